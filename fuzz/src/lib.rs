@@ -1,0 +1,1 @@
+//! Fuzz entry points for gcl. Each takes arbitrary bytes and must never panic.

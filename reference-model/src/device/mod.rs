@@ -1,0 +1,1190 @@
+//! The simulated grasper: a sans-IO state machine of a whole hand.
+//!
+//! Bytes and time go in ([`Device::handle_input`], [`Device::handle_timeout`]); bytes come out
+//! ([`Device::take_output`]). The device never reads a clock, never sleeps and never does I/O:
+//! a transport (pty, TCP, stdio, the in-process target, a fuzzer, a test) owns those. The
+//! same inputs at the same times give the same bytes; noise comes from a seeded generator.
+//!
+//! Physics runs in 1 ms ticks, only while something moves.
+
+pub mod fault;
+mod physics;
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::time::Duration;
+
+use rand_core::{RngCore, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+pub use fault::{Fault, UnknownFault};
+use physics::{Goal, Motor, Termination};
+
+use crate::grammar::{self, Args, Command, Line, ParseOptions};
+use crate::motor::MotorSet;
+use crate::params::{NvMemory, ParamStore, Transfer};
+use crate::realtime::{self, ControlHeader, RtLayout};
+use crate::spec::{CommandKind, ParamId, Profile, Scope};
+use crate::status::StatusBits;
+
+/// Conditions in and around the hand that the protocol cannot set: objects, temperature,
+/// where the joints are at power-up.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Scenario {
+    /// For each motor 1..=4, the position where it meets an object when closing, if any.
+    pub objects: [Option<i64>; 4],
+    /// Ambient board temperature, tenths of °C.
+    pub temperature: i64,
+    /// Peak-to-peak half-width of temperature noise, tenths of °C.
+    pub temperature_noise: i64,
+    /// Half-width of strain noise, in strain counts.
+    pub strain_noise: i64,
+    /// Joint positions at power-up, counts.
+    pub initial_positions: [i64; 4],
+    /// RealTime analog input (LFAIN) per motor.
+    pub analog_input: [i64; 4],
+}
+
+impl Default for Scenario {
+    fn default() -> Scenario {
+        Scenario {
+            objects: [None; 4],
+            temperature: 315,
+            temperature_noise: 3,
+            strain_noise: 2,
+            initial_positions: [0; 4],
+            analog_input: [0; 4],
+        }
+    }
+}
+
+/// Everything a device is built from besides its profile.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DeviceConfig {
+    /// Seed of the noise generator.
+    pub seed: u64,
+    /// The world around the hand.
+    pub scenario: Scenario,
+    /// The EEPROM contents at power-up.
+    pub nv: NvMemory,
+    /// Deliberate bugs.
+    pub faults: Vec<Fault>,
+}
+
+/// What the hand is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// Supervisory mode, waiting for a command line.
+    Idle,
+    /// Supervisory mode, a command running.
+    Busy,
+    /// RealTime mode.
+    Loop,
+}
+
+#[derive(Debug, Clone)]
+struct Task {
+    kind: CommandKind,
+    motors: MotorSet,
+    status: StatusBits,
+    check_mpe: bool,
+}
+
+#[derive(Debug, Clone)]
+struct LoopState {
+    layout: RtLayout,
+    /// The header whose data is being received, and the data so far.
+    pending: Option<ControlHeader>,
+    data: Vec<u8>,
+    /// Decoded control values, reused.
+    values: Vec<i64>,
+    /// Feedback values, reused.
+    feedback: Vec<i64>,
+}
+
+const TICK_US: u64 = 1000;
+
+/// A whole simulated grasper.
+#[derive(Debug, Clone)]
+pub struct Device {
+    profile: Arc<Profile>,
+    faults: Vec<Fault>,
+    scenario: Scenario,
+    rng: rand_pcg::Pcg32,
+    nv: NvMemory,
+    params: ParamStore,
+    motors: [Motor; 4],
+    mode: Mode,
+    line: Vec<u8>,
+    overflow: bool,
+    queue: VecDeque<u8>,
+    task: Option<Task>,
+    rt: Option<Box<LoopState>>,
+    out: Vec<u8>,
+    now_us: u64,
+    next_tick_us: u64,
+    heat: f64,
+    last_status: StatusBits,
+    eol: Vec<u8>,
+    prompt: Vec<u8>,
+    ids: Ids,
+}
+
+/// Parameter ids the device uses, looked up once.
+#[derive(Debug, Clone, Copy, Default)]
+struct Ids {
+    p: Option<ParamId>,
+    s: Option<ParamId>,
+    sg: Option<ParamId>,
+    temp: Option<ParamId>,
+    ptemp: Option<ParamId>,
+    upsecs: Option<ParamId>,
+    sn: Option<ParamId>,
+    od: Option<ParamId>,
+    bd: Option<ParamId>,
+    bp: Option<ParamId>,
+    en: Option<ParamId>,
+    dp: Option<ParamId>,
+    ds: Option<ParamId>,
+    ct: Option<ParamId>,
+    ot: Option<ParamId>,
+    mcv: Option<ParamId>,
+    mov: Option<ParamId>,
+    ivel: Option<ParamId>,
+    accel: Option<ParamId>,
+    mpe: Option<ParamId>,
+    tstop: Option<ParamId>,
+    hold: Option<ParamId>,
+    hsg: Option<ParamId>,
+    lsg: Option<ParamId>,
+    bs: Option<ParamId>,
+    sgflip: Option<ParamId>,
+    ihit: Option<ParamId>,
+    otemp: Option<ParamId>,
+    baud: Option<ParamId>,
+    lcvc: Option<ParamId>,
+    lfvc: Option<ParamId>,
+    lfdpc: Option<ParamId>,
+    lfdpd: Option<ParamId>,
+    lcpg: Option<ParamId>,
+}
+
+impl Ids {
+    fn new(p: &Profile) -> Ids {
+        let f = |n: &str| p.param_id(n);
+        Ids {
+            p: f("P"),
+            s: f("S"),
+            sg: f("SG"),
+            temp: f("TEMP"),
+            ptemp: f("PTEMP"),
+            upsecs: f("UPSECS"),
+            sn: f("SN"),
+            od: f("OD"),
+            bd: f("BD"),
+            bp: f("BP"),
+            en: f("EN"),
+            dp: f("DP"),
+            ds: f("DS"),
+            ct: f("CT"),
+            ot: f("OT"),
+            mcv: f("MCV"),
+            mov: f("MOV"),
+            ivel: f("IVEL"),
+            accel: f("ACCEL"),
+            mpe: f("MPE"),
+            tstop: f("TSTOP"),
+            hold: f("HOLD"),
+            hsg: f("HSG").or_else(|| f("MSG")),
+            lsg: f("LSG"),
+            bs: f("BS"),
+            sgflip: f("SGFLIP"),
+            ihit: f("IHIT"),
+            otemp: f("OTEMP"),
+            baud: f("BAUD"),
+            lcvc: f("LCVC"),
+            lfvc: f("LFVC"),
+            lfdpc: f("LFDPC"),
+            lfdpd: f("LFDPD"),
+            lcpg: f("LCPG"),
+        }
+    }
+}
+
+impl Device {
+    /// Powers up a hand: it prints its banner and a prompt.
+    pub fn new(profile: Arc<Profile>, config: DeviceConfig) -> Device {
+        let mut nv = config.nv;
+        let params = ParamStore::power_up(&profile, &mut nv);
+        let has = |f: Fault| config.faults.contains(&f);
+        let eol = if has(Fault::CrLf) { b"\r\n".to_vec() } else { profile.framing.line_ending.as_bytes().to_vec() };
+        let mut prompt = profile.framing.prompt.as_bytes().to_vec();
+        if has(Fault::PromptNoSpace) {
+            while prompt.last() == Some(&b' ') {
+                prompt.pop();
+            }
+        }
+        let motors = std::array::from_fn(|i| Motor::new(config.scenario.initial_positions[i] as f64));
+        let mut d = Device {
+            ids: Ids::new(&profile),
+            faults: config.faults,
+            rng: rand_pcg::Pcg32::seed_from_u64(config.seed),
+            scenario: config.scenario,
+            nv,
+            params,
+            motors,
+            mode: Mode::Idle,
+            line: Vec::with_capacity(profile.framing.max_line),
+            overflow: false,
+            queue: VecDeque::new(),
+            task: None,
+            rt: None,
+            out: Vec::with_capacity(256),
+            now_us: 0,
+            next_tick_us: TICK_US,
+            heat: 0.0,
+            last_status: StatusBits::empty(),
+            eol,
+            prompt,
+            profile,
+        };
+        d.print_banner();
+        d
+    }
+
+    /// A powered-up hand of a built-in profile with default conditions.
+    pub fn with_profile(profile: Arc<Profile>) -> Device {
+        Device::new(profile, DeviceConfig::default())
+    }
+
+    fn has(&self, f: Fault) -> bool {
+        self.faults.contains(&f)
+    }
+
+    // ------------------------------------------------------------------ public surface
+
+    /// The profile the hand runs.
+    pub fn profile(&self) -> &Arc<Profile> {
+        &self.profile
+    }
+
+    /// Feeds bytes from the host, received at `now` (time since power-up).
+    pub fn handle_input(&mut self, now: Duration, bytes: &[u8]) {
+        self.advance(now);
+        for &b in bytes {
+            self.input_byte(b);
+        }
+    }
+
+    /// Lets time pass to `now` with no input.
+    pub fn handle_timeout(&mut self, now: Duration) {
+        self.advance(now);
+    }
+
+    /// When the hand next needs [`Device::handle_timeout`] to make progress on its own (a
+    /// running command), or `None` when it only waits for input.
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        (self.mode == Mode::Busy).then(|| Duration::from_micros(self.next_tick_us.max(self.now_us)))
+    }
+
+    /// Runs a supervisory command in progress to completion, as fast as possible, and returns
+    /// the time it completed. `limit` bounds the simulated time spent.
+    pub fn run_until_idle(&mut self, limit: Duration) -> Duration {
+        let end = self.now_us.saturating_add(limit.as_micros() as u64);
+        while let Some(t) = self.poll_timeout() {
+            if t.as_micros() as u64 > end {
+                break;
+            }
+            self.advance(t);
+        }
+        self.now()
+    }
+
+    /// Bytes written since the last call.
+    pub fn take_output(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.out)
+    }
+
+    /// Bytes written and not yet taken.
+    pub fn output(&self) -> &[u8] {
+        &self.out
+    }
+
+    /// Forgets the bytes written so far.
+    pub fn clear_output(&mut self) {
+        self.out.clear();
+    }
+
+    /// The simulated time the hand has reached.
+    pub fn now(&self) -> Duration {
+        Duration::from_micros(self.now_us)
+    }
+
+    /// What the hand is doing.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// Whether a supervisory command is running.
+    pub fn is_busy(&self) -> bool {
+        self.mode == Mode::Busy
+    }
+
+    /// The status of the last finished command line (empty for success).
+    pub fn last_status(&self) -> StatusBits {
+        self.last_status
+    }
+
+    /// The RealTime layouts while in LOOP.
+    pub fn rt_layout(&self) -> Option<&RtLayout> {
+        self.rt.as_ref().map(|r| &r.layout)
+    }
+
+    /// The working parameter values.
+    pub fn params(&self) -> &ParamStore {
+        &self.params
+    }
+
+    /// The EEPROM contents.
+    pub fn nv(&self) -> &NvMemory {
+        &self.nv
+    }
+
+    /// The serial rate the hand is set to, in bit/s.
+    pub fn baud(&self) -> u32 {
+        self.ids.baud.map_or(9600, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
+    }
+
+    /// Present position of a motor (1..=4), rounded.
+    pub fn position(&self, motor: u8) -> i64 {
+        self.motors[(motor.clamp(1, 4) - 1) as usize].position()
+    }
+
+    /// Whether a motor has been initialised by HI.
+    pub fn initialized(&self, motor: u8) -> bool {
+        self.motors[(motor.clamp(1, 4) - 1) as usize].initialized
+    }
+
+    /// The world around the hand.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// Changes the world around the hand (objects, temperature) from now on.
+    pub fn set_scenario(&mut self, scenario: Scenario) {
+        self.scenario = scenario;
+    }
+
+    // ------------------------------------------------------------------ time
+
+    fn advance(&mut self, now: Duration) {
+        let now_us = now.as_micros().min(u128::from(u64::MAX)) as u64;
+        if now_us <= self.now_us {
+            return;
+        }
+        let elapsed_ms = (now_us - self.now_us) / 1000;
+        self.nv.powered_ms = self.nv.powered_ms.saturating_add((now_us - self.now_us) / 1000);
+        let active = self.mode == Mode::Busy || (self.mode == Mode::Loop && self.loop_moving());
+        if !active {
+            self.heat = (self.heat - 0.0002 * elapsed_ms as f64).max(0.0);
+            self.now_us = now_us;
+            self.next_tick_us = now_us + TICK_US;
+            return;
+        }
+        while self.next_tick_us <= now_us {
+            self.now_us = self.next_tick_us;
+            self.next_tick_us += TICK_US;
+            self.tick();
+            if self.mode == Mode::Idle {
+                // The command finished: queued input runs at this instant.
+                self.drain_queue();
+                if self.mode == Mode::Idle {
+                    break;
+                }
+            }
+        }
+        if self.now_us < now_us {
+            self.now_us = now_us;
+            if self.next_tick_us <= now_us {
+                self.next_tick_us = now_us + TICK_US;
+            }
+        }
+    }
+
+    fn loop_moving(&self) -> bool {
+        self.motors.iter().any(|m| m.rt_velocity != 0.0 || m.velocity != 0.0)
+    }
+
+    /// One millisecond of physics.
+    fn tick(&mut self) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        let mut moving = 0;
+        for i in 0..4 {
+            let m = (i + 1) as u8;
+            let limit = self.limit(m);
+            let object = self.scenario.objects[i].map(|o| (o, hand.object_compliance));
+            let accel = self.accel(m);
+            let vel_unit = hand.counts_per_ms_per_velocity_unit;
+            let (mcv, mov) = (self.get(self.ids.mcv, m) as f64 * vel_unit, self.get(self.ids.mov, m) as f64 * vel_unit);
+            let ivel = self.ids.ivel.map_or(mov, |id| self.params.get(&profile, id, m) as f64 * vel_unit);
+            let tstop = self.get(self.ids.tstop, m).max(0) as u32;
+            let (hsg, lsg) = (self.get(self.ids.hsg, m), self.ids.lsg.map_or(256, |id| self.params.get(&profile, id, m)));
+            let bs = self.get(self.ids.bs, m) != 0;
+            let before = self.motors[i].pos;
+            let motor = &mut self.motors[i];
+            let term = motor.step(physics::StepLimits {
+                limit,
+                object,
+                accel,
+                close_speed: mcv,
+                open_speed: mov,
+                init_speed: ivel,
+                tstop_ms: tstop,
+                settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.params.get(&profile, id, m).max(1) as u64),
+                free_strain: hand.free_strain,
+                strain_per_count: hand.strain_per_count,
+                high_strain: hsg,
+                low_strain: lsg,
+                breakaway: bs,
+            });
+            let moved = (motor.pos - before).abs();
+            if moved > 0.0 {
+                moving += 1;
+                self.nv.odometer_counts[i] = self.nv.odometer_counts[i].saturating_add(moved.round() as u64);
+            }
+            if let Some(t) = term {
+                self.terminate_motor(m, t);
+            }
+        }
+        self.heat += 0.0005 * f64::from(moving);
+        if let Some(task) = &self.task
+            && task.motors.iter().all(|m| self.motors[(m - 1) as usize].goal.is_none())
+        {
+            self.finish_task();
+        }
+    }
+
+    fn terminate_motor(&mut self, m: u8, t: Termination) {
+        let i = (m - 1) as usize;
+        let hold = self.get(self.ids.hold, m) != 0;
+        let goal = self.motors[i].goal.take();
+        self.motors[i].velocity = 0.0;
+        self.motors[i].powered = hold;
+        if let Some(Goal::Initialize { .. }) = goal {
+            self.motors[i].finish_initialize();
+            self.motors[i].powered = hold;
+            return;
+        }
+        if t == Termination::Breakaway {
+            let at = self.motors[i].position();
+            self.set_live(self.ids.bd, m, 1);
+            self.set_live(self.ids.bp, m, at);
+        }
+        let mpe = self.get(self.ids.mpe, m);
+        if let (Some(task), Some(Goal::Position { target, .. })) = (&mut self.task, goal)
+            && task.check_mpe
+            && !self.faults.contains(&Fault::MpeIgnored)
+            && (self.motors[i].position() - target.round() as i64).abs() > mpe
+        {
+            task.status |= StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
+        }
+    }
+
+    fn finish_task(&mut self) {
+        if let Some(task) = self.task.take() {
+            if task.kind == CommandKind::Initialize {
+                for m in task.motors.iter() {
+                    self.motors[(m - 1) as usize].reported = None;
+                    self.set_live(self.ids.bd, m, 0);
+                    self.set_live(self.ids.bp, m, 0);
+                }
+            }
+            self.mode = Mode::Idle;
+            self.end_line(task.status);
+        }
+    }
+
+    // ------------------------------------------------------------------ bytes
+
+    fn input_byte(&mut self, b: u8) {
+        match self.mode {
+            Mode::Busy => {
+                if b == self.profile.framing.abort {
+                    self.abort_task();
+                } else if self.queue.len() < 2 * self.profile.framing.max_line + 4 {
+                    self.queue.push_back(b);
+                }
+            }
+            Mode::Loop => self.loop_byte(b),
+            Mode::Idle => self.line_byte(b),
+        }
+    }
+
+    fn drain_queue(&mut self) {
+        while self.mode == Mode::Idle {
+            let Some(b) = self.queue.pop_front() else { break };
+            self.line_byte(b);
+        }
+        if self.mode == Mode::Loop {
+            while let Some(b) = self.queue.pop_front() {
+                self.loop_byte(b);
+            }
+        }
+    }
+
+    fn line_byte(&mut self, b: u8) {
+        let framing = &self.profile.framing;
+        if b == framing.abort {
+            self.line.clear();
+            self.overflow = false;
+            self.last_status = StatusBits::empty();
+            self.prompt();
+        } else if b == framing.terminator {
+            let line = std::mem::take(&mut self.line);
+            let overflow = std::mem::replace(&mut self.overflow, false);
+            if overflow {
+                self.end_line(StatusBits::from_bits_truncate(framing.overlong_status));
+            } else {
+                self.run_line(&line);
+            }
+            self.line = line;
+            self.line.clear();
+        } else {
+            if framing.echo && !self.has(Fault::NoEcho) {
+                self.out.push(b);
+            }
+            if self.line.len() < framing.max_line {
+                self.line.push(b);
+            } else {
+                self.overflow = true;
+            }
+        }
+    }
+
+    fn prompt(&mut self) {
+        self.out.extend_from_slice(&self.eol);
+        self.out.extend_from_slice(&self.prompt);
+    }
+
+    fn print_line(&mut self, text: &str) {
+        self.out.extend_from_slice(&self.eol);
+        self.out.extend_from_slice(text.as_bytes());
+    }
+
+    /// Ends a command: the status line if any, then the prompt.
+    fn end_line(&mut self, status: StatusBits) {
+        self.last_status = status;
+        if !status.is_empty() {
+            let text = format!("ERR {}", status.code());
+            self.print_line(&text);
+        }
+        self.prompt();
+    }
+
+    fn print_banner(&mut self) {
+        for i in 0..self.profile.banner.len() {
+            let l = self.profile.banner[i].clone();
+            self.print_line(&l);
+        }
+        self.prompt();
+    }
+
+    // ------------------------------------------------------------------ supervisory
+
+    fn run_line(&mut self, line: &[u8]) {
+        let opts = ParseOptions { case_sensitive_commands: self.has(Fault::LowercaseRejected) };
+        match grammar::parse_line_with(&self.profile, line, opts) {
+            Ok(Line::Empty) => {
+                self.last_status = StatusBits::empty();
+                self.prompt();
+            }
+            Ok(Line::Command(c)) => self.run_command(&c),
+            Err(mut r) => {
+                if self.has(Fault::ReadOnlyStatus) && r.status.contains(StatusBits::READ_ONLY) {
+                    r.status = (r.status - StatusBits::READ_ONLY) | StatusBits::INVALID_VALUE;
+                }
+                if self.has(Fault::RangeOffByOne)
+                    && r.status == StatusBits::INVALID_VALUE
+                    && let Some(c) = self.off_by_one_accepts(line)
+                {
+                    return self.run_command(&c);
+                }
+                self.end_line(r.status)
+            }
+        }
+    }
+
+    /// The range-off-by-one fault: a set whose only problem is a value one past a maximum.
+    fn off_by_one_accepts(&self, line: &[u8]) -> Option<Command> {
+        let text = std::str::from_utf8(line).ok()?;
+        let mut toks: Vec<String> = text.split_ascii_whitespace().map(str::to_string).collect();
+        let mut changed = false;
+        for i in 1..toks.len() {
+            if let (Some(id), Ok(v)) = (self.profile.param_id(&toks[i - 1]), toks[i].parse::<i64>()) {
+                let p = self.profile.param(id);
+                if p.values.is_none() && v == p.max + 1 {
+                    toks[i] = p.max.to_string();
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            return None;
+        }
+        let Ok(Line::Command(mut c)) = grammar::parse_line(&self.profile, toks.join(" ").as_bytes()) else {
+            return None;
+        };
+        if let Args::Pairs(ps) = &mut c.args {
+            for (id, v) in ps.iter_mut() {
+                if *v == self.profile.param(*id).max && self.profile.param(*id).values.is_none() {
+                    *v += 1;
+                }
+            }
+        }
+        Some(c)
+    }
+
+    fn enabled_motors(&self) -> MotorSet {
+        match self.ids.en {
+            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.params.get(&self.profile, en, *m) != 0)),
+            None => MotorSet::ALL,
+        }
+    }
+
+    fn get(&self, id: Option<ParamId>, motor: u8) -> i64 {
+        id.map_or(0, |id| self.params.get(&self.profile, id, motor))
+    }
+
+    fn set_live(&mut self, id: Option<ParamId>, motor: u8, v: i64) {
+        if let Some(id) = id {
+            let profile = self.profile.clone();
+            self.params.set_unchecked(&profile, id, MotorSet::single(motor).unwrap_or_default(), v);
+        }
+    }
+
+    fn limit(&self, m: u8) -> i64 {
+        if m == 4 { self.profile.hand.spread_limit } else { self.profile.hand.finger_limit }
+    }
+
+    fn accel(&self, m: u8) -> f64 {
+        let a = self.get(self.ids.accel, m).max(1) as f64;
+        a * self.profile.hand.velocity_units_per_ms_per_accel * self.profile.hand.counts_per_ms_per_velocity_unit
+    }
+
+    fn temperature(&mut self) -> i64 {
+        let n = self.scenario.temperature_noise;
+        let t = self.scenario.temperature + self.heat.round() as i64 + self.noise(n);
+        if t > self.nv.peak_temperature {
+            self.nv.peak_temperature = t;
+        }
+        t
+    }
+
+    fn noise(&mut self, half_width: i64) -> i64 {
+        if half_width <= 0 {
+            return 0;
+        }
+        let span = (2 * half_width + 1) as u32;
+        i64::from(self.rng.next_u32() % span) - half_width
+    }
+
+    fn strain(&mut self, m: u8) -> i64 {
+        let i = (m - 1) as usize;
+        let hand = &self.profile.hand;
+        let raw = self.motors[i].strain(self.scenario.objects[i], hand.free_strain, hand.strain_per_count);
+        let n = self.scenario.strain_noise;
+        let v = (raw + self.noise(n)).clamp(0, 255);
+        if self.get(self.ids.sgflip, m) != 0 { 255 - v } else { v }
+    }
+
+    /// The value FGET/PGET prints for a parameter and motor.
+    fn read_param(&mut self, id: ParamId, m: u8) -> i64 {
+        let i = (m.clamp(1, 4) - 1) as usize;
+        let ids = self.ids;
+        let is = |x: Option<ParamId>| x == Some(id);
+        if is(ids.p) {
+            self.motors[i].position()
+        } else if is(ids.s) {
+            if self.motors[i].initialized { 0 } else { self.profile.hand.uninitialized_state_value }
+        } else if is(ids.sg) {
+            self.strain(m)
+        } else if is(ids.temp) {
+            self.temperature()
+        } else if is(ids.ptemp) {
+            self.nv.peak_temperature
+        } else if is(ids.upsecs) {
+            (self.nv.powered_ms / 1000) as i64
+        } else if is(ids.sn) {
+            self.nv.serial_number
+        } else if is(ids.od) {
+            (self.nv.odometer_counts[i] / 1000) as i64
+        } else {
+            self.params.get(&self.profile, id, m)
+        }
+    }
+
+    fn run_command(&mut self, c: &Command) {
+        let profile = self.profile.clone();
+        let spec = profile.command(c.command);
+        let kind = spec.kind;
+        let is_motion_like = kind.is_motion() || matches!(kind, CommandKind::Initialize | CommandKind::Terminate | CommandKind::Loop);
+        let motors = match c.prefix {
+            Some(p) => p,
+            None if is_motion_like => self.enabled_motors(),
+            None => MotorSet::ALL,
+        };
+        match kind {
+            k if k.is_motion() || k == CommandKind::Initialize => self.start_motion(k, motors, c),
+            CommandKind::Terminate => {
+                let mut status = StatusBits::empty();
+                for m in motors.iter() {
+                    let motor = &mut self.motors[(m - 1) as usize];
+                    if motor.initialized {
+                        motor.powered = false;
+                        motor.goal = None;
+                        motor.velocity = 0.0;
+                    } else {
+                        status |= StatusBits::from_bits_truncate(profile.hand.terminate_uninitialized_status);
+                    }
+                }
+                self.end_line(status);
+            }
+            CommandKind::Loop => self.start_loop(motors),
+            CommandKind::MotorSet | CommandKind::GlobalSet => {
+                if let Args::Pairs(pairs) = &c.args {
+                    for (id, v) in pairs {
+                        self.params.set_unchecked(&profile, *id, motors, *v);
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorGet | CommandKind::GlobalGet => {
+                if let Args::Names(names) = &c.args {
+                    for id in names {
+                        let line = self.value_line(*id, motors, false);
+                        self.print_line(&line);
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorDefaults | CommandKind::MotorLoad | CommandKind::MotorSave => {
+                let t = match kind {
+                    CommandKind::MotorDefaults => Transfer::Defaults,
+                    CommandKind::MotorLoad => Transfer::Load,
+                    _ => Transfer::Save,
+                };
+                let keep_mcv = (t == Transfer::Defaults && self.has(Fault::FdefSkipsMcv))
+                    .then(|| self.ids.mcv.map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m)))))
+                    .flatten();
+                self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
+                if let Some((id, vals)) = keep_mcv {
+                    for m in 1..=4u8 {
+                        self.params.set_unchecked(&profile, id, MotorSet::single(m).unwrap_or_default(), vals[m as usize - 1]);
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::GlobalDefaults | CommandKind::GlobalLoad | CommandKind::GlobalSave => {
+                let t = match kind {
+                    CommandKind::GlobalDefaults => Transfer::Defaults,
+                    CommandKind::GlobalLoad => Transfer::Load,
+                    _ => Transfer::Save,
+                };
+                self.params.transfer(&profile, &mut self.nv, t, Scope::Global, MotorSet::ALL);
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorList | CommandKind::MotorListAll | CommandKind::GlobalList | CommandKind::GlobalListAll => {
+                let scope = if matches!(kind, CommandKind::MotorList | CommandKind::MotorListAll) { Scope::Motor } else { Scope::Global };
+                let all = matches!(kind, CommandKind::MotorListAll | CommandKind::GlobalListAll);
+                for id in self.listed(kind, scope, all) {
+                    let p = profile.param(id);
+                    let line = format!("{} {}  {}", p.name, if p.read_only { "RO" } else { "RW" }, p.description);
+                    self.print_line(&line);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorListValues
+            | CommandKind::MotorListAllValues
+            | CommandKind::GlobalListValues
+            | CommandKind::GlobalListAllValues => {
+                let scope = if matches!(kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
+                    Scope::Motor
+                } else {
+                    Scope::Global
+                };
+                let all = matches!(kind, CommandKind::MotorListAllValues | CommandKind::GlobalListAllValues);
+                for id in self.listed(kind, scope, all) {
+                    let line = self.value_line(id, motors, true);
+                    self.print_line(&line);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Reset => {
+                self.power_cycle();
+            }
+            CommandKind::ErrorText => {
+                let bits = match c.args {
+                    Args::Integer(n) => StatusBits::from_bits_truncate(n as u32),
+                    _ => StatusBits::all(),
+                };
+                for l in bits.describe(&profile) {
+                    self.print_line(&l);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Version => {
+                for l in &profile.version {
+                    self.print_line(l);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Help | CommandKind::HelpAll => {
+                let topic = match c.args {
+                    Args::Topic(t) => Some(t),
+                    _ => None,
+                };
+                for (i, cmd) in profile.commands.iter().enumerate() {
+                    let wanted = match topic {
+                        Some(t) => t.0 as usize == i,
+                        None => kind == CommandKind::HelpAll || !(profile.hand.help_lists_standard_only && cmd.advanced),
+                    };
+                    if wanted {
+                        self.print_line(&format!("{}  {}", cmd.name, cmd.help));
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            _ => self.end_line(StatusBits::UNKNOWN_COMMAND),
+        }
+    }
+
+    /// The parameters a list command shows. The seed's FLISTA/FLISTAV list every parameter
+    /// (motor and hand) in FGET order; bh8-262 splits motor and global lists.
+    fn listed(&self, kind: CommandKind, scope: Scope, all: bool) -> Vec<ParamId> {
+        let profile = &self.profile;
+        let seed_style = matches!(kind, CommandKind::MotorListAll | CommandKind::MotorListAllValues)
+            && profile.command_of_kind(CommandKind::GlobalList).is_none();
+        profile
+            .param_ids()
+            .filter(|id| {
+                let p = profile.param(*id);
+                (seed_style || p.scope == scope) && (all || !p.advanced)
+            })
+            .collect()
+    }
+
+    /// One FGET-style line: values for the motors in order (globals once). With `named`, the
+    /// parameter's name first (the list commands).
+    fn value_line(&mut self, id: ParamId, motors: MotorSet, named: bool) -> String {
+        let profile = self.profile.clone();
+        let p = profile.param(id);
+        let mut vals: Vec<(u8, i64)> = Vec::with_capacity(4);
+        match (p.scope, named) {
+            (Scope::Global, true) => vals.push((1, self.read_param(id, 1))),
+            _ => {
+                for m in motors.iter() {
+                    vals.push((m, self.read_param(id, m)));
+                }
+            }
+        }
+        if Some(id) == self.ids.p && !named {
+            for (m, v) in &vals {
+                self.motors[(*m - 1) as usize].reported = Some(*v);
+            }
+        }
+        if self.has(Fault::FgetReversed) && !named {
+            vals.reverse();
+        }
+        let mut s = String::new();
+        if named {
+            s.push_str(&p.name);
+        }
+        for (i, (_, v)) in vals.iter().enumerate() {
+            if i > 0 || named {
+                s.push(' ');
+            }
+            s.push_str(&v.to_string());
+        }
+        s
+    }
+
+    fn overtemperature(&mut self) -> bool {
+        let hand_status = self.profile.hand.overtemp_status;
+        let otemp = self.get(self.ids.otemp, 1);
+        hand_status != 0 && otemp != 0 && self.temperature() > otemp
+    }
+
+    fn start_motion(&mut self, kind: CommandKind, motors: MotorSet, c: &Command) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        if kind != CommandKind::Initialize && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+            return self.end_line(StatusBits::from_bits_truncate(hand.uninitialized_status));
+        }
+        if kind.is_motion() && self.overtemperature() {
+            return self.end_line(StatusBits::from_bits_truncate(hand.overtemp_status));
+        }
+        if motors.is_empty() {
+            return self.end_line(StatusBits::empty());
+        }
+        let arg = match c.args {
+            Args::Integer(v) => Some(v),
+            _ => None,
+        };
+        for m in motors.iter() {
+            let i = (m - 1) as usize;
+            let p = self.motors[i].pos;
+            let finger_ct = hand.finger_close_target.unwrap_or(17000);
+            let spread_ct = hand.spread_close_target.unwrap_or(3150);
+            let goal = match kind {
+                CommandKind::Initialize => Goal::Initialize { settled_ms: 0 },
+                CommandKind::Close => Goal::Position {
+                    target: self.ids.ct.map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.params.get(&profile, id, m)) as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::Open => Goal::Position { target: self.get(self.ids.ot, m) as f64, stall_ms: 0 },
+                CommandKind::Move => Goal::Position { target: arg.unwrap_or_else(|| self.get(self.ids.dp, m)) as f64, stall_ms: 0 },
+                CommandKind::Home => Goal::Position { target: 0.0, stall_ms: 0 },
+                CommandKind::IncrementalClose => {
+                    Goal::Position { target: p.round() + arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64, stall_ms: 0 }
+                }
+                CommandKind::IncrementalOpen => {
+                    Goal::Position { target: p.round() - arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64, stall_ms: 0 }
+                }
+                CommandKind::TorqueClose => Goal::Velocity { direction: 1.0, stall_ms: 0 },
+                _ => Goal::Velocity { direction: -1.0, stall_ms: 0 },
+            };
+            if matches!(kind, CommandKind::Open | CommandKind::TorqueOpen) {
+                self.set_live(self.ids.bd, m, 0);
+                self.set_live(self.ids.bp, m, 0);
+            }
+            let motor = &mut self.motors[i];
+            motor.goal = Some(goal);
+            motor.powered = true;
+            motor.rt_velocity = 0.0;
+        }
+        self.task = Some(Task {
+            kind,
+            motors,
+            status: StatusBits::empty(),
+            check_mpe: matches!(
+                kind,
+                CommandKind::Move | CommandKind::Home | CommandKind::IncrementalClose | CommandKind::IncrementalOpen
+            ),
+        });
+        self.mode = Mode::Busy;
+        self.next_tick_us = self.now_us + TICK_US;
+    }
+
+    fn abort_task(&mut self) {
+        self.queue.clear();
+        let Some(task) = self.task.take() else { return };
+        for m in 1..=4u8 {
+            let i = (m - 1) as usize;
+            if self.motors[i].goal.take().is_some() {
+                self.motors[i].velocity = 0.0;
+                self.motors[i].powered = self.get(self.ids.hold, m) != 0;
+            }
+        }
+        let _ = task;
+        self.mode = Mode::Idle;
+        let status = if self.has(Fault::AbortSilent) {
+            StatusBits::empty()
+        } else {
+            StatusBits::from_bits_truncate(self.profile.hand.abort_status)
+        };
+        self.end_line(status);
+    }
+
+    fn power_cycle(&mut self) {
+        let profile = self.profile.clone();
+        self.params = ParamStore::power_up(&profile, &mut self.nv);
+        for m in &mut self.motors {
+            m.power_down();
+        }
+        self.task = None;
+        self.rt = None;
+        self.queue.clear();
+        self.mode = Mode::Idle;
+        self.last_status = StatusBits::empty();
+        if self.has(Fault::ResetNoBanner) {
+            self.prompt();
+        } else {
+            self.print_banner();
+        }
+    }
+
+    // ------------------------------------------------------------------ RealTime
+
+    fn start_loop(&mut self, motors: MotorSet) {
+        let profile = self.profile.clone();
+        if motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+            return self.end_line(StatusBits::from_bits_truncate(profile.hand.uninitialized_status));
+        }
+        let layout = RtLayout::compute(&profile, &self.params, motors);
+        for m in motors.iter() {
+            let motor = &mut self.motors[(m - 1) as usize];
+            if motor.reported.is_none() {
+                motor.reported = Some(motor.position());
+            }
+            motor.rt_velocity = 0.0;
+            motor.rt_gain = 0;
+            motor.powered = true;
+        }
+        if self.has(Fault::LoopAckNewline) {
+            self.out.extend_from_slice(&self.eol.clone());
+        }
+        self.out.push(realtime::FEEDBACK_HEADER);
+        self.last_status = StatusBits::empty();
+        let n_control = layout.control.fields.len();
+        let n_feedback = layout.feedback.fields.len();
+        self.rt = Some(Box::new(LoopState {
+            layout,
+            pending: None,
+            data: Vec::with_capacity(16),
+            values: vec![0; n_control],
+            feedback: vec![0; n_feedback],
+        }));
+        self.mode = Mode::Loop;
+    }
+
+    fn loop_byte(&mut self, b: u8) {
+        let Some(mut rt) = self.rt.take() else {
+            self.mode = Mode::Idle;
+            return self.line_byte(b);
+        };
+        if let Some(h) = rt.pending {
+            rt.data.push(b);
+            if rt.data.len() + 1 >= rt.layout.control.size {
+                let mut block = Vec::with_capacity(rt.layout.control.size);
+                block.push(h.byte());
+                block.extend_from_slice(&rt.data);
+                let LoopState { layout, values, .. } = &mut *rt;
+                if layout.control.decode_into(&block, values).is_ok() {
+                    self.apply_control(&rt);
+                }
+                rt.pending = None;
+                rt.data.clear();
+            }
+            self.rt = Some(rt);
+            return;
+        }
+        match ControlHeader::from_byte(b) {
+            Some(ControlHeader::Abort) => {
+                self.leave_loop();
+                self.prompt();
+            }
+            Some(h) => {
+                if h.wants_feedback() {
+                    self.emit_feedback(&mut rt);
+                } else {
+                    self.out.push(realtime::FEEDBACK_HEADER);
+                }
+                if h.has_data() && rt.layout.control.size > 1 {
+                    rt.pending = Some(h);
+                }
+                self.rt = Some(rt);
+            }
+            None => {
+                let status = StatusBits::from_bits_truncate(self.profile.hand.bad_header_status);
+                if self.has(Fault::StayInLoop) {
+                    self.rt = Some(rt);
+                    self.print_line(&format!("ERR {}", status.code()));
+                    self.prompt();
+                    self.last_status = status;
+                } else {
+                    self.leave_loop();
+                    self.end_line(status);
+                }
+            }
+        }
+    }
+
+    fn leave_loop(&mut self) {
+        self.rt = None;
+        self.mode = Mode::Idle;
+        for m in &mut self.motors {
+            m.rt_velocity = 0.0;
+            m.velocity = 0.0;
+        }
+    }
+
+    fn apply_control(&mut self, rt: &LoopState) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        for (f, v) in rt.layout.control.fields.iter().zip(&rt.values) {
+            let Some(m) = f.motor else { continue };
+            let i = (m - 1) as usize;
+            match f.name.as_str() {
+                "LCV" => {
+                    let lcvc = self.get(self.ids.lcvc, m);
+                    self.motors[i].rt_velocity =
+                        realtime::control_velocity(*v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
+                }
+                "LCPG" => self.motors[i].rt_gain = *v,
+                "LCT" => {
+                    self.motors[i].rt_velocity =
+                        realtime::control_velocity(*v, 1, hand.lcv_fraction_bits + 4) * hand.rt_velocity_counts_per_ms;
+                }
+                _ => {}
+            }
+        }
+        for m in rt.layout.motors.iter() {
+            let has_gain = self.ids.lcpg.is_some_and(|id| self.params.get(&profile, id, m) != 0);
+            self.motors[(m - 1) as usize].rt_uses_gain = has_gain;
+        }
+    }
+
+    fn emit_feedback(&mut self, rt: &mut LoopState) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        let discard = self.get(self.ids.lfdpd, 1) != 0;
+        for k in 0..rt.layout.feedback.fields.len() {
+            let f = &rt.layout.feedback.fields[k];
+            let v = match f.motor {
+                Some(m) => {
+                    let i = (m - 1) as usize;
+                    match f.name.as_str() {
+                        "LFV" => {
+                            let c = self.get(self.ids.lfvc, m).max(1) as f64;
+                            (self.motors[i].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
+                        }
+                        "LFS" => self.strain(m),
+                        "LFAP" => {
+                            let p = self.motors[i].position().clamp(0, 65535);
+                            if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
+                        }
+                        "LFDP" => {
+                            let present = self.motors[i].position();
+                            let c = self.get(self.ids.lfdpc, m);
+                            let mut r = self.motors[i].reported.unwrap_or(present);
+                            let q = if self.faults.contains(&Fault::LfdpNotClipped) {
+                                let d = (present - r) / c.max(1);
+                                r += d * c.max(1);
+                                i64::from(d as i8)
+                            } else {
+                                i64::from(realtime::lfdp_step(&mut r, present, c, discard))
+                            };
+                            self.motors[i].reported = Some(r);
+                            q
+                        }
+                        "LFBP" => self.get(self.ids.bp, m),
+                        "LFAIN" => self.scenario.analog_input[i],
+                        _ => 0,
+                    }
+                }
+                None => {
+                    let t = self.temperature();
+                    if f.size == 1 && hand.lft_whole_degrees { t / 10 } else { t }
+                }
+            };
+            rt.feedback[k] = v;
+        }
+        rt.layout.feedback.encode_clamped(realtime::FEEDBACK_HEADER, &rt.feedback, &mut self.out);
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,248 @@
+use super::*;
+
+fn hand(profile: &str) -> Device {
+    let mut d = Device::with_profile(Profile::builtin(profile).unwrap());
+    d.clear_output();
+    d
+}
+
+/// Sends one line, runs it to completion, returns the bytes.
+fn send(d: &mut Device, line: &str) -> String {
+    let now = d.now();
+    d.handle_input(now, format!("{line}\r").as_bytes());
+    d.run_until_idle(Duration::from_secs(120));
+    String::from_utf8_lossy(&d.take_output()).into_owned()
+}
+
+#[test]
+fn banner_at_power_up() {
+    let mut d = Device::with_profile(Profile::builtin("seed").unwrap());
+    let out = String::from_utf8(d.take_output()).unwrap();
+    assert!(out.starts_with("\n\rBarrettHand Firmware"), "{out:?}");
+    assert!(out.ends_with("\n\r=> "));
+}
+
+#[test]
+fn seed_examples_from_the_issue() {
+    let mut d = hand("seed");
+    assert_eq!(send(&mut d, "HI"), "HI\n\r=> ");
+    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\n\r1000 1000 1000 150\n\r=> ");
+    assert_eq!(send(&mut d, "BOGUS"), "BOGUS\n\rERR 32\n\r=> ");
+    assert_eq!(send(&mut d, "FSET DP 70000"), "FSET DP 70000\n\rERR 128\n\r=> ");
+    assert_eq!(send(&mut d, ""), "\n\r=> ");
+}
+
+#[test]
+fn motion_before_hi_is_refused() {
+    let mut d = hand("seed");
+    assert_eq!(send(&mut d, "C"), "C\n\rERR 4\n\r=> ");
+    assert_eq!(send(&mut d, "T"), "T\n\rERR 1\n\r=> ");
+    assert_eq!(send(&mut d, "FGET S"), "FGET S\n\r1 1 1 1\n\r=> ");
+    let mut b = hand("bh8-262");
+    assert_eq!(send(&mut b, "FGET S"), "FGET S\n\r4 4 4 4\n\r=> ");
+}
+
+#[test]
+fn close_and_open_move_the_fingers() {
+    let mut d = hand("seed");
+    send(&mut d, "HI");
+    let t0 = d.now();
+    assert_eq!(send(&mut d, "123C"), "123C\n\r=> ");
+    assert!(d.now() - t0 > Duration::from_secs(1), "closing takes time");
+    assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r17000 17000 17000 0\n\r=> ");
+    send(&mut d, "123O");
+    assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r0 0 0 0\n\r=> ");
+    assert_eq!(send(&mut d, "2M 5000"), "2M 5000\n\r=> ");
+    assert_eq!(d.position(2), 5000);
+}
+
+#[test]
+fn missed_position_gives_16() {
+    let mut d = hand("seed");
+    send(&mut d, "HI");
+    // The spread stops at 3150.
+    assert_eq!(send(&mut d, "SM 5000"), "SM 5000\n\rERR 16\n\r=> ");
+    // An object in F1's way.
+    let mut sc = d.scenario().clone();
+    sc.objects[0] = Some(4000);
+    d.set_scenario(sc);
+    assert_eq!(send(&mut d, "1M 8000"), "1M 8000\n\rERR 16\n\r=> ");
+    let p = d.position(1);
+    assert!((4000..=4600).contains(&p), "{p}");
+    // Closing into it is not an error.
+    send(&mut d, "1O");
+    assert_eq!(send(&mut d, "1C"), "1C\n\r=> ");
+}
+
+#[test]
+fn strain_limit_stops_a_finger() {
+    let mut d = hand("seed");
+    let mut sc = d.scenario().clone();
+    sc.objects[1] = Some(3000);
+    sc.strain_noise = 0;
+    d.set_scenario(sc);
+    send(&mut d, "HI");
+    send(&mut d, "2FSET MSG 60");
+    assert_eq!(send(&mut d, "2C"), "2C\n\r=> ");
+    let p = d.position(2);
+    // 20 + 0.25 * (p - 3000) > 60 first at p = 3161.
+    assert!((3150..3200).contains(&p), "{p}");
+}
+
+#[test]
+fn abort_during_motion() {
+    let mut s = hand("seed");
+    send(&mut s, "HI");
+    s.handle_input(s.now(), b"C\r");
+    s.handle_timeout(s.now() + Duration::from_millis(200));
+    s.handle_input(s.now(), b"\x03");
+    assert_eq!(String::from_utf8(s.take_output()).unwrap(), "C\n\r=> ");
+    assert!(!s.is_busy());
+    let mut b = hand("bh8-262");
+    send(&mut b, "HI");
+    b.handle_input(b.now(), b"C\r");
+    b.handle_timeout(b.now() + Duration::from_millis(100));
+    b.handle_input(b.now(), b"\x03");
+    assert_eq!(String::from_utf8(b.take_output()).unwrap(), "C\n\rERR 16384\n\r=> ");
+}
+
+#[test]
+fn input_during_motion_waits_its_turn() {
+    let mut d = hand("seed");
+    send(&mut d, "HI");
+    d.handle_input(d.now(), b"C\rFGET P\r");
+    d.run_until_idle(Duration::from_secs(60));
+    assert_eq!(String::from_utf8(d.take_output()).unwrap(), "C\n\r=> FGET P\n\r17000 17000 17000 3150\n\r=> ");
+}
+
+#[test]
+fn persistence() {
+    let mut d = hand("seed");
+    send(&mut d, "FSET DP 5000 BAUD 192");
+    send(&mut d, "FSAVE");
+    send(&mut d, "FSET DP 7000");
+    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\n\r7000 7000 7000 7000\n\r=> ");
+    send(&mut d, "FLOAD");
+    assert_eq!(send(&mut d, "FGET DP BAUD"), "FGET DP BAUD\n\r5000 5000 5000 5000\n\r192 192 192 192\n\r=> ");
+    send(&mut d, "FDEF");
+    assert_eq!(send(&mut d, "1FGET DP"), "1FGET DP\n\r1000\n\r=> ");
+    let out = send(&mut d, "RESET");
+    assert!(out.starts_with("RESET\n\rBarrettHand Firmware"), "{out}");
+    assert_eq!(send(&mut d, "FGET DP BAUD"), "FGET DP BAUD\n\r5000 5000 5000 5000\n\r96 96 96 96\n\r=> ");
+    assert_eq!(send(&mut d, "C"), "C\n\rERR 4\n\r=> ");
+}
+
+#[test]
+fn overlong_line_is_an_error_and_bounded() {
+    let mut d = hand("seed");
+    let long = "X".repeat(10_000);
+    let out = send(&mut d, &long);
+    assert!(out.ends_with("\n\rERR 1024\n\r=> "));
+    assert_eq!(send(&mut d, "FGET MPE"), "FGET MPE\n\r25 25 25 25\n\r=> ");
+}
+
+fn seed_rt(d: &mut Device) {
+    send(d, "HI");
+    send(d, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
+    send(d, "4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
+}
+
+#[test]
+fn seed_realtime_example_layout() {
+    let mut d = hand("seed");
+    seed_rt(&mut d);
+    assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
+    let l = d.rt_layout().unwrap();
+    assert_eq!(l.control.size, 3);
+    assert_eq!(l.feedback.size, 6);
+    let names: Vec<_> = l.feedback.fields.iter().map(|f| (f.motor, f.name.as_str())).collect();
+    assert_eq!(names, vec![(Some(1), "LFS"), (Some(1), "LFDP"), (Some(2), "LFS"), (Some(2), "LFDP"), (Some(4), "LFDP")]);
+    d.handle_input(d.now(), &[b'C', 20, 0xFB]);
+    let fb = d.take_output();
+    assert_eq!(fb.len(), 6);
+    assert_eq!(fb[0], b'*');
+    d.handle_input(d.now(), b"a");
+    assert_eq!(d.take_output(), b"*");
+    d.handle_input(d.now(), b"\x03");
+    assert_eq!(d.take_output(), b"\n\r=> ");
+    assert_eq!(d.mode(), Mode::Idle);
+}
+
+#[test]
+fn realtime_velocity_moves_the_finger() {
+    let mut d = hand("seed");
+    seed_rt(&mut d);
+    send(&mut d, "124LOOP");
+    d.handle_input(d.now(), &[b'c', 55, 0]);
+    let t = d.now() + Duration::from_millis(1000);
+    d.handle_input(t, b"a");
+    d.take_output();
+    // 55 × LCVC 1 × 0.1 counts/ms for 1000 ms.
+    assert_eq!(d.position(1), 5500);
+    assert_eq!(d.position(2), 0);
+}
+
+#[test]
+fn bad_header_returns_to_supervisory() {
+    let mut d = hand("seed");
+    seed_rt(&mut d);
+    send(&mut d, "124LOOP");
+    d.handle_input(d.now(), b"X");
+    assert_eq!(d.take_output(), b"\n\rERR 2048\n\r=> ");
+    assert_eq!(send(&mut d, "FGET LCV"), "FGET LCV\n\r1 1 1 0\n\r=> ");
+}
+
+#[test]
+fn manual_example_43_feedback_is_8_bytes() {
+    let mut d = hand("bh8-262-4.3");
+    send(&mut d, "HI");
+    send(&mut d, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
+    send(&mut d, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
+    send(&mut d, "PSET LFT 1");
+    assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
+    assert_eq!(d.rt_layout().unwrap().feedback.size, 8);
+    let mut e = hand("bh8-262-4.4");
+    send(&mut e, "HI");
+    send(&mut e, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
+    send(&mut e, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
+    send(&mut e, "PSET LFT 1");
+    send(&mut e, "124LOOP");
+    assert_eq!(e.rt_layout().unwrap().feedback.size, 7);
+}
+
+#[test]
+fn lfdp_worked_example_through_the_device() {
+    let mut d = hand("seed");
+    send(&mut d, "HI");
+    send(&mut d, "1FSET LCV 1 LCVC 1 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 2");
+    send(&mut d, "1M 1500");
+    assert_eq!(send(&mut d, "1FGET P"), "1FGET P\n\r1500\n\r=> ");
+    send(&mut d, "1M 2000");
+    send(&mut d, "1LOOP");
+    let mut sent = Vec::new();
+    for _ in 0..3 {
+        d.handle_input(d.now(), b"A");
+        sent.push(d.take_output());
+    }
+    assert_eq!(sent, vec![vec![b'*', 0x7F], vec![b'*', 0x7B], vec![b'*', 0x00]]);
+}
+
+#[test]
+fn same_inputs_same_bytes() {
+    let run = || {
+        let mut d = Device::new(Profile::builtin("bh8-262").unwrap(), DeviceConfig { seed: 7, ..Default::default() });
+        for l in ["HI", "FGET SG", "PGET TEMP", "GC", "FGET P SG", "GO", "PGET TEMP UPSECS"] {
+            send(&mut d, l);
+        }
+        d.take_output()
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn faults_change_the_bytes() {
+    let p = Profile::builtin("seed").unwrap();
+    let mut d = Device::new(p, DeviceConfig { faults: vec![Fault::CrLf, Fault::FgetReversed], ..Default::default() });
+    d.clear_output();
+    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\r\n150 1000 1000 1000\r\n=> ");
+}

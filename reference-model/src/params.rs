@@ -1,0 +1,237 @@
+//! The parameter store (the hand's RAM copy) and the non-volatile memory (its EEPROM),
+//! both plain values.
+//!
+//! This module owns defaults, range-checked writes and the FSAVE/FLOAD/FDEF (PSAVE/PLOAD/PDEF)
+//! transfers. Live values (P, SG, TEMP...) are the device's: the store only holds what is
+//! written.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::motor::MotorSet;
+use crate::spec::{ParamId, Profile, Scope};
+
+/// A write the store refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum StoreError {
+    /// The value is outside the parameter's range or set (128).
+    #[error("value out of range")]
+    OutOfRange,
+    /// The parameter is read-only (256).
+    #[error("read-only parameter")]
+    ReadOnly,
+}
+
+/// Working values of every stored parameter. Motor parameters hold one value per motor;
+/// globals use slot 0.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParamStore {
+    values: Vec<[i64; 4]>,
+}
+
+/// The transfers between RAM and EEPROM.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transfer {
+    /// RAM to EEPROM (FSAVE / PSAVE).
+    Save,
+    /// EEPROM to RAM (FLOAD / PLOAD).
+    Load,
+    /// Factory defaults to RAM (FDEF / PDEF).
+    Defaults,
+}
+
+impl Transfer {
+    fn command(self, scope: Scope) -> &'static str {
+        match (self, scope) {
+            (Transfer::Save, Scope::Motor) => "FSAVE",
+            (Transfer::Load, Scope::Motor) => "FLOAD",
+            (Transfer::Defaults, Scope::Motor) => "FDEF",
+            (Transfer::Save, Scope::Global) => "PSAVE",
+            (Transfer::Load, Scope::Global) => "PLOAD",
+            (Transfer::Defaults, Scope::Global) => "PDEF",
+        }
+    }
+}
+
+impl ParamStore {
+    /// Factory defaults for every stored parameter.
+    pub fn defaults(profile: &Profile) -> ParamStore {
+        let mut values = vec![[0i64; 4]; profile.slots];
+        for id in profile.param_ids() {
+            if profile.param(id).alias_of.is_some() {
+                continue;
+            }
+            let slot = profile.slot[id.0 as usize] as usize;
+            for m in 1..=4u8 {
+                values[slot][m as usize - 1] = profile.default_for(id, m);
+            }
+        }
+        ParamStore { values }
+    }
+
+    /// The stored value of a parameter for a motor (1..=4; ignored for globals).
+    pub fn get(&self, profile: &Profile, id: ParamId, motor: u8) -> i64 {
+        let slot = profile.slot[id.0 as usize] as usize;
+        match profile.param(id).scope {
+            Scope::Motor => self.values[slot][(motor.clamp(1, 4) - 1) as usize],
+            Scope::Global => self.values[slot][0],
+        }
+    }
+
+    /// Looks a parameter up by name and reads it; `None` if the profile lacks it.
+    pub fn get_named(&self, profile: &Profile, name: &str, motor: u8) -> Option<i64> {
+        profile.param_id(name).map(|id| self.get(profile, id, motor))
+    }
+
+    /// Writes a value after the range and read-only checks.
+    pub fn set(&mut self, profile: &Profile, id: ParamId, motors: MotorSet, value: i64) -> Result<(), StoreError> {
+        if profile.param(id).read_only {
+            return Err(StoreError::ReadOnly);
+        }
+        if !profile.value_ok(id, value) {
+            return Err(StoreError::OutOfRange);
+        }
+        self.set_unchecked(profile, id, motors, value);
+        Ok(())
+    }
+
+    /// Writes a value with no checks (the model's own bookkeeping and faults).
+    pub fn set_unchecked(&mut self, profile: &Profile, id: ParamId, motors: MotorSet, value: i64) {
+        let slot = profile.slot[id.0 as usize] as usize;
+        match profile.param(id).scope {
+            Scope::Motor => {
+                for m in motors.iter() {
+                    self.values[slot][m as usize - 1] = value;
+                }
+            }
+            Scope::Global => self.values[slot][0] = value,
+        }
+    }
+
+    /// Runs FSAVE/FLOAD/FDEF (`scope` motor, on `motors`) or PSAVE/PLOAD/PDEF (`scope`
+    /// global) for every parameter whose `persist` list names the command.
+    pub fn transfer(&mut self, profile: &Profile, nv: &mut NvMemory, t: Transfer, scope: Scope, motors: MotorSet) {
+        let cmd = t.command(scope);
+        for id in profile.param_ids() {
+            let p = profile.param(id);
+            if p.scope != scope || p.alias_of.is_some() || !p.persist.iter().any(|c| c == cmd) {
+                continue;
+            }
+            let targets = match scope {
+                Scope::Motor => motors,
+                Scope::Global => MotorSet::single(1).unwrap_or_default(),
+            };
+            for m in targets.iter() {
+                match t {
+                    Transfer::Save => nv.store(profile, id, m, self.get(profile, id, m)),
+                    Transfer::Load => {
+                        let v = nv.load(profile, id, m);
+                        self.set_unchecked(profile, id, MotorSet::single(m).unwrap_or_default(), v)
+                    }
+                    Transfer::Defaults => {
+                        let v = profile.default_for(id, m);
+                        self.set_unchecked(profile, id, MotorSet::single(m).unwrap_or_default(), v)
+                    }
+                }
+            }
+        }
+    }
+
+    /// The state after power-up or RESET: factory defaults, then FLOAD and PLOAD from `nv`.
+    pub fn power_up(profile: &Profile, nv: &mut NvMemory) -> ParamStore {
+        let mut s = ParamStore::defaults(profile);
+        s.transfer(profile, nv, Transfer::Load, Scope::Motor, MotorSet::ALL);
+        s.transfer(profile, nv, Transfer::Load, Scope::Global, MotorSet::ALL);
+        s
+    }
+}
+
+/// The hand's non-volatile memory: saved parameters by name, and the values the hand keeps
+/// by itself (odometer, powered seconds, peak temperature, serial number).
+///
+/// Held as a value so that the harness can persist it (`gcl sim --eeprom FILE`) and tests can
+/// compare it.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NvMemory {
+    /// Saved motor parameters: name → value per motor 1..=4.
+    #[serde(default)]
+    pub motor: BTreeMap<String, [i64; 4]>,
+    /// Saved global parameters: name → value.
+    #[serde(default)]
+    pub global: BTreeMap<String, i64>,
+    /// Self-stored values: odometer counts per motor (OD is this ÷ 1000).
+    #[serde(default)]
+    pub odometer_counts: [u64; 4],
+    /// Self-stored: powered milliseconds (UPSECS is this ÷ 1000).
+    #[serde(default)]
+    pub powered_ms: u64,
+    /// Self-stored: the highest temperature seen, tenths of °C.
+    #[serde(default)]
+    pub peak_temperature: i64,
+    /// Self-stored: the serial number.
+    #[serde(default)]
+    pub serial_number: i64,
+    /// How many FSAVE/PSAVE writes the memory has taken (the parts wear out near 5000).
+    #[serde(default)]
+    pub writes: u64,
+}
+
+impl NvMemory {
+    /// The saved value of a parameter, or its factory default if none was saved.
+    pub fn load(&self, profile: &Profile, id: ParamId, motor: u8) -> i64 {
+        let p = profile.param(id);
+        let saved = match p.scope {
+            Scope::Motor => self.motor.get(&p.name).map(|v| v[(motor.clamp(1, 4) - 1) as usize]),
+            Scope::Global => self.global.get(&p.name).copied(),
+        };
+        match saved {
+            Some(v) if profile.value_ok(id, v) => v,
+            _ => profile.default_for(id, motor),
+        }
+    }
+
+    fn store(&mut self, profile: &Profile, id: ParamId, motor: u8, value: i64) {
+        let p = profile.param(id);
+        self.writes += 1;
+        match p.scope {
+            Scope::Motor => {
+                let entry = self.motor.entry(p.name.clone()).or_insert_with(|| {
+                    let mut d = [0; 4];
+                    for m in 1..=4u8 {
+                        d[m as usize - 1] = profile.default_for(id, m);
+                    }
+                    d
+                });
+                entry[(motor.clamp(1, 4) - 1) as usize] = value;
+            }
+            Scope::Global => {
+                self.global.insert(p.name.clone(), value);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn save_load_defaults() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut nv = NvMemory::default();
+        let mut s = ParamStore::power_up(&p, &mut nv);
+        let dp = p.param_id("DP").unwrap();
+        assert_eq!(s.get(&p, dp, 1), 1000);
+        assert_eq!(s.get(&p, dp, 4), 150);
+        s.set(&p, dp, MotorSet::from_motors([1]), 5000).unwrap();
+        assert_eq!(s.set(&p, dp, MotorSet::ALL, 20001), Err(StoreError::OutOfRange));
+        s.transfer(&p, &mut nv, Transfer::Save, Scope::Motor, MotorSet::ALL);
+        s.transfer(&p, &mut nv, Transfer::Defaults, Scope::Motor, MotorSet::ALL);
+        assert_eq!(s.get(&p, dp, 1), 1000);
+        let s2 = ParamStore::power_up(&p, &mut nv);
+        assert_eq!(s2.get(&p, dp, 1), 5000);
+        let baud = p.param_id("BAUD").unwrap();
+        assert_eq!(s2.get(&p, baud, 3), 96);
+    }
+}

@@ -1,0 +1,806 @@
+//! The protocol as data: the schema of the files under `spec/` and the loader that turns
+//! them into a resolved [`Profile`].
+//!
+//! This module owns the mapping from TOML text to typed tables. It never touches the file
+//! system: the embedded profiles come in through `include_str!`, and a profile from
+//! elsewhere comes in through a caller-supplied resolver (see [`Profile::load_with`]).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::status::StatusBits;
+
+/// Files under `spec/` compiled into the model, by their path relative to `spec/`.
+pub const EMBEDDED_FILES: &[(&str, &str)] = &[
+    ("shared/framing.toml", include_str!("../../spec/shared/framing.toml")),
+    ("shared/status.toml", include_str!("../../spec/shared/status.toml")),
+    ("seed.toml", include_str!("../../spec/seed.toml")),
+    ("bh8-262/common.toml", include_str!("../../spec/bh8-262/common.toml")),
+    ("bh8-262-4.3.toml", include_str!("../../spec/bh8-262-4.3.toml")),
+    ("bh8-262-4.4.toml", include_str!("../../spec/bh8-262-4.4.toml")),
+];
+
+/// The profiles shipped with the model: `(name, top-level file)`.
+pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
+    ("seed", "seed.toml"),
+    ("bh8-262-4.3", "bh8-262-4.3.toml"),
+    ("bh8-262-4.4", "bh8-262-4.4.toml"),
+];
+
+/// Why a spec file could not become a profile.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum SpecError {
+    /// No embedded profile or alias has this name.
+    #[error("unknown profile `{0}` (known: seed, bh8-262-4.3, bh8-262-4.4, bh8-262)")]
+    UnknownProfile(String),
+    /// An `include` named a file the resolver could not supply.
+    #[error("spec file `{0}` not found")]
+    MissingFile(String),
+    /// A file is not valid TOML for the schema.
+    #[error("spec file `{file}`: {message}")]
+    Syntax {
+        /// The file.
+        file: String,
+        /// What the TOML parser said.
+        message: String,
+    },
+    /// The files parse but contradict each other or the model.
+    #[error("profile `{profile}`: {message}")]
+    Invalid {
+        /// The profile being resolved.
+        profile: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Includes loop back on themselves.
+    #[error("spec include cycle through `{0}`")]
+    IncludeCycle(String),
+}
+
+/// One spec file as written. Lists from included files come first; an entry with the same
+/// name later in the chain replaces the earlier one in place.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpecFile {
+    /// The profile id (top-level files only).
+    #[serde(default)]
+    pub id: Option<String>,
+    /// A one-line title.
+    #[serde(default)]
+    pub title: Option<String>,
+    /// Other names this profile answers to.
+    #[serde(default)]
+    pub aliases: Vec<String>,
+    /// Files (relative to `spec/`) merged before this one, in order.
+    #[serde(default)]
+    pub include: Vec<String>,
+    /// Byte-level framing.
+    #[serde(default)]
+    pub framing: Option<Framing>,
+    /// Lines of the power-up and RESET banner.
+    #[serde(default)]
+    pub banner: Option<Vec<String>>,
+    /// Lines printed by `VERS`.
+    #[serde(default)]
+    pub version: Option<Vec<String>>,
+    /// Physical and behavioural constants of the grasper.
+    #[serde(default)]
+    pub hand: Option<Hand>,
+    /// Motor prefix characters.
+    #[serde(default)]
+    pub prefixes: Vec<PrefixSpec>,
+    /// Commands.
+    #[serde(default)]
+    pub commands: Vec<CommandSpec>,
+    /// Names of commands from included files that this profile does not have.
+    #[serde(default)]
+    pub remove_commands: Vec<String>,
+    /// Parameters.
+    #[serde(default)]
+    pub params: Vec<ParamSpec>,
+    /// Names of parameters from included files that this profile does not have.
+    #[serde(default)]
+    pub remove_params: Vec<String>,
+    /// Status bits.
+    #[serde(default)]
+    pub status: Vec<StatusSpec>,
+    /// Decisions taken where the seed is silent or wrong.
+    #[serde(default)]
+    pub decisions: Vec<Decision>,
+}
+
+/// Framing: how bytes become lines and lines become output.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct Framing {
+    /// The byte that ends a command line (CR, 13).
+    pub terminator: u8,
+    /// Whether every received byte is echoed.
+    pub echo: bool,
+    /// The bytes written in front of every output line and the prompt.
+    pub line_ending: String,
+    /// The prompt text.
+    pub prompt: String,
+    /// Longest command line accepted, in bytes, terminator excluded.
+    pub max_line: usize,
+    /// Status sent for a line longer than `max_line`.
+    pub overlong_status: u32,
+    /// The abort byte (^C, 3).
+    pub abort: u8,
+}
+
+/// Constants of the simulated grasper that the protocol text does not cover but a model needs.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Hand {
+    /// Position of the finger's closed joint stop, in encoder counts.
+    pub finger_limit: i64,
+    /// Position of the spread's closed joint stop.
+    pub spread_limit: i64,
+    /// Encoder counts per millisecond for one unit of MCV/MOV/IVEL and of RealTime velocity.
+    pub counts_per_ms_per_velocity_unit: f64,
+    /// Velocity units per millisecond gained for each unit of ACCEL.
+    pub velocity_units_per_ms_per_accel: f64,
+    /// Fraction bits in the RealTime LCV datum (0 in the seed; 4.4 fixed point in 4.3x).
+    pub lcv_fraction_bits: u32,
+    /// Encoder counts per millisecond for a RealTime velocity of 1.0 (LCV datum × LCVC,
+    /// after the fraction bits).
+    pub rt_velocity_counts_per_ms: f64,
+    /// Encoder counts per millisecond that one unit of raw feedback velocity (LFV × LFVC) stands for.
+    pub lfv_counts_per_ms: f64,
+    /// Target of C in profiles without a CT parameter: fingers.
+    #[serde(default)]
+    pub finger_close_target: Option<i64>,
+    /// Target of C in profiles without a CT parameter: spread.
+    #[serde(default)]
+    pub spread_close_target: Option<i64>,
+    /// Status a ^C during motion sends (0: prompt only).
+    pub abort_status: u32,
+    /// Status `T` sends for an uninitialised motor.
+    pub terminate_uninitialized_status: u32,
+    /// Status any other motion command sends for an uninitialised motor.
+    pub uninitialized_status: u32,
+    /// Status for a motion command while over temperature (0: no overtemperature check).
+    pub overtemp_status: u32,
+    /// Status when a position move ends outside MPE.
+    pub missed_position_status: u32,
+    /// Status for a bad RealTime header.
+    pub bad_header_status: u32,
+    /// Value of the `S` parameter before HI.
+    pub uninitialized_state_value: i64,
+    /// Strain reading of a finger touching nothing.
+    pub free_strain: i64,
+    /// Strain counts gained per encoder count pressed into an object.
+    pub strain_per_count: f64,
+    /// How far, in counts, a finger can press into an object before it stalls.
+    pub object_compliance: i64,
+    /// Time HI spends at the open stop (vibration, commutation), in ms, per motor.
+    pub hi_settle_ms: u64,
+    /// Whether the RealTime LFT field exists and its width in bytes (0: none).
+    pub lft_size: usize,
+    /// Whether an LFT of width 1 carries whole degrees (true) or tenths (false).
+    pub lft_whole_degrees: bool,
+    /// Whether a bare `?` lists only standard commands (advanced ones through `A?`).
+    pub help_lists_standard_only: bool,
+}
+
+/// One motor prefix character.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct PrefixSpec {
+    /// The character, upper case.
+    pub char: char,
+    /// The motors it names, 1..=4.
+    pub motors: Vec<u8>,
+}
+
+/// What a command does, in the model's terms. Each kind has one implementation.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Hash)]
+#[serde(rename_all = "kebab-case")]
+pub enum CommandKind {
+    /// `C`: move to the close target.
+    Close,
+    /// `O`: move to the open target.
+    Open,
+    /// `M [pos]`: move to a position (DP when none).
+    Move,
+    /// `IC [dist]`: incremental close by DS or the argument.
+    IncrementalClose,
+    /// `IO [dist]`: incremental open.
+    IncrementalOpen,
+    /// `HOME`: move to 0.
+    Home,
+    /// `TC`: velocity close until stall.
+    TorqueClose,
+    /// `TO`: velocity open until stall.
+    TorqueOpen,
+    /// `HI`: initialise and home.
+    Initialize,
+    /// `T`: cut motor power.
+    Terminate,
+    /// `LOOP`: enter RealTime mode.
+    Loop,
+    /// `FSET name value ...`.
+    MotorSet,
+    /// `FGET name ...`.
+    MotorGet,
+    /// `FDEF`.
+    MotorDefaults,
+    /// `FLOAD`.
+    MotorLoad,
+    /// `FSAVE`.
+    MotorSave,
+    /// `FLIST`: standard motor parameter names.
+    MotorList,
+    /// `FLISTV`: standard motor parameter values.
+    MotorListValues,
+    /// `FLISTA`: all motor parameter names.
+    MotorListAll,
+    /// `FLISTAV`: all motor parameter values.
+    MotorListAllValues,
+    /// `PSET name value ...`.
+    GlobalSet,
+    /// `PGET name ...`.
+    GlobalGet,
+    /// `PDEF`.
+    GlobalDefaults,
+    /// `PLOAD`.
+    GlobalLoad,
+    /// `PSAVE`.
+    GlobalSave,
+    /// `PLIST`.
+    GlobalList,
+    /// `PLISTV`.
+    GlobalListValues,
+    /// `PLISTA`.
+    GlobalListAll,
+    /// `PLISTAV`.
+    GlobalListAllValues,
+    /// `RESET`: as a power cycle.
+    Reset,
+    /// `ERR [n]`: describe status bits.
+    ErrorText,
+    /// `VERS`.
+    Version,
+    /// `?` and `?CMD`.
+    Help,
+    /// `A?`: standard and advanced commands.
+    HelpAll,
+}
+
+impl CommandKind {
+    /// Whether the command moves motors and so needs HI first.
+    pub fn is_motion(self) -> bool {
+        matches!(
+            self,
+            Self::Close
+                | Self::Open
+                | Self::Move
+                | Self::IncrementalClose
+                | Self::IncrementalOpen
+                | Self::Home
+                | Self::TorqueClose
+                | Self::TorqueOpen
+        )
+    }
+}
+
+/// Whether a command takes a motor prefix.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum PrefixRule {
+    /// A prefix is allowed; with none the command acts on the EN motors (motion) or all four.
+    Allowed,
+    /// A prefix gives 4096.
+    Forbidden,
+}
+
+/// What follows the command word.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ArgRule {
+    /// Nothing; any argument gives 1024.
+    None,
+    /// Zero or one integer in `arg_min..=arg_max`.
+    OptionalInteger,
+    /// One or more parameter names.
+    Names,
+    /// One or more `name value` pairs.
+    Pairs,
+}
+
+/// One command of a profile.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct CommandSpec {
+    /// The command word, upper case.
+    pub name: String,
+    /// A grouping for people: movement, realtime, motor-param, global-param, admin, advanced.
+    pub category: String,
+    /// What it does.
+    pub kind: CommandKind,
+    /// Whether it takes a prefix.
+    pub prefix: PrefixRule,
+    /// What follows it.
+    pub args: ArgRule,
+    /// Lowest integer argument (with `optional-integer`).
+    #[serde(default)]
+    pub arg_min: Option<i64>,
+    /// Highest integer argument (with `optional-integer`).
+    #[serde(default)]
+    pub arg_max: Option<i64>,
+    /// Listed only by `A?`, not by `?`.
+    #[serde(default)]
+    pub advanced: bool,
+    /// What it prints on success, for people.
+    pub prints: String,
+    /// The `?CMD` text.
+    pub help: String,
+}
+
+/// Whether a parameter belongs to each motor or to the hand.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scope {
+    /// One value per motor.
+    Motor,
+    /// One value for the hand.
+    Global,
+}
+
+/// Which RealTime block a flag adds a field to.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BlockKind {
+    /// Host to hand.
+    Control,
+    /// Hand to host.
+    Feedback,
+}
+
+/// The field a RealTime flag adds when it is 1.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct RtField {
+    /// The block.
+    pub block: BlockKind,
+    /// Width in bytes (1 or 2; two-byte fields are big-endian).
+    pub size: usize,
+    /// Two's complement or unsigned.
+    pub signed: bool,
+    /// Position among the fields of one motor (or among global fields).
+    pub order: u32,
+}
+
+/// One parameter of a profile.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct ParamSpec {
+    /// The name, upper case.
+    pub name: String,
+    /// Per motor or per hand.
+    pub scope: Scope,
+    /// Grouping: movement, status, realtime, advanced, config.
+    pub section: String,
+    /// What it means.
+    pub description: String,
+    /// Lowest value.
+    pub min: i64,
+    /// Highest value.
+    pub max: i64,
+    /// When set, only these values are valid.
+    #[serde(default)]
+    pub values: Option<Vec<i64>>,
+    /// Default for F1..F3 (or the global default).
+    #[serde(default)]
+    pub default: Option<i64>,
+    /// Default for the spread, when it differs.
+    #[serde(default)]
+    pub default_spread: Option<i64>,
+    /// Read-only: a write gives 256.
+    #[serde(default)]
+    pub read_only: bool,
+    /// Listed only by the `...A` list commands.
+    #[serde(default)]
+    pub advanced: bool,
+    /// Which of FSAVE/FLOAD/FDEF (or PSAVE/PLOAD/PDEF) cover it.
+    #[serde(default)]
+    pub persist: Vec<String>,
+    /// The command that reads it (default FGET for motor, PGET for global parameters).
+    #[serde(default)]
+    pub get: Option<String>,
+    /// The command that writes it (default FSET / PSET).
+    #[serde(default)]
+    pub set: Option<String>,
+    /// Another name for the same storage.
+    #[serde(default)]
+    pub alias_of: Option<String>,
+    /// Extra names accepted on input only.
+    #[serde(default)]
+    pub input_aliases: Vec<String>,
+    /// The value is computed from the hand's state, not stored.
+    #[serde(default)]
+    pub live: bool,
+    /// Kept by the hand itself across RESET and power loss (odometer, serial number...).
+    #[serde(default)]
+    pub self_stored: bool,
+    /// The RealTime field this flag adds.
+    #[serde(default)]
+    pub rt: Option<RtField>,
+}
+
+/// One status bit.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct StatusSpec {
+    /// The bit value (a power of two).
+    pub bit: u32,
+    /// The `ERR` description.
+    pub text: String,
+    /// Whether the model ever sends it.
+    pub sent: bool,
+}
+
+/// One decision taken where the seed is silent or wrong.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct Decision {
+    /// A stable slug.
+    pub id: String,
+    /// The clause of the seed (or manual) it resolves.
+    pub clause: String,
+    /// What the model does.
+    pub resolution: String,
+    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO.
+    pub level: String,
+}
+
+/// Index of a command in [`Profile::commands`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub struct CommandId(pub u16);
+
+/// Index of a parameter in [`Profile::params`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub struct ParamId(pub u16);
+
+/// A resolved profile: every include merged, every cross reference checked, indexes built.
+#[derive(Debug, Clone, Serialize)]
+pub struct Profile {
+    /// The profile id.
+    pub id: String,
+    /// A one-line title.
+    pub title: String,
+    /// Other names.
+    pub aliases: Vec<String>,
+    /// Framing.
+    pub framing: Framing,
+    /// Lines of the power-up and RESET banner.
+    pub banner: Vec<String>,
+    /// Lines printed by `VERS`.
+    pub version: Vec<String>,
+    /// Hand constants.
+    pub hand: Hand,
+    /// Motor prefixes.
+    pub prefixes: Vec<PrefixSpec>,
+    /// Commands, in listing order.
+    pub commands: Vec<CommandSpec>,
+    /// Parameters, in listing order.
+    pub params: Vec<ParamSpec>,
+    /// Status bits, lowest first.
+    pub status: Vec<StatusSpec>,
+    /// Decisions, in file order.
+    pub decisions: Vec<Decision>,
+    /// Storage slot of each parameter (aliases share their target's slot).
+    #[serde(skip)]
+    pub(crate) slot: Vec<u16>,
+    /// Number of distinct storage slots.
+    #[serde(skip)]
+    pub(crate) slots: usize,
+}
+
+fn parse_file(name: &str, text: &str) -> Result<SpecFile, SpecError> {
+    toml::from_str(text).map_err(|e| SpecError::Syntax {
+        file: name.to_string(),
+        message: e.to_string(),
+    })
+}
+
+fn merge_named<T: Clone>(into: &mut Vec<T>, from: &[T], name: impl Fn(&T) -> &str) {
+    for item in from {
+        match into.iter_mut().find(|x| name(x) == name(item)) {
+            Some(slot) => *slot = item.clone(),
+            None => into.push(item.clone()),
+        }
+    }
+}
+
+impl Profile {
+    /// The embedded profile with this name or alias (`bh8-262` is `bh8-262-4.4`).
+    pub fn builtin(name: &str) -> Result<Arc<Profile>, SpecError> {
+        use std::sync::OnceLock;
+        static CACHE: OnceLock<Vec<Arc<Profile>>> = OnceLock::new();
+        let all = CACHE.get_or_init(|| {
+            EMBEDDED_PROFILES
+                .iter()
+                .map(|(_, file)| {
+                    let p = Profile::load_with(file, &|f| embedded(f).map(str::to_string));
+                    // The embedded files are checked by this crate's tests; a failure here is
+                    // a build defect, not bad input.
+                    Arc::new(p.unwrap_or_else(|e| panic!("embedded spec is invalid: {e}")))
+                })
+                .collect()
+        });
+        all.iter()
+            .find(|p| p.id.eq_ignore_ascii_case(name) || p.aliases.iter().any(|a| a.eq_ignore_ascii_case(name)))
+            .cloned()
+            .ok_or_else(|| SpecError::UnknownProfile(name.to_string()))
+    }
+
+    /// Names of the embedded profiles.
+    pub fn builtin_names() -> impl Iterator<Item = &'static str> {
+        EMBEDDED_PROFILES.iter().map(|(n, _)| *n)
+    }
+
+    /// Loads a profile from `top`, asking `resolve` for the text of each file by its path
+    /// relative to `spec/`. The model itself never reads files.
+    pub fn load_with(top: &str, resolve: &dyn Fn(&str) -> Option<String>) -> Result<Profile, SpecError> {
+        let mut merged = SpecFile::default();
+        let mut stack = Vec::new();
+        Self::merge_file(top, resolve, &mut merged, &mut stack)?;
+        Self::resolve(merged)
+    }
+
+    fn merge_file(
+        name: &str,
+        resolve: &dyn Fn(&str) -> Option<String>,
+        into: &mut SpecFile,
+        stack: &mut Vec<String>,
+    ) -> Result<(), SpecError> {
+        if stack.iter().any(|s| s == name) {
+            return Err(SpecError::IncludeCycle(name.to_string()));
+        }
+        let text = resolve(name).ok_or_else(|| SpecError::MissingFile(name.to_string()))?;
+        let file = parse_file(name, &text)?;
+        stack.push(name.to_string());
+        for inc in &file.include {
+            Self::merge_file(inc, resolve, into, stack)?;
+        }
+        stack.pop();
+        if file.id.is_some() {
+            into.id = file.id.clone();
+        }
+        if file.title.is_some() {
+            into.title = file.title.clone();
+        }
+        into.aliases.extend(file.aliases.iter().cloned());
+        if file.framing.is_some() {
+            into.framing = file.framing.clone();
+        }
+        if file.hand.is_some() {
+            into.hand = file.hand.clone();
+        }
+        if file.banner.is_some() {
+            into.banner = file.banner.clone();
+        }
+        if file.version.is_some() {
+            into.version = file.version.clone();
+        }
+        if !file.prefixes.is_empty() {
+            into.prefixes = file.prefixes.clone();
+        }
+        merge_named(&mut into.commands, &file.commands, |c| &c.name);
+        into.commands.retain(|c| !file.remove_commands.contains(&c.name));
+        merge_named(&mut into.params, &file.params, |p| &p.name);
+        into.params.retain(|p| !file.remove_params.contains(&p.name));
+        let mut status = into.status.clone();
+        for s in &file.status {
+            match status.iter_mut().find(|x| x.bit == s.bit) {
+                Some(slot) => *slot = s.clone(),
+                None => status.push(s.clone()),
+            }
+        }
+        into.status = status;
+        merge_named(&mut into.decisions, &file.decisions, |d| &d.id);
+        Ok(())
+    }
+
+    fn resolve(f: SpecFile) -> Result<Profile, SpecError> {
+        let id = f.id.clone().unwrap_or_default();
+        let invalid = |message: String| SpecError::Invalid { profile: id.clone(), message };
+        if id.is_empty() {
+            return Err(invalid("no `id`".into()));
+        }
+        let framing = f.framing.ok_or_else(|| invalid("no [framing]".into()))?;
+        let hand = f.hand.ok_or_else(|| invalid("no [hand]".into()))?;
+        let banner = f.banner.ok_or_else(|| invalid("no `banner`".into()))?;
+        let version = f.version.ok_or_else(|| invalid("no `version`".into()))?;
+        if f.prefixes.is_empty() {
+            return Err(invalid("no [[prefixes]]".into()));
+        }
+        for p in &f.prefixes {
+            if p.motors.is_empty() || p.motors.iter().any(|m| !(1..=4).contains(m)) {
+                return Err(invalid(format!("prefix `{}` names motors outside 1..=4", p.char)));
+            }
+        }
+        let mut status = f.status;
+        status.sort_by_key(|s| s.bit);
+        for s in &status {
+            if !s.bit.is_power_of_two() || StatusBits::from_bits(s.bit).is_none() {
+                return Err(invalid(format!("status {} is not a known single bit", s.bit)));
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for c in &f.commands {
+            if !seen.insert(c.name.to_ascii_uppercase()) {
+                return Err(invalid(format!("command `{}` twice", c.name)));
+            }
+            if c.name.is_empty() || c.name.starts_with(|ch: char| f.prefixes.iter().any(|p| p.char == ch)) {
+                return Err(invalid(format!("command `{}` starts with a prefix character", c.name)));
+            }
+            if c.args == ArgRule::OptionalInteger && (c.arg_min.is_none() || c.arg_max.is_none()) {
+                return Err(invalid(format!("command `{}` needs arg_min and arg_max", c.name)));
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for p in &f.params {
+            for n in std::iter::once(&p.name).chain(&p.input_aliases) {
+                if !seen.insert(n.to_ascii_uppercase()) {
+                    return Err(invalid(format!("parameter name `{n}` twice")));
+                }
+            }
+            if p.min > p.max {
+                return Err(invalid(format!("parameter `{}` has min > max", p.name)));
+            }
+            if !p.live && !p.read_only && p.alias_of.is_none() && p.default.is_none() {
+                return Err(invalid(format!("writable parameter `{}` has no default", p.name)));
+            }
+            for cmd in p.get.iter().chain(&p.set).chain(&p.persist) {
+                if !f.commands.iter().any(|c| &c.name == cmd) {
+                    return Err(invalid(format!("parameter `{}` names command `{cmd}`, which the profile lacks", p.name)));
+                }
+            }
+            if let Some(rt) = &p.rt
+                && !(rt.size == 1 || rt.size == 2)
+            {
+                return Err(invalid(format!("RealTime field `{}` must be 1 or 2 bytes", p.name)));
+            }
+        }
+        // Storage slots: aliases share the slot of their target.
+        let mut slot = vec![0u16; f.params.len()];
+        let mut slots = 0usize;
+        for (i, p) in f.params.iter().enumerate() {
+            if p.alias_of.is_none() {
+                slot[i] = slots as u16;
+                slots += 1;
+            }
+        }
+        for (i, p) in f.params.iter().enumerate() {
+            if let Some(target) = &p.alias_of {
+                let t = f
+                    .params
+                    .iter()
+                    .position(|q| &q.name == target && q.alias_of.is_none())
+                    .ok_or_else(|| invalid(format!("`{}` is an alias of unknown `{target}`", p.name)))?;
+                slot[i] = slot[t];
+            }
+        }
+        Ok(Profile {
+            title: f.title.unwrap_or_default(),
+            aliases: f.aliases,
+            framing,
+            banner,
+            version,
+            hand,
+            prefixes: f.prefixes,
+            commands: f.commands,
+            params: f.params,
+            status,
+            decisions: f.decisions,
+            slot,
+            slots,
+            id,
+        })
+    }
+
+    /// Finds a command by name, ignoring ASCII case.
+    pub fn command_id(&self, name: &str) -> Option<CommandId> {
+        self.commands
+            .iter()
+            .position(|c| c.name.eq_ignore_ascii_case(name))
+            .map(|i| CommandId(i as u16))
+    }
+
+    /// The command with this id.
+    pub fn command(&self, id: CommandId) -> &CommandSpec {
+        &self.commands[id.0 as usize]
+    }
+
+    /// The first command of this kind, if the profile has one.
+    pub fn command_of_kind(&self, kind: CommandKind) -> Option<CommandId> {
+        self.commands.iter().position(|c| c.kind == kind).map(|i| CommandId(i as u16))
+    }
+
+    /// Finds a parameter by name or input alias, ignoring ASCII case.
+    pub fn param_id(&self, name: &str) -> Option<ParamId> {
+        self.params
+            .iter()
+            .position(|p| p.name.eq_ignore_ascii_case(name) || p.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name)))
+            .map(|i| ParamId(i as u16))
+    }
+
+    /// The parameter with this id.
+    pub fn param(&self, id: ParamId) -> &ParamSpec {
+        &self.params[id.0 as usize]
+    }
+
+    /// All parameter ids, in listing order.
+    pub fn param_ids(&self) -> impl Iterator<Item = ParamId> + '_ {
+        (0..self.params.len()).map(|i| ParamId(i as u16))
+    }
+
+    /// The command word that reads this parameter.
+    pub fn getter(&self, id: ParamId) -> &str {
+        let p = self.param(id);
+        p.get.as_deref().unwrap_or(match p.scope {
+            Scope::Motor => "FGET",
+            Scope::Global => "PGET",
+        })
+    }
+
+    /// The command word that writes this parameter.
+    pub fn setter(&self, id: ParamId) -> &str {
+        let p = self.param(id);
+        p.set.as_deref().unwrap_or(match p.scope {
+            Scope::Motor => "FSET",
+            Scope::Global => "PSET",
+        })
+    }
+
+    /// The text of one status bit, if the profile defines it.
+    pub fn status_text(&self, bit: u32) -> Option<&str> {
+        self.status.iter().find(|s| s.bit == bit).map(|s| s.text.as_str())
+    }
+
+    /// The default of a parameter for a motor (1..=4) or, for globals, the hand.
+    pub fn default_for(&self, id: ParamId, motor: u8) -> i64 {
+        let p = self.param(id);
+        if motor == 4 {
+            p.default_spread.or(p.default).unwrap_or(0)
+        } else {
+            p.default.unwrap_or(0)
+        }
+    }
+
+    /// Whether a value is valid for a parameter.
+    pub fn value_ok(&self, id: ParamId, value: i64) -> bool {
+        let p = self.param(id);
+        match &p.values {
+            Some(vs) => vs.contains(&value),
+            None => (p.min..=p.max).contains(&value),
+        }
+    }
+
+    /// Decisions grouped by the clause they resolve.
+    pub fn decisions_by_clause(&self) -> BTreeMap<&str, Vec<&Decision>> {
+        let mut m: BTreeMap<&str, Vec<&Decision>> = BTreeMap::new();
+        for d in &self.decisions {
+            m.entry(d.clause.as_str()).or_default().push(d);
+        }
+        m
+    }
+
+    /// The motors a prefix character names.
+    pub fn prefix_motors(&self, ch: char) -> Option<&[u8]> {
+        self.prefixes
+            .iter()
+            .find(|p| p.char.eq_ignore_ascii_case(&ch))
+            .map(|p| p.motors.as_slice())
+    }
+}
+
+/// The text of an embedded spec file, by its path relative to `spec/`.
+pub fn embedded(path: &str) -> Option<&'static str> {
+    EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
+}
