@@ -1,1 +1,66 @@
-fn main() {}
+//! `gcl`: the conformance kit for the Grasper Control Language.
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use gcl_harness::cli;
+
+/// The conformance kit for the Grasper Control Language (GCL), the serial protocol of
+/// Barrett's BH8-series robot hands.
+///
+/// Exit codes: 0 success, 1 conformance failures or mismatches, 2 usage or
+/// infrastructure errors.
+#[derive(Debug, Parser)]
+#[command(name = "gcl", version, propagate_version = true, max_term_width = 100)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run lines against a fresh simulated hand and show how the model reads and answers them.
+    Explain(cli::explain::Args),
+    /// Print a profile: framing, commands, parameters, status codes, decisions.
+    Spec(cli::spec::Args),
+    /// Run the simulated grasper on a pty, TCP or stdio.
+    Sim(cli::sim::Args),
+    /// Turn a script of host lines and blocks into a golden transcript.
+    Record(cli::record::Args),
+    /// Replay a transcript's host side and compare the hand's answers.
+    Replay(cli::replay::Args),
+    /// Run the conformance suite against a hand.
+    Conform(cli::conform::Args),
+    /// Run the suite at MUST and SHOULD and write a certificate bundle, or verify one.
+    Certify(cli::certify::Args),
+    /// Regenerate or check the committed golden transcripts.
+    Suite(cli::suite::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Explain(a) => cli::explain::run(a),
+        Command::Spec(a) => cli::spec::run(a),
+        Command::Sim(a) => cli::sim::run(a),
+        Command::Record(a) => cli::record::run(a),
+        Command::Replay(a) => cli::replay::run(a),
+        Command::Conform(a) => cli::conform::run(a),
+        Command::Certify(a) => cli::certify::run(a),
+        Command::Suite(a) => cli::suite::run(a),
+    };
+    match result {
+        Ok(code) => ExitCode::from(code),
+        Err(e) => {
+            // A closed pipe (`gcl spec | head`) is not an error.
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) {
+                return ExitCode::from(cli::EXIT_OK);
+            }
+            let _ = writeln!(std::io::stderr(), "gcl: error: {e:#}");
+            ExitCode::from(cli::EXIT_ERROR)
+        }
+    }
+}

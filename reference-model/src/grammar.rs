@@ -287,11 +287,7 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
     if !problems.is_empty() {
         return Err(Rejected::new(problems));
     }
-    Ok(Line::Command(Command {
-        prefix: has_prefix.then_some(prefix),
-        command: id,
-        args: parsed_args,
-    }))
+    Ok(Line::Command(Command { prefix: has_prefix.then_some(prefix), command: id, args: parsed_args }))
 }
 
 /// Resolves a parameter name for a get (`set == false`) or a set command.

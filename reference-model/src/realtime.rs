@@ -176,7 +176,13 @@ impl BlockLayout {
         for m in motors.iter() {
             for (id, p, rt) in flags.iter().filter(|(_, p, _)| p.scope == Scope::Motor) {
                 if store.get(profile, *id, m) != 0 {
-                    fields.push(Field { motor: Some(m), name: p.name.clone(), offset, size: rt.size, signed: rt.signed });
+                    fields.push(Field {
+                        motor: Some(m),
+                        name: p.name.clone(),
+                        offset,
+                        size: rt.size,
+                        signed: rt.signed,
+                    });
                     offset += rt.size;
                 }
             }

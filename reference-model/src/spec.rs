@@ -23,11 +23,8 @@ pub const EMBEDDED_FILES: &[(&str, &str)] = &[
 ];
 
 /// The profiles shipped with the model: `(name, top-level file)`.
-pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
-    ("seed", "seed.toml"),
-    ("bh8-262-4.3", "bh8-262-4.3.toml"),
-    ("bh8-262-4.4", "bh8-262-4.4.toml"),
-];
+pub const EMBEDDED_PROFILES: &[(&str, &str)] =
+    &[("seed", "seed.toml"), ("bh8-262-4.3", "bh8-262-4.3.toml"), ("bh8-262-4.4", "bh8-262-4.4.toml")];
 
 /// Why a spec file could not become a profile.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -501,10 +498,7 @@ pub struct Profile {
 }
 
 fn parse_file(name: &str, text: &str) -> Result<SpecFile, SpecError> {
-    toml::from_str(text).map_err(|e| SpecError::Syntax {
-        file: name.to_string(),
-        message: e.to_string(),
-    })
+    toml::from_str(text).map_err(|e| SpecError::Syntax { file: name.to_string(), message: e.to_string() })
 }
 
 fn merge_named<T: Clone>(into: &mut Vec<T>, from: &[T], name: impl Fn(&T) -> &str) {
@@ -658,7 +652,10 @@ impl Profile {
             }
             for cmd in p.get.iter().chain(&p.set).chain(&p.persist) {
                 if !f.commands.iter().any(|c| &c.name == cmd) {
-                    return Err(invalid(format!("parameter `{}` names command `{cmd}`, which the profile lacks", p.name)));
+                    return Err(invalid(format!(
+                        "parameter `{}` names command `{cmd}`, which the profile lacks",
+                        p.name
+                    )));
                 }
             }
             if let Some(rt) = &p.rt
@@ -706,10 +703,7 @@ impl Profile {
 
     /// Finds a command by name, ignoring ASCII case.
     pub fn command_id(&self, name: &str) -> Option<CommandId> {
-        self.commands
-            .iter()
-            .position(|c| c.name.eq_ignore_ascii_case(name))
-            .map(|i| CommandId(i as u16))
+        self.commands.iter().position(|c| c.name.eq_ignore_ascii_case(name)).map(|i| CommandId(i as u16))
     }
 
     /// The command with this id.
@@ -726,7 +720,9 @@ impl Profile {
     pub fn param_id(&self, name: &str) -> Option<ParamId> {
         self.params
             .iter()
-            .position(|p| p.name.eq_ignore_ascii_case(name) || p.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name)))
+            .position(|p| {
+                p.name.eq_ignore_ascii_case(name) || p.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name))
+            })
             .map(|i| ParamId(i as u16))
     }
 
@@ -766,11 +762,7 @@ impl Profile {
     /// The default of a parameter for a motor (1..=4) or, for globals, the hand.
     pub fn default_for(&self, id: ParamId, motor: u8) -> i64 {
         let p = self.param(id);
-        if motor == 4 {
-            p.default_spread.or(p.default).unwrap_or(0)
-        } else {
-            p.default.unwrap_or(0)
-        }
+        if motor == 4 { p.default_spread.or(p.default).unwrap_or(0) } else { p.default.unwrap_or(0) }
     }
 
     /// Whether a value is valid for a parameter.
@@ -793,10 +785,7 @@ impl Profile {
 
     /// The motors a prefix character names.
     pub fn prefix_motors(&self, ch: char) -> Option<&[u8]> {
-        self.prefixes
-            .iter()
-            .find(|p| p.char.eq_ignore_ascii_case(&ch))
-            .map(|p| p.motors.as_slice())
+        self.prefixes.iter().find(|p| p.char.eq_ignore_ascii_case(&ch)).map(|p| p.motors.as_slice())
     }
 }
 

@@ -64,9 +64,7 @@ impl StatusBits {
     /// The `ERR n` description lines for each set bit, as the profile words them:
     /// `bit: text`. Bits the profile does not define are skipped.
     pub fn describe(self, profile: &Profile) -> Vec<String> {
-        self.iter()
-            .filter_map(|b| profile.status_text(b.bits()).map(|t| format!("{}: {}", b.bits(), t)))
-            .collect()
+        self.iter().filter_map(|b| profile.status_text(b.bits()).map(|t| format!("{}: {}", b.bits(), t))).collect()
     }
 }
 

@@ -79,10 +79,6 @@ pub struct UnknownFault(pub String);
 impl FromStr for Fault {
     type Err = UnknownFault;
     fn from_str(s: &str) -> Result<Fault, UnknownFault> {
-        Fault::ALL
-            .iter()
-            .copied()
-            .find(|f| f.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| UnknownFault(s.to_string()))
+        Fault::ALL.iter().copied().find(|f| f.name().eq_ignore_ascii_case(s)).ok_or_else(|| UnknownFault(s.to_string()))
     }
 }

@@ -431,7 +431,8 @@ impl Device {
             let (mcv, mov) = (self.get(self.ids.mcv, m) as f64 * vel_unit, self.get(self.ids.mov, m) as f64 * vel_unit);
             let ivel = self.ids.ivel.map_or(mov, |id| self.params.get(&profile, id, m) as f64 * vel_unit);
             let tstop = self.get(self.ids.tstop, m).max(0) as u32;
-            let (hsg, lsg) = (self.get(self.ids.hsg, m), self.ids.lsg.map_or(256, |id| self.params.get(&profile, id, m)));
+            let (hsg, lsg) =
+                (self.get(self.ids.hsg, m), self.ids.lsg.map_or(256, |id| self.params.get(&profile, id, m)));
             let bs = self.get(self.ids.bs, m) != 0;
             let before = self.motors[i].pos;
             let motor = &mut self.motors[i];
@@ -443,7 +444,8 @@ impl Device {
                 open_speed: mov,
                 init_speed: ivel,
                 tstop_ms: tstop,
-                settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.params.get(&profile, id, m).max(1) as u64),
+                settle_ms: hand.hi_settle_ms
+                    * self.ids.ihit.map_or(1, |id| self.params.get(&profile, id, m).max(1) as u64),
                 free_strain: hand.free_strain,
                 strain_per_count: hand.strain_per_count,
                 high_strain: hsg,
@@ -730,7 +732,8 @@ impl Device {
         let profile = self.profile.clone();
         let spec = profile.command(c.command);
         let kind = spec.kind;
-        let is_motion_like = kind.is_motion() || matches!(kind, CommandKind::Initialize | CommandKind::Terminate | CommandKind::Loop);
+        let is_motion_like =
+            kind.is_motion() || matches!(kind, CommandKind::Initialize | CommandKind::Terminate | CommandKind::Loop);
         let motors = match c.prefix {
             Some(p) => p,
             None if is_motion_like => self.enabled_motors(),
@@ -782,7 +785,12 @@ impl Device {
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
                 if let Some((id, vals)) = keep_mcv {
                     for m in 1..=4u8 {
-                        self.params.set_unchecked(&profile, id, MotorSet::single(m).unwrap_or_default(), vals[m as usize - 1]);
+                        self.params.set_unchecked(
+                            &profile,
+                            id,
+                            MotorSet::single(m).unwrap_or_default(),
+                            vals[m as usize - 1],
+                        );
                     }
                 }
                 self.end_line(StatusBits::empty());
@@ -796,8 +804,15 @@ impl Device {
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Global, MotorSet::ALL);
                 self.end_line(StatusBits::empty());
             }
-            CommandKind::MotorList | CommandKind::MotorListAll | CommandKind::GlobalList | CommandKind::GlobalListAll => {
-                let scope = if matches!(kind, CommandKind::MotorList | CommandKind::MotorListAll) { Scope::Motor } else { Scope::Global };
+            CommandKind::MotorList
+            | CommandKind::MotorListAll
+            | CommandKind::GlobalList
+            | CommandKind::GlobalListAll => {
+                let scope = if matches!(kind, CommandKind::MotorList | CommandKind::MotorListAll) {
+                    Scope::Motor
+                } else {
+                    Scope::Global
+                };
                 let all = matches!(kind, CommandKind::MotorListAll | CommandKind::GlobalListAll);
                 for id in self.listed(kind, scope, all) {
                     let p = profile.param(id);
@@ -849,7 +864,9 @@ impl Device {
                 for (i, cmd) in profile.commands.iter().enumerate() {
                     let wanted = match topic {
                         Some(t) => t.0 as usize == i,
-                        None => kind == CommandKind::HelpAll || !(profile.hand.help_lists_standard_only && cmd.advanced),
+                        None => {
+                            kind == CommandKind::HelpAll || !(profile.hand.help_lists_standard_only && cmd.advanced)
+                        }
                     };
                     if wanted {
                         self.print_line(&format!("{}  {}", cmd.name, cmd.help));
@@ -941,18 +958,26 @@ impl Device {
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0 },
                 CommandKind::Close => Goal::Position {
-                    target: self.ids.ct.map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.params.get(&profile, id, m)) as f64,
+                    target: self
+                        .ids
+                        .ct
+                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.params.get(&profile, id, m))
+                        as f64,
                     stall_ms: 0,
                 },
                 CommandKind::Open => Goal::Position { target: self.get(self.ids.ot, m) as f64, stall_ms: 0 },
-                CommandKind::Move => Goal::Position { target: arg.unwrap_or_else(|| self.get(self.ids.dp, m)) as f64, stall_ms: 0 },
+                CommandKind::Move => {
+                    Goal::Position { target: arg.unwrap_or_else(|| self.get(self.ids.dp, m)) as f64, stall_ms: 0 }
+                }
                 CommandKind::Home => Goal::Position { target: 0.0, stall_ms: 0 },
-                CommandKind::IncrementalClose => {
-                    Goal::Position { target: p.round() + arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64, stall_ms: 0 }
-                }
-                CommandKind::IncrementalOpen => {
-                    Goal::Position { target: p.round() - arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64, stall_ms: 0 }
-                }
+                CommandKind::IncrementalClose => Goal::Position {
+                    target: p.round() + arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::IncrementalOpen => Goal::Position {
+                    target: p.round() - arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64,
+                    stall_ms: 0,
+                },
                 CommandKind::TorqueClose => Goal::Velocity { direction: 1.0, stall_ms: 0 },
                 _ => Goal::Velocity { direction: -1.0, stall_ms: 0 },
             };
@@ -1077,6 +1102,7 @@ impl Device {
                 self.prompt();
             }
             Some(h) => {
+                self.last_status = StatusBits::empty();
                 if h.wants_feedback() {
                     self.emit_feedback(&mut rt);
                 } else {
@@ -1154,7 +1180,11 @@ impl Device {
                         "LFS" => self.strain(m),
                         "LFAP" => {
                             let p = self.motors[i].position().clamp(0, 65535);
-                            if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
+                            if self.faults.contains(&Fault::LittleEndianLfap) {
+                                ((p & 0xFF) << 8) | (p >> 8)
+                            } else {
+                                p
+                            }
                         }
                         "LFDP" => {
                             let present = self.motors[i].position();

@@ -156,7 +156,10 @@ fn seed_realtime_example_layout() {
     assert_eq!(l.control.size, 3);
     assert_eq!(l.feedback.size, 6);
     let names: Vec<_> = l.feedback.fields.iter().map(|f| (f.motor, f.name.as_str())).collect();
-    assert_eq!(names, vec![(Some(1), "LFS"), (Some(1), "LFDP"), (Some(2), "LFS"), (Some(2), "LFDP"), (Some(4), "LFDP")]);
+    assert_eq!(
+        names,
+        vec![(Some(1), "LFS"), (Some(1), "LFDP"), (Some(2), "LFS"), (Some(2), "LFDP"), (Some(4), "LFDP")]
+    );
     d.handle_input(d.now(), &[b'C', 20, 0xFB]);
     let fb = d.take_output();
     assert_eq!(fb.len(), 6);

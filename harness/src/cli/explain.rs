@@ -1,0 +1,211 @@
+//! `gcl explain`: the implementers' pocket reference. Runs lines in order against a freshly
+//! powered-up simulated hand and shows, for each, how the model parses it, the exact bytes
+//! of the answer, the status, and after LOOP the RealTime block layouts.
+
+use std::io::Write;
+use std::time::Duration;
+
+use gcl_model::escape::{escape, unescape};
+use gcl_model::grammar::{self, Args as CmdArgs, Line};
+use gcl_model::realtime::BlockLayout;
+use gcl_model::{Device, Mode, Profile};
+use serde_json::{Value, json};
+
+use super::{EXIT_OK, load_profile};
+
+/// Arguments of `gcl explain`.
+#[derive(Debug, clap::Args)]
+#[command(after_help = "Each LINE may use the escapes \\n \\r \\t \\\\ and \\xHH. In supervisory mode a CR \
+is added to each LINE; in RealTime mode (after LOOP) a LINE is sent as raw bytes, so \
+'C\\x14\\xFB' is a control block and '\\x03' leaves the loop.\n\nExample:\n  gcl explain --profile seed HI \
+'12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1' \
+'4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1' 124LOOP 'C\\x14\\xFB' '\\x03'")]
+pub struct Args {
+    /// Profile: seed, bh8-262-4.3, bh8-262-4.4 (alias bh8-262), or a spec TOML file.
+    #[arg(long, default_value = "bh8-262")]
+    profile: String,
+    /// One JSON object per line instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Seed of the simulated hand's noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Lines to run, in order.
+    #[arg(required = true, value_name = "LINE")]
+    lines: Vec<String>,
+}
+
+/// One line and what the hand made of it.
+pub struct Explained {
+    /// The LINE as given.
+    pub line: String,
+    /// Whether it was sent in supervisory mode (else as a RealTime block).
+    pub supervisory: bool,
+    /// How the model parses it (JSON, as `--json` prints it).
+    pub parsed: Value,
+    /// The exact answer.
+    pub response: Vec<u8>,
+    /// The status the line ended with.
+    pub status: gcl_model::StatusBits,
+    /// The mode after the line.
+    pub mode_after: Mode,
+    /// The RealTime layouts, while in LOOP.
+    pub layout: Option<gcl_model::RtLayout>,
+}
+
+impl Explained {
+    /// The `--json` object.
+    pub fn to_json(&self, profile: &Profile) -> Value {
+        let mut obj = json!({
+            "line": self.line,
+            "mode": if self.supervisory { "supervisory" } else { "realtime" },
+            "parsed": self.parsed,
+            "response": self.response.iter().map(|&b| char::from(b)).collect::<String>(),
+            "response_escaped": escape(&self.response),
+            "status": self.status.code(),
+            "status_text": self.status.describe(profile),
+            "mode_after": self.mode_after,
+        });
+        if let Some(l) = &self.layout {
+            obj["control_block"] = block_json(&l.control);
+            obj["feedback_block"] = block_json(&l.feedback);
+        }
+        obj
+    }
+}
+
+/// Runs `lines` in order against a freshly powered-up hand.
+pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[String]) -> anyhow::Result<Vec<Explained>> {
+    let mut hand = Device::new(profile.clone(), gcl_model::DeviceConfig { seed, ..Default::default() });
+    hand.clear_output();
+    let mut out = Vec::new();
+    for text in lines {
+        let bytes = unescape(text).map_err(|e| anyhow::anyhow!("LINE `{text}`: {e}"))?;
+        let supervisory = hand.mode() != Mode::Loop;
+        let parsed = if supervisory {
+            let p = parsed(profile, &bytes);
+            let mut with_cr = bytes.clone();
+            with_cr.push(profile.framing.terminator);
+            hand.handle_input(hand.now(), &with_cr);
+            p
+        } else {
+            hand.handle_input(hand.now(), &bytes);
+            json!({ "block": escape(&bytes) })
+        };
+        hand.run_until_idle(Duration::from_secs(600));
+        out.push(Explained {
+            line: text.clone(),
+            supervisory,
+            parsed,
+            response: hand.take_output(),
+            status: hand.last_status(),
+            mode_after: hand.mode(),
+            layout: hand.rt_layout().cloned(),
+        });
+    }
+    Ok(out)
+}
+
+fn parsed(profile: &Profile, bytes: &[u8]) -> Value {
+    match grammar::parse_line(profile, bytes) {
+        Ok(Line::Empty) => json!({ "empty": true }),
+        Ok(Line::Command(c)) => {
+            let spec = profile.command(c.command);
+            let args = match &c.args {
+                CmdArgs::None => json!(null),
+                CmdArgs::Integer(v) => json!(v),
+                CmdArgs::Names(ns) => json!(ns.iter().map(|n| profile.param(*n).name.clone()).collect::<Vec<_>>()),
+                CmdArgs::Pairs(ps) => {
+                    json!(ps.iter().map(|(n, v)| json!([profile.param(*n).name, v])).collect::<Vec<_>>())
+                }
+                CmdArgs::Topic(t) => json!(profile.command(*t).name),
+            };
+            json!({
+                "command": spec.name,
+                "kind": spec.kind,
+                "prefix": c.prefix.map(|p| p.iter().collect::<Vec<_>>()),
+                "args": args,
+                "canonical": c.to_line(profile),
+            })
+        }
+        Err(r) => json!({
+            "rejected": r.status.code(),
+            "problems": r.problems.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+        }),
+    }
+}
+
+fn block_json(b: &BlockLayout) -> Value {
+    json!({
+        "size": b.size,
+        "fields": b.fields.iter().map(|f| json!({
+            "motor": f.motor, "name": f.name, "offset": f.offset, "size": f.size, "signed": f.signed,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+fn block_text(b: &BlockLayout, header: &str) -> String {
+    let mut s = format!("{} bytes: [0] {header}", b.size);
+    for f in &b.fields {
+        let who = f.motor.map_or("hand".to_string(), |m| format!("motor {m}"));
+        let ty = format!("{}{}", if f.signed { "i" } else { "u" }, f.size * 8);
+        let range =
+            if f.size == 1 { format!("[{}]", f.offset) } else { format!("[{}..{}]", f.offset, f.offset + f.size - 1) };
+        s.push_str(&format!(", {range} {who} {} {ty}{}", f.name, if f.size > 1 { " big-endian" } else { "" }));
+    }
+    s
+}
+
+fn parsed_text(p: &Value) -> String {
+    let strs = |v: &Value| {
+        v.as_array().map(|a| a.iter().filter_map(|x| x.as_str()).collect::<Vec<_>>().join("; ")).unwrap_or_default()
+    };
+    if let Some(b) = p.get("block") {
+        format!("RealTime block \"{}\"", b.as_str().unwrap_or_default())
+    } else if p.get("empty").is_some() {
+        "empty line".to_string()
+    } else if let Some(code) = p.get("rejected") {
+        format!("rejected with {code}: {}", strs(&p["problems"]))
+    } else {
+        let prefix = match p["prefix"].as_array() {
+            Some(ms) => format!("motors {}", ms.iter().map(|m| m.to_string()).collect::<String>()),
+            None => "no prefix".to_string(),
+        };
+        format!(
+            "{} ({}), {prefix}, args {}, canonical `{}`",
+            p["command"].as_str().unwrap_or_default(),
+            p["kind"].as_str().unwrap_or_default(),
+            p["args"],
+            p["canonical"].as_str().unwrap_or_default()
+        )
+    }
+}
+
+/// Runs `gcl explain`.
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let profile = load_profile(&args.profile)?;
+    let results = explain_lines(&profile, args.seed, &args.lines)?;
+    let mut w = std::io::stdout().lock();
+    for r in &results {
+        if args.json {
+            writeln!(w, "{}", serde_json::to_string(&r.to_json(&profile))?)?;
+            continue;
+        }
+        writeln!(w, "> {}", r.line)?;
+        writeln!(w, "  parsed:   {}", parsed_text(&r.parsed))?;
+        writeln!(w, "  response: \"{}\"", escape(&r.response))?;
+        let texts = r.status.describe(&profile).join("; ");
+        writeln!(
+            w,
+            "  status:   {}{}",
+            r.status.code(),
+            if texts.is_empty() { String::new() } else { format!(" ({texts})") }
+        )?;
+        if let Some(l) = &r.layout {
+            writeln!(w, "  mode:     RealTime, motors {}", l.motors)?;
+            writeln!(w, "  control:  {}", block_text(&l.control, "header C/c (A/a: the header alone)"))?;
+            writeln!(w, "  feedback: {}", block_text(&l.feedback, "'*' (reply to c/a: '*' alone)"))?;
+        }
+    }
+    Ok(EXIT_OK)
+}
