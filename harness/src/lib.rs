@@ -4,8 +4,10 @@
 //! ([`cli`]). The reference model (`gcl-model`) stays pure; time, bytes, files and
 //! processes live here.
 
+pub mod certify;
 pub mod cli;
 pub mod link;
+pub mod report;
 pub mod target;
 
 pub use link::{Link, LinkError, SimLink};

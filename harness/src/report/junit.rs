@@ -1,0 +1,110 @@
+//! JUnit XML: one `testsuite` per run, one `testcase` per case with `name` (the case id)
+//! and `classname` (`gcl.<profile>.<level>`); failures carry the diff.
+
+use quick_xml::Writer;
+use quick_xml::events::{BytesCData, BytesDecl, BytesEnd, BytesStart, BytesText, Event};
+
+use super::{RunReport, Verdict};
+
+/// Renders the run as JUnit XML.
+pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    let count = |v: Verdict| r.summary.get(&v).copied().unwrap_or(0);
+    let failures = count(Verdict::Fail) + count(Verdict::Xpass);
+    let errors = count(Verdict::Error) + count(Verdict::Timeout);
+    let skipped = count(Verdict::Skip) + count(Verdict::Xfail);
+    let time = format!("{:.3}", r.duration_ms / 1000.0);
+    let (tests, failures, errors, skipped) =
+        (r.cases.len().to_string(), failures.to_string(), errors.to_string(), skipped.to_string());
+    let name = format!("gcl conform {} ({})", r.profile, r.target);
+    let mut suites = BytesStart::new("testsuites");
+    suites.push_attribute(("name", name.as_str()));
+    suites.push_attribute(("tests", tests.as_str()));
+    suites.push_attribute(("failures", failures.as_str()));
+    suites.push_attribute(("errors", errors.as_str()));
+    suites.push_attribute(("time", time.as_str()));
+    w.write_event(Event::Start(suites))?;
+    let mut suite = BytesStart::new("testsuite");
+    suite.push_attribute(("name", name.as_str()));
+    suite.push_attribute(("tests", tests.as_str()));
+    suite.push_attribute(("failures", failures.as_str()));
+    suite.push_attribute(("errors", errors.as_str()));
+    suite.push_attribute(("skipped", skipped.as_str()));
+    suite.push_attribute(("time", time.as_str()));
+    suite.push_attribute(("timestamp", r.started.as_str()));
+    w.write_event(Event::Start(suite))?;
+    for c in &r.cases {
+        let classname = format!("gcl.{}.{}", r.profile, c.level);
+        let t = format!("{:.3}", c.duration_ms / 1000.0);
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("name", c.id.as_str()));
+        tc.push_attribute(("classname", classname.as_str()));
+        tc.push_attribute(("time", t.as_str()));
+        w.write_event(Event::Start(tc))?;
+        let message = c.message.clone().unwrap_or_else(|| c.verdict.to_string());
+        let body = {
+            let mut b = format!("{}\n{}\nclauses: {}\n", c.verdict, c.title, c.clauses.join(", "));
+            if let Some(d) = &c.diff {
+                b.push_str(&format!(
+                    "step {} parts at byte {}\nexpected: \"{}\"\nactual:   \"{}\"\n",
+                    d.step, d.offset, d.expected, d.actual
+                ));
+            }
+            if let Some(t) = &c.transcript {
+                b.push_str("\ntranscript:\n");
+                b.push_str(t);
+            }
+            b
+        };
+        let element = match c.verdict {
+            Verdict::Pass => None,
+            Verdict::Fail | Verdict::Xpass => Some("failure"),
+            Verdict::Error | Verdict::Timeout => Some("error"),
+            Verdict::Skip | Verdict::Xfail => Some("skipped"),
+        };
+        if let Some(el) = element {
+            let mut e = BytesStart::new(el);
+            e.push_attribute(("message", message.as_str()));
+            e.push_attribute(("type", c.verdict.as_str()));
+            w.write_event(Event::Start(e))?;
+            // CDATA cannot hold "]]>"; split it if a transcript ever contains it.
+            for (i, part) in body.split("]]>").enumerate() {
+                if i > 0 {
+                    w.write_event(Event::Text(BytesText::new("]]>")))?;
+                }
+                w.write_event(Event::CData(BytesCData::new(part)))?;
+            }
+            w.write_event(Event::End(BytesEnd::new(el)))?;
+        }
+        w.write_event(Event::End(BytesEnd::new("testcase")))?;
+    }
+    w.write_event(Event::End(BytesEnd::new("testsuite")))?;
+    w.write_event(Event::End(BytesEnd::new("testsuites")))?;
+    Ok(String::from_utf8(w.into_inner())?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_testcase_has_name_and_classname_and_failures_carry_the_diff() {
+        let r = crate::report::tests::sample();
+        let xml = to_junit(&r).unwrap();
+        assert!(xml.contains(r#"<testcase name="framing-echo" classname="gcl.seed.MUST""#), "{xml}");
+        assert!(xml.contains(r#"<failure message="answer differs at byte 7" type="FAIL">"#), "{xml}");
+        assert!(xml.contains("expected: \"FGET DP\\n\\r1000\""), "{xml}");
+        // It is well-formed: quick-xml reads it back to the end.
+        let mut reader = quick_xml::Reader::from_str(&xml);
+        let mut cases = 0;
+        loop {
+            match reader.read_event().unwrap() {
+                Event::Start(e) if e.name().as_ref() == b"testcase" => cases += 1,
+                Event::Eof => break,
+                _ => {}
+            }
+        }
+        assert_eq!(cases, 2);
+    }
+}

@@ -1,0 +1,379 @@
+//! Conformance reports: the results of a run as data, and the writers CI systems and people
+//! read (JSON with a schema, JUnit XML, a self-contained HTML page).
+//!
+//! Results are also streamed to `results.jsonl` as each case ends (one flushed line per
+//! case), so a crash or a kill mid-run leaves everything already decided readable.
+
+mod html;
+mod junit;
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+pub use html::to_html;
+pub use junit::to_junit;
+
+/// The version of the report format (bump on incompatible changes).
+pub const REPORT_FORMAT: u32 = 1;
+
+/// How a case ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "UPPERCASE")]
+pub enum Verdict {
+    /// The device's answers matched.
+    Pass,
+    /// An answer differed from the golden one.
+    Fail,
+    /// A step waited past its deadline.
+    Timeout,
+    /// The device vanished (disconnect, exited process) or the link failed.
+    Error,
+    /// Not run: filtered out by level or glob, or the target lacks what the case requires.
+    Skip,
+    /// Failed, and listed as a known failure.
+    Xfail,
+    /// Passed, but listed as a known failure: the list is stale, and the run fails.
+    Xpass,
+}
+
+impl Verdict {
+    /// Every verdict, in report order.
+    pub const ALL: [Verdict; 7] =
+        [Verdict::Pass, Verdict::Fail, Verdict::Timeout, Verdict::Error, Verdict::Skip, Verdict::Xfail, Verdict::Xpass];
+
+    /// Whether this verdict makes the run fail.
+    pub fn fails_run(self) -> bool {
+        matches!(self, Verdict::Fail | Verdict::Timeout | Verdict::Error | Verdict::Xpass)
+    }
+
+    /// The upper-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Pass => "PASS",
+            Verdict::Fail => "FAIL",
+            Verdict::Timeout => "TIMEOUT",
+            Verdict::Error => "ERROR",
+            Verdict::Skip => "SKIP",
+            Verdict::Xfail => "XFAIL",
+            Verdict::Xpass => "XPASS",
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Where the device's answer parted from the golden one.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Diff {
+    /// The step (0-based) of the transcript.
+    pub step: usize,
+    /// The byte offset within that step's answer.
+    pub offset: usize,
+    /// The expected answer, escaped (with elisions as written).
+    pub expected: String,
+    /// The actual answer, escaped.
+    pub actual: String,
+}
+
+/// The result of one case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// The case's stable id.
+    pub id: String,
+    /// Its title.
+    pub title: String,
+    /// The spec clauses it checks.
+    pub clauses: Vec<String>,
+    /// MUST, SHOULD, MAY or INFO.
+    pub level: String,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Wall time spent, milliseconds.
+    pub duration_ms: f64,
+    /// One line saying why (for anything but PASS).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+    /// Where the answer parted from the golden one (FAIL, XFAIL).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diff: Option<Diff>,
+    /// The exchange as it happened, in transcript text (for failures, and in certificates).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transcript: Option<String>,
+}
+
+/// Wire-time accounting of a run over a paced link.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WireTime {
+    /// Bytes the harness sent.
+    pub bytes_sent: u64,
+    /// Bytes the device sent.
+    pub bytes_received: u64,
+    /// The line rate used for the bound, bit/s.
+    pub baud: u32,
+    /// Simulated motion time the cases need, milliseconds.
+    pub motion_ms: f64,
+    /// bytes × 10 / baud + motion time, milliseconds.
+    pub lower_bound_ms: f64,
+    /// The run's wall time, milliseconds.
+    pub actual_ms: f64,
+    /// actual / lower bound.
+    pub ratio: f64,
+}
+
+/// How many cases of each verdict.
+pub type Summary = BTreeMap<Verdict, usize>;
+
+/// One spec clause and how the cases that check it fared.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ClauseCoverage {
+    /// The clause.
+    pub clause: String,
+    /// Ids of the cases that check it.
+    pub cases: Vec<String>,
+    /// The worst verdict among them.
+    pub verdict: Verdict,
+}
+
+/// A whole conformance run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunReport {
+    /// The report format version.
+    pub format: u32,
+    /// `gcl` and its version.
+    pub tool: String,
+    /// The target as given.
+    pub target: String,
+    /// The profile the suite was selected for.
+    pub profile: String,
+    /// The level filter: must, should or all.
+    pub level: String,
+    /// Start time, RFC 3339 UTC.
+    pub started: String,
+    /// Wall time of the run, milliseconds.
+    pub duration_ms: f64,
+    /// The suite version: SHA-256 over every golden transcript.
+    pub suite_hash: String,
+    /// Whether the device answered the liveness probe before and after the suite.
+    pub liveness: Liveness,
+    /// Wire-time accounting, when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wire: Option<WireTime>,
+    /// Counts per verdict.
+    pub summary: Summary,
+    /// Per-clause verdicts.
+    pub clauses: Vec<ClauseCoverage>,
+    /// Every case.
+    pub cases: Vec<CaseResult>,
+}
+
+/// The liveness probe results.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Liveness {
+    /// Before the first case.
+    pub before: bool,
+    /// After the last case.
+    pub after: bool,
+}
+
+impl RunReport {
+    /// Whether the run as a whole passed.
+    pub fn passed(&self) -> bool {
+        self.liveness.before && self.liveness.after && !self.cases.iter().any(|c| c.verdict.fails_run())
+    }
+
+    /// Fills `summary` and `clauses` from `cases`.
+    pub fn tally(&mut self) {
+        self.summary = Verdict::ALL.iter().map(|v| (*v, 0)).collect();
+        for c in &self.cases {
+            *self.summary.entry(c.verdict).or_default() += 1;
+        }
+        let mut by_clause: BTreeMap<&str, (Vec<String>, Verdict)> = BTreeMap::new();
+        for c in &self.cases {
+            for cl in &c.clauses {
+                let e = by_clause.entry(cl.as_str()).or_insert((Vec::new(), Verdict::Pass));
+                e.0.push(c.id.clone());
+                e.1 = worse(e.1, c.verdict);
+            }
+        }
+        self.clauses = by_clause
+            .into_iter()
+            .map(|(clause, (cases, verdict))| ClauseCoverage { clause: clause.to_string(), cases, verdict })
+            .collect();
+    }
+}
+
+/// The worse of two verdicts for a clause: anything failing beats SKIP/XFAIL beats PASS.
+fn worse(a: Verdict, b: Verdict) -> Verdict {
+    let rank = |v: Verdict| match v {
+        Verdict::Pass => 0,
+        Verdict::Skip => 1,
+        Verdict::Xfail => 2,
+        Verdict::Xpass => 3,
+        Verdict::Timeout => 4,
+        Verdict::Fail => 5,
+        Verdict::Error => 6,
+    };
+    if rank(b) > rank(a) { b } else { a }
+}
+
+/// Streams case results to `results.jsonl`, one flushed line per case.
+pub struct ResultStream {
+    out: BufWriter<File>,
+    path: PathBuf,
+}
+
+impl ResultStream {
+    /// Creates (truncates) `dir/results.jsonl`, creating `dir`.
+    pub fn create(dir: &Path) -> std::io::Result<ResultStream> {
+        std::fs::create_dir_all(dir)?;
+        let path = dir.join("results.jsonl");
+        Ok(ResultStream { out: BufWriter::new(File::create(&path)?), path })
+    }
+
+    /// Appends one result and flushes it to the file.
+    pub fn push(&mut self, r: &CaseResult) -> std::io::Result<()> {
+        serde_json::to_writer(&mut self.out, r)?;
+        self.out.write_all(b"\n")?;
+        self.out.flush()
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, synced, then
+/// renamed over the target. A kill leaves the old file or the new one, never a torn one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+    }
+    std::fs::rename(&tmp, path)
+}
+
+/// Writes `report.json`, `junit.xml` and `report.html` into `dir`.
+pub fn write_all(dir: &Path, report: &RunReport) -> anyhow::Result<Vec<PathBuf>> {
+    let json = dir.join("report.json");
+    write_atomic(&json, &serde_json::to_vec_pretty(report)?)?;
+    let junit = dir.join("junit.xml");
+    write_atomic(&junit, to_junit(report)?.as_bytes())?;
+    let html = dir.join("report.html");
+    write_atomic(&html, to_html(report).as_bytes())?;
+    Ok(vec![json, junit, html])
+}
+
+/// The JSON Schema of `report.json`, as committed in `reports/report.schema.json`.
+pub const SCHEMA: &str = include_str!("../../../reports/report.schema.json");
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    pub(crate) fn sample() -> RunReport {
+        let mut r = RunReport {
+            format: REPORT_FORMAT,
+            tool: "gcl 0.1.0".into(),
+            target: "sim".into(),
+            profile: "seed".into(),
+            level: "all".into(),
+            started: "2026-11-22T00:00:00Z".into(),
+            duration_ms: 12.5,
+            suite_hash: "00".repeat(32),
+            liveness: Liveness { before: true, after: true },
+            wire: None,
+            summary: Summary::new(),
+            clauses: vec![],
+            cases: vec![
+                CaseResult {
+                    id: "framing-echo".into(),
+                    title: "Echo <all> bytes & keeps case".into(),
+                    clauses: vec!["decision:framing-echo".into()],
+                    level: "MUST".into(),
+                    verdict: Verdict::Pass,
+                    duration_ms: 0.3,
+                    message: None,
+                    diff: None,
+                    transcript: None,
+                },
+                CaseResult {
+                    id: "fget-dp-default".into(),
+                    title: "FGET DP reads the defaults".into(),
+                    clauses: vec!["seed: FGET".into(), "decision:framing-echo".into()],
+                    level: "MUST".into(),
+                    verdict: Verdict::Fail,
+                    duration_ms: 0.5,
+                    message: Some("answer differs at byte 7".into()),
+                    diff: Some(Diff {
+                        step: 1,
+                        offset: 7,
+                        expected: "FGET DP\\n\\r1000".into(),
+                        actual: "FGET DP\\r\\n1000".into(),
+                    }),
+                    transcript: Some("> FGET DP\\r\n< FGET DP\\r\\n1000".into()),
+                },
+            ],
+        };
+        r.tally();
+        r
+    }
+
+    #[test]
+    fn tally_counts_and_ranks_clauses() {
+        let r = sample();
+        assert_eq!(r.summary[&Verdict::Pass], 1);
+        assert_eq!(r.summary[&Verdict::Fail], 1);
+        assert!(!r.passed());
+        let echo = r.clauses.iter().find(|c| c.clause == "decision:framing-echo").unwrap();
+        assert_eq!(echo.verdict, Verdict::Fail);
+        assert_eq!(echo.cases.len(), 2);
+    }
+
+    #[test]
+    fn json_round_trips_and_names_verdicts_in_capitals() {
+        let r = sample();
+        let text = serde_json::to_string(&r).unwrap();
+        assert!(text.contains("\"verdict\":\"FAIL\""));
+        let back: RunReport = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, r);
+    }
+
+    #[test]
+    fn atomic_write_replaces_whole_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("report.json");
+        write_atomic(&p, b"old").unwrap();
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file left behind");
+    }
+
+    #[test]
+    fn stream_survives_without_a_final_report() {
+        let dir = tempfile::tempdir().unwrap();
+        let r = sample();
+        {
+            let mut s = ResultStream::create(dir.path()).unwrap();
+            s.push(&r.cases[0]).unwrap();
+            // Dropped without finishing, as a killed run would be (the line is already flushed).
+            std::mem::forget(s);
+        }
+        let text = std::fs::read_to_string(dir.path().join("results.jsonl")).unwrap();
+        let first: CaseResult = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+        assert_eq!(first.id, "framing-echo");
+    }
+}
