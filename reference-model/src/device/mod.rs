@@ -396,7 +396,12 @@ impl Device {
         while self.next_tick_us <= now_us {
             self.now_us = self.next_tick_us;
             self.next_tick_us += TICK_US;
-            self.tick();
+            let moved = self.tick();
+            if self.mode == Mode::Loop && moved == 0 {
+                // Every loop motor is still (pinned at a stop, or commanded to 0): nothing
+                // changes until the next control block, so jump ahead.
+                break;
+            }
             if self.mode == Mode::Idle {
                 // The command finished: queued input runs at this instant.
                 self.drain_queue();
@@ -417,8 +422,8 @@ impl Device {
         self.motors.iter().any(|m| m.rt_velocity != 0.0 || m.velocity != 0.0)
     }
 
-    /// One millisecond of physics.
-    fn tick(&mut self) {
+    /// One millisecond of physics. Returns how many motors moved.
+    fn tick(&mut self) -> u32 {
         let profile = self.profile.clone();
         let hand = &profile.hand;
         let mut moving = 0;
@@ -467,6 +472,7 @@ impl Device {
         {
             self.finish_task();
         }
+        moving
     }
 
     fn terminate_motor(&mut self, m: u8, t: Termination) {
@@ -476,7 +482,12 @@ impl Device {
         self.motors[i].velocity = 0.0;
         self.motors[i].powered = hold;
         if let Some(Goal::Initialize { .. }) = goal {
-            self.motors[i].finish_initialize();
+            if t == Termination::Goal {
+                self.motors[i].finish_initialize();
+            } else {
+                // A HI that stalled before the open stop leaves the motor uninitialised.
+                self.motors[i].initialized = false;
+            }
             self.motors[i].powered = hold;
             return;
         }
@@ -765,6 +776,10 @@ impl Device {
                 self.end_line(StatusBits::empty());
             }
             CommandKind::MotorGet | CommandKind::GlobalGet => {
+                // PGET prints one value per name; FGET one per selected motor (the seed's
+                // BAUD, a hand value read through FGET, repeats).
+                let motors =
+                    if kind == CommandKind::GlobalGet { MotorSet::single(1).unwrap_or_default() } else { motors };
                 if let Args::Names(names) = &c.args {
                     for id in names {
                         let line = self.value_line(*id, motors, false);
@@ -956,7 +971,7 @@ impl Device {
             let finger_ct = hand.finger_close_target.unwrap_or(17000);
             let spread_ct = hand.spread_close_target.unwrap_or(3150);
             let goal = match kind {
-                CommandKind::Initialize => Goal::Initialize { settled_ms: 0 },
+                CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
                 CommandKind::Close => Goal::Position {
                     target: self
                         .ids

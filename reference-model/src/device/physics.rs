@@ -25,6 +25,8 @@ pub(super) enum Goal {
     Initialize {
         /// Milliseconds spent at the open stop.
         settled_ms: u64,
+        /// Milliseconds the motor has been unable to open (an open velocity of 0).
+        stall_ms: u32,
     },
 }
 
@@ -167,14 +169,14 @@ impl Motor {
             Goal::Velocity { direction, .. } => {
                 (if direction > 0.0 { l.close_speed } else { l.open_speed }, direction, None)
             }
-            Goal::Initialize { settled_ms } => {
+            Goal::Initialize { settled_ms, .. } => {
                 if self.pos <= lo {
                     self.velocity = 0.0;
                     let s = settled_ms + 1;
                     if s >= l.settle_ms {
                         return Some(Termination::Goal);
                     }
-                    self.goal = Some(Goal::Initialize { settled_ms: s });
+                    self.goal = Some(Goal::Initialize { settled_ms: s, stall_ms: 0 });
                     return None;
                 }
                 (l.init_speed, -1.0, None)
@@ -192,8 +194,11 @@ impl Motor {
         let blocked = (clamped - self.pos).abs() < 1e-9;
         self.velocity = if blocked { 0.0 } else { clamped - self.pos };
         self.pos = clamped;
-        if matches!(goal, Goal::Initialize { .. }) {
-            return None;
+        if let Goal::Initialize { settled_ms, stall_ms } = goal {
+            // A motor that cannot open stalls like any other, and the HI fails for it.
+            let stall_ms = if blocked { stall_ms + 1 } else { 0 };
+            self.goal = Some(Goal::Initialize { settled_ms, stall_ms });
+            return (stall_ms > l.tstop_ms).then_some(Termination::Stall);
         }
         // Strain checks.
         let sg = self.strain(l.object.map(|(o, _)| o), l.free_strain, l.strain_per_count);
