@@ -97,7 +97,9 @@ fn files_under(dir: &Path) -> std::io::Result<Vec<String>> {
             if ty.is_dir() {
                 stack.push(r);
             } else {
-                out.push(r.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect::<Vec<_>>().join("/"));
+                out.push(
+                    r.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect::<Vec<_>>().join("/"),
+                );
             }
         }
     }
@@ -142,7 +144,11 @@ pub fn verify(dir: &Path) -> anyhow::Result<Result<Certificate, Vec<Tamper>>> {
             problems.push(Tamper::Malformed(format!("{MANIFEST} line {}: expected `<sha256>  <path>`", n + 1)));
             continue;
         };
-        if hash.len() != 64 || !hash.bytes().all(|b| b.is_ascii_hexdigit()) || path.contains("..") || path.starts_with('/') {
+        if hash.len() != 64
+            || !hash.bytes().all(|b| b.is_ascii_hexdigit())
+            || path.contains("..")
+            || path.starts_with('/')
+        {
             problems.push(Tamper::Malformed(format!("{MANIFEST} line {}", n + 1)));
             continue;
         }

@@ -6,9 +6,16 @@
 
 pub mod certify;
 pub mod cli;
+pub mod client;
+pub mod conform;
 pub mod link;
+pub mod links;
+pub mod replay;
 pub mod report;
+pub mod sim;
+pub mod suite;
 pub mod target;
+pub mod transcript;
 
 pub use link::{Link, LinkError, SimLink};
 pub use target::Target;

@@ -8,11 +8,18 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::time::Duration;
+
+use gcl_model::params::NvMemory;
+use gcl_model::{DeviceConfig, Fault, Scenario};
+
+use crate::link::{Link, LinkError, SimLink};
+use crate::links::{ExecLink, SerialLink, StderrMode, TcpLink};
 
 /// A parsed `--target`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Target {
-    /// The in-process reference model with this profile (default `bh8-262`... see [`Target::profile`]).
+    /// The in-process reference model with this profile (default `bh8-262`; see [`Target::sim_profile`]).
     Sim {
         /// The profile name, if given.
         profile: Option<String>,
@@ -110,6 +117,74 @@ impl fmt::Display for Target {
     }
 }
 
+/// The profile `sim` opens when neither the target nor [`OpenOptions::profile`] names one.
+pub const DEFAULT_SIM_PROFILE: &str = "bh8-262";
+
+/// How to open a target, beyond what its text says.
+#[derive(Debug, Clone)]
+pub struct OpenOptions {
+    /// The profile for `sim` when the target does not name one (`sim:PROFILE` wins).
+    pub profile: Option<String>,
+    /// `sim`: seed of the model's noise.
+    pub seed: u64,
+    /// `sim`: deliberate firmware bugs.
+    pub faults: Vec<Fault>,
+    /// `sim`: the world around the hand.
+    pub scenario: Option<Scenario>,
+    /// `sim`: the EEPROM at power-up.
+    pub nv: Option<NvMemory>,
+    /// `tcp`: how long to try to connect.
+    pub connect_timeout: Duration,
+    /// `exec`: what happens to the child's stderr.
+    pub stderr: StderrMode,
+}
+
+impl Default for OpenOptions {
+    fn default() -> OpenOptions {
+        OpenOptions {
+            profile: None,
+            seed: 0,
+            faults: Vec::new(),
+            scenario: None,
+            nv: None,
+            connect_timeout: Duration::from_secs(5),
+            stderr: StderrMode::Inherit,
+        }
+    }
+}
+
+impl Target {
+    /// The profile a `sim` target runs: its own, else `fallback`, else [`DEFAULT_SIM_PROFILE`].
+    /// `None` for targets outside this process.
+    pub fn sim_profile<'a>(&'a self, fallback: Option<&'a str>) -> Option<&'a str> {
+        match self {
+            Target::Sim { profile } => Some(profile.as_deref().or(fallback).unwrap_or(DEFAULT_SIM_PROFILE)),
+            _ => None,
+        }
+    }
+}
+
+/// Opens a link to `target`.
+pub fn open(target: &Target, opts: &OpenOptions) -> Result<Box<dyn Link>, LinkError> {
+    match target {
+        Target::Sim { .. } => {
+            let name = target.sim_profile(opts.profile.as_deref()).unwrap_or(DEFAULT_SIM_PROFILE);
+            let profile = crate::cli::load_profile(name)
+                .map_err(|e| LinkError::Open { target: target.to_string(), reason: format!("{e:#}") })?;
+            let config = DeviceConfig {
+                seed: opts.seed,
+                scenario: opts.scenario.clone().unwrap_or_default(),
+                nv: opts.nv.clone().unwrap_or_default(),
+                faults: opts.faults.clone(),
+            };
+            Ok(Box::new(SimLink::new(profile, config)))
+        }
+        Target::Serial { path, baud } => Ok(Box::new(SerialLink::open(path, *baud)?)),
+        Target::Tcp { addr } => Ok(Box::new(TcpLink::connect(addr, opts.connect_timeout)?)),
+        Target::Exec { argv } => Ok(Box::new(ExecLink::spawn(argv, opts.stderr)?)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -131,6 +206,22 @@ mod tests {
         assert!("serial:/dev/x?baud=fast".parse::<Target>().is_err());
         for t in ["sim", "sim:seed", "serial:/dev/x?baud=9600", "tcp://h:1", "exec:a b"] {
             assert_eq!(t.parse::<Target>().unwrap().to_string(), t);
+        }
+    }
+
+    #[test]
+    fn opens_sim_and_reports_bad_targets() {
+        let mut l = open(&"sim:seed".parse().unwrap(), &OpenOptions::default()).unwrap();
+        assert_eq!(l.describe(), "sim:seed");
+        let mut buf = Vec::new();
+        l.recv(&mut buf, Duration::from_millis(10)).unwrap();
+        assert!(String::from_utf8_lossy(&buf).contains("BarrettHand Firmware"));
+        let l = open(&"sim".parse().unwrap(), &OpenOptions::default()).unwrap();
+        assert!(l.describe().starts_with("sim:bh8-262"));
+        let opts = OpenOptions { profile: Some("seed".into()), ..Default::default() };
+        assert_eq!(open(&"sim".parse().unwrap(), &opts).unwrap().describe(), "sim:seed");
+        for bad in ["sim:nonesuch", "serial:/nonexistent/tty", "exec:/nonexistent/program"] {
+            assert!(matches!(open(&bad.parse().unwrap(), &opts), Err(LinkError::Open { .. })), "{bad}");
         }
     }
 }

@@ -1,10 +1,128 @@
-//! `gcl record` (not built yet).
+//! `gcl record`: runs a script of host lines and blocks against a hand and writes what it
+//! answered as a golden transcript (the script syntax is in
+//! [`crate::transcript::script`] and `vectors/README.md`).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+
+use super::{EXIT_OK, load_profile};
+use crate::target::{DEFAULT_SIM_PROFILE, Target};
+use crate::transcript::record::{RecordOptions, record};
+use crate::transcript::script::parse_script_bytes;
+use crate::transcript::{Level, is_slug};
 
 /// Arguments of `gcl record`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(after_help = "Script lines: a host line (sent with a CR), `line: ESCAPED`, `nowait: LINE`, \
+`raw: ESCAPED`, `partial: ESCAPED`, `block: 43 14 FB`, `abort`, `wait`, `pause: 200ms`, `timeout: 30s`, `# comment`, \
+and transcript header keys (`id:`, `title:`, `clause:`, `level:`, `profile:`, `requires:`, `note:`).\n\n\
+Example:\n  gcl record --target sim:seed --script my-case.script --out my-case.gcl")]
+pub struct Args {
+    /// The hand: sim[:PROFILE], serial:PATH[?baud=N], tcp://HOST:PORT or exec:COMMAND ARGS.
+    #[arg(long)]
+    target: String,
+    /// The script to run.
+    #[arg(long)]
+    script: PathBuf,
+    /// Where to write the transcript (default: standard output).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The case id (default: the script's `id:`, else its file name).
+    #[arg(long)]
+    id: Option<String>,
+    /// The title (default: the script's, else the id).
+    #[arg(long)]
+    title: Option<String>,
+    /// Spec clauses checked (repeatable; added to the script's).
+    #[arg(long = "clause")]
+    clauses: Vec<String>,
+    /// MUST, SHOULD, MAY or INFO (default: the script's, else INFO).
+    #[arg(long)]
+    level: Option<Level>,
+    /// Profiles the case applies to (repeatable). The first is also the profile of the model
+    /// that shapes the capture (RealTime block sizes); default: the target's or the script's.
+    #[arg(long = "profile")]
+    profiles: Vec<String>,
+    /// Requirements (repeatable): motion, realtime, eeprom, abort-timing, ...
+    #[arg(long = "requires")]
+    requires: Vec<String>,
+    /// Capture timeout of a step whose script sets none, in milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = 30_000)]
+    timeout: u64,
+    /// Silence that ends a `nowait:` step, in milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = 100)]
+    quiet: u64,
+    /// Write RESET banners exactly instead of as `{any}BarrettHand Firmware{any}`.
+    #[arg(long)]
+    exact_banner: bool,
+    /// Keep going when a step times out (write what arrived) instead of failing.
+    #[arg(long)]
+    allow_timeouts: bool,
+}
 
 /// Runs `gcl record`.
-pub fn run(_args: Args) -> anyhow::Result<u8> {
-    anyhow::bail!("gcl record is not built yet")
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let target: Target = args.target.parse()?;
+    let bytes = std::fs::read(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
+    let script = parse_script_bytes(&bytes).with_context(|| format!("parsing {}", args.script.display()))?;
+    let mut fields = script.fields.clone();
+    if let Some(id) = args.id {
+        fields.id = Some(id);
+    }
+    if fields.id.is_none() {
+        let stem = args.script.file_stem().and_then(|s| s.to_str()).unwrap_or("recorded").to_ascii_lowercase();
+        let slug: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect();
+        fields.id = Some(if is_slug(&slug) { slug } else { "recorded".into() });
+    }
+    if let Some(t) = args.title {
+        fields.title = Some(t);
+    }
+    if fields.title.is_none() {
+        fields.title = fields.id.clone();
+    }
+    fields.clauses.extend(args.clauses);
+    if fields.clauses.is_empty() {
+        fields.clauses.push(format!("recorded: {}", args.script.display()));
+    }
+    if let Some(l) = args.level {
+        fields.level = Some(l);
+    }
+    fields.level.get_or_insert(Level::Info);
+    if !args.profiles.is_empty() {
+        fields.profiles = args.profiles;
+    }
+    let model = fields
+        .profiles
+        .first()
+        .cloned()
+        .or_else(|| target.sim_profile(None).map(str::to_string))
+        .unwrap_or_else(|| DEFAULT_SIM_PROFILE.to_string());
+    let profile = load_profile(&model)?;
+    if fields.profiles.is_empty() {
+        fields.profiles.push(profile.id.clone());
+    }
+    for r in &args.requires {
+        fields.apply("requires", r, 0)?;
+    }
+    let header = fields.finish(0)?;
+    let mut link = super::replay::open_target(&target, Some(&profile.id))?;
+    let mut opts = RecordOptions::new(profile);
+    opts.timeout = Duration::from_millis(args.timeout);
+    opts.quiet = Duration::from_millis(args.quiet);
+    opts.elide_banner = !args.exact_banner;
+    let (t, caps) = record(link.as_mut(), header, &script, &opts, args.allow_timeouts)?;
+    for (i, c) in caps.iter().enumerate() {
+        if c.timed_out {
+            eprintln!("gcl record: step {} (script line {}) timed out; kept what arrived", i + 1, script.steps[i].line);
+        }
+    }
+    let text = t.to_text();
+    match args.out {
+        Some(path) => std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?,
+        None => std::io::stdout().lock().write_all(text.as_bytes())?,
+    }
+    Ok(EXIT_OK)
 }

@@ -1,10 +1,96 @@
-//! `gcl replay` (not built yet).
+//! `gcl replay`: sends a golden transcript's host side to a hand and compares its answers.
+//! Exit 0 when every answer matches, 1 on a mismatch or a timeout (expected against actual,
+//! escaped, at the byte where they part), 2 on errors (a file that does not parse, a target
+//! that does not open, a link that fails).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
+use crate::replay::{ReplayOptions, ReplayOutcome, replay};
+use crate::target::Target;
+use crate::transcript::parse_bytes;
 
 /// Arguments of `gcl replay`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(after_help = "Example:\n  gcl replay vectors/suite/seed/framing-echo.gcl --target sim:seed")]
+pub struct Args {
+    /// Transcript files to replay, in order.
+    #[arg(required = true, value_name = "FILE")]
+    files: Vec<PathBuf>,
+    /// The hand: sim[:PROFILE], serial:PATH[?baud=N], tcp://HOST:PORT or exec:COMMAND ARGS.
+    /// A bare `sim` runs the transcript's first profile.
+    #[arg(long, default_value = "sim")]
+    target: String,
+    /// Wait of a step without `within`, in milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = crate::transcript::DEFAULT_STEP_TIMEOUT.as_millis() as u64)]
+    timeout: u64,
+    /// Send ^C and drain the answer before the first step.
+    #[arg(long)]
+    resync: bool,
+    /// Print only failures.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// Opens a target for a transcript of `profile` (used when the target is a bare `sim`).
+pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Result<Box<dyn crate::Link>> {
+    let opts = crate::target::OpenOptions { profile: profile.map(str::to_string), ..Default::default() };
+    crate::target::open(target, &opts).with_context(|| format!("opening {target}"))
+}
 
 /// Runs `gcl replay`.
-pub fn run(_args: Args) -> anyhow::Result<u8> {
-    anyhow::bail!("gcl replay is not built yet")
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let target: Target = args.target.parse()?;
+    let opts = ReplayOptions {
+        default_timeout: Duration::from_millis(args.timeout),
+        resync: args.resync,
+        ..ReplayOptions::default()
+    };
+    let mut transcripts = Vec::new();
+    for f in &args.files {
+        let bytes = std::fs::read(f).with_context(|| format!("reading {}", f.display()))?;
+        let t = parse_bytes(&bytes).with_context(|| format!("parsing {}", f.display()))?;
+        transcripts.push((f, t));
+    }
+    let mut code = EXIT_OK;
+    let mut shared: Option<Box<dyn crate::Link>> = None;
+    let mut w = std::io::stdout().lock();
+    for (f, t) in &transcripts {
+        // Each transcript gets a fresh simulated hand; a real hand is opened once.
+        let mut fresh;
+        let link: &mut dyn crate::Link = if matches!(target, Target::Sim { .. }) {
+            fresh = open_target(&target, t.header.profiles.first().map(String::as_str))?;
+            fresh.as_mut()
+        } else {
+            if shared.is_none() {
+                shared = Some(open_target(&target, None)?);
+            }
+            match shared.as_mut() {
+                Some(l) => l.as_mut(),
+                None => anyhow::bail!("no link"),
+            }
+        };
+        let out = replay(t, link, &opts);
+        match &out {
+            ReplayOutcome::Pass(p) => {
+                if !args.quiet {
+                    writeln!(w, "PASS {} ({} steps)", f.display(), p.exchange.len())?;
+                }
+            }
+            ReplayOutcome::Mismatch(_) | ReplayOutcome::Timeout(_) => {
+                let verdict = if matches!(out, ReplayOutcome::Timeout(_)) { "TIMEOUT" } else { "FAIL" };
+                writeln!(w, "{verdict} {}: {}", f.display(), out.render().trim_end())?;
+                code = code.max(EXIT_FAIL);
+            }
+            ReplayOutcome::Disconnected(_) => {
+                writeln!(w, "ERROR {}: {}", f.display(), out.summary())?;
+                code = EXIT_ERROR;
+            }
+        }
+    }
+    Ok(code)
 }

@@ -1,10 +1,104 @@
-//! `gcl suite` (not built yet).
+//! `gcl suite`: the committed golden transcripts. `regenerate` rewrites them from the
+//! reference model, `check` fails (exit 1, listing the files) when they are stale, missing or
+//! extra, `list` shows the cases.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use super::{EXIT_FAIL, EXIT_OK};
+use crate::suite;
+use crate::transcript::Level;
 
 /// Arguments of `gcl suite`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum Command {
+    /// Write the model's goldens: one file per case per profile, and index.json.
+    Regenerate {
+        /// The suite directory.
+        #[arg(long, default_value = suite::DEFAULT_DIR)]
+        dir: PathBuf,
+    },
+    /// Fail (exit 1) when the committed files differ from what the model generates.
+    Check {
+        /// The suite directory.
+        #[arg(long, default_value = suite::DEFAULT_DIR)]
+        dir: PathBuf,
+    },
+    /// List the committed cases: profile, id, level, requirements, title.
+    List {
+        /// Only this profile.
+        #[arg(long)]
+        profile: Option<String>,
+        /// The suite directory.
+        #[arg(long, default_value = suite::DEFAULT_DIR)]
+        dir: PathBuf,
+    },
+}
 
 /// Runs `gcl suite`.
-pub fn run(_args: Args) -> anyhow::Result<u8> {
-    anyhow::bail!("gcl suite is not built yet")
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let mut w = std::io::stdout().lock();
+    match args.command {
+        Command::Regenerate { dir } => {
+            let cases = suite::generate_all()?;
+            let before = suite::regenerate(&dir, &cases)?;
+            for l in before.lines() {
+                writeln!(w, "{l}")?;
+            }
+            writeln!(
+                w,
+                "{} cases in {}: {} written, {} removed",
+                cases.len(),
+                dir.display(),
+                before.stale.len() + before.missing.len(),
+                before.extra.len()
+            )?;
+            Ok(EXIT_OK)
+        }
+        Command::Check { dir } => {
+            let cases = suite::generate_all()?;
+            let r = suite::check(&dir, &cases)?;
+            if r.is_fresh() {
+                writeln!(w, "{} cases in {} are fresh", r.checked, dir.display())?;
+                return Ok(EXIT_OK);
+            }
+            for l in r.lines() {
+                writeln!(w, "{l}")?;
+            }
+            writeln!(w, "the committed suite is stale; run `gcl suite regenerate --dir {}`", dir.display())?;
+            Ok(EXIT_FAIL)
+        }
+        Command::List { profile, dir } => {
+            let cases = match &profile {
+                Some(p) => {
+                    let id = super::load_profile(p)?.id.clone();
+                    suite::load_profile(&dir, &id)?
+                }
+                None => suite::load_dir(&dir)?,
+            };
+            for c in &cases {
+                let req: Vec<&str> = c.header().requires.iter().map(|r| r.as_str()).collect();
+                writeln!(
+                    w,
+                    "{:<12} {:<44} {:<6} {:<22} {}",
+                    c.profile,
+                    c.id(),
+                    c.level(),
+                    if req.is_empty() { "-".to_string() } else { req.join(",") },
+                    c.header().title
+                )?;
+            }
+            let counts = suite::count_by_level(&cases);
+            let per: Vec<String> =
+                Level::ALL.iter().map(|l| format!("{} {}", counts.get(l).copied().unwrap_or(0), l)).collect();
+            writeln!(w, "{} cases: {}", cases.len(), per.join(", "))?;
+            Ok(EXIT_OK)
+        }
+    }
 }

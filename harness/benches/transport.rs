@@ -1,0 +1,179 @@
+//! Transport figures of `gcl sim`: round-trip latency and pacing accuracy.
+//!
+//! Run with `cargo bench -p gcl-harness --bench transport`. The simulator runs in-process on
+//! a thread (the same `gcl_harness::sim` code `gcl sim` runs), in fast time; the host side is
+//! the host library over the `serial:` (pty) and `tcp:` links, as a user's program would be.
+//!
+//! Figures:
+//! - `FGET P` round trip (echo, one output line, prompt), unpaced, profile bh8-262: median
+//!   and p99 over the pty and over TCP. Aim: p99 under 200 µs.
+//! - RealTime `A` exchange with 4-motor feedback (bh8-262 default flags: LFV, LFS, LFAP and
+//!   LFDP on motors 1-4, a 21-byte block), unpaced: median and p99 over the pty and TCP.
+//!   Aim: p99 under 200 µs.
+//! - Pacing at `--baud 9600`: the `?` listing (about 1.6 kB) over the pty, bytes per second
+//!   from the first byte to the last, against 960. Aim: within 2 %.
+//!
+//! Without `--bench` (as under `cargo test --all-targets`) it runs a few iterations of each as
+//! a smoke test and prints nothing but a line per figure.
+
+use std::os::fd::AsFd;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use gcl_harness::client::Hand;
+use gcl_harness::links::{SerialLink, TcpLink};
+use gcl_harness::sim::{Engine, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
+use gcl_harness::{Link, LinkError};
+use gcl_model::Profile;
+
+struct Server {
+    stop: StopHandle,
+    thread: Option<JoinHandle<()>>,
+    target: String,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.stop.stop();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn options(baud: Option<u32>) -> SimOptions {
+    let mut o = SimOptions::new(Profile::builtin("bh8-262").unwrap());
+    o.baud = baud;
+    o
+}
+
+fn pty_server(baud: Option<u32>) -> Server {
+    let (stop, signal) = stop_pair().unwrap();
+    let mut pty = Pty::open(None).unwrap();
+    let target = pty.path().display().to_string();
+    let mut engine = Engine::new(&options(baud)).unwrap();
+    let thread = std::thread::spawn(move || {
+        pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
+    });
+    Server { stop, thread: Some(thread), target }
+}
+
+fn tcp_server() -> Server {
+    let (stop, signal) = stop_pair().unwrap();
+    let mut server = TcpServer::bind("127.0.0.1:0", false).unwrap();
+    let target = server.local_addr().to_string();
+    let mut engine = Engine::new(&options(None)).unwrap();
+    let thread = std::thread::spawn(move || {
+        server.serve(&mut engine, &[signal.as_fd()]).unwrap();
+    });
+    Server { stop, thread: Some(thread), target }
+}
+
+fn link(kind: &str, server: &Server) -> Box<dyn Link> {
+    match kind {
+        "pty" => Box::new(SerialLink::open(&server.target, 9600).unwrap()),
+        _ => Box::new(TcpLink::connect(&server.target, Duration::from_secs(5)).unwrap()),
+    }
+}
+
+struct Stats {
+    median: Duration,
+    p99: Duration,
+    n: usize,
+}
+
+fn stats(mut v: Vec<Duration>) -> Stats {
+    v.sort();
+    let n = v.len();
+    Stats { median: v[n / 2], p99: v[(n * 99 / 100).min(n - 1)], n }
+}
+
+fn print(name: &str, s: &Stats) {
+    let aim = if s.p99 < Duration::from_micros(200) { "met" } else { "MISSED" };
+    println!(
+        "{name:<34} median {:>7.1} µs   p99 {:>7.1} µs   ({} samples; aim p99 < 200 µs: {aim})",
+        s.median.as_secs_f64() * 1e6,
+        s.p99.as_secs_f64() * 1e6,
+        s.n
+    );
+}
+
+fn round_trips(kind: &str, server: &Server, n: usize) {
+    let mut hand = Hand::new(link(kind, server), Profile::builtin("bh8-262").unwrap());
+    hand.initialize().unwrap();
+    for _ in 0..n / 10 + 1 {
+        hand.command("FGET P").unwrap();
+    }
+    let mut v = Vec::with_capacity(n);
+    for _ in 0..n {
+        let t = Instant::now();
+        hand.command("FGET P").unwrap();
+        v.push(t.elapsed());
+    }
+    print(&format!("FGET P round trip, {kind}"), &stats(v));
+
+    hand.rt_start("1234").unwrap();
+    assert_eq!(hand.rt_layout().unwrap().feedback.size, 21);
+    for _ in 0..n / 10 + 1 {
+        hand.rt_update_with(false, true).unwrap();
+    }
+    let mut v = Vec::with_capacity(n);
+    for _ in 0..n {
+        let t = Instant::now();
+        hand.rt_update_with(false, true).unwrap();
+        v.push(t.elapsed());
+    }
+    hand.rt_abort().unwrap();
+    print(&format!("RealTime A, 4-motor feedback, {kind}"), &stats(v));
+}
+
+fn pacing(rounds: usize) -> Result<(), LinkError> {
+    let server = pty_server(Some(9600));
+    let mut l = SerialLink::open(&server.target, 9600)?;
+    let mut total = 0usize;
+    let mut time = Duration::ZERO;
+    for _ in 0..rounds {
+        // Everything pending first (the banner), then a quiet line.
+        let mut sink = Vec::new();
+        l.send(b"\r")?;
+        while l.recv(&mut sink, Duration::from_millis(300))? > 0 {}
+        l.send(b"?\r")?;
+        let mut buf = Vec::new();
+        let mut first: Option<(Instant, usize)> = None;
+        let mut last = Instant::now();
+        while !buf.ends_with(b"\n\r=> ") {
+            let n = l.recv(&mut buf, Duration::from_secs(10))?;
+            if n == 0 {
+                break;
+            }
+            let now = Instant::now();
+            if first.is_none() {
+                first = Some((now, n));
+            }
+            last = now;
+        }
+        if let Some((t0, n0)) = first {
+            // Bytes after the first read, over the time they took.
+            total += buf.len() - n0;
+            time += last - t0;
+        }
+    }
+    let rate = total as f64 / time.as_secs_f64();
+    let err = (rate - 960.0) / 960.0 * 100.0;
+    println!(
+        "{:<34} {rate:>7.1} B/s against 960 ({err:+.2} %; {total} bytes; aim within 2 %: {})",
+        "pacing at --baud 9600, pty",
+        if err.abs() <= 2.0 { "met" } else { "MISSED" }
+    );
+    Ok(())
+}
+
+fn main() {
+    let bench = std::env::args().any(|a| a == "--bench");
+    let n = if bench { 20_000 } else { 50 };
+    for kind in ["pty", "tcp"] {
+        let server = if kind == "pty" { pty_server(None) } else { tcp_server() };
+        round_trips(kind, &server, n);
+    }
+    pacing(if bench { 3 } else { 1 }).unwrap();
+}

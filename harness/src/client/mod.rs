@@ -1,0 +1,968 @@
+//! A host library that speaks GCL like Barrett's C-Function library (`BHand`), over any
+//! [`Link`].
+//!
+//! [`core`] is the protocol as a sans-IO state machine; [`Hand`] drives it over a link with
+//! timeouts: initialise, close, open, move, incremental moves, stop, get and set parameters,
+//! error texts, and RealTime control (flags, start, update, read feedback, set velocity and
+//! gain, abort). [`programs`] holds the seed document's two example programs.
+//!
+//! ```
+//! use gcl_harness::client::Hand;
+//! use gcl_harness::target::{self, OpenOptions};
+//!
+//! let mut hand = Hand::open(&"sim:seed".parse().unwrap(), &OpenOptions::default()).unwrap();
+//! hand.initialize().unwrap();
+//! hand.close("123").unwrap();
+//! assert!(hand.get("1", "P").unwrap()[0] > 10_000);
+//! ```
+//!
+//! Every wait is bounded by [`Timeouts`]; no bytes from a hand can make it panic or hang.
+
+pub mod core;
+pub mod programs;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::params::ParamStore;
+use gcl_model::realtime::ControlHeader;
+use gcl_model::spec::Scope;
+use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
+
+use self::core::{Framing, HostCore, HostMode, ProtocolError, Reply};
+use crate::link::{Link, LinkError, byte_time};
+use crate::target::{self, OpenOptions, Target};
+
+/// What went wrong talking to a hand.
+#[derive(Debug, thiserror::Error)]
+pub enum ClientError {
+    /// The hand answered `ERR n`.
+    #[error("`{command}`: the hand answered ERR {code}{}", describe(*status))]
+    Device {
+        /// The command or block that failed.
+        command: String,
+        /// The status bits.
+        status: StatusBits,
+        /// The number on the wire.
+        code: u32,
+    },
+    /// No complete answer within the timeout.
+    #[error("`{waiting_for}`: no complete answer within {after:?}")]
+    Timeout {
+        /// What was awaited.
+        waiting_for: String,
+        /// The timeout.
+        after: Duration,
+    },
+    /// The echo differs from the line sent.
+    #[error("echo mismatch: sent \"{sent}\", the hand echoed \"{got}\"")]
+    EchoMismatch {
+        /// What was sent, escaped.
+        sent: String,
+        /// What came back, escaped.
+        got: String,
+    },
+    /// The answer fits no GCL framing.
+    #[error("`{command}`: framing error: {detail}; received \"{got}\"")]
+    Framing {
+        /// The request.
+        command: String,
+        /// What is wrong.
+        detail: String,
+        /// What came back, escaped.
+        got: String,
+    },
+    /// After `RESET` the banner lacks `BarrettHand Firmware`.
+    #[error("no `BarrettHand Firmware` banner after RESET; got {0:?}")]
+    NoBanner(Vec<String>),
+    /// The hand went away.
+    #[error("the hand disconnected")]
+    Disconnected,
+    /// Another link failure.
+    #[error("link: {0}")]
+    Link(LinkError),
+    /// A request that cannot be made: bad motor string, unknown parameter, value out of range,
+    /// RealTime call outside a loop.
+    #[error("{0}")]
+    Usage(String),
+}
+
+fn describe(s: StatusBits) -> String {
+    let names: Vec<&str> = s.iter_names().map(|(n, _)| n).collect();
+    if names.is_empty() { String::new() } else { format!(" ({})", names.join(" | ")) }
+}
+
+impl From<LinkError> for ClientError {
+    fn from(e: LinkError) -> ClientError {
+        match e {
+            LinkError::Disconnected => ClientError::Disconnected,
+            e => ClientError::Link(e),
+        }
+    }
+}
+
+impl ClientError {
+    fn protocol(e: ProtocolError, command: &str) -> ClientError {
+        match e {
+            ProtocolError::Status { status, code, .. } => {
+                ClientError::Device { command: command.to_string(), status, code }
+            }
+            ProtocolError::EchoMismatch { sent, got } => ClientError::EchoMismatch { sent, got },
+            ProtocolError::Framing { detail, got } => {
+                ClientError::Framing { command: command.to_string(), detail, got }
+            }
+            ProtocolError::Usage(m) => ClientError::Usage(m),
+        }
+    }
+
+    /// The status bits, for a device error.
+    pub fn status(&self) -> Option<StatusBits> {
+        match self {
+            ClientError::Device { status, .. } => Some(*status),
+            _ => None,
+        }
+    }
+}
+
+/// How long to wait for each kind of answer (like `BHand::ComSetTimeouts`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Timeouts {
+    /// A command without motion.
+    pub reply: Duration,
+    /// A command that moves (HI, C, O, M, IC, IO, HOME...).
+    pub motion: Duration,
+    /// A RealTime block.
+    pub block: Duration,
+    /// Each attempt to resynchronise (bare CR, ^C) before `RESET`.
+    pub sync: Duration,
+}
+
+impl Default for Timeouts {
+    fn default() -> Timeouts {
+        Timeouts {
+            reply: Duration::from_secs(5),
+            motion: Duration::from_secs(30),
+            block: Duration::from_secs(2),
+            sync: Duration::from_secs(1),
+        }
+    }
+}
+
+/// The RealTime flags and coefficients of `RTSetFlags`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RtFlags {
+    /// Control blocks carry a velocity (LCV).
+    pub lcv: bool,
+    /// Control velocity coefficient (LCVC).
+    pub lcvc: i64,
+    /// Control blocks carry a proportional gain (LCPG).
+    pub lcpg: bool,
+    /// Feedback carries velocity (LFV).
+    pub lfv: bool,
+    /// Feedback velocity coefficient (LFVC).
+    pub lfvc: i64,
+    /// Feedback carries strain (LFS).
+    pub lfs: bool,
+    /// Feedback carries absolute position (LFAP).
+    pub lfap: bool,
+    /// Feedback carries delta position (LFDP).
+    pub lfdp: bool,
+    /// Delta position coefficient (LFDPC).
+    pub lfdpc: i64,
+}
+
+impl RtFlags {
+    /// The flags in `RTSetFlags`' argument order: LCV, LCVC, LCPG, LFV, LFVC, LFS, LFAP, LFDP,
+    /// LFDPC. The seed's RealTime example is `RtFlags::barrett(1, 1, 0, 0, 1, 0, 1, 0, 1)`.
+    #[allow(clippy::too_many_arguments)] // the argument list of Barrett's RTSetFlags
+    pub fn barrett(
+        lcv: i64,
+        lcvc: i64,
+        lcpg: i64,
+        lfv: i64,
+        lfvc: i64,
+        lfs: i64,
+        lfap: i64,
+        lfdp: i64,
+        lfdpc: i64,
+    ) -> RtFlags {
+        RtFlags {
+            lcv: lcv != 0,
+            lcvc,
+            lcpg: lcpg != 0,
+            lfv: lfv != 0,
+            lfvc,
+            lfs: lfs != 0,
+            lfap: lfap != 0,
+            lfdp: lfdp != 0,
+            lfdpc,
+        }
+    }
+
+    fn pairs(&self) -> [(&'static str, i64); 9] {
+        [
+            ("LCV", self.lcv.into()),
+            ("LCVC", self.lcvc),
+            ("LCPG", self.lcpg.into()),
+            ("LFV", self.lfv.into()),
+            ("LFVC", self.lfvc),
+            ("LFS", self.lfs.into()),
+            ("LFAP", self.lfap.into()),
+            ("LFDP", self.lfdp.into()),
+            ("LFDPC", self.lfdpc),
+        ]
+    }
+}
+
+/// Parses a motor string like Barrett's library takes: any of `1 2 3 4 G S` (`G` = 123,
+/// `S` = 4); empty means no prefix (every enabled motor).
+pub fn parse_motors(text: &str) -> Result<MotorSet, ClientError> {
+    let mut set = MotorSet::EMPTY;
+    for c in text.chars() {
+        set = set
+            | match c.to_ascii_uppercase() {
+                '1'..='4' => MotorSet::single(c as u8 - b'0').unwrap_or_default(),
+                'G' => MotorSet::FINGERS,
+                'S' => MotorSet::SPREAD,
+                _ => return Err(ClientError::Usage(format!("bad motor string `{text}`: use 1 2 3 4 G S"))),
+            };
+    }
+    Ok(set)
+}
+
+/// ^C attempts of [`Hand::resync`]: more than the data bytes of the longest control block
+/// (4 motors × LCV, LCPG and a 2-byte LCT).
+const SYNC_ATTEMPTS: usize = 18;
+
+/// How long the line must stay silent after a resynchronisation.
+const QUIET: Duration = Duration::from_millis(50);
+
+#[derive(Debug, Clone)]
+struct RtSession {
+    layout: RtLayout,
+    control: Vec<i64>,
+    feedback: Option<Vec<i64>>,
+    positions: [Option<i64>; 4],
+    lfvc: [i64; 4],
+    lfdpc: [i64; 4],
+    updates: u64,
+}
+
+/// A hand at the end of a link: the blocking client.
+pub struct Hand {
+    link: Box<dyn Link>,
+    core: HostCore,
+    profile: Arc<Profile>,
+    timeouts: Timeouts,
+    rt: Option<RtSession>,
+    sent: u64,
+    received: u64,
+    scratch: Vec<u8>,
+    early: Option<Result<Reply, ClientError>>,
+}
+
+impl std::fmt::Debug for Hand {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hand")
+            .field("link", &self.link.describe())
+            .field("profile", &self.profile.id)
+            .field("mode", &self.core.mode())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Hand {
+    /// A client over `link` for a hand of `profile` (the profile gives the framing, the
+    /// parameter names and the RealTime field sizes).
+    pub fn new(link: Box<dyn Link>, profile: Arc<Profile>) -> Hand {
+        Hand {
+            link,
+            core: HostCore::new(Framing::of(&profile)),
+            profile,
+            timeouts: Timeouts::default(),
+            rt: None,
+            sent: 0,
+            received: 0,
+            scratch: Vec::with_capacity(4096),
+            early: None,
+        }
+    }
+
+    /// Opens `target` and a client for it. The profile is the `sim` target's, else
+    /// `opts.profile`, else `bh8-262`.
+    pub fn open(target: &Target, opts: &OpenOptions) -> Result<Hand, ClientError> {
+        let name = target
+            .sim_profile(opts.profile.as_deref())
+            .or(opts.profile.as_deref())
+            .unwrap_or(target::DEFAULT_SIM_PROFILE);
+        let profile =
+            crate::cli::load_profile(name).map_err(|e| ClientError::Usage(format!("profile `{name}`: {e:#}")))?;
+        let link = target::open(target, opts)?;
+        Ok(Hand::new(link, profile))
+    }
+
+    /// The timeouts.
+    pub fn timeouts(&self) -> Timeouts {
+        self.timeouts
+    }
+
+    /// Changes the timeouts (`ComSetTimeouts`).
+    pub fn set_timeouts(&mut self, t: Timeouts) {
+        self.timeouts = t;
+    }
+
+    /// The profile.
+    pub fn profile(&self) -> &Arc<Profile> {
+        &self.profile
+    }
+
+    /// The link.
+    pub fn link(&self) -> &dyn Link {
+        self.link.as_ref()
+    }
+
+    /// The link, mutably (to pause, or to reach the simulator behind a `SimLink`).
+    pub fn link_mut(&mut self) -> &mut dyn Link {
+        self.link.as_mut()
+    }
+
+    /// Gives the link back.
+    pub fn into_link(self) -> Box<dyn Link> {
+        self.link
+    }
+
+    /// Time as the link sees it ([`Link::elapsed`]).
+    pub fn elapsed(&self) -> Duration {
+        self.link.elapsed()
+    }
+
+    /// Bytes sent and received so far.
+    pub fn wire_bytes(&self) -> (u64, u64) {
+        (self.sent, self.received)
+    }
+
+    /// Wire time of every byte so far at `baud` (8N1): what a simulator in fast time counts.
+    pub fn wire_time(&self, baud: u32) -> Duration {
+        byte_time(baud) * (self.sent + self.received).min(u64::from(u32::MAX)) as u32
+    }
+
+    /// Whether the client believes the hand is in RealTime mode.
+    pub fn in_realtime(&self) -> bool {
+        self.core.mode() == HostMode::RealTime
+    }
+
+    // ------------------------------------------------------------------ plumbing
+
+    fn send(&mut self, bytes: &[u8]) -> Result<(), ClientError> {
+        self.sent += bytes.len() as u64;
+        self.link.send(bytes).map_err(|e| {
+            self.core.give_up();
+            e.into()
+        })
+    }
+
+    fn await_reply(&mut self, timeout: Duration, what: &str) -> Result<Reply, ClientError> {
+        let start = self.link.elapsed();
+        loop {
+            match self.core.poll() {
+                Ok(Some(r)) => return Ok(r),
+                Ok(None) => {}
+                Err(e) => {
+                    if self.core.mode() == HostMode::Supervisory {
+                        self.rt = None;
+                    }
+                    return Err(ClientError::protocol(e, what));
+                }
+            }
+            let spent = self.link.elapsed().saturating_sub(start);
+            if spent >= timeout {
+                self.core.give_up();
+                return Err(ClientError::Timeout { waiting_for: what.to_string(), after: timeout });
+            }
+            self.scratch.clear();
+            match self.link.recv(&mut self.scratch, timeout - spent) {
+                Ok(n) => {
+                    self.received += n as u64;
+                    self.core.handle_input(&self.scratch);
+                }
+                Err(e) => {
+                    self.core.give_up();
+                    return Err(e.into());
+                }
+            }
+        }
+    }
+
+    fn run(&mut self, line: &str, timeout: Duration) -> Result<Vec<String>, ClientError> {
+        let bytes = self.core.command(line).map_err(|e| ClientError::protocol(e, line))?;
+        self.send(&bytes)?;
+        match self.await_reply(timeout, line)? {
+            Reply::Lines(l) => Ok(l),
+            other => Err(ClientError::Framing {
+                command: line.to_string(),
+                detail: format!("unexpected answer {other:?}"),
+                got: String::new(),
+            }),
+        }
+    }
+
+    /// Sends a supervisory command and returns its output lines.
+    pub fn command(&mut self, line: &str) -> Result<Vec<String>, ClientError> {
+        self.run(line, self.timeouts.reply)
+    }
+
+    /// Sends a command that moves, with the motion timeout.
+    pub fn motion(&mut self, line: &str) -> Result<Vec<String>, ClientError> {
+        self.run(line, self.timeouts.motion)
+    }
+
+    fn prefixed(&self, motors: &str, command: &str) -> Result<String, ClientError> {
+        Ok(format!("{}{command}", parse_motors(motors)?))
+    }
+
+    /// Brings the link and the hand to a known state: a bare CR (or, if no prompt comes back,
+    /// ^C) and everything up to the prompt discarded.
+    pub fn resync(&mut self) -> Result<(), ClientError> {
+        self.rt = None;
+        let cr = self.core.sync();
+        self.send(&cr)?;
+        match self.await_reply(self.timeouts.sync, "bare CR") {
+            Ok(_) => return self.drain_until_quiet(),
+            Err(ClientError::Timeout { .. } | ClientError::Framing { .. }) => {}
+            Err(e) => return Err(e),
+        }
+        // In the middle of a RealTime block a CR or a ^C is data: as many ^C as the longest
+        // control block can hold, until one ends the loop (or stops a motion).
+        let mut last = None;
+        for _ in 0..SYNC_ATTEMPTS {
+            let abort = self.core.sync_abort();
+            self.send(&abort)?;
+            match self.await_reply(self.timeouts.sync, "^C") {
+                Ok(_) => return self.drain_until_quiet(),
+                Err(e @ (ClientError::Timeout { .. } | ClientError::Framing { .. })) => last = Some(e),
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last.unwrap_or(ClientError::Timeout { waiting_for: "^C".into(), after: self.timeouts.sync }))
+    }
+
+    /// Discards input until the line has been quiet for a moment: prompts still in flight
+    /// from before a resynchronisation (a banner, answers to garbage) must not be taken for
+    /// the answer to the next command.
+    fn drain_until_quiet(&mut self) -> Result<(), ClientError> {
+        let quiet = self.timeouts.sync.min(QUIET);
+        let start = self.link.elapsed();
+        loop {
+            self.scratch.clear();
+            let n = self.link.recv(&mut self.scratch, quiet)?;
+            self.received += n as u64;
+            if n == 0 || self.link.elapsed().saturating_sub(start) > self.timeouts.sync {
+                return Ok(());
+            }
+        }
+    }
+
+    /// `RESET`: returns the banner lines, checked for `BarrettHand Firmware`.
+    pub fn reset(&mut self) -> Result<Vec<String>, ClientError> {
+        let banner = self.run("RESET", self.timeouts.motion)?;
+        if !banner.iter().any(|l| l.contains("BarrettHand Firmware")) {
+            return Err(ClientError::NoBanner(banner));
+        }
+        Ok(banner)
+    }
+
+    /// Start-up like `BHand::InitHand("")` after `InitSoftware`: a bare CR, `RESET` (the
+    /// banner must contain `BarrettHand Firmware`), then `HI`. Returns the banner.
+    pub fn initialize(&mut self) -> Result<Vec<String>, ClientError> {
+        self.resync()?;
+        let banner = self.reset()?;
+        self.motion("HI")?;
+        Ok(banner)
+    }
+
+    /// `HI` for some motors (`InitHand("123S")`).
+    pub fn init_hand(&mut self, motors: &str) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, "HI")?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `C`: close.
+    pub fn close(&mut self, motors: &str) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, "C")?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `O`: open.
+    pub fn open_fingers(&mut self, motors: &str) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, "O")?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `M [pos]`: move to `pos`, or to DP.
+    pub fn move_to(&mut self, motors: &str, pos: Option<i64>) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, &pos.map_or("M".to_string(), |p| format!("M {p}")))?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `IC [step]`: incremental close by `step`, or by DS.
+    pub fn incremental_close(&mut self, motors: &str, step: Option<i64>) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, &step.map_or("IC".to_string(), |s| format!("IC {s}")))?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `IO [step]`: incremental open by `step`, or by DS.
+    pub fn incremental_open(&mut self, motors: &str, step: Option<i64>) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, &step.map_or("IO".to_string(), |s| format!("IO {s}")))?;
+        self.motion(&l).map(drop)
+    }
+
+    /// `T`: stop the motors (terminate power).
+    pub fn stop(&mut self, motors: &str) -> Result<(), ClientError> {
+        let l = self.prefixed(motors, "T")?;
+        self.command(&l).map(drop)
+    }
+
+    /// Sends a command and returns once the hand has echoed it, without waiting for it to
+    /// finish: then [`Hand::finish`] waits for the end, or [`Hand::abort`] stops it.
+    pub fn start(&mut self, line: &str) -> Result<(), ClientError> {
+        self.early = None;
+        let bytes = self.core.command(line).map_err(|e| ClientError::protocol(e, line))?;
+        self.send(&bytes)?;
+        let timeout = self.timeouts.reply;
+        let start = self.link.elapsed();
+        loop {
+            if self.core.echo_received() {
+                // Finished already (an error, or a command without motion)?
+                return match self.core.poll() {
+                    Ok(None) => Ok(()),
+                    Ok(Some(r)) => {
+                        self.early = Some(Ok(r));
+                        Ok(())
+                    }
+                    Err(e) => Err(ClientError::protocol(e, line)),
+                };
+            }
+            if let Err(e) = self.core.poll() {
+                return Err(ClientError::protocol(e, line));
+            }
+            let spent = self.link.elapsed().saturating_sub(start);
+            if spent >= timeout {
+                self.core.give_up();
+                return Err(ClientError::Timeout { waiting_for: format!("echo of `{line}`"), after: timeout });
+            }
+            self.scratch.clear();
+            match self.link.recv(&mut self.scratch, timeout - spent) {
+                Ok(n) => {
+                    self.received += n as u64;
+                    self.core.handle_input(&self.scratch);
+                }
+                Err(e) => {
+                    self.core.give_up();
+                    return Err(e.into());
+                }
+            }
+        }
+    }
+
+    /// Waits (motion timeout) for the end of a command begun with [`Hand::start`]; its
+    /// output lines.
+    pub fn finish(&mut self) -> Result<Vec<String>, ClientError> {
+        match self.early.take() {
+            Some(Ok(Reply::Lines(l))) => Ok(l),
+            Some(Ok(_)) => Ok(Vec::new()),
+            Some(Err(e)) => Err(e),
+            None => match self.await_reply(self.timeouts.motion, "the command in progress")? {
+                Reply::Lines(l) => Ok(l),
+                _ => Ok(Vec::new()),
+            },
+        }
+    }
+
+    /// ^C in supervisory mode: stops a motion in progress; returns the lines before the
+    /// prompt (`ERR 16384` on bh8-262 when something was stopped).
+    pub fn abort(&mut self) -> Result<Vec<String>, ClientError> {
+        self.early = None;
+        let b = self.core.abort();
+        self.send(&b)?;
+        self.rt = None;
+        match self.await_reply(self.timeouts.reply, "^C")? {
+            Reply::Prompt(lines) => Ok(lines),
+            _ => Ok(Vec::new()),
+        }
+    }
+
+    fn values(line: &str, what: &str) -> Result<Vec<i64>, ClientError> {
+        line.split_whitespace().map(|v| v.parse::<i64>()).collect::<Result<Vec<_>, _>>().map_err(|_| {
+            ClientError::Framing { command: what.to_string(), detail: "not a number".into(), got: line.into() }
+        })
+    }
+
+    /// `FGET name`: one value per motor (motor order).
+    pub fn get(&mut self, motors: &str, name: &str) -> Result<Vec<i64>, ClientError> {
+        Ok(self.get_many(motors, &[name])?.pop().unwrap_or_default())
+    }
+
+    /// `FGET n1 n2 ...`: for each name, one value per motor.
+    pub fn get_many(&mut self, motors: &str, names: &[&str]) -> Result<Vec<Vec<i64>>, ClientError> {
+        let l = self.prefixed(motors, &format!("FGET {}", names.join(" ")))?;
+        let lines = self.command(&l)?;
+        if lines.len() != names.len() {
+            return Err(ClientError::Framing {
+                command: l,
+                detail: format!("{} lines for {} parameters", lines.len(), names.len()),
+                got: lines.join(" | "),
+            });
+        }
+        lines.iter().map(|line| Self::values(line, &l)).collect()
+    }
+
+    /// `FSET name value` for some motors.
+    pub fn set(&mut self, motors: &str, name: &str, value: i64) -> Result<(), ClientError> {
+        self.set_many(motors, &[(name, value)])
+    }
+
+    /// `FSET n1 v1 n2 v2 ...`, split over several lines if one would be too long for the hand.
+    pub fn set_many(&mut self, motors: &str, pairs: &[(&str, i64)]) -> Result<(), ClientError> {
+        let prefix = self.prefixed(motors, "FSET")?;
+        let max = self.profile.framing.max_line;
+        let mut line = prefix.clone();
+        for (n, v) in pairs {
+            let item = format!(" {n} {v}");
+            if line.len() > prefix.len() && line.len() + item.len() > max {
+                self.command(&line)?;
+                line = prefix.clone();
+            }
+            line.push_str(&item);
+        }
+        if line.len() > prefix.len() {
+            self.command(&line)?;
+        }
+        Ok(())
+    }
+
+    /// `PGET name`: a global parameter.
+    pub fn pget(&mut self, name: &str) -> Result<i64, ClientError> {
+        let l = format!("PGET {name}");
+        let lines = self.command(&l)?;
+        let v = lines.first().map(|line| Self::values(line, &l)).transpose()?.unwrap_or_default();
+        v.first().copied().ok_or_else(|| ClientError::Framing {
+            command: l,
+            detail: "no value".into(),
+            got: lines.join(" | "),
+        })
+    }
+
+    /// `PSET name value`: a global parameter.
+    pub fn pset(&mut self, name: &str, value: i64) -> Result<(), ClientError> {
+        self.command(&format!("PSET {name} {value}")).map(drop)
+    }
+
+    /// `ERR n`: the hand's description lines of a status number.
+    pub fn error_text(&mut self, code: u32) -> Result<Vec<String>, ClientError> {
+        self.command(&format!("ERR {code}"))
+    }
+
+    /// The description of a status from the profile, without asking the hand
+    /// (`BHand::ErrorMessage`).
+    pub fn error_message(&self, status: StatusBits) -> String {
+        status.describe(&self.profile).join("; ")
+    }
+
+    // ------------------------------------------------------------------ RealTime
+
+    /// `RTSetFlags`: one `FSET` of the RealTime flags and coefficients for `motors`.
+    pub fn rt_set_flags(&mut self, motors: &str, flags: RtFlags) -> Result<(), ClientError> {
+        self.set_many(motors, &flags.pairs())
+    }
+
+    /// `RTStart`: reads the RealTime flags of `motors` back from the hand (so that flags loaded
+    /// from its EEPROM count too), computes the block layouts, reads the positions, and sends
+    /// `LOOP`.
+    pub fn rt_start(&mut self, motors: &str) -> Result<(), ClientError> {
+        let set = parse_motors(motors)?;
+        if set.is_empty() {
+            return Err(ClientError::Usage("RTStart needs motors, e.g. \"123\"".into()));
+        }
+        let profile = self.profile.clone();
+        let mut store = ParamStore::defaults(&profile);
+        let mut motor_names = Vec::new();
+        let mut global_names = Vec::new();
+        for id in profile.param_ids() {
+            let p = profile.param(id);
+            let wanted = p.rt.is_some() || matches!(p.name.as_str(), "LCVC" | "LFVC" | "LFDPC");
+            if !wanted || p.alias_of.is_some() {
+                continue;
+            }
+            match p.scope {
+                Scope::Motor => motor_names.push(p.name.clone()),
+                Scope::Global => global_names.push(p.name.clone()),
+            }
+        }
+        let digits = set.to_string();
+        // Several FGET lines if one would be too long.
+        let max = profile.framing.max_line;
+        let mut chunk: Vec<&str> = Vec::new();
+        let mut chunks: Vec<Vec<&str>> = Vec::new();
+        for n in &motor_names {
+            let len = digits.len() + 4 + chunk.iter().map(|c| c.len() + 1).sum::<usize>() + n.len() + 1;
+            if !chunk.is_empty() && len > max {
+                chunks.push(std::mem::take(&mut chunk));
+            }
+            chunk.push(n);
+        }
+        if !chunk.is_empty() {
+            chunks.push(chunk);
+        }
+        for names in chunks {
+            let values = self.get_many(&digits, &names)?;
+            for (name, vals) in names.iter().zip(values) {
+                let Some(id) = profile.param_id(name) else { continue };
+                for (m, v) in set.iter().zip(vals) {
+                    store.set_unchecked(&profile, id, MotorSet::single(m).unwrap_or_default(), v);
+                }
+            }
+        }
+        for name in &global_names {
+            let Some(id) = profile.param_id(name) else { continue };
+            let v = self.pget(name)?;
+            store.set_unchecked(&profile, id, MotorSet::ALL, v);
+        }
+        let coeff = |name: &str| -> [i64; 4] {
+            std::array::from_fn(|i| store.get_named(&profile, name, i as u8 + 1).unwrap_or(1).max(1))
+        };
+        let (lfvc, lfdpc) = (coeff("LFVC"), coeff("LFDPC"));
+        // FGET P gives the starting positions (and restarts the hand's LFDP reckoning).
+        let p = self.get(&digits, "P")?;
+        let mut positions = [None; 4];
+        for (m, v) in set.iter().zip(p) {
+            positions[(m - 1) as usize] = Some(v);
+        }
+        let layout = RtLayout::compute(&profile, &store, set);
+        let line = format!("{digits}LOOP");
+        let bytes = self.core.start_loop(&line, layout.clone()).map_err(|e| ClientError::protocol(e, &line))?;
+        self.send(&bytes)?;
+        match self.await_reply(self.timeouts.reply, &line)? {
+            Reply::LoopStarted => {}
+            other => {
+                return Err(ClientError::Framing {
+                    command: line,
+                    detail: format!("unexpected {other:?}"),
+                    got: String::new(),
+                });
+            }
+        }
+        let n_control = layout.control.fields.len();
+        self.rt =
+            Some(RtSession { layout, control: vec![0; n_control], feedback: None, positions, lfvc, lfdpc, updates: 0 });
+        Ok(())
+    }
+
+    /// The loop's block layouts.
+    pub fn rt_layout(&self) -> Option<&RtLayout> {
+        self.rt.as_ref().map(|r| &r.layout)
+    }
+
+    fn session(&mut self) -> Result<&mut RtSession, ClientError> {
+        self.rt.as_mut().ok_or_else(|| ClientError::Usage("not in RealTime mode: call rt_start first".into()))
+    }
+
+    fn set_control(&mut self, motor: char, name: &str, value: i64) -> Result<(), ClientError> {
+        let m = parse_motors(&motor.to_string())?;
+        let Some(m) = m.iter().next().filter(|_| m.len() == 1) else {
+            return Err(ClientError::Usage(format!("`{motor}` is not one motor")));
+        };
+        let s = self.session()?;
+        let i = s.layout.control.position(Some(m), name).ok_or_else(|| {
+            ClientError::Usage(format!("motor {m} has no {name} in its control block: set the flag with rt_set_flags"))
+        })?;
+        let f = &s.layout.control.fields[i];
+        s.control[i] = value.clamp(f.min(), f.max());
+        Ok(())
+    }
+
+    /// `RTSetVelocity`: the LCV datum for a motor in the next control block (clamped to a
+    /// signed byte).
+    pub fn rt_set_velocity(&mut self, motor: char, velocity: i64) -> Result<(), ClientError> {
+        self.set_control(motor, "LCV", velocity)
+    }
+
+    /// `RTSetGain`: the LCPG datum for a motor in the next control block.
+    pub fn rt_set_gain(&mut self, motor: char, gain: i64) -> Result<(), ClientError> {
+        self.set_control(motor, "LCPG", gain)
+    }
+
+    /// `RTSetTorque` (bh8-262-4.4): the LCT datum for a motor.
+    pub fn rt_set_torque(&mut self, motor: char, torque: i64) -> Result<(), ClientError> {
+        self.set_control(motor, "LCT", torque)
+    }
+
+    /// `RTUpdate`: sends a `C` block with the control values (or `A` when the control block
+    /// is empty) and reads the feedback.
+    pub fn rt_update(&mut self) -> Result<(), ClientError> {
+        let no_control = self.session()?.layout.control.fields.is_empty();
+        self.rt_update_with(!no_control, true)
+    }
+
+    /// `RTUpdate(control, feedback)`: `C`, `c`, `A` or `a`.
+    pub fn rt_update_with(&mut self, control: bool, feedback: bool) -> Result<(), ClientError> {
+        let header = match (control, feedback) {
+            (true, true) => ControlHeader::DataFeedback,
+            (true, false) => ControlHeader::DataAck,
+            (false, true) => ControlHeader::Feedback,
+            (false, false) => ControlHeader::Ack,
+        };
+        let values = self.session()?.control.clone();
+        let what = format!("RealTime block {}", header.byte() as char);
+        let bytes = self.core.block(header, &values).map_err(|e| ClientError::protocol(e, &what))?;
+        self.send(&bytes)?;
+        match self.await_reply(self.timeouts.block, &what)? {
+            Reply::Feedback(v) => {
+                let s = self.session()?;
+                s.updates += 1;
+                for m in s.layout.motors.iter() {
+                    let i = (m - 1) as usize;
+                    if let Some(ap) = s.layout.feedback.value_of(&v, Some(m), "LFAP") {
+                        s.positions[i] = Some(ap);
+                    } else if let Some(dp) = s.layout.feedback.value_of(&v, Some(m), "LFDP") {
+                        s.positions[i] = Some(s.positions[i].unwrap_or(0) + dp * s.lfdpc[i]);
+                    }
+                }
+                s.feedback = Some(v);
+                Ok(())
+            }
+            _ => {
+                self.session()?.updates += 1;
+                Ok(())
+            }
+        }
+    }
+
+    fn feedback(&self, motor: char, name: &str) -> Option<i64> {
+        let s = self.rt.as_ref()?;
+        let m = parse_motors(&motor.to_string()).ok()?.iter().next()?;
+        s.layout.feedback.value_of(s.feedback.as_ref()?, Some(m), name)
+    }
+
+    /// `RTGetPosition`: from LFAP, or reckoned from LFDP × LFDPC since `rt_start`.
+    pub fn rt_get_position(&self, motor: char) -> Option<i64> {
+        let m = parse_motors(&motor.to_string()).ok()?.iter().next()?;
+        self.rt.as_ref()?.positions[(m - 1) as usize]
+    }
+
+    /// `RTGetStrain`: LFS of the last feedback.
+    pub fn rt_get_strain(&self, motor: char) -> Option<i64> {
+        self.feedback(motor, "LFS")
+    }
+
+    /// `RTGetVelocity`: LFV × LFVC of the last feedback.
+    pub fn rt_get_velocity(&self, motor: char) -> Option<i64> {
+        let m = parse_motors(&motor.to_string()).ok()?.iter().next()?;
+        let c = self.rt.as_ref()?.lfvc[(m - 1) as usize];
+        self.feedback(motor, "LFV").map(|v| v * c)
+    }
+
+    /// `RTGetDeltaPos`: the raw LFDP of the last feedback.
+    pub fn rt_get_delta_position(&self, motor: char) -> Option<i64> {
+        self.feedback(motor, "LFDP")
+    }
+
+    /// LFT of the last feedback (bh8-262).
+    pub fn rt_get_temperature(&self) -> Option<i64> {
+        let s = self.rt.as_ref()?;
+        s.layout.feedback.value_of(s.feedback.as_ref()?, None, "LFT")
+    }
+
+    /// Blocks exchanged since `rt_start`.
+    pub fn rt_updates(&self) -> u64 {
+        self.rt.as_ref().map_or(0, |s| s.updates)
+    }
+
+    /// `RTAbort`: ^C, and the prompt back.
+    pub fn rt_abort(&mut self) -> Result<(), ClientError> {
+        let b = self.core.abort();
+        self.send(&b)?;
+        self.rt = None;
+        self.await_reply(self.timeouts.reply, "^C (leave RealTime)").map(drop)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hand(profile: &str) -> Hand {
+        Hand::open(&format!("sim:{profile}").parse().unwrap(), &OpenOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn motors_parse_like_barretts() {
+        assert_eq!(parse_motors("123").unwrap(), MotorSet::FINGERS);
+        assert_eq!(parse_motors("GS").unwrap(), MotorSet::ALL);
+        assert_eq!(parse_motors("").unwrap(), MotorSet::EMPTY);
+        assert!(parse_motors("5").is_err());
+    }
+
+    #[test]
+    fn supervisory_operations() {
+        let mut h = hand("seed");
+        let banner = h.initialize().unwrap();
+        assert!(banner[0].contains("BarrettHand Firmware"));
+        h.close("123").unwrap();
+        let p = h.get("123", "P").unwrap();
+        assert!(p.iter().all(|v| *v > 10_000), "{p:?}");
+        h.open_fingers("G").unwrap();
+        assert!(h.get("1", "P").unwrap()[0] < 100);
+        h.set("1", "DP", 1234).unwrap();
+        assert_eq!(h.get("1", "DP").unwrap(), vec![1234]);
+        h.move_to("1", None).unwrap();
+        assert!((h.get("1", "P").unwrap()[0] - 1234).abs() < 50);
+        let e = h.set("1", "DP", 999_999).unwrap_err();
+        assert_eq!(e.status(), Some(StatusBits::INVALID_VALUE));
+        assert_eq!(e.to_string(), "`1FSET DP 999999`: the hand answered ERR 128 (INVALID_VALUE)");
+        assert!(h.error_text(128).unwrap()[0].contains("128"));
+        assert!(h.error_message(StatusBits::INVALID_VALUE).contains("128"));
+        assert!(matches!(h.command("NONESUCH"), Err(ClientError::Device { code: 32, .. })));
+        assert!(h.pget("TEMP").unwrap() > 0);
+    }
+
+    #[test]
+    fn realtime_operations() {
+        let mut h = hand("seed");
+        h.initialize().unwrap();
+        h.rt_set_flags("123", RtFlags::barrett(1, 1, 0, 0, 1, 0, 1, 0, 1)).unwrap();
+        h.rt_start("123").unwrap();
+        assert_eq!(h.rt_layout().unwrap().control.size, 4);
+        assert_eq!(h.rt_layout().unwrap().feedback.size, 7);
+        h.rt_set_velocity('1', 55).unwrap();
+        assert!(h.rt_set_gain('1', 3).is_err());
+        for _ in 0..100 {
+            h.rt_update().unwrap();
+        }
+        assert!(h.rt_get_position('1').unwrap() > 1000);
+        assert_eq!(h.rt_get_position('2'), Some(0));
+        assert!(h.command("FGET P").is_err());
+        h.rt_abort().unwrap();
+        assert!(h.get("1", "P").unwrap()[0] > 1000);
+    }
+
+    #[test]
+    fn realtime_on_bh8_262_reads_flags_back() {
+        let mut h = hand("bh8-262");
+        h.initialize().unwrap();
+        h.rt_start("1234").unwrap();
+        // bh8-262's default flags: LCV, LCPG in control; LFV, LFS, LFAP, LFDP in feedback.
+        assert_eq!(h.rt_layout().unwrap().feedback.size, 21);
+        h.rt_update().unwrap();
+        assert!(h.rt_get_strain('1').is_some());
+        h.rt_abort().unwrap();
+    }
+
+    #[test]
+    fn a_refused_loop_is_a_device_error() {
+        let mut h = hand("seed");
+        h.resync().unwrap();
+        let e = h.rt_start("123").unwrap_err();
+        assert_eq!(e.status(), Some(StatusBits::NOT_INITIALIZED));
+        assert!(!h.in_realtime());
+    }
+}

@@ -1,0 +1,465 @@
+//! Replaying a transcript: send its host side through a [`Link`], compare every answer with
+//! the golden one, and say how it ended.
+//!
+//! Each step waits at most its own `within` (or [`ReplayOptions::default_timeout`]), so a hung
+//! hand never hangs a run. An answer is consumed as soon as the shortest prefix of what arrived
+//! matches the step's expectation; bytes after it belong to the next step, and bytes left after
+//! the last step are a mismatch of their own. Nothing here panics on a hand's bytes.
+
+use std::fmt::Write as _;
+use std::time::Duration;
+
+use crate::link::{Link, LinkError};
+use crate::transcript::matcher::{Feed, Matcher, show};
+use crate::transcript::record::drain;
+use crate::transcript::{DEFAULT_STEP_TIMEOUT, Form, Send, Step, Transcript, escape_text};
+
+/// How to replay.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReplayOptions {
+    /// The wait of a step that has no `within`.
+    pub default_timeout: Duration,
+    /// Before the first step, bytes are read and discarded until the hand has been quiet this
+    /// long (a power-up banner, the end of an earlier case).
+    pub drain_quiet: Duration,
+    /// The longest the start-of-run drain may take.
+    pub drain_limit: Duration,
+    /// Send ^C before the drain, to bring a hand that is moving, looping or mid-line back to
+    /// an idle prompt (the answer is drained). Off by default: a transcript starts from its own
+    /// preamble.
+    pub resync: bool,
+    /// After the last step, wait this long for bytes the hand should not send.
+    pub trailing: Duration,
+}
+
+impl Default for ReplayOptions {
+    fn default() -> ReplayOptions {
+        ReplayOptions {
+            default_timeout: DEFAULT_STEP_TIMEOUT,
+            drain_quiet: Duration::from_millis(100),
+            drain_limit: Duration::from_secs(5),
+            resync: false,
+            trailing: Duration::from_millis(50),
+        }
+    }
+}
+
+/// One step as it happened.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Exchanged {
+    /// The step, 0-based.
+    pub step: usize,
+    /// Its line in the transcript (0 when built in code).
+    pub line: usize,
+    /// What was sent.
+    pub sent: Vec<u8>,
+    /// What the hand answered: the matched answer, or for the last step of a failed replay
+    /// everything received.
+    pub received: Vec<u8>,
+}
+
+/// A replay where every answer matched.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Passed {
+    /// Time the replay took on the link's clock (simulated time for the simulator).
+    pub elapsed: Duration,
+    /// Every step.
+    pub exchange: Vec<Exchanged>,
+}
+
+/// Where an answer parted from the golden one.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mismatch {
+    /// The step, 0-based.
+    pub step: usize,
+    /// Its line in the transcript.
+    pub line: usize,
+    /// Byte offset within the step's answer where the bytes part.
+    pub offset: usize,
+    /// The expectation from the parting byte on, as written (escaped text or hex, elisions
+    /// in braces). Empty when the hand sent bytes after the end of the transcript.
+    pub expected: String,
+    /// The answer from the parting byte on, in the same form.
+    pub actual: String,
+    /// The whole expectation of the step, as written.
+    pub expected_full: String,
+    /// Whether the mismatch is bytes after the last step (nothing more was expected).
+    pub trailing: bool,
+    /// How the step's bytes are shown.
+    pub form: Form,
+    /// The exchange up to and including the failing step (whose `received` is the whole
+    /// answer as far as it was read).
+    pub exchange: Vec<Exchanged>,
+}
+
+/// A step that waited past its deadline.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TimedOut {
+    /// The step, 0-based.
+    pub step: usize,
+    /// Its line in the transcript.
+    pub line: usize,
+    /// How long it waited.
+    pub waited: Duration,
+    /// Bytes of the answer that arrived, all matching so far.
+    pub offset: usize,
+    /// What was still expected, as written.
+    pub expected: String,
+    /// The whole expectation of the step, as written.
+    pub expected_full: String,
+    /// How the step's bytes are shown.
+    pub form: Form,
+    /// The exchange up to and including the step.
+    pub exchange: Vec<Exchanged>,
+}
+
+/// The link failed: the hand disconnected, or an I/O error.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Disconnected {
+    /// The step, 0-based (the number of steps when it happened after the last).
+    pub step: usize,
+    /// Its line in the transcript.
+    pub line: usize,
+    /// What the link said.
+    pub reason: String,
+    /// The exchange so far.
+    pub exchange: Vec<Exchanged>,
+}
+
+/// How a replay ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ReplayOutcome {
+    /// Every answer matched.
+    Pass(Passed),
+    /// An answer differed (FAIL).
+    Mismatch(Box<Mismatch>),
+    /// A step waited past its deadline (TIMEOUT).
+    Timeout(Box<TimedOut>),
+    /// The hand vanished or the link failed (ERROR).
+    Disconnected(Box<Disconnected>),
+}
+
+impl ReplayOutcome {
+    /// Whether every answer matched.
+    pub fn is_pass(&self) -> bool {
+        matches!(self, ReplayOutcome::Pass(_))
+    }
+
+    /// The exchange as far as it went.
+    pub fn exchange(&self) -> &[Exchanged] {
+        match self {
+            ReplayOutcome::Pass(p) => &p.exchange,
+            ReplayOutcome::Mismatch(m) => &m.exchange,
+            ReplayOutcome::Timeout(t) => &t.exchange,
+            ReplayOutcome::Disconnected(d) => &d.exchange,
+        }
+    }
+
+    /// The failing step (0-based), if any.
+    pub fn failed_step(&self) -> Option<usize> {
+        match self {
+            ReplayOutcome::Pass(_) => None,
+            ReplayOutcome::Mismatch(m) => Some(m.step),
+            ReplayOutcome::Timeout(t) => Some(t.step),
+            ReplayOutcome::Disconnected(d) => Some(d.step),
+        }
+    }
+
+    /// One line saying how the replay ended.
+    pub fn summary(&self) -> String {
+        match self {
+            ReplayOutcome::Pass(p) => format!("pass: {} steps", p.exchange.len()),
+            ReplayOutcome::Mismatch(m) if m.trailing => {
+                format!("mismatch after the last step (line {}): the hand sent more", m.line)
+            }
+            ReplayOutcome::Mismatch(m) => {
+                format!("mismatch at step {} (line {}), byte {} of the answer", m.step + 1, m.line, m.offset)
+            }
+            ReplayOutcome::Timeout(t) => format!(
+                "timeout at step {} (line {}) after {}: {} bytes of the answer arrived",
+                t.step + 1,
+                t.line,
+                crate::transcript::format_duration(t.waited),
+                t.offset
+            ),
+            ReplayOutcome::Disconnected(d) => {
+                format!("link failed at step {} (line {}): {}", d.step + 1, d.line, d.reason)
+            }
+        }
+    }
+
+    /// A report for people: the summary, the step's bytes sent, and expected against actual
+    /// from a little before the parting byte, with a caret under it.
+    pub fn render(&self) -> String {
+        let mut s = self.summary();
+        s.push('\n');
+        match self {
+            ReplayOutcome::Pass(_) => {}
+            ReplayOutcome::Mismatch(m) => {
+                let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+                if let Some(e) = m.exchange.last() {
+                    let _ = writeln!(s, "  sent:     \"{}\"", escape_text(&e.sent));
+                }
+                let _ = writeln!(s, "  golden:   {}", m.expected_full);
+                let _ = write!(s, "{}", side_by_side(got, m.offset, &m.expected, m.form, m.trailing));
+            }
+            ReplayOutcome::Timeout(t) => {
+                let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+                if let Some(e) = t.exchange.last() {
+                    let _ = writeln!(s, "  sent:     \"{}\"", escape_text(&e.sent));
+                }
+                let _ = writeln!(s, "  golden:   {}", t.expected_full);
+                let _ = write!(s, "{}", side_by_side(got, t.offset, &t.expected, t.form, false));
+                let _ = writeln!(s, "  (nothing more arrived)");
+            }
+            ReplayOutcome::Disconnected(_) => {}
+        }
+        s
+    }
+}
+
+/// Bytes before the parting byte shown for context.
+const CONTEXT: usize = 24;
+
+fn side_by_side(got: &[u8], offset: usize, expected_rest: &str, form: Form, trailing: bool) -> String {
+    let offset = offset.min(got.len());
+    let from = offset.saturating_sub(CONTEXT);
+    let lead = if from > 0 { "…" } else { "" };
+    let (q, sep) = if form == Form::Text { ("\"", "") } else { ("", " ") };
+    let before = show(&got[from..offset], form);
+    let after = show(&got[offset..], form);
+    let joint = if before.is_empty() || after.is_empty() { "" } else { sep };
+    let joint_e = if before.is_empty() || expected_rest.is_empty() { "" } else { sep };
+    let expected =
+        if trailing { "(end of answer)".to_string() } else { format!("{q}{lead}{before}{joint_e}{expected_rest}{q}") };
+    let actual = format!("{q}{lead}{before}{joint}{after}{q}");
+    let caret = q.len() + lead.chars().count() + before.chars().count() + joint.len();
+    format!("  expected: {expected}\n  actual:   {actual}\n            {}^ byte {offset}\n", " ".repeat(caret))
+}
+
+fn link_failed(step: usize, line: usize, e: &LinkError, exchange: Vec<Exchanged>) -> ReplayOutcome {
+    ReplayOutcome::Disconnected(Box::new(Disconnected { step, line, reason: e.to_string(), exchange }))
+}
+
+/// Replays `t` over `link`.
+pub fn replay(t: &Transcript, link: &mut dyn Link, opts: &ReplayOptions) -> ReplayOutcome {
+    let start = link.elapsed();
+    let first_line = t.steps.first().map_or(0, |s| s.line);
+    if opts.resync
+        && let Err(e) = link.send(&[3])
+    {
+        return link_failed(0, first_line, &e, Vec::new());
+    }
+    if let Err(e) = drain(link, opts.drain_quiet, opts.drain_limit) {
+        return link_failed(0, first_line, &e, Vec::new());
+    }
+    let mut exchange: Vec<Exchanged> = Vec::with_capacity(t.steps.len());
+    let mut buf: Vec<u8> = Vec::new();
+    for (i, step) in t.steps.iter().enumerate() {
+        match run_step(i, step, link, opts, &mut buf, &mut exchange) {
+            Ok(()) => {}
+            Err(outcome) => return outcome,
+        }
+    }
+    if !opts.trailing.is_zero()
+        && let Err(e) = link.recv(&mut buf, opts.trailing)
+    {
+        let line = t.steps.last().map_or(0, |s| s.line);
+        return link_failed(t.steps.len(), line, &e, exchange);
+    }
+    if !buf.is_empty() {
+        let step = t.steps.len().saturating_sub(1);
+        let last = t.steps.last();
+        let mut exchange = exchange;
+        let mut offset = 0;
+        if let Some(e) = exchange.last_mut() {
+            offset = e.received.len();
+            e.received.extend_from_slice(&buf);
+        }
+        let form = if buf.iter().all(|b| (0x20..0x7f).contains(b) || matches!(b, b'\n' | b'\r' | b'\t')) {
+            Form::Text
+        } else {
+            Form::Hex
+        };
+        return ReplayOutcome::Mismatch(Box::new(Mismatch {
+            step,
+            line: last.map_or(0, |s| s.line),
+            offset,
+            expected: String::new(),
+            actual: show(&buf, form),
+            expected_full: last.map(|s| s.expect.to_text()).unwrap_or_default(),
+            trailing: true,
+            form,
+            exchange,
+        }));
+    }
+    ReplayOutcome::Pass(Passed { elapsed: link.elapsed().saturating_sub(start), exchange })
+}
+
+fn run_step(
+    i: usize,
+    step: &Step,
+    link: &mut dyn Link,
+    opts: &ReplayOptions,
+    buf: &mut Vec<u8>,
+    exchange: &mut Vec<Exchanged>,
+) -> Result<(), ReplayOutcome> {
+    if let Some(p) = step.pause {
+        link.pause(p);
+    }
+    let sent = step.send.as_ref().map(|s: &Send| s.bytes.clone()).unwrap_or_default();
+    if !sent.is_empty()
+        && let Err(e) = link.send(&sent)
+    {
+        exchange.push(Exchanged { step: i, line: step.line, sent, received: Vec::new() });
+        return Err(link_failed(i, step.line, &e, std::mem::take(exchange)));
+    }
+    let timeout = step.within.unwrap_or(opts.default_timeout);
+    let t0 = link.elapsed();
+    let mut m = Matcher::new(&step.expect);
+    let mut fed = 0;
+    let consumed = 'outer: loop {
+        if m.is_complete() {
+            break 'outer fed;
+        }
+        while fed < buf.len() {
+            let b = buf[fed];
+            fed += 1;
+            match m.feed(b) {
+                Feed::Complete => break 'outer fed,
+                Feed::Alive => {}
+                Feed::Dead => {
+                    let offset = fed - 1;
+                    let form = m.form_at_parting();
+                    let expected = m.expected_at_parting();
+                    exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                    let got = &exchange[exchange.len() - 1].received;
+                    return Err(ReplayOutcome::Mismatch(Box::new(Mismatch {
+                        step: i,
+                        line: step.line,
+                        offset,
+                        expected,
+                        actual: show(&got[offset..], form),
+                        expected_full: step.expect.to_text(),
+                        trailing: false,
+                        form,
+                        exchange: std::mem::take(exchange),
+                    })));
+                }
+            }
+        }
+        let spent = link.elapsed().saturating_sub(t0);
+        let before = link.elapsed();
+        let got = if spent < timeout { link.recv(buf, timeout - spent) } else { Ok(0) };
+        match got {
+            Err(e) => {
+                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                return Err(link_failed(i, step.line, &e, std::mem::take(exchange)));
+            }
+            Ok(0) if spent >= timeout || link.elapsed() == before || link.elapsed().saturating_sub(t0) >= timeout => {
+                let form = m.form_at_parting();
+                let expected = m.expected_rest();
+                let offset = buf.len();
+                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                return Err(ReplayOutcome::Timeout(Box::new(TimedOut {
+                    step: i,
+                    line: step.line,
+                    waited: link.elapsed().saturating_sub(t0),
+                    offset,
+                    expected,
+                    expected_full: step.expect.to_text(),
+                    form,
+                    exchange: std::mem::take(exchange),
+                })));
+            }
+            Ok(_) => {}
+        }
+    };
+    let rest = buf.split_off(consumed);
+    let received = std::mem::replace(buf, rest);
+    exchange.push(Exchanged { step: i, line: step.line, sent, received });
+    Ok(())
+}
+
+/// The exchange written as a transcript: `t`'s header, each step's pause, sent bytes and
+/// `within`, and the bytes the hand actually answered as an exact expectation. For reports and
+/// certificates ("what the hand said").
+pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
+    let steps = exchange
+        .iter()
+        .filter_map(|e| {
+            let s = t.steps.get(e.step)?;
+            let form = s.expect.segments.first().map_or(Form::Text, |g| g.form);
+            let expect = match form {
+                Form::Text => crate::transcript::Expect::text(&e.received),
+                Form::Hex => crate::transcript::Expect::hex(&e.received),
+            };
+            Some(Step { line: 0, comments: Vec::new(), pause: s.pause, send: s.send.clone(), within: s.within, expect })
+        })
+        .collect();
+    Transcript { header: t.header.clone(), steps }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SimLink;
+    use crate::transcript::parse;
+    use gcl_model::{DeviceConfig, Fault, Profile};
+
+    const FGET: &str = "gcl-transcript 1\nid: t\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\nsend \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"FGET DP\\r\"\nexpect \"FGET DP\\n\\r{int 990..1010} 1000 1000 150\\n\\r=> \"\n";
+
+    fn sim(faults: Vec<Fault>) -> SimLink {
+        SimLink::new(Profile::builtin("seed").unwrap(), DeviceConfig { faults, ..Default::default() })
+    }
+
+    #[test]
+    fn passes_on_the_model() {
+        let t = parse(FGET).unwrap();
+        let out = replay(&t, &mut sim(vec![]), &ReplayOptions::default());
+        assert!(out.is_pass(), "{}", out.render());
+        assert_eq!(out.exchange()[1].received, b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
+        let actual = actual_transcript(&t, out.exchange());
+        assert!(actual.to_text().contains("expect \"FGET DP\\n\\r1000 1000 1000 150\\n\\r=> \""));
+    }
+
+    #[test]
+    fn mismatch_shows_the_parting_byte() {
+        let t = parse(FGET).unwrap();
+        let out = replay(&t, &mut sim(vec![Fault::CrLf]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!((m.step, m.line, m.offset), (0, 8, 0));
+        assert_eq!(m.expected, "\\n\\r=> ");
+        assert_eq!(m.actual, "\\r\\n=> ");
+        let r = out.render();
+        assert!(r.contains("expected: \"\\n\\r=> \""), "{r}");
+        assert!(r.contains("actual:   \"\\r\\n=> \""), "{r}");
+        let out = replay(&t, &mut sim(vec![Fault::FgetReversed]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!((m.step, m.offset), (1, 10));
+        assert_eq!(m.actual, "50 1000 1000 1000\\n\\r=> ");
+        assert!(m.expected.starts_with("{int 990..1010} 1000"), "{}", m.expected);
+        let r = out.render();
+        assert!(r.contains("^ byte 10"), "{r}");
+    }
+
+    #[test]
+    fn a_short_answer_times_out_at_the_step_deadline() {
+        let t = parse(FGET).unwrap();
+        let out = replay(&t, &mut sim(vec![Fault::PromptNoSpace]), &ReplayOptions::default());
+        let ReplayOutcome::Timeout(to) = &out else { panic!("{}", out.render()) };
+        assert_eq!((to.step, to.offset), (0, 4));
+        assert_eq!(to.expected, " ");
+        assert!(to.waited >= DEFAULT_STEP_TIMEOUT);
+    }
+
+    #[test]
+    fn extra_bytes_after_the_last_step_are_a_mismatch() {
+        let mut t = parse(FGET).unwrap();
+        t.steps[1].send = Some(Send::text(b"FGET DP\rFGET DP\r".to_vec()));
+        let out = replay(&t, &mut sim(vec![]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert!(m.trailing);
+        assert!(m.actual.starts_with("FGET DP"), "{}", m.actual);
+    }
+}

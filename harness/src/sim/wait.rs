@@ -1,0 +1,63 @@
+//! Waiting on file descriptors with a deadline, and the stop switch that ends a transport
+//! loop from another thread (or, in `gcl sim`, from a signal).
+
+use std::os::fd::{AsFd, BorrowedFd, OwnedFd};
+use std::time::{Duration, Instant};
+
+use nix::errno::Errno;
+use nix::poll::{PollFd, PollFlags};
+use nix::sys::time::TimeSpec;
+
+/// The sending side of a stop switch: [`StopHandle::stop`], or dropping it, stops the loop
+/// that holds the matching [`StopSignal`].
+#[derive(Debug)]
+pub struct StopHandle {
+    tx: Option<OwnedFd>,
+}
+
+impl StopHandle {
+    /// Asks the loop to stop (closes the pipe; the loop sees end of file).
+    pub fn stop(&mut self) {
+        self.tx = None;
+    }
+}
+
+/// The receiving side of a stop switch: readable once the loop should stop.
+#[derive(Debug)]
+pub struct StopSignal {
+    rx: OwnedFd,
+}
+
+impl AsFd for StopSignal {
+    fn as_fd(&self) -> BorrowedFd<'_> {
+        self.rx.as_fd()
+    }
+}
+
+/// A new stop switch (a pipe).
+pub fn stop_pair() -> std::io::Result<(StopHandle, StopSignal)> {
+    let (rx, tx) = nix::unistd::pipe()?;
+    Ok((StopHandle { tx: Some(tx) }, StopSignal { rx }))
+}
+
+/// Waits until one of `fds` is ready or `deadline` passes (`None`: no deadline). Returns
+/// normally on a timeout; the caller reads `revents`. An interrupted wait counts as a timeout.
+pub(crate) fn wait(fds: &mut [PollFd<'_>], deadline: Option<Instant>) -> std::io::Result<()> {
+    let timeout = deadline.map(|d| TimeSpec::from_duration(d.saturating_duration_since(Instant::now())));
+    match nix::poll::ppoll(fds, timeout, None) {
+        Ok(_) | Err(Errno::EINTR) => Ok(()),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Whether a polled descriptor reported any of `flags`.
+pub(crate) fn ready(fd: &PollFd<'_>, flags: PollFlags) -> bool {
+    fd.revents().is_some_and(|r| r.intersects(flags))
+}
+
+/// Readable, or closed (which a reader learns by reading).
+pub(crate) const IN: PollFlags = PollFlags::POLLIN.union(PollFlags::POLLHUP).union(PollFlags::POLLERR);
+
+/// A short pause used when a descriptor keeps reporting a condition the loop cannot clear
+/// (a pty whose last client just closed), so that the loop does not spin.
+pub(crate) const BACKOFF: Duration = Duration::from_millis(20);

@@ -1,0 +1,513 @@
+//! Turning a case plan into a golden transcript: the plan's host side runs against the
+//! in-process reference model through the same recorder `gcl record` uses, and each answer is
+//! written down exactly, except where the plan's [`Shape`] says the protocol lets it vary.
+//! Every elision is checked to match the model's own answer before the case is accepted.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::realtime::{ControlHeader, Field};
+use gcl_model::spec::{CommandKind, ParamSpec, Scope};
+use gcl_model::{DeviceConfig, Profile};
+
+use crate::SimLink;
+use crate::transcript::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
+use crate::transcript::script::{Action, ScriptStep};
+use crate::transcript::{Expect, FieldSpec, Form, Header, Level, Piece, Requirement, Send, Step, Transcript};
+
+/// An inclusive range of values.
+pub(crate) type Range = (i64, i64);
+
+/// Live values whose reading the protocol fixes (initialisation state, breakaway flags); every
+/// other live value (position, strain, temperature, odometer, uptime, serial number) varies
+/// from hand to hand and is elided to its parameter's range.
+const DETERMINED_LIVE: &[&str] = &["S", "BD", "BP"];
+
+/// How the answer of a planned step is written.
+#[derive(Debug, Clone)]
+pub(crate) enum Shape {
+    /// Exactly as the model answers.
+    Exact,
+    /// A RESET banner: `{any}BarrettHand Firmware{any}`.
+    Banner,
+    /// Value lines after the echo: for line `i`, token `j`, a range (or exact).
+    Values(Vec<Vec<Option<Range>>>),
+    /// List lines `NAME value...`: values of live parameters elided to their ranges.
+    ListValues,
+    /// The echo, then any lines (text the project chose: only their presence is checked).
+    AnyLines,
+    /// A RealTime answer: a feedback block with per-field rules (see [`FieldRule`]).
+    Block(Vec<FieldRule>),
+}
+
+/// An override for one feedback field.
+#[derive(Debug, Clone)]
+pub(crate) struct FieldRule {
+    /// The motor, or `None` for a hand-wide field.
+    pub motor: Option<u8>,
+    /// The flag name (LFAP, LFDP, ...).
+    pub name: &'static str,
+    /// The accepted range (`None`: exact).
+    pub range: Option<Range>,
+}
+
+/// One planned step.
+#[derive(Debug, Clone)]
+pub(crate) struct Plan {
+    pub step: ScriptStep,
+    pub shape: Shape,
+    pub within_floor: Option<Duration>,
+}
+
+/// A case before it runs.
+#[derive(Debug, Clone)]
+pub(crate) struct CaseDef {
+    pub id: String,
+    pub title: String,
+    pub clauses: Vec<String>,
+    pub level: Option<Level>,
+    pub decision_level: Option<Level>,
+    pub requires: Vec<Requirement>,
+    pub notes: Vec<String>,
+    pub plans: Vec<Plan>,
+}
+
+/// A case under construction, with the profile it is for.
+pub(crate) struct CaseB {
+    pub p: Arc<Profile>,
+    pub def: CaseDef,
+    pending_pause: Option<Duration>,
+    pending_comments: Vec<String>,
+}
+
+impl CaseB {
+    pub fn new(p: &Arc<Profile>, id: impl Into<String>, title: impl Into<String>) -> CaseB {
+        CaseB {
+            p: p.clone(),
+            def: CaseDef {
+                id: id.into(),
+                title: title.into(),
+                clauses: Vec::new(),
+                level: None,
+                decision_level: None,
+                requires: Vec::new(),
+                notes: Vec::new(),
+                plans: Vec::new(),
+            },
+            pending_pause: None,
+            pending_comments: Vec::new(),
+        }
+    }
+
+    /// A clause of the profile's source document: `seed: ...` or `manual: ...`.
+    pub fn src(mut self, what: &str) -> CaseB {
+        let c = format!("{}: {what}", source_label(&self.p));
+        if !self.def.clauses.contains(&c) {
+            self.def.clauses.push(c);
+        }
+        self
+    }
+
+    /// A decision of the profile, when it has it: `decision:<id>`; the case's level becomes
+    /// the weakest level among its decisions unless set explicitly.
+    pub fn decision(mut self, id: &str) -> CaseB {
+        if let Some(d) = self.p.decisions.iter().find(|d| d.id == id) {
+            let c = format!("decision:{id}");
+            if !self.def.clauses.contains(&c) {
+                self.def.clauses.push(c);
+            }
+            let l: Level = d.level.parse().unwrap_or(Level::Info);
+            self.def.decision_level = Some(self.def.decision_level.map_or(l, |x| x.max(l)));
+        }
+        self
+    }
+
+    /// Sets the level explicitly.
+    pub fn level(mut self, l: Level) -> CaseB {
+        self.def.level = Some(l);
+        self
+    }
+
+    pub fn requires(mut self, r: Requirement) -> CaseB {
+        if !self.def.requires.contains(&r) {
+            self.def.requires.push(r);
+        }
+        self
+    }
+
+    pub fn note(mut self, n: impl Into<String>) -> CaseB {
+        self.def.notes.push(n.into());
+        self
+    }
+
+    fn push(mut self, action: Action, shape: Shape) -> CaseB {
+        let step = ScriptStep {
+            pause: self.pending_pause.take(),
+            comments: std::mem::take(&mut self.pending_comments),
+            ..ScriptStep::new(action)
+        };
+        self.def.plans.push(Plan { step, shape, within_floor: None });
+        self
+    }
+
+    /// A comment written before the next step.
+    pub fn comment(mut self, c: impl Into<String>) -> CaseB {
+        self.pending_comments.push(c.into());
+        self
+    }
+
+    /// The standard start of every case: ^C (idle prompt), RESET (banner elided), FDEF and
+    /// PDEF (factory values in RAM whatever the EEPROM holds), and HI when motors must move.
+    pub fn preamble(mut self, motion: bool) -> CaseB {
+        self = self.comment("preamble: a known state").abort().line_shaped("RESET", Shape::Banner).line("FDEF");
+        if self.p.command_id("PDEF").is_some() {
+            self = self.line("PDEF");
+        }
+        if motion {
+            self = self.requires(Requirement::Motion).line("HI");
+        }
+        self.comment("the check")
+    }
+
+    pub fn line(self, text: &str) -> CaseB {
+        self.line_shaped(text, Shape::Exact)
+    }
+
+    pub fn line_shaped(self, text: &str, shape: Shape) -> CaseB {
+        self.push(Action::Line(text.as_bytes().to_vec()), shape)
+    }
+
+    /// A host line whose answer is not awaited (the echo only).
+    pub fn nowait(self, text: &str) -> CaseB {
+        self.push(Action::NoWait(text.as_bytes().to_vec()), Shape::Exact)
+    }
+
+    /// Raw bytes written as a string (several lines at once, partial lines).
+    pub fn raw(self, bytes: &[u8]) -> CaseB {
+        self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Text }, Shape::Exact)
+    }
+
+    /// A RealTime block, written in hex, with its answer shaped.
+    pub fn block(self, bytes: &[u8], shape: Shape) -> CaseB {
+        self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Hex }, shape)
+    }
+
+    /// Bytes with no CR whose answer is not awaited (a partial line).
+    pub fn partial(self, bytes: &[u8]) -> CaseB {
+        self.push(Action::Partial(bytes.to_vec()), Shape::Exact)
+    }
+
+    pub fn abort(self) -> CaseB {
+        self.push(Action::abort(), Shape::Exact)
+    }
+
+    pub fn wait(self) -> CaseB {
+        self.push(Action::Wait, Shape::Exact)
+    }
+
+    /// A pause before the next step.
+    pub fn pause_ms(mut self, ms: u64) -> CaseB {
+        self.pending_pause = Some(Duration::from_millis(ms));
+        self
+    }
+
+    /// A get line (`FGET`/`PGET` by the first name's getter) with values shaped: positions
+    /// (`P`) by `pos` per motor, other live values by their ranges.
+    pub fn get(self, prefix: &str, names: &[&str], pos: Option<[Range; 4]>) -> CaseB {
+        let p = self.p.clone();
+        let Some(first) = names.first().and_then(|n| p.param_id(n)) else {
+            return self.line(&format!("{prefix}FGET {}", names.join(" ")));
+        };
+        let getter = p.getter(first).to_string();
+        let motors = prefix_motors(&p, prefix);
+        let mut lines = Vec::new();
+        for n in names {
+            let Some(id) = p.param_id(n) else {
+                lines.push(Vec::new());
+                continue;
+            };
+            let spec = p.param(id);
+            let per_value: Vec<u8> = if getter == "PGET" { vec![1] } else { motors.clone() };
+            lines.push(per_value.iter().map(|m| value_range(spec, *m, pos)).collect());
+        }
+        self.line_shaped(&format!("{prefix}{getter} {}", names.join(" ")), Shape::Values(lines))
+    }
+
+    pub fn within(mut self, d: Duration) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.within_floor = Some(d);
+        }
+        self
+    }
+
+    /// The case. A case that writes the EEPROM ends by writing the factory values back
+    /// (FDEF then FSAVE, PDEF then PSAVE) unless its last save already wrote them.
+    pub fn finish(mut self) -> CaseDef {
+        if self.def.requires.contains(&Requirement::Eeprom) {
+            for (defaults, save) in [
+                (CommandKind::MotorDefaults, CommandKind::MotorSave),
+                (CommandKind::GlobalDefaults, CommandKind::GlobalSave),
+            ] {
+                if !self.last_save_is_factory(defaults, save) {
+                    let (d, s) = (self.name_of(defaults), self.name_of(save));
+                    self = self.comment("restore the factory values in the EEPROM").line(&d).line(&s);
+                }
+            }
+        }
+        self.def
+    }
+
+    fn name_of(&self, kind: CommandKind) -> String {
+        self.p.command_of_kind(kind).map_or(String::new(), |id| self.p.command(id).name.clone())
+    }
+
+    /// Whether the last `save` of the plan (if any) follows an unprefixed `defaults` with no
+    /// set or load in between.
+    fn last_save_is_factory(&self, defaults: CommandKind, save: CommandKind) -> bool {
+        let kinds: Vec<Option<(CommandKind, bool)>> = self
+            .def
+            .plans
+            .iter()
+            .map(|pl| match &pl.step.action {
+                Action::Line(l) => match gcl_model::grammar::parse_line(&self.p, l) {
+                    Ok(gcl_model::Line::Command(c)) => Some((c.kind(&self.p), c.prefix.is_some())),
+                    _ => None,
+                },
+                _ => None,
+            })
+            .collect();
+        let Some(last_save) = kinds.iter().rposition(|k| k.is_some_and(|(k, _)| k == save)) else { return true };
+        let set = if save == CommandKind::MotorSave { CommandKind::MotorSet } else { CommandKind::GlobalSet };
+        let load = if save == CommandKind::MotorSave { CommandKind::MotorLoad } else { CommandKind::GlobalLoad };
+        for k in kinds[..last_save].iter().rev().flatten() {
+            match k {
+                (k, false) if *k == defaults => return true,
+                (k, _) if *k == set || *k == load || *k == CommandKind::Reset => return false,
+                _ => {}
+            }
+        }
+        false
+    }
+}
+
+/// The motors a prefix names (all four when none), ascending.
+pub(crate) fn prefix_motors(p: &Profile, prefix: &str) -> Vec<u8> {
+    if prefix.is_empty() {
+        return vec![1, 2, 3, 4];
+    }
+    let mut ms: Vec<u8> = prefix.chars().filter_map(|c| p.prefix_motors(c)).flatten().copied().collect();
+    ms.sort_unstable();
+    ms.dedup();
+    ms
+}
+
+/// The range a read of a parameter is elided to, or `None` when it is exact.
+pub(crate) fn value_range(spec: &ParamSpec, motor: u8, pos: Option<[Range; 4]>) -> Option<Range> {
+    if !spec.live || DETERMINED_LIVE.contains(&spec.name.as_str()) {
+        return None;
+    }
+    if spec.name == "P" {
+        return Some(pos.map_or((spec.min, spec.max), |p| p[(motor.clamp(1, 4) - 1) as usize]));
+    }
+    Some((spec.min, spec.max))
+}
+
+/// The label of a profile's source document in clause strings.
+pub(crate) fn source_label(p: &Profile) -> &'static str {
+    // The seed profile follows the seed document; the bh8-262 profiles follow Barrett's manuals.
+    if p.id == "seed" { "seed" } else { "manual" }
+}
+
+/// The line ending then the prompt.
+pub(crate) fn eol_prompt(p: &Profile) -> Vec<u8> {
+    [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat()
+}
+
+/// A feedback field's accepted range at rest, unless a rule overrides it: strain any byte,
+/// the temperature its parameter's range in the field's units, everything else exact.
+fn field_range(p: &Profile, f: &Field, rules: &[FieldRule]) -> Option<Range> {
+    if let Some(r) = rules.iter().find(|r| r.motor == f.motor && r.name == f.name) {
+        return r.range;
+    }
+    match f.name.as_str() {
+        "LFS" => Some((f.min(), f.max())),
+        "LFT" => {
+            let t = p.param_id("TEMP").map(|id| p.param(id)).map_or((f.min(), f.max()), |s| (s.min, s.max));
+            let (lo, hi) = if f.size == 1 && p.hand.lft_whole_degrees { (t.0 / 10, t.1 / 10) } else { (t.0, t.1) };
+            Some((lo.max(f.min()), hi.min(f.max())))
+        }
+        _ => None,
+    }
+}
+
+fn shape_block(p: &Profile, c: &Captured, rules: &[FieldRule]) -> Expect {
+    let mut e = Expect::default();
+    let header = c.sent.first().copied().and_then(ControlHeader::from_byte);
+    let Some(layout) = &c.layout else { return Expect::hex(&c.output) };
+    let fb = &layout.feedback;
+    if !header.is_some_and(|h| h.wants_feedback()) || c.output.len() != fb.size {
+        return match answer_form(c, &eol_prompt(p)) {
+            Form::Hex => Expect::hex(&c.output),
+            Form::Text => Expect::text(&c.output),
+        };
+    }
+    e.push_bytes(Form::Hex, &c.output[..1]);
+    for f in &fb.fields {
+        let bytes = &c.output[f.offset..f.offset + f.size];
+        match field_range(p, f, rules) {
+            None => e.push_bytes(Form::Hex, bytes),
+            Some((lo, hi)) if f.size == 1 && lo <= f.min() && hi >= f.max() => e.push(Form::Hex, Piece::AnyByte),
+            // A range of one value is that value's bytes.
+            Some((lo, hi)) if lo == hi => e.push_bytes(Form::Hex, bytes),
+            Some((lo, hi)) => e.push(
+                Form::Hex,
+                Piece::Field(FieldSpec {
+                    width: f.size as u8,
+                    signed: f.signed,
+                    min: lo.max(f.min()),
+                    max: hi.min(f.max()),
+                }),
+            ),
+        }
+    }
+    e
+}
+
+/// Splits an answer `<echo>(<eol><line>)*<eol><prompt>` into the echo, the lines, and the
+/// closing bytes. `None` if it does not have that shape.
+fn split_lines<'a>(out: &'a [u8], eol: &[u8], ep: &[u8]) -> Option<(&'a [u8], Vec<&'a [u8]>)> {
+    let body = out.strip_suffix(ep)?;
+    let mut parts = Vec::new();
+    let mut rest = body;
+    let echo_end = find(rest, eol).unwrap_or(rest.len());
+    let echo = &rest[..echo_end];
+    rest = &rest[echo_end..];
+    while !rest.is_empty() {
+        rest = rest.strip_prefix(eol)?;
+        let end = find(rest, eol).unwrap_or(rest.len());
+        parts.push(&rest[..end]);
+        rest = &rest[end..];
+    }
+    Some((echo, parts))
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len().max(1)).position(|w| w == needle)
+}
+
+fn push_values(e: &mut Expect, line: &[u8], ranges: &[Option<Range>]) {
+    for (j, tok) in line.split(|b| *b == b' ').enumerate() {
+        if j > 0 {
+            e.push_bytes(Form::Text, b" ");
+        }
+        match ranges.get(j).copied().flatten() {
+            Some(r) => e.push(Form::Text, Piece::Int(Some(r))),
+            None => e.push_bytes(Form::Text, tok),
+        }
+    }
+}
+
+/// The expectation for a captured answer under a shape.
+pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<Expect, String> {
+    let eol = p.framing.line_ending.as_bytes();
+    let ep = eol_prompt(p);
+    let exact = || match answer_form(c, &ep) {
+        Form::Hex => Expect::hex(&c.output),
+        Form::Text => Expect::text(&c.output),
+    };
+    Ok(match shape {
+        Shape::Exact => exact(),
+        Shape::Banner => banner_expect(&c.output, &ep).ok_or("no banner in the answer")?,
+        Shape::Block(rules) => shape_block(p, c, rules),
+        Shape::AnyLines => {
+            let (echo, _) = split_lines(&c.output, eol, &ep).ok_or("answer is not lines and a prompt")?;
+            let mut e = Expect::default();
+            e.push_bytes(Form::Text, echo);
+            e.push_bytes(Form::Text, eol);
+            e.push(Form::Text, Piece::Any);
+            e.push_bytes(Form::Text, &ep);
+            e
+        }
+        Shape::Values(ranges) => {
+            let (echo, lines) = split_lines(&c.output, eol, &ep).ok_or("answer is not lines and a prompt")?;
+            let mut e = Expect::default();
+            e.push_bytes(Form::Text, echo);
+            for (i, l) in lines.iter().enumerate() {
+                e.push_bytes(Form::Text, eol);
+                push_values(&mut e, l, ranges.get(i).map(Vec::as_slice).unwrap_or_default());
+            }
+            e.push_bytes(Form::Text, &ep);
+            e
+        }
+        Shape::ListValues => {
+            let (echo, lines) = split_lines(&c.output, eol, &ep).ok_or("answer is not lines and a prompt")?;
+            let mut e = Expect::default();
+            e.push_bytes(Form::Text, echo);
+            for l in lines {
+                e.push_bytes(Form::Text, eol);
+                let name = l.split(|b| *b == b' ').next().unwrap_or_default();
+                let spec = std::str::from_utf8(name).ok().and_then(|n| p.param_id(n)).map(|id| p.param(id));
+                let ranges: Vec<Option<Range>> = match spec {
+                    Some(s) => std::iter::once(None)
+                        .chain((1..=4u8).map(|m| value_range(s, if s.scope == Scope::Global { 1 } else { m }, None)))
+                        .collect(),
+                    None => Vec::new(),
+                };
+                push_values(&mut e, l, &ranges);
+            }
+            e.push_bytes(Form::Text, &ep);
+            e
+        }
+    })
+}
+
+/// Runs a plan against a fresh simulated hand of `profile` and writes the golden transcript.
+pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript, String> {
+    let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
+    let mut link = SimLink::new(profile.clone(), DeviceConfig::default());
+    let mut opts = RecordOptions::new(profile.clone());
+    opts.timeout = Duration::from_secs(120);
+    let steps: Vec<ScriptStep> = def.plans.iter().map(|p| p.step.clone()).collect();
+    let caps = capture(&mut link, &steps, &opts).map_err(|e| fail(e.to_string()))?;
+    let mut out = Vec::with_capacity(caps.len());
+    for (i, (plan, c)) in def.plans.iter().zip(&caps).enumerate() {
+        if c.timed_out {
+            return Err(fail(format!("step {i} got no complete answer: \"{}\"", gcl_model::escape::escape(&c.output))));
+        }
+        let expect = shape_answer(profile, c, &plan.shape).map_err(|m| fail(format!("step {i}: {m}")))?;
+        expect.check().map_err(|m| fail(format!("step {i}: {m}")))?;
+        if !expect.matches(&c.output) {
+            return Err(fail(format!(
+                "step {i}: the shaped answer {} does not match the model's \"{}\"",
+                expect.to_text(),
+                gcl_model::escape::escape(&c.output)
+            )));
+        }
+        let send = match &plan.step.action {
+            Action::Wait => None,
+            Action::Bytes { form, .. } => Some(Send { bytes: c.sent.clone(), form: *form }),
+            _ => Some(Send::text(c.sent.clone())),
+        };
+        let mut within = suggest_within(profile, &plan.step.action, &c.sent, c.took, c.output.len());
+        if let Some(f) = plan.within_floor {
+            within = Some(within.map_or(f, |w| w.max(f)));
+        }
+        out.push(Step { line: 0, comments: plan.step.comments.clone(), pause: plan.step.pause, send, within, expect });
+    }
+    let mut requires = def.requires.clone();
+    requires.sort();
+    let header = Header {
+        id: def.id.clone(),
+        title: def.title.clone(),
+        clauses: def.clauses.clone(),
+        level: def.level.or(def.decision_level).unwrap_or(Level::Must),
+        profiles: vec![profile.id.clone()],
+        requires,
+        notes: def.notes.clone(),
+        extensions: Vec::new(),
+    };
+    if header.clauses.is_empty() {
+        return Err(fail("no clause".into()));
+    }
+    Ok(Transcript { header, steps: out })
+}

@@ -1,0 +1,1542 @@
+//! The catalogue: which cases each profile gets. Most are generated from the profile's tables
+//! (every command with its prefix and argument rules, every parameter's default, range and
+//! access, every status bit); a few are written by hand (the seed's examples, RealTime worked
+//! examples, abort timing). Each case starts from the same preamble, so cases are independent
+//! on a real hand, and takes its level from the decisions it checks.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::realtime::lfdp_step;
+use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, Scope};
+use gcl_model::{Profile, StatusBits};
+
+use super::build::{CaseB, CaseDef, FieldRule, Range, Shape};
+use crate::transcript::{Level, Requirement};
+
+/// Every case of a profile, in catalogue order.
+pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
+    let mut g = Gen { p: p.clone(), out: Vec::new() };
+    g.framing();
+    g.commands();
+    g.params();
+    g.status();
+    g.persistence();
+    g.abort();
+    g.motion();
+    g.realtime();
+    g.examples();
+    g.out
+}
+
+struct Gen {
+    p: Arc<Profile>,
+    out: Vec<CaseDef>,
+}
+
+/// A command or parameter name as part of an id.
+pub(crate) fn slug(name: &str) -> String {
+    match name {
+        "?" => "help".into(),
+        "A?" => "a-help".into(),
+        _ => name.to_ascii_lowercase().chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect(),
+    }
+}
+
+impl Gen {
+    fn case(&self, id: impl Into<String>, title: impl Into<String>) -> CaseB {
+        CaseB::new(&self.p, id, title)
+    }
+
+    fn add(&mut self, c: CaseB) {
+        self.out.push(c.finish());
+    }
+
+    fn has_cmd(&self, name: &str) -> bool {
+        self.p.command_id(name).is_some()
+    }
+
+    fn has_param(&self, name: &str) -> bool {
+        self.p.param_id(name).is_some()
+    }
+
+    fn param(&self, name: &str) -> Option<&ParamSpec> {
+        self.p.param_id(name).map(|id| self.p.param(id))
+    }
+
+    fn default(&self, name: &str, motor: u8) -> i64 {
+        self.p.param_id(name).map_or(0, |id| self.p.default_for(id, motor))
+    }
+
+    fn mpe(&self, motor: u8) -> i64 {
+        self.default("MPE", motor)
+    }
+
+    fn limit(&self, motor: u8) -> i64 {
+        if motor == 4 { self.p.hand.spread_limit } else { self.p.hand.finger_limit }
+    }
+
+    /// `x` within MPE, for each motor.
+    fn near(&self, goals: [i64; 4]) -> [Range; 4] {
+        std::array::from_fn(|i| {
+            let m = i as u8 + 1;
+            ((goals[i] - self.mpe(m)).max(0), goals[i] + self.mpe(m))
+        })
+    }
+
+    fn close_target(&self, motor: u8) -> i64 {
+        if self.has_param("CT") {
+            self.default("CT", motor)
+        } else if motor == 4 {
+            self.p.hand.spread_close_target.unwrap_or(self.p.hand.spread_limit)
+        } else {
+            self.p.hand.finger_close_target.unwrap_or(self.p.hand.finger_limit)
+        }
+    }
+
+    /// The status a hand constant names, as the wire number.
+    fn code(&self, bits: u32) -> u32 {
+        StatusBits::from_bits_truncate(bits).code()
+    }
+
+    // ------------------------------------------------------------------ framing
+
+    fn framing(&mut self) {
+        let p = self.p.clone();
+        let c = self
+            .case(
+                "framing-echo",
+                "Every byte of a line is echoed as sent; answers start with LF CR; the CR is not echoed",
+            )
+            .decision("framing-echo")
+            .preamble(false)
+            .line("FGET DP")
+            .line("BOGUS")
+            .line("FGET DP MCV");
+        self.add(c);
+
+        let c = self
+            .case("framing-empty-line", "A bare CR, or separators then CR, prints a fresh prompt and no status")
+            .decision("framing-empty-line")
+            .preamble(false)
+            .line("")
+            .line("   ")
+            .line("FGET DP");
+        self.add(c);
+
+        let c = self
+            .case(
+                "framing-case",
+                "Command words, parameter names and prefix letters are case-insensitive; the echo keeps the case",
+            )
+            .decision("framing-case")
+            .preamble(false)
+            .line("fget dp")
+            .line("Fget Dp Mcv")
+            .line("sfget dp")
+            .line("gFGET dp")
+            .line("fset dp 1234")
+            .line("FGET DP");
+        self.add(c);
+
+        let c = self
+            .case(
+                "framing-whitespace",
+                "Runs of spaces and tabs separate tokens; leading separators and a space after the prefix are accepted",
+            )
+            .decision("framing-whitespace")
+            .preamble(false)
+            .line("  FGET   DP")
+            .line("FGET\tDP")
+            .line("12 FGET DP")
+            .line("FGET DP   ");
+        self.add(c);
+
+        let max = p.framing.max_line;
+        let fits = fill_line("FGET", " DP", max);
+        let over = format!("{fits}P");
+        let c = self
+            .case(
+                "framing-max-line",
+                format!("A line of {max} bytes is accepted; one byte more gives ERR {}", p.framing.overlong_status),
+            )
+            .decision("framing-max-line")
+            .preamble(false)
+            .line(&fits)
+            .line(&over)
+            .line("FGET DS");
+        self.add(c);
+
+        let c = self
+            .case("framing-numbers", "Values are decimal integers only: hex, a plus sign, a fraction or a word is 128")
+            .decision("framing-numbers")
+            .preamble(false)
+            .line("FSET DP 0x10")
+            .line("FSET DP +5")
+            .line("FSET DP 1.5")
+            .line("FSET DP TRUE")
+            .line("FGET DP");
+        self.add(c);
+
+        let c = self
+            .case(
+                "framing-errors-combine",
+                "Problems in one line are OR'ed into one ERR; a line with an error changes nothing",
+            )
+            .decision("framing-errors-combine")
+            .preamble(false)
+            .line("FSET NOPE 1 DP 99999")
+            .line("FSET DP 1234 MCV 99999")
+            .line("FGET DP NOPE")
+            .line("FGET DP MCV");
+        self.add(c);
+
+        let c = self
+            .case("framing-backspace", "No line editing: backspace is an ordinary byte, echoed and kept")
+            .decision("framing-backspace")
+            .preamble(false)
+            .raw(b"FGET DX\x08P\r")
+            .line("FGET DP");
+        self.add(c);
+
+        let c = self
+            .case("framing-busy-input", "A line sent while a command runs is echoed and run after the prompt")
+            .decision("framing-busy-input")
+            .preamble(true)
+            .raw(b"GC\rFGET DP\r")
+            .within(Duration::from_secs(30))
+            .wait();
+        self.add(c);
+
+        let c = self
+            .case("framing-abort-partial-line", "^C discards a partial line and prints a fresh prompt")
+            .decision("framing-abort-idle")
+            .preamble(false)
+            .partial(b"FGET D")
+            .abort()
+            .line("P")
+            .line("FGET DP");
+        self.add(c);
+    }
+
+    // ------------------------------------------------------------------ commands
+
+    fn commands(&mut self) {
+        let cmds = self.p.commands.clone();
+        for c in &cmds {
+            self.command_prefix(c);
+            self.command_args(c);
+            if c.kind.is_motion() || c.kind == CommandKind::Loop {
+                self.command_before_hi(c);
+            }
+            if c.kind.is_motion() && self.p.hand.overtemp_status != 0 && self.has_param("OTEMP") {
+                self.command_overtemp(c);
+            }
+            self.command_run(c);
+        }
+    }
+
+    /// Arguments that make a valid line for a command.
+    fn valid_args(&self, c: &CommandSpec) -> String {
+        match c.args {
+            ArgRule::None | ArgRule::OptionalInteger => String::new(),
+            ArgRule::Names => self
+                .p
+                .params
+                .iter()
+                .find(|x| {
+                    self.p.param_id(&x.name).is_some_and(|id| self.p.getter(id) == c.name) && x.alias_of.is_none()
+                })
+                .map_or(String::new(), |x| format!(" {}", x.name)),
+            ArgRule::Pairs => self
+                .writable_for(&c.name)
+                .first()
+                .map_or(String::new(), |x| format!(" {} {}", x.name, self.default(&x.name, 1))),
+        }
+    }
+
+    /// Writable parameters set by `setter`, BAUD last (a change would move the line rate).
+    fn writable_for(&self, setter: &str) -> Vec<ParamSpec> {
+        let mut v: Vec<ParamSpec> = self
+            .p
+            .params
+            .iter()
+            .filter(|x| {
+                !x.read_only
+                    && !x.live
+                    && x.alias_of.is_none()
+                    && self.p.param_id(&x.name).is_some_and(|id| self.p.setter(id) == setter)
+            })
+            .cloned()
+            .collect();
+        v.sort_by_key(|x| x.name == "BAUD");
+        v
+    }
+
+    fn command_prefix(&mut self, c: &CommandSpec) {
+        let id = format!("cmd-{}-prefix", slug(&c.name));
+        let label = src_label(&self.p);
+        match c.prefix {
+            PrefixRule::Forbidden => {
+                let mut k = self
+                    .case(id, format!("{} takes no motor prefix: a prefix gives 4096", c.name))
+                    .src(&format!("Command {}", c.name));
+                k = match (label, c.name.as_str()) {
+                    ("seed", "VERS" | "?") => k.decision("seed-prefix-rules"),
+                    ("seed", "FLISTA" | "FLISTAV") => k.decision("seed-flista"),
+                    ("manual", "FLISTA") => k.decision("bh8-list-prefixes"),
+                    ("manual", "?" | "A?" | "RESET" | "ERR" | "VERS") => k.decision("bh8-admin-prefixes"),
+                    _ => k.level(Level::Must),
+                };
+                let line = format!("1{}{}", c.name, self.valid_args(c));
+                k = k.preamble(false).line(&line).line("FGET DP");
+                self.add(k);
+            }
+            PrefixRule::Allowed => {
+                let mut k = self
+                    .case(id, format!("{} takes a motor prefix and acts on the motors it names", c.name))
+                    .src(&format!("Command {}", c.name));
+                if label == "seed"
+                    && matches!(
+                        c.kind,
+                        CommandKind::MotorDefaults
+                            | CommandKind::MotorLoad
+                            | CommandKind::MotorSave
+                            | CommandKind::Terminate
+                    )
+                {
+                    k = k.decision("seed-prefix-rules");
+                }
+                if label == "manual" && c.kind == CommandKind::MotorListAllValues {
+                    k = k.decision("bh8-list-prefixes");
+                }
+                k = self.prefixed_run(k, c);
+                self.add(k);
+            }
+        }
+    }
+
+    /// The body of a prefix-allowed command's prefix case.
+    fn prefixed_run(&self, k: CaseB, c: &CommandSpec) -> CaseB {
+        let n = &c.name;
+        match c.kind {
+            CommandKind::Initialize => {
+                k.preamble(false).requires(Requirement::Motion).line(&format!("1{n}")).get("", &["S"], None)
+            }
+            CommandKind::Terminate => k.preamble(true).line(&format!("1{n}")).line("FGET DP"),
+            CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&format!("1{n}")).abort(),
+            kind if kind.is_motion() => {
+                let (setup, goals) = self.motion_recipe(kind, "1");
+                let mut k = k.preamble(true);
+                for s in setup {
+                    k = k.line(&s);
+                }
+                k.line(&format!("1{n}")).get("", &["P"], Some(goals))
+            }
+            CommandKind::MotorSet => k.preamble(false).line(&format!("2{n} DP 1234")).line("FGET DP"),
+            CommandKind::MotorGet => {
+                k.preamble(false).line(&format!("2{n} DP")).line(&format!("S{n} DP")).line(&format!("G{n} DP"))
+            }
+            CommandKind::MotorDefaults => k.preamble(false).line("FSET DP 1234").line(&format!("2{n}")).line("FGET DP"),
+            CommandKind::MotorLoad => k
+                .requires(Requirement::Eeprom)
+                .preamble(false)
+                .line("FSAVE")
+                .line("FSET DP 1234")
+                .line(&format!("2{n}"))
+                .line("FGET DP"),
+            CommandKind::MotorSave => k
+                .requires(Requirement::Eeprom)
+                .preamble(false)
+                .line("FSET DP 1234")
+                .line(&format!("2{n}"))
+                .line_shaped("RESET", Shape::Banner)
+                .line("FGET DP"),
+            CommandKind::MotorListValues | CommandKind::MotorListAllValues => {
+                k.preamble(false).line_shaped(&format!("2{n}"), Shape::ListValues)
+            }
+            _ => k.preamble(false).line(&format!("1{n}{}", self.valid_args(c))),
+        }
+    }
+
+    /// Setup lines and the positions each motor reaches after `{prefix}CMD` for a motion kind.
+    fn motion_recipe(&self, kind: CommandKind, prefix: &str) -> (Vec<String>, [Range; 4]) {
+        let sel = super::build::prefix_motors(&self.p, prefix);
+        let mut pos = [0i64; 4];
+        let mut setup = Vec::new();
+        let mut exact: [Option<Range>; 4] = [None; 4];
+        let stage = |setup: &mut Vec<String>, pos: &mut [i64; 4]| {
+            setup.push("M 3000".to_string());
+            *pos = [3000; 4];
+        };
+        match kind {
+            CommandKind::Close => {
+                for m in &sel {
+                    pos[*m as usize - 1] = self.close_target(*m);
+                }
+            }
+            CommandKind::Open | CommandKind::Home | CommandKind::TorqueOpen => {
+                stage(&mut setup, &mut pos);
+                for m in &sel {
+                    pos[*m as usize - 1] = if kind == CommandKind::Open { self.default("OT", *m) } else { 0 };
+                }
+            }
+            CommandKind::Move => {
+                for m in &sel {
+                    pos[*m as usize - 1] = self.default("DP", *m).min(self.limit(*m));
+                }
+            }
+            CommandKind::IncrementalClose => {
+                for m in &sel {
+                    pos[*m as usize - 1] = self.default("DS", *m).min(self.limit(*m));
+                }
+            }
+            CommandKind::IncrementalOpen => {
+                stage(&mut setup, &mut pos);
+                for m in &sel {
+                    let i = *m as usize - 1;
+                    pos[i] = (pos[i] - self.default("DS", *m)).max(0);
+                }
+            }
+            CommandKind::TorqueClose => {
+                for m in &sel {
+                    let l = self.limit(*m);
+                    exact[*m as usize - 1] = Some((l - self.mpe(*m), l));
+                }
+            }
+            _ => {}
+        }
+        let mut r = self.near(pos);
+        for (i, e) in exact.iter().enumerate() {
+            if let Some(e) = e {
+                r[i] = *e;
+            }
+        }
+        (setup, r)
+    }
+
+    fn command_args(&mut self, c: &CommandSpec) {
+        let id = format!("cmd-{}-args", slug(&c.name));
+        let n = &c.name;
+        let mut k = self.case(id, format!("{n} refuses arguments it does not take")).src(&format!("Command {n}"));
+        match c.args {
+            ArgRule::None => {
+                k = k.src("Status codes 1024");
+                if src_label(&self.p) == "seed"
+                    && matches!(c.kind, CommandKind::IncrementalClose | CommandKind::IncrementalOpen)
+                {
+                    k = k.decision("seed-ic-io-args");
+                }
+                if c.kind == CommandKind::Help {
+                    k = k.decision(if src_label(&self.p) == "seed" { "seed-help" } else { "bh8-help-format" });
+                }
+                k = k.preamble(false).line(&format!("{n} 1")).line(&format!("{n} 1 2"));
+            }
+            ArgRule::OptionalInteger => {
+                let (lo, hi) = (c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(0));
+                k = k.src("Status codes 128").src("Status codes 1024");
+                if c.kind == CommandKind::ErrorText {
+                    k = k.decision(if src_label(&self.p) == "seed" { "seed-err-command" } else { "bh8-err-format" });
+                }
+                if src_label(&self.p) == "manual" && c.kind.is_motion() {
+                    k = k.decision("bh8-ic-io-range");
+                }
+                k = k
+                    .preamble(false)
+                    .line(&format!("{n} 1 2"))
+                    .line(&format!("{n} {}", hi + 1))
+                    .line(&format!("{n} X"));
+                if lo > -(1 << 40) {
+                    k = k.line(&format!("{n} {}", lo - 1));
+                }
+            }
+            ArgRule::Names => {
+                k = k
+                    .title_set(format!("{n} without a name gives 128"))
+                    .decision(if src_label(&self.p) == "seed" {
+                        "framing-errors-combine"
+                    } else {
+                        "bh8-partial-errors"
+                    })
+                    .level(Level::Info)
+                    .preamble(false)
+                    .line(n);
+            }
+            ArgRule::Pairs => {
+                let first = self.writable_for(n).first().map(|x| x.name.clone()).unwrap_or_default();
+                k = k
+                    .title_set(format!("{n} without a value gives 128"))
+                    .decision(if src_label(&self.p) == "seed" {
+                        "framing-errors-combine"
+                    } else {
+                        "bh8-partial-errors"
+                    })
+                    .level(Level::Info)
+                    .preamble(false)
+                    .line(n)
+                    .line(&format!("{n} {first}"));
+            }
+        }
+        k = k.line("FGET DP");
+        self.add(k);
+    }
+
+    fn command_before_hi(&mut self, c: &CommandSpec) {
+        let n = &c.name;
+        let id = format!("cmd-{}-before-hi", slug(n));
+        let code = if c.kind == CommandKind::Terminate {
+            self.code(self.p.hand.terminate_uninitialized_status)
+        } else {
+            self.code(self.p.hand.uninitialized_status)
+        };
+        let mut k = self
+            .case(id, format!("{n} before HI gives {code} and moves nothing"))
+            .src(&format!("Command {n}"))
+            .src("Command HI");
+        k = match (src_label(&self.p), c.kind) {
+            ("seed", _) => k.decision("seed-motion-before-hi"),
+            (_, CommandKind::Loop) => k.decision("bh8-loop-failure").decision("bh8-motion-before-hi"),
+            _ => k.decision("bh8-motion-before-hi"),
+        };
+        k = k.preamble(false).line(n).get("", &["S"], None);
+        self.add(k);
+    }
+
+    fn command_overtemp(&mut self, c: &CommandSpec) {
+        let n = &c.name;
+        let code = self.code(self.p.hand.overtemp_status);
+        let k = self
+            .case(
+                format!("cmd-{}-overtemp", slug(n)),
+                format!("{n} over temperature (OTEMP below TEMP) gives {code} and moves nothing"),
+            )
+            .src(&format!("Command {n}"))
+            .src("Parameter OTEMP")
+            .decision("bh8-otemp-units")
+            .preamble(true)
+            .line("PSET OTEMP 1")
+            .line(n)
+            .get("", &["P"], Some(self.near([0; 4])))
+            .line("T")
+            .line("PSET OTEMP 0");
+        self.add(k);
+    }
+
+    fn command_run(&mut self, c: &CommandSpec) {
+        let n = c.name.clone();
+        let id = format!("cmd-{}", slug(&n));
+        let label = src_label(&self.p);
+        let k = self.case(id, format!("{n} does its job")).src(&format!("Command {n}"));
+        let k = match c.kind {
+            kind if kind.is_motion() => {
+                let (setup, goals) = self.motion_recipe(kind, "");
+                let mut k = k.preamble(true);
+                if label == "seed" && matches!(kind, CommandKind::Close | CommandKind::Open) {
+                    k = k.decision("seed-close-open-targets");
+                }
+                if kind == CommandKind::TorqueClose {
+                    k = k.decision("bh8-position-bounds");
+                }
+                for s in setup {
+                    k = k.line(&s);
+                }
+                k.line(&n).get("", &["P"], Some(goals))
+            }
+            CommandKind::Initialize => {
+                let k = k.preamble(false).requires(Requirement::Motion).line(&n).within(Duration::from_secs(30));
+                k.get("", &["S", "P"], Some(self.near([0; 4])))
+            }
+            CommandKind::Terminate => k.preamble(true).line(&n).get("", &["S"], None),
+            CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&n).abort().line("FGET DP"),
+            CommandKind::MotorSet | CommandKind::GlobalSet => {
+                let params: Vec<ParamSpec> =
+                    self.writable_for(&n).into_iter().filter(|x| x.name != "BAUD").take(2).collect();
+                if params.is_empty() {
+                    return;
+                }
+                let pairs: Vec<String> =
+                    params.iter().map(|x| format!("{} {}", x.name, other_value(x, self.default(&x.name, 1)))).collect();
+                let names: Vec<&str> = params.iter().map(|x| x.name.as_str()).collect();
+                let getter = if c.kind == CommandKind::MotorSet { "FGET" } else { "PGET" };
+                let k = if label == "seed" { k.decision("seed-fget-format") } else { k.decision("bh8-fget-format") };
+                k.level(Level::Must)
+                    .preamble(false)
+                    .line(&format!("{n} {}", pairs.join(" ")))
+                    .line(&format!("{getter} {}", names.join(" ")))
+            }
+            CommandKind::MotorGet | CommandKind::GlobalGet => {
+                let readable: Vec<&ParamSpec> = self
+                    .p
+                    .params
+                    .iter()
+                    .filter(|x| self.p.param_id(&x.name).is_some_and(|id| self.p.getter(id) == n))
+                    .collect();
+                let mut names: Vec<String> =
+                    readable.iter().filter(|x| !x.live).take(3).map(|x| x.name.clone()).collect();
+                if names.is_empty() {
+                    names = readable.iter().take(1).map(|x| x.name.clone()).collect();
+                }
+                if names.is_empty() {
+                    return;
+                }
+                let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+                let k = if label == "seed" { k.decision("seed-fget-format") } else { k.decision("bh8-fget-format") };
+                k.level(Level::Must).preamble(false).get("", &refs, None)
+            }
+            CommandKind::MotorList
+            | CommandKind::MotorListAll
+            | CommandKind::GlobalList
+            | CommandKind::GlobalListAll => {
+                let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-names-format") };
+                k.preamble(false).line(&n)
+            }
+            CommandKind::MotorListValues
+            | CommandKind::MotorListAllValues
+            | CommandKind::GlobalListValues
+            | CommandKind::GlobalListAllValues => {
+                let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-values-format") };
+                k.preamble(false).line_shaped(&n, Shape::ListValues)
+            }
+            CommandKind::Reset => {
+                let k = if label == "seed" { k.decision("seed-reset-output") } else { k.decision("bh8-reset") };
+                k.preamble(true).line_shaped(&n, Shape::Banner).get("", &["S"], None).line("C")
+            }
+            CommandKind::ErrorText => {
+                let k = if label == "seed" { k.decision("seed-err-command") } else { k.decision("bh8-err-format") };
+                k.preamble(false).line(&format!("{n} 3")).line(&format!("{n} 4160")).line(&n)
+            }
+            CommandKind::Version => {
+                let k = if label == "seed" { k.level(Level::Info) } else { k.decision("bh8-vers-text") };
+                k.preamble(false).line_shaped(&n, Shape::AnyLines)
+            }
+            CommandKind::Help => {
+                let k = if label == "seed" { k.decision("seed-help") } else { k.decision("bh8-help-format") };
+                k.preamble(false).line(&n).line(&format!("{n}HI")).line(&format!("{n}BOGUS")).line(&format!("{n} HI"))
+            }
+            CommandKind::HelpAll => k.decision("bh8-help-format").preamble(false).line(&n),
+            // Persistence commands have their own cases.
+            _ => return,
+        };
+        self.add(k);
+    }
+
+    // ------------------------------------------------------------------ parameters
+
+    fn params(&mut self) {
+        let params = self.p.params.clone();
+        for x in &params {
+            self.param_default(x);
+            if !x.read_only && !x.live {
+                self.param_set(x);
+                self.param_range(x);
+            }
+            if x.read_only {
+                self.param_read_only(x);
+            }
+        }
+        for (cmd, line) in
+            [("FGET", "FGET NOPE"), ("FSET", "FSET NOPE 1"), ("PGET", "PGET NOPE"), ("PSET", "PSET NOPE 1")]
+        {
+            if self.has_cmd(cmd) {
+                let k = self
+                    .case(format!("param-unknown-name-{}", slug(cmd)), format!("{cmd} of an unknown name gives 64"))
+                    .src(&format!("Command {cmd}"))
+                    .src("Status codes 64")
+                    .level(Level::Must)
+                    .preamble(false)
+                    .line(line)
+                    .line("FGET DP");
+                self.add(k);
+            }
+        }
+        if self.p.decisions.iter().any(|d| d.id == "bh8-global-names-on-fset") {
+            let k = self
+                .case(
+                    "param-scope-commands",
+                    "FSET and FGET know only motor parameters, PSET and PGET only global ones (64)",
+                )
+                .decision("bh8-global-names-on-fset")
+                .preamble(false)
+                .line("FGET BAUD")
+                .line("FSET BAUD 96")
+                .line("PGET DP")
+                .line("PSET DP 1000");
+            self.add(k);
+        }
+        if self.p.decisions.iter().any(|d| d.id == "seed-temp-global") {
+            let k = self
+                .case("param-temp-global", "TEMP is read only through PGET; FGET TEMP and FSET TEMP give 64")
+                .decision("seed-temp-global")
+                .preamble(false)
+                .get("", &["TEMP"], None)
+                .line("FGET TEMP")
+                .line("FSET TEMP 5");
+            self.add(k);
+        }
+        if self.has_cmd("PGET") {
+            let id =
+                if self.p.decisions.iter().any(|d| d.id == "seed-pget-tmp") { "seed-pget-tmp" } else { "bh8-no-tmp" };
+            let mut k = self
+                .case("param-tmp-alias", "Whether PGET accepts the seed's name TMP for TEMP")
+                .decision(id)
+                .preamble(false);
+            k = match self.param("TEMP") {
+                Some(t) if t.input_aliases.iter().any(|a| a == "TMP") => {
+                    let r = (t.min, t.max);
+                    k.line_shaped("PGET TMP", Shape::Values(vec![vec![Some(r)]]))
+                }
+                _ => k.line("PGET TMP"),
+            };
+            self.add(k);
+        }
+        if self.has_param("HSG") && self.param("MSG").is_some_and(|m| m.alias_of.is_some()) {
+            let k = self
+                .case("param-msg-hsg-alias", "MSG and HSG name one value per motor")
+                .decision("bh8-msg-alias")
+                .preamble(false)
+                .line("2FSET MSG 100")
+                .line("FGET HSG MSG")
+                .line("3FSET HSG 200")
+                .line("FGET MSG HSG");
+            self.add(k);
+        }
+        let en = if src_label(&self.p) == "seed" { "seed-param-prefix-en" } else { "bh8-param-prefix-en" };
+        let k = self
+            .case("param-en-narrows-motion", "EN narrows motion commands without a prefix, never parameter commands")
+            .src("Parameter EN")
+            .decision(en)
+            .preamble(true)
+            .line("SFSET EN 0")
+            .line("FGET EN DP")
+            .line("M 3000")
+            .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
+        self.add(k);
+    }
+
+    fn param_level(&self, mut k: CaseB, x: &ParamSpec) -> CaseB {
+        let label = src_label(&self.p);
+        k = k.src(&format!("Parameter {}", x.name));
+        match (label, x.name.as_str()) {
+            ("seed", "S") => k.decision("seed-s-values"),
+            ("seed", "BAUD") => k.decision("seed-baud"),
+            ("seed", "SGFLIP") => k.decision("seed-sgflip-spread"),
+            ("manual", "S") => k.decision("bh8-s-before-hi"),
+            ("manual", "SGFLIP") => k.decision("bh8-sgflip-default"),
+            ("manual", "MSG" | "HSG") => k.decision("bh8-msg-alias"),
+            ("manual", "LCT" | "LFBP" | "LFAIN") => k.decision("bh8-new-rt-fields-defaults"),
+            ("manual", "OD" | "UPSECS" | "PTEMP" | "SN") => k.decision("bh8-self-stored"),
+            ("manual", "BP") => k.decision("bh8-bp-range"),
+            ("manual", "SAMPLE") => k.decision("bh8-sample-fixed"),
+            _ => k.level(Level::Must),
+        }
+    }
+
+    fn param_default(&mut self, x: &ParamSpec) {
+        let what = if x.live { "reads" } else { "reads its factory default" };
+        let k = self.case(format!("param-{}-default", slug(&x.name)), format!("{} {what}", x.name));
+        let k = self.param_level(k, x).preamble(false).get("", &[&x.name], None);
+        self.add(k);
+    }
+
+    fn param_set(&mut self, x: &ParamSpec) {
+        let id = self.p.param_id(&x.name);
+        let Some(id) = id else { return };
+        let setter = self.p.setter(id).to_string();
+        let prefix = if x.scope == Scope::Motor { "2" } else { "" };
+        let values: Vec<i64> = match &x.values {
+            Some(_) => vec![self.default(&x.name, 1)],
+            None => vec![x.min, x.max],
+        };
+        let k = self.case(
+            format!("param-{}-set", slug(&x.name)),
+            format!("{} takes values in its range and reads them back", x.name),
+        );
+        let mut k = self.param_level(k, x).src(&format!("Command {setter}")).preamble(false);
+        for v in values {
+            k = k.line(&format!("{prefix}{setter} {} {v}", x.name)).get("", &[&x.name], None);
+        }
+        self.add(k);
+    }
+
+    fn param_range(&mut self, x: &ParamSpec) {
+        let Some(id) = self.p.param_id(&x.name) else { return };
+        let setter = self.p.setter(id).to_string();
+        let mut bad: Vec<i64> = match &x.values {
+            Some(vs) => (x.min..=x.max + 1).filter(|v| !vs.contains(v)).take(1).chain([x.max + 1]).collect(),
+            None => vec![x.max + 1, x.min - 1],
+        };
+        bad.dedup();
+        let k = self.case(
+            format!("param-{}-range", slug(&x.name)),
+            format!("{} out of range gives 128 and changes nothing", x.name),
+        );
+        let mut k = self.param_level(k, x).src("Status codes 128").preamble(false);
+        if src_label(&self.p) == "seed" && x.min == 0 && x.max == 1 {
+            k = k.decision("seed-booleans").level(Level::Must);
+        }
+        for v in bad {
+            k = k.line(&format!("{setter} {} {v}", x.name));
+        }
+        k = k.get("", &[&x.name], None);
+        self.add(k);
+    }
+
+    fn param_read_only(&mut self, x: &ParamSpec) {
+        let Some(id) = self.p.param_id(&x.name) else { return };
+        let getter = self.p.getter(id);
+        let setter = match getter {
+            "PGET" if self.has_cmd("PSET") => "PSET",
+            _ => "FSET",
+        };
+        let writable_through = (getter == "FGET" && setter == "FSET") || (getter == "PGET" && setter == "PSET");
+        let code = if writable_through { 256 } else { 64 };
+        let k = self.case(
+            format!("param-{}-read-only", slug(&x.name)),
+            format!("{setter} {} gives {code}: it is read-only", x.name),
+        );
+        let mut k = self.param_level(k, x).src(&format!("Status codes {code}"));
+        if !writable_through && src_label(&self.p) == "seed" {
+            k = k.decision("seed-temp-global");
+        }
+        let k = k.preamble(false).line(&format!("{setter} {} 0", x.name)).get("", &[&x.name], None);
+        self.add(k);
+    }
+
+    // ------------------------------------------------------------------ status bits
+
+    fn status(&mut self) {
+        let h = self.p.hand.clone();
+        let t1 = self.code(h.terminate_uninitialized_status);
+        let mut k =
+            self.case(format!("status-{t1}-terminate-before-hi"), format!("T before HI gives {t1}")).src("Command T");
+        k = if src_label(&self.p) == "seed" {
+            k.decision("seed-motion-before-hi")
+        } else {
+            k.decision("bh8-terminate-uninitialized")
+        };
+        let k = k.preamble(false).line("T").line("HI").requires(Requirement::Motion).line("T");
+        self.add(k);
+
+        let u = self.code(h.uninitialized_status);
+        let k = self
+            .case(format!("status-{u}-not-initialized"), format!("A motion command before HI gives {u}"))
+            .src(&format!("Status codes {u}"))
+            .decision(if src_label(&self.p) == "seed" { "seed-motion-before-hi" } else { "bh8-motion-before-hi" })
+            .preamble(false)
+            .line("M 1000")
+            .line("1C");
+        self.add(k);
+
+        let simple: [(u32, &str, &[&str]); 6] = [
+            (32, "unknown-command", &["BOGUS", "1BOGUS", "FGETX DP"]),
+            (64, "unknown-parameter", &["FGET NOPE", "FSET NOPE 5"]),
+            (128, "invalid-value", &["FSET DP 99999999", "FSET DP -1", "FSET DP X"]),
+            (256, "read-only", &["FSET P 5", "FSET S 0"]),
+            (1024, "too-many-arguments", &["FDEF 1", "M 1 2", "RESET 1"]),
+            (4096, "prefix-not-allowed", &["1RESET", "GRESET"]),
+        ];
+        for (code, name, lines) in simple {
+            let mut k = self
+                .case(
+                    format!("status-{code}-{name}"),
+                    format!("ERR {code}: {}", self.p.status_text(code).unwrap_or(name)),
+                )
+                .src(&format!("Status codes {code}"))
+                .level(Level::Must)
+                .preamble(false);
+            for l in lines {
+                k = k.line(l);
+            }
+            self.add(k.line("FGET DP"));
+        }
+
+        let combos: [(&str, &[&str]); 4] = [
+            ("prefix-and-arguments", &["1VERS 3", "1RESET 5"]),
+            ("unknown-and-invalid", &["FSET NOPE 1 DP 99999"]),
+            ("unknown-and-read-only", &["FSET NOPE 1 P 0"]),
+            ("invalid-and-read-only", &["FSET DP 99999 P 0"]),
+        ];
+        for (name, lines) in combos {
+            let mut k = self
+                .case(
+                    format!("status-combined-{name}"),
+                    format!("Several problems in one line OR their bits: {}", lines.join(", ")),
+                )
+                .src("Status codes")
+                .decision("framing-errors-combine")
+                .preamble(false);
+            for l in lines {
+                k = k.line(l);
+            }
+            self.add(k.line("FGET DP"));
+        }
+
+        let mp = self.code(h.missed_position_status);
+        let l4 = self.limit(4);
+        let k = self
+            .case(format!("status-{mp}-missed-position"), format!("M past the spread's joint stop gives {mp}"))
+            .src(&format!("Status codes {mp}"))
+            .src("Command M")
+            .decision("bh8-missed-position-code")
+            .decision("bh8-position-bounds")
+            .level(Level::Must)
+            .preamble(true)
+            .line(&format!("SM {}", l4 + 850))
+            .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));
+        self.add(k);
+
+        let bh = self.code(h.bad_header_status);
+        let k = self
+            .case(
+                format!("status-{bh}-bad-header"),
+                format!("An invalid RealTime header gives {bh} and ends RealTime mode"),
+            )
+            .src(&format!("Status codes {bh}"))
+            .src("RealTime Control")
+            .level(Level::Must)
+            .requires(Requirement::Realtime)
+            .preamble(true)
+            .line("1LOOP")
+            .block(b"Z", Shape::Exact)
+            .line("FGET DP");
+        self.add(k);
+
+        if h.overtemp_status != 0 && self.has_param("OTEMP") {
+            let ot = self.code(h.overtemp_status);
+            let k = self
+                .case(format!("status-{ot}-overtemperature"), format!("A motion command over temperature gives {ot}"))
+                .src(&format!("Status codes {ot}"))
+                .decision("bh8-otemp-units")
+                .preamble(true)
+                .line("PSET OTEMP 1")
+                .line("GM 3000")
+                .line("FSET DP 3000")
+                .line("PSET OTEMP 0")
+                .line("GM 3000")
+                .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
+            self.add(k);
+        }
+        if h.abort_status != 0 {
+            let ab = self.code(h.abort_status);
+            let k = self
+                .case(format!("status-{ab}-abort"), format!("^C during motion gives {ab}"))
+                .src(&format!("Status codes {ab}"))
+                .decision("bh8-abort-motion")
+                .requires(Requirement::AbortTiming)
+                .preamble(true)
+                .nowait("GC")
+                .pause_ms(200)
+                .abort()
+                .get(
+                    "",
+                    &["P"],
+                    Some([
+                        (0, self.close_target(1)),
+                        (0, self.close_target(2)),
+                        (0, self.close_target(3)),
+                        (0, self.mpe(4)),
+                    ]),
+                );
+            self.add(k);
+        }
+    }
+
+    // ------------------------------------------------------------------ persistence
+
+    fn persistence(&mut self) {
+        let label = src_label(&self.p);
+        let k = self
+            .case("persist-fdef", "FDEF restores the factory values in RAM")
+            .src("Command FDEF")
+            .level(Level::Must)
+            .preamble(false)
+            .line("FSET DP 1234 MCV 77")
+            .line("FDEF")
+            .line("FGET DP MCV");
+        self.add(k);
+
+        let k = self
+            .case(
+                "persist-fsave-reset",
+                "FSAVE keeps values across RESET; FDEF and FSAVE bring the factory values back",
+            )
+            .src("Command FSAVE")
+            .src("Command RESET")
+            .level(Level::Must)
+            .requires(Requirement::Eeprom)
+            .preamble(false)
+            .line("FSET DP 1234")
+            .line("FSAVE")
+            .line_shaped("RESET", Shape::Banner)
+            .line("FGET DP")
+            .comment("restore the factory values in the EEPROM")
+            .line("FDEF")
+            .line("FSAVE")
+            .line_shaped("RESET", Shape::Banner)
+            .line("FGET DP");
+        self.add(k);
+
+        let k = self
+            .case("persist-fload", "FLOAD brings back the saved values")
+            .src("Command FLOAD")
+            .level(Level::Must)
+            .requires(Requirement::Eeprom)
+            .preamble(false)
+            .line("FSAVE")
+            .line("FSET DP 1234")
+            .line("FLOAD")
+            .line("FGET DP");
+        self.add(k);
+
+        let k = self
+            .case("persist-reset-discards-ram", "RESET forgets values that were not saved")
+            .src("Command RESET")
+            .decision(if label == "seed" { "seed-reset-output" } else { "bh8-reset" })
+            .requires(Requirement::Eeprom)
+            .preamble(false)
+            .line("FSAVE")
+            .line("FSET DP 1234")
+            .line_shaped("RESET", Shape::Banner)
+            .line("FGET DP");
+        self.add(k);
+
+        // The whole saved set: every parameter FSAVE covers survives RESET.
+        let saved: Vec<ParamSpec> = self
+            .p
+            .params
+            .iter()
+            .filter(|x| x.persist.iter().any(|c| c == "FSAVE") && x.alias_of.is_none())
+            .cloned()
+            .collect();
+        if !saved.is_empty() {
+            let pairs: Vec<String> =
+                saved.iter().map(|x| format!("{} {}", x.name, other_value(x, self.default(&x.name, 1)))).collect();
+            let names: Vec<String> = saved.iter().map(|x| x.name.clone()).collect();
+            let mut k = self
+                .case("persist-saved-set", "Every parameter of the saved set survives FSAVE and RESET")
+                .src("Command FSAVE")
+                .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
+                .requires(Requirement::Eeprom)
+                .preamble(false);
+            for l in chunk_lines("FSET", &pairs, self.p.framing.max_line) {
+                k = k.line(&l);
+            }
+            k = k.line("FSAVE").line_shaped("RESET", Shape::Banner);
+            for l in chunk_lines("FGET", &names, self.p.framing.max_line) {
+                k = k.line(&l);
+            }
+            self.add(k);
+        }
+
+        if self.has_cmd("PSAVE") && self.has_param("OTEMP") {
+            let k = self
+                .case("persist-pdef", "PDEF restores the factory global values in RAM")
+                .src("Command PDEF")
+                .level(Level::Must)
+                .preamble(false)
+                .line("PSET OTEMP 700")
+                .line("PDEF")
+                .line("PGET OTEMP");
+            self.add(k);
+            let k = self
+                .case(
+                    "persist-psave-reset",
+                    "PSAVE keeps global values across RESET; PDEF and PSAVE bring the factory values back",
+                )
+                .src("Command PSAVE")
+                .decision("bh8-saved-sets")
+                .requires(Requirement::Eeprom)
+                .preamble(false)
+                .line("PSET OTEMP 700")
+                .line("PSAVE")
+                .line_shaped("RESET", Shape::Banner)
+                .line("PGET OTEMP")
+                .comment("restore the factory values in the EEPROM")
+                .line("PDEF")
+                .line("PSAVE")
+                .line_shaped("RESET", Shape::Banner)
+                .line("PGET OTEMP");
+            self.add(k);
+            let k = self
+                .case("persist-pload", "PLOAD brings back the saved global values")
+                .src("Command PLOAD")
+                .level(Level::Must)
+                .requires(Requirement::Eeprom)
+                .preamble(false)
+                .line("PSAVE")
+                .line("PSET OTEMP 700")
+                .line("PLOAD")
+                .line("PGET OTEMP");
+            self.add(k);
+        }
+    }
+
+    // ------------------------------------------------------------------ ^C
+
+    fn abort(&mut self) {
+        let label = src_label(&self.p);
+        let k = self
+            .case("abort-idle", "^C while idle prints a fresh prompt and no status")
+            .decision("framing-abort-idle")
+            .preamble(false)
+            .abort()
+            .abort()
+            .line("FGET DP");
+        self.add(k);
+
+        let goals = [(0, self.close_target(1)), (0, self.close_target(2)), (0, self.close_target(3)), (0, self.mpe(4))];
+        let k = self
+            .case("abort-motion", "^C during motion stops every motor and answers at once")
+            .src("Command ^C")
+            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-motion" })
+            .requires(Requirement::AbortTiming)
+            .preamble(true)
+            .nowait("GC")
+            .pause_ms(200)
+            .abort()
+            .get("", &["P"], Some(goals))
+            .line("FGET DP");
+        self.add(k);
+
+        let k = self
+            .case("abort-motion-discards-queue", "^C during motion also discards the lines queued behind the command")
+            .src("Command ^C")
+            .decision("framing-busy-input")
+            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-motion" })
+            .requires(Requirement::AbortTiming)
+            .preamble(true)
+            .nowait("GC\rFGET DP")
+            .pause_ms(200)
+            .abort()
+            .line("FGET DS");
+        self.add(k);
+
+        let k = self
+            .case("abort-loop", "^C in place of a RealTime header ends the loop and prints the prompt")
+            .src("RealTime Control")
+            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-loop" })
+            .requires(Requirement::Realtime)
+            .preamble(true)
+            .line("1LOOP")
+            .abort()
+            .line("FGET DP");
+        self.add(k);
+    }
+
+    // ------------------------------------------------------------------ motion
+
+    fn motion(&mut self) {
+        let label = src_label(&self.p);
+        let k = self
+            .case("motion-goal-within-mpe", "M ends within MPE of its goal and gives no status")
+            .src("Command M")
+            .src("Parameter MPE")
+            .level(Level::Must)
+            .preamble(true)
+            .line("GM 5000")
+            .get("", &["P"], Some(self.near([5000, 5000, 5000, 0])))
+            .line("SM 1000")
+            .get("", &["P"], Some(self.near([5000, 5000, 5000, 1000])));
+        self.add(k);
+
+        let msg = if self.has_param("HSG") { "HSG" } else { "MSG" };
+        let k = self
+            .case("motion-strain-limit", format!("With {msg} 0 a move stops at once; M then misses its goal (16)"))
+            .src(&format!("Parameter {msg}"))
+            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-strain-limits-disable" })
+            .preamble(true)
+            .line("GFSET MSG 0")
+            .line("GM 5000")
+            .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (0, self.mpe(4))]));
+        self.add(k);
+
+        if self.has_param("CT") {
+            let l4 = self.limit(4);
+            let k = self
+                .case(
+                    "motion-close-stall-no-status",
+                    "C to a target past the joint stop stalls after TSTOP and gives no status",
+                )
+                .src("Command C")
+                .src("Parameter TSTOP")
+                .decision("bh8-missed-position-code")
+                .preamble(true)
+                .line(&format!("SFSET CT {}", l4 + 850))
+                .line("SC")
+                .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));
+            self.add(k);
+        }
+    }
+
+    // ------------------------------------------------------------------ RealTime
+
+    /// FSET (and PSET) lines setting every RealTime flag: 1 for `on`, 0 for the rest.
+    fn rt_flags(&self, prefix: &str, on: &[&str]) -> Vec<String> {
+        let flags: Vec<&ParamSpec> = self.p.params.iter().filter(|x| x.rt.is_some()).collect();
+        let motor: Vec<String> = flags
+            .iter()
+            .filter(|x| x.scope == Scope::Motor)
+            .map(|x| format!("{} {}", x.name, i32::from(on.contains(&x.name.as_str()))))
+            .collect();
+        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, self.p.framing.max_line);
+        for g in flags.iter().filter(|x| x.scope == Scope::Global) {
+            if let Some(id) = self.p.param_id(&g.name) {
+                lines.push(format!("{} {} {}", self.p.setter(id), g.name, i32::from(on.contains(&g.name.as_str()))));
+            }
+        }
+        lines
+    }
+
+    fn rt_case(&self, id: &str, title: &str, prefix: &str, on: &[&str]) -> CaseB {
+        let mut k = self.case(id, title).src("RealTime Control").requires(Requirement::Realtime).preamble(true);
+        for l in self.rt_flags(prefix, on) {
+            k = k.line(&l);
+        }
+        k
+    }
+
+    fn at_rest(&self) -> Vec<FieldRule> {
+        (1..=4u8).map(|m| FieldRule { motor: Some(m), name: "LFAP", range: Some((0, self.mpe(m))) }).collect()
+    }
+
+    fn realtime(&mut self) {
+        let label = src_label(&self.p);
+        let headers: [(&str, &str, u8, &[u8]); 4] = [
+            ("upper-c", "C: control data follows; the answer is a feedback block", b'C', &[0]),
+            ("lower-c", "c: control data follows; the answer is * alone", b'c', &[0]),
+            ("upper-a", "A: no data; the answer is a feedback block", b'A', &[]),
+            ("lower-a", "a: no data; the answer is * alone", b'a', &[]),
+        ];
+        for (name, title, h, data) in headers {
+            let mut block = vec![h];
+            block.extend_from_slice(data);
+            let k = self
+                .rt_case(&format!("rt-header-{name}"), title, "1", &["LCV", "LFAP"])
+                .level(Level::Must)
+                .line("1LOOP")
+                .block(&block, Shape::Block(self.at_rest()))
+                .block(&block, Shape::Block(self.at_rest()))
+                .abort();
+            self.add(k);
+        }
+
+        let flags: Vec<ParamSpec> = self.p.params.iter().filter(|x| x.rt.is_some()).cloned().collect();
+        for f in &flags {
+            let Some(rt) = f.rt else { continue };
+            let block = if rt.block == gcl_model::spec::BlockKind::Control { "control" } else { "feedback" };
+            let bytes = if rt.size == 1 { "1 byte" } else { "2 bytes" };
+            let mut k = self.rt_case(
+                &format!("rt-field-{}", slug(&f.name)),
+                &format!("{} alone adds {bytes} to the {block} block", f.name),
+                if f.scope == Scope::Motor { "1" } else { "" },
+                &[&f.name],
+            );
+            k = match (label, f.name.as_str()) {
+                ("manual", "LFT") => k.decision("bh8-lft-field"),
+                ("manual", "LCT" | "LFBP" | "LFAIN") => {
+                    k.decision("bh8-44-rt-field-order").decision("bh8-new-rt-fields-defaults")
+                }
+                _ => k.level(Level::Must),
+            };
+            k = k.src(&format!("Parameter {}", f.name)).line("1LOOP");
+            if rt.block == gcl_model::spec::BlockKind::Control {
+                let mut b = vec![b'C'];
+                b.extend(std::iter::repeat_n(0u8, rt.size));
+                let mut c = vec![b'c'];
+                c.extend(std::iter::repeat_n(0u8, rt.size));
+                k = k.block(&b, Shape::Block(self.at_rest())).block(&c, Shape::Block(self.at_rest()));
+            } else {
+                k = k.block(b"A", Shape::Block(self.at_rest()));
+            }
+            k = k.abort();
+            self.add(k);
+        }
+
+        let all: Vec<&str> = flags.iter().map(|x| x.name.as_str()).collect();
+        let control_size: usize = flags
+            .iter()
+            .filter(|x| x.scope == Scope::Motor && x.rt.is_some_and(|r| r.block == gcl_model::spec::BlockKind::Control))
+            .map(|x| x.rt.map_or(0, |r| r.size))
+            .sum::<usize>()
+            * 4;
+        let mut block = vec![b'C'];
+        block.extend(std::iter::repeat_n(0u8, control_size));
+        let k = self
+            .rt_case(
+                "rt-all-fields",
+                "Every flag on every motor: fields per motor in order, motors ascending, hand fields last",
+                "",
+                &all,
+            )
+            .decision(if label == "seed" { "seed-rt-field-order" } else { "bh8-44-rt-field-order" })
+            .line("LOOP")
+            .block(&block, Shape::Block(self.at_rest()))
+            .block(b"A", Shape::Block(self.at_rest()))
+            .abort();
+        self.add(k);
+
+        let mpe1 = self.mpe(1);
+        let k = self
+            .rt_case("rt-lfap-byte-order", "LFAP is two bytes, high byte first: 5000 is 13 88", "1", &["LFAP"])
+            .level(Level::Must)
+            .line("1M 5000")
+            .line("1LOOP")
+            .block(
+                b"A",
+                Shape::Block(vec![FieldRule { motor: Some(1), name: "LFAP", range: Some((5000 - mpe1, 5000 + mpe1)) }]),
+            )
+            .abort();
+        self.add(k);
+
+        self.lfdp_case(
+            "rt-lfdp-worked-example",
+            "The LFDP worked example: LFDPC 2, reported 1500, moved to 2000: 127, 123, 0",
+            2,
+            1500,
+            2000,
+            false,
+            3,
+        );
+        if self.has_param("LFDPD") {
+            self.lfdp_case(
+                "rt-lfdpd-discard",
+                "With LFDPD 1 the clipped rest of LFDP is dropped: 127, 0, 0",
+                2,
+                1500,
+                2000,
+                true,
+                3,
+            );
+        }
+        self.lfdp_case(
+            "rt-lfdpc-scaling",
+            "LFDP is the movement divided by LFDPC: 1000 counts with LFDPC 10 read 100",
+            10,
+            0,
+            1000,
+            false,
+            2,
+        );
+
+        // LFVC: the feedback velocity is the velocity divided by LFVC.
+        let lcvc = (1i64 << self.p.hand.lcv_fraction_bits) / 4;
+        let lcvc = lcvc.clamp(1, 255);
+        let datum: i64 = 40;
+        let raw = datum as f64 * lcvc as f64 / f64::from(1u32 << self.p.hand.lcv_fraction_bits)
+            * self.p.hand.rt_velocity_counts_per_ms
+            / self.p.hand.lfv_counts_per_ms;
+        let lfv = (raw / 2.0).trunc() as i64;
+        let tol = |v: i64| (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64);
+        let k = self
+            .rt_case(
+                "rt-lfvc-scaling",
+                &format!(
+                    "LFV is the velocity divided by LFVC: LCV {datum} x LCVC {lcvc} reads about {lfv} with LFVC 2"
+                ),
+                "1",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LFVC")
+            .src("Parameter LCVC")
+            .decision(if label == "seed" { "seed-rt-velocity" } else { "bh8-velocity-units" })
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("1FSET LCVC {lcvc} LFVC 2"))
+            .line("1LOOP")
+            .block(&[b'C', datum as u8], Shape::Block(Vec::new()))
+            .pause_ms(50)
+            .block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFV", range: Some(tol(lfv)) }]))
+            .abort();
+        self.add(k);
+
+        let k = self
+            .rt_case(
+                "rt-bad-header-returns-to-supervisory",
+                "After an invalid header the hand is back in supervisory mode",
+                "1",
+                &["LFAP"],
+            )
+            .level(Level::Must)
+            .line("1LOOP")
+            .block(b"A", Shape::Block(self.at_rest()))
+            .block(b"X", Shape::Exact)
+            .line("FGET DP")
+            .line("1LOOP")
+            .abort();
+        self.add(k);
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn lfdp_case(&mut self, id: &str, title: &str, coeff: i64, from: i64, to: i64, discard: bool, blocks: usize) {
+        let label = src_label(&self.p);
+        let mpe = self.mpe(1);
+        // Every position the two moves may end at within MPE, and the LFDP values that follow.
+        let mut ranges = vec![(i64::MAX, i64::MIN); blocks];
+        for p1 in (from - mpe).max(0)..=from + mpe {
+            for p2 in (to - mpe).max(0)..=to + mpe {
+                let mut r = p1;
+                for slot in ranges.iter_mut() {
+                    let v = i64::from(lfdp_step(&mut r, p2, coeff, discard));
+                    *slot = (slot.0.min(v), slot.1.max(v));
+                }
+            }
+        }
+        let mut k = self.rt_case(id, title, "1", &["LFDP"]).src("Parameter LFDPC");
+        k = if label == "seed" {
+            k.decision("seed-lfdp-state")
+        } else {
+            k.decision("bh8-lfdp-state").decision("bh8-rt-clipping")
+        };
+        if discard {
+            k = k.line("PSET LFDPD 1");
+        }
+        k = k
+            .note(format!("LFDP ranges cover both moves ending anywhere within MPE ({mpe}) of their goals."))
+            .line(&format!("1FSET LFDPC {coeff}"));
+        if from > 0 {
+            k = k.line(&format!("1M {from}"));
+        }
+        k = k.get("1", &["P"], Some(self.near([from; 4]))).line(&format!("1M {to}")).line("1LOOP");
+        for r in ranges {
+            k = k.block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFDP", range: Some(r) }]));
+        }
+        k = k.abort();
+        self.add(k);
+    }
+
+    // ------------------------------------------------------------------ the seed's examples
+
+    fn examples(&mut self) {
+        let label = src_label(&self.p);
+        let mut k = self
+            .case(
+                "example-realtime-seed",
+                "The seed's RealTime example: 124LOOP, 3-byte control blocks, 6-byte feedback blocks",
+            )
+            .clause("seed: RealTime Control, Example")
+            .requires(Requirement::Realtime)
+            .level(Level::Must);
+        if label == "seed" {
+            k = k.decision("seed-rt-feedback-order");
+        }
+        let moving = vec![
+            FieldRule { motor: Some(1), name: "LFDP", range: Some((0, 127)) },
+            FieldRule { motor: Some(2), name: "LFDP", range: Some((-128, 0)) },
+        ];
+        let mut k = k.preamble(true);
+        if self.p.params.iter().any(|x| x.name == "LFT") {
+            k = k.line("PSET LFT 0");
+        }
+        let k = k
+            .line("12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1")
+            .line("4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1")
+            .line("124LOOP")
+            .block(&[0x43, 0x14, 0xFB], Shape::Block(Vec::new()))
+            .block(&[0x43, 0x14, 0xFB], Shape::Block(moving.clone()))
+            .block(&[0x43, 0x00, 0x00], Shape::Block(moving))
+            .abort();
+        self.add(k);
+
+        let finger = self.limit(1);
+        let moving = vec![
+            FieldRule { motor: Some(1), name: "LFAP", range: Some((0, finger)) },
+            FieldRule { motor: Some(2), name: "LFAP", range: Some((0, self.mpe(2))) },
+            FieldRule { motor: Some(3), name: "LFAP", range: Some((0, self.mpe(3))) },
+        ];
+        let mut k = self
+            .case(
+                "example-realtime-program",
+                "The seed's RealTime example program: RTSetFlags, 123LOOP, 4-byte C blocks, 7-byte feedback",
+            )
+            .clause("seed: Example Programs, RealTime Mode Example Program")
+            .requires(Requirement::Realtime)
+            .level(Level::Must)
+            .preamble(true)
+            .line("123FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFVC 1 LFS 0 LFAP 1 LFDP 0 LFDPC 1")
+            .line("123LOOP");
+        for _ in 0..5 {
+            k = k.block(&[0x43, 55, 0, 0], Shape::Block(moving.clone()));
+        }
+        let k = k.abort().line("FGET DP");
+        self.add(k);
+
+        let goals_c = self.near([self.close_target(1), self.close_target(2), self.close_target(3), 0]);
+        let mut k = self
+            .case("example-supervisory-program", "The seed's supervisory example program: CR, RESET, HI, 123C, 123O")
+            .clause("seed: Example Programs, Supervisory Mode Example Program")
+            .level(Level::Must)
+            .requires(Requirement::Motion)
+            .comment("a host's start-up: ^C, a bare CR, RESET")
+            .abort()
+            .line("")
+            .line_shaped("RESET", Shape::Banner)
+            .line("FDEF");
+        if self.has_cmd("PDEF") {
+            k = k.line("PDEF");
+        }
+        let k = k.line("HI").line("123C").get("", &["P"], Some(goals_c)).line("123O").get(
+            "",
+            &["P"],
+            Some(self.near([0; 4])),
+        );
+        self.add(k);
+    }
+}
+
+/// The label of the profile's source in clause strings.
+fn src_label(p: &Profile) -> &'static str {
+    super::build::source_label(p)
+}
+
+/// A value other than `default` within the parameter's values: its maximum, else its minimum.
+fn other_value(x: &ParamSpec, default: i64) -> i64 {
+    match &x.values {
+        Some(vs) => vs.iter().copied().find(|v| *v != default).unwrap_or(default),
+        None if x.max != default => x.max,
+        None => x.min,
+    }
+}
+
+/// `head` then as many `item`s as fit in `max` bytes.
+fn fill_line(head: &str, item: &str, max: usize) -> String {
+    let mut s = head.to_string();
+    while s.len() + item.len() <= max {
+        s.push_str(item);
+    }
+    while s.len() < max {
+        s.push(' ');
+    }
+    s
+}
+
+/// Lines of `head` followed by items, each line at most `max` bytes.
+fn chunk_lines(head: &str, items: &[String], max: usize) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = head.to_string();
+    for it in items {
+        if cur.len() + 1 + it.len() > max && cur.len() > head.len() {
+            out.push(std::mem::replace(&mut cur, head.to_string()));
+        }
+        cur.push(' ');
+        cur.push_str(it);
+    }
+    if cur.len() > head.len() {
+        out.push(cur);
+    }
+    out
+}
+
+impl CaseB {
+    /// Replaces the title.
+    pub(crate) fn title_set(mut self, t: String) -> CaseB {
+        self.def.title = t;
+        self
+    }
+
+    /// A clause given literally.
+    pub(crate) fn clause(mut self, c: &str) -> CaseB {
+        if !self.def.clauses.iter().any(|x| x == c) {
+            self.def.clauses.push(c.to_string());
+        }
+        self
+    }
+}

@@ -1,0 +1,405 @@
+//! Matching a device's bytes against an [`Expect`], one byte at a time.
+//!
+//! The expectation is run as a small nondeterministic automaton: every way the bytes so far can
+//! line up with the pieces is kept as a state. A byte that no state can take is where the
+//! answer parts from the expectation; the match is complete as soon as one state has consumed
+//! every piece, so an expectation is satisfied by the *shortest* prefix of the output that
+//! matches it (the rest belongs to the next step). Integers are checked digit by digit against
+//! their range, and two-byte fields against theirs after the high byte, so a wrong value is
+//! reported at its first impossible byte rather than at the end of the line.
+
+use super::{Expect, FieldSpec, Form, Piece, hex_bytes, pieces_hex, pieces_text};
+
+/// Most digits an integer may have (as `gcl_model::grammar::parse_integer`).
+const MAX_DIGITS: u32 = 18;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct State {
+    /// Index of the piece being matched; `pieces.len()` when every piece has matched.
+    piece: usize,
+    /// Progress inside the piece: bytes of a literal or field, characters of an integer.
+    k: u32,
+    /// Integer or field value so far (an integer's absolute value).
+    acc: i64,
+    /// An integer's minus sign.
+    neg: bool,
+}
+
+impl State {
+    fn at(piece: usize) -> State {
+        State { piece, k: 0, acc: 0, neg: false }
+    }
+}
+
+/// What one more byte did to a match.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Feed {
+    /// The bytes so far can still become a complete answer.
+    Alive,
+    /// The bytes so far are a complete answer.
+    Complete,
+    /// No answer starts with the bytes so far: this byte is where they part.
+    Dead,
+}
+
+/// An incremental matcher for one [`Expect`].
+#[derive(Debug, Clone)]
+pub struct Matcher {
+    pieces: Vec<(Form, Piece)>,
+    states: Vec<State>,
+    /// The furthest state alive before the last byte, for reporting what was expected.
+    best: State,
+    consumed: usize,
+}
+
+impl Matcher {
+    /// A matcher at the start of `expect`.
+    pub fn new(expect: &Expect) -> Matcher {
+        let mut pieces: Vec<(Form, Piece)> = Vec::new();
+        for (form, p) in expect.pieces() {
+            match (pieces.last_mut(), p) {
+                (Some((_, Piece::Bytes(prev))), Piece::Bytes(more)) => prev.extend_from_slice(more),
+                _ => pieces.push((form, p.clone())),
+            }
+        }
+        let mut m = Matcher { pieces, states: Vec::new(), best: State::at(0), consumed: 0 };
+        let mut start = Vec::new();
+        m.close(State::at(0), &mut start);
+        m.states = start;
+        m.best = m.furthest().unwrap_or(State::at(0));
+        m
+    }
+
+    /// Bytes fed so far.
+    pub fn consumed(&self) -> usize {
+        self.consumed
+    }
+
+    /// Whether the bytes fed so far are a complete answer.
+    pub fn is_complete(&self) -> bool {
+        self.states.iter().any(|s| s.piece == self.pieces.len())
+    }
+
+    /// Whether some answer still starts with the bytes fed so far.
+    pub fn is_alive(&self) -> bool {
+        !self.states.is_empty()
+    }
+
+    /// Feeds one byte. Feeding a dead matcher keeps it dead.
+    pub fn feed(&mut self, b: u8) -> Feed {
+        if self.states.is_empty() {
+            return Feed::Dead;
+        }
+        if let Some(f) = self.furthest() {
+            self.best = f;
+        }
+        let mut next = Vec::with_capacity(self.states.len() + 2);
+        let states = std::mem::take(&mut self.states);
+        for s in states {
+            if let Some(t) = self.step(s, b) {
+                self.close(t, &mut next);
+            }
+        }
+        self.states = next;
+        self.consumed += 1;
+        if self.states.is_empty() {
+            Feed::Dead
+        } else if self.is_complete() {
+            Feed::Complete
+        } else {
+            Feed::Alive
+        }
+    }
+
+    /// The state that has matched the most pieces (the most progress inside its piece).
+    fn furthest(&self) -> Option<State> {
+        self.states.iter().copied().max_by_key(|s| (s.piece, s.k))
+    }
+
+    /// Adds `s` and every state reachable from it without a byte.
+    fn close(&self, s: State, out: &mut Vec<State>) {
+        if out.contains(&s) {
+            return;
+        }
+        out.push(s);
+        let Some((_, p)) = self.pieces.get(s.piece) else { return };
+        let next = State::at(s.piece + 1);
+        let skip = match p {
+            Piece::Bytes(b) => s.k as usize >= b.len(),
+            Piece::Line | Piece::Any => true,
+            Piece::Int(r) => {
+                let digits = s.k - u32::from(s.neg);
+                digits >= 1 && !(s.neg && s.acc == 0) && in_range(*r, if s.neg { -s.acc } else { s.acc })
+            }
+            Piece::AnyByte => false,
+            Piece::Field(f) => s.k == u32::from(f.width) && (f.min..=f.max).contains(&signed_value(f, s.acc)),
+        };
+        if skip {
+            self.close(next, out);
+        }
+    }
+
+    /// The state after `s` takes byte `b`, if it can.
+    fn step(&self, s: State, b: u8) -> Option<State> {
+        let (_, p) = self.pieces.get(s.piece)?;
+        match p {
+            Piece::Bytes(lit) => (lit.get(s.k as usize) == Some(&b)).then_some(State { k: s.k + 1, ..s }),
+            Piece::Line => (b != b'\n' && b != b'\r').then_some(s),
+            Piece::Any => Some(s),
+            Piece::AnyByte => Some(State::at(s.piece + 1)),
+            Piece::Int(r) => {
+                let digits = s.k - u32::from(s.neg);
+                if b == b'-' && s.k == 0 {
+                    let ok = r.is_none_or(|(lo, _)| lo <= -1);
+                    return ok.then_some(State { k: 1, neg: true, ..s });
+                }
+                if !b.is_ascii_digit() || digits >= MAX_DIGITS || (digits >= 1 && s.acc == 0) {
+                    return None;
+                }
+                let acc = s.acc * 10 + i64::from(b - b'0');
+                let t = State { k: s.k + 1, acc, ..s };
+                extendable(*r, t.neg, acc, digits + 1).then_some(t)
+            }
+            Piece::Field(f) => {
+                let acc = (s.acc << 8) | i64::from(b);
+                let k = s.k + 1;
+                if k == u32::from(f.width) {
+                    // The range check happens in `close`; a value out of range leaves a state
+                    // that cannot advance, so check it here to die on this byte.
+                    (f.min..=f.max).contains(&signed_value(f, acc)).then_some(State { k, acc, ..s })
+                } else {
+                    // High byte of a two-byte field: some low byte must land in range.
+                    let (lo, hi) = if f.signed {
+                        let h = i64::from(b as i8);
+                        (h * 256, h * 256 + 255)
+                    } else {
+                        (acc * 256, acc * 256 + 255)
+                    };
+                    (lo <= f.max && hi >= f.min).then_some(State { k, acc, ..s })
+                }
+            }
+        }
+    }
+
+    /// How the expectation continues from where the furthest match stands, as written
+    /// (escaped text, or hex when the piece there is in a hex segment).
+    pub fn expected_rest(&self) -> String {
+        let s = self.furthest().unwrap_or(self.best);
+        self.render_from(s)
+    }
+
+    /// As [`Matcher::expected_rest`], from the furthest state before the last byte fed (what was
+    /// expected at the byte that killed the match).
+    pub fn expected_at_parting(&self) -> String {
+        self.render_from(self.best)
+    }
+
+    /// The form of the piece where the furthest match stands.
+    pub fn form_at_parting(&self) -> Form {
+        self.pieces.get(self.best.piece).or(self.pieces.last()).map_or(Form::Text, |(f, _)| *f)
+    }
+
+    fn render_from(&self, s: State) -> String {
+        let mut parts: Vec<(Form, Piece)> = Vec::new();
+        for (i, (form, p)) in self.pieces.iter().enumerate().skip(s.piece) {
+            match p {
+                Piece::Bytes(b) if i == s.piece => {
+                    let rest = b.get(s.k as usize..).unwrap_or_default();
+                    if !rest.is_empty() {
+                        parts.push((*form, Piece::Bytes(rest.to_vec())));
+                    }
+                }
+                _ => parts.push((*form, p.clone())),
+            }
+        }
+        render(&parts)
+    }
+}
+
+/// Renders pieces for people: consecutive pieces of one form together, text escaped, hex as
+/// tokens, segments separated by a space.
+fn render(parts: &[(Form, Piece)]) -> String {
+    let mut out = String::new();
+    let mut i = 0;
+    while i < parts.len() {
+        let form = parts[i].0;
+        let mut j = i;
+        while j < parts.len() && parts[j].0 == form {
+            j += 1;
+        }
+        let ps: Vec<Piece> = parts[i..j].iter().map(|(_, p)| p.clone()).collect();
+        if !out.is_empty() {
+            out.push(' ');
+        }
+        match form {
+            Form::Text => out.push_str(&pieces_text(&ps)),
+            Form::Hex => out.push_str(&pieces_hex(&ps)),
+        }
+        i = j;
+    }
+    out
+}
+
+/// Shows device bytes in a form: escaped text or hex.
+pub fn show(bytes: &[u8], form: Form) -> String {
+    match form {
+        Form::Text => super::escape_text(bytes),
+        Form::Hex => hex_bytes(bytes),
+    }
+}
+
+fn signed_value(f: &FieldSpec, acc: i64) -> i64 {
+    match (f.width, f.signed) {
+        (1, true) => i64::from(acc as u8 as i8),
+        (2, true) => i64::from(acc as u16 as i16),
+        _ => acc,
+    }
+}
+
+fn in_range(r: Option<(i64, i64)>, v: i64) -> bool {
+    r.is_none_or(|(lo, hi)| (lo..=hi).contains(&v))
+}
+
+/// Whether an integer whose first `digits` digits give `acc` (absolute value) can still end in
+/// range by appending digits (never after a leading zero, at most [`MAX_DIGITS`]).
+fn extendable(r: Option<(i64, i64)>, neg: bool, acc: i64, digits: u32) -> bool {
+    let Some((lo, hi)) = r else { return true };
+    let max_extra = if acc == 0 { 0 } else { MAX_DIGITS - digits };
+    let (lo, hi) = (i128::from(lo), i128::from(hi));
+    let mut scale: i128 = 1;
+    for _ in 0..=max_extra {
+        let a = i128::from(acc) * scale;
+        let b = a + scale - 1;
+        let (vmin, vmax) = if neg { (-b, -a) } else { (a, b) };
+        if vmin <= hi && vmax >= lo {
+            return true;
+        }
+        scale *= 10;
+    }
+    false
+}
+
+/// Where a device's answer stands against an expectation.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    /// The first `n` bytes are a complete answer.
+    Complete(usize),
+    /// Every byte fits, but the answer is not complete yet.
+    Partial,
+    /// The answer parts from the expectation at this byte offset.
+    Parted(usize),
+}
+
+/// Runs `actual` through a fresh matcher: the shortest complete prefix, a partial match, or
+/// the offset where the bytes part from the expectation.
+pub fn match_prefix(expect: &Expect, actual: &[u8]) -> Outcome {
+    let mut m = Matcher::new(expect);
+    if m.is_complete() {
+        return Outcome::Complete(0);
+    }
+    for (i, &b) in actual.iter().enumerate() {
+        match m.feed(b) {
+            Feed::Complete => return Outcome::Complete(i + 1),
+            Feed::Dead => return Outcome::Parted(i),
+            Feed::Alive => {}
+        }
+    }
+    Outcome::Partial
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transcript::{FieldSpec, Form, Piece};
+
+    fn text(parts: &[Piece]) -> Expect {
+        let mut e = Expect::default();
+        for p in parts {
+            e.push(Form::Text, p.clone());
+        }
+        e
+    }
+
+    fn b(s: &str) -> Piece {
+        Piece::Bytes(s.as_bytes().to_vec())
+    }
+
+    #[test]
+    fn exact_bytes_and_parting_offset() {
+        let e = Expect::text(b"FGET DP\n\r1000\n\r=> ");
+        assert_eq!(match_prefix(&e, b"FGET DP\n\r1000\n\r=> "), Outcome::Complete(18));
+        assert_eq!(match_prefix(&e, b"FGET DP\n\r10"), Outcome::Partial);
+        assert_eq!(match_prefix(&e, b"FGET DP\r\n1000"), Outcome::Parted(7));
+        assert_eq!(match_prefix(&e, b"FGET DP\n\r1000\n\r=> more"), Outcome::Complete(18));
+    }
+
+    #[test]
+    fn integers_in_range_part_at_the_first_impossible_digit() {
+        let e = text(&[b("P "), Piece::Int(Some((4950, 5050))), b("\n")]);
+        assert!(e.matches(b"P 5000\n"));
+        assert!(e.matches(b"P 4950\n"));
+        assert!(!e.matches(b"P 5051\n"));
+        assert_eq!(match_prefix(&e, b"P 5123\n"), Outcome::Parted(3));
+        assert_eq!(match_prefix(&e, b"P 05000\n"), Outcome::Parted(2));
+        assert_eq!(match_prefix(&e, b"P -5\n"), Outcome::Parted(2));
+        let neg = text(&[Piece::Int(Some((-550, 1250))), b(";")]);
+        assert!(neg.matches(b"-12;"));
+        assert!(neg.matches(b"0;"));
+        assert!(!neg.matches(b"-0;"));
+        assert!(!neg.matches(b"00;"));
+        assert_eq!(match_prefix(&neg, b"-551;"), Outcome::Parted(3));
+        let any = text(&[Piece::Int(None), b(";")]);
+        assert!(any.matches(b"-123456789012345678;"));
+        assert!(!any.matches(b"1234567890123456789;"));
+    }
+
+    #[test]
+    fn line_and_any_are_lazy() {
+        let e = text(&[b("RESET"), Piece::Any, b("BarrettHand Firmware"), Piece::Any, b("\n\r=> ")]);
+        let out = b"RESET\n\rBarrettHand Firmware 4.4x\n\rmore\n\r=> ";
+        assert_eq!(match_prefix(&e, out), Outcome::Complete(out.len()));
+        assert_eq!(match_prefix(&e, b"RESET\n\rno banner\n\r=> "), Outcome::Partial);
+        let l = text(&[b("V\n\r"), Piece::Line, b("\n\r=> ")]);
+        assert!(l.matches(b"V\n\r\n\r=> "));
+        assert!(l.matches(b"V\n\rversion 1\n\r=> "));
+        assert!(!l.matches(b"V\n\rtwo\n\rlines\n\r=> "));
+    }
+
+    #[test]
+    fn binary_fields_and_wildcards() {
+        let mut e = Expect::default();
+        e.push_bytes(Form::Hex, b"*");
+        e.push(Form::Hex, Piece::AnyByte);
+        e.push(Form::Hex, Piece::Field(FieldSpec { width: 2, signed: false, min: 4950, max: 5050 }));
+        e.push(Form::Hex, Piece::Field(FieldSpec { width: 1, signed: true, min: -3, max: 3 }));
+        assert!(e.matches(&[b'*', 0x80, 0x13, 0x88, 0xFE]));
+        // Little-endian 5000 parts at its first byte.
+        assert_eq!(match_prefix(&e, &[b'*', 0x80, 0x88, 0x13, 0]), Outcome::Parted(2));
+        assert_eq!(match_prefix(&e, &[b'*', 0x80, 0x13, 0x88, 0x04]), Outcome::Parted(4));
+        let s16 = Piece::Field(FieldSpec { width: 2, signed: true, min: -550, max: 1250 });
+        let mut t = Expect::default();
+        t.push(Form::Hex, s16);
+        t.push_bytes(Form::Hex, b"!");
+        assert!(t.matches(&[0x01, 0x3B, b'!']));
+        assert!(t.matches(&[0xFE, 0x00, b'!']));
+        assert_eq!(match_prefix(&t, &[0x80, 0x00, b'!']), Outcome::Parted(0));
+    }
+
+    #[test]
+    fn expected_rest_shows_what_was_wanted() {
+        let e = Expect::text(b"FGET DP\n\r1000\n\r=> ");
+        let mut m = Matcher::new(&e);
+        for &c in b"FGET DP\r" {
+            m.feed(c);
+        }
+        assert!(!m.is_alive());
+        assert_eq!(m.expected_at_parting(), "\\n\\r1000\\n\\r=> ");
+        let mut h = Expect::hex(b"*");
+        h.push(Form::Hex, Piece::Field(FieldSpec { width: 2, signed: false, min: 0, max: 50 }));
+        let mut m = Matcher::new(&h);
+        m.feed(b'*');
+        m.feed(0x13);
+        assert_eq!(m.expected_at_parting(), "{u16 0..50}");
+        assert_eq!(m.form_at_parting(), Form::Hex);
+    }
+}

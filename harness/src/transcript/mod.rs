@@ -1,0 +1,614 @@
+//! Golden transcripts: the one text format for a conversation with a hand.
+//!
+//! A transcript is a header (a stable id, a title, the spec clauses it checks, a level, the
+//! profiles it applies to, what it requires of the target) and a list of [`Step`]s. Each step
+//! may pause, may send bytes to the hand, and then expects an answer: an [`Expect`] made of
+//! exact bytes and *elisions* for values that legitimately vary (an integer in a range, any
+//! line, any byte of a RealTime block, a two-byte field in a range). The same file is a golden
+//! vector, a fuzz seed and a regression case. `vectors/README.md` is the normative description
+//! of the text; this module owns its typed form, [`parse`] (untrusted text to [`Transcript`],
+//! errors with line numbers), printing ([`Transcript::to_text`], canonical, so that
+//! `parse(print(t)) == t`), and matching device bytes against an [`Expect`] ([`matcher`]).
+//!
+//! This module never talks to a hand: [`record`] and [`crate::replay`] do that through a
+//! [`crate::Link`].
+
+pub mod matcher;
+mod parse;
+pub mod record;
+pub mod script;
+
+use std::fmt::{self, Write as _};
+use std::str::FromStr;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+pub use matcher::{Feed, Matcher};
+pub use parse::{ParseError, ParseErrorKind, parse, parse_bytes};
+
+/// The first line of every transcript: the format and its version.
+pub const MAGIC: &str = "gcl-transcript 1";
+
+/// How long a step without `within` may wait for its answer.
+pub const DEFAULT_STEP_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// The longest duration the format accepts (24 h), so that arithmetic on it cannot overflow.
+pub const MAX_DURATION: Duration = Duration::from_secs(86_400);
+
+/// Transcript files larger than this are refused unread.
+pub const MAX_FILE_BYTES: usize = 4 << 20;
+
+/// How strongly a case binds an implementation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "UPPERCASE")]
+pub enum Level {
+    /// Required by the protocol's sources; a failure is non-conformance.
+    #[default]
+    Must,
+    /// Expected; a decision of this project with good evidence.
+    Should,
+    /// Allowed behaviour.
+    May,
+    /// Informational: the project's choice where no source settles it. Never a failure of
+    /// conformance by itself.
+    Info,
+}
+
+impl Level {
+    /// Every level, strongest first.
+    pub const ALL: [Level; 4] = [Level::Must, Level::Should, Level::May, Level::Info];
+
+    /// The upper-case name as written in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Level::Must => "MUST",
+            Level::Should => "SHOULD",
+            Level::May => "MAY",
+            Level::Info => "INFO",
+        }
+    }
+}
+
+impl fmt::Display for Level {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A level name that is not MUST, SHOULD, MAY or INFO.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown level `{0}` (expected MUST, SHOULD, MAY or INFO)")]
+pub struct UnknownLevel(pub String);
+
+impl FromStr for Level {
+    type Err = UnknownLevel;
+    fn from_str(s: &str) -> Result<Level, UnknownLevel> {
+        Level::ALL.into_iter().find(|l| l.as_str().eq_ignore_ascii_case(s)).ok_or_else(|| UnknownLevel(s.to_string()))
+    }
+}
+
+/// Something a case needs from its target beyond a supervisory conversation. A runner skips
+/// cases whose requirements the target (or the operator) does not grant.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Requirement {
+    /// Moves motors (HI and motion commands): the hand must be free to move.
+    Motion,
+    /// Enters RealTime mode (LOOP).
+    Realtime,
+    /// Writes the EEPROM (FSAVE or PSAVE); the case restores the factory values at its end.
+    Eeprom,
+    /// Depends on a pause before ^C landing while motors still move.
+    AbortTiming,
+    /// Any other requirement, by its slug.
+    Other(String),
+}
+
+impl Requirement {
+    /// The slug as written in files.
+    pub fn as_str(&self) -> &str {
+        match self {
+            Requirement::Motion => "motion",
+            Requirement::Realtime => "realtime",
+            Requirement::Eeprom => "eeprom",
+            Requirement::AbortTiming => "abort-timing",
+            Requirement::Other(s) => s,
+        }
+    }
+
+    /// Reads a slug; unknown slugs become [`Requirement::Other`]. `None` if it is not a slug.
+    pub fn from_slug(s: &str) -> Option<Requirement> {
+        Some(match s {
+            "motion" => Requirement::Motion,
+            "realtime" => Requirement::Realtime,
+            "eeprom" => Requirement::Eeprom,
+            "abort-timing" => Requirement::AbortTiming,
+            _ if is_slug(s) => Requirement::Other(s.to_string()),
+            _ => return None,
+        })
+    }
+}
+
+impl fmt::Display for Requirement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Whether `s` is a slug: lower-case ASCII letters and digits, with `-`, `.` or `_` inside,
+/// 1 to 100 bytes. Ids and requirements are slugs.
+pub fn is_slug(s: &str) -> bool {
+    let b = s.as_bytes();
+    !b.is_empty()
+        && b.len() <= 100
+        && (b[0].is_ascii_lowercase() || b[0].is_ascii_digit())
+        && b.iter().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || matches!(c, b'-' | b'.' | b'_'))
+}
+
+/// The header of a transcript.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Header {
+    /// A stable slug naming the case (never a position); unique within a profile.
+    pub id: String,
+    /// One line for people.
+    pub title: String,
+    /// The spec clauses checked: a profile's decision as `decision:<id>`, or a source section
+    /// such as `seed: Command FGET`. At least one.
+    pub clauses: Vec<String>,
+    /// How strongly the case binds.
+    pub level: Level,
+    /// The profiles the case applies to. At least one.
+    pub profiles: Vec<String>,
+    /// What the case needs from its target.
+    pub requires: Vec<Requirement>,
+    /// Free text for people, one entry per `note:` line.
+    pub notes: Vec<String>,
+    /// `x-*` keys and their values, kept in order for tools that add their own.
+    pub extensions: Vec<(String, String)>,
+}
+
+impl Header {
+    /// Whether the case needs `r`.
+    pub fn requires(&self, r: &Requirement) -> bool {
+        self.requires.contains(r)
+    }
+}
+
+/// How a chunk of bytes is written: as an escaped string or as hex bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Form {
+    /// `"..."` with `\n \r \t \\ \xHH` escapes.
+    #[default]
+    Text,
+    /// `hex 2A 13 88`.
+    Hex,
+}
+
+/// Bytes the host sends.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Send {
+    /// The bytes.
+    pub bytes: Vec<u8>,
+    /// How they are written.
+    pub form: Form,
+}
+
+impl Send {
+    /// Bytes written as a string.
+    pub fn text(bytes: impl Into<Vec<u8>>) -> Send {
+        Send { bytes: bytes.into(), form: Form::Text }
+    }
+
+    /// Bytes written in hex.
+    pub fn hex(bytes: impl Into<Vec<u8>>) -> Send {
+        Send { bytes: bytes.into(), form: Form::Hex }
+    }
+}
+
+/// One element of an expected answer.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Piece {
+    /// These bytes exactly. Never empty inside an [`Expect`].
+    Bytes(Vec<u8>),
+    /// `{int}` / `{int A..B}`: a decimal integer as GCL prints them (`0`, or an optional `-`
+    /// and digits without a leading zero, at most 18 digits), optionally within `A..=B`.
+    Int(Option<(i64, i64)>),
+    /// `{line}`: zero or more bytes other than LF and CR.
+    Line,
+    /// `{any}`: zero or more bytes of any value (as few as the rest of the answer needs).
+    Any,
+    /// `{byte}`, or `??` in hex: exactly one byte of any value.
+    AnyByte,
+    /// `{u8 A..B}`, `{i8 A..B}`, `{u16 A..B}`, `{i16 A..B}`: a binary field (two-byte fields
+    /// big-endian) whose value lies within `min..=max`.
+    Field(FieldSpec),
+}
+
+/// A binary field elision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct FieldSpec {
+    /// Width in bytes: 1 or 2.
+    pub width: u8,
+    /// Two's complement or unsigned.
+    pub signed: bool,
+    /// Lowest accepted value.
+    pub min: i64,
+    /// Highest accepted value.
+    pub max: i64,
+}
+
+impl FieldSpec {
+    /// The values a field of this width and signedness can carry.
+    pub fn representable(width: u8, signed: bool) -> (i64, i64) {
+        let bits = u32::from(width) * 8;
+        if signed { (-(1i64 << (bits - 1)), (1i64 << (bits - 1)) - 1) } else { (0, (1i64 << bits) - 1) }
+    }
+
+    /// The type name as written: `u8`, `i8`, `u16`, `i16`.
+    pub fn type_name(&self) -> &'static str {
+        match (self.width, self.signed) {
+            (1, false) => "u8",
+            (1, true) => "i8",
+            (_, false) => "u16",
+            (_, true) => "i16",
+        }
+    }
+
+    /// Reads the field's value from its bytes (big-endian). `bytes.len()` must be `width`.
+    pub fn value(&self, bytes: &[u8]) -> i64 {
+        match (bytes, self.signed) {
+            ([b], false) => i64::from(*b),
+            ([b], true) => i64::from(*b as i8),
+            ([h, l], false) => i64::from(u16::from_be_bytes([*h, *l])),
+            ([h, l], true) => i64::from(i16::from_be_bytes([*h, *l])),
+            _ => i64::MIN,
+        }
+    }
+}
+
+impl Piece {
+    /// Whether the piece can match a varying number of bytes (an expectation must not end
+    /// with one: the match would be cut at its shortest).
+    pub fn is_variable(&self) -> bool {
+        matches!(self, Piece::Int(_) | Piece::Line | Piece::Any)
+    }
+}
+
+/// A run of pieces written in one [`Form`].
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Segment {
+    /// How the segment is written.
+    pub form: Form,
+    /// Its pieces: never empty, no empty [`Piece::Bytes`], no two adjacent `Bytes`.
+    pub pieces: Vec<Piece>,
+}
+
+/// What the hand is expected to answer in one step.
+///
+/// Built with [`Expect::push`] and friends, which keep it in the normal form the printer and
+/// the parser agree on (adjacent segments of one form merged, adjacent bytes merged).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Expect {
+    /// The segments, in order. Empty: the step expects nothing.
+    pub segments: Vec<Segment>,
+}
+
+impl Expect {
+    /// Expects nothing.
+    pub fn nothing() -> Expect {
+        Expect::default()
+    }
+
+    /// Expects exactly these bytes, written as a string.
+    pub fn text(bytes: &[u8]) -> Expect {
+        let mut e = Expect::default();
+        e.push_bytes(Form::Text, bytes);
+        e
+    }
+
+    /// Expects exactly these bytes, written in hex.
+    pub fn hex(bytes: &[u8]) -> Expect {
+        let mut e = Expect::default();
+        e.push_bytes(Form::Hex, bytes);
+        e
+    }
+
+    /// Appends a piece written in `form`, keeping the normal form.
+    pub fn push(&mut self, form: Form, piece: Piece) {
+        if let Piece::Bytes(b) = &piece
+            && b.is_empty()
+        {
+            return;
+        }
+        match self.segments.last_mut() {
+            Some(seg) if seg.form == form => match (seg.pieces.last_mut(), piece) {
+                (Some(Piece::Bytes(prev)), Piece::Bytes(more)) => prev.extend_from_slice(&more),
+                (_, p) => seg.pieces.push(p),
+            },
+            _ => self.segments.push(Segment { form, pieces: vec![piece] }),
+        }
+    }
+
+    /// Appends exact bytes.
+    pub fn push_bytes(&mut self, form: Form, bytes: &[u8]) {
+        self.push(form, Piece::Bytes(bytes.to_vec()));
+    }
+
+    /// Whether nothing is expected.
+    pub fn is_empty(&self) -> bool {
+        self.segments.is_empty()
+    }
+
+    /// Every piece with the form of its segment, in order.
+    pub fn pieces(&self) -> impl Iterator<Item = (Form, &Piece)> {
+        self.segments.iter().flat_map(|s| s.pieces.iter().map(move |p| (s.form, p)))
+    }
+
+    /// The exact bytes expected, if the expectation has no elision.
+    pub fn exact_bytes(&self) -> Option<Vec<u8>> {
+        let mut out = Vec::new();
+        for (_, p) in self.pieces() {
+            match p {
+                Piece::Bytes(b) => out.extend_from_slice(b),
+                _ => return None,
+            }
+        }
+        Some(out)
+    }
+
+    /// Checks the rules the parser enforces: ranges ordered and representable, no variable
+    /// elision at the end.
+    pub fn check(&self) -> Result<(), String> {
+        for (_, p) in self.pieces() {
+            match p {
+                Piece::Int(Some((a, b))) if a > b => return Err(format!("{{int {a}..{b}}}: empty range")),
+                Piece::Field(f) => {
+                    if !(f.width == 1 || f.width == 2) {
+                        return Err(format!("field width {} (1 or 2)", f.width));
+                    }
+                    let (lo, hi) = FieldSpec::representable(f.width, f.signed);
+                    if f.min > f.max || f.min < lo || f.max > hi {
+                        return Err(format!("{{{} {}..{}}}: range outside {lo}..{hi}", f.type_name(), f.min, f.max));
+                    }
+                }
+                _ => {}
+            }
+        }
+        if self.pieces().last().is_some_and(|(_, p)| p.is_variable()) {
+            return Err("an expectation must not end with {int}, {line} or {any}".into());
+        }
+        Ok(())
+    }
+
+    /// Whether `actual` is exactly a complete answer (the whole of it, not a prefix).
+    pub fn matches(&self, actual: &[u8]) -> bool {
+        let mut m = Matcher::new(self);
+        for &b in actual {
+            if m.feed(b) == Feed::Dead {
+                return false;
+            }
+        }
+        m.is_complete()
+    }
+
+    /// The expectation as written after `expect` (without `within`).
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        if self.segments.is_empty() {
+            return "\"\"".to_string();
+        }
+        for (i, seg) in self.segments.iter().enumerate() {
+            if i > 0 {
+                s.push(' ');
+            }
+            write_segment(&mut s, seg.form, &seg.pieces);
+        }
+        s
+    }
+}
+
+/// One step: an optional pause, optional bytes to send, and the expected answer.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Step {
+    /// The 1-based line of the step's first action in its source file; 0 when the step was
+    /// built in code. Compare transcripts with [`Transcript::without_lines`] to ignore it.
+    pub line: usize,
+    /// `#` comment lines written before the step.
+    pub comments: Vec<String>,
+    /// Time to let pass before sending.
+    pub pause: Option<Duration>,
+    /// Bytes to send.
+    pub send: Option<Send>,
+    /// How long the answer may take; [`DEFAULT_STEP_TIMEOUT`] (or a runner's override) when
+    /// `None`.
+    pub within: Option<Duration>,
+    /// The answer.
+    pub expect: Expect,
+}
+
+/// A whole transcript.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Transcript {
+    /// Who the case is and what it checks.
+    pub header: Header,
+    /// What happens, in order.
+    pub steps: Vec<Step>,
+}
+
+impl Transcript {
+    /// The canonical text. [`parse`] of it gives back `self` (line numbers aside).
+    pub fn to_text(&self) -> String {
+        let mut s = String::with_capacity(256 + self.steps.len() * 64);
+        let h = &self.header;
+        s.push_str(MAGIC);
+        s.push('\n');
+        let _ = writeln!(s, "id: {}", h.id);
+        let _ = writeln!(s, "title: {}", h.title);
+        for c in &h.clauses {
+            let _ = writeln!(s, "clause: {c}");
+        }
+        let _ = writeln!(s, "level: {}", h.level);
+        if !h.profiles.is_empty() {
+            let _ = writeln!(s, "profile: {}", h.profiles.join(", "));
+        }
+        if !h.requires.is_empty() {
+            let r: Vec<&str> = h.requires.iter().map(Requirement::as_str).collect();
+            let _ = writeln!(s, "requires: {}", r.join(", "));
+        }
+        for n in &h.notes {
+            let _ = writeln!(s, "note: {n}");
+        }
+        for (k, v) in &h.extensions {
+            let _ = writeln!(s, "{k}: {v}");
+        }
+        for step in &self.steps {
+            s.push('\n');
+            write_step(&mut s, step);
+        }
+        s
+    }
+
+    /// A copy with every [`Step::line`] set to 0, for comparing a parsed transcript with a
+    /// built one.
+    pub fn without_lines(&self) -> Transcript {
+        let mut t = self.clone();
+        for s in &mut t.steps {
+            s.line = 0;
+        }
+        t
+    }
+}
+
+impl fmt::Display for Transcript {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.to_text())
+    }
+}
+
+fn write_step(s: &mut String, step: &Step) {
+    for c in &step.comments {
+        if c.is_empty() {
+            s.push_str("#\n");
+        } else {
+            let _ = writeln!(s, "# {c}");
+        }
+    }
+    if let Some(p) = step.pause {
+        let _ = writeln!(s, "pause {}", format_duration(p));
+    }
+    if let Some(send) = &step.send {
+        s.push_str("send ");
+        match send.form {
+            Form::Text => {
+                s.push('"');
+                s.push_str(&escape_text(&send.bytes));
+                s.push('"');
+            }
+            Form::Hex => {
+                s.push_str("hex");
+                for b in &send.bytes {
+                    let _ = write!(s, " {b:02X}");
+                }
+            }
+        }
+        s.push('\n');
+    }
+    s.push_str("expect ");
+    if let Some(w) = step.within {
+        let _ = write!(s, "within {} ", format_duration(w));
+    }
+    s.push_str(&step.expect.to_text());
+    s.push('\n');
+}
+
+/// Writes a duration as the format does: whole seconds as `Ns`, anything else as `Nms`.
+pub fn format_duration(d: Duration) -> String {
+    let ms = d.as_millis();
+    if ms.is_multiple_of(1000) && ms > 0 { format!("{}s", ms / 1000) } else { format!("{ms}ms") }
+}
+
+/// Escapes bytes for a transcript string: [`gcl_model::escape::escape`], plus `"` as `\x22`
+/// and `{` as `\x7B` (they delimit strings and elisions).
+pub fn escape_text(bytes: &[u8]) -> String {
+    let mut s = String::with_capacity(bytes.len());
+    for &b in bytes {
+        match b {
+            b'"' => s.push_str("\\x22"),
+            b'{' => s.push_str("\\x7B"),
+            _ => s.push_str(&gcl_model::escape::escape(&[b])),
+        }
+    }
+    s
+}
+
+/// Writes bytes as space-separated upper-case hex.
+pub fn hex_bytes(bytes: &[u8]) -> String {
+    let mut s = String::with_capacity(bytes.len() * 3);
+    for (i, b) in bytes.iter().enumerate() {
+        if i > 0 {
+            s.push(' ');
+        }
+        let _ = write!(s, "{b:02X}");
+    }
+    s
+}
+
+/// The elision syntax of a piece, `{...}` (the same in strings and hex segments; `??` is the
+/// hex shorthand of `{byte}`).
+fn elision_text(p: &Piece) -> String {
+    match p {
+        Piece::Bytes(_) => String::new(),
+        Piece::Int(None) => "{int}".into(),
+        Piece::Int(Some((a, b))) => format!("{{int {a}..{b}}}"),
+        Piece::Line => "{line}".into(),
+        Piece::Any => "{any}".into(),
+        Piece::AnyByte => "{byte}".into(),
+        Piece::Field(f) => format!("{{{} {}..{}}}", f.type_name(), f.min, f.max),
+    }
+}
+
+/// Writes pieces in a form: a quoted string, or `hex` and tokens.
+pub(crate) fn write_segment(s: &mut String, form: Form, pieces: &[Piece]) {
+    match form {
+        Form::Text => {
+            s.push('"');
+            s.push_str(&pieces_text(pieces));
+            s.push('"');
+        }
+        Form::Hex => {
+            s.push_str("hex");
+            for p in pieces {
+                s.push(' ');
+                s.push_str(&pieces_hex(std::slice::from_ref(p)));
+            }
+        }
+    }
+}
+
+/// Pieces as the inside of a string (no quotes).
+pub(crate) fn pieces_text(pieces: &[Piece]) -> String {
+    let mut s = String::new();
+    for p in pieces {
+        match p {
+            Piece::Bytes(b) => s.push_str(&escape_text(b)),
+            _ => s.push_str(&elision_text(p)),
+        }
+    }
+    s
+}
+
+/// Pieces as hex tokens (no `hex` keyword).
+pub(crate) fn pieces_hex(pieces: &[Piece]) -> String {
+    let mut parts = Vec::new();
+    for p in pieces {
+        match p {
+            Piece::Bytes(b) => parts.push(hex_bytes(b)),
+            Piece::AnyByte => parts.push("??".into()),
+            _ => parts.push(elision_text(p)),
+        }
+    }
+    parts.join(" ")
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,352 @@
+//! Recording: run a script's host side against a hand and capture what it answers, step by
+//! step, then write the answers down as a golden [`Transcript`].
+//!
+//! A step of a recording ends
+//! - at the first prompt (line ending then `=> `) after its bytes went out;
+//! - for a LOOP line, at the `*` that opens RealTime mode;
+//! - in RealTime mode, once the hand has sent as many bytes as the reference model answers to
+//!   the same bytes (a feedback block of the layout's size, or `*`);
+//! - for [`Action::NoWait`] and [`Action::Partial`], once the hand has been quiet for
+//!   [`RecordOptions::quiet`];
+//! - or at its timeout.
+//!
+//! To know when RealTime mode starts and how big its blocks are, the recorder runs a *shadow*
+//! reference model of the profile beside the link and feeds it the same bytes. The shadow only
+//! shapes the capture; every byte written to the transcript comes from the link.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::grammar::{self, Line};
+use gcl_model::realtime::RtLayout;
+use gcl_model::spec::CommandKind;
+use gcl_model::{Device, DeviceConfig, Mode, Profile};
+
+use super::script::{Action, Script, ScriptStep};
+use super::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, Piece, Send, Step, Transcript};
+use crate::link::{Link, LinkError, byte_time};
+
+/// The text every banner contains (decision `bh8-banner-text`, notes: RESET).
+pub const BANNER_TEXT: &[u8] = b"BarrettHand Firmware";
+
+/// How to record.
+#[derive(Debug, Clone)]
+pub struct RecordOptions {
+    /// The profile of the shadow model (block sizes, the prompt, the CR).
+    pub profile: Arc<Profile>,
+    /// Capture timeout of a step whose script gives none.
+    pub timeout: Duration,
+    /// Silence that ends a [`Action::NoWait`] step, and the start-of-run drain.
+    pub quiet: Duration,
+    /// Write a RESET's banner as `{any}BarrettHand Firmware{any}` instead of its exact text.
+    pub elide_banner: bool,
+}
+
+impl RecordOptions {
+    /// Defaults for a profile: 30 s per step, 100 ms of quiet, banners elided.
+    pub fn new(profile: Arc<Profile>) -> RecordOptions {
+        RecordOptions {
+            profile,
+            timeout: Duration::from_secs(30),
+            quiet: Duration::from_millis(100),
+            elide_banner: true,
+        }
+    }
+}
+
+/// What one step captured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Captured {
+    /// The bytes sent.
+    pub sent: Vec<u8>,
+    /// The hand's answer.
+    pub output: Vec<u8>,
+    /// Time from the send to the end of the answer, on the link's clock.
+    pub took: Duration,
+    /// Whether the bytes were sent in RealTime mode (per the shadow model).
+    pub realtime: bool,
+    /// The RealTime layouts in force when the bytes were sent.
+    pub layout: Option<RtLayout>,
+    /// Whether the step ended at its timeout instead of its natural end.
+    pub timed_out: bool,
+}
+
+/// Reads and discards whatever the hand sends until it has been quiet for `quiet` (a power-up
+/// banner, the tail of an earlier conversation), for at most `limit`.
+pub fn drain(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<Vec<u8>, LinkError> {
+    let start = link.elapsed();
+    let mut junk = Vec::new();
+    loop {
+        let n = link.recv(&mut junk, quiet)?;
+        if n == 0 || link.elapsed().saturating_sub(start) >= limit {
+            return Ok(junk);
+        }
+    }
+}
+
+/// Runs the steps against `link` and captures each answer. The link should be fresh or idle:
+/// anything it sends before the first step is drained first.
+pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) -> Result<Vec<Captured>, LinkError> {
+    let profile = &opts.profile;
+    let eol_prompt: Vec<u8> = [profile.framing.line_ending.as_bytes(), profile.framing.prompt.as_bytes()].concat();
+    let mut shadow = Device::new(profile.clone(), DeviceConfig::default());
+    shadow.clear_output();
+    drain(link, opts.quiet, Duration::from_secs(10))?;
+    let mut carry: Vec<u8> = Vec::new();
+    let mut out = Vec::with_capacity(steps.len());
+    for step in steps {
+        if let Some(p) = step.pause {
+            link.pause(p);
+            let t = shadow.now() + p;
+            shadow.handle_timeout(t);
+        }
+        let sent = step.action.wire_bytes(profile.framing.terminator);
+        let was_loop = shadow.mode() == Mode::Loop;
+        let layout = shadow.rt_layout().cloned();
+        shadow.clear_output();
+        shadow.handle_input(shadow.now(), &sent);
+        if !step.action.ends_on_quiet() {
+            shadow.run_until_idle(Duration::from_secs(600));
+        }
+        let shadow_out = shadow.take_output();
+        let entered_loop = !was_loop && shadow.mode() == Mode::Loop;
+        if !sent.is_empty() {
+            link.send(&sent)?;
+        }
+        let t0 = link.elapsed();
+        let timeout = step.timeout.unwrap_or(opts.timeout);
+        let mut buf = std::mem::take(&mut carry);
+        let end = |buf: &[u8]| -> Option<usize> {
+            let prompt_end = find(buf, &eol_prompt).map(|i| i + eol_prompt.len());
+            if was_loop {
+                let size_end = (buf.len() >= shadow_out.len() && !shadow_out.is_empty()).then_some(shadow_out.len());
+                return match (prompt_end, size_end) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
+            }
+            if entered_loop {
+                let star = buf.iter().position(|b| *b == gcl_model::realtime::FEEDBACK_HEADER).map(|i| i + 1);
+                return match (prompt_end, star) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
+            }
+            prompt_end
+        };
+        let mut timed_out = false;
+        let cut = if step.action.ends_on_quiet() {
+            loop {
+                let before = link.elapsed();
+                let n = link.recv(&mut buf, opts.quiet)?;
+                if n == 0 || link.elapsed().saturating_sub(t0) >= timeout || link.elapsed() == before {
+                    break buf.len();
+                }
+            }
+        } else {
+            loop {
+                if let Some(e) = end(&buf) {
+                    break e;
+                }
+                let spent = link.elapsed().saturating_sub(t0);
+                if spent >= timeout {
+                    timed_out = true;
+                    break buf.len();
+                }
+                let before = link.elapsed();
+                let n = link.recv(&mut buf, timeout - spent)?;
+                if n == 0 && link.elapsed() == before {
+                    timed_out = true;
+                    break buf.len();
+                }
+            }
+        };
+        carry = buf.split_off(cut);
+        out.push(Captured {
+            sent,
+            output: buf,
+            took: link.elapsed().saturating_sub(t0),
+            realtime: was_loop,
+            layout,
+            timed_out,
+        });
+    }
+    Ok(out)
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    if needle.is_empty() || hay.len() < needle.len() {
+        return None;
+    }
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// The `within` to write for a step: enough for a slow hand (twice the time it took plus twice
+/// the wire time of its bytes at 9600 baud, plus a second), at least 30 s for a line that moves
+/// motors (or a `wait`), 10 s for RESET; `None` when [`DEFAULT_STEP_TIMEOUT`] is enough.
+pub fn suggest_within(
+    profile: &Profile,
+    action: &Action,
+    sent: &[u8],
+    took: Duration,
+    output_len: usize,
+) -> Option<Duration> {
+    let wire = byte_time(9600) * (output_len + sent.len()).min(1 << 20) as u32;
+    let mut need = took.saturating_mul(2) + wire * 2 + Duration::from_secs(1);
+    let floor = |need: &mut Duration, d: Duration| *need = (*need).max(d);
+    if matches!(action, Action::Wait) {
+        floor(&mut need, Duration::from_secs(30));
+    }
+    for line in sent.split(|b| *b == profile.framing.terminator) {
+        if let Ok(Line::Command(c)) = grammar::parse_line(profile, line) {
+            let kind = c.kind(profile);
+            if kind.is_motion() || kind == CommandKind::Initialize {
+                floor(&mut need, Duration::from_secs(30));
+            } else if kind == CommandKind::Reset {
+                floor(&mut need, Duration::from_secs(10));
+            }
+        }
+    }
+    let secs = need.as_millis().div_ceil(1000);
+    let d = Duration::from_secs(u64::try_from(secs).unwrap_or(u64::MAX).min(super::MAX_DURATION.as_secs()));
+    (d > DEFAULT_STEP_TIMEOUT).then_some(d)
+}
+
+/// The expectation for an answer that carries a banner: the bytes before the first line break
+/// exactly (the echo), then `{any}BarrettHand Firmware{any}`, then the closing line ending and
+/// prompt exactly. `None` if the answer has no banner text or does not end with the prompt.
+pub fn banner_expect(output: &[u8], eol_prompt: &[u8]) -> Option<Expect> {
+    let at = find(output, BANNER_TEXT)?;
+    if !output.ends_with(eol_prompt) || output.len() < at + BANNER_TEXT.len() + eol_prompt.len() {
+        return None;
+    }
+    let echo_end = output.iter().position(|b| *b == b'\n' || *b == b'\r').unwrap_or(at).min(at);
+    let mut e = Expect::default();
+    e.push_bytes(Form::Text, &output[..echo_end]);
+    e.push(Form::Text, Piece::Any);
+    e.push_bytes(Form::Text, BANNER_TEXT);
+    e.push(Form::Text, Piece::Any);
+    e.push_bytes(Form::Text, eol_prompt);
+    Some(e)
+}
+
+/// How a captured answer is written: hex for RealTime answers that are not supervisory text
+/// (no prompt), an escaped string otherwise.
+pub fn answer_form(c: &Captured, eol_prompt: &[u8]) -> Form {
+    if c.realtime && find(&c.output, eol_prompt).is_none() { Form::Hex } else { Form::Text }
+}
+
+/// The transcript step for a script step and what it captured, with the exact answer (or the
+/// banner elided, per `opts`).
+pub fn step_from(step: &ScriptStep, c: &Captured, opts: &RecordOptions) -> Step {
+    let profile = &opts.profile;
+    let eol_prompt: Vec<u8> = [profile.framing.line_ending.as_bytes(), profile.framing.prompt.as_bytes()].concat();
+    let send = match &step.action {
+        Action::Wait => None,
+        Action::Bytes { form, .. } => Some(Send { bytes: c.sent.clone(), form: *form }),
+        _ => Some(Send::text(c.sent.clone())),
+    };
+    let form = answer_form(c, &eol_prompt);
+    let expect = match (opts.elide_banner, banner_expect(&c.output, &eol_prompt)) {
+        (true, Some(e)) => e,
+        _ if form == Form::Hex => Expect::hex(&c.output),
+        _ => Expect::text(&c.output),
+    };
+    let within = suggest_within(profile, &step.action, &c.sent, c.took, c.output.len());
+    Step { line: 0, comments: step.comments.clone(), pause: step.pause, send, within, expect }
+}
+
+/// Why a recording failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// The link failed.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// A step got no complete answer before its timeout.
+    #[error("step {step} (script line {line}): no complete answer within {timeout:?}; got \"{got}\"")]
+    Timeout {
+        /// The step, 0-based.
+        step: usize,
+        /// Its script line.
+        line: usize,
+        /// Its capture timeout.
+        timeout: Duration,
+        /// What arrived, escaped.
+        got: String,
+    },
+}
+
+/// Records a script: runs it, then writes each answer down. With `allow_timeouts`, a step that
+/// times out keeps what arrived; otherwise it is an error.
+pub fn record(
+    link: &mut dyn Link,
+    header: Header,
+    script: &Script,
+    opts: &RecordOptions,
+    allow_timeouts: bool,
+) -> Result<(Transcript, Vec<Captured>), RecordError> {
+    let captured = capture(link, &script.steps, opts)?;
+    if !allow_timeouts && let Some((i, c)) = captured.iter().enumerate().find(|(_, c)| c.timed_out) {
+        let s = &script.steps[i];
+        return Err(RecordError::Timeout {
+            step: i,
+            line: s.line,
+            timeout: s.timeout.unwrap_or(opts.timeout),
+            got: super::escape_text(&c.output),
+        });
+    }
+    let steps = script.steps.iter().zip(&captured).map(|(s, c)| step_from(s, c, opts)).collect();
+    Ok((Transcript { header, steps }, captured))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SimLink;
+
+    #[test]
+    fn records_lines_loops_blocks_and_banners() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+        let steps: Vec<ScriptStep> = [
+            Action::abort(),
+            Action::Line(b"RESET".to_vec()),
+            Action::Line(b"HI".to_vec()),
+            Action::Line(b"1FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 1 LFDP 0".to_vec()),
+            Action::Line(b"1LOOP".to_vec()),
+            Action::Bytes { bytes: b"A".to_vec(), form: Form::Hex },
+            Action::abort(),
+        ]
+        .into_iter()
+        .map(ScriptStep::new)
+        .collect();
+        let opts = RecordOptions::new(p.clone());
+        let caps = capture(&mut link, &steps, &opts).unwrap();
+        assert!(caps.iter().all(|c| !c.timed_out));
+        assert_eq!(caps[0].output, b"\n\r=> ");
+        assert_eq!(caps[2].output, b"HI\n\r=> ");
+        assert_eq!(caps[4].output, b"1LOOP*");
+        assert_eq!(caps[5].output, [b'*', 0, 0]);
+        assert!(caps[5].realtime);
+        assert_eq!(caps[6].output, b"\n\r=> ");
+        let s = step_from(&steps[1], &caps[1], &opts);
+        assert_eq!(s.expect.to_text(), "\"RESET{any}BarrettHand Firmware{any}\\n\\r=> \"");
+        assert_eq!(s.within, Some(Duration::from_secs(10)));
+        let s = step_from(&steps[5], &caps[5], &opts);
+        assert_eq!(s.expect.to_text(), "hex 2A 00 00");
+        assert_eq!(step_from(&steps[2], &caps[2], &opts).within, Some(Duration::from_secs(30)));
+    }
+
+    #[test]
+    fn a_step_ends_at_the_first_prompt_and_the_rest_carries_over() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+        let steps = vec![
+            ScriptStep::new(Action::Bytes { bytes: b"FGET DP\rFGET DS\r".to_vec(), form: Form::Text }),
+            ScriptStep::new(Action::Wait),
+        ];
+        let caps = capture(&mut link, &steps, &RecordOptions::new(p)).unwrap();
+        assert_eq!(caps[0].output, b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
+        assert_eq!(caps[1].output, b"FGET DS\n\r1200 1200 1200 150\n\r=> ");
+    }
+}

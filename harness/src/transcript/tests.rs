@@ -1,0 +1,291 @@
+use std::time::Duration;
+
+use proptest::prelude::*;
+
+use super::*;
+
+const SAMPLE: &str = r#"gcl-transcript 1
+id: rt-lfap-byte-order
+title: LFAP is two bytes, high byte first
+clause: seed: RealTime Control
+clause: decision:seed-rt-field-order
+level: MUST
+profile: seed, bh8-262-4.4
+requires: motion, realtime
+note: positions within MPE
+x-origin: hand-written
+
+# preamble
+send "\x03"
+expect "\n\r=> "
+
+send "RESET\r"
+expect within 10s "RESET{any}BarrettHand Firmware{any}\n\r=> "
+
+send "1M 5000\r"
+expect within 30s "1M 5000\n\r=> "
+
+send "1FGET P\r"
+expect "1FGET P\n\r{int 4950..5050}\n\r=> "
+
+send hex 41
+expect hex 2A {u16 4950..5050} ?? {i8 -3..3}
+
+pause 200ms
+send "\x03"
+expect "\n\r=> "
+"#;
+
+#[test]
+fn parses_every_element() {
+    let t = parse(SAMPLE).unwrap();
+    let h = &t.header;
+    assert_eq!(h.id, "rt-lfap-byte-order");
+    assert_eq!(h.clauses, vec!["seed: RealTime Control", "decision:seed-rt-field-order"]);
+    assert_eq!(h.level, Level::Must);
+    assert_eq!(h.profiles, vec!["seed", "bh8-262-4.4"]);
+    assert_eq!(h.requires, vec![Requirement::Motion, Requirement::Realtime]);
+    assert_eq!(h.extensions, vec![("x-origin".to_string(), "hand-written".to_string())]);
+    assert_eq!(t.steps.len(), 6);
+    assert_eq!(t.steps[0].line, 13);
+    assert_eq!(t.steps[0].comments, vec!["preamble"]);
+    assert_eq!(t.steps[0].send, Some(Send::text(vec![3])));
+    assert_eq!(t.steps[1].within, Some(Duration::from_secs(10)));
+    assert_eq!(t.steps[4].send, Some(Send::hex(vec![0x41])));
+    let pieces: Vec<&Piece> = t.steps[4].expect.pieces().map(|(_, p)| p).collect();
+    assert_eq!(
+        pieces,
+        vec![
+            &Piece::Bytes(vec![0x2A]),
+            &Piece::Field(FieldSpec { width: 2, signed: false, min: 4950, max: 5050 }),
+            &Piece::AnyByte,
+            &Piece::Field(FieldSpec { width: 1, signed: true, min: -3, max: 3 }),
+        ]
+    );
+    assert_eq!(t.steps[5].pause, Some(Duration::from_millis(200)));
+    assert!(t.steps[3].expect.matches(b"1FGET P\n\r5003\n\r=> "));
+    assert!(!t.steps[3].expect.matches(b"1FGET P\n\r5051\n\r=> "));
+}
+
+#[test]
+fn printing_is_canonical_and_round_trips() {
+    let t = parse(SAMPLE).unwrap();
+    let text = t.to_text();
+    let again = parse(&text).unwrap();
+    assert_eq!(again.without_lines(), t.without_lines());
+    assert_eq!(again.to_text(), text);
+    assert!(text.contains("expect hex 2A {u16 4950..5050} ?? {i8 -3..3}\n"));
+    assert!(text.contains("profile: seed, bh8-262-4.4\n"));
+}
+
+#[test]
+fn hand_written_shorthand_is_accepted() {
+    // Steps without `expect` expect nothing; CRLF files read the same; `{byte}` is `??`.
+    let t = parse(
+        "gcl-transcript 1\r\nid: a\r\ntitle: t\r\nclause: c\r\nlevel: info\r\nprofile: seed\r\n\
+         send \"A\"\r\nsend \"B\"\r\nexpect \"x\" hex 01 {byte}\r\n",
+    )
+    .unwrap();
+    assert_eq!(t.steps.len(), 2);
+    assert!(t.steps[0].expect.is_empty());
+    assert_eq!(t.header.level, Level::Info);
+    assert!(t.steps[1].expect.matches(b"x\x01\xFF"));
+    assert_eq!(t.steps[1].expect.to_text(), "\"x\" hex 01 ??");
+}
+
+fn err(text: &str) -> ParseError {
+    match parse(text) {
+        Ok(t) => panic!("parsed: {t:?}"),
+        Err(e) => e,
+    }
+}
+
+const HEAD: &str = "gcl-transcript 1\nid: a\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n";
+
+#[test]
+fn errors_are_typed_with_line_numbers() {
+    assert_eq!(err("").kind, ParseErrorKind::MissingMagic);
+    assert_eq!(err("hello\n").kind, ParseErrorKind::MissingMagic);
+    let e = err("gcl-transcript 2\n");
+    assert_eq!((e.line, e.kind), (1, ParseErrorKind::UnsupportedVersion("2".into())));
+    let e = err("gcl-transcript 1\nid: a\nid: b\n");
+    assert_eq!((e.line, e.kind), (3, ParseErrorKind::DuplicateKey("id".into())));
+    let e = err("gcl-transcript 1\nid: Not A Slug\n");
+    assert_eq!(e.line, 2);
+    assert!(matches!(e.kind, ParseErrorKind::BadValue { .. }));
+    let e = err("gcl-transcript 1\ncolour: red\n");
+    assert_eq!((e.line, e.kind), (2, ParseErrorKind::UnknownKey("colour".into())));
+    let e = err("gcl-transcript 1\nid: a\ntitle: t\nlevel: MUST\nprofile: seed\nsend \"x\"\n");
+    assert_eq!((e.line, e.kind), (6, ParseErrorKind::MissingKey("clause".into())));
+    let e = err("gcl-transcript 1\nlevel: SOMETIMES\n");
+    assert_eq!(e.line, 2);
+    let e = err(&format!("{HEAD}send \"x\"\nexpect \"y\"\nid: late\n"));
+    assert_eq!((e.line, e.kind), (9, ParseErrorKind::HeaderInBody("id".into())));
+    let e = err(&format!("{HEAD}transmit \"x\"\n"));
+    assert_eq!((e.line, e.kind), (7, ParseErrorKind::UnknownDirective("transmit".into())));
+    let e = err(&format!("{HEAD}pause soon\n"));
+    assert_eq!((e.line, e.kind), (7, ParseErrorKind::BadDuration("soon".into())));
+    let e = err(&format!("{HEAD}pause 99999999s\n"));
+    assert_eq!(e.line, 7);
+    let e = err(&format!("{HEAD}send \"abc\n"));
+    assert_eq!((e.line, e.column), (7, Some(6)));
+    assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
+    let e = err(&format!("{HEAD}send \"a\\qb\"\n"));
+    assert_eq!((e.line, e.column), (7, Some(8)));
+    let e = err(&format!("{HEAD}send \"a{{int}}\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
+    let e = err(&format!("{HEAD}send hex 4G\n"));
+    assert_eq!(e.kind, ParseErrorKind::BadHex("4G".into()));
+    let e = err(&format!("{HEAD}send hex ??\n"));
+    assert_eq!(e.kind, ParseErrorKind::BadHex("??".into()));
+    let e = err(&format!("{HEAD}expect \"{{int 9..1}}x\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadElision(_)));
+    let e = err(&format!("{HEAD}expect hex {{u8 0..256}}\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadElision(_)));
+    let e = err(&format!("{HEAD}expect \"{{whatever}}x\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadElision(_)));
+    let e = err(&format!("{HEAD}expect \"x{{int}}\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadExpect(_)));
+    let e = err(&format!("{HEAD}expect \"x\" trailing\n"));
+    assert_eq!(e.kind, ParseErrorKind::Unexpected("trailing".into()));
+    let e = err(HEAD);
+    assert_eq!(e.kind, ParseErrorKind::NoSteps);
+    let e = parse_bytes(b"gcl-transcript 1\nid: \xFF\n").unwrap_err();
+    assert_eq!((e.line, e.kind), (2, ParseErrorKind::NotUtf8));
+    let e = err(&format!("{HEAD}send \"caf\u{e9}\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
+}
+
+#[test]
+fn errors_display_with_their_line() {
+    let e = err(&format!("{HEAD}pause soon\n"));
+    assert_eq!(e.to_string(), "line 7: bad duration `soon` (expected e.g. 200ms or 20s, at most 24 h)");
+}
+
+// ---------------------------------------------------------------- property: parse(print(t)) == t
+
+fn arb_text() -> impl Strategy<Value = String> {
+    "[A-Za-z0-9 ,.:;()'+*/=_-]{1,30}".prop_map(|s| s.trim().to_string()).prop_filter("non-empty", |s| !s.is_empty())
+}
+
+fn arb_slug() -> impl Strategy<Value = String> {
+    "[a-z0-9][a-z0-9._-]{0,20}"
+}
+
+fn arb_duration() -> impl Strategy<Value = Duration> {
+    prop_oneof![(0u64..100_000).prop_map(Duration::from_millis), (1u64..3600).prop_map(Duration::from_secs)]
+}
+
+fn arb_field() -> impl Strategy<Value = FieldSpec> {
+    (1u8..=2, any::<bool>(), any::<i64>(), any::<i64>()).prop_map(|(width, signed, a, b)| {
+        let (lo, hi) = FieldSpec::representable(width, signed);
+        let span = (hi - lo + 1) as u64;
+        let x = lo + (a as u64 % span) as i64;
+        let y = lo + (b as u64 % span) as i64;
+        FieldSpec { width, signed, min: x.min(y), max: x.max(y) }
+    })
+}
+
+fn arb_piece() -> impl Strategy<Value = Piece> {
+    prop_oneof![
+        4 => proptest::collection::vec(any::<u8>(), 1..8).prop_map(Piece::Bytes),
+        1 => Just(Piece::Int(None)),
+        1 => (-1_000_000i64..1_000_000, 0i64..1_000_000).prop_map(|(a, d)| Piece::Int(Some((a, a + d)))),
+        1 => Just(Piece::Line),
+        1 => Just(Piece::Any),
+        1 => Just(Piece::AnyByte),
+        1 => arb_field().prop_map(Piece::Field),
+    ]
+}
+
+fn arb_expect() -> impl Strategy<Value = Expect> {
+    proptest::collection::vec((any::<bool>(), arb_piece()), 0..8).prop_map(|ps| {
+        let mut e = Expect::default();
+        for (hex, p) in ps {
+            e.push(if hex { Form::Hex } else { Form::Text }, p);
+        }
+        // The format forbids a variable elision at the end.
+        if e.pieces().last().is_some_and(|(_, p)| p.is_variable()) {
+            e.push_bytes(Form::Text, b"=> ");
+        }
+        e
+    })
+}
+
+fn arb_step() -> impl Strategy<Value = Step> {
+    (
+        proptest::collection::vec(arb_text(), 0..2),
+        proptest::option::of(arb_duration()),
+        proptest::option::of((proptest::collection::vec(any::<u8>(), 0..10), any::<bool>())),
+        proptest::option::of(arb_duration()),
+        arb_expect(),
+    )
+        .prop_map(|(comments, pause, send, within, expect)| Step {
+            line: 0,
+            comments,
+            pause,
+            send: send.map(|(bytes, hex)| Send { bytes, form: if hex { Form::Hex } else { Form::Text } }),
+            within,
+            expect,
+        })
+}
+
+fn arb_requirement() -> impl Strategy<Value = Requirement> {
+    prop_oneof![
+        Just(Requirement::Motion),
+        Just(Requirement::Realtime),
+        Just(Requirement::Eeprom),
+        Just(Requirement::AbortTiming),
+        "[a-z][a-z0-9-]{0,10}".prop_map(|s| Requirement::from_slug(&s).unwrap_or(Requirement::Motion)),
+    ]
+}
+
+fn arb_transcript() -> impl Strategy<Value = Transcript> {
+    (
+        arb_slug(),
+        arb_text(),
+        proptest::collection::vec(arb_text(), 1..3),
+        prop_oneof![Just(Level::Must), Just(Level::Should), Just(Level::May), Just(Level::Info)],
+        proptest::collection::vec("[a-z0-9][a-z0-9.-]{0,12}", 1..3),
+        proptest::collection::btree_set(arb_requirement(), 0..3),
+        proptest::collection::vec(arb_text(), 0..2),
+        proptest::collection::vec(arb_step(), 1..6),
+    )
+        .prop_map(|(id, title, clauses, level, profiles, requires, notes, steps)| Transcript {
+            header: Header {
+                id,
+                title,
+                clauses,
+                level,
+                profiles,
+                requires: requires.into_iter().collect(),
+                notes,
+                extensions: vec![("x-seed".into(), "42".into())],
+            },
+            steps,
+        })
+}
+
+proptest! {
+    #[test]
+    fn parse_print_round_trip(t in arb_transcript()) {
+        let text = t.to_text();
+        let back = parse(&text).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+        prop_assert_eq!(back.without_lines(), t);
+        prop_assert_eq!(back.to_text(), text);
+    }
+
+    #[test]
+    fn parse_never_panics(s in "(gcl-transcript 1\n)?[ -~\n\t\u{80}-\u{10ff}]{0,300}") {
+        let _ = parse(&s);
+    }
+
+    #[test]
+    fn exact_expectations_match_their_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..40)) {
+        prop_assert!(Expect::text(&bytes).matches(&bytes));
+        prop_assert!(Expect::hex(&bytes).matches(&bytes));
+        if !bytes.is_empty() {
+            prop_assert!(!Expect::text(&bytes).matches(&bytes[..bytes.len() - 1]));
+        }
+    }
+}

@@ -1,0 +1,163 @@
+//! Shared by the `sim_*` and `client_*` integration tests: start `gcl sim` as a child process
+//! on a pty, TCP or stdio, and open a [`Hand`] on it. Children are killed and reaped on drop.
+
+#![allow(dead_code)] // each test file uses a part
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+use gcl_harness::client::{Hand, Timeouts};
+use gcl_harness::links::{ExecLink, StderrMode};
+use gcl_harness::target::OpenOptions;
+
+/// The `gcl` binary under test.
+pub const GCL: &str = env!("CARGO_BIN_EXE_gcl");
+
+/// A transport `gcl sim` serves on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transport {
+    Pty,
+    Tcp,
+    Stdio,
+}
+
+pub const ALL: [Transport; 3] = [Transport::Pty, Transport::Tcp, Transport::Stdio];
+
+/// A `gcl sim --pty` or `--tcp` child.
+pub struct SimProcess {
+    child: Child,
+    /// The first line of its stdout: the pty path or the bound address.
+    pub address: String,
+    pub transport: Transport,
+}
+
+impl SimProcess {
+    /// Starts `gcl sim <transport flag> <args>` and reads the address it prints.
+    pub fn start(transport: Transport, args: &[&str]) -> SimProcess {
+        let flag: &[&str] = match transport {
+            Transport::Pty => &["--pty"],
+            Transport::Tcp => &["--tcp", "127.0.0.1:0"],
+            Transport::Stdio => panic!("stdio children are started by the exec link"),
+        };
+        let mut child = Command::new(GCL)
+            .arg("sim")
+            .args(flag)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn gcl sim");
+        let stdout = child.stdout.take().expect("stdout");
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let _ = BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        let line = match rx.recv_timeout(Duration::from_secs(30)) {
+            Ok(l) => l,
+            Err(_) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("gcl sim printed no address");
+            }
+        };
+        let address = line.trim().to_string();
+        assert!(!address.is_empty(), "gcl sim exited without an address");
+        SimProcess { child, address, transport }
+    }
+
+    /// The `--target` text for this simulator.
+    pub fn target(&self) -> String {
+        match self.transport {
+            Transport::Pty => format!("serial:{}", self.address),
+            _ => format!("tcp://{}", self.address),
+        }
+    }
+
+    /// A new client (a new open of the pty, a new TCP connection).
+    pub fn hand(&self, profile: &str) -> Hand {
+        let opts = OpenOptions { profile: Some(profile.into()), ..Default::default() };
+        let mut h = Hand::open(&self.target().parse().unwrap(), &opts).expect("open the simulator");
+        h.set_timeouts(test_timeouts());
+        h
+    }
+
+    /// SIGTERM, then the exit status.
+    pub fn terminate(&mut self) -> ExitStatus {
+        let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
+        let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM);
+        let end = Instant::now() + Duration::from_secs(20);
+        loop {
+            if let Ok(Some(s)) = self.child.try_wait() {
+                return s;
+            }
+            assert!(Instant::now() < end, "gcl sim ignored SIGTERM");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    /// Whether it is still running.
+    pub fn running(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
+    }
+
+    /// SIGKILL, as a crash would.
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for SimProcess {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn test_timeouts() -> Timeouts {
+    Timeouts { sync: Duration::from_millis(300), ..Timeouts::default() }
+}
+
+/// The argv of a `gcl sim --stdio` child.
+pub fn stdio_argv(args: &[&str]) -> Vec<String> {
+    let mut v = vec![GCL.to_string(), "sim".into(), "--stdio".into()];
+    v.extend(args.iter().map(|s| s.to_string()));
+    v
+}
+
+/// A hand on a `gcl sim --stdio` child.
+pub fn stdio_hand(profile: &str, args: &[&str]) -> Hand {
+    let mut all = vec!["--profile", profile];
+    all.extend_from_slice(args);
+    let link = ExecLink::spawn(&stdio_argv(&all), StderrMode::Null).expect("spawn gcl sim --stdio");
+    let mut h = Hand::new(Box::new(link), gcl_harness::cli::load_profile(profile).unwrap());
+    h.set_timeouts(test_timeouts());
+    h
+}
+
+/// A simulator (none for stdio, whose child belongs to the hand's link) and a hand on it.
+pub fn start(transport: Transport, profile: &str, args: &[&str]) -> (Option<SimProcess>, Hand) {
+    if transport == Transport::Stdio {
+        return (None, stdio_hand(profile, args));
+    }
+    let mut all = vec!["--profile", profile];
+    all.extend_from_slice(args);
+    let sim = SimProcess::start(transport, &all);
+    let hand = sim.hand(profile);
+    (Some(sim), hand)
+}
+
+/// Deterministic noise (no dependency on a random crate): a 64-bit LCG.
+pub fn noise(seed: u64, len: usize) -> Vec<u8> {
+    let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    (0..len)
+        .map(|_| {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 56) as u8
+        })
+        .collect()
+}

@@ -1,0 +1,74 @@
+//! The unmutated in-process simulator passes every committed golden transcript of every
+//! profile, and the suite covers what the issue asks of it.
+
+use std::path::PathBuf;
+
+use gcl_harness::SimLink;
+use gcl_harness::suite::{self, Case};
+use gcl_harness::transcript::{Level, Requirement};
+use gcl_model::{DeviceConfig, Profile};
+
+fn suite_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(suite::DEFAULT_DIR)
+}
+
+fn committed() -> Vec<Case> {
+    let cases = suite::load_dir(&suite_dir()).unwrap_or_else(|e| panic!("loading the committed suite: {e}"));
+    assert!(!cases.is_empty(), "no committed suite under {}", suite_dir().display());
+    cases
+}
+
+#[test]
+fn the_simulator_passes_every_committed_case() {
+    let mut failures = Vec::new();
+    let cases = committed();
+    for case in &cases {
+        let profile = Profile::builtin(&case.profile).unwrap();
+        let mut link = SimLink::new(profile, DeviceConfig::default());
+        let out = suite::run_case(case, &mut link, &suite::replay_options());
+        if !out.is_pass() {
+            failures.push(format!("{}: {}", case.rel_path().display(), out.render()));
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} cases failed:\n{}", failures.len(), cases.len(), failures.join("\n"));
+}
+
+#[test]
+fn every_profile_has_a_suite_with_every_level_it_needs() {
+    let cases = committed();
+    for name in Profile::builtin_names() {
+        let mine: Vec<&Case> = cases.iter().filter(|c| c.profile == name).collect();
+        assert!(mine.len() > 100, "{name}: only {} cases", mine.len());
+        for l in [Level::Must, Level::Should, Level::Info] {
+            assert!(mine.iter().any(|c| c.level() == l), "{name}: no {l} case");
+        }
+        let p = Profile::builtin(name).unwrap();
+        for c in &p.commands {
+            let id = format!("cmd-{}-prefix", c.name.to_ascii_lowercase().replace("a?", "a-help").replace('?', "help"));
+            assert!(mine.iter().any(|k| k.id() == id), "{name}: no {id}");
+        }
+        for x in &p.params {
+            let id = format!("param-{}-default", x.name.to_ascii_lowercase());
+            assert!(mine.iter().any(|k| k.id() == id), "{name}: no {id}");
+        }
+        for s in p.status.iter().filter(|s| s.sent && s.bit != 2) {
+            let prefix = format!("status-{}-", s.bit);
+            assert!(mine.iter().any(|k| k.id().starts_with(&prefix)), "{name}: no case for status {}", s.bit);
+        }
+        for c in mine.iter().filter(|c| c.requires(&Requirement::Eeprom)) {
+            let t = &c.transcript;
+            let tail: Vec<&[u8]> =
+                t.steps.iter().rev().take(4).filter_map(|s| s.send.as_ref().map(|x| x.bytes.as_slice())).collect();
+            assert!(
+                tail.iter().any(|b| b.starts_with(b"FDEF")
+                    || b.starts_with(b"PDEF")
+                    || b.starts_with(b"FLOAD")
+                    || b.starts_with(b"PLOAD")
+                    || b.starts_with(b"FGET")
+                    || b.starts_with(b"PGET")),
+                "{name}/{}: an EEPROM case must restore the factory values at its end",
+                c.id()
+            );
+        }
+    }
+}

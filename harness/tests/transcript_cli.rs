@@ -1,0 +1,92 @@
+//! `gcl replay` and `gcl record` as a user runs them: exit codes, the mismatch report, and a
+//! recording that replays.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn gcl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_gcl"))
+}
+
+fn golden(profile: &str, id: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite").join(profile).join(format!("{id}.gcl"))
+}
+
+#[test]
+fn replay_exits_0_on_a_match() {
+    let out = gcl().args(["replay", "--target", "sim"]).arg(golden("seed", "framing-echo")).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.starts_with("PASS "), "{stdout}");
+}
+
+#[test]
+fn replay_exits_1_and_shows_the_parting_byte_on_a_mismatch() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(golden("seed", "param-dp-default")).unwrap();
+    let edited = text.replace("1000 1000 1000 150", "1000 1000 1001 150");
+    assert_ne!(text, edited);
+    let f = dir.path().join("param-dp-default.gcl");
+    std::fs::write(&f, edited).unwrap();
+    let out = gcl().args(["replay", "--target", "sim:seed"]).arg(&f).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("FAIL "), "{stdout}");
+    assert!(stdout.contains("expected: \"…"), "{stdout}");
+    assert!(stdout.contains("1001 150\\n\\r=> \""), "{stdout}");
+    assert!(stdout.contains("1000 150\\n\\r=> \""), "{stdout}");
+    assert!(stdout.contains("^ byte 21"), "{stdout}");
+}
+
+#[test]
+fn replay_exits_2_on_a_file_that_does_not_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("bad.gcl");
+    std::fs::write(&f, "gcl-transcript 1\nid: x\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\nsend \"\\q\"\n").unwrap();
+    let out = gcl().args(["replay", "--target", "sim"]).arg(&f).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("line 7, column 7"), "{stderr}");
+}
+
+#[test]
+fn a_recording_of_the_simulator_replays_against_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("abort-close.script");
+    std::fs::write(
+        &script,
+        "# my case\nid: abort-close\nlevel: SHOULD\nclause: decision:bh8-abort-motion\nrequires: motion, abort-timing\n\
+         abort\nRESET\nHI\nnowait: GC\npause: 200ms\nabort\n1FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 1 LFDP 0\n1LOOP\nblock: 41\nabort\n",
+    )
+    .unwrap();
+    let out_file = dir.path().join("abort-close.gcl");
+    let out = gcl()
+        .args(["record", "--target", "sim:bh8-262-4.4", "--title", "^C during C"])
+        .arg("--script")
+        .arg(&script)
+        .arg("--out")
+        .arg(&out_file)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&out_file).unwrap();
+    assert!(text.contains("id: abort-close\ntitle: ^C during C\n"), "{text}");
+    assert!(text.contains("profile: bh8-262-4.4\n"), "{text}");
+    assert!(text.contains("expect within 10s \"RESET{any}BarrettHand Firmware{any}\\n\\r=> \""), "{text}");
+    assert!(text.contains("pause 200ms\nsend \"\\x03\"\nexpect \"\\n\\rERR 16384\\n\\r=> \""), "{text}");
+    assert!(text.contains("send hex 41\nexpect hex 2A 00 00"), "{text}");
+    let t = gcl_harness::transcript::parse(&text).unwrap();
+    assert_eq!(t.header.level, gcl_harness::transcript::Level::Should);
+    let out = gcl().args(["replay", "--target", "sim"]).arg(&out_file).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+}
+
+#[test]
+fn suite_check_passes_on_the_committed_suite() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite");
+    let out = gcl().args(["suite", "check", "--dir"]).arg(&dir).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let out = gcl().args(["suite", "list", "--profile", "seed", "--dir"]).arg(&dir).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("seed         framing-echo"), "{stdout}");
+}
