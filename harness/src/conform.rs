@@ -270,7 +270,7 @@ pub fn run(
     if !fresh_per_case {
         // A shared link was drained by the probe; between passing cases nothing is pending.
         ropts.drain_quiet = Duration::ZERO;
-        ropts.trailing = Duration::from_millis(20);
+        ropts.trailing = Duration::from_millis(2);
     }
 
     let mut results: Vec<CaseResult> = Vec::with_capacity(cases.len());
@@ -363,7 +363,7 @@ pub fn run(
         if r.verdict.fails_run() && !fresh_per_case && shared.is_some() {
             // Whatever the failing case left pending must not be blamed on the next one.
             if let Some(l) = shared.as_deref_mut() {
-                let _ = crate::transcript::record::drain(l, Duration::from_millis(200), Duration::from_secs(5));
+                let _ = crate::transcript::record::drain(l, Duration::from_millis(50), Duration::from_secs(5));
             }
         }
         if let Some(s) = stream.as_deref_mut() {

@@ -1,0 +1,216 @@
+//! Proof that the suite catches firmware bugs: `gcl conform` against every `--fault` mutant
+//! of the simulator fails, and names the cases that should catch the bug; the unmutated
+//! simulator passes 100%. Also: known failures (XFAIL/XPASS), the liveness probe, reports
+//! and certificates, all through the real `gcl` binary.
+
+use std::path::Path;
+use std::process::{Command, Output};
+use std::str::FromStr;
+
+use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::report::{RunReport, Verdict};
+use gcl_harness::suite;
+use gcl_harness::target::{OpenOptions, Target};
+use gcl_model::{Fault, Profile};
+
+const GCL: &str = env!("CARGO_BIN_EXE_gcl");
+
+/// Each mutant and cases that must catch it (on bh8-262-4.4).
+const MUTANTS: &[(&str, &[&str])] = &[
+    ("crlf", &["framing-echo", "framing-empty-line"]),
+    ("no-echo", &["framing-echo"]),
+    ("prompt-no-space", &["framing-empty-line"]),
+    ("lfap-little-endian", &["rt-lfap-byte-order"]),
+    ("read-only-status", &["status-256-read-only", "param-p-read-only"]),
+    ("lfdp-not-clipped", &["rt-lfdp-worked-example"]),
+    ("mpe-ignored", &["status-16-missed-position"]),
+    ("stay-in-loop", &["rt-bad-header-returns-to-supervisory"]),
+    ("range-off-by-one", &["param-dp-range"]),
+    ("fdef-skips-mcv", &["persist-fdef"]),
+    ("lowercase-rejected", &["framing-case"]),
+    ("fget-reversed", &["param-dp-default", "cmd-fget"]),
+    ("abort-silent", &["status-16384-abort", "abort-motion"]),
+    ("loop-ack-newline", &["cmd-loop"]),
+    ("reset-no-banner", &["cmd-reset"]),
+];
+
+/// The committed goldens (a separate test keeps them fresh); loading them is cheaper than
+/// generating the suite in every run of a debug build.
+const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
+
+fn cases(profile: &Profile) -> Vec<suite::Case> {
+    suite::load_profile(Path::new(SUITE), &profile.id).unwrap()
+}
+
+fn in_process(profile: &str, faults: Vec<Fault>) -> RunReport {
+    let p = Profile::builtin(profile).unwrap();
+    let cases = cases(&p);
+    let opts = ConformOptions {
+        target: Target::Sim { profile: Some(p.id.clone()) },
+        open: OpenOptions { faults, ..Default::default() },
+        profile: p,
+        level: LevelFilter::All,
+        only: vec![],
+        skip: vec![],
+        known: KnownFailures::default(),
+        step_timeout: None,
+        refuse: vec![],
+        baud: None,
+        keep_transcripts: false,
+    };
+    conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report
+}
+
+fn failed(r: &RunReport) -> Vec<&str> {
+    r.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.as_str()).collect()
+}
+
+#[test]
+fn the_unmutated_simulator_passes_every_case_of_every_profile() {
+    for name in Profile::builtin_names() {
+        let r = in_process(name, vec![]);
+        assert!(r.cases.len() > 150, "{name}: only {} cases", r.cases.len());
+        assert!(r.passed(), "{name}: {:?}", failed(&r));
+        assert_eq!(r.summary[&Verdict::Pass], r.cases.len(), "{name}: every case ran and passed");
+    }
+}
+
+#[test]
+fn every_mutant_is_caught_in_process_by_the_cases_named_for_it() {
+    for f in Fault::ALL {
+        assert!(MUTANTS.iter().any(|(n, _)| *n == f.name()), "fault {f} has no expectation in MUTANTS");
+    }
+    // Two threads: the machines that run this have two cores.
+    let (a, b) = MUTANTS.split_at(MUTANTS.len() / 2);
+    let check = |part: &'static [(&'static str, &'static [&'static str])]| {
+        for (name, catchers) in part {
+            let r = in_process("bh8-262-4.4", vec![Fault::from_str(name).unwrap()]);
+            let f = failed(&r);
+            assert!(!r.passed(), "mutant {name} survived the suite");
+            for c in *catchers {
+                assert!(f.contains(c), "mutant {name}: case {c} should fail; failing: {f:?}");
+            }
+        }
+    };
+    std::thread::scope(|s| {
+        let h = s.spawn(|| check(a));
+        check(b);
+        h.join().unwrap();
+    });
+}
+
+fn gcl(args: &[&str]) -> Output {
+    Command::new(GCL).args(args).output().unwrap()
+}
+
+fn report(dir: &Path) -> RunReport {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn every_mutant_fails_gcl_conform_over_exec() {
+    for (name, catchers) in MUTANTS {
+        let dir = tempfile::tempdir().unwrap();
+        // ^C during motion needs the hand to still be moving when it arrives: real time.
+        let time = if *name == "abort-silent" { "real" } else { "fast" };
+        let target = format!("exec:{GCL} sim --stdio --profile bh8-262 --time {time} --fault {name}");
+        let mut args =
+            vec!["conform", "--target", &target, "--profile", "bh8-262", "-q", "--timeout", "1000", "--suite", SUITE];
+        for c in *catchers {
+            args.extend(["--only", c]);
+        }
+        let rep = dir.path().to_str().unwrap().to_string();
+        args.extend(["--report", &rep]);
+        let out = gcl(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(1), "mutant {name} must fail the run:\n{stdout}");
+        let r = report(dir.path());
+        for c in *catchers {
+            let case = r.cases.iter().find(|x| x.id == *c).unwrap_or_else(|| panic!("{name}: {c} did not run"));
+            // A mismatch is FAIL; an answer that never completes (a prompt missing its space)
+            // is TIMEOUT. Either way the case fails the run, with its diff and transcript.
+            assert!(matches!(case.verdict, Verdict::Fail | Verdict::Timeout), "mutant {name}: {c}: {:?}", case.verdict);
+            assert!(case.diff.is_some() && case.transcript.is_some(), "a failure carries its diff and transcript");
+            assert!(stdout.contains(c), "the summary names {c}:\n{stdout}");
+        }
+    }
+}
+
+#[test]
+fn the_unmutated_simulator_passes_over_exec_with_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = format!("exec:{GCL} sim --stdio --profile seed");
+    let rep = dir.path().to_str().unwrap();
+    // A simulator in fast time finishes motion before a host's pause ends, so ^C-during-motion
+    // cases cannot land: refuse them (they run in-process and against real-time hands).
+    let out = gcl(&[
+        "conform", "--target", &target, "--profile", "seed", "--no", "abort-timing", "--report", rep, "--suite", SUITE,
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("result: PASS"));
+    let r = report(dir.path());
+    assert!(r.liveness.before && r.liveness.after);
+    assert!(r.summary[&Verdict::Skip] > 0 && r.summary[&Verdict::Fail] == 0);
+    let junit = std::fs::read_to_string(dir.path().join("junit.xml")).unwrap();
+    assert_eq!(junit.matches("<testcase ").count(), r.cases.len());
+    let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
+    assert!(html.contains("Clause coverage"));
+    let jsonl = std::fs::read_to_string(dir.path().join("results.jsonl")).unwrap();
+    assert_eq!(jsonl.lines().count(), r.cases.len(), "every case was streamed as it ended");
+}
+
+#[test]
+fn known_failures_turn_into_xfail_and_stale_entries_into_xpass() {
+    let dir = tempfile::tempdir().unwrap();
+    let known = dir.path().join("known.toml");
+    std::fs::write(
+        &known,
+        "[[failure]]\ncase = \"framing-case\"\nreason = \"firmware refuses lower case (ticket 12)\"\n",
+    )
+    .unwrap();
+    let k = known.to_str().unwrap();
+    // The bug is there: XFAIL, and the run passes.
+    let out = gcl(&[
+        "conform", "--target", "sim", "--fault", "lowercase-rejected", "--only", "framing-*", "--known-failures", k,
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("XFAIL"));
+    // The bug is fixed but still listed: XPASS fails the run.
+    let out = gcl(&["conform", "--target", "sim", "--only", "framing-*", "--known-failures", k]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("XPASS") && stdout.contains("remove it from the list"), "{stdout}");
+}
+
+#[test]
+fn a_silent_hand_is_an_infrastructure_error_not_a_hang() {
+    let out = gcl(&["conform", "--target", "exec:sleep 30", "--timeout", "300"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("liveness probe"));
+    let out = gcl(&["conform", "--target", "bogus:x"]);
+    assert_eq!(out.status.code(), Some(2), "usage errors exit 2");
+}
+
+#[test]
+fn certificates_are_written_and_tampering_is_caught() {
+    let dir = tempfile::tempdir().unwrap();
+    let cert = dir.path().join("cert");
+    let c = cert.to_str().unwrap();
+    let out = gcl(&["certify", "--target", "sim:seed", "--out", c]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cert.join("certificate.json")).unwrap()).unwrap();
+    assert!(json["firmware_version"][0].as_str().unwrap().contains("seed"), "{json}");
+    assert_eq!(json["verdict"], "PASS");
+    assert_eq!(json["levels"], serde_json::json!(["MUST", "SHOULD"]));
+    assert!(std::fs::read_dir(cert.join("transcripts")).unwrap().count() > 100);
+    assert_eq!(gcl(&["certify", "--verify", c]).status.code(), Some(0));
+    let t = cert.join("transcripts/framing-echo.gcl");
+    let text = std::fs::read_to_string(&t).unwrap();
+    std::fs::write(&t, text.replacen("=> ", "=>", 1)).unwrap();
+    let out = gcl(&["certify", "--verify", c]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("modified: transcripts/framing-echo.gcl"));
+}
