@@ -4,8 +4,8 @@
 #
 #   GCL_FUZZ_SECONDS    seconds per target (default 30)
 #   GCL_FUZZ_TARGETS    space-separated targets (default: grammar device realtime spec)
-#   GCL_FUZZ_SANITIZER  address (default) or none (about twice the execs/s; the model is
-#                       forbid(unsafe_code), so ASan mostly watches its dependencies)
+#   GCL_FUZZ_SANITIZER  address (default) or none (faster; the model is forbid(unsafe_code),
+#                       so ASan mostly watches its dependencies)
 #
 # Dictionaries come from fuzz/seeds/dicts/<target>.dict when there is one.
 # Reproducers of crashes land in fuzz/artifacts/<target>/; replay one on stable with

@@ -423,8 +423,9 @@ fn wire_time(
     for r in results.iter().filter(|r| r.verdict != Verdict::Skip) {
         let Some(case) = cases.iter().find(|c| c.id() == r.id) else { continue };
         let mut link = SimLink::new(opts.profile.clone(), Default::default());
-        let outcome =
-            suite::run_case(case, &mut link, &ReplayOptions { trailing: Duration::ZERO, ..suite::replay_options() });
+        // No quiet-time drain and no trailing wait: they are the runner's, not the case's.
+        let quiet = ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
+        let outcome = suite::run_case(case, &mut link, &quiet);
         let bytes: u64 = outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum();
         let wire_at_sim = byte_time(link.device().baud()) * bytes as u32;
         motion += link.elapsed().saturating_sub(wire_at_sim);

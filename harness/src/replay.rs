@@ -12,7 +12,7 @@ use std::time::Duration;
 use crate::link::{Link, LinkError};
 use crate::transcript::matcher::{Feed, Matcher, show};
 use crate::transcript::record::drain;
-use crate::transcript::{DEFAULT_STEP_TIMEOUT, Form, Send, Step, Transcript, escape_text};
+use crate::transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
 
 /// How to replay.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -126,7 +126,23 @@ pub struct Disconnected {
     pub exchange: Vec<Exchanged>,
 }
 
-/// How a replay ended.
+/// Where a failed replay parted from the golden transcript, for reports.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Parting {
+    /// The step, 0-based.
+    pub step: usize,
+    /// Its line in the transcript.
+    pub line: usize,
+    /// Byte offset within the step's answer.
+    pub offset: usize,
+    /// The expectation from that byte on, as written (empty: nothing more was expected).
+    pub expected: String,
+    /// The answer from that byte on, escaped or in hex (empty: nothing more arrived).
+    pub actual: String,
+}
+
+/// How a replay ended. A runner's verdicts: `Pass` PASS, `Mismatch` FAIL, `Timeout` TIMEOUT,
+/// `Disconnected` ERROR.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ReplayOutcome {
     /// Every answer matched.
@@ -162,6 +178,27 @@ impl ReplayOutcome {
             ReplayOutcome::Mismatch(m) => Some(m.step),
             ReplayOutcome::Timeout(t) => Some(t.step),
             ReplayOutcome::Disconnected(d) => Some(d.step),
+        }
+    }
+
+    /// Where the answer parted from the golden one (mismatch or timeout).
+    pub fn parting(&self) -> Option<Parting> {
+        match self {
+            ReplayOutcome::Mismatch(m) => Some(Parting {
+                step: m.step,
+                line: m.line,
+                offset: m.offset,
+                expected: m.expected.clone(),
+                actual: m.actual.clone(),
+            }),
+            ReplayOutcome::Timeout(t) => Some(Parting {
+                step: t.step,
+                line: t.line,
+                offset: t.offset,
+                expected: t.expected.clone(),
+                actual: String::new(),
+            }),
+            _ => None,
         }
     }
 
@@ -307,7 +344,7 @@ fn run_step(
     if let Some(p) = step.pause {
         link.pause(p);
     }
-    let sent = step.send.as_ref().map(|s: &Send| s.bytes.clone()).unwrap_or_default();
+    let sent = step.send.as_ref().map(|s: &HostBytes| s.bytes.clone()).unwrap_or_default();
     if !sent.is_empty()
         && let Err(e) = link.send(&sent)
     {
@@ -429,6 +466,8 @@ mod tests {
         let out = replay(&t, &mut sim(vec![Fault::CrLf]), &ReplayOptions::default());
         let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
         assert_eq!((m.step, m.line, m.offset), (0, 8, 0));
+        let parting = out.parting().unwrap();
+        assert_eq!((parting.step, parting.offset, parting.actual.as_str()), (0, 0, "\\r\\n=> "));
         assert_eq!(m.expected, "\\n\\r=> ");
         assert_eq!(m.actual, "\\r\\n=> ");
         let r = out.render();
@@ -456,7 +495,7 @@ mod tests {
     #[test]
     fn extra_bytes_after_the_last_step_are_a_mismatch() {
         let mut t = parse(FGET).unwrap();
-        t.steps[1].send = Some(Send::text(b"FGET DP\rFGET DP\r".to_vec()));
+        t.steps[1].send = Some(HostBytes::text(b"FGET DP\rFGET DP\r".to_vec()));
         let out = replay(&t, &mut sim(vec![]), &ReplayOptions::default());
         let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
         assert!(m.trailing);

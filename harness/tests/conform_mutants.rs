@@ -144,7 +144,17 @@ fn the_unmutated_simulator_passes_over_exec_with_reports() {
     // A simulator in fast time finishes motion before a host's pause ends, so ^C-during-motion
     // cases cannot land: refuse them (they run in-process and against real-time hands).
     let out = gcl(&[
-        "conform", "--target", &target, "--profile", "seed", "--no", "abort-timing", "--report", rep, "--suite", SUITE,
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--no",
+        "abort-timing",
+        "--report",
+        rep,
+        "--suite",
+        SUITE,
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
@@ -172,7 +182,15 @@ fn known_failures_turn_into_xfail_and_stale_entries_into_xpass() {
     let k = known.to_str().unwrap();
     // The bug is there: XFAIL, and the run passes.
     let out = gcl(&[
-        "conform", "--target", "sim", "--fault", "lowercase-rejected", "--only", "framing-*", "--known-failures", k,
+        "conform",
+        "--target",
+        "sim",
+        "--fault",
+        "lowercase-rejected",
+        "--only",
+        "framing-*",
+        "--known-failures",
+        k,
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{stdout}");

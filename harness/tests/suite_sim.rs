@@ -55,20 +55,37 @@ fn every_profile_has_a_suite_with_every_level_it_needs() {
             let prefix = format!("status-{}-", s.bit);
             assert!(mine.iter().any(|k| k.id().starts_with(&prefix)), "{name}: no case for status {}", s.bit);
         }
+        // A case is never stronger than a decision it checks: [open] points stay INFO.
+        for c in &mine {
+            for cl in &c.header().clauses {
+                let Some(d) = cl.strip_prefix("decision:") else { continue };
+                let d = p
+                    .decisions
+                    .iter()
+                    .find(|x| x.id == d)
+                    .unwrap_or_else(|| panic!("{name}/{}: no decision {d}", c.id()));
+                let l: Level = d.level.parse().unwrap();
+                assert!(c.level() >= l, "{name}/{}: level {} but it checks {} ({})", c.id(), c.level(), d.id, d.level);
+            }
+        }
+        // A case that writes the EEPROM leaves the factory values in it.
         for c in mine.iter().filter(|c| c.requires(&Requirement::Eeprom)) {
-            let t = &c.transcript;
-            let tail: Vec<&[u8]> =
-                t.steps.iter().rev().take(4).filter_map(|s| s.send.as_ref().map(|x| x.bytes.as_slice())).collect();
-            assert!(
-                tail.iter().any(|b| b.starts_with(b"FDEF")
-                    || b.starts_with(b"PDEF")
-                    || b.starts_with(b"FLOAD")
-                    || b.starts_with(b"PLOAD")
-                    || b.starts_with(b"FGET")
-                    || b.starts_with(b"PGET")),
-                "{name}/{}: an EEPROM case must restore the factory values at its end",
-                c.id()
-            );
+            let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+            assert!(suite::run_case(c, &mut link, &suite::replay_options()).is_pass());
+            let nv = link.device().nv();
+            assert!(nv.writes > 0, "{name}/{}: requires eeprom but never writes it", c.id());
+            for id in p.param_ids().filter(|id| !p.param(*id).persist.is_empty()) {
+                for m in 1..=4 {
+                    assert_eq!(
+                        nv.load(&p, id, m),
+                        p.default_for(id, m),
+                        "{name}/{}: the EEPROM keeps {} {} for motor {m}",
+                        c.id(),
+                        p.param(id).name,
+                        nv.load(&p, id, m)
+                    );
+                }
+            }
         }
     }
 }

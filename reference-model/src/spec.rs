@@ -497,6 +497,76 @@ pub struct Profile {
     pub(crate) slots: usize,
 }
 
+/// The largest magnitude a parameter value, range or argument may have in a spec file, so
+/// that the model's arithmetic on values can never overflow.
+pub const MAX_VALUE: i64 = 1 << 40;
+
+/// Checks that framing and hand constants lie where the model's arithmetic and buffers are
+/// safe. A spec file is input: out-of-bounds constants are an error, never a panic later.
+fn check_bounds(framing: &Framing, hand: &Hand) -> Result<(), String> {
+    let status_ok = |name: &str, v: u32| {
+        StatusBits::from_bits(v).map(|_| ()).ok_or_else(|| format!("{name} = {v} is not a combination of status bits"))
+    };
+    if !(1..=4096).contains(&framing.max_line) {
+        return Err(format!("framing.max_line = {} must be 1..=4096", framing.max_line));
+    }
+    if framing.line_ending.len() > 16 || framing.prompt.len() > 16 {
+        return Err("framing.line_ending and framing.prompt must be at most 16 bytes".into());
+    }
+    if framing.terminator == framing.abort {
+        return Err("framing.terminator and framing.abort must differ".into());
+    }
+    status_ok("framing.overlong_status", framing.overlong_status)?;
+    for (name, v) in [
+        ("hand.abort_status", hand.abort_status),
+        ("hand.terminate_uninitialized_status", hand.terminate_uninitialized_status),
+        ("hand.uninitialized_status", hand.uninitialized_status),
+        ("hand.overtemp_status", hand.overtemp_status),
+        ("hand.missed_position_status", hand.missed_position_status),
+        ("hand.bad_header_status", hand.bad_header_status),
+    ] {
+        status_ok(name, v)?;
+    }
+    let counts = |name: &str, v: i64| {
+        if (0..=65535).contains(&v) { Ok(()) } else { Err(format!("{name} = {v} must be 0..=65535")) }
+    };
+    counts("hand.finger_limit", hand.finger_limit)?;
+    counts("hand.spread_limit", hand.spread_limit)?;
+    counts("hand.object_compliance", hand.object_compliance)?;
+    counts("hand.uninitialized_state_value", hand.uninitialized_state_value)?;
+    for (name, v) in
+        [("hand.finger_close_target", hand.finger_close_target), ("hand.spread_close_target", hand.spread_close_target)]
+    {
+        if let Some(v) = v {
+            counts(name, v)?;
+        }
+    }
+    if !(0..=255).contains(&hand.free_strain) {
+        return Err(format!("hand.free_strain = {} must be 0..=255", hand.free_strain));
+    }
+    for (name, v) in [
+        ("hand.counts_per_ms_per_velocity_unit", hand.counts_per_ms_per_velocity_unit),
+        ("hand.velocity_units_per_ms_per_accel", hand.velocity_units_per_ms_per_accel),
+        ("hand.rt_velocity_counts_per_ms", hand.rt_velocity_counts_per_ms),
+        ("hand.lfv_counts_per_ms", hand.lfv_counts_per_ms),
+        ("hand.strain_per_count", hand.strain_per_count),
+    ] {
+        if !(v.is_finite() && v > 0.0 && v <= 10_000.0) {
+            return Err(format!("{name} = {v} must be a number in (0, 10000]"));
+        }
+    }
+    if hand.lcv_fraction_bits > 15 {
+        return Err(format!("hand.lcv_fraction_bits = {} must be 0..=15", hand.lcv_fraction_bits));
+    }
+    if hand.hi_settle_ms > 60_000 {
+        return Err(format!("hand.hi_settle_ms = {} must be at most 60000", hand.hi_settle_ms));
+    }
+    if hand.lft_size > 2 {
+        return Err(format!("hand.lft_size = {} must be 0, 1 or 2", hand.lft_size));
+    }
+    Ok(())
+}
+
 fn parse_file(name: &str, text: &str) -> Result<SpecFile, SpecError> {
     toml::from_str(text).map_err(|e| SpecError::Syntax { file: name.to_string(), message: e.to_string() })
 }
@@ -610,6 +680,7 @@ impl Profile {
         let hand = f.hand.ok_or_else(|| invalid("no [hand]".into()))?;
         let banner = f.banner.ok_or_else(|| invalid("no `banner`".into()))?;
         let version = f.version.ok_or_else(|| invalid("no `version`".into()))?;
+        check_bounds(&framing, &hand).map_err(&invalid)?;
         if f.prefixes.is_empty() {
             return Err(invalid("no [[prefixes]]".into()));
         }
@@ -636,6 +707,9 @@ impl Profile {
             if c.args == ArgRule::OptionalInteger && (c.arg_min.is_none() || c.arg_max.is_none()) {
                 return Err(invalid(format!("command `{}` needs arg_min and arg_max", c.name)));
             }
+            if c.arg_min.into_iter().chain(c.arg_max).any(|v| v.abs() > MAX_VALUE) {
+                return Err(invalid(format!("command `{}`: arguments beyond ±{MAX_VALUE}", c.name)));
+            }
         }
         let mut seen = std::collections::HashSet::new();
         for p in &f.params {
@@ -646,6 +720,17 @@ impl Profile {
             }
             if p.min > p.max {
                 return Err(invalid(format!("parameter `{}` has min > max", p.name)));
+            }
+            let extremes = [p.min, p.max].into_iter().chain(p.values.iter().flatten().copied());
+            if extremes.chain(p.default).chain(p.default_spread).any(|v| v.abs() > MAX_VALUE) {
+                return Err(invalid(format!("parameter `{}`: values beyond ±{MAX_VALUE}", p.name)));
+            }
+            let in_range = |v: i64| match &p.values {
+                Some(vs) => vs.contains(&v),
+                None => (p.min..=p.max).contains(&v),
+            };
+            if let Some(d) = p.default.into_iter().chain(p.default_spread).find(|d| !in_range(*d)) {
+                return Err(invalid(format!("parameter `{}`: default {d} is outside its range", p.name)));
             }
             if !p.live && !p.read_only && p.alias_of.is_none() && p.default.is_none() {
                 return Err(invalid(format!("writable parameter `{}` has no default", p.name)));

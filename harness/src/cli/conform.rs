@@ -19,7 +19,7 @@ use crate::transcript::{Level, Requirement};
 /// Arguments shared by `gcl conform` and `gcl certify`.
 #[derive(Debug, clap::Args)]
 pub struct SuiteArgs {
-    /// The hand: sim[:PROFILE], serial:PATH[?baud=N], tcp://HOST:PORT or exec:COMMAND ARGS.
+    /// The hand: `sim[:PROFILE]`, `serial:PATH[?baud=N]`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     #[arg(long, value_name = "TARGET")]
     pub target: Target,
     /// The profile whose suite runs (default: the sim target's profile, else bh8-262).
@@ -31,8 +31,8 @@ pub struct SuiteArgs {
     /// Skip cases whose id matches (a glob; repeatable).
     #[arg(long, value_name = "GLOB")]
     pub skip: Vec<String>,
-    /// A TOML file of known failures ([[failure]] case = "glob", reason = "...", optional
-    /// profile). Listed cases that fail are XFAIL; listed cases that pass are XPASS and fail the run.
+    /// A TOML file of known failures (`[[failure]]` tables with `case = "glob"`,
+    /// `reason = "..."`, optional `profile`). Listed cases that fail are XFAIL; listed cases that pass are XPASS and fail the run.
     #[arg(long, value_name = "FILE")]
     pub known_failures: Option<PathBuf>,
     /// Per-step deadline in milliseconds for steps that do not set their own.

@@ -21,7 +21,7 @@ use crate::transcript::{Level, is_slug};
 and transcript header keys (`id:`, `title:`, `clause:`, `level:`, `profile:`, `requires:`, `note:`).\n\n\
 Example:\n  gcl record --target sim:seed --script my-case.script --out my-case.gcl")]
 pub struct Args {
-    /// The hand: sim[:PROFILE], serial:PATH[?baud=N], tcp://HOST:PORT or exec:COMMAND ARGS.
+    /// The hand: `sim`, `sim:PROFILE`, `serial:PATH?baud=N`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     #[arg(long)]
     target: String,
     /// The script to run.

@@ -21,7 +21,7 @@ pub struct Args {
     /// Transcript files to replay, in order.
     #[arg(required = true, value_name = "FILE")]
     files: Vec<PathBuf>,
-    /// The hand: sim[:PROFILE], serial:PATH[?baud=N], tcp://HOST:PORT or exec:COMMAND ARGS.
+    /// The hand: `sim`, `sim:PROFILE`, `serial:PATH?baud=N`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     /// A bare `sim` runs the transcript's first profile.
     #[arg(long, default_value = "sim")]
     target: String,

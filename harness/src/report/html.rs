@@ -50,7 +50,7 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
         "<table><tr><th>target</th><td>{}</td></tr><tr><th>profile</th><td>{}</td></tr>\
 <tr><th>level</th><td>{}</td></tr><tr><th>started</th><td>{}</td></tr><tr><th>duration</th><td>{:.1} ms</td></tr>\
 <tr><th>suite</th><td><code>{}</code></td></tr><tr><th>tool</th><td>{}</td></tr>\
-<tr><th>liveness</th><td>before: {}, after: {}</td></tr></table>\n",
+<tr><th>liveness</th><td>before: {}, after: {}</td></tr></table>",
         esc(&r.target),
         esc(&r.profile),
         esc(&r.level),
@@ -61,13 +61,15 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
         r.liveness.before,
         r.liveness.after
     );
+    h.push('\n');
     if let Some(w) = &r.wire {
         let _ = write!(
             h,
             "<p>Wire time: {} bytes sent, {} received at {} baud; lower bound {:.0} ms (motion {:.0} ms), \
-took {:.0} ms, ratio {:.2}.</p>\n",
+took {:.0} ms, ratio {:.2}.</p>",
             w.bytes_sent, w.bytes_received, w.baud, w.lower_bound_ms, w.motion_ms, w.actual_ms, w.ratio
         );
+        h.push('\n');
     }
     h.push_str("<h2>Summary</h2>\n<table><tr>");
     for v in Verdict::ALL {

@@ -13,7 +13,7 @@ use gcl_model::{DeviceConfig, Profile};
 use crate::SimLink;
 use crate::transcript::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use crate::transcript::script::{Action, ScriptStep};
-use crate::transcript::{Expect, FieldSpec, Form, Header, Level, Piece, Requirement, Send, Step, Transcript};
+use crate::transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
 /// An inclusive range of values.
 pub(crate) type Range = (i64, i64);
@@ -485,8 +485,8 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
         }
         let send = match &plan.step.action {
             Action::Wait => None,
-            Action::Bytes { form, .. } => Some(Send { bytes: c.sent.clone(), form: *form }),
-            _ => Some(Send::text(c.sent.clone())),
+            Action::Bytes { form, .. } => Some(HostBytes { bytes: c.sent.clone(), form: *form }),
+            _ => Some(HostBytes::text(c.sent.clone())),
         };
         let mut within = suggest_within(profile, &plan.step.action, &c.sent, c.took, c.output.len());
         if let Some(f) = plan.within_floor {

@@ -713,28 +713,29 @@ impl Gen {
         self.add(k);
     }
 
-    fn param_level(&self, mut k: CaseB, x: &ParamSpec) -> CaseB {
+    /// The source clause of a parameter case, and the decisions that govern it: those about
+    /// defaults only for the default case.
+    fn param_level(&self, mut k: CaseB, x: &ParamSpec, default_case: bool) -> CaseB {
         let label = src_label(&self.p);
         k = k.src(&format!("Parameter {}", x.name));
-        match (label, x.name.as_str()) {
-            ("seed", "S") => k.decision("seed-s-values"),
-            ("seed", "BAUD") => k.decision("seed-baud"),
-            ("seed", "SGFLIP") => k.decision("seed-sgflip-spread"),
-            ("manual", "S") => k.decision("bh8-s-before-hi"),
-            ("manual", "SGFLIP") => k.decision("bh8-sgflip-default"),
-            ("manual", "MSG" | "HSG") => k.decision("bh8-msg-alias"),
-            ("manual", "LCT" | "LFBP" | "LFAIN") => k.decision("bh8-new-rt-fields-defaults"),
-            ("manual", "OD" | "UPSECS" | "PTEMP" | "SN") => k.decision("bh8-self-stored"),
-            ("manual", "BP") => k.decision("bh8-bp-range"),
-            ("manual", "SAMPLE") => k.decision("bh8-sample-fixed"),
-            _ => k.level(Level::Must),
+        match (label, x.name.as_str(), default_case) {
+            ("seed", "S", _) => k.decision("seed-s-values"),
+            ("seed", "BAUD", _) => k.decision("seed-baud"),
+            ("seed", "SGFLIP", true) => k.decision("seed-sgflip-spread"),
+            ("manual", "S", _) => k.decision("bh8-s-before-hi"),
+            ("manual", "SGFLIP", true) => k.decision("bh8-sgflip-default"),
+            ("manual", "MSG" | "HSG", _) => k.decision("bh8-msg-alias"),
+            ("manual", "LCT" | "LFBP" | "LFAIN", _) => k.decision("bh8-new-rt-fields-defaults"),
+            ("manual", "OD" | "UPSECS" | "PTEMP" | "SN", _) => k.decision("bh8-self-stored"),
+            ("manual", "BP", _) => k.decision("bh8-bp-range"),
+            _ => k,
         }
     }
 
     fn param_default(&mut self, x: &ParamSpec) {
         let what = if x.live { "reads" } else { "reads its factory default" };
         let k = self.case(format!("param-{}-default", slug(&x.name)), format!("{} {what}", x.name));
-        let k = self.param_level(k, x).preamble(false).get("", &[&x.name], None);
+        let k = self.param_level(k, x, true).preamble(false).get("", &[&x.name], None);
         self.add(k);
     }
 
@@ -751,7 +752,7 @@ impl Gen {
             format!("param-{}-set", slug(&x.name)),
             format!("{} takes values in its range and reads them back", x.name),
         );
-        let mut k = self.param_level(k, x).src(&format!("Command {setter}")).preamble(false);
+        let mut k = self.param_level(k, x, false).src(&format!("Command {setter}")).preamble(false);
         for v in values {
             k = k.line(&format!("{prefix}{setter} {} {v}", x.name)).get("", &[&x.name], None);
         }
@@ -770,7 +771,7 @@ impl Gen {
             format!("param-{}-range", slug(&x.name)),
             format!("{} out of range gives 128 and changes nothing", x.name),
         );
-        let mut k = self.param_level(k, x).src("Status codes 128").preamble(false);
+        let mut k = self.param_level(k, x, false).src("Status codes 128").preamble(false);
         if src_label(&self.p) == "seed" && x.min == 0 && x.max == 1 {
             k = k.decision("seed-booleans").level(Level::Must);
         }
@@ -792,9 +793,13 @@ impl Gen {
         let code = if writable_through { 256 } else { 64 };
         let k = self.case(
             format!("param-{}-read-only", slug(&x.name)),
-            format!("{setter} {} gives {code}: it is read-only", x.name),
+            if code == 256 {
+                format!("{setter} {} gives 256: it is read-only", x.name)
+            } else {
+                format!("{setter} {} gives 64: {} is read-only and only {getter} knows it", x.name, x.name)
+            },
         );
-        let mut k = self.param_level(k, x).src(&format!("Status codes {code}"));
+        let mut k = self.param_level(k, x, false).src(&format!("Status codes {code}"));
         if !writable_through && src_label(&self.p) == "seed" {
             k = k.decision("seed-temp-global");
         }
@@ -878,8 +883,6 @@ impl Gen {
             .src(&format!("Status codes {mp}"))
             .src("Command M")
             .decision("bh8-missed-position-code")
-            .decision("bh8-position-bounds")
-            .level(Level::Must)
             .preamble(true)
             .line(&format!("SM {}", l4 + 850))
             .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));

@@ -186,22 +186,22 @@ pub enum Form {
 
 /// Bytes the host sends.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct Send {
+pub struct HostBytes {
     /// The bytes.
     pub bytes: Vec<u8>,
     /// How they are written.
     pub form: Form,
 }
 
-impl Send {
+impl HostBytes {
     /// Bytes written as a string.
-    pub fn text(bytes: impl Into<Vec<u8>>) -> Send {
-        Send { bytes: bytes.into(), form: Form::Text }
+    pub fn text(bytes: impl Into<Vec<u8>>) -> HostBytes {
+        HostBytes { bytes: bytes.into(), form: Form::Text }
     }
 
     /// Bytes written in hex.
-    pub fn hex(bytes: impl Into<Vec<u8>>) -> Send {
-        Send { bytes: bytes.into(), form: Form::Hex }
+    pub fn hex(bytes: impl Into<Vec<u8>>) -> HostBytes {
+        HostBytes { bytes: bytes.into(), form: Form::Hex }
     }
 }
 
@@ -418,7 +418,7 @@ pub struct Step {
     /// Time to let pass before sending.
     pub pause: Option<Duration>,
     /// Bytes to send.
-    pub send: Option<Send>,
+    pub send: Option<HostBytes>,
     /// How long the answer may take; [`DEFAULT_STEP_TIMEOUT`] (or a runner's override) when
     /// `None`.
     pub within: Option<Duration>,
@@ -466,6 +466,11 @@ impl Transcript {
             write_step(&mut s, step);
         }
         s
+    }
+
+    /// Every byte the host sends, in order: the transcript's host side as one fuzz input.
+    pub fn host_bytes(&self) -> Vec<u8> {
+        self.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|s| s.bytes.iter().copied()).collect()
     }
 
     /// A copy with every [`Step::line`] set to 0, for comparing a parsed transcript with a

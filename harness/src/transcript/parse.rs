@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use super::{
-    Expect, FieldSpec, Form, Header, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Send, Step,
+    Expect, FieldSpec, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step,
     Transcript, is_slug,
 };
 
@@ -543,7 +543,7 @@ pub fn parse(text: &str) -> Result<Transcript, ParseError> {
                     Form::Text
                 };
                 let bytes = e.exact_bytes().unwrap_or_default();
-                cur.step.send = Some(Send { bytes, form });
+                cur.step.send = Some(HostBytes { bytes, form });
             }
             _ => {
                 start(&mut cur, n, &mut comments);

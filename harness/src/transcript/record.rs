@@ -23,7 +23,7 @@ use gcl_model::spec::CommandKind;
 use gcl_model::{Device, DeviceConfig, Mode, Profile};
 
 use super::script::{Action, Script, ScriptStep};
-use super::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, Piece, Send, Step, Transcript};
+use super::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, HostBytes, Piece, Step, Transcript};
 use crate::link::{Link, LinkError, byte_time};
 
 /// The text every banner contains (decision `bh8-banner-text`, notes: RESET).
@@ -243,8 +243,8 @@ pub fn step_from(step: &ScriptStep, c: &Captured, opts: &RecordOptions) -> Step 
     let eol_prompt: Vec<u8> = [profile.framing.line_ending.as_bytes(), profile.framing.prompt.as_bytes()].concat();
     let send = match &step.action {
         Action::Wait => None,
-        Action::Bytes { form, .. } => Some(Send { bytes: c.sent.clone(), form: *form }),
-        _ => Some(Send::text(c.sent.clone())),
+        Action::Bytes { form, .. } => Some(HostBytes { bytes: c.sent.clone(), form: *form }),
+        _ => Some(HostBytes::text(c.sent.clone())),
     };
     let form = answer_form(c, &eol_prompt);
     let expect = match (opts.elide_banner, banner_expect(&c.output, &eol_prompt)) {

@@ -49,9 +49,9 @@ fn parses_every_element() {
     assert_eq!(t.steps.len(), 6);
     assert_eq!(t.steps[0].line, 13);
     assert_eq!(t.steps[0].comments, vec!["preamble"]);
-    assert_eq!(t.steps[0].send, Some(Send::text(vec![3])));
+    assert_eq!(t.steps[0].send, Some(HostBytes::text(vec![3])));
     assert_eq!(t.steps[1].within, Some(Duration::from_secs(10)));
-    assert_eq!(t.steps[4].send, Some(Send::hex(vec![0x41])));
+    assert_eq!(t.steps[4].send, Some(HostBytes::hex(vec![0x41])));
     let pieces: Vec<&Piece> = t.steps[4].expect.pieces().map(|(_, p)| p).collect();
     assert_eq!(
         pieces,
@@ -224,7 +224,7 @@ fn arb_step() -> impl Strategy<Value = Step> {
             line: 0,
             comments,
             pause,
-            send: send.map(|(bytes, hex)| Send { bytes, form: if hex { Form::Hex } else { Form::Text } }),
+            send: send.map(|(bytes, hex)| HostBytes { bytes, form: if hex { Form::Hex } else { Form::Text } }),
             within,
             expect,
         })
