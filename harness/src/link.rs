@@ -114,14 +114,14 @@ impl SimLink {
     }
 
     fn collect(&mut self) {
-        let out = self.device.take_output();
-        if !out.is_empty() {
-            let t = self.device.now() + byte_time(self.device.baud()) * out.len() as u32;
+        let before = self.pending.len();
+        self.device.drain_output(&mut self.pending);
+        let n = self.pending.len() - before;
+        if n > 0 {
+            let t = self.device.now() + byte_time(self.device.baud()) * n as u32;
             self.device.handle_timeout(t);
-            self.pending.extend_from_slice(&out);
             // Output produced while the wire was busy (nothing in practice) joins it.
-            let more = self.device.take_output();
-            self.pending.extend_from_slice(&more);
+            self.device.drain_output(&mut self.pending);
         }
     }
 }

@@ -104,7 +104,8 @@ struct LoopState {
     feedback: Vec<i64>,
 }
 
-const TICK_US: u64 = 1000;
+/// One physics tick, in nanoseconds.
+const TICK_NS: u64 = 1_000_000;
 
 /// A whole simulated grasper.
 #[derive(Debug, Clone)]
@@ -122,9 +123,14 @@ pub struct Device {
     queue: VecDeque<u8>,
     task: Option<Task>,
     rt: Option<Box<LoopState>>,
+    /// Per-motor physics inputs, refreshed when a command or loop starts.
+    limits: [physics::StepLimits; 4],
     out: Vec<u8>,
-    now_us: u64,
-    next_tick_us: u64,
+    /// Simulated time since power-up, ns.
+    now_ns: u64,
+    next_tick_ns: u64,
+    /// Powered milliseconds in the EEPROM at power-up (UPSECS counts on from there).
+    powered_at_boot_ms: u64,
     heat: f64,
     last_status: StatusBits,
     eol: Vec<u8>,
@@ -217,6 +223,7 @@ impl Device {
     /// Powers up a hand: it prints its banner and a prompt.
     pub fn new(profile: Arc<Profile>, config: DeviceConfig) -> Device {
         let mut nv = config.nv;
+        let powered_at_boot_ms = nv.powered_ms;
         let params = ParamStore::power_up(&profile, &mut nv);
         let has = |f: Fault| config.faults.contains(&f);
         let eol = if has(Fault::CrLf) { b"\r\n".to_vec() } else { profile.framing.line_ending.as_bytes().to_vec() };
@@ -241,9 +248,11 @@ impl Device {
             queue: VecDeque::new(),
             task: None,
             rt: None,
+            limits: [physics::StepLimits::default(); 4],
             out: Vec::with_capacity(256),
-            now_us: 0,
-            next_tick_us: TICK_US,
+            now_ns: 0,
+            next_tick_ns: TICK_NS,
+            powered_at_boot_ms,
             heat: 0.0,
             last_status: StatusBits::empty(),
             eol,
@@ -286,15 +295,15 @@ impl Device {
     /// When the hand next needs [`Device::handle_timeout`] to make progress on its own (a
     /// running command), or `None` when it only waits for input.
     pub fn poll_timeout(&self) -> Option<Duration> {
-        (self.mode == Mode::Busy).then(|| Duration::from_micros(self.next_tick_us.max(self.now_us)))
+        (self.mode == Mode::Busy).then(|| Duration::from_nanos(self.next_tick_ns.max(self.now_ns)))
     }
 
     /// Runs a supervisory command in progress to completion, as fast as possible, and returns
     /// the time it completed. `limit` bounds the simulated time spent.
     pub fn run_until_idle(&mut self, limit: Duration) -> Duration {
-        let end = self.now_us.saturating_add(limit.as_micros() as u64);
+        let end = self.now_ns.saturating_add(limit.as_nanos().min(u128::from(u64::MAX)) as u64);
         while let Some(t) = self.poll_timeout() {
-            if t.as_micros() as u64 > end {
+            if t.as_nanos() as u64 > end {
                 break;
             }
             self.advance(t);
@@ -305,6 +314,13 @@ impl Device {
     /// Bytes written since the last call.
     pub fn take_output(&mut self) -> Vec<u8> {
         std::mem::take(&mut self.out)
+    }
+
+    /// Appends the bytes written since the last call to `into`, keeping the hand's own buffer
+    /// (no allocation in a steady exchange).
+    pub fn drain_output(&mut self, into: &mut Vec<u8>) {
+        into.extend_from_slice(&self.out);
+        self.out.clear();
     }
 
     /// Bytes written and not yet taken.
@@ -319,7 +335,7 @@ impl Device {
 
     /// The simulated time the hand has reached.
     pub fn now(&self) -> Duration {
-        Duration::from_micros(self.now_us)
+        Duration::from_nanos(self.now_ns)
     }
 
     /// What the hand is doing.
@@ -375,27 +391,28 @@ impl Device {
     /// Changes the world around the hand (objects, temperature) from now on.
     pub fn set_scenario(&mut self, scenario: Scenario) {
         self.scenario = scenario;
+        self.refresh_limits();
     }
 
     // ------------------------------------------------------------------ time
 
     fn advance(&mut self, now: Duration) {
-        let now_us = now.as_micros().min(u128::from(u64::MAX)) as u64;
-        if now_us <= self.now_us {
+        let now_ns = now.as_nanos().min(u128::from(u64::MAX)) as u64;
+        if now_ns <= self.now_ns {
             return;
         }
-        let elapsed_ms = (now_us - self.now_us) / 1000;
-        self.nv.powered_ms = self.nv.powered_ms.saturating_add((now_us - self.now_us) / 1000);
+        let elapsed_ms = (now_ns - self.now_ns) / 1_000_000;
+        self.nv.powered_ms = self.powered_at_boot_ms.saturating_add(now_ns / 1_000_000);
         let active = self.mode == Mode::Busy || (self.mode == Mode::Loop && self.loop_moving());
         if !active {
             self.heat = (self.heat - 0.0002 * elapsed_ms as f64).max(0.0);
-            self.now_us = now_us;
-            self.next_tick_us = now_us + TICK_US;
+            self.now_ns = now_ns;
+            self.next_tick_ns = now_ns + TICK_NS;
             return;
         }
-        while self.next_tick_us <= now_us {
-            self.now_us = self.next_tick_us;
-            self.next_tick_us += TICK_US;
+        while self.next_tick_ns <= now_ns {
+            self.now_ns = self.next_tick_ns;
+            self.next_tick_ns += TICK_NS;
             let moved = self.tick();
             if self.mode == Mode::Loop && moved == 0 {
                 // Every loop motor is still (pinned at a stop, or commanded to 0): nothing
@@ -410,10 +427,10 @@ impl Device {
                 }
             }
         }
-        if self.now_us < now_us {
-            self.now_us = now_us;
-            if self.next_tick_us <= now_us {
-                self.next_tick_us = now_us + TICK_US;
+        if self.now_ns < now_ns {
+            self.now_ns = now_ns;
+            if self.next_tick_ns <= now_ns {
+                self.next_tick_ns = now_ns + TICK_NS;
             }
         }
     }
@@ -422,41 +439,43 @@ impl Device {
         self.motors.iter().any(|m| m.rt_velocity != 0.0 || m.velocity != 0.0)
     }
 
+    /// What one motor's physics needs from the parameters and the world. Parameters cannot
+    /// change while a command runs or a loop is open, so this is computed when one starts.
+    fn step_limits(&self, m: u8) -> physics::StepLimits {
+        let profile = &self.profile;
+        let hand = &profile.hand;
+        let i = (m - 1) as usize;
+        let vel_unit = hand.counts_per_ms_per_velocity_unit;
+        let (mcv, mov) = (self.get(self.ids.mcv, m) as f64 * vel_unit, self.get(self.ids.mov, m) as f64 * vel_unit);
+        physics::StepLimits {
+            limit: self.limit(m),
+            object: self.scenario.objects[i].map(|o| (o, hand.object_compliance)),
+            accel: self.accel(m),
+            close_speed: mcv,
+            open_speed: mov,
+            init_speed: self.ids.ivel.map_or(mov, |id| self.params.get(profile, id, m) as f64 * vel_unit),
+            tstop_ms: self.get(self.ids.tstop, m).clamp(0, i64::from(u32::MAX)) as u32,
+            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.params.get(profile, id, m).max(1) as u64),
+            free_strain: hand.free_strain,
+            strain_per_count: hand.strain_per_count,
+            high_strain: self.get(self.ids.hsg, m),
+            low_strain: self.ids.lsg.map_or(256, |id| self.params.get(profile, id, m)),
+            breakaway: self.get(self.ids.bs, m) != 0,
+        }
+    }
+
+    fn refresh_limits(&mut self) {
+        self.limits = std::array::from_fn(|i| self.step_limits((i + 1) as u8));
+    }
+
     /// One millisecond of physics. Returns how many motors moved.
     fn tick(&mut self) -> u32 {
-        let profile = self.profile.clone();
-        let hand = &profile.hand;
         let mut moving = 0;
         for i in 0..4 {
             let m = (i + 1) as u8;
-            let limit = self.limit(m);
-            let object = self.scenario.objects[i].map(|o| (o, hand.object_compliance));
-            let accel = self.accel(m);
-            let vel_unit = hand.counts_per_ms_per_velocity_unit;
-            let (mcv, mov) = (self.get(self.ids.mcv, m) as f64 * vel_unit, self.get(self.ids.mov, m) as f64 * vel_unit);
-            let ivel = self.ids.ivel.map_or(mov, |id| self.params.get(&profile, id, m) as f64 * vel_unit);
-            let tstop = self.get(self.ids.tstop, m).max(0) as u32;
-            let (hsg, lsg) =
-                (self.get(self.ids.hsg, m), self.ids.lsg.map_or(256, |id| self.params.get(&profile, id, m)));
-            let bs = self.get(self.ids.bs, m) != 0;
             let before = self.motors[i].pos;
             let motor = &mut self.motors[i];
-            let term = motor.step(physics::StepLimits {
-                limit,
-                object,
-                accel,
-                close_speed: mcv,
-                open_speed: mov,
-                init_speed: ivel,
-                tstop_ms: tstop,
-                settle_ms: hand.hi_settle_ms
-                    * self.ids.ihit.map_or(1, |id| self.params.get(&profile, id, m).max(1) as u64),
-                free_strain: hand.free_strain,
-                strain_per_count: hand.strain_per_count,
-                high_strain: hsg,
-                low_strain: lsg,
-                breakaway: bs,
-            });
+            let term = motor.step(self.limits[i]);
             let moved = (motor.pos - before).abs();
             if moved > 0.0 {
                 moving += 1;
@@ -1015,7 +1034,8 @@ impl Device {
             ),
         });
         self.mode = Mode::Busy;
-        self.next_tick_us = self.now_us + TICK_US;
+        self.refresh_limits();
+        self.next_tick_ns = self.now_ns + TICK_NS;
     }
 
     fn abort_task(&mut self) {
@@ -1088,6 +1108,7 @@ impl Device {
             feedback: vec![0; n_feedback],
         }));
         self.mode = Mode::Loop;
+        self.refresh_limits();
     }
 
     fn loop_byte(&mut self, b: u8) {
@@ -1095,14 +1116,12 @@ impl Device {
             self.mode = Mode::Idle;
             return self.line_byte(b);
         };
-        if let Some(h) = rt.pending {
+        if rt.pending.is_some() {
+            // `data` holds the header byte, then the control data so far.
             rt.data.push(b);
-            if rt.data.len() + 1 >= rt.layout.control.size {
-                let mut block = Vec::with_capacity(rt.layout.control.size);
-                block.push(h.byte());
-                block.extend_from_slice(&rt.data);
-                let LoopState { layout, values, .. } = &mut *rt;
-                if layout.control.decode_into(&block, values).is_ok() {
+            if rt.data.len() >= rt.layout.control.size {
+                let LoopState { layout, values, data, .. } = &mut *rt;
+                if layout.control.decode_into(data, values).is_ok() {
                     self.apply_control(&rt);
                 }
                 rt.pending = None;
@@ -1125,6 +1144,8 @@ impl Device {
                 }
                 if h.has_data() && rt.layout.control.size > 1 {
                     rt.pending = Some(h);
+                    rt.data.clear();
+                    rt.data.push(h.byte());
                 }
                 self.rt = Some(rt);
             }

@@ -44,7 +44,7 @@ pub(super) enum Termination {
 }
 
 /// The per-tick inputs a motor needs from its parameters and the world.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(super) struct StepLimits {
     pub limit: i64,
     pub object: Option<(i64, i64)>,
