@@ -39,7 +39,15 @@ pub struct Args {
 /// Opens a target for a transcript of `profile` (used when the target is a bare `sim`).
 pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Result<Box<dyn crate::Link>> {
     let opts = crate::target::OpenOptions { profile: profile.map(str::to_string), ..Default::default() };
-    crate::target::open(target, &opts).with_context(|| format!("opening {target}"))
+    let mut link = crate::target::open(target, &opts).with_context(|| format!("opening {target}"))?;
+    if matches!(target, Target::Exec { .. }) {
+        // A freshly started process prints its power-up banner when it is ready, which may be
+        // well after the first quiet period a transcript's drain allows: wait for it here.
+        let mut junk = Vec::new();
+        link.recv(&mut junk, Duration::from_secs(5))?;
+        crate::transcript::record::drain(link.as_mut(), Duration::from_millis(100), Duration::from_secs(5))?;
+    }
+    Ok(link)
 }
 
 /// Runs `gcl replay`.

@@ -1,0 +1,74 @@
+//! `report.json` is what CI systems read: every report `gcl conform` writes must validate
+//! against the schema committed in `reports/report.schema.json`, failures and all.
+
+use std::str::FromStr;
+
+use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::report::{self, Verdict};
+use gcl_harness::suite;
+use gcl_harness::target::{OpenOptions, Target};
+use gcl_model::{Fault, Profile};
+
+fn validator() -> jsonschema::Validator {
+    let schema: serde_json::Value = serde_json::from_str(report::SCHEMA).unwrap();
+    jsonschema::validator_for(&schema).unwrap()
+}
+
+#[test]
+fn reports_with_every_kind_of_verdict_validate_against_the_schema() {
+    let p = Profile::builtin("bh8-262-4.4").unwrap();
+    let cases = suite::generate(&p).unwrap();
+    let opts = ConformOptions {
+        target: Target::Sim { profile: None },
+        open: OpenOptions { faults: vec![Fault::from_str("fget-reversed").unwrap()], ..Default::default() },
+        profile: p,
+        level: LevelFilter::Should,
+        only: vec![],
+        skip: vec!["rt-*".into()],
+        known: KnownFailures::parse("[[failure]]\ncase = \"cmd-fget\"\nreason = \"r\"\n").unwrap(),
+        step_timeout: None,
+        refuse: vec![],
+        baud: Some(38400),
+        keep_transcripts: false,
+    };
+    let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
+    for v in [Verdict::Pass, Verdict::Fail, Verdict::Skip, Verdict::Xfail] {
+        assert!(r.summary[&v] > 0, "the sample run has a {v}");
+    }
+    assert!(r.wire.is_some());
+    let json = serde_json::to_value(&r).unwrap();
+    let v = validator();
+    let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{e} at {}", e.instance_path())).collect();
+    assert!(errors.is_empty(), "{errors:#?}");
+}
+
+#[test]
+fn the_schema_rejects_what_it_should() {
+    let v = validator();
+    let good = serde_json::to_value(sample_case()).unwrap();
+    let mut bad = good.clone();
+    bad["verdict"] = "MAYBE".into();
+    let report = |case: serde_json::Value| {
+        serde_json::json!({
+            "format": 1, "tool": "gcl", "target": "sim", "profile": "seed", "level": "all",
+            "started": "2026-11-22T00:00:00Z", "duration_ms": 1.0, "suite_hash": "0".repeat(64),
+            "liveness": {"before": true, "after": true}, "summary": {"PASS": 1}, "clauses": [], "cases": [case]
+        })
+    };
+    assert!(v.is_valid(&report(good)));
+    assert!(!v.is_valid(&report(bad)), "an unknown verdict is refused");
+}
+
+fn sample_case() -> report::CaseResult {
+    report::CaseResult {
+        id: "framing-echo".into(),
+        title: "t".into(),
+        clauses: vec!["decision:framing-echo".into()],
+        level: "MUST".into(),
+        verdict: Verdict::Pass,
+        duration_ms: 0.1,
+        message: None,
+        diff: None,
+        transcript: None,
+    }
+}
