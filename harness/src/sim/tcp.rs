@@ -16,6 +16,10 @@ use nix::poll::{PollFd, PollFlags};
 use super::wait::{IN, ready, wait};
 use super::{Engine, SimError};
 
+/// How long a new connection waits for the active client's end before it is refused: a
+/// client that closes and reconnects at once must not be turned away.
+const RECONNECT_GRACE: std::time::Duration = std::time::Duration::from_millis(100);
+
 /// A bound listener.
 #[derive(Debug)]
 pub struct TcpServer {
@@ -86,8 +90,15 @@ impl TcpServer {
                 loop {
                     match self.listener.accept() {
                         Ok((s, peer)) => {
-                            // A client accepted in this same round may already have ended.
+                            // A client accepted in this same round may already have ended, and
+                            // one that closed just before this connection may not have been
+                            // seen to end yet (a busy machine): give its end a moment to land.
                             read_client(&mut client, engine, &mut buf);
+                            if let Some((active, _)) = &client {
+                                let mut fds = [PollFd::new(active.as_fd(), IN)];
+                                let _ = wait(&mut fds, Some(Instant::now() + RECONNECT_GRACE));
+                                read_client(&mut client, engine, &mut buf);
+                            }
                             if client.is_some() {
                                 engine.note(&format!("refused {peer}: another client is connected"));
                                 let _ = s.shutdown(Shutdown::Both);
