@@ -26,6 +26,7 @@ pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
     g.motion();
     g.realtime();
     g.examples();
+    g.firmware();
     g.out
 }
 
@@ -588,17 +589,21 @@ impl Gen {
             | CommandKind::GlobalList
             | CommandKind::GlobalListAll => {
                 let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-names-format") };
-                k.preamble(false).line(&n)
+                self.listing_order(k, c.kind).preamble(false).line(&n)
             }
             CommandKind::MotorListValues
             | CommandKind::MotorListAllValues
             | CommandKind::GlobalListValues
             | CommandKind::GlobalListAllValues => {
                 let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-values-format") };
-                k.preamble(false).line_shaped(&n, Shape::ListValues)
+                self.listing_order(k, c.kind).preamble(false).line_shaped(&n, Shape::ListValues)
             }
             CommandKind::Reset => {
-                let k = if label == "seed" { k.decision("seed-reset-output") } else { k.decision("bh8-reset") };
+                let k = if label == "seed" {
+                    k.decision("seed-reset-output")
+                } else {
+                    k.decision("bh8-reset").decision("bh8-banner-text")
+                };
                 k.preamble(true).line_shaped(&n, Shape::Banner).get("", &["S"], None).line("C")
             }
             CommandKind::ErrorText => {
@@ -618,6 +623,19 @@ impl Gen {
             _ => return,
         };
         self.add(k);
+    }
+
+    /// A listing prints its parameters in the profile's listing order; the order of the
+    /// parameters new in firmware 4.4x concerns the motor listings only.
+    fn listing_order(&self, k: CaseB, kind: CommandKind) -> CaseB {
+        let k = k.decision("bh8-listing-order");
+        match kind {
+            CommandKind::MotorList
+            | CommandKind::MotorListAll
+            | CommandKind::MotorListValues
+            | CommandKind::MotorListAllValues => k.decision("bh8-44-listing-order"),
+            _ => k,
+        }
     }
 
     // ------------------------------------------------------------------ parameters
@@ -711,6 +729,48 @@ impl Gen {
             .line("M 3000")
             .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
         self.add(k);
+
+        if self.p.decisions.iter().any(|d| d.id == "bh8-spread-defaults") {
+            let k = self
+                .case(
+                    "param-spread-finger-defaults",
+                    "Where the manual gives the spread no default (BDAT, BS), the spread starts at the finger default and can be set",
+                )
+                .src("Parameter BDAT")
+                .src("Parameter BS")
+                .decision("bh8-spread-defaults")
+                .preamble(false)
+                .get("", &["BDAT", "BS"], None)
+                .line("SFSET BDAT 1000 BS 1")
+                .get("", &["BDAT", "BS"], None)
+                .line("SFDEF")
+                .get("S", &["BDAT", "BS"], None);
+            self.add(k);
+        }
+
+        if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
+            let new = ["LCT", "LFBP", "LFAIN"];
+            let known = new.iter().all(|n| self.has_param(n));
+            let title = if known {
+                "Firmware 4.4x knows LCT, LFBP and LFAIN; each defaults to 0 on every motor"
+            } else {
+                "Firmware 4.3x does not know LCT, LFBP or LFAIN: FGET and FSET of them give 64"
+            };
+            let k = self
+                .case("param-44-rt-flags", title)
+                .src("Command FGET")
+                .src("Command FSET")
+                .decision("bh8-new-rt-fields-defaults")
+                .decision("bh8-43-no-44-params")
+                .preamble(false)
+                .get("", &new, None)
+                .line("FSET LCT 0 LFBP 0 LFAIN 0")
+                .get("", &["LCT"], None)
+                .get("", &["LFBP"], None)
+                .get("", &["LFAIN"], None)
+                .line("FGET DP");
+            self.add(k);
+        }
     }
 
     /// The source clause of a parameter case, and the decisions that govern it: those about
@@ -853,6 +913,26 @@ impl Gen {
                 k = k.line(l);
             }
             self.add(k.line("FGET DP"));
+        }
+
+        // A status the profile defines but never sends: only ERR shows it.
+        for s in self.p.status.clone().iter().filter(|s| !s.sent) {
+            let id = format!("seed-status-{}", s.bit);
+            if !self.p.decisions.iter().any(|d| d.id == id) {
+                continue;
+            }
+            let k = self
+                .case(
+                    format!("status-{}-text-only", s.bit),
+                    format!("ERR {} prints `{}: {}`; no command ever sends {}", s.bit, s.bit, s.text, s.bit),
+                )
+                .src(&format!("Status codes {}", s.bit))
+                .src("Command ERR")
+                .decision(&id)
+                .preamble(false)
+                .line(&format!("ERR {}", s.bit))
+                .line("FGET DP");
+            self.add(k);
         }
 
         let combos: [(&str, &[&str]); 4] = [
@@ -1169,6 +1249,62 @@ impl Gen {
                 .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));
             self.add(k);
         }
+
+        // A stall at the spread's joint stop leaves an error of exactly the overshoot: equal
+        // to MPE is success, one count more is a missed position.
+        let (l4, mpe4) = (self.limit(4), self.mpe(4));
+        let mp = self.code(self.p.hand.missed_position_status);
+        let rest = [(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - mpe4, l4)];
+        let k = self
+            .case(
+                "motion-mpe-boundary",
+                format!("A move whose final error equals MPE succeeds; one count more gives {mp}"),
+            )
+            .src("Command M")
+            .src("Parameter MPE")
+            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-mpe-boundary" })
+            .note(format!(
+                "The spread stalls at its joint stop ({l4}): SM {} leaves an error of MPE ({mpe4}), SM {} one more.",
+                l4 + mpe4,
+                l4 + mpe4 + 1
+            ))
+            .preamble(true)
+            .line(&format!("SM {}", l4 + mpe4))
+            .get("", &["P"], Some(rest))
+            .line(&format!("SM {}", l4 + mpe4 + 1))
+            .get("", &["P"], Some(rest));
+        self.add(k);
+
+        // HI drives each motor open at its init velocity (IVEL, else MOV); where that can be 0,
+        // a motor away from its open stop cannot reach it and HI fails for it.
+        let hi_stall =
+            ["seed-hi-stall", "bh8-hi-stall"].into_iter().find(|d| self.p.decisions.iter().any(|x| x.id == *d));
+        let init = if self.has_param("IVEL") { "IVEL" } else { "MOV" };
+        if let (Some(d), Some(x)) = (hi_stall, self.param(init))
+            && x.min == 0
+        {
+            let s_bad = self.p.hand.uninitialized_state_value;
+            let u = self.code(self.p.hand.uninitialized_status);
+            let k = self
+                .case(
+                    "motion-hi-stall",
+                    format!(
+                        "A motor HI cannot open ({init} 0) stays uninitialised: S reads {s_bad}, motion on it gives {u}"
+                    ),
+                )
+                .src("Command HI")
+                .src(&format!("Parameter {init}"))
+                .decision(d)
+                .preamble(true)
+                .line("1M 3000")
+                .line(&format!("1FSET {init} 0"))
+                .line("HI")
+                .get("", &["S"], None)
+                .line("1M 1000")
+                .line("M 1000")
+                .get("", &["P"], Some(self.near([3000, 0, 0, 0])));
+            self.add(k);
+        }
     }
 
     // ------------------------------------------------------------------ RealTime
@@ -1322,13 +1458,9 @@ impl Gen {
         );
 
         // LFVC: the feedback velocity is the velocity divided by LFVC.
-        let lcvc = (1i64 << self.p.hand.lcv_fraction_bits) / 4;
-        let lcvc = lcvc.clamp(1, 255);
+        let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
         let datum: i64 = 40;
-        let raw = datum as f64 * lcvc as f64 / f64::from(1u32 << self.p.hand.lcv_fraction_bits)
-            * self.p.hand.rt_velocity_counts_per_ms
-            / self.p.hand.lfv_counts_per_ms;
-        let lfv = (raw / 2.0).trunc() as i64;
+        let lfv = self.lfv_at(datum, lcvc, 2);
         let tol = |v: i64| (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64);
         let k = self
             .rt_case(
@@ -1366,6 +1498,234 @@ impl Gen {
             .line("1LOOP")
             .abort();
         self.add(k);
+
+        self.realtime_decisions();
+    }
+
+    /// The LFV a motor reads while it runs at the control velocity of an LCV `datum` with
+    /// `lcvc` (no gain field), reported with `lfvc` (0 acts as 1).
+    fn lfv_at(&self, datum: i64, lcvc: i64, lfvc: i64) -> i64 {
+        let h = &self.p.hand;
+        let raw = datum as f64 * lcvc as f64 / f64::from(1u32 << h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms
+            / h.lfv_counts_per_ms;
+        (raw / lfvc.max(1) as f64).trunc() as i64
+    }
+
+    /// An LCVC for a brisk RealTime move that stays inside the joint range over a case's short
+    /// pauses: half of one whole LCV unit (LCV has `lcv_fraction_bits` fraction bits).
+    fn brisk_lcvc(&self) -> i64 {
+        ((1i64 << self.p.hand.lcv_fraction_bits) / 2).clamp(1, 255)
+    }
+
+    /// RealTime cases for decisions about the loop's motors, gains and coefficients.
+    fn realtime_decisions(&mut self) {
+        let label = src_label(&self.p);
+        let tol = |v: i64| (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64);
+
+        // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
+        let (datum, lcvc) = (40i64, self.brisk_lcvc());
+        let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
+        let mut k = self
+            .rt_case(
+                "rt-lfv-formula",
+                &format!("LFV x LFVC is the velocity: two motors at one velocity read about {v1} with LFVC 1 and {v2} with LFVC 2"),
+                "12",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LFV")
+            .src("Parameter LFVC");
+        k = if label == "seed" {
+            k.decision("seed-lfv-formula").decision("seed-rt-velocity")
+        } else {
+            k.decision("bh8-velocity-units")
+        };
+        let k = k
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("12FSET LCVC {lcvc}"))
+            .line("1FSET LFVC 1")
+            .line("2FSET LFVC 2")
+            .line("12LOOP")
+            .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
+            .pause_ms(50)
+            .block(
+                b"A",
+                Shape::Block(vec![
+                    FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
+                    FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
+                ]),
+            )
+            .abort();
+        self.add(k);
+
+        // With LCPG 1 the gain starts at 0: a velocity alone does not move the motor. A motor
+        // without LCV keeps its control velocity of 0 whatever its gain.
+        let finger = self.limit(1);
+        let v = self.lfv_at(datum, lcvc, 1);
+        let still = |g: &Gen| -> Vec<FieldRule> {
+            (1..=2u8).map(|m| FieldRule { motor: Some(m), name: "LFAP", range: Some((0, g.mpe(m))) }).collect()
+        };
+        let moving = vec![
+            FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v)) },
+            FieldRule { motor: Some(1), name: "LFAP", range: Some((0, finger)) },
+            FieldRule { motor: Some(2), name: "LFAP", range: Some((0, self.mpe(2))) },
+        ];
+        let mut k = self
+            .rt_case(
+                "rt-lcpg-zero-gain",
+                "With LCPG 1 the gain starts at 0 on LOOP entry: a control velocity moves nothing until a gain arrives; a motor without LCV stays",
+                "12",
+                &["LCPG", "LFV", "LFAP"],
+            )
+            .src("Parameter LCPG");
+        k = if label == "seed" { k.decision("seed-lcpg-gain") } else { k.decision("bh8-rt-zero-gain") };
+        let k = k
+            .note(format!(
+                "Control blocks: motor 1 LCV then LCPG, motor 2 LCPG. The answer to a C block shows the state before \
+                 its data. Once a gain arrives motor 1 runs at about LFV {v} (25% tolerance)."
+            ))
+            .line(&format!("1FSET LCV 1 LCVC {lcvc}"))
+            .line("12LOOP")
+            .comment(format!("velocity {datum}, gain 0 on motor 1; gain 64 on motor 2, which has no velocity field"))
+            .block(&[b'C', datum as u8, 0, 64], Shape::Block(still(self)))
+            .pause_ms(100)
+            .block(b"A", Shape::Block(still(self)))
+            .comment("the same velocity with gain 64: motor 1 runs, motor 2 still has no velocity")
+            .block(&[b'C', datum as u8, 64, 64], Shape::Block(still(self)))
+            .pause_ms(100)
+            .block(b"A", Shape::Block(moving))
+            .abort();
+        self.add(k);
+
+        // LOOP with no prefix takes the motors whose EN is 1; a prefix names them whatever EN.
+        let rest: Vec<FieldRule> = self.at_rest();
+        let mut k = self
+            .rt_case(
+                "rt-loop-en-motors",
+                "LOOP with no prefix runs the motors whose EN is 1 (fewer fields); a prefix names its motors whatever EN",
+                "",
+                &["LFAP"],
+            )
+            .src("Parameter EN");
+        k = if label == "seed" {
+            k.decision("seed-param-prefix-en")
+        } else {
+            k.decision("bh8-loop-motors").decision("bh8-param-prefix-en")
+        };
+        let k = k
+            .line("SFSET EN 0")
+            .comment("motors 1, 2 and 3: three LFAP fields")
+            .line("LOOP")
+            .block(b"A", Shape::Block(rest.clone()))
+            .abort()
+            .comment("the spread alone: one LFAP field")
+            .line("4LOOP")
+            .block(b"A", Shape::Block(rest))
+            .abort();
+        self.add(k);
+
+        // SGFLIP turns the LFS byte over as it turns FGET SG over.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-lfs-sgflip") {
+            let f = self.p.hand.free_strain;
+            let (plain, flipped) = ((0, (2 * f).min(255)), ((255 - 2 * f).max(0), 255));
+            let k = self
+                .rt_case(
+                    "rt-lfs-sgflip",
+                    "With SGFLIP 1 the LFS byte is 255 minus the strain, as FGET SG reads",
+                    "12",
+                    &["LFS"],
+                )
+                .src("Parameter LFS")
+                .src("Parameter SGFLIP")
+                .decision("bh8-lfs-sgflip")
+                .decision("bh8-sgflip-default")
+                .note(format!(
+                    "A free finger's strain is near {f}: with SGFLIP 0 it reads {}..{}, with SGFLIP 1 {}..{}.",
+                    plain.0, plain.1, flipped.0, flipped.1
+                ))
+                .line("2FSET SGFLIP 1")
+                .line_shaped("12FGET SG", Shape::Values(vec![vec![Some(plain), Some(flipped)]]))
+                .line("12LOOP")
+                .block(
+                    b"A",
+                    Shape::Block(vec![
+                        FieldRule { motor: Some(1), name: "LFS", range: Some(plain) },
+                        FieldRule { motor: Some(2), name: "LFS", range: Some(flipped) },
+                    ]),
+                )
+                .abort();
+            self.add(k);
+        }
+
+        // LCVC, LFVC, LFDPC and LFDPD shape the data but add no field.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-rt-coefficients") {
+            let k = self
+                .rt_case(
+                    "rt-coefficients-no-field",
+                    "LCVC, LFVC, LFDPC and LFDPD add no field: with LCV and LFAP the blocks stay 2 and 3 bytes",
+                    "1",
+                    &["LCV", "LFAP"],
+                )
+                .decision("bh8-rt-coefficients")
+                .line("1FSET LCVC 2 LFVC 2 LFDPC 2")
+                .line("PSET LFDPD 1")
+                .line("1LOOP")
+                .block(&[b'C', 0], Shape::Block(self.at_rest()))
+                .block(b"A", Shape::Block(self.at_rest()))
+                .abort();
+            self.add(k);
+        }
+
+        // A coefficient of 0 is accepted and divides as 1.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-coefficient-range") {
+            let mpe = 10;
+            let (from, to) = (0i64, 100i64);
+            let mut lfdp = vec![(i64::MAX, i64::MIN); 2];
+            for p1 in (from - mpe).max(0)..=from + mpe {
+                for p2 in (to - mpe).max(0)..=to + mpe {
+                    let mut r = p1;
+                    for slot in lfdp.iter_mut() {
+                        let v = i64::from(lfdp_step(&mut r, p2, 1, false));
+                        *slot = (slot.0.min(v), slot.1.max(v));
+                    }
+                }
+            }
+            let both = |name: &'static str, r: Option<Range>| -> Vec<FieldRule> {
+                (1..=2u8).map(|m| FieldRule { motor: Some(m), name, range: r }).collect()
+            };
+            let v = self.lfv_at(datum, lcvc, 1);
+            let near: [Range; 4] = [(0, mpe); 4];
+            let mut k = self
+                .rt_case(
+                    "rt-coefficients-zero",
+                    "LFVC 0 and LFDPC 0 are accepted and act as 1: motor 1 (0) reads as motor 2 (1)",
+                    "12",
+                    &["LCV", "LFV", "LFDP"],
+                )
+                .src("Parameter LFVC")
+                .src("Parameter LFDPC")
+                .decision("bh8-coefficient-range")
+                .note(format!(
+                    "MPE is {mpe} so that LFDP after the move is narrow; velocities are compared with 25% tolerance."
+                ))
+                .line("1FSET LFVC 0 LFDPC 0")
+                .line("2FSET LFVC 1 LFDPC 1")
+                .line(&format!("12FSET LCVC {lcvc} MPE {mpe}"))
+                .get("12", &["LFVC", "LFDPC"], None)
+                .get("12", &["P"], Some(near))
+                .line(&format!("12M {to}"))
+                .line("12LOOP");
+            for r in &lfdp {
+                k = k.block(b"A", Shape::Block(both("LFDP", Some(*r))));
+            }
+            let mut moving = both("LFV", Some(tol(v)));
+            moving.extend(both("LFDP", Some((0, 127))));
+            let k = k
+                .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
+                .pause_ms(50)
+                .block(b"A", Shape::Block(moving))
+                .abort();
+            self.add(k);
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -1481,6 +1841,40 @@ impl Gen {
             &["P"],
             Some(self.near([0; 4])),
         );
+        self.add(k);
+    }
+
+    // ------------------------------------------------------------------ firmware families
+
+    /// The tables both BH8-262 firmware profiles share, printed the same way in each, so that
+    /// the two goldens of this case differ only where the firmware does (LCT, LFBP, LFAIN).
+    fn firmware(&mut self) {
+        if !self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
+            return;
+        }
+        let lines: Vec<&str> = ["A?", "ERR", "FLISTA", "PLISTA"].into_iter().filter(|n| self.has_cmd(n)).collect();
+        let values: Vec<&str> = ["FLISTAV", "PLISTAV"].into_iter().filter(|n| self.has_cmd(n)).collect();
+        let mut k = self.case(
+            "firmware-shared-tables",
+            "Firmware 4.3x and 4.4x share commands, status texts, parameters and defaults; 4.4x adds LCT, LFBP and LFAIN",
+        );
+        for n in lines.iter().chain(&values) {
+            k = k.src(&format!("Command {n}"));
+        }
+        k = k
+            .decision("bh8-44-same-as-43")
+            .level(Level::Info)
+            .note(
+                "Compare this file across the bh8-262 profiles: only the header, LFT's description (its width) and \
+                 the LCT, LFBP and LFAIN lines differ.",
+            )
+            .preamble(false);
+        for n in lines {
+            k = k.line(n);
+        }
+        for n in values {
+            k = k.line_shaped(n, Shape::ListValues);
+        }
         self.add(k);
     }
 }
