@@ -374,21 +374,28 @@ impl Hand {
                     return Err(ClientError::protocol(e, what));
                 }
             }
-            let spent = self.link.elapsed().saturating_sub(start);
-            if spent >= timeout {
-                self.core.give_up();
-                return Err(ClientError::Timeout { waiting_for: what.to_string(), after: timeout });
+            self.pump(start, timeout, || what.to_string())?;
+        }
+    }
+
+    /// Waits for more bytes until `timeout` after `start` and feeds them to the core. Past the
+    /// deadline, or if the link fails, the core gives up and the error says what was awaited.
+    fn pump(&mut self, start: Duration, timeout: Duration, what: impl FnOnce() -> String) -> Result<(), ClientError> {
+        let spent = self.link.elapsed().saturating_sub(start);
+        if spent >= timeout {
+            self.core.give_up();
+            return Err(ClientError::Timeout { waiting_for: what(), after: timeout });
+        }
+        self.scratch.clear();
+        match self.link.recv(&mut self.scratch, timeout - spent) {
+            Ok(n) => {
+                self.received += n as u64;
+                self.core.handle_input(&self.scratch);
+                Ok(())
             }
-            self.scratch.clear();
-            match self.link.recv(&mut self.scratch, timeout - spent) {
-                Ok(n) => {
-                    self.received += n as u64;
-                    self.core.handle_input(&self.scratch);
-                }
-                Err(e) => {
-                    self.core.give_up();
-                    return Err(e.into());
-                }
+            Err(e) => {
+                self.core.give_up();
+                Err(e.into())
             }
         }
     }
@@ -545,22 +552,7 @@ impl Hand {
             if let Err(e) = self.core.poll() {
                 return Err(ClientError::protocol(e, line));
             }
-            let spent = self.link.elapsed().saturating_sub(start);
-            if spent >= timeout {
-                self.core.give_up();
-                return Err(ClientError::Timeout { waiting_for: format!("echo of `{line}`"), after: timeout });
-            }
-            self.scratch.clear();
-            match self.link.recv(&mut self.scratch, timeout - spent) {
-                Ok(n) => {
-                    self.received += n as u64;
-                    self.core.handle_input(&self.scratch);
-                }
-                Err(e) => {
-                    self.core.give_up();
-                    return Err(e.into());
-                }
-            }
+            self.pump(start, timeout, || format!("echo of `{line}`"))?;
         }
     }
 

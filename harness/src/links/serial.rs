@@ -66,17 +66,8 @@ impl Link for SerialLink {
 
     fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
         self.port.set_timeout(timeout.max(super::MIN_WAIT)).map_err(|e| LinkError::Io(e.into()))?;
-        match self.port.read(&mut self.scratch) {
-            Ok(0) => Err(LinkError::Disconnected),
-            Ok(n) => {
-                buf.extend_from_slice(&self.scratch[..n]);
-                Ok(n)
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => Ok(0),
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => Ok(0),
-            Err(e) if is_gone(&e) => Err(LinkError::Disconnected),
-            Err(e) => Err(LinkError::Io(e)),
-        }
+        let r = self.port.read(&mut self.scratch);
+        super::read_outcome(r, &self.scratch, buf, is_gone)
     }
 
     fn elapsed(&self) -> Duration {

@@ -58,23 +58,8 @@ impl Link for TcpLink {
 
     fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
         self.stream.set_read_timeout(Some(timeout.max(super::MIN_WAIT))).map_err(LinkError::Io)?;
-        match self.stream.read(&mut self.scratch) {
-            Ok(0) => Err(LinkError::Disconnected),
-            Ok(n) => {
-                buf.extend_from_slice(&self.scratch[..n]);
-                Ok(n)
-            }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted
-                ) =>
-            {
-                Ok(0)
-            }
-            Err(e) if is_gone(&e) => Err(LinkError::Disconnected),
-            Err(e) => Err(LinkError::Io(e)),
-        }
+        let r = self.stream.read(&mut self.scratch);
+        super::read_outcome(r, &self.scratch, buf, is_gone)
     }
 
     fn elapsed(&self) -> Duration {

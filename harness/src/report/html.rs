@@ -81,14 +81,26 @@ took {:.0} ms, ratio {:.2}.</p>",
     }
     h.push_str("</tr></table>\n");
 
-    h.push_str("<h2>Clause coverage</h2>\n<table><tr><th>clause</th><th>verdict</th><th>cases</th></tr>\n");
+    // The clause matrix: one row per spec clause, one column per verdict, counting the
+    // cases that check it.
+    h.push_str("<h2>Clause coverage</h2>\n<table><tr><th>clause</th><th>verdict</th>");
+    for v in Verdict::ALL {
+        let _ = write!(h, "<th>{v}</th>");
+    }
+    h.push_str("<th>cases</th></tr>\n");
     for c in &r.clauses {
+        let _ = write!(h, "<tr class=\"{}\"><td>{}</td><td>{}</td>", class(c.verdict), esc(&c.clause), c.verdict);
+        for v in Verdict::ALL {
+            let n = r.cases.iter().filter(|k| k.verdict == v && k.clauses.contains(&c.clause)).count();
+            if n == 0 {
+                h.push_str("<td></td>");
+            } else {
+                let _ = write!(h, "<td>{n}</td>");
+            }
+        }
         let _ = writeln!(
             h,
-            "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td></tr>",
-            class(c.verdict),
-            esc(&c.clause),
-            c.verdict,
+            "<td>{}</td></tr>",
             c.cases.iter().map(|id| format!("<a href=\"#{0}\">{0}</a>", esc(id))).collect::<Vec<_>>().join(" ")
         );
     }
