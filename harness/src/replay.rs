@@ -207,20 +207,20 @@ impl ReplayOutcome {
         match self {
             ReplayOutcome::Pass(p) => format!("pass: {} steps", p.exchange.len()),
             ReplayOutcome::Mismatch(m) if m.trailing => {
-                format!("mismatch after the last step (line {}): the hand sent more", m.line)
+                format!("mismatch after the last step{}: the hand sent more", at_line(m.line))
             }
             ReplayOutcome::Mismatch(m) => {
-                format!("mismatch at step {} (line {}), byte {} of the answer", m.step + 1, m.line, m.offset)
+                format!("mismatch at step {}{}, byte {} of the answer", m.step + 1, at_line(m.line), m.offset)
             }
             ReplayOutcome::Timeout(t) => format!(
-                "timeout at step {} (line {}) after {}: {} bytes of the answer arrived",
+                "timeout at step {}{} after {}: {} bytes of the answer arrived",
                 t.step + 1,
-                t.line,
+                at_line(t.line),
                 crate::transcript::format_duration(t.waited),
                 t.offset
             ),
             ReplayOutcome::Disconnected(d) => {
-                format!("link failed at step {} (line {}): {}", d.step + 1, d.line, d.reason)
+                format!("link failed at step {}{}: {}", d.step + 1, at_line(d.line), d.reason)
             }
         }
     }
@@ -253,6 +253,11 @@ impl ReplayOutcome {
         }
         s
     }
+}
+
+/// ` (line N)` for a step read from a file; nothing for one built in code (line 0).
+fn at_line(line: usize) -> String {
+    if line == 0 { String::new() } else { format!(" (line {line})") }
 }
 
 /// Bytes before the parting byte shown for context.
