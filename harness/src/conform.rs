@@ -238,7 +238,8 @@ pub fn run(
     stream: Option<&mut ResultStream>,
     progress: &mut dyn FnMut(&CaseResult, usize, usize),
 ) -> anyhow::Result<RunOutput> {
-    let started_at = time::OffsetDateTime::now_utc();
+    let now = time::OffsetDateTime::now_utc();
+    let started_at = now.replace_nanosecond(0).unwrap_or(now);
     let wall = Instant::now();
     let (selected, skipped) = select(cases, opts)?;
     let fresh_per_case = matches!(opts.target, Target::Sim { .. });
