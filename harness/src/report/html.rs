@@ -139,14 +139,18 @@ took {:.0} ms, ratio {:.2}.</p>",
                 let _ = writeln!(
                     h,
                     "<p>step {}, parts at byte {}</p>\n<pre>expected: \"{}\"\nactual:   \"{}\"</pre>",
-                    d.step,
+                    d.step + 1,
                     d.offset,
                     esc(&d.expected),
                     esc(&d.actual)
                 );
             }
             if let Some(t) = &c.transcript {
-                let _ = writeln!(h, "<pre>{}</pre>", esc(t));
+                let _ = writeln!(
+                    h,
+                    "<p>The exchange as it happened (the hand's answers written as a transcript):</p>\n<pre>{}</pre>",
+                    esc(t)
+                );
             }
         }
     }

@@ -48,7 +48,10 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
             if let Some(d) = &c.diff {
                 b.push_str(&format!(
                     "step {} parts at byte {}\nexpected: \"{}\"\nactual:   \"{}\"\n",
-                    d.step, d.offset, d.expected, d.actual
+                    d.step + 1,
+                    d.offset,
+                    d.expected,
+                    d.actual
                 ));
             }
             if let Some(t) = &c.transcript {
