@@ -5,7 +5,6 @@
 //! system: the embedded profiles come in through `include_str!`, and a profile from
 //! elsewhere comes in through a caller-supplied resolver (see [`Profile::load_with`]).
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
@@ -857,15 +856,6 @@ impl Profile {
             Some(vs) => vs.contains(&value),
             None => (p.min..=p.max).contains(&value),
         }
-    }
-
-    /// Decisions grouped by the clause they resolve.
-    pub fn decisions_by_clause(&self) -> BTreeMap<&str, Vec<&Decision>> {
-        let mut m: BTreeMap<&str, Vec<&Decision>> = BTreeMap::new();
-        for d in &self.decisions {
-            m.entry(d.clause.as_str()).or_default().push(d);
-        }
-        m
     }
 
     /// The motors a prefix character names.

@@ -56,11 +56,6 @@ impl StatusBits {
         Self::from_bits(code).ok_or(UnknownStatusBits(code & !Self::all().bits()))
     }
 
-    /// The single bits that make up this set, lowest first.
-    pub fn single_bits(self) -> impl Iterator<Item = StatusBits> {
-        self.iter()
-    }
-
     /// The `ERR n` description lines for each set bit, as the profile words them:
     /// `bit: text`. Bits the profile does not define are skipped.
     pub fn describe(self, profile: &Profile) -> Vec<String> {
@@ -81,7 +76,7 @@ mod tests {
     fn composes_and_decomposes() {
         let s = StatusBits::from_code(3).unwrap();
         assert_eq!(s, StatusBits::NO_MOTOR_BOARD | StatusBits::NO_MOTOR);
-        assert_eq!(s.single_bits().map(|b| b.code()).collect::<Vec<_>>(), vec![1, 2]);
+        assert_eq!(s.iter().map(|b| b.code()).collect::<Vec<_>>(), vec![1, 2]);
         assert_eq!((StatusBits::PREFIX_NOT_ALLOWED | StatusBits::TOO_MANY_ARGUMENTS).code(), 5120);
         assert_eq!(StatusBits::from_code(32768), Err(UnknownStatusBits(32768)));
     }

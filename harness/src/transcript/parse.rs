@@ -345,16 +345,9 @@ impl<'a> Cursor<'a> {
                             self.err(self.pos, ParseErrorKind::BadString("`{` in a sent string (write \\x7B)".into()))
                         );
                     }
-                    let rest = &self.text[self.pos..];
-                    let Some(end) = rest.find('}') else {
-                        return Err(self.err(self.pos, ParseErrorKind::BadElision(rest.to_string())));
-                    };
-                    let inner = &rest[1..end];
-                    let piece = elision(inner)
-                        .ok_or_else(|| self.err(self.pos, ParseErrorKind::BadElision(format!("{{{inner}}}"))))?;
+                    let piece = self.braced_elision()?;
                     out.push_bytes(form, &std::mem::take(&mut lit));
                     out.push(form, piece);
-                    self.pos += end + 1;
                 }
                 0x20..=0x7e => {
                     lit.push(c);
@@ -372,6 +365,19 @@ impl<'a> Cursor<'a> {
         Ok(())
     }
 
+    /// Reads a `{...}` elision at the cursor (which is on the `{`) and moves past the `}`.
+    fn braced_elision(&mut self) -> Result<Piece, ParseError> {
+        let rest = &self.text[self.pos..];
+        let Some(end) = rest.find('}') else {
+            return Err(self.err(self.pos, ParseErrorKind::BadElision(rest.to_string())));
+        };
+        let inner = &rest[1..end];
+        let piece =
+            elision(inner).ok_or_else(|| self.err(self.pos, ParseErrorKind::BadElision(format!("{{{inner}}}"))))?;
+        self.pos += end + 1;
+        Ok(piece)
+    }
+
     /// Reads hex tokens up to the end of the line or the next string. With `elisions`, `??` and
     /// `{...}` are accepted.
     pub fn hex(&mut self, elisions: bool, out: &mut Expect) -> Result<(), ParseError> {
@@ -381,15 +387,8 @@ impl<'a> Cursor<'a> {
             match b.get(self.pos) {
                 None | Some(b'"') => return Ok(()),
                 Some(b'{') if elisions => {
-                    let rest = &self.text[self.pos..];
-                    let Some(end) = rest.find('}') else {
-                        return Err(self.err(self.pos, ParseErrorKind::BadElision(rest.to_string())));
-                    };
-                    let inner = &rest[1..end];
-                    let piece = elision(inner)
-                        .ok_or_else(|| self.err(self.pos, ParseErrorKind::BadElision(format!("{{{inner}}}"))))?;
+                    let piece = self.braced_elision()?;
                     out.push(Form::Hex, piece);
-                    self.pos += end + 1;
                 }
                 Some(_) => {
                     let at = self.pos;

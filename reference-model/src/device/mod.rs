@@ -1040,7 +1040,9 @@ impl Device {
 
     fn abort_task(&mut self) {
         self.queue.clear();
-        let Some(task) = self.task.take() else { return };
+        if self.task.take().is_none() {
+            return;
+        }
         for m in 1..=4u8 {
             let i = (m - 1) as usize;
             if self.motors[i].goal.take().is_some() {
@@ -1048,7 +1050,6 @@ impl Device {
                 self.motors[i].powered = self.get(self.ids.hold, m) != 0;
             }
         }
-        let _ = task;
         self.mode = Mode::Idle;
         let status = if self.has(Fault::AbortSilent) {
             StatusBits::empty()
