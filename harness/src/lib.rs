@@ -8,6 +8,7 @@ pub mod certify;
 pub mod cli;
 pub mod client;
 pub mod conform;
+pub mod files;
 pub mod link;
 pub mod links;
 pub mod replay;

@@ -32,17 +32,35 @@ pub fn load_profile(name: &str) -> anyhow::Result<Arc<Profile>> {
         return Ok(p);
     }
     let path = Path::new(name);
-    if !path.is_file() {
+    if !path.exists() {
         anyhow::bail!(
             "unknown profile `{name}`: not a built-in profile ({}) nor a readable file",
             Profile::builtin_names().collect::<Vec<_>>().join(", ")
         );
     }
+    // The file itself first, so a FIFO, a device or a huge file is one clear error.
+    let top_text = crate::files::read_input_text(path).with_context(|| format!("profile file {name}"))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let top = path.file_name().and_then(|f| f.to_str()).unwrap_or_default().to_string();
+    let failed = std::cell::RefCell::new(None::<String>);
     let resolve = |f: &str| -> Option<String> {
-        std::fs::read_to_string(dir.join(f)).ok().or_else(|| gcl_model::spec::embedded(f).map(str::to_string))
+        if f == top {
+            return Some(top_text.clone());
+        }
+        let p = dir.join(f);
+        match crate::files::read_input_text(&p) {
+            Ok(t) => Some(t),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => gcl_model::spec::embedded(f).map(str::to_string),
+            Err(e) => {
+                failed.borrow_mut().get_or_insert_with(|| format!("{}: {e}", p.display()));
+                None
+            }
+        }
     };
-    let p = Profile::load_with(&top, &resolve).with_context(|| format!("loading profile file {name}"))?;
+    let loaded = Profile::load_with(&top, &resolve);
+    if let Some(e) = failed.into_inner() {
+        anyhow::bail!("loading profile file {name}: {e}");
+    }
+    let p = loaded.with_context(|| format!("loading profile file {name}"))?;
     Ok(Arc::new(p))
 }

@@ -60,7 +60,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let mut transcripts = Vec::new();
     for f in &args.files {
-        let bytes = std::fs::read(f).with_context(|| format!("reading {}", f.display()))?;
+        let bytes = crate::files::read_input(f).with_context(|| format!("reading {}", f.display()))?;
         let t = parse_bytes(&bytes).with_context(|| format!("parsing {}", f.display()))?;
         transcripts.push((f, t));
     }

@@ -115,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let profile = load_profile(&args.profile)?;
     let scenario = match &args.scenario {
         Some(p) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("scenario file {}", p.display()))?;
+            let text = crate::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
             parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?
         }
         None => Default::default(),

@@ -35,7 +35,7 @@ impl EepromFile {
     /// Opens `path`: loads it if it exists, and proves it writable by writing it back (an
     /// absent file is created holding an empty memory).
     pub fn open(path: &Path) -> Result<(EepromFile, NvMemory), SimError> {
-        let nv = match std::fs::read(path) {
+        let nv = match crate::files::read_input(path) {
             Ok(bytes) => serde_json::from_slice::<NvMemory>(&bytes)
                 .map_err(|e| err(path, format!("not an EEPROM image (JSON of NvMemory): {e}")))?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => NvMemory::default(),
