@@ -27,7 +27,7 @@ pub struct Args {
     /// The script to run.
     #[arg(long)]
     script: PathBuf,
-    /// Where to write the transcript (default: standard output).
+    /// Where to write the transcript, atomically (default: standard output).
     #[arg(long)]
     out: Option<PathBuf>,
     /// The case id (default: the script's `id:`, else its file name).
@@ -66,7 +66,7 @@ pub struct Args {
 /// Runs `gcl record`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let target: Target = args.target.parse()?;
-    let bytes = std::fs::read(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
+    let bytes = crate::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
     let script = parse_script_bytes(&bytes).with_context(|| format!("parsing {}", args.script.display()))?;
     let mut fields = script.fields.clone();
     if let Some(id) = args.id {
@@ -121,7 +121,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     }
     let text = t.to_text();
     match args.out {
-        Some(path) => std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?,
+        // Temporary file, then rename: a kill leaves the old file or the new one, never an
+        // empty or torn one.
+        Some(path) => crate::report::write_atomic(&path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?,
         None => std::io::stdout().lock().write_all(text.as_bytes())?,
     }
     Ok(EXIT_OK)
