@@ -1,6 +1,11 @@
 //! `serial:PATH?baud=N`: a serial port (or a pty such as `gcl sim --pty`'s), raw 8N1, no flow
-//! control, opened non-exclusively so that a pty can be reopened; stale input is discarded at
-//! open.
+//! control; stale input is discarded at open.
+//!
+//! The port is held exclusively, twice over (the serialport crate's exclusive mode): an
+//! advisory `flock` on the device, which every `gcl` honours, root or not, and TIOCEXCL,
+//! which makes the kernel refuse other opens by programs without privilege. A port already
+//! held is one clear error, [`busy`]. TIOCEXCL is cleared again when the link closes, so a
+//! pty whose other end stays open can be reopened.
 
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -30,20 +35,34 @@ fn is_gone(e: &std::io::Error) -> bool {
         || e.to_string().contains("I/O error")
 }
 
+/// The reason given when another program holds the port.
+pub fn busy(path: &str) -> String {
+    format!("{path} is in use by another program (another gcl run or a terminal); close it and try again")
+}
+
 impl SerialLink {
-    /// Opens `path` at `baud`, 8N1, no flow control.
+    /// Opens `path` at `baud`, 8N1, no flow control, exclusively.
     pub fn open(path: &str, baud: u32) -> Result<SerialLink, LinkError> {
         let open_err = |reason: String| LinkError::Open { target: format!("serial:{path}"), reason };
-        let mut port = serialport::new(path, baud)
+        // Exclusive: serialport sets TIOCEXCL and takes an exclusive flock, and clears
+        // TIOCEXCL again when the port closes.
+        let port = serialport::new(path, baud)
             .data_bits(DataBits::Eight)
             .parity(Parity::None)
             .stop_bits(StopBits::One)
             .flow_control(FlowControl::None)
-            .exclusive(false)
+            .exclusive(true)
             .timeout(Duration::from_millis(100))
             .open_native()
-            .map_err(|e| open_err(e.to_string()))?;
-        port.set_exclusive(false).map_err(|e| open_err(e.to_string()))?;
+            .map_err(|e| {
+                let text = e.to_string();
+                // EBUSY from TIOCEXCL, or the flock another opener holds.
+                if text.contains("busy") || text.contains("exclusive lock") {
+                    open_err(busy(path))
+                } else {
+                    open_err(text)
+                }
+            })?;
         port.clear(ClearBuffer::Input).map_err(|e| open_err(e.to_string()))?;
         Ok(SerialLink {
             port,
