@@ -16,7 +16,8 @@ use super::{EXIT_OK, load_profile};
 /// Arguments of `gcl explain`.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Each LINE may use the escapes \\n \\r \\t \\\\ and \\xHH. In supervisory mode a CR \
-is added to each LINE; in RealTime mode (after LOOP) a LINE is sent as raw bytes, so \
+is added to each LINE, and a LINE holding CRs ('FGET DP\\rFGET MOV') is the commands the hand reads, each \
+explained on its own; in RealTime mode (after LOOP) a LINE is sent as raw bytes, so \
 'C\\x14\\xFB' is a control block and '\\x03' leaves the loop.\n\nExample:\n  gcl explain --profile seed HI \
 '12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1' \
 '4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1' 124LOOP 'C\\x14\\xFB' '\\x03'")]
@@ -37,7 +38,7 @@ pub struct Args {
 
 /// One line and what the hand made of it.
 pub struct Explained {
-    /// The LINE as given.
+    /// The LINE as given, or the one command of it explained (when the LINE held several).
     pub line: String,
     /// Whether it was sent in supervisory mode (else as a RealTime block).
     pub supervisory: bool,
@@ -74,36 +75,53 @@ impl Explained {
     }
 }
 
-/// Runs `lines` in order against a freshly powered-up hand.
+/// Runs `lines` in order against a freshly powered-up hand. A supervisory LINE holding the
+/// terminator is split into the commands the hand reads, one [`Explained`] each.
 pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[String]) -> anyhow::Result<Vec<Explained>> {
     let mut hand = Device::new(profile.clone(), gcl_model::DeviceConfig { seed, ..Default::default() });
     hand.clear_output();
     let mut out = Vec::new();
     for text in lines {
         let bytes = unescape(text).map_err(|e| anyhow::anyhow!("LINE `{text}`: {e}"))?;
-        let supervisory = hand.mode() != Mode::Loop;
-        let parsed = if supervisory {
-            let p = parsed(profile, &bytes);
-            let mut with_cr = bytes.clone();
+        if hand.mode() == Mode::Loop {
+            hand.handle_input(hand.now(), &bytes);
+            out.push(step(&mut hand, text.clone(), false, json!({ "block": escape(&bytes) })));
+            continue;
+        }
+        // A LINE holding the terminator (`FGET DP\rFGET MOV`) is as many commands as the
+        // hand reads: each is explained on its own, with its own answer.
+        let commands: Vec<&[u8]> = bytes.split(|&b| b == profile.framing.terminator).collect();
+        let many = commands.len() > 1;
+        for (i, cmd) in commands.iter().enumerate() {
+            if hand.mode() == Mode::Loop {
+                // An earlier command entered LOOP: the rest are RealTime bytes.
+                let rest = commands[i..].join(&[profile.framing.terminator][..]);
+                hand.handle_input(hand.now(), &rest);
+                out.push(step(&mut hand, escape(&rest), false, json!({ "block": escape(&rest) })));
+                break;
+            }
+            let p = parsed(profile, cmd);
+            let mut with_cr = cmd.to_vec();
             with_cr.push(profile.framing.terminator);
             hand.handle_input(hand.now(), &with_cr);
-            p
-        } else {
-            hand.handle_input(hand.now(), &bytes);
-            json!({ "block": escape(&bytes) })
-        };
-        hand.run_until_idle(Duration::from_secs(600));
-        out.push(Explained {
-            line: text.clone(),
-            supervisory,
-            parsed,
-            response: hand.take_output(),
-            status: hand.last_status(),
-            mode_after: hand.mode(),
-            layout: hand.rt_layout().cloned(),
-        });
+            let line = if many { escape(cmd) } else { text.clone() };
+            out.push(step(&mut hand, line, true, p));
+        }
     }
     Ok(out)
+}
+
+fn step(hand: &mut Device, line: String, supervisory: bool, parsed: Value) -> Explained {
+    hand.run_until_idle(Duration::from_secs(600));
+    Explained {
+        line,
+        supervisory,
+        parsed,
+        response: hand.take_output(),
+        status: hand.last_status(),
+        mode_after: hand.mode(),
+        layout: hand.rt_layout().cloned(),
+    }
 }
 
 fn parsed(profile: &Profile, bytes: &[u8]) -> Value {
@@ -208,4 +226,29 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
     }
     Ok(EXIT_OK)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_holding_a_cr_is_the_two_commands_the_hand_answers() {
+        let profile = load_profile("seed").unwrap();
+        let r = explain_lines(&profile, 0, &["FGET DP\\rFGET MOV".to_string()]).unwrap();
+        assert_eq!(r.len(), 2, "two commands");
+        assert_eq!(r[0].line, "FGET DP");
+        assert_eq!(r[1].line, "FGET MOV");
+        for e in &r {
+            assert!(e.parsed.get("rejected").is_none(), "{}: {}", e.line, e.parsed);
+            assert_eq!(e.parsed["command"], "FGET");
+            assert_eq!(e.status.code(), 0);
+        }
+        assert!(escape(&r[0].response).starts_with("FGET DP\\n\\r"), "{}", escape(&r[0].response));
+        assert!(escape(&r[1].response).starts_with("FGET MOV\\n\\r"), "{}", escape(&r[1].response));
+        // A plain LINE is still one entry, shown as given.
+        let r = explain_lines(&profile, 0, &["HI".to_string()]).unwrap();
+        assert_eq!(r.len(), 1);
+        assert_eq!(r[0].line, "HI");
+    }
 }
