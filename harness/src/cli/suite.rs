@@ -3,7 +3,7 @@
 //! extra, `list` shows the cases.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
 use crate::suite;
@@ -41,11 +41,40 @@ enum Command {
     },
 }
 
+/// The suite directory, or a clear error when there is none: outside the repository the
+/// default `vectors/suite` does not exist, and listing 870 "missing" files, or advising a
+/// regenerate that would write them into the current directory, helps nobody.
+fn existing_suite(dir: &Path) -> anyhow::Result<()> {
+    let found = dir.is_dir() && (dir.join(suite::INDEX_FILE).is_file() || has_profile_dir(dir));
+    if !found {
+        anyhow::bail!(
+            "cannot find a suite at {}: run gcl from the repository root (the suite is vectors/suite there) or give \
+--dir DIR",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn has_profile_dir(dir: &Path) -> bool {
+    std::fs::read_dir(dir).map(|d| d.filter_map(|e| e.ok()).any(|e| e.path().is_dir())).unwrap_or(false)
+}
+
 /// Runs `gcl suite`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut w = std::io::stdout().lock();
     match args.command {
         Command::Regenerate { dir } => {
+            // A new suite directory is made only where its parent exists (`vectors/` in the
+            // repository), never as a stray `vectors/suite` under whatever the cwd is.
+            let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            if !dir.is_dir() && !parent.is_dir() {
+                anyhow::bail!(
+                    "{} does not exist: run gcl from the repository root or give --dir DIR (a new DIR is made only \
+inside an existing folder)",
+                    dir.display()
+                );
+            }
             let cases = suite::generate_all()?;
             let before = suite::regenerate(&dir, &cases)?;
             for l in before.lines() {
@@ -62,6 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             Ok(EXIT_OK)
         }
         Command::Check { dir } => {
+            existing_suite(&dir)?;
             let cases = suite::generate_all()?;
             let r = suite::check(&dir, &cases)?;
             if r.is_fresh() {
@@ -75,6 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             Ok(EXIT_FAIL)
         }
         Command::List { profile, dir } => {
+            existing_suite(&dir)?;
             let cases = match &profile {
                 Some(p) => {
                     let id = super::load_profile(p)?.id.clone();
