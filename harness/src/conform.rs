@@ -16,7 +16,10 @@ use serde::Deserialize;
 
 use crate::link::{Link, LinkError, SimLink, byte_time};
 use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript};
-use crate::report::{CaseResult, Diff, Liveness, REPORT_FORMAT, ResultStream, RunReport, Verdict, WireTime};
+use crate::report::{
+    CaseResult, Diff, KnownFailureEntry, Liveness, REPORT_FORMAT, ResultStream, RunOptions, RunReport, Verdict,
+    WireTime,
+};
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target, open};
 use crate::transcript::{Level, Requirement};
@@ -77,6 +80,7 @@ struct KnownFile {
 #[derive(Debug, Clone, Default)]
 pub struct KnownFailures {
     entries: Vec<(KnownFailure, globset::GlobMatcher)>,
+    source: Option<String>,
 }
 
 impl KnownFailures {
@@ -95,13 +99,34 @@ impl KnownFailures {
             let g = Glob::new(&k.case).map_err(|e| anyhow::anyhow!("bad glob `{}`: {e}", k.case))?.compile_matcher();
             entries.push((k, g));
         }
-        Ok(KnownFailures { entries })
+        Ok(KnownFailures { entries, source: None })
     }
 
     /// Reads and parses a file.
     pub fn load(path: &Path) -> anyhow::Result<KnownFailures> {
-        let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        KnownFailures::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))
+        let text = crate::files::read_input_text(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let mut k = KnownFailures::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?;
+        k.source = Some(path.display().to_string());
+        Ok(k)
+    }
+
+    /// The file the list came from, when it came from one.
+    pub fn source(&self) -> Option<&str> {
+        self.source.as_deref()
+    }
+
+    /// The entries that apply to `profile`, each with whether it matches a case of `cases`
+    /// (an entry that matches none is stale, or a typo).
+    pub fn entries_for(&self, profile: &str, cases: &[Case]) -> Vec<KnownFailureEntry> {
+        self.entries
+            .iter()
+            .filter(|(k, _)| k.profile.as_deref().is_none_or(|p| p == profile))
+            .map(|(k, g)| KnownFailureEntry {
+                case: k.case.clone(),
+                reason: k.reason.clone(),
+                matched: cases.iter().any(|c| g.is_match(c.id())),
+            })
+            .collect()
     }
 
     /// The entry that covers a case, if any.
@@ -111,6 +136,18 @@ impl KnownFailures {
             .find(|(k, g)| g.is_match(id) && k.profile.as_deref().is_none_or(|p| p == profile))
             .map(|(k, _)| k)
     }
+}
+
+/// The `--only` globs that match no case of `cases`: running them would run nothing.
+pub fn unmatched_globs(cases: &[Case], patterns: &[String]) -> anyhow::Result<Vec<String>> {
+    let mut out = Vec::new();
+    for p in patterns {
+        let g = Glob::new(p).map_err(|e| anyhow::anyhow!("bad glob `{p}`: {e}"))?.compile_matcher();
+        if !cases.iter().any(|c| g.is_match(c.id())) {
+            out.push(p.clone());
+        }
+    }
+    Ok(out)
 }
 
 fn globs(patterns: &[String]) -> anyhow::Result<Option<GlobSet>> {
@@ -276,7 +313,7 @@ pub fn run(
 
     let mut results: Vec<CaseResult> = Vec::with_capacity(cases.len());
     let mut transcripts = Vec::new();
-    let (mut sent, mut received) = (0u64, 0u64);
+    let mut wire_cases: Vec<WireCase> = Vec::new();
     let mut stream = stream;
     let total = selected.len() + skipped.len();
     for r in skipped {
@@ -310,9 +347,19 @@ pub fn run(
         };
         let outcome = suite::run_case(case, link, &ropts);
         let ms = t0.elapsed().as_secs_f64() * 1000.0;
-        for e in outcome.exchange() {
-            sent += e.sent.len() as u64;
-            received += e.received.len() as u64;
+        // The wire-time bound counts cases that ran to their end or to a mismatch: a
+        // TIMEOUT's wait and an ERROR's reconnect are not line time.
+        if matches!(outcome, ReplayOutcome::Pass(_) | ReplayOutcome::Mismatch(_)) {
+            let (s, r) = outcome
+                .exchange()
+                .iter()
+                .fold((0u64, 0u64), |(s, r), e| (s + e.sent.len() as u64, r + e.received.len() as u64));
+            wire_cases.push(WireCase {
+                id: case.id().to_string(),
+                sent: s,
+                received: r,
+                passed: matches!(outcome, ReplayOutcome::Pass(_)),
+            });
         }
         let mut r = result_of(case, Verdict::Pass, ms, None);
         match &outcome {
@@ -386,10 +433,7 @@ pub fn run(
         Target::Serial { baud, .. } => Some(*baud),
         _ => opts.baud,
     };
-    let wire = match baud {
-        Some(baud) => Some(wire_time(cases, &results, opts, baud, sent, received, actual_ms)?),
-        None => None,
-    };
+    let wire = baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
     let mut report = RunReport {
         format: REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
@@ -400,6 +444,7 @@ pub fn run(
         duration_ms: actual_ms,
         suite_hash: suite::suite_hash(cases),
         liveness: Liveness { before, after },
+        options: run_options(cases, opts),
         wire,
         summary: Default::default(),
         clauses: Vec::new(),
@@ -409,39 +454,71 @@ pub fn run(
     Ok(RunOutput { report, transcripts })
 }
 
-/// The wire-time lower bound: bytes × 10 / baud, plus the simulated motion and pause time
-/// the same cases need on the reference model.
-fn wire_time(
-    cases: &[Case],
-    results: &[CaseResult],
-    opts: &ConformOptions,
-    baud: u32,
+/// What of `opts` changed what ran, for the report. The suite's source and `--partial` are
+/// the command line's to add.
+pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
+    RunOptions {
+        only: opts.only.clone(),
+        skip: opts.skip.clone(),
+        refused: opts.refuse.iter().map(|r| r.as_str().to_string()).collect(),
+        faults: opts.open.faults.iter().map(|f| f.to_string()).collect(),
+        seed: matches!(opts.target, Target::Sim { .. }).then_some(opts.open.seed),
+        suite_dir: None,
+        step_timeout_ms: opts.step_timeout.map(|t| u64::try_from(t.as_millis()).unwrap_or(u64::MAX)),
+        known_failures_file: opts.known.source().map(str::to_string),
+        known_failures: opts.known.entries_for(&opts.profile.id, cases),
+        partial: false,
+    }
+}
+
+/// What one case exchanged, for the wire-time bound.
+struct WireCase {
+    id: String,
     sent: u64,
     received: u64,
-    actual_ms: f64,
-) -> anyhow::Result<WireTime> {
-    let mut motion = Duration::ZERO;
-    for r in results.iter().filter(|r| r.verdict != Verdict::Skip) {
-        let Some(case) = cases.iter().find(|c| c.id() == r.id) else { continue };
-        let mut link = SimLink::new(opts.profile.clone(), Default::default());
-        // No quiet-time drain and no trailing wait: they are the runner's, not the case's.
-        let quiet = ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
-        let outcome = suite::run_case(case, &mut link, &quiet);
-        let bytes: u64 = outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum();
-        let wire_at_sim = byte_time(link.device().baud()) * bytes as u32;
-        motion += link.elapsed().saturating_sub(wire_at_sim);
+    passed: bool,
+}
+
+/// The wire-time lower bound, by construction: a sum over the cases that ran to their end
+/// or to a mismatch of what each one cannot take less than. A case's bytes cross a
+/// full-duplex line, so it takes at least its larger direction × 10 bits / baud; a passing
+/// case also took at least the motion and pause time the reference model needs for it
+/// (its simulated time less the time of every byte at the model's own BAUD). The larger of
+/// the two counts, never their sum, since a hand may talk while it moves.
+fn wire_time(cases: &[Case], counted: &[WireCase], opts: &ConformOptions, baud: u32, actual_ms: f64) -> WireTime {
+    let per_byte_ms = 10.0 / f64::from(baud.max(1)) * 1000.0;
+    let (mut motion_ms, mut lower_bound_ms) = (0.0, 0.0);
+    let (mut sent, mut received) = (0u64, 0u64);
+    for w in counted {
+        sent += w.sent;
+        received += w.received;
+        let wire_ms = w.sent.max(w.received) as f64 * per_byte_ms;
+        let mut case_motion_ms = 0.0;
+        if w.passed
+            && let Some(case) = cases.iter().find(|c| c.id() == w.id)
+        {
+            let mut link = SimLink::new(opts.profile.clone(), Default::default());
+            // No quiet-time drain and no trailing wait: they are the runner's, not the case's.
+            let quiet =
+                ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
+            let outcome = suite::run_case(case, &mut link, &quiet);
+            let bytes: u64 = outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum();
+            let wire_at_sim = byte_time(link.device().baud()) * u32::try_from(bytes).unwrap_or(u32::MAX);
+            case_motion_ms = link.elapsed().saturating_sub(wire_at_sim).as_secs_f64() * 1000.0;
+        }
+        motion_ms += case_motion_ms;
+        lower_bound_ms += f64::max(wire_ms, case_motion_ms);
     }
-    let motion_ms = motion.as_secs_f64() * 1000.0;
-    let lower_bound_ms = (sent + received) as f64 * 10.0 / f64::from(baud) * 1000.0 + motion_ms;
-    Ok(WireTime {
+    WireTime {
         bytes_sent: sent,
         bytes_received: received,
         baud,
         motion_ms,
         lower_bound_ms,
+        counted_cases: counted.len(),
         actual_ms,
         ratio: if lower_bound_ms > 0.0 { actual_ms / lower_bound_ms } else { 0.0 },
-    })
+    }
 }
 
 #[cfg(test)]

@@ -8,10 +8,11 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::params::NvMemory;
-use gcl_model::{DeviceConfig, Fault, Scenario};
+use gcl_model::{DeviceConfig, Fault, Profile, Scenario};
 
 use crate::link::{Link, LinkError, SimLink};
 use crate::links::{ExecLink, SerialLink, StderrMode, TcpLink};
@@ -55,6 +56,20 @@ pub struct BadTarget {
     pub reason: String,
 }
 
+/// The line rates `gcl` accepts, bit/s: from the slowest POSIX rate (50) to 4 Mbit/s. Zero
+/// or an absurd rate is refused when the command line is parsed, so no figure derived from
+/// it (the wire-time bound) can be infinite or meaningless.
+pub const BAUD_RANGE: std::ops::RangeInclusive<u32> = 50..=4_000_000;
+
+/// Parses a line rate within [`BAUD_RANGE`] (also a clap value parser for `--baud`).
+pub fn parse_baud(s: &str) -> Result<u32, String> {
+    let baud: u32 = s.trim().parse().map_err(|_| format!("baud must be a whole number, not `{s}`"))?;
+    if !BAUD_RANGE.contains(&baud) {
+        return Err(format!("baud {baud} is outside {}..={} bit/s", BAUD_RANGE.start(), BAUD_RANGE.end()));
+    }
+    Ok(baud)
+}
+
 impl FromStr for Target {
     type Err = BadTarget;
 
@@ -81,7 +96,7 @@ impl FromStr for Target {
             if let Some(q) = query {
                 for kv in q.split('&') {
                     match kv.split_once('=') {
-                        Some(("baud", v)) => baud = v.parse().map_err(|_| bad("baud must be a whole number"))?,
+                        Some(("baud", v)) => baud = parse_baud(v).map_err(|e| bad(&e))?,
                         _ => return Err(bad(&format!("unknown option `{kv}`"))),
                     }
                 }
@@ -125,6 +140,9 @@ pub const DEFAULT_SIM_PROFILE: &str = "bh8-262";
 pub struct OpenOptions {
     /// The profile for `sim` when the target does not name one (`sim:PROFILE` wins).
     pub profile: Option<String>,
+    /// `sim`: a profile already loaded (from a file given as `--profile FILE.toml`), used
+    /// when the target names none; it wins over [`OpenOptions::profile`].
+    pub loaded_profile: Option<Arc<Profile>>,
     /// `sim`: seed of the model's noise.
     pub seed: u64,
     /// `sim`: deliberate firmware bugs.
@@ -143,6 +161,7 @@ impl Default for OpenOptions {
     fn default() -> OpenOptions {
         OpenOptions {
             profile: None,
+            loaded_profile: None,
             seed: 0,
             faults: Vec::new(),
             scenario: None,
@@ -167,10 +186,15 @@ impl Target {
 /// Opens a link to `target`.
 pub fn open(target: &Target, opts: &OpenOptions) -> Result<Box<dyn Link>, LinkError> {
     match target {
-        Target::Sim { .. } => {
-            let name = target.sim_profile(opts.profile.as_deref()).unwrap_or(DEFAULT_SIM_PROFILE);
-            let profile = crate::cli::load_profile(name)
-                .map_err(|e| LinkError::Open { target: target.to_string(), reason: format!("{e:#}") })?;
+        Target::Sim { profile: own } => {
+            let profile = match (own, &opts.loaded_profile) {
+                (None, Some(p)) => p.clone(),
+                _ => {
+                    let name = target.sim_profile(opts.profile.as_deref()).unwrap_or(DEFAULT_SIM_PROFILE);
+                    crate::cli::load_profile(name)
+                        .map_err(|e| LinkError::Open { target: target.to_string(), reason: format!("{e:#}") })?
+                }
+            };
             let config = DeviceConfig {
                 seed: opts.seed,
                 scenario: opts.scenario.clone().unwrap_or_default(),
@@ -204,6 +228,12 @@ mod tests {
         );
         assert!("bogus:x".parse::<Target>().is_err());
         assert!("serial:/dev/x?baud=fast".parse::<Target>().is_err());
+        for absurd in ["0", "49", "4000001", "99999999999"] {
+            let e = format!("serial:/dev/x?baud={absurd}").parse::<Target>().unwrap_err();
+            assert!(e.to_string().contains("baud"), "{e}");
+            assert!(parse_baud(absurd).is_err(), "{absurd}");
+        }
+        assert_eq!(parse_baud("9600"), Ok(9600));
         for t in ["sim", "sim:seed", "serial:/dev/x?baud=9600", "tcp://h:1", "exec:a b"] {
             assert_eq!(t.parse::<Target>().unwrap().to_string(), t);
         }

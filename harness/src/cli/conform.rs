@@ -47,8 +47,8 @@ pub struct SuiteArgs {
     #[arg(long, value_name = "DIR")]
     pub suite: Option<PathBuf>,
     /// The line rate the hand runs at, for the wire-time lower bound (serial targets give
-    /// their own with ?baud=N).
-    #[arg(long)]
+    /// their own with ?baud=N); 50 to 4000000.
+    #[arg(long, value_parser = crate::target::parse_baud)]
     pub baud: Option<u32>,
     /// sim targets: seed of the model's noise.
     #[arg(long, default_value_t = 0)]
@@ -103,10 +103,27 @@ pub fn prepare(
         }
         None => suite::generate(&profile).context("generating the suite")?,
     };
+    let unmatched = conform::unmatched_globs(&cases, &a.only)?;
+    if !unmatched.is_empty() {
+        anyhow::bail!(
+            "--only {} matches no case of profile {} (`gcl suite list --profile {}` lists them)",
+            unmatched.iter().map(|g| format!("`{g}`")).collect::<Vec<_>>().join(", "),
+            profile.id,
+            profile.id
+        );
+    }
     let known = match &a.known_failures {
         Some(p) => KnownFailures::load(p)?,
         None => KnownFailures::default(),
     };
+    for k in known.entries_for(&profile.id, &cases).iter().filter(|k| !k.matched) {
+        eprintln!(
+            "gcl: warning: known failure `{}` in {} matches no case of profile {}; it is stale or a typo",
+            k.case,
+            known.source().unwrap_or("the known-failures list"),
+            profile.id
+        );
+    }
     let refuse = a
         .refuse
         .iter()
@@ -118,8 +135,14 @@ pub fn prepare(
             None => anyhow::bail!("bad requirement `{r}`"),
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let open =
-        OpenOptions { profile: Some(profile.id.clone()), seed: a.seed, faults: a.fault.clone(), ..Default::default() };
+    let open = OpenOptions {
+        profile: Some(profile.id.clone()),
+        // A profile from a file is simulated as loaded, not looked up again by its id.
+        loaded_profile: Some(profile.clone()),
+        seed: a.seed,
+        faults: a.fault.clone(),
+        ..Default::default()
+    };
     let opts = ConformOptions {
         target: a.target.clone(),
         open,
@@ -134,6 +157,11 @@ pub fn prepare(
         keep_transcripts,
     };
     Ok((opts, cases))
+}
+
+/// Adds to a report the options only the command line knows (the suite's source).
+pub fn record_options(report: &mut RunReport, a: &SuiteArgs) {
+    report.options.suite_dir = a.suite.as_ref().map(|d| d.display().to_string());
 }
 
 /// Runs the suite with a progress bar on a terminal, or a line per problem otherwise.
@@ -182,6 +210,11 @@ pub fn run_with_progress(
 pub fn summary_text(r: &RunReport) -> String {
     let mut s = String::new();
     s.push_str(&format!("gcl conform: target {}, profile {}, level {}\n", r.target, r.profile, r.level));
+    let given = r.options.pairs();
+    if !given.is_empty() {
+        let text: Vec<String> = given.iter().map(|(k, v)| format!("--{k} {v}")).collect();
+        s.push_str(&format!("  options: {}\n", text.join("; ")));
+    }
     let mut by_level: BTreeMap<Level, BTreeMap<Verdict, usize>> = BTreeMap::new();
     for c in &r.cases {
         let l = c.level.parse().unwrap_or(Level::Info);
@@ -227,15 +260,21 @@ pub fn summary_text(r: &RunReport) -> String {
     s.push_str(&format!("  time: {:.3} s\n", r.duration_ms / 1000.0));
     if let Some(w) = &r.wire {
         s.push_str(&format!(
-            "  wire-time lower bound: {:.3} s ({} bytes sent, {} received at {} baud, {:.3} s of motion); took {:.3} s; ratio {:.3}\n",
+            "  wire-time lower bound: {:.3} s over the {} PASS/FAIL cases (per case the larger of its bytes one way at \
+{} baud, full duplex, and the model's motion time; {} bytes sent, {} received, {:.3} s of motion); took {:.3} s; \
+ratio {:.3}\n",
             w.lower_bound_ms / 1000.0,
+            w.counted_cases,
+            w.baud,
             w.bytes_sent,
             w.bytes_received,
-            w.baud,
             w.motion_ms / 1000.0,
             w.actual_ms / 1000.0,
             w.ratio
         ));
+    }
+    if r.ran() == 0 {
+        s.push_str("  no case ran\n");
     }
     s.push_str(&format!("  result: {}\n", if r.passed() { "PASS" } else { "FAIL" }));
     s
@@ -244,7 +283,8 @@ pub fn summary_text(r: &RunReport) -> String {
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(&args.suite, args.level, false)?;
-    let out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
+    let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
+    record_options(&mut out.report, &args.suite);
     let mut w = std::io::stdout().lock();
     write!(w, "{}", summary_text(&out.report))?;
     if let Some(dir) = &args.report {

@@ -62,12 +62,28 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
         r.liveness.after
     );
     h.push('\n');
+    let given = r.options.pairs();
+    if !given.is_empty() {
+        h.push_str("<p>Options that changed what ran:</p><table>");
+        for (k, v) in &given {
+            let _ = write!(h, "<tr><th>--{}</th><td>{}</td></tr>", esc(k), esc(v));
+        }
+        h.push_str("</table>\n");
+    }
     if let Some(w) = &r.wire {
         let _ = write!(
             h,
-            "<p>Wire time: {} bytes sent, {} received at {} baud; lower bound {:.0} ms (motion {:.0} ms), \
-took {:.0} ms, ratio {:.2}.</p>",
-            w.bytes_sent, w.bytes_received, w.baud, w.lower_bound_ms, w.motion_ms, w.actual_ms, w.ratio
+            "<p>Wire time: lower bound {:.0} ms over the {} PASS/FAIL cases (per case, the larger of its bytes one \
+way at {} baud, as the line is full duplex, and the model's motion time for it; {} bytes sent, {} received, motion \
+{:.0} ms); took {:.0} ms, ratio {:.2}.</p>",
+            w.lower_bound_ms,
+            w.counted_cases,
+            w.baud,
+            w.bytes_sent,
+            w.bytes_received,
+            w.motion_ms,
+            w.actual_ms,
+            w.ratio
         );
         h.push('\n');
     }

@@ -34,6 +34,18 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
     suite.push_attribute(("time", time.as_str()));
     suite.push_attribute(("timestamp", r.started.as_str()));
     w.write_event(Event::Start(suite))?;
+    let given = r.options.pairs();
+    if !given.is_empty() {
+        w.write_event(Event::Start(BytesStart::new("properties")))?;
+        for (k, v) in &given {
+            let name = format!("gcl.{k}");
+            let mut p = BytesStart::new("property");
+            p.push_attribute(("name", name.as_str()));
+            p.push_attribute(("value", v.as_str()));
+            w.write_event(Event::Empty(p))?;
+        }
+        w.write_event(Event::End(BytesEnd::new("properties")))?;
+    }
     for c in &r.cases {
         let classname = format!("gcl.{}.{}", r.profile, c.level);
         let t = format!("{:.3}", c.duration_ms / 1000.0);

@@ -112,20 +112,113 @@ pub struct CaseResult {
 /// Wire-time accounting of a run over a paced link.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WireTime {
-    /// Bytes the harness sent.
+    /// Bytes the harness sent in the cases counted.
     pub bytes_sent: u64,
-    /// Bytes the device sent.
+    /// Bytes the device sent in the cases counted.
     pub bytes_received: u64,
     /// The line rate used for the bound, bit/s.
     pub baud: u32,
-    /// Simulated motion time the cases need, milliseconds.
+    /// Simulated motion time the passing cases need, milliseconds.
     pub motion_ms: f64,
-    /// bytes × 10 / baud + motion time, milliseconds.
+    /// The lower bound, milliseconds: over the cases counted, each case's larger of its
+    /// bytes in either direction × 10 / baud (the line is full duplex) and the motion time
+    /// the model needs for it (passing cases only).
     pub lower_bound_ms: f64,
+    /// How many cases the bound counts: those that ran to their end or to a mismatch (PASS,
+    /// FAIL and their known-failure forms); TIMEOUT and ERROR cases are left out.
+    #[serde(default)]
+    pub counted_cases: usize,
     /// The run's wall time, milliseconds.
     pub actual_ms: f64,
     /// actual / lower bound.
     pub ratio: f64,
+}
+
+/// Every option that changed what a run ran or how it was judged, so a report (and a
+/// certificate) says what it is a report of.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunOptions {
+    /// `--only` globs: only matching cases ran (the others are absent from the report).
+    #[serde(default)]
+    pub only: Vec<String>,
+    /// `--skip` globs: matching cases are SKIP.
+    #[serde(default)]
+    pub skip: Vec<String>,
+    /// `--no` requirements the operator refused: cases needing them are SKIP.
+    #[serde(default)]
+    pub refused: Vec<String>,
+    /// `--fault`s given to a simulated hand.
+    #[serde(default)]
+    pub faults: Vec<String>,
+    /// The seed of a simulated hand's noise.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// `--suite DIR`: the committed goldens in DIR ran instead of the generated suite.
+    #[serde(default)]
+    pub suite_dir: Option<String>,
+    /// `--timeout`: the per-step deadline, milliseconds.
+    #[serde(default)]
+    pub step_timeout_ms: Option<u64>,
+    /// `--known-failures FILE`.
+    #[serde(default)]
+    pub known_failures_file: Option<String>,
+    /// Every known-failures entry for this profile, and whether it matched a case.
+    #[serde(default)]
+    pub known_failures: Vec<KnownFailureEntry>,
+    /// `certify --partial`: the run was not meant to certify the whole suite.
+    #[serde(default)]
+    pub partial: bool,
+}
+
+/// One known-failures entry as a report records it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct KnownFailureEntry {
+    /// The glob over case ids.
+    pub case: String,
+    /// Why it fails.
+    pub reason: String,
+    /// Whether it matches a case of the profile's suite (an entry that does not is stale).
+    pub matched: bool,
+}
+
+impl RunOptions {
+    /// The options that were given, as (name, value) pairs for people: empty for a run of
+    /// the whole suite with no options.
+    pub fn pairs(&self) -> Vec<(&'static str, String)> {
+        let mut v = Vec::new();
+        let list = |l: &[String]| l.join(", ");
+        if !self.only.is_empty() {
+            v.push(("only", list(&self.only)));
+        }
+        if !self.skip.is_empty() {
+            v.push(("skip", list(&self.skip)));
+        }
+        if !self.refused.is_empty() {
+            v.push(("no", list(&self.refused)));
+        }
+        if !self.faults.is_empty() {
+            v.push(("fault", list(&self.faults)));
+        }
+        if let Some(d) = &self.suite_dir {
+            v.push(("suite", d.clone()));
+        }
+        if let Some(t) = self.step_timeout_ms {
+            v.push(("timeout", format!("{t} ms")));
+        }
+        if let Some(f) = &self.known_failures_file {
+            let stale: Vec<&str> = self.known_failures.iter().filter(|k| !k.matched).map(|k| k.case.as_str()).collect();
+            let mut s = format!("{f} ({} entries", self.known_failures.len());
+            if !stale.is_empty() {
+                s.push_str(&format!("; matching no case: {}", stale.join(", ")));
+            }
+            s.push(')');
+            v.push(("known-failures", s));
+        }
+        if self.partial {
+            v.push(("partial", "yes".to_string()));
+        }
+        v
+    }
 }
 
 /// How many cases of each verdict.
@@ -163,6 +256,10 @@ pub struct RunReport {
     pub suite_hash: String,
     /// Whether the device answered the liveness probe before and after the suite.
     pub liveness: Liveness,
+    /// The options that changed what ran (selection, refusals, faults, the suite's source,
+    /// known failures).
+    #[serde(default)]
+    pub options: RunOptions,
     /// Wire-time accounting, when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wire: Option<WireTime>,
@@ -184,9 +281,17 @@ pub struct Liveness {
 }
 
 impl RunReport {
-    /// Whether the run as a whole passed.
+    /// Whether the run as a whole passed. A run where no case ran (every one SKIP) did not.
     pub fn passed(&self) -> bool {
-        self.liveness.before && self.liveness.after && !self.cases.iter().any(|c| c.verdict.fails_run())
+        self.liveness.before
+            && self.liveness.after
+            && self.ran() > 0
+            && !self.cases.iter().any(|c| c.verdict.fails_run())
+    }
+
+    /// How many cases ran (every verdict but SKIP).
+    pub fn ran(&self) -> usize {
+        self.cases.iter().filter(|c| c.verdict != Verdict::Skip).count()
     }
 
     /// Fills `summary` and `clauses` from `cases`.
@@ -295,6 +400,7 @@ pub(crate) mod tests {
             duration_ms: 12.5,
             suite_hash: "00".repeat(32),
             liveness: Liveness { before: true, after: true },
+            options: RunOptions::default(),
             wire: None,
             summary: Summary::new(),
             clauses: vec![],
