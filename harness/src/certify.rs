@@ -1,21 +1,54 @@
-//! Certificate bundles: what `gcl certify` leaves a firmware team to keep, and the tamper
-//! check behind `gcl certify --verify`.
+//! Certificate bundles: what `gcl certify` leaves a firmware team to keep, and the checks
+//! behind `gcl certify --verify`.
 //!
 //! A bundle is a folder: `certificate.json` (firmware VERS text, profile, suite hash,
-//! harness version, date, a verdict per clause), the reports, one actual transcript per
-//! case under `transcripts/`, and `MANIFEST.sha256`, which lists the SHA-256 of every other
-//! file in the `sha256sum` format, so `sha256sum -c MANIFEST.sha256` checks it too.
+//! harness version, date, the options that changed what ran, a verdict per clause and one
+//! for the run), the reports, one actual transcript per case under `transcripts/`, and
+//! `MANIFEST.sha256`, which lists the SHA-256 of every other file in the `sha256sum` format,
+//! so `sha256sum -c MANIFEST.sha256` checks it too.
+//!
+//! A manifest only proves that nothing changed since somebody wrote it: anybody can edit a
+//! certificate and rerun `sha256sum`. So a bundle is signed: `MANIFEST.sig` holds an Ed25519
+//! signature over the manifest (see [`SIGNATURE`] for its format) by a key pair that
+//! [`generate_key`] makes, stored as PKCS#8 PEM (private) and SPKI PEM (public), the formats
+//! `openssl genpkey -algorithm ed25519` and `openssl pkey -pubout` use. [`verify`] also
+//! recomputes the certificate's verdicts from the bundled `report.json`, so a certificate
+//! cannot disagree with the run it certifies.
 
 use std::collections::BTreeSet;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
+use ed25519_dalek::pkcs8::spki::der::pem::LineEnding;
+use ed25519_dalek::pkcs8::{DecodePrivateKey, DecodePublicKey, EncodePrivateKey, EncodePublicKey};
+use ed25519_dalek::{Signature, Signer, SigningKey, Verifier, VerifyingKey};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::report::{RunReport, Verdict, write_all, write_atomic};
+use crate::files::{MAX_INPUT_BYTES, MAX_KEY_BYTES, open_regular, read_limited, read_text_limited, too_large};
+use crate::report::{RunOptions, RunReport, Verdict, write_all, write_atomic};
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "MANIFEST.sha256";
+
+/// The signature's file name. Its text is four lines:
+///
+/// ```text
+/// gcl-signature 1
+/// algorithm: ed25519
+/// public-key: <32 bytes, hex>
+/// signature: <64 bytes, hex>
+/// ```
+///
+/// The signature is over [`SIGNED_PREFIX`] followed by the bytes of `MANIFEST.sha256`.
+pub const SIGNATURE: &str = "MANIFEST.sig";
+
+/// What is signed before the manifest's bytes, so a signature made for a bundle means
+/// nothing anywhere else.
+pub const SIGNED_PREFIX: &[u8] = b"gcl certificate manifest 1\n";
+
+/// The largest file of a bundle `--verify` reads (reports with every transcript included).
+pub const MAX_BUNDLE_FILE_BYTES: u64 = 256 << 20;
 
 /// The certificate proper.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,8 +67,19 @@ pub struct Certificate {
     pub date: String,
     /// The levels run (MUST and SHOULD).
     pub levels: Vec<String>,
-    /// PASS when every case passed (or was a known failure), else FAIL.
-    pub verdict: Verdict,
+    /// `PASS` when every case of the levels ran and passed (or was a known failure), `FAIL`
+    /// when one did not; `PARTIAL: R of T cases` when only R of the T cases ran (or
+    /// `--partial` was given) and those passed, `FAIL (PARTIAL: R of T cases)` when not.
+    /// See [`verdict_text`].
+    pub verdict: String,
+    /// Whether the certificate covers only part of the suite.
+    pub partial: bool,
+    /// Cases that ran (any verdict but SKIP).
+    pub cases_run: usize,
+    /// Cases of the levels certified in the suite.
+    pub cases_total: usize,
+    /// Every option that changed what ran.
+    pub options: RunOptions,
     /// The verdict per spec clause.
     pub clauses: Vec<ClauseVerdict>,
 }
@@ -51,6 +95,94 @@ pub struct ClauseVerdict {
     pub cases: usize,
 }
 
+/// The certificate's verdict for a run: see [`Certificate::verdict`].
+pub fn verdict_text(passed: bool, partial: bool, cases_run: usize, cases_total: usize) -> String {
+    match (partial, passed) {
+        (false, true) => "PASS".to_string(),
+        (false, false) => "FAIL".to_string(),
+        (true, true) => format!("PARTIAL: {cases_run} of {cases_total} cases"),
+        (true, false) => format!("FAIL (PARTIAL: {cases_run} of {cases_total} cases)"),
+    }
+}
+
+impl Certificate {
+    /// The certificate of a run: `cases_total` is the number of cases of the certified
+    /// levels in the whole suite, `partial` whether the operator asked for part of it.
+    pub fn of_run(report: &RunReport, firmware_version: Vec<String>, cases_total: usize, partial: bool) -> Certificate {
+        let cases_run = report.ran();
+        let partial = partial || cases_run < cases_total;
+        Certificate {
+            firmware_version,
+            profile: report.profile.clone(),
+            target: report.target.clone(),
+            suite_hash: report.suite_hash.clone(),
+            harness_version: report.tool.clone(),
+            date: report.started.clone(),
+            levels: vec!["MUST".into(), "SHOULD".into()],
+            verdict: verdict_text(report.passed(), partial, cases_run, cases_total),
+            partial,
+            cases_run,
+            cases_total,
+            options: RunOptions { partial, ..report.options.clone() },
+            clauses: clause_verdicts(report),
+        }
+    }
+
+    /// Whether the certificate says the hand passed the whole suite.
+    pub fn is_pass(&self) -> bool {
+        self.verdict == "PASS"
+    }
+}
+
+fn clause_verdicts(report: &RunReport) -> Vec<ClauseVerdict> {
+    report
+        .clauses
+        .iter()
+        .map(|c| ClauseVerdict { clause: c.clause.clone(), verdict: c.verdict, cases: c.cases.len() })
+        .collect()
+}
+
+/// Where the certificate disagrees with the report it was made from; empty when it agrees.
+pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut same = |what: &str, c: String, r: String| {
+        if c != r {
+            out.push(format!("the certificate's {what} `{c}` is not the report's `{r}`"));
+        }
+    };
+    same("profile", cert.profile.clone(), report.profile.clone());
+    same("target", cert.target.clone(), report.target.clone());
+    same("suite hash", cert.suite_hash.clone(), report.suite_hash.clone());
+    same("date", cert.date.clone(), report.started.clone());
+    same("count of cases run", cert.cases_run.to_string(), report.ran().to_string());
+    let expected = verdict_text(report.passed(), cert.partial, report.ran(), cert.cases_total);
+    same("verdict", cert.verdict.clone(), expected);
+    if !cert.partial {
+        let certified = report.cases.iter().filter(|c| c.level == "MUST" || c.level == "SHOULD").count();
+        same("count of cases", cert.cases_total.to_string(), certified.to_string());
+        if cert.cases_run < cert.cases_total {
+            out.push("a certificate that is not partial says cases did not run".to_string());
+        }
+    }
+    let opts = RunOptions { partial: cert.partial, ..report.options.clone() };
+    if cert.options != opts {
+        out.push("the certificate's options are not the report's".to_string());
+    }
+    if cert.clauses != clause_verdicts(report) {
+        out.push("the certificate's clause verdicts are not the report's".to_string());
+    }
+    let tally: usize = report.summary.values().sum();
+    if tally != report.cases.len() {
+        out.push(format!("report.json counts {tally} cases in its summary but lists {}", report.cases.len()));
+    }
+    let mut recount = report.clone();
+    recount.tally();
+    if recount.summary != report.summary || recount.clauses != report.clauses {
+        out.push("report.json's summary or clauses do not follow from its cases".to_string());
+    }
+    out
+}
+
 /// SHA-256 of bytes, lower-case hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
@@ -60,12 +192,14 @@ fn safe_name(id: &str) -> String {
     id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
 }
 
-/// Writes a whole bundle into `dir` (created if needed; it should be empty).
+/// Writes a whole bundle into `dir` (created if needed; it should be empty), signed with
+/// `key` when one is given.
 pub fn write_bundle(
     dir: &Path,
     cert: &Certificate,
     report: &RunReport,
     transcripts: &[(String, String)],
+    key: Option<&SigningKey>,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir.join("transcripts"))?;
     write_all(dir, report)?;
@@ -75,17 +209,132 @@ pub fn write_bundle(
     write_atomic(&dir.join("certificate.json"), &serde_json::to_vec_pretty(cert)?)?;
     let mut lines = String::new();
     for rel in files_under(dir)? {
-        if rel == MANIFEST {
+        if rel == MANIFEST || rel == SIGNATURE {
             continue;
         }
-        let bytes = std::fs::read(dir.join(&rel))?;
-        lines.push_str(&format!("{}  {}\n", sha256_hex(&bytes), rel));
+        lines.push_str(&format!("{}  {}\n", hash_file(&dir.join(&rel))?, rel));
     }
     write_atomic(&dir.join(MANIFEST), lines.as_bytes())?;
+    if let Some(key) = key {
+        write_atomic(&dir.join(SIGNATURE), signature_text(key, lines.as_bytes()).as_bytes())?;
+    }
     Ok(())
 }
 
-/// Every regular file under `dir`, as `/`-separated relative paths, sorted.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn unhex(s: &str) -> Option<Vec<u8>> {
+    if !s.len().is_multiple_of(2) || !s.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return None;
+    }
+    (0..s.len()).step_by(2).map(|i| u8::from_str_radix(&s[i..i + 2], 16).ok()).collect()
+}
+
+fn signed_message(manifest: &[u8]) -> Vec<u8> {
+    [SIGNED_PREFIX, manifest].concat()
+}
+
+fn signature_text(key: &SigningKey, manifest: &[u8]) -> String {
+    let sig = key.sign(&signed_message(manifest));
+    format!(
+        "gcl-signature 1\nalgorithm: ed25519\npublic-key: {}\nsignature: {}\n",
+        hex(key.verifying_key().as_bytes()),
+        hex(&sig.to_bytes())
+    )
+}
+
+fn parse_signature(text: &str) -> Result<(VerifyingKey, Signature), String> {
+    let mut lines = text.lines();
+    let mut field = |name: &str| -> Result<String, String> {
+        let line = lines.next().ok_or_else(|| format!("{SIGNATURE}: missing `{name}` line"))?;
+        line.strip_prefix(name).map(|v| v.trim().to_string()).ok_or_else(|| format!("{SIGNATURE}: expected `{name}`"))
+    };
+    if field("gcl-signature")? != "1" {
+        return Err(format!("{SIGNATURE}: unknown format (expected `gcl-signature 1`)"));
+    }
+    if field("algorithm:")? != "ed25519" {
+        return Err(format!("{SIGNATURE}: unknown algorithm (expected ed25519)"));
+    }
+    let key = unhex(&field("public-key:")?)
+        .and_then(|b| <[u8; 32]>::try_from(b).ok())
+        .and_then(|b| VerifyingKey::from_bytes(&b).ok())
+        .ok_or_else(|| format!("{SIGNATURE}: bad public key"))?;
+    let sig = unhex(&field("signature:")?)
+        .and_then(|b| <[u8; 64]>::try_from(b).ok())
+        .map(|b| Signature::from_bytes(&b))
+        .ok_or_else(|| format!("{SIGNATURE}: bad signature"))?;
+    Ok((key, sig))
+}
+
+/// A short name for a public key: the first 16 hex digits of the SHA-256 of its 32 bytes.
+pub fn fingerprint(key: &VerifyingKey) -> String {
+    sha256_hex(key.as_bytes())[..16].to_string()
+}
+
+/// Makes a key pair and writes the private key to `path` (PKCS#8 PEM, mode 0600; the file
+/// must not exist) and the public key to `path` + `.pub` (SPKI PEM). Returns the public key.
+pub fn generate_key(path: &Path) -> anyhow::Result<VerifyingKey> {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut seed = [0u8; 32];
+    getrandom::fill(&mut seed).map_err(|e| anyhow::anyhow!("no randomness from the operating system: {e}"))?;
+    let key = SigningKey::from_bytes(&seed);
+    let private = key.to_pkcs8_pem(LineEnding::LF).map_err(|e| anyhow::anyhow!("encoding the key: {e}"))?;
+    let public = key.verifying_key().to_public_key_pem(LineEnding::LF).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let pub_path = public_key_path(path);
+    for p in [path, pub_path.as_path()] {
+        if p.exists() {
+            anyhow::bail!("{} exists; a key is never overwritten", p.display());
+        }
+    }
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o600)
+        .open(path)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    f.write_all(private.as_bytes())?;
+    f.sync_all()?;
+    write_atomic(&pub_path, public.as_bytes()).map_err(|e| anyhow::anyhow!("{}: {e}", pub_path.display()))?;
+    Ok(key.verifying_key())
+}
+
+/// Where [`generate_key`] puts the public key of a private key file.
+pub fn public_key_path(private: &Path) -> PathBuf {
+    let mut s = private.as_os_str().to_os_string();
+    s.push(".pub");
+    PathBuf::from(s)
+}
+
+/// Reads a private key (PKCS#8 PEM, as [`generate_key`] or `openssl genpkey -algorithm
+/// ed25519` writes it).
+pub fn load_signing_key(path: &Path) -> anyhow::Result<SigningKey> {
+    let text = read_text_limited(path, MAX_KEY_BYTES).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    SigningKey::from_pkcs8_pem(&text)
+        .map_err(|e| anyhow::anyhow!("{}: not an Ed25519 private key in PKCS#8 PEM: {e}", path.display()))
+}
+
+/// Reads a public key (SPKI PEM, as [`generate_key`] or `openssl pkey -pubout` writes it).
+pub fn load_verifying_key(path: &Path) -> anyhow::Result<VerifyingKey> {
+    let text = read_text_limited(path, MAX_KEY_BYTES).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    VerifyingKey::from_public_key_pem(&text)
+        .map_err(|e| anyhow::anyhow!("{}: not an Ed25519 public key in PEM: {e}", path.display()))
+}
+
+/// SHA-256 of a bundle's file, read as a stream (at most [`MAX_BUNDLE_FILE_BYTES`]).
+fn hash_file(path: &Path) -> std::io::Result<String> {
+    let mut f = open_regular(path)?.take(MAX_BUNDLE_FILE_BYTES + 1);
+    let mut h = Sha256::new();
+    let n = std::io::copy(&mut f, &mut h)?;
+    if n > MAX_BUNDLE_FILE_BYTES {
+        return Err(too_large(MAX_BUNDLE_FILE_BYTES));
+    }
+    Ok(hex(&h.finalize()))
+}
+
+/// Every file under `dir` that is not a directory, as `/`-separated relative paths, sorted.
 fn files_under(dir: &Path) -> std::io::Result<Vec<String>> {
     let mut out = Vec::new();
     let mut stack = vec![PathBuf::new()];
@@ -118,6 +367,11 @@ pub enum Tamper {
     Unlisted(String),
     /// The manifest or the certificate does not parse.
     Malformed(String),
+    /// The signature does not check, or is not by the trusted key, or is missing while a
+    /// key was given.
+    Signature(String),
+    /// The certificate disagrees with the bundled report.
+    Disagrees(String),
 }
 
 impl std::fmt::Display for Tamper {
@@ -127,19 +381,47 @@ impl std::fmt::Display for Tamper {
             Tamper::Missing(p) => write!(f, "missing: {p}"),
             Tamper::Unlisted(p) => write!(f, "not in the manifest: {p}"),
             Tamper::Malformed(m) => write!(f, "malformed: {m}"),
+            Tamper::Signature(m) => write!(f, "signature: {m}"),
+            Tamper::Disagrees(m) => write!(f, "disagrees with report.json: {m}"),
         }
     }
 }
 
-/// Checks a bundle against its manifest. `Ok(cert)` when intact; the problems otherwise.
-pub fn verify(dir: &Path) -> anyhow::Result<Result<Certificate, Vec<Tamper>>> {
-    let manifest = match std::fs::read_to_string(dir.join(MANIFEST)) {
+/// Who signed an intact bundle.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Signed {
+    /// No signature: the manifest holds, but anybody could have written it.
+    Unsigned,
+    /// Signed by the key given to check it.
+    ByTrustedKey(VerifyingKey),
+    /// Signed, and the signature checks, but no key was given to say whose key it is.
+    ByUncheckedKey(VerifyingKey),
+}
+
+/// An intact bundle: its certificate and who signed it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verified {
+    /// The certificate.
+    pub certificate: Certificate,
+    /// The signature's status.
+    pub signed: Signed,
+}
+
+/// Checks a bundle: its manifest, its signature (against `trusted` when given; a bundle
+/// without one then fails) and that the certificate agrees with the bundled report.
+/// `Ok(Ok(..))` when intact; `Ok(Err(problems))` otherwise; `Err` when `dir` is not a
+/// bundle folder at all (a usage error).
+pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> anyhow::Result<Result<Verified, Vec<Tamper>>> {
+    if !dir.is_dir() {
+        anyhow::bail!("{}: no such directory (give the folder `gcl certify --out` wrote)", dir.display());
+    }
+    let manifest = match read_limited(&dir.join(MANIFEST), MAX_INPUT_BYTES) {
         Ok(m) => m,
         Err(e) => return Ok(Err(vec![Tamper::Malformed(format!("{MANIFEST}: {e}"))])),
     };
     let mut problems = Vec::new();
     let mut listed = BTreeSet::new();
-    for (n, line) in manifest.lines().enumerate() {
+    for (n, line) in String::from_utf8_lossy(&manifest).lines().enumerate() {
         let Some((hash, path)) = line.split_once("  ") else {
             problems.push(Tamper::Malformed(format!("{MANIFEST} line {}: expected `<sha256>  <path>`", n + 1)));
             continue;
@@ -153,61 +435,123 @@ pub fn verify(dir: &Path) -> anyhow::Result<Result<Certificate, Vec<Tamper>>> {
             continue;
         }
         listed.insert(path.to_string());
-        match std::fs::read(dir.join(path)) {
-            Ok(bytes) if sha256_hex(&bytes) == hash.to_ascii_lowercase() => {}
+        match hash_file(&dir.join(path)) {
+            Ok(h) if h == hash.to_ascii_lowercase() => {}
             Ok(_) => problems.push(Tamper::Modified(path.to_string())),
-            Err(_) => problems.push(Tamper::Missing(path.to_string())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => problems.push(Tamper::Missing(path.to_string())),
+            Err(e) => problems.push(Tamper::Malformed(format!("{path}: {e}"))),
         }
     }
     for f in files_under(dir)? {
-        if f != MANIFEST && !listed.contains(&f) {
+        if f != MANIFEST && f != SIGNATURE && !listed.contains(&f) {
             problems.push(Tamper::Unlisted(f));
         }
     }
-    if !listed.contains("certificate.json") && !problems.iter().any(|p| matches!(p, Tamper::Missing(_))) {
-        problems.push(Tamper::Missing("certificate.json".into()));
+    for required in ["certificate.json", "report.json"] {
+        if !listed.contains(required) && !problems.contains(&Tamper::Missing(required.into())) {
+            problems.push(Tamper::Missing(required.into()));
+        }
     }
+    let signed = match read_limited(&dir.join(SIGNATURE), MAX_KEY_BYTES) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => match trusted {
+            Some(_) => {
+                problems
+                    .push(Tamper::Signature(format!("the bundle is unsigned (no {SIGNATURE}), but a key was given")));
+                Signed::Unsigned
+            }
+            None => Signed::Unsigned,
+        },
+        Err(e) => {
+            problems.push(Tamper::Signature(format!("{SIGNATURE}: {e}")));
+            Signed::Unsigned
+        }
+        Ok(bytes) => match parse_signature(&String::from_utf8_lossy(&bytes)) {
+            Err(m) => {
+                problems.push(Tamper::Signature(m));
+                Signed::Unsigned
+            }
+            Ok((key, sig)) => {
+                if key.verify(&signed_message(&manifest), &sig).is_err() {
+                    problems.push(Tamper::Signature(format!(
+                        "it does not match {MANIFEST} (signed by key {})",
+                        fingerprint(&key)
+                    )));
+                }
+                match trusted {
+                    Some(t) if *t != key => {
+                        problems.push(Tamper::Signature(format!(
+                            "signed by key {}, not by the trusted key {}",
+                            fingerprint(&key),
+                            fingerprint(t)
+                        )));
+                        Signed::ByUncheckedKey(key)
+                    }
+                    Some(_) => Signed::ByTrustedKey(key),
+                    None => Signed::ByUncheckedKey(key),
+                }
+            }
+        },
+    };
     if !problems.is_empty() {
         return Ok(Err(problems));
     }
-    let text = std::fs::read_to_string(dir.join("certificate.json"))?;
-    match serde_json::from_str::<Certificate>(&text) {
-        Ok(c) => Ok(Ok(c)),
-        Err(e) => Ok(Err(vec![Tamper::Malformed(format!("certificate.json: {e}"))])),
+    let parse = |name: &str| -> Result<serde_json::Value, Tamper> {
+        let bytes = read_limited(&dir.join(name), MAX_BUNDLE_FILE_BYTES)
+            .map_err(|e| Tamper::Malformed(format!("{name}: {e}")))?;
+        serde_json::from_slice(&bytes).map_err(|e| Tamper::Malformed(format!("{name}: {e}")))
+    };
+    let typed = parse("certificate.json").and_then(|c| {
+        serde_json::from_value::<Certificate>(c).map_err(|e| Tamper::Malformed(format!("certificate.json: {e}")))
+    });
+    let report = parse("report.json").and_then(|r| {
+        serde_json::from_value::<RunReport>(r).map_err(|e| Tamper::Malformed(format!("report.json: {e}")))
+    });
+    let (certificate, report) = match (typed, report) {
+        (Ok(c), Ok(r)) => (c, r),
+        (c, r) => return Ok(Err(c.err().into_iter().chain(r.err()).collect())),
+    };
+    let differ = disagreements(&certificate, &report);
+    if !differ.is_empty() {
+        return Ok(Err(differ.into_iter().map(Tamper::Disagrees).collect()));
     }
+    Ok(Ok(Verified { certificate, signed }))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn bundle() -> (tempfile::TempDir, Certificate) {
+    fn bundle(key: Option<&SigningKey>) -> (tempfile::TempDir, Certificate) {
         let dir = tempfile::tempdir().unwrap();
         let report = crate::report::tests::sample();
-        let cert = Certificate {
-            firmware_version: vec!["BarrettHand Firmware test".into()],
-            profile: "seed".into(),
-            target: "sim".into(),
-            suite_hash: "ab".repeat(32),
-            harness_version: "gcl 0.1.0".into(),
-            date: "2026-11-22T00:00:00Z".into(),
-            levels: vec!["MUST".into(), "SHOULD".into()],
-            verdict: Verdict::Fail,
-            clauses: report
-                .clauses
-                .iter()
-                .map(|c| ClauseVerdict { clause: c.clause.clone(), verdict: c.verdict, cases: c.cases.len() })
-                .collect(),
-        };
-        write_bundle(dir.path(), &cert, &report, &[("framing-echo".into(), "> HI\\r\n< HI\\n\\r=> \n".into())])
+        let cert = Certificate::of_run(&report, vec!["BarrettHand Firmware test".into()], 2, false);
+        write_bundle(dir.path(), &cert, &report, &[("framing-echo".into(), "> HI\\r\n< HI\\n\\r=> \n".into())], key)
             .unwrap();
         (dir, cert)
     }
 
+    /// What a forger does: rewrite the manifest as `sha256sum` would.
+    fn rerun_sha256sum(dir: &Path) {
+        let mut lines = String::new();
+        for rel in files_under(dir).unwrap() {
+            if rel != MANIFEST && rel != SIGNATURE {
+                lines.push_str(&format!("{}  {}\n", sha256_hex(&std::fs::read(dir.join(&rel)).unwrap()), rel));
+            }
+        }
+        std::fs::write(dir.join(MANIFEST), lines).unwrap();
+    }
+
+    fn key() -> SigningKey {
+        SigningKey::from_bytes(&[7; 32])
+    }
+
     #[test]
-    fn an_untouched_bundle_verifies() {
-        let (dir, cert) = bundle();
-        assert_eq!(verify(dir.path()).unwrap(), Ok(cert));
+    fn an_untouched_bundle_verifies_and_says_it_is_unsigned() {
+        let (dir, cert) = bundle(None);
+        assert_eq!(cert.verdict, "FAIL");
+        let v = verify(dir.path(), None).unwrap().unwrap();
+        assert_eq!(v.certificate, cert);
+        assert_eq!(v.signed, Signed::Unsigned);
         let manifest = std::fs::read_to_string(dir.path().join(MANIFEST)).unwrap();
         assert!(manifest.contains("  transcripts/framing-echo.gcl\n"));
         assert!(manifest.contains("  certificate.json\n"));
@@ -215,15 +559,90 @@ mod tests {
 
     #[test]
     fn tampering_is_found() {
-        let (dir, _) = bundle();
+        let (dir, _) = bundle(None);
         let p = dir.path().join("certificate.json");
         let text = std::fs::read_to_string(&p).unwrap().replace("\"FAIL\"", "\"PASS\"");
         std::fs::write(&p, text).unwrap();
         std::fs::remove_file(dir.path().join("junit.xml")).unwrap();
         std::fs::write(dir.path().join("transcripts/extra.gcl"), "x").unwrap();
-        let problems = verify(dir.path()).unwrap().unwrap_err();
+        let problems = verify(dir.path(), None).unwrap().unwrap_err();
         assert!(problems.contains(&Tamper::Modified("certificate.json".into())), "{problems:?}");
         assert!(problems.contains(&Tamper::Missing("junit.xml".into())), "{problems:?}");
         assert!(problems.contains(&Tamper::Unlisted("transcripts/extra.gcl".into())), "{problems:?}");
+    }
+
+    #[test]
+    fn a_forged_verdict_with_a_rewritten_manifest_disagrees_with_the_report() {
+        let (dir, _) = bundle(None);
+        let p = dir.path().join("certificate.json");
+        let text = std::fs::read_to_string(&p).unwrap().replace("\"verdict\": \"FAIL\"", "\"verdict\": \"PASS\"");
+        assert!(text.contains("\"verdict\": \"PASS\""));
+        std::fs::write(&p, text).unwrap();
+        rerun_sha256sum(dir.path());
+        let problems = verify(dir.path(), None).unwrap().unwrap_err();
+        assert!(
+            problems.iter().any(|p| matches!(p, Tamper::Disagrees(m) if m.contains("verdict `PASS`"))),
+            "{problems:?}"
+        );
+    }
+
+    #[test]
+    fn signatures_are_checked_against_the_trusted_key() {
+        let k = key();
+        let (dir, _) = bundle(Some(&k));
+        let v = verify(dir.path(), Some(&k.verifying_key())).unwrap().unwrap();
+        assert_eq!(v.signed, Signed::ByTrustedKey(k.verifying_key()));
+        assert_eq!(verify(dir.path(), None).unwrap().unwrap().signed, Signed::ByUncheckedKey(k.verifying_key()));
+        // Another key is not trusted.
+        let other = SigningKey::from_bytes(&[8; 32]).verifying_key();
+        let problems = verify(dir.path(), Some(&other)).unwrap().unwrap_err();
+        assert!(problems.iter().any(|p| matches!(p, Tamper::Signature(m) if m.contains("not by the trusted key"))));
+        // A forger who rewrites the report and the manifest consistently breaks the signature.
+        let r = dir.path().join("report.json");
+        let text = std::fs::read_to_string(&r).unwrap().replace("\"duration_ms\": 12.5", "\"duration_ms\": 13.5");
+        std::fs::write(&r, text).unwrap();
+        rerun_sha256sum(dir.path());
+        let problems = verify(dir.path(), Some(&k.verifying_key())).unwrap().unwrap_err();
+        assert!(problems.iter().any(|p| matches!(p, Tamper::Signature(m) if m.contains("does not match"))));
+        // An unsigned bundle fails when a key is given.
+        let (unsigned, _) = bundle(None);
+        let problems = verify(unsigned.path(), Some(&k.verifying_key())).unwrap().unwrap_err();
+        assert!(problems.iter().any(|p| matches!(p, Tamper::Signature(m) if m.contains("unsigned"))));
+    }
+
+    #[test]
+    fn a_missing_folder_is_a_usage_error_not_tampering() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(verify(&dir.path().join("nonesuch"), None).is_err());
+    }
+
+    #[test]
+    fn generated_keys_load_back_and_are_never_overwritten() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("gcl-key.pem");
+        let public = generate_key(&p).unwrap();
+        let private = load_signing_key(&p).unwrap();
+        assert_eq!(private.verifying_key(), public);
+        assert_eq!(load_verifying_key(&public_key_path(&p)).unwrap(), public);
+        assert!(std::fs::read_to_string(&p).unwrap().starts_with("-----BEGIN PRIVATE KEY-----"));
+        use std::os::unix::fs::PermissionsExt;
+        assert_eq!(std::fs::metadata(&p).unwrap().permissions().mode() & 0o077, 0, "private key readable by others");
+        assert!(generate_key(&p).is_err());
+        assert!(load_verifying_key(&p).is_err(), "a private key is not a public key");
+    }
+
+    #[test]
+    fn partial_verdicts_say_so() {
+        assert_eq!(verdict_text(true, false, 336, 336), "PASS");
+        assert_eq!(verdict_text(true, true, 12, 336), "PARTIAL: 12 of 336 cases");
+        assert_eq!(verdict_text(false, true, 12, 336), "FAIL (PARTIAL: 12 of 336 cases)");
+        let mut r = crate::report::tests::sample();
+        for c in &mut r.cases {
+            c.verdict = Verdict::Skip;
+        }
+        r.tally();
+        let c = Certificate::of_run(&r, vec![], 2, false);
+        assert!(c.partial && !c.is_pass(), "nothing ran: not a PASS");
+        assert_eq!(c.verdict, "FAIL (PARTIAL: 0 of 2 cases)");
     }
 }
