@@ -1,0 +1,371 @@
+//! Issue 9, as an adversarial user tries it: bad files (huge, endless, FIFOs), selections
+//! that select nothing, certificates that would lie, busy ports, profiles from files, absurd
+//! bauds, and a first run outside the repository. Every child is bounded in time.
+
+mod sim_support;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use gcl_harness::report::{RunReport, Verdict};
+use sim_support::{GCL, SimProcess, Transport};
+
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `gcl ARGS` in `cwd`, killing it if it has not ended within `limit`.
+fn gcl_in(cwd: Option<&Path>, args: &[&str], limit: Duration) -> Run {
+    let mut cmd = Command::new(GCL);
+    cmd.args(args).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    if let Some(d) = cwd {
+        cmd.current_dir(d);
+    }
+    let mut child = cmd.spawn().unwrap();
+    let end = Instant::now() + limit;
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > end {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("gcl {args:?} did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+fn gcl(args: &[&str]) -> Run {
+    gcl_in(None, args, Duration::from_secs(120))
+}
+
+fn mkfifo(p: &Path) {
+    nix::unistd::mkfifo(p, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn report(dir: &Path) -> RunReport {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
+
+#[test]
+fn no_file_input_is_read_whole_or_waited_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("x.gcl");
+    mkfifo(&fifo);
+    // A sparse 1 GiB file costs nothing on disk; reading it whole would cost 1 GiB.
+    let big = dir.path().join("big.gcl");
+    std::fs::File::create(&big).unwrap().set_len(1 << 30).unwrap();
+    let quick = Duration::from_secs(30);
+    for (args, says) in [
+        (vec!["replay", "/dev/zero"], "character device"),
+        (vec!["replay", s(&fifo)], "named pipe"),
+        (vec!["replay", s(&big)], "larger than"),
+        (vec!["record", "--target", "sim:seed", "--script", s(&big)], "larger than"),
+        (vec!["record", "--target", "sim:seed", "--script", s(&fifo)], "named pipe"),
+        (vec!["conform", "--target", "sim:seed", "--known-failures", s(&fifo)], "named pipe"),
+        (vec!["conform", "--target", "sim:seed", "--known-failures", s(&big)], "larger than"),
+        (vec!["explain", "--profile", s(&fifo), "HI"], "named pipe"),
+        (vec!["explain", "--profile", s(&big), "HI"], "larger than"),
+        (vec!["sim", "--stdio", "--scenario", s(&fifo)], "named pipe"),
+        (vec!["sim", "--stdio", "--eeprom", "/dev/zero"], "character device"),
+        (vec!["certify", "--verify", s(dir.path()), "--pubkey", s(&fifo)], "named pipe"),
+    ] {
+        let r = gcl_in(None, &args, quick);
+        assert_eq!(r.code, Some(2), "{args:?}: {}{}", r.stdout, r.stderr);
+        assert!(r.stderr.contains(says), "{args:?}: {}", r.stderr);
+    }
+    // A FIFO named like a golden in a suite directory is refused, not waited on.
+    let suite = dir.path().join("suite");
+    std::fs::create_dir_all(suite.join("seed")).unwrap();
+    std::fs::copy(Path::new(SUITE).join("seed/framing-echo.gcl"), suite.join("seed/framing-echo.gcl")).unwrap();
+    mkfifo(&suite.join("seed/x.gcl"));
+    let r = gcl_in(None, &["conform", "--target", "sim:seed", "--suite", s(&suite)], quick);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("x.gcl") && r.stderr.contains("named pipe"), "{}", r.stderr);
+}
+
+#[test]
+fn record_replaces_its_output_atomically() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("hi.script");
+    std::fs::write(&script, "id: hi\nHI\n").unwrap();
+    let out = dir.path().join("hi.gcl");
+    std::fs::write(&out, "old contents\n").unwrap();
+    let before = std::fs::metadata(&out).unwrap().ino();
+    let r = gcl(&["record", "--target", "sim:seed", "--script", s(&script), "--out", s(&out)]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    // A new file renamed over the old one (a write in place keeps the inode, and a kill in
+    // the middle of it leaves an empty or torn file).
+    assert_ne!(std::fs::metadata(&out).unwrap().ino(), before, "the output was rewritten in place");
+    assert!(std::fs::read_to_string(&out).unwrap().starts_with("gcl-transcript"));
+    let names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names.len(), 2, "no temporary file left behind: {names:?}");
+}
+
+#[test]
+fn only_matching_nothing_is_a_usage_error_and_a_run_of_nothing_is_no_pass() {
+    let r = gcl(&["conform", "--target", "sim:seed", "--only", "nonesuch-*"]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("--only `nonesuch-*` matches no case"), "{}", r.stderr);
+    assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
+    let r = gcl(&["conform", "--target", "sim:seed", "--skip", "*"]);
+    assert_eq!(r.code, Some(1), "{}", r.stdout);
+    assert!(r.stdout.contains("no case ran") && r.stdout.contains("result: FAIL"), "{}", r.stdout);
+}
+
+#[test]
+fn a_known_failure_that_matches_nothing_is_reported_and_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let known = dir.path().join("known.toml");
+    std::fs::write(
+        &known,
+        "[[failure]]\ncase = \"framing-ech\"\nreason = \"a typo\"\n\n[[failure]]\ncase = \"x\"\nprofile = \"bh8-262-4.3\"\nreason = \"another profile's\"\n",
+    )
+    .unwrap();
+    let rep = dir.path().join("rep");
+    let r = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--only",
+        "framing-echo",
+        "--known-failures",
+        s(&known),
+        "--report",
+        s(&rep),
+    ]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("warning: known failure `framing-ech`") && r.stderr.contains("matches no case"));
+    assert!(!r.stderr.contains("`x`"), "entries for other profiles are not this run's: {}", r.stderr);
+    let rep = report(&rep);
+    assert_eq!(rep.options.known_failures.len(), 1);
+    assert!(!rep.options.known_failures[0].matched);
+    assert_eq!(rep.options.only, vec!["framing-echo".to_string()]);
+    assert!(r.stdout.contains("matching no case: framing-ech"), "{}", r.stdout);
+}
+
+#[test]
+fn certify_refuses_selections_unless_partial_and_says_partial() {
+    let dir = tempfile::tempdir().unwrap();
+    for extra in [&["--skip", "rt-*"][..], &["--only", "framing-*"], &["--fault", "crlf"], &["--suite", SUITE]] {
+        let out = dir.path().join("refused");
+        let mut args = vec!["certify", "--target", "sim:seed", "--out", s(&out)];
+        args.extend(extra);
+        let r = gcl(&args);
+        assert_eq!(r.code, Some(2), "{extra:?}: {}", r.stdout);
+        assert!(r.stderr.contains(extra[0]) && r.stderr.contains("--partial"), "{}", r.stderr);
+        assert!(!out.exists(), "nothing written");
+    }
+    // Everything skipped: not a PASS, even when partial.
+    let none = dir.path().join("none");
+    let r = gcl(&["certify", "--target", "sim:seed", "--partial", "--skip", "*", "--out", s(&none)]);
+    assert_eq!(r.code, Some(1), "{}", r.stdout);
+    let cert: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(none.join("certificate.json")).unwrap()).unwrap();
+    assert!(cert["verdict"].as_str().unwrap().starts_with("FAIL (PARTIAL: 0 of "), "{}", cert["verdict"]);
+    // A partial run: its verdict, its options, in the certificate and every report.
+    let part = dir.path().join("part");
+    let r = gcl(&["certify", "--target", "sim:seed", "--partial", "--only", "framing-*", "--out", s(&part)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let cert: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(part.join("certificate.json")).unwrap()).unwrap();
+    let verdict = cert["verdict"].as_str().unwrap();
+    assert!(verdict.starts_with("PARTIAL: ") && verdict.ends_with(" cases"), "{verdict}");
+    assert_eq!(cert["options"]["only"], serde_json::json!(["framing-*"]));
+    assert_eq!(cert["options"]["partial"], true);
+    let rep = report(&part);
+    assert_eq!(rep.options.only, vec!["framing-*".to_string()]);
+    let ran: Vec<_> = rep.cases.iter().filter(|c| c.verdict != Verdict::Skip).collect();
+    assert!(!ran.is_empty() && ran.iter().all(|c| c.id.starts_with("framing-") && c.verdict == Verdict::Pass));
+    let junit = std::fs::read_to_string(part.join("junit.xml")).unwrap();
+    assert!(junit.contains("<property name=\"gcl.only\" value=\"framing-*\"/>"), "{junit}");
+    let html = std::fs::read_to_string(part.join("report.html")).unwrap();
+    assert!(html.contains("<th>--only</th><td>framing-*</td>"));
+    let r = gcl(&["certify", "--verify", s(&part)]);
+    assert_eq!(r.code, Some(0), "{}", r.stdout);
+    assert!(r.stdout.contains("unsigned") && r.stdout.contains("verdict PARTIAL: "), "{}", r.stdout);
+}
+
+#[test]
+fn signed_certificates_verify_and_forgeries_do_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let key = dir.path().join("lab.pem");
+    let r = gcl(&["certify", "--keygen", s(&key)]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let public = dir.path().join("lab.pem.pub");
+    assert!(std::fs::read_to_string(&public).unwrap().starts_with("-----BEGIN PUBLIC KEY-----"));
+    let cert = dir.path().join("cert");
+    let r = gcl(&[
+        "certify",
+        "--target",
+        "sim:seed",
+        "--partial",
+        "--only",
+        "framing-*",
+        "--key",
+        s(&key),
+        "--out",
+        s(&cert),
+    ]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("signed by key"), "{}", r.stdout);
+    let r = gcl(&["certify", "--verify", s(&cert), "--pubkey", s(&public)]);
+    assert_eq!(r.code, Some(0), "{}", r.stdout);
+    assert!(r.stdout.contains("intact, signed by the trusted key"), "{}", r.stdout);
+    // Forge: say PASS, and rewrite the manifest as `sha256sum` would.
+    let c = cert.join("certificate.json");
+    let text = std::fs::read_to_string(&c).unwrap();
+    let forged = regex_free_replace_verdict(&text, "PASS");
+    std::fs::write(&c, forged).unwrap();
+    let mut manifest = String::new();
+    for line in std::fs::read_to_string(cert.join("MANIFEST.sha256")).unwrap().lines() {
+        let (_, path) = line.split_once("  ").unwrap();
+        let hash = gcl_harness::certify::sha256_hex(&std::fs::read(cert.join(path)).unwrap());
+        manifest.push_str(&format!("{hash}  {path}\n"));
+    }
+    std::fs::write(cert.join("MANIFEST.sha256"), manifest).unwrap();
+    let r = gcl(&["certify", "--verify", s(&cert), "--pubkey", s(&public)]);
+    assert_eq!(r.code, Some(1), "{}", r.stdout);
+    assert!(r.stdout.contains("TAMPERED") && r.stdout.contains("signature"), "{}", r.stdout);
+    // Without the signature, the certificate still disagrees with its report.
+    std::fs::remove_file(cert.join("MANIFEST.sig")).unwrap();
+    let r = gcl(&["certify", "--verify", s(&cert)]);
+    assert_eq!(r.code, Some(1), "{}", r.stdout);
+    assert!(r.stdout.contains("disagrees with report.json"), "{}", r.stdout);
+    // A missing folder is a usage error.
+    let r = gcl(&["certify", "--verify", s(&dir.path().join("nonesuch"))]);
+    assert_eq!(r.code, Some(2), "{}", r.stdout);
+    assert!(!r.stdout.contains("TAMPERED"));
+    // --help does not make --target look required for --verify.
+    let r = gcl(&["certify", "--help"]);
+    assert!(r.stdout.contains("gcl certify --verify DIR [--pubkey FILE]"), "{}", r.stdout);
+}
+
+/// Replaces the value of the top-level `"verdict"` of a pretty-printed certificate.
+fn regex_free_replace_verdict(text: &str, to: &str) -> String {
+    text.lines()
+        .map(|l| if l.starts_with("  \"verdict\": ") { format!("  \"verdict\": \"{to}\",") } else { l.to_string() })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn a_busy_serial_port_is_one_clear_line_and_exit_2() {
+    let sim = SimProcess::start(Transport::Pty, &["--profile", "seed"]);
+    let target = sim.target();
+    let path = target.strip_prefix("serial:").unwrap().to_string();
+    {
+        let _held = gcl_harness::links::SerialLink::open(&path, 9600).unwrap();
+        let r = gcl(&["conform", "--target", &target, "--profile", "seed", "--only", "framing-echo"]);
+        assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+        assert!(r.stderr.contains("is in use by another program"), "{}", r.stderr);
+        assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
+    }
+    // Released on close: the next run opens it.
+    let r = gcl(&["conform", "--target", &target, "--profile", "seed", "--only", "framing-echo", "--timeout", "2000"]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+}
+
+#[test]
+fn a_profile_file_is_simulated_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let seed = std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../spec/seed.toml")).unwrap();
+    let file = dir.path().join("my-seed.toml");
+    std::fs::write(&file, seed.replacen("id = \"seed\"", "id = \"my-seed\"", 1)).unwrap();
+    let rep = dir.path().join("rep");
+    let r = gcl(&["conform", "--target", "sim", "--profile", s(&file), "--only", "framing-*", "--report", s(&rep)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert_eq!(report(&rep).profile, "my-seed");
+}
+
+#[test]
+fn absurd_bauds_are_refused_and_the_bound_counts_only_pass_and_fail() {
+    for args in [
+        &["conform", "--target", "sim", "--baud", "0"][..],
+        &["conform", "--target", "sim", "--baud", "99999999"],
+        &["conform", "--target", "serial:/dev/null?baud=0"],
+    ] {
+        let r = gcl(args);
+        assert_eq!(r.code, Some(2), "{args:?}");
+        assert!(r.stderr.contains("baud"), "{}", r.stderr);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    // PASS, FAIL (a range off by one) and TIMEOUT (a prompt without its space never
+    // completes an answer) in one run, from two hands.
+    let r = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "range-off-by-one",
+        "--only",
+        "param-dp-*",
+        "--timeout",
+        "200",
+        "--baud",
+        "9600",
+        "--report",
+        s(dir.path()),
+    ]);
+    assert_eq!(r.code, Some(1), "{}", r.stdout);
+    let rep = report(dir.path());
+    let w = rep.wire.clone().unwrap();
+    assert!(rep.summary[&Verdict::Pass] > 0 && rep.summary[&Verdict::Fail] > 0, "{:?}", rep.summary);
+    assert_eq!(w.counted_cases, rep.summary[&Verdict::Pass] + rep.summary[&Verdict::Fail]);
+    let timeouts = tempfile::tempdir().unwrap();
+    let r2 = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "prompt-no-space",
+        "--only",
+        "framing-*",
+        "--timeout",
+        "200",
+        "--baud",
+        "9600",
+        "--report",
+        s(timeouts.path()),
+    ]);
+    assert_eq!(r2.code, Some(1), "{}", r2.stdout);
+    let rep2 = report(timeouts.path());
+    assert!(rep2.summary[&Verdict::Timeout] > 0, "{:?}", rep2.summary);
+    let w2 = rep2.wire.unwrap();
+    assert_eq!(w2.counted_cases, 0, "TIMEOUTs are not line time");
+    assert_eq!(w2.lower_bound_ms, 0.0);
+    // Full duplex: never more than both directions one after the other, plus motion.
+    let serial_ms = (w.bytes_sent + w.bytes_received) as f64 * 10.0 / 9600.0 * 1000.0;
+    assert!(w.lower_bound_ms < serial_ms + w.motion_ms, "{w:?}");
+    assert!(w.lower_bound_ms >= w.bytes_sent.max(w.bytes_received) as f64 * 10.0 / 9600.0 * 1000.0, "{w:?}");
+    assert!(r.stdout.contains("PASS/FAIL cases") && r.stdout.contains("full duplex"), "{}", r.stdout);
+}
+
+#[test]
+fn suite_commands_outside_the_repository_say_they_cannot_find_the_suite() {
+    let dir = tempfile::tempdir().unwrap();
+    for cmd in ["check", "list"] {
+        let r = gcl_in(Some(dir.path()), &["suite", cmd], Duration::from_secs(120));
+        assert_eq!(r.code, Some(2), "{cmd}: {}", r.stdout);
+        assert!(r.stderr.contains("cannot find a suite at vectors/suite"), "{}", r.stderr);
+        assert!(!r.stdout.contains("missing"), "{}", r.stdout);
+    }
+    let r = gcl_in(Some(dir.path()), &["suite", "regenerate"], Duration::from_secs(120));
+    assert_eq!(r.code, Some(2), "{}", r.stdout);
+    assert!(!dir.path().join("vectors").exists(), "nothing written into the cwd");
+}
