@@ -253,19 +253,14 @@ pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Re
     Ok(ok)
 }
 
-/// Asks the hand for `VERS` and returns its lines (empty if it answered nothing useful).
-pub fn firmware_version(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<Vec<String>, LinkError> {
-    let mut cmd = b"VERS".to_vec();
-    cmd.push(profile.framing.terminator);
-    link.send(&cmd)?;
-    let prompt = [profile.framing.line_ending.as_bytes(), profile.framing.prompt.as_bytes()].concat();
-    let mut buf = Vec::new();
-    link.recv_until(&mut buf, timeout, &|b: &[u8]| b.ends_with(&prompt))?;
-    let text = String::from_utf8_lossy(&buf).into_owned();
-    let eol = profile.framing.line_ending.as_str();
-    let mut lines: Vec<String> = text.split(eol).skip(1).map(str::to_string).collect();
-    lines.pop(); // the prompt
-    Ok(lines)
+/// Asks the hand for `VERS` and returns its lines; a hand that refuses (`ERR n`) or breaks GCL
+/// gives an error, never its `ERR` line as a version.
+pub fn firmware_version(
+    link: &mut dyn Link,
+    profile: &Profile,
+    timeout: Duration,
+) -> Result<Vec<String>, crate::client::ClientError> {
+    crate::client::ask(link, crate::client::core::Framing::of(profile), "VERS", timeout)
 }
 
 /// Runs the selected cases. `progress` is told after each case.

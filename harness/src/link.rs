@@ -71,6 +71,20 @@ pub trait Link: Send {
     }
 }
 
+/// Reads and discards whatever the hand sends until it has been quiet for `quiet` (a power-up
+/// banner, the tail of an earlier conversation), for at most `limit`. Returns what it threw
+/// away.
+pub fn drain(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<Vec<u8>, LinkError> {
+    let start = link.elapsed();
+    let mut junk = Vec::new();
+    loop {
+        let n = link.recv(&mut junk, quiet)?;
+        if n == 0 || link.elapsed().saturating_sub(start) >= limit {
+            return Ok(junk);
+        }
+    }
+}
+
 /// Time one byte takes on an 8N1 line at `baud` (10 bits).
 pub fn byte_time(baud: u32) -> Duration {
     Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)))

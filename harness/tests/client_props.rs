@@ -1,72 +1,112 @@
-//! Property tests of the host library: no bytes from a hand can make it panic or wait past
-//! its timeouts.
+//! Property tests of the host library: whatever bytes a hand sends, the host core answers with
+//! an [`Answer`] or a [`Violation`] and keeps its state consistent with what it answered; no
+//! byte from a hand is ever blamed on the caller ([`Misuse`]); and the client never panics or
+//! waits past its timeouts.
 
 use std::time::Duration;
 
-use gcl_harness::client::core::{Framing, HostCore, ProtocolError, Reply};
+use gcl_harness::client::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusal, Violation};
 use gcl_harness::client::{ClientError, Hand, Timeouts};
 use gcl_harness::{Link, LinkError};
 use gcl_model::params::ParamStore;
 use gcl_model::realtime::ControlHeader;
-use gcl_model::{MotorSet, Profile, RtLayout};
+use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
 use proptest::prelude::*;
 
 fn layout(p: &Profile) -> RtLayout {
     RtLayout::compute(p, &ParamStore::defaults(p), MotorSet::ALL)
 }
 
-/// Puts a core into one of its waiting states.
-fn prime(core: &mut HostCore, state: u8, p: &Profile) {
+/// Puts a core into one of its waiting states. Every request here is one a caller may make
+/// in that state, so none is a misuse.
+fn prime(core: &mut HostCore, state: u8, p: &Profile) -> Result<(), Misuse> {
     match state % 6 {
         0 => {
-            let _ = core.command("FGET P");
+            core.command("FGET P")?;
         }
         1 => {
-            let _ = core.start_loop("1234LOOP", layout(p));
+            core.start_loop("1234LOOP", layout(p))?;
         }
         2 | 3 => {
             // In a loop: feedback or ack.
-            let _ = core.start_loop("1234LOOP", layout(p));
+            core.start_loop("1234LOOP", layout(p))?;
             core.handle_input(b"1234LOOP*");
-            let _ = core.poll();
+            assert_eq!(core.poll(), Ok(Some(Answer::LoopStarted)));
             let h = if state % 6 == 2 { ControlHeader::Feedback } else { ControlHeader::Ack };
-            let _ = core.block(h, &[]);
+            core.block(h, &[])?;
         }
         4 => {
-            let _ = core.abort();
+            core.abort();
         }
         _ => {
-            let _ = core.sync();
+            core.sync();
         }
     }
+    Ok(())
+}
+
+/// Whether text shows no raw control byte: bytes from the hand are escaped when displayed.
+fn printable(text: &str) -> bool {
+    !text.chars().any(|c| c.is_control())
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
-    /// Random bytes in random chunks, in every waiting state: never a panic, and every answer
-    /// is either "more", a reply, or a typed error.
+    /// Random bytes in random chunks, in every waiting state: each poll is "more" while the
+    /// core still waits, or a finished answer or violation after which it waits no more, in
+    /// the mode its answer implies; violations display escaped; and the next request, after
+    /// a supervisory answer, is never refused as a misuse.
     #[test]
-    fn random_bytes_never_panic_the_core(
+    fn random_bytes_keep_the_core_consistent(
         state in 0u8..6,
         chunks in proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..64), 0..40),
     ) {
         let p = Profile::builtin("bh8-262").unwrap();
         let mut core = HostCore::new(Framing::of(&p));
-        prime(&mut core, state, &p);
+        prime(&mut core, state, &p).unwrap();
         for c in &chunks {
             core.handle_input(c);
             match core.poll() {
-                Ok(_) => {}
-                Err(ProtocolError::Status { .. } | ProtocolError::EchoMismatch { .. } | ProtocolError::Framing { .. }) => {
-                    prime(&mut core, state, &p);
+                Ok(None) => prop_assert!(core.is_waiting()),
+                Ok(Some(answer)) => {
+                    prop_assert!(!core.is_waiting());
+                    match answer {
+                        Answer::LoopStarted => prop_assert_eq!(core.mode(), HostMode::RealTime),
+                        Answer::Prompt(_) | Answer::Done(_) => {
+                            prop_assert_eq!(core.mode(), HostMode::Supervisory)
+                        }
+                        Answer::Refused(Refusal { status, code, .. }) => {
+                            prop_assert_eq!(core.mode(), HostMode::Supervisory);
+                            prop_assert_eq!(status, StatusBits::from_bits_truncate(code));
+                        }
+                        Answer::Feedback(v) => {
+                            prop_assert_eq!(core.mode(), HostMode::RealTime);
+                            prop_assert_eq!(v.len(), layout(&p).feedback.fields.len());
+                        }
+                        Answer::Ack => prop_assert_eq!(core.mode(), HostMode::RealTime),
+                    }
+                    if core.mode() == HostMode::Supervisory {
+                        // Back in supervisory mode, every request may be made again.
+                        prime(&mut core, state, &p).unwrap();
+                    } else {
+                        let _ = core.abort();
+                    }
                 }
-                Err(ProtocolError::Usage(_)) => prime(&mut core, state, &p),
+                Err(v) => {
+                    prop_assert!(!core.is_waiting());
+                    prop_assert!(printable(&v.to_string()), "{:?}", v.to_string());
+                    if core.mode() == HostMode::Supervisory {
+                        prime(&mut core, state, &p).unwrap();
+                    } else {
+                        let _ = core.abort();
+                    }
+                }
             }
         }
     }
 
-    /// Random bytes around a real answer: a reply split anywhere parses the same.
+    /// A reply split anywhere parses the same.
     #[test]
     fn a_reply_split_anywhere_parses_the_same(split in 0usize..40) {
         let mut core = HostCore::new(Framing::default());
@@ -77,12 +117,23 @@ proptest! {
         let first = core.poll().unwrap();
         core.handle_input(&bytes[k..]);
         let r = first.or_else(|| core.poll().unwrap());
-        prop_assert_eq!(r, Some(Reply::Lines(vec!["1000 1000 1000 150".into()])));
+        prop_assert_eq!(r, Some(Answer::Done(vec!["1000 1000 1000 150".into()])));
     }
 
-    /// A hand that babbles forever: every operation ends, by its timeout at the latest.
+    /// Any `ERR n` is data: the refusal carries its number, whatever bits it sets.
     #[test]
-    fn a_babbling_hand_never_hangs_the_client(seed in any::<u64>(), op in 0u8..4) {
+    fn any_status_is_a_refusal(code in any::<u32>()) {
+        let mut core = HostCore::new(Framing::default());
+        core.command("HI").unwrap();
+        core.handle_input(format!("HI\n\rERR {code}\n\r=> ").as_bytes());
+        let r = core.poll().unwrap();
+        prop_assert_eq!(r, Some(Answer::Refused(Refusal { status: StatusBits::from_bits_truncate(code), code, lines: vec![] })));
+    }
+
+    /// A hand that babbles forever: every operation ends, by its timeout at the latest, and
+    /// whatever went wrong is never blamed on the caller.
+    #[test]
+    fn a_babbling_hand_never_hangs_the_client_nor_blames_it(seed in any::<u64>(), op in 0u8..6) {
         let p = Profile::builtin("seed").unwrap();
         let mut hand = Hand::new(Box::new(Babble::new(seed)), p);
         hand.set_timeouts(Timeouts {
@@ -95,11 +146,69 @@ proptest! {
             0 => hand.command("FGET DP").map(drop),
             1 => hand.initialize().map(drop),
             2 => hand.rt_start("123"),
+            3 => hand.get("123", "P").map(drop),
+            4 => hand.start("C").and_then(|()| hand.finish()).map(drop),
             _ => hand.resync(),
         };
-        // Success is possible by chance; what matters is that it returned.
-        let _ = r;
+        prop_assert!(!matches!(r, Err(ClientError::Misuse(_))), "{:?}", r);
         prop_assert!(hand.elapsed() < Duration::from_secs(60));
+    }
+}
+
+/// A hand that refuses `VERS` has no firmware version: its `ERR 32` is a refusal, not a
+/// version line a certificate could print.
+#[test]
+fn a_refused_vers_is_no_firmware_version() {
+    let p = Profile::builtin("bh8-262").unwrap();
+    let mut link = Canned::new(b"VERS\n\rERR 32\n\r=> ");
+    let e = gcl_harness::conform::firmware_version(&mut link, &p, Duration::from_secs(1)).unwrap_err();
+    assert!(matches!(e, ClientError::Refused { code: 32, .. }), "{e:?}");
+    assert_eq!(link.sent, b"VERS\r");
+    // A hand that answers gives its lines, without echo or prompt.
+    let mut link = Canned::new(b"VERS\n\rBarrettHand Firmware 4.4\n\r=> ");
+    let lines = gcl_harness::conform::firmware_version(&mut link, &p, Duration::from_secs(1)).unwrap();
+    assert_eq!(lines, vec!["BarrettHand Firmware 4.4".to_string()]);
+    // A hand that breaks GCL is told apart from one that refuses.
+    let mut link = Canned::new(b"VERS\r\n4.4\r\n=> ");
+    let e = gcl_harness::conform::firmware_version(&mut link, &p, Duration::from_secs(1)).unwrap_err();
+    assert!(matches!(e, ClientError::Violation { violation: Violation::MissingLineBreak { .. }, .. }), "{e:?}");
+}
+
+/// A link that answers with fixed bytes, then silence, on a simulated clock.
+struct Canned {
+    answer: Vec<u8>,
+    sent: Vec<u8>,
+    now: Duration,
+}
+
+impl Canned {
+    fn new(answer: &[u8]) -> Canned {
+        Canned { answer: answer.to_vec(), sent: Vec::new(), now: Duration::ZERO }
+    }
+}
+
+impl Link for Canned {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.sent.extend_from_slice(bytes);
+        Ok(())
+    }
+
+    fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+        if self.answer.is_empty() {
+            self.now += timeout;
+            return Ok(0);
+        }
+        let n = self.answer.len();
+        buf.append(&mut self.answer);
+        Ok(n)
+    }
+
+    fn elapsed(&self) -> Duration {
+        self.now
+    }
+
+    fn describe(&self) -> String {
+        "canned".into()
     }
 }
 

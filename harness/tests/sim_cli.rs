@@ -143,7 +143,10 @@ fn scenario_objects_stop_the_fingers() {
 fn faults_reach_the_hand() {
     let mut hand = stdio_hand("seed", &["--fault", "no-echo"]);
     hand.resync().unwrap();
-    assert!(matches!(hand.command("FGET DP"), Err(ClientError::EchoMismatch { .. })));
+    assert!(matches!(
+        hand.command("FGET DP"),
+        Err(ClientError::Violation { violation: gcl_harness::client::core::Violation::EchoMismatch { .. }, .. })
+    ));
 }
 
 #[test]

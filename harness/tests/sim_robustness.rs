@@ -159,7 +159,10 @@ fn a_vanished_simulator_is_a_disconnect() {
         hand.resync().unwrap();
         sim.kill();
         let e = hand.command("FGET DP").unwrap_err();
-        assert!(matches!(e, gcl_harness::client::ClientError::Disconnected), "{t:?}: {e}");
+        assert!(
+            matches!(e, gcl_harness::client::ClientError::Link(gcl_harness::LinkError::Disconnected)),
+            "{t:?}: {e}"
+        );
     }
     let mut link = ExecLink::spawn(&stdio_argv(&["--profile", "seed"]), StderrMode::Null).unwrap();
     let pid = nix::unistd::Pid::from_raw(link.pid() as i32);

@@ -1,6 +1,8 @@
 //! The host side of GCL as a sans-IO state machine: it builds the bytes of each request and
 //! recognises the hand's answer in whatever pieces it arrives, like `httparse`: `Ok(None)`
-//! means "need more bytes", an `Err` means the bytes cannot be a GCL answer.
+//! means "need more bytes", `Ok(Some(answer))` is an [`Answer`] (a refusal, `ERR n`, is one),
+//! and an `Err` is a [`Violation`]: the hand broke GCL. Requests the caller cannot make fail
+//! with a [`Misuse`] before any byte goes out; no byte from a hand produces one.
 //!
 //! Framing it knows (from the profile's `[framing]`): a command goes out as `line\r`; the hand
 //! echoes the line (not the CR), then sends each output line introduced by `\n\r`, then
@@ -13,7 +15,7 @@
 //! The core never blocks, never reads a clock and never panics, whatever bytes it is fed.
 
 use gcl_model::escape::escape;
-use gcl_model::realtime::{ControlHeader, FEEDBACK_HEADER};
+use gcl_model::realtime::{BlockError, ControlHeader, FEEDBACK_HEADER};
 use gcl_model::{Profile, RtLayout, StatusBits};
 
 /// Longest answer the core buffers before calling the bytes a framing error.
@@ -42,6 +44,14 @@ impl Framing {
             abort: profile.framing.abort,
         }
     }
+
+    /// Where the first prompt (line break then `=> `) in `bytes` ends, if there is one: the end
+    /// of every supervisory answer, and the only end a host that does not parse the answer
+    /// (the recorder) can rely on.
+    pub fn prompt_end(&self, bytes: &[u8]) -> Option<usize> {
+        let end = [self.line_ending.as_slice(), self.prompt.as_slice()].concat();
+        find(bytes, &end).map(|i| i + end.len())
+    }
 }
 
 impl Default for Framing {
@@ -50,11 +60,15 @@ impl Default for Framing {
     }
 }
 
-/// A complete answer from the hand.
+/// A complete answer from the hand: everything a hand that keeps to GCL can say, including a
+/// refusal (`ERR n` is data, as a 4xx is in httparse).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Reply {
+pub enum Answer {
     /// A supervisory command finished without a status; its output lines.
-    Lines(Vec<String>),
+    Done(Vec<String>),
+    /// The hand answered `ERR n` to a command, to `LOOP`, or to a RealTime block (which also
+    /// ends the loop).
+    Refused(Refusal),
     /// `LOOP` was answered with `*`: the hand is in RealTime mode.
     LoopStarted,
     /// A feedback block, one value per field of the feedback layout.
@@ -65,39 +79,157 @@ pub enum Reply {
     Prompt(Vec<String>),
 }
 
-/// Why bytes from the hand are not the answer expected, or why a request cannot be made.
+/// `ERR n`: the hand understood the framing and refused or failed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refusal {
+    /// The status bits (bits GCL does not define are dropped here, kept in `code`).
+    pub status: StatusBits,
+    /// The number on the wire.
+    pub code: u32,
+    /// Output lines before the `ERR` line.
+    pub lines: Vec<String>,
+}
+
+impl Refusal {
+    fn of(code: u32, lines: Vec<String>) -> Refusal {
+        Refusal { status: StatusBits::from_bits_truncate(code), code, lines }
+    }
+}
+
+/// The hand broke GCL: its bytes fit no answer the request allows. Bytes are kept as they came;
+/// they are escaped only when the violation is displayed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum ProtocolError {
-    /// The hand answered `ERR n`: it understood the framing and refused or failed.
-    #[error("the hand answered ERR {code}")]
-    Status {
-        /// The status bits (bits GCL does not define are dropped here, kept in `code`).
-        status: StatusBits,
-        /// The number on the wire.
-        code: u32,
-        /// Output lines before the `ERR` line.
+pub enum Violation {
+    /// The echo differs from the line sent.
+    #[error("echo mismatch: sent \"{}\", the hand echoed \"{}\"", escape(sent), escape(got))]
+    EchoMismatch {
+        /// The line sent.
+        sent: Vec<u8>,
+        /// What came back (at most 16 bytes past the echo's length).
+        got: Vec<u8>,
+    },
+    /// Where a line break (`\n\r`) must start, something else came.
+    #[error("expected a line break at byte {at}; received \"{}\"", escape(got))]
+    MissingLineBreak {
+        /// Offset in the answer.
+        at: usize,
+        /// The answer so far (at most 200 bytes).
+        got: Vec<u8>,
+    },
+    /// An `ERR` line whose number does not parse.
+    #[error("status line \"{}\" has no number", escape(line))]
+    StatusWithoutNumber {
+        /// The line.
+        line: Vec<u8>,
+    },
+    /// A feedback block that does not decode with the loop's layout.
+    #[error("bad feedback block ({error}): \"{}\"", escape(got))]
+    BadFeedback {
+        /// Why it does not decode.
+        error: BlockError,
+        /// The block.
+        got: Vec<u8>,
+    },
+    /// In RealTime mode, a byte that starts neither a feedback block (`*`) nor a line break.
+    #[error("expected a feedback header `*`, got byte {byte:#04x}")]
+    NotABlock {
+        /// The byte.
+        byte: u8,
+    },
+    /// `LOOP` answered with lines and a prompt, but neither `*` nor `ERR`.
+    #[error("LOOP was answered with lines but neither `*` nor ERR: {lines:?}")]
+    LoopNotEntered {
+        /// The lines.
         lines: Vec<String>,
     },
-    /// The echo differs from the line sent.
-    #[error("echo mismatch: sent \"{sent}\", the hand echoed \"{got}\"")]
-    EchoMismatch {
-        /// The line sent, escaped.
-        sent: String,
-        /// What came back, escaped.
-        got: String,
+    /// In RealTime mode the hand went back to its prompt without an `ERR` line.
+    #[error("the loop ended without an ERR line: {lines:?}")]
+    LoopEndedWithoutStatus {
+        /// The lines before the prompt.
+        lines: Vec<String>,
     },
-    /// The bytes fit no GCL framing.
-    #[error("framing error: {detail}; received \"{got}\"")]
-    Framing {
-        /// What is wrong.
+    /// More than [`MAX_REPLY`] bytes without a complete answer.
+    #[error("answer longer than {limit} bytes")]
+    TooLong {
+        /// The limit.
+        limit: usize,
+    },
+    /// An output line that should hold numbers does not.
+    #[error("not a number: \"{}\"", escape(line.as_bytes()))]
+    NotANumber {
+        /// The line.
+        line: String,
+    },
+    /// A different number of output lines than the command asks for (`FGET` gives one per
+    /// parameter).
+    #[error("{} lines for {expected} values: {lines:?}", lines.len())]
+    LineCount {
+        /// Lines expected.
+        expected: usize,
+        /// The lines received.
+        lines: Vec<String>,
+    },
+    /// After `RESET` the banner lacks `BarrettHand Firmware`.
+    #[error("no `BarrettHand Firmware` banner after RESET; got {lines:?}")]
+    NoBanner {
+        /// The lines received.
+        lines: Vec<String>,
+    },
+}
+
+/// The caller asked for something no hand could be asked: these come from the request
+/// alone, never from bytes of a hand.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum Misuse {
+    /// A command line holding the terminator (CR) or ^C.
+    #[error("a command line cannot hold a CR or ^C: \"{}\"", escape(line.as_bytes()))]
+    ControlInLine {
+        /// The line.
+        line: String,
+    },
+    /// A supervisory command while the hand is in RealTime mode.
+    #[error("`{}`: the hand is in RealTime mode; abort the loop first", escape(line.as_bytes()))]
+    InRealTime {
+        /// The line.
+        line: String,
+    },
+    /// A RealTime block or setting outside a loop.
+    #[error("not in RealTime mode: start a loop first")]
+    NotInRealTime,
+    /// A control value that does not fit its field, or the wrong number of values.
+    #[error("control block: {0}")]
+    Block(BlockError),
+    /// A motor string other than `1 2 3 4 G S`.
+    #[error("bad motor string `{text}`: use 1 2 3 4 G S")]
+    BadMotors {
+        /// The text.
+        text: String,
+    },
+    /// A RealTime setting for something other than one motor.
+    #[error("`{motor}` is not one motor")]
+    NotOneMotor {
+        /// The motor text.
+        motor: char,
+    },
+    /// A loop without motors.
+    #[error("RTStart needs motors, e.g. \"123\"")]
+    NoMotors,
+    /// A control datum the loop's control block does not carry.
+    #[error("motor {motor} has no {name} in its control block: set the flag with rt_set_flags")]
+    NoSuchField {
+        /// The motor.
+        motor: u8,
+        /// The field.
+        name: String,
+    },
+    /// A profile that does not load.
+    #[error("profile `{name}`: {detail}")]
+    Profile {
+        /// The name given.
+        name: String,
+        /// Why it does not load.
         detail: String,
-        /// What was received, escaped.
-        got: String,
     },
-    /// The request does not fit the state (a command in RealTime mode, a block outside it,
-    /// a value that does not fit its field, a line holding a CR).
-    #[error("{0}")]
-    Usage(String),
 }
 
 /// Supervisory or RealTime, as far as the host knows.
@@ -133,8 +265,12 @@ pub struct HostCore {
 
 enum Lines {
     Partial,
-    Complete { lines: Vec<String>, used: usize },
-    Bad(String),
+    Complete {
+        lines: Vec<String>,
+        used: usize,
+    },
+    /// No line break at this offset.
+    Bad(usize),
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
@@ -145,6 +281,8 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 }
 
 /// `ERR n` → n. `Err(())` for an `ERR` line whose number does not parse.
+// A `Result` with a unit error keeps "not a status line" apart from "a status line without a
+// number" without another type.
 fn status_line(line: &str) -> Option<Result<u32, ()>> {
     let rest = line.strip_prefix("ERR ")?;
     Some(rest.trim().parse::<u32>().map_err(|_| ()))
@@ -199,21 +337,18 @@ impl HostCore {
         self.waiting = waiting;
     }
 
-    fn check_line(&self, line: &str) -> Result<(), ProtocolError> {
+    fn check_line(&self, line: &str) -> Result<(), Misuse> {
         let b = line.as_bytes();
         if b.contains(&self.framing.terminator) || b.contains(&self.framing.abort) {
-            return Err(ProtocolError::Usage(format!(
-                "a command line cannot hold a CR or ^C: \"{}\"",
-                escape(line.as_bytes())
-            )));
+            return Err(Misuse::ControlInLine { line: line.to_string() });
         }
         Ok(())
     }
 
     /// A supervisory command: returns the bytes to send (`line` + CR).
-    pub fn command(&mut self, line: &str) -> Result<Vec<u8>, ProtocolError> {
+    pub fn command(&mut self, line: &str) -> Result<Vec<u8>, Misuse> {
         if self.mode == HostMode::RealTime {
-            return Err(ProtocolError::Usage(format!("`{line}`: the hand is in RealTime mode; abort the loop first")));
+            return Err(Misuse::InRealTime { line: line.to_string() });
         }
         self.check_line(line)?;
         self.begin(Await::Reply { echo: line.as_bytes().to_vec() });
@@ -223,7 +358,7 @@ impl HostCore {
     }
 
     /// A `LOOP` command whose loop will have `layout`: the bytes to send.
-    pub fn start_loop(&mut self, line: &str, layout: RtLayout) -> Result<Vec<u8>, ProtocolError> {
+    pub fn start_loop(&mut self, line: &str, layout: RtLayout) -> Result<Vec<u8>, Misuse> {
         let out = self.command(line)?;
         self.waiting = Await::Loop { echo: line.as_bytes().to_vec() };
         self.pending_layout = Some(layout);
@@ -232,19 +367,17 @@ impl HostCore {
 
     /// A RealTime block: `header` and, for `C`/`c`, one value per control field. Use
     /// [`HostCore::abort`] for ^C.
-    pub fn block(&mut self, header: ControlHeader, values: &[i64]) -> Result<Vec<u8>, ProtocolError> {
+    pub fn block(&mut self, header: ControlHeader, values: &[i64]) -> Result<Vec<u8>, Misuse> {
         let Some(layout) = &self.layout else {
-            return Err(ProtocolError::Usage("not in RealTime mode: start a loop first".into()));
+            return Err(Misuse::NotInRealTime);
         };
         if self.mode != HostMode::RealTime {
-            return Err(ProtocolError::Usage("not in RealTime mode: start a loop first".into()));
+            return Err(Misuse::NotInRealTime);
         }
         let mut out = Vec::with_capacity(layout.control.size);
         match header {
             ControlHeader::Abort => return Ok(self.abort()),
-            h if h.has_data() => {
-                layout.control.encode(h.byte(), values, &mut out).map_err(|e| ProtocolError::Usage(e.to_string()))?
-            }
+            h if h.has_data() => layout.control.encode(h.byte(), values, &mut out).map_err(Misuse::Block)?,
             h => out.push(h.byte()),
         }
         self.begin(if header.wants_feedback() { Await::Feedback } else { Await::Ack });
@@ -296,30 +429,38 @@ impl HostCore {
         self.rx.extend_from_slice(&bytes[..bytes.len().min(room)]);
     }
 
-    fn fail(&mut self, e: ProtocolError) -> Result<Option<Reply>, ProtocolError> {
+    fn fail(&mut self, v: Violation) -> Result<Option<Answer>, Violation> {
         self.waiting = Await::Nothing;
         self.pending_layout = None;
         self.rx.clear();
-        Err(e)
+        Err(v)
     }
 
-    fn framing_error(&mut self, detail: impl Into<String>) -> Result<Option<Reply>, ProtocolError> {
-        let got = escape(&self.rx[..self.rx.len().min(200)]);
-        self.fail(ProtocolError::Framing { detail: detail.into(), got })
+    fn no_line_break(&mut self, at: usize) -> Result<Option<Answer>, Violation> {
+        let got = self.rx[..self.rx.len().min(200)].to_vec();
+        self.fail(Violation::MissingLineBreak { at, got })
     }
 
-    /// The answer, if complete: `Ok(None)` while more bytes are needed.
-    pub fn poll(&mut self) -> Result<Option<Reply>, ProtocolError> {
+    /// A finished request: nothing awaited any more.
+    fn done(&mut self, answer: Answer) -> Result<Option<Answer>, Violation> {
+        self.waiting = Await::Nothing;
+        self.pending_layout = None;
+        Ok(Some(answer))
+    }
+
+    /// The answer, if complete: `Ok(None)` while more bytes are needed, a [`Violation`] when
+    /// the bytes cannot be a GCL answer to the request.
+    pub fn poll(&mut self) -> Result<Option<Answer>, Violation> {
         if self.rx.len() > MAX_REPLY && self.waiting != Await::Nothing {
-            return self.framing_error(format!("answer longer than {MAX_REPLY} bytes"));
+            return self.fail(Violation::TooLong { limit: MAX_REPLY });
         }
         match self.waiting.clone() {
             Await::Nothing => Ok(None),
             Await::Reply { echo } | Await::Loop { echo } => {
                 let k = self.rx.len().min(echo.len());
                 if self.rx[..k] != echo[..k] {
-                    let got = escape(&self.rx[..self.rx.len().min(echo.len() + 16)]);
-                    return self.fail(ProtocolError::EchoMismatch { sent: escape(&echo), got });
+                    let got = self.rx[..self.rx.len().min(echo.len() + 16)].to_vec();
+                    return self.fail(Violation::EchoMismatch { sent: echo, got });
                 }
                 if self.rx.len() < echo.len() {
                     return Ok(None);
@@ -330,32 +471,27 @@ impl HostCore {
                     self.waiting = Await::Nothing;
                     self.mode = HostMode::RealTime;
                     self.layout = self.pending_layout.take();
-                    return Ok(Some(Reply::LoopStarted));
+                    return Ok(Some(Answer::LoopStarted));
                 }
                 match self.lines(echo.len()) {
                     Lines::Partial => Ok(None),
-                    Lines::Bad(d) => self.framing_error(d),
+                    Lines::Bad(at) => self.no_line_break(at),
                     Lines::Complete { mut lines, used } => {
                         self.rx.drain(..used);
-                        self.waiting = Await::Nothing;
-                        self.pending_layout = None;
                         if let Some(last) = lines.last()
                             && let Some(code) = status_line(last)
                         {
                             let Ok(code) = code else {
-                                return self.framing_error(format!("status line `{last}` has no number"));
+                                let line = last.as_bytes().to_vec();
+                                return self.fail(Violation::StatusWithoutNumber { line });
                             };
                             lines.pop();
-                            return self.fail(ProtocolError::Status {
-                                status: StatusBits::from_bits_truncate(code),
-                                code,
-                                lines,
-                            });
+                            return self.done(Answer::Refused(Refusal::of(code, lines)));
                         }
                         if is_loop {
-                            return self.framing_error("LOOP was answered with lines but neither `*` nor ERR");
+                            return self.fail(Violation::LoopNotEntered { lines });
                         }
-                        Ok(Some(Reply::Lines(lines)))
+                        self.done(Answer::Done(lines))
                     }
                 }
             }
@@ -368,7 +504,7 @@ impl HostCore {
                         self.waiting = Await::Nothing;
                         self.mode = HostMode::Supervisory;
                         self.layout = None;
-                        return Ok(Some(Reply::Prompt(Vec::new())));
+                        return Ok(Some(Answer::Prompt(Vec::new())));
                     }
                     // Only the tail can matter; keep the buffer small.
                     if self.rx.len() > 4096 {
@@ -380,13 +516,13 @@ impl HostCore {
                 }
                 match self.lines(0) {
                     Lines::Partial => Ok(None),
-                    Lines::Bad(d) => self.framing_error(d),
+                    Lines::Bad(at) => self.no_line_break(at),
                     Lines::Complete { lines, used } => {
                         self.rx.drain(..used);
                         self.waiting = Await::Nothing;
                         self.mode = HostMode::Supervisory;
                         self.layout = None;
-                        Ok(Some(Reply::Prompt(lines)))
+                        Ok(Some(Answer::Prompt(lines)))
                     }
                 }
             }
@@ -396,11 +532,10 @@ impl HostCore {
                     if self.waiting == Await::Ack {
                         self.rx.drain(..1);
                         self.waiting = Await::Nothing;
-                        return Ok(Some(Reply::Ack));
+                        return Ok(Some(Answer::Ack));
                     }
-                    let Some(layout) = &self.layout else {
-                        return self.framing_error("feedback without a layout");
-                    };
+                    // `block` waits for feedback only with a layout; without one, wait on.
+                    let Some(layout) = &self.layout else { return Ok(None) };
                     let size = layout.feedback.size;
                     if self.rx.len() < size {
                         return Ok(None);
@@ -409,35 +544,35 @@ impl HostCore {
                         Ok((_, values)) => {
                             self.rx.drain(..size);
                             self.waiting = Await::Nothing;
-                            Ok(Some(Reply::Feedback(values)))
+                            Ok(Some(Answer::Feedback(values)))
                         }
-                        Err(e) => self.framing_error(format!("bad feedback block: {e}")),
+                        Err(error) => {
+                            let got = self.rx[..size].to_vec();
+                            self.fail(Violation::BadFeedback { error, got })
+                        }
                     };
                 }
                 if self.framing.line_ending.first() == Some(&first) {
                     return match self.lines(0) {
                         Lines::Partial => Ok(None),
-                        Lines::Bad(d) => self.framing_error(d),
+                        Lines::Bad(at) => self.no_line_break(at),
                         Lines::Complete { mut lines, used } => {
                             self.rx.drain(..used);
                             // Whatever it said, the hand is back in supervisory mode.
                             self.mode = HostMode::Supervisory;
                             self.layout = None;
-                            match lines.last().and_then(|l| status_line(l)) {
-                                Some(Ok(code)) => {
+                            match lines.last().map(|l| (status_line(l), l.as_bytes().to_vec())) {
+                                Some((Some(Ok(code)), _)) => {
                                     lines.pop();
-                                    self.fail(ProtocolError::Status {
-                                        status: StatusBits::from_bits_truncate(code),
-                                        code,
-                                        lines,
-                                    })
+                                    self.done(Answer::Refused(Refusal::of(code, lines)))
                                 }
-                                _ => self.framing_error("the loop ended without an ERR line"),
+                                Some((Some(Err(())), line)) => self.fail(Violation::StatusWithoutNumber { line }),
+                                _ => self.fail(Violation::LoopEndedWithoutStatus { lines }),
                             }
                         }
                     };
                 }
-                self.framing_error(format!("expected a feedback header `*`, got byte {first:#04x}"))
+                self.fail(Violation::NotABlock { byte: first })
             }
         }
     }
@@ -452,14 +587,10 @@ impl HostCore {
         loop {
             let rest = &bytes[pos..];
             if rest.len() < eol.len() {
-                return if eol.starts_with(rest) {
-                    Lines::Partial
-                } else {
-                    Lines::Bad(format!("expected a line break \"{}\" at byte {}", escape(eol), from + pos))
-                };
+                return if eol.starts_with(rest) { Lines::Partial } else { Lines::Bad(from + pos) };
             }
             if !rest.starts_with(eol) {
-                return Lines::Bad(format!("expected a line break \"{}\" at byte {}", escape(eol), from + pos));
+                return Lines::Bad(from + pos);
             }
             let body = &rest[eol.len()..];
             if body.starts_with(prompt) {
@@ -487,7 +618,7 @@ mod tests {
     }
 
     /// Feeds `bytes` one at a time and returns the first answer or error.
-    fn feed(c: &mut HostCore, bytes: &[u8]) -> Result<Option<Reply>, ProtocolError> {
+    fn feed(c: &mut HostCore, bytes: &[u8]) -> Result<Option<Answer>, Violation> {
         for (i, b) in bytes.iter().enumerate() {
             c.handle_input(&[*b]);
             let r = c.poll()?;
@@ -505,23 +636,35 @@ mod tests {
         assert_eq!(c.command("FGET DP").unwrap(), b"FGET DP\r");
         assert_eq!(
             feed(&mut c, b"FGET DP\n\r1000 1000 1000 150\n\r=> ").unwrap(),
-            Some(Reply::Lines(vec!["1000 1000 1000 150".into()]))
+            Some(Answer::Done(vec!["1000 1000 1000 150".into()]))
         );
         c.command("HI").unwrap();
-        assert_eq!(feed(&mut c, b"HI\n\r=> ").unwrap(), Some(Reply::Lines(vec![])));
+        assert_eq!(feed(&mut c, b"HI\n\r=> ").unwrap(), Some(Answer::Done(vec![])));
     }
 
     #[test]
     fn status_and_echo_errors() {
         let mut c = core();
         c.command("FSET DP 99999").unwrap();
-        let e = feed(&mut c, b"FSET DP 99999\n\rERR 128\n\r=> ").unwrap_err();
-        assert_eq!(e, ProtocolError::Status { status: StatusBits::INVALID_VALUE, code: 128, lines: vec![] });
+        assert_eq!(
+            feed(&mut c, b"FSET DP 99999\n\rERR 128\n\r=> ").unwrap(),
+            Some(Answer::Refused(Refusal { status: StatusBits::INVALID_VALUE, code: 128, lines: vec![] }))
+        );
         c.command("HI").unwrap();
-        assert!(matches!(feed(&mut c, b"HX"), Err(ProtocolError::EchoMismatch { .. })));
+        let e = feed(&mut c, b"HX").unwrap_err();
+        assert_eq!(e, Violation::EchoMismatch { sent: b"HI".to_vec(), got: b"HX".to_vec() });
         c.command("HI").unwrap();
-        assert!(matches!(feed(&mut c, b"HI\r\n=> "), Err(ProtocolError::Framing { .. })));
-        assert!(c.command("A\rB").is_err());
+        assert!(matches!(feed(&mut c, b"HI\r\n=> "), Err(Violation::MissingLineBreak { at: 2, .. })));
+        c.command("HI").unwrap();
+        let e = feed(&mut c, b"HI\n\rERR x\n\r=> ").unwrap_err();
+        assert_eq!(e, Violation::StatusWithoutNumber { line: b"ERR x".to_vec() });
+        assert_eq!(e.to_string(), "status line \"ERR x\" has no number");
+        assert_eq!(c.command("A\rB"), Err(Misuse::ControlInLine { line: "A\rB".into() }));
+        // Bytes are escaped only when shown.
+        assert_eq!(
+            Misuse::ControlInLine { line: "A\rB".into() }.to_string(),
+            "a command line cannot hold a CR or ^C: \"A\\rB\""
+        );
     }
 
     #[test]
@@ -535,17 +678,17 @@ mod tests {
         let mut c = core();
         assert!(c.block(ControlHeader::Feedback, &[]).is_err());
         c.start_loop("123LOOP", layout).unwrap();
-        assert_eq!(feed(&mut c, b"123LOOP*").unwrap(), Some(Reply::LoopStarted));
+        assert_eq!(feed(&mut c, b"123LOOP*").unwrap(), Some(Answer::LoopStarted));
         assert_eq!(c.mode(), HostMode::RealTime);
         assert!(c.command("FGET P").is_err());
         assert_eq!(c.block(ControlHeader::DataFeedback, &[55, 0, -1]).unwrap(), b"C\x37\x00\xff");
         assert!(c.block(ControlHeader::DataFeedback, &[500, 0, 0]).is_err());
         c.block(ControlHeader::DataFeedback, &[55, 0, 0]).unwrap();
-        assert_eq!(feed(&mut c, b"*\x13\x88\x00\x01\xff\xff").unwrap(), Some(Reply::Feedback(vec![5000, 1, 65535])));
+        assert_eq!(feed(&mut c, b"*\x13\x88\x00\x01\xff\xff").unwrap(), Some(Answer::Feedback(vec![5000, 1, 65535])));
         c.block(ControlHeader::Ack, &[]).unwrap();
-        assert_eq!(feed(&mut c, b"*").unwrap(), Some(Reply::Ack));
+        assert_eq!(feed(&mut c, b"*").unwrap(), Some(Answer::Ack));
         c.block(ControlHeader::Feedback, &[]).unwrap();
-        assert!(matches!(feed(&mut c, b"\n\rERR 2048\n\r=> "), Err(ProtocolError::Status { code: 2048, .. })));
+        assert!(matches!(feed(&mut c, b"\n\rERR 2048\n\r=> "), Ok(Some(Answer::Refused(Refusal { code: 2048, .. })))));
         assert_eq!(c.mode(), HostMode::Supervisory);
     }
 
@@ -553,10 +696,33 @@ mod tests {
     fn abort_and_sync() {
         let mut c = core();
         assert_eq!(c.abort(), vec![3]);
-        assert_eq!(feed(&mut c, b"\n\rERR 16384\n\r=> ").unwrap(), Some(Reply::Prompt(vec!["ERR 16384".into()])));
+        assert_eq!(feed(&mut c, b"\n\rERR 16384\n\r=> ").unwrap(), Some(Answer::Prompt(vec!["ERR 16384".into()])));
         c.sync();
         c.handle_input(b"junk\n\rBarrettHand\n\r=> \n\r=> ");
-        assert_eq!(c.poll().unwrap(), Some(Reply::Prompt(vec![])));
+        assert_eq!(c.poll().unwrap(), Some(Answer::Prompt(vec![])));
+        assert!(!c.is_waiting());
+    }
+
+    #[test]
+    fn violations_name_what_the_hand_broke() {
+        let p = Profile::builtin("seed").unwrap();
+        let layout = RtLayout::compute(&p, &ParamStore::defaults(&p), MotorSet::FINGERS);
+        let mut c = core();
+        c.start_loop("123LOOP", layout.clone()).unwrap();
+        let e = feed(&mut c, b"123LOOP\n\rOK\n\r=> ").unwrap_err();
+        assert_eq!(e, Violation::LoopNotEntered { lines: vec!["OK".into()] });
+        c.start_loop("123LOOP", layout).unwrap();
+        feed(&mut c, b"123LOOP*").unwrap();
+        c.block(ControlHeader::Feedback, &[]).unwrap();
+        assert_eq!(feed(&mut c, b"?").unwrap_err(), Violation::NotABlock { byte: b'?' });
+        c.block(ControlHeader::Feedback, &[]).unwrap();
+        let e = feed(&mut c, b"\n\rbye\n\r=> ").unwrap_err();
+        assert_eq!(e, Violation::LoopEndedWithoutStatus { lines: vec!["bye".into()] });
+        assert_eq!(c.mode(), HostMode::Supervisory);
+        c.command("FGET P").unwrap();
+        c.handle_input(b"FGET P\n\r");
+        c.handle_input(&vec![b'0'; MAX_REPLY]);
+        assert_eq!(c.poll(), Err(Violation::TooLong { limit: MAX_REPLY }));
         assert!(!c.is_waiting());
     }
 
@@ -566,7 +732,7 @@ mod tests {
         let layout = RtLayout::compute(&p, &ParamStore::defaults(&p), MotorSet::FINGERS);
         let mut c = core();
         c.start_loop("123LOOP", layout).unwrap();
-        assert!(matches!(feed(&mut c, b"123LOOP\n\rERR 4\n\r=> "), Err(ProtocolError::Status { code: 4, .. })));
+        assert!(matches!(feed(&mut c, b"123LOOP\n\rERR 4\n\r=> "), Ok(Some(Answer::Refused(Refusal { code: 4, .. })))));
         assert_eq!(c.mode(), HostMode::Supervisory);
     }
 }

@@ -29,22 +29,34 @@ use gcl_model::realtime::ControlHeader;
 use gcl_model::spec::Scope;
 use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
 
-use self::core::{Framing, HostCore, HostMode, ProtocolError, Reply};
-use crate::link::{Link, LinkError, byte_time};
+use self::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusal, Violation};
+use crate::link::{Link, LinkError, byte_time, drain};
 use crate::target::{self, OpenOptions, Target};
 
-/// What went wrong talking to a hand.
+/// What went wrong talking to a hand, by who is to blame: the hand refused (`Refused`), the
+/// hand broke GCL (`Violation`), the hand was too slow (`Timeout`), the link failed (`Link`),
+/// or the caller asked for something that cannot be asked (`Misuse`).
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
-    /// The hand answered `ERR n`.
-    #[error("`{command}`: the hand answered ERR {code}{}", describe(*status))]
-    Device {
+    /// The hand answered `ERR n`: it kept to GCL and refused or failed.
+    #[error("`{request}`: the hand answered ERR {code}{}", describe(*status))]
+    Refused {
         /// The command or block that failed.
-        command: String,
-        /// The status bits.
+        request: String,
+        /// The status bits (bits GCL does not define are dropped here, kept in `code`).
         status: StatusBits,
         /// The number on the wire.
         code: u32,
+        /// Output lines before the `ERR` line.
+        lines: Vec<String>,
+    },
+    /// The hand broke GCL.
+    #[error("`{request}`: the hand broke GCL: {violation}")]
+    Violation {
+        /// The command or block whose answer was wrong.
+        request: String,
+        /// How.
+        violation: Violation,
     },
     /// No complete answer within the timeout.
     #[error("`{waiting_for}`: no complete answer within {after:?}")]
@@ -54,37 +66,12 @@ pub enum ClientError {
         /// The timeout.
         after: Duration,
     },
-    /// The echo differs from the line sent.
-    #[error("echo mismatch: sent \"{sent}\", the hand echoed \"{got}\"")]
-    EchoMismatch {
-        /// What was sent, escaped.
-        sent: String,
-        /// What came back, escaped.
-        got: String,
-    },
-    /// The answer fits no GCL framing.
-    #[error("`{command}`: framing error: {detail}; received \"{got}\"")]
-    Framing {
-        /// The request.
-        command: String,
-        /// What is wrong.
-        detail: String,
-        /// What came back, escaped.
-        got: String,
-    },
-    /// After `RESET` the banner lacks `BarrettHand Firmware`.
-    #[error("no `BarrettHand Firmware` banner after RESET; got {0:?}")]
-    NoBanner(Vec<String>),
-    /// The hand went away.
-    #[error("the hand disconnected")]
-    Disconnected,
-    /// Another link failure.
+    /// The link failed (the hand disconnected, an I/O error, a target that does not open).
     #[error("link: {0}")]
-    Link(LinkError),
-    /// A request that cannot be made: bad motor string, unknown parameter, value out of range,
-    /// RealTime call outside a loop.
-    #[error("{0}")]
-    Usage(String),
+    Link(#[from] LinkError),
+    /// A request that cannot be made; no byte was sent for it.
+    #[error(transparent)]
+    Misuse(#[from] Misuse),
 }
 
 fn describe(s: StatusBits) -> String {
@@ -92,35 +79,48 @@ fn describe(s: StatusBits) -> String {
     if names.is_empty() { String::new() } else { format!(" ({})", names.join(" | ")) }
 }
 
-impl From<LinkError> for ClientError {
-    fn from(e: LinkError) -> ClientError {
-        match e {
-            LinkError::Disconnected => ClientError::Disconnected,
-            e => ClientError::Link(e),
+impl ClientError {
+    /// The status bits, for a refusal.
+    pub fn status(&self) -> Option<StatusBits> {
+        match self {
+            ClientError::Refused { status, .. } => Some(*status),
+            _ => None,
         }
+    }
+
+    fn refused(request: &str, r: Refusal) -> ClientError {
+        ClientError::Refused { request: request.to_string(), status: r.status, code: r.code, lines: r.lines }
+    }
+
+    fn violation(request: &str, violation: Violation) -> ClientError {
+        ClientError::Violation { request: request.to_string(), violation }
     }
 }
 
-impl ClientError {
-    fn protocol(e: ProtocolError, command: &str) -> ClientError {
-        match e {
-            ProtocolError::Status { status, code, .. } => {
-                ClientError::Device { command: command.to_string(), status, code }
-            }
-            ProtocolError::EchoMismatch { sent, got } => ClientError::EchoMismatch { sent, got },
-            ProtocolError::Framing { detail, got } => {
-                ClientError::Framing { command: command.to_string(), detail, got }
-            }
-            ProtocolError::Usage(m) => ClientError::Usage(m),
+/// Sends one supervisory command over a borrowed link and returns its output lines: for
+/// one-off questions (`VERS`) by tools that own the link. A refusal is
+/// [`ClientError::Refused`], never lines.
+pub fn ask(link: &mut dyn Link, framing: Framing, line: &str, timeout: Duration) -> Result<Vec<String>, ClientError> {
+    let mut core = HostCore::new(framing);
+    let bytes = core.command(line)?;
+    link.send(&bytes)?;
+    let start = link.elapsed();
+    let mut buf = Vec::new();
+    loop {
+        match core.poll() {
+            Ok(Some(Answer::Done(lines))) => return Ok(lines),
+            Ok(Some(Answer::Refused(r))) => return Err(ClientError::refused(line, r)),
+            // A command is answered by lines or a refusal: `poll` gives nothing else.
+            Ok(Some(_)) | Ok(None) => {}
+            Err(v) => return Err(ClientError::violation(line, v)),
         }
-    }
-
-    /// The status bits, for a device error.
-    pub fn status(&self) -> Option<StatusBits> {
-        match self {
-            ClientError::Device { status, .. } => Some(*status),
-            _ => None,
+        let spent = link.elapsed().saturating_sub(start);
+        if spent >= timeout {
+            return Err(ClientError::Timeout { waiting_for: line.to_string(), after: timeout });
         }
+        buf.clear();
+        link.recv(&mut buf, timeout - spent)?;
+        core.handle_input(&buf);
     }
 }
 
@@ -224,7 +224,7 @@ pub fn parse_motors(text: &str) -> Result<MotorSet, ClientError> {
                 '1'..='4' => MotorSet::single(c as u8 - b'0').unwrap_or_default(),
                 'G' => MotorSet::FINGERS,
                 'S' => MotorSet::SPREAD,
-                _ => return Err(ClientError::Usage(format!("bad motor string `{text}`: use 1 2 3 4 G S"))),
+                _ => return Err(Misuse::BadMotors { text: text.to_string() }.into()),
             };
     }
     Ok(set)
@@ -258,7 +258,7 @@ pub struct Hand {
     sent: u64,
     received: u64,
     scratch: Vec<u8>,
-    early: Option<Result<Reply, ClientError>>,
+    early: Option<Result<Answer, ClientError>>,
 }
 
 impl std::fmt::Debug for Hand {
@@ -295,8 +295,8 @@ impl Hand {
             .sim_profile(opts.profile.as_deref())
             .or(opts.profile.as_deref())
             .unwrap_or(target::DEFAULT_SIM_PROFILE);
-        let profile =
-            crate::cli::load_profile(name).map_err(|e| ClientError::Usage(format!("profile `{name}`: {e:#}")))?;
+        let profile = crate::cli::load_profile(name)
+            .map_err(|e| Misuse::Profile { name: name.to_string(), detail: format!("{e:#}") })?;
         let link = target::open(target, opts)?;
         Ok(Hand::new(link, profile))
     }
@@ -361,17 +361,34 @@ impl Hand {
         })
     }
 
-    fn await_reply(&mut self, timeout: Duration, what: &str) -> Result<Reply, ClientError> {
+    /// Waits for the answer to `what`; a refusal is an error here.
+    fn await_reply(&mut self, timeout: Duration, what: &str) -> Result<Answer, ClientError> {
+        let answer = self.await_answer(timeout, what)?;
+        self.accept(answer, what)
+    }
+
+    fn accept(&mut self, answer: Answer, what: &str) -> Result<Answer, ClientError> {
+        if self.core.mode() == HostMode::Supervisory {
+            self.rt = None;
+        }
+        match answer {
+            Answer::Refused(r) => Err(ClientError::refused(what, r)),
+            a => Ok(a),
+        }
+    }
+
+    /// Waits for the answer to `what`, a refusal included.
+    fn await_answer(&mut self, timeout: Duration, what: &str) -> Result<Answer, ClientError> {
         let start = self.link.elapsed();
         loop {
             match self.core.poll() {
-                Ok(Some(r)) => return Ok(r),
+                Ok(Some(a)) => return Ok(a),
                 Ok(None) => {}
-                Err(e) => {
+                Err(v) => {
                     if self.core.mode() == HostMode::Supervisory {
                         self.rt = None;
                     }
-                    return Err(ClientError::protocol(e, what));
+                    return Err(ClientError::violation(what, v));
                 }
             }
             self.pump(start, timeout, || what.to_string())?;
@@ -401,15 +418,12 @@ impl Hand {
     }
 
     fn run(&mut self, line: &str, timeout: Duration) -> Result<Vec<String>, ClientError> {
-        let bytes = self.core.command(line).map_err(|e| ClientError::protocol(e, line))?;
+        let bytes = self.core.command(line)?;
         self.send(&bytes)?;
         match self.await_reply(timeout, line)? {
-            Reply::Lines(l) => Ok(l),
-            other => Err(ClientError::Framing {
-                command: line.to_string(),
-                detail: format!("unexpected answer {other:?}"),
-                got: String::new(),
-            }),
+            Answer::Done(l) => Ok(l),
+            // A command is answered by lines or a refusal: `poll` gives nothing else.
+            _ => Ok(Vec::new()),
         }
     }
 
@@ -435,7 +449,7 @@ impl Hand {
         self.send(&cr)?;
         match self.await_reply(self.timeouts.sync, "bare CR") {
             Ok(_) => return self.drain_until_quiet(),
-            Err(ClientError::Timeout { .. } | ClientError::Framing { .. }) => {}
+            Err(ClientError::Timeout { .. } | ClientError::Violation { .. }) => {}
             Err(e) => return Err(e),
         }
         // In the middle of a RealTime block a CR or a ^C is data: as many ^C as the longest
@@ -446,7 +460,7 @@ impl Hand {
             self.send(&abort)?;
             match self.await_reply(self.timeouts.sync, "^C") {
                 Ok(_) => return self.drain_until_quiet(),
-                Err(e @ (ClientError::Timeout { .. } | ClientError::Framing { .. })) => last = Some(e),
+                Err(e @ (ClientError::Timeout { .. } | ClientError::Violation { .. })) => last = Some(e),
                 Err(e) => return Err(e),
             }
         }
@@ -457,23 +471,16 @@ impl Hand {
     /// from before a resynchronisation (a banner, answers to garbage) must not be taken for
     /// the answer to the next command.
     fn drain_until_quiet(&mut self) -> Result<(), ClientError> {
-        let quiet = self.timeouts.sync.min(QUIET);
-        let start = self.link.elapsed();
-        loop {
-            self.scratch.clear();
-            let n = self.link.recv(&mut self.scratch, quiet)?;
-            self.received += n as u64;
-            if n == 0 || self.link.elapsed().saturating_sub(start) > self.timeouts.sync {
-                return Ok(());
-            }
-        }
+        let junk = drain(self.link.as_mut(), self.timeouts.sync.min(QUIET), self.timeouts.sync)?;
+        self.received += junk.len() as u64;
+        Ok(())
     }
 
     /// `RESET`: returns the banner lines, checked for `BarrettHand Firmware`.
     pub fn reset(&mut self) -> Result<Vec<String>, ClientError> {
         let banner = self.run("RESET", self.timeouts.motion)?;
         if !banner.iter().any(|l| l.contains("BarrettHand Firmware")) {
-            return Err(ClientError::NoBanner(banner));
+            return Err(ClientError::violation("RESET", Violation::NoBanner { lines: banner }));
         }
         Ok(banner)
     }
@@ -533,7 +540,7 @@ impl Hand {
     /// finish: then [`Hand::finish`] waits for the end, or [`Hand::abort`] stops it.
     pub fn start(&mut self, line: &str) -> Result<(), ClientError> {
         self.early = None;
-        let bytes = self.core.command(line).map_err(|e| ClientError::protocol(e, line))?;
+        let bytes = self.core.command(line)?;
         self.send(&bytes)?;
         let timeout = self.timeouts.reply;
         let start = self.link.elapsed();
@@ -542,15 +549,15 @@ impl Hand {
                 // Finished already (an error, or a command without motion)?
                 return match self.core.poll() {
                     Ok(None) => Ok(()),
-                    Ok(Some(r)) => {
-                        self.early = Some(Ok(r));
+                    Ok(Some(a)) => {
+                        self.early = Some(self.accept(a, line));
                         Ok(())
                     }
-                    Err(e) => Err(ClientError::protocol(e, line)),
+                    Err(v) => Err(ClientError::violation(line, v)),
                 };
             }
-            if let Err(e) = self.core.poll() {
-                return Err(ClientError::protocol(e, line));
+            if let Err(v) = self.core.poll() {
+                return Err(ClientError::violation(line, v));
             }
             self.pump(start, timeout, || format!("echo of `{line}`"))?;
         }
@@ -560,11 +567,11 @@ impl Hand {
     /// output lines.
     pub fn finish(&mut self) -> Result<Vec<String>, ClientError> {
         match self.early.take() {
-            Some(Ok(Reply::Lines(l))) => Ok(l),
+            Some(Ok(Answer::Done(l))) => Ok(l),
             Some(Ok(_)) => Ok(Vec::new()),
             Some(Err(e)) => Err(e),
             None => match self.await_reply(self.timeouts.motion, "the command in progress")? {
-                Reply::Lines(l) => Ok(l),
+                Answer::Done(l) => Ok(l),
                 _ => Ok(Vec::new()),
             },
         }
@@ -578,15 +585,16 @@ impl Hand {
         self.send(&b)?;
         self.rt = None;
         match self.await_reply(self.timeouts.reply, "^C")? {
-            Reply::Prompt(lines) => Ok(lines),
+            Answer::Prompt(lines) => Ok(lines),
             _ => Ok(Vec::new()),
         }
     }
 
     fn values(line: &str, what: &str) -> Result<Vec<i64>, ClientError> {
-        line.split_whitespace().map(|v| v.parse::<i64>()).collect::<Result<Vec<_>, _>>().map_err(|_| {
-            ClientError::Framing { command: what.to_string(), detail: "not a number".into(), got: line.into() }
-        })
+        line.split_whitespace()
+            .map(|v| v.parse::<i64>())
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|_| ClientError::violation(what, Violation::NotANumber { line: line.to_string() }))
     }
 
     /// `FGET name`: one value per motor (motor order).
@@ -599,11 +607,7 @@ impl Hand {
         let l = self.prefixed(motors, &format!("FGET {}", names.join(" ")))?;
         let lines = self.command(&l)?;
         if lines.len() != names.len() {
-            return Err(ClientError::Framing {
-                command: l,
-                detail: format!("{} lines for {} parameters", lines.len(), names.len()),
-                got: lines.join(" | "),
-            });
+            return Err(ClientError::violation(&l, Violation::LineCount { expected: names.len(), lines }));
         }
         lines.iter().map(|line| Self::values(line, &l)).collect()
     }
@@ -637,11 +641,7 @@ impl Hand {
         let l = format!("PGET {name}");
         let lines = self.command(&l)?;
         let v = lines.first().map(|line| Self::values(line, &l)).transpose()?.unwrap_or_default();
-        v.first().copied().ok_or_else(|| ClientError::Framing {
-            command: l,
-            detail: "no value".into(),
-            got: lines.join(" | "),
-        })
+        v.first().copied().ok_or_else(|| ClientError::violation(&l, Violation::LineCount { expected: 1, lines }))
     }
 
     /// `PSET name value`: a global parameter.
@@ -673,7 +673,7 @@ impl Hand {
     pub fn rt_start(&mut self, motors: &str) -> Result<(), ClientError> {
         let set = parse_motors(motors)?;
         if set.is_empty() {
-            return Err(ClientError::Usage("RTStart needs motors, e.g. \"123\"".into()));
+            return Err(Misuse::NoMotors.into());
         }
         let profile = self.profile.clone();
         let mut store = ParamStore::defaults(&profile);
@@ -731,18 +731,10 @@ impl Hand {
         }
         let layout = RtLayout::compute(&profile, &store, set);
         let line = format!("{digits}LOOP");
-        let bytes = self.core.start_loop(&line, layout.clone()).map_err(|e| ClientError::protocol(e, &line))?;
+        let bytes = self.core.start_loop(&line, layout.clone())?;
         self.send(&bytes)?;
-        match self.await_reply(self.timeouts.reply, &line)? {
-            Reply::LoopStarted => {}
-            other => {
-                return Err(ClientError::Framing {
-                    command: line,
-                    detail: format!("unexpected {other:?}"),
-                    got: String::new(),
-                });
-            }
-        }
+        // `LOOP` is answered by `*` or a refusal: `poll` gives nothing else.
+        self.await_reply(self.timeouts.reply, &line)?;
         let n_control = layout.control.fields.len();
         self.rt =
             Some(RtSession { layout, control: vec![0; n_control], feedback: None, positions, lfvc, lfdpc, updates: 0 });
@@ -755,18 +747,20 @@ impl Hand {
     }
 
     fn session(&mut self) -> Result<&mut RtSession, ClientError> {
-        self.rt.as_mut().ok_or_else(|| ClientError::Usage("not in RealTime mode: call rt_start first".into()))
+        self.rt.as_mut().ok_or(ClientError::Misuse(Misuse::NotInRealTime))
     }
 
     fn set_control(&mut self, motor: char, name: &str, value: i64) -> Result<(), ClientError> {
         let m = parse_motors(&motor.to_string())?;
         let Some(m) = m.iter().next().filter(|_| m.len() == 1) else {
-            return Err(ClientError::Usage(format!("`{motor}` is not one motor")));
+            return Err(Misuse::NotOneMotor { motor }.into());
         };
         let s = self.session()?;
-        let i = s.layout.control.position(Some(m), name).ok_or_else(|| {
-            ClientError::Usage(format!("motor {m} has no {name} in its control block: set the flag with rt_set_flags"))
-        })?;
+        let i = s
+            .layout
+            .control
+            .position(Some(m), name)
+            .ok_or_else(|| Misuse::NoSuchField { motor: m, name: name.to_string() })?;
         let f = &s.layout.control.fields[i];
         s.control[i] = value.clamp(f.min(), f.max());
         Ok(())
@@ -805,10 +799,10 @@ impl Hand {
         };
         let values = self.session()?.control.clone();
         let what = format!("RealTime block {}", header.byte() as char);
-        let bytes = self.core.block(header, &values).map_err(|e| ClientError::protocol(e, &what))?;
+        let bytes = self.core.block(header, &values)?;
         self.send(&bytes)?;
         match self.await_reply(self.timeouts.block, &what)? {
-            Reply::Feedback(v) => {
+            Answer::Feedback(v) => {
                 let s = self.session()?;
                 s.updates += 1;
                 for m in s.layout.motors.iter() {
@@ -913,7 +907,7 @@ mod tests {
         assert_eq!(e.to_string(), "`1FSET DP 999999`: the hand answered ERR 128 (INVALID_VALUE)");
         assert!(h.error_text(128).unwrap()[0].contains("128"));
         assert!(h.error_message(StatusBits::INVALID_VALUE).contains("128"));
-        assert!(matches!(h.command("NONESUCH"), Err(ClientError::Device { code: 32, .. })));
+        assert!(matches!(h.command("NONESUCH"), Err(ClientError::Refused { code: 32, .. })));
         assert!(h.pget("TEMP").unwrap() > 0);
     }
 

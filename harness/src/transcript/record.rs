@@ -24,6 +24,7 @@ use gcl_model::{Device, DeviceConfig, Mode, Profile};
 
 use super::script::{Action, Script, ScriptStep};
 use super::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, HostBytes, Piece, Step, Transcript};
+use crate::client::core::Framing;
 use crate::link::{Link, LinkError, byte_time};
 
 /// The text every banner contains (decision `bh8-banner-text`, notes: RESET).
@@ -71,24 +72,15 @@ pub struct Captured {
     pub timed_out: bool,
 }
 
-/// Reads and discards whatever the hand sends until it has been quiet for `quiet` (a power-up
-/// banner, the tail of an earlier conversation), for at most `limit`.
-pub fn drain(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<Vec<u8>, LinkError> {
-    let start = link.elapsed();
-    let mut junk = Vec::new();
-    loop {
-        let n = link.recv(&mut junk, quiet)?;
-        if n == 0 || link.elapsed().saturating_sub(start) >= limit {
-            return Ok(junk);
-        }
-    }
-}
+pub use crate::link::drain;
 
 /// Runs the steps against `link` and captures each answer. The link should be fresh or idle:
 /// anything it sends before the first step is drained first.
 pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) -> Result<Vec<Captured>, LinkError> {
     let profile = &opts.profile;
-    let eol_prompt: Vec<u8> = [profile.framing.line_ending.as_bytes(), profile.framing.prompt.as_bytes()].concat();
+    // The recorder writes down whatever the hand says, GCL or not, so it does not parse the
+    // answer; it only needs the host core's notion of where an answer ends.
+    let framing = Framing::of(profile);
     let mut shadow = Device::new(profile.clone(), DeviceConfig::default());
     shadow.clear_output();
     drain(link, opts.quiet, Duration::from_secs(10))?;
@@ -117,7 +109,7 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
         let timeout = step.timeout.unwrap_or(opts.timeout);
         let mut buf = std::mem::take(&mut carry);
         let end = |buf: &[u8]| -> Option<usize> {
-            let prompt_end = find(buf, &eol_prompt).map(|i| i + eol_prompt.len());
+            let prompt_end = framing.prompt_end(buf);
             if was_loop {
                 let size_end = (buf.len() >= shadow_out.len() && !shadow_out.is_empty()).then_some(shadow_out.len());
                 return match (prompt_end, size_end) {
