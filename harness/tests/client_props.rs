@@ -153,6 +153,83 @@ proptest! {
         prop_assert!(!matches!(r, Err(ClientError::Misuse(_))), "{:?}", r);
         prop_assert!(hand.elapsed() < Duration::from_secs(60));
     }
+
+    /// A hand that echoes each line and then answers with GCL-like pieces in any order (line
+    /// breaks, prompts, `ERR`, numbers, words, `*`): whatever the client makes of it, it is
+    /// never the caller's fault, and every operation ends.
+    #[test]
+    fn a_mimicking_hand_never_blames_the_caller(
+        pieces in proptest::collection::vec(0usize..MIMIC_PIECES.len(), 0..12),
+        op in 0u8..7,
+    ) {
+        let p = Profile::builtin("seed").unwrap();
+        let mut hand = Hand::new(Box::new(Mimic::new(pieces)), p);
+        hand.set_timeouts(Timeouts {
+            reply: Duration::from_millis(200),
+            motion: Duration::from_millis(200),
+            block: Duration::from_millis(200),
+            sync: Duration::from_millis(50),
+        });
+        let r: Result<(), ClientError> = match op {
+            0 => hand.command("FGET DP").map(drop),
+            1 => hand.reset().map(drop),
+            2 => hand.rt_start("123"),
+            3 => hand.get("123", "P").map(drop),
+            4 => hand.pget("TEMP").map(drop),
+            5 => hand.start("C").and_then(|()| hand.finish()).map(drop),
+            _ => hand.abort().map(drop),
+        };
+        prop_assert!(!matches!(r, Err(ClientError::Misuse(_))), "{:?}", r);
+        prop_assert!(hand.elapsed() < Duration::from_secs(60));
+    }
+}
+
+/// What a [`Mimic`] answers with, after the echo.
+const MIMIC_PIECES: &[&[u8]] =
+    &[b"\n\r", b"=> ", b"ERR ", b"ERR 32", b"128", b"-7", b"x", b" ", b"*", b"BarrettHand Firmware", b"\n\r=> "];
+
+/// A link that echoes what it is sent (without the CR) and then answers with the chosen
+/// pieces, then a prompt; silence after that, on a simulated clock.
+struct Mimic {
+    pieces: Vec<usize>,
+    queue: Vec<u8>,
+    now: Duration,
+}
+
+impl Mimic {
+    fn new(pieces: Vec<usize>) -> Mimic {
+        Mimic { pieces, queue: Vec::new(), now: Duration::ZERO }
+    }
+}
+
+impl Link for Mimic {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.queue.extend(bytes.iter().filter(|b| **b != b'\r' && **b != 3));
+        for i in &self.pieces {
+            self.queue.extend_from_slice(MIMIC_PIECES[*i]);
+        }
+        self.queue.extend_from_slice(b"\n\r=> ");
+        Ok(())
+    }
+
+    fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+        if self.queue.is_empty() {
+            self.now += timeout;
+            return Ok(0);
+        }
+        self.now += Duration::from_millis(1);
+        let n = self.queue.len().min(5);
+        buf.extend(self.queue.drain(..n));
+        Ok(n)
+    }
+
+    fn elapsed(&self) -> Duration {
+        self.now
+    }
+
+    fn describe(&self) -> String {
+        "mimic".into()
+    }
 }
 
 /// A hand that refuses `VERS` has no firmware version: its `ERR 32` is a refusal, not a

@@ -17,6 +17,10 @@
 //! ```
 //!
 //! Every wait is bounded by [`Timeouts`]; no bytes from a hand can make it panic or hang.
+//! A [`ClientError`] says who is to blame: the hand refused ([`ClientError::Refused`], its
+//! `ERR n`), the hand broke GCL ([`ClientError::Violation`]), it was too slow, the link failed,
+//! or the caller asked for something no hand can be asked ([`ClientError::Misuse`], raised
+//! before a byte is sent and never by bytes from a hand).
 
 pub mod core;
 pub mod programs;
@@ -912,6 +916,18 @@ mod tests {
     }
 
     #[test]
+    fn a_misuse_sends_nothing() {
+        let mut h = hand("seed");
+        h.initialize().unwrap();
+        let before = h.wire_bytes();
+        assert!(matches!(h.command("FGET P\rHI"), Err(ClientError::Misuse(Misuse::ControlInLine { .. }))));
+        assert!(matches!(h.close("5"), Err(ClientError::Misuse(Misuse::BadMotors { .. }))));
+        assert!(matches!(h.rt_update(), Err(ClientError::Misuse(Misuse::NotInRealTime))));
+        assert!(matches!(h.rt_start(""), Err(ClientError::Misuse(Misuse::NoMotors))));
+        assert_eq!(h.wire_bytes(), before);
+    }
+
+    #[test]
     fn realtime_operations() {
         let mut h = hand("seed");
         h.initialize().unwrap();
@@ -944,7 +960,7 @@ mod tests {
     }
 
     #[test]
-    fn a_refused_loop_is_a_device_error() {
+    fn a_refused_loop_is_a_refusal() {
         let mut h = hand("seed");
         h.resync().unwrap();
         let e = h.rt_start("123").unwrap_err();
