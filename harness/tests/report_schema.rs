@@ -30,6 +30,7 @@ fn reports_with_every_kind_of_verdict_validate_against_the_schema() {
         refuse: vec![],
         baud: Some(38400),
         keep_transcripts: false,
+        control: Default::default(),
     };
     let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
     for v in [Verdict::Pass, Verdict::Fail, Verdict::Skip, Verdict::Xfail] {

@@ -34,6 +34,27 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
     suite.push_attribute(("time", time.as_str()));
     suite.push_attribute(("timestamp", r.started.as_str()));
     w.write_event(Event::Start(suite))?;
+    // The pre-flight, an early end and the root-cause groups lead, as properties CI shows.
+    let mut props: Vec<(String, String)> = Vec::new();
+    if let Some(p) = &r.preflight {
+        props.push(("preflight".into(), p.clone()));
+    }
+    if let Some(st) = &r.stopped {
+        props.push(("stopped".into(), st.message.clone()));
+    }
+    for (i, g) in r.groups.iter().enumerate() {
+        props.push((format!("root-cause-{}", i + 1), g.summary.clone()));
+    }
+    if !props.is_empty() {
+        w.write_event(Event::Start(BytesStart::new("properties")))?;
+        for (k, v) in &props {
+            let mut e = BytesStart::new("property");
+            e.push_attribute(("name", k.as_str()));
+            e.push_attribute(("value", v.as_str()));
+            w.write_event(Event::Empty(e))?;
+        }
+        w.write_event(Event::End(BytesEnd::new("properties")))?;
+    }
     for c in &r.cases {
         let classname = format!("gcl.{}.{}", r.profile, c.level);
         let t = format!("{:.3}", c.duration_ms / 1000.0);
@@ -47,11 +68,8 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
             let mut b = format!("{}\n{}\nclauses: {}\n", c.verdict, c.title, c.clauses.join(", "));
             if let Some(d) = &c.diff {
                 b.push_str(&format!(
-                    "step {} parts at byte {}\nexpected: \"{}\"\nactual:   \"{}\"\n",
-                    d.step + 1,
-                    d.offset,
-                    d.expected,
-                    d.actual
+                    "step {} parts at byte {}\nexpected: \"{}{}\"\nactual:   \"{}{}\"\n",
+                    d.step, d.offset, d.before, d.expected, d.before, d.actual
                 ));
             }
             if let Some(t) = &c.transcript {
