@@ -233,6 +233,9 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
     }
 }
 
+/// A hand that sends more than this in answer to the liveness probe floods: it is not live.
+const LIVENESS_MAX_BYTES: usize = 1 << 20;
+
 /// Sends a bare CR (after ^C) and waits for a prompt: is anybody there?
 pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<bool, LinkError> {
     // Any prompt-like answer counts: a hand with a malformed prompt is alive, and its cases
@@ -240,13 +243,28 @@ pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Re
     let prompt = profile.framing.prompt.trim_end().as_bytes().to_vec();
     link.send(&[profile.framing.abort])?;
     link.send(&[profile.framing.terminator])?;
-    let mut buf = Vec::new();
-    let ok = link.recv_until(&mut buf, timeout, &|b: &[u8]| {
-        b.windows(prompt.len()).filter(|w| *w == prompt.as_slice()).count() >= 2
-    })?;
+    // Count prompts as bytes arrive, keeping only a prompt's length of tail: a hand that
+    // floods instead of answering costs time, never memory.
+    let start = link.elapsed();
+    let (mut seen, mut tail, mut total) = (0usize, Vec::new(), 0usize);
+    let mut chunk = Vec::new();
+    while seen < 2 && total <= LIVENESS_MAX_BYTES {
+        let spent = link.elapsed().saturating_sub(start);
+        if spent >= timeout {
+            break;
+        }
+        chunk.clear();
+        link.recv(&mut chunk, timeout - spent)?;
+        total += chunk.len();
+        tail.extend_from_slice(&chunk);
+        seen += tail.windows(prompt.len().max(1)).filter(|w| *w == prompt.as_slice() || prompt.is_empty()).count();
+        // Keep what could be the start of a prompt split across reads.
+        let cut = tail.len().saturating_sub(prompt.len().saturating_sub(1));
+        tail.drain(..cut);
+    }
     // Let a slow second prompt land before the first case starts.
-    crate::transcript::record::drain(link, Duration::from_millis(20), timeout)?;
-    Ok(ok)
+    let settled = discard(link, Duration::from_millis(20), timeout)?;
+    Ok(seen >= 2 && settled.quiet)
 }
 
 /// Asks the hand for `VERS` and returns its lines (empty if it answered nothing useful).

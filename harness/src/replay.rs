@@ -339,6 +339,9 @@ fn at_line(line: usize) -> String {
 /// Bytes before the parting byte shown for context.
 const CONTEXT: usize = 24;
 
+/// Bytes of an answer shown after the parting byte in a rendering.
+const SHOWN_AFTER: usize = 400;
+
 /// Bytes of a flood shown in a rendering.
 const FLOOD_SHOWN: usize = 200;
 
@@ -348,7 +351,11 @@ fn side_by_side(got: &[u8], offset: usize, expected_rest: &str, form: Form, trai
     let lead = if from > 0 { "…" } else { "" };
     let (q, sep) = if form == Form::Text { ("\"", "") } else { ("", " ") };
     let before = show(&got[from..offset], form);
-    let after = show(&got[offset..], form);
+    let shown = (got.len() - offset).min(SHOWN_AFTER);
+    let mut after = show(&got[offset..offset + shown], form);
+    if shown < got.len() - offset {
+        let _ = write!(after, "… ({} more bytes)", got.len() - offset - shown);
+    }
     let joint = if before.is_empty() || after.is_empty() { "" } else { sep };
     let joint_e = if before.is_empty() || expected_rest.is_empty() { "" } else { sep };
     let expected =
@@ -632,6 +639,65 @@ mod tests {
         assert_eq!((to.step, to.offset), (0, 4));
         assert_eq!(to.expected, " ");
         assert!(to.waited >= DEFAULT_STEP_TIMEOUT);
+    }
+
+    /// A hand that answers RESET with an endless stream (never the banner's end).
+    struct Flooding {
+        inner: SimLink,
+        flooding: bool,
+    }
+
+    impl Link for Flooding {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            if bytes.starts_with(b"RESET") {
+                self.flooding = true;
+                return Ok(());
+            }
+            self.inner.send(bytes)
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            if self.flooding {
+                // The echo, then text that never reaches the banner.
+                self.inner.pause(Duration::from_millis(1));
+                let before = buf.len();
+                if before == 0 {
+                    buf.extend_from_slice(b"RESET\n\r");
+                }
+                buf.extend(std::iter::repeat_n(b'x', 65536));
+                return Ok(buf.len() - before);
+            }
+            self.inner.recv(buf, timeout)
+        }
+        fn elapsed(&self) -> Duration {
+            self.inner.elapsed()
+        }
+        fn describe(&self) -> String {
+            "flooding".into()
+        }
+    }
+
+    #[test]
+    fn a_hand_that_floods_an_open_elision_fails_with_a_bounded_prefix() {
+        let text = "gcl-transcript 1\nid: t\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\nsend \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"RESET\\r\"\nexpect within 10s \"RESET{any}BarrettHand Firmware{any}\\n\\r=> \"\n";
+        let t = parse(text).unwrap();
+        let mut link = Flooding { inner: sim(vec![]), flooding: false };
+        let out = replay(&t, &mut link, &ReplayOptions::default());
+        let ReplayOutcome::Flooded(f) = &out else { panic!("{}", out.render()) };
+        assert_eq!(f.step, 1);
+        assert_eq!(f.ceiling, default_ceiling(&t.steps[1]));
+        assert_eq!(out.exchange()[1].received.len(), f.ceiling, "only the prefix up to the ceiling is kept");
+        assert!(out.summary().starts_with("the hand flooded at step 2"), "{}", out.summary());
+        // A budget from the model sets the ceiling instead.
+        let opts = ReplayOptions {
+            budgets: vec![
+                StepBudget { deadline: Duration::from_secs(1), ceiling: 100 },
+                StepBudget { deadline: Duration::from_secs(1), ceiling: 5000 },
+            ],
+            ..ReplayOptions::default()
+        };
+        let mut link = Flooding { inner: sim(vec![]), flooding: false };
+        let out = replay(&t, &mut link, &opts);
+        assert_eq!(out.exchange().last().map(|e| e.received.len()), Some(5000), "{}", out.summary());
     }
 
     #[test]

@@ -438,6 +438,19 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn long_actuals_are_cut_with_a_note() {
+        let long = "é".repeat(10_000);
+        let cut = truncate_note(&long, MAX_SHOWN);
+        assert!(cut.len() < MAX_SHOWN + 64, "{}", cut.len());
+        assert!(
+            cut.ends_with(&format!("… [{} more bytes not shown]", long.len() - MAX_SHOWN)),
+            "{}",
+            &cut[cut.len() - 40..]
+        );
+        assert_eq!(truncate_note("short", MAX_SHOWN), "short");
+    }
+
+    #[test]
     fn atomic_write_replaces_whole_files() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("report.json");
