@@ -397,6 +397,7 @@ pub fn run_with_events(
     }
     let mut failures = 0usize;
     let mut timeouts_in_a_row = 0usize;
+    let mut first_timeout = String::new();
     let mut stopped: Option<Stopped> = None;
     for case in selected {
         if let Some(st) = &stopped {
@@ -473,6 +474,9 @@ pub fn run_with_events(
             }
         }
         timeouts_in_a_row = if r.verdict == Verdict::Timeout { timeouts_in_a_row + 1 } else { 0 };
+        if timeouts_in_a_row == 1 {
+            first_timeout = case.id().to_string();
+        }
         if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile) {
             let step = outcome.failed_step().unwrap_or(0);
             signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
@@ -539,11 +543,12 @@ pub fn run_with_events(
                 _ => reopen(opts, probe_timeout).is_ok(),
             };
             if !alive {
+                let at = std::mem::take(&mut first_timeout);
                 let message = format!(
-                    "the hand stopped answering at case {id} ({} timeouts in a row, then no answer to the liveness probe)",
+                    "the hand stopped answering at case {at} ({} timeouts in a row from there, then no answer to the liveness probe)",
                     opts.control.dead_after
                 );
-                stopped = Some(Stopped { cause: StopCause::DeadHand, case: id.clone(), message });
+                stopped = Some(Stopped { cause: StopCause::DeadHand, case: at, message });
             }
         }
         if let Some(st) = &stopped {

@@ -98,7 +98,15 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
         link.send(&p.send)?;
         let deadline = policy.deadline(predicted).max(policy.silent_wait);
         let actual = collect(link, policy.deadline(predicted).min(deadline), deadline)?;
+        let silent = actual.is_empty();
         answers.push((p, expected, actual));
+        if silent {
+            // A hand that says nothing at all says nothing to the rest either.
+            let what = answers.last().map_or("", |(p, _, _)| p.what);
+            return Ok(Preflight {
+                findings: vec![format!("no answer to {what}; the hand may have stopped answering")],
+            });
+        }
     }
     let fr = &profile.framing;
     let eol = fr.line_ending.as_bytes();

@@ -131,6 +131,8 @@ fn a_hand_that_stops_answering_ends_the_run_early_with_exit_2() {
     assert!(stderr.lines().any(|l| l.starts_with(&line)), "one line says where: {stderr}");
     let timeouts = r.cases.iter().filter(|c| c.verdict == Verdict::Timeout).count();
     assert_eq!(timeouts, 2, "{:?}", r.summary);
+    let first = r.cases.iter().find(|c| c.verdict == Verdict::Timeout).unwrap();
+    assert_eq!(st.case, first.id, "the case where it stopped answering is the first of the timeouts");
     let passed = r.cases.iter().filter(|c| c.verdict == Verdict::Pass).count();
     assert!(passed > 3, "the hand answered at first: {:?}", r.summary);
     let not_run = r.cases.iter().filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:"))).count();

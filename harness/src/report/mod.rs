@@ -124,7 +124,8 @@ pub enum StopCause {
 pub struct Stopped {
     /// Why.
     pub cause: StopCause,
-    /// The last case that ran.
+    /// Where: the case that reached `--max-failures`, or the first of the timeouts in a row
+    /// after which the hand did not answer.
     pub case: String,
     /// One line for people.
     pub message: String,
