@@ -432,7 +432,10 @@ pub fn run_with_events(
             }
         };
         let mut case_opts = ropts.clone();
+        // The in-process model's time is simulated: waiting costs nothing there, so it keeps
+        // the goldens' deadlines and the suite's in-process speed.
         if opts.step_timeout.is_none()
+            && !fresh_per_case
             && let Some(pred) = crate::deadline::predict(case, &opts.profile)
         {
             case_opts.budgets = crate::deadline::budgets(&pred, &policy, link_baud);
