@@ -239,9 +239,10 @@ type Member<'a> = (usize, usize, Option<&'a str>);
 /// case (cases whose result does not fail the run, such as XFAIL, are left out).
 ///
 /// A group names the clause of the case most likely at fault: among the cases that own the
-/// group's failures ([`owner`]), those whose clause holds a failure's hint first (the status
-/// number, `echo`), then those whose clause names the command being answered, then the
-/// smallest golden transcript.
+/// group's failures (the case itself when the failing step is part of its own check, else
+/// the smallest case whose check holds that exchange), those whose clause holds a failure's
+/// hint first (the status number, `echo`), then those whose clause names the command being
+/// answered, then the smallest golden transcript.
 pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure]) -> Vec<FailureGroup> {
     let find = |id: &str| cases.iter().find(|c| c.id() == id);
     let mut by: BTreeMap<&Signature, Vec<Member<'_>>> = BTreeMap::new();
