@@ -233,6 +233,10 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
     }
 }
 
+/// After a failing case, the hand must fall quiet within this long, or the link is reopened
+/// (and after `--dead-after` such cases in a row the run ends: the hand floods).
+const AFTER_FAILURE_DRAIN: Duration = Duration::from_secs(2);
+
 /// A hand that sends more than this in answer to the liveness probe floods: it is not live.
 const LIVENESS_MAX_BYTES: usize = 1 << 20;
 
@@ -354,7 +358,7 @@ pub fn run_with_events(
                 on(RunEvent::Preflight(&line));
                 preflight = Some(line);
             }
-            let _ = discard(l.as_mut(), Duration::from_millis(50), Duration::from_secs(5));
+            let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
         }
         if !fresh_per_case {
             shared = Some(l);
@@ -398,6 +402,7 @@ pub fn run_with_events(
     let mut failures = 0usize;
     let mut timeouts_in_a_row = 0usize;
     let mut first_timeout = String::new();
+    let (mut unquiet_in_a_row, mut first_unquiet) = (0usize, String::new());
     let mut stopped: Option<Stopped> = None;
     for case in selected {
         if let Some(st) = &stopped {
@@ -516,11 +521,21 @@ pub fn run_with_events(
                     Verdict::Timeout => 20,
                     _ => 50,
                 });
-                match discard(l, quiet, Duration::from_secs(5)) {
+                match discard(l, quiet, AFTER_FAILURE_DRAIN) {
                     Ok(d) if d.quiet => {}
-                    _ => shared = None,
+                    Ok(_) => {
+                        shared = None;
+                        unquiet_in_a_row += 1;
+                        if unquiet_in_a_row == 1 {
+                            first_unquiet = case.id().to_string();
+                        }
+                    }
+                    Err(_) => shared = None,
                 }
             }
+        }
+        if r.verdict == Verdict::Pass {
+            unquiet_in_a_row = 0;
         }
         if r.verdict.fails_run() {
             failures += 1;
@@ -539,6 +554,13 @@ pub fn run_with_events(
                 if failures == 1 { "" } else { "s" }
             );
             stopped = Some(Stopped { cause: StopCause::MaxFailures, case: id.clone(), message });
+        } else if opts.control.dead_after > 0 && unquiet_in_a_row >= opts.control.dead_after {
+            let at = std::mem::take(&mut first_unquiet);
+            let message = format!(
+                "the hand floods: it did not stop sending after {} failing cases in a row, from case {at}",
+                opts.control.dead_after
+            );
+            stopped = Some(Stopped { cause: StopCause::Flooding, case: at, message });
         } else if opts.control.dead_after > 0 && timeouts_in_a_row >= opts.control.dead_after {
             timeouts_in_a_row = 0;
             let alive = match shared.as_deref_mut() {
@@ -560,7 +582,7 @@ pub fn run_with_events(
     }
 
     let after = match (&stopped, shared.as_deref_mut()) {
-        (Some(s), _) if s.cause == StopCause::DeadHand => false,
+        (Some(s), _) if s.cause != StopCause::MaxFailures => false,
         (_, Some(l)) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
         _ => match open_link() {
             Ok(mut l) => liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false),

@@ -142,6 +142,42 @@ fn a_hand_that_stops_answering_ends_the_run_early_with_exit_2() {
 }
 
 #[test]
+fn a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    // Prompts enough for the liveness probe, then an endless stream of zero bytes.
+    let hand = script(dir.path(), "flood.sh", "printf '\\n\\r=> \\n\\r=> \\n\\r=> '\nsleep 0.4\nexec cat /dev/zero\n");
+    let out = dir.path().join("r");
+    let target = format!("exec:sh {}", hand.display());
+    let o = gcl(&[
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--dead-after",
+        "2",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{stdout}{stderr}");
+    let r = report(&out);
+    let st = r.stopped.as_ref().expect("stopped early");
+    assert_eq!(st.cause, StopCause::Flooding, "{st:?}");
+    assert!(stderr.contains("the hand floods"), "{stderr}");
+    for f in ["report.json", "junit.xml", "report.html", "results.jsonl"] {
+        let len = std::fs::metadata(out.join(f)).unwrap().len();
+        assert!(len < 2 << 20, "{f} is {len} bytes");
+    }
+    let failed: Vec<_> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
+    assert_eq!(failed.len(), 2, "{:?}", r.summary);
+    for c in failed {
+        let d = c.diff.as_ref().unwrap();
+        assert!(d.actual.len() <= gcl_harness::report::MAX_SHOWN + 64, "{}", d.actual.len());
+    }
+}
+
+#[test]
 fn a_hand_that_restarts_is_drained_and_probed_before_the_next_case() {
     let dir = tempfile::tempdir().unwrap();
     let flag = dir.path().join("started-once");

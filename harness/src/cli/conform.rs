@@ -52,7 +52,8 @@ pub struct SuiteArgs {
     #[arg(long, conflicts_with = "max_failures")]
     pub fail_fast: bool,
     /// After N timeouts in a row, probe the hand; if it does not answer, the rest of the cases
-    /// are not run and the run exits 2 (0: never).
+    /// are not run and the run exits 2. The same after N failing cases in a row after which the
+    /// hand would not stop sending (0: never).
     #[arg(long, value_name = "N", default_value_t = crate::conform::DEFAULT_DEAD_AFTER as u64)]
     pub dead_after: u64,
     /// Skip the framing pre-flight (a few exchanges before the suite that name gross framing
@@ -336,7 +337,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
     }
     if let Some(st) = &out.report.stopped
-        && st.cause == StopCause::DeadHand
+        && st.cause != StopCause::MaxFailures
     {
         eprintln!("gcl conform: {}", st.message);
         return Ok(EXIT_ERROR);

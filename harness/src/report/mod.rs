@@ -117,6 +117,8 @@ pub enum StopCause {
     MaxFailures,
     /// The hand stopped answering: consecutive TIMEOUTs, then no answer to the liveness probe.
     DeadHand,
+    /// The hand floods: after consecutive failing cases it did not stop sending.
+    Flooding,
 }
 
 /// A run that ended early: the remaining cases are SKIP, "not run".
@@ -124,8 +126,8 @@ pub enum StopCause {
 pub struct Stopped {
     /// Why.
     pub cause: StopCause,
-    /// Where: the case that reached `--max-failures`, or the first of the timeouts in a row
-    /// after which the hand did not answer.
+    /// Where: the case that reached `--max-failures`, or the first of the timeouts (or
+    /// floods) in a row after which the run ended.
     pub case: String,
     /// One line for people.
     pub message: String,
