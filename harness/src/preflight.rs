@@ -209,6 +209,52 @@ mod tests {
         run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap()
     }
 
+    /// A hand that answers each probe with a fixed text.
+    struct Scripted {
+        answers: Vec<(&'static [u8], &'static [u8])>,
+        pending: Vec<u8>,
+        now: Duration,
+    }
+
+    impl Link for Scripted {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            if let Some((_, a)) = self.answers.iter().find(|(s, _)| *s == bytes) {
+                self.pending.extend_from_slice(a);
+            }
+            Ok(())
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            self.now += timeout;
+            let n = self.pending.len();
+            buf.append(&mut self.pending);
+            Ok(n)
+        }
+        fn elapsed(&self) -> Duration {
+            self.now
+        }
+        fn describe(&self) -> String {
+            "scripted".into()
+        }
+    }
+
+    #[test]
+    fn a_status_line_in_another_form_is_named() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut hand = Scripted {
+            answers: vec![
+                (b"\x03", b"\n\r=> "),
+                (b"\r", b"\n\r=> "),
+                (b"ZZQX\r", b"ZZQX\n\rError 32!\n\r=> "),
+                (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
+            ],
+            pending: Vec::new(),
+            now: Duration::ZERO,
+        };
+        let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap();
+        assert_eq!(r.findings, vec!["an error status reads `Error 32!`, not in the form `ERR 32`"], "{r:?}");
+        assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
+    }
+
     #[test]
     fn a_healthy_hand_passes_the_pre_flight() {
         let r = probe(vec![]);
