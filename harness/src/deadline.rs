@@ -6,7 +6,8 @@
 //!
 //! - a deadline of `max(floor, predicted × factor + margin)`, where `predicted` is the model's
 //!   time with the bytes re-timed at the link's baud (the hand's own BAUD when the link does
-//!   not say), and
+//!   not say); a step that moves or resets the hand keeps at least its golden `within`
+//!   ([`budgets`]: motion time depends on where earlier cases left the fingers), and
 //! - an answer ceiling of `expected length × 16 + 4 KiB` ([`crate::replay::ceiling_for`]).
 //!
 //! The defaults ([`DeadlinePolicy::for_target`]): factor 2, margin 50 ms; a floor of 500 ms
@@ -29,6 +30,7 @@ use crate::link::{SimLink, byte_time};
 use crate::replay::{ReplayOptions, StepBudget, ceiling_for};
 use crate::suite::{self, Case};
 use crate::target::Target;
+use crate::transcript::DEFAULT_STEP_TIMEOUT;
 
 /// How deadlines are derived from the model's prediction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -114,10 +116,40 @@ pub fn predict(case: &Case, profile: &Arc<Profile>) -> Option<Vec<StepPrediction
     )
 }
 
+/// Time the model's hand may spend on a step beyond its bytes before the step counts as one
+/// that moves or resets the hand ([`budgets`]).
+pub const BUSY: Duration = Duration::from_millis(20);
+
+impl StepPrediction {
+    /// Time the model's hand spent on the step beyond its bytes on the wire: motion, a reset.
+    pub fn busy(&self) -> Duration {
+        let n = u32::try_from(self.wire_bytes).unwrap_or(u32::MAX);
+        self.took.saturating_sub(byte_time(self.baud).saturating_mul(n))
+    }
+}
+
 /// Budgets for every step of a case from its predictions.
-pub fn budgets(pred: &[StepPrediction], policy: &DeadlinePolicy, link_baud: Option<u32>) -> Vec<StepBudget> {
+///
+/// A step during which the model's hand is busy for more than [`BUSY`] (it moves or resets)
+/// keeps at least its golden deadline (`within`, or the transcript default): how long a
+/// motion takes depends on where the fingers start, which on a shared hand earlier cases
+/// decide, so the model's time from its own fresh start is a lower bound there, not a
+/// deadline. Every other step gets the model's time.
+pub fn budgets(
+    case: &Case,
+    pred: &[StepPrediction],
+    policy: &DeadlinePolicy,
+    link_baud: Option<u32>,
+) -> Vec<StepBudget> {
     pred.iter()
-        .map(|p| StepBudget { deadline: policy.deadline(p.at_baud(link_baud)), ceiling: ceiling_for(p.answer_len) })
+        .zip(&case.transcript.steps)
+        .map(|(p, step)| {
+            let mut deadline = policy.deadline(p.at_baud(link_baud));
+            if p.busy() > BUSY {
+                deadline = deadline.max(step.within.unwrap_or(DEFAULT_STEP_TIMEOUT));
+            }
+            StepBudget { deadline, ceiling: ceiling_for(p.answer_len) }
+        })
         .collect()
 }
 
@@ -147,7 +179,13 @@ mod tests {
         assert!(longest > wire * 5, "HI moves the fingers: {longest:?}, of which {wire:?} on the wire");
         // At a slower line the same step takes longer; motion time stays.
         assert!(s.at_baud(Some(600)) > s.at_baud(None));
-        let b = budgets(&pred, &DeadlinePolicy::for_target(&Target::Sim { profile: None }), None);
+        let b = budgets(hi, &pred, &DeadlinePolicy::for_target(&Target::Sim { profile: None }), None);
         assert!(b.iter().zip(&pred).all(|(b, p)| b.deadline > p.took && b.ceiling > p.answer_len));
+        // HI moves the fingers: how long depends on where they start, so it keeps its golden
+        // deadline; a step that only talks gets the model's time.
+        let i = pred.iter().position(|s| s.took == longest).unwrap();
+        assert_eq!(Some(b[i].deadline), hi.transcript.steps[i].within);
+        let j = pred.iter().position(|s| s.busy() <= BUSY).unwrap();
+        assert!(b[j].deadline < Duration::from_secs(1), "{:?}", b[j]);
     }
 }

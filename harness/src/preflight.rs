@@ -22,6 +22,9 @@ use crate::replay::discard;
 /// The most bytes of one probe answer kept.
 pub const MAX_ANSWER: usize = 4096;
 
+/// The longest the RESET probe waits for an answer that ends in a prompt.
+const RESET_WAIT: Duration = Duration::from_secs(10);
+
 /// How long the hand must be quiet for an answer to count as complete.
 const QUIET: Duration = Duration::from_millis(60);
 
@@ -64,9 +67,15 @@ fn probes(profile: &Profile) -> Vec<Probe> {
     ]
 }
 
-/// Reads until the link has been quiet for [`QUIET`] (and at least `min` has passed) or until
+/// Reads until the link has been quiet for [`QUIET`] after something prompt-like (ending in
+/// `prompt`), or quiet after at least `min` has passed (`None`: only after a prompt), or until
 /// `deadline`, keeping at most [`MAX_ANSWER`] bytes.
-fn collect(link: &mut dyn Link, min: Duration, deadline: Duration) -> Result<Vec<u8>, LinkError> {
+fn collect(
+    link: &mut dyn Link,
+    min: Option<Duration>,
+    deadline: Duration,
+    prompt: &[u8],
+) -> Result<Vec<u8>, LinkError> {
     let start = link.elapsed();
     let mut got = Vec::new();
     loop {
@@ -75,7 +84,9 @@ fn collect(link: &mut dyn Link, min: Duration, deadline: Duration) -> Result<Vec
             break;
         }
         let n = link.recv(&mut got, QUIET.min(deadline - spent))?;
-        if n == 0 && link.elapsed().saturating_sub(start) >= min && !got.is_empty() {
+        let spent = link.elapsed().saturating_sub(start);
+        let prompt_like = !prompt.is_empty() && got.trim_ascii_end().ends_with(prompt);
+        if n == 0 && !got.is_empty() && (prompt_like || min.is_some_and(|m| spent >= m)) {
             break;
         }
     }
@@ -90,14 +101,20 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     discard(&mut model, Duration::from_millis(50), Duration::from_secs(1))?;
     let mut findings = Vec::new();
     let mut answers = Vec::new();
+    let trimmed = profile.framing.prompt.trim_end().as_bytes();
     for p in probes(profile) {
         let t0 = model.elapsed();
         model.send(&p.send)?;
-        let expected = collect(&mut model, Duration::ZERO, Duration::from_secs(30))?;
+        let expected = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"")?;
         let predicted = model.elapsed().saturating_sub(t0);
         link.send(&p.send)?;
-        let deadline = policy.deadline(predicted).max(policy.silent_wait);
-        let actual = collect(link, policy.deadline(predicted).min(deadline), deadline)?;
+        let actual = if p.what == "RESET" {
+            // A power cycle: a real hand may take seconds before its banner; wait for a prompt.
+            collect(link, None, RESET_WAIT, trimmed)?
+        } else {
+            let deadline = policy.deadline(predicted).max(policy.silent_wait);
+            collect(link, Some(policy.deadline(predicted).min(deadline)), deadline, trimmed)?
+        };
         let silent = actual.is_empty();
         answers.push((p, expected, actual));
         if silent {
