@@ -443,7 +443,7 @@ pub fn run_with_events(
             && !fresh_per_case
             && let Some(pred) = crate::deadline::predict(case, &opts.profile)
         {
-            case_opts.budgets = crate::deadline::budgets(case, &pred, &policy, link_baud);
+            case_opts.budgets = crate::deadline::budgets(&opts.profile, case, &pred, &policy, link_baud);
         }
         let outcome = suite::run_case(case, link, &case_opts);
         let ms = t0.elapsed().as_secs_f64() * 1000.0;

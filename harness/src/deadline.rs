@@ -128,14 +128,26 @@ impl StepPrediction {
     }
 }
 
+/// Whether `sent` holds a command that reads or writes the hand's EEPROM (FSAVE, FLOAD,
+/// PSAVE, PLOAD), whose time on a real hand the model does not know.
+fn touches_memory(profile: &Profile, sent: &[u8]) -> bool {
+    use gcl_model::grammar::{Line, parse_line};
+    use gcl_model::spec::CommandKind::{GlobalLoad, GlobalSave, MotorLoad, MotorSave};
+    sent.split(|b| *b == profile.framing.terminator).any(|line| {
+        matches!(parse_line(profile, line), Ok(Line::Command(c))
+            if matches!(c.kind(profile), MotorSave | MotorLoad | GlobalSave | GlobalLoad))
+    })
+}
+
 /// Budgets for every step of a case from its predictions.
 ///
-/// A step during which the model's hand is busy for more than [`BUSY`] (it moves or resets)
-/// keeps at least its golden deadline (`within`, or the transcript default): how long a
+/// A step during which the model's hand is busy for more than [`BUSY`] (it moves or resets),
+/// or that reads or writes the EEPROM, keeps at least its golden deadline (`within`, or the transcript default): how long a
 /// motion takes depends on where the fingers start, which on a shared hand earlier cases
 /// decide, so the model's time from its own fresh start is a lower bound there, not a
 /// deadline. Every other step gets the model's time.
 pub fn budgets(
+    profile: &Profile,
     case: &Case,
     pred: &[StepPrediction],
     policy: &DeadlinePolicy,
@@ -145,7 +157,8 @@ pub fn budgets(
         .zip(&case.transcript.steps)
         .map(|(p, step)| {
             let mut deadline = policy.deadline(p.at_baud(link_baud));
-            if p.busy() > BUSY {
+            let sent = step.send.as_ref().map(|h| h.bytes.as_slice()).unwrap_or_default();
+            if p.busy() > BUSY || touches_memory(profile, sent) {
                 deadline = deadline.max(step.within.unwrap_or(DEFAULT_STEP_TIMEOUT));
             }
             StepBudget { deadline, ceiling: ceiling_for(p.answer_len) }
@@ -167,6 +180,19 @@ mod tests {
     }
 
     #[test]
+    fn eeprom_steps_keep_their_golden_deadline() {
+        let p = Profile::builtin("seed").unwrap();
+        let cases = suite::generate(&p).unwrap();
+        let case = cases.iter().find(|c| c.id() == "persist-fsave-reset").expect("an FSAVE case");
+        let pred = predict(case, &p).unwrap();
+        let b = budgets(&p, case, &pred, &DeadlinePolicy::for_target(&"exec:x".parse().unwrap()), None);
+        let i =
+            case.transcript.steps.iter().position(|s| s.send.as_ref().is_some_and(|h| h.bytes == b"FSAVE\r")).unwrap();
+        assert!(b[i].deadline >= DEFAULT_STEP_TIMEOUT, "{:?}", b[i]);
+        assert!(b[i - 1].deadline < Duration::from_secs(1) || pred[i - 1].busy() > BUSY, "{:?}", b[i - 1]);
+    }
+
+    #[test]
     fn the_model_predicts_motion_and_wire_time_per_step() {
         let p = Profile::builtin("seed").unwrap();
         let cases = suite::generate(&p).unwrap();
@@ -179,7 +205,7 @@ mod tests {
         assert!(longest > wire * 5, "HI moves the fingers: {longest:?}, of which {wire:?} on the wire");
         // At a slower line the same step takes longer; motion time stays.
         assert!(s.at_baud(Some(600)) > s.at_baud(None));
-        let b = budgets(hi, &pred, &DeadlinePolicy::for_target(&Target::Sim { profile: None }), None);
+        let b = budgets(&p, hi, &pred, &DeadlinePolicy::for_target(&Target::Sim { profile: None }), None);
         assert!(b.iter().zip(&pred).all(|(b, p)| b.deadline > p.took && b.ceiling > p.answer_len));
         // HI moves the fingers: how long depends on where they start, so it keeps its golden
         // deadline; a step that only talks gets the model's time.
