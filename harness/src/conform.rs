@@ -565,7 +565,15 @@ pub fn run_with_events(
             timeouts_in_a_row = 0;
             let alive = match shared.as_deref_mut() {
                 Some(l) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
-                _ => reopen(opts, probe_timeout).is_ok(),
+                _ => match reopen(opts, probe_timeout) {
+                    Ok(l) => {
+                        if !fresh_per_case {
+                            shared = Some(l);
+                        }
+                        true
+                    }
+                    Err(_) => false,
+                },
             };
             if !alive {
                 let at = std::mem::take(&mut first_timeout);
