@@ -76,7 +76,7 @@ pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Opt
         ReplayOutcome::Mismatch(m) if m.trailing => ("framing", None),
         ReplayOutcome::Mismatch(m) => {
             let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-            classify(got, m.offset, &m.expected, sent, profile)
+            classify(got, m.offset, &m.expected, &m.expected_full, sent, profile)
         }
     };
     Some((Signature { command, kind }, hint))
@@ -111,6 +111,7 @@ fn classify(
     got: &[u8],
     offset: usize,
     expected_rest: &str,
+    golden: &str,
     sent: &[u8],
     profile: &Profile,
 ) -> (&'static str, Option<String>) {
@@ -121,14 +122,27 @@ fn classify(
     if offset < echo_len {
         return ("framing", Some("echo".to_string()));
     }
-    let line_start = got[..offset].iter().rposition(|b| matches!(b, b'\n' | b'\r')).map_or(0, |i| i + 1);
-    let line_end = got[offset..].iter().position(|b| matches!(b, b'\n' | b'\r')).map_or(got.len(), |i| offset + i);
+    let is_eol = |b: &u8| matches!(b, b'\n' | b'\r');
+    let line_start = got[..offset].iter().rposition(is_eol).map_or(0, |i| i + 1);
+    let line_end = got[offset..].iter().position(is_eol).map_or(got.len(), |i| offset + i);
     let actual_line = &got[line_start..line_end];
+    // The golden's line at the same place: as many line endings in as the answer has.
+    let line_no = {
+        let eol = fr.line_ending.as_bytes();
+        got[..line_start].windows(eol.len().max(1)).filter(|w| *w == eol).count()
+    };
     let expected_line = {
-        let mut s = crate::transcript::escape_text(&got[line_start..offset]);
-        let rest = expected_rest.split("\\n").next().unwrap_or_default();
-        s.push_str(rest.split("\\r").next().unwrap_or_default());
-        s
+        let text = golden.trim_matches('"');
+        let eol = crate::transcript::escape_text(fr.line_ending.as_bytes());
+        match text.split(eol.as_str()).nth(line_no) {
+            Some(l) if !eol.is_empty() => l.to_string(),
+            _ => {
+                let mut s = crate::transcript::escape_text(&got[line_start..offset]);
+                let rest = expected_rest.split("\\n").next().unwrap_or_default();
+                s.push_str(rest.split("\\r").next().unwrap_or_default());
+                s
+            }
+        }
     };
     let status_word = b"ERR";
     let is_status = |l: &[u8]| l.starts_with(status_word);
@@ -142,14 +156,16 @@ fn classify(
         };
         return ("status", hint);
     }
-    let a = got.get(offset).copied();
-    if matches!(a, Some(b'\n' | b'\r')) || expected_rest.starts_with("\\n") || expected_rest.starts_with("\\r") {
-        return ("framing", None);
-    }
     let prompt = fr.prompt.trim_end();
     if actual_line.starts_with(prompt.as_bytes()) || expected_line.starts_with(prompt) {
         return ("framing", None);
     }
+    let a_eol = got.get(offset).is_some_and(is_eol);
+    let e_eol = expected_rest.starts_with("\\n") || expected_rest.starts_with("\\r");
+    if a_eol && e_eol {
+        return ("framing", None);
+    }
+    // One side ends the line where the other goes on, or the content differs.
     let kind = if is_reordering(&String::from_utf8_lossy(actual_line), &expected_line) { "order" } else { "value" };
     (kind, None)
 }
