@@ -14,15 +14,16 @@ use gcl_model::Profile;
 use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
+use crate::deadline::DeadlinePolicy;
 use crate::link::{Link, LinkError, SimLink, byte_time};
-use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript};
+use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard};
 use crate::report::{
-    CaseResult, Diff, KnownFailureEntry, Liveness, REPORT_FORMAT, ResultStream, RunOptions, RunReport, Verdict,
-    WireTime,
+    CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
+    RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
 };
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target, open};
-use crate::transcript::{Level, Requirement};
+use crate::transcript::{Form, Level, Requirement};
 
 /// Which levels to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -178,7 +179,8 @@ pub struct ConformOptions {
     pub skip: Vec<String>,
     /// Known failures.
     pub known: KnownFailures,
-    /// Per-step deadline for steps without their own `within`.
+    /// A flat per-step deadline for steps without their own `within`, instead of deadlines
+    /// from the model ([`crate::deadline`]).
     pub step_timeout: Option<Duration>,
     /// Requirements the operator refuses (`--no motion`): such cases are SKIP.
     pub refuse: Vec<Requirement>,
@@ -186,6 +188,34 @@ pub struct ConformOptions {
     pub baud: Option<u32>,
     /// Keep the transcript of every case in the results, not only of failures (certificates).
     pub keep_transcripts: bool,
+    /// Deadlines, early ends and the pre-flight.
+    pub control: RunControl,
+}
+
+/// After this many TIMEOUTs in a row the hand is probed again (`--dead-after`).
+pub const DEFAULT_DEAD_AFTER: usize = 5;
+
+/// How a run is steered: its deadlines, when it ends early, and whether it starts with the
+/// framing pre-flight.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunControl {
+    /// End the run after this many failing cases (`--max-failures N`; `--fail-fast` is 1); the
+    /// rest are SKIP, "not run".
+    pub max_failures: Option<usize>,
+    /// After this many consecutive TIMEOUTs, probe the hand; when it does not answer, the rest
+    /// of the cases are SKIP and the run says where the hand stopped answering (0: never).
+    pub dead_after: usize,
+    /// How step deadlines follow the model (default: [`DeadlinePolicy::for_target`]). Unused
+    /// when [`ConformOptions::step_timeout`] gives flat deadlines.
+    pub deadlines: Option<DeadlinePolicy>,
+    /// Run the framing pre-flight before the first case.
+    pub preflight: bool,
+}
+
+impl Default for RunControl {
+    fn default() -> RunControl {
+        RunControl { max_failures: None, dead_after: DEFAULT_DEAD_AFTER, deadlines: None, preflight: true }
+    }
 }
 
 /// What a run produced besides its report.
@@ -237,6 +267,13 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
     }
 }
 
+/// After a failing case, the hand must fall quiet within this long, or the link is reopened
+/// (and after `--dead-after` such cases in a row the run ends: the hand floods).
+const AFTER_FAILURE_DRAIN: Duration = Duration::from_secs(2);
+
+/// A hand that sends more than this in answer to the liveness probe floods: it is not live.
+const LIVENESS_MAX_BYTES: usize = 1 << 20;
+
 /// Sends a bare CR (after ^C) and waits for a prompt: is anybody there?
 pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<bool, LinkError> {
     // Any prompt-like answer counts: a hand with a malformed prompt is alive, and its cases
@@ -244,13 +281,28 @@ pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Re
     let prompt = profile.framing.prompt.trim_end().as_bytes().to_vec();
     link.send(&[profile.framing.abort])?;
     link.send(&[profile.framing.terminator])?;
-    let mut buf = Vec::new();
-    let ok = link.recv_until(&mut buf, timeout, &|b: &[u8]| {
-        b.windows(prompt.len()).filter(|w| *w == prompt.as_slice()).count() >= 2
-    })?;
+    // Count prompts as bytes arrive, keeping only a prompt's length of tail: a hand that
+    // floods instead of answering costs time, never memory.
+    let start = link.elapsed();
+    let (mut seen, mut tail, mut total) = (0usize, Vec::new(), 0usize);
+    let mut chunk = Vec::new();
+    while seen < 2 && total <= LIVENESS_MAX_BYTES {
+        let spent = link.elapsed().saturating_sub(start);
+        if spent >= timeout {
+            break;
+        }
+        chunk.clear();
+        link.recv(&mut chunk, timeout - spent)?;
+        total += chunk.len();
+        tail.extend_from_slice(&chunk);
+        seen += tail.windows(prompt.len().max(1)).filter(|w| *w == prompt.as_slice() || prompt.is_empty()).count();
+        // Keep what could be the start of a prompt split across reads.
+        let cut = tail.len().saturating_sub(prompt.len().saturating_sub(1));
+        tail.drain(..cut);
+    }
     // Let a slow second prompt land before the first case starts.
-    crate::transcript::record::drain(link, Duration::from_millis(20), timeout)?;
-    Ok(ok)
+    let settled = discard(link, Duration::from_millis(20), timeout)?;
+    Ok(seen >= 2 && settled.quiet)
 }
 
 /// Asks the hand for `VERS` and returns its lines; a hand that refuses (`ERR n`) or breaks GCL
@@ -263,12 +315,53 @@ pub fn firmware_version(
     crate::client::ask(link, crate::client::core::Framing::of(profile), "VERS", timeout)
 }
 
+/// Something a run reports as it goes.
+#[derive(Debug, Clone, Copy)]
+pub enum RunEvent<'a> {
+    /// The framing pre-flight's one line, before the first case.
+    Preflight(&'a str),
+    /// A case ended: its result, how many results so far, and how many there will be.
+    Case(&'a CaseResult, usize, usize),
+    /// The run ends early; the remaining cases are SKIP (not run).
+    Stopped(&'a Stopped),
+}
+
 /// Runs the selected cases. `progress` is told after each case.
 pub fn run(
     cases: &[Case],
     opts: &ConformOptions,
     stream: Option<&mut ResultStream>,
     progress: &mut dyn FnMut(&CaseResult, usize, usize),
+) -> anyhow::Result<RunOutput> {
+    run_with_events(cases, opts, stream, &mut |e| {
+        if let RunEvent::Case(r, done, total) = e {
+            progress(r, done, total);
+        }
+    })
+}
+
+/// Opens the target for a run after the link was lost: waits for whatever a restarted hand
+/// prints (its power-up banner), then probes it, so that no case is blamed for a restart.
+fn reopen(opts: &ConformOptions, probe_timeout: Duration) -> Result<Box<dyn Link>, String> {
+    let mut l = open(&opts.target, &opts.open).map_err(|e| format!("cannot reopen the target: {e}"))?;
+    match liveness(l.as_mut(), &opts.profile, probe_timeout) {
+        Ok(true) => {}
+        Ok(false) => return Err("reopened the target, but it does not answer the liveness probe".to_string()),
+        Err(e) => return Err(format!("reopened the target, but the link failed: {e}")),
+    }
+    match discard(l.as_mut(), Duration::from_millis(100), Duration::from_secs(5)) {
+        Ok(d) if d.quiet => Ok(l),
+        Ok(_) => Err("reopened the target, but it does not stop sending".to_string()),
+        Err(e) => Err(format!("reopened the target, but the link failed: {e}")),
+    }
+}
+
+/// As [`run`], telling `on` about the pre-flight, every case and an early end.
+pub fn run_with_events(
+    cases: &[Case],
+    opts: &ConformOptions,
+    stream: Option<&mut ResultStream>,
+    on: &mut dyn FnMut(RunEvent<'_>),
 ) -> anyhow::Result<RunOutput> {
     let now = time::OffsetDateTime::now_utc();
     let started_at = now.replace_nanosecond(0).unwrap_or(now);
@@ -277,11 +370,25 @@ pub fn run(
     let fresh_per_case = matches!(opts.target, Target::Sim { .. });
     let probe_timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5)).max(Duration::from_secs(2));
     let open_link = || open(&opts.target, &opts.open);
+    let policy = opts.control.deadlines.unwrap_or_else(|| DeadlinePolicy::for_target(&opts.target));
+    let link_baud = match &opts.target {
+        Target::Serial { baud, .. } => Some(*baud),
+        _ => opts.baud,
+    };
 
     let mut shared: Option<Box<dyn Link>> = None;
+    let mut preflight = None;
     let before = {
         let mut l = open_link()?;
         let ok = liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false);
+        if ok && opts.control.preflight {
+            if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
+                let line = p.line();
+                on(RunEvent::Preflight(&line));
+                preflight = Some(line);
+            }
+            let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+        }
         if !fresh_per_case {
             shared = Some(l);
         }
@@ -299,6 +406,8 @@ pub fn run(
     let mut ropts = suite::replay_options();
     if let Some(t) = opts.step_timeout {
         ropts.default_timeout = t;
+    } else {
+        ropts.silent_wait = policy.silent_wait;
     }
     if !fresh_per_case {
         // A shared link was drained by the probe; between passing cases nothing is pending.
@@ -307,6 +416,7 @@ pub fn run(
     }
 
     let mut results: Vec<CaseResult> = Vec::with_capacity(cases.len());
+    let mut signatures: Vec<crate::triage::Failure> = Vec::new();
     let mut transcripts = Vec::new();
     let mut wire_cases: Vec<WireCase> = Vec::new();
     let mut stream = stream;
@@ -315,10 +425,24 @@ pub fn run(
         if let Some(s) = stream.as_deref_mut() {
             s.push(&r)?;
         }
-        progress(&r, results.len() + 1, total);
+        on(RunEvent::Case(&r, results.len() + 1, total));
         results.push(r);
     }
+    let mut failures = 0usize;
+    let mut timeouts_in_a_row = 0usize;
+    let mut first_timeout = String::new();
+    let (mut unquiet_in_a_row, mut first_unquiet) = (0usize, String::new());
+    let mut stopped: Option<Stopped> = None;
     for case in selected {
+        if let Some(st) = &stopped {
+            let r = result_of(case, Verdict::Skip, 0.0, Some(format!("not run: {}", st.message)));
+            if let Some(s) = stream.as_deref_mut() {
+                s.push(&r)?;
+            }
+            on(RunEvent::Case(&r, results.len() + 1, total));
+            results.push(r);
+            continue;
+        }
         let t0 = Instant::now();
         let link: &mut dyn Link = if fresh_per_case {
             shared = Some(open_link()?);
@@ -326,21 +450,31 @@ pub fn run(
         } else {
             match shared.as_deref_mut() {
                 Some(l) => l,
-                None => match open_link() {
+                None => match reopen(opts, probe_timeout) {
                     Ok(l) => shared.insert(l).as_mut(),
                     Err(e) => {
-                        let r = result_of(case, Verdict::Error, 0.0, Some(format!("cannot reopen the target: {e}")));
+                        let r = result_of(case, Verdict::Error, 0.0, Some(e));
                         if let Some(s) = stream.as_deref_mut() {
                             s.push(&r)?;
                         }
-                        progress(&r, results.len() + 1, total);
+                        on(RunEvent::Case(&r, results.len() + 1, total));
                         results.push(r);
+                        failures += 1;
                         continue;
                     }
                 },
             }
         };
-        let outcome = suite::run_case(case, link, &ropts);
+        let mut case_opts = ropts.clone();
+        // The in-process model's time is simulated: waiting costs nothing there, so it keeps
+        // the goldens' deadlines and the suite's in-process speed.
+        if opts.step_timeout.is_none()
+            && !fresh_per_case
+            && let Some(pred) = crate::deadline::predict(case, &opts.profile)
+        {
+            case_opts.budgets = crate::deadline::budgets(&opts.profile, case, &pred, &policy, link_baud);
+        }
+        let outcome = suite::run_case(case, link, &case_opts);
         let ms = t0.elapsed().as_secs_f64() * 1000.0;
         // The wire-time bound counts cases that ran to their end or to a mismatch: a
         // TIMEOUT's wait and an ERROR's reconnect are not line time.
@@ -357,29 +491,42 @@ pub fn run(
             });
         }
         let mut r = result_of(case, Verdict::Pass, ms, None);
+        let mut flooded = false;
         match &outcome {
             ReplayOutcome::Pass(_) => {}
             ReplayOutcome::Mismatch(m) => {
                 r.verdict = Verdict::Fail;
                 r.message = Some(outcome.summary());
-                r.diff = Some(Diff {
-                    step: m.step,
-                    offset: m.offset,
-                    expected: m.expected.clone(),
-                    actual: m.actual.clone(),
-                });
+                let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+                r.diff = Some(diff_of(m.step, m.offset, &m.expected, &m.actual, got, m.form, &m.expected_full));
             }
             ReplayOutcome::Timeout(t) => {
                 r.verdict = Verdict::Timeout;
                 r.message = Some(outcome.summary());
-                r.diff =
-                    Some(Diff { step: t.step, offset: t.offset, expected: t.expected.clone(), actual: String::new() });
+                let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+                r.diff = Some(diff_of(t.step, t.offset, &t.expected, "", got, t.form, &t.expected_full));
+            }
+            ReplayOutcome::Flooded(f) => {
+                r.verdict = Verdict::Fail;
+                r.message = Some(outcome.summary());
+                let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+                let actual = crate::transcript::escape_text(got);
+                r.diff = Some(diff_of(f.step, 0, &f.expected_full, &actual, &[], Form::Text, &f.expected_full));
+                flooded = true;
             }
             ReplayOutcome::Disconnected(_) => {
                 r.verdict = Verdict::Error;
                 r.message = Some(outcome.summary());
                 shared = None;
             }
+        }
+        timeouts_in_a_row = if r.verdict == Verdict::Timeout { timeouts_in_a_row + 1 } else { 0 };
+        if timeouts_in_a_row == 1 {
+            first_timeout = case.id().to_string();
+        }
+        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile) {
+            let step = outcome.failed_step().unwrap_or(0);
+            signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
         }
         if let Some(k) = opts.known.lookup(&case.profile, case.id()) {
             r.verdict = match r.verdict {
@@ -400,35 +547,98 @@ pub fn run(
                 transcripts.push((case.id().to_string(), text.clone()));
             }
             if r.verdict != Verdict::Pass {
-                r.transcript = Some(text);
+                r.transcript = Some(truncate_note(&text, MAX_SHOWN * 4));
             }
         }
         if r.verdict.fails_run() && !fresh_per_case && shared.is_some() {
-            // Whatever the failing case left pending must not be blamed on the next one.
+            // Whatever the failing case left pending must not be blamed on the next one; a
+            // hand that does not stop sending is reopened.
             if let Some(l) = shared.as_deref_mut() {
-                let _ = crate::transcript::record::drain(l, Duration::from_millis(50), Duration::from_secs(5));
+                // A timed-out step has just waited through a quiet spell; others wait for one.
+                let quiet = Duration::from_millis(match r.verdict {
+                    _ if flooded => 100,
+                    Verdict::Timeout => 20,
+                    _ => 50,
+                });
+                match discard(l, quiet, AFTER_FAILURE_DRAIN) {
+                    Ok(d) if d.quiet => {}
+                    Ok(_) => {
+                        shared = None;
+                        unquiet_in_a_row += 1;
+                        if unquiet_in_a_row == 1 {
+                            first_unquiet = case.id().to_string();
+                        }
+                    }
+                    Err(_) => shared = None,
+                }
             }
+        }
+        if r.verdict == Verdict::Pass {
+            unquiet_in_a_row = 0;
+        }
+        if r.verdict.fails_run() {
+            failures += 1;
         }
         if let Some(s) = stream.as_deref_mut() {
             s.push(&r)?;
         }
-        progress(&r, results.len() + 1, total);
+        on(RunEvent::Case(&r, results.len() + 1, total));
+        let id = r.id.clone();
         results.push(r);
+        if let Some(max) = opts.control.max_failures
+            && failures >= max
+        {
+            let message = format!(
+                "stopped after {failures} failing case{} (--max-failures {max}) at case {id}",
+                if failures == 1 { "" } else { "s" }
+            );
+            stopped = Some(Stopped { cause: StopCause::MaxFailures, case: id.clone(), message });
+        } else if opts.control.dead_after > 0 && unquiet_in_a_row >= opts.control.dead_after {
+            let at = std::mem::take(&mut first_unquiet);
+            let message = format!(
+                "the hand floods: it did not stop sending after {} failing cases in a row, from case {at}",
+                opts.control.dead_after
+            );
+            stopped = Some(Stopped { cause: StopCause::Flooding, case: at, message });
+        } else if opts.control.dead_after > 0 && timeouts_in_a_row >= opts.control.dead_after {
+            timeouts_in_a_row = 0;
+            let alive = match shared.as_deref_mut() {
+                Some(l) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
+                _ => match reopen(opts, probe_timeout) {
+                    Ok(l) => {
+                        if !fresh_per_case {
+                            shared = Some(l);
+                        }
+                        true
+                    }
+                    Err(_) => false,
+                },
+            };
+            if !alive {
+                let at = std::mem::take(&mut first_timeout);
+                let message = format!(
+                    "the hand stopped answering at case {at} ({} timeouts in a row from there, then no answer to the liveness probe)",
+                    opts.control.dead_after
+                );
+                stopped = Some(Stopped { cause: StopCause::DeadHand, case: at, message });
+            }
+        }
+        if let Some(st) = &stopped {
+            on(RunEvent::Stopped(st));
+        }
     }
 
-    let after = match shared.as_deref_mut() {
-        Some(l) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
+    let after = match (&stopped, shared.as_deref_mut()) {
+        (Some(s), _) if s.cause != StopCause::MaxFailures => false,
+        (_, Some(l)) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
         _ => match open_link() {
             Ok(mut l) => liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false),
             Err(_) => false,
         },
     };
     let actual_ms = wall.elapsed().as_secs_f64() * 1000.0;
-    let baud = match &opts.target {
-        Target::Serial { baud, .. } => Some(*baud),
-        _ => opts.baud,
-    };
-    let wire = baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
+    let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
+    let groups = crate::triage::group(cases, &results, &signatures);
     let mut report = RunReport {
         format: REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
@@ -440,6 +650,9 @@ pub fn run(
         suite_hash: suite::suite_hash(cases),
         liveness: Liveness { before, after },
         options: run_options(cases, opts),
+        preflight,
+        stopped,
+        groups,
         wire,
         summary: Default::default(),
         clauses: Vec::new(),
@@ -463,6 +676,25 @@ pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
         known_failures_file: opts.known.source().map(str::to_string),
         known_failures: opts.known.entries_for(&opts.profile.id, cases),
         partial: false,
+    }
+}
+
+/// A report's diff: 1-based step, the agreed answer before the parting byte for context, the
+/// golden, and long actuals cut with a note.
+fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8], form: Form, golden: &str) -> Diff {
+    let offset_c = offset.min(got.len());
+    let from = offset_c.saturating_sub(CONTEXT_CHARS);
+    let before = match form {
+        Form::Text => crate::transcript::escape_text(&got[from..offset_c]),
+        Form::Hex => crate::transcript::matcher::show(&got[from..offset_c], Form::Hex),
+    };
+    Diff {
+        step: step + 1,
+        offset,
+        expected: truncate_note(expected, MAX_SHOWN),
+        actual: truncate_note(actual, MAX_SHOWN),
+        before,
+        golden: truncate_note(golden, MAX_SHOWN),
     }
 }
 

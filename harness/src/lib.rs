@@ -8,15 +8,18 @@ pub mod certify;
 pub mod cli;
 pub mod client;
 pub mod conform;
+pub mod deadline;
 pub mod files;
 pub mod link;
 pub mod links;
+pub mod preflight;
 pub mod replay;
 pub mod report;
 pub mod sim;
 pub mod suite;
 pub mod target;
 pub mod transcript;
+pub mod triage;
 
 pub use link::{Link, LinkError, SimLink};
 pub use target::Target;

@@ -11,7 +11,6 @@ use std::time::Duration;
 
 use crate::link::{Link, LinkError};
 use crate::transcript::matcher::{Feed, Matcher, show};
-use crate::transcript::record::drain;
 use crate::transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
 
 /// How to replay.
@@ -30,6 +29,43 @@ pub struct ReplayOptions {
     pub resync: bool,
     /// After the last step, wait this long for bytes the hand should not send.
     pub trailing: Duration,
+    /// Per-step budgets (index = step) that replace the step's `within` and
+    /// [`ReplayOptions::default_timeout`], and its answer ceiling: a runner derives them from
+    /// the model's own run of the transcript ([`crate::deadline`]). Steps past the end of the
+    /// list use `within`, the default timeout and [`default_ceiling`].
+    pub budgets: Vec<StepBudget>,
+    /// A step whose budget has passed with not one byte of its answer waits on until this much
+    /// time has passed since it began (zero: no such grace). A hand that said nothing may be
+    /// slow to start, or the machine busy; one that stopped mid-answer is judged at its
+    /// deadline. Runs of silent steps are bounded by the runner's dead-hand rule.
+    pub silent_wait: Duration,
+}
+
+/// What one step may take: how long its answer may take, and how many bytes it may be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepBudget {
+    /// The deadline, from just before the step's bytes are sent.
+    pub deadline: Duration,
+    /// The most bytes of answer read for the step; beyond them the hand flooded.
+    pub ceiling: usize,
+}
+
+/// Multiplier of the expected answer's length in an answer ceiling.
+pub const CEILING_FACTOR: usize = 16;
+
+/// Added to every answer ceiling: no step is judged a flood under 4 KiB.
+pub const CEILING_FLOOR: usize = 4096;
+
+/// The answer ceiling of a step whose expected answer is `expected_len` bytes long:
+/// `expected_len` × [`CEILING_FACTOR`] + [`CEILING_FLOOR`].
+pub fn ceiling_for(expected_len: usize) -> usize {
+    expected_len.saturating_mul(CEILING_FACTOR).saturating_add(CEILING_FLOOR)
+}
+
+/// The answer ceiling of a step without a budget, from its golden expectation as written (its
+/// escaped text is at least as long as the bytes it stands for, elisions aside).
+pub fn default_ceiling(step: &Step) -> usize {
+    ceiling_for(step.expect.to_text().len())
 }
 
 impl Default for ReplayOptions {
@@ -40,6 +76,8 @@ impl Default for ReplayOptions {
             drain_limit: Duration::from_secs(5),
             resync: false,
             trailing: Duration::from_millis(50),
+            budgets: Vec::new(),
+            silent_wait: Duration::ZERO,
         }
     }
 }
@@ -54,8 +92,11 @@ pub struct Exchanged {
     /// What was sent.
     pub sent: Vec<u8>,
     /// What the hand answered: the matched answer, or for the last step of a failed replay
-    /// everything received.
+    /// everything received (at most the step's answer ceiling).
     pub received: Vec<u8>,
+    /// Time from just before the step's bytes were sent until its answer was complete (or
+    /// the step ended), on the link's clock.
+    pub took: Duration,
 }
 
 /// A replay where every answer matched.
@@ -113,6 +154,22 @@ pub struct TimedOut {
     pub exchange: Vec<Exchanged>,
 }
 
+/// The hand sent more than a step's answer ceiling while its answer was still open (an
+/// `{any}` elision that never closes, a hand that streams bytes).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Flooded {
+    /// The step, 0-based.
+    pub step: usize,
+    /// Its line in the transcript.
+    pub line: usize,
+    /// The ceiling that was passed, bytes.
+    pub ceiling: usize,
+    /// The whole expectation of the step, as written.
+    pub expected_full: String,
+    /// The exchange up to and including the step (whose `received` is the bounded prefix).
+    pub exchange: Vec<Exchanged>,
+}
+
 /// The link failed: the hand disconnected, or an I/O error.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Disconnected {
@@ -141,8 +198,8 @@ pub struct Parting {
     pub actual: String,
 }
 
-/// How a replay ended. A runner's verdicts: `Pass` PASS, `Mismatch` FAIL, `Timeout` TIMEOUT,
-/// `Disconnected` ERROR.
+/// How a replay ended. A runner's verdicts: `Pass` PASS, `Mismatch` and `Flooded` FAIL,
+/// `Timeout` TIMEOUT, `Disconnected` ERROR.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ReplayOutcome {
     /// Every answer matched.
@@ -151,6 +208,8 @@ pub enum ReplayOutcome {
     Mismatch(Box<Mismatch>),
     /// A step waited past its deadline (TIMEOUT).
     Timeout(Box<TimedOut>),
+    /// A step's answer passed its ceiling (FAIL: the hand flooded).
+    Flooded(Box<Flooded>),
     /// The hand vanished or the link failed (ERROR).
     Disconnected(Box<Disconnected>),
 }
@@ -167,6 +226,7 @@ impl ReplayOutcome {
             ReplayOutcome::Pass(p) => &p.exchange,
             ReplayOutcome::Mismatch(m) => &m.exchange,
             ReplayOutcome::Timeout(t) => &t.exchange,
+            ReplayOutcome::Flooded(f) => &f.exchange,
             ReplayOutcome::Disconnected(d) => &d.exchange,
         }
     }
@@ -177,6 +237,7 @@ impl ReplayOutcome {
             ReplayOutcome::Pass(_) => None,
             ReplayOutcome::Mismatch(m) => Some(m.step),
             ReplayOutcome::Timeout(t) => Some(t.step),
+            ReplayOutcome::Flooded(f) => Some(f.step),
             ReplayOutcome::Disconnected(d) => Some(d.step),
         }
     }
@@ -219,6 +280,13 @@ impl ReplayOutcome {
                 crate::transcript::format_duration(t.waited),
                 t.offset
             ),
+            ReplayOutcome::Flooded(f) => format!(
+                "the hand flooded at step {}{}: more than {} bytes of answer without matching it (the first {} are kept)",
+                f.step + 1,
+                at_line(f.line),
+                f.ceiling,
+                f.ceiling
+            ),
             ReplayOutcome::Disconnected(d) => {
                 format!("link failed at step {}{}: {}", d.step + 1, at_line(d.line), d.reason)
             }
@@ -249,6 +317,14 @@ impl ReplayOutcome {
                 let _ = write!(s, "{}", side_by_side(got, t.offset, &t.expected, t.form, false));
                 let _ = writeln!(s, "  (nothing more arrived)");
             }
+            ReplayOutcome::Flooded(f) => {
+                if let Some(e) = f.exchange.last() {
+                    let _ = writeln!(s, "  sent:     \"{}\"", escape_text(&e.sent));
+                    let _ = writeln!(s, "  golden:   {}", f.expected_full);
+                    let head = &e.received[..e.received.len().min(FLOOD_SHOWN)];
+                    let _ = writeln!(s, "  actual:   \"{}\" … ({} bytes)", escape_text(head), e.received.len());
+                }
+            }
             ReplayOutcome::Disconnected(_) => {}
         }
         s
@@ -263,13 +339,23 @@ fn at_line(line: usize) -> String {
 /// Bytes before the parting byte shown for context.
 const CONTEXT: usize = 24;
 
+/// Bytes of an answer shown after the parting byte in a rendering.
+const SHOWN_AFTER: usize = 400;
+
+/// Bytes of a flood shown in a rendering.
+const FLOOD_SHOWN: usize = 200;
+
 fn side_by_side(got: &[u8], offset: usize, expected_rest: &str, form: Form, trailing: bool) -> String {
     let offset = offset.min(got.len());
     let from = offset.saturating_sub(CONTEXT);
     let lead = if from > 0 { "…" } else { "" };
     let (q, sep) = if form == Form::Text { ("\"", "") } else { ("", " ") };
     let before = show(&got[from..offset], form);
-    let after = show(&got[offset..], form);
+    let shown = (got.len() - offset).min(SHOWN_AFTER);
+    let mut after = show(&got[offset..offset + shown], form);
+    if shown < got.len() - offset {
+        let _ = write!(after, "… ({} more bytes)", got.len() - offset - shown);
+    }
     let joint = if before.is_empty() || after.is_empty() { "" } else { sep };
     let joint_e = if before.is_empty() || expected_rest.is_empty() { "" } else { sep };
     let expected =
@@ -277,6 +363,34 @@ fn side_by_side(got: &[u8], offset: usize, expected_rest: &str, form: Form, trai
     let actual = format!("{q}{lead}{before}{joint}{after}{q}");
     let caret = q.len() + lead.chars().count() + before.chars().count() + joint.len();
     format!("  expected: {expected}\n  actual:   {actual}\n            {}^ byte {offset}\n", " ".repeat(caret))
+}
+
+/// What [`discard`] saw.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Discarded {
+    /// Bytes read and thrown away.
+    pub bytes: u64,
+    /// Whether the hand fell quiet; false when `limit` passed while it was still sending.
+    pub quiet: bool,
+}
+
+/// Reads and throws away what the hand sends until it has been quiet for `quiet` or `limit`
+/// has passed, keeping nothing: memory stays bounded however much a flooding hand sends.
+pub fn discard(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<Discarded, LinkError> {
+    let start = link.elapsed();
+    let mut scratch = Vec::with_capacity(8192);
+    let mut bytes = 0u64;
+    loop {
+        scratch.clear();
+        let n = link.recv(&mut scratch, quiet)?;
+        bytes += n as u64;
+        if n == 0 {
+            return Ok(Discarded { bytes, quiet: true });
+        }
+        if link.elapsed().saturating_sub(start) >= limit {
+            return Ok(Discarded { bytes, quiet: false });
+        }
+    }
 }
 
 fn link_failed(step: usize, line: usize, e: &LinkError, exchange: Vec<Exchanged>) -> ReplayOutcome {
@@ -292,7 +406,7 @@ pub fn replay(t: &Transcript, link: &mut dyn Link, opts: &ReplayOptions) -> Repl
     {
         return link_failed(0, first_line, &e, Vec::new());
     }
-    if let Err(e) = drain(link, opts.drain_quiet, opts.drain_limit) {
+    if let Err(e) = discard(link, opts.drain_quiet, opts.drain_limit) {
         return link_failed(0, first_line, &e, Vec::new());
     }
     let mut exchange: Vec<Exchanged> = Vec::with_capacity(t.steps.len());
@@ -350,16 +464,22 @@ fn run_step(
         link.pause(p);
     }
     let sent = step.send.as_ref().map(|s: &HostBytes| s.bytes.clone()).unwrap_or_default();
+    let t0 = link.elapsed();
     if !sent.is_empty()
         && let Err(e) = link.send(&sent)
     {
-        exchange.push(Exchanged { step: i, line: step.line, sent, received: Vec::new() });
+        let took = link.elapsed().saturating_sub(t0);
+        exchange.push(Exchanged { step: i, line: step.line, sent, received: Vec::new(), took });
         return Err(link_failed(i, step.line, &e, std::mem::take(exchange)));
     }
-    let timeout = step.within.unwrap_or(opts.default_timeout);
-    let t0 = link.elapsed();
+    let budget = opts.budgets.get(i).copied();
+    let timeout = budget.map_or_else(|| step.within.unwrap_or(opts.default_timeout), |b| b.deadline);
+    let ceiling = budget.map_or_else(|| default_ceiling(step), |b| b.ceiling);
     let mut m = Matcher::new(&step.expect);
     let mut fed = 0;
+    // When the answer's first byte came after the deadline (a silent step's grace), the
+    // rest of the answer gets the deadline again from there.
+    let mut first_byte: Option<Duration> = None;
     let consumed = 'outer: loop {
         if m.is_complete() {
             break 'outer fed;
@@ -374,7 +494,9 @@ fn run_step(
                     let offset = fed - 1;
                     let form = m.form_at_parting();
                     let expected = m.expected_at_parting();
-                    exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                    buf.truncate(offset.saturating_add(ceiling));
+                    let took = link.elapsed().saturating_sub(t0);
+                    exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
                     let got = &exchange[exchange.len() - 1].received;
                     return Err(ReplayOutcome::Mismatch(Box::new(Mismatch {
                         step: i,
@@ -390,23 +512,44 @@ fn run_step(
                 }
             }
         }
+        if buf.len() > ceiling {
+            buf.truncate(ceiling);
+            let took = link.elapsed().saturating_sub(t0);
+            exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
+            return Err(ReplayOutcome::Flooded(Box::new(Flooded {
+                step: i,
+                line: step.line,
+                ceiling,
+                expected_full: step.expect.to_text(),
+                exchange: std::mem::take(exchange),
+            })));
+        }
         let spent = link.elapsed().saturating_sub(t0);
+        let limit = if buf.is_empty() {
+            timeout.max(opts.silent_wait)
+        } else {
+            let first = *first_byte.get_or_insert(spent);
+            if first > timeout { first + timeout } else { timeout }
+        };
         let before = link.elapsed();
-        let got = if spent < timeout { link.recv(buf, timeout - spent) } else { Ok(0) };
+        let got = if spent < limit { link.recv(buf, limit - spent) } else { Ok(0) };
         match got {
             Err(e) => {
-                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                buf.truncate(ceiling);
+                let took = link.elapsed().saturating_sub(t0);
+                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
                 return Err(link_failed(i, step.line, &e, std::mem::take(exchange)));
             }
-            Ok(0) if spent >= timeout || link.elapsed() == before || link.elapsed().saturating_sub(t0) >= timeout => {
+            Ok(0) if spent >= limit || link.elapsed() == before || link.elapsed().saturating_sub(t0) >= limit => {
                 let form = m.form_at_parting();
                 let expected = m.expected_rest();
                 let offset = buf.len();
-                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf) });
+                let took = link.elapsed().saturating_sub(t0);
+                exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
                 return Err(ReplayOutcome::Timeout(Box::new(TimedOut {
                     step: i,
                     line: step.line,
-                    waited: link.elapsed().saturating_sub(t0),
+                    waited: took,
                     offset,
                     expected,
                     expected_full: step.expect.to_text(),
@@ -419,7 +562,8 @@ fn run_step(
     };
     let rest = buf.split_off(consumed);
     let received = std::mem::replace(buf, rest);
-    exchange.push(Exchanged { step: i, line: step.line, sent, received });
+    let took = link.elapsed().saturating_sub(t0);
+    exchange.push(Exchanged { step: i, line: step.line, sent, received, took });
     Ok(())
 }
 
@@ -495,6 +639,65 @@ mod tests {
         assert_eq!((to.step, to.offset), (0, 4));
         assert_eq!(to.expected, " ");
         assert!(to.waited >= DEFAULT_STEP_TIMEOUT);
+    }
+
+    /// A hand that answers RESET with an endless stream (never the banner's end).
+    struct Flooding {
+        inner: SimLink,
+        flooding: bool,
+    }
+
+    impl Link for Flooding {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            if bytes.starts_with(b"RESET") {
+                self.flooding = true;
+                return Ok(());
+            }
+            self.inner.send(bytes)
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            if self.flooding {
+                // The echo, then text that never reaches the banner.
+                self.inner.pause(Duration::from_millis(1));
+                let before = buf.len();
+                if before == 0 {
+                    buf.extend_from_slice(b"RESET\n\r");
+                }
+                buf.extend(std::iter::repeat_n(b'x', 65536));
+                return Ok(buf.len() - before);
+            }
+            self.inner.recv(buf, timeout)
+        }
+        fn elapsed(&self) -> Duration {
+            self.inner.elapsed()
+        }
+        fn describe(&self) -> String {
+            "flooding".into()
+        }
+    }
+
+    #[test]
+    fn a_hand_that_floods_an_open_elision_fails_with_a_bounded_prefix() {
+        let text = "gcl-transcript 1\nid: t\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\nsend \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"RESET\\r\"\nexpect within 10s \"RESET{any}BarrettHand Firmware{any}\\n\\r=> \"\n";
+        let t = parse(text).unwrap();
+        let mut link = Flooding { inner: sim(vec![]), flooding: false };
+        let out = replay(&t, &mut link, &ReplayOptions::default());
+        let ReplayOutcome::Flooded(f) = &out else { panic!("{}", out.render()) };
+        assert_eq!(f.step, 1);
+        assert_eq!(f.ceiling, default_ceiling(&t.steps[1]));
+        assert_eq!(out.exchange()[1].received.len(), f.ceiling, "only the prefix up to the ceiling is kept");
+        assert!(out.summary().starts_with("the hand flooded at step 2"), "{}", out.summary());
+        // A budget from the model sets the ceiling instead.
+        let opts = ReplayOptions {
+            budgets: vec![
+                StepBudget { deadline: Duration::from_secs(1), ceiling: 100 },
+                StepBudget { deadline: Duration::from_secs(1), ceiling: 5000 },
+            ],
+            ..ReplayOptions::default()
+        };
+        let mut link = Flooding { inner: sim(vec![]), flooding: false };
+        let out = replay(&t, &mut link, &opts);
+        assert_eq!(out.exchange().last().map(|e| e.received.len()), Some(5000), "{}", out.summary());
     }
 
     #[test]

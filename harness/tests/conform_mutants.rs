@@ -57,6 +57,7 @@ fn in_process(profile: &str, faults: Vec<Fault>) -> RunReport {
         refuse: vec![],
         baud: None,
         keep_transcripts: false,
+        control: Default::default(),
     };
     conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report
 }

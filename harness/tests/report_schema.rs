@@ -30,16 +30,26 @@ fn reports_with_every_kind_of_verdict_validate_against_the_schema() {
         refuse: vec![],
         baud: Some(38400),
         keep_transcripts: false,
+        control: Default::default(),
     };
     let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
     for v in [Verdict::Pass, Verdict::Fail, Verdict::Skip, Verdict::Xfail] {
         assert!(r.summary[&v] > 0, "the sample run has a {v}");
     }
     assert!(r.wire.is_some());
-    let json = serde_json::to_value(&r).unwrap();
+    assert!(r.preflight.is_some() && !r.groups.is_empty());
     let v = validator();
-    let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{e} at {}", e.instance_path())).collect();
-    assert!(errors.is_empty(), "{errors:#?}");
+    let check = |r: &report::RunReport| {
+        let json = serde_json::to_value(r).unwrap();
+        let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{e} at {}", e.instance_path())).collect();
+        assert!(errors.is_empty(), "{errors:#?}");
+    };
+    check(&r);
+    // A run that ends early says so, and still validates.
+    let opts = ConformOptions { control: conform::RunControl { max_failures: Some(2), ..Default::default() }, ..opts };
+    let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
+    assert!(r.stopped.is_some());
+    check(&r);
 }
 
 #[test]

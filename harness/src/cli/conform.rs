@@ -9,9 +9,10 @@ use std::time::Duration;
 use anyhow::Context;
 use gcl_model::Fault;
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
-use crate::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunOutput};
-use crate::report::{CaseResult, ResultStream, RunReport, Verdict, write_all};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
+use crate::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
+use crate::deadline::DeadlinePolicy;
+use crate::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target};
 use crate::transcript::{Level, Requirement};
@@ -35,9 +36,30 @@ pub struct SuiteArgs {
     /// `reason = "..."`, optional `profile`). Listed cases that fail are XFAIL; listed cases that pass are XPASS and fail the run.
     #[arg(long, value_name = "FILE")]
     pub known_failures: Option<PathBuf>,
-    /// Per-step deadline in milliseconds for steps that do not set their own.
+    /// A flat per-step deadline in milliseconds for steps that do not set their own, instead of
+    /// deadlines from the model (the model's time for the step at the link's baud × 2 + the
+    /// margin, at least 500 ms on serial and 200 ms on TCP targets).
     #[arg(long, value_name = "MS")]
     pub timeout: Option<u64>,
+    /// Added to every model-derived step deadline, in milliseconds (default 50; raise it for a
+    /// hand or bridge with latency the model does not know).
+    #[arg(long, value_name = "MS", conflicts_with = "timeout")]
+    pub margin: Option<u64>,
+    /// Stop after N failing cases; the rest are reported as SKIP, "not run".
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_failures: Option<u64>,
+    /// Stop at the first failing case (--max-failures 1).
+    #[arg(long, conflicts_with = "max_failures")]
+    pub fail_fast: bool,
+    /// After N timeouts in a row, probe the hand; if it does not answer, the rest of the cases
+    /// are not run and the run exits 2. The same after N failing cases in a row after which the
+    /// hand would not stop sending (0: never).
+    #[arg(long, value_name = "N", default_value_t = crate::conform::DEFAULT_DEAD_AFTER as u64)]
+    pub dead_after: u64,
+    /// Skip the framing pre-flight (a few exchanges before the suite that name gross framing
+    /// faults: prompt, line ending, echo, banner, status format).
+    #[arg(long)]
+    pub no_preflight: bool,
     /// Refuse cases that need this of the hand (motion, realtime, eeprom, abort-timing;
     /// repeatable): they are reported as SKIP.
     #[arg(long = "no", value_name = "REQUIREMENT")]
@@ -155,6 +177,15 @@ pub fn prepare(
         refuse,
         baud: a.baud,
         keep_transcripts,
+        control: RunControl {
+            max_failures: if a.fail_fast { Some(1) } else { a.max_failures.map(|n| n as usize) },
+            dead_after: a.dead_after as usize,
+            deadlines: a.margin.map(|ms| DeadlinePolicy {
+                margin: Duration::from_millis(ms),
+                ..DeadlinePolicy::for_target(&a.target)
+            }),
+            preflight: !a.no_preflight,
+        },
     };
     Ok((opts, cases))
 }
@@ -187,7 +218,13 @@ pub fn run_with_progress(
     } else {
         None
     };
-    let mut progress = |r: &CaseResult, done: usize, total: usize| {
+    let progress = |r: &CaseResult, done: usize, total: usize| {
+        if r.verdict == Verdict::Skip && r.message.as_deref().is_some_and(|m| m.starts_with("not run:")) {
+            if let Some(b) = &bar {
+                b.set_position(done as u64);
+            }
+            return;
+        }
         if let Some(b) = &bar {
             b.set_length(total as u64);
             b.set_position(done as u64);
@@ -199,7 +236,17 @@ pub fn run_with_progress(
             eprintln!("{:<7} {}: {}", r.verdict, r.id, r.message.as_deref().unwrap_or(""));
         }
     };
-    let out = conform::run(cases, opts, stream.as_mut(), &mut progress)?;
+    let out = conform::run_with_events(cases, opts, stream.as_mut(), &mut |e| match e {
+        RunEvent::Preflight(line) => match &bar {
+            Some(b) => b.println(line),
+            None => eprintln!("{line}"),
+        },
+        RunEvent::Case(r, done, total) => progress(r, done, total),
+        RunEvent::Stopped(st) => match &bar {
+            Some(b) => b.println(&st.message),
+            None => eprintln!("{}", st.message),
+        },
+    })?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -214,6 +261,29 @@ pub fn summary_text(r: &RunReport) -> String {
     if !given.is_empty() {
         let text: Vec<String> = given.iter().map(|(k, v)| format!("--{k} {v}")).collect();
         s.push_str(&format!("  options: {}\n", text.join("; ")));
+    }
+    if let Some(p) = &r.preflight {
+        s.push_str(&format!("  {p}\n"));
+    }
+    if !r.groups.is_empty() {
+        s.push_str("  root causes first (failures grouped by where they part from the golden, largest first):\n");
+        for g in r.groups.iter().take(10) {
+            s.push_str(&format!("    {}\n", g.summary));
+            if let Some(d) = &g.diff {
+                s.push_str(&format!(
+                    "      step {}, byte {}: expected \"{}{}\", got \"{}{}\"\n",
+                    d.step,
+                    d.offset,
+                    d.before,
+                    clip(&d.expected, 60),
+                    d.before,
+                    clip(&d.actual, 60)
+                ));
+            }
+        }
+        if r.groups.len() > 10 {
+            s.push_str(&format!("    ... and {} more groups\n", r.groups.len() - 10));
+        }
     }
     let mut by_level: BTreeMap<Level, BTreeMap<Verdict, usize>> = BTreeMap::new();
     for c in &r.cases {
@@ -242,8 +312,13 @@ pub fn summary_text(r: &RunReport) -> String {
     }
     s.push('\n');
     let covered = r.clauses.len();
-    let clean = r.clauses.iter().filter(|c| matches!(c.verdict, Verdict::Pass)).count();
-    s.push_str(&format!("  clauses: {covered} covered, {clean} with every case passing\n"));
+    let count = |f: fn(Verdict) -> bool| r.clauses.iter().filter(|c| f(c.verdict)).count();
+    let clean = count(|v| v == Verdict::Pass);
+    let failing = count(Verdict::fails_run);
+    let skipped = count(|v| matches!(v, Verdict::Skip | Verdict::Xfail));
+    s.push_str(&format!(
+        "  clauses: {covered} covered: {clean} with every case passing, {failing} failing, {skipped} not fully judged (a case skipped or a known failure)\n"
+    ));
     let failing: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
     if !failing.is_empty() {
         s.push_str("  failing cases:\n");
@@ -253,6 +328,9 @@ pub fn summary_text(r: &RunReport) -> String {
         if failing.len() > 50 {
             s.push_str(&format!("    ... and {} more\n", failing.len() - 50));
         }
+    }
+    if let Some(st) = &r.stopped {
+        s.push_str(&format!("  ended early: {}\n", st.message));
     }
     if !r.liveness.after {
         s.push_str("  the hand did not answer the liveness probe after the suite\n");
@@ -280,6 +358,11 @@ ratio {:.3}\n",
     s
 }
 
+/// `s` cut to `n` characters, with an ellipsis when cut.
+fn clip(s: &str, n: usize) -> String {
+    if s.chars().count() <= n { s.to_string() } else { format!("{}…", s.chars().take(n).collect::<String>()) }
+}
+
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(&args.suite, args.level, false)?;
@@ -292,6 +375,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         for f in files {
             writeln!(w, "  wrote {}", f.display())?;
         }
+    }
+    if let Some(st) = &out.report.stopped
+        && st.cause != StopCause::MaxFailures
+    {
+        eprintln!("gcl conform: {}", st.message);
+        return Ok(EXIT_ERROR);
     }
     Ok(if out.report.passed() { EXIT_OK } else { EXIT_FAIL })
 }

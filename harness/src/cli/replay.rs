@@ -89,7 +89,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                     writeln!(w, "PASS {} ({} steps)", f.display(), p.exchange.len())?;
                 }
             }
-            ReplayOutcome::Mismatch(_) | ReplayOutcome::Timeout(_) => {
+            ReplayOutcome::Mismatch(_) | ReplayOutcome::Timeout(_) | ReplayOutcome::Flooded(_) => {
                 let verdict = if matches!(out, ReplayOutcome::Timeout(_)) { "TIMEOUT" } else { "FAIL" };
                 writeln!(w, "{verdict} {}: {}", f.display(), out.render().trim_end())?;
                 code = code.max(EXIT_FAIL);

@@ -30,6 +30,29 @@ fn class(v: Verdict) -> &'static str {
     }
 }
 
+/// A diff for people: the step and byte, expected and actual with the agreed bytes before the
+/// parting one as context, a caret under the parting byte, and the step's whole golden.
+fn diff_view(d: &super::Diff) -> String {
+    let lead = if d.offset > d.before.len() { "…" } else { "" };
+    let caret = 1 + lead.chars().count() + d.before.chars().count();
+    let mut p = format!(
+        "<p>step {}, parts at byte {}</p>\n<pre>expected: \"{lead}{}{}\"\nactual:   \"{lead}{}{}\"\n          {}^ byte {}",
+        d.step,
+        d.offset,
+        esc(&d.before),
+        esc(&d.expected),
+        esc(&d.before),
+        esc(&d.actual),
+        " ".repeat(caret),
+        d.offset
+    );
+    if !d.golden.is_empty() {
+        let _ = write!(p, "\ngolden:   {}", esc(&d.golden));
+    }
+    p.push_str("</pre>");
+    p
+}
+
 /// Renders the run as one HTML page.
 pub fn to_html(r: &RunReport) -> String {
     let mut h = String::new();
@@ -67,6 +90,31 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
         h.push_str("<p>Options that changed what ran:</p><table>");
         for (k, v) in &given {
             let _ = write!(h, "<tr><th>--{}</th><td>{}</td></tr>", esc(k), esc(v));
+        }
+        h.push_str("</table>\n");
+    }
+    if let Some(p) = &r.preflight {
+        let _ = writeln!(h, "<p><strong>{}</strong></p>", esc(p));
+    }
+    if let Some(st) = &r.stopped {
+        let _ = writeln!(h, "<p class=\"fail\"><strong>Ended early:</strong> {}</p>", esc(&st.message));
+    }
+    if !r.groups.is_empty() {
+        h.push_str("<h2>Root causes first</h2>\n<p>Failures grouped by where they part from their goldens (the command answered, the kind of difference), largest first; each names the clause of its smallest failing case.</p>\n<table><tr><th>cases</th><th>command</th><th>kind</th><th>likely clause</th><th>representative</th></tr>\n");
+        for g in &r.groups {
+            let _ = writeln!(
+                h,
+                "<tr class=\"fail\"><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td><a href=\"#fail-{}\">{}</a></td></tr>",
+                g.cases.len(),
+                esc(&g.command),
+                esc(&g.kind),
+                esc(&g.clause),
+                esc(&g.representative),
+                esc(&g.representative)
+            );
+            if let Some(d) = &g.diff {
+                let _ = writeln!(h, "<tr><td></td><td colspan=\"4\">{}</td></tr>", diff_view(d));
+            }
         }
         h.push_str("</table>\n");
     }
@@ -152,14 +200,7 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
                 esc(&c.clauses.join(", "))
             );
             if let Some(d) = &c.diff {
-                let _ = writeln!(
-                    h,
-                    "<p>step {}, parts at byte {}</p>\n<pre>expected: \"{}\"\nactual:   \"{}\"</pre>",
-                    d.step + 1,
-                    d.offset,
-                    esc(&d.expected),
-                    esc(&d.actual)
-                );
+                let _ = writeln!(h, "{}", diff_view(d));
             }
             if let Some(t) = &c.transcript {
                 let _ = writeln!(
@@ -184,7 +225,12 @@ mod tests {
         let page = to_html(&r);
         assert!(page.contains("Echo &lt;all&gt; bytes &amp; keeps case"));
         assert!(!page.contains("<all>"));
-        assert!(page.contains(r#"expected: "FGET DP\n\r1000""#));
+        assert!(page.contains(r#"expected: "FGET DP\n\r1000""#), "{page}");
+        assert!(page.contains(r#"actual:   "FGET DP\r\n1000""#), "{page}");
+        assert!(page.contains("step 2, parts at byte 7"), "{page}");
+        assert!(page.contains("\n                  ^ byte 7"), "the caret sits under the parting byte: {page}");
+        assert!(page.contains("golden:   &quot;FGET DP"), "{page}");
+        assert!(page.contains("pre-flight: framing as the profile says"), "{page}");
         assert!(page.contains("<h1>gcl conform: FAILED</h1>"));
         assert!(page.contains("decision:framing-echo"));
         assert!(!page.contains("<script"), "self-contained and inert");

@@ -34,15 +34,27 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
     suite.push_attribute(("time", time.as_str()));
     suite.push_attribute(("timestamp", r.started.as_str()));
     w.write_event(Event::Start(suite))?;
-    let given = r.options.pairs();
-    if !given.is_empty() {
+    // The pre-flight, an early end and the root-cause groups lead, as properties CI shows.
+    let mut props: Vec<(String, String)> = Vec::new();
+    for (k, v) in r.options.pairs() {
+        props.push((format!("gcl.{k}"), v.to_string()));
+    }
+    if let Some(p) = &r.preflight {
+        props.push(("preflight".into(), p.clone()));
+    }
+    if let Some(st) = &r.stopped {
+        props.push(("stopped".into(), st.message.clone()));
+    }
+    for (i, g) in r.groups.iter().enumerate() {
+        props.push((format!("root-cause-{}", i + 1), g.summary.clone()));
+    }
+    if !props.is_empty() {
         w.write_event(Event::Start(BytesStart::new("properties")))?;
-        for (k, v) in &given {
-            let name = format!("gcl.{k}");
-            let mut p = BytesStart::new("property");
-            p.push_attribute(("name", name.as_str()));
-            p.push_attribute(("value", v.as_str()));
-            w.write_event(Event::Empty(p))?;
+        for (k, v) in &props {
+            let mut e = BytesStart::new("property");
+            e.push_attribute(("name", k.as_str()));
+            e.push_attribute(("value", v.as_str()));
+            w.write_event(Event::Empty(e))?;
         }
         w.write_event(Event::End(BytesEnd::new("properties")))?;
     }
@@ -59,11 +71,8 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
             let mut b = format!("{}\n{}\nclauses: {}\n", c.verdict, c.title, c.clauses.join(", "));
             if let Some(d) = &c.diff {
                 b.push_str(&format!(
-                    "step {} parts at byte {}\nexpected: \"{}\"\nactual:   \"{}\"\n",
-                    d.step + 1,
-                    d.offset,
-                    d.expected,
-                    d.actual
+                    "step {} parts at byte {}\nexpected: \"{}{}\"\nactual:   \"{}{}\"\n",
+                    d.step, d.offset, d.before, d.expected, d.before, d.actual
                 ));
             }
             if let Some(t) = &c.transcript {

@@ -73,14 +73,85 @@ impl std::fmt::Display for Verdict {
 /// Where the device's answer parted from the golden one.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Diff {
-    /// The step (0-based) of the transcript.
+    /// The step of the transcript, numbered from 1 as in every message.
     pub step: usize,
     /// The byte offset within that step's answer.
     pub offset: usize,
-    /// The expected answer, escaped (with elisions as written).
+    /// The expected answer from the parting byte on, escaped (with elisions as written).
     pub expected: String,
-    /// The actual answer, escaped.
+    /// The actual answer from the parting byte on, escaped.
     pub actual: String,
+    /// The answer just before the parting byte (at most [`CONTEXT_CHARS`] characters), escaped:
+    /// the part both agree on, shown in front of `expected` and `actual`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub before: String,
+    /// The step's whole golden expectation, as written.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub golden: String,
+}
+
+/// Characters of agreed answer kept in [`Diff::before`].
+pub const CONTEXT_CHARS: usize = 40;
+
+/// The longest text a report keeps of an actual answer or a transcript; longer ones are cut
+/// with a note saying how much was left out.
+pub const MAX_SHOWN: usize = 8192;
+
+/// `s` cut to at most `max` bytes (on a character boundary) with a note of what was left out.
+pub fn truncate_note(s: &str, max: usize) -> String {
+    if s.len() <= max {
+        return s.to_string();
+    }
+    let mut cut = max;
+    while !s.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    format!("{}… [{} more bytes not shown]", &s[..cut], s.len() - cut)
+}
+
+/// Why a run ended before its last case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StopCause {
+    /// `--max-failures` (or `--fail-fast`) was reached.
+    MaxFailures,
+    /// The hand stopped answering: consecutive TIMEOUTs, then no answer to the liveness probe.
+    DeadHand,
+    /// The hand floods: after consecutive failing cases it did not stop sending.
+    Flooding,
+}
+
+/// A run that ended early: the remaining cases are SKIP, "not run".
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Stopped {
+    /// Why.
+    pub cause: StopCause,
+    /// Where: the case that reached `--max-failures`, or the first of the timeouts (or
+    /// floods) in a row after which the run ended.
+    pub case: String,
+    /// One line for people.
+    pub message: String,
+}
+
+/// Failures that part from their goldens the same way: one likely root cause.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FailureGroup {
+    /// The command being answered where the cases part (`FGET`, `^C`, `CR`, `RealTime block`).
+    pub command: String,
+    /// The kind of difference: order, value, framing, status, missing-answer, flood, link.
+    pub kind: String,
+    /// One line for people: "120 cases: FGET: the values come in another order".
+    pub summary: String,
+    /// The clause most likely at fault: that of the group's case with the smallest golden
+    /// transcript.
+    pub clause: String,
+    /// The case whose diff represents the group (the one with the smallest transcript).
+    pub representative: String,
+    /// Its diff.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diff: Option<Diff>,
+    /// Every case of the group.
+    pub cases: Vec<String>,
 }
 
 /// The result of one case.
@@ -260,6 +331,15 @@ pub struct RunReport {
     /// known failures).
     #[serde(default)]
     pub options: RunOptions,
+    /// The framing pre-flight's one line (prompt, line ending, echo, banner, status format).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preflight: Option<String>,
+    /// Set when the run ended before its last case.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<Stopped>,
+    /// Failures grouped by where they part from their goldens, largest group first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<FailureGroup>,
     /// Wire-time accounting, when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wire: Option<WireTime>,
@@ -286,6 +366,7 @@ impl RunReport {
         self.liveness.before
             && self.liveness.after
             && self.ran() > 0
+            && self.stopped.is_none()
             && !self.cases.iter().any(|c| c.verdict.fails_run())
     }
 
@@ -401,6 +482,9 @@ pub(crate) mod tests {
             suite_hash: "00".repeat(32),
             liveness: Liveness { before: true, after: true },
             options: RunOptions::default(),
+            preflight: Some("pre-flight: framing as the profile says".into()),
+            stopped: None,
+            groups: vec![],
             wire: None,
             summary: Summary::new(),
             clauses: vec![],
@@ -425,10 +509,12 @@ pub(crate) mod tests {
                     duration_ms: 0.5,
                     message: Some("answer differs at byte 7".into()),
                     diff: Some(Diff {
-                        step: 1,
+                        step: 2,
                         offset: 7,
-                        expected: "FGET DP\\n\\r1000".into(),
-                        actual: "FGET DP\\r\\n1000".into(),
+                        expected: "\\n\\r1000".into(),
+                        actual: "\\r\\n1000".into(),
+                        before: "FGET DP".into(),
+                        golden: "\"FGET DP\\n\\r1000\"".into(),
                     }),
                     transcript: Some("> FGET DP\\r\n< FGET DP\\r\\n1000".into()),
                 },
@@ -456,6 +542,19 @@ pub(crate) mod tests {
         assert!(text.contains("\"verdict\":\"FAIL\""));
         let back: RunReport = serde_json::from_str(&text).unwrap();
         assert_eq!(back, r);
+    }
+
+    #[test]
+    fn long_actuals_are_cut_with_a_note() {
+        let long = "é".repeat(10_000);
+        let cut = truncate_note(&long, MAX_SHOWN);
+        assert!(cut.len() < MAX_SHOWN + 64, "{}", cut.len());
+        assert!(
+            cut.ends_with(&format!("… [{} more bytes not shown]", long.len() - MAX_SHOWN)),
+            "{}",
+            &cut[cut.len() - 40..]
+        );
+        assert_eq!(truncate_note("short", MAX_SHOWN), "short");
     }
 
     #[test]

@@ -1,0 +1,293 @@
+//! The framing pre-flight: before a suite, a probe of a few exchanges that names gross
+//! framing faults in one line ("the hand's prompt is `=>` without the trailing space"), so a
+//! team whose firmware breaks its prompt learns it from the first second of a run instead of
+//! from 200 failures. The suite still runs afterwards, so every affected case is listed.
+//!
+//! The probe sends ^C, a bare CR, an unknown command word (its answer shows the echo and the
+//! status format) and RESET (its answer shows the banner), the same to the in-process model
+//! and to the hand, and compares what came back: line ending, prompt text, echo, status line
+//! shape, banner text. Each answer is read until the hand is quiet, within a deadline from the
+//! model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::escape::escape;
+use gcl_model::{DeviceConfig, Profile};
+
+use crate::deadline::DeadlinePolicy;
+use crate::link::{Link, LinkError, SimLink};
+use crate::replay::discard;
+
+/// The most bytes of one probe answer kept.
+pub const MAX_ANSWER: usize = 4096;
+
+/// The longest the RESET probe waits for an answer that ends in a prompt.
+const RESET_WAIT: Duration = Duration::from_secs(10);
+
+/// How long the hand must be quiet for an answer to count as complete.
+const QUIET: Duration = Duration::from_millis(60);
+
+/// The banner text hosts look for after RESET (see `shared/protocol-notes.md`).
+const BANNER_TEXT: &[u8] = b"BarrettHand Firmware";
+
+/// An unknown command word: it changes nothing, and its answer carries an error status.
+const UNKNOWN: &[u8] = b"ZZQX";
+
+/// What the pre-flight found.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Preflight {
+    /// Gross framing faults, one phrase each; empty when the framing is as the profile says.
+    pub findings: Vec<String>,
+}
+
+impl Preflight {
+    /// The one line printed at the top of the console output and of every report.
+    pub fn line(&self) -> String {
+        if self.findings.is_empty() {
+            "pre-flight: framing as the profile says (echo, line ending, prompt, status format, banner)".to_string()
+        } else {
+            format!("pre-flight: {}", self.findings.join("; "))
+        }
+    }
+}
+
+struct Probe {
+    send: Vec<u8>,
+    what: &'static str,
+}
+
+fn probes(profile: &Profile) -> Vec<Probe> {
+    let t = profile.framing.terminator;
+    vec![
+        Probe { send: vec![profile.framing.abort], what: "^C" },
+        Probe { send: vec![t], what: "a bare CR" },
+        Probe { send: [UNKNOWN, &[t]].concat(), what: "an unknown command" },
+        Probe { send: [b"RESET".as_slice(), &[t]].concat(), what: "RESET" },
+    ]
+}
+
+/// Reads until the link has been quiet for [`QUIET`] after something prompt-like (ending in
+/// `prompt`), or quiet after at least `min` has passed (`None`: only after a prompt), or until
+/// `deadline`, keeping at most [`MAX_ANSWER`] bytes.
+fn collect(
+    link: &mut dyn Link,
+    min: Option<Duration>,
+    deadline: Duration,
+    prompt: &[u8],
+) -> Result<Vec<u8>, LinkError> {
+    let start = link.elapsed();
+    let mut got = Vec::new();
+    loop {
+        let spent = link.elapsed().saturating_sub(start);
+        if spent >= deadline || got.len() >= MAX_ANSWER {
+            break;
+        }
+        let n = link.recv(&mut got, QUIET.min(deadline - spent))?;
+        let spent = link.elapsed().saturating_sub(start);
+        let prompt_like = !prompt.is_empty() && got.trim_ascii_end().ends_with(prompt);
+        if n == 0 && !got.is_empty() && (prompt_like || min.is_some_and(|m| spent >= m)) {
+            break;
+        }
+    }
+    got.truncate(MAX_ANSWER);
+    Ok(got)
+}
+
+/// Runs the probe on `link` (at an idle prompt) and compares with the model. The hand is left
+/// after a RESET, at an idle prompt.
+pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy) -> Result<Preflight, LinkError> {
+    let mut model = SimLink::new(profile.clone(), DeviceConfig::default());
+    discard(&mut model, Duration::from_millis(50), Duration::from_secs(1))?;
+    let mut findings = Vec::new();
+    let mut answers = Vec::new();
+    let trimmed = profile.framing.prompt.trim_end().as_bytes();
+    for p in probes(profile) {
+        let t0 = model.elapsed();
+        model.send(&p.send)?;
+        let expected = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"")?;
+        let predicted = model.elapsed().saturating_sub(t0);
+        link.send(&p.send)?;
+        let actual = if p.what == "RESET" {
+            // A power cycle: a real hand may take seconds before its banner; wait for a prompt.
+            collect(link, None, RESET_WAIT, trimmed)?
+        } else {
+            let deadline = policy.deadline(predicted).max(policy.silent_wait);
+            collect(link, Some(policy.deadline(predicted).min(deadline)), deadline, trimmed)?
+        };
+        let silent = actual.is_empty();
+        answers.push((p, expected, actual));
+        if silent {
+            // A hand that says nothing at all says nothing to the rest either.
+            let what = answers.last().map_or("", |(p, _, _)| p.what);
+            return Ok(Preflight {
+                findings: vec![format!("no answer to {what}; the hand may have stopped answering")],
+            });
+        }
+    }
+    let fr = &profile.framing;
+    let eol = fr.line_ending.as_bytes();
+    let prompt = fr.prompt.as_bytes();
+
+    // The bare CR's answer: line ending, then prompt.
+    let (_, _, cr) = &answers[1];
+    let mut hand_eol: Vec<u8> = cr.iter().copied().take_while(|b| matches!(b, b'\n' | b'\r')).collect();
+    if cr.is_empty() {
+        findings.push("no answer to a bare CR".to_string());
+    } else {
+        let hand_prompt = &cr[hand_eol.len()..];
+        if hand_eol != eol {
+            findings.push(if hand_eol.is_empty() {
+                format!("the prompt comes without a line ending in front (expected `{}`)", escape(eol))
+            } else {
+                format!("lines end in `{}` instead of `{}`", escape(&hand_eol), escape(eol))
+            });
+        }
+        if hand_prompt != prompt {
+            let trimmed = fr.prompt.trim_end().as_bytes();
+            findings.push(if hand_prompt == trimmed {
+                format!("the hand's prompt is `{}` without the trailing space", escape(hand_prompt))
+            } else {
+                format!("the hand's prompt is `{}`, not `{}`", escape(hand_prompt), escape(prompt))
+            });
+        }
+    }
+    if hand_eol.is_empty() {
+        hand_eol = eol.to_vec();
+    }
+
+    // The unknown command: echo, then the status line.
+    let (p, expected, actual) = &answers[2];
+    let word = &p.send[..p.send.len() - 1];
+    let echoes = expected.starts_with(word);
+    if echoes && !actual.is_empty() && !actual.starts_with(word) {
+        findings.push("the hand does not echo what it receives".to_string());
+    } else if !echoes && actual.starts_with(word) {
+        findings.push("the hand echoes what it receives, which the profile does not".to_string());
+    }
+    let status_line = |answer: &[u8], eol: &[u8]| -> Option<Vec<u8>> {
+        // The first non-empty line after the echo.
+        split(answer, eol).into_iter().skip(1).find(|l| !l.is_empty()).map(<[u8]>::to_vec)
+    };
+    if let (Some(want), Some(got)) = (status_line(expected, eol), status_line(actual, &hand_eol)) {
+        if shape(&want) != shape(&got) {
+            findings.push(format!("an error status reads `{}`, not in the form `{}`", escape(&got), escape(&want)));
+        }
+    } else if status_line(expected, eol).is_some() && !actual.is_empty() {
+        findings.push(format!("{} gets no status line", p.what));
+    }
+
+    // RESET: the banner.
+    let (_, expected, actual) = &answers[3];
+    let has = |a: &[u8]| a.windows(BANNER_TEXT.len()).any(|w| w == BANNER_TEXT);
+    if has(expected) && !has(actual) {
+        findings.push(format!("RESET prints no banner (no `{}`)", String::from_utf8_lossy(BANNER_TEXT)));
+    }
+    for (p, _, actual) in &answers {
+        if actual.is_empty() && p.what != "a bare CR" {
+            findings.push(format!("no answer to {}", p.what));
+        }
+    }
+    Ok(Preflight { findings })
+}
+
+fn split<'a>(s: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {
+    let mut out = Vec::new();
+    let mut rest = s;
+    while let Some(i) = rest.windows(sep.len().max(1)).position(|w| w == sep) {
+        out.push(&rest[..i]);
+        rest = &rest[i + sep.len().max(1)..];
+    }
+    out.push(rest);
+    out
+}
+
+/// A line's shape: runs of digits become `9`, so `ERR 32` and `ERR 1024` have one shape.
+fn shape(line: &[u8]) -> Vec<u8> {
+    let mut out: Vec<u8> = Vec::with_capacity(line.len());
+    for &b in line {
+        let c = if b.is_ascii_digit() { b'9' } else { b };
+        if !(c == b'9' && out.last() == Some(&b'9')) {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gcl_model::Fault;
+
+    fn probe(faults: Vec<Fault>) -> Preflight {
+        let p = Profile::builtin("seed").unwrap();
+        let mut hand = SimLink::new(p.clone(), DeviceConfig { faults, ..Default::default() });
+        discard(&mut hand, Duration::from_millis(50), Duration::from_secs(1)).unwrap();
+        run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap()
+    }
+
+    /// A hand that answers each probe with a fixed text.
+    struct Scripted {
+        answers: Vec<(&'static [u8], &'static [u8])>,
+        pending: Vec<u8>,
+        now: Duration,
+    }
+
+    impl Link for Scripted {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            if let Some((_, a)) = self.answers.iter().find(|(s, _)| *s == bytes) {
+                self.pending.extend_from_slice(a);
+            }
+            Ok(())
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            self.now += timeout;
+            let n = self.pending.len();
+            buf.append(&mut self.pending);
+            Ok(n)
+        }
+        fn elapsed(&self) -> Duration {
+            self.now
+        }
+        fn describe(&self) -> String {
+            "scripted".into()
+        }
+    }
+
+    #[test]
+    fn a_status_line_in_another_form_is_named() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut hand = Scripted {
+            answers: vec![
+                (b"\x03", b"\n\r=> "),
+                (b"\r", b"\n\r=> "),
+                (b"ZZQX\r", b"ZZQX\n\rError 32!\n\r=> "),
+                (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
+            ],
+            pending: Vec::new(),
+            now: Duration::ZERO,
+        };
+        let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap();
+        assert_eq!(r.findings, vec!["an error status reads `Error 32!`, not in the form `ERR 32`"], "{r:?}");
+        assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
+    }
+
+    #[test]
+    fn a_healthy_hand_passes_the_pre_flight() {
+        let r = probe(vec![]);
+        assert!(r.findings.is_empty(), "{r:?}");
+        assert!(r.line().contains("as the profile says"));
+    }
+
+    #[test]
+    fn each_gross_framing_fault_is_named() {
+        let r = probe(vec![Fault::PromptNoSpace]);
+        assert_eq!(r.findings, vec!["the hand's prompt is `=>` without the trailing space"], "{r:?}");
+        let r = probe(vec![Fault::CrLf]);
+        assert_eq!(r.findings, vec!["lines end in `\\r\\n` instead of `\\n\\r`"], "{r:?}");
+        let r = probe(vec![Fault::NoEcho]);
+        assert_eq!(r.findings, vec!["the hand does not echo what it receives"], "{r:?}");
+        let r = probe(vec![Fault::ResetNoBanner]);
+        assert_eq!(r.findings, vec!["RESET prints no banner (no `BarrettHand Firmware`)"], "{r:?}");
+    }
+}

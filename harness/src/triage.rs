@@ -1,0 +1,323 @@
+//! Root causes first: failures grouped by where they part from their goldens.
+//!
+//! One firmware bug often fails a hundred cases (every case that reads parameters back trips
+//! over an FGET that prints the motors in reverse). A failure's *signature* is the command
+//! being answered where it parts from the golden (`FGET`, `^C`, `CR`, `RealTime block`) and
+//! the kind of difference:
+//!
+//! - `framing`: the echo, a line ending or the prompt (also bytes after the last answer);
+//! - `status`: an `ERR n` line where none was expected, none where one was, or another one;
+//! - `order`: the answer's line holds the expected values in another order;
+//! - `value`: anything else in the answer's content;
+//! - `missing-answer`: the answer never came, or stopped short of anything but framing;
+//! - `flood`: the hand sent more than the step's ceiling;
+//! - `link`: the link failed (the hand vanished).
+//!
+//! Cases with one signature form a group; groups are listed largest first, each with the
+//! case of the smallest golden transcript as its representative, whose clause is named as the
+//! one most likely at fault (the smallest case exercises least besides its own clause).
+
+use std::collections::BTreeMap;
+
+use gcl_model::Profile;
+use gcl_model::grammar::{Line, parse_line};
+
+use crate::replay::ReplayOutcome;
+use crate::report::{CaseResult, FailureGroup};
+use crate::suite::Case;
+use crate::transcript::Form;
+
+/// Where one failing case parts from its golden.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Signature {
+    /// The command being answered.
+    pub command: String,
+    /// The kind of difference (see the module documentation).
+    pub kind: &'static str,
+}
+
+/// One failing case as the grouping sees it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Failure {
+    /// Its index among the run's results.
+    pub result: usize,
+    /// The failing step, 0-based.
+    pub step: usize,
+    /// Where it parts from its golden.
+    pub signature: Signature,
+    /// A word the clause at fault likely holds: the status number expected (or given) for a
+    /// status difference, `echo` for a difference in the echo.
+    pub hint: Option<String>,
+}
+
+/// The signature of a failed replay of `case` and a hint at its clause; `None` for a pass.
+pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Option<(Signature, Option<String>)> {
+    let step = outcome.failed_step()?;
+    let t = &case.transcript;
+    let golden = t.steps.get(step.min(t.steps.len().saturating_sub(1)));
+    let sent = golden.and_then(|s| s.send.as_ref()).map(|h| h.bytes.as_slice()).unwrap_or_default();
+    let hex = golden.is_some_and(|s| s.expect.segments.iter().any(|g| g.form == Form::Hex))
+        || golden.and_then(|s| s.send.as_ref()).is_some_and(|h| h.form == Form::Hex);
+    let command = command_of(sent, hex, profile);
+    let eol = profile.framing.line_ending.as_bytes();
+    let prompt = profile.framing.prompt.as_bytes();
+    let framing_text = crate::transcript::escape_text(&[eol, prompt].concat());
+    let (kind, hint) = match outcome {
+        ReplayOutcome::Pass(_) => return None,
+        ReplayOutcome::Disconnected(_) => ("link", None),
+        ReplayOutcome::Flooded(_) => ("flood", None),
+        ReplayOutcome::Timeout(to) => {
+            if to.offset > 0 && !to.expected.is_empty() && framing_text.ends_with(&to.expected) {
+                ("framing", None)
+            } else {
+                ("missing-answer", None)
+            }
+        }
+        ReplayOutcome::Mismatch(m) if m.trailing => ("framing", None),
+        ReplayOutcome::Mismatch(m) => {
+            let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            classify(got, m.offset, &m.expected, &m.expected_full, sent, profile)
+        }
+    };
+    Some((Signature { command, kind }, hint))
+}
+
+/// The command word of a step's first line: `^C`, `CR`, `RealTime block`, or the word itself
+/// without its motor prefix.
+fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
+    let fr = &profile.framing;
+    if sent.first() == Some(&fr.abort) {
+        return "^C".to_string();
+    }
+    if hex {
+        return "RealTime block".to_string();
+    }
+    let line = sent.split(|b| *b == fr.terminator).next().unwrap_or_default();
+    if line.iter().all(|b| b.is_ascii_whitespace()) {
+        return "CR".to_string();
+    }
+    if let Ok(Line::Command(c)) = parse_line(profile, line) {
+        return profile.command(c.command).name.clone();
+    }
+    // A line the model refuses: its first word, without a motor prefix, as sent.
+    let text = String::from_utf8_lossy(line);
+    let word = text.split_whitespace().next().unwrap_or_default();
+    let bare = word.trim_start_matches(|c: char| profile.prefixes.iter().any(|p| p.char == c.to_ascii_uppercase()));
+    let w = if bare.is_empty() { word } else { bare };
+    w.chars().take(16).collect::<String>().to_ascii_uppercase()
+}
+
+fn classify(
+    got: &[u8],
+    offset: usize,
+    expected_rest: &str,
+    golden: &str,
+    sent: &[u8],
+    profile: &Profile,
+) -> (&'static str, Option<String>) {
+    let fr = &profile.framing;
+    let offset = offset.min(got.len());
+    let echo_len =
+        if fr.echo { sent.iter().take_while(|b| **b != fr.terminator && **b != fr.abort).count() } else { 0 };
+    if offset < echo_len {
+        return ("framing", Some("echo".to_string()));
+    }
+    let is_eol = |b: &u8| matches!(b, b'\n' | b'\r');
+    let line_start = got[..offset].iter().rposition(is_eol).map_or(0, |i| i + 1);
+    let line_end = got[offset..].iter().position(is_eol).map_or(got.len(), |i| offset + i);
+    let actual_line = &got[line_start..line_end];
+    // The golden's line at the same place: as many line endings in as the answer has.
+    let line_no = {
+        let eol = fr.line_ending.as_bytes();
+        got[..line_start].windows(eol.len().max(1)).filter(|w| *w == eol).count()
+    };
+    let expected_line = {
+        let text = golden.trim_matches('"');
+        let eol = crate::transcript::escape_text(fr.line_ending.as_bytes());
+        match text.split(eol.as_str()).nth(line_no) {
+            Some(l) if !eol.is_empty() => l.to_string(),
+            _ => {
+                let mut s = crate::transcript::escape_text(&got[line_start..offset]);
+                let rest = expected_rest.split("\\n").next().unwrap_or_default();
+                s.push_str(rest.split("\\r").next().unwrap_or_default());
+                s
+            }
+        }
+    };
+    let status_word = b"ERR";
+    let is_status = |l: &[u8]| l.starts_with(status_word);
+    if is_status(actual_line) || expected_line.starts_with("ERR") {
+        let number =
+            |l: &str| l.split_whitespace().nth(1).filter(|n| n.bytes().all(|b| b.is_ascii_digit())).map(str::to_string);
+        let hint = if expected_line.starts_with("ERR") {
+            number(&expected_line)
+        } else {
+            number(&String::from_utf8_lossy(actual_line))
+        };
+        return ("status", hint);
+    }
+    let prompt = fr.prompt.trim_end();
+    if actual_line.starts_with(prompt.as_bytes()) || expected_line.starts_with(prompt) {
+        return ("framing", None);
+    }
+    let a_eol = got.get(offset).is_some_and(is_eol);
+    let e_eol = expected_rest.starts_with("\\n") || expected_rest.starts_with("\\r");
+    if a_eol && e_eol {
+        return ("framing", None);
+    }
+    // One side ends the line where the other goes on, or the content differs.
+    let kind = if is_reordering(&String::from_utf8_lossy(actual_line), &expected_line) { "order" } else { "value" };
+    (kind, None)
+}
+
+/// Whether `actual` holds the tokens of `expected` in another order (an elision `{...}` in
+/// `expected` stands for any one token).
+fn is_reordering(actual: &str, expected: &str) -> bool {
+    let a: Vec<&str> = actual.split_whitespace().collect();
+    let e = elisions_as_one(expected);
+    let e: Vec<&str> = e.split_whitespace().collect();
+    if a.len() != e.len() || a.len() < 2 || a == e {
+        return false;
+    }
+    let mut pool = a.clone();
+    for t in e.iter().filter(|t| !t.starts_with('{')) {
+        match pool.iter().position(|x| x == t) {
+            Some(i) => {
+                pool.swap_remove(i);
+            }
+            None => return false,
+        }
+    }
+    true
+}
+
+/// `text` with every elision (`{int 990..1010}`) written `{}`, so that it is one token.
+fn elisions_as_one(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut depth = 0usize;
+    for ch in text.chars() {
+        match ch {
+            '{' => {
+                if depth == 0 {
+                    out.push_str("{}");
+                }
+                depth += 1;
+            }
+            '}' => depth = depth.saturating_sub(1),
+            c if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    out
+}
+
+fn phrase(kind: &str) -> &'static str {
+    match kind {
+        "order" => "the values come in another order",
+        "value" => "a value differs",
+        "framing" => "the framing differs (echo, line ending or prompt)",
+        "status" => "the status differs",
+        "missing-answer" => "the answer is missing or stops short",
+        "flood" => "the hand floods the answer",
+        _ => "the link failed",
+    }
+}
+
+/// Where a case's own check begins: the first step after a `# the check` comment (0 when the
+/// case has none: all of it is its check).
+fn check_start(case: &Case) -> usize {
+    case.transcript.steps.iter().position(|s| s.comments.iter().any(|c| c.contains("the check"))).unwrap_or(0)
+}
+
+fn size(case: &Case) -> (usize, usize) {
+    (case.transcript.steps.len(), case.text().len())
+}
+
+/// The case that owns a failure of `case` at `step`: the case itself when the step is part of
+/// its own check; otherwise (it failed in its preamble, on something it does not check) the
+/// smallest case of the suite whose check holds that very exchange.
+fn owner<'c>(case: &'c Case, step: usize, all: &'c [Case]) -> (&'c Case, bool) {
+    if step >= check_start(case) {
+        return (case, true);
+    }
+    let Some(s) = case.transcript.steps.get(step) else { return (case, false) };
+    all.iter()
+        .filter(|c| c.profile == case.profile)
+        .filter(|c| c.transcript.steps[check_start(c)..].iter().any(|t| t.send == s.send && t.expect == s.expect))
+        .min_by_key(|c| size(c))
+        .map_or((case, false), |c| (c, true))
+}
+
+/// A group member: result index, failing step, hint.
+type Member<'a> = (usize, usize, Option<&'a str>);
+
+/// Groups the failing cases, largest group first. `failures` holds one entry per failing
+/// case (cases whose result does not fail the run, such as XFAIL, are left out).
+///
+/// A group names the clause of the case most likely at fault: among the cases that own the
+/// group's failures (the case itself when the failing step is part of its own check, else
+/// the smallest case whose check holds that exchange), those whose clause holds a failure's
+/// hint first (the status number, `echo`), then those whose clause names the command being
+/// answered, then the smallest golden transcript.
+pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure]) -> Vec<FailureGroup> {
+    let find = |id: &str| cases.iter().find(|c| c.id() == id);
+    let mut by: BTreeMap<&Signature, Vec<Member<'_>>> = BTreeMap::new();
+    for f in failures.iter().filter(|f| results.get(f.result).is_some_and(|r| r.verdict.fails_run())) {
+        by.entry(&f.signature).or_default().push((f.result, f.step, f.hint.as_deref()));
+    }
+    let mut groups: Vec<FailureGroup> = by
+        .into_iter()
+        .map(|(sig, idx)| {
+            let small = |i: usize| find(&results[i].id).map_or((usize::MAX, usize::MAX), size);
+            let rep =
+                idx.iter().map(|(i, _, _)| *i).min_by_key(|i| (small(*i), results[*i].id.clone())).unwrap_or(idx[0].0);
+            let r = &results[rep];
+            let has_word = |clause: &str, w: &str| {
+                clause.split(|c: char| c.is_whitespace() || c == '-' || c == ':').any(|x| x.eq_ignore_ascii_case(w))
+            };
+            let hints: Vec<&str> = idx.iter().filter_map(|(_, _, h)| *h).collect();
+            let clause = idx
+                .iter()
+                .filter_map(|(i, step, _)| find(&results[*i].id).map(|c| owner(c, *step, cases)))
+                .chain(idx.iter().filter_map(|(i, _, _)| find(&results[*i].id).map(|c| (c, false))))
+                .map(|(c, owns)| (c.header().clauses.first().cloned().unwrap_or_default(), owns, size(c)))
+                .min_by_key(|(clause, owns, size)| {
+                    let hinted = hints.iter().any(|h| has_word(clause, h));
+                    (!hinted, !owns, !has_word(clause, &sig.command), *size, clause.clone())
+                })
+                .map(|(clause, _, _)| clause)
+                .unwrap_or_else(|| r.clauses.first().cloned().unwrap_or_default());
+            let n = idx.len();
+            FailureGroup {
+                command: sig.command.clone(),
+                kind: sig.kind.to_string(),
+                summary: format!(
+                    "{n} case{}: {}: {}; likely clause `{clause}` (e.g. case {})",
+                    if n == 1 { "" } else { "s" },
+                    sig.command,
+                    phrase(sig.kind),
+                    r.id
+                ),
+                clause,
+                representative: r.id.clone(),
+                diff: r.diff.clone(),
+                cases: idx.iter().map(|(i, _, _)| results[*i].id.clone()).collect(),
+            }
+        })
+        .collect();
+    groups.sort_by(|a, b| b.cases.len().cmp(&a.cases.len()).then_with(|| a.summary.cmp(&b.summary)));
+    groups
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reordered_values_are_told_from_changed_ones() {
+        assert!(is_reordering("150 1000 1000 1000", "1000 1000 1000 150"));
+        assert!(is_reordering("150 1000 1000 1000", "{int 990..1010} 1000 1000 150"));
+        assert!(!is_reordering("150 1000 1000 1001", "1000 1000 1000 150"));
+        assert!(!is_reordering("1000 1000 1000 150", "1000 1000 1000 150"));
+    }
+}

@@ -1,0 +1,257 @@
+//! The runner as a user meets it through the `gcl` binary: the framing pre-flight line,
+//! `--max-failures` and `--fail-fast`, the early end on a hand that stops answering, clean
+//! reconnects to a hand that restarts, and what the summary and reports say about them.
+//!
+//! Hands that misbehave in time are small shell scripts around `gcl sim --stdio` (run as
+//! `exec:` targets), started and killed by the runner itself; every run here is bounded by
+//! the runner's own deadlines.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use gcl_harness::report::{RunReport, StopCause, Verdict};
+
+const GCL: &str = env!("CARGO_BIN_EXE_gcl");
+
+fn gcl(args: &[&str]) -> Output {
+    Command::new(GCL).args(args).output().expect("gcl runs")
+}
+
+fn report(dir: &Path) -> RunReport {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// A hand written as a shell script (`exec:sh FILE`); `{gcl}` in `body` is the binary.
+fn script(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, body.replace("{gcl}", GCL)).unwrap();
+    p
+}
+
+fn text(o: &Output) -> (String, String) {
+    (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+#[test]
+fn the_pre_flight_names_a_broken_prompt_first_in_the_console_and_in_every_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "prompt-no-space",
+        "--only",
+        "framing-*",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{stdout}{stderr}");
+    let line = "pre-flight: the hand's prompt is `=>` without the trailing space";
+    assert!(stderr.starts_with(line), "the first line of the run: {stderr}");
+    assert!(stdout.lines().nth(1).is_some_and(|l| l.trim() == line), "and at the top of the summary: {stdout}");
+    // The suite still ran: every case is listed.
+    let r = report(&out);
+    assert_eq!(r.preflight.as_deref(), Some(line));
+    assert!(r.cases.len() > 5 && r.cases.iter().all(|c| c.verdict == Verdict::Timeout), "{:?}", r.summary);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("the hand&#39;s prompt is `=&gt;` without the trailing space"), "{html}");
+    let junit = std::fs::read_to_string(out.join("junit.xml")).unwrap();
+    assert!(junit.contains("name=\"preflight\""), "{junit}");
+
+    let o = gcl(&["conform", "--target", "sim:seed", "--only", "framing-echo"]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(stderr.starts_with("pre-flight: framing as the profile says"), "{stderr}");
+}
+
+#[test]
+fn fail_fast_and_max_failures_stop_the_run_and_list_the_rest_as_not_run() {
+    let dir = tempfile::tempdir().unwrap();
+    for (flag, n) in [(vec!["--fail-fast"], 1usize), (vec!["--max-failures", "3"], 3)] {
+        let out = dir.path().join(format!("r{n}"));
+        let mut args = vec!["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--report"];
+        args.push(out.to_str().unwrap());
+        args.extend(flag.iter().copied());
+        let o = gcl(&args);
+        let (stdout, stderr) = text(&o);
+        assert_eq!(o.status.code(), Some(1), "failures, not an infrastructure error: {stdout}{stderr}");
+        let r = report(&out);
+        let failing = r.cases.iter().filter(|c| c.verdict.fails_run()).count();
+        assert_eq!(failing, n, "{flag:?}");
+        let st = r.stopped.as_ref().expect("the report says the run ended early");
+        assert_eq!(st.cause, StopCause::MaxFailures);
+        assert!(stdout.contains(&format!("ended early: {}", st.message)), "{stdout}");
+        let not_run =
+            r.cases.iter().filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:"))).count();
+        assert!(not_run > 50, "the rest are listed as not run: {not_run}");
+        assert!(
+            r.cases
+                .iter()
+                .filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:")))
+                .all(|c| c.verdict == Verdict::Skip)
+        );
+        assert_eq!(r.cases.len(), 209, "every case of the suite is in the report");
+    }
+}
+
+#[test]
+fn a_hand_that_stops_answering_ends_the_run_early_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    // The hand answers its first 1200 bytes of input, then stays connected and says nothing
+    // (`dd bs=1` passes each byte on at once, where `head` would hold them in a buffer).
+    let hand = script(
+        dir.path(),
+        "dead.sh",
+        "dd bs=1 count=1200 2>/dev/null | {gcl} sim --stdio --profile seed 2>/dev/null\nexec sleep 60\n",
+    );
+    let out = dir.path().join("r");
+    let target = format!("exec:sh {}", hand.display());
+    let o = gcl(&[
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--only",
+        "param-*",
+        "--dead-after",
+        "2",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{stdout}{stderr}");
+    let r = report(&out);
+    let st = r.stopped.as_ref().expect("stopped early");
+    assert_eq!(st.cause, StopCause::DeadHand);
+    let line = format!("gcl conform: the hand stopped answering at case {}", st.case);
+    assert!(stderr.lines().any(|l| l.starts_with(&line)), "one line says where: {stderr}");
+    let timeouts = r.cases.iter().filter(|c| c.verdict == Verdict::Timeout).count();
+    assert_eq!(timeouts, 2, "{:?}", r.summary);
+    let first = r.cases.iter().find(|c| c.verdict == Verdict::Timeout).unwrap();
+    assert_eq!(st.case, first.id, "the case where it stopped answering is the first of the timeouts");
+    let passed = r.cases.iter().filter(|c| c.verdict == Verdict::Pass).count();
+    assert!(passed > 3, "the hand answered at first: {:?}", r.summary);
+    let not_run = r.cases.iter().filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:"))).count();
+    assert_eq!(passed + timeouts + not_run, r.cases.len(), "{:?}", r.summary);
+    assert!(not_run > 20, "{:?}", r.summary);
+    assert!(!r.liveness.after && !r.passed());
+}
+
+#[test]
+fn a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    // Prompts enough for the liveness probe, then an endless stream of zero bytes.
+    let hand = script(dir.path(), "flood.sh", "printf '\\n\\r=> \\n\\r=> \\n\\r=> '\nsleep 0.4\nexec cat /dev/zero\n");
+    let out = dir.path().join("r");
+    let target = format!("exec:sh {}", hand.display());
+    let o = gcl(&[
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--dead-after",
+        "2",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{stdout}{stderr}");
+    let r = report(&out);
+    let st = r.stopped.as_ref().expect("stopped early");
+    assert_eq!(st.cause, StopCause::Flooding, "{st:?}");
+    assert!(stderr.contains("the hand floods"), "{stderr}");
+    for f in ["report.json", "junit.xml", "report.html", "results.jsonl"] {
+        let len = std::fs::metadata(out.join(f)).unwrap().len();
+        assert!(len < 2 << 20, "{f} is {len} bytes");
+    }
+    let failed: Vec<_> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
+    assert_eq!(failed.len(), 2, "{:?}", r.summary);
+    for c in failed {
+        let d = c.diff.as_ref().unwrap();
+        assert!(d.actual.len() <= gcl_harness::report::MAX_SHOWN + 64, "{}", d.actual.len());
+    }
+}
+
+#[test]
+fn a_hand_that_restarts_is_drained_and_probed_before_the_next_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let flag = dir.path().join("started-once");
+    // The first process ends after 1200 bytes of input; the one started after it runs on.
+    let hand = script(
+        dir.path(),
+        "once.sh",
+        &format!(
+            "if [ -e {f} ]; then exec {{gcl}} sim --stdio --profile seed; fi\ntouch {f}\ndd bs=1 count=1200 2>/dev/null | {{gcl}} sim --stdio --profile seed 2>/dev/null\n",
+            f = flag.display()
+        ),
+    );
+    let out = dir.path().join("r");
+    let target = format!("exec:sh {}", hand.display());
+    let o = gcl(&[
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--only",
+        "param-*",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{stdout}{stderr}");
+    let r = report(&out);
+    let errors: Vec<usize> =
+        r.cases.iter().enumerate().filter(|(_, c)| c.verdict == Verdict::Error).map(|(i, _)| i).collect();
+    assert_eq!(errors.len(), 1, "only the case the hand vanished in: {:?}", r.summary);
+    let after = &r.cases[errors[0] + 1];
+    assert_eq!(after.verdict, Verdict::Pass, "the next case is not blamed for the restart: {after:?}");
+    assert_eq!(r.summary[&Verdict::Pass], r.cases.len() - 1, "{:?}", r.summary);
+    assert!(r.liveness.after);
+}
+
+#[test]
+fn a_failures_diff_numbers_its_step_as_its_message_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "fget-reversed",
+        "--only",
+        "param-dp-default",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let r = report(&out);
+    let c = &r.cases[0];
+    let d = c.diff.as_ref().unwrap();
+    // ^C, RESET, FDEF, then the check: FGET DP is the 4th step.
+    assert_eq!(d.step, 4);
+    assert!(c.message.as_deref().unwrap().contains("step 4"), "{:?}", c.message);
+    // The answer parts at byte 10: `1` of `150` still fits the elision `{int 990..1010}`.
+    assert_eq!(d.offset, 10);
+    assert_eq!(d.before, "FGET DP\\n\\r1", "the agreed bytes before the parting one");
+    assert!(d.golden.starts_with("\"FGET DP\\n\\r"), "{}", d.golden);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("step 4, parts at byte 10"), "{html}");
+    assert!(html.contains("golden:   &quot;FGET DP"), "{html}");
+}
+
+#[test]
+fn skipped_clauses_are_not_counted_as_failing() {
+    let o = gcl(&["conform", "--target", "sim:seed", "--only", "cmd-hi*", "--no", "motion"]);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+    let line = stdout.lines().find(|l| l.trim_start().starts_with("clauses:")).unwrap();
+    assert!(line.contains(" 0 failing"), "{line}");
+    assert!(!line.contains(" 0 not fully judged"), "skipped clauses are counted as such: {line}");
+}

@@ -1,0 +1,109 @@
+//! Root causes first: against every `--fault` mutant of the simulator, the largest group of
+//! failures names the clause the fault breaks.
+
+use std::path::Path;
+
+use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::report::RunReport;
+use gcl_harness::suite;
+use gcl_harness::target::{OpenOptions, Target};
+use gcl_model::{Fault, Profile};
+
+const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
+
+fn run(profile: &str, faults: Vec<Fault>) -> RunReport {
+    let p = Profile::builtin(profile).unwrap();
+    let cases = suite::load_profile(Path::new(SUITE), &p.id).unwrap();
+    let opts = ConformOptions {
+        target: Target::Sim { profile: Some(p.id.clone()) },
+        open: OpenOptions { faults, ..Default::default() },
+        profile: p,
+        level: LevelFilter::All,
+        only: vec![],
+        skip: vec![],
+        known: KnownFailures::default(),
+        step_timeout: None,
+        refuse: vec![],
+        baud: None,
+        keep_transcripts: false,
+        control: Default::default(),
+    };
+    conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report
+}
+
+/// The clause each fault breaks, as the groups should name it (after the profile's `seed: `
+/// or `bh8-262: ` prefix). Where two clauses state the broken rule, either is right.
+const FAULT_CLAUSES: &[(&str, &[&str])] = &[
+    // ^C at idle answers LF CR then `=> `: decision framing-abort-idle states both.
+    ("crlf", &["decision:framing-abort-idle", "decision:framing-echo", "decision:framing-empty-line"]),
+    ("no-echo", &["decision:framing-echo"]),
+    ("prompt-no-space", &["decision:framing-abort-idle", "decision:framing-empty-line"]),
+    ("lfap-little-endian", &["RealTime Control", "Parameter LFAP"]),
+    ("read-only-status", &["Status codes 256"]),
+    ("lfdp-not-clipped", &["RealTime Control", "Parameter LFDP"]),
+    ("mpe-ignored", &["Status codes 16", "Parameter MPE"]),
+    ("stay-in-loop", &["Status codes 2048"]),
+    ("range-off-by-one", &["Parameter *", "Status codes 128"]),
+    ("fdef-skips-mcv", &["Command FDEF"]),
+    ("lowercase-rejected", &["decision:framing-case"]),
+    ("fget-reversed", &["Command FGET"]),
+    ("abort-silent", &["Command ^C", "Status codes 16384", "decision:framing-abort-idle"]),
+    ("loop-ack-newline", &["Command LOOP"]),
+    ("reset-no-banner", &["Command RESET"]),
+];
+
+fn matches(clause: &str, want: &str) -> bool {
+    let bare =
+        if clause.starts_with("decision:") { clause } else { clause.split_once(": ").map_or(clause, |(_, c)| c) };
+    match want.strip_suffix('*') {
+        Some(prefix) => bare.starts_with(prefix),
+        None => bare == want,
+    }
+}
+
+#[test]
+fn the_largest_group_of_failures_names_the_clause_each_fault_breaks() {
+    let mut unlisted = Vec::new();
+    for f in Fault::ALL {
+        // The seed suite first; a fault it cannot see (abort timing) on bh8-262-4.4.
+        let mut r = run("seed", vec![*f]);
+        if r.groups.is_empty() {
+            r = run("bh8-262-4.4", vec![*f]);
+        }
+        let top = r.groups.first().unwrap_or_else(|| panic!("{f}: no failure groups"));
+        assert!(top.cases.len() >= r.groups.iter().map(|g| g.cases.len()).max().unwrap(), "{f}: largest first");
+        let grouped: usize = r.groups.iter().map(|g| g.cases.len()).sum();
+        let failing = r.cases.iter().filter(|c| c.verdict.fails_run()).count();
+        assert_eq!(grouped, failing, "{f}: every failing case is in exactly one group");
+        assert!(top.cases.contains(&top.representative) && top.diff.is_some(), "{f}: {top:?}");
+        match FAULT_CLAUSES.iter().find(|(n, _)| *n == f.name()) {
+            Some((_, want)) => assert!(
+                want.iter().any(|w| matches(&top.clause, w)),
+                "{f}: the top group names `{}`, expected one of {want:?}: {}",
+                top.clause,
+                top.summary
+            ),
+            None => unlisted.push(format!("{f}: top group {}", top.summary)),
+        }
+    }
+    // Faults added since this table was written: their top group is printed for a person to
+    // judge and add here.
+    for u in unlisted {
+        println!("no expected clause recorded for {u}");
+    }
+}
+
+#[test]
+fn fget_reversed_leads_with_one_group_of_reordered_fget_answers() {
+    let r = run("seed", vec![Fault::FgetReversed]);
+    let top = &r.groups[0];
+    assert_eq!((top.command.as_str(), top.kind.as_str()), ("FGET", "order"), "{}", top.summary);
+    assert!(top.cases.len() > 100, "{}", top.summary);
+    assert!(top.summary.starts_with(&format!("{} cases: FGET: the values come in another order", top.cases.len())));
+}
+
+#[test]
+fn an_unmutated_hand_has_no_groups() {
+    let r = run("seed", vec![]);
+    assert!(r.passed() && r.groups.is_empty(), "{:?}", r.groups);
+}
