@@ -16,6 +16,7 @@ pub mod sim;
 pub mod suite;
 pub mod target;
 pub mod transcript;
+pub mod vectors;
 
 pub use link::{Link, LinkError, SimLink};
 pub use target::Target;
