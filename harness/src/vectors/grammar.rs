@@ -114,6 +114,27 @@ fn line_test(
     b.push(Test::new(id, comment, ok, body).flags(&t_flags))
 }
 
+/// Arguments that make a command line valid, for the prefix tests: a name for a get
+/// command, a name and its lowest value for a set command, nothing otherwise.
+fn sample_args(p: &gcl_model::Profile, c: &gcl_model::spec::CommandSpec) -> String {
+    let pick = |get: bool| {
+        p.param_ids().find(|id| {
+            let ps = p.param(*id);
+            if get { p.getter(*id) == c.name } else { p.setter(*id) == c.name && !ps.read_only }
+        })
+    };
+    match c.args {
+        ArgRule::Names => pick(true).map(|id| format!(" {}", p.param(id).name)).unwrap_or_default(),
+        ArgRule::Pairs => pick(false)
+            .map(|id| {
+                let ps = p.param(id);
+                format!(" {} {}", ps.name, ps.values.as_ref().and_then(|v| v.first().copied()).unwrap_or(ps.min))
+            })
+            .unwrap_or_default(),
+        ArgRule::None | ArgRule::OptionalInteger => String::new(),
+    }
+}
+
 pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
     let p = b.profile();
     // Framing of the line itself.
@@ -160,21 +181,39 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         let n = c.name.as_str();
         let s = slug(&n.replace('?', "help"));
         let cf = command_flags(n);
-        line_test(b, format!("cmd-{s}-bare"), format!("`{n}` alone"), n, cf)?;
+        let bare = match c.args {
+            ArgRule::Names => format!("`{n}` alone: it needs a name (128)"),
+            ArgRule::Pairs => format!("`{n}` alone: it needs a name and a value (128)"),
+            ArgRule::None | ArgRule::OptionalInteger => format!("`{n}` alone"),
+        };
+        line_test(b, format!("cmd-{s}-bare"), bare, n, cf)?;
+        let args = sample_args(p, c);
         let (pre_comment, pre_flags) = match c.prefix {
             PrefixRule::Allowed => ("a motor prefix is allowed on", cf),
             PrefixRule::Forbidden => ("a motor prefix is refused (4096) on", cf),
         };
-        line_test(b, format!("cmd-{s}-prefix-12"), format!("{pre_comment} `{n}`"), &format!("12{n}"), pre_flags)?;
+        line_test(
+            b,
+            format!("cmd-{s}-prefix-12"),
+            format!("{pre_comment} `{n}{args}`"),
+            &format!("12{n}{args}"),
+            pre_flags,
+        )?;
         line_test(
             b,
             format!("cmd-{s}-prefix-g"),
-            format!("{pre_comment} `{n}` (G: the fingers)"),
-            &format!("G{n}"),
+            format!("{pre_comment} `{n}{args}` (G: the fingers)"),
+            &format!("G{n}{args}"),
             pre_flags,
         )?;
         if n.bytes().any(|c| c.is_ascii_uppercase()) {
-            line_test(b, format!("cmd-{s}-lower-case"), format!("`{n}` in lower case"), &n.to_ascii_lowercase(), cf)?;
+            line_test(
+                b,
+                format!("cmd-{s}-lower-case"),
+                format!("`{n}{args}` in lower case"),
+                &format!("{n}{args}").to_ascii_lowercase(),
+                cf,
+            )?;
         }
         match c.args {
             ArgRule::None => {
