@@ -135,3 +135,21 @@ fn the_schemas_reject_what_they_should() {
         assert!(!v.is_valid(&bad), "{}: a malformed suite hash is refused", kind.name());
     }
 }
+
+#[test]
+fn gcl_vectors_check_and_regenerate_from_the_command_line() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().to_str().unwrap();
+    let out = std::process::Command::new(gcl).args(["vectors", "check", "--dir", d]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("missing seed/host.json") && stdout.contains("gcl suite regenerate"), "{stdout}");
+    let out = std::process::Command::new(gcl).args(["vectors", "regenerate", "--dir", d]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new(gcl).args(["vectors", "check", "--dir", d]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    // What the command wrote is what the committed files are.
+    let want = vectors::expected_files(&committed_cases()).unwrap();
+    assert!(vectors::check(dir.path(), &want).unwrap().is_fresh());
+}

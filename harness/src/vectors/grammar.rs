@@ -84,6 +84,20 @@ fn outcome(b: &FileBuilder<'_>, line: &str) -> (bool, Value) {
     }
 }
 
+/// The status a fresh hand answers to `line` (sent with its CR), if it answers `ERR n`.
+fn hand_refuses(p: &std::sync::Arc<gcl_model::Profile>, line: &str) -> Option<u32> {
+    let mut hand = gcl_model::Device::with_profile(p.clone());
+    hand.clear_output();
+    hand.handle_input(std::time::Duration::ZERO, format!("{line}\r").as_bytes());
+    let out = String::from_utf8_lossy(&hand.take_output()).into_owned();
+    let rest = out.split("\n\rERR ").nth(1)?;
+    rest.split("\n\r").next()?.trim().parse().ok()
+}
+
+fn bits(code: u32) -> Vec<u32> {
+    (0..32).map(|i| 1u32 << i).filter(|b| code & b != 0).collect()
+}
+
 /// Adds the test of one line, with the framing decisions its text implies.
 fn line_test(
     b: &mut FileBuilder<'_>,
@@ -175,6 +189,28 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
     ];
     for (id, line, comment, flags) in fixed {
         line_test(b, format!("line-{id}"), (*comment).to_string(), line, flags)?;
+    }
+    // The line length limit is the hand's framing, not the grammar's: ask a fresh hand.
+    let max = p.framing.max_line;
+    let at_limit = format!("FGET DP{}", " ".repeat(max.saturating_sub(7)));
+    let over = format!("{at_limit} ");
+    for (id, line, comment) in [
+        ("at-length-limit", &at_limit, format!("{max} bytes before the CR: the longest line a hand keeps")),
+        ("over-length-limit", &over, format!("{} bytes before the CR: past the limit", max + 1)),
+    ] {
+        let (ok, body) = match hand_refuses(p, line) {
+            Some(code) => (false, json!({ "rejected": { "status": code, "bits": bits(code) } })),
+            None => outcome(b, line),
+        };
+        let mut body = body;
+        if let Value::Object(m) = &mut body {
+            m.insert("line".into(), json!(line));
+        }
+        b.push(Test::new(format!("line-{id}"), comment, ok, body).flags(&[
+            "framing-max-line",
+            "framing-whitespace",
+            "bh8-framing-open",
+        ]))?;
     }
     // Every command.
     for c in &p.commands {
