@@ -30,6 +30,13 @@ def escape(data):
     return "".join(out)
 
 
+def show(data, hex_form):
+    """Bytes as a report shows them: hex pairs for a hex expectation, else an escaped string."""
+    if hex_form:
+        return " ".join("%02X" % b for b in data)
+    return '"%s"' % escape(data)
+
+
 def drain(link, quiet=DRAIN_QUIET, limit=DRAIN_LIMIT):
     """Reads and discards until the hand has been quiet for `quiet` seconds (at most `limit`)."""
     end = time.monotonic() + limit
@@ -82,16 +89,16 @@ def replay(t, link, default_timeout=2.0, resync=False):
                     return Outcome(
                         "FAIL",
                         i,
-                        "%s: the answer parts from the expectation at byte %d\n  expected: %s\n  actual:   \"%s\""
-                        % (_where(i, step), fed - 1, step.expect_text, escape(buf[fed - 1 :])),
+                        "%s: the answer parts from the expectation at byte %d\n  expected: %s\n  actual:   %s"
+                        % (_where(i, step), fed - 1, step.expect_text, show(buf[fed - 1 :], step.expect_text.startswith("hex"))),
                     )
                 left = deadline - time.monotonic()
                 if left <= 0:
                     return Outcome(
                         "TIMEOUT",
                         i,
-                        "%s: no complete answer within %gs (%d bytes so far)\n  expected: %s\n  actual:   \"%s\""
-                        % (_where(i, step), timeout, len(buf), step.expect_text, escape(buf)),
+                        "%s: no complete answer within %gs (%d bytes so far)\n  expected: %s\n  actual:   %s"
+                        % (_where(i, step), timeout, len(buf), step.expect_text, show(buf, step.expect_text.startswith("hex"))),
                     )
                 buf += link.recv(left)
             buf = buf[fed:]
