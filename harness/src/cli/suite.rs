@@ -4,7 +4,7 @@
 //! shows the cases.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
 use crate::suite;
@@ -25,9 +25,9 @@ enum Command {
         /// The suite directory.
         #[arg(long, default_value = suite::DEFAULT_DIR)]
         dir: PathBuf,
-        /// The JSON vectors directory.
-        #[arg(long, default_value = crate::vectors::DEFAULT_DIR)]
-        vectors_dir: PathBuf,
+        /// The JSON vectors directory [default: `json` next to the suite directory].
+        #[arg(long)]
+        vectors_dir: Option<PathBuf>,
     },
     /// Fail (exit 1) when the committed goldens or JSON vectors differ from what the model
     /// generates.
@@ -35,9 +35,9 @@ enum Command {
         /// The suite directory.
         #[arg(long, default_value = suite::DEFAULT_DIR)]
         dir: PathBuf,
-        /// The JSON vectors directory.
-        #[arg(long, default_value = crate::vectors::DEFAULT_DIR)]
-        vectors_dir: PathBuf,
+        /// The JSON vectors directory [default: `json` next to the suite directory].
+        #[arg(long)]
+        vectors_dir: Option<PathBuf>,
     },
     /// List the committed cases: profile, id, level, requirements, title.
     List {
@@ -48,6 +48,12 @@ enum Command {
         #[arg(long, default_value = suite::DEFAULT_DIR)]
         dir: PathBuf,
     },
+}
+
+/// The JSON vectors that go with a suite directory: `json` next to it (`vectors/json` for
+/// `vectors/suite`).
+fn json_dir(suite_dir: &Path) -> PathBuf {
+    suite_dir.parent().unwrap_or(Path::new(".")).join("json")
 }
 
 /// Runs `gcl suite`.
@@ -68,13 +74,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 before.stale.len() + before.missing.len(),
                 before.extra.len()
             )?;
-            super::vectors::regenerate(&mut w, &vectors_dir, &cases)?;
+            super::vectors::regenerate(&mut w, &vectors_dir.unwrap_or_else(|| json_dir(&dir)), &cases)?;
             Ok(EXIT_OK)
         }
         Command::Check { dir, vectors_dir } => {
             let cases = suite::generate_all()?;
             let r = suite::check(&dir, &cases)?;
-            let vectors_fresh = super::vectors::check(&mut w, &vectors_dir, &cases)?;
+            let vectors_fresh = super::vectors::check(&mut w, &vectors_dir.unwrap_or_else(|| json_dir(&dir)), &cases)?;
             if r.is_fresh() {
                 writeln!(w, "{} cases in {} are fresh", r.checked, dir.display())?;
                 return Ok(if vectors_fresh { EXIT_OK } else { EXIT_FAIL });
