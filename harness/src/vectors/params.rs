@@ -20,7 +20,9 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         if !ps.persist.is_empty() {
             flags.extend(["seed-saved-set", "bh8-saved-sets"]);
         }
-        if ps.scope == Scope::Motor && ps.default_spread.is_some() {
+        // The profiles give the spread no default of its own where the manual says "N/A"; the
+        // spread then starts at the finger default (an open decision).
+        if ps.scope == Scope::Motor && ps.default_spread.is_none() && !ps.read_only {
             flags.push("bh8-spread-defaults");
         }
         let finger_default = (ps.default.is_some() || ps.default_spread.is_some()).then(|| p.default_for(id, 1));
