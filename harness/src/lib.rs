@@ -20,6 +20,7 @@ pub mod suite;
 pub mod target;
 pub mod transcript;
 pub mod triage;
+pub mod vectors;
 
 pub use link::{Link, LinkError, SimLink};
 pub use target::Target;

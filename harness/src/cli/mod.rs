@@ -10,6 +10,7 @@ pub mod replay;
 pub mod sim;
 pub mod spec;
 pub mod suite;
+pub mod vectors;
 
 use std::path::Path;
 use std::sync::Arc;

@@ -1,6 +1,7 @@
-//! `gcl suite`: the committed golden transcripts. `regenerate` rewrites them from the
-//! reference model, `check` fails (exit 1, listing the files) when they are stale, missing or
-//! extra, `list` shows the cases.
+//! `gcl suite`: the committed golden transcripts. `regenerate` rewrites them (and the JSON
+//! vectors of `vectors/json/`, whose headers carry the suite hash) from the reference model,
+//! `check` fails (exit 1, listing the files) when either is stale, missing or extra, `list`
+//! shows the cases.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -18,17 +19,25 @@ pub struct Args {
 
 #[derive(Debug, clap::Subcommand)]
 enum Command {
-    /// Write the model's goldens: one file per case per profile, and index.json.
+    /// Write the model's goldens (one file per case per profile, and index.json) and the
+    /// JSON vectors, whose headers carry the suite hash.
     Regenerate {
         /// The suite directory.
         #[arg(long, default_value = suite::DEFAULT_DIR)]
         dir: PathBuf,
+        /// The JSON vectors directory [default: `json` next to the suite directory].
+        #[arg(long)]
+        vectors_dir: Option<PathBuf>,
     },
-    /// Fail (exit 1) when the committed files differ from what the model generates.
+    /// Fail (exit 1) when the committed goldens or JSON vectors differ from what the model
+    /// generates.
     Check {
         /// The suite directory.
         #[arg(long, default_value = suite::DEFAULT_DIR)]
         dir: PathBuf,
+        /// The JSON vectors directory [default: `json` next to the suite directory].
+        #[arg(long)]
+        vectors_dir: Option<PathBuf>,
     },
     /// List the committed cases: profile, id, level, requirements, title.
     List {
@@ -60,11 +69,17 @@ fn has_profile_dir(dir: &Path) -> bool {
     std::fs::read_dir(dir).map(|d| d.filter_map(|e| e.ok()).any(|e| e.path().is_dir())).unwrap_or(false)
 }
 
+/// The JSON vectors that go with a suite directory: `json` next to it (`vectors/json` for
+/// `vectors/suite`).
+fn json_dir(suite_dir: &Path) -> PathBuf {
+    suite_dir.parent().unwrap_or(Path::new(".")).join("json")
+}
+
 /// Runs `gcl suite`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut w = std::io::stdout().lock();
     match args.command {
-        Command::Regenerate { dir } => {
+        Command::Regenerate { dir, vectors_dir } => {
             // A new suite directory is made only where its parent exists (`vectors/` in the
             // repository), never as a stray `vectors/suite` under whatever the cwd is.
             let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
@@ -88,15 +103,17 @@ inside an existing folder)",
                 before.stale.len() + before.missing.len(),
                 before.extra.len()
             )?;
+            super::vectors::regenerate(&mut w, &vectors_dir.unwrap_or_else(|| json_dir(&dir)), &cases)?;
             Ok(EXIT_OK)
         }
-        Command::Check { dir } => {
+        Command::Check { dir, vectors_dir } => {
             existing_suite(&dir)?;
             let cases = suite::generate_all()?;
             let r = suite::check(&dir, &cases)?;
+            let vectors_fresh = super::vectors::check(&mut w, &vectors_dir.unwrap_or_else(|| json_dir(&dir)), &cases)?;
             if r.is_fresh() {
                 writeln!(w, "{} cases in {} are fresh", r.checked, dir.display())?;
-                return Ok(EXIT_OK);
+                return Ok(if vectors_fresh { EXIT_OK } else { EXIT_FAIL });
             }
             for l in r.lines() {
                 writeln!(w, "{l}")?;

@@ -1,0 +1,95 @@
+"""Command line: `replay` and `check`. Exit codes: 0 pass, 1 failures, 2 usage or
+infrastructure errors (as gcl's)."""
+
+import argparse
+import glob
+import os
+import sys
+
+from . import loader
+from .links import TargetError, open_target, parse_target
+from .replay import replay, wait_banner
+from .schema import SchemaError
+from .transcript import TranscriptError, parse
+
+EXIT_OK, EXIT_FAIL, EXIT_ERROR = 0, 1, 2
+
+
+def cmd_replay(args):
+    try:
+        spec = parse_target(args.target)
+    except TargetError as e:
+        print("gcl_vectors: error: %s" % e, file=sys.stderr)
+        return EXIT_ERROR
+    transcripts = []
+    for f in args.files:
+        try:
+            with open(f, "rb") as fh:
+                transcripts.append((f, parse(fh.read())))
+        except (OSError, TranscriptError) as e:
+            print("gcl_vectors: error: %s: %s" % (f, e), file=sys.stderr)
+            return EXIT_ERROR
+    try:
+        link = open_target(spec)
+    except TargetError as e:
+        print("gcl_vectors: error: opening %s: %s" % (args.target, e), file=sys.stderr)
+        return EXIT_ERROR
+    code = EXIT_OK
+    try:
+        if spec[0] == "exec":
+            wait_banner(link)
+        for f, t in transcripts:
+            out = replay(t, link, default_timeout=args.timeout / 1000.0, resync=args.resync)
+            if out.verdict == "PASS":
+                if not args.quiet:
+                    print("PASS %s (%d steps)" % (f, out.steps))
+            elif out.verdict in ("FAIL", "TIMEOUT"):
+                print("%s %s: %s" % (out.verdict, f, out.detail))
+                code = max(code, EXIT_FAIL)
+            else:
+                print("ERROR %s: %s" % (f, out.detail))
+                code = EXIT_ERROR
+            sys.stdout.flush()
+    except Exception as e:  # a link that breaks outside a step (the banner wait)
+        print("gcl_vectors: error: %s" % e, file=sys.stderr)
+        return EXIT_ERROR
+    finally:
+        link.close()
+    return code
+
+
+def cmd_check(args):
+    files = args.files or sorted(glob.glob(os.path.join(loader.VECTORS, "json", "*", "*.json")))
+    bad = 0
+    for f in files:
+        try:
+            vf = loader.load(f)
+            if not args.quiet:
+                print("ok %s: %s of %s, %d tests" % (f, vf.kind, vf.profile, len(vf.tests)))
+        except (OSError, ValueError, SchemaError) as e:
+            print("BAD %s: %s" % (f, e))
+            bad += 1
+    return EXIT_FAIL if bad else EXIT_OK
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python3 -m gcl_vectors", description=__doc__)
+    sub = ap.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("replay", help="run golden transcripts against a hand")
+    r.add_argument("files", nargs="+", metavar="FILE")
+    r.add_argument("--target", required=True, help="serial:PATH?baud=N, tcp://HOST:PORT or exec:COMMAND ARGS")
+    r.add_argument("--timeout", type=int, default=2000, metavar="MS", help="wait of a step without `within`")
+    r.add_argument("--resync", action="store_true", help="send ^C and drain before each transcript")
+    r.add_argument("-q", "--quiet", action="store_true", help="print only failures")
+    c = sub.add_parser("check", help="load JSON vector files with their schema check")
+    c.add_argument("files", nargs="*", metavar="FILE")
+    c.add_argument("-q", "--quiet", action="store_true")
+    args = ap.parse_args(argv)
+    try:
+        return cmd_replay(args) if args.command == "replay" else cmd_check(args)
+    except BrokenPipeError:
+        return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

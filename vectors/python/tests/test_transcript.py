@@ -1,0 +1,97 @@
+"""The transcript reader and matcher follow vectors/README.md: every committed golden
+parses, and the elision rules hold byte by byte."""
+
+import glob
+import os
+import unittest
+
+from gcl_vectors import loader
+from gcl_vectors.matcher import ALIVE, COMPLETE, DEAD, match_prefix
+from gcl_vectors.transcript import TranscriptError, parse, parse_segments
+
+GOOD = b"""gcl-transcript 1
+# a comment among header lines is dropped
+id: sample
+title: a sample
+clause: seed: Command FGET
+level: must
+profile: seed, bh8-262-4.4
+
+send "FGET DP\\r"
+expect "FGET DP\\n\\r{int 0..20000} {int}\\n\\r=> "
+
+pause 200ms
+send hex 41
+expect within 3s hex 2A {u16 4950..5050} ??
+"""
+
+
+def expect(text):
+    return parse_segments(text, 1, allow_elisions=True)
+
+
+class Transcripts(unittest.TestCase):
+    def test_every_golden_parses(self):
+        files = glob.glob(os.path.join(loader.VECTORS, "suite", "*", "*.gcl"))
+        self.assertGreater(len(files), 500)
+        for f in files:
+            with open(f, "rb") as fh:
+                t = parse(fh.read())
+            self.assertEqual(t.id, os.path.basename(f)[:-4])
+            self.assertIn(os.path.basename(os.path.dirname(f)), t.profiles)
+            self.assertTrue(t.steps)
+
+    def test_sample(self):
+        t = parse(GOOD)
+        self.assertEqual(t.id, "sample")
+        self.assertEqual(t.profiles, ["seed", "bh8-262-4.4"])
+        self.assertEqual(len(t.steps), 2)
+        self.assertEqual(t.steps[0].send, b"FGET DP\r")
+        self.assertEqual((t.steps[1].pause, t.steps[1].send, t.steps[1].within), (0.2, b"A", 3.0))
+
+    def test_errors_name_their_line(self):
+        cases = [
+            (GOOD.replace(b"gcl-transcript 1", b"gcl-transcript 2"), 1),
+            (GOOD.replace(b"level: must", b"colour: red"), 6),
+            (GOOD.replace(b'send hex 41', b'send "{int}"'), 13),
+            (GOOD.replace(b"{int 0..20000}", b"{int 9..1}"), 10),
+            (GOOD.replace(b"pause 200ms", b"pause soon"), 12),
+            (GOOD.replace(b"??", b"{u8 0..300}"), 14),
+        ]
+        for text, line in cases:
+            with self.assertRaises(TranscriptError) as cm:
+                parse(text)
+            self.assertEqual(cm.exception.line, line, str(cm.exception))
+        with self.assertRaises(TranscriptError):
+            parse(GOOD.replace(b"id: sample\n", b""))
+
+    def test_integers(self):
+        self.assertEqual(match_prefix(expect('"{int}\\n"'), b"-12\n"), (COMPLETE, 4))
+        self.assertEqual(match_prefix(expect('"{int}\\n"'), b"0\n"), (COMPLETE, 2))
+        self.assertEqual(match_prefix(expect('"{int}\\n"'), b"007\n")[0], DEAD)
+        self.assertEqual(match_prefix(expect('"{int}\\n"'), b"-0\n")[0], DEAD)
+        self.assertEqual(match_prefix(expect('"{int}\\n"'), b"+5\n"), (DEAD, 0))
+        # A range parts at the first digit that can no longer lead into it.
+        self.assertEqual(match_prefix(expect('"{int 4950..5050}\\n"'), b"5100\n"), (DEAD, 1))
+        self.assertEqual(match_prefix(expect('"{int 4950..5050}\\n"'), b"4990\n"), (COMPLETE, 5))
+        self.assertEqual(match_prefix(expect('"{int -5..5}x"'), b"-6x"), (DEAD, 1))
+
+    def test_binary_fields(self):
+        e = expect("hex 2A {u16 4950..5050}")
+        self.assertEqual(match_prefix(e, b"\x2a\x13\x88"), (COMPLETE, 3))
+        self.assertEqual(match_prefix(e, b"\x2a\x88\x13"), (DEAD, 1), "parts at the high byte")
+        self.assertEqual(match_prefix(expect("hex {i8 -2..2}"), b"\xfe"), (COMPLETE, 1))
+        self.assertEqual(match_prefix(expect("hex {i8 -2..2}"), b"\xfd"), (DEAD, 0))
+        self.assertEqual(match_prefix(expect("hex {i16 -1..1}"), b"\xff\xff"), (COMPLETE, 2))
+
+    def test_shortest_match_and_lines(self):
+        e = expect('"RESET{any}BarrettHand Firmware{any}\\n\\r=> "')
+        data = b"RESET\n\rBarrettHand Firmware 4.4\n\r=> \n\r=> "
+        self.assertEqual(match_prefix(e, data), (COMPLETE, len(data) - 5))
+        self.assertEqual(match_prefix(expect('"{line}\\n\\r"'), b"ab\rc\n\r"), (DEAD, 2))
+        self.assertEqual(match_prefix(expect('""'), b"x"), (COMPLETE, 0))
+        self.assertEqual(match_prefix(expect('"ab"'), b"a"), (ALIVE, 1))
+
+
+if __name__ == "__main__":
+    unittest.main()
