@@ -232,3 +232,52 @@ fn certificates_are_written_and_tampering_is_caught() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stdout).contains("modified: transcripts/framing-echo.gcl"));
 }
+
+#[test]
+fn skip_decision_drops_exactly_the_cases_resting_on_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().to_str().unwrap();
+    // A hand whose lines hold 128 bytes fails framing-max-line; the implementer skips the
+    // decision instead of the case, and every other case still runs.
+    let out = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--only",
+        "framing-*",
+        "--skip-decision",
+        "framing-max-line",
+        "--report",
+        rep,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let r = report(dir.path());
+    for c in &r.cases {
+        let rests = c.decisions.iter().any(|d| d == "framing-max-line");
+        assert_eq!(c.verdict == Verdict::Skip, rests, "{}: {:?} {:?}", c.id, c.verdict, c.decisions);
+        if rests {
+            assert!(c.message.as_deref().unwrap_or_default().contains("framing-max-line"));
+        }
+    }
+    assert!(r.cases.iter().any(|c| c.verdict == Verdict::Skip));
+    // The same from a known-failures file, with its reason.
+    let known = dir.path().join("known.toml");
+    std::fs::write(&known, "[[skip-decision]]\nid = \"framing-case\"\nreason = \"upper case only\"\n").unwrap();
+    let out = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "lowercase-rejected",
+        "--only",
+        "framing-*",
+        "--known-failures",
+        known.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    // A decision the profile lacks is a usage error, not a silent no-op.
+    let out = gcl(&["conform", "--target", "sim:seed", "--skip-decision", "no-such-decision"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-decision"));
+}

@@ -35,6 +35,11 @@ pub struct SuiteArgs {
     /// `reason = "..."`, optional `profile`). Listed cases that fail are XFAIL; listed cases that pass are XPASS and fail the run.
     #[arg(long, value_name = "FILE")]
     pub known_failures: Option<PathBuf>,
+    /// Skip every case that rests on this decision of the profile (repeatable; `gcl spec`
+    /// lists the ids; a known-failures file may hold `[[skip-decision]]` tables with `id` and
+    /// `reason`): for an implementation that decided an open point differently.
+    #[arg(long, value_name = "ID")]
+    pub skip_decision: Vec<String>,
     /// Per-step deadline in milliseconds for steps that do not set their own.
     #[arg(long, value_name = "MS")]
     pub timeout: Option<u64>,
@@ -103,10 +108,13 @@ pub fn prepare(
         }
         None => suite::generate(&profile).context("generating the suite")?,
     };
-    let known = match &a.known_failures {
+    let mut known = match &a.known_failures {
         Some(p) => KnownFailures::load(p)?,
         None => KnownFailures::default(),
     };
+    for id in &a.skip_decision {
+        known.skip_decision(id, "--skip-decision");
+    }
     let refuse = a
         .refuse
         .iter()

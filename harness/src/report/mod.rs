@@ -92,6 +92,10 @@ pub struct CaseResult {
     pub title: String,
     /// The spec clauses it checks.
     pub clauses: Vec<String>,
+    /// Every decision of the profile the case rests on (ids): those it checks and those its
+    /// framing, preamble and read-backs touch. `--skip-decision` drops cases by these.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub decisions: Vec<String>,
     /// MUST, SHOULD, MAY or INFO.
     pub level: String,
     /// The verdict.
@@ -303,6 +307,7 @@ pub(crate) mod tests {
                     id: "framing-echo".into(),
                     title: "Echo <all> bytes & keeps case".into(),
                     clauses: vec!["decision:framing-echo".into()],
+                    decisions: vec!["framing-echo".into()],
                     level: "MUST".into(),
                     verdict: Verdict::Pass,
                     duration_ms: 0.3,
@@ -314,6 +319,7 @@ pub(crate) mod tests {
                     id: "fget-dp-default".into(),
                     title: "FGET DP reads the defaults".into(),
                     clauses: vec!["seed: FGET".into(), "decision:framing-echo".into()],
+                    decisions: vec!["framing-echo".into(), "seed-fget-format".into()],
                     level: "MUST".into(),
                     verdict: Verdict::Fail,
                     duration_ms: 0.5,

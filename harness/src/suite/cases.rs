@@ -162,6 +162,7 @@ impl Gen {
                 format!("A line of {max} bytes is accepted; one byte more gives ERR {}", p.framing.overlong_status),
             )
             .decision("framing-max-line")
+            .decision("framing-whitespace")
             .preamble(false)
             .line(&fits)
             .line(&over)
@@ -180,13 +181,19 @@ impl Gen {
         self.add(c);
 
         let c = self
-            .case(
-                "framing-errors-combine",
-                "Problems in one line are OR'ed into one ERR; a line with an error changes nothing",
-            )
+            .case("framing-errors-combine", "Problems in one line are OR'ed into one ERR")
             .decision("framing-errors-combine")
             .preamble(false)
             .line("FSET NOPE 1 DP 99999")
+            .line("1FGET NOPE")
+            .line("1FGET DP");
+        self.add(c);
+
+        let c = self
+            .case("framing-line-atomic", "A line with an error changes nothing and prints no value line")
+            .decision("framing-line-atomic")
+            .decision("bh8-partial-errors")
+            .preamble(false)
             .line("FSET DP 1234 MCV 99999")
             .line("FGET DP NOPE")
             .line("FGET DP MCV");
@@ -311,6 +318,9 @@ impl Gen {
                 if label == "manual" && c.kind == CommandKind::MotorListAllValues {
                     k = k.decision("bh8-list-prefixes");
                 }
+                if matches!(c.kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
+                    k = k.decision("seed-flista").decision("bh8-list-values-format");
+                }
                 k = self.prefixed_run(k, c);
                 self.add(k);
             }
@@ -321,9 +331,14 @@ impl Gen {
     fn prefixed_run(&self, k: CaseB, c: &CommandSpec) -> CaseB {
         let n = &c.name;
         match c.kind {
-            CommandKind::Initialize => {
-                k.preamble(false).requires(Requirement::Motion).line(&format!("1{n}")).get("", &["S"], None)
-            }
+            CommandKind::Initialize => k
+                .decision("seed-motion-before-hi")
+                .decision("bh8-motion-before-hi")
+                .preamble(false)
+                .requires(Requirement::Motion)
+                .line(&format!("1{n}"))
+                .line("1M 1000")
+                .line("2M 1000"),
             CommandKind::Terminate => k.preamble(true).line(&format!("1{n}")).line("FGET DP"),
             CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&format!("1{n}")).abort(),
             kind if kind.is_motion() => {
@@ -431,7 +446,10 @@ impl Gen {
                 if c.kind == CommandKind::Help {
                     k = k.decision(if src_label(&self.p) == "seed" { "seed-help" } else { "bh8-help-format" });
                 }
-                k = k.preamble(false).line(&format!("{n} 1")).line(&format!("{n} 1 2"));
+                // A motion command is checked on initialised motors, so that its answer does
+                // not also depend on which of two problems a hand reports.
+                let ready = c.kind.is_motion() || c.kind == CommandKind::Loop;
+                k = k.preamble(ready).line(&format!("{n} 1")).line(&format!("{n} 1 2"));
             }
             ArgRule::OptionalInteger => {
                 let (lo, hi) = (c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(0));
@@ -442,11 +460,7 @@ impl Gen {
                 if src_label(&self.p) == "manual" && c.kind.is_motion() {
                     k = k.decision("bh8-ic-io-range");
                 }
-                k = k
-                    .preamble(false)
-                    .line(&format!("{n} 1 2"))
-                    .line(&format!("{n} {}", hi + 1))
-                    .line(&format!("{n} X"));
+                k = k.preamble(c.kind.is_motion()).line(&format!("{n} 1 2")).line(&format!("{n} {}", hi + 1));
                 if lo > -(1 << 40) {
                     k = k.line(&format!("{n} {}", lo - 1));
                 }
@@ -454,12 +468,7 @@ impl Gen {
             ArgRule::Names => {
                 k = k
                     .title_set(format!("{n} without a name gives 128"))
-                    .decision(if src_label(&self.p) == "seed" {
-                        "framing-errors-combine"
-                    } else {
-                        "bh8-partial-errors"
-                    })
-                    .level(Level::Info)
+                    .decision("framing-missing-value")
                     .preamble(false)
                     .line(n);
             }
@@ -467,12 +476,7 @@ impl Gen {
                 let first = self.writable_for(n).first().map(|x| x.name.clone()).unwrap_or_default();
                 k = k
                     .title_set(format!("{n} without a value gives 128"))
-                    .decision(if src_label(&self.p) == "seed" {
-                        "framing-errors-combine"
-                    } else {
-                        "bh8-partial-errors"
-                    })
-                    .level(Level::Info)
+                    .decision("framing-missing-value")
                     .preamble(false)
                     .line(n)
                     .line(&format!("{n} {first}"));
@@ -495,11 +499,16 @@ impl Gen {
             .src(&format!("Command {n}"))
             .src("Command HI");
         k = match (src_label(&self.p), c.kind) {
+            ("seed", CommandKind::Terminate) => k.decision("seed-terminate-uninitialized"),
+            ("seed", CommandKind::Loop) => k.decision("seed-motion-before-hi").decision("seed-param-prefix-en"),
             ("seed", _) => k.decision("seed-motion-before-hi"),
-            (_, CommandKind::Loop) => k.decision("bh8-loop-failure").decision("bh8-motion-before-hi"),
+            (_, CommandKind::Loop) => {
+                k.decision("bh8-loop-failure").decision("bh8-motion-before-hi").decision("bh8-loop-motors")
+            }
+            (_, CommandKind::Terminate) => k.decision("bh8-terminate-uninitialized"),
             _ => k.decision("bh8-motion-before-hi"),
         };
-        k = k.preamble(false).line(n).get("", &["S"], None);
+        k = k.preamble(false).line(n);
         self.add(k);
     }
 
@@ -548,7 +557,14 @@ impl Gen {
                 k.get("", &["S", "P"], Some(self.near([0; 4])))
             }
             CommandKind::Terminate => k.preamble(true).line(&n).get("", &["S"], None),
-            CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&n).abort().line("FGET DP"),
+            CommandKind::Loop => k
+                .decision("seed-param-prefix-en")
+                .decision("bh8-loop-motors")
+                .preamble(true)
+                .requires(Requirement::Realtime)
+                .line(&n)
+                .abort()
+                .line("FGET DP"),
             CommandKind::MotorSet | CommandKind::GlobalSet => {
                 let params: Vec<ParamSpec> =
                     self.writable_for(&n).into_iter().filter(|x| x.name != "BAUD").take(2).collect();
@@ -604,7 +620,11 @@ impl Gen {
                 } else {
                     k.decision("bh8-reset").decision("bh8-banner-text")
                 };
-                k.preamble(true).line_shaped(&n, Shape::Banner).get("", &["S"], None).line("C")
+                k.decision("seed-motion-before-hi")
+                    .decision("bh8-motion-before-hi")
+                    .preamble(true)
+                    .line_shaped(&n, Shape::Banner)
+                    .line("C")
             }
             CommandKind::ErrorText => {
                 let k = if label == "seed" { k.decision("seed-err-command") } else { k.decision("bh8-err-format") };
@@ -813,6 +833,9 @@ impl Gen {
             format!("{} takes values in its range and reads them back", x.name),
         );
         let mut k = self.param_level(k, x, false).src(&format!("Command {setter}")).preamble(false);
+        if values.contains(&0) && matches!(x.name.as_str(), "LCVC" | "LFVC" | "LFDPC") {
+            k = k.decision("bh8-coefficient-range");
+        }
         for v in values {
             k = k.line(&format!("{prefix}{setter} {} {v}", x.name)).get("", &[&x.name], None);
         }
@@ -875,7 +898,7 @@ impl Gen {
         let mut k =
             self.case(format!("status-{t1}-terminate-before-hi"), format!("T before HI gives {t1}")).src("Command T");
         k = if src_label(&self.p) == "seed" {
-            k.decision("seed-motion-before-hi")
+            k.decision("seed-terminate-uninitialized")
         } else {
             k.decision("bh8-terminate-uninitialized")
         };
@@ -895,9 +918,9 @@ impl Gen {
         let simple: [(u32, &str, &[&str]); 6] = [
             (32, "unknown-command", &["BOGUS", "1BOGUS", "FGETX DP"]),
             (64, "unknown-parameter", &["FGET NOPE", "FSET NOPE 5"]),
-            (128, "invalid-value", &["FSET DP 99999999", "FSET DP -1", "FSET DP X"]),
+            (128, "invalid-value", &["FSET DP 99999999", "FSET DP -1"]),
             (256, "read-only", &["FSET P 5", "FSET S 0"]),
-            (1024, "too-many-arguments", &["FDEF 1", "M 1 2", "RESET 1"]),
+            (1024, "too-many-arguments", &["FDEF 1", "ERR 1 2", "RESET 1"]),
             (4096, "prefix-not-allowed", &["1RESET", "GRESET"]),
         ];
         for (code, name, lines) in simple {
@@ -929,6 +952,7 @@ impl Gen {
                 .src(&format!("Status codes {}", s.bit))
                 .src("Command ERR")
                 .decision(&id)
+                .decision("seed-err-command")
                 .preamble(false)
                 .line(&format!("ERR {}", s.bit))
                 .line("FGET DP");
@@ -963,6 +987,8 @@ impl Gen {
             .src(&format!("Status codes {mp}"))
             .src("Command M")
             .decision("bh8-missed-position-code")
+            .decision("seed-motion-model")
+            .decision("bh8-position-bounds")
             .preamble(true)
             .line(&format!("SM {}", l4 + 850))
             .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));
@@ -1263,6 +1289,7 @@ impl Gen {
             .src("Command M")
             .src("Parameter MPE")
             .decision(if label == "seed" { "seed-motion-model" } else { "bh8-mpe-boundary" })
+            .decision("bh8-position-bounds")
             .note(format!(
                 "The spread stalls at its joint stop ({l4}): SM {} leaves an error of MPE ({mpe4}), SM {} one more.",
                 l4 + mpe4,
@@ -1295,6 +1322,10 @@ impl Gen {
                 .src("Command HI")
                 .src(&format!("Parameter {init}"))
                 .decision(d)
+                .decision("seed-motion-before-hi")
+                .decision("bh8-motion-before-hi")
+                .decision("seed-s-values")
+                .decision("bh8-s-before-hi")
                 .preamble(true)
                 .line("1M 3000")
                 .line(&format!("1FSET {init} 0"))
@@ -1408,7 +1439,7 @@ impl Gen {
                 &all,
             )
             .decision(if label == "seed" { "seed-rt-field-order" } else { "bh8-44-rt-field-order" })
-            .line("LOOP")
+            .line("1234LOOP")
             .block(&block, Shape::Block(self.at_rest()))
             .block(b"A", Shape::Block(self.at_rest()))
             .abort();
@@ -1826,6 +1857,7 @@ impl Gen {
         let mut k = self
             .case("example-supervisory-program", "The seed's supervisory example program: CR, RESET, HI, 123C, 123O")
             .clause("seed: Example Programs, Supervisory Mode Example Program")
+            .decision("framing-empty-line")
             .level(Level::Must)
             .requires(Requirement::Motion)
             .comment("a host's start-up: ^C, a bare CR, RESET")
@@ -1863,6 +1895,10 @@ impl Gen {
         }
         k = k
             .decision("bh8-44-same-as-43")
+            .decision("bh8-err-format")
+            .decision("bh8-help-format")
+            .decision("bh8-list-names-format")
+            .decision("bh8-list-values-format")
             .level(Level::Info)
             .note(
                 "Compare this file across the bh8-262 profiles: only the header, LFT's description (its width) and \
