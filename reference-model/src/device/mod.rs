@@ -453,13 +453,13 @@ impl Device {
             accel: self.accel(m),
             close_speed: mcv,
             open_speed: mov,
-            init_speed: self.ids.ivel.map_or(mov, |id| self.params.get(profile, id, m) as f64 * vel_unit),
+            init_speed: self.ids.ivel.map_or(mov, |id| self.behaviour(id, m) as f64 * vel_unit),
             tstop_ms: self.get(self.ids.tstop, m).clamp(0, i64::from(u32::MAX)) as u32,
-            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.params.get(profile, id, m).max(1) as u64),
+            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.behaviour(id, m).max(1) as u64),
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
             high_strain: self.get(self.ids.hsg, m),
-            low_strain: self.ids.lsg.map_or(256, |id| self.params.get(profile, id, m)),
+            low_strain: self.ids.lsg.map_or(256, |id| self.behaviour(id, m)),
             breakaway: self.get(self.ids.bs, m) != 0,
         }
     }
@@ -633,8 +633,22 @@ impl Device {
                 self.last_status = StatusBits::empty();
                 self.prompt();
             }
-            Ok(Line::Command(c)) => self.run_command(&c),
+            Ok(Line::Command(mut c)) => {
+                if self.has(Fault::GIncludesSpread) && prefix_text(&self.profile, line).contains(['G', 'g']) {
+                    c.prefix = c.prefix.map(|p| p | MotorSet::single(4).unwrap_or_default());
+                }
+                self.run_command(&c)
+            }
             Err(mut r) => {
+                if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
+                    return self.end_line(StatusBits::empty());
+                }
+                if self.has(Fault::PrefixNotRefused) && r.status == StatusBits::PREFIX_NOT_ALLOWED {
+                    let skip = line.len() - line.trim_ascii_start().len() + prefix_text(&self.profile, line).len();
+                    if let Ok(Line::Command(c)) = grammar::parse_line(&self.profile, &line[skip..]) {
+                        return self.run_command(&c);
+                    }
+                }
                 if self.has(Fault::ReadOnlyStatus) && r.status.contains(StatusBits::READ_ONLY) {
                     r.status = (r.status - StatusBits::READ_ONLY) | StatusBits::INVALID_VALUE;
                 }
@@ -681,13 +695,39 @@ impl Device {
 
     fn enabled_motors(&self) -> MotorSet {
         match self.ids.en {
-            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.params.get(&self.profile, en, *m) != 0)),
+            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.behaviour(en, *m) != 0)),
             None => MotorSet::ALL,
         }
     }
 
+    /// The value a parameter has for the hand's behaviour (not for FGET): what was set, or
+    /// its factory value when a `*-ignored` fault makes the hand ignore it.
     fn get(&self, id: Option<ParamId>, motor: u8) -> i64 {
-        id.map_or(0, |id| self.params.get(&self.profile, id, motor))
+        id.map_or(0, |id| self.behaviour(id, motor))
+    }
+
+    fn behaviour(&self, id: ParamId, motor: u8) -> i64 {
+        if self.ignores(id) { self.profile.default_for(id, motor) } else { self.params.get(&self.profile, id, motor) }
+    }
+
+    fn ignores(&self, id: ParamId) -> bool {
+        let name = self.profile.param(id).name.as_str();
+        self.faults.iter().any(|f| f.ignored_params().contains(&name))
+    }
+
+    /// The parameters as the hand's behaviour sees them (see [`Device::get`]).
+    fn behaviour_store(&self) -> std::borrow::Cow<'_, ParamStore> {
+        if self.faults.iter().all(|f| f.ignored_params().is_empty()) {
+            return std::borrow::Cow::Borrowed(&self.params);
+        }
+        let mut store = self.params.clone();
+        for id in self.profile.param_ids().filter(|id| self.ignores(*id)) {
+            for m in 1..=4u8 {
+                let v = self.profile.default_for(id, m);
+                store.set_unchecked(&self.profile, id, MotorSet::single(m).unwrap_or_default(), v);
+            }
+        }
+        std::borrow::Cow::Owned(store)
     }
 
     fn set_live(&mut self, id: Option<ParamId>, motor: u8, v: i64) {
@@ -817,6 +857,9 @@ impl Device {
                     .then(|| self.ids.mcv.map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m)))))
                     .flatten();
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
+                if t == Transfer::Defaults && self.has(Fault::FdefWritesEeprom) {
+                    self.params.transfer(&profile, &mut self.nv, Transfer::Save, Scope::Motor, motors);
+                }
                 if let Some((id, vals)) = keep_mcv {
                     for m in 1..=4u8 {
                         self.params.set_unchecked(
@@ -941,7 +984,7 @@ impl Device {
                 }
             }
         }
-        if Some(id) == self.ids.p && !named {
+        if Some(id) == self.ids.p && !named && !self.has(Fault::FgetPKeepsReported) {
             for (m, v) in &vals {
                 self.motors[(*m - 1) as usize].reported = Some(*v);
             }
@@ -992,10 +1035,7 @@ impl Device {
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
                 CommandKind::Close => Goal::Position {
-                    target: self
-                        .ids
-                        .ct
-                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.params.get(&profile, id, m))
+                    target: self.ids.ct.map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
                         as f64,
                     stall_ms: 0,
                 },
@@ -1061,7 +1101,11 @@ impl Device {
 
     fn power_cycle(&mut self) {
         let profile = self.profile.clone();
+        let ram = self.params.clone();
         self.params = ParamStore::power_up(&profile, &mut self.nv);
+        if self.has(Fault::ResetKeepsRam) {
+            self.params = ram;
+        }
         for m in &mut self.motors {
             m.power_down();
         }
@@ -1084,7 +1128,7 @@ impl Device {
         if motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
             return self.end_line(StatusBits::from_bits_truncate(profile.hand.uninitialized_status));
         }
-        let layout = RtLayout::compute(&profile, &self.params, motors);
+        let layout = RtLayout::compute(&profile, &self.behaviour_store(), motors);
         for m in motors.iter() {
             let motor = &mut self.motors[(m - 1) as usize];
             if motor.reported.is_none() {
@@ -1182,6 +1226,7 @@ impl Device {
             let i = (m - 1) as usize;
             match f.name.as_str() {
                 "LCV" => {
+                    let v = &if self.has(Fault::LcvUnsigned) { i64::from(*v as u8) } else { *v };
                     let lcvc = self.get(self.ids.lcvc, m);
                     self.motors[i].rt_velocity =
                         realtime::control_velocity(*v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
@@ -1195,7 +1240,7 @@ impl Device {
             }
         }
         for m in rt.layout.motors.iter() {
-            let has_gain = self.ids.lcpg.is_some_and(|id| self.params.get(&profile, id, m) != 0);
+            let has_gain = self.ids.lcpg.is_some_and(|id| self.behaviour(id, m) != 0);
             self.motors[(m - 1) as usize].rt_uses_gain = has_gain;
         }
     }
@@ -1251,6 +1296,15 @@ impl Device {
         }
         rt.layout.feedback.encode_clamped(realtime::FEEDBACK_HEADER, &rt.feedback, &mut self.out);
     }
+}
+
+/// The run of prefix characters a line starts with (after leading separators).
+fn prefix_text(profile: &Profile, line: &[u8]) -> String {
+    line.trim_ascii_start()
+        .iter()
+        .take_while(|b| b.is_ascii() && profile.prefix_motors(**b as char).is_some())
+        .map(|b| *b as char)
+        .collect()
 }
 
 #[cfg(test)]
