@@ -1066,6 +1066,21 @@ impl Gen {
         self.add(k);
 
         let k = self
+            .case("persist-fdef-ram-only", "FDEF changes RAM only: the saved values come back at RESET")
+            .src("Command FDEF")
+            .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
+            .level(Level::Must)
+            .requires(Requirement::Eeprom)
+            .preamble(false)
+            .line("FSET DP 1234")
+            .line("FSAVE")
+            .line("FDEF")
+            .line("1FGET DP")
+            .line_shaped("RESET", Shape::Banner)
+            .line("1FGET DP");
+        self.add(k);
+
+        let k = self
             .case(
                 "persist-fsave-reset",
                 "FSAVE keeps values across RESET; FDEF and FSAVE bring the factory values back",
