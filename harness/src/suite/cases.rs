@@ -1143,11 +1143,11 @@ impl Gen {
                 .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
                 .requires(Requirement::Eeprom)
                 .preamble(false);
-            for l in chunk_lines("FSET", &pairs, self.p.framing.max_line) {
+            for l in chunk_lines("FSET", &pairs, safe_line(&self.p)) {
                 k = k.line(&l);
             }
             k = k.line("FSAVE").line_shaped("RESET", Shape::Banner);
-            for l in chunk_lines("FGET", &names, self.p.framing.max_line) {
+            for l in chunk_lines("FGET", &names, safe_line(&self.p)) {
                 k = k.line(&l);
             }
             self.add(k);
@@ -1638,7 +1638,7 @@ impl Gen {
             .filter(|x| x.scope == Scope::Motor)
             .map(|x| format!("{} {}", x.name, i32::from(on.contains(&x.name.as_str()))))
             .collect();
-        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, self.p.framing.max_line);
+        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, safe_line(&self.p));
         for g in flags.iter().filter(|x| x.scope == Scope::Global) {
             if let Some(id) = self.p.param_id(&g.name) {
                 lines.push(format!("{} {} {}", self.p.setter(id), g.name, i32::from(on.contains(&g.name.as_str()))));
@@ -2260,6 +2260,13 @@ fn other_value(x: &ParamSpec, default: i64) -> i64 {
         None if x.max != default => x.max,
         None => x.min,
     }
+}
+
+/// The longest line a case sends (outside the line-length case itself): the profile's limit,
+/// but no more than [`super::depends::SAFE_LINE`], the longest line a host library is known to
+/// send, so that a hand with a shorter buffer than the model's fails only framing-max-line.
+fn safe_line(p: &Profile) -> usize {
+    p.framing.max_line.min(super::depends::SAFE_LINE)
 }
 
 /// `head` then as many `item`s as fit in `max` bytes.

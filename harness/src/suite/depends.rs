@@ -35,6 +35,11 @@ pub const FRAMING: &[&str] = &[
     "bh8-fget-format",
 ];
 
+/// The longest command line with evidence behind it: Barrett's host library sends
+/// `123FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFVC 1 LFS 0 LFAP 1 LFDP 0 LFDPC 1` (68 bytes;
+/// protocol-notes, "Two profiles, one engine"). A longer line rests on framing-max-line.
+pub const SAFE_LINE: usize = 68;
+
 /// Decision ids by topic: the first ids the profile has are used.
 fn topic(p: &Profile, ids: &[&str], out: &mut Vec<String>) {
     for id in ids {
@@ -148,7 +153,7 @@ fn line_decisions(
     {
         topic(p, &["framing-whitespace"], found);
     }
-    if line.len() > p.framing.max_line {
+    if line.len() > p.framing.max_line.min(SAFE_LINE) {
         topic(p, &["framing-max-line"], found);
     }
     if line.iter().any(|b| matches!(b, 8 | 127)) {
