@@ -345,6 +345,9 @@ impl Gen {
             kind if kind.is_motion() => {
                 let (setup, goals) = self.motion_recipe(kind, "1");
                 let mut k = k.preamble(true);
+                if kind == CommandKind::Close {
+                    k = k.decision("seed-close-open-targets");
+                }
                 for s in setup {
                     k = k.line(&s);
                 }
@@ -2186,7 +2189,6 @@ impl Gen {
         let k = k.abort().line("FGET DP");
         self.add(k);
 
-        let goals_c = self.near([self.close_target(1), self.close_target(2), self.close_target(3), 0]);
         let mut k = self
             .case("example-supervisory-program", "The seed's supervisory example program: CR, RESET, HI, 123C, 123O")
             .clause("seed: Example Programs, Supervisory Mode Example Program")
@@ -2201,11 +2203,7 @@ impl Gen {
         if self.has_cmd("PDEF") {
             k = k.line("PDEF");
         }
-        let k = k.line("HI").line("123C").get("", &["P"], Some(goals_c)).line("123O").get(
-            "",
-            &["P"],
-            Some(self.near([0; 4])),
-        );
+        let k = k.line("HI").line("123C").line("123O").get("", &["P"], Some(self.near([0; 4])));
         self.add(k);
     }
 

@@ -68,6 +68,13 @@ fn status_in(output: &[u8]) -> Option<u32> {
     text[at + 4..].chars().take_while(char::is_ascii_digit).collect::<String>().parse().ok()
 }
 
+/// What the analysis remembers between lines.
+#[derive(Default)]
+struct State {
+    /// The last motion was a C that ended without a status.
+    closed: bool,
+}
+
 /// Every decision a case's steps rest on, in the profile's order, given the plan and what the
 /// model answered to each step.
 pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<String> {
@@ -76,6 +83,7 @@ pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Ve
     let mut initialized = [false; 4];
     let mut in_loop = false;
     let mut busy = false;
+    let mut st = State::default();
     for (plan, c) in plans.iter().zip(caps) {
         let status = status_in(&c.output);
         match &plan.step.action {
@@ -92,7 +100,7 @@ pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Ve
             }
             Action::Line(line) => {
                 busy = false;
-                line_decisions(p, line, status, &mut initialized, &mut in_loop, &c.output, &mut found);
+                line_decisions(p, line, status, &mut initialized, &mut in_loop, &c.output, &mut found, &mut st);
             }
             Action::NoWait(line) => {
                 if line.contains(&p.framing.terminator) {
@@ -110,7 +118,7 @@ pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Ve
                     topic(p, &["framing-busy-input"], &mut found);
                 }
                 for l in bytes.split(|b| *b == p.framing.terminator).filter(|l| !l.is_empty()) {
-                    line_decisions(p, l, None, &mut initialized, &mut in_loop, &c.output, &mut found);
+                    line_decisions(p, l, None, &mut initialized, &mut in_loop, &c.output, &mut found, &mut st);
                 }
             }
             Action::Partial(_) | Action::Wait => {}
@@ -129,6 +137,7 @@ fn line_decisions(
     in_loop: &mut bool,
     output: &[u8],
     found: &mut Vec<String>,
+    st: &mut State,
 ) {
     let text = String::from_utf8_lossy(line);
     if line.iter().all(|b| matches!(b, b' ' | b'\t' | b'\n')) {
@@ -218,6 +227,12 @@ fn line_decisions(
                     {
                         topic(p, &["seed-s-values", "bh8-s-before-hi"], found);
                     }
+                    if let Args::Names(names) = &c.args
+                        && names.iter().any(|id| p.param(*id).name == "P")
+                        && st.closed
+                    {
+                        topic(p, &["seed-close-open-targets"], found);
+                    }
                 }
                 CommandKind::MotorList
                 | CommandKind::MotorListAll
@@ -260,6 +275,9 @@ fn line_decisions(
                     }
                 }
                 k if k.is_motion() => {
+                    // The seed gives C no target: where it closes to is a decision, seen by a
+                    // read of P before the next move.
+                    st.closed = *k == CommandKind::Close && status.is_none();
                     if status.is_some_and(|s| s & p.hand.uninitialized_status != 0) || uninit {
                         topic(p, &["seed-motion-before-hi", "bh8-motion-before-hi"], found);
                     }
