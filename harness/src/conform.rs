@@ -131,7 +131,7 @@ impl KnownFailures {
 
     /// The skipped decision a case rests on, if any.
     pub fn skipped_by<'a>(&'a self, profile: &'a str, decisions: &[String]) -> Option<&'a SkipDecision> {
-        self.skipped_decisions(profile).find(|s| decisions.iter().any(|d| *d == s.id))
+        self.skipped_decisions(profile).find(|s| decisions.contains(&s.id))
     }
 
     /// Reads and parses a file.

@@ -71,74 +71,70 @@ fn status_in(output: &[u8]) -> Option<u32> {
 /// What the analysis remembers between lines.
 #[derive(Default)]
 struct State {
+    /// Which motors an earlier HI initialised (RESET forgets).
+    initialized: [bool; 4],
+    /// In RealTime mode.
+    in_loop: bool,
     /// The last motion was a C that ended without a status.
     closed: bool,
+    /// The decisions found so far.
+    found: Vec<String>,
 }
 
 /// Every decision a case's steps rest on, in the profile's order, given the plan and what the
 /// model answered to each step.
 pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<String> {
-    let mut found = Vec::new();
-    topic(p, &["framing-echo", "framing-line-ending", "framing-prompt"], &mut found);
-    let mut initialized = [false; 4];
-    let mut in_loop = false;
-    let mut busy = false;
     let mut st = State::default();
+    topic(p, &["framing-echo", "framing-line-ending", "framing-prompt"], &mut st.found);
+    let mut busy = false;
     for (plan, c) in plans.iter().zip(caps) {
         let status = status_in(&c.output);
         match &plan.step.action {
             Action::Bytes { bytes, .. } if bytes.as_slice() == [p.framing.abort] => {
-                if in_loop {
-                    topic(p, &["seed-abort", "bh8-abort-loop"], &mut found);
+                if st.in_loop {
+                    topic(p, &["seed-abort", "bh8-abort-loop"], &mut st.found);
                 } else if busy {
-                    topic(p, &["seed-abort", "bh8-abort-motion"], &mut found);
+                    topic(p, &["seed-abort", "bh8-abort-motion"], &mut st.found);
                 } else {
-                    topic(p, &["framing-abort-idle"], &mut found);
+                    topic(p, &["framing-abort-idle"], &mut st.found);
                 }
-                in_loop = false;
+                st.in_loop = false;
                 busy = false;
             }
             Action::Line(line) => {
                 busy = false;
-                line_decisions(p, line, status, &mut initialized, &mut in_loop, &c.output, &mut found, &mut st);
+                line_decisions(p, line, status, &c.output, &mut st);
             }
             Action::NoWait(line) => {
                 if line.contains(&p.framing.terminator) {
-                    topic(p, &["framing-busy-input"], &mut found);
+                    topic(p, &["framing-busy-input"], &mut st.found);
                 }
                 busy = true;
             }
-            Action::Bytes { .. } if in_loop => {
+            Action::Bytes { .. } if st.in_loop => {
                 if status.is_some() {
-                    in_loop = false;
+                    st.in_loop = false;
                 }
             }
             Action::Bytes { bytes, .. } => {
                 if bytes.iter().filter(|b| **b == p.framing.terminator).count() > 1 {
-                    topic(p, &["framing-busy-input"], &mut found);
+                    topic(p, &["framing-busy-input"], &mut st.found);
                 }
                 for l in bytes.split(|b| *b == p.framing.terminator).filter(|l| !l.is_empty()) {
-                    line_decisions(p, l, None, &mut initialized, &mut in_loop, &c.output, &mut found, &mut st);
+                    line_decisions(p, l, None, &c.output, &mut st);
                 }
             }
             Action::Partial(_) | Action::Wait => {}
         }
     }
+    let mut found = st.found;
     let order = |id: &String| p.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
     found.sort_by_key(order);
     found
 }
 
-fn line_decisions(
-    p: &Profile,
-    line: &[u8],
-    status: Option<u32>,
-    initialized: &mut [bool; 4],
-    in_loop: &mut bool,
-    output: &[u8],
-    found: &mut Vec<String>,
-    st: &mut State,
-) {
+fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], st: &mut State) {
+    let State { initialized, in_loop, closed, found } = st;
     let text = String::from_utf8_lossy(line);
     if line.iter().all(|b| matches!(b, b' ' | b'\t' | b'\n')) {
         topic(p, &["framing-empty-line"], found);
@@ -198,7 +194,7 @@ fn line_decisions(
                 }
                 if r.problems.iter().any(|x| matches!(x, grammar::Problem::InvalidValue(v) if v.contains("required")))
                     || matches!(kind, CommandKind::MotorSet | CommandKind::GlobalSet)
-                        && text.split_ascii_whitespace().count() % 2 == 0
+                        && text.split_ascii_whitespace().count().is_multiple_of(2)
                 {
                     topic(p, &["framing-missing-value"], found);
                 }
@@ -229,7 +225,7 @@ fn line_decisions(
                     }
                     if let Args::Names(names) = &c.args
                         && names.iter().any(|id| p.param(*id).name == "P")
-                        && st.closed
+                        && *closed
                     {
                         topic(p, &["seed-close-open-targets"], found);
                     }
@@ -245,11 +241,9 @@ fn line_decisions(
                 CommandKind::ErrorText => topic(p, &["seed-err-command", "bh8-err-format"], found),
                 CommandKind::Help | CommandKind::HelpAll => topic(p, &["seed-help", "bh8-help-format"], found),
                 CommandKind::Version => topic(p, &["bh8-vers-text"], found),
-                CommandKind::Initialize => {
-                    if status.is_none() {
-                        for m in &motors {
-                            initialized[*m as usize - 1] = true;
-                        }
+                CommandKind::Initialize if status.is_none() => {
+                    for m in &motors {
+                        initialized[*m as usize - 1] = true;
                     }
                 }
                 CommandKind::Terminate if status.is_some() => {
@@ -277,7 +271,7 @@ fn line_decisions(
                 k if k.is_motion() => {
                     // The seed gives C no target: where it closes to is a decision, seen by a
                     // read of P before the next move.
-                    st.closed = *k == CommandKind::Close && status.is_none();
+                    *closed = *k == CommandKind::Close && status.is_none();
                     if status.is_some_and(|s| s & p.hand.uninitialized_status != 0) || uninit {
                         topic(p, &["seed-motion-before-hi", "bh8-motion-before-hi"], found);
                     }
