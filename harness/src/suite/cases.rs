@@ -984,6 +984,21 @@ impl Gen {
             self.add(k.line("FGET DP"));
         }
 
+        // A grammar problem and a condition found only when running meet on one line.
+        let u = self.code(h.uninitialized_status);
+        let k = self
+            .case(
+                "status-combined-grammar-and-not-initialized",
+                format!("A refused line never runs: before HI, C 1 gives only 1024 and M 99999 only 128, not {u}"),
+            )
+            .src("Status codes")
+            .decision("framing-parse-before-run")
+            .preamble(false)
+            .line("C 1")
+            .line("M 99999")
+            .line("1FGET DP");
+        self.add(k);
+
         let mp = self.code(h.missed_position_status);
         let l4 = self.limit(4);
         let k = self
