@@ -67,6 +67,10 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("fdef-writes-eeprom", B44, &["persist-fdef-ram-only"]),
     ("lcv-unsigned", B44, &["example-realtime-seed"]),
     ("fget-p-keeps-reported", B44, &["rt-lfdp-worked-example"]),
+    ("uninitialized-moves", B44, &["status-4-not-initialized", "cmd-m-before-hi"]),
+    ("unknown-command-64", B44, &["status-32-unknown-command"]),
+    ("unknown-param-128", B44, &["status-64-unknown-parameter", "param-unknown-name-fset"]),
+    ("partial-set-applied", B44, &["framing-line-atomic"]),
 ];
 
 const B44: &str = "bh8-262-4.4";

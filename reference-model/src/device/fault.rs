@@ -133,6 +133,14 @@ faults! {
     LcvUnsigned => "lcv-unsigned",
     /// FGET P does not set the position LFDP is reported against.
     FgetPKeepsReported => "fget-p-keeps-reported",
+    /// Motion commands run on motors HI has not initialised, instead of giving 4.
+    UninitializedMoves => "uninitialized-moves",
+    /// An unknown command word gives 64 (unknown parameter) instead of 32.
+    UnknownCommand64 => "unknown-command-64",
+    /// An unknown parameter name gives 128 (invalid value) instead of 64.
+    UnknownParam128 => "unknown-param-128",
+    /// A refused FSET or PSET still applies the pairs that are valid on their own.
+    PartialSetApplied => "partial-set-applied",
 }
 
 impl Fault {

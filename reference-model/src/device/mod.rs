@@ -640,6 +640,15 @@ impl Device {
                 self.run_command(&c)
             }
             Err(mut r) => {
+                if self.has(Fault::UnknownCommand64) && r.status.contains(StatusBits::UNKNOWN_COMMAND) {
+                    r.status = (r.status - StatusBits::UNKNOWN_COMMAND) | StatusBits::UNKNOWN_PARAMETER;
+                }
+                if self.has(Fault::UnknownParam128) && r.status.contains(StatusBits::UNKNOWN_PARAMETER) {
+                    r.status = (r.status - StatusBits::UNKNOWN_PARAMETER) | StatusBits::INVALID_VALUE;
+                }
+                if self.has(Fault::PartialSetApplied) {
+                    self.apply_valid_pairs(line);
+                }
                 if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
                     return self.end_line(StatusBits::empty());
                 }
@@ -659,6 +668,25 @@ impl Device {
                     return self.run_command(&c);
                 }
                 self.end_line(r.status)
+            }
+        }
+    }
+
+    /// The partial-set-applied fault: the pairs of a refused set line that parse alone.
+    fn apply_valid_pairs(&mut self, line: &[u8]) {
+        let Ok(text) = std::str::from_utf8(line) else { return };
+        let mut toks = text.split_ascii_whitespace();
+        let Some(head) = toks.next() else { return };
+        let rest: Vec<&str> = toks.collect();
+        let profile = self.profile.clone();
+        for pair in rest.chunks(2) {
+            let one = format!("{head} {}", pair.join(" "));
+            if let Ok(Line::Command(c)) = grammar::parse_line(&profile, one.as_bytes())
+                && let Args::Pairs(ps) = &c.args
+            {
+                for (id, v) in ps {
+                    self.params.set_unchecked(&profile, *id, c.prefix.unwrap_or(MotorSet::ALL), *v);
+                }
             }
         }
     }
@@ -1014,7 +1042,10 @@ impl Device {
     fn start_motion(&mut self, kind: CommandKind, motors: MotorSet, c: &Command) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        if kind != CommandKind::Initialize && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+        if kind != CommandKind::Initialize
+            && !self.has(Fault::UninitializedMoves)
+            && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized)
+        {
             return self.end_line(StatusBits::from_bits_truncate(hand.uninitialized_status));
         }
         if kind.is_motion() && self.overtemperature() {
