@@ -71,6 +71,10 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("unknown-command-64", B44, &["status-32-unknown-command"]),
     ("unknown-param-128", B44, &["status-64-unknown-parameter", "param-unknown-name-fset"]),
     ("partial-set-applied", B44, &["framing-line-atomic"]),
+    ("tab-not-separator", B44, &["framing-whitespace"]),
+    ("missing-value-ignored", B44, &["cmd-fset-args", "cmd-pset-args"]),
+    ("empty-line-error", B44, &["framing-empty-line"]),
+    ("overlong-line-runs", B44, &["framing-max-line"]),
 ];
 
 const B44: &str = "bh8-262-4.4";

@@ -141,6 +141,14 @@ faults! {
     UnknownParam128 => "unknown-param-128",
     /// A refused FSET or PSET still applies the pairs that are valid on their own.
     PartialSetApplied => "partial-set-applied",
+    /// A tab is not a separator: a line with one is an unknown command.
+    TabNotSeparator => "tab-not-separator",
+    /// A set whose last name has no value drops it silently instead of giving 128.
+    MissingValueIgnored => "missing-value-ignored",
+    /// An empty line gives ERR 32 instead of a fresh prompt.
+    EmptyLineError => "empty-line-error",
+    /// A line past the length limit runs cut short instead of giving its status.
+    OverlongLineRuns => "overlong-line-runs",
 }
 
 impl Fault {

@@ -577,7 +577,7 @@ impl Device {
         } else if b == framing.terminator {
             let line = std::mem::take(&mut self.line);
             let overflow = std::mem::replace(&mut self.overflow, false);
-            if overflow {
+            if overflow && !self.has(Fault::OverlongLineRuns) {
                 self.end_line(StatusBits::from_bits_truncate(framing.overlong_status));
             } else {
                 self.run_line(&line);
@@ -628,7 +628,11 @@ impl Device {
 
     fn run_line(&mut self, line: &[u8]) {
         let opts = ParseOptions { case_sensitive_commands: self.has(Fault::LowercaseRejected) };
+        if self.has(Fault::TabNotSeparator) && line.contains(&b'\t') {
+            return self.end_line(StatusBits::UNKNOWN_COMMAND);
+        }
         match grammar::parse_line_with(&self.profile, line, opts) {
+            Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             Ok(Line::Empty) => {
                 self.last_status = StatusBits::empty();
                 self.prompt();
@@ -648,6 +652,12 @@ impl Device {
                 }
                 if self.has(Fault::PartialSetApplied) {
                     self.apply_valid_pairs(line);
+                }
+                if self.has(Fault::MissingValueIgnored)
+                    && r.status == StatusBits::INVALID_VALUE
+                    && let Some(cut) = self.without_last_name(line)
+                {
+                    return self.run_command(&cut);
                 }
                 if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
                     return self.end_line(StatusBits::empty());
@@ -669,6 +679,28 @@ impl Device {
                 }
                 self.end_line(r.status)
             }
+        }
+    }
+
+    /// The missing-value-ignored fault: a set line with an odd token count, run without its
+    /// last token.
+    fn without_last_name(&self, line: &[u8]) -> Option<Command> {
+        let text = std::str::from_utf8(line).ok()?;
+        let toks: Vec<&str> = text.split_ascii_whitespace().collect();
+        if toks.len() < 2 || !toks.len().is_multiple_of(2) {
+            return None;
+        }
+        // A lone name: the set of nothing (parsed with a dummy pair, then emptied).
+        let probe = format!("{} {} 0", toks[..toks.len() - 1].join(" "), toks[toks.len() - 1]);
+        let text = if toks.len() == 2 { probe } else { toks[..toks.len() - 1].join(" ") };
+        match grammar::parse_line(&self.profile, text.as_bytes()) {
+            Ok(Line::Command(mut c)) if matches!(c.args, Args::Pairs(_)) => {
+                if toks.len() == 2 {
+                    c.args = Args::Pairs(Vec::new());
+                }
+                Some(c)
+            }
+            _ => None,
         }
     }
 
