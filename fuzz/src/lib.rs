@@ -149,7 +149,8 @@ pub struct Step {
 
 /// What the `device` target reads from its input bytes.
 ///
-/// Layout: `profile`, `faults` (two bytes, little-endian, bit `i` = `Fault::ALL[i]`),
+/// Layout: `profile`, `faults` (two bytes, little-endian, bit `i` = `Fault::ALL[i]`; the
+/// faults past the sixteenth are not reachable from here),
 /// `scenario` (bit flags, see [`scenario_of`]), then steps, each `wait`, `len`, `len` bytes.
 /// Missing bytes read as zero, a short last chunk is kept as it is: every input is a session.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -253,8 +254,13 @@ pub fn device(data: &[u8]) -> DeviceRun {
     let session = DeviceSession::from_bytes(data);
     let profiles = builtin_profiles();
     let profile = profiles[usize::from(session.profile) % profiles.len()].clone();
-    let faults =
-        Fault::ALL.iter().enumerate().filter(|(i, _)| session.faults & (1 << i) != 0).map(|(_, f)| *f).collect();
+    let faults = Fault::ALL
+        .iter()
+        .take(16)
+        .enumerate()
+        .filter(|(i, _)| session.faults & (1 << i) != 0)
+        .map(|(_, f)| *f)
+        .collect();
     let config = DeviceConfig {
         seed: u64::from(session.scenario),
         scenario: scenario_of(session.scenario),

@@ -69,11 +69,27 @@ pub struct KnownFailure {
     pub reason: String,
 }
 
+/// One decision an implementer took differently: every case resting on it is SKIP, with the
+/// reason, in the manner of Wycheproof's flags.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkipDecision {
+    /// The decision id (`gcl spec --profile P` lists them).
+    pub id: String,
+    /// Only for this profile, when given.
+    #[serde(default)]
+    pub profile: Option<String>,
+    /// Why (what the implementation does instead).
+    pub reason: String,
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct KnownFile {
     #[serde(default)]
     failure: Vec<KnownFailure>,
+    #[serde(default, rename = "skip-decision")]
+    skip_decision: Vec<SkipDecision>,
 }
 
 /// Known failures: data with a reason, never a silent skip. A listed case that fails is
@@ -82,6 +98,7 @@ struct KnownFile {
 pub struct KnownFailures {
     entries: Vec<(KnownFailure, globset::GlobMatcher)>,
     source: Option<String>,
+    skip_decisions: Vec<SkipDecision>,
 }
 
 impl KnownFailures {
@@ -92,6 +109,10 @@ impl KnownFailures {
     /// case = "rt-lft-*"
     /// profile = "bh8-262-4.4"   # optional
     /// reason = "firmware 4.4.1 sends LFT unsigned"
+    ///
+    /// [[skip-decision]]
+    /// id = "framing-max-line"
+    /// reason = "our lines hold 128 bytes"
     /// ```
     pub fn parse(text: &str) -> anyhow::Result<KnownFailures> {
         let f: KnownFile = toml::from_str(text)?;
@@ -100,7 +121,22 @@ impl KnownFailures {
             let g = Glob::new(&k.case).map_err(|e| anyhow::anyhow!("bad glob `{}`: {e}", k.case))?.compile_matcher();
             entries.push((k, g));
         }
-        Ok(KnownFailures { entries, source: None })
+        Ok(KnownFailures { entries, source: None, skip_decisions: f.skip_decision })
+    }
+
+    /// Adds a decision whose cases are skipped (`--skip-decision ID`).
+    pub fn skip_decision(&mut self, id: &str, reason: &str) {
+        self.skip_decisions.push(SkipDecision { id: id.to_string(), profile: None, reason: reason.to_string() });
+    }
+
+    /// The skipped decisions that apply to a profile.
+    pub fn skipped_decisions<'a>(&'a self, profile: &'a str) -> impl Iterator<Item = &'a SkipDecision> + 'a {
+        self.skip_decisions.iter().filter(move |s| s.profile.as_deref().is_none_or(|p| p == profile))
+    }
+
+    /// The skipped decision a case rests on, if any.
+    pub fn skipped_by<'a>(&'a self, profile: &'a str, decisions: &[String]) -> Option<&'a SkipDecision> {
+        self.skipped_decisions(profile).find(|s| decisions.contains(&s.id))
     }
 
     /// Reads and parses a file.
@@ -230,6 +266,15 @@ pub struct RunOutput {
 pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> anyhow::Result<(Vec<&'c Case>, Vec<CaseResult>)> {
     let only = globs(&opts.only)?;
     let skip = globs(&opts.skip)?;
+    let profile = opts.profile.id.as_str();
+    if let Some(s) =
+        opts.known.skipped_decisions(profile).find(|s| !opts.profile.decisions.iter().any(|d| d.id == s.id))
+    {
+        anyhow::bail!(
+            "skip-decision: profile {profile} has no decision `{}` (`gcl spec --profile {profile}` lists them)",
+            s.id
+        );
+    }
     let mut run = Vec::new();
     let mut skipped = Vec::new();
     for c in cases {
@@ -241,6 +286,8 @@ pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> anyhow::Result<(V
             continue;
         } else if skip.as_ref().is_some_and(|g| g.is_match(c.id())) {
             Some("skipped by --skip".to_string())
+        } else if let Some(s) = opts.known.skipped_by(profile, &c.decisions()) {
+            Some(format!("rests on decision {}, decided differently: {}", s.id, s.reason))
         } else {
             opts.refuse.iter().find(|r| c.requires(r)).map(|r| format!("requires {r}, which was refused"))
         };
@@ -258,6 +305,7 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
         id: h.id.clone(),
         title: h.title.clone(),
         clauses: h.clauses.clone(),
+        decisions: c.decisions(),
         level: h.level.to_string(),
         verdict,
         duration_ms,
@@ -675,6 +723,7 @@ pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
         step_timeout_ms: opts.step_timeout.map(|t| u64::try_from(t.as_millis()).unwrap_or(u64::MAX)),
         known_failures_file: opts.known.source().map(str::to_string),
         known_failures: opts.known.entries_for(&opts.profile.id, cases),
+        skip_decisions: opts.known.skipped_decisions(&opts.profile.id).map(|d| d.id.clone()).collect(),
         partial: false,
     }
 }

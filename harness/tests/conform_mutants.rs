@@ -15,24 +15,70 @@ use gcl_model::{Fault, Profile};
 
 const GCL: &str = env!("CARGO_BIN_EXE_gcl");
 
-/// Each mutant and cases that must catch it (on bh8-262-4.4).
-const MUTANTS: &[(&str, &[&str])] = &[
-    ("crlf", &["framing-echo", "framing-empty-line"]),
-    ("no-echo", &["framing-echo"]),
-    ("prompt-no-space", &["framing-empty-line"]),
-    ("lfap-little-endian", &["rt-lfap-byte-order"]),
-    ("read-only-status", &["status-256-read-only", "param-p-read-only"]),
-    ("lfdp-not-clipped", &["rt-lfdp-worked-example"]),
-    ("mpe-ignored", &["status-16-missed-position"]),
-    ("stay-in-loop", &["rt-bad-header-returns-to-supervisory"]),
-    ("range-off-by-one", &["param-dp-range"]),
-    ("fdef-skips-mcv", &["persist-fdef"]),
-    ("lowercase-rejected", &["framing-case"]),
-    ("fget-reversed", &["param-dp-default", "cmd-fget"]),
-    ("abort-silent", &["status-16384-abort", "abort-motion"]),
-    ("loop-ack-newline", &["cmd-loop"]),
-    ("reset-no-banner", &["cmd-reset"]),
+/// Each mutant, the profile it is tried on, and the cases named for it: each must fail.
+const MUTANTS: &[(&str, &str, &[&str])] = &[
+    ("crlf", B44, &["framing-echo", "framing-empty-line"]),
+    ("no-echo", B44, &["framing-echo"]),
+    ("prompt-no-space", B44, &["framing-empty-line"]),
+    ("lfap-little-endian", B44, &["rt-lfap-byte-order"]),
+    ("read-only-status", B44, &["status-256-read-only", "param-p-read-only"]),
+    ("lfdp-not-clipped", B44, &["rt-lfdp-worked-example"]),
+    ("mpe-ignored", B44, &["status-16-missed-position"]),
+    ("stay-in-loop", B44, &["rt-bad-header-returns-to-supervisory"]),
+    ("range-off-by-one", B44, &["param-dp-range"]),
+    ("fdef-skips-mcv", B44, &["persist-fdef"]),
+    ("lowercase-rejected", B44, &["framing-case"]),
+    ("fget-reversed", B44, &["param-dp-default", "cmd-fget"]),
+    ("abort-silent", B44, &["status-16384-abort", "abort-motion"]),
+    ("loop-ack-newline", B44, &["cmd-loop"]),
+    ("reset-no-banner", B44, &["cmd-reset"]),
+    ("dp-ignored", B44, &["param-dp-effect"]),
+    ("ds-ignored", B44, &["param-ds-effect"]),
+    ("ct-ignored", B44, &["param-ct-effect"]),
+    ("ot-ignored", B44, &["param-ot-effect"]),
+    ("mcv-ignored", B44, &["param-mcv-effect"]),
+    ("mov-ignored", B44, &["param-mov-effect"]),
+    ("accel-ignored", SEED, &["param-accel-effect"]),
+    ("mpe-default", B44, &["param-mpe-effect"]),
+    ("tstop-ignored", B44, &["param-tstop-effect"]),
+    ("hsg-ignored", B44, &["motion-strain-limit"]),
+    ("lsg-ignored", B44, &["param-lsg-effect"]),
+    ("en-ignored", B44, &["param-en-narrows-motion", "rt-loop-en-motors"]),
+    ("sgflip-ignored", B44, &["param-sgflip-effect", "rt-lfs-sgflip"]),
+    ("otemp-ignored", B44, &["status-8192-overtemperature", "cmd-m-overtemp"]),
+    ("lcvc-ignored", B44, &["rt-lcvc-scaling"]),
+    ("lfvc-ignored", B44, &["rt-lfvc-scaling", "rt-lfv-formula"]),
+    ("lfdpc-ignored", B44, &["rt-lfdpc-scaling"]),
+    ("lfdpd-ignored", B44, &["rt-lfdpd-discard"]),
+    ("lcv-ignored", B44, &["rt-field-lcv"]),
+    ("lcpg-ignored", B44, &["rt-field-lcpg"]),
+    ("lfv-ignored", B44, &["rt-field-lfv"]),
+    ("lfs-ignored", B44, &["rt-field-lfs"]),
+    ("lfap-ignored", B44, &["rt-field-lfap"]),
+    ("lfdp-ignored", B44, &["rt-field-lfdp"]),
+    ("lct-ignored", B44, &["rt-field-lct"]),
+    ("lfbp-ignored", B44, &["rt-field-lfbp"]),
+    ("lfain-ignored", B44, &["rt-field-lfain"]),
+    ("lft-ignored", B44, &["rt-field-lft"]),
+    ("too-many-args-silent", B44, &["status-1024-too-many-arguments", "cmd-m-args"]),
+    ("prefix-not-refused", B44, &["status-4096-prefix-not-allowed", "cmd-reset-prefix"]),
+    ("g-includes-spread", B44, &["cmd-fget-prefix"]),
+    ("reset-keeps-ram", B44, &["persist-reset-discards-ram"]),
+    ("fdef-writes-eeprom", B44, &["persist-fdef-ram-only"]),
+    ("lcv-unsigned", B44, &["example-realtime-seed"]),
+    ("fget-p-keeps-reported", B44, &["rt-lfdp-worked-example"]),
+    ("uninitialized-moves", B44, &["status-4-not-initialized", "cmd-m-before-hi"]),
+    ("unknown-command-64", B44, &["status-32-unknown-command"]),
+    ("unknown-param-128", B44, &["status-64-unknown-parameter", "param-unknown-name-fset"]),
+    ("partial-set-applied", B44, &["framing-line-atomic"]),
+    ("tab-not-separator", B44, &["framing-whitespace"]),
+    ("missing-value-ignored", B44, &["cmd-fset-args", "cmd-pset-args"]),
+    ("empty-line-error", B44, &["framing-empty-line"]),
+    ("overlong-line-runs", B44, &["framing-max-line"]),
 ];
+
+const B44: &str = "bh8-262-4.4";
+const SEED: &str = "seed";
 
 /// The committed goldens (a separate test keeps them fresh); loading them is cheaper than
 /// generating the suite in every run of a debug build.
@@ -78,14 +124,15 @@ fn the_unmutated_simulator_passes_every_case_of_every_profile() {
 
 #[test]
 fn every_mutant_is_caught_in_process_by_the_cases_named_for_it() {
+    assert!(Fault::ALL.len() >= 35, "only {} faults", Fault::ALL.len());
     for f in Fault::ALL {
-        assert!(MUTANTS.iter().any(|(n, _)| *n == f.name()), "fault {f} has no expectation in MUTANTS");
+        assert!(MUTANTS.iter().any(|(n, _, _)| *n == f.name()), "fault {f} has no expectation in MUTANTS");
     }
     // Two threads: the machines that run this have two cores.
     let (a, b) = MUTANTS.split_at(MUTANTS.len() / 2);
-    let check = |part: &'static [(&'static str, &'static [&'static str])]| {
-        for (name, catchers) in part {
-            let r = in_process("bh8-262-4.4", vec![Fault::from_str(name).unwrap()]);
+    let check = |part: &'static [(&'static str, &'static str, &'static [&'static str])]| {
+        for (name, profile, catchers) in part {
+            let r = in_process(profile, vec![Fault::from_str(name).unwrap()]);
             let f = failed(&r);
             assert!(!r.passed(), "mutant {name} survived the suite");
             for c in *catchers {
@@ -110,13 +157,17 @@ fn report(dir: &Path) -> RunReport {
 
 #[test]
 fn every_mutant_fails_gcl_conform_over_exec() {
-    for (name, catchers) in MUTANTS {
+    for (name, profile, catchers) in MUTANTS {
         let dir = tempfile::tempdir().unwrap();
         // ^C during motion needs the hand to still be moving when it arrives: real time.
-        let time = if *name == "abort-silent" { "real" } else { "fast" };
-        let target = format!("exec:{GCL} sim --stdio --profile bh8-262 --time {time} --fault {name}");
+        let p = Profile::builtin(profile).unwrap();
+        let timed = cases(&p)
+            .iter()
+            .any(|c| catchers.contains(&c.id()) && c.requires(&gcl_harness::transcript::Requirement::AbortTiming));
+        let time = if timed { "real" } else { "fast" };
+        let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
         let mut args =
-            vec!["conform", "--target", &target, "--profile", "bh8-262", "-q", "--timeout", "1000", "--suite", SUITE];
+            vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
         for c in *catchers {
             args.extend(["--only", c]);
         }
@@ -232,4 +283,53 @@ fn certificates_are_written_and_tampering_is_caught() {
     let out = gcl(&["certify", "--verify", c]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stdout).contains("modified: transcripts/framing-echo.gcl"));
+}
+
+#[test]
+fn skip_decision_drops_exactly_the_cases_resting_on_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().to_str().unwrap();
+    // A hand whose lines hold 128 bytes fails framing-max-line; the implementer skips the
+    // decision instead of the case, and every other case still runs.
+    let out = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--only",
+        "framing-*",
+        "--skip-decision",
+        "framing-max-line",
+        "--report",
+        rep,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let r = report(dir.path());
+    for c in &r.cases {
+        let rests = c.decisions.iter().any(|d| d == "framing-max-line");
+        assert_eq!(c.verdict == Verdict::Skip, rests, "{}: {:?} {:?}", c.id, c.verdict, c.decisions);
+        if rests {
+            assert!(c.message.as_deref().unwrap_or_default().contains("framing-max-line"));
+        }
+    }
+    assert!(r.cases.iter().any(|c| c.verdict == Verdict::Skip));
+    // The same from a known-failures file, with its reason.
+    let known = dir.path().join("known.toml");
+    std::fs::write(&known, "[[skip-decision]]\nid = \"framing-case\"\nreason = \"upper case only\"\n").unwrap();
+    let out = gcl(&[
+        "conform",
+        "--target",
+        "sim:seed",
+        "--fault",
+        "lowercase-rejected",
+        "--only",
+        "framing-*",
+        "--known-failures",
+        known.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    // A decision the profile lacks is a usage error, not a silent no-op.
+    let out = gcl(&["conform", "--target", "sim:seed", "--skip-decision", "no-such-decision"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-decision"));
 }

@@ -74,6 +74,7 @@ fn sample_case() -> report::CaseResult {
         id: "framing-echo".into(),
         title: "t".into(),
         clauses: vec!["decision:framing-echo".into()],
+        decisions: vec!["framing-echo".into()],
         level: "MUST".into(),
         verdict: Verdict::Pass,
         duration_ms: 0.1,

@@ -425,6 +425,11 @@ pub struct ParamSpec {
     /// The RealTime field this flag adds.
     #[serde(default)]
     pub rt: Option<RtField>,
+    /// What the value changes in the hand's behaviour on the wire, for parameters whose value
+    /// does more than read back. The suite has a case that sets every such parameter to a
+    /// value other than its default and observes this.
+    #[serde(default)]
+    pub effect: Option<String>,
 }
 
 /// One status bit.
@@ -449,8 +454,113 @@ pub struct Decision {
     pub clause: String,
     /// What the model does.
     pub resolution: String,
-    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO.
+    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO. The loader
+    /// bounds it by [`Decision::evidence`] (see [`Evidence::strongest_level`]).
     pub level: String,
+    /// What supports the resolution, graded as in `protocol-notes.md`: `[doc]` (a Barrett
+    /// manual or the seed says it), `[code×N]` (N independent host libraries depend on it;
+    /// `[code]` is one, `x` may stand for `×`), `[open]` (no source settles it). `[doc]` and
+    /// `[code×N]` combine: `[doc][code×3]`.
+    pub evidence: String,
+}
+
+/// The grade of a decision's evidence, parsed from [`Decision::evidence`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Evidence {
+    /// A Barrett manual or the seed states it.
+    pub doc: bool,
+    /// How many independent host libraries depend on it.
+    pub code: u32,
+}
+
+impl Evidence {
+    /// Parses `[doc]`, `[code]`, `[code×N]` (or `[codexN]`), combinations of those, or
+    /// `[open]` alone.
+    pub fn parse(text: &str) -> Result<Evidence, String> {
+        let mut e = Evidence::default();
+        let mut open = false;
+        let mut rest = text.trim();
+        if rest.is_empty() {
+            return Err("evidence is empty: use [doc], [code×N] or [open]".into());
+        }
+        while !rest.is_empty() {
+            let inner_end = rest
+                .find(']')
+                .filter(|_| rest.starts_with('['))
+                .ok_or_else(|| format!("evidence `{text}`: expected [doc], [code×N] or [open] at `{rest}`"))?;
+            let tag = &rest[1..inner_end];
+            rest = rest[inner_end + 1..].trim_start();
+            match tag {
+                "doc" if !e.doc => e.doc = true,
+                "open" => open = true,
+                "code" if e.code == 0 => e.code = 1,
+                t if e.code == 0 && (t.starts_with("code×") || t.starts_with("codex")) => {
+                    let n = t.trim_start_matches("code").trim_start_matches('×').trim_start_matches('x');
+                    e.code = n
+                        .parse::<u32>()
+                        .ok()
+                        .filter(|n| (1..=99).contains(n))
+                        .ok_or_else(|| format!("evidence `{text}`: `[{t}]` needs a count 1..=99"))?;
+                }
+                t => return Err(format!("evidence `{text}`: unknown or repeated grade `[{t}]`")),
+            }
+        }
+        if open && (e.doc || e.code > 0) {
+            return Err(format!("evidence `{text}`: [open] cannot be combined with a source"));
+        }
+        Ok(e)
+    }
+
+    /// Whether no source settles it.
+    pub fn is_open(self) -> bool {
+        !self.doc && self.code == 0
+    }
+
+    /// The strongest level a conformance check resting on this evidence may carry: MUST on
+    /// `[doc]` or `[code×N]` with N ≥ 2; SHOULD on one host library; INFO when open.
+    pub fn strongest_level(self) -> &'static str {
+        if self.doc || self.code >= 2 {
+            "MUST"
+        } else if self.code == 1 {
+            "SHOULD"
+        } else {
+            "INFO"
+        }
+    }
+}
+
+/// The rank of a level name (MUST strongest), or `None` for an unknown name.
+pub fn level_rank(level: &str) -> Option<u8> {
+    match level {
+        "MUST" => Some(0),
+        "SHOULD" => Some(1),
+        "MAY" => Some(2),
+        "INFO" => Some(3),
+        _ => None,
+    }
+}
+
+impl Decision {
+    /// The parsed evidence (the loader has checked it for every built-in profile).
+    pub fn grade(&self) -> Evidence {
+        Evidence::parse(&self.evidence).unwrap_or_default()
+    }
+
+    /// Checks the level name and that the evidence supports the level.
+    fn check(&self) -> Result<(), String> {
+        let e = Evidence::parse(&self.evidence).map_err(|m| format!("decision `{}`: {m}", self.id))?;
+        let rank = level_rank(&self.level).ok_or_else(|| {
+            format!("decision `{}`: level `{}` is not MUST, SHOULD, MAY or INFO", self.id, self.level)
+        })?;
+        let max = e.strongest_level();
+        if rank < level_rank(max).unwrap_or(3) {
+            return Err(format!(
+                "decision `{}` is {} but its evidence {} supports at most {max}",
+                self.id, self.level, self.evidence
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Index of a command in [`Profile::commands`].
@@ -748,6 +858,9 @@ impl Profile {
                 return Err(invalid(format!("RealTime field `{}` must be 1 or 2 bytes", p.name)));
             }
         }
+        for d in &f.decisions {
+            d.check().map_err(&invalid)?;
+        }
         // Storage slots: aliases share the slot of their target.
         let mut slot = vec![0u16; f.params.len()];
         let mut slots = 0usize;
@@ -867,4 +980,37 @@ impl Profile {
 /// The text of an embedded spec file, by its path relative to `spec/`.
 pub fn embedded(path: &str) -> Option<&'static str> {
     EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
+}
+
+#[cfg(test)]
+mod evidence_tests {
+    use super::*;
+
+    #[test]
+    fn evidence_grades_parse_and_bound_the_level() {
+        let e = Evidence::parse("[doc][code×3]").unwrap();
+        assert_eq!((e.doc, e.code, e.strongest_level()), (true, 3, "MUST"));
+        assert_eq!(Evidence::parse("[codex2]").unwrap().strongest_level(), "MUST");
+        assert_eq!(Evidence::parse("[code]").unwrap().strongest_level(), "SHOULD");
+        assert!(Evidence::parse("[open]").unwrap().is_open());
+        for bad in ["", "doc", "[open][doc]", "[code×0]", "[guess]", "[doc][doc]"] {
+            assert!(Evidence::parse(bad).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn the_loader_refuses_a_must_without_two_sources() {
+        let seed = embedded("seed.toml").unwrap();
+        let resolve = |p: &str| {
+            if p == "top.toml" {
+                Some(format!(
+                    "{seed}\n[[decisions]]\nid = \"x-guess\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUST\"\nevidence = \"[code]\"\n"
+                ))
+            } else {
+                embedded(p).map(str::to_string)
+            }
+        };
+        let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
+        assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
+    }
 }

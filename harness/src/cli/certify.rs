@@ -123,6 +123,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         if suite_args.suite.is_some() {
             changed.push("--suite");
         }
+        if !suite_args.skip_decision.is_empty() {
+            changed.push("--skip-decision");
+        }
         if !changed.is_empty() {
             anyhow::bail!(
                 "{} change what a certificate covers; give --partial to write a certificate that says it is partial",

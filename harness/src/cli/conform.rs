@@ -36,6 +36,11 @@ pub struct SuiteArgs {
     /// `reason = "..."`, optional `profile`). Listed cases that fail are XFAIL; listed cases that pass are XPASS and fail the run.
     #[arg(long, value_name = "FILE")]
     pub known_failures: Option<PathBuf>,
+    /// Skip every case that rests on this decision of the profile (repeatable; `gcl spec`
+    /// lists the ids; a known-failures file may hold `[[skip-decision]]` tables with `id` and
+    /// `reason`): for an implementation that decided an open point differently.
+    #[arg(long, value_name = "ID")]
+    pub skip_decision: Vec<String>,
     /// A flat per-step deadline in milliseconds for steps that do not set their own, instead of
     /// deadlines from the model (the model's time for the step at the link's baud × 2 + the
     /// margin, at least 500 ms on serial and 200 ms on TCP targets).
@@ -134,7 +139,7 @@ pub fn prepare(
             profile.id
         );
     }
-    let known = match &a.known_failures {
+    let mut known = match &a.known_failures {
         Some(p) => KnownFailures::load(p)?,
         None => KnownFailures::default(),
     };
@@ -145,6 +150,9 @@ pub fn prepare(
             known.source().unwrap_or("the known-failures list"),
             profile.id
         );
+    }
+    for id in &a.skip_decision {
+        known.skip_decision(id, "--skip-decision");
     }
     let refuse = a
         .refuse

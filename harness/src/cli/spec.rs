@@ -105,7 +105,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     }
     writeln!(w, "\ndecisions ({})", p.decisions.len())?;
     for d in &p.decisions {
-        writeln!(w, "  [{}] {} ({})\n      {}", d.level, d.id, d.clause, d.resolution)?;
+        writeln!(w, "  [{}] {} {} ({})\n      {}", d.level, d.id, d.evidence, d.clause, d.resolution)?;
     }
     Ok(EXIT_OK)
 }

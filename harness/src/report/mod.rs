@@ -163,6 +163,10 @@ pub struct CaseResult {
     pub title: String,
     /// The spec clauses it checks.
     pub clauses: Vec<String>,
+    /// Every decision of the profile the case rests on (ids): those it checks and those its
+    /// framing, preamble and read-backs touch. `--skip-decision` drops cases by these.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub decisions: Vec<String>,
     /// MUST, SHOULD, MAY or INFO.
     pub level: String,
     /// The verdict.
@@ -236,6 +240,10 @@ pub struct RunOptions {
     /// Every known-failures entry for this profile, and whether it matched a case.
     #[serde(default)]
     pub known_failures: Vec<KnownFailureEntry>,
+    /// `--skip-decision` ids (and `[[skip-decision]]` entries of the known-failures file):
+    /// the cases resting on them are SKIP.
+    #[serde(default)]
+    pub skip_decisions: Vec<String>,
     /// `certify --partial`: the run was not meant to certify the whole suite.
     #[serde(default)]
     pub partial: bool,
@@ -269,6 +277,9 @@ impl RunOptions {
         }
         if !self.faults.is_empty() {
             v.push(("fault", list(&self.faults)));
+        }
+        if !self.skip_decisions.is_empty() {
+            v.push(("skip-decision", list(&self.skip_decisions)));
         }
         if let Some(d) = &self.suite_dir {
             v.push(("suite", d.clone()));
@@ -493,6 +504,7 @@ pub(crate) mod tests {
                     id: "framing-echo".into(),
                     title: "Echo <all> bytes & keeps case".into(),
                     clauses: vec!["decision:framing-echo".into()],
+                    decisions: vec!["framing-echo".into()],
                     level: "MUST".into(),
                     verdict: Verdict::Pass,
                     duration_ms: 0.3,
@@ -504,6 +516,7 @@ pub(crate) mod tests {
                     id: "fget-dp-default".into(),
                     title: "FGET DP reads the defaults".into(),
                     clauses: vec!["seed: FGET".into(), "decision:framing-echo".into()],
+                    decisions: vec!["framing-echo".into(), "seed-fget-format".into()],
                     level: "MUST".into(),
                     verdict: Verdict::Fail,
                     duration_ms: 0.5,

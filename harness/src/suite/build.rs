@@ -15,6 +15,13 @@ use crate::transcript::record::{Captured, RecordOptions, answer_form, banner_exp
 use crate::transcript::script::{Action, ScriptStep};
 use crate::transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
+/// The header key listing every decision a case rests on (those it checks and those its
+/// framing, preamble, read-backs and teardown touch), space-separated, in the profile's order.
+pub const DECISIONS_KEY: &str = "x-decisions";
+
+/// The clause prefix naming a decision a case checks.
+pub const DECISION_CLAUSE: &str = "decision:";
+
 /// An inclusive range of values.
 pub(crate) type Range = (i64, i64);
 
@@ -66,7 +73,6 @@ pub(crate) struct CaseDef {
     pub title: String,
     pub clauses: Vec<String>,
     pub level: Option<Level>,
-    pub decision_level: Option<Level>,
     pub requires: Vec<Requirement>,
     pub notes: Vec<String>,
     pub plans: Vec<Plan>,
@@ -89,7 +95,6 @@ impl CaseB {
                 title: title.into(),
                 clauses: Vec::new(),
                 level: None,
-                decision_level: None,
                 requires: Vec::new(),
                 notes: Vec::new(),
                 plans: Vec::new(),
@@ -108,21 +113,19 @@ impl CaseB {
         self
     }
 
-    /// A decision of the profile, when it has it: `decision:<id>`; the case's level becomes
-    /// the weakest level among its decisions unless set explicitly.
+    /// A decision of the profile the case checks, when the profile has it: `decision:<id>`.
+    /// The case's level is the weakest among every decision it rests on (see [`build`]).
     pub fn decision(mut self, id: &str) -> CaseB {
-        if let Some(d) = self.p.decisions.iter().find(|d| d.id == id) {
-            let c = format!("decision:{id}");
+        if self.p.decisions.iter().any(|d| d.id == id) {
+            let c = format!("{DECISION_CLAUSE}{id}");
             if !self.def.clauses.contains(&c) {
                 self.def.clauses.push(c);
             }
-            let l: Level = d.level.parse().unwrap_or(Level::Info);
-            self.def.decision_level = Some(self.def.decision_level.map_or(l, |x| x.max(l)));
         }
         self
     }
 
-    /// Sets the level explicitly.
+    /// Sets the strongest level the case may have (its decisions may weaken it).
     pub fn level(mut self, l: Level) -> CaseB {
         self.def.level = Some(l);
         self
@@ -496,15 +499,34 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
     }
     let mut requires = def.requires.clone();
     requires.sort();
+    // The decisions the case rests on: those it checks, then those its steps touch.
+    let mut decisions: Vec<String> =
+        def.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
+    for d in super::depends::decisions_of(profile, &def.plans, &caps) {
+        if !decisions.contains(&d) {
+            decisions.push(d);
+        }
+    }
+    let order = |id: &String| profile.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
+    decisions.sort_by_key(order);
+    // The case binds no more strongly than the weakest decision it rests on.
+    let mut level = def.level.unwrap_or(Level::Must);
+    for d in profile.decisions.iter().filter(|d| decisions.contains(&d.id)) {
+        level = level.max(d.level.parse().unwrap_or(Level::Info));
+    }
+    let mut extensions = Vec::new();
+    if !decisions.is_empty() {
+        extensions.push((DECISIONS_KEY.to_string(), decisions.join(" ")));
+    }
     let header = Header {
         id: def.id.clone(),
         title: def.title.clone(),
         clauses: def.clauses.clone(),
-        level: def.level.or(def.decision_level).unwrap_or(Level::Must),
+        level,
         profiles: vec![profile.id.clone()],
         requires,
         notes: def.notes.clone(),
-        extensions: Vec::new(),
+        extensions,
     };
     if header.clauses.is_empty() {
         return Err(fail("no clause".into()));

@@ -24,6 +24,7 @@ pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
     g.persistence();
     g.abort();
     g.motion();
+    g.effects();
     g.realtime();
     g.examples();
     g.firmware();
@@ -162,6 +163,7 @@ impl Gen {
                 format!("A line of {max} bytes is accepted; one byte more gives ERR {}", p.framing.overlong_status),
             )
             .decision("framing-max-line")
+            .decision("framing-whitespace")
             .preamble(false)
             .line(&fits)
             .line(&over)
@@ -180,13 +182,19 @@ impl Gen {
         self.add(c);
 
         let c = self
-            .case(
-                "framing-errors-combine",
-                "Problems in one line are OR'ed into one ERR; a line with an error changes nothing",
-            )
+            .case("framing-errors-combine", "Problems in one line are OR'ed into one ERR")
             .decision("framing-errors-combine")
             .preamble(false)
             .line("FSET NOPE 1 DP 99999")
+            .line("1FGET NOPE")
+            .line("1FGET DP");
+        self.add(c);
+
+        let c = self
+            .case("framing-line-atomic", "A line with an error changes nothing and prints no value line")
+            .decision("framing-line-atomic")
+            .decision("bh8-partial-errors")
+            .preamble(false)
             .line("FSET DP 1234 MCV 99999")
             .line("FGET DP NOPE")
             .line("FGET DP MCV");
@@ -311,6 +319,9 @@ impl Gen {
                 if label == "manual" && c.kind == CommandKind::MotorListAllValues {
                     k = k.decision("bh8-list-prefixes");
                 }
+                if matches!(c.kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
+                    k = k.decision("seed-flista").decision("bh8-list-values-format");
+                }
                 k = self.prefixed_run(k, c);
                 self.add(k);
             }
@@ -321,14 +332,22 @@ impl Gen {
     fn prefixed_run(&self, k: CaseB, c: &CommandSpec) -> CaseB {
         let n = &c.name;
         match c.kind {
-            CommandKind::Initialize => {
-                k.preamble(false).requires(Requirement::Motion).line(&format!("1{n}")).get("", &["S"], None)
-            }
+            CommandKind::Initialize => k
+                .decision("seed-motion-before-hi")
+                .decision("bh8-motion-before-hi")
+                .preamble(false)
+                .requires(Requirement::Motion)
+                .line(&format!("1{n}"))
+                .line("1M 1000")
+                .line("2M 1000"),
             CommandKind::Terminate => k.preamble(true).line(&format!("1{n}")).line("FGET DP"),
             CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&format!("1{n}")).abort(),
             kind if kind.is_motion() => {
                 let (setup, goals) = self.motion_recipe(kind, "1");
                 let mut k = k.preamble(true);
+                if kind == CommandKind::Close {
+                    k = k.decision("seed-close-open-targets");
+                }
                 for s in setup {
                     k = k.line(&s);
                 }
@@ -431,7 +450,10 @@ impl Gen {
                 if c.kind == CommandKind::Help {
                     k = k.decision(if src_label(&self.p) == "seed" { "seed-help" } else { "bh8-help-format" });
                 }
-                k = k.preamble(false).line(&format!("{n} 1")).line(&format!("{n} 1 2"));
+                // A motion command is checked on initialised motors, so that its answer does
+                // not also depend on which of two problems a hand reports.
+                let ready = c.kind.is_motion() || c.kind == CommandKind::Loop;
+                k = k.preamble(ready).line(&format!("{n} 1")).line(&format!("{n} 1 2"));
             }
             ArgRule::OptionalInteger => {
                 let (lo, hi) = (c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(0));
@@ -442,11 +464,7 @@ impl Gen {
                 if src_label(&self.p) == "manual" && c.kind.is_motion() {
                     k = k.decision("bh8-ic-io-range");
                 }
-                k = k
-                    .preamble(false)
-                    .line(&format!("{n} 1 2"))
-                    .line(&format!("{n} {}", hi + 1))
-                    .line(&format!("{n} X"));
+                k = k.preamble(c.kind.is_motion()).line(&format!("{n} 1 2")).line(&format!("{n} {}", hi + 1));
                 if lo > -(1 << 40) {
                     k = k.line(&format!("{n} {}", lo - 1));
                 }
@@ -454,12 +472,7 @@ impl Gen {
             ArgRule::Names => {
                 k = k
                     .title_set(format!("{n} without a name gives 128"))
-                    .decision(if src_label(&self.p) == "seed" {
-                        "framing-errors-combine"
-                    } else {
-                        "bh8-partial-errors"
-                    })
-                    .level(Level::Info)
+                    .decision("framing-missing-value")
                     .preamble(false)
                     .line(n);
             }
@@ -467,12 +480,7 @@ impl Gen {
                 let first = self.writable_for(n).first().map(|x| x.name.clone()).unwrap_or_default();
                 k = k
                     .title_set(format!("{n} without a value gives 128"))
-                    .decision(if src_label(&self.p) == "seed" {
-                        "framing-errors-combine"
-                    } else {
-                        "bh8-partial-errors"
-                    })
-                    .level(Level::Info)
+                    .decision("framing-missing-value")
                     .preamble(false)
                     .line(n)
                     .line(&format!("{n} {first}"));
@@ -495,11 +503,16 @@ impl Gen {
             .src(&format!("Command {n}"))
             .src("Command HI");
         k = match (src_label(&self.p), c.kind) {
+            ("seed", CommandKind::Terminate) => k.decision("seed-terminate-uninitialized"),
+            ("seed", CommandKind::Loop) => k.decision("seed-motion-before-hi").decision("seed-param-prefix-en"),
             ("seed", _) => k.decision("seed-motion-before-hi"),
-            (_, CommandKind::Loop) => k.decision("bh8-loop-failure").decision("bh8-motion-before-hi"),
+            (_, CommandKind::Loop) => {
+                k.decision("bh8-loop-failure").decision("bh8-motion-before-hi").decision("bh8-loop-motors")
+            }
+            (_, CommandKind::Terminate) => k.decision("bh8-terminate-uninitialized"),
             _ => k.decision("bh8-motion-before-hi"),
         };
-        k = k.preamble(false).line(n).get("", &["S"], None);
+        k = k.preamble(false).line(n);
         self.add(k);
     }
 
@@ -548,7 +561,14 @@ impl Gen {
                 k.get("", &["S", "P"], Some(self.near([0; 4])))
             }
             CommandKind::Terminate => k.preamble(true).line(&n).get("", &["S"], None),
-            CommandKind::Loop => k.preamble(true).requires(Requirement::Realtime).line(&n).abort().line("FGET DP"),
+            CommandKind::Loop => k
+                .decision("seed-param-prefix-en")
+                .decision("bh8-loop-motors")
+                .preamble(true)
+                .requires(Requirement::Realtime)
+                .line(&n)
+                .abort()
+                .line("FGET DP"),
             CommandKind::MotorSet | CommandKind::GlobalSet => {
                 let params: Vec<ParamSpec> =
                     self.writable_for(&n).into_iter().filter(|x| x.name != "BAUD").take(2).collect();
@@ -604,7 +624,11 @@ impl Gen {
                 } else {
                     k.decision("bh8-reset").decision("bh8-banner-text")
                 };
-                k.preamble(true).line_shaped(&n, Shape::Banner).get("", &["S"], None).line("C")
+                k.decision("seed-motion-before-hi")
+                    .decision("bh8-motion-before-hi")
+                    .preamble(true)
+                    .line_shaped(&n, Shape::Banner)
+                    .line("C")
             }
             CommandKind::ErrorText => {
                 let k = if label == "seed" { k.decision("seed-err-command") } else { k.decision("bh8-err-format") };
@@ -813,6 +837,9 @@ impl Gen {
             format!("{} takes values in its range and reads them back", x.name),
         );
         let mut k = self.param_level(k, x, false).src(&format!("Command {setter}")).preamble(false);
+        if values.contains(&0) && matches!(x.name.as_str(), "LCVC" | "LFVC" | "LFDPC") {
+            k = k.decision("bh8-coefficient-range");
+        }
         for v in values {
             k = k.line(&format!("{prefix}{setter} {} {v}", x.name)).get("", &[&x.name], None);
         }
@@ -875,7 +902,7 @@ impl Gen {
         let mut k =
             self.case(format!("status-{t1}-terminate-before-hi"), format!("T before HI gives {t1}")).src("Command T");
         k = if src_label(&self.p) == "seed" {
-            k.decision("seed-motion-before-hi")
+            k.decision("seed-terminate-uninitialized")
         } else {
             k.decision("bh8-terminate-uninitialized")
         };
@@ -895,9 +922,9 @@ impl Gen {
         let simple: [(u32, &str, &[&str]); 6] = [
             (32, "unknown-command", &["BOGUS", "1BOGUS", "FGETX DP"]),
             (64, "unknown-parameter", &["FGET NOPE", "FSET NOPE 5"]),
-            (128, "invalid-value", &["FSET DP 99999999", "FSET DP -1", "FSET DP X"]),
+            (128, "invalid-value", &["FSET DP 99999999", "FSET DP -1"]),
             (256, "read-only", &["FSET P 5", "FSET S 0"]),
-            (1024, "too-many-arguments", &["FDEF 1", "M 1 2", "RESET 1"]),
+            (1024, "too-many-arguments", &["FDEF 1", "ERR 1 2", "RESET 1"]),
             (4096, "prefix-not-allowed", &["1RESET", "GRESET"]),
         ];
         for (code, name, lines) in simple {
@@ -929,6 +956,7 @@ impl Gen {
                 .src(&format!("Status codes {}", s.bit))
                 .src("Command ERR")
                 .decision(&id)
+                .decision("seed-err-command")
                 .preamble(false)
                 .line(&format!("ERR {}", s.bit))
                 .line("FGET DP");
@@ -956,6 +984,21 @@ impl Gen {
             self.add(k.line("FGET DP"));
         }
 
+        // A grammar problem and a condition found only when running meet on one line.
+        let u = self.code(h.uninitialized_status);
+        let k = self
+            .case(
+                "status-combined-grammar-and-not-initialized",
+                format!("A refused line never runs: before HI, C 1 gives only 1024 and M 99999 only 128, not {u}"),
+            )
+            .src("Status codes")
+            .decision("framing-parse-before-run")
+            .preamble(false)
+            .line("C 1")
+            .line("M 99999")
+            .line("1FGET DP");
+        self.add(k);
+
         let mp = self.code(h.missed_position_status);
         let l4 = self.limit(4);
         let k = self
@@ -963,6 +1006,8 @@ impl Gen {
             .src(&format!("Status codes {mp}"))
             .src("Command M")
             .decision("bh8-missed-position-code")
+            .decision("seed-motion-model")
+            .decision("bh8-position-bounds")
             .preamble(true)
             .line(&format!("SM {}", l4 + 850))
             .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (l4 - self.mpe(4), l4)]));
@@ -1039,6 +1084,21 @@ impl Gen {
         self.add(k);
 
         let k = self
+            .case("persist-fdef-ram-only", "FDEF changes RAM only: the saved values come back at RESET")
+            .src("Command FDEF")
+            .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
+            .level(Level::Must)
+            .requires(Requirement::Eeprom)
+            .preamble(false)
+            .line("FSET DP 1234")
+            .line("FSAVE")
+            .line("FDEF")
+            .line("1FGET DP")
+            .line_shaped("RESET", Shape::Banner)
+            .line("1FGET DP");
+        self.add(k);
+
+        let k = self
             .case(
                 "persist-fsave-reset",
                 "FSAVE keeps values across RESET; FDEF and FSAVE bring the factory values back",
@@ -1101,11 +1161,11 @@ impl Gen {
                 .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
                 .requires(Requirement::Eeprom)
                 .preamble(false);
-            for l in chunk_lines("FSET", &pairs, self.p.framing.max_line) {
+            for l in chunk_lines("FSET", &pairs, safe_line(&self.p)) {
                 k = k.line(&l);
             }
             k = k.line("FSAVE").line_shaped("RESET", Shape::Banner);
-            for l in chunk_lines("FGET", &names, self.p.framing.max_line) {
+            for l in chunk_lines("FGET", &names, safe_line(&self.p)) {
                 k = k.line(&l);
             }
             self.add(k);
@@ -1228,7 +1288,7 @@ impl Gen {
             .src(&format!("Parameter {msg}"))
             .decision(if label == "seed" { "seed-motion-model" } else { "bh8-strain-limits-disable" })
             .preamble(true)
-            .line("GFSET MSG 0")
+            .line(&format!("GFSET {msg} 0"))
             .line("GM 5000")
             .get("", &["P"], Some([(0, self.mpe(1)), (0, self.mpe(2)), (0, self.mpe(3)), (0, self.mpe(4))]));
         self.add(k);
@@ -1263,6 +1323,7 @@ impl Gen {
             .src("Command M")
             .src("Parameter MPE")
             .decision(if label == "seed" { "seed-motion-model" } else { "bh8-mpe-boundary" })
+            .decision("bh8-position-bounds")
             .note(format!(
                 "The spread stalls at its joint stop ({l4}): SM {} leaves an error of MPE ({mpe4}), SM {} one more.",
                 l4 + mpe4,
@@ -1295,6 +1356,10 @@ impl Gen {
                 .src("Command HI")
                 .src(&format!("Parameter {init}"))
                 .decision(d)
+                .decision("seed-motion-before-hi")
+                .decision("bh8-motion-before-hi")
+                .decision("seed-s-values")
+                .decision("bh8-s-before-hi")
                 .preamble(true)
                 .line("1M 3000")
                 .line(&format!("1FSET {init} 0"))
@@ -1307,6 +1372,280 @@ impl Gen {
         }
     }
 
+    // ------------------------------------------------------------------ parameter effects
+
+    /// For parameters whose value changes what the hand does: a case that sets one to a value
+    /// other than its default and shows the difference on the wire.
+    fn effects(&mut self) {
+        let label = src_label(&self.p);
+        let dp = 3000;
+        let k = self
+            .case("param-dp-effect", format!("M without an argument goes to DP: 1FSET DP {dp}, 1M"))
+            .src("Parameter DP")
+            .src("Command M")
+            .level(Level::Must)
+            .preamble(true)
+            .line(&format!("1FSET DP {dp}"))
+            .line("1M")
+            .get("1", &["P"], Some(self.near([dp; 4])));
+        self.add(k);
+
+        let (up, down) = (2500, 1000);
+        let k = self
+            .case(
+                "param-ds-effect",
+                format!(
+                    "IC and IO without an argument step by DS: DS {up} closes to {up}, DS {down} opens back to {}",
+                    up - down
+                ),
+            )
+            .src("Parameter DS")
+            .src("Command IC")
+            .src("Command IO")
+            .level(Level::Must)
+            .preamble(true)
+            .line(&format!("1FSET DS {up}"))
+            .line("1IC")
+            .get("1", &["P"], Some(self.near([up; 4])))
+            .line(&format!("1FSET DS {down}"))
+            .line("1IO")
+            .get("1", &["P"], Some(self.near([up - down; 4])));
+        self.add(k);
+
+        if self.has_param("CT") {
+            let ct = 5000;
+            let k = self
+                .case("param-ct-effect", format!("C closes to CT: 1FSET CT {ct}, 1C"))
+                .src("Parameter CT")
+                .src("Command C")
+                .level(Level::Must)
+                .preamble(true)
+                .line(&format!("1FSET CT {ct}"))
+                .line("1C")
+                .get("1", &["P"], Some(self.near([ct; 4])));
+            self.add(k);
+        }
+        if self.has_param("OT") {
+            let ot = 1000;
+            let k = self
+                .case("param-ot-effect", format!("O opens to OT: 1FSET OT {ot}, 1O from 3000"))
+                .src("Parameter OT")
+                .src("Command O")
+                .level(Level::Must)
+                .preamble(true)
+                .line("1M 3000")
+                .line(&format!("1FSET OT {ot}"))
+                .line("1O")
+                .get("1", &["P"], Some(self.near([ot; 4])));
+            self.add(k);
+        }
+
+        // MPE: the spread stalls at its joint stop 850 counts short of the goal; with MPE
+        // 1000 that is no error.
+        let l4 = self.limit(4);
+        let mpe = 1000;
+        let k = self
+            .case(
+                "param-mpe-effect",
+                format!("With MPE {mpe} a move that ends 850 counts short of its goal gives no status"),
+            )
+            .src("Parameter MPE")
+            .src("Command M")
+            .decision("seed-motion-model")
+            .decision("bh8-position-bounds")
+            .preamble(true)
+            .line(&format!("SFSET MPE {mpe}"))
+            .line(&format!("SM {}", l4 + 850))
+            .get("S", &["P"], Some([(l4 - mpe, l4); 4]));
+        self.add(k);
+
+        if self.has_param("LSG") {
+            let k = self
+                .case(
+                    "param-lsg-effect",
+                    "With LSG 100 a move stops at once (a free finger's strain is lower); M then gives 16",
+                )
+                .src("Parameter LSG")
+                .decision("bh8-strain-limits-disable")
+                .decision("bh8-missed-position-code")
+                .preamble(true)
+                .line("1FSET LSG 100")
+                .line("1M 5000")
+                .get("1", &["P"], Some([(0, self.mpe(1)); 4]));
+            self.add(k);
+        }
+
+        // SGFLIP turns FGET SG over.
+        let f = self.p.hand.free_strain;
+        let (plain, flipped) = ((0, (2 * f).min(255)), ((255 - 2 * f).max(0), 255));
+        let k = self
+            .case("param-sgflip-effect", "With SGFLIP 1 FGET SG reads 255 minus the strain")
+            .src("Parameter SGFLIP")
+            .src("Parameter SG")
+            .decision(if label == "seed" { "seed-strain-at-rest" } else { "bh8-strain-at-rest" })
+            .note(format!(
+                "A free finger's strain is near {f}: with SGFLIP 0 it reads {}..{}, with SGFLIP 1 {}..{}.",
+                plain.0, plain.1, flipped.0, flipped.1
+            ))
+            .preamble(false)
+            .line("2FSET SGFLIP 1")
+            .line_shaped("12FGET SG", Shape::Values(vec![vec![Some(plain), Some(flipped)]]));
+        self.add(k);
+
+        self.timed_effects();
+    }
+
+    /// Where a motor is `ticks` ms after a position move from `from` to `target` starts, with
+    /// ACCEL `accel` and maximum velocity `speed` (MCV or MOV), by the model's trapezoid.
+    fn reach(&self, from: i64, target: i64, accel: i64, speed: i64, ticks: u64) -> i64 {
+        let h = &self.p.hand;
+        let a = accel.max(1) as f64 * h.velocity_units_per_ms_per_accel * h.counts_per_ms_per_velocity_unit;
+        let vmax = speed as f64 * h.counts_per_ms_per_velocity_unit;
+        let (mut pos, mut v) = (from as f64, 0.0f64);
+        let t = target as f64;
+        for _ in 0..ticks {
+            let d = t - pos;
+            if d.abs() < 0.5 {
+                break;
+            }
+            let want = vmax.min((2.0 * a * d.abs()).sqrt()).min(v + a).max(0.0);
+            let next = pos + d.signum() * want;
+            pos = if (t - pos) * (t - next) <= 0.0 { t } else { next };
+            v = want;
+        }
+        pos.round() as i64
+    }
+
+    /// Parameters whose effect is how fast a motor moves or how long it waits: seen through
+    /// where a motor is when a ^C lands, or whether its command is still running then. These
+    /// need a hand whose motion takes time (`abort-timing`).
+    fn timed_effects(&mut self) {
+        let label = src_label(&self.p);
+        let abort_d = if label == "seed" { "seed-abort" } else { "bh8-abort-motion" };
+        let model_d = if label == "seed" { "seed-motion-model" } else { "bh8-velocity-units" };
+        // The ^C lands between `pause` and `pause + slack` ms after the command: the host's
+        // pause, plus the echo and the recorder's quiet time.
+        let slack = 150u64;
+        let (ct, accel) = (self.close_target(1), self.default("ACCEL", 1));
+        for (name, kind) in [("MCV", CommandKind::Close), ("MOV", CommandKind::Open)] {
+            let Some(x) = self.param(name).cloned() else { continue };
+            let def = self.default(name, 1);
+            let slow = (def / 6).max(x.min).max(1);
+            let from = if kind == CommandKind::Close { 0 } else { 12000 };
+            let to = if kind == CommandKind::Close { ct } else { 0 };
+            let pause = 150u64;
+            let range = |v: i64| {
+                let (a, b) = (self.reach(from, to, accel, v, pause), self.reach(from, to, accel, v, pause + slack));
+                (a.min(b) - 2, a.max(b) + 2)
+            };
+            let (r1, r2) = (range(slow), range(def));
+            if r1.1 >= r2.0 && r2.1 >= r1.0 {
+                continue;
+            }
+            let word = if kind == CommandKind::Close { "C" } else { "O" };
+            let mut k = self
+                .case(
+                    format!("param-{}-effect", slug(name)),
+                    format!("{name} sets how fast {word} moves: with {name} {slow} motor 1 is behind motor 2 ({name} {def}) when a ^C lands"),
+                )
+                .src(&format!("Parameter {name}"))
+                .src(&format!("Command {word}"))
+                .decision(abort_d)
+                .decision(model_d)
+                .requires(Requirement::AbortTiming)
+                .note(format!(
+                    "The ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
+                    pause + slack,
+                    r1.0,
+                    r1.1,
+                    r2.0,
+                    r2.1
+                ))
+                .preamble(true);
+            if from > 0 {
+                k = k.line(&format!("12M {from}"));
+            }
+            let k = k.line(&format!("1FSET {name} {slow}")).nowait(&format!("12{word}")).pause_ms(pause).abort().get(
+                "12",
+                &["P"],
+                Some([r1, r2, (0, 0), (0, 0)]),
+            );
+            self.add(k);
+        }
+
+        // ACCEL: where the ramp up takes long enough to see (the seed's units).
+        if let Some(x) = self.param("ACCEL").cloned() {
+            let fast = (accel * 100).min(x.max);
+            let speed = self.param("MCV").map_or(0, |m| m.max);
+            let pause = 150u64;
+            let slack = 100u64;
+            let range = |a: i64| {
+                let (lo, hi) = (self.reach(0, ct, a, speed, pause), self.reach(0, ct, a, speed, pause + slack));
+                (lo - 2, hi + 2)
+            };
+            let (r1, r2) = (range(fast), range(accel));
+            if r1.0 > r2.1 && r1.1 < ct - self.mpe(1) {
+                let k = self
+                    .case(
+                        "param-accel-effect",
+                        format!("ACCEL sets how fast a move speeds up: with ACCEL {fast} motor 1 is ahead of motor 2 (ACCEL {accel}) when a ^C lands"),
+                    )
+                    .src("Parameter ACCEL")
+                    .src("Command C")
+                    .decision(abort_d)
+                    .decision(model_d)
+                    .requires(Requirement::AbortTiming)
+                    .note(format!(
+                        "Both motors close at MCV {speed}; the ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
+                        pause + slack,
+                        r1.0,
+                        r1.1,
+                        r2.0,
+                        r2.1
+                    ))
+                    .preamble(true)
+                    .line(&format!("12FSET MCV {speed}"))
+                    .line(&format!("1FSET ACCEL {fast}"))
+                    .nowait("12C")
+                    .pause_ms(pause)
+                    .abort()
+                    .get("12", &["P"], Some([r1, r2, (0, 0), (0, 0)]));
+                self.add(k);
+            }
+        }
+
+        // TSTOP: a motor stalled at its joint stop keeps driving for TSTOP ms. With TSTOP 5000
+        // the move is still running a second after the stall began, so the ^C stops it;
+        // with the factory TSTOP it would long have ended with 16.
+        let l4 = self.limit(4);
+        let goal = l4 + 850;
+        let (a4, v4) = (self.default("ACCEL", 4), self.default("MCV", 4));
+        let mut t_stop = 0u64;
+        while t_stop < 60_000 && self.reach(0, goal, a4, v4, t_stop) < l4 {
+            t_stop += 10;
+        }
+        let tstop = 5000;
+        let pause = t_stop + 1000;
+        let k = self
+            .case(
+                "param-tstop-effect",
+                format!("TSTOP sets how long a stalled motor keeps driving: with TSTOP {tstop} a move stalled at the joint stop is still running when a ^C lands 1 s later"),
+            )
+            .src("Parameter TSTOP")
+            .src("Command M")
+            .decision(abort_d)
+            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-position-bounds" })
+            .requires(Requirement::AbortTiming)
+            .note(format!("The spread reaches its joint stop ({l4}) about {t_stop} ms after SM {goal} starts."))
+            .preamble(true)
+            .line(&format!("SFSET TSTOP {tstop}"))
+            .nowait(&format!("SM {goal}"))
+            .pause_ms(pause)
+            .abort()
+            .get("S", &["P"], Some([(l4 - self.mpe(4), l4); 4]));
+        self.add(k);
+    }
+
     // ------------------------------------------------------------------ RealTime
 
     /// FSET (and PSET) lines setting every RealTime flag: 1 for `on`, 0 for the rest.
@@ -1317,7 +1656,7 @@ impl Gen {
             .filter(|x| x.scope == Scope::Motor)
             .map(|x| format!("{} {}", x.name, i32::from(on.contains(&x.name.as_str()))))
             .collect();
-        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, self.p.framing.max_line);
+        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, safe_line(&self.p));
         for g in flags.iter().filter(|x| x.scope == Scope::Global) {
             if let Some(id) = self.p.param_id(&g.name) {
                 lines.push(format!("{} {} {}", self.p.setter(id), g.name, i32::from(on.contains(&g.name.as_str()))));
@@ -1387,7 +1726,18 @@ impl Gen {
             } else {
                 k = k.block(b"A", Shape::Block(self.at_rest()));
             }
-            k = k.abort();
+            // And back: with the flag 0 the field is gone (a C block is its header alone).
+            let off = match self.p.param_id(&f.name) {
+                Some(id) if f.scope == Scope::Global => format!("{} {} 0", self.p.setter(id), f.name),
+                _ => format!("1FSET {} 0", f.name),
+            };
+            k = k
+                .abort()
+                .comment(format!("{} 0: no field", f.name))
+                .line(&off)
+                .line("1LOOP")
+                .block(if rt.block == gcl_model::spec::BlockKind::Control { b"C" } else { b"A" }, Shape::Exact)
+                .abort();
             self.add(k);
         }
 
@@ -1408,7 +1758,7 @@ impl Gen {
                 &all,
             )
             .decision(if label == "seed" { "seed-rt-field-order" } else { "bh8-44-rt-field-order" })
-            .line("LOOP")
+            .line("1234LOOP")
             .block(&block, Shape::Block(self.at_rest()))
             .block(b"A", Shape::Block(self.at_rest()))
             .abort();
@@ -1544,6 +1894,35 @@ impl Gen {
             .line(&format!("12FSET LCVC {lcvc}"))
             .line("1FSET LFVC 1")
             .line("2FSET LFVC 2")
+            .line("12LOOP")
+            .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
+            .pause_ms(50)
+            .block(
+                b"A",
+                Shape::Block(vec![
+                    FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
+                    FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
+                ]),
+            )
+            .abort();
+        self.add(k);
+
+        // LCVC multiplies the datum: two motors at one datum, LCVC twice as large on motor 1.
+        let (v1, v2) = (self.lfv_at(datum, 2 * lcvc, 1), self.lfv_at(datum, lcvc, 1));
+        let mut k = self
+            .rt_case(
+                "rt-lcvc-scaling",
+                &format!("The control velocity is LCV x LCVC: one datum reads about {v1} with LCVC {} and {v2} with LCVC {lcvc}", 2 * lcvc),
+                "12",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LCVC")
+            .src("Parameter LCV");
+        k = if label == "seed" { k.decision("seed-rt-velocity") } else { k.decision("bh8-velocity-units") };
+        let k = k
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("1FSET LCVC {}", 2 * lcvc))
+            .line(&format!("2FSET LCVC {lcvc}"))
             .line("12LOOP")
             .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
             .pause_ms(50)
@@ -1744,6 +2123,9 @@ impl Gen {
             }
         }
         let mut k = self.rt_case(id, title, "1", &["LFDP"]).src("Parameter LFDPC");
+        if discard {
+            k = k.src("Parameter LFDPD");
+        }
         k = if label == "seed" {
             k.decision("seed-lfdp-state")
         } else {
@@ -1822,10 +2204,10 @@ impl Gen {
         let k = k.abort().line("FGET DP");
         self.add(k);
 
-        let goals_c = self.near([self.close_target(1), self.close_target(2), self.close_target(3), 0]);
         let mut k = self
             .case("example-supervisory-program", "The seed's supervisory example program: CR, RESET, HI, 123C, 123O")
             .clause("seed: Example Programs, Supervisory Mode Example Program")
+            .decision("framing-empty-line")
             .level(Level::Must)
             .requires(Requirement::Motion)
             .comment("a host's start-up: ^C, a bare CR, RESET")
@@ -1836,11 +2218,7 @@ impl Gen {
         if self.has_cmd("PDEF") {
             k = k.line("PDEF");
         }
-        let k = k.line("HI").line("123C").get("", &["P"], Some(goals_c)).line("123O").get(
-            "",
-            &["P"],
-            Some(self.near([0; 4])),
-        );
+        let k = k.line("HI").line("123C").line("123O").get("", &["P"], Some(self.near([0; 4])));
         self.add(k);
     }
 
@@ -1863,6 +2241,10 @@ impl Gen {
         }
         k = k
             .decision("bh8-44-same-as-43")
+            .decision("bh8-err-format")
+            .decision("bh8-help-format")
+            .decision("bh8-list-names-format")
+            .decision("bh8-list-values-format")
             .level(Level::Info)
             .note(
                 "Compare this file across the bh8-262 profiles: only the header, LFT's description (its width) and \
@@ -1891,6 +2273,13 @@ fn other_value(x: &ParamSpec, default: i64) -> i64 {
         None if x.max != default => x.max,
         None => x.min,
     }
+}
+
+/// The longest line a case sends (outside the line-length case itself): the profile's limit,
+/// but no more than [`super::depends::SAFE_LINE`], the longest line a host library is known to
+/// send, so that a hand with a shorter buffer than the model's fails only framing-max-line.
+fn safe_line(p: &Profile) -> usize {
+    p.framing.max_line.min(super::depends::SAFE_LINE)
 }
 
 /// `head` then as many `item`s as fit in `max` bytes.

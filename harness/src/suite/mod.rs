@@ -17,6 +17,10 @@
 
 mod build;
 mod cases;
+mod depends;
+
+pub use build::{DECISION_CLAUSE, DECISIONS_KEY};
+pub use depends::FRAMING;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -77,6 +81,27 @@ impl Case {
     /// The file's text.
     pub fn text(&self) -> String {
         self.transcript.to_text()
+    }
+
+    /// The decisions the case checks (its `decision:` clauses).
+    pub fn checked_decisions(&self) -> Vec<String> {
+        self.header().clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect()
+    }
+
+    /// Every decision the case rests on: those it checks and those its framing, preamble,
+    /// read-backs and teardown touch (the `x-decisions` header), without repeats.
+    pub fn decisions(&self) -> Vec<String> {
+        let mut out = self.checked_decisions();
+        for (k, v) in &self.header().extensions {
+            if k == DECISIONS_KEY {
+                for d in v.split_ascii_whitespace() {
+                    if !out.iter().any(|x| x == d) {
+                        out.push(d.to_string());
+                    }
+                }
+            }
+        }
+        out
     }
 }
 
@@ -230,11 +255,13 @@ struct IndexEntry<'a> {
     title: &'a str,
     level: Level,
     clauses: &'a [String],
+    decisions: Vec<String>,
     requires: Vec<&'a str>,
 }
 
-/// The text of `index.json`: every case's profile, id, path, title, level, clauses and
-/// requirements, for tools that do not parse transcripts.
+/// The text of `index.json`: every case's profile, id, path, title, level, clauses,
+/// decisions (every decision id it rests on) and requirements, for tools that do not parse
+/// transcripts.
 pub fn index_text(cases: &[Case]) -> String {
     let entries: Vec<IndexEntry> = cases
         .iter()
@@ -245,6 +272,7 @@ pub fn index_text(cases: &[Case]) -> String {
             title: &c.header().title,
             level: c.level(),
             clauses: &c.header().clauses,
+            decisions: c.decisions(),
             requires: c.header().requires.iter().map(Requirement::as_str).collect(),
         })
         .collect();

@@ -63,6 +63,130 @@ faults! {
     LoopAckNewline => "loop-ack-newline",
     /// RESET does not print the banner.
     ResetNoBanner => "reset-no-banner",
+    /// DP is stored but ignored: M without an argument goes to the factory DP.
+    DpIgnored => "dp-ignored",
+    /// DS is stored but ignored: IC and IO step by the factory DS.
+    DsIgnored => "ds-ignored",
+    /// CT is stored but ignored: C closes to the factory CT.
+    CtIgnored => "ct-ignored",
+    /// OT is stored but ignored: O opens to the factory OT.
+    OtIgnored => "ot-ignored",
+    /// MCV is stored but ignored: closing runs at the factory MCV.
+    McvIgnored => "mcv-ignored",
+    /// MOV is stored but ignored: opening runs at the factory MOV.
+    MovIgnored => "mov-ignored",
+    /// ACCEL is stored but ignored: moves accelerate at the factory ACCEL.
+    AccelIgnored => "accel-ignored",
+    /// MPE is stored but ignored: the final position is checked against the factory MPE.
+    MpeDefault => "mpe-default",
+    /// TSTOP is stored but ignored: a stall ends after the factory TSTOP.
+    TstopIgnored => "tstop-ignored",
+    /// The high strain limit (HSG, or MSG) is stored but ignored.
+    HsgIgnored => "hsg-ignored",
+    /// LSG is stored but ignored.
+    LsgIgnored => "lsg-ignored",
+    /// EN is stored but ignored: commands without a prefix act on every motor.
+    EnIgnored => "en-ignored",
+    /// SGFLIP is stored but ignored: the strain is never turned over.
+    SgflipIgnored => "sgflip-ignored",
+    /// OTEMP is stored but ignored: the hand never trips over temperature.
+    OtempIgnored => "otemp-ignored",
+    /// LCVC is stored but ignored: the control velocity uses the factory LCVC.
+    LcvcIgnored => "lcvc-ignored",
+    /// LFVC is stored but ignored: LFV is divided by the factory LFVC.
+    LfvcIgnored => "lfvc-ignored",
+    /// LFDPC is stored but ignored: LFDP is divided by the factory LFDPC.
+    LfdpcIgnored => "lfdpc-ignored",
+    /// LFDPD is stored but ignored: the clipped rest of LFDP is always carried.
+    LfdpdIgnored => "lfdpd-ignored",
+    /// The LCV flag is stored but ignored: the control block layout uses the factory LCV.
+    LcvIgnored => "lcv-ignored",
+    /// The LCPG flag is stored but ignored: the block layout and the gain use the factory LCPG.
+    LcpgIgnored => "lcpg-ignored",
+    /// The LFV flag is stored but ignored: the feedback layout uses the factory LFV.
+    LfvIgnored => "lfv-ignored",
+    /// The LFS flag is stored but ignored.
+    LfsIgnored => "lfs-ignored",
+    /// The LFAP flag is stored but ignored.
+    LfapIgnored => "lfap-ignored",
+    /// The LFDP flag is stored but ignored.
+    LfdpIgnored => "lfdp-ignored",
+    /// The LCT flag is stored but ignored.
+    LctIgnored => "lct-ignored",
+    /// The LFBP flag is stored but ignored.
+    LfbpIgnored => "lfbp-ignored",
+    /// The LFAIN flag is stored but ignored.
+    LfainIgnored => "lfain-ignored",
+    /// The LFT flag is stored but ignored.
+    LftIgnored => "lft-ignored",
+    /// A line with too many arguments (and no other problem) gets the prompt and no status.
+    TooManyArgsSilent => "too-many-args-silent",
+    /// A prefix on a command that takes none is ignored and the command runs.
+    PrefixNotRefused => "prefix-not-refused",
+    /// The prefix G names the spread too (1234 instead of 123).
+    GIncludesSpread => "g-includes-spread",
+    /// RESET keeps the parameters in RAM instead of loading the saved ones.
+    ResetKeepsRam => "reset-keeps-ram",
+    /// FDEF also writes the factory values to the EEPROM.
+    FdefWritesEeprom => "fdef-writes-eeprom",
+    /// The LCV datum is read as an unsigned byte: negative velocities become large positive ones.
+    LcvUnsigned => "lcv-unsigned",
+    /// FGET P does not set the position LFDP is reported against.
+    FgetPKeepsReported => "fget-p-keeps-reported",
+    /// Motion commands run on motors HI has not initialised, instead of giving 4.
+    UninitializedMoves => "uninitialized-moves",
+    /// An unknown command word gives 64 (unknown parameter) instead of 32.
+    UnknownCommand64 => "unknown-command-64",
+    /// An unknown parameter name gives 128 (invalid value) instead of 64.
+    UnknownParam128 => "unknown-param-128",
+    /// A refused FSET or PSET still applies the pairs that are valid on their own.
+    PartialSetApplied => "partial-set-applied",
+    /// A tab is not a separator: a line with one is an unknown command.
+    TabNotSeparator => "tab-not-separator",
+    /// A set whose last name has no value drops it silently instead of giving 128.
+    MissingValueIgnored => "missing-value-ignored",
+    /// An empty line gives ERR 32 instead of a fresh prompt.
+    EmptyLineError => "empty-line-error",
+    /// A line past the length limit runs cut short instead of giving its status.
+    OverlongLineRuns => "overlong-line-runs",
+}
+
+impl Fault {
+    /// The parameters a `*-ignored` fault makes the hand ignore (it behaves as if each had its
+    /// factory value, while FGET still reads back what was set), or none.
+    pub fn ignored_params(self) -> &'static [&'static str] {
+        match self {
+            Fault::DpIgnored => &["DP"],
+            Fault::DsIgnored => &["DS"],
+            Fault::CtIgnored => &["CT"],
+            Fault::OtIgnored => &["OT"],
+            Fault::McvIgnored => &["MCV"],
+            Fault::MovIgnored => &["MOV"],
+            Fault::AccelIgnored => &["ACCEL"],
+            Fault::MpeDefault => &["MPE"],
+            Fault::TstopIgnored => &["TSTOP"],
+            Fault::HsgIgnored => &["HSG", "MSG"],
+            Fault::LsgIgnored => &["LSG"],
+            Fault::EnIgnored => &["EN"],
+            Fault::SgflipIgnored => &["SGFLIP"],
+            Fault::OtempIgnored => &["OTEMP"],
+            Fault::LcvcIgnored => &["LCVC"],
+            Fault::LfvcIgnored => &["LFVC"],
+            Fault::LfdpcIgnored => &["LFDPC"],
+            Fault::LfdpdIgnored => &["LFDPD"],
+            Fault::LcvIgnored => &["LCV"],
+            Fault::LcpgIgnored => &["LCPG"],
+            Fault::LfvIgnored => &["LFV"],
+            Fault::LfsIgnored => &["LFS"],
+            Fault::LfapIgnored => &["LFAP"],
+            Fault::LfdpIgnored => &["LFDP"],
+            Fault::LctIgnored => &["LCT"],
+            Fault::LfbpIgnored => &["LFBP"],
+            Fault::LfainIgnored => &["LFAIN"],
+            Fault::LftIgnored => &["LFT"],
+            _ => &[],
+        }
+    }
 }
 
 impl fmt::Display for Fault {

@@ -453,13 +453,13 @@ impl Device {
             accel: self.accel(m),
             close_speed: mcv,
             open_speed: mov,
-            init_speed: self.ids.ivel.map_or(mov, |id| self.params.get(profile, id, m) as f64 * vel_unit),
+            init_speed: self.ids.ivel.map_or(mov, |id| self.behaviour(id, m) as f64 * vel_unit),
             tstop_ms: self.get(self.ids.tstop, m).clamp(0, i64::from(u32::MAX)) as u32,
-            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.params.get(profile, id, m).max(1) as u64),
+            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.behaviour(id, m).max(1) as u64),
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
             high_strain: self.get(self.ids.hsg, m),
-            low_strain: self.ids.lsg.map_or(256, |id| self.params.get(profile, id, m)),
+            low_strain: self.ids.lsg.map_or(256, |id| self.behaviour(id, m)),
             breakaway: self.get(self.ids.bs, m) != 0,
         }
     }
@@ -577,7 +577,7 @@ impl Device {
         } else if b == framing.terminator {
             let line = std::mem::take(&mut self.line);
             let overflow = std::mem::replace(&mut self.overflow, false);
-            if overflow {
+            if overflow && !self.has(Fault::OverlongLineRuns) {
                 self.end_line(StatusBits::from_bits_truncate(framing.overlong_status));
             } else {
                 self.run_line(&line);
@@ -628,13 +628,46 @@ impl Device {
 
     fn run_line(&mut self, line: &[u8]) {
         let opts = ParseOptions { case_sensitive_commands: self.has(Fault::LowercaseRejected) };
+        if self.has(Fault::TabNotSeparator) && line.contains(&b'\t') {
+            return self.end_line(StatusBits::UNKNOWN_COMMAND);
+        }
         match grammar::parse_line_with(&self.profile, line, opts) {
+            Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             Ok(Line::Empty) => {
                 self.last_status = StatusBits::empty();
                 self.prompt();
             }
-            Ok(Line::Command(c)) => self.run_command(&c),
+            Ok(Line::Command(mut c)) => {
+                if self.has(Fault::GIncludesSpread) && prefix_text(&self.profile, line).contains(['G', 'g']) {
+                    c.prefix = c.prefix.map(|p| p | MotorSet::single(4).unwrap_or_default());
+                }
+                self.run_command(&c)
+            }
             Err(mut r) => {
+                if self.has(Fault::UnknownCommand64) && r.status.contains(StatusBits::UNKNOWN_COMMAND) {
+                    r.status = (r.status - StatusBits::UNKNOWN_COMMAND) | StatusBits::UNKNOWN_PARAMETER;
+                }
+                if self.has(Fault::UnknownParam128) && r.status.contains(StatusBits::UNKNOWN_PARAMETER) {
+                    r.status = (r.status - StatusBits::UNKNOWN_PARAMETER) | StatusBits::INVALID_VALUE;
+                }
+                if self.has(Fault::PartialSetApplied) {
+                    self.apply_valid_pairs(line);
+                }
+                if self.has(Fault::MissingValueIgnored)
+                    && r.status == StatusBits::INVALID_VALUE
+                    && let Some(cut) = self.without_last_name(line)
+                {
+                    return self.run_command(&cut);
+                }
+                if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
+                    return self.end_line(StatusBits::empty());
+                }
+                if self.has(Fault::PrefixNotRefused) && r.status == StatusBits::PREFIX_NOT_ALLOWED {
+                    let skip = line.len() - line.trim_ascii_start().len() + prefix_text(&self.profile, line).len();
+                    if let Ok(Line::Command(c)) = grammar::parse_line(&self.profile, &line[skip..]) {
+                        return self.run_command(&c);
+                    }
+                }
                 if self.has(Fault::ReadOnlyStatus) && r.status.contains(StatusBits::READ_ONLY) {
                     r.status = (r.status - StatusBits::READ_ONLY) | StatusBits::INVALID_VALUE;
                 }
@@ -645,6 +678,47 @@ impl Device {
                     return self.run_command(&c);
                 }
                 self.end_line(r.status)
+            }
+        }
+    }
+
+    /// The missing-value-ignored fault: a set line with an odd token count, run without its
+    /// last token.
+    fn without_last_name(&self, line: &[u8]) -> Option<Command> {
+        let text = std::str::from_utf8(line).ok()?;
+        let toks: Vec<&str> = text.split_ascii_whitespace().collect();
+        if toks.len() < 2 || !toks.len().is_multiple_of(2) {
+            return None;
+        }
+        // A lone name: the set of nothing (parsed with a dummy pair, then emptied).
+        let probe = format!("{} {} 0", toks[..toks.len() - 1].join(" "), toks[toks.len() - 1]);
+        let text = if toks.len() == 2 { probe } else { toks[..toks.len() - 1].join(" ") };
+        match grammar::parse_line(&self.profile, text.as_bytes()) {
+            Ok(Line::Command(mut c)) if matches!(c.args, Args::Pairs(_)) => {
+                if toks.len() == 2 {
+                    c.args = Args::Pairs(Vec::new());
+                }
+                Some(c)
+            }
+            _ => None,
+        }
+    }
+
+    /// The partial-set-applied fault: the pairs of a refused set line that parse alone.
+    fn apply_valid_pairs(&mut self, line: &[u8]) {
+        let Ok(text) = std::str::from_utf8(line) else { return };
+        let mut toks = text.split_ascii_whitespace();
+        let Some(head) = toks.next() else { return };
+        let rest: Vec<&str> = toks.collect();
+        let profile = self.profile.clone();
+        for pair in rest.chunks(2) {
+            let one = format!("{head} {}", pair.join(" "));
+            if let Ok(Line::Command(c)) = grammar::parse_line(&profile, one.as_bytes())
+                && let Args::Pairs(ps) = &c.args
+            {
+                for (id, v) in ps {
+                    self.params.set_unchecked(&profile, *id, c.prefix.unwrap_or(MotorSet::ALL), *v);
+                }
             }
         }
     }
@@ -681,13 +755,39 @@ impl Device {
 
     fn enabled_motors(&self) -> MotorSet {
         match self.ids.en {
-            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.params.get(&self.profile, en, *m) != 0)),
+            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.behaviour(en, *m) != 0)),
             None => MotorSet::ALL,
         }
     }
 
+    /// The value a parameter has for the hand's behaviour (not for FGET): what was set, or
+    /// its factory value when a `*-ignored` fault makes the hand ignore it.
     fn get(&self, id: Option<ParamId>, motor: u8) -> i64 {
-        id.map_or(0, |id| self.params.get(&self.profile, id, motor))
+        id.map_or(0, |id| self.behaviour(id, motor))
+    }
+
+    fn behaviour(&self, id: ParamId, motor: u8) -> i64 {
+        if self.ignores(id) { self.profile.default_for(id, motor) } else { self.params.get(&self.profile, id, motor) }
+    }
+
+    fn ignores(&self, id: ParamId) -> bool {
+        let name = self.profile.param(id).name.as_str();
+        self.faults.iter().any(|f| f.ignored_params().contains(&name))
+    }
+
+    /// The parameters as the hand's behaviour sees them (see [`Device::get`]).
+    fn behaviour_store(&self) -> std::borrow::Cow<'_, ParamStore> {
+        if self.faults.iter().all(|f| f.ignored_params().is_empty()) {
+            return std::borrow::Cow::Borrowed(&self.params);
+        }
+        let mut store = self.params.clone();
+        for id in self.profile.param_ids().filter(|id| self.ignores(*id)) {
+            for m in 1..=4u8 {
+                let v = self.profile.default_for(id, m);
+                store.set_unchecked(&self.profile, id, MotorSet::single(m).unwrap_or_default(), v);
+            }
+        }
+        std::borrow::Cow::Owned(store)
     }
 
     fn set_live(&mut self, id: Option<ParamId>, motor: u8, v: i64) {
@@ -817,6 +917,9 @@ impl Device {
                     .then(|| self.ids.mcv.map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m)))))
                     .flatten();
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
+                if t == Transfer::Defaults && self.has(Fault::FdefWritesEeprom) {
+                    self.params.transfer(&profile, &mut self.nv, Transfer::Save, Scope::Motor, motors);
+                }
                 if let Some((id, vals)) = keep_mcv {
                     for m in 1..=4u8 {
                         self.params.set_unchecked(
@@ -941,7 +1044,7 @@ impl Device {
                 }
             }
         }
-        if Some(id) == self.ids.p && !named {
+        if Some(id) == self.ids.p && !named && !self.has(Fault::FgetPKeepsReported) {
             for (m, v) in &vals {
                 self.motors[(*m - 1) as usize].reported = Some(*v);
             }
@@ -971,7 +1074,10 @@ impl Device {
     fn start_motion(&mut self, kind: CommandKind, motors: MotorSet, c: &Command) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        if kind != CommandKind::Initialize && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+        if kind != CommandKind::Initialize
+            && !self.has(Fault::UninitializedMoves)
+            && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized)
+        {
             return self.end_line(StatusBits::from_bits_truncate(hand.uninitialized_status));
         }
         if kind.is_motion() && self.overtemperature() {
@@ -992,10 +1098,7 @@ impl Device {
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
                 CommandKind::Close => Goal::Position {
-                    target: self
-                        .ids
-                        .ct
-                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.params.get(&profile, id, m))
+                    target: self.ids.ct.map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
                         as f64,
                     stall_ms: 0,
                 },
@@ -1061,7 +1164,11 @@ impl Device {
 
     fn power_cycle(&mut self) {
         let profile = self.profile.clone();
+        let ram = self.params.clone();
         self.params = ParamStore::power_up(&profile, &mut self.nv);
+        if self.has(Fault::ResetKeepsRam) {
+            self.params = ram;
+        }
         for m in &mut self.motors {
             m.power_down();
         }
@@ -1084,7 +1191,7 @@ impl Device {
         if motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
             return self.end_line(StatusBits::from_bits_truncate(profile.hand.uninitialized_status));
         }
-        let layout = RtLayout::compute(&profile, &self.params, motors);
+        let layout = RtLayout::compute(&profile, &self.behaviour_store(), motors);
         for m in motors.iter() {
             let motor = &mut self.motors[(m - 1) as usize];
             if motor.reported.is_none() {
@@ -1182,6 +1289,7 @@ impl Device {
             let i = (m - 1) as usize;
             match f.name.as_str() {
                 "LCV" => {
+                    let v = &if self.has(Fault::LcvUnsigned) { i64::from(*v as u8) } else { *v };
                     let lcvc = self.get(self.ids.lcvc, m);
                     self.motors[i].rt_velocity =
                         realtime::control_velocity(*v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
@@ -1195,7 +1303,7 @@ impl Device {
             }
         }
         for m in rt.layout.motors.iter() {
-            let has_gain = self.ids.lcpg.is_some_and(|id| self.params.get(&profile, id, m) != 0);
+            let has_gain = self.ids.lcpg.is_some_and(|id| self.behaviour(id, m) != 0);
             self.motors[(m - 1) as usize].rt_uses_gain = has_gain;
         }
     }
@@ -1251,6 +1359,15 @@ impl Device {
         }
         rt.layout.feedback.encode_clamped(realtime::FEEDBACK_HEADER, &rt.feedback, &mut self.out);
     }
+}
+
+/// The run of prefix characters a line starts with (after leading separators).
+fn prefix_text(profile: &Profile, line: &[u8]) -> String {
+    line.trim_ascii_start()
+        .iter()
+        .take_while(|b| b.is_ascii() && profile.prefix_motors(**b as char).is_some())
+        .map(|b| *b as char)
+        .collect()
 }
 
 #[cfg(test)]
