@@ -451,6 +451,10 @@ pub struct Decision {
     pub resolution: String,
     /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO.
     pub level: String,
+    /// Where the facts behind it come from (a manual's section, a wiki page, a public host
+    /// library's file), one source per entry; empty where the project simply chose.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub evidence: Vec<String>,
 }
 
 /// Index of a command in [`Profile::commands`].

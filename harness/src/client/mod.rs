@@ -72,8 +72,8 @@ pub enum ClientError {
         /// What came back, escaped.
         got: String,
     },
-    /// After `RESET` the banner lacks `BarrettHand Firmware`.
-    #[error("no `BarrettHand Firmware` banner after RESET; got {0:?}")]
+    /// After `RESET` no banner line ends with `BarrettHand Firmware`.
+    #[error("no banner line ending with `BarrettHand Firmware` after RESET; got {0:?}")]
     NoBanner(Vec<String>),
     /// The hand went away.
     #[error("the hand disconnected")]
@@ -469,10 +469,11 @@ impl Hand {
         }
     }
 
-    /// `RESET`: returns the banner lines, checked for `BarrettHand Firmware`.
+    /// `RESET`: returns the banner lines, checked as Barrett's C++ API checks them: some line
+    /// ends with `BarrettHand Firmware` (the text straight followed by the line ending).
     pub fn reset(&mut self) -> Result<Vec<String>, ClientError> {
         let banner = self.run("RESET", self.timeouts.motion)?;
-        if !banner.iter().any(|l| l.contains("BarrettHand Firmware")) {
+        if !banner.iter().any(|l| l.ends_with("BarrettHand Firmware")) {
             return Err(ClientError::NoBanner(banner));
         }
         Ok(banner)
