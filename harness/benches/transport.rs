@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use gcl_harness::client::Hand;
 use gcl_harness::links::{SerialLink, TcpLink};
-use gcl_harness::sim::{Engine, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
+use gcl_harness::sim::{Engine, Pace, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
 use gcl_harness::{Link, LinkError};
 use gcl_model::Profile;
 
@@ -41,17 +41,17 @@ impl Drop for Server {
     }
 }
 
-fn options(baud: Option<u32>) -> SimOptions {
+fn options(pace: Pace) -> SimOptions {
     let mut o = SimOptions::new(Profile::builtin("bh8-262").unwrap());
-    o.baud = baud;
+    o.pace = pace;
     o
 }
 
-fn pty_server(baud: Option<u32>) -> Server {
+fn pty_server(pace: Pace) -> Server {
     let (stop, signal) = stop_pair().unwrap();
     let mut pty = Pty::open(None).unwrap();
     let target = pty.path().display().to_string();
-    let mut engine = Engine::new(&options(baud)).unwrap();
+    let mut engine = Engine::new(&options(pace)).unwrap();
     let thread = std::thread::spawn(move || {
         pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });
@@ -62,7 +62,7 @@ fn tcp_server() -> Server {
     let (stop, signal) = stop_pair().unwrap();
     let mut server = TcpServer::bind("127.0.0.1:0", false).unwrap();
     let target = server.local_addr().to_string();
-    let mut engine = Engine::new(&options(None)).unwrap();
+    let mut engine = Engine::new(&options(Pace::Unpaced)).unwrap();
     let thread = std::thread::spawn(move || {
         server.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });
@@ -128,7 +128,7 @@ fn round_trips(kind: &str, server: &Server, n: usize) {
 }
 
 fn pacing(rounds: usize) -> Result<(), LinkError> {
-    let server = pty_server(Some(9600));
+    let server = pty_server(Pace::Fixed(9600));
     let mut l = SerialLink::open(&server.target, 9600)?;
     let mut total = 0usize;
     let mut time = Duration::ZERO;
@@ -172,7 +172,7 @@ fn main() {
     let bench = std::env::args().any(|a| a == "--bench");
     let n = if bench { 20_000 } else { 50 };
     for kind in ["pty", "tcp"] {
-        let server = if kind == "pty" { pty_server(None) } else { tcp_server() };
+        let server = if kind == "pty" { pty_server(Pace::Unpaced) } else { tcp_server() };
         round_trips(kind, &server, n);
     }
     pacing(if bench { 3 } else { 1 }).unwrap();

@@ -1,6 +1,7 @@
 //! A Python host (pyserial) against `gcl sim --pty` and `--tcp` (`socket://`): the framing a
-//! program outside Rust sees. Needs python3; installs pyserial with pip when it is missing, so
-//! `cargo test` alone is enough on a fresh machine. Set GCL_SKIP_PYTHON=1 to skip.
+//! program outside Rust sees. Needs python3 with pyserial. The test never changes the machine:
+//! without pyserial it says so and skips (set GCL_SKIP_PYTHON=1 to skip silently); under CI
+//! (`CI=true`, where `.ci/run` installs pyserial) a missing pyserial is a failure.
 
 mod sim_support;
 
@@ -9,30 +10,21 @@ use std::process::Command;
 
 use sim_support::{SimProcess, Transport};
 
+/// Whether python3 with pyserial is there; skips with a message when not (fails under CI).
 fn python_ready() -> bool {
     if std::env::var("GCL_SKIP_PYTHON").is_ok_and(|v| v == "1") {
         eprintln!("GCL_SKIP_PYTHON=1: skipping the pyserial check");
         return false;
     }
-    let has_pyserial =
-        || Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
-    if !has_pyserial() {
-        eprintln!("pyserial is missing: installing it with `python3 -m pip install pyserial`");
-        for extra in [None, Some("--user")] {
-            let mut pip = Command::new("python3");
-            pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "pyserial"]);
-            pip.args(extra);
-            if pip.status().is_ok_and(|s| s.success()) && has_pyserial() {
-                break;
-            }
-        }
+    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
+    if !ok {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "CI: python3 with pyserial is needed (.ci/run installs it with pip)"
+        );
+        eprintln!("SKIPPED: python3 with pyserial is not installed (pip install pyserial to run this test)");
     }
-    let ok = has_pyserial();
-    assert!(
-        ok,
-        "python3 with pyserial is needed for this test: pip install pyserial (or set GCL_SKIP_PYTHON=1 to skip it)"
-    );
-    true
+    ok
 }
 
 fn check(url: &str) {

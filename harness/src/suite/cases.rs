@@ -1888,7 +1888,10 @@ impl Gen {
     fn banner(&mut self) {
         let decision = if self.p.id == "seed" { "seed-banner-text" } else { "bh8-banner-text" };
         let k = self
-            .case("banner-lines", "After RESET, 'BarrettHand Firmware' ends its line and more banner text follows before the prompt")
+            .case(
+                "banner-lines",
+                "After RESET, 'BarrettHand Firmware' ends its line and more banner text follows before the prompt",
+            )
             .src("Command RESET")
             .decision(decision)
             .comment("a host's start-up: ^C, a bare CR, RESET; it searches the answer for the banner line")

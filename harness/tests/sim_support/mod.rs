@@ -33,8 +33,17 @@ pub struct SimProcess {
 }
 
 impl SimProcess {
-    /// Starts `gcl sim <transport flag> <args>` and reads the address it prints.
+    /// Starts `gcl sim <transport flag> <args>` and reads the address it prints. Unless `args`
+    /// choose a time mode, the child runs in fast time (unpaced), the opt-in speed-up: most
+    /// tests check answers, not timing.
     pub fn start(transport: Transport, args: &[&str]) -> SimProcess {
+        let fast: &[&str] = if args.contains(&"--time") { &[] } else { &["--time", "fast"] };
+        SimProcess::start_exact(transport, &[args, fast].concat())
+    }
+
+    /// Starts `gcl sim <transport flag> <args>` with exactly these arguments (the defaults of
+    /// `gcl sim` otherwise: real time, paced at the hand's BAUD).
+    pub fn start_exact(transport: Transport, args: &[&str]) -> SimProcess {
         let flag: &[&str] = match transport {
             Transport::Pty => &["--pty"],
             Transport::Tcp => &["--tcp", "127.0.0.1:0"],
