@@ -186,7 +186,7 @@ impl Engine {
             let last_due = self.in_due + bt * (end as u32 - 1);
             self.in_last = last_due;
             self.in_due = last_due + bt;
-            self.deliver(&chunk, bt);
+            self.deliver(&chunk, bt, last_due);
         }
         if self.time == TimeMode::Real && self.link.device().poll_timeout().is_some() {
             let now = self.started.elapsed();
@@ -203,7 +203,7 @@ impl Engine {
 
     /// Passes host bytes to the model; the answer goes out at `bt`, the rate in force when
     /// they arrived (a BAUD change applies after its own answer).
-    fn deliver(&mut self, bytes: &[u8], bt: Duration) {
+    fn deliver(&mut self, bytes: &[u8], bt: Duration, arrived: Instant) {
         let mut out = Vec::new();
         match self.time {
             TimeMode::Fast => {
@@ -223,7 +223,7 @@ impl Engine {
                 out = d.take_output();
             }
         }
-        self.emit(&out, bt);
+        self.emit_at(&out, bt, arrived);
         self.persist();
     }
 
@@ -337,6 +337,12 @@ impl Engine {
     }
 
     fn emit(&mut self, bytes: &[u8], bt: Duration) {
+        self.emit_at(bytes, bt, Instant::now());
+    }
+
+    /// Queues output the hand started sending at `at` (for an answer, when the last byte of
+    /// its command was on the hand's side of the line, however late the engine woke for it).
+    fn emit_at(&mut self, bytes: &[u8], bt: Duration, at: Instant) {
         if bytes.is_empty() {
             return;
         }
@@ -351,7 +357,7 @@ impl Engine {
             return;
         }
         if self.out.is_empty() {
-            self.out_free_at = self.out_free_at.max(Instant::now());
+            self.out_free_at = self.out_free_at.max(at.min(Instant::now()));
         }
         self.out.extend(bytes);
         match self.out_rates.back_mut() {
