@@ -13,7 +13,8 @@ use nix::sys::signalfd::SignalFd;
 
 use super::{EXIT_OK, load_profile};
 use crate::sim::{
-    Engine, Pace, SCENARIO_EXAMPLE, SimOptions, TimeMode, parse_scenario, pty::Pty, stdio, tcp::TcpServer,
+    Engine, Pace, SCENARIO_EXAMPLE, SimOptions, TimeMode, check_scenario, parse_scenario, pty::Pty, stdio,
+    tcp::TcpServer,
 };
 
 fn after_help() -> String {
@@ -137,7 +138,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let scenario = match &args.scenario {
         Some(p) => {
             let text = std::fs::read_to_string(p).with_context(|| format!("scenario file {}", p.display()))?;
-            parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?
+            let s = parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?;
+            check_scenario(&s, &profile).with_context(|| format!("scenario file {}", p.display()))?;
+            s
         }
         None => Default::default(),
     };

@@ -26,7 +26,7 @@ use gcl_model::{Fault, Profile, Scenario};
 
 pub use eeprom::EepromFile;
 pub use engine::{Engine, IN_CAP, OUT_CAP};
-pub use scenario::{SCENARIO_EXAMPLE, parse_scenario};
+pub use scenario::{SCENARIO_EXAMPLE, check_scenario, parse_scenario};
 pub use trace::{Direction, Trace};
 pub use wait::{StopHandle, StopSignal, stop_pair};
 

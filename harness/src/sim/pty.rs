@@ -16,6 +16,7 @@
 use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
+use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -48,8 +49,8 @@ fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
 
 impl Pty {
     /// Creates a raw pty; with `link`, also a symbolic link to its slave at that path (an
-    /// existing symbolic link there is replaced unless it points at a pty another process
-    /// holds open; any other file is an error). The link is removed when the `Pty` is dropped.
+    /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
+    /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
     pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
         let pair = nix::pty::openpty(None, None).map_err(|e| pty_err("cannot create a pty", e))?;
         let mut t = termios::tcgetattr(&pair.slave).map_err(|e| pty_err("tcgetattr", e))?;
@@ -309,7 +310,21 @@ fn make_link(target: &Path, link: &Path) -> Result<(), SimError> {
         Ok(m) if !m.file_type().is_symlink() => {
             return Err(SimError::Pty(format!("--link {}: exists and is not a symbolic link", link.display())));
         }
-        _ => {}
+        Ok(_) => {
+            // A pty's node exists only while its master is open: a link to one that exists
+            // belongs to a running simulator (or terminal), which must keep it.
+            if let Ok(old) = std::fs::read_link(link)
+                && old.starts_with("/dev/pts")
+                && std::fs::metadata(&old).is_ok_and(|m| m.file_type().is_char_device())
+            {
+                return Err(SimError::Pty(format!(
+                    "--link {}: points at {}, a pty in use (another gcl sim?); stop it, or remove the link",
+                    link.display(),
+                    old.display()
+                )));
+            }
+        }
+        Err(_) => {}
     }
     let name = link.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = link.with_file_name(format!(".{name}.tmp{}", std::process::id()));
