@@ -170,3 +170,52 @@ pub fn noise(seed: u64, len: usize) -> Vec<u8> {
         })
         .collect()
 }
+
+/// A pty opened as a host program opens a serial port (no controlling tty, non-blocking, no
+/// discard of stale input: the test sees exactly what the port holds).
+pub fn open_port(path: &str) -> std::fs::File {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
+        .open(path)
+        .expect("open the pty")
+}
+
+/// Reads from a non-blocking port until `done(bytes)` or `limit` passes, or, with `quiet`,
+/// until nothing came for that long. Returns what arrived.
+pub fn read_port(
+    port: &mut std::fs::File,
+    done: &dyn Fn(&[u8]) -> bool,
+    quiet: Option<Duration>,
+    limit: Duration,
+) -> Vec<u8> {
+    use nix::poll::{PollFd, PollFlags, PollTimeout};
+    use std::io::Read;
+    use std::os::fd::AsFd;
+    let end = Instant::now() + limit;
+    let mut got = Vec::new();
+    let mut buf = [0u8; 4096];
+    while !done(&got) {
+        let mut wait = end.saturating_duration_since(Instant::now());
+        if let Some(q) = quiet {
+            wait = wait.min(q);
+        }
+        if wait.is_zero() {
+            break;
+        }
+        let mut fds = [PollFd::new(port.as_fd(), PollFlags::POLLIN)];
+        let ms = PollTimeout::try_from(wait.as_millis().min(60_000) as i32).unwrap_or(PollTimeout::MAX);
+        if !nix::poll::poll(&mut fds, ms).is_ok_and(|n| n > 0) {
+            break;
+        }
+        match port.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => got.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(_) => break,
+        }
+    }
+    got
+}
