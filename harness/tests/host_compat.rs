@@ -15,7 +15,8 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 use gcl_model::Profile;
-use sim_support::{SimProcess, Transport, open_port, read_port};
+use nix::sys::termios::BaudRate;
+use sim_support::{SimProcess, Transport, open_port, read_port, set_port_speed};
 
 const PROMPT: &[u8] = b"\n\r=> ";
 
@@ -68,6 +69,7 @@ fn a_library_that_changes_the_baud_rate_reopens_to_one_fresh_prompt() {
     // Switch its own side, wait about a second (Barrett's API), send a CR.
     std::thread::sleep(Duration::from_millis(500));
     let mut port = open_port(&sim.address);
+    set_port_speed(&port, BaudRate::B38400);
     port.write_all(b"\r").unwrap();
     let got = read_port(&mut port, &|_| false, Some(Duration::from_millis(400)), Duration::from_secs(5));
     assert_eq!(got, PROMPT, "exactly one fresh prompt");

@@ -231,3 +231,34 @@ fn stdio_stops_on_sigterm_while_nobody_reads_its_output() {
     let status = status.expect("gcl sim --stdio ignored SIGTERM while its output was not read");
     assert_eq!(status.code(), Some(0));
 }
+
+#[test]
+fn a_host_at_another_speed_than_the_hand_exchanges_garbage_both_ways() {
+    use nix::sys::termios::BaudRate;
+    use sim_support::{read_port, set_port_speed};
+    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", "bh8-262"]);
+    let mut port = open_port(&sim.address);
+    // The pty starts at the hand's rate: a host that sets no speed talks.
+    port.write_all(b"\r").unwrap();
+    assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"\n\r=> ");
+    // The host forgets that the hand is at 9600.
+    set_port_speed(&port, BaudRate::B38400);
+    port.write_all(b"FGET DP\r").unwrap();
+    let got = read_quiet(&mut port, QUIET, Duration::from_secs(5));
+    assert!(!got.windows(3).any(|w| w == b"=> "), "no prompt makes it through: {got:?}");
+    assert!(got.iter().all(|b| *b >= 0x80), "only garbage: {got:?}");
+    // Back at the hand's rate, ^C clears what garbage the hand received.
+    set_port_speed(&port, BaudRate::B9600);
+    port.write_all(b"\x03").unwrap();
+    let got = read_port(&mut port, &|b| b.ends_with(b"\n\r=> "), None, Duration::from_secs(5));
+    assert!(got.ends_with(b"\n\r=> "), "{got:?}");
+    port.write_all(b"FGET DP\r").unwrap();
+    assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"FGET DP\n\r8500 8500 8500 1575\n\r=> ");
+
+    // --no-speed-check: the speed is ignored.
+    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", "bh8-262", "--no-speed-check"]);
+    let mut port = open_port(&sim.address);
+    set_port_speed(&port, BaudRate::B38400);
+    port.write_all(b"\r").unwrap();
+    assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"\n\r=> ");
+}

@@ -30,6 +30,10 @@ Transports (exactly one):
                port: the hand keeps its state across a reopen, what the host had not read is
                discarded when it closes, and what the hand sends while no host has the port
                open is lost (so the power-up banner is never seen; send RESET to see one).
+               While paced, the speed the host sets on the port is checked against the hand's
+               rate: when they differ, bytes cross garbled both ways, as through a UART at the
+               wrong rate (a host that changes the hand's BAUD must change its own too).
+               --no-speed-check turns this off.
   --tcp ADDR   prints the bound address (e.g. 127.0.0.1:40123) alone on the first line of stdout.
                ADDR is HOST:PORT or PORT (127.0.0.1); port 0 picks a free one. One client at a
                time, like a cable: a second connection while one is active is closed at once with
@@ -96,6 +100,9 @@ pub struct Args {
     /// Serve on TCP at HOST:PORT or PORT (loopback); prints the bound address on stdout's first line.
     #[arg(long, value_name = "ADDR")]
     tcp: Option<String>,
+    /// With --pty: do not garble bytes when the host's port speed differs from the hand's.
+    #[arg(long, requires = "pty")]
+    no_speed_check: bool,
     /// With --tcp: allow a non-loopback address.
     #[arg(long, requires = "tcp")]
     allow_remote: bool,
@@ -176,6 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut pty = Pty::open(args.link.as_deref())?;
         let mut engine = Engine::new(&opts)?;
         pty.match_speed(&engine)?;
+        pty.set_speed_check(!args.no_speed_check);
         announce(&pty.path().display().to_string())?;
         eprintln!(
             "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",

@@ -273,6 +273,15 @@ impl Engine {
         &all[..n]
     }
 
+    /// The first run of queued output sent at one rate: its length, and the rate (bit/s;
+    /// `None` when unpaced). A transport that checks the host's speed writes one run at a time.
+    pub fn head_run(&self) -> Option<(usize, Option<u32>)> {
+        self.out_rates.front().map(|&(count, bt)| {
+            let baud = (!bt.is_zero()).then(|| (10_000_000_000f64 / bt.as_nanos() as f64).round() as u32);
+            (count, baud)
+        })
+    }
+
     /// Records that the transport wrote `n` bytes of [`Engine::ready_output`].
     pub fn consumed(&mut self, n: usize) {
         let mut n = n.min(self.out.len());

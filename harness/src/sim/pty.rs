@@ -41,6 +41,10 @@ pub struct Pty {
     watch: Inotify,
     /// Whether a host has the port open.
     open: bool,
+    /// Whether bytes are garbled while the host's speed differs from the hand's.
+    speed_check: bool,
+    /// The last mismatch noted in the trace (host rate, hand rate).
+    mismatch: Option<(u32, u32)>,
 }
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -67,7 +71,16 @@ impl Pty {
         watch
             .add_watch(&path, AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
-        let mut pty = Pty { master: File::from(pair.master), slave: pair.slave, path, link: None, watch, open: true };
+        let mut pty = Pty {
+            master: File::from(pair.master),
+            slave: pair.slave,
+            path,
+            link: None,
+            watch,
+            open: true,
+            speed_check: true,
+            mismatch: None,
+        };
         if let Some(l) = link {
             make_link(&pty.path, l)?;
             pty.link = Some(l.to_path_buf());
@@ -83,6 +96,43 @@ impl Pty {
     /// The symbolic link, if one was made.
     pub fn link(&self) -> Option<&Path> {
         self.link.as_deref()
+    }
+
+    /// Turns the speed check on (the default) or off: while on, and the line is paced, bytes
+    /// cross garbled in both directions whenever the speed the host set on the port differs
+    /// from the hand's rate, as through a UART at the wrong rate.
+    pub fn set_speed_check(&mut self, on: bool) {
+        self.speed_check = on;
+    }
+
+    /// The speed the host set on the port (the slave's termios, shared by every descriptor of
+    /// it), in bit/s.
+    /// `None` when it is not one of the standard speeds (a host that set an arbitrary rate
+    /// through `termios2`/`BOTHER`, as the serialport crate does): the check then stands aside.
+    fn host_speed(&self) -> Option<u32> {
+        let t = termios::tcgetattr(&self.slave).ok()?;
+        // Read the speed bits directly: nix's cfgetospeed panics on a speed it has no name for.
+        let mask = nix::libc::CBAUD | nix::libc::CBAUDEX;
+        let bits = t.control_flags.bits() & mask;
+        SPEEDS.iter().find(|(_, b)| *b as nix::libc::tcflag_t == bits).map(|(r, _)| *r)
+    }
+
+    /// Whether bytes at `hand` bit/s arrive garbled at the host's speed (and the reverse);
+    /// notes a new mismatch in the trace.
+    fn garbled(&mut self, engine: &mut Engine, hand: Option<u32>) -> bool {
+        let (Some(hand), true) = (hand, self.speed_check) else { return false };
+        let Some(host) = self.host_speed() else { return false };
+        let uart = SPEEDS.iter().find(|(r, _)| *r >= hand).map_or(hand, |(r, _)| *r);
+        if host == uart {
+            self.mismatch = None;
+            return false;
+        }
+        if self.mismatch != Some((host, hand)) {
+            self.mismatch = Some((host, hand));
+            engine
+                .note(&format!("speed mismatch: the host's port is at {host}, the hand at {hand}: garbage both ways"));
+        }
+        true
     }
 
     /// Sets the slave's speed to the hand's line rate (a host that opens the port without
@@ -239,7 +289,12 @@ impl Pty {
                             backoff_until = Some(Instant::now() + BACKOFF);
                             break;
                         }
-                        Ok(n) => engine.input(&buf[..n]),
+                        Ok(n) => {
+                            if self.garbled(engine, engine.line_baud()) {
+                                buf[..n].iter_mut().for_each(|b| *b = garble(*b));
+                            }
+                            engine.input(&buf[..n]);
+                        }
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                         // EIO: no process has the slave open. Cannot happen while we hold
@@ -254,11 +309,20 @@ impl Pty {
             engine.wake();
             write_blocked = false;
             loop {
+                let (run, rate) = engine.head_run().unwrap_or((0, None));
+                let garble_out = self.garbled(engine, rate);
                 let out = engine.ready_output(Instant::now());
                 if out.is_empty() {
                     break;
                 }
-                match self.master.write(out) {
+                let n = out.len().min(run.max(1));
+                let written = if garble_out {
+                    let g: Vec<u8> = out[..n].iter().map(|b| garble(*b)).collect();
+                    self.master.write(&g)
+                } else {
+                    self.master.write(&out[..n])
+                };
+                match written {
                     Ok(0) => {
                         write_blocked = true;
                         break;
@@ -276,6 +340,13 @@ impl Pty {
         }
         engine.finish()
     }
+}
+
+/// A byte as a UART at another rate would see it: not a bit-exact model of sampling at the
+/// wrong rate, but never the byte sent, and never a byte of the protocol (the top bit is set),
+/// so neither side can mistake it for a command, a CR, a ^C or a prompt.
+fn garble(b: u8) -> u8 {
+    (b.rotate_left(3) ^ 0x5A) | 0x80
 }
 
 /// Line rates and their termios speeds.

@@ -219,3 +219,11 @@ pub fn read_port(
     }
     got
 }
+
+/// Sets the speed of a port as a host program does (`cfsetspeed`, `tcsetattr`).
+pub fn set_port_speed(port: &std::fs::File, speed: nix::sys::termios::BaudRate) {
+    use nix::sys::termios;
+    let mut t = termios::tcgetattr(port).unwrap();
+    termios::cfsetspeed(&mut t, speed).unwrap();
+    termios::tcsetattr(port, termios::SetArg::TCSANOW, &t).unwrap();
+}
