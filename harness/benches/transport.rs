@@ -13,6 +13,10 @@
 //! - Pacing at `--baud 9600`: the `?` listing (about 1.6 kB) over the pty, bytes per second
 //!   from the first byte to the last, against 960. Aim: within 2 %.
 //!
+//! - RealTime cycles per second over the pty with the line paced at the hand's BAUD (9600, then
+//!   38400 after `FSET BAUD 384`), the seed's example blocks (3 bytes out, 6 back), divided
+//!   by the series limit of the line (baud / 90). Aim: between 0.95 and 1.00.
+//!
 //! Without `--bench` (as under `cargo test --all-targets`) it runs a few iterations of each as
 //! a smoke test and prints nothing but a line per figure.
 
@@ -22,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use gcl_harness::client::Hand;
 use gcl_harness::links::{SerialLink, TcpLink};
-use gcl_harness::sim::{Engine, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
+use gcl_harness::sim::{Engine, Pace, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
 use gcl_harness::{Link, LinkError};
 use gcl_model::Profile;
 
@@ -41,17 +45,17 @@ impl Drop for Server {
     }
 }
 
-fn options(baud: Option<u32>) -> SimOptions {
+fn options(pace: Pace) -> SimOptions {
     let mut o = SimOptions::new(Profile::builtin("bh8-262").unwrap());
-    o.baud = baud;
+    o.pace = pace;
     o
 }
 
-fn pty_server(baud: Option<u32>) -> Server {
+fn pty_server(pace: Pace) -> Server {
     let (stop, signal) = stop_pair().unwrap();
     let mut pty = Pty::open(None).unwrap();
     let target = pty.path().display().to_string();
-    let mut engine = Engine::new(&options(baud)).unwrap();
+    let mut engine = Engine::new(&options(pace)).unwrap();
     let thread = std::thread::spawn(move || {
         pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });
@@ -62,7 +66,7 @@ fn tcp_server() -> Server {
     let (stop, signal) = stop_pair().unwrap();
     let mut server = TcpServer::bind("127.0.0.1:0", false).unwrap();
     let target = server.local_addr().to_string();
-    let mut engine = Engine::new(&options(None)).unwrap();
+    let mut engine = Engine::new(&options(Pace::Unpaced)).unwrap();
     let thread = std::thread::spawn(move || {
         server.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });
@@ -128,7 +132,7 @@ fn round_trips(kind: &str, server: &Server, n: usize) {
 }
 
 fn pacing(rounds: usize) -> Result<(), LinkError> {
-    let server = pty_server(Some(9600));
+    let server = pty_server(Pace::Fixed(9600));
     let mut l = SerialLink::open(&server.target, 9600)?;
     let mut total = 0usize;
     let mut time = Duration::ZERO;
@@ -168,12 +172,80 @@ fn pacing(rounds: usize) -> Result<(), LinkError> {
     Ok(())
 }
 
+/// The seed's RealTime example over the pty, paced at the hand's BAUD: `C v1 v2` out (3 bytes),
+/// `* s1 d1 s2 d2 d4` back (6 bytes), one block at a time as a control loop does. Prints cycles
+/// per second against the series limit of the line (baud / 10 / 9).
+fn realtime_cycles(baud: u32, cycles: usize) -> Result<(), LinkError> {
+    let (stop, signal) = stop_pair().unwrap();
+    let mut pty = Pty::open(None).unwrap();
+    let target = pty.path().display().to_string();
+    let mut o = SimOptions::new(Profile::builtin("seed").unwrap());
+    // Fast time so that HI completes at once; the line is paced at the hand's BAUD all the same.
+    o.pace = Pace::Hand;
+    let mut engine = Engine::new(&o).unwrap();
+    let thread = std::thread::spawn(move || {
+        pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
+    });
+    let _server = Server { stop, thread: Some(thread), target: target.clone() };
+    let prompt = |b: &[u8]| b.ends_with(b"\n\r=> ");
+    let mut l = SerialLink::open(&target, 9600)?;
+    let mut buf = Vec::new();
+    let line = |l: &mut SerialLink, text: &str| -> Result<(), LinkError> {
+        let mut buf = Vec::new();
+        l.send(format!("{text}\r").as_bytes())?;
+        l.recv_until(&mut buf, Duration::from_secs(30), &prompt)?;
+        Ok(())
+    };
+    line(&mut l, "")?;
+    if baud != 9600 {
+        // The hand changes its rate after the answer; the host then follows and reopens.
+        line(&mut l, &format!("FSET BAUD {}", baud / 100))?;
+        drop(l);
+        l = SerialLink::open(&target, baud)?;
+        line(&mut l, "")?;
+    }
+    for cmd in [
+        "HI",
+        "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1",
+        "4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1",
+    ] {
+        line(&mut l, cmd)?;
+    }
+    l.send(b"124LOOP\r")?;
+    l.recv_until(&mut buf, Duration::from_secs(5), &|b: &[u8]| b.ends_with(b"*"))?;
+    let mut run = |n: usize| -> Result<Duration, LinkError> {
+        let t = Instant::now();
+        for _ in 0..n {
+            let mut fb = Vec::new();
+            l.send(&[b'C', 0, 0])?;
+            l.recv_until(&mut fb, Duration::from_secs(5), &|b: &[u8]| b.len() >= 6)?;
+            assert_eq!(fb.len(), 6, "a 6-byte feedback block");
+        }
+        Ok(t.elapsed())
+    };
+    run(5)?;
+    let took = run(cycles)?;
+    let rate = cycles as f64 / took.as_secs_f64();
+    let limit = f64::from(baud) / 10.0 / 9.0;
+    let ratio = rate / limit;
+    println!(
+        "{:<34} {rate:>7.1} cycles/s against a line limit of {limit:.1} (ratio {ratio:.3}; aim 0.95-1.00: {})",
+        format!("RealTime 3+6 bytes, pty, {baud}"),
+        if (0.95..=1.0).contains(&ratio) { "met" } else { "MISSED" }
+    );
+    let _ = l.send(&[3]);
+    Ok(())
+}
+
 fn main() {
     let bench = std::env::args().any(|a| a == "--bench");
     let n = if bench { 20_000 } else { 50 };
     for kind in ["pty", "tcp"] {
-        let server = if kind == "pty" { pty_server(None) } else { tcp_server() };
+        let server = if kind == "pty" { pty_server(Pace::Unpaced) } else { tcp_server() };
         round_trips(kind, &server, n);
     }
     pacing(if bench { 3 } else { 1 }).unwrap();
+    for baud in [9600, 38400] {
+        realtime_cycles(baud, if bench { baud as usize / 90 * 5 } else { 20 }).unwrap();
+    }
 }

@@ -32,6 +32,7 @@ fn failing(p: &std::sync::Arc<Profile>, cases: &[suite::Case], fault: Fault) -> 
         refuse: vec![],
         baud: None,
         keep_transcripts: false,
+        control: Default::default(),
     };
     let r = conform::run(cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
     r.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.clone()).collect()

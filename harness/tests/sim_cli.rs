@@ -121,9 +121,18 @@ fn the_pty_link_comes_and_goes_and_sigterm_exits_0() {
         hand.resync().unwrap();
         assert_eq!(hand.get("4", "DP").unwrap(), vec![150]);
     }
+    // A second simulator may not take over the live simulator's link.
+    let (code, err) = run(&["--pty", "--profile", "seed", "--link", &l]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("a pty in use"), "{err}");
+    assert_eq!(std::fs::read_link(&link).unwrap().display().to_string(), sim.address);
     let status = sim.terminate();
     assert_eq!(status.code(), Some(0));
     assert!(std::fs::symlink_metadata(&link).is_err(), "the link must be removed");
+    // A link left by a simulator that is gone (its pty no longer exists) is replaced.
+    std::os::unix::fs::symlink("/dev/pts/999999", &link).unwrap();
+    let sim = SimProcess::start(Transport::Pty, &["--profile", "seed", "--link", &l]);
+    assert_eq!(std::fs::read_link(&link).unwrap().display().to_string(), sim.address);
 }
 
 #[test]

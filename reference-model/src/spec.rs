@@ -462,6 +462,10 @@ pub struct Decision {
     /// `[code]` is one, `x` may stand for `×`), `[open]` (no source settles it). `[doc]` and
     /// `[code×N]` combine: `[doc][code×3]`.
     pub evidence: String,
+    /// Where the facts behind it come from (a manual's section, a wiki page, a public host
+    /// library's file), one source per entry; empty where the project simply chose.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sources: Vec<String>,
 }
 
 /// The grade of a decision's evidence, parsed from [`Decision::evidence`].

@@ -12,7 +12,10 @@ use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
 
 use super::{EXIT_OK, load_profile};
-use crate::sim::{Engine, SCENARIO_EXAMPLE, SimOptions, TimeMode, parse_scenario, pty::Pty, stdio, tcp::TcpServer};
+use crate::sim::{
+    Engine, Pace, SCENARIO_EXAMPLE, SimOptions, TimeMode, check_scenario, parse_scenario, pty::Pty, stdio,
+    tcp::TcpServer,
+};
 
 fn after_help() -> String {
     let faults: Vec<String> = Fault::ALL.iter().map(|f| format!("  {:<20} {}", f.name(), f.description())).collect();
@@ -23,21 +26,39 @@ Transports (exactly one):
   --pty        prints the slave path (e.g. /dev/pts/7) alone on the first line of stdout.
                Open it like a serial port: serial.Serial('/dev/pts/7') in pyserial, or
                --target serial:/dev/pts/7. The line is raw (no echo by the tty, no CR
-               translation). Closing and reopening the port keeps the hand's state; a client
-               should discard stale input when it opens.
+               translation) and starts at the hand's rate. It opens and closes like a serial
+               port: the hand keeps its state across a reopen, what the host had not read is
+               discarded when it closes, and what the hand sends while no host has the port
+               open is lost (so the power-up banner is never seen; send RESET to see one).
+               While paced, the speed the host sets on the port is checked against the hand's
+               rate: when they differ, bytes cross garbled both ways, as through a UART at the
+               wrong rate (a host that changes the hand's BAUD must change its own too).
+               --no-speed-check turns this off.
   --tcp ADDR   prints the bound address (e.g. 127.0.0.1:40123) alone on the first line of stdout.
                ADDR is HOST:PORT or PORT (127.0.0.1); port 0 picks a free one. One client at a
                time, like a cable: a second connection while one is active is closed at once with
-               nothing written. State persists across clients; output produced while no client is
-               connected is dropped. pyserial: serial.serial_for_url('socket://127.0.0.1:40123').
+               nothing written. State persists across clients; what a client had not read is
+               discarded when it goes, and output produced while no client is connected is lost.
+               A client that half-closes still gets its answers.
+               pyserial: serial.serial_for_url('socket://127.0.0.1:40123').
   --stdio      speaks on stdin/stdout (for exec: targets); exits 0 at end of input.
 
-Time:
-  fast   every byte takes its wire time at the hand's BAUD parameter (9600 at the factory;
-         --baud only paces the output) in simulated time, and motion completes at once in
-         simulated time. A host that counts wire time (bytes x 10 / baud) sees the hand's clock:
-         cargo run --example realtime -- --target serial:/dev/pts/7 --profile seed --clock wire
+Defaults match a hand: --pty and --tcp run in real time, paced at the hand's BAUD parameter
+(9600 at the factory) in both directions; PSET BAUD / FSET BAUD change the pace after their
+answer. --stdio defaults to fast time, unpaced (it is a pipe to a test program, not a line).
+Nothing is dropped while a host is connected: when it stops reading, the simulator stops
+reading it.
+
+Time (--time):
   real   simulated time is the wall clock; motion takes as long as on a hand; ^C stops it.
+  fast   an opt-in speed-up: every byte takes its wire time at the hand's BAUD in simulated
+         time, and motion completes at once in simulated time. A host that counts wire time
+         (bytes x 10 / baud) sees the hand's clock:
+         cargo run --example realtime -- --target serial:/dev/pts/7 --profile seed --clock wire
+         Unpaced unless --baud is given.
+Pace:
+  --baud N     pace both directions at N whatever the hand's BAUD says.
+  --unpaced    an opt-in speed-up: bytes cross at once (no hand does this).
 
 Faults (--fault NAME, repeatable):
 {}
@@ -57,7 +78,8 @@ exit 2. Nothing a client sends stops the simulator; SIGINT/SIGTERM stop it with 
 
 Examples:
   gcl sim --pty --link /tmp/hand --profile seed
-  gcl sim --tcp 127.0.0.1:5000 --time real --baud 9600 --trace hand.trace
+  gcl sim --tcp 127.0.0.1:5000 --trace hand.trace
+  gcl sim --pty --time fast --unpaced
   gcl sim --stdio --eeprom hand.json --fault no-echo",
         faults.join("\n"),
         scenario.join("\n")
@@ -78,6 +100,9 @@ pub struct Args {
     /// Serve on TCP at HOST:PORT or PORT (loopback); prints the bound address on stdout's first line.
     #[arg(long, value_name = "ADDR")]
     tcp: Option<String>,
+    /// With --pty: do not garble bytes when the host's port speed differs from the hand's.
+    #[arg(long, requires = "pty")]
+    no_speed_check: bool,
     /// With --tcp: allow a non-loopback address.
     #[arg(long, requires = "tcp")]
     allow_remote: bool,
@@ -87,12 +112,16 @@ pub struct Args {
     /// Profile: seed, bh8-262-4.3, bh8-262-4.4 (alias bh8-262), or a spec TOML file.
     #[arg(long, default_value = "bh8-262")]
     profile: String,
-    /// Pace output at the byte time of this rate (8N1: 10 bits a byte); unpaced without it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(50..=4_000_000))]
+    /// Pace both directions at this rate (8N1: 10 bits a byte) instead of the hand's BAUD.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(50..=4_000_000), conflicts_with = "unpaced")]
     baud: Option<u32>,
-    /// fast: simulated time follows the bytes on the wire, motion completes at once; real: the wall clock.
-    #[arg(long, value_enum, default_value = "fast")]
-    time: TimeMode,
+    /// Opt-in speed-up: no line timing at all.
+    #[arg(long)]
+    unpaced: bool,
+    /// real: the wall clock (default for --pty and --tcp); fast: opt-in speed-up, simulated time
+    /// follows the bytes on the wire and motion completes at once (default for --stdio).
+    #[arg(long, value_enum)]
+    time: Option<TimeMode>,
     /// Keep the EEPROM in this JSON file across runs.
     #[arg(long, value_name = "FILE")]
     eeprom: Option<PathBuf>,
@@ -116,17 +145,26 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let scenario = match &args.scenario {
         Some(p) => {
             let text = crate::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
-            parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?
+            let s = parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?;
+            check_scenario(&s, &profile).with_context(|| format!("scenario file {}", p.display()))?;
+            s
         }
         None => Default::default(),
+    };
+    let time = args.time.unwrap_or(if args.stdio { TimeMode::Fast } else { TimeMode::Real });
+    let pace = match (args.unpaced, args.baud) {
+        (true, _) => Pace::Unpaced,
+        (false, Some(b)) => Pace::Fixed(b),
+        (false, None) if time == TimeMode::Fast => Pace::Unpaced,
+        (false, None) => Pace::Hand,
     };
     let opts = SimOptions {
         profile,
         seed: args.seed,
         scenario,
         faults: args.faults.clone(),
-        time: args.time,
-        baud: args.baud,
+        time,
+        pace,
         eeprom: args.eeprom.clone(),
         trace: args.trace.clone(),
     };
@@ -144,13 +182,16 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if args.pty {
         let mut pty = Pty::open(args.link.as_deref())?;
         let mut engine = Engine::new(&opts)?;
+        pty.match_speed(&engine)?;
+        pty.set_speed_check(!args.no_speed_check);
         announce(&pty.path().display().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on {}{} (time {}); stop with ^C",
+            "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",
             opts.profile.id,
             pty.path().display(),
             pty.link().map(|l| format!(" (link {})", l.display())).unwrap_or_default(),
-            opts.time.name()
+            opts.time.name(),
+            opts.pace
         );
         pty.serve(&mut engine, &stops)?;
     } else if let Some(addr) = &args.tcp {
@@ -158,10 +199,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         announce(&server.local_addr().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on tcp {} (time {}); stop with ^C",
+            "gcl sim: profile {} on tcp {} (time {}, paced at {}); stop with ^C",
             opts.profile.id,
             server.local_addr(),
-            opts.time.name()
+            opts.time.name(),
+            opts.pace
         );
         server.serve(&mut engine, &stops)?;
     } else {

@@ -480,10 +480,11 @@ impl Hand {
         Ok(())
     }
 
-    /// `RESET`: returns the banner lines, checked for `BarrettHand Firmware`.
+    /// `RESET`: returns the banner lines, checked as Barrett's C++ API checks them: some line
+    /// ends with `BarrettHand Firmware` (the text straight followed by the line ending).
     pub fn reset(&mut self) -> Result<Vec<String>, ClientError> {
         let banner = self.run("RESET", self.timeouts.motion)?;
-        if !banner.iter().any(|l| l.contains("BarrettHand Firmware")) {
+        if !banner.iter().any(|l| l.ends_with("BarrettHand Firmware")) {
             return Err(ClientError::violation("RESET", Violation::NoBanner { lines: banner }));
         }
         Ok(banner)

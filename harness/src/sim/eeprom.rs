@@ -32,9 +32,11 @@ fn contents_differ(a: &NvMemory, b: &NvMemory) -> bool {
 }
 
 impl EepromFile {
-    /// Opens `path`: loads it if it exists, and proves it writable by writing it back (an
-    /// absent file is created holding an empty memory).
+    /// Opens `path`: removes temporary files a killed simulator left beside it, loads it if it
+    /// exists, and proves it writable by writing it back (an absent file is created holding an
+    /// empty memory).
     pub fn open(path: &Path) -> Result<(EepromFile, NvMemory), SimError> {
+        remove_stale_temporaries(path);
         let nv = match crate::files::read_input(path) {
             Ok(bytes) => serde_json::from_slice::<NvMemory>(&bytes)
                 .map_err(|e| err(path, format!("not an EEPROM image (JSON of NvMemory): {e}")))?,
@@ -70,10 +72,7 @@ impl EepromFile {
     }
 
     fn write(&mut self, nv: &NvMemory) -> Result<(), SimError> {
-        let dir = match self.path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
+        let dir = dir_of(&self.path);
         let name = self.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
         let result = (|| -> std::io::Result<()> {
@@ -99,6 +98,30 @@ impl EepromFile {
     }
 }
 
+/// The directory `path` lives in (`.` for a bare name).
+fn dir_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Removes `.NAME.tmpPID` files beside `path` whose process is gone (a kill during a write
+/// leaves one); a live process's temporary file is left alone.
+fn remove_stale_temporaries(path: &Path) {
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else { return };
+    let prefix = format!(".{name}.tmp");
+    let Ok(entries) = std::fs::read_dir(dir_of(path)) else { return };
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(pid) = file.to_str().and_then(|f| f.strip_prefix(&prefix)) else { continue };
+        let Ok(pid) = pid.parse::<u32>() else { continue };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -119,5 +142,20 @@ mod tests {
         assert!(matches!(EepromFile::open(&path), Err(SimError::Eeprom { .. })));
         let missing_dir = dir.path().join("no/such/dir/hand.json");
         assert!(EepromFile::open(&missing_dir).is_err());
+    }
+
+    #[test]
+    fn temporaries_of_dead_processes_are_removed_at_start() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("hand.json");
+        // PID 0x7FFFFFFE is above any pid_max: no such process.
+        let stale = dir.path().join(".hand.json.tmp2147483646");
+        let other = dir.path().join(".other.json.tmp2147483646");
+        for f in [&stale, &other] {
+            std::fs::write(f, b"{").unwrap();
+        }
+        EepromFile::open(&path).unwrap();
+        assert!(!stale.exists(), "a dead writer's temporary file is removed");
+        assert!(other.exists(), "another file's temporaries are not touched");
     }
 }

@@ -1,6 +1,21 @@
-//! The engine: the model, its clock, output pacing, EEPROM persistence and the trace, with no
-//! transport. A transport feeds it input, wakes it at [`Engine::deadline`], and writes what
-//! [`Engine::ready_output`] offers.
+//! The engine: the model, its clock, line timing in both directions, EEPROM persistence and
+//! the trace, with no transport. A transport hands it what the host wrote
+//! ([`Engine::input`], only while [`Engine::wants_input`]), wakes it at [`Engine::deadline`],
+//! and writes what [`Engine::ready_output`] offers.
+//!
+//! Line timing: under pacing every byte costs its wire time (10 bits at the rate) in each
+//! direction. A byte the host wrote reaches the model one byte time after the previous one
+//! did (or after it was read, if the line was idle); a byte the hand wrote is offered to the
+//! host one byte time after the previous one was. So no request/answer cycle beats the line.
+//! [`Pace::Hand`] follows the hand's BAUD parameter: an answer goes out at the rate in force
+//! when its command arrived, so the answer to the command that changes BAUD still goes at
+//! the old rate, as on a hand.
+//!
+//! Nothing is dropped while a host listens: when output the host has not taken reaches
+//! [`OUT_CAP`], the engine stops passing host bytes to the model and [`Engine::wants_input`]
+//! turns false, so the transport stops reading the host (flow control by backpressure).
+//! While no host listens (a pty nobody has open, no TCP client), what the hand sends is lost,
+//! as on a serial line with nobody at the other end.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -9,30 +24,41 @@ use gcl_model::params::NvMemory;
 use gcl_model::{Device, DeviceConfig};
 
 use super::trace::Direction;
-use super::{EepromFile, SimError, SimOptions, TimeMode, Trace};
+use super::{EepromFile, Pace, SimError, SimOptions, TimeMode, Trace};
 use crate::link::{Link, SimLink, byte_time};
 
-/// Output nobody reads (a pty with no client, a stalled socket) is kept up to this size; the
-/// oldest bytes are dropped beyond it, as on a serial line with no listener.
-const OUT_CAP: usize = 64 * 1024;
+/// Output the host has not taken, beyond which the engine stops passing the host's bytes to
+/// the model (one command's answer may go past it; nothing is ever dropped).
+pub const OUT_CAP: usize = 64 * 1024;
+
+/// Host bytes waiting for their wire time, beyond which the transport stops reading the host.
+pub const IN_CAP: usize = 4096;
 
 /// In fast time, a motion that has not finished after this much simulated time is left
 /// running (a ^C still stops it).
 const FAST_MOTION_LIMIT: Duration = Duration::from_secs(3600);
 
-/// A simulated hand with its clock, pacing, EEPROM file and trace.
+/// A simulated hand with its clock, line timing, EEPROM file and trace.
 pub struct Engine {
     link: SimLink,
     time: TimeMode,
+    pace: Pace,
     started: Instant,
     eeprom: Option<EepromFile>,
     eeprom_warned: bool,
     trace: Option<Trace>,
+    /// Output not yet taken by the transport, with the byte time of each run of it.
     out: VecDeque<u8>,
-    byte_time: Option<Duration>,
-    wire_free_at: Instant,
+    out_rates: VecDeque<(usize, Duration)>,
+    /// When the output line is free to start the head byte of `out`.
+    out_free_at: Instant,
+    /// Host bytes not yet passed to the model.
+    inq: VecDeque<u8>,
+    /// When the head byte of `inq` has crossed the line.
+    in_due: Instant,
+    /// When the last byte passed to the model had crossed the line.
+    in_last: Instant,
     listening: bool,
-    dropped: usize,
 }
 
 impl std::fmt::Debug for Engine {
@@ -40,14 +66,16 @@ impl std::fmt::Debug for Engine {
         f.debug_struct("Engine")
             .field("link", &self.link.describe())
             .field("time", &self.time)
-            .field("queued", &self.out.len())
+            .field("pace", &self.pace)
+            .field("queued_out", &self.out.len())
+            .field("queued_in", &self.inq.len())
             .finish_non_exhaustive()
     }
 }
 
 impl Engine {
     /// Powers up the hand: loads the EEPROM file, opens the trace, and queues the power-up
-    /// banner.
+    /// banner (which only a host already listening receives).
     pub fn new(opts: &SimOptions) -> Result<Engine, SimError> {
         let (eeprom, nv) = match &opts.eeprom {
             Some(p) => {
@@ -57,11 +85,11 @@ impl Engine {
             None => (None, NvMemory::default()),
         };
         let header = format!(
-            "profile {}, time {}, seed {}, baud {}, faults [{}]",
+            "profile {}, time {}, seed {}, pace {}, faults [{}]",
             opts.profile.id,
             opts.time.name(),
             opts.seed,
-            opts.baud.map_or("unpaced".to_string(), |b| b.to_string()),
+            opts.pace,
             opts.faults.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
         );
         let trace = opts.trace.as_deref().map(|p| Trace::create(p, &header)).transpose()?;
@@ -71,19 +99,23 @@ impl Engine {
         let mut e = Engine {
             link,
             time: opts.time,
+            pace: opts.pace,
             started: now,
             eeprom,
             eeprom_warned: false,
             trace,
             out: VecDeque::new(),
-            byte_time: opts.baud.map(byte_time),
-            wire_free_at: now,
+            out_rates: VecDeque::new(),
+            out_free_at: now,
+            inq: VecDeque::new(),
+            in_due: now,
+            in_last: now,
             listening: true,
-            dropped: 0,
         };
         let mut banner = Vec::new();
         let _ = e.link.recv(&mut banner, Duration::ZERO);
-        e.emit(&banner);
+        let bt = e.byte_time();
+        e.emit(&banner, bt);
         Ok(e)
     }
 
@@ -97,7 +129,27 @@ impl Engine {
         self.time
     }
 
-    /// Bytes from the host.
+    /// The rate the line runs at now (bit/s), or `None` when unpaced.
+    pub fn line_baud(&self) -> Option<u32> {
+        match self.pace {
+            Pace::Unpaced => None,
+            Pace::Fixed(b) => Some(b),
+            Pace::Hand => Some(self.link.device().baud()),
+        }
+    }
+
+    fn byte_time(&self) -> Duration {
+        self.line_baud().map_or(Duration::ZERO, byte_time)
+    }
+
+    /// Whether the transport should read the host now: false while host bytes wait for their
+    /// wire time beyond [`IN_CAP`], or output the host has not taken is at [`OUT_CAP`].
+    pub fn wants_input(&self) -> bool {
+        self.inq.len() < IN_CAP && self.out.len() < OUT_CAP
+    }
+
+    /// Bytes the host wrote, read from the transport now. They reach the model at their wire
+    /// time (at once when unpaced), on the next [`Engine::wake`] that finds them due.
     pub fn input(&mut self, bytes: &[u8]) {
         if bytes.is_empty() {
             return;
@@ -106,6 +158,52 @@ impl Engine {
         if let Some(t) = &mut self.trace {
             t.bytes(sim, Direction::In, bytes);
         }
+        if self.inq.is_empty() {
+            self.in_due = self.in_last.max(Instant::now()) + self.byte_time();
+        }
+        self.inq.extend(bytes);
+        self.wake();
+    }
+
+    /// Lets time pass: passes the host bytes that are due to the model (while the output
+    /// queue has room), and runs the model up to the wall clock in real time.
+    pub fn wake(&mut self) {
+        let now = Instant::now();
+        while !self.inq.is_empty() && self.in_due <= now && self.out.len() < OUT_CAP {
+            let bt = self.byte_time();
+            let due = if bt.is_zero() {
+                self.inq.len()
+            } else {
+                let n = (now - self.in_due).as_nanos() / bt.as_nanos() + 1;
+                n.min(self.inq.len() as u128) as usize
+            };
+            // One line at a time, so that the output check above runs between lines.
+            let (a, b) = self.inq.as_slices();
+            let framing = &self.link.device().profile().framing;
+            let (term, abort) = (framing.terminator, framing.abort);
+            let end = a.iter().chain(b).take(due).position(|&c| c == term || c == abort).map_or(due, |i| i + 1);
+            let chunk: Vec<u8> = self.inq.drain(..end).collect();
+            let last_due = self.in_due + bt * (end as u32 - 1);
+            self.in_last = last_due;
+            self.in_due = last_due + bt;
+            self.deliver(&chunk, bt, last_due);
+        }
+        if self.time == TimeMode::Real && self.link.device().poll_timeout().is_some() {
+            let now = self.started.elapsed();
+            let d = self.link.device_mut();
+            d.handle_timeout(now);
+            let out = d.take_output();
+            let bt = self.byte_time();
+            self.emit(&out, bt);
+            if !self.link.device().is_busy() {
+                self.persist();
+            }
+        }
+    }
+
+    /// Passes host bytes to the model; the answer goes out at `bt`, the rate in force when
+    /// they arrived (a BAUD change applies after its own answer).
+    fn deliver(&mut self, bytes: &[u8], bt: Duration, arrived: Instant) {
         let mut out = Vec::new();
         match self.time {
             TimeMode::Fast => {
@@ -119,41 +217,27 @@ impl Engine {
                 }
             }
             TimeMode::Real => {
-                let now = self.started.elapsed();
+                let now = self.started.elapsed().max(self.link.device().now());
                 let d = self.link.device_mut();
                 d.handle_input(now, bytes);
                 out = d.take_output();
             }
         }
-        self.emit(&out);
+        self.emit_at(&out, bt, arrived);
         self.persist();
     }
 
-    /// Lets time pass (real time: runs the model up to the wall clock).
-    pub fn wake(&mut self) {
-        if self.time == TimeMode::Real && self.link.device().poll_timeout().is_some() {
-            let now = self.started.elapsed();
-            let d = self.link.device_mut();
-            d.handle_timeout(now);
-            let out = d.take_output();
-            self.emit(&out);
-            if !self.link.device().is_busy() {
-                self.persist();
-            }
-        }
-    }
-
-    /// When [`Engine::wake`] or a paced write is next due, if ever.
+    /// When [`Engine::wake`] or a paced write is next due, if ever. A paced byte that is due
+    /// already is not a deadline: the transport waits for its descriptor to be writable.
     pub fn deadline(&self) -> Option<Instant> {
+        let now = Instant::now();
         let model = match self.time {
             TimeMode::Real => self.link.device().poll_timeout().map(|t| self.started + t),
             TimeMode::Fast => None,
         };
-        let pacing = (self.byte_time.is_some() && !self.out.is_empty()).then_some(self.wire_free_at);
-        match (model, pacing) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        let input = (!self.inq.is_empty() && self.out.len() < OUT_CAP).then_some(self.in_due);
+        let output = self.out_rates.front().map(|&(_, bt)| self.out_free_at + bt).filter(|t| *t > now);
+        [model, input, output].into_iter().flatten().min()
     }
 
     /// Whether output is waiting to be written (now or later).
@@ -161,49 +245,86 @@ impl Engine {
         !self.out.is_empty()
     }
 
-    /// The output that may be written now: everything when unpaced, else as many bytes as
-    /// the line would have carried by `now`.
+    /// Whether host bytes are waiting for their wire time.
+    pub fn has_input(&self) -> bool {
+        !self.inq.is_empty()
+    }
+
+    /// The output that may be written now: every byte whose wire time has passed by `now`.
     pub fn ready_output(&mut self, now: Instant) -> &[u8] {
-        let n = match self.byte_time {
-            None => self.out.len(),
-            Some(_) if now < self.wire_free_at => 0,
-            Some(bt) => {
-                let slots = (now - self.wire_free_at).as_nanos() / bt.as_nanos().max(1) + 1;
-                (slots.min(self.out.len() as u128)) as usize
+        let mut n = 0;
+        let mut t = self.out_free_at;
+        for &(count, bt) in &self.out_rates {
+            if bt.is_zero() {
+                n += count;
+                continue;
             }
-        };
+            if t + bt > now {
+                break;
+            }
+            let k = ((now - t).as_nanos() / bt.as_nanos()).min(count as u128) as usize;
+            n += k;
+            t += bt * k as u32;
+            if k < count {
+                break;
+            }
+        }
         let all = self.out.make_contiguous();
         &all[..n]
     }
 
+    /// The first run of queued output sent at one rate: its length, and the rate (bit/s;
+    /// `None` when unpaced). A transport that checks the host's speed writes one run at a time.
+    pub fn head_run(&self) -> Option<(usize, Option<u32>)> {
+        self.out_rates.front().map(|&(count, bt)| {
+            let baud = (!bt.is_zero()).then(|| (10_000_000_000f64 / bt.as_nanos() as f64).round() as u32);
+            (count, baud)
+        })
+    }
+
     /// Records that the transport wrote `n` bytes of [`Engine::ready_output`].
     pub fn consumed(&mut self, n: usize) {
-        let n = n.min(self.out.len());
+        let mut n = n.min(self.out.len());
         self.out.drain(..n);
-        if let Some(bt) = self.byte_time {
-            self.wire_free_at += bt * n as u32;
+        while n > 0 {
+            let Some((count, bt)) = self.out_rates.front_mut() else { break };
+            let k = n.min(*count);
+            self.out_free_at += *bt * k as u32;
+            *count -= k;
+            n -= k;
+            if *count == 0 {
+                self.out_rates.pop_front();
+            }
         }
     }
 
-    /// A client connected (TCP): output is wanted again.
+    /// A host opened the port or connected: output is delivered again.
     pub fn client_connected(&mut self, who: &str) {
         self.listening = true;
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
-            t.event(sim, &format!("client connected: {who}"));
+            t.event(sim, &format!("host connected: {who}"));
         }
     }
 
-    /// The client went away: undelivered output is lost, and output is dropped until the
-    /// next client. The hand itself carries on as it was (mid-motion, mid-RealTime).
+    /// The host closed the port or went away: the output it has not taken is discarded, and
+    /// output is lost until the next host, as on a serial line. The hand itself carries on as
+    /// it was (mid-motion, mid-RealTime); bytes already on the wire still reach it.
     pub fn client_gone(&mut self, why: &str) {
         self.listening = false;
+        let discarded = self.out.len();
         self.out.clear();
+        self.out_rates.clear();
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
-            t.event(sim, &format!("client gone: {why}"));
+            t.event(sim, &format!("host gone: {why}; {discarded} bytes not taken discarded"));
         }
         self.persist();
+    }
+
+    /// Whether a host is there to receive output.
+    pub fn is_listening(&self) -> bool {
+        self.listening
     }
 
     /// Logs an event in the trace.
@@ -224,7 +345,13 @@ impl Engine {
         }
     }
 
-    fn emit(&mut self, bytes: &[u8]) {
+    fn emit(&mut self, bytes: &[u8], bt: Duration) {
+        self.emit_at(bytes, bt, Instant::now());
+    }
+
+    /// Queues output the hand started sending at `at` (for an answer, when the last byte of
+    /// its command was on the hand's side of the line, however late the engine woke for it).
+    fn emit_at(&mut self, bytes: &[u8], bt: Duration, at: Instant) {
         if bytes.is_empty() {
             return;
         }
@@ -234,18 +361,17 @@ impl Engine {
         }
         if !self.listening {
             if let Some(t) = &mut self.trace {
-                t.event(sim, &format!("no client: {} bytes dropped", bytes.len()));
+                t.event(sim, &format!("no host: {} bytes lost on the line", bytes.len()));
             }
             return;
         }
         if self.out.is_empty() {
-            self.wire_free_at = self.wire_free_at.max(Instant::now());
+            self.out_free_at = self.out_free_at.max(at.min(Instant::now()));
         }
         self.out.extend(bytes);
-        if self.out.len() > OUT_CAP {
-            let excess = self.out.len() - OUT_CAP;
-            self.out.drain(..excess);
-            self.dropped += excess;
+        match self.out_rates.back_mut() {
+            Some((count, b)) if *b == bt => *count += bytes.len(),
+            _ => self.out_rates.push_back((bytes.len(), bt)),
         }
     }
 
@@ -265,11 +391,15 @@ mod tests {
     use super::*;
     use gcl_model::Profile;
 
-    fn engine(time: TimeMode, baud: Option<u32>) -> Engine {
-        let mut o = SimOptions::new(Profile::builtin("seed").unwrap());
+    fn engine_for(profile: &str, time: TimeMode, pace: Pace) -> Engine {
+        let mut o = SimOptions::new(Profile::builtin(profile).unwrap());
         o.time = time;
-        o.baud = baud;
+        o.pace = pace;
         Engine::new(&o).unwrap()
+    }
+
+    fn engine(time: TimeMode, pace: Pace) -> Engine {
+        engine_for("seed", time, pace)
     }
 
     fn drain(e: &mut Engine) -> Vec<u8> {
@@ -280,7 +410,7 @@ mod tests {
 
     #[test]
     fn fast_time_runs_motion_to_the_end_at_once() {
-        let mut e = engine(TimeMode::Fast, None);
+        let mut e = engine(TimeMode::Fast, Pace::Unpaced);
         assert!(drain(&mut e).ends_with(b"=> "));
         e.input(b"HI\r");
         assert_eq!(drain(&mut e), b"HI\n\r=> ");
@@ -290,7 +420,7 @@ mod tests {
 
     #[test]
     fn real_time_waits_for_the_clock() {
-        let mut e = engine(TimeMode::Real, None);
+        let mut e = engine(TimeMode::Real, Pace::Unpaced);
         drain(&mut e);
         e.input(b"HI\r");
         assert_eq!(drain(&mut e), b"HI");
@@ -302,22 +432,76 @@ mod tests {
     }
 
     #[test]
-    fn pacing_offers_bytes_a_slot_at_a_time() {
-        let mut e = engine(TimeMode::Fast, Some(9600));
+    fn pacing_offers_a_byte_once_its_wire_time_has_passed() {
+        let mut e = engine(TimeMode::Fast, Pace::Fixed(9600));
         let t0 = Instant::now();
-        let first = e.ready_output(t0).len();
-        assert!(first >= 1);
-        e.consumed(first);
-        // The next byte is due one byte time after the first.
+        let bt = byte_time(9600);
+        // Nothing before the first byte has crossed the line; then one byte per byte time.
+        assert!(e.ready_output(t0 + bt * 3).len() <= 4);
         let due = e.deadline().unwrap();
-        assert!(e.ready_output(due - Duration::from_micros(1)).len() <= 1);
-        assert!(!e.ready_output(due + Duration::from_millis(5)).is_empty());
+        assert!(due >= t0 && due <= Instant::now() + bt);
+        assert_eq!(e.ready_output(due + bt * 2 + bt / 2).len(), 3);
+    }
+
+    #[test]
+    fn host_bytes_reach_the_model_at_their_wire_time() {
+        let mut e = engine(TimeMode::Real, Pace::Fixed(1200));
+        drain(&mut e);
+        let t0 = Instant::now();
+        e.input(b"FGET DP\r");
+        // 8 bytes at 1200 baud: 66.7 ms before the CR is on the hand's side of the line.
+        assert!(e.has_input() || t0.elapsed() >= byte_time(1200) * 8);
+        let due = e.deadline().unwrap();
+        assert!(due > t0);
+        while e.has_input() {
+            std::thread::sleep(Duration::from_millis(5));
+            e.wake();
+        }
+        assert!(t0.elapsed() >= byte_time(1200) * 8);
+    }
+
+    #[test]
+    fn the_hands_baud_sets_the_pace_after_the_answer_that_sets_it() {
+        let mut e = engine_for("bh8-262", TimeMode::Fast, Pace::Hand);
+        assert_eq!(e.line_baud(), Some(9600));
+        while e.has_output() {
+            drain(&mut e);
+        }
+        e.out_free_at = Instant::now();
+        e.in_last = Instant::now();
+        e.input(b"PSET BAUD 384\r");
+        std::thread::sleep(byte_time(9600) * 15);
+        e.wake();
+        assert_eq!(e.line_baud(), Some(38400));
+        // The answer (echo, prompt) still goes at 9600.
+        assert_eq!(e.out_rates.front().map(|r| r.1), Some(byte_time(9600)));
+    }
+
+    #[test]
+    fn a_host_that_does_not_read_is_not_read_and_loses_nothing() {
+        let mut e = engine(TimeMode::Fast, Pace::Unpaced);
+        drain(&mut e);
+        let cmd = b"FGET DP\r";
+        let answer_len = b"FGET DP\n\r1000 1000 1000 150\n\r=> ".len();
+        let mut sent = 0;
+        while e.wants_input() {
+            e.input(cmd);
+            sent += 1;
+        }
+        assert!(e.out.len() >= OUT_CAP && e.out.len() < OUT_CAP + 2 * answer_len, "{}", e.out.len());
+        // Nothing dropped: every command sent is answered once the host reads.
+        let mut got = Vec::new();
+        while e.has_output() || e.has_input() {
+            got.extend(drain(&mut e));
+            e.wake();
+        }
+        assert_eq!(got.len(), sent * answer_len);
     }
 
     #[test]
     fn garbage_never_takes_the_hand_down() {
         for time in [TimeMode::Fast, TimeMode::Real] {
-            let mut e = engine(time, None);
+            let mut e = engine(time, Pace::Unpaced);
             let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
             for _ in 0..200 {
                 let chunk: Vec<u8> = (0..500)
@@ -339,10 +523,11 @@ mod tests {
     }
 
     #[test]
-    fn output_without_a_listener_is_dropped() {
-        let mut e = engine(TimeMode::Fast, None);
+    fn output_without_a_listener_is_lost_and_unread_output_is_discarded() {
+        let mut e = engine(TimeMode::Fast, Pace::Unpaced);
+        assert!(e.has_output());
         e.client_gone("test");
-        assert!(!e.has_output());
+        assert!(!e.has_output(), "the banner nobody read is discarded");
         e.input(b"FGET DP\r");
         assert!(!e.has_output());
         e.client_connected("again");

@@ -25,8 +25,8 @@ use std::sync::Arc;
 use gcl_model::{Fault, Profile, Scenario};
 
 pub use eeprom::EepromFile;
-pub use engine::Engine;
-pub use scenario::{SCENARIO_EXAMPLE, parse_scenario};
+pub use engine::{Engine, IN_CAP, OUT_CAP};
+pub use scenario::{SCENARIO_EXAMPLE, check_scenario, parse_scenario};
 pub use trace::{Direction, Trace};
 pub use wait::{StopHandle, StopSignal, stop_pair};
 
@@ -53,6 +53,29 @@ impl TimeMode {
     }
 }
 
+/// How fast bytes cross the simulated line (8N1: 10 bits a byte), in both directions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Pace {
+    /// At the hand's BAUD parameter (9600 at the factory), which `PSET BAUD`/`FSET BAUD`
+    /// changes after the answer to the command that sets it.
+    #[default]
+    Hand,
+    /// At this rate, whatever the hand's BAUD.
+    Fixed(u32),
+    /// As fast as the transport goes (an opt-in speed-up; no hand does this).
+    Unpaced,
+}
+
+impl std::fmt::Display for Pace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Pace::Hand => f.write_str("the hand's BAUD"),
+            Pace::Fixed(b) => write!(f, "{b} baud"),
+            Pace::Unpaced => f.write_str("unpaced"),
+        }
+    }
+}
+
 /// Everything a simulated hand on a transport is built from.
 #[derive(Debug, Clone)]
 pub struct SimOptions {
@@ -66,8 +89,8 @@ pub struct SimOptions {
     pub faults: Vec<Fault>,
     /// Fast or real time.
     pub time: TimeMode,
-    /// Pace output at the byte time of this rate (8N1, 10 bits a byte); `None` is unpaced.
-    pub baud: Option<u32>,
+    /// How fast bytes cross the line, in both directions.
+    pub pace: Pace,
     /// Where the EEPROM lives between runs (JSON of `NvMemory`).
     pub eeprom: Option<PathBuf>,
     /// Where to log both directions.
@@ -75,7 +98,9 @@ pub struct SimOptions {
 }
 
 impl SimOptions {
-    /// Default options for a profile: seed 0, default scenario, fast time, unpaced, no files.
+    /// Default options for a profile: seed 0, default scenario, fast time, unpaced, no files
+    /// (what a test or an in-process tool wants; `gcl sim --pty`/`--tcp` default to real
+    /// time paced at the hand's BAUD).
     pub fn new(profile: Arc<Profile>) -> SimOptions {
         SimOptions {
             profile,
@@ -83,7 +108,7 @@ impl SimOptions {
             scenario: Scenario::default(),
             faults: Vec::new(),
             time: TimeMode::Fast,
-            baud: None,
+            pace: Pace::Unpaced,
             eeprom: None,
             trace: None,
         }

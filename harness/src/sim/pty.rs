@@ -2,32 +2,49 @@
 //! port by path (pyserial, termios, the `serial:` target) can use.
 //!
 //! The slave side is set raw (`cfmakeraw`): no echo by the line discipline, no CR/NL
-//! translation, no signals from ^C, so every byte reaches the hand as sent. The simulator keeps
-//! its own descriptor of the slave open for its whole life, so a client closing the port never
-//! hangs up the master: the next client finds the hand as the last one left it. A client should
-//! discard stale input when it opens the port (pyserial and the `serial:` target do), since
-//! answers the previous client did not read wait in the slave's buffer.
+//! translation, no signals from ^C, so every byte reaches the hand as sent. The pty is created
+//! at the hand's line rate, so a host that never sets a speed talks at the hand's rate.
+//!
+//! The port opens and closes like a serial port. The simulator keeps its own descriptor of the
+//! slave, so a host closing the port never hangs up the master and the hand keeps its state
+//! across a reopen; it watches the slave's path with inotify to see hosts open and close it.
+//! While no host has the port open the hand runs on, but what it sends is lost (so the
+//! power-up banner is never seen by a host that opens the port later; the answer to a RESET
+//! the host sends is). When the last host closes the port, what it had not read is discarded,
+//! both in the simulator's queue and in the slave's input buffer.
 
 use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
+use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use nix::fcntl::{FcntlArg, OFlag, fcntl};
 use nix::poll::{PollFd, PollFlags};
-use nix::sys::termios::{self, SetArg};
+use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
+use nix::sys::termios::{self, BaudRate, FlushArg, SetArg};
 
 use super::wait::{BACKOFF, IN, ready, wait};
 use super::{Engine, SimError};
+
+/// How soon a write the pty master refused is tried again.
+const WRITE_RETRY: std::time::Duration = std::time::Duration::from_millis(5);
 
 /// A pseudo-terminal pair held by the simulator.
 #[derive(Debug)]
 pub struct Pty {
     master: File,
-    _slave: OwnedFd,
+    slave: OwnedFd,
     path: PathBuf,
     link: Option<PathBuf>,
+    watch: Inotify,
+    /// Whether a host has the port open.
+    open: bool,
+    /// Whether bytes are garbled while the host's speed differs from the hand's.
+    speed_check: bool,
+    /// The last mismatch noted in the trace (host rate, hand rate).
+    mismatch: Option<(u32, u32)>,
 }
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -36,8 +53,8 @@ fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
 
 impl Pty {
     /// Creates a raw pty; with `link`, also a symbolic link to its slave at that path (an
-    /// existing symbolic link there is replaced; any other file is an error). The link is
-    /// removed when the `Pty` is dropped.
+    /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
+    /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
     pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
         let pair = nix::pty::openpty(None, None).map_err(|e| pty_err("cannot create a pty", e))?;
         let mut t = termios::tcgetattr(&pair.slave).map_err(|e| pty_err("tcgetattr", e))?;
@@ -46,7 +63,24 @@ impl Pty {
         let path = nix::unistd::ttyname(&pair.slave).map_err(|e| pty_err("ttyname", e))?;
         fcntl(pair.master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| pty_err("cannot make the master non-blocking", e))?;
-        let mut pty = Pty { master: File::from(pair.master), _slave: pair.slave, path, link: None };
+        // The simulator's own slave descriptor only ever drains what a host left unread.
+        fcntl(pair.slave.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
+            .map_err(|e| pty_err("cannot make the slave non-blocking", e))?;
+        let watch = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
+            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        watch
+            .add_watch(&path, AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE)
+            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        let mut pty = Pty {
+            master: File::from(pair.master),
+            slave: pair.slave,
+            path,
+            link: None,
+            watch,
+            open: true,
+            speed_check: true,
+            mismatch: None,
+        };
         if let Some(l) = link {
             make_link(&pty.path, l)?;
             pty.link = Some(l.to_path_buf());
@@ -64,18 +98,160 @@ impl Pty {
         self.link.as_deref()
     }
 
+    /// Turns the speed check on (the default) or off: while on, and the line is paced, bytes
+    /// cross garbled in both directions whenever the speed the host set on the port differs
+    /// from the hand's rate, as through a UART at the wrong rate.
+    pub fn set_speed_check(&mut self, on: bool) {
+        self.speed_check = on;
+    }
+
+    /// The speed the host set on the port (the slave's termios, shared by every descriptor of
+    /// it), in bit/s.
+    /// `None` when it is not one of the standard speeds (a host that set an arbitrary rate
+    /// through `termios2`/`BOTHER`, as the serialport crate does): the check then stands aside.
+    fn host_speed(&self) -> Option<u32> {
+        let t = termios::tcgetattr(&self.slave).ok()?;
+        // Read the speed bits directly: nix's cfgetospeed panics on a speed it has no name for.
+        let mask = nix::libc::CBAUD | nix::libc::CBAUDEX;
+        let bits = t.control_flags.bits() & mask;
+        SPEEDS.iter().find(|(_, b)| *b as nix::libc::tcflag_t == bits).map(|(r, _)| *r)
+    }
+
+    /// Whether bytes at `hand` bit/s arrive garbled at the host's speed (and the reverse);
+    /// notes a new mismatch in the trace.
+    fn garbled(&mut self, engine: &mut Engine, hand: Option<u32>) -> bool {
+        let (Some(hand), true) = (hand, self.speed_check) else { return false };
+        let Some(host) = self.host_speed() else { return false };
+        let uart = SPEEDS.iter().find(|(r, _)| *r >= hand).map_or(hand, |(r, _)| *r);
+        if host == uart {
+            self.mismatch = None;
+            return false;
+        }
+        if self.mismatch != Some((host, hand)) {
+            self.mismatch = Some((host, hand));
+            engine
+                .note(&format!("speed mismatch: the host's port is at {host}, the hand at {hand}: garbage both ways"));
+        }
+        true
+    }
+
+    /// Sets the slave's speed to the hand's line rate (a host that opens the port without
+    /// setting a speed then talks at the hand's rate). Unpaced: left as it is.
+    pub fn match_speed(&self, engine: &Engine) -> Result<(), SimError> {
+        let Some(baud) = engine.line_baud() else { return Ok(()) };
+        let mut t = termios::tcgetattr(&self.slave).map_err(|e| pty_err("tcgetattr", e))?;
+        termios::cfsetspeed(&mut t, speed_for(baud)).map_err(|e| pty_err("cfsetspeed", e))?;
+        termios::tcsetattr(&self.slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))
+    }
+
+    /// Tells the engine when a host opened the port and when the last one closed it; on
+    /// close, also discards what it left unread in the slave's input buffer.
+    ///
+    /// inotify merges identical events that follow each other unread (two opens in a row are
+    /// one event), so opens are not counted: an open means a host is there, and a close is
+    /// the last one when no other process holds the slave open (`/proc/*/fd`), or when an
+    /// open follows it in the same batch (a host that closed and reopened at once: what it
+    /// left unread is still discarded).
+    fn take_port_events(&mut self, engine: &mut Engine) {
+        let mut masks = Vec::new();
+        self.read_masks(&mut masks);
+        let mut i = 0;
+        while i < masks.len() {
+            let m = masks[i];
+            if m.intersects(AddWatchFlags::IN_CLOSE) && self.open {
+                let mut reopened = masks[i + 1..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN));
+                if !reopened && self.held_elsewhere() {
+                    // A holder now, and an open after this close: the host reopened at once.
+                    let seen = masks.len();
+                    self.read_masks(&mut masks);
+                    reopened = masks[seen..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN));
+                } else {
+                    reopened = true;
+                }
+                if reopened {
+                    self.open = false;
+                    self.discard_unread();
+                    engine.client_gone(&format!("{} closed", self.path.display()));
+                }
+            }
+            if m.contains(AddWatchFlags::IN_OPEN) && !self.open {
+                self.open = true;
+                engine.client_connected(&format!("{} opened", self.path.display()));
+            }
+            i += 1;
+        }
+    }
+
+    fn read_masks(&self, into: &mut Vec<AddWatchFlags>) {
+        while let Ok(events) = self.watch.read_events() {
+            if events.is_empty() {
+                break;
+            }
+            into.extend(events.into_iter().map(|e| e.mask));
+        }
+    }
+
+    /// Discards what the host left unread in the slave's input buffer: a read through the
+    /// simulator's own (non-blocking) descriptor of the slave, then a flush. Known limit: a
+    /// host that reopens within a few milliseconds of its close may still find the old bytes
+    /// (the kernel does not show them to the simulator's descriptor then); hosts that change
+    /// the rate wait far longer before they reopen.
+    fn discard_unread(&mut self) {
+        let mut buf = [0u8; 4096];
+        for _ in 0..1024 {
+            match nix::unistd::read(self.slave.as_raw_fd(), &mut buf) {
+                Ok(n) if n > 0 => {}
+                Err(nix::errno::Errno::EINTR) => {}
+                _ => break,
+            }
+        }
+        let _ = termios::tcflush(&self.slave, FlushArg::TCIFLUSH);
+    }
+
+    /// Whether a descriptor other than the simulator's own refers to the slave.
+    fn held_elsewhere(&self) -> bool {
+        let me = std::process::id().to_string();
+        let own = self.slave.as_raw_fd().to_string();
+        let Ok(procs) = std::fs::read_dir("/proc") else { return true };
+        for p in procs.flatten() {
+            let pid = p.file_name();
+            let Some(pid) = pid.to_str().filter(|n| n.bytes().all(|b| b.is_ascii_digit())) else { continue };
+            let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+            for fd in fds.flatten() {
+                if pid == me && fd.file_name().to_str() == Some(own.as_str()) {
+                    continue;
+                }
+                if std::fs::read_link(fd.path()).is_ok_and(|t| t == self.path) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Serves the hand until one of `stops` becomes readable. Returns an error only for a
     /// failure of the pty itself, never for anything a client does.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
+        let _ = self.match_speed(engine);
+        // Nobody has the port open yet (a host that opened it already is seen next).
+        if self.open {
+            self.open = false;
+            engine.client_gone("no host has the port open");
+        }
         let mut buf = vec![0u8; 8192];
         let mut backoff_until: Option<Instant> = None;
+        let mut write_blocked = false;
+        self.take_port_events(engine);
         loop {
             let now = Instant::now();
-            let readable_ok = backoff_until.is_none_or(|t| now >= t);
-            if readable_ok {
+            let readable_ok = backoff_until.is_none_or(|t| now >= t) && engine.wants_input();
+            if backoff_until.is_some_and(|t| now >= t) {
                 backoff_until = None;
             }
-            let want_write = !engine.ready_output(now).is_empty();
+            // The deadline before the output check: a byte that falls due in between is
+            // then either a deadline or ready to write, never neither.
+            let mut deadline = engine.deadline();
+            let want_write = !engine.ready_output(Instant::now()).is_empty();
             let mut flags = PollFlags::empty();
             if readable_ok {
                 flags |= IN;
@@ -83,28 +259,42 @@ impl Pty {
             if want_write {
                 flags |= PollFlags::POLLOUT;
             }
-            let mut deadline = engine.deadline();
             if let Some(b) = backoff_until {
                 deadline = Some(deadline.map_or(b, |d| d.min(b)));
             }
+            // A pty master does not always report POLLOUT when its slave's reader frees room:
+            // a write that was refused is retried after a short while anyway.
+            if want_write && write_blocked {
+                let r = now + WRITE_RETRY;
+                deadline = Some(deadline.map_or(r, |d| d.min(r)));
+            }
             let (master_in, stop) = {
-                let mut fds = Vec::with_capacity(1 + stops.len());
+                let mut fds = Vec::with_capacity(2 + stops.len());
                 fds.push(PollFd::new(self.master.as_fd(), flags));
+                fds.push(PollFd::new(self.watch.as_fd(), IN));
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
                 wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the pty", e))?;
-                (readable_ok && ready(&fds[0], IN), fds[1..].iter().any(|f| ready(f, IN)))
+                (readable_ok && ready(&fds[0], IN), fds[2..].iter().any(|f| ready(f, IN)))
             };
             if stop {
                 break;
             }
+            // Opens and closes before the host's bytes: they happened before any byte the host
+            // wrote after them.
+            self.take_port_events(engine);
             if master_in {
-                loop {
+                while engine.wants_input() {
                     match self.master.read(&mut buf) {
                         Ok(0) => {
                             backoff_until = Some(Instant::now() + BACKOFF);
                             break;
                         }
-                        Ok(n) => engine.input(&buf[..n]),
+                        Ok(n) => {
+                            if self.garbled(engine, engine.line_baud()) {
+                                buf[..n].iter_mut().for_each(|b| *b = garble(*b));
+                            }
+                            engine.input(&buf[..n]);
+                        }
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                         // EIO: no process has the slave open. Cannot happen while we hold
@@ -117,16 +307,34 @@ impl Pty {
                 }
             }
             engine.wake();
+            write_blocked = false;
             loop {
+                let (run, rate) = engine.head_run().unwrap_or((0, None));
+                let garble_out = self.garbled(engine, rate);
                 let out = engine.ready_output(Instant::now());
                 if out.is_empty() {
                     break;
                 }
-                match self.master.write(out) {
+                let n = out.len().min(run.max(1));
+                let written = if garble_out {
+                    let g: Vec<u8> = out[..n].iter().map(|b| garble(*b)).collect();
+                    self.master.write(&g)
+                } else {
+                    self.master.write(&out[..n])
+                };
+                match written {
+                    Ok(0) => {
+                        write_blocked = true;
+                        break;
+                    }
                     Ok(n) => engine.consumed(n),
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                    // Full (nobody reading) or EIO: try again later.
-                    Err(_) => break,
+                    // Full (the host is not reading): the output waits, and the host is not
+                    // read beyond the engine's cap meanwhile.
+                    Err(_) => {
+                        write_blocked = true;
+                        break;
+                    }
                 }
             }
         }
@@ -134,12 +342,60 @@ impl Pty {
     }
 }
 
+/// A byte as a UART at another rate would see it: not a bit-exact model of sampling at the
+/// wrong rate, but never the byte sent, and never a byte of the protocol (the top bit is set),
+/// so neither side can mistake it for a command, a CR, a ^C or a prompt.
+fn garble(b: u8) -> u8 {
+    (b.rotate_left(3) ^ 0x5A) | 0x80
+}
+
+/// Line rates and their termios speeds.
+const SPEEDS: &[(u32, BaudRate)] = &[
+    (50, BaudRate::B50),
+    (75, BaudRate::B75),
+    (110, BaudRate::B110),
+    (134, BaudRate::B134),
+    (150, BaudRate::B150),
+    (200, BaudRate::B200),
+    (300, BaudRate::B300),
+    (600, BaudRate::B600),
+    (1200, BaudRate::B1200),
+    (1800, BaudRate::B1800),
+    (2400, BaudRate::B2400),
+    (4800, BaudRate::B4800),
+    (9600, BaudRate::B9600),
+    (19200, BaudRate::B19200),
+    (38400, BaudRate::B38400),
+    (57600, BaudRate::B57600),
+    (115_200, BaudRate::B115200),
+    (230_400, BaudRate::B230400),
+];
+
+/// The termios speed nearest above a rate (a UART runs at one of these).
+fn speed_for(baud: u32) -> BaudRate {
+    SPEEDS.iter().find(|(r, _)| *r >= baud).map_or(BaudRate::B230400, |(_, b)| *b)
+}
+
 fn make_link(target: &Path, link: &Path) -> Result<(), SimError> {
     match std::fs::symlink_metadata(link) {
         Ok(m) if !m.file_type().is_symlink() => {
             return Err(SimError::Pty(format!("--link {}: exists and is not a symbolic link", link.display())));
         }
-        _ => {}
+        Ok(_) => {
+            // A pty's node exists only while its master is open: a link to one that exists
+            // belongs to a running simulator (or terminal), which must keep it.
+            if let Ok(old) = std::fs::read_link(link)
+                && old.starts_with("/dev/pts")
+                && std::fs::metadata(&old).is_ok_and(|m| m.file_type().is_char_device())
+            {
+                return Err(SimError::Pty(format!(
+                    "--link {}: points at {}, a pty in use (another gcl sim?); stop it, or remove the link",
+                    link.display(),
+                    old.display()
+                )));
+            }
+        }
+        Err(_) => {}
     }
     let name = link.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = link.with_file_name(format!(".{name}.tmp{}", std::process::id()));

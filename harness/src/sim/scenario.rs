@@ -4,7 +4,7 @@
 //! keyed by motor number: `objects = { 1 = 6000, 2 = 6500 }`. An array of four integers is
 //! accepted too. Every other key is the field of `Scenario` of the same name.
 
-use gcl_model::Scenario;
+use gcl_model::{Profile, Scenario};
 
 use super::SimError;
 
@@ -52,6 +52,45 @@ pub fn parse_scenario(text: &str) -> Result<Scenario, SimError> {
     Ok(scenario)
 }
 
+/// Checks a scenario's values against what the profile's hand can report: positions (objects,
+/// initial positions) within each joint's travel, the temperature within the range of the
+/// temperature parameter (when the profile has one), noise widths within that range and the
+/// strain byte, analog inputs within one byte.
+pub fn check_scenario(s: &Scenario, p: &Profile) -> Result<(), SimError> {
+    let bad = |m: String| Err(SimError::Scenario(m));
+    for m in 1..=4usize {
+        let limit = if m == 4 { p.hand.spread_limit } else { p.hand.finger_limit };
+        if let Some(o) = s.objects[m - 1]
+            && !(0..=limit).contains(&o)
+        {
+            return bad(format!("objects.{m} = {o}: outside motor {m}'s travel 0..={limit}"));
+        }
+        let i = s.initial_positions[m - 1];
+        if !(0..=limit).contains(&i) {
+            return bad(format!("initial_positions[{}] = {i}: outside motor {m}'s travel 0..={limit}", m - 1));
+        }
+        let a = s.analog_input[m - 1];
+        if !(0..=255).contains(&a) {
+            return bad(format!("analog_input[{}] = {a}: outside one byte 0..=255", m - 1));
+        }
+    }
+    let temp = ["TEMP", "TMP"].iter().find_map(|n| p.param_id(n)).map(|id| p.param(id));
+    let (lo, hi) = temp.map_or((-550, 1250), |t| (t.min, t.max));
+    if !(lo..=hi).contains(&s.temperature) {
+        return bad(format!(
+            "temperature = {}: outside the hand's range {lo}..={hi} (tenths of a degree C)",
+            s.temperature
+        ));
+    }
+    if !(0..=hi - lo).contains(&s.temperature_noise) {
+        return bad(format!("temperature_noise = {}: outside 0..={}", s.temperature_noise, hi - lo));
+    }
+    if !(0..=255).contains(&s.strain_noise) {
+        return bad(format!("strain_noise = {}: outside 0..=255 (the strain byte)", s.strain_noise));
+    }
+    Ok(())
+}
+
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
@@ -66,6 +105,26 @@ mod tests {
         assert_eq!(s.objects, [Some(6000), Some(6000), Some(7000), None]);
         assert_eq!(s.temperature, 400);
         assert_eq!(s.strain_noise, 0);
+    }
+
+    #[test]
+    fn values_are_checked_against_the_profile() {
+        for name in Profile::builtin_names() {
+            let p = Profile::builtin(name).unwrap();
+            assert!(check_scenario(&parse_scenario(SCENARIO_EXAMPLE).unwrap(), &p).is_ok(), "{name}");
+            assert!(check_scenario(&Scenario::default(), &p).is_ok(), "{name}");
+            for text in [
+                "temperature = 99999999",
+                "initial_positions = [99999, 0, 0, 0]",
+                "objects = { 4 = 99999 }",
+                "objects = { 1 = -1 }",
+                "analog_input = [0, 0, 0, 256]",
+                "strain_noise = -1",
+            ] {
+                let err = check_scenario(&parse_scenario(text).unwrap(), &p).unwrap_err().to_string();
+                assert!(err.contains("outside"), "{name} {text}: {err}");
+            }
+        }
     }
 
     #[test]

@@ -3,7 +3,10 @@
 //! A second connection while one is active is accepted and closed at once with nothing
 //! written (the cable is taken); before deciding, the active connection is read to its end, so
 //! a client that closes and reconnects at once is not refused. The hand keeps its state from
-//! one client to the next; output produced while no client is connected is dropped. pyserial's
+//! one client to the next; when a client goes, what it had not read is discarded, and output
+//! produced while no client is connected is lost. A client that shuts down its sending side
+//! (half-close) still gets every answer; the simulator then ends the stream. While the client
+//! does not read, the simulator stops reading it (backpressure; nothing is dropped). pyserial's
 //! `socket://HOST:PORT` works as a client.
 
 use std::io::{Read, Write};
@@ -59,28 +62,39 @@ impl TcpServer {
     /// Serves clients one at a time until one of `stops` becomes readable.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
         engine.client_gone("listening, no client yet");
-        let mut client: Option<(TcpStream, String)> = None;
+        let mut client: Option<Client> = None;
         let mut buf = vec![0u8; 8192];
         loop {
+            // The deadline before the output check: a byte that falls due in between is
+            // then either a deadline or ready to write, never neither.
+            let deadline = engine.deadline();
             let want_write = !engine.ready_output(Instant::now()).is_empty();
-            let (client_in, listen_in, stop) = {
+            let (client_in, client_err, listen_in, stop) = {
                 let mut fds = Vec::with_capacity(2 + stops.len());
                 fds.push(PollFd::new(self.listener.as_fd(), IN));
-                if let Some((s, _)) = &client {
-                    let mut f = IN;
+                if let Some(c) = &client {
+                    let mut f = PollFlags::empty();
+                    if !c.read_closed && engine.wants_input() {
+                        f |= IN;
+                    }
                     if want_write {
                         f |= PollFlags::POLLOUT;
                     }
-                    fds.push(PollFd::new(s.as_fd(), f));
+                    fds.push(PollFd::new(c.stream.as_fd(), f));
                 }
                 let first_stop = fds.len();
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
-                wait(&mut fds, engine.deadline()).map_err(|e| SimError::io("waiting on the socket", e))?;
+                wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the socket", e))?;
                 let client_in = client.is_some() && ready(&fds[1], IN);
-                (client_in, ready(&fds[0], IN), fds[first_stop..].iter().any(|f| ready(f, IN)))
+                let client_err = client.is_some() && ready(&fds[1], PollFlags::POLLHUP | PollFlags::POLLERR);
+                (client_in, client_err, ready(&fds[0], IN), fds[first_stop..].iter().any(|f| ready(f, IN)))
             };
             if stop {
                 break;
+            }
+            // A half-closed client whose connection broke cannot take its answers any more.
+            if client_err && client.as_ref().is_some_and(|c| c.read_closed) {
+                end_client(&mut client, engine, "the half-closed client's connection ended");
             }
             // The active client first, so that its end is seen before a new connection.
             if client_in || listen_in {
@@ -94,10 +108,16 @@ impl TcpServer {
                             // one that closed just before this connection may not have been
                             // seen to end yet (a busy machine): give its end a moment to land.
                             read_client(&mut client, engine, &mut buf);
-                            if let Some((active, _)) = &client {
-                                let mut fds = [PollFd::new(active.as_fd(), IN)];
+                            if let Some(c) = &client
+                                && !c.read_closed
+                            {
+                                let mut fds = [PollFd::new(c.stream.as_fd(), IN)];
                                 let _ = wait(&mut fds, Some(Instant::now() + RECONNECT_GRACE));
                                 read_client(&mut client, engine, &mut buf);
+                            }
+                            // A client that has finished sending (half-closed) gives way.
+                            if client.as_ref().is_some_and(|c| c.read_closed) {
+                                end_client(&mut client, engine, "half-closed client replaced by a new connection");
                             }
                             if client.is_some() {
                                 engine.note(&format!("refused {peer}: another client is connected"));
@@ -105,7 +125,7 @@ impl TcpServer {
                             } else if s.set_nonblocking(true).is_ok() {
                                 let _ = s.set_nodelay(true);
                                 engine.client_connected(&peer.to_string());
-                                client = Some((s, peer.to_string()));
+                                client = Some(Client { stream: s, read_closed: false });
                             }
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -115,14 +135,14 @@ impl TcpServer {
                 }
             }
             engine.wake();
-            if let Some((s, _)) = &mut client {
+            if let Some(c) = &mut client {
                 let mut gone = None;
                 loop {
                     let out = engine.ready_output(Instant::now());
                     if out.is_empty() {
                         break;
                     }
-                    match s.write(out) {
+                    match c.stream.write(out) {
                         Ok(n) => engine.consumed(n),
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
@@ -132,9 +152,19 @@ impl TcpServer {
                         }
                     }
                 }
+                // A half-closed client gets every answer to what it sent, then the end of the
+                // stream: once nothing is queued either way and the hand is idle.
+                if gone.is_none()
+                    && c.read_closed
+                    && !engine.has_output()
+                    && !engine.has_input()
+                    && !engine.device().is_busy()
+                {
+                    let _ = c.stream.shutdown(Shutdown::Write);
+                    gone = Some("closed by the client after its last answer".to_string());
+                }
                 if let Some(why) = gone {
-                    client = None;
-                    engine.client_gone(&why);
+                    end_client(&mut client, engine, &why);
                 }
             }
         }
@@ -142,18 +172,41 @@ impl TcpServer {
     }
 }
 
-/// Reads the active client until it has nothing more; ends it on end of stream or error.
-fn read_client(client: &mut Option<(TcpStream, String)>, engine: &mut Engine, buf: &mut [u8]) {
-    let Some((s, _)) = client else { return };
+/// The connected client.
+#[derive(Debug)]
+struct Client {
+    stream: TcpStream,
+    /// The client shut down its sending side (or closed): its answers are still delivered.
+    read_closed: bool,
+}
+
+fn end_client(client: &mut Option<Client>, engine: &mut Engine, why: &str) {
+    *client = None;
+    engine.client_gone(why);
+}
+
+/// Reads the active client until it has nothing more (or the engine wants no more for now).
+/// End of stream only marks it half-closed; an error ends it.
+fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8]) {
+    let Some(c) = client else { return };
+    if c.read_closed {
+        return;
+    }
     let why = loop {
-        match s.read(buf) {
-            Ok(0) => break "closed by the client".to_string(),
+        if !engine.wants_input() {
+            return;
+        }
+        match c.stream.read(buf) {
+            Ok(0) => {
+                c.read_closed = true;
+                engine.note("the client finished sending (half-close)");
+                return;
+            }
             Ok(n) => engine.input(&buf[..n]),
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => return,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => break e.to_string(),
         }
     };
-    *client = None;
-    engine.client_gone(&why);
+    end_client(client, engine, &why);
 }

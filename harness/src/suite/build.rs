@@ -37,6 +37,10 @@ pub(crate) enum Shape {
     Exact,
     /// A RESET banner: `{any}BarrettHand Firmware{any}`.
     Banner,
+    /// A RESET banner checked for what hosts rely on: the echo, any text, `BarrettHand
+    /// Firmware` then the line ending straight after it, at least one more byte of banner,
+    /// then the line ending and the prompt.
+    BannerLines,
     /// Value lines after the echo: for line `i`, token `j`, a range (or exact).
     Values(Vec<Vec<Option<Range>>>),
     /// List lines `NAME value...`: values of live parameters elided to their ranges.
@@ -410,6 +414,26 @@ fn push_values(e: &mut Expect, line: &[u8], ranges: &[Option<Range>]) {
     }
 }
 
+/// See [`Shape::BannerLines`]. `None` if the model's own answer does not have that form.
+fn banner_lines_expect(output: &[u8], eol: &[u8], ep: &[u8]) -> Option<Expect> {
+    const TEXT: &[u8] = b"BarrettHand Firmware";
+    let line = [TEXT, eol].concat();
+    let at = find(output, &line)?;
+    let rest = &output[at + line.len()..];
+    if !rest.ends_with(ep) || rest.len() <= ep.len() {
+        return None;
+    }
+    let echo_end = output.iter().position(|b| *b == b'\n' || *b == b'\r').unwrap_or(at).min(at);
+    let mut e = Expect::default();
+    e.push_bytes(Form::Text, &output[..echo_end]);
+    e.push(Form::Text, Piece::Any);
+    e.push_bytes(Form::Text, &line);
+    e.push(Form::Text, Piece::AnyByte);
+    e.push(Form::Text, Piece::Any);
+    e.push_bytes(Form::Text, ep);
+    Some(e)
+}
+
 /// The expectation for a captured answer under a shape.
 pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<Expect, String> {
     let eol = p.framing.line_ending.as_bytes();
@@ -421,6 +445,7 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<E
     Ok(match shape {
         Shape::Exact => exact(),
         Shape::Banner => banner_expect(&c.output, &ep).ok_or("no banner in the answer")?,
+        Shape::BannerLines => banner_lines_expect(&c.output, eol, &ep).ok_or("no banner line in the answer")?,
         Shape::Block(rules) => shape_block(p, c, rules),
         Shape::AnyLines => {
             let (echo, _) = split_lines(&c.output, eol, &ep).ok_or("answer is not lines and a prompt")?;

@@ -28,6 +28,7 @@ pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
     g.realtime();
     g.examples();
     g.firmware();
+    g.banner();
     g.out
 }
 
@@ -2262,6 +2263,27 @@ impl Gen {
 }
 
 /// The label of the profile's source in clause strings.
+impl Gen {
+    /// What host libraries look for after RESET (Barrett's C++ API fails to initialise
+    /// without it): `BarrettHand Firmware`, the line ending straight after it, more banner
+    /// text, the prompt.
+    fn banner(&mut self) {
+        let decision = if self.p.id == "seed" { "seed-banner-text" } else { "bh8-banner-text" };
+        let k = self
+            .case(
+                "banner-lines",
+                "After RESET, 'BarrettHand Firmware' ends its line and more banner text follows before the prompt",
+            )
+            .src("Command RESET")
+            .decision(decision)
+            .comment("a host's start-up: ^C, a bare CR, RESET; it searches the answer for the banner line")
+            .abort()
+            .line("")
+            .line_shaped("RESET", Shape::BannerLines);
+        self.add(k);
+    }
+}
+
 fn src_label(p: &Profile) -> &'static str {
     super::build::source_label(p)
 }

@@ -33,8 +33,17 @@ pub struct SimProcess {
 }
 
 impl SimProcess {
-    /// Starts `gcl sim <transport flag> <args>` and reads the address it prints.
+    /// Starts `gcl sim <transport flag> <args>` and reads the address it prints. Unless `args`
+    /// choose a time mode, the child runs in fast time (unpaced), the opt-in speed-up: most
+    /// tests check answers, not timing.
     pub fn start(transport: Transport, args: &[&str]) -> SimProcess {
+        let fast: &[&str] = if args.contains(&"--time") { &[] } else { &["--time", "fast"] };
+        SimProcess::start_exact(transport, &[args, fast].concat())
+    }
+
+    /// Starts `gcl sim <transport flag> <args>` with exactly these arguments (the defaults of
+    /// `gcl sim` otherwise: real time, paced at the hand's BAUD).
+    pub fn start_exact(transport: Transport, args: &[&str]) -> SimProcess {
         let flag: &[&str] = match transport {
             Transport::Pty => &["--pty"],
             Transport::Tcp => &["--tcp", "127.0.0.1:0"],
@@ -160,4 +169,61 @@ pub fn noise(seed: u64, len: usize) -> Vec<u8> {
             (x >> 56) as u8
         })
         .collect()
+}
+
+/// A pty opened as a host program opens a serial port (no controlling tty, non-blocking, no
+/// discard of stale input: the test sees exactly what the port holds).
+pub fn open_port(path: &str) -> std::fs::File {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
+        .open(path)
+        .expect("open the pty")
+}
+
+/// Reads from a non-blocking port until `done(bytes)` or `limit` passes, or, with `quiet`,
+/// until nothing came for that long. Returns what arrived.
+pub fn read_port(
+    port: &mut std::fs::File,
+    done: &dyn Fn(&[u8]) -> bool,
+    quiet: Option<Duration>,
+    limit: Duration,
+) -> Vec<u8> {
+    use nix::poll::{PollFd, PollFlags, PollTimeout};
+    use std::io::Read;
+    use std::os::fd::AsFd;
+    let end = Instant::now() + limit;
+    let mut got = Vec::new();
+    let mut buf = [0u8; 4096];
+    while !done(&got) {
+        let mut wait = end.saturating_duration_since(Instant::now());
+        if let Some(q) = quiet {
+            wait = wait.min(q);
+        }
+        if wait.is_zero() {
+            break;
+        }
+        let mut fds = [PollFd::new(port.as_fd(), PollFlags::POLLIN)];
+        let ms = PollTimeout::try_from(wait.as_millis().min(60_000) as i32).unwrap_or(PollTimeout::MAX);
+        if !nix::poll::poll(&mut fds, ms).is_ok_and(|n| n > 0) {
+            break;
+        }
+        match port.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => got.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(_) => break,
+        }
+    }
+    got
+}
+
+/// Sets the speed of a port as a host program does (`cfsetspeed`, `tcsetattr`).
+pub fn set_port_speed(port: &std::fs::File, speed: nix::sys::termios::BaudRate) {
+    use nix::sys::termios;
+    let mut t = termios::tcgetattr(port).unwrap();
+    termios::cfsetspeed(&mut t, speed).unwrap();
+    termios::tcsetattr(port, termios::SetArg::TCSANOW, &t).unwrap();
 }

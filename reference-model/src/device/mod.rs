@@ -1232,6 +1232,13 @@ impl Device {
                 if layout.control.decode_into(data, values).is_ok() {
                     self.apply_control(&rt);
                 }
+                // The answer follows the whole block, as a hand reads a block before it
+                // answers: no exchange beats the line's wire time in both directions.
+                if rt.pending.is_some_and(|h| h.wants_feedback()) {
+                    self.emit_feedback(&mut rt);
+                } else {
+                    self.out.push(realtime::FEEDBACK_HEADER);
+                }
                 rt.pending = None;
                 rt.data.clear();
             }
@@ -1245,15 +1252,15 @@ impl Device {
             }
             Some(h) => {
                 self.last_status = StatusBits::empty();
-                if h.wants_feedback() {
-                    self.emit_feedback(&mut rt);
-                } else {
-                    self.out.push(realtime::FEEDBACK_HEADER);
-                }
                 if h.has_data() && rt.layout.control.size > 1 {
+                    // Answered once the data is in (above).
                     rt.pending = Some(h);
                     rt.data.clear();
                     rt.data.push(h.byte());
+                } else if h.wants_feedback() {
+                    self.emit_feedback(&mut rt);
+                } else {
+                    self.out.push(realtime::FEEDBACK_HEADER);
                 }
                 self.rt = Some(rt);
             }
