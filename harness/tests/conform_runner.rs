@@ -93,7 +93,11 @@ fn fail_fast_and_max_failures_stop_the_run_and_list_the_rest_as_not_run() {
                 .filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:")))
                 .all(|c| c.verdict == Verdict::Skip)
         );
-        assert_eq!(r.cases.len(), 209, "every case of the suite is in the report");
+        let suite_cases = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite/seed"))
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "gcl"))
+            .count();
+        assert_eq!(r.cases.len(), suite_cases, "every case of the suite is in the report");
     }
 }
 
@@ -200,6 +204,9 @@ fn a_hand_that_restarts_is_drained_and_probed_before_the_next_case() {
         "seed",
         "--only",
         "param-*",
+        // A fast-time simulator finishes a motion before a ^C can land (README).
+        "--no",
+        "abort-timing",
         "--report",
         out.to_str().unwrap(),
     ]);
@@ -211,7 +218,8 @@ fn a_hand_that_restarts_is_drained_and_probed_before_the_next_case() {
     assert_eq!(errors.len(), 1, "only the case the hand vanished in: {:?}", r.summary);
     let after = &r.cases[errors[0] + 1];
     assert_eq!(after.verdict, Verdict::Pass, "the next case is not blamed for the restart: {after:?}");
-    assert_eq!(r.summary[&Verdict::Pass], r.cases.len() - 1, "{:?}", r.summary);
+    let skipped = r.summary.get(&Verdict::Skip).copied().unwrap_or(0);
+    assert_eq!(r.summary[&Verdict::Pass], r.cases.len() - 1 - skipped, "{:?}", r.summary);
     assert!(r.liveness.after);
 }
 

@@ -265,13 +265,13 @@ pub fn run_with_progress(
 pub fn summary_text(r: &RunReport) -> String {
     let mut s = String::new();
     s.push_str(&format!("gcl conform: target {}, profile {}, level {}\n", r.target, r.profile, r.level));
+    if let Some(p) = &r.preflight {
+        s.push_str(&format!("  {p}\n"));
+    }
     let given = r.options.pairs();
     if !given.is_empty() {
         let text: Vec<String> = given.iter().map(|(k, v)| format!("--{k} {v}")).collect();
         s.push_str(&format!("  options: {}\n", text.join("; ")));
-    }
-    if let Some(p) = &r.preflight {
-        s.push_str(&format!("  {p}\n"));
     }
     if !r.groups.is_empty() {
         s.push_str("  root causes first (failures grouped by where they part from the golden, largest first):\n");

@@ -2268,17 +2268,22 @@ impl Gen {
     /// without it): `BarrettHand Firmware`, the line ending straight after it, more banner
     /// text, the prompt.
     fn banner(&mut self) {
-        let decision = if self.p.id == "seed" { "seed-banner-text" } else { "bh8-banner-text" };
+        // The profile's own banner decision (`seed-banner-text`, `bh8-banner-text`): data, not
+        // a branch on the profile's id.
+        let Some(decision) = self.p.decisions.iter().map(|d| d.id.clone()).find(|id| id.ends_with("-banner-text"))
+        else {
+            return;
+        };
         let k = self
             .case(
                 "banner-lines",
                 "After RESET, 'BarrettHand Firmware' ends its line and more banner text follows before the prompt",
             )
             .src("Command RESET")
-            .decision(decision)
-            .comment("a host's start-up: ^C, a bare CR, RESET; it searches the answer for the banner line")
+            .decision(&decision)
+            .comment("a host's start-up: ^C, then RESET; it searches the answer for the banner line")
             .abort()
-            .line("")
+            .comment("the check")
             .line_shaped("RESET", Shape::BannerLines);
         self.add(k);
     }
