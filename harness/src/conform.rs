@@ -228,6 +228,27 @@ pub struct ConformOptions {
     pub control: RunControl,
 }
 
+impl ConformOptions {
+    /// Every case at every level against the in-process simulated hand of `profile` with
+    /// `faults`, with no selection, known failures or deadlines of the caller's own.
+    pub fn in_process(profile: Arc<Profile>, faults: Vec<gcl_model::Fault>) -> ConformOptions {
+        ConformOptions {
+            target: Target::Sim { profile: Some(profile.id.clone()) },
+            open: OpenOptions { faults, ..Default::default() },
+            profile,
+            level: LevelFilter::All,
+            only: vec![],
+            skip: vec![],
+            known: KnownFailures::default(),
+            step_timeout: None,
+            refuse: vec![],
+            baud: None,
+            keep_transcripts: false,
+            control: RunControl::default(),
+        }
+    }
+}
+
 /// After this many TIMEOUTs in a row the hand is probed again (`--dead-after`).
 pub const DEFAULT_DEAD_AFTER: usize = 5;
 

@@ -7,10 +7,9 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::str::FromStr;
 
-use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::conform::{self, ConformOptions};
 use gcl_harness::report::{RunReport, Verdict};
 use gcl_harness::suite;
-use gcl_harness::target::{OpenOptions, Target};
 use gcl_model::{Fault, Profile};
 
 const GCL: &str = env!("CARGO_BIN_EXE_gcl");
@@ -91,20 +90,7 @@ fn cases(profile: &Profile) -> Vec<suite::Case> {
 fn in_process(profile: &str, faults: Vec<Fault>) -> RunReport {
     let p = Profile::builtin(profile).unwrap();
     let cases = cases(&p);
-    let opts = ConformOptions {
-        target: Target::Sim { profile: Some(p.id.clone()) },
-        open: OpenOptions { faults, ..Default::default() },
-        profile: p,
-        level: LevelFilter::All,
-        only: vec![],
-        skip: vec![],
-        known: KnownFailures::default(),
-        step_timeout: None,
-        refuse: vec![],
-        baud: None,
-        keep_transcripts: false,
-        control: Default::default(),
-    };
+    let opts = ConformOptions::in_process(p, faults);
     conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report
 }
 

@@ -12,28 +12,14 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::conform::{self, ConformOptions};
 use gcl_harness::suite;
-use gcl_harness::target::{OpenOptions, Target};
 use gcl_model::{Fault, Profile};
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
 
 fn failing(p: &std::sync::Arc<Profile>, cases: &[suite::Case], fault: Fault) -> BTreeSet<String> {
-    let opts = ConformOptions {
-        target: Target::Sim { profile: Some(p.id.clone()) },
-        open: OpenOptions { faults: vec![fault], ..Default::default() },
-        profile: p.clone(),
-        level: LevelFilter::All,
-        only: vec![],
-        skip: vec![],
-        known: KnownFailures::default(),
-        step_timeout: None,
-        refuse: vec![],
-        baud: None,
-        keep_transcripts: false,
-        control: Default::default(),
-    };
+    let opts = ConformOptions::in_process(p.clone(), vec![fault]);
     let r = conform::run(cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
     r.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.clone()).collect()
 }

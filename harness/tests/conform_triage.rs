@@ -3,10 +3,9 @@
 
 use std::path::Path;
 
-use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
+use gcl_harness::conform::{self, ConformOptions};
 use gcl_harness::report::RunReport;
 use gcl_harness::suite;
-use gcl_harness::target::{OpenOptions, Target};
 use gcl_model::{Fault, Profile};
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
@@ -14,20 +13,7 @@ const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
 fn run(profile: &str, faults: Vec<Fault>) -> RunReport {
     let p = Profile::builtin(profile).unwrap();
     let cases = suite::load_profile(Path::new(SUITE), &p.id).unwrap();
-    let opts = ConformOptions {
-        target: Target::Sim { profile: Some(p.id.clone()) },
-        open: OpenOptions { faults, ..Default::default() },
-        profile: p,
-        level: LevelFilter::All,
-        only: vec![],
-        skip: vec![],
-        known: KnownFailures::default(),
-        step_timeout: None,
-        refuse: vec![],
-        baud: None,
-        keep_transcripts: false,
-        control: Default::default(),
-    };
+    let opts = ConformOptions::in_process(p, faults);
     conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report
 }
 
