@@ -5,7 +5,6 @@
 
 mod sim_support;
 
-use std::fs::File;
 use std::io::{Read, Write};
 use std::net::{Shutdown, TcpStream};
 use std::os::fd::AsFd;
@@ -13,65 +12,11 @@ use std::os::unix::fs::OpenOptionsExt;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use nix::poll::{PollFd, PollFlags, PollTimeout};
-use sim_support::{GCL, SimProcess, Transport};
-
-/// Opens the pty as a host program does (no controlling tty, no discard of stale input).
-fn open_port(path: &str) -> File {
-    std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
-        .open(path)
-        .expect("open the pty")
-}
+use sim_support::{GCL, SimProcess, Transport, open_port};
 
 /// Everything that arrives within `quiet` of the previous byte, stopping at `limit` overall.
-fn read_quiet(f: &mut impl ReadFd, quiet: Duration, limit: Duration) -> Vec<u8> {
-    let end = Instant::now() + limit;
-    let mut got = Vec::new();
-    let mut buf = [0u8; 4096];
-    loop {
-        let left = end.saturating_duration_since(Instant::now()).min(quiet);
-        if left.is_zero() || !f.wait_readable(left) {
-            return got;
-        }
-        match f.read_some(&mut buf) {
-            Ok(0) => return got,
-            Ok(n) => got.extend_from_slice(&buf[..n]),
-            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
-            Err(_) => return got,
-        }
-    }
-}
-
-trait ReadFd {
-    fn wait_readable(&self, d: Duration) -> bool;
-    fn read_some(&mut self, buf: &mut [u8]) -> std::io::Result<usize>;
-}
-
-fn poll_in(fd: std::os::fd::BorrowedFd<'_>, d: Duration) -> bool {
-    let mut fds = [PollFd::new(fd, PollFlags::POLLIN)];
-    let ms = PollTimeout::try_from(d.as_millis().min(60_000) as i32).unwrap_or(PollTimeout::MAX);
-    nix::poll::poll(&mut fds, ms).is_ok_and(|n| n > 0)
-}
-
-impl ReadFd for File {
-    fn wait_readable(&self, d: Duration) -> bool {
-        poll_in(self.as_fd(), d)
-    }
-    fn read_some(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        self.read(buf)
-    }
-}
-
-impl ReadFd for TcpStream {
-    fn wait_readable(&self, d: Duration) -> bool {
-        poll_in(self.as_fd(), d)
-    }
-    fn read_some(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        self.read(buf)
-    }
+fn read_quiet(f: &mut (impl Read + AsFd), quiet: Duration, limit: Duration) -> Vec<u8> {
+    sim_support::read_port(f, &|_| false, Some(quiet), limit)
 }
 
 const QUIET: Duration = Duration::from_millis(400);
@@ -137,7 +82,7 @@ fn a_tcp_client_that_half_closes_still_gets_its_answer() {
 }
 
 /// 10,000 commands written at once while the host reads late: every answer arrives.
-fn pipeline(what: &str, mut write: impl Write + Send + 'static, read: &mut impl ReadFd) {
+fn pipeline(what: &str, mut write: impl Write + Send + 'static, read: &mut (impl Read + AsFd)) {
     const N: usize = 10_000;
     let answer = b"FGET DP\n\r1000 1000 1000 150\n\r=> ";
     let writer = std::thread::spawn(move || {
@@ -147,19 +92,7 @@ fn pipeline(what: &str, mut write: impl Write + Send + 'static, read: &mut impl 
     // Read late, so that the simulator's output queue fills and it has to stop reading.
     std::thread::sleep(Duration::from_millis(500));
     let want = N * answer.len();
-    let mut got = Vec::with_capacity(want);
-    let mut buf = [0u8; 65536];
-    let end = Instant::now() + Duration::from_secs(30);
-    while got.len() < want && Instant::now() < end {
-        if read.wait_readable(Duration::from_secs(5)) {
-            match read.read_some(&mut buf) {
-                Ok(0) => break,
-                Ok(n) => got.extend_from_slice(&buf[..n]),
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
-                Err(_) => break,
-            }
-        }
-    }
+    let got = sim_support::read_port(read, &|g| g.len() >= want, Some(Duration::from_secs(5)), Duration::from_secs(30));
     assert_eq!(got.len(), want, "{what}: bytes lost");
     assert!(writer.join().unwrap(), "{what}: the writer was cut off");
     assert!(got.chunks(answer.len()).all(|c| c == answer), "{what}: answers out of shape");

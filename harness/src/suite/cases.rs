@@ -1812,7 +1812,6 @@ impl Gen {
         let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
         let datum: i64 = 40;
         let lfv = self.lfv_at(datum, lcvc, 2);
-        let tol = |v: i64| (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64);
         let k = self
             .rt_case(
                 "rt-lfvc-scaling",
@@ -1871,8 +1870,6 @@ impl Gen {
     /// RealTime cases for decisions about the loop's motors, gains and coefficients.
     fn realtime_decisions(&mut self) {
         let label = src_label(&self.p);
-        let tol = |v: i64| (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64);
-
         // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
         let (datum, lcvc) = (40i64, self.brisk_lcvc());
         let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
@@ -1894,19 +1891,8 @@ impl Gen {
             .note("Velocities during motion are compared with 25% tolerance.")
             .line(&format!("12FSET LCVC {lcvc}"))
             .line("1FSET LFVC 1")
-            .line("2FSET LFVC 2")
-            .line("12LOOP")
-            .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
-            .pause_ms(50)
-            .block(
-                b"A",
-                Shape::Block(vec![
-                    FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
-                    FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
-                ]),
-            )
-            .abort();
-        self.add(k);
+            .line("2FSET LFVC 2");
+        self.add(two_motor_velocities(k, datum, v1, v2));
 
         // LCVC multiplies the datum: two motors at one datum, LCVC twice as large on motor 1.
         let (v1, v2) = (self.lfv_at(datum, 2 * lcvc, 1), self.lfv_at(datum, lcvc, 1));
@@ -1923,19 +1909,8 @@ impl Gen {
         let k = k
             .note("Velocities during motion are compared with 25% tolerance.")
             .line(&format!("1FSET LCVC {}", 2 * lcvc))
-            .line(&format!("2FSET LCVC {lcvc}"))
-            .line("12LOOP")
-            .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
-            .pause_ms(50)
-            .block(
-                b"A",
-                Shape::Block(vec![
-                    FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
-                    FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
-                ]),
-            )
-            .abort();
-        self.add(k);
+            .line(&format!("2FSET LCVC {lcvc}"));
+        self.add(two_motor_velocities(k, datum, v1, v2));
 
         // With LCPG 1 the gain starts at 0: a velocity alone does not move the motor. A motor
         // without LCV keeps its control velocity of 0 whatever its gain.
@@ -2287,6 +2262,28 @@ impl Gen {
             .line_shaped("RESET", Shape::BannerLines);
         self.add(k);
     }
+}
+
+/// The band a feedback velocity of about `v` may read in: 25 %, the tolerance the cases' notes
+/// state.
+fn tol(v: i64) -> (i64, i64) {
+    (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64)
+}
+
+/// Motors 1 and 2 in the loop, both sent `datum`; after a pause their feedback velocities read
+/// about `v1` and `v2`.
+fn two_motor_velocities(k: CaseB, datum: i64, v1: i64, v2: i64) -> CaseB {
+    k.line("12LOOP")
+        .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
+        .pause_ms(50)
+        .block(
+            b"A",
+            Shape::Block(vec![
+                FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
+                FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
+            ]),
+        )
+        .abort()
 }
 
 fn src_label(p: &Profile) -> &'static str {

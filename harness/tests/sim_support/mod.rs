@@ -186,13 +186,12 @@ pub fn open_port(path: &str) -> std::fs::File {
 /// Reads from a non-blocking port until `done(bytes)` or `limit` passes, or, with `quiet`,
 /// until nothing came for that long. Returns what arrived.
 pub fn read_port(
-    port: &mut std::fs::File,
+    port: &mut (impl std::io::Read + std::os::fd::AsFd),
     done: &dyn Fn(&[u8]) -> bool,
     quiet: Option<Duration>,
     limit: Duration,
 ) -> Vec<u8> {
     use nix::poll::{PollFd, PollFlags, PollTimeout};
-    use std::io::Read;
     use std::os::fd::AsFd;
     let end = Instant::now() + limit;
     let mut got = Vec::new();
