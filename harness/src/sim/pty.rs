@@ -159,16 +159,16 @@ impl Pty {
         while i < masks.len() {
             let m = masks[i];
             if m.intersects(AddWatchFlags::IN_CLOSE) && self.open {
-                let mut reopened = masks[i + 1..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN));
-                if !reopened && self.held_elsewhere() {
-                    // A holder now, and an open after this close: the host reopened at once.
+                // The host's session ends here unless another process still holds the slave;
+                // a close followed by an open (a quick reopen) ends it too, so what it left
+                // unread is discarded.
+                let reopened_in_batch = masks[i + 1..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN));
+                let ended = reopened_in_batch || !self.held_elsewhere() || {
                     let seen = masks.len();
                     self.read_masks(&mut masks);
-                    reopened = masks[seen..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN));
-                } else {
-                    reopened = true;
-                }
-                if reopened {
+                    masks[seen..].iter().any(|m| m.contains(AddWatchFlags::IN_OPEN))
+                };
+                if ended {
                     self.open = false;
                     self.discard_unread();
                     engine.client_gone(&format!("{} closed", self.path.display()));
