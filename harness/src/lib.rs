@@ -4,6 +4,10 @@
 //! ([`cli`]). The reference model (`gcl-model`) stays pure; time, bytes, files and
 //! processes live here.
 
+// Lets code that moves between the library and the binary name library items the same
+// way (`gcl_harness::...`) from either side.
+extern crate self as gcl_harness;
+
 pub mod certify;
 pub mod cli;
 pub mod client;
