@@ -134,10 +134,16 @@ fn wall_clock_loop(name: &str) {
     let expected = per_ms * ms;
     let actual = (p1 - p0) as f64;
     assert!((actual - expected).abs() <= expected / 3.0, "{name}: moved {actual} counts, velocity says {expected:.0}");
-    assert!((moved as f64 - actual).abs() <= actual / 3.0 + 10.0, "{name}: feedback deltas {moved}, position moved {actual}");
+    assert!(
+        (moved as f64 - actual).abs() <= actual / 3.0 + 10.0,
+        "{name}: feedback deltas {moved}, position moved {actual}"
+    );
     // A host that turns LFV back into counts per ms (LFV x LFVC in the profile's feedback unit:
     // per 10 ms tick on a BH8-262, as libgripper reads it) sees the same speed.
     let lfv_mean = lfv_sum as f64 / f64::from(cycles);
     let seen = lfv_mean * h.lfv_counts_per_ms;
-    assert!((seen - per_ms).abs() <= per_ms / 4.0, "{name}: LFV {lfv_mean:.1} reads as {seen:.2} counts/ms, commanded {per_ms:.2}");
+    assert!(
+        (seen - per_ms).abs() <= per_ms / 4.0,
+        "{name}: LFV {lfv_mean:.1} reads as {seen:.2} counts/ms, commanded {per_ms:.2}"
+    );
 }

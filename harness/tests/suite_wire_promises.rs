@@ -113,12 +113,15 @@ fn every_wire_promise_is_checked_by_a_case_that_fails_without_it() {
     for name in Profile::builtin_names() {
         let p = Profile::builtin(name).unwrap();
         let cases = suite::load_profile(Path::new(SUITE), &p.id).unwrap();
-        let wire: Vec<&str> =
-            p.decisions.iter().filter(|d| is_wire_promise(&d.level)).map(|d| d.id.as_str()).collect();
+        let wire: Vec<&str> = p.decisions.iter().filter(|d| is_wire_promise(&d.level)).map(|d| d.id.as_str()).collect();
         // A framing decision is checked by every case that rests on it (each expectation
         // spells out the echo, line ending and prompt); any other by the cases that cite it.
         let checks = |c: &Case, d: &str| -> bool {
-            if is_framing(d) { c.decisions().iter().any(|x| x == d) } else { c.checked_decisions().iter().any(|x| x == d) }
+            if is_framing(d) {
+                c.decisions().iter().any(|x| x == d)
+            } else {
+                c.checked_decisions().iter().any(|x| x == d)
+            }
         };
         let citing = |d: &str| -> Vec<&Case> { cases.iter().filter(|c| checks(c, d)).collect() };
         // The model keeps every promise it makes: each citing case passes without a fault.
@@ -177,7 +180,8 @@ fn every_wire_promise_is_checked_by_a_case_that_fails_without_it() {
     // Every entry is still needed somewhere (or it names a decision that is no wire promise).
     for e in &list {
         if !used.iter().any(|(id, _)| *id == e.id) {
-            problems.push(format!("{}: listed as uncovered, but it is covered (or no wire promise) on its profiles", e.id));
+            problems
+                .push(format!("{}: listed as uncovered, but it is covered (or no wire promise) on its profiles", e.id));
         }
     }
     assert!(problems.is_empty(), "{} problems:\n{}", problems.len(), problems.join("\n"));

@@ -46,7 +46,11 @@ fn timed(d: &mut Device, line: &str) -> (f64, String) {
 
 /// `got` is within `frac` of `want` (the acceleration ramp and whole-ms ticks add a little).
 fn near(got: f64, want: f64, frac: f64, what: &str) {
-    assert!((got - want).abs() <= want * frac, "{what}: {got:.1} ms, the units say {want:.1} ms (±{:.0}%)", frac * 100.0);
+    assert!(
+        (got - want).abs() <= want * frac,
+        "{what}: {got:.1} ms, the units say {want:.1} ms (±{:.0}%)",
+        frac * 100.0
+    );
 }
 
 #[test]
@@ -60,7 +64,10 @@ fn full_close_and_spread_take_as_long_as_the_default_velocities_say() {
         assert_eq!(out, "123C\n\r=> ", "{name}");
         let want = travel_ms(&p, default(&p, "CT", 1), default(&p, "MCV", 1));
         near(took, want, 0.03, &format!("{name}: 123C from open"));
-        assert!((1000.0..1300.0).contains(&took), "{name}: a full close at MCV 100 takes about 1.1 s, took {took:.0} ms");
+        assert!(
+            (1000.0..1300.0).contains(&took),
+            "{name}: a full close at MCV 100 takes about 1.1 s, took {took:.0} ms"
+        );
         // O back at MOV.
         let (took, _) = timed(&mut d, "123O");
         let want = travel_ms(&p, default(&p, "CT", 1) - default(&p, "OT", 1), default(&p, "MOV", 1));
