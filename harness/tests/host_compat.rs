@@ -6,8 +6,10 @@
 //! - a library that connects with ^C and reads exactly one prompt before its first command;
 //! - a library that changes the baud rate: `PSET BAUD`, close without reading the answer,
 //!   reopen, wait, CR, one prompt;
-//! - a wall-clock RealTime loop for two seconds: its cycle rate stays within the line's limit
-//!   and positions move as the commanded velocities say.
+//! - a wall-clock RealTime loop for two seconds, on the seed and on bh8-262: its cycle rate
+//!   stays within the line's limit, positions move as the commanded velocities say, and the
+//!   feedback velocity read in the profile's unit (counts per 10 ms on a BH8-262, as
+//!   libgripper reads it) agrees.
 
 mod sim_support;
 
