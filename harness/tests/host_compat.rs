@@ -6,8 +6,10 @@
 //! - a library that connects with ^C and reads exactly one prompt before its first command;
 //! - a library that changes the baud rate: `PSET BAUD`, close without reading the answer,
 //!   reopen, wait, CR, one prompt;
-//! - a wall-clock RealTime loop for two seconds: its cycle rate stays within the line's limit
-//!   and positions move as the commanded velocities say.
+//! - a wall-clock RealTime loop for two seconds, on the seed and on bh8-262: its cycle rate
+//!   stays within the line's limit, positions move as the commanded velocities say, and the
+//!   feedback velocity read in the profile's unit (counts per 10 ms on a BH8-262, as
+//!   libgripper reads it) agrees.
 
 mod sim_support;
 
@@ -78,27 +80,41 @@ fn a_library_that_changes_the_baud_rate_reopens_to_one_fresh_prompt() {
 
 #[test]
 fn a_wall_clock_realtime_loop_stays_within_the_line_and_moves_as_commanded() {
-    let profile = Profile::builtin("seed").unwrap();
-    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", "seed"]);
+    for name in ["seed", "bh8-262"] {
+        wall_clock_loop(name);
+    }
+}
+
+/// A velocity loop on the wall clock for 2 s against `gcl sim --pty --profile name`.
+fn wall_clock_loop(name: &str) {
+    let profile = Profile::builtin(name).unwrap();
+    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", name]);
     let mut port = open_port(&sim.address);
     assert_eq!(exchange(&mut port, ""), PROMPT);
     exchange(&mut port, "HI");
-    exchange(&mut port, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
+    // Motors 1 and 2: a velocity out; their velocity and position change back. Motor 4: only
+    // its position change. C v1 v2 is 3 bytes; * lfv1 d1 lfv2 d2 d4 is 6.
+    exchange(&mut port, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
     exchange(&mut port, "4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
+    if profile.param_id("LCT").is_some() {
+        exchange(&mut port, "124FSET LCT 0 LFBP 0 LFAIN 0");
+    }
+    if profile.param_id("LFT").is_some() {
+        exchange(&mut port, "PSET LFT 0");
+    }
     let before = exchange(&mut port, "1FGET P");
     let p0: i64 = String::from_utf8_lossy(&before).split("\n\r").nth(1).unwrap().trim().parse().unwrap();
     port.write_all(b"124LOOP\r").unwrap();
     assert!(read_port(&mut port, &|b| b.ends_with(b"*"), None, Duration::from_secs(5)).ends_with(b"*"));
-    // A control loop on the wall clock, as fast as the line lets it, for 2 s:
-    // close motors 1 and 2 at 20 units (C, v1, v2: 3 bytes; feedback * s1 d1 s2 d2 d4: 6).
+    // Close motors 1 and 2 at datum 20, as fast as the line lets the loop run.
     let v = 20i8;
     let start = Instant::now();
-    let mut cycles = 0u32;
-    let mut moved = 0i64;
+    let (mut cycles, mut moved, mut lfv_sum) = (0u32, 0i64, 0i64);
     while start.elapsed() < Duration::from_secs(2) {
         port.write_all(&[b'C', v as u8, v as u8]).unwrap();
         let fb = read_port(&mut port, &|b| b.len() >= 6, None, Duration::from_secs(5));
-        assert_eq!(fb.len(), 6, "{fb:?}");
+        assert_eq!(fb.len(), 6, "{name}: {fb:?}");
+        lfv_sum += i64::from(fb[1] as i8);
         moved += i64::from(fb[2] as i8);
         cycles += 1;
     }
@@ -110,11 +126,26 @@ fn a_wall_clock_realtime_loop_stays_within_the_line_and_moves_as_commanded() {
     // The line's limit: 9 bytes of 10 bits each per cycle at 9600 baud.
     let rate = f64::from(cycles) / took.as_secs_f64();
     let limit = 9600.0 / 90.0;
-    assert!(rate <= limit * 1.01, "{rate:.1} cycles/s beats the line's {limit:.1}");
-    // Positions move as the velocity says: v × rt_velocity_counts_per_ms per ms of loop, within
-    // a third (acceleration, the loop's edges); the feedback deltas add up to the same motion.
-    let expected = f64::from(v) * profile.hand.rt_velocity_counts_per_ms * took.as_secs_f64() * 1000.0;
+    assert!(rate <= limit * 1.01, "{name}: {rate:.1} cycles/s beats the line's {limit:.1}");
+    // Positions move as the velocity says: the datum (with its fraction bits) times
+    // rt_velocity_counts_per_ms per ms of loop, within a third (acceleration, the loop's
+    // edges); the feedback deltas add up to the same motion.
+    let h = &profile.hand;
+    let per_ms = f64::from(v) / f64::from(1u32 << h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms;
+    let ms = took.as_secs_f64() * 1000.0;
+    let expected = per_ms * ms;
     let actual = (p1 - p0) as f64;
-    assert!((actual - expected).abs() <= expected / 3.0, "moved {actual} counts, velocity says {expected:.0}");
-    assert!((moved as f64 - actual).abs() <= actual / 3.0 + 10.0, "feedback deltas {moved}, position moved {actual}");
+    assert!((actual - expected).abs() <= expected / 3.0, "{name}: moved {actual} counts, velocity says {expected:.0}");
+    assert!(
+        (moved as f64 - actual).abs() <= actual / 3.0 + 10.0,
+        "{name}: feedback deltas {moved}, position moved {actual}"
+    );
+    // A host that turns LFV back into counts per ms (LFV x LFVC in the profile's feedback unit:
+    // per 10 ms tick on a BH8-262, as libgripper reads it) sees the same speed.
+    let lfv_mean = lfv_sum as f64 / f64::from(cycles);
+    let seen = lfv_mean * h.lfv_counts_per_ms;
+    assert!(
+        (seen - per_ms).abs() <= per_ms / 4.0,
+        "{name}: LFV {lfv_mean:.1} reads as {seen:.2} counts/ms, commanded {per_ms:.2}"
+    );
 }

@@ -25,7 +25,7 @@ use nix::poll::{PollFd, PollFlags};
 use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
 use nix::sys::termios::{self, BaudRate, FlushArg, SetArg};
 
-use super::wait::{BACKOFF, IN, ready, wait};
+use super::wait::{BACKOFF, IN, precise_timers, ready, wait};
 use super::{Engine, SimError};
 
 /// How soon a write the pty master refused is tried again.
@@ -233,6 +233,7 @@ impl Pty {
     /// failure of the pty itself, never for anything a client does.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
         let _ = self.match_speed(engine);
+        precise_timers();
         // Nobody has the port open yet (a host that opened it already is seen next).
         if self.open {
             self.open = false;
@@ -268,20 +269,23 @@ impl Pty {
                 let r = now + WRITE_RETRY;
                 deadline = Some(deadline.map_or(r, |d| d.min(r)));
             }
-            let (master_in, stop) = {
+            let (master_in, port_events, stop) = {
                 let mut fds = Vec::with_capacity(2 + stops.len());
                 fds.push(PollFd::new(self.master.as_fd(), flags));
                 fds.push(PollFd::new(self.watch.as_fd(), IN));
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
                 wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the pty", e))?;
-                (readable_ok && ready(&fds[0], IN), fds[2..].iter().any(|f| ready(f, IN)))
+                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), fds[2..].iter().any(|f| ready(f, IN)))
             };
             if stop {
                 break;
             }
             // Opens and closes before the host's bytes: they happened before any byte the host
-            // wrote after them.
-            self.take_port_events(engine);
+            // wrote after them. (Only when inotify has something: a wake-up per paced byte
+            // should not cost a read of an empty queue.)
+            if port_events {
+                self.take_port_events(engine);
+            }
             if master_in {
                 while engine.wants_input() {
                     match self.master.read(&mut buf) {

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use nix::poll::{PollFd, PollFlags};
 
-use super::wait::{IN, ready, wait};
+use super::wait::{IN, precise_timers, ready, wait};
 use super::{Engine, SimError};
 
 /// How long a new connection waits for the active client's end before it is refused: a
@@ -61,6 +61,7 @@ impl TcpServer {
 
     /// Serves clients one at a time until one of `stops` becomes readable.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
+        precise_timers();
         engine.client_gone("listening, no client yet");
         let mut client: Option<Client> = None;
         let mut buf = vec![0u8; 8192];

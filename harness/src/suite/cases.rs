@@ -1810,7 +1810,7 @@ impl Gen {
 
         // LFVC: the feedback velocity is the velocity divided by LFVC.
         let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
-        let datum: i64 = 40;
+        let (datum, lcvc) = self.fit_lfv(40, lcvc, 1, 2);
         let lfv = self.lfv_at(datum, lcvc, 2);
         let k = self
             .rt_case(
@@ -1861,6 +1861,19 @@ impl Gen {
         (raw / lfvc.max(1) as f64).trunc() as i64
     }
 
+    /// `datum` and `lcvc`, halved (LCVC first) until the LFV of `factor` × `lcvc` with `lfvc`,
+    /// with its tolerance band, fits LFV's signed byte: feedback units differ by profile.
+    fn fit_lfv(&self, mut datum: i64, mut lcvc: i64, factor: i64, lfvc: i64) -> (i64, i64) {
+        while tol(self.lfv_at(datum, factor * lcvc, lfvc)).1 > 127 && datum > 1 {
+            if lcvc > 1 {
+                lcvc /= 2;
+            } else {
+                datum /= 2;
+            }
+        }
+        (datum, lcvc)
+    }
+
     /// An LCVC for a brisk RealTime move that stays inside the joint range over a case's short
     /// pauses: half of one whole LCV unit (LCV has `lcv_fraction_bits` fraction bits).
     fn brisk_lcvc(&self) -> i64 {
@@ -1871,7 +1884,7 @@ impl Gen {
     fn realtime_decisions(&mut self) {
         let label = src_label(&self.p);
         // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
-        let (datum, lcvc) = (40i64, self.brisk_lcvc());
+        let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
         let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
         let mut k = self
             .rt_case(
