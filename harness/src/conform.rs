@@ -23,7 +23,7 @@ use crate::report::{
 };
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target, open};
-use crate::transcript::{Form, Level, Requirement};
+use gcl_transcript::{Form, Level, Requirement};
 
 /// Which levels to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -579,7 +579,7 @@ pub fn run_with_events(
                 r.verdict = Verdict::Fail;
                 r.message = Some(outcome.summary());
                 let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                let actual = crate::transcript::escape_text(got);
+                let actual = gcl_transcript::escape_text(got);
                 r.diff = Some(diff_of(f.step, 0, &f.expected_full, &actual, &[], Form::Text, &f.expected_full));
                 flooded = true;
             }
@@ -755,8 +755,8 @@ fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8],
     let offset_c = offset.min(got.len());
     let from = offset_c.saturating_sub(CONTEXT_CHARS);
     let before = match form {
-        Form::Text => crate::transcript::escape_text(&got[from..offset_c]),
-        Form::Hex => crate::transcript::matcher::show(&got[from..offset_c], Form::Hex),
+        Form::Text => gcl_transcript::escape_text(&got[from..offset_c]),
+        Form::Hex => gcl_transcript::matcher::show(&got[from..offset_c], Form::Hex),
     };
     Diff {
         step: step + 1,

@@ -17,12 +17,12 @@ pub mod files;
 pub mod link;
 pub mod links;
 pub mod preflight;
+pub mod record;
 pub mod replay;
 pub mod report;
 pub mod sim;
 pub mod suite;
 pub mod target;
-pub mod transcript;
 pub mod triage;
 pub mod vectors;
 

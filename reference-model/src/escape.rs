@@ -44,7 +44,11 @@ pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
                     Some(b't') => out.push(b'\t'),
                     Some(b'\\') => out.push(b'\\'),
                     Some(b'x') => {
-                        let hex = text.get(i + 2..i + 4).ok_or(UnescapeError::BadEscape(i))?;
+                        // Two hex digits exactly (`from_str_radix` alone would take `+F`).
+                        let hex = text
+                            .get(i + 2..i + 4)
+                            .filter(|h| h.bytes().all(|d| d.is_ascii_hexdigit()))
+                            .ok_or(UnescapeError::BadEscape(i))?;
                         let v = u8::from_str_radix(hex, 16).map_err(|_| UnescapeError::BadEscape(i))?;
                         out.push(v);
                         i += 2;
@@ -74,5 +78,6 @@ mod tests {
         assert_eq!(escape(b"HI\n\r=> \x03"), "HI\\n\\r=> \\x03");
         assert!(unescape("\\q").is_err());
         assert!(unescape("\\x4").is_err());
+        assert!(unescape("\\x+F").is_err());
     }
 }

@@ -15,7 +15,7 @@ use crate::deadline::DeadlinePolicy;
 use crate::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target};
-use crate::transcript::{Level, Requirement};
+use gcl_transcript::{Level, Requirement};
 
 /// Arguments shared by `gcl conform` and `gcl certify`.
 #[derive(Debug, clap::Args)]

@@ -1,6 +1,6 @@
 //! `gcl record`: runs a script of host lines and blocks against a hand and writes what it
 //! answered as a golden transcript (the script syntax is in
-//! [`crate::transcript::script`] and `vectors/README.md`).
+//! [`gcl_transcript::script`] and `vectors/README.md`).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -10,9 +10,9 @@ use anyhow::Context;
 
 use super::{EXIT_OK, load_profile};
 use crate::target::{DEFAULT_SIM_PROFILE, Target};
-use crate::transcript::record::{RecordOptions, record};
-use crate::transcript::script::parse_script_bytes;
-use crate::transcript::{Level, is_slug};
+use gcl_harness::record::{RecordOptions, record};
+use gcl_transcript::script::parse_script_bytes;
+use gcl_transcript::{Level, is_slug};
 
 /// Arguments of `gcl record`.
 #[derive(Debug, clap::Args)]

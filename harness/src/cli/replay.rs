@@ -12,7 +12,7 @@ use anyhow::Context;
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
 use crate::target::Target;
-use crate::transcript::parse_bytes;
+use gcl_transcript::parse_bytes;
 
 /// Arguments of `gcl replay`.
 #[derive(Debug, clap::Args)]
@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(long, default_value = "sim")]
     target: String,
     /// Wait of a step without `within`, in milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = crate::transcript::DEFAULT_STEP_TIMEOUT.as_millis() as u64)]
+    #[arg(long, value_name = "MS", default_value_t = gcl_transcript::DEFAULT_STEP_TIMEOUT.as_millis() as u64)]
     timeout: u64,
     /// Send ^C and drain the answer before the first step.
     #[arg(long)]
@@ -45,7 +45,7 @@ pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Res
         // well after the first quiet period a transcript's drain allows: wait for it here.
         let mut junk = Vec::new();
         link.recv(&mut junk, Duration::from_secs(5))?;
-        crate::transcript::record::drain(link.as_mut(), Duration::from_millis(100), Duration::from_secs(5))?;
+        gcl_harness::link::drain(link.as_mut(), Duration::from_millis(100), Duration::from_secs(5))?;
     }
     Ok(link)
 }

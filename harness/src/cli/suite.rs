@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
 use crate::suite;
-use crate::transcript::Level;
+use gcl_transcript::Level;
 
 /// Arguments of `gcl suite`.
 #[derive(Debug, clap::Args)]

@@ -11,9 +11,9 @@ use gcl_model::spec::{CommandKind, ParamSpec, Scope};
 use gcl_model::{DeviceConfig, Profile};
 
 use crate::SimLink;
-use crate::transcript::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
-use crate::transcript::script::{Action, ScriptStep};
-use crate::transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
+use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
+use gcl_transcript::script::{Action, ScriptStep};
+use gcl_transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
 /// The header key listing every decision a case rests on (those it checks and those its
 /// framing, preamble, read-backs and teardown touch), space-separated, in the profile's order.

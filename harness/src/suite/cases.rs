@@ -12,7 +12,7 @@ use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, 
 use gcl_model::{Profile, StatusBits};
 
 use super::build::{CaseB, CaseDef, FieldRule, Range, Shape};
-use crate::transcript::{Level, Requirement};
+use gcl_transcript::{Level, Requirement};
 
 /// Every case of a profile, in catalogue order.
 pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
