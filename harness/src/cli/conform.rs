@@ -10,11 +10,11 @@ use anyhow::Context;
 use gcl_model::Fault;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
-use crate::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
-use crate::deadline::DeadlinePolicy;
-use crate::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
-use crate::suite::{self, Case};
-use crate::target::{OpenOptions, Target};
+use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
+use gcl_harness::deadline::DeadlinePolicy;
+use gcl_harness::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
+use gcl_harness::suite::{self, Case};
+use gcl_harness::target::{OpenOptions, Target};
 use gcl_transcript::{Level, Requirement};
 
 /// Arguments shared by `gcl conform` and `gcl certify`.
@@ -59,7 +59,7 @@ pub struct SuiteArgs {
     /// After N timeouts in a row, probe the hand; if it does not answer, the rest of the cases
     /// are not run and the run exits 2. The same after N failing cases in a row after which the
     /// hand would not stop sending (0: never).
-    #[arg(long, value_name = "N", default_value_t = crate::conform::DEFAULT_DEAD_AFTER as u64)]
+    #[arg(long, value_name = "N", default_value_t = gcl_harness::conform::DEFAULT_DEAD_AFTER as u64)]
     pub dead_after: u64,
     /// Skip the framing pre-flight (a few exchanges before the suite that name gross framing
     /// faults: prompt, line ending, echo, banner, status format).
@@ -75,7 +75,7 @@ pub struct SuiteArgs {
     pub suite: Option<PathBuf>,
     /// The line rate the hand runs at, for the wire-time lower bound (serial targets give
     /// their own with ?baud=N); 50 to 4000000.
-    #[arg(long, value_parser = crate::target::parse_baud)]
+    #[arg(long, value_parser = gcl_harness::target::parse_baud)]
     pub baud: Option<u32>,
     /// sim targets: seed of the model's noise.
     #[arg(long, default_value_t = 0)]
@@ -117,7 +117,7 @@ pub fn prepare(
         .profile
         .clone()
         .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| crate::target::DEFAULT_SIM_PROFILE.to_string());
+        .unwrap_or_else(|| gcl_harness::target::DEFAULT_SIM_PROFILE.to_string());
     let profile = load_profile(&profile_name)?;
     let cases = match &a.suite {
         Some(dir) => {

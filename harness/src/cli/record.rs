@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::Context;
 
 use super::{EXIT_OK, load_profile};
-use crate::target::{DEFAULT_SIM_PROFILE, Target};
+use gcl_harness::target::{DEFAULT_SIM_PROFILE, Target};
 use gcl_harness::record::{RecordOptions, record};
 use gcl_transcript::script::parse_script_bytes;
 use gcl_transcript::{Level, is_slug};
@@ -66,7 +66,7 @@ pub struct Args {
 /// Runs `gcl record`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let target: Target = args.target.parse()?;
-    let bytes = crate::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
+    let bytes = gcl_harness::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
     let script = parse_script_bytes(&bytes).with_context(|| format!("parsing {}", args.script.display()))?;
     let mut fields = script.fields.clone();
     if let Some(id) = args.id {
@@ -123,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.out {
         // Temporary file, then rename: a kill leaves the old file or the new one, never an
         // empty or torn one.
-        Some(path) => crate::report::write_atomic(&path, text.as_bytes())
+        Some(path) => gcl_harness::report::write_atomic(&path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?,
         None => std::io::stdout().lock().write_all(text.as_bytes())?,
     }

@@ -1,5 +1,5 @@
 //! `gcl sim`: the simulated grasper on a pty, TCP or stdio (the transports live in
-//! [`crate::sim`]). This module parses arguments, turns start-up problems into one line on
+//! [`gcl_harness::sim`]). This module parses arguments, turns start-up problems into one line on
 //! stderr and exit code 2, and stops cleanly on SIGINT, SIGTERM and SIGHUP.
 
 use std::io::Write;
@@ -12,7 +12,7 @@ use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
 
 use super::{EXIT_OK, load_profile};
-use crate::sim::{
+use gcl_harness::sim::{
     Engine, Pace, SCENARIO_EXAMPLE, SimOptions, TimeMode, check_scenario, parse_scenario, pty::Pty, stdio,
     tcp::TcpServer,
 };
@@ -144,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let profile = load_profile(&args.profile)?;
     let scenario = match &args.scenario {
         Some(p) => {
-            let text = crate::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
+            let text = gcl_harness::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
             let s = parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?;
             check_scenario(&s, &profile).with_context(|| format!("scenario file {}", p.display()))?;
             s

@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
-use crate::suite;
+use gcl_harness::suite;
 use gcl_transcript::Level;
 
 /// Arguments of `gcl suite`.
