@@ -59,8 +59,8 @@ pub fn load(name: &str) -> Result<Arc<Profile>, ProfileError> {
         });
     }
     // The file itself first, so a FIFO, a device or a huge file is one clear error.
-    let top_text = crate::files::read_input_text(path)
-        .map_err(|error| ProfileError::Read { name: name.to_string(), error })?;
+    let top_text =
+        crate::files::read_input_text(path).map_err(|error| ProfileError::Read { name: name.to_string(), error })?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let top = path.file_name().and_then(|f| f.to_str()).unwrap_or_default().to_string();
     let failed = std::cell::RefCell::new(None::<String>);

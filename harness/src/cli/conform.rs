@@ -97,14 +97,35 @@ pub struct Args {
     #[command(flatten)]
     pub suite: SuiteArgs,
     /// Levels to run: must (MUST), should (MUST and SHOULD), all (also MAY and INFO).
-    #[arg(long, value_enum, default_value_t = LevelFilter::All)]
-    pub level: LevelFilter,
+    #[arg(long, value_enum, default_value_t = LevelArg::All)]
+    pub level: LevelArg,
     /// Write report.json, junit.xml, report.html (and results.jsonl as cases end) into DIR.
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
     /// Print only the summary.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `--level`: the command line's names for a [`LevelFilter`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LevelArg {
+    /// MUST only.
+    Must,
+    /// MUST and SHOULD.
+    Should,
+    /// Every level: MUST, SHOULD, MAY, INFO.
+    All,
+}
+
+impl From<LevelArg> for LevelFilter {
+    fn from(l: LevelArg) -> LevelFilter {
+        match l {
+            LevelArg::Must => LevelFilter::Must,
+            LevelArg::Should => LevelFilter::Should,
+            LevelArg::All => LevelFilter::All,
+        }
+    }
 }
 
 /// The suite, options and cases a run needs, from the shared arguments.
@@ -373,7 +394,7 @@ fn clip(s: &str, n: usize) -> String {
 
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let (opts, cases) = prepare(&args.suite, args.level, false)?;
+    let (opts, cases) = prepare(&args.suite, args.level.into(), false)?;
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
     record_options(&mut out.report, &args.suite);
     let mut w = std::io::stdout().lock();
