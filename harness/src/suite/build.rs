@@ -321,8 +321,17 @@ pub(crate) fn value_range(spec: &ParamSpec, motor: u8, pos: Option<[Range; 4]>) 
 
 /// The label of a profile's source document in clause strings.
 pub(crate) fn source_label(p: &Profile) -> &'static str {
-    // The seed profile follows the seed document; the bh8-262 profiles follow Barrett's manuals.
-    if p.id == "seed" { "seed" } else { "manual" }
+    sources().get(p.id.as_str()).map_or("manual", String::as_str)
+}
+
+/// `harness/suite-cases/sources.toml`: which document each profile's clauses cite.
+fn sources() -> &'static std::collections::BTreeMap<String, String> {
+    static SOURCES: std::sync::OnceLock<std::collections::BTreeMap<String, String>> = std::sync::OnceLock::new();
+    SOURCES.get_or_init(|| {
+        // Embedded, and checked by the test below: a broken file is a build of this crate
+        // that fails its tests, never a run that cites the wrong document.
+        toml::from_str(include_str!("../../suite-cases/sources.toml")).unwrap_or_default()
+    })
 }
 
 /// The line ending then the prompt.
@@ -557,4 +566,22 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
         return Err(fail("no clause".into()));
     }
     Ok(Transcript { header, steps: out })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sources_file_parses_and_names_only_builtin_profiles() {
+        let text = include_str!("../../suite-cases/sources.toml");
+        let parsed: std::collections::BTreeMap<String, String> = toml::from_str(text).unwrap();
+        assert_eq!(&parsed, sources(), "the embedded file did not parse");
+        for (id, label) in &parsed {
+            assert!(Profile::builtin(id).is_ok(), "sources.toml names `{id}`, which is no built-in profile");
+            assert!(["seed", "manual"].contains(&label.as_str()), "`{id}`: unknown source `{label}`");
+        }
+        assert_eq!(source_label(&Profile::builtin("seed").unwrap()), "seed");
+        assert_eq!(source_label(&Profile::builtin("bh8-262").unwrap()), "manual");
+    }
 }

@@ -59,6 +59,22 @@ impl Gen {
         self.p.command_id(name).is_some()
     }
 
+    /// Whether the profile has this decision. Profiles differ in data, not in code: a case
+    /// names every decision it may rest on (the seed's and the manuals'), and
+    /// [`CaseB::decision`] cites those the profile has.
+    fn has_decision(&self, id: &str) -> bool {
+        self.p.decisions.iter().any(|d| d.id == id)
+    }
+
+    /// Cites those of `ids` the profile has; a case that rests on none of them is MUST.
+    fn cite_or_must(&self, k: CaseB, ids: &[&str]) -> CaseB {
+        if ids.iter().any(|id| self.has_decision(id)) {
+            ids.iter().fold(k, |k, id| k.decision(id))
+        } else {
+            k.level(Level::Must)
+        }
+    }
+
     fn has_param(&self, name: &str) -> bool {
         self.p.param_id(name).is_some()
     }
@@ -285,19 +301,19 @@ impl Gen {
 
     fn command_prefix(&mut self, c: &CommandSpec) {
         let id = format!("cmd-{}-prefix", slug(&c.name));
-        let label = src_label(&self.p);
         match c.prefix {
             PrefixRule::Forbidden => {
                 let mut k = self
                     .case(id, format!("{} takes no motor prefix: a prefix gives 4096", c.name))
                     .src(&format!("Command {}", c.name));
-                k = match (label, c.name.as_str()) {
-                    ("seed", "VERS" | "?") => k.decision("seed-prefix-rules"),
-                    ("seed", "FLISTA" | "FLISTAV") => k.decision("seed-flista"),
-                    ("manual", "FLISTA") => k.decision("bh8-list-prefixes"),
-                    ("manual", "?" | "A?" | "RESET" | "ERR" | "VERS") => k.decision("bh8-admin-prefixes"),
-                    _ => k.level(Level::Must),
+                let cited: &[&str] = match c.name.as_str() {
+                    "VERS" | "?" => &["seed-prefix-rules", "bh8-admin-prefixes"],
+                    "FLISTA" => &["seed-flista", "bh8-list-prefixes"],
+                    "FLISTAV" => &["seed-flista"],
+                    "A?" | "RESET" | "ERR" => &["bh8-admin-prefixes"],
+                    _ => &[],
                 };
+                k = self.cite_or_must(k, cited);
                 let line = format!("1{}{}", c.name, self.valid_args(c));
                 k = k.preamble(false).line(&line).line("FGET DP");
                 self.add(k);
@@ -306,18 +322,16 @@ impl Gen {
                 let mut k = self
                     .case(id, format!("{} takes a motor prefix and acts on the motors it names", c.name))
                     .src(&format!("Command {}", c.name));
-                if label == "seed"
-                    && matches!(
-                        c.kind,
-                        CommandKind::MotorDefaults
-                            | CommandKind::MotorLoad
-                            | CommandKind::MotorSave
-                            | CommandKind::Terminate
-                    )
-                {
+                if matches!(
+                    c.kind,
+                    CommandKind::MotorDefaults
+                        | CommandKind::MotorLoad
+                        | CommandKind::MotorSave
+                        | CommandKind::Terminate
+                ) {
                     k = k.decision("seed-prefix-rules");
                 }
-                if label == "manual" && c.kind == CommandKind::MotorListAllValues {
+                if c.kind == CommandKind::MotorListAllValues {
                     k = k.decision("bh8-list-prefixes");
                 }
                 if matches!(c.kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
@@ -443,13 +457,11 @@ impl Gen {
         match c.args {
             ArgRule::None => {
                 k = k.src("Status codes 1024");
-                if src_label(&self.p) == "seed"
-                    && matches!(c.kind, CommandKind::IncrementalClose | CommandKind::IncrementalOpen)
-                {
+                if matches!(c.kind, CommandKind::IncrementalClose | CommandKind::IncrementalOpen) {
                     k = k.decision("seed-ic-io-args");
                 }
                 if c.kind == CommandKind::Help {
-                    k = k.decision(if src_label(&self.p) == "seed" { "seed-help" } else { "bh8-help-format" });
+                    k = k.decision("seed-help").decision("bh8-help-format");
                 }
                 // A motion command is checked on initialised motors, so that its answer does
                 // not also depend on which of two problems a hand reports.
@@ -460,9 +472,9 @@ impl Gen {
                 let (lo, hi) = (c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(0));
                 k = k.src("Status codes 128").src("Status codes 1024");
                 if c.kind == CommandKind::ErrorText {
-                    k = k.decision(if src_label(&self.p) == "seed" { "seed-err-command" } else { "bh8-err-format" });
+                    k = k.decision("seed-err-command").decision("bh8-err-format");
                 }
-                if src_label(&self.p) == "manual" && c.kind.is_motion() {
+                if c.kind.is_motion() {
                     k = k.decision("bh8-ic-io-range");
                 }
                 k = k.preamble(c.kind.is_motion()).line(&format!("{n} 1 2")).line(&format!("{n} {}", hi + 1));
@@ -503,15 +515,17 @@ impl Gen {
             .case(id, format!("{n} before HI gives {code} and moves nothing"))
             .src(&format!("Command {n}"))
             .src("Command HI");
-        k = match (src_label(&self.p), c.kind) {
-            ("seed", CommandKind::Terminate) => k.decision("seed-terminate-uninitialized"),
-            ("seed", CommandKind::Loop) => k.decision("seed-motion-before-hi").decision("seed-param-prefix-en"),
-            ("seed", _) => k.decision("seed-motion-before-hi"),
-            (_, CommandKind::Loop) => {
-                k.decision("bh8-loop-failure").decision("bh8-motion-before-hi").decision("bh8-loop-motors")
+        k = match c.kind {
+            CommandKind::Terminate => {
+                k.decision("seed-terminate-uninitialized").decision("bh8-terminate-uninitialized")
             }
-            (_, CommandKind::Terminate) => k.decision("bh8-terminate-uninitialized"),
-            _ => k.decision("bh8-motion-before-hi"),
+            CommandKind::Loop => k
+                .decision("seed-motion-before-hi")
+                .decision("seed-param-prefix-en")
+                .decision("bh8-loop-failure")
+                .decision("bh8-motion-before-hi")
+                .decision("bh8-loop-motors"),
+            _ => k.decision("seed-motion-before-hi").decision("bh8-motion-before-hi"),
         };
         k = k.preamble(false).line(n);
         self.add(k);
@@ -540,13 +554,12 @@ impl Gen {
     fn command_run(&mut self, c: &CommandSpec) {
         let n = c.name.clone();
         let id = format!("cmd-{}", slug(&n));
-        let label = src_label(&self.p);
         let k = self.case(id, format!("{n} does its job")).src(&format!("Command {n}"));
         let k = match c.kind {
             kind if kind.is_motion() => {
                 let (setup, goals) = self.motion_recipe(kind, "");
                 let mut k = k.preamble(true);
-                if label == "seed" && matches!(kind, CommandKind::Close | CommandKind::Open) {
+                if matches!(kind, CommandKind::Close | CommandKind::Open) {
                     k = k.decision("seed-close-open-targets");
                 }
                 if kind == CommandKind::TorqueClose {
@@ -580,7 +593,7 @@ impl Gen {
                     params.iter().map(|x| format!("{} {}", x.name, other_value(x, self.default(&x.name, 1)))).collect();
                 let names: Vec<&str> = params.iter().map(|x| x.name.as_str()).collect();
                 let getter = if c.kind == CommandKind::MotorSet { "FGET" } else { "PGET" };
-                let k = if label == "seed" { k.decision("seed-fget-format") } else { k.decision("bh8-fget-format") };
+                let k = k.decision("seed-fget-format").decision("bh8-fget-format");
                 k.level(Level::Must)
                     .preamble(false)
                     .line(&format!("{n} {}", pairs.join(" ")))
@@ -602,29 +615,25 @@ impl Gen {
                     return;
                 }
                 let refs: Vec<&str> = names.iter().map(String::as_str).collect();
-                let k = if label == "seed" { k.decision("seed-fget-format") } else { k.decision("bh8-fget-format") };
+                let k = k.decision("seed-fget-format").decision("bh8-fget-format");
                 k.level(Level::Must).preamble(false).get("", &refs, None)
             }
             CommandKind::MotorList
             | CommandKind::MotorListAll
             | CommandKind::GlobalList
             | CommandKind::GlobalListAll => {
-                let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-names-format") };
+                let k = k.decision("seed-flista").decision("bh8-list-names-format");
                 self.listing_order(k, c.kind).preamble(false).line(&n)
             }
             CommandKind::MotorListValues
             | CommandKind::MotorListAllValues
             | CommandKind::GlobalListValues
             | CommandKind::GlobalListAllValues => {
-                let k = if label == "seed" { k.decision("seed-flista") } else { k.decision("bh8-list-values-format") };
+                let k = k.decision("seed-flista").decision("bh8-list-values-format");
                 self.listing_order(k, c.kind).preamble(false).line_shaped(&n, Shape::ListValues)
             }
             CommandKind::Reset => {
-                let k = if label == "seed" {
-                    k.decision("seed-reset-output")
-                } else {
-                    k.decision("bh8-reset").decision("bh8-banner-text")
-                };
+                let k = k.decision("seed-reset-output").decision("bh8-reset").decision("bh8-banner-text");
                 k.decision("seed-motion-before-hi")
                     .decision("bh8-motion-before-hi")
                     .preamble(true)
@@ -632,15 +641,17 @@ impl Gen {
                     .line("C")
             }
             CommandKind::ErrorText => {
-                let k = if label == "seed" { k.decision("seed-err-command") } else { k.decision("bh8-err-format") };
+                let k = k.decision("seed-err-command").decision("bh8-err-format");
                 k.preamble(false).line(&format!("{n} 3")).line(&format!("{n} 4160")).line(&n)
             }
             CommandKind::Version => {
-                let k = if label == "seed" { k.level(Level::Info) } else { k.decision("bh8-vers-text") };
+                // What VERS says is checked where the profile decides it; elsewhere it is INFO.
+                let k =
+                    if self.has_decision("bh8-vers-text") { k.decision("bh8-vers-text") } else { k.level(Level::Info) };
                 k.preamble(false).line_shaped(&n, Shape::AnyLines)
             }
             CommandKind::Help => {
-                let k = if label == "seed" { k.decision("seed-help") } else { k.decision("bh8-help-format") };
+                let k = k.decision("seed-help").decision("bh8-help-format");
                 k.preamble(false).line(&n).line(&format!("{n}HI")).line(&format!("{n}BOGUS")).line(&format!("{n} HI"))
             }
             CommandKind::HelpAll => k.decision("bh8-help-format").preamble(false).line(&n),
@@ -743,11 +754,11 @@ impl Gen {
                 .line("FGET MSG HSG");
             self.add(k);
         }
-        let en = if src_label(&self.p) == "seed" { "seed-param-prefix-en" } else { "bh8-param-prefix-en" };
         let k = self
             .case("param-en-narrows-motion", "EN narrows motion commands without a prefix, never parameter commands")
             .src("Parameter EN")
-            .decision(en)
+            .decision("seed-param-prefix-en")
+            .decision("bh8-param-prefix-en")
             .preamble(true)
             .line("SFSET EN 0")
             .line("FGET EN DP")
@@ -801,18 +812,15 @@ impl Gen {
     /// The source clause of a parameter case, and the decisions that govern it: those about
     /// defaults only for the default case.
     fn param_level(&self, mut k: CaseB, x: &ParamSpec, default_case: bool) -> CaseB {
-        let label = src_label(&self.p);
         k = k.src(&format!("Parameter {}", x.name));
-        match (label, x.name.as_str(), default_case) {
-            ("seed", "S", _) => k.decision("seed-s-values"),
-            ("seed", "BAUD", _) => k.decision("seed-baud"),
-            ("seed", "SGFLIP", true) => k.decision("seed-sgflip-spread"),
-            ("manual", "S", _) => k.decision("bh8-s-before-hi"),
-            ("manual", "SGFLIP", true) => k.decision("bh8-sgflip-default"),
-            ("manual", "MSG" | "HSG", _) => k.decision("bh8-msg-alias"),
-            ("manual", "LCT" | "LFBP" | "LFAIN", _) => k.decision("bh8-new-rt-fields-defaults"),
-            ("manual", "OD" | "UPSECS" | "PTEMP" | "SN", _) => k.decision("bh8-self-stored"),
-            ("manual", "BP", _) => k.decision("bh8-bp-range"),
+        match (x.name.as_str(), default_case) {
+            ("S", _) => k.decision("seed-s-values").decision("bh8-s-before-hi"),
+            ("BAUD", _) => k.decision("seed-baud"),
+            ("SGFLIP", true) => k.decision("seed-sgflip-spread").decision("bh8-sgflip-default"),
+            ("MSG" | "HSG", _) => k.decision("bh8-msg-alias"),
+            ("LCT" | "LFBP" | "LFAIN", _) => k.decision("bh8-new-rt-fields-defaults"),
+            ("OD" | "UPSECS" | "PTEMP" | "SN", _) => k.decision("bh8-self-stored"),
+            ("BP", _) => k.decision("bh8-bp-range"),
             _ => k,
         }
     }
@@ -860,7 +868,7 @@ impl Gen {
             format!("{} out of range gives 128 and changes nothing", x.name),
         );
         let mut k = self.param_level(k, x, false).src("Status codes 128").preamble(false);
-        if src_label(&self.p) == "seed" && x.min == 0 && x.max == 1 {
+        if x.min == 0 && x.max == 1 && self.has_decision("seed-booleans") {
             k = k.decision("seed-booleans").level(Level::Must);
         }
         for v in bad {
@@ -888,7 +896,7 @@ impl Gen {
             },
         );
         let mut k = self.param_level(k, x, false).src(&format!("Status codes {code}"));
-        if !writable_through && src_label(&self.p) == "seed" {
+        if !writable_through {
             k = k.decision("seed-temp-global");
         }
         let k = k.preamble(false).line(&format!("{setter} {} 0", x.name)).get("", &[&x.name], None);
@@ -902,11 +910,7 @@ impl Gen {
         let t1 = self.code(h.terminate_uninitialized_status);
         let mut k =
             self.case(format!("status-{t1}-terminate-before-hi"), format!("T before HI gives {t1}")).src("Command T");
-        k = if src_label(&self.p) == "seed" {
-            k.decision("seed-terminate-uninitialized")
-        } else {
-            k.decision("bh8-terminate-uninitialized")
-        };
+        k = k.decision("seed-terminate-uninitialized").decision("bh8-terminate-uninitialized");
         let k = k.preamble(false).line("T").line("HI").requires(Requirement::Motion).line("T");
         self.add(k);
 
@@ -914,7 +918,8 @@ impl Gen {
         let k = self
             .case(format!("status-{u}-not-initialized"), format!("A motion command before HI gives {u}"))
             .src(&format!("Status codes {u}"))
-            .decision(if src_label(&self.p) == "seed" { "seed-motion-before-hi" } else { "bh8-motion-before-hi" })
+            .decision("seed-motion-before-hi")
+            .decision("bh8-motion-before-hi")
             .preamble(false)
             .line("M 1000")
             .line("1C");
@@ -1073,7 +1078,6 @@ impl Gen {
     // ------------------------------------------------------------------ persistence
 
     fn persistence(&mut self) {
-        let label = src_label(&self.p);
         let k = self
             .case("persist-fdef", "FDEF restores the factory values in RAM")
             .src("Command FDEF")
@@ -1087,7 +1091,8 @@ impl Gen {
         let k = self
             .case("persist-fdef-ram-only", "FDEF changes RAM only: the saved values come back at RESET")
             .src("Command FDEF")
-            .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
+            .decision("seed-saved-set")
+            .decision("bh8-saved-sets")
             .level(Level::Must)
             .requires(Requirement::Eeprom)
             .preamble(false)
@@ -1135,7 +1140,8 @@ impl Gen {
         let k = self
             .case("persist-reset-discards-ram", "RESET forgets values that were not saved")
             .src("Command RESET")
-            .decision(if label == "seed" { "seed-reset-output" } else { "bh8-reset" })
+            .decision("seed-reset-output")
+            .decision("bh8-reset")
             .requires(Requirement::Eeprom)
             .preamble(false)
             .line("FSAVE")
@@ -1159,7 +1165,8 @@ impl Gen {
             let mut k = self
                 .case("persist-saved-set", "Every parameter of the saved set survives FSAVE and RESET")
                 .src("Command FSAVE")
-                .decision(if label == "seed" { "seed-saved-set" } else { "bh8-saved-sets" })
+                .decision("seed-saved-set")
+                .decision("bh8-saved-sets")
                 .requires(Requirement::Eeprom)
                 .preamble(false);
             for l in chunk_lines("FSET", &pairs, safe_line(&self.p)) {
@@ -1218,7 +1225,6 @@ impl Gen {
     // ------------------------------------------------------------------ ^C
 
     fn abort(&mut self) {
-        let label = src_label(&self.p);
         let k = self
             .case("abort-idle", "^C while idle prints a fresh prompt and no status")
             .decision("framing-abort-idle")
@@ -1232,7 +1238,8 @@ impl Gen {
         let k = self
             .case("abort-motion", "^C during motion stops every motor and answers at once")
             .src("Command ^C")
-            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-motion" })
+            .decision("seed-abort")
+            .decision("bh8-abort-motion")
             .requires(Requirement::AbortTiming)
             .preamble(true)
             .nowait("GC")
@@ -1246,7 +1253,8 @@ impl Gen {
             .case("abort-motion-discards-queue", "^C during motion also discards the lines queued behind the command")
             .src("Command ^C")
             .decision("framing-busy-input")
-            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-motion" })
+            .decision("seed-abort")
+            .decision("bh8-abort-motion")
             .requires(Requirement::AbortTiming)
             .preamble(true)
             .nowait("GC\rFGET DP")
@@ -1258,7 +1266,8 @@ impl Gen {
         let k = self
             .case("abort-loop", "^C in place of a RealTime header ends the loop and prints the prompt")
             .src("RealTime Control")
-            .decision(if label == "seed" { "seed-abort" } else { "bh8-abort-loop" })
+            .decision("seed-abort")
+            .decision("bh8-abort-loop")
             .requires(Requirement::Realtime)
             .preamble(true)
             .line("1LOOP")
@@ -1270,7 +1279,6 @@ impl Gen {
     // ------------------------------------------------------------------ motion
 
     fn motion(&mut self) {
-        let label = src_label(&self.p);
         let k = self
             .case("motion-goal-within-mpe", "M ends within MPE of its goal and gives no status")
             .src("Command M")
@@ -1287,7 +1295,8 @@ impl Gen {
         let k = self
             .case("motion-strain-limit", format!("With {msg} 0 a move stops at once; M then misses its goal (16)"))
             .src(&format!("Parameter {msg}"))
-            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-strain-limits-disable" })
+            .decision("seed-motion-model")
+            .decision("bh8-strain-limits-disable")
             .preamble(true)
             .line(&format!("GFSET {msg} 0"))
             .line("GM 5000")
@@ -1323,7 +1332,8 @@ impl Gen {
             )
             .src("Command M")
             .src("Parameter MPE")
-            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-mpe-boundary" })
+            .decision("seed-motion-model")
+            .decision("bh8-mpe-boundary")
             .decision("bh8-position-bounds")
             .note(format!(
                 "The spread stalls at its joint stop ({l4}): SM {} leaves an error of MPE ({mpe4}), SM {} one more.",
@@ -1378,7 +1388,6 @@ impl Gen {
     /// For parameters whose value changes what the hand does: a case that sets one to a value
     /// other than its default and shows the difference on the wire.
     fn effects(&mut self) {
-        let label = src_label(&self.p);
         let dp = 3000;
         let k = self
             .case("param-dp-effect", format!("M without an argument goes to DP: 1FSET DP {dp}, 1M"))
@@ -1483,7 +1492,8 @@ impl Gen {
             .case("param-sgflip-effect", "With SGFLIP 1 FGET SG reads 255 minus the strain")
             .src("Parameter SGFLIP")
             .src("Parameter SG")
-            .decision(if label == "seed" { "seed-strain-at-rest" } else { "bh8-strain-at-rest" })
+            .decision("seed-strain-at-rest")
+            .decision("bh8-strain-at-rest")
             .note(format!(
                 "A free finger's strain is near {f}: with SGFLIP 0 it reads {}..{}, with SGFLIP 1 {}..{}.",
                 plain.0, plain.1, flipped.0, flipped.1
@@ -1521,9 +1531,6 @@ impl Gen {
     /// where a motor is when a ^C lands, or whether its command is still running then. These
     /// need a hand whose motion takes time (`abort-timing`).
     fn timed_effects(&mut self) {
-        let label = src_label(&self.p);
-        let abort_d = if label == "seed" { "seed-abort" } else { "bh8-abort-motion" };
-        let model_d = if label == "seed" { "seed-motion-model" } else { "bh8-velocity-units" };
         // The ^C lands between `pause` and `pause + slack` ms after the command: the host's
         // pause, plus the echo and the recorder's quiet time.
         let slack = 150u64;
@@ -1551,8 +1558,8 @@ impl Gen {
                 )
                 .src(&format!("Parameter {name}"))
                 .src(&format!("Command {word}"))
-                .decision(abort_d)
-                .decision(model_d)
+                .decision("seed-abort").decision("bh8-abort-motion")
+                .decision("seed-motion-model").decision("bh8-velocity-units")
                 .requires(Requirement::AbortTiming)
                 .note(format!(
                     "The ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
@@ -1593,8 +1600,8 @@ impl Gen {
                     )
                     .src("Parameter ACCEL")
                     .src("Command C")
-                    .decision(abort_d)
-                    .decision(model_d)
+                    .decision("seed-abort").decision("bh8-abort-motion")
+                    .decision("seed-motion-model").decision("bh8-velocity-units")
                     .requires(Requirement::AbortTiming)
                     .note(format!(
                         "Both motors close at MCV {speed}; the ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
@@ -1634,8 +1641,8 @@ impl Gen {
             )
             .src("Parameter TSTOP")
             .src("Command M")
-            .decision(abort_d)
-            .decision(if label == "seed" { "seed-motion-model" } else { "bh8-position-bounds" })
+            .decision("seed-abort").decision("bh8-abort-motion")
+            .decision("seed-motion-model").decision("bh8-position-bounds")
             .requires(Requirement::AbortTiming)
             .note(format!("The spread reaches its joint stop ({l4}) about {t_stop} ms after SM {goal} starts."))
             .preamble(true)
@@ -1679,7 +1686,6 @@ impl Gen {
     }
 
     fn realtime(&mut self) {
-        let label = src_label(&self.p);
         let headers: [(&str, &str, u8, &[u8]); 4] = [
             ("upper-c", "C: control data follows; the answer is a feedback block", b'C', &[0]),
             ("lower-c", "c: control data follows; the answer is * alone", b'c', &[0]),
@@ -1710,13 +1716,12 @@ impl Gen {
                 if f.scope == Scope::Motor { "1" } else { "" },
                 &[&f.name],
             );
-            k = match (label, f.name.as_str()) {
-                ("manual", "LFT") => k.decision("bh8-lft-field"),
-                ("manual", "LCT" | "LFBP" | "LFAIN") => {
-                    k.decision("bh8-44-rt-field-order").decision("bh8-new-rt-fields-defaults")
-                }
-                _ => k.level(Level::Must),
+            let cited: &[&str] = match f.name.as_str() {
+                "LFT" => &["bh8-lft-field"],
+                "LCT" | "LFBP" | "LFAIN" => &["bh8-44-rt-field-order", "bh8-new-rt-fields-defaults"],
+                _ => &[],
             };
+            k = self.cite_or_must(k, cited);
             k = k.src(&format!("Parameter {}", f.name)).line("1LOOP");
             if rt.block == gcl_model::spec::BlockKind::Control {
                 let mut b = vec![b'C'];
@@ -1758,7 +1763,8 @@ impl Gen {
                 "",
                 &all,
             )
-            .decision(if label == "seed" { "seed-rt-field-order" } else { "bh8-44-rt-field-order" })
+            .decision("seed-rt-field-order")
+            .decision("bh8-44-rt-field-order")
             .line("1234LOOP")
             .block(&block, Shape::Block(self.at_rest()))
             .block(b"A", Shape::Block(self.at_rest()))
@@ -1823,7 +1829,8 @@ impl Gen {
             )
             .src("Parameter LFVC")
             .src("Parameter LCVC")
-            .decision(if label == "seed" { "seed-rt-velocity" } else { "bh8-velocity-units" })
+            .decision("seed-rt-velocity")
+            .decision("bh8-velocity-units")
             .note("Velocities during motion are compared with 25% tolerance.")
             .line(&format!("1FSET LCVC {lcvc} LFVC 2"))
             .line("1LOOP")
@@ -1869,7 +1876,6 @@ impl Gen {
 
     /// RealTime cases for decisions about the loop's motors, gains and coefficients.
     fn realtime_decisions(&mut self) {
-        let label = src_label(&self.p);
         // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
         let (datum, lcvc) = (40i64, self.brisk_lcvc());
         let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
@@ -1882,11 +1888,7 @@ impl Gen {
             )
             .src("Parameter LFV")
             .src("Parameter LFVC");
-        k = if label == "seed" {
-            k.decision("seed-lfv-formula").decision("seed-rt-velocity")
-        } else {
-            k.decision("bh8-velocity-units")
-        };
+        k = k.decision("seed-lfv-formula").decision("seed-rt-velocity").decision("bh8-velocity-units");
         let k = k
             .note("Velocities during motion are compared with 25% tolerance.")
             .line(&format!("12FSET LCVC {lcvc}"))
@@ -1905,7 +1907,7 @@ impl Gen {
             )
             .src("Parameter LCVC")
             .src("Parameter LCV");
-        k = if label == "seed" { k.decision("seed-rt-velocity") } else { k.decision("bh8-velocity-units") };
+        k = k.decision("seed-rt-velocity").decision("bh8-velocity-units");
         let k = k
             .note("Velocities during motion are compared with 25% tolerance.")
             .line(&format!("1FSET LCVC {}", 2 * lcvc))
@@ -1932,7 +1934,7 @@ impl Gen {
                 &["LCPG", "LFV", "LFAP"],
             )
             .src("Parameter LCPG");
-        k = if label == "seed" { k.decision("seed-lcpg-gain") } else { k.decision("bh8-rt-zero-gain") };
+        k = k.decision("seed-lcpg-gain").decision("bh8-rt-zero-gain");
         let k = k
             .note(format!(
                 "Control blocks: motor 1 LCV then LCPG, motor 2 LCPG. The answer to a C block shows the state before \
@@ -1961,11 +1963,7 @@ impl Gen {
                 &["LFAP"],
             )
             .src("Parameter EN");
-        k = if label == "seed" {
-            k.decision("seed-param-prefix-en")
-        } else {
-            k.decision("bh8-loop-motors").decision("bh8-param-prefix-en")
-        };
+        k = k.decision("seed-param-prefix-en").decision("bh8-loop-motors").decision("bh8-param-prefix-en");
         let k = k
             .line("SFSET EN 0")
             .comment("motors 1, 2 and 3: three LFAP fields")
@@ -2085,7 +2083,6 @@ impl Gen {
 
     #[allow(clippy::too_many_arguments)]
     fn lfdp_case(&mut self, id: &str, title: &str, coeff: i64, from: i64, to: i64, discard: bool, blocks: usize) {
-        let label = src_label(&self.p);
         let mpe = self.mpe(1);
         // Every position the two moves may end at within MPE, and the LFDP values that follow.
         let mut ranges = vec![(i64::MAX, i64::MIN); blocks];
@@ -2102,11 +2099,7 @@ impl Gen {
         if discard {
             k = k.src("Parameter LFDPD");
         }
-        k = if label == "seed" {
-            k.decision("seed-lfdp-state")
-        } else {
-            k.decision("bh8-lfdp-state").decision("bh8-rt-clipping")
-        };
+        k = k.decision("seed-lfdp-state").decision("bh8-lfdp-state").decision("bh8-rt-clipping");
         if discard {
             k = k.line("PSET LFDPD 1");
         }
@@ -2127,7 +2120,6 @@ impl Gen {
     // ------------------------------------------------------------------ the seed's examples
 
     fn examples(&mut self) {
-        let label = src_label(&self.p);
         let mut k = self
             .case(
                 "example-realtime-seed",
@@ -2136,9 +2128,7 @@ impl Gen {
             .clause("seed: RealTime Control, Example")
             .requires(Requirement::Realtime)
             .level(Level::Must);
-        if label == "seed" {
-            k = k.decision("seed-rt-feedback-order");
-        }
+        k = k.decision("seed-rt-feedback-order");
         let moving = vec![
             FieldRule { motor: Some(1), name: "LFDP", range: Some((0, 127)) },
             FieldRule { motor: Some(2), name: "LFDP", range: Some((-128, 0)) },
@@ -2284,10 +2274,6 @@ fn two_motor_velocities(k: CaseB, datum: i64, v1: i64, v2: i64) -> CaseB {
             ]),
         )
         .abort()
-}
-
-fn src_label(p: &Profile) -> &'static str {
-    super::build::source_label(p)
 }
 
 /// A value other than `default` within the parameter's values: its maximum, else its minimum.
