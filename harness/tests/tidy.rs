@@ -173,7 +173,8 @@ fn decisions_of(profile: &str) -> Vec<String> {
 }
 
 /// Architecture invariant: a case cites only decisions the spec has. Every decision id the
-/// suite's generators name (`.decision("...")`) is a decision of some built-in profile (a typo
+/// suite's generators name (`.decision("...")`) or its case scripts cite (`clause:
+/// decision:...`) is a decision of some built-in profile (a typo
 /// would otherwise be dropped silently, since a case cites only the decisions its profile
 /// has), and every decision a committed golden rests on (`index.json`) is one of its own
 /// profile's.
@@ -192,6 +193,27 @@ fn cited_decisions_exist_in_the_spec() {
                 named += 1;
                 if !all.iter().any(|d| d == id) {
                     bad.push(format!("{}:{n}: `{id}`", rel(f)));
+                }
+            }
+        }
+    }
+    // Case scripts cite decisions as `clause: decision:ID`.
+    let mut scripts = vec![Path::new(ROOT).join("harness/suite-cases")];
+    while let Some(d) = scripts.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                scripts.push(p);
+            } else if p.extension().is_some_and(|x| x == "gcls") {
+                for (n, line) in std::fs::read_to_string(&p).unwrap().lines().enumerate() {
+                    if let Some(id) =
+                        line.trim().strip_prefix("clause:").and_then(|c| c.trim().strip_prefix("decision:"))
+                    {
+                        named += 1;
+                        if !all.iter().any(|d| d == id.trim()) {
+                            bad.push(format!("{}:{}: `{}`", rel(&p), n + 1, id.trim()));
+                        }
+                    }
                 }
             }
         }

@@ -176,6 +176,11 @@ impl CaseB {
         self.comment("the check")
     }
 
+    /// A step of a case script, its answer written exactly.
+    pub fn step(self, action: Action) -> CaseB {
+        self.push(action, Shape::Exact)
+    }
+
     pub fn line(self, text: &str) -> CaseB {
         self.line_shaped(text, Shape::Exact)
     }
@@ -189,27 +194,13 @@ impl CaseB {
         self.push(Action::NoWait(text.as_bytes().to_vec()), Shape::Exact)
     }
 
-    /// Raw bytes written as a string (several lines at once, partial lines).
-    pub fn raw(self, bytes: &[u8]) -> CaseB {
-        self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Text }, Shape::Exact)
-    }
-
     /// A RealTime block, written in hex, with its answer shaped.
     pub fn block(self, bytes: &[u8], shape: Shape) -> CaseB {
         self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Hex }, shape)
     }
 
-    /// Bytes with no CR whose answer is not awaited (a partial line).
-    pub fn partial(self, bytes: &[u8]) -> CaseB {
-        self.push(Action::Partial(bytes.to_vec()), Shape::Exact)
-    }
-
     pub fn abort(self) -> CaseB {
         self.push(Action::abort(), Shape::Exact)
-    }
-
-    pub fn wait(self) -> CaseB {
-        self.push(Action::Wait, Shape::Exact)
     }
 
     /// A pause before the next step.

@@ -1,17 +1,12 @@
-//! ^C: aborting an idle line, a motion, the RealTime loop.
+//! ^C: aborting an idle line, a motion, the RealTime loop. The cases are scripts
+//! (`harness/suite-cases/abort/`) except `abort-motion`, whose read-back follows the profile's
+//! close targets.
 
 use super::*;
 
 impl Gen {
     pub(super) fn abort(&mut self) {
-        let k = self
-            .case("abort-idle", "^C while idle prints a fresh prompt and no status")
-            .decision("framing-abort-idle")
-            .preamble(false)
-            .abort()
-            .abort()
-            .line("FGET DP");
-        self.add(k);
+        self.scripts(&["abort-idle"]);
 
         let goals = [(0, self.close_target(1)), (0, self.close_target(2)), (0, self.close_target(3)), (0, self.mpe(4))];
         let k = self
@@ -28,30 +23,6 @@ impl Gen {
             .line("FGET DP");
         self.add(k);
 
-        let k = self
-            .case("abort-motion-discards-queue", "^C during motion also discards the lines queued behind the command")
-            .src("Command ^C")
-            .decision("framing-busy-input")
-            .decision("seed-abort")
-            .decision("bh8-abort-motion")
-            .requires(Requirement::AbortTiming)
-            .preamble(true)
-            .nowait("GC\rFGET DP")
-            .pause_ms(200)
-            .abort()
-            .line("FGET DS");
-        self.add(k);
-
-        let k = self
-            .case("abort-loop", "^C in place of a RealTime header ends the loop and prints the prompt")
-            .src("RealTime Control")
-            .decision("seed-abort")
-            .decision("bh8-abort-loop")
-            .requires(Requirement::Realtime)
-            .preamble(true)
-            .line("1LOOP")
-            .abort()
-            .line("FGET DP");
-        self.add(k);
+        self.scripts(&["abort-motion-discards-queue", "abort-loop"]);
     }
 }

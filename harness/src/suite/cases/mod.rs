@@ -23,6 +23,7 @@ mod motion;
 mod params;
 mod persistence;
 mod realtime;
+mod scripts;
 mod status;
 use gcl_transcript::{Level, Requirement};
 
