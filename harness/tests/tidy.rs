@@ -65,7 +65,7 @@ fn has_word(line: &str, word: &str) -> bool {
         let before = line[..i].chars().next_back();
         let after = line[i + word.len()..].chars().next();
         let word_ends_in_ident = ident(word.chars().next_back());
-        !ident(before) && !(word_ends_in_ident && ident(after))
+        !(ident(before) || (word_ends_in_ident && ident(after)))
     })
 }
 
