@@ -30,20 +30,7 @@ impl Gen {
                 self.add(k);
             }
         }
-        if self.p.decisions.iter().any(|d| d.id == "bh8-global-names-on-fset") {
-            let k = self
-                .case(
-                    "param-scope-commands",
-                    "FSET and FGET know only motor parameters, PSET and PGET only global ones (64)",
-                )
-                .decision("bh8-global-names-on-fset")
-                .preamble(false)
-                .line("FGET BAUD")
-                .line("FSET BAUD 96")
-                .line("PGET DP")
-                .line("PSET DP 1000");
-            self.add(k);
-        }
+        self.scripts(&["param-scope-commands"]);
         if self.p.decisions.iter().any(|d| d.id == "seed-temp-global") {
             let k = self
                 .case("param-temp-global", "TEMP is read only through PGET; FGET TEMP and FSET TEMP give 64")

@@ -4,15 +4,7 @@ use super::*;
 
 impl Gen {
     pub(super) fn persistence(&mut self) {
-        let k = self
-            .case("persist-fdef", "FDEF restores the factory values in RAM")
-            .src("Command FDEF")
-            .level(Level::Must)
-            .preamble(false)
-            .line("FSET DP 1234 MCV 77")
-            .line("FDEF")
-            .line("FGET DP MCV");
-        self.add(k);
+        self.scripts(&["persist-fdef"]);
 
         let k = self
             .case("persist-fdef-ram-only", "FDEF changes RAM only: the saved values come back at RESET")
@@ -51,17 +43,7 @@ impl Gen {
             .line("FGET DP");
         self.add(k);
 
-        let k = self
-            .case("persist-fload", "FLOAD brings back the saved values")
-            .src("Command FLOAD")
-            .level(Level::Must)
-            .requires(Requirement::Eeprom)
-            .preamble(false)
-            .line("FSAVE")
-            .line("FSET DP 1234")
-            .line("FLOAD")
-            .line("FGET DP");
-        self.add(k);
+        self.scripts(&["persist-fload"]);
 
         let k = self
             .case("persist-reset-discards-ram", "RESET forgets values that were not saved")
@@ -105,16 +87,8 @@ impl Gen {
             self.add(k);
         }
 
+        self.scripts(&["persist-pdef"]);
         if self.has_cmd("PSAVE") && self.has_param("OTEMP") {
-            let k = self
-                .case("persist-pdef", "PDEF restores the factory global values in RAM")
-                .src("Command PDEF")
-                .level(Level::Must)
-                .preamble(false)
-                .line("PSET OTEMP 700")
-                .line("PDEF")
-                .line("PGET OTEMP");
-            self.add(k);
             let k = self
                 .case(
                     "persist-psave-reset",
@@ -134,17 +108,7 @@ impl Gen {
                 .line_shaped("RESET", Shape::Banner)
                 .line("PGET OTEMP");
             self.add(k);
-            let k = self
-                .case("persist-pload", "PLOAD brings back the saved global values")
-                .src("Command PLOAD")
-                .level(Level::Must)
-                .requires(Requirement::Eeprom)
-                .preamble(false)
-                .line("PSAVE")
-                .line("PSET OTEMP 700")
-                .line("PLOAD")
-                .line("PGET OTEMP");
-            self.add(k);
         }
+        self.scripts(&["persist-pload"]);
     }
 }

@@ -10,6 +10,8 @@
 //! clause: src:Command ^C              a clause of the profile's own source (`seed:`/`manual:`)
 //! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
 //! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
+//! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
+//!                                     param:NAME, decision:ID)
 //! profile: seed                       only for these profiles (default: every profile)
 //! level: MUST  requires: motion  note: ...   as in a transcript
 //! ```
@@ -39,6 +41,11 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("abort-idle", include_str!("../../../suite-cases/abort/abort-idle.gcls")),
     ("abort-motion-discards-queue", include_str!("../../../suite-cases/abort/abort-motion-discards-queue.gcls")),
     ("abort-loop", include_str!("../../../suite-cases/abort/abort-loop.gcls")),
+    ("param-scope-commands", include_str!("../../../suite-cases/params/param-scope-commands.gcls")),
+    ("persist-fdef", include_str!("../../../suite-cases/persistence/persist-fdef.gcls")),
+    ("persist-fload", include_str!("../../../suite-cases/persistence/persist-fload.gcls")),
+    ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
+    ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -110,6 +117,19 @@ impl Gen {
         let mut preamble = Preamble::Idle;
         for (key, value) in &f.extensions {
             match key.as_str() {
+                "x-when" => {
+                    for cond in value.split_whitespace() {
+                        let holds = match cond.split_once(':') {
+                            Some(("command", n)) => self.has_cmd(n),
+                            Some(("param", n)) => self.has_param(n),
+                            Some(("decision", d)) => self.has_decision(d),
+                            _ => return Err(invalid(format!("x-when `{cond}`: command:, param: or decision:"))),
+                        };
+                        if !holds {
+                            return Ok(None);
+                        }
+                    }
+                }
                 "x-preamble" => {
                     preamble = match value.as_str() {
                         "none" => Preamble::None,
@@ -118,7 +138,7 @@ impl Gen {
                         _ => return Err(invalid(format!("x-preamble `{value}`: none, idle or motion"))),
                     }
                 }
-                _ => return Err(invalid(format!("unknown key `{key}` (only x-preamble)"))),
+                _ => return Err(invalid(format!("unknown key `{key}` (x-preamble, x-when)"))),
             }
         }
         if let Some(l) = f.level {
