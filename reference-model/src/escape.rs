@@ -31,11 +31,18 @@ pub enum UnescapeError {
 
 /// Decodes [`escape`]d text.
 pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
+    let mut out = Vec::with_capacity(text.len());
+    unescape_into(text, &mut out)?;
+    Ok(out)
+}
+
+/// Decodes [`escape`]d text onto the end of `out` (what a parser reading many strings uses,
+/// to reuse one buffer). On an error, `out` holds the bytes decoded before it.
+pub fn unescape_into(text: &str, out: &mut Vec<u8>) -> Result<(), UnescapeError> {
     let b = text.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
-    while i < b.len() {
-        match b[i] {
+    while let Some(&c) = b.get(i) {
+        match c {
             b'\\' => {
                 let next = b.get(i + 1).copied();
                 match next {
@@ -57,14 +64,14 @@ pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
                 }
                 i += 2;
             }
-            c @ 0x20..=0x7e => {
+            0x20..=0x7e => {
                 out.push(c);
                 i += 1;
             }
             _ => return Err(UnescapeError::Unprintable(i)),
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use gcl_model::escape::{UnescapeError, unescape};
+use gcl_model::escape::{UnescapeError, unescape_into};
 
 use super::{
     Expect, FieldSpec, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step,
@@ -113,7 +113,7 @@ pub(crate) fn check_text(bytes: &[u8]) -> Result<&str, ParseError> {
 
 /// Where the literal text that starts at `from` ends: at the next `"` or `{` that is not
 /// escaped, or at the end. An escape's second byte never ends it, so `\"` stays in the text
-/// (and is refused by [`unescape`] as an unknown escape).
+/// (and is refused by [`unescape_into`] as an unknown escape).
 fn literal_end(b: &[u8], from: usize) -> usize {
     let mut i = from;
     while let Some(&c) = b.get(i) {
@@ -349,7 +349,7 @@ impl<'a> Cursor<'a> {
                     // Text up to the next `"` or `{`, decoded by the one unescaper.
                     let end = literal_end(b, self.pos);
                     let run = &self.text[self.pos..end];
-                    let bytes = unescape(run).map_err(|e| {
+                    unescape_into(run, &mut lit).map_err(|e| {
                         let (at, why) = match e {
                             UnescapeError::BadEscape(i) if run.as_bytes().get(i + 1) == Some(&b'x') => {
                                 (i, "`\\x` needs two hex digits")
@@ -359,7 +359,6 @@ impl<'a> Cursor<'a> {
                         };
                         self.err(self.pos + at, ParseErrorKind::BadString(why.into()))
                     })?;
-                    lit.extend_from_slice(&bytes);
                     self.pos = end;
                 }
             }
