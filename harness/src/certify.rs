@@ -200,7 +200,7 @@ pub fn write_bundle(
     report: &RunReport,
     transcripts: &[(String, String)],
     key: Option<&SigningKey>,
-) -> anyhow::Result<()> {
+) -> std::io::Result<()> {
     std::fs::create_dir_all(dir.join("transcripts"))?;
     write_all(dir, report)?;
     for (id, text) in transcripts {
@@ -273,20 +273,69 @@ pub fn fingerprint(key: &VerifyingKey) -> String {
     sha256_hex(key.as_bytes())[..16].to_string()
 }
 
+/// Why a signing key could not be made, written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum KeyError {
+    /// The operating system gave no randomness for the key.
+    #[error("no randomness from the operating system: {0}")]
+    NoRandomness(String),
+    /// The key could not be encoded as PEM.
+    #[error("encoding the key: {0}")]
+    Encode(String),
+    /// A key file is already there; keys are never overwritten.
+    #[error("{} exists; a key is never overwritten", .0.display())]
+    Exists(PathBuf),
+    /// A key file could not be written or read.
+    #[error("{}: {error}", path.display())]
+    Io {
+        /// The key file.
+        path: PathBuf,
+        /// What failed.
+        error: std::io::Error,
+    },
+    /// The file holds no key of the expected kind.
+    #[error("{}: not {expected}: {detail}", path.display())]
+    NotAKey {
+        /// The key file.
+        path: PathBuf,
+        /// What kind of key was expected.
+        expected: &'static str,
+        /// The decoder's complaint.
+        detail: String,
+    },
+}
+
+/// Why [`verify`] could not look at a bundle at all (a usage or system error, unlike a
+/// tampered bundle, which is a [`Tamper`]).
+#[derive(Debug, thiserror::Error)]
+pub enum BundleError {
+    /// The path is not a folder.
+    #[error("{}: no such directory (give the folder `gcl certify --out` wrote)", .0.display())]
+    NotADirectory(PathBuf),
+    /// The folder could not be listed.
+    #[error("{}: {error}", path.display())]
+    Unreadable {
+        /// The folder.
+        path: PathBuf,
+        /// What failed.
+        error: std::io::Error,
+    },
+}
+
 /// Makes a key pair and writes the private key to `path` (PKCS#8 PEM, mode 0600; the file
 /// must not exist) and the public key to `path` + `.pub` (SPKI PEM). Returns the public key.
-pub fn generate_key(path: &Path) -> anyhow::Result<VerifyingKey> {
+pub fn generate_key(path: &Path) -> Result<VerifyingKey, KeyError> {
     use std::io::Write;
     use std::os::unix::fs::OpenOptionsExt;
     let mut seed = [0u8; 32];
-    getrandom::fill(&mut seed).map_err(|e| anyhow::anyhow!("no randomness from the operating system: {e}"))?;
+    getrandom::fill(&mut seed).map_err(|e| KeyError::NoRandomness(e.to_string()))?;
     let key = SigningKey::from_bytes(&seed);
-    let private = key.to_pkcs8_pem(LineEnding::LF).map_err(|e| anyhow::anyhow!("encoding the key: {e}"))?;
-    let public = key.verifying_key().to_public_key_pem(LineEnding::LF).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let private = key.to_pkcs8_pem(LineEnding::LF).map_err(|e| KeyError::Encode(e.to_string()))?;
+    let public = key.verifying_key().to_public_key_pem(LineEnding::LF).map_err(|e| KeyError::Encode(e.to_string()))?;
     let pub_path = public_key_path(path);
     for p in [path, pub_path.as_path()] {
         if p.exists() {
-            anyhow::bail!("{} exists; a key is never overwritten", p.display());
+            return Err(KeyError::Exists(p.to_path_buf()));
         }
     }
     let mut f = std::fs::OpenOptions::new()
@@ -294,10 +343,11 @@ pub fn generate_key(path: &Path) -> anyhow::Result<VerifyingKey> {
         .create_new(true)
         .mode(0o600)
         .open(path)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    f.write_all(private.as_bytes())?;
-    f.sync_all()?;
-    write_atomic(&pub_path, public.as_bytes()).map_err(|e| anyhow::anyhow!("{}: {e}", pub_path.display()))?;
+        .map_err(|error| KeyError::Io { path: path.to_path_buf(), error })?;
+    f.write_all(private.as_bytes())
+        .and_then(|()| f.sync_all())
+        .map_err(|error| KeyError::Io { path: path.to_path_buf(), error })?;
+    write_atomic(&pub_path, public.as_bytes()).map_err(|error| KeyError::Io { path: pub_path.clone(), error })?;
     Ok(key.verifying_key())
 }
 
@@ -310,17 +360,25 @@ pub fn public_key_path(private: &Path) -> PathBuf {
 
 /// Reads a private key (PKCS#8 PEM, as [`generate_key`] or `openssl genpkey -algorithm
 /// ed25519` writes it).
-pub fn load_signing_key(path: &Path) -> anyhow::Result<SigningKey> {
-    let text = read_text_limited(path, MAX_KEY_BYTES).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    SigningKey::from_pkcs8_pem(&text)
-        .map_err(|e| anyhow::anyhow!("{}: not an Ed25519 private key in PKCS#8 PEM: {e}", path.display()))
+pub fn load_signing_key(path: &Path) -> Result<SigningKey, KeyError> {
+    let text =
+        read_text_limited(path, MAX_KEY_BYTES).map_err(|error| KeyError::Io { path: path.to_path_buf(), error })?;
+    SigningKey::from_pkcs8_pem(&text).map_err(|e| KeyError::NotAKey {
+        path: path.to_path_buf(),
+        expected: "an Ed25519 private key in PKCS#8 PEM",
+        detail: e.to_string(),
+    })
 }
 
 /// Reads a public key (SPKI PEM, as [`generate_key`] or `openssl pkey -pubout` writes it).
-pub fn load_verifying_key(path: &Path) -> anyhow::Result<VerifyingKey> {
-    let text = read_text_limited(path, MAX_KEY_BYTES).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    VerifyingKey::from_public_key_pem(&text)
-        .map_err(|e| anyhow::anyhow!("{}: not an Ed25519 public key in PEM: {e}", path.display()))
+pub fn load_verifying_key(path: &Path) -> Result<VerifyingKey, KeyError> {
+    let text =
+        read_text_limited(path, MAX_KEY_BYTES).map_err(|error| KeyError::Io { path: path.to_path_buf(), error })?;
+    VerifyingKey::from_public_key_pem(&text).map_err(|e| KeyError::NotAKey {
+        path: path.to_path_buf(),
+        expected: "an Ed25519 public key in PEM",
+        detail: e.to_string(),
+    })
 }
 
 /// SHA-256 of a bundle's file, read as a stream (at most [`MAX_BUNDLE_FILE_BYTES`]).
@@ -411,9 +469,9 @@ pub struct Verified {
 /// without one then fails) and that the certificate agrees with the bundled report.
 /// `Ok(Ok(..))` when intact; `Ok(Err(problems))` otherwise; `Err` when `dir` is not a
 /// bundle folder at all (a usage error).
-pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> anyhow::Result<Result<Verified, Vec<Tamper>>> {
+pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> Result<Result<Verified, Vec<Tamper>>, BundleError> {
     if !dir.is_dir() {
-        anyhow::bail!("{}: no such directory (give the folder `gcl certify --out` wrote)", dir.display());
+        return Err(BundleError::NotADirectory(dir.to_path_buf()));
     }
     let manifest = match read_limited(&dir.join(MANIFEST), MAX_INPUT_BYTES) {
         Ok(m) => m,
@@ -442,7 +500,7 @@ pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> anyhow::Result<Resu
             Err(e) => problems.push(Tamper::Malformed(format!("{path}: {e}"))),
         }
     }
-    for f in files_under(dir)? {
+    for f in files_under(dir).map_err(|error| BundleError::Unreadable { path: dir.to_path_buf(), error })? {
         if f != MANIFEST && f != SIGNATURE && !listed.contains(&f) {
             problems.push(Tamper::Unlisted(f));
         }

@@ -6,7 +6,7 @@
 //! The runner never hangs on a hung hand: every step of every case has a deadline, and a
 //! vanished hand ends its case as ERROR and is reopened for the next one.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -23,10 +23,85 @@ use crate::report::{
 };
 use crate::suite::{self, Case};
 use crate::target::{OpenOptions, Target, open};
-use crate::transcript::{Form, Level, Requirement};
+use gcl_transcript::{Form, Level, Requirement};
+
+/// Why a conformance run could not run (a failing hand is a report, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum ConformError {
+    /// An `--only` or `--skip` pattern is not a glob.
+    #[error(transparent)]
+    Glob(#[from] BadGlob),
+    /// A skipped decision names no decision of the profile.
+    #[error("skip-decision: profile {profile} has no decision `{id}` (`gcl spec --profile {profile}` lists them)")]
+    UnknownSkipDecision {
+        /// The profile's id.
+        profile: String,
+        /// The decision id as given.
+        id: String,
+    },
+    /// The hand did not answer the liveness probe before the run.
+    #[error("the hand at {target} did not answer the liveness probe (^C, CR, expecting `{prompt}`) within {waited:?}")]
+    NotAlive {
+        /// The target as written.
+        target: String,
+        /// The prompt expected, escaped.
+        prompt: String,
+        /// How long the probe waited.
+        waited: Duration,
+    },
+    /// The target could not be opened.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// `results.jsonl` could not be written.
+    #[error("writing results.jsonl: {0}")]
+    Results(std::io::Error),
+}
+
+/// A pattern that is not a glob.
+#[derive(Debug, thiserror::Error)]
+#[error("bad glob `{pattern}`: {error}")]
+pub struct BadGlob {
+    /// The pattern as given.
+    pub pattern: String,
+    /// What globset refused.
+    pub error: globset::Error,
+}
+
+impl BadGlob {
+    fn new(pattern: &str, error: globset::Error) -> BadGlob {
+        BadGlob { pattern: pattern.to_string(), error }
+    }
+}
+
+/// Why a known-failures file does not load.
+#[derive(Debug, thiserror::Error)]
+pub enum KnownFailuresError {
+    /// Not the TOML the format asks for.
+    #[error(transparent)]
+    Toml(#[from] toml::de::Error),
+    /// A `case` pattern is not a glob.
+    #[error(transparent)]
+    Glob(BadGlob),
+    /// The file could not be read.
+    #[error("{}: {error}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        error: std::io::Error,
+    },
+    /// The file's text is wrong.
+    #[error("{}: {error}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        error: Box<KnownFailuresError>,
+    },
+}
 
 /// Which levels to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LevelFilter {
     /// MUST only.
     Must,
@@ -114,11 +189,12 @@ impl KnownFailures {
     /// id = "framing-max-line"
     /// reason = "our lines hold 128 bytes"
     /// ```
-    pub fn parse(text: &str) -> anyhow::Result<KnownFailures> {
+    pub fn parse(text: &str) -> Result<KnownFailures, KnownFailuresError> {
         let f: KnownFile = toml::from_str(text)?;
         let mut entries = Vec::new();
         for k in f.failure {
-            let g = Glob::new(&k.case).map_err(|e| anyhow::anyhow!("bad glob `{}`: {e}", k.case))?.compile_matcher();
+            let g =
+                Glob::new(&k.case).map_err(|e| KnownFailuresError::Glob(BadGlob::new(&k.case, e)))?.compile_matcher();
             entries.push((k, g));
         }
         Ok(KnownFailures { entries, source: None, skip_decisions: f.skip_decision })
@@ -140,9 +216,11 @@ impl KnownFailures {
     }
 
     /// Reads and parses a file.
-    pub fn load(path: &Path) -> anyhow::Result<KnownFailures> {
-        let text = crate::files::read_input_text(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        let mut k = KnownFailures::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e:#}", path.display()))?;
+    pub fn load(path: &Path) -> Result<KnownFailures, KnownFailuresError> {
+        let text = crate::files::read_input_text(path)
+            .map_err(|error| KnownFailuresError::Read { path: path.to_path_buf(), error })?;
+        let mut k = KnownFailures::parse(&text)
+            .map_err(|e| KnownFailuresError::InFile { path: path.to_path_buf(), error: Box::new(e) })?;
         k.source = Some(path.display().to_string());
         Ok(k)
     }
@@ -176,10 +254,10 @@ impl KnownFailures {
 }
 
 /// The `--only` globs that match no case of `cases`: running them would run nothing.
-pub fn unmatched_globs(cases: &[Case], patterns: &[String]) -> anyhow::Result<Vec<String>> {
+pub fn unmatched_globs(cases: &[Case], patterns: &[String]) -> Result<Vec<String>, BadGlob> {
     let mut out = Vec::new();
     for p in patterns {
-        let g = Glob::new(p).map_err(|e| anyhow::anyhow!("bad glob `{p}`: {e}"))?.compile_matcher();
+        let g = Glob::new(p).map_err(|e| BadGlob::new(p, e))?.compile_matcher();
         if !cases.iter().any(|c| g.is_match(c.id())) {
             out.push(p.clone());
         }
@@ -187,15 +265,15 @@ pub fn unmatched_globs(cases: &[Case], patterns: &[String]) -> anyhow::Result<Ve
     Ok(out)
 }
 
-fn globs(patterns: &[String]) -> anyhow::Result<Option<GlobSet>> {
+fn globs(patterns: &[String]) -> Result<Option<GlobSet>, BadGlob> {
     if patterns.is_empty() {
         return Ok(None);
     }
     let mut b = GlobSetBuilder::new();
     for p in patterns {
-        b.add(Glob::new(p).map_err(|e| anyhow::anyhow!("bad glob `{p}`: {e}"))?);
+        b.add(Glob::new(p).map_err(|e| BadGlob::new(p, e))?);
     }
-    Ok(Some(b.build()?))
+    b.build().map(Some).map_err(|e| BadGlob::new(&patterns.join(" "), e))
 }
 
 /// Everything a run needs.
@@ -284,17 +362,14 @@ pub struct RunOutput {
 }
 
 /// Selects the cases of `cases` that run, and the SKIP results of those that do not.
-pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> anyhow::Result<(Vec<&'c Case>, Vec<CaseResult>)> {
+pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<(Vec<&'c Case>, Vec<CaseResult>), ConformError> {
     let only = globs(&opts.only)?;
     let skip = globs(&opts.skip)?;
     let profile = opts.profile.id.as_str();
     if let Some(s) =
         opts.known.skipped_decisions(profile).find(|s| !opts.profile.decisions.iter().any(|d| d.id == s.id))
     {
-        anyhow::bail!(
-            "skip-decision: profile {profile} has no decision `{}` (`gcl spec --profile {profile}` lists them)",
-            s.id
-        );
+        return Err(ConformError::UnknownSkipDecision { profile: profile.to_string(), id: s.id.clone() });
     }
     let mut run = Vec::new();
     let mut skipped = Vec::new();
@@ -401,7 +476,7 @@ pub fn run(
     opts: &ConformOptions,
     stream: Option<&mut ResultStream>,
     progress: &mut dyn FnMut(&CaseResult, usize, usize),
-) -> anyhow::Result<RunOutput> {
+) -> Result<RunOutput, ConformError> {
     run_with_events(cases, opts, stream, &mut |e| {
         if let RunEvent::Case(r, done, total) = e {
             progress(r, done, total);
@@ -431,7 +506,7 @@ pub fn run_with_events(
     opts: &ConformOptions,
     stream: Option<&mut ResultStream>,
     on: &mut dyn FnMut(RunEvent<'_>),
-) -> anyhow::Result<RunOutput> {
+) -> Result<RunOutput, ConformError> {
     let now = time::OffsetDateTime::now_utc();
     let started_at = now.replace_nanosecond(0).unwrap_or(now);
     let wall = Instant::now();
@@ -464,12 +539,11 @@ pub fn run_with_events(
         ok
     };
     if !before {
-        anyhow::bail!(
-            "the hand at {} did not answer the liveness probe (^C, CR, expecting `{}`) within {:?}",
-            opts.target,
-            gcl_model::escape::escape(opts.profile.framing.prompt.as_bytes()),
-            probe_timeout
-        );
+        return Err(ConformError::NotAlive {
+            target: opts.target.to_string(),
+            prompt: gcl_model::escape::escape(opts.profile.framing.prompt.as_bytes()),
+            waited: probe_timeout,
+        });
     }
 
     let mut ropts = suite::replay_options();
@@ -492,7 +566,7 @@ pub fn run_with_events(
     let total = selected.len() + skipped.len();
     for r in skipped {
         if let Some(s) = stream.as_deref_mut() {
-            s.push(&r)?;
+            s.push(&r).map_err(ConformError::Results)?;
         }
         on(RunEvent::Case(&r, results.len() + 1, total));
         results.push(r);
@@ -506,7 +580,7 @@ pub fn run_with_events(
         if let Some(st) = &stopped {
             let r = result_of(case, Verdict::Skip, 0.0, Some(format!("not run: {}", st.message)));
             if let Some(s) = stream.as_deref_mut() {
-                s.push(&r)?;
+                s.push(&r).map_err(ConformError::Results)?;
             }
             on(RunEvent::Case(&r, results.len() + 1, total));
             results.push(r);
@@ -524,7 +598,7 @@ pub fn run_with_events(
                     Err(e) => {
                         let r = result_of(case, Verdict::Error, 0.0, Some(e));
                         if let Some(s) = stream.as_deref_mut() {
-                            s.push(&r)?;
+                            s.push(&r).map_err(ConformError::Results)?;
                         }
                         on(RunEvent::Case(&r, results.len() + 1, total));
                         results.push(r);
@@ -579,7 +653,7 @@ pub fn run_with_events(
                 r.verdict = Verdict::Fail;
                 r.message = Some(outcome.summary());
                 let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                let actual = crate::transcript::escape_text(got);
+                let actual = gcl_transcript::escape_text(got);
                 r.diff = Some(diff_of(f.step, 0, &f.expected_full, &actual, &[], Form::Text, &f.expected_full));
                 flooded = true;
             }
@@ -649,7 +723,7 @@ pub fn run_with_events(
             failures += 1;
         }
         if let Some(s) = stream.as_deref_mut() {
-            s.push(&r)?;
+            s.push(&r).map_err(ConformError::Results)?;
         }
         on(RunEvent::Case(&r, results.len() + 1, total));
         let id = r.id.clone();
@@ -755,8 +829,8 @@ fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8],
     let offset_c = offset.min(got.len());
     let from = offset_c.saturating_sub(CONTEXT_CHARS);
     let before = match form {
-        Form::Text => crate::transcript::escape_text(&got[from..offset_c]),
-        Form::Hex => crate::transcript::matcher::show(&got[from..offset_c], Form::Hex),
+        Form::Text => gcl_transcript::escape_text(&got[from..offset_c]),
+        Form::Hex => gcl_transcript::matcher::show(&got[from..offset_c], Form::Hex),
     };
     Diff {
         step: step + 1,

@@ -30,7 +30,7 @@ use crate::link::{SimLink, byte_time};
 use crate::replay::{ReplayOptions, StepBudget, ceiling_for};
 use crate::suite::{self, Case};
 use crate::target::Target;
-use crate::transcript::DEFAULT_STEP_TIMEOUT;
+use gcl_transcript::DEFAULT_STEP_TIMEOUT;
 
 /// How deadlines are derived from the model's prediction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -18,7 +18,7 @@ use std::path::Path;
 
 /// The size limit of an input file a person writes or a tool generates: transcripts,
 /// scripts, suite files, known-failures lists, scenarios, EEPROM images, profile TOML.
-pub const MAX_INPUT_BYTES: u64 = crate::transcript::MAX_FILE_BYTES as u64;
+pub const MAX_INPUT_BYTES: u64 = gcl_transcript::MAX_FILE_BYTES as u64;
 
 /// The size limit of a key file.
 pub const MAX_KEY_BYTES: u64 = 64 << 10;

@@ -4,7 +4,8 @@ use std::io::Write;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use gcl_harness::cli;
+
+mod cli;
 
 /// The conformance kit for the Grasper Control Language (GCL), the serial protocol of
 /// Barrett's BH8-series robot hands.

@@ -10,8 +10,8 @@ use std::fmt::Write as _;
 use std::time::Duration;
 
 use crate::link::{Link, LinkError};
-use crate::transcript::matcher::{Feed, Matcher, show};
-use crate::transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
+use gcl_transcript::matcher::{Feed, Matcher, show};
+use gcl_transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
 
 /// How to replay.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -277,7 +277,7 @@ impl ReplayOutcome {
                 "timeout at step {}{} after {}: {} bytes of the answer arrived",
                 t.step + 1,
                 at_line(t.line),
-                crate::transcript::format_duration(t.waited),
+                gcl_transcript::format_duration(t.waited),
                 t.offset
             ),
             ReplayOutcome::Flooded(f) => format!(
@@ -577,8 +577,8 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
             let s = t.steps.get(e.step)?;
             let form = s.expect.segments.first().map_or(Form::Text, |g| g.form);
             let expect = match form {
-                Form::Text => crate::transcript::Expect::text(&e.received),
-                Form::Hex => crate::transcript::Expect::hex(&e.received),
+                Form::Text => gcl_transcript::Expect::text(&e.received),
+                Form::Hex => gcl_transcript::Expect::hex(&e.received),
             };
             Some(Step { line: 0, comments: Vec::new(), pause: s.pause, send: s.send.clone(), within: s.within, expect })
         })
@@ -590,8 +590,8 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
 mod tests {
     use super::*;
     use crate::SimLink;
-    use crate::transcript::parse;
     use gcl_model::{DeviceConfig, Fault, Profile};
+    use gcl_transcript::parse;
 
     const FGET: &str = "gcl-transcript 1\nid: t\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\nsend \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"FGET DP\\r\"\nexpect \"FGET DP\\n\\r{int 990..1010} 1000 1000 150\\n\\r=> \"\n";
 

@@ -191,8 +191,8 @@ pub fn open(target: &Target, opts: &OpenOptions) -> Result<Box<dyn Link>, LinkEr
                 (None, Some(p)) => p.clone(),
                 _ => {
                     let name = target.sim_profile(opts.profile.as_deref()).unwrap_or(DEFAULT_SIM_PROFILE);
-                    crate::cli::load_profile(name)
-                        .map_err(|e| LinkError::Open { target: target.to_string(), reason: format!("{e:#}") })?
+                    crate::profiles::load(name)
+                        .map_err(|e| LinkError::Open { target: target.to_string(), reason: e.to_string() })?
                 }
             };
             let config = DeviceConfig {

@@ -25,7 +25,7 @@ use gcl_model::grammar::{Line, parse_line};
 use crate::replay::ReplayOutcome;
 use crate::report::{CaseResult, FailureGroup};
 use crate::suite::Case;
-use crate::transcript::Form;
+use gcl_transcript::Form;
 
 /// Where one failing case parts from its golden.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -61,7 +61,7 @@ pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Opt
     let command = command_of(sent, hex, profile);
     let eol = profile.framing.line_ending.as_bytes();
     let prompt = profile.framing.prompt.as_bytes();
-    let framing_text = crate::transcript::escape_text(&[eol, prompt].concat());
+    let framing_text = gcl_transcript::escape_text(&[eol, prompt].concat());
     let (kind, hint) = match outcome {
         ReplayOutcome::Pass(_) => return None,
         ReplayOutcome::Disconnected(_) => ("link", None),
@@ -133,11 +133,11 @@ fn classify(
     };
     let expected_line = {
         let text = golden.trim_matches('"');
-        let eol = crate::transcript::escape_text(fr.line_ending.as_bytes());
+        let eol = gcl_transcript::escape_text(fr.line_ending.as_bytes());
         match text.split(eol.as_str()).nth(line_no) {
             Some(l) if !eol.is_empty() => l.to_string(),
             _ => {
-                let mut s = crate::transcript::escape_text(&got[line_start..offset]);
+                let mut s = gcl_transcript::escape_text(&got[line_start..offset]);
                 let rest = expected_rest.split("\\n").next().unwrap_or_default();
                 s.push_str(rest.split("\\r").next().unwrap_or_default());
                 s

@@ -7,10 +7,11 @@ use std::time::Duration;
 
 use gcl_harness::client::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusal, Violation};
 use gcl_harness::client::{ClientError, Hand, Timeouts};
-use gcl_harness::{Link, LinkError};
+use gcl_harness::{Link, LinkError, SimLink};
 use gcl_model::params::ParamStore;
 use gcl_model::realtime::ControlHeader;
-use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
+use gcl_model::spec::Scope;
+use gcl_model::{DeviceConfig, MotorSet, Profile, RtLayout, StatusBits};
 use proptest::prelude::*;
 
 fn layout(p: &Profile) -> RtLayout {
@@ -128,6 +129,51 @@ proptest! {
         core.handle_input(format!("HI\n\rERR {code}\n\r=> ").as_bytes());
         let r = core.poll().unwrap();
         prop_assert_eq!(r, Some(Answer::Refused(Refusal { status: StatusBits::from_bits_truncate(code), code, lines: vec![] })));
+    }
+
+    /// Answers from a hand that keeps to GCL (the reference model over an in-process link)
+    /// round trip through the client: a value set within a parameter's range reads back as
+    /// set, on that motor only; a value past its range is refused with the hand's status and
+    /// changes nothing. Nothing a well-formed hand says is a `Violation` or a `Misuse`.
+    #[test]
+    fn a_well_formed_hand_round_trips_parameters(
+        profile in prop::sample::select(vec!["seed", "bh8-262-4.3", "bh8-262-4.4"]),
+        pick in any::<prop::sample::Index>(),
+        frac in 0.0f64..=1.0,
+        motor in 1u8..=4,
+    ) {
+        let p = Profile::builtin(profile).unwrap();
+        let writable: Vec<_> = p
+            .params
+            .iter()
+            .filter(|x| {
+                x.scope == Scope::Motor
+                    && !x.read_only
+                    && x.alias_of.is_none()
+                    && x.values.is_none()
+                    && x.get.is_none()
+                    && x.set.is_none()
+            })
+            .cloned()
+            .collect();
+        prop_assert!(writable.len() > 10, "{}: {} writable parameters", profile, writable.len());
+        let x = pick.get(&writable);
+        let value = x.min + ((x.max - x.min) as f64 * frac) as i64;
+        let m = motor.to_string();
+        let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+        // The power-up banner is not an answer to anything.
+        gcl_harness::link::drain(&mut link, Duration::from_millis(100), Duration::from_secs(5)).unwrap();
+        let mut hand = Hand::new(Box::new(link), p.clone());
+        let before = hand.get("1234", &x.name).unwrap();
+        hand.set(&m, &x.name, value).unwrap();
+        let mut expected = before.clone();
+        expected[usize::from(motor - 1)] = value;
+        prop_assert_eq!(hand.get("1234", &x.name).unwrap(), expected.clone(), "{} {}FSET {} {}", profile, m, x.name, value);
+        if x.max < (1 << 40) {
+            let r = hand.set(&m, &x.name, x.max + 1);
+            prop_assert!(matches!(r, Err(ClientError::Refused { code: 128, .. })), "{}: {:?}", x.name, r);
+            prop_assert_eq!(hand.get("1234", &x.name).unwrap(), expected);
+        }
     }
 
     /// A hand that babbles forever: every operation ends, by its timeout at the latest, and

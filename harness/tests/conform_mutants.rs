@@ -149,7 +149,7 @@ fn every_mutant_fails_gcl_conform_over_exec() {
         let p = Profile::builtin(profile).unwrap();
         let timed = cases(&p)
             .iter()
-            .any(|c| catchers.contains(&c.id()) && c.requires(&gcl_harness::transcript::Requirement::AbortTiming));
+            .any(|c| catchers.contains(&c.id()) && c.requires(&gcl_transcript::Requirement::AbortTiming));
         let time = if timed { "real" } else { "fast" };
         let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
         let mut args =

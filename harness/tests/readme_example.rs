@@ -2,8 +2,8 @@
 //! it must parse and pass against the reference model, so it cannot rot.
 
 use gcl_harness::replay::{ReplayOptions, replay};
-use gcl_harness::transcript::parse;
 use gcl_harness::{SimLink, Target, target};
+use gcl_transcript::parse;
 
 #[test]
 fn the_readme_example_transcript_passes_on_the_model() {

@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use gcl_harness::suite::{self, Case};
-use gcl_harness::transcript::Level;
 use gcl_model::Profile;
 use gcl_model::spec::level_rank;
+use gcl_transcript::Level;
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
 

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use gcl_harness::SimLink;
 use gcl_harness::suite::{self, Case};
-use gcl_harness::transcript::{Level, Requirement};
 use gcl_model::{DeviceConfig, Profile};
+use gcl_transcript::{Level, Requirement};
 
 fn suite_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(suite::DEFAULT_DIR)

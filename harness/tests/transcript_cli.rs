@@ -76,8 +76,8 @@ fn a_recording_of_the_simulator_replays_against_it() {
     assert!(text.contains("expect within 10s \"RESET{any}BarrettHand Firmware{any}\\n\\r=> \""), "{text}");
     assert!(text.contains("pause 200ms\nsend \"\\x03\"\nexpect \"\\n\\rERR 16384\\n\\r=> \""), "{text}");
     assert!(text.contains("send hex 41\nexpect hex 2A 00 00"), "{text}");
-    let t = gcl_harness::transcript::parse(&text).unwrap();
-    assert_eq!(t.header.level, gcl_harness::transcript::Level::Should);
+    let t = gcl_transcript::parse(&text).unwrap();
+    assert_eq!(t.header.level, gcl_transcript::Level::Should);
     let out = gcl().args(["replay", "--target", "sim"]).arg(&out_file).output().unwrap();
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
 }

@@ -31,11 +31,18 @@ pub enum UnescapeError {
 
 /// Decodes [`escape`]d text.
 pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
+    let mut out = Vec::with_capacity(text.len());
+    unescape_into(text, &mut out)?;
+    Ok(out)
+}
+
+/// Decodes [`escape`]d text onto the end of `out` (what a parser reading many strings uses,
+/// to reuse one buffer). On an error, `out` holds the bytes decoded before it.
+pub fn unescape_into(text: &str, out: &mut Vec<u8>) -> Result<(), UnescapeError> {
     let b = text.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
-    while i < b.len() {
-        match b[i] {
+    while let Some(&c) = b.get(i) {
+        match c {
             b'\\' => {
                 let next = b.get(i + 1).copied();
                 match next {
@@ -44,7 +51,11 @@ pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
                     Some(b't') => out.push(b'\t'),
                     Some(b'\\') => out.push(b'\\'),
                     Some(b'x') => {
-                        let hex = text.get(i + 2..i + 4).ok_or(UnescapeError::BadEscape(i))?;
+                        // Two hex digits exactly (`from_str_radix` alone would take `+F`).
+                        let hex = text
+                            .get(i + 2..i + 4)
+                            .filter(|h| h.bytes().all(|d| d.is_ascii_hexdigit()))
+                            .ok_or(UnescapeError::BadEscape(i))?;
                         let v = u8::from_str_radix(hex, 16).map_err(|_| UnescapeError::BadEscape(i))?;
                         out.push(v);
                         i += 2;
@@ -53,14 +64,14 @@ pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
                 }
                 i += 2;
             }
-            c @ 0x20..=0x7e => {
+            0x20..=0x7e => {
                 out.push(c);
                 i += 1;
             }
             _ => return Err(UnescapeError::Unprintable(i)),
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -74,5 +85,6 @@ mod tests {
         assert_eq!(escape(b"HI\n\r=> \x03"), "HI\\n\\r=> \\x03");
         assert!(unescape("\\q").is_err());
         assert!(unescape("\\x4").is_err());
+        assert!(unescape("\\x+F").is_err());
     }
 }

@@ -9,12 +9,12 @@ use anyhow::Context;
 
 use super::conform::{SuiteArgs, prepare, record_options, run_with_progress, summary_text};
 use super::{EXIT_FAIL, EXIT_OK};
-use crate::certify::{
+use gcl_harness::certify::{
     Certificate, Signed, fingerprint, generate_key, load_signing_key, load_verifying_key, public_key_path, verify,
     write_bundle,
 };
-use crate::conform::{LevelFilter, firmware_version};
-use crate::target::open;
+use gcl_harness::conform::{LevelFilter, firmware_version};
+use gcl_harness::target::open;
 
 /// Arguments of `gcl certify`.
 #[derive(Debug, clap::Args)]
@@ -144,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5));
     let vers = {
         let mut link = open(&opts.target, &opts.open).with_context(|| format!("opening {}", opts.target))?;
-        crate::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
+        gcl_harness::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
         firmware_version(link.as_mut(), &opts.profile, timeout)?
     };
     let mut out = run_with_progress(&opts, &cases, Some(&args.out), false)?;

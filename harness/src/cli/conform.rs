@@ -10,12 +10,12 @@ use anyhow::Context;
 use gcl_model::Fault;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
-use crate::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
-use crate::deadline::DeadlinePolicy;
-use crate::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
-use crate::suite::{self, Case};
-use crate::target::{OpenOptions, Target};
-use crate::transcript::{Level, Requirement};
+use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
+use gcl_harness::deadline::DeadlinePolicy;
+use gcl_harness::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
+use gcl_harness::suite::{self, Case};
+use gcl_harness::target::{OpenOptions, Target};
+use gcl_transcript::{Level, Requirement};
 
 /// Arguments shared by `gcl conform` and `gcl certify`.
 #[derive(Debug, clap::Args)]
@@ -59,7 +59,7 @@ pub struct SuiteArgs {
     /// After N timeouts in a row, probe the hand; if it does not answer, the rest of the cases
     /// are not run and the run exits 2. The same after N failing cases in a row after which the
     /// hand would not stop sending (0: never).
-    #[arg(long, value_name = "N", default_value_t = crate::conform::DEFAULT_DEAD_AFTER as u64)]
+    #[arg(long, value_name = "N", default_value_t = gcl_harness::conform::DEFAULT_DEAD_AFTER as u64)]
     pub dead_after: u64,
     /// Skip the framing pre-flight (a few exchanges before the suite that name gross framing
     /// faults: prompt, line ending, echo, banner, status format).
@@ -75,7 +75,7 @@ pub struct SuiteArgs {
     pub suite: Option<PathBuf>,
     /// The line rate the hand runs at, for the wire-time lower bound (serial targets give
     /// their own with ?baud=N); 50 to 4000000.
-    #[arg(long, value_parser = crate::target::parse_baud)]
+    #[arg(long, value_parser = gcl_harness::target::parse_baud)]
     pub baud: Option<u32>,
     /// sim targets: seed of the model's noise.
     #[arg(long, default_value_t = 0)]
@@ -97,14 +97,35 @@ pub struct Args {
     #[command(flatten)]
     pub suite: SuiteArgs,
     /// Levels to run: must (MUST), should (MUST and SHOULD), all (also MAY and INFO).
-    #[arg(long, value_enum, default_value_t = LevelFilter::All)]
-    pub level: LevelFilter,
+    #[arg(long, value_enum, default_value_t = LevelArg::All)]
+    pub level: LevelArg,
     /// Write report.json, junit.xml, report.html (and results.jsonl as cases end) into DIR.
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
     /// Print only the summary.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `--level`: the command line's names for a [`LevelFilter`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LevelArg {
+    /// MUST only.
+    Must,
+    /// MUST and SHOULD.
+    Should,
+    /// Every level: MUST, SHOULD, MAY, INFO.
+    All,
+}
+
+impl From<LevelArg> for LevelFilter {
+    fn from(l: LevelArg) -> LevelFilter {
+        match l {
+            LevelArg::Must => LevelFilter::Must,
+            LevelArg::Should => LevelFilter::Should,
+            LevelArg::All => LevelFilter::All,
+        }
+    }
 }
 
 /// The suite, options and cases a run needs, from the shared arguments.
@@ -117,7 +138,7 @@ pub fn prepare(
         .profile
         .clone()
         .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| crate::target::DEFAULT_SIM_PROFILE.to_string());
+        .unwrap_or_else(|| gcl_harness::target::DEFAULT_SIM_PROFILE.to_string());
     let profile = load_profile(&profile_name)?;
     let cases = match &a.suite {
         Some(dir) => {
@@ -373,7 +394,7 @@ fn clip(s: &str, n: usize) -> String {
 
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let (opts, cases) = prepare(&args.suite, args.level, false)?;
+    let (opts, cases) = prepare(&args.suite, args.level.into(), false)?;
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
     record_options(&mut out.report, &args.suite);
     let mut w = std::io::stdout().lock();

@@ -1,6 +1,6 @@
 //! `gcl record`: runs a script of host lines and blocks against a hand and writes what it
 //! answered as a golden transcript (the script syntax is in
-//! [`crate::transcript::script`] and `vectors/README.md`).
+//! [`gcl_transcript::script`] and `vectors/README.md`).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,10 +9,10 @@ use std::time::Duration;
 use anyhow::Context;
 
 use super::{EXIT_OK, load_profile};
-use crate::target::{DEFAULT_SIM_PROFILE, Target};
-use crate::transcript::record::{RecordOptions, record};
-use crate::transcript::script::parse_script_bytes;
-use crate::transcript::{Level, is_slug};
+use gcl_harness::record::{RecordOptions, record};
+use gcl_harness::target::{DEFAULT_SIM_PROFILE, Target};
+use gcl_transcript::script::parse_script_bytes;
+use gcl_transcript::{Level, is_slug};
 
 /// Arguments of `gcl record`.
 #[derive(Debug, clap::Args)]
@@ -66,7 +66,8 @@ pub struct Args {
 /// Runs `gcl record`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let target: Target = args.target.parse()?;
-    let bytes = crate::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
+    let bytes =
+        gcl_harness::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
     let script = parse_script_bytes(&bytes).with_context(|| format!("parsing {}", args.script.display()))?;
     let mut fields = script.fields.clone();
     if let Some(id) = args.id {
@@ -123,7 +124,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.out {
         // Temporary file, then rename: a kill leaves the old file or the new one, never an
         // empty or torn one.
-        Some(path) => crate::report::write_atomic(&path, text.as_bytes())
+        Some(path) => gcl_harness::report::write_atomic(&path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?,
         None => std::io::stdout().lock().write_all(text.as_bytes())?,
     }

@@ -1,5 +1,5 @@
 //! `gcl sim`: the simulated grasper on a pty, TCP or stdio (the transports live in
-//! [`crate::sim`]). This module parses arguments, turns start-up problems into one line on
+//! [`gcl_harness::sim`]). This module parses arguments, turns start-up problems into one line on
 //! stderr and exit code 2, and stops cleanly on SIGINT, SIGTERM and SIGHUP.
 
 use std::io::Write;
@@ -12,7 +12,7 @@ use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
 
 use super::{EXIT_OK, load_profile};
-use crate::sim::{
+use gcl_harness::sim::{
     Engine, Pace, SCENARIO_EXAMPLE, SimOptions, TimeMode, check_scenario, parse_scenario, pty::Pty, stdio,
     tcp::TcpServer,
 };
@@ -121,7 +121,7 @@ pub struct Args {
     /// real: the wall clock (default for --pty and --tcp); fast: opt-in speed-up, simulated time
     /// follows the bytes on the wire and motion completes at once (default for --stdio).
     #[arg(long, value_enum)]
-    time: Option<TimeMode>,
+    time: Option<TimeArg>,
     /// Keep the EEPROM in this JSON file across runs.
     #[arg(long, value_name = "FILE")]
     eeprom: Option<PathBuf>,
@@ -139,19 +139,41 @@ pub struct Args {
     faults: Vec<Fault>,
 }
 
+/// `--time`: the command line's names for a [`TimeMode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum TimeArg {
+    /// Simulated time advances by the wire time of every byte exchanged (at the hand's BAUD)
+    /// and by the duration of each motion, which completes as fast as the CPU allows. The same
+    /// bytes always give the same answers, whatever the host's speed.
+    Fast,
+    /// Simulated time is the wall clock since start: a motion takes as long as on a hand and a
+    /// ^C sent mid-motion stops it.
+    Real,
+}
+
+impl From<TimeArg> for TimeMode {
+    fn from(t: TimeArg) -> TimeMode {
+        match t {
+            TimeArg::Fast => TimeMode::Fast,
+            TimeArg::Real => TimeMode::Real,
+        }
+    }
+}
+
 /// Runs `gcl sim`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let profile = load_profile(&args.profile)?;
     let scenario = match &args.scenario {
         Some(p) => {
-            let text = crate::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
+            let text =
+                gcl_harness::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
             let s = parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?;
             check_scenario(&s, &profile).with_context(|| format!("scenario file {}", p.display()))?;
             s
         }
         None => Default::default(),
     };
-    let time = args.time.unwrap_or(if args.stdio { TimeMode::Fast } else { TimeMode::Real });
+    let time = args.time.map(TimeMode::from).unwrap_or(if args.stdio { TimeMode::Fast } else { TimeMode::Real });
     let pace = match (args.unpaced, args.baud) {
         (true, _) => Pace::Unpaced,
         (false, Some(b)) => Pace::Fixed(b),

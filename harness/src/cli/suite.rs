@@ -7,8 +7,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
-use crate::suite;
-use crate::transcript::Level;
+use gcl_harness::suite;
+use gcl_transcript::Level;
 
 /// Arguments of `gcl suite`.
 #[derive(Debug, clap::Args)]

@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::{EXIT_FAIL, EXIT_OK};
-use crate::{suite, vectors};
+use gcl_harness::{suite, vectors};
 
 /// Arguments of `gcl vectors`.
 #[derive(Debug, clap::Args)]

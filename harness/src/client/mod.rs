@@ -299,8 +299,8 @@ impl Hand {
             .sim_profile(opts.profile.as_deref())
             .or(opts.profile.as_deref())
             .unwrap_or(target::DEFAULT_SIM_PROFILE);
-        let profile = crate::cli::load_profile(name)
-            .map_err(|e| Misuse::Profile { name: name.to_string(), detail: format!("{e:#}") })?;
+        let profile = crate::profiles::load(name)
+            .map_err(|e| Misuse::Profile { name: name.to_string(), detail: e.to_string() })?;
         let link = target::open(target, opts)?;
         Ok(Hand::new(link, profile))
     }

@@ -7,7 +7,7 @@ use quick_xml::events::{BytesCData, BytesDecl, BytesEnd, BytesStart, BytesText, 
 use super::{RunReport, Verdict};
 
 /// Renders the run as JUnit XML.
-pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
+pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let count = |v: Verdict| r.summary.get(&v).copied().unwrap_or(0);
@@ -105,7 +105,8 @@ pub fn to_junit(r: &RunReport) -> anyhow::Result<String> {
     }
     w.write_event(Event::End(BytesEnd::new("testsuite")))?;
     w.write_event(Event::End(BytesEnd::new("testsuites")))?;
-    Ok(String::from_utf8(w.into_inner())?)
+    // Every piece written is a Rust string, so the bytes are UTF-8.
+    String::from_utf8(w.into_inner()).map_err(std::io::Error::other)
 }
 
 #[cfg(test)]

@@ -464,7 +464,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// Writes `report.json`, `junit.xml` and `report.html` into `dir`.
-pub fn write_all(dir: &Path, report: &RunReport) -> anyhow::Result<Vec<PathBuf>> {
+pub fn write_all(dir: &Path, report: &RunReport) -> std::io::Result<Vec<PathBuf>> {
     let json = dir.join("report.json");
     write_atomic(&json, &serde_json::to_vec_pretty(report)?)?;
     let junit = dir.join("junit.xml");

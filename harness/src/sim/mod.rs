@@ -31,7 +31,7 @@ pub use trace::{Direction, Trace};
 pub use wait::{StopHandle, StopSignal, stop_pair};
 
 /// How simulated time relates to the wall clock.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TimeMode {
     /// Simulated time advances by the wire time of every byte exchanged (at the hand's BAUD)
     /// and by the duration of each motion, which completes as fast as the CPU allows. The same

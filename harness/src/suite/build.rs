@@ -11,9 +11,9 @@ use gcl_model::spec::{CommandKind, ParamSpec, Scope};
 use gcl_model::{DeviceConfig, Profile};
 
 use crate::SimLink;
-use crate::transcript::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
-use crate::transcript::script::{Action, ScriptStep};
-use crate::transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
+use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
+use gcl_transcript::script::{Action, ScriptStep};
+use gcl_transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
 /// The header key listing every decision a case rests on (those it checks and those its
 /// framing, preamble, read-backs and teardown touch), space-separated, in the profile's order.
@@ -176,6 +176,11 @@ impl CaseB {
         self.comment("the check")
     }
 
+    /// A step of a case script, its answer written exactly.
+    pub fn step(self, action: Action) -> CaseB {
+        self.push(action, Shape::Exact)
+    }
+
     pub fn line(self, text: &str) -> CaseB {
         self.line_shaped(text, Shape::Exact)
     }
@@ -189,27 +194,13 @@ impl CaseB {
         self.push(Action::NoWait(text.as_bytes().to_vec()), Shape::Exact)
     }
 
-    /// Raw bytes written as a string (several lines at once, partial lines).
-    pub fn raw(self, bytes: &[u8]) -> CaseB {
-        self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Text }, Shape::Exact)
-    }
-
     /// A RealTime block, written in hex, with its answer shaped.
     pub fn block(self, bytes: &[u8], shape: Shape) -> CaseB {
         self.push(Action::Bytes { bytes: bytes.to_vec(), form: Form::Hex }, shape)
     }
 
-    /// Bytes with no CR whose answer is not awaited (a partial line).
-    pub fn partial(self, bytes: &[u8]) -> CaseB {
-        self.push(Action::Partial(bytes.to_vec()), Shape::Exact)
-    }
-
     pub fn abort(self) -> CaseB {
         self.push(Action::abort(), Shape::Exact)
-    }
-
-    pub fn wait(self) -> CaseB {
-        self.push(Action::Wait, Shape::Exact)
     }
 
     /// A pause before the next step.
@@ -321,8 +312,17 @@ pub(crate) fn value_range(spec: &ParamSpec, motor: u8, pos: Option<[Range; 4]>) 
 
 /// The label of a profile's source document in clause strings.
 pub(crate) fn source_label(p: &Profile) -> &'static str {
-    // The seed profile follows the seed document; the bh8-262 profiles follow Barrett's manuals.
-    if p.id == "seed" { "seed" } else { "manual" }
+    sources().get(p.id.as_str()).map_or("manual", String::as_str)
+}
+
+/// `harness/suite-cases/sources.toml`: which document each profile's clauses cite.
+fn sources() -> &'static std::collections::BTreeMap<String, String> {
+    static SOURCES: std::sync::OnceLock<std::collections::BTreeMap<String, String>> = std::sync::OnceLock::new();
+    SOURCES.get_or_init(|| {
+        // Embedded, and checked by the test below: a broken file is a build of this crate
+        // that fails its tests, never a run that cites the wrong document.
+        toml::from_str(include_str!("../../suite-cases/sources.toml")).unwrap_or_default()
+    })
 }
 
 /// The line ending then the prompt.
@@ -557,4 +557,22 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
         return Err(fail("no clause".into()));
     }
     Ok(Transcript { header, steps: out })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sources_file_parses_and_names_only_builtin_profiles() {
+        let text = include_str!("../../suite-cases/sources.toml");
+        let parsed: std::collections::BTreeMap<String, String> = toml::from_str(text).unwrap();
+        assert_eq!(&parsed, sources(), "the embedded file did not parse");
+        for (id, label) in &parsed {
+            assert!(Profile::builtin(id).is_ok(), "sources.toml names `{id}`, which is no built-in profile");
+            assert!(["seed", "manual"].contains(&label.as_str()), "`{id}`: unknown source `{label}`");
+        }
+        assert_eq!(source_label(&Profile::builtin("seed").unwrap()), "seed");
+        assert_eq!(source_label(&Profile::builtin("bh8-262").unwrap()), "manual");
+    }
 }

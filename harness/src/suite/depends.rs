@@ -14,8 +14,8 @@ use gcl_model::grammar::{self, Args, Line};
 use gcl_model::spec::CommandKind;
 
 use super::build::Plan;
-use crate::transcript::record::Captured;
-use crate::transcript::script::Action;
+use gcl_harness::record::Captured;
+use gcl_transcript::script::Action;
 
 /// Decisions every case rests on through its framing, preamble, read-backs and teardown: the
 /// echo, the LF CR line ending and the `=> ` prompt (every step); ^C at an idle prompt and

@@ -32,7 +32,7 @@ use sha2::{Digest, Sha256};
 
 use crate::link::Link;
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
-use crate::transcript::{Header, Level, ParseError, Requirement, Transcript, parse_bytes};
+use gcl_transcript::{Header, Level, ParseError, Requirement, Transcript, parse_bytes};
 
 /// Where the committed suite lives, relative to the repository root.
 pub const DEFAULT_DIR: &str = "vectors/suite";

@@ -8,7 +8,7 @@ use serde_json::json;
 
 use super::layout::{block_json, layout_flags, layout_with, rt_flags};
 use super::{FileBuilder, Test, VectorsError, slug};
-use crate::transcript::hex_bytes;
+use gcl_transcript::hex_bytes;
 
 /// Encodes one value into a one-field block and returns the field's bytes.
 fn field_bytes(f: &Field, v: i64) -> Vec<u8> {

@@ -15,7 +15,7 @@ use serde_json::{Value, json};
 
 use super::layout::{block_json, layout_with};
 use super::{FileBuilder, Test, VectorsError};
-use crate::transcript::hex_bytes;
+use gcl_transcript::hex_bytes;
 
 /// What the host asked.
 #[derive(Debug, Clone)]

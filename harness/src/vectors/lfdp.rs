@@ -6,7 +6,7 @@ use gcl_model::realtime::lfdp_step;
 use serde_json::json;
 
 use super::{FileBuilder, Test, VectorsError};
-use crate::transcript::hex_bytes;
+use gcl_transcript::hex_bytes;
 
 pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
     let p = b.profile();

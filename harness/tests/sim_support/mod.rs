@@ -143,7 +143,7 @@ pub fn stdio_hand(profile: &str, args: &[&str]) -> Hand {
     let mut all = vec!["--profile", profile];
     all.extend_from_slice(args);
     let link = ExecLink::spawn(&stdio_argv(&all), StderrMode::Null).expect("spawn gcl sim --stdio");
-    let mut h = Hand::new(Box::new(link), gcl_harness::cli::load_profile(profile).unwrap());
+    let mut h = Hand::new(Box::new(link), gcl_harness::profiles::load(profile).unwrap());
     h.set_timeouts(test_timeouts());
     h
 }

@@ -310,7 +310,7 @@ pub fn match_prefix(expect: &Expect, actual: &[u8]) -> Outcome {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transcript::{FieldSpec, Form, Piece};
+    use crate::{FieldSpec, Form, Piece};
 
     fn text(parts: &[Piece]) -> Expect {
         let mut e = Expect::default();

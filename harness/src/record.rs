@@ -22,10 +22,10 @@ use gcl_model::realtime::RtLayout;
 use gcl_model::spec::CommandKind;
 use gcl_model::{Device, DeviceConfig, Mode, Profile};
 
-use super::script::{Action, Script, ScriptStep};
-use super::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, HostBytes, Piece, Step, Transcript};
 use crate::client::core::Framing;
-use crate::link::{Link, LinkError, byte_time};
+use crate::link::{Link, LinkError, byte_time, drain};
+use gcl_transcript::script::{Action, Script, ScriptStep};
+use gcl_transcript::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, HostBytes, Piece, Step, Transcript};
 
 /// The text every banner contains (decision `bh8-banner-text`, notes: RESET).
 pub const BANNER_TEXT: &[u8] = b"BarrettHand Firmware";
@@ -71,8 +71,6 @@ pub struct Captured {
     /// Whether the step ended at its timeout instead of its natural end.
     pub timed_out: bool,
 }
-
-pub use crate::link::drain;
 
 /// Runs the steps against `link` and captures each answer. The link should be fresh or idle:
 /// anything it sends before the first step is drained first.
@@ -200,7 +198,7 @@ pub fn suggest_within(
         }
     }
     let secs = need.as_millis().div_ceil(1000);
-    let d = Duration::from_secs(u64::try_from(secs).unwrap_or(u64::MAX).min(super::MAX_DURATION.as_secs()));
+    let d = Duration::from_secs(u64::try_from(secs).unwrap_or(u64::MAX).min(gcl_transcript::MAX_DURATION.as_secs()));
     (d > DEFAULT_STEP_TIMEOUT).then_some(d)
 }
 
@@ -284,7 +282,7 @@ pub fn record(
             step: i,
             line: s.line,
             timeout: s.timeout.unwrap_or(opts.timeout),
-            got: super::escape_text(&c.output),
+            got: gcl_transcript::escape_text(&c.output),
         });
     }
     let steps = script.steps.iter().zip(&captured).map(|(s, c)| step_from(s, c, opts)).collect();

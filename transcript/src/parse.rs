@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+use gcl_model::escape::{UnescapeError, unescape_into};
+
 use super::{
     Expect, FieldSpec, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step,
     Transcript, is_slug,
@@ -109,21 +111,45 @@ pub(crate) fn check_text(bytes: &[u8]) -> Result<&str, ParseError> {
     })
 }
 
+/// Where the literal text that starts at `from` ends: at the next `"` or `{` that is not
+/// escaped, or at the end. An escape's second byte never ends it, so `\"` stays in the text
+/// (and is refused by [`unescape_into`] as an unknown escape).
+fn literal_end(b: &[u8], from: usize) -> usize {
+    let mut i = from;
+    while let Some(&c) = b.get(i) {
+        match c {
+            b'"' | b'{' => break,
+            b'\\' => i += 2,
+            _ => i += 1,
+        }
+    }
+    i.min(b.len())
+}
+
 /// Splits text into `(line number, line)` with a trailing CR removed (CRLF files read the same).
 pub(crate) fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
     text.split('\n').enumerate().map(|(i, l)| (i + 1, l.strip_suffix('\r').unwrap_or(l)))
 }
 
-/// Header values as they are read, before the required keys are checked.
+/// Header values as they are read, before the required keys are checked (a script's header,
+/// which `gcl record` completes from its options).
 #[derive(Debug, Clone, Default)]
-pub(crate) struct HeaderFields {
+pub struct HeaderFields {
+    /// `id:`.
     pub id: Option<String>,
+    /// `title:`.
     pub title: Option<String>,
+    /// Every `clause:`.
     pub clauses: Vec<String>,
+    /// `level:`.
     pub level: Option<Level>,
+    /// `profile:`, split.
     pub profiles: Vec<String>,
+    /// `requires:`, split.
     pub requires: Vec<Requirement>,
+    /// Every `note:`.
     pub notes: Vec<String>,
+    /// `x-...` keys with their values, in file order.
     pub extensions: Vec<(String, String)>,
 }
 
@@ -309,36 +335,6 @@ impl<'a> Cursor<'a> {
                     self.pos += 1;
                     break;
                 }
-                b'\\' => {
-                    let (byte, len) = match b.get(self.pos + 1) {
-                        Some(b'n') => (b'\n', 2),
-                        Some(b'r') => (b'\r', 2),
-                        Some(b't') => (b'\t', 2),
-                        Some(b'\\') => (b'\\', 2),
-                        Some(b'x') => {
-                            let hex = self.text.get(self.pos + 2..self.pos + 4).and_then(|h| {
-                                h.bytes().all(|d| d.is_ascii_hexdigit()).then(|| u8::from_str_radix(h, 16).ok())?
-                            });
-                            match hex {
-                                Some(v) => (v, 4),
-                                None => {
-                                    return Err(self.err(
-                                        self.pos,
-                                        ParseErrorKind::BadString("`\\x` needs two hex digits".into()),
-                                    ));
-                                }
-                            }
-                        }
-                        _ => {
-                            return Err(self.err(
-                                self.pos,
-                                ParseErrorKind::BadString("unknown escape (use \\n \\r \\t \\\\ or \\xHH)".into()),
-                            ));
-                        }
-                    };
-                    lit.push(byte);
-                    self.pos += len;
-                }
                 b'{' => {
                     if !elisions {
                         return Err(
@@ -349,15 +345,21 @@ impl<'a> Cursor<'a> {
                     out.push_bytes(form, &std::mem::take(&mut lit));
                     out.push(form, piece);
                 }
-                0x20..=0x7e => {
-                    lit.push(c);
-                    self.pos += 1;
-                }
                 _ => {
-                    return Err(self.err(
-                        self.pos,
-                        ParseErrorKind::BadString("raw control or non-ASCII character (escape it)".into()),
-                    ));
+                    // Text up to the next `"` or `{`, decoded by the one unescaper.
+                    let end = literal_end(b, self.pos);
+                    let run = &self.text[self.pos..end];
+                    unescape_into(run, &mut lit).map_err(|e| {
+                        let (at, why) = match e {
+                            UnescapeError::BadEscape(i) if run.as_bytes().get(i + 1) == Some(&b'x') => {
+                                (i, "`\\x` needs two hex digits")
+                            }
+                            UnescapeError::BadEscape(i) => (i, "unknown escape (use \\n \\r \\t \\\\ or \\xHH)"),
+                            UnescapeError::Unprintable(i) => (i, "raw control or non-ASCII character (escape it)"),
+                        };
+                        self.err(self.pos + at, ParseErrorKind::BadString(why.into()))
+                    })?;
+                    self.pos = end;
                 }
             }
         }

@@ -97,7 +97,8 @@ impl ScriptStep {
 /// and steps.
 #[derive(Debug, Clone, Default)]
 pub struct Script {
-    pub(crate) fields: HeaderFields,
+    /// The header keys the script gives.
+    pub fields: HeaderFields,
     /// The steps.
     pub steps: Vec<ScriptStep>,
 }

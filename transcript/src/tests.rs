@@ -132,6 +132,13 @@ fn errors_are_typed_with_line_numbers() {
     assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
     let e = err(&format!("{HEAD}send \"a\\qb\"\n"));
     assert_eq!((e.line, e.column), (7, Some(8)));
+    // Strings and `gcl record` scripts share one unescaper: both refuse `\x+F` and raw bytes.
+    let e = err(&format!("{HEAD}send \"a\\x+Fb\"\n"));
+    assert_eq!((e.line, e.column), (7, Some(8)));
+    assert_eq!(e.kind, ParseErrorKind::BadString("`\\x` needs two hex digits".into()));
+    assert!(crate::script::parse_script("line: a\\x+F\n").is_err());
+    let e = err(&format!("{HEAD}expect \"ok\u{e9}\"\n"));
+    assert_eq!((e.line, e.column), (7, Some(11)));
     let e = err(&format!("{HEAD}send \"a{{int}}\"\n"));
     assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
     let e = err(&format!("{HEAD}send hex 4G\n"));

@@ -1,4 +1,4 @@
-//! Golden transcripts: the one text format for a conversation with a hand.
+//! # gcl-transcript: the `gcl-transcript 1` format of a conversation with a GCL hand
 //!
 //! A transcript is a header (a stable id, a title, the spec clauses it checks, a level, the
 //! profiles it applies to, what it requires of the target) and a list of [`Step`]s. Each step
@@ -6,16 +6,47 @@
 //! exact bytes and *elisions* for values that legitimately vary (an integer in a range, any
 //! line, any byte of a RealTime block, a two-byte field in a range). The same file is a golden
 //! vector, a fuzz seed and a regression case. `vectors/README.md` is the normative description
-//! of the text; this module owns its typed form, [`parse`] (untrusted text to [`Transcript`],
+//! of the text; this crate owns its typed form, [`parse`] (untrusted text to [`Transcript`],
 //! errors with line numbers), printing ([`Transcript::to_text`], canonical, so that
-//! `parse(print(t)) == t`), and matching device bytes against an [`Expect`] ([`matcher`]).
+//! `parse(print(t)) == t`), matching device bytes against an [`Expect`] ([`matcher`]), the
+//! `gcl record` script format ([`script`]) and the escaping of bytes in strings
+//! ([`escape_text`], over the one escaping of [`gcl_model::escape`]).
 //!
-//! This module never talks to a hand: [`record`] and [`crate::replay`] do that through a
-//! [`crate::Link`].
+//! It is the crate `vectors/README.md` offers to other implementers: it does no I/O, reads no
+//! clock and depends only on the pure reference model, so a host or a device written in Rust
+//! can run the golden transcripts with its own transport. Sending the host side and reading
+//! the answers is the caller's job (in this project, `gcl-harness`'s `replay` and `record`).
+//!
+//! ```
+//! use gcl_transcript::matcher::{Feed, Matcher};
+//!
+//! let text = "gcl-transcript 1\n\
+//!             id: vers\n\
+//!             title: VERS answers one line\n\
+//!             clause: manual: VERS\n\
+//!             level: MUST\n\
+//!             profile: seed\n\
+//!             \n\
+//!             send \"VERS\\r\"\n\
+//!             expect \"VERS\\n\\r{line}\\n\\r=> \"\n";
+//! let t = gcl_transcript::parse(text)?;
+//! assert_eq!(t.header.id, "vers");
+//! // Printing is canonical: reading the printed text gives the same transcript.
+//! assert_eq!(gcl_transcript::parse(&t.to_text())?, t);
+//!
+//! // Feed a hand's answer byte by byte; the matcher says when it is complete or has parted.
+//! let mut m = Matcher::new(&t.steps[0].expect);
+//! let mut last = Feed::Alive;
+//! for &b in b"VERS\n\rBH8-262 4.4\n\r=> " {
+//!     last = m.feed(b);
+//! }
+//! assert_eq!(last, Feed::Complete);
+//! assert!(!t.steps[0].expect.matches(b"VERS\n\rERR 32\n\r"));
+//! # Ok::<(), gcl_transcript::ParseError>(())
+//! ```
 
 pub mod matcher;
 mod parse;
-pub mod record;
 pub mod script;
 
 use std::fmt::{self, Write as _};
@@ -25,7 +56,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 pub use matcher::{Feed, Matcher};
-pub use parse::{ParseError, ParseErrorKind, parse, parse_bytes};
+pub use parse::{HeaderFields, ParseError, ParseErrorKind, parse, parse_bytes};
 
 /// The first line of every transcript: the format and its version.
 pub const MAGIC: &str = "gcl-transcript 1";

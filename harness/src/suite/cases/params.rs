@@ -1,0 +1,219 @@
+//! Parameters: each parameter's default, setting, range and access.
+
+use super::*;
+
+impl Gen {
+    pub(super) fn params(&mut self) {
+        let params = self.p.params.clone();
+        for x in &params {
+            self.param_default(x);
+            if !x.read_only && !x.live {
+                self.param_set(x);
+                self.param_range(x);
+            }
+            if x.read_only {
+                self.param_read_only(x);
+            }
+        }
+        for (cmd, line) in
+            [("FGET", "FGET NOPE"), ("FSET", "FSET NOPE 1"), ("PGET", "PGET NOPE"), ("PSET", "PSET NOPE 1")]
+        {
+            if self.has_cmd(cmd) {
+                let k = self
+                    .case(format!("param-unknown-name-{}", slug(cmd)), format!("{cmd} of an unknown name gives 64"))
+                    .src(&format!("Command {cmd}"))
+                    .src("Status codes 64")
+                    .level(Level::Must)
+                    .preamble(false)
+                    .line(line)
+                    .line("FGET DP");
+                self.add(k);
+            }
+        }
+        self.scripts(&["param-scope-commands"]);
+        if self.p.decisions.iter().any(|d| d.id == "seed-temp-global") {
+            let k = self
+                .case("param-temp-global", "TEMP is read only through PGET; FGET TEMP and FSET TEMP give 64")
+                .decision("seed-temp-global")
+                .preamble(false)
+                .get("", &["TEMP"], None)
+                .line("FGET TEMP")
+                .line("FSET TEMP 5");
+            self.add(k);
+        }
+        if self.has_cmd("PGET") {
+            let id =
+                if self.p.decisions.iter().any(|d| d.id == "seed-pget-tmp") { "seed-pget-tmp" } else { "bh8-no-tmp" };
+            let mut k = self
+                .case("param-tmp-alias", "Whether PGET accepts the seed's name TMP for TEMP")
+                .decision(id)
+                .preamble(false);
+            k = match self.param("TEMP") {
+                Some(t) if t.input_aliases.iter().any(|a| a == "TMP") => {
+                    let r = (t.min, t.max);
+                    k.line_shaped("PGET TMP", Shape::Values(vec![vec![Some(r)]]))
+                }
+                _ => k.line("PGET TMP"),
+            };
+            self.add(k);
+        }
+        if self.has_param("HSG") && self.param("MSG").is_some_and(|m| m.alias_of.is_some()) {
+            let k = self
+                .case("param-msg-hsg-alias", "MSG and HSG name one value per motor")
+                .decision("bh8-msg-alias")
+                .preamble(false)
+                .line("2FSET MSG 100")
+                .line("FGET HSG MSG")
+                .line("3FSET HSG 200")
+                .line("FGET MSG HSG");
+            self.add(k);
+        }
+        let k = self
+            .case("param-en-narrows-motion", "EN narrows motion commands without a prefix, never parameter commands")
+            .src("Parameter EN")
+            .decision("seed-param-prefix-en")
+            .decision("bh8-param-prefix-en")
+            .preamble(true)
+            .line("SFSET EN 0")
+            .line("FGET EN DP")
+            .line("M 3000")
+            .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
+        self.add(k);
+
+        if self.p.decisions.iter().any(|d| d.id == "bh8-spread-defaults") {
+            let k = self
+                .case(
+                    "param-spread-finger-defaults",
+                    "Where the manual gives the spread no default (BDAT, BS), the spread starts at the finger default and can be set",
+                )
+                .src("Parameter BDAT")
+                .src("Parameter BS")
+                .decision("bh8-spread-defaults")
+                .preamble(false)
+                .get("", &["BDAT", "BS"], None)
+                .line("SFSET BDAT 1000 BS 1")
+                .get("", &["BDAT", "BS"], None)
+                .line("SFDEF")
+                .get("S", &["BDAT", "BS"], None);
+            self.add(k);
+        }
+
+        if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
+            let new = ["LCT", "LFBP", "LFAIN"];
+            let known = new.iter().all(|n| self.has_param(n));
+            let title = if known {
+                "Firmware 4.4x knows LCT, LFBP and LFAIN; each defaults to 0 on every motor"
+            } else {
+                "Firmware 4.3x does not know LCT, LFBP or LFAIN: FGET and FSET of them give 64"
+            };
+            let k = self
+                .case("param-44-rt-flags", title)
+                .src("Command FGET")
+                .src("Command FSET")
+                .decision("bh8-new-rt-fields-defaults")
+                .decision("bh8-43-no-44-params")
+                .preamble(false)
+                .get("", &new, None)
+                .line("FSET LCT 0 LFBP 0 LFAIN 0")
+                .get("", &["LCT"], None)
+                .get("", &["LFBP"], None)
+                .get("", &["LFAIN"], None)
+                .line("FGET DP");
+            self.add(k);
+        }
+    }
+
+    /// The source clause of a parameter case, and the decisions that govern it: those about
+    /// defaults only for the default case.
+    pub(super) fn param_level(&self, mut k: CaseB, x: &ParamSpec, default_case: bool) -> CaseB {
+        k = k.src(&format!("Parameter {}", x.name));
+        match (x.name.as_str(), default_case) {
+            ("S", _) => k.decision("seed-s-values").decision("bh8-s-before-hi"),
+            ("BAUD", _) => k.decision("seed-baud"),
+            ("SGFLIP", true) => k.decision("seed-sgflip-spread").decision("bh8-sgflip-default"),
+            ("MSG" | "HSG", _) => k.decision("bh8-msg-alias"),
+            ("LCT" | "LFBP" | "LFAIN", _) => k.decision("bh8-new-rt-fields-defaults"),
+            ("OD" | "UPSECS" | "PTEMP" | "SN", _) => k.decision("bh8-self-stored"),
+            ("BP", _) => k.decision("bh8-bp-range"),
+            _ => k,
+        }
+    }
+
+    pub(super) fn param_default(&mut self, x: &ParamSpec) {
+        let what = if x.live { "reads" } else { "reads its factory default" };
+        let k = self.case(format!("param-{}-default", slug(&x.name)), format!("{} {what}", x.name));
+        let k = self.param_level(k, x, true).preamble(false).get("", &[&x.name], None);
+        self.add(k);
+    }
+
+    pub(super) fn param_set(&mut self, x: &ParamSpec) {
+        let id = self.p.param_id(&x.name);
+        let Some(id) = id else { return };
+        let setter = self.p.setter(id).to_string();
+        let prefix = if x.scope == Scope::Motor { "2" } else { "" };
+        let values: Vec<i64> = match &x.values {
+            Some(_) => vec![self.default(&x.name, 1)],
+            None => vec![x.min, x.max],
+        };
+        let k = self.case(
+            format!("param-{}-set", slug(&x.name)),
+            format!("{} takes values in its range and reads them back", x.name),
+        );
+        let mut k = self.param_level(k, x, false).src(&format!("Command {setter}")).preamble(false);
+        if values.contains(&0) && matches!(x.name.as_str(), "LCVC" | "LFVC" | "LFDPC") {
+            k = k.decision("bh8-coefficient-range");
+        }
+        for v in values {
+            k = k.line(&format!("{prefix}{setter} {} {v}", x.name)).get("", &[&x.name], None);
+        }
+        self.add(k);
+    }
+
+    pub(super) fn param_range(&mut self, x: &ParamSpec) {
+        let Some(id) = self.p.param_id(&x.name) else { return };
+        let setter = self.p.setter(id).to_string();
+        let mut bad: Vec<i64> = match &x.values {
+            Some(vs) => (x.min..=x.max + 1).filter(|v| !vs.contains(v)).take(1).chain([x.max + 1]).collect(),
+            None => vec![x.max + 1, x.min - 1],
+        };
+        bad.dedup();
+        let k = self.case(
+            format!("param-{}-range", slug(&x.name)),
+            format!("{} out of range gives 128 and changes nothing", x.name),
+        );
+        let mut k = self.param_level(k, x, false).src("Status codes 128").preamble(false);
+        if x.min == 0 && x.max == 1 && self.has_decision("seed-booleans") {
+            k = k.decision("seed-booleans").level(Level::Must);
+        }
+        for v in bad {
+            k = k.line(&format!("{setter} {} {v}", x.name));
+        }
+        k = k.get("", &[&x.name], None);
+        self.add(k);
+    }
+
+    pub(super) fn param_read_only(&mut self, x: &ParamSpec) {
+        let Some(id) = self.p.param_id(&x.name) else { return };
+        let getter = self.p.getter(id);
+        let setter = match getter {
+            "PGET" if self.has_cmd("PSET") => "PSET",
+            _ => "FSET",
+        };
+        let writable_through = (getter == "FGET" && setter == "FSET") || (getter == "PGET" && setter == "PSET");
+        let code = if writable_through { 256 } else { 64 };
+        let k = self.case(
+            format!("param-{}-read-only", slug(&x.name)),
+            if code == 256 {
+                format!("{setter} {} gives 256: it is read-only", x.name)
+            } else {
+                format!("{setter} {} gives 64: {} is read-only and only {getter} knows it", x.name, x.name)
+            },
+        );
+        let mut k = self.param_level(k, x, false).src(&format!("Status codes {code}"));
+        if !writable_through {
+            k = k.decision("seed-temp-global");
+        }
+        let k = k.preamble(false).line(&format!("{setter} {} 0", x.name)).get("", &[&x.name], None);
+        self.add(k);
+    }
+}

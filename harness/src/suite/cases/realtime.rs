@@ -1,0 +1,488 @@
+//! RealTime: the loop, block layouts from the flags, the codec, LFDP.
+
+use super::*;
+
+impl Gen {
+    /// FSET (and PSET) lines setting every RealTime flag: 1 for `on`, 0 for the rest.
+    pub(super) fn rt_flags(&self, prefix: &str, on: &[&str]) -> Vec<String> {
+        let flags: Vec<&ParamSpec> = self.p.params.iter().filter(|x| x.rt.is_some()).collect();
+        let motor: Vec<String> = flags
+            .iter()
+            .filter(|x| x.scope == Scope::Motor)
+            .map(|x| format!("{} {}", x.name, i32::from(on.contains(&x.name.as_str()))))
+            .collect();
+        let mut lines = chunk_lines(&format!("{prefix}FSET"), &motor, safe_line(&self.p));
+        for g in flags.iter().filter(|x| x.scope == Scope::Global) {
+            if let Some(id) = self.p.param_id(&g.name) {
+                lines.push(format!("{} {} {}", self.p.setter(id), g.name, i32::from(on.contains(&g.name.as_str()))));
+            }
+        }
+        lines
+    }
+
+    pub(super) fn rt_case(&self, id: &str, title: &str, prefix: &str, on: &[&str]) -> CaseB {
+        let mut k = self.case(id, title).src("RealTime Control").requires(Requirement::Realtime).preamble(true);
+        for l in self.rt_flags(prefix, on) {
+            k = k.line(&l);
+        }
+        k
+    }
+
+    pub(super) fn at_rest(&self) -> Vec<FieldRule> {
+        (1..=4u8).map(|m| FieldRule { motor: Some(m), name: "LFAP", range: Some((0, self.mpe(m))) }).collect()
+    }
+
+    pub(super) fn realtime(&mut self) {
+        let headers: [(&str, &str, u8, &[u8]); 4] = [
+            ("upper-c", "C: control data follows; the answer is a feedback block", b'C', &[0]),
+            ("lower-c", "c: control data follows; the answer is * alone", b'c', &[0]),
+            ("upper-a", "A: no data; the answer is a feedback block", b'A', &[]),
+            ("lower-a", "a: no data; the answer is * alone", b'a', &[]),
+        ];
+        for (name, title, h, data) in headers {
+            let mut block = vec![h];
+            block.extend_from_slice(data);
+            let k = self
+                .rt_case(&format!("rt-header-{name}"), title, "1", &["LCV", "LFAP"])
+                .level(Level::Must)
+                .line("1LOOP")
+                .block(&block, Shape::Block(self.at_rest()))
+                .block(&block, Shape::Block(self.at_rest()))
+                .abort();
+            self.add(k);
+        }
+
+        let flags: Vec<ParamSpec> = self.p.params.iter().filter(|x| x.rt.is_some()).cloned().collect();
+        for f in &flags {
+            let Some(rt) = f.rt else { continue };
+            let block = if rt.block == gcl_model::spec::BlockKind::Control { "control" } else { "feedback" };
+            let bytes = if rt.size == 1 { "1 byte" } else { "2 bytes" };
+            let mut k = self.rt_case(
+                &format!("rt-field-{}", slug(&f.name)),
+                &format!("{} alone adds {bytes} to the {block} block", f.name),
+                if f.scope == Scope::Motor { "1" } else { "" },
+                &[&f.name],
+            );
+            let cited: &[&str] = match f.name.as_str() {
+                "LFT" => &["bh8-lft-field"],
+                "LCT" | "LFBP" | "LFAIN" => &["bh8-44-rt-field-order", "bh8-new-rt-fields-defaults"],
+                _ => &[],
+            };
+            k = self.cite_or_must(k, cited);
+            k = k.src(&format!("Parameter {}", f.name)).line("1LOOP");
+            if rt.block == gcl_model::spec::BlockKind::Control {
+                let mut b = vec![b'C'];
+                b.extend(std::iter::repeat_n(0u8, rt.size));
+                let mut c = vec![b'c'];
+                c.extend(std::iter::repeat_n(0u8, rt.size));
+                k = k.block(&b, Shape::Block(self.at_rest())).block(&c, Shape::Block(self.at_rest()));
+            } else {
+                k = k.block(b"A", Shape::Block(self.at_rest()));
+            }
+            // And back: with the flag 0 the field is gone (a C block is its header alone).
+            let off = match self.p.param_id(&f.name) {
+                Some(id) if f.scope == Scope::Global => format!("{} {} 0", self.p.setter(id), f.name),
+                _ => format!("1FSET {} 0", f.name),
+            };
+            k = k
+                .abort()
+                .comment(format!("{} 0: no field", f.name))
+                .line(&off)
+                .line("1LOOP")
+                .block(if rt.block == gcl_model::spec::BlockKind::Control { b"C" } else { b"A" }, Shape::Exact)
+                .abort();
+            self.add(k);
+        }
+
+        let all: Vec<&str> = flags.iter().map(|x| x.name.as_str()).collect();
+        let control_size: usize = flags
+            .iter()
+            .filter(|x| x.scope == Scope::Motor && x.rt.is_some_and(|r| r.block == gcl_model::spec::BlockKind::Control))
+            .map(|x| x.rt.map_or(0, |r| r.size))
+            .sum::<usize>()
+            * 4;
+        let mut block = vec![b'C'];
+        block.extend(std::iter::repeat_n(0u8, control_size));
+        let k = self
+            .rt_case(
+                "rt-all-fields",
+                "Every flag on every motor: fields per motor in order, motors ascending, hand fields last",
+                "",
+                &all,
+            )
+            .decision("seed-rt-field-order")
+            .decision("bh8-44-rt-field-order")
+            .line("1234LOOP")
+            .block(&block, Shape::Block(self.at_rest()))
+            .block(b"A", Shape::Block(self.at_rest()))
+            .abort();
+        self.add(k);
+
+        let mpe1 = self.mpe(1);
+        let k = self
+            .rt_case("rt-lfap-byte-order", "LFAP is two bytes, high byte first: 5000 is 13 88", "1", &["LFAP"])
+            .level(Level::Must)
+            .line("1M 5000")
+            .line("1LOOP")
+            .block(
+                b"A",
+                Shape::Block(vec![FieldRule { motor: Some(1), name: "LFAP", range: Some((5000 - mpe1, 5000 + mpe1)) }]),
+            )
+            .abort();
+        self.add(k);
+
+        self.lfdp_case(
+            "rt-lfdp-worked-example",
+            "The LFDP worked example: LFDPC 2, reported 1500, moved to 2000: 127, 123, 0",
+            2,
+            1500,
+            2000,
+            false,
+            3,
+        );
+        if self.has_param("LFDPD") {
+            self.lfdp_case(
+                "rt-lfdpd-discard",
+                "With LFDPD 1 the clipped rest of LFDP is dropped: 127, 0, 0",
+                2,
+                1500,
+                2000,
+                true,
+                3,
+            );
+        }
+        self.lfdp_case(
+            "rt-lfdpc-scaling",
+            "LFDP is the movement divided by LFDPC: 1000 counts with LFDPC 10 read 100",
+            10,
+            0,
+            1000,
+            false,
+            2,
+        );
+
+        // LFVC: the feedback velocity is the velocity divided by LFVC.
+        let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
+        let (datum, lcvc) = self.fit_lfv(40, lcvc, 1, 2);
+        let lfv = self.lfv_at(datum, lcvc, 2);
+        let k = self
+            .rt_case(
+                "rt-lfvc-scaling",
+                &format!(
+                    "LFV is the velocity divided by LFVC: LCV {datum} x LCVC {lcvc} reads about {lfv} with LFVC 2"
+                ),
+                "1",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LFVC")
+            .src("Parameter LCVC")
+            .decision("seed-rt-velocity")
+            .decision("bh8-velocity-units")
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("1FSET LCVC {lcvc} LFVC 2"))
+            .line("1LOOP")
+            .block(&[b'C', datum as u8], Shape::Block(Vec::new()))
+            .pause_ms(50)
+            .block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFV", range: Some(tol(lfv)) }]))
+            .abort();
+        self.add(k);
+
+        let k = self
+            .rt_case(
+                "rt-bad-header-returns-to-supervisory",
+                "After an invalid header the hand is back in supervisory mode",
+                "1",
+                &["LFAP"],
+            )
+            .level(Level::Must)
+            .line("1LOOP")
+            .block(b"A", Shape::Block(self.at_rest()))
+            .block(b"X", Shape::Exact)
+            .line("FGET DP")
+            .line("1LOOP")
+            .abort();
+        self.add(k);
+
+        self.realtime_decisions();
+    }
+
+    /// The LFV a motor reads while it runs at the control velocity of an LCV `datum` with
+    /// `lcvc` (no gain field), reported with `lfvc` (0 acts as 1).
+    pub(super) fn lfv_at(&self, datum: i64, lcvc: i64, lfvc: i64) -> i64 {
+        let h = &self.p.hand;
+        let raw = datum as f64 * lcvc as f64 / f64::from(1u32 << h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms
+            / h.lfv_counts_per_ms;
+        (raw / lfvc.max(1) as f64).trunc() as i64
+    }
+
+    /// `datum` and `lcvc`, halved (LCVC first) until the LFV of `factor` × `lcvc` with `lfvc`,
+    /// with its tolerance band, fits LFV's signed byte: feedback units differ by profile.
+    fn fit_lfv(&self, mut datum: i64, mut lcvc: i64, factor: i64, lfvc: i64) -> (i64, i64) {
+        while tol(self.lfv_at(datum, factor * lcvc, lfvc)).1 > 127 && datum > 1 {
+            if lcvc > 1 {
+                lcvc /= 2;
+            } else {
+                datum /= 2;
+            }
+        }
+        (datum, lcvc)
+    }
+
+    /// An LCVC for a brisk RealTime move that stays inside the joint range over a case's short
+    /// pauses: half of one whole LCV unit (LCV has `lcv_fraction_bits` fraction bits).
+    pub(super) fn brisk_lcvc(&self) -> i64 {
+        ((1i64 << self.p.hand.lcv_fraction_bits) / 2).clamp(1, 255)
+    }
+
+    /// RealTime cases for decisions about the loop's motors, gains and coefficients.
+    pub(super) fn realtime_decisions(&mut self) {
+        // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
+        let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
+        let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
+        let mut k = self
+            .rt_case(
+                "rt-lfv-formula",
+                &format!("LFV x LFVC is the velocity: two motors at one velocity read about {v1} with LFVC 1 and {v2} with LFVC 2"),
+                "12",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LFV")
+            .src("Parameter LFVC");
+        k = k.decision("seed-lfv-formula").decision("seed-rt-velocity").decision("bh8-velocity-units");
+        let k = k
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("12FSET LCVC {lcvc}"))
+            .line("1FSET LFVC 1")
+            .line("2FSET LFVC 2");
+        self.add(two_motor_velocities(k, datum, v1, v2));
+
+        // LCVC multiplies the datum: two motors at one datum, LCVC twice as large on motor 1.
+        let (v1, v2) = (self.lfv_at(datum, 2 * lcvc, 1), self.lfv_at(datum, lcvc, 1));
+        let mut k = self
+            .rt_case(
+                "rt-lcvc-scaling",
+                &format!("The control velocity is LCV x LCVC: one datum reads about {v1} with LCVC {} and {v2} with LCVC {lcvc}", 2 * lcvc),
+                "12",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LCVC")
+            .src("Parameter LCV");
+        k = k.decision("seed-rt-velocity").decision("bh8-velocity-units");
+        let k = k
+            .note("Velocities during motion are compared with 25% tolerance.")
+            .line(&format!("1FSET LCVC {}", 2 * lcvc))
+            .line(&format!("2FSET LCVC {lcvc}"));
+        self.add(two_motor_velocities(k, datum, v1, v2));
+
+        // With LCPG 1 the gain starts at 0: a velocity alone does not move the motor. A motor
+        // without LCV keeps its control velocity of 0 whatever its gain.
+        let finger = self.limit(1);
+        let v = self.lfv_at(datum, lcvc, 1);
+        let still = |g: &Gen| -> Vec<FieldRule> {
+            (1..=2u8).map(|m| FieldRule { motor: Some(m), name: "LFAP", range: Some((0, g.mpe(m))) }).collect()
+        };
+        let moving = vec![
+            FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v)) },
+            FieldRule { motor: Some(1), name: "LFAP", range: Some((0, finger)) },
+            FieldRule { motor: Some(2), name: "LFAP", range: Some((0, self.mpe(2))) },
+        ];
+        let mut k = self
+            .rt_case(
+                "rt-lcpg-zero-gain",
+                "With LCPG 1 the gain starts at 0 on LOOP entry: a control velocity moves nothing until a gain arrives; a motor without LCV stays",
+                "12",
+                &["LCPG", "LFV", "LFAP"],
+            )
+            .src("Parameter LCPG");
+        k = k.decision("seed-lcpg-gain").decision("bh8-rt-zero-gain");
+        let k = k
+            .note(format!(
+                "Control blocks: motor 1 LCV then LCPG, motor 2 LCPG. The answer to a C block shows the state before \
+                 its data. Once a gain arrives motor 1 runs at about LFV {v} (25% tolerance)."
+            ))
+            .line(&format!("1FSET LCV 1 LCVC {lcvc}"))
+            .line("12LOOP")
+            .comment(format!("velocity {datum}, gain 0 on motor 1; gain 64 on motor 2, which has no velocity field"))
+            .block(&[b'C', datum as u8, 0, 64], Shape::Block(still(self)))
+            .pause_ms(100)
+            .block(b"A", Shape::Block(still(self)))
+            .comment("the same velocity with gain 64: motor 1 runs, motor 2 still has no velocity")
+            .block(&[b'C', datum as u8, 64, 64], Shape::Block(still(self)))
+            .pause_ms(100)
+            .block(b"A", Shape::Block(moving))
+            .abort();
+        self.add(k);
+
+        // LOOP with no prefix takes the motors whose EN is 1; a prefix names them whatever EN.
+        let rest: Vec<FieldRule> = self.at_rest();
+        let mut k = self
+            .rt_case(
+                "rt-loop-en-motors",
+                "LOOP with no prefix runs the motors whose EN is 1 (fewer fields); a prefix names its motors whatever EN",
+                "",
+                &["LFAP"],
+            )
+            .src("Parameter EN");
+        k = k.decision("seed-param-prefix-en").decision("bh8-loop-motors").decision("bh8-param-prefix-en");
+        let k = k
+            .line("SFSET EN 0")
+            .comment("motors 1, 2 and 3: three LFAP fields")
+            .line("LOOP")
+            .block(b"A", Shape::Block(rest.clone()))
+            .abort()
+            .comment("the spread alone: one LFAP field")
+            .line("4LOOP")
+            .block(b"A", Shape::Block(rest))
+            .abort();
+        self.add(k);
+
+        // SGFLIP turns the LFS byte over as it turns FGET SG over.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-lfs-sgflip") {
+            let f = self.p.hand.free_strain;
+            let (plain, flipped) = ((0, (2 * f).min(255)), ((255 - 2 * f).max(0), 255));
+            let k = self
+                .rt_case(
+                    "rt-lfs-sgflip",
+                    "With SGFLIP 1 the LFS byte is 255 minus the strain, as FGET SG reads",
+                    "12",
+                    &["LFS"],
+                )
+                .src("Parameter LFS")
+                .src("Parameter SGFLIP")
+                .decision("bh8-lfs-sgflip")
+                .decision("bh8-sgflip-default")
+                .note(format!(
+                    "A free finger's strain is near {f}: with SGFLIP 0 it reads {}..{}, with SGFLIP 1 {}..{}.",
+                    plain.0, plain.1, flipped.0, flipped.1
+                ))
+                .line("2FSET SGFLIP 1")
+                .line_shaped("12FGET SG", Shape::Values(vec![vec![Some(plain), Some(flipped)]]))
+                .line("12LOOP")
+                .block(
+                    b"A",
+                    Shape::Block(vec![
+                        FieldRule { motor: Some(1), name: "LFS", range: Some(plain) },
+                        FieldRule { motor: Some(2), name: "LFS", range: Some(flipped) },
+                    ]),
+                )
+                .abort();
+            self.add(k);
+        }
+
+        // LCVC, LFVC, LFDPC and LFDPD shape the data but add no field.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-rt-coefficients") {
+            let k = self
+                .rt_case(
+                    "rt-coefficients-no-field",
+                    "LCVC, LFVC, LFDPC and LFDPD add no field: with LCV and LFAP the blocks stay 2 and 3 bytes",
+                    "1",
+                    &["LCV", "LFAP"],
+                )
+                .decision("bh8-rt-coefficients")
+                .line("1FSET LCVC 2 LFVC 2 LFDPC 2")
+                .line("PSET LFDPD 1")
+                .line("1LOOP")
+                .block(&[b'C', 0], Shape::Block(self.at_rest()))
+                .block(b"A", Shape::Block(self.at_rest()))
+                .abort();
+            self.add(k);
+        }
+
+        // A coefficient of 0 is accepted and divides as 1.
+        if self.p.decisions.iter().any(|d| d.id == "bh8-coefficient-range") {
+            let mpe = 10;
+            let (from, to) = (0i64, 100i64);
+            let mut lfdp = vec![(i64::MAX, i64::MIN); 2];
+            for p1 in (from - mpe).max(0)..=from + mpe {
+                for p2 in (to - mpe).max(0)..=to + mpe {
+                    let mut r = p1;
+                    for slot in lfdp.iter_mut() {
+                        let v = i64::from(lfdp_step(&mut r, p2, 1, false));
+                        *slot = (slot.0.min(v), slot.1.max(v));
+                    }
+                }
+            }
+            let both = |name: &'static str, r: Option<Range>| -> Vec<FieldRule> {
+                (1..=2u8).map(|m| FieldRule { motor: Some(m), name, range: r }).collect()
+            };
+            let v = self.lfv_at(datum, lcvc, 1);
+            let near: [Range; 4] = [(0, mpe); 4];
+            let mut k = self
+                .rt_case(
+                    "rt-coefficients-zero",
+                    "LFVC 0 and LFDPC 0 are accepted and act as 1: motor 1 (0) reads as motor 2 (1)",
+                    "12",
+                    &["LCV", "LFV", "LFDP"],
+                )
+                .src("Parameter LFVC")
+                .src("Parameter LFDPC")
+                .decision("bh8-coefficient-range")
+                .note(format!(
+                    "MPE is {mpe} so that LFDP after the move is narrow; velocities are compared with 25% tolerance."
+                ))
+                .line("1FSET LFVC 0 LFDPC 0")
+                .line("2FSET LFVC 1 LFDPC 1")
+                .line(&format!("12FSET LCVC {lcvc} MPE {mpe}"))
+                .get("12", &["LFVC", "LFDPC"], None)
+                .get("12", &["P"], Some(near))
+                .line(&format!("12M {to}"))
+                .line("12LOOP");
+            for r in &lfdp {
+                k = k.block(b"A", Shape::Block(both("LFDP", Some(*r))));
+            }
+            let mut moving = both("LFV", Some(tol(v)));
+            moving.extend(both("LFDP", Some((0, 127))));
+            let k = k
+                .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
+                .pause_ms(50)
+                .block(b"A", Shape::Block(moving))
+                .abort();
+            self.add(k);
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn lfdp_case(
+        &mut self,
+        id: &str,
+        title: &str,
+        coeff: i64,
+        from: i64,
+        to: i64,
+        discard: bool,
+        blocks: usize,
+    ) {
+        let mpe = self.mpe(1);
+        // Every position the two moves may end at within MPE, and the LFDP values that follow.
+        let mut ranges = vec![(i64::MAX, i64::MIN); blocks];
+        for p1 in (from - mpe).max(0)..=from + mpe {
+            for p2 in (to - mpe).max(0)..=to + mpe {
+                let mut r = p1;
+                for slot in ranges.iter_mut() {
+                    let v = i64::from(lfdp_step(&mut r, p2, coeff, discard));
+                    *slot = (slot.0.min(v), slot.1.max(v));
+                }
+            }
+        }
+        let mut k = self.rt_case(id, title, "1", &["LFDP"]).src("Parameter LFDPC");
+        if discard {
+            k = k.src("Parameter LFDPD");
+        }
+        k = k.decision("seed-lfdp-state").decision("bh8-lfdp-state").decision("bh8-rt-clipping");
+        if discard {
+            k = k.line("PSET LFDPD 1");
+        }
+        k = k
+            .note(format!("LFDP ranges cover both moves ending anywhere within MPE ({mpe}) of their goals."))
+            .line(&format!("1FSET LFDPC {coeff}"));
+        if from > 0 {
+            k = k.line(&format!("1M {from}"));
+        }
+        k = k.get("1", &["P"], Some(self.near([from; 4]))).line(&format!("1M {to}")).line("1LOOP");
+        for r in ranges {
+            k = k.block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFDP", range: Some(r) }]));
+        }
+        k = k.abort();
+        self.add(k);
+    }
+}

@@ -1,0 +1,214 @@
+//! Hand-written cases as data: `harness/suite-cases/<area>/<id>.gcls`, embedded in the binary.
+//!
+//! A case script is a `gcl record` script ([`gcl_transcript::script`]) whose header says what
+//! the suite needs besides the steps:
+//!
+//! ```text
+//! id: framing-echo                    the case id (also the file name)
+//! title: Every byte of a line is echoed as sent
+//! clause: decision:framing-echo       a decision the case checks, cited when the profile has it
+//! clause: src:Command ^C              a clause of the profile's own source (`seed:`/`manual:`)
+//! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
+//! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
+//! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
+//!                                     param:NAME, decision:ID)
+//! profile: seed                       only for these profiles (default: every profile)
+//! level: MUST  requires: motion  note: ...   as in a transcript
+//! ```
+//!
+//! Steps are the script's: host lines, `line:`, `nowait:`, `raw:`, `partial:`, `abort`,
+//! `wait`, `pause:`; every answer is written exactly as the model gives it. A `timeout:` line
+//! gives the step after it a `within` floor. Cases whose answers need a shape (elided values,
+//! RealTime blocks) or whose lines are computed from the profile stay in the generators.
+
+use gcl_transcript::ParseError;
+use gcl_transcript::script::{ScriptStep, parse_script};
+
+use super::*;
+
+/// Every case script, by id, in no particular order (the generators place them).
+pub(crate) const SCRIPTS: &[(&str, &str)] = &[
+    ("framing-echo", include_str!("../../../suite-cases/framing/framing-echo.gcls")),
+    ("framing-empty-line", include_str!("../../../suite-cases/framing/framing-empty-line.gcls")),
+    ("framing-case", include_str!("../../../suite-cases/framing/framing-case.gcls")),
+    ("framing-whitespace", include_str!("../../../suite-cases/framing/framing-whitespace.gcls")),
+    ("framing-numbers", include_str!("../../../suite-cases/framing/framing-numbers.gcls")),
+    ("framing-errors-combine", include_str!("../../../suite-cases/framing/framing-errors-combine.gcls")),
+    ("framing-line-atomic", include_str!("../../../suite-cases/framing/framing-line-atomic.gcls")),
+    ("framing-backspace", include_str!("../../../suite-cases/framing/framing-backspace.gcls")),
+    ("framing-busy-input", include_str!("../../../suite-cases/framing/framing-busy-input.gcls")),
+    ("framing-abort-partial-line", include_str!("../../../suite-cases/framing/framing-abort-partial-line.gcls")),
+    ("abort-idle", include_str!("../../../suite-cases/abort/abort-idle.gcls")),
+    ("abort-motion-discards-queue", include_str!("../../../suite-cases/abort/abort-motion-discards-queue.gcls")),
+    ("abort-loop", include_str!("../../../suite-cases/abort/abort-loop.gcls")),
+    ("param-scope-commands", include_str!("../../../suite-cases/params/param-scope-commands.gcls")),
+    ("persist-fdef", include_str!("../../../suite-cases/persistence/persist-fdef.gcls")),
+    ("persist-fload", include_str!("../../../suite-cases/persistence/persist-fload.gcls")),
+    ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
+    ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
+];
+
+/// Why a case script does not make a case.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum ScriptError {
+    /// No script has this id.
+    #[error("no case script `{0}`")]
+    Missing(String),
+    /// The text is not a script.
+    #[error("case script `{id}`: {error}")]
+    Parse {
+        /// The script's id (its file name).
+        id: String,
+        /// Where and why it does not parse.
+        error: ParseError,
+    },
+    /// The script parses but says something the suite cannot use.
+    #[error("case script `{id}`: {reason}")]
+    Invalid {
+        /// The script's id.
+        id: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// How a case starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Preamble {
+    None,
+    Idle,
+    Motion,
+}
+
+impl Gen {
+    /// Adds the cases of these scripts, in this order (each only for the profiles it names).
+    /// A script that does not make a case adds nothing; the tests below name it.
+    pub(super) fn scripts(&mut self, ids: &[&str]) {
+        for id in ids {
+            if let Ok(Some(k)) = self.script_case(id) {
+                self.add(k);
+            }
+        }
+    }
+
+    /// The case of one script for this profile: `None` when the script names other profiles.
+    pub(super) fn script_case(&self, id: &str) -> Result<Option<CaseB>, ScriptError> {
+        let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
+        let script = parse_script(text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
+        let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
+        let f = &script.fields;
+        if f.id.as_deref() != Some(id) {
+            return Err(invalid(format!("its `id:` is {:?}, not its file name", f.id)));
+        }
+        let title = f.title.clone().ok_or_else(|| invalid("no `title:`".into()))?;
+        if !f.profiles.is_empty() && !f.profiles.contains(&self.p.id) {
+            return Ok(None);
+        }
+        let mut k = self.case(id.to_string(), title);
+        for c in &f.clauses {
+            k = if let Some(d) = c.strip_prefix(DECISION_PREFIX) {
+                k.decision(d.trim())
+            } else if let Some(what) = c.strip_prefix(SRC_PREFIX) {
+                k.src(what.trim())
+            } else {
+                k.clause(c)
+            };
+        }
+        let mut preamble = Preamble::Idle;
+        for (key, value) in &f.extensions {
+            match key.as_str() {
+                "x-when" => {
+                    for cond in value.split_whitespace() {
+                        let holds = match cond.split_once(':') {
+                            Some(("command", n)) => self.has_cmd(n),
+                            Some(("param", n)) => self.has_param(n),
+                            Some(("decision", d)) => self.has_decision(d),
+                            _ => return Err(invalid(format!("x-when `{cond}`: command:, param: or decision:"))),
+                        };
+                        if !holds {
+                            return Ok(None);
+                        }
+                    }
+                }
+                "x-preamble" => {
+                    preamble = match value.as_str() {
+                        "none" => Preamble::None,
+                        "idle" => Preamble::Idle,
+                        "motion" => Preamble::Motion,
+                        _ => return Err(invalid(format!("x-preamble `{value}`: none, idle or motion"))),
+                    }
+                }
+                _ => return Err(invalid(format!("unknown key `{key}` (x-preamble, x-when)"))),
+            }
+        }
+        if let Some(l) = f.level {
+            k = k.level(l);
+        }
+        for r in &f.requires {
+            k = k.requires(r.clone());
+        }
+        for n in &f.notes {
+            k = k.note(n.clone());
+        }
+        if preamble != Preamble::None {
+            k = k.preamble(preamble == Preamble::Motion);
+        }
+        let mut timeout = None;
+        for step in &script.steps {
+            k = Self::script_step(k, step, timeout);
+            timeout = step.timeout;
+        }
+        Ok(Some(k))
+    }
+
+    /// One script step as a planned step; a `timeout:` new since the step before is its floor.
+    fn script_step(mut k: CaseB, step: &ScriptStep, before: Option<Duration>) -> CaseB {
+        for c in &step.comments {
+            k = k.comment(c.clone());
+        }
+        if let Some(p) = step.pause {
+            k = k.pause_ms(u64::try_from(p.as_millis()).unwrap_or(u64::MAX));
+        }
+        k = k.step(step.action.clone());
+        match step.timeout {
+            Some(t) if step.timeout != before => k.within(t),
+            _ => k,
+        }
+    }
+}
+
+/// The clause prefix that names a decision (`clause: decision:framing-echo`).
+const DECISION_PREFIX: &str = super::super::build::DECISION_CLAUSE;
+
+/// The clause prefix that names a clause of the profile's source (`clause: src:Command HI`).
+const SRC_PREFIX: &str = "src:";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every script makes a case for some built-in profile, and every script is placed by a
+    /// generator exactly once for each profile it applies to.
+    #[test]
+    fn every_script_parses_and_is_placed() {
+        for (id, _) in SCRIPTS {
+            let mut applies = false;
+            for name in Profile::builtin_names() {
+                let p = Profile::builtin(name).unwrap();
+                let g = Gen { p: p.clone(), out: Vec::new() };
+                let made = g.script_case(id).unwrap_or_else(|e| panic!("{e}"));
+                applies |= made.is_some();
+                let placed = catalogue(&p).iter().filter(|c| c.id == *id).count();
+                assert_eq!(placed, usize::from(made.is_some()), "{name}: case script `{id}` placed {placed} times");
+            }
+            assert!(applies, "case script `{id}` applies to no built-in profile");
+        }
+    }
+
+    #[test]
+    fn bad_scripts_are_clear_errors() {
+        let p = Profile::builtin("seed").unwrap();
+        let g = Gen { p, out: Vec::new() };
+        assert!(matches!(g.script_case("no-such-case"), Err(ScriptError::Missing(_))));
+    }
+}
