@@ -369,17 +369,29 @@ impl<'p> Generator<'p> {
         Some(format!("{prefix}{} {name}", self.p.getter(id)))
     }
 
-    /// A parameter set, maybe saved, then defaults, loads or a reset, then read back.
+    /// One to three parameters set, maybe saved, then defaults, loads or a reset, then all
+    /// read back.
     fn persistence(&self, d: &mut Dice, out: &mut Vec<HostAction>) {
         let ps = self.params_by(|s| !s.read_only && !s.live && !s.persist.is_empty());
-        let Some(s) = d.pick(&ps) else { return };
-        let Some(id) = self.p.param_id(&s.name) else { return };
-        let mut v = d.between(s.min, s.max);
-        if let Some(vs) = &s.values {
-            v = *d.pick(vs).unwrap_or(&v);
+        let mut names = Vec::new();
+        for _ in 0..1 + d.below(3) {
+            let Some(s) = d.pick(&ps) else { return };
+            let Some(id) = self.p.param_id(&s.name) else { return };
+            let mut v = d.between(s.min, s.max);
+            if let Some(vs) = &s.values {
+                v = *d.pick(vs).unwrap_or(&v);
+            }
+            out.push(HostAction::Line(format!("{} {} {v}", self.p.setter(id), s.name)));
+            names.push(s.name.clone());
         }
-        out.push(HostAction::Line(format!("{} {} {v}", self.p.setter(id), s.name)));
-        let mut kinds = vec![CommandKind::Reset, CommandKind::MotorDefaults, CommandKind::MotorLoad, CommandKind::GlobalDefaults, CommandKind::GlobalLoad];
+        let after = [
+            CommandKind::Reset,
+            CommandKind::MotorDefaults,
+            CommandKind::MotorLoad,
+            CommandKind::GlobalDefaults,
+            CommandKind::GlobalLoad,
+        ];
+        let mut kinds: Vec<CommandKind> = after.to_vec();
         if self.allowed.eeprom && d.chance(40) {
             kinds = vec![CommandKind::MotorSave, CommandKind::GlobalSave];
         }
@@ -388,10 +400,12 @@ impl<'p> Generator<'p> {
             if let Some(c) = self.commands(|c| c.kind == k).first() {
                 out.push(HostAction::Line(c.name.clone()));
             }
-            kinds = vec![CommandKind::Reset, CommandKind::MotorDefaults, CommandKind::MotorLoad, CommandKind::GlobalDefaults, CommandKind::GlobalLoad];
+            kinds = after.to_vec();
         }
-        if let Some(l) = self.read_back(d, &s.name) {
-            out.push(HostAction::Line(l));
+        for n in names {
+            if let Some(l) = self.read_back(d, &n) {
+                out.push(HostAction::Line(l));
+            }
         }
     }
 
@@ -435,8 +449,17 @@ impl<'p> Generator<'p> {
             }
             3 if self.allowed.realtime && self.allowed.motion => self.realtime(d, out),
             4 => {
-                if let Some(l) = param.and_then(|n| self.read_back(d, n)) {
-                    out.push(HostAction::Line(l));
+                // The parameter, and the parameters its effect names (SGFLIP: SG).
+                let Some(n) = param else { return };
+                let effect = self.p.param_id(n).and_then(|id| self.p.param(id).effect.clone()).unwrap_or_default();
+                let mut names = vec![n.to_string()];
+                names.extend(
+                    effect.split(|c: char| !c.is_ascii_alphanumeric()).filter(|w| self.p.param_id(w).is_some()).map(str::to_string),
+                );
+                for n in names {
+                    if let Some(l) = self.read_back(d, &n) {
+                        out.push(HostAction::Line(l));
+                    }
                 }
             }
             _ => out.push(HostAction::Line(self.valid_line(d))),

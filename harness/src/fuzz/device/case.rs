@@ -18,6 +18,7 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 
 use super::action::HostAction;
 use crate::suite::build::{CaseB, FieldRule, Range, Shape, build, value_range};
+use crate::transcript::record::{Captured, RecordOptions, capture};
 use crate::transcript::script::ScriptStep;
 use crate::transcript::{Requirement, Transcript};
 
@@ -81,6 +82,16 @@ impl Walk {
         }
         self.shadow.take_output()
     }
+}
+
+/// How a step's answer is shaped once the model's answer is known.
+enum ShapeKind {
+    /// As [`Shape::Exact`], [`Shape::ListValues`] or [`Shape::Banner`].
+    Fixed(Shape),
+    /// A get line's values ([`get_shape`]); `true` after ^C mid-motion.
+    Get(Vec<gcl_model::spec::ParamId>, bool),
+    /// A feedback block: LFAP in a band around the model's; `true` after ^C mid-motion.
+    Block(bool),
 }
 
 fn mpe(p: &Profile, motor: u8) -> i64 {
@@ -148,6 +159,7 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
     }
     walk.features.clear();
     let mut eeprom = false;
+    let mut kinds: Vec<(usize, ShapeKind)> = Vec::new();
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
         match a {
@@ -166,7 +178,7 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
                 let shape = match &cmd {
                     Some(c) if !refused => match (c.kind(p), &c.args) {
                         (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => {
-                            get_shape(p, ids, &answer, walk.positions_uncertain)
+                            ShapeKind::Get(ids.clone(), walk.positions_uncertain)
                         }
                         (
                             CommandKind::MotorListValues
@@ -174,11 +186,11 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
                             | CommandKind::MotorListAllValues
                             | CommandKind::GlobalListAllValues,
                             _,
-                        ) => Shape::ListValues,
-                        (CommandKind::Reset, _) => Shape::Banner,
-                        _ => Shape::Exact,
+                        ) => ShapeKind::Fixed(Shape::ListValues),
+                        (CommandKind::Reset, _) => ShapeKind::Fixed(Shape::Banner),
+                        _ => ShapeKind::Fixed(Shape::Exact),
                     },
-                    _ => Shape::Exact,
+                    _ => ShapeKind::Fixed(Shape::Exact),
                 };
                 if let Some(c) = &cmd {
                     match c.kind(p) {
@@ -188,7 +200,8 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
                         _ => {}
                     }
                 }
-                k = k.line_shaped(l, shape);
+                kinds.push((k.def.plans.len(), shape));
+                k = k.line(l);
             }
             HostAction::Raw(b) => {
                 let step = ScriptStep::new(crate::transcript::script::Action::Bytes {
@@ -257,21 +270,11 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
                     k = k.partial(&bytes).abort();
                     continue;
                 }
-                let rules: Vec<FieldRule> = (1..=4u8)
-                    .map(|m| {
-                        let pos = walk.shadow.position(m);
-                        let band = mpe(p, m);
-                        FieldRule {
-                            motor: Some(m),
-                            name: "LFAP",
-                            range: (!walk.positions_uncertain).then_some((pos - band, pos + band)),
-                        }
-                    })
-                    .collect();
+                kinds.push((k.def.plans.len(), ShapeKind::Block(walk.positions_uncertain)));
                 // Motors that move under RealTime control leave the model's clock and the
-                // hand's apart: positions are banded, and what follows reads them widely.
+                // hand's apart: what follows reads positions widely.
                 walk.positions_uncertain = true;
-                k = k.block(&bytes, Shape::Block(rules));
+                k = k.block(&bytes, Shape::Exact);
             }
         }
     }
@@ -281,7 +284,22 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
     if eeprom {
         k = k.requires(Requirement::Eeprom);
     }
-    let def = k.finish();
+    let mut def = k.finish();
+    // The model's answers as the wire meets them, then the shapes from them.
+    let mut link = crate::SimLink::new(p.clone(), DeviceConfig::default());
+    let mut ro = RecordOptions::new(p.clone());
+    ro.timeout = Duration::from_secs(120);
+    let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
+    let caps = capture(&mut link, &steps, &ro).map_err(|e| NotACase(e.to_string()))?;
+    for (i, kind) in kinds {
+        let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
+        plan.shape = match kind {
+            ShapeKind::Fixed(s) => s,
+            ShapeKind::Get(_, _) if c.output.windows(3).any(|w| w == b"ERR") => Shape::Exact,
+            ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain),
+            ShapeKind::Block(uncertain) => Shape::Block(block_rules(p, c, uncertain)),
+        };
+    }
     let eeprom_writes = def
         .plans
         .iter()
@@ -302,6 +320,19 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
         return Err(NotACase(out.summary()));
     }
     Ok(BuiltCase { transcript, features: walk.features, eeprom_writes })
+}
+
+/// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's.
+fn block_rules(p: &Profile, c: &Captured, uncertain: bool) -> Vec<FieldRule> {
+    let Some(layout) = &c.layout else { return Vec::new() };
+    let Ok((_, values)) = layout.feedback.decode(&c.output) else { return Vec::new() };
+    (1..=4u8)
+        .filter_map(|m| {
+            let v = layout.feedback.value_of(&values, Some(m), "LFAP")?;
+            let band = if uncertain { 3 * mpe(p, m) } else { mpe(p, m) };
+            Some(FieldRule { motor: Some(m), name: "LFAP", range: Some((v - band, v + band)) })
+        })
+        .collect()
 }
 
 /// Coverage features of a line as the model's grammar reads it.

@@ -169,3 +169,6 @@ pub fn write_all(dir: &Path, r: &FuzzReport) -> Result<Vec<PathBuf>, FuzzError> 
     }
     Ok(out)
 }
+
+/// The JSON schema of `fuzz-device.json`.
+pub const SCHEMA: &str = include_str!("../../../../reports/fuzz-device.schema.json");
