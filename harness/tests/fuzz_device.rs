@@ -10,7 +10,7 @@ use std::path::Path;
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, load_corpus, report, run};
 use gcl_harness::replay::replay;
 use gcl_harness::target::{OpenOptions, Target};
-use gcl_harness::transcript::parse::parse;
+use gcl_harness::transcript::parse;
 use gcl_model::{Fault, Profile};
 
 /// The generator's seed of the fault sweep.
@@ -141,7 +141,7 @@ fn the_unmutated_sim_over_exec_yields_no_findings() {
 #[test]
 fn the_report_validates_against_its_schema_with_one_junit_testcase_per_finding() {
     let dir = tempfile::tempdir().unwrap();
-    let mut o = opts(vec![Fault::FgetReversed, Fault::CrLf], 150);
+    let mut o = opts(vec![Fault::FgetReversed, Fault::UnknownCommand64], 150);
     o.out = Some(dir.path().join("out"));
     let s = run(&o, &|_| {}).unwrap();
     assert!(s.findings.len() >= 2, "{:?}", s.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>());
@@ -151,7 +151,7 @@ fn the_report_validates_against_its_schema_with_one_junit_testcase_per_finding()
     let schema: serde_json::Value = serde_json::from_str(report::SCHEMA).unwrap();
     let v = jsonschema::validator_for(&schema).unwrap();
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[0]).unwrap()).unwrap();
-    let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{} at {}", e, e.instance_path)).collect();
+    let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{} at {}", e, e.instance_path())).collect();
     assert!(errors.is_empty(), "{errors:#?}");
     let junit = std::fs::read_to_string(&files[1]).unwrap();
     assert_eq!(junit.matches("<testcase ").count(), s.findings.len());

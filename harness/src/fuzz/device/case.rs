@@ -100,7 +100,7 @@ fn mpe(p: &Profile, motor: u8) -> i64 {
 
 /// The shape of a get line's answer, from the model's answer: positions in a band of MPE,
 /// other live values in their ranges, everything else exact.
-fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], uncertain: bool) -> Shape {
+fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], uncertain: bool, wide: bool) -> Shape {
     let eol = p.framing.line_ending.as_bytes();
     let text = String::from_utf8_lossy(answer);
     let lines: Vec<&str> = text.split(std::str::from_utf8(eol).unwrap_or("\n\r")).skip(1).collect();
@@ -116,6 +116,7 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
                 // Positions within MPE of the model's (wider after ^C mid-motion, where the
                 // hand's timing and the model's part), strain within the free strain.
                 let band = match spec.name.as_str() {
+                    "P" if uncertain && wide => Some(spec.max - spec.min),
                     "P" if uncertain => Some(3 * mpe(p, motor)),
                     "P" => Some(mpe(p, motor)),
                     "SG" => Some(p.hand.free_strain.max(1)),
@@ -133,7 +134,23 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
 }
 
 /// The transcript and coverage of `actions` after the preamble. `id` names the case.
-pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
+///
+/// `wide` is for hands outside this process: there the model's clock and the hand's part as
+/// soon as motors move under RealTime control or a ^C lands mid-motion (a wait advances the
+/// in-process model's clock, not a child's or a real hand's), so what follows reads
+/// positions, velocities and position changes in their whole range; in-process the model is
+/// its own clock and only MPE bands apply.
+///
+/// `home` starts every case with HI (a hand outside this process keeps its positions across
+/// RESET; the in-process sim is fresh for every case), which a case that moves does anyway.
+pub fn build_case(
+    p: &Arc<Profile>,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+) -> Result<BuiltCase, NotACase> {
     let term = p.framing.terminator;
     let parsed = |l: &str| match parse_line(p, l.as_bytes()) {
         Ok(Line::Command(c)) => Some(c),
@@ -147,7 +164,8 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
         HostAction::LineThenAbort { .. } => true,
         _ => false,
     });
-    let mut k = CaseB::new(p, id, title).src("Supervisory mode").preamble(moves);
+    let mut k = CaseB::new(p, id, title).src("Supervisory mode").preamble(moves || home);
+    let homed = moves || home;
     let mut walk = Walk {
         shadow: Device::new(p.clone(), DeviceConfig::default()),
         features: BTreeSet::new(),
@@ -291,13 +309,33 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
     ro.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
     let caps = capture(&mut link, &steps, &ro).map_err(|e| NotACase(e.to_string()))?;
+    if wide {
+        // A feedback block inside an answer shaped as text or bytes (a block with bytes too
+        // many, the answer to ^C mid-block) holds strain and positions exactly: such a case
+        // would judge a real hand by the model's noise.
+        let block_steps: BTreeSet<usize> =
+            kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
+        for (i, c) in caps.iter().enumerate() {
+            let fb = c.layout.as_ref().map(|l| l.feedback.size);
+            let is_feedback = c.realtime && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && c.output.len() > 1;
+            if is_feedback && !(block_steps.contains(&i) && fb == Some(c.output.len())) {
+                return Err(NotACase(format!("step {i}: a feedback block inside another answer")));
+            }
+        }
+    }
     for (i, kind) in kinds {
         let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
         plan.shape = match kind {
             ShapeKind::Fixed(s) => s,
             ShapeKind::Get(_, _) if c.output.windows(3).any(|w| w == b"ERR") => Shape::Exact,
-            ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain),
-            ShapeKind::Block(uncertain) => Shape::Block(block_rules(p, c, uncertain)),
+            ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain || !homed, wide),
+            ShapeKind::Block(uncertain) => {
+                let size = c.layout.as_ref().map(|l| l.feedback.size);
+                if wide && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && size != Some(c.output.len()) {
+                    return Err(NotACase("a block answer that is not a feedback block".into()));
+                }
+                Shape::Block(block_rules(p, c, uncertain, wide))
+            }
         };
     }
     let eeprom_writes = def
@@ -322,9 +360,23 @@ pub fn build_case(p: &Arc<Profile>, actions: &[HostAction], id: &str, title: &st
     Ok(BuiltCase { transcript, features: walk.features, eeprom_writes })
 }
 
-/// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's.
-fn block_rules(p: &Profile, c: &Captured, uncertain: bool) -> Vec<FieldRule> {
+/// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with
+/// `wide` after motion, LFAP, LFV, LFDP and LFBP anywhere in their fields.
+fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<FieldRule> {
     let Some(layout) = &c.layout else { return Vec::new() };
+    if wide && uncertain {
+        let any = Some((i64::MIN / 2, i64::MAX / 2));
+        return layout
+            .feedback
+            .fields
+            .iter()
+            .filter(|f| matches!(f.name.as_str(), "LFAP" | "LFV" | "LFDP" | "LFBP"))
+            .filter_map(|f| {
+                let name = ["LFAP", "LFV", "LFDP", "LFBP"].into_iter().find(|n| *n == f.name)?;
+                Some(FieldRule { motor: f.motor, name, range: any })
+            })
+            .collect();
+    }
     let Ok((_, values)) = layout.feedback.decode(&c.output) else { return Vec::new() };
     (1..=4u8)
         .filter_map(|m| {

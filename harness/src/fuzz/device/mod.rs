@@ -104,6 +104,19 @@ impl FuzzOptions {
     }
 }
 
+impl FuzzOptions {
+    /// Whether answers get the wide bands of a hand outside this process (see
+    /// [`case::build_case`]).
+    pub fn wide(&self) -> bool {
+        !matches!(self.target, Target::Sim { .. })
+    }
+
+    /// Whether every case starts with HI (a hand outside this process, when motion is allowed).
+    pub fn home(&self) -> bool {
+        self.wide() && self.allowed.motion
+    }
+}
+
 /// Why a run could not go on (exit code 2): the target, the corpus or the output.
 #[derive(Debug, thiserror::Error)]
 pub enum FuzzError {
@@ -279,12 +292,15 @@ fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
 struct Hand<'o> {
     opts: &'o FuzzOptions,
     link: Option<Box<dyn Link>>,
+    /// Whether the link was just opened (its power-up banner may still be on the way).
+    new: bool,
 }
 
 impl Hand<'_> {
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
+            self.new = true;
             self.link = Some(crate::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
         }
         self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
@@ -305,9 +321,18 @@ impl Hand<'_> {
                 ro.budgets = deadline::budgets(&p, &case, &pred, &policy, baud);
             }
             ro.silent_wait = policy.silent_wait;
+            // Every case begins with ^C and RESET, so the start-of-case drain only clears
+            // what the last case left; a serial hand keeps the replayer's default.
+            if !matches!(self.opts.target, Target::Serial { .. }) && !self.new && self.link.is_some() {
+                ro.drain_quiet = Duration::from_millis(20);
+            }
+        }
+        if self.link.is_none() {
+            ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
         let link = self.link()?;
         let out = replay(t, link.as_mut(), &ro);
+        self.new = false;
         if matches!(out, ReplayOutcome::Disconnected(_)) {
             self.link = None;
         }
@@ -352,14 +377,17 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         error: None,
     });
     let runs = AtomicU64::new(0);
+    let tickets = AtomicU64::new(0);
     let writes = AtomicU64::new(0);
     let stop = AtomicBool::new(false);
     let jobs = opts.jobs.max(1);
     std::thread::scope(|s| {
         for w in 0..jobs {
-            let (shared, runs, writes, stop) = (&shared, &runs, &writes, &stop);
+            let counters = Counters { runs: &runs, tickets: &tickets, writes: &writes, stop: &stop };
+            let shared = &shared;
             s.spawn(move || {
-                if let Err(e) = worker(opts, w, start, shared, runs, writes, stop, progress) {
+                if let Err(e) = worker(opts, w, start, shared, counters, progress) {
+                    let stop = counters.stop;
                     stop.store(true, Ordering::SeqCst);
                     let mut g = shared.lock().unwrap_or_else(|e| e.into_inner());
                     g.error.get_or_insert(e);
@@ -384,17 +412,28 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     })
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The run's counters, shared by the workers.
+#[derive(Clone, Copy)]
+struct Counters<'a> {
+    /// Cases run.
+    runs: &'a AtomicU64,
+    /// Cases started (a `Runs` budget is handed out as tickets).
+    tickets: &'a AtomicU64,
+    /// EEPROM writes.
+    writes: &'a AtomicU64,
+    /// Set to end every worker.
+    stop: &'a AtomicBool,
+}
+
 fn worker(
     opts: &FuzzOptions,
     w: usize,
     start: Instant,
     shared: &Mutex<Shared>,
-    runs: &AtomicU64,
-    writes: &AtomicU64,
-    stop: &AtomicBool,
+    c: Counters<'_>,
     progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<(), FuzzError> {
+    let Counters { runs, tickets, writes, stop } = c;
     let p = opts.profile.clone();
     let lock = || shared.lock().unwrap_or_else(|e| e.into_inner());
     let mut allowed = opts.allowed;
@@ -402,17 +441,19 @@ fn worker(
     allowed.eeprom = false;
     let gen_no_eeprom = Generator::new(&p, allowed);
     let mut dice = Dice::new(opts.seed.wrapping_add(w as u64));
-    let mut hand = Hand { opts, link: None };
+    let mut hand = Hand { opts, link: None, new: true };
     loop {
         if stop.load(Ordering::SeqCst) {
             return Ok(());
         }
-        let n = runs.load(Ordering::SeqCst);
-        let over = match opts.budget {
-            Budget::Runs(r) => n >= r,
-            Budget::Time(t) => start.elapsed() >= t,
-        };
-        if over {
+        if let Budget::Time(t) = opts.budget
+            && start.elapsed() >= t
+        {
+            return Ok(());
+        }
+        if let Budget::Runs(r) = opts.budget
+            && tickets.load(Ordering::SeqCst) >= r
+        {
             return Ok(());
         }
         let budget_left = opts.write_budget.is_none_or(|b| writes.load(Ordering::SeqCst) < b);
@@ -425,7 +466,7 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let Ok(built) = build_case(&p, &actions, "fuzz", "a generated case") else {
+        let Ok(built) = build_case(&p, &actions, "fuzz", "a generated case", opts.wide(), opts.home()) else {
             lock().dropped += 1;
             continue;
         };
@@ -438,6 +479,11 @@ fn worker(
             }
         } else {
             writes.fetch_add(built.eeprom_writes as u64, Ordering::SeqCst);
+        }
+        if let Budget::Runs(r) = opts.budget
+            && tickets.fetch_add(1, Ordering::SeqCst) >= r
+        {
+            return Ok(());
         }
         let outcome = hand.run(&built.transcript)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
@@ -468,7 +514,7 @@ fn worker(
         };
         let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
         let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-        let final_case = build_case(&p, &min_actions, &id, &title).unwrap_or(min_case);
+        let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
         let diff = hand.run(&final_case.transcript)?.render();
         let text = final_case.transcript.to_text();
         let path = match &opts.out {
@@ -517,7 +563,7 @@ fn minimize(
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
         *tries += 1;
-        let Ok(b) = build_case(&p, cand, "fuzz", "minimizing") else { return Ok(None) };
+        let Ok(b) = build_case(&p, cand, "fuzz", "minimizing", opts.wide(), opts.home()) else { return Ok(None) };
         if b.eeprom_writes > built.eeprom_writes {
             return Ok(None);
         }
