@@ -125,6 +125,29 @@ impl<'p> Generator<'p> {
         self.p.commands.iter().filter(|c| self.command_allowed(c) && f(c)).collect()
     }
 
+    /// Whether every action is within what is allowed (corpus entries from elsewhere, the
+    /// suite's cases): each line of every action is read by the model's grammar.
+    pub fn permits(&self, actions: &[HostAction]) -> bool {
+        let term = self.p.framing.terminator;
+        actions.iter().all(|a| {
+            let bytes: Vec<u8> = match a {
+                HostAction::Line(l) | HostAction::PartialThenAbort(l) => l.as_bytes().to_vec(),
+                HostAction::LineThenAbort { line, .. } => {
+                    if !self.allowed.abort_timing {
+                        return false;
+                    }
+                    line.as_bytes().to_vec()
+                }
+                HostAction::Raw(b) => b.clone(),
+                HostAction::Block { .. } | HostAction::Abort => Vec::new(),
+            };
+            bytes.split(|b| *b == term).all(|line| match gcl_model::parse_line(self.p, line) {
+                Ok(gcl_model::Line::Command(c)) => self.command_allowed(self.p.command(c.command)),
+                _ => true,
+            })
+        })
+    }
+
     /// A new case: 1 to 6 groups of actions.
     pub fn case(&self, d: &mut Dice) -> Vec<HostAction> {
         let mut out = Vec::new();
@@ -439,6 +462,12 @@ impl<'p> Generator<'p> {
                     _ => self.motion_line(d),
                 };
                 if let Some(l) = line {
+                    // From closed, so that opening moves too.
+                    if d.chance(35)
+                        && let Some(c) = self.commands(|c| c.kind == CommandKind::Close).first()
+                    {
+                        out.push(HostAction::Line(c.name.clone()));
+                    }
                     if self.allowed.abort_timing && d.chance(35) {
                         out.push(HostAction::LineThenAbort { line: l, after_ms: d.between(20, 400) as u64 });
                     } else {
@@ -579,4 +608,46 @@ pub fn simpler(a: &HostAction) -> Vec<HostAction> {
         }
         _ => Vec::new(),
     }
+}
+
+/// The host side of a suite case after its preamble, as actions: the suite's goldens are the
+/// first corpus. Lines become [`HostAction::Line`], ^C [`HostAction::Abort`] (after a line
+/// not awaited, [`HostAction::LineThenAbort`] with the case's pause), a partial line before
+/// ^C [`HostAction::PartialThenAbort`], and anything else (RealTime blocks, several lines at
+/// once) [`HostAction::Raw`].
+pub fn from_transcript(p: &Profile, t: &crate::transcript::Transcript) -> Vec<HostAction> {
+    let fr = &p.framing;
+    // The preamble ends where the suite's "the check" comment stands.
+    let start = t.steps.iter().position(|s| s.comments.iter().any(|c| c == "the check")).unwrap_or(0);
+    let mut out: Vec<HostAction> = Vec::new();
+    for s in &t.steps[start..] {
+        let Some(h) = &s.send else { continue };
+        let b = &h.bytes;
+        if b.as_slice() == [fr.abort] {
+            let pause = s.pause.map_or(0, |d| d.as_millis() as u64);
+            match out.pop() {
+                Some(HostAction::Line(l)) if pause > 0 => out.push(HostAction::LineThenAbort { line: l, after_ms: pause }),
+                Some(HostAction::Raw(r)) if !r.ends_with(&[fr.terminator]) => {
+                    out.push(HostAction::PartialThenAbort(String::from_utf8_lossy(&r).into_owned()))
+                }
+                Some(a) => {
+                    out.push(a);
+                    out.push(HostAction::Abort);
+                }
+                None => out.push(HostAction::Abort),
+            }
+            continue;
+        }
+        let one_line = b.last() == Some(&fr.terminator)
+            && b.iter().filter(|x| **x == fr.terminator).count() == 1
+            && b.iter().all(|x| *x == fr.terminator || *x == b'\t' || (0x20..0x7f).contains(x))
+            && h.form == crate::transcript::Form::Text;
+        if one_line {
+            out.push(HostAction::Line(String::from_utf8_lossy(&b[..b.len() - 1]).into_owned()));
+        } else {
+            out.push(HostAction::Raw(b.clone()));
+        }
+    }
+    out.truncate(24);
+    out
 }

@@ -79,6 +79,8 @@ pub struct FuzzOptions {
     pub minimize: bool,
     /// The most replays one minimization may spend.
     pub minimize_budget: usize,
+    /// Start the corpus from the suite's cases of the profile (their host sides).
+    pub suite_seeds: bool,
 }
 
 impl FuzzOptions {
@@ -100,6 +102,7 @@ impl FuzzOptions {
             jobs: 1,
             minimize: true,
             minimize_budget: 300,
+            suite_seeds: true,
         }
     }
 }
@@ -250,6 +253,25 @@ struct Shared {
     error: Option<FuzzError>,
 }
 
+/// The host sides of the suite's cases of a profile, as action lists (generated once per
+/// profile and process).
+pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
+    static CACHE: Mutex<BTreeMap<String, Arc<Vec<Vec<HostAction>>>>> = Mutex::new(BTreeMap::new());
+    let mut c = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+    c.entry(p.id.clone())
+        .or_insert_with(|| {
+            let cases = crate::suite::generate(p).unwrap_or_default();
+            Arc::new(
+                cases
+                    .iter()
+                    .map(|c| action::from_transcript(p, &c.transcript))
+                    .filter(|a| !a.is_empty())
+                    .collect(),
+            )
+        })
+        .clone()
+}
+
 /// The content-hash name of a corpus entry.
 pub fn corpus_name(actions: &[HostAction]) -> String {
     let json = serde_json::to_vec(actions).unwrap_or_default();
@@ -356,7 +378,8 @@ pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<Fin
             _ => sig.kind.to_string(),
         }
     };
-    Some(FindingSignature { command: sig.command, kind })
+    // A refused line's first word may hold control bytes: shown escaped, as everywhere.
+    Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
 }
 
 /// Runs the fuzzer. `progress` is called from worker threads.
@@ -366,7 +389,12 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     if let Some(dir) = &opts.corpus {
         corpus = load_corpus(dir)?.0;
     }
-    let loaded = corpus.len();
+    if opts.suite_seeds {
+        corpus.extend(suite_seeds(&opts.profile).iter().cloned());
+    }
+    // Entries from other runs or the suite may do what this run refuses.
+    let generator = Generator::new(&opts.profile, opts.allowed);
+    corpus.retain(|a| generator.permits(a));
     let shared = Mutex::new(Shared {
         corpus,
         features: BTreeSet::new(),
@@ -399,7 +427,6 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     if let Some(e) = sh.error {
         return Err(e);
     }
-    let _ = loaded;
     Ok(FuzzSummary {
         runs: runs.load(Ordering::SeqCst),
         dropped: sh.dropped,
