@@ -455,7 +455,7 @@ impl<'p> Generator<'p> {
         match d.below(6) {
             0..=2 if self.allowed.motion => {
                 let line = match d.pick(&named) {
-                    Some(c) if d.chance(80) => {
+                    Some(c) if d.chance(50) => {
                         let px = if c.prefix == PrefixRule::Allowed && d.chance(30) { self.prefix(d) } else { String::new() };
                         Some(format!("{px}{}", c.name))
                     }
