@@ -65,7 +65,13 @@ fn main() {
                 if x.found_after < Duration::from_secs(10) {
                     under += 1;
                 }
-                println!("  {:<24} first finding after {:>7.3} s (case {:>4}): {}", f.name(), x.found_after.as_secs_f64(), x.run, x.signature);
+                println!(
+                    "  {:<24} first finding after {:>7.3} s (case {:>4}): {}",
+                    f.name(),
+                    x.found_after.as_secs_f64(),
+                    x.run,
+                    x.signature
+                );
             }
             None => println!("  {:<24} not found in {} cases ({:.1} s)", f.name(), s.runs, s.elapsed.as_secs_f64()),
         }

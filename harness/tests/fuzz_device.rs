@@ -37,8 +37,8 @@ fn unfound_list() -> BTreeMap<String, String> {
         #[serde(default)]
         unfound: Vec<Entry>,
     }
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_device_unfound.toml"))
-        .unwrap();
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_device_unfound.toml")).unwrap();
     let l: List = toml::from_str(&text).unwrap();
     l.unfound.into_iter().map(|e| (e.fault, e.reason)).collect()
 }
@@ -136,7 +136,11 @@ fn the_unmutated_sim_over_exec_yields_no_findings() {
     o.seed = 3;
     o.allowed.abort_timing = false;
     let s = run(&o, &|_| {}).unwrap();
-    assert!(s.findings.is_empty(), "false positives over exec: {:#?}", s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>());
+    assert!(
+        s.findings.is_empty(),
+        "false positives over exec: {:#?}",
+        s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
+    );
     assert_eq!(s.runs, 40);
 }
 

@@ -182,7 +182,13 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         s.eeprom_writes
     )?;
     for f in &s.findings {
-        writeln!(out, "  {} ({} actions){}", f.signature, f.actions.len(), f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display())))?;
+        writeln!(
+            out,
+            "  {} ({} actions){}",
+            f.signature,
+            f.actions.len(),
+            f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display()))
+        )?;
     }
     if !a.quiet {
         write!(out, "{}", fd::coverage::render(&report.coverage))?;

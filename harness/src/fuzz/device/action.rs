@@ -283,7 +283,8 @@ impl<'p> Generator<'p> {
             ArgRule::Pairs => {
                 let read_only = d.chance(5);
                 let ps = self.params_by(|s| {
-                    self.p.param_id(&s.name).is_some_and(|id| self.p.setter(id) == c.name) && (!s.read_only || read_only)
+                    self.p.param_id(&s.name).is_some_and(|id| self.p.setter(id) == c.name)
+                        && (!s.read_only || read_only)
                 });
                 for _ in 0..1 + d.below(2) {
                     if let Some(s) = d.pick(&ps) {
@@ -301,8 +302,7 @@ impl<'p> Generator<'p> {
 
     /// Case and whitespace variants of a line.
     fn variant(&self, d: &mut Dice, line: &str) -> String {
-        let mut s: String =
-            line.chars().map(|ch| if d.chance(30) { ch.to_ascii_lowercase() } else { ch }).collect();
+        let mut s: String = line.chars().map(|ch| if d.chance(30) { ch.to_ascii_lowercase() } else { ch }).collect();
         if d.chance(40) {
             s = s.replace(' ', "  ");
         }
@@ -355,7 +355,10 @@ impl<'p> Generator<'p> {
         let mut l = if d.chance(40) { self.prefix(d) } else { String::new() };
         l.push_str(&c.name);
         if c.args == ArgRule::OptionalInteger && d.chance(50) {
-            l.push_str(&format!(" {}", d.between(c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(self.p.hand.finger_limit))));
+            l.push_str(&format!(
+                " {}",
+                d.between(c.arg_min.unwrap_or(0), c.arg_max.unwrap_or(self.p.hand.finger_limit))
+            ));
         }
         Some(l)
     }
@@ -369,7 +372,8 @@ impl<'p> Generator<'p> {
         if Some(v) == s.default {
             v = d.between(s.min, s.max);
         }
-        let prefix = if s.scope == gcl_model::spec::Scope::Motor && d.chance(50) { self.prefix(d) } else { String::new() };
+        let prefix =
+            if s.scope == gcl_model::spec::Scope::Motor && d.chance(50) { self.prefix(d) } else { String::new() };
         out.push(HostAction::Line(format!("{prefix}{} {} {v}", self.p.setter(id), s.name)));
         Some(s.name.clone())
     }
@@ -388,7 +392,8 @@ impl<'p> Generator<'p> {
     fn read_back(&self, d: &mut Dice, name: &str) -> Option<String> {
         let id = self.p.param_id(name)?;
         let s = self.p.param(id);
-        let prefix = if s.scope == gcl_model::spec::Scope::Motor && d.chance(30) { self.prefix(d) } else { String::new() };
+        let prefix =
+            if s.scope == gcl_model::spec::Scope::Motor && d.chance(30) { self.prefix(d) } else { String::new() };
         Some(format!("{prefix}{} {name}", self.p.getter(id)))
     }
 
@@ -456,7 +461,11 @@ impl<'p> Generator<'p> {
             0..=2 if self.allowed.motion => {
                 let line = match d.pick(&named) {
                     Some(c) if d.chance(50) => {
-                        let px = if c.prefix == PrefixRule::Allowed && d.chance(30) { self.prefix(d) } else { String::new() };
+                        let px = if c.prefix == PrefixRule::Allowed && d.chance(30) {
+                            self.prefix(d)
+                        } else {
+                            String::new()
+                        };
                         Some(format!("{px}{}", c.name))
                     }
                     _ => self.motion_line(d),
@@ -483,7 +492,10 @@ impl<'p> Generator<'p> {
                 let effect = self.p.param_id(n).and_then(|id| self.p.param(id).effect.clone()).unwrap_or_default();
                 let mut names = vec![n.to_string()];
                 names.extend(
-                    effect.split(|c: char| !c.is_ascii_alphanumeric()).filter(|w| self.p.param_id(w).is_some()).map(str::to_string),
+                    effect
+                        .split(|c: char| !c.is_ascii_alphanumeric())
+                        .filter(|w| self.p.param_id(w).is_some())
+                        .map(str::to_string),
                 );
                 for n in names {
                     if let Some(l) = self.read_back(d, &n) {
@@ -508,7 +520,8 @@ impl<'p> Generator<'p> {
             if let Some(s) = d.pick(&flags)
                 && let Some(id) = self.p.param_id(&s.name)
             {
-                let v = if d.chance(80) { d.between(s.min.max(0), s.max.min(s.min.max(0) + 3)) } else { self.value(d, s) };
+                let v =
+                    if d.chance(80) { d.between(s.min.max(0), s.max.min(s.min.max(0) + 3)) } else { self.value(d, s) };
                 out.push(HostAction::Line(format!("{} {} {v}", self.p.setter(id), s.name)));
             }
         }
@@ -590,9 +603,9 @@ pub fn simpler(a: &HostAction) -> Vec<HostAction> {
             }
             out
         }
-        HostAction::Raw(b) => vec![HostAction::Line(
-            String::from_utf8_lossy(b).chars().filter(|c| !c.is_control()).collect::<String>(),
-        )],
+        HostAction::Raw(b) => {
+            vec![HostAction::Line(String::from_utf8_lossy(b).chars().filter(|c| !c.is_control()).collect::<String>())]
+        }
         HostAction::LineThenAbort { line, after_ms } if *after_ms > 0 => {
             vec![HostAction::LineThenAbort { line: line.clone(), after_ms: 0 }, HostAction::Line(line.clone())]
         }
@@ -626,7 +639,9 @@ pub fn from_transcript(p: &Profile, t: &crate::transcript::Transcript) -> Vec<Ho
         if b.as_slice() == [fr.abort] {
             let pause = s.pause.map_or(0, |d| d.as_millis() as u64);
             match out.pop() {
-                Some(HostAction::Line(l)) if pause > 0 => out.push(HostAction::LineThenAbort { line: l, after_ms: pause }),
+                Some(HostAction::Line(l)) if pause > 0 => {
+                    out.push(HostAction::LineThenAbort { line: l, after_ms: pause })
+                }
                 Some(HostAction::Raw(r)) if !r.ends_with(&[fr.terminator]) => {
                     out.push(HostAction::PartialThenAbort(String::from_utf8_lossy(&r).into_owned()))
                 }

@@ -279,7 +279,10 @@ pub fn build_case(
                 let step = ScriptStep::new(if short {
                     crate::transcript::script::Action::Partial(bytes.clone())
                 } else {
-                    crate::transcript::script::Action::Bytes { bytes: bytes.clone(), form: crate::transcript::Form::Hex }
+                    crate::transcript::script::Action::Bytes {
+                        bytes: bytes.clone(),
+                        form: crate::transcript::Form::Hex,
+                    }
                 });
                 walk.feed(&step, term);
                 if short {
@@ -317,7 +320,8 @@ pub fn build_case(
             kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
         for (i, c) in caps.iter().enumerate() {
             let fb = c.layout.as_ref().map(|l| l.feedback.size);
-            let is_feedback = c.realtime && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && c.output.len() > 1;
+            let is_feedback =
+                c.realtime && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && c.output.len() > 1;
             if is_feedback && !(block_steps.contains(&i) && fb == Some(c.output.len())) {
                 return Err(NotACase(format!("step {i}: a feedback block inside another answer")));
             }
@@ -331,7 +335,10 @@ pub fn build_case(
             ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain || !homed, wide),
             ShapeKind::Block(uncertain) => {
                 let size = c.layout.as_ref().map(|l| l.feedback.size);
-                if wide && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && size != Some(c.output.len()) {
+                if wide
+                    && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER)
+                    && size != Some(c.output.len())
+                {
                     return Err(NotACase("a block answer that is not a feedback block".into()));
                 }
                 Shape::Block(block_rules(p, c, uncertain, wide))

@@ -90,7 +90,13 @@ pub fn render(rows: &[CoverageRow]) -> String {
         if r.missing.len() > 12 {
             missing.push_str(&format!(" ... (+{})", r.missing.len() - 12));
         }
-        s.push_str(&format!("  {:<12} {:>4} / {:<4} {}\n", r.category, r.reached, total, if missing.is_empty() { String::new() } else { format!("not reached: {missing}") }));
+        s.push_str(&format!(
+            "  {:<12} {:>4} / {:<4} {}\n",
+            r.category,
+            r.reached,
+            total,
+            if missing.is_empty() { String::new() } else { format!("not reached: {missing}") }
+        ));
     }
     s
 }

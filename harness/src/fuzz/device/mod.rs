@@ -262,11 +262,7 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
         .or_insert_with(|| {
             let cases = crate::suite::generate(p).unwrap_or_default();
             Arc::new(
-                cases
-                    .iter()
-                    .map(|c| action::from_transcript(p, &c.transcript))
-                    .filter(|a| !a.is_empty())
-                    .collect(),
+                cases.iter().map(|c| action::from_transcript(p, &c.transcript)).filter(|a| !a.is_empty()).collect(),
             )
         })
         .clone()
@@ -487,7 +483,11 @@ fn worker(
         let g = if budget_left { &gen_all } else { &gen_no_eeprom };
         let base = {
             let sh = lock();
-            if !sh.corpus.is_empty() && dice.chance(50) { sh.corpus.get(dice.below(sh.corpus.len())).cloned() } else { None }
+            if !sh.corpus.is_empty() && dice.chance(50) {
+                sh.corpus.get(dice.below(sh.corpus.len())).cloned()
+            } else {
+                None
+            }
         };
         let actions = match base {
             Some(b) => g.mutate(&mut dice, &b),

@@ -52,11 +52,12 @@ impl FuzzReport {
     /// The report of a run.
     pub fn new(opts: &FuzzOptions, s: &FuzzSummary) -> FuzzReport {
         let a = opts.allowed;
-        let refused = [("motion", a.motion), ("realtime", a.realtime), ("eeprom", a.eeprom), ("abort-timing", a.abort_timing)]
-            .iter()
-            .filter(|(_, ok)| !ok)
-            .map(|(n, _)| n.to_string())
-            .collect();
+        let refused =
+            [("motion", a.motion), ("realtime", a.realtime), ("eeprom", a.eeprom), ("abort-timing", a.abort_timing)]
+                .iter()
+                .filter(|(_, ok)| !ok)
+                .map(|(n, _)| n.to_string())
+                .collect();
         FuzzReport {
             format: 1,
             tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
@@ -164,7 +165,8 @@ pub fn write_all(dir: &Path, r: &FuzzReport) -> Result<Vec<PathBuf>, FuzzError> 
     let mut out = Vec::new();
     for (name, text) in files {
         let path = dir.join(name);
-        crate::report::write_atomic(&path, text.as_bytes()).map_err(|source| FuzzError::Out { path: path.clone(), source })?;
+        crate::report::write_atomic(&path, text.as_bytes())
+            .map_err(|source| FuzzError::Out { path: path.clone(), source })?;
         out.push(path);
     }
     Ok(out)
