@@ -1,7 +1,7 @@
 //! From host actions to a golden transcript, the suite's way: the actions follow the suite's
-//! preamble in a [`CaseB`], each answer gets the suite's [`Shape`] (positions in a band of
+//! preamble in a `CaseB`, each answer gets the suite's `Shape` (positions in a band of
 //! MPE around the model's, other live values in their ranges, banners elided, feedback
-//! blocks with the suite's field rules), and [`build`] runs the host side against the
+//! blocks with the suite's field rules), and `suite::build` runs the host side against the
 //! in-process model and checks every shaped answer against the model's own. The transcript
 //! is then the set of answers the model accepts.
 //!
