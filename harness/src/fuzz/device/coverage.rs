@@ -38,7 +38,8 @@ pub fn universe(p: &Profile) -> BTreeMap<String, BTreeSet<String>> {
         }
     }
     for s in &p.status {
-        if StatusBits::from_bits(s.bit).is_some() {
+        // Bits the model never sends (the profile says so) cannot be reached through it.
+        if s.sent && StatusBits::from_bits(s.bit).is_some() {
             add("status", s.bit.to_string());
         }
     }
