@@ -36,6 +36,7 @@ pub const TARGETS: &[(&str, EntryPoint)] = &[
         device(data);
     }),
     ("realtime", realtime),
+    ("wire", wire),
     ("spec", |data| {
         spec(data);
     }),
@@ -597,4 +598,46 @@ pub fn exercise(profile: Arc<Profile>) {
         send(&mut hand, &[abort]);
     }
     let _ = hand.take_output();
+}
+
+// ------------------------------------------------------------------------------------- wire
+
+/// `gcl fuzz device`'s action generator against the in-process sim, differentially: the
+/// input picks (with `arbitrary`) a profile, a fault or none, and the seeds of one to six
+/// groups of host actions; the case the model makes of them is replayed against the mutant.
+///
+/// Checks, besides not panicking: the case passes on the unmutated sim (the fuzzer's
+/// oracle never blames a correct hand); its transcript text parses back (`gcl replay` reads
+/// every finding it writes) and replays on the mutant with the same verdict; a failing
+/// replay has a signature and a passing one none.
+pub fn wire(data: &[u8]) {
+    use gcl_harness::fuzz::device::action::{Allowed, Dice, Generator};
+    use gcl_harness::fuzz::device::{case::build_case, signature};
+    use gcl_harness::replay::replay;
+    let mut u = arbitrary::Unstructured::new(data);
+    let profiles = builtin_profiles();
+    let Ok(pi) = u.choose_index(profiles.len()) else { return };
+    let p = &profiles[pi];
+    let fault: Option<Fault> = u.choose(Fault::ALL).ok().copied().filter(|_| u.arbitrary::<bool>().unwrap_or(false));
+    let groups = u.int_in_range(1..=6u8).unwrap_or(1);
+    let g = Generator::new(p, Allowed::default());
+    let mut actions = Vec::new();
+    for _ in 0..groups {
+        let seed: u64 = u.arbitrary().unwrap_or(0);
+        g.group(&mut Dice::new(seed), &mut actions);
+    }
+    let Ok(built) = build_case(p, &actions, "wire", "wire", false, false) else { return };
+    let t = &built.transcript;
+    let opts = gcl_harness::suite::replay_options();
+    let fresh =
+        |faults: Vec<Fault>| gcl_harness::SimLink::new(p.clone(), DeviceConfig { faults, ..DeviceConfig::default() });
+    assert!(replay(t, &mut fresh(vec![]), &opts).is_pass(), "wire: the model's own case fails on the unmutated sim");
+    let Some(f) = fault else { return };
+    let out = replay(t, &mut fresh(vec![f]), &opts);
+    assert_eq!(out.is_pass(), signature(p, t, &out).is_none(), "wire: a verdict and its signature disagree ({f})");
+    let text = t.to_text();
+    let back = gcl_harness::transcript::parse(&text)
+        .unwrap_or_else(|e| panic!("wire: the transcript does not parse back: {e}"));
+    let again = replay(&back, &mut fresh(vec![f]), &opts);
+    assert_eq!(again.is_pass(), out.is_pass(), "wire: the parsed transcript replays differently on {f}");
 }

@@ -28,6 +28,7 @@ pub fn generate() -> Vec<Seed> {
     seeds.extend(device());
     seeds.extend(realtime());
     seeds.extend(spec());
+    seeds.extend(wire());
     seeds.extend(dictionaries());
     seeds
 }
@@ -348,4 +349,18 @@ fn dictionaries() -> Vec<Seed> {
         )
         .chain(EMBEDDED_FILES.iter().map(|(f, _)| format!("\"{f}\"").into_bytes()));
     vec![dict("grammar", grammar), dict("device", device), dict("spec", spec)]
+}
+
+/// `wire` inputs: a profile, a fault (or none), the number of groups and their seeds, as
+/// `arbitrary` reads them; a spread of each.
+fn wire() -> Vec<Seed> {
+    (0u8..8)
+        .map(|i| {
+            let mut bytes = vec![i % 3, i.wrapping_mul(7), 1, 5];
+            for g in 0..6u64 {
+                bytes.extend((u64::from(i) * 1000 + g).to_le_bytes());
+            }
+            Seed { target: "wire", name: format!("seed-{i}"), bytes }
+        })
+        .collect()
 }
