@@ -37,6 +37,7 @@ pub const TARGETS: &[(&str, EntryPoint)] = &[
     }),
     ("realtime", realtime),
     ("wire", wire),
+    ("transcript", transcript),
     ("spec", |data| {
         spec(data);
     }),
@@ -640,4 +641,19 @@ pub fn wire(data: &[u8]) {
         .unwrap_or_else(|e| panic!("wire: the transcript does not parse back: {e}"));
     let again = replay(&back, &mut fresh(vec![f]), &opts);
     assert_eq!(again.is_pass(), out.is_pass(), "wire: the parsed transcript replays differently on {f}");
+}
+
+// ------------------------------------------------------------------------------- transcript
+
+/// The transcript reader (`gcl replay`, `gcl fuzz device`'s findings, the suite) on untrusted
+/// text.
+///
+/// Checks, besides not panicking: a transcript that parses prints (`to_text`) a text that
+/// parses back to the same transcript, line numbers aside.
+pub fn transcript(data: &[u8]) {
+    let Ok(t) = gcl_harness::transcript::parse_bytes(data) else { return };
+    let text = t.to_text();
+    let back = gcl_harness::transcript::parse(&text)
+        .unwrap_or_else(|e| panic!("transcript round trip: the printed text does not parse: {e}\n{text}"));
+    assert_eq!(back.without_lines(), t.without_lines(), "transcript round trip: the printed text reads differently");
 }

@@ -29,6 +29,7 @@ pub fn generate() -> Vec<Seed> {
     seeds.extend(realtime());
     seeds.extend(spec());
     seeds.extend(wire());
+    seeds.extend(transcripts());
     seeds.extend(dictionaries());
     seeds
 }
@@ -363,4 +364,29 @@ fn wire() -> Vec<Seed> {
             Seed { target: "wire", name: format!("seed-{i}"), bytes }
         })
         .collect()
+}
+
+/// `transcript` inputs: a few of the suite's golden transcripts of the seed profile (one of
+/// each kind of step: text, hex blocks, pauses, elisions, fields), and a broken header.
+fn transcripts() -> Vec<Seed> {
+    let Ok(p) = Profile::builtin("seed") else { return Vec::new() };
+    let cases = gcl_harness::suite::generate(&p).unwrap_or_default();
+    let mut out: Vec<Seed> = [
+        "framing-echo",
+        "abort-motion-discards-queue",
+        "rt-header-upper-c",
+        "cmd-fget",
+        "param-p-read-only",
+        "rt-lfdp-worked-example",
+    ]
+    .iter()
+    .filter_map(|id| cases.iter().find(|c| c.id() == *id))
+    .map(|c| Seed { target: "transcript", name: c.id().to_string(), bytes: c.text().into_bytes() })
+    .collect();
+    out.push(Seed {
+        target: "transcript",
+        name: "bad-header".into(),
+        bytes: b"gcl-transcript 1\nid: X\n\nsend \"A\"\n".to_vec(),
+    });
+    out
 }
