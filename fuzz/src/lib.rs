@@ -38,6 +38,7 @@ pub const TARGETS: &[(&str, EntryPoint)] = &[
     ("realtime", realtime),
     ("wire", wire),
     ("transcript", transcript),
+    ("client", client),
     ("spec", |data| {
         spec(data);
     }),
@@ -656,4 +657,68 @@ pub fn transcript(data: &[u8]) {
     let back = gcl_harness::transcript::parse(&text)
         .unwrap_or_else(|e| panic!("transcript round trip: the printed text does not parse: {e}\n{text}"));
     assert_eq!(back.without_lines(), t.without_lines(), "transcript round trip: the printed text reads differently");
+}
+
+// ----------------------------------------------------------------------------------- client
+
+/// Polls the host core may answer before it must be settled (each answer consumes bytes).
+const CLIENT_POLLS: usize = 4096;
+
+/// The host client core (`gcl_harness::client::core::HostCore`) driven by the input: the first
+/// byte picks the profile; then each byte is an operation (a request from [`seeds::LINES`],
+/// LOOP with the profile's default layout, a RealTime block, ^C, a sync, expecting a prompt,
+/// giving up) or, for bytes from 0x40, a chunk of that many bytes from the hand (the next
+/// input bytes), after which the core is polled until it settles.
+///
+/// Checks, besides not panicking: polling settles (`Ok(None)` or a violation) within
+/// `CLIENT_POLLS` polls, whatever the hand sends.
+pub fn client(data: &[u8]) {
+    use gcl_harness::client::core::{Framing, HostCore};
+    let Some((&first, mut rest)) = data.split_first() else { return };
+    let profiles = builtin_profiles();
+    let p = &profiles[first as usize % profiles.len()];
+    let mut core = HostCore::new(Framing::of(p));
+    let layout = RtLayout::compute(p, &ParamStore::defaults(p), MotorSet::from_motors([1, 2, 3, 4]));
+    while let Some((&op, tail)) = rest.split_first() {
+        rest = tail;
+        match op {
+            0..=15 => {
+                let _ = core.command(seeds::LINES[op as usize % seeds::LINES.len()]);
+            }
+            16 => {
+                let _ = core.start_loop("LOOP", layout.clone());
+            }
+            17 => {
+                let _ = core.block(realtime::ControlHeader::DataFeedback, &[0; 8]);
+            }
+            18 => {
+                let _ = core.block(realtime::ControlHeader::Ack, &[]);
+            }
+            19 => {
+                core.abort();
+            }
+            20 => {
+                core.sync();
+            }
+            21 => core.expect_prompt(),
+            22 => core.give_up(),
+            n if n >= 0x40 => {
+                let k = ((n - 0x3f) as usize).min(rest.len());
+                core.handle_input(&rest[..k]);
+                rest = &rest[k..];
+                let mut settled = false;
+                for _ in 0..CLIENT_POLLS {
+                    match core.poll() {
+                        Ok(Some(_)) => {}
+                        Ok(None) | Err(_) => {
+                            settled = true;
+                            break;
+                        }
+                    }
+                }
+                assert!(settled, "client core: poll does not settle within {CLIENT_POLLS} polls");
+            }
+            _ => {}
+        }
+    }
 }

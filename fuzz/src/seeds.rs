@@ -30,6 +30,7 @@ pub fn generate() -> Vec<Seed> {
     seeds.extend(spec());
     seeds.extend(wire());
     seeds.extend(transcripts());
+    seeds.extend(client());
     seeds.extend(dictionaries());
     seeds
 }
@@ -388,5 +389,29 @@ fn transcripts() -> Vec<Seed> {
         name: "bad-header".into(),
         bytes: b"gcl-transcript 1\nid: X\n\nsend \"A\"\n".to_vec(),
     });
+    out
+}
+
+/// `client` inputs: a request and the hand's answer in chunks, for each profile and a few
+/// shapes (an answer, a refusal, a LOOP with its `*` and a feedback block, garbage).
+fn client() -> Vec<Seed> {
+    let chunk = |bytes: &[u8]| {
+        let mut v = Vec::new();
+        for c in bytes.chunks(0x40) {
+            v.push(0x3f + c.len() as u8);
+            v.extend_from_slice(c);
+        }
+        v
+    };
+    let mut out = Vec::new();
+    for p in 0..3u8 {
+        let hi = [&[p, 0][..], &chunk(b"HI\n\r=> ")].concat();
+        out.push(Seed { target: "client", name: format!("p{p}-answer"), bytes: hi });
+        let err = [&[p, 1][..], &chunk(b"FGET DP\n\rERR 64\n\r=> ")].concat();
+        out.push(Seed { target: "client", name: format!("p{p}-refusal"), bytes: err });
+    }
+    let lp = [&[0u8, 16][..], &chunk(b"LOOP*"), &[17][..], &chunk(&[b'*'; 22])].concat();
+    out.push(Seed { target: "client", name: "loop-block".into(), bytes: lp });
+    out.push(Seed { target: "client", name: "garbage".into(), bytes: [&[1u8, 3][..], &chunk(&[0xff; 100])].concat() });
     out
 }
