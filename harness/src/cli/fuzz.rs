@@ -172,11 +172,12 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
+        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),
         s.cases_per_second(),
+        s.wire_bytes as f64 / s.elapsed.saturating_sub(s.minimizing).as_secs_f64().max(1e-3),
         s.findings.len(),
         s.corpus,
         s.eeprom_writes

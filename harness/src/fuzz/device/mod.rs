@@ -210,6 +210,8 @@ pub struct FuzzSummary {
     pub corpus: usize,
     /// EEPROM writes made.
     pub eeprom_writes: u64,
+    /// Bytes on the wire in both directions during the cases (drains and minimization aside).
+    pub wire_bytes: u64,
     /// Wall time of the run.
     pub elapsed: Duration,
     /// Time spent minimizing (part of `elapsed`).
@@ -249,6 +251,7 @@ struct Shared {
     /// Signatures seen (found or being minimized).
     seen: BTreeSet<FindingSignature>,
     dropped: u64,
+    wire_bytes: u64,
     minimizing: Duration,
     error: Option<FuzzError>,
 }
@@ -397,6 +400,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         findings: Vec::new(),
         seen: BTreeSet::new(),
         dropped: 0,
+        wire_bytes: 0,
         minimizing: Duration::ZERO,
         error: None,
     });
@@ -430,6 +434,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         features: sh.features,
         corpus: sh.corpus.len(),
         eeprom_writes: writes.load(Ordering::SeqCst),
+        wire_bytes: sh.wire_bytes,
         elapsed: start.elapsed(),
         minimizing: sh.minimizing,
     })
@@ -517,6 +522,7 @@ fn worker(
         let sig = signature(&p, &built.transcript, &outcome);
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
+            sh.wire_bytes += outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum::<u64>();
             let new_cov = !built.features.is_subset(&sh.features);
             if new_cov {
                 sh.features.extend(built.features.iter().cloned());

@@ -38,6 +38,8 @@ pub struct FuzzReport {
     pub cases_per_second: f64,
     /// EEPROM writes made.
     pub eeprom_writes: u64,
+    /// Bytes on the wire (both directions) during the cases.
+    pub wire_bytes: u64,
     /// Corpus entries at the end.
     pub corpus: usize,
     /// What was refused (`motion`, `realtime`, `eeprom`, `abort-timing`).
@@ -71,6 +73,7 @@ impl FuzzReport {
             dropped: s.dropped,
             cases_per_second: s.cases_per_second(),
             eeprom_writes: s.eeprom_writes,
+            wire_bytes: s.wire_bytes,
             corpus: s.corpus,
             refused,
             coverage: table(&opts.profile, &s.features),
