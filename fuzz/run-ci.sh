@@ -3,7 +3,7 @@
 # if any of them finds a crash (a panic in the model or a failed property check).
 #
 #   GCL_FUZZ_SECONDS    seconds per target (default 30)
-#   GCL_FUZZ_TARGETS    space-separated targets (default: grammar device realtime spec)
+#   GCL_FUZZ_TARGETS    space-separated targets (default: grammar device realtime spec wire transcript client)
 #   GCL_FUZZ_SANITIZER  address (default) or none (faster; the model is forbid(unsafe_code),
 #                       so ASan mostly watches its dependencies)
 #
@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 seconds=${GCL_FUZZ_SECONDS:-30}
-targets=${GCL_FUZZ_TARGETS:-grammar device realtime spec}
+targets=${GCL_FUZZ_TARGETS:-grammar device realtime spec wire transcript client}
 sanitizer=${GCL_FUZZ_SANITIZER:-address}
 
 if ! cargo fuzz --version >/dev/null 2>&1; then

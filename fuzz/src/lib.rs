@@ -36,6 +36,9 @@ pub const TARGETS: &[(&str, EntryPoint)] = &[
         device(data);
     }),
     ("realtime", realtime),
+    ("wire", wire),
+    ("transcript", transcript),
+    ("client", client),
     ("spec", |data| {
         spec(data);
     }),
@@ -597,4 +600,124 @@ pub fn exercise(profile: Arc<Profile>) {
         send(&mut hand, &[abort]);
     }
     let _ = hand.take_output();
+}
+
+// ------------------------------------------------------------------------------------- wire
+
+/// `gcl fuzz device`'s action generator against the in-process sim, differentially: the
+/// input picks (with `arbitrary`) a profile, a fault or none, and the seeds of one to six
+/// groups of host actions; the case the model makes of them is replayed against the mutant.
+///
+/// Checks, besides not panicking: the case passes on the unmutated sim (the fuzzer's
+/// oracle never blames a correct hand); its transcript text parses back (`gcl replay` reads
+/// every finding it writes) and replays on the mutant with the same verdict; a failing
+/// replay has a signature and a passing one none.
+pub fn wire(data: &[u8]) {
+    use gcl_harness::fuzz::device::action::{Allowed, Dice, Generator};
+    use gcl_harness::fuzz::device::{case::build_case, signature};
+    use gcl_harness::replay::replay;
+    let mut u = arbitrary::Unstructured::new(data);
+    let profiles = builtin_profiles();
+    let Ok(pi) = u.choose_index(profiles.len()) else { return };
+    let p = &profiles[pi];
+    let fault: Option<Fault> = u.choose(Fault::ALL).ok().copied().filter(|_| u.arbitrary::<bool>().unwrap_or(false));
+    let groups = u.int_in_range(1..=6u8).unwrap_or(1);
+    let g = Generator::new(p, Allowed::default());
+    let mut actions = Vec::new();
+    for _ in 0..groups {
+        let seed: u64 = u.arbitrary().unwrap_or(0);
+        g.group(&mut Dice::new(seed), &mut actions);
+    }
+    let Ok(built) = build_case(p, &actions, "wire", "wire", false, false) else { return };
+    let t = &built.transcript;
+    let opts = gcl_harness::suite::replay_options();
+    let fresh =
+        |faults: Vec<Fault>| gcl_harness::SimLink::new(p.clone(), DeviceConfig { faults, ..DeviceConfig::default() });
+    assert!(replay(t, &mut fresh(vec![]), &opts).is_pass(), "wire: the model's own case fails on the unmutated sim");
+    let Some(f) = fault else { return };
+    let out = replay(t, &mut fresh(vec![f]), &opts);
+    assert_eq!(out.is_pass(), signature(p, t, &out).is_none(), "wire: a verdict and its signature disagree ({f})");
+    let text = t.to_text();
+    let back = gcl_transcript::parse(&text).unwrap_or_else(|e| panic!("wire: the transcript does not parse back: {e}"));
+    let again = replay(&back, &mut fresh(vec![f]), &opts);
+    assert_eq!(again.is_pass(), out.is_pass(), "wire: the parsed transcript replays differently on {f}");
+}
+
+// ------------------------------------------------------------------------------- transcript
+
+/// The transcript reader (`gcl replay`, `gcl fuzz device`'s findings, the suite) on untrusted
+/// text.
+///
+/// Checks, besides not panicking: a transcript that parses prints (`to_text`) a text that
+/// parses back to the same transcript, line numbers aside.
+pub fn transcript(data: &[u8]) {
+    let Ok(t) = gcl_transcript::parse_bytes(data) else { return };
+    let text = t.to_text();
+    let back = gcl_transcript::parse(&text)
+        .unwrap_or_else(|e| panic!("transcript round trip: the printed text does not parse: {e}\n{text}"));
+    assert_eq!(back.without_lines(), t.without_lines(), "transcript round trip: the printed text reads differently");
+}
+
+// ----------------------------------------------------------------------------------- client
+
+/// Polls the host core may answer before it must be settled (each answer consumes bytes).
+const CLIENT_POLLS: usize = 4096;
+
+/// The host client core (`gcl_harness::client::core::HostCore`) driven by the input: the first
+/// byte picks the profile; then each byte is an operation (a request from [`seeds::LINES`],
+/// LOOP with the profile's default layout, a RealTime block, ^C, a sync, expecting a prompt,
+/// giving up) or, for bytes from 0x40, a chunk of that many bytes from the hand (the next
+/// input bytes), after which the core is polled until it settles.
+///
+/// Checks, besides not panicking: polling settles (`Ok(None)` or a violation) within
+/// `CLIENT_POLLS` polls, whatever the hand sends.
+pub fn client(data: &[u8]) {
+    use gcl_harness::client::core::{Framing, HostCore};
+    let Some((&first, mut rest)) = data.split_first() else { return };
+    let profiles = builtin_profiles();
+    let p = &profiles[first as usize % profiles.len()];
+    let mut core = HostCore::new(Framing::of(p));
+    let layout = RtLayout::compute(p, &ParamStore::defaults(p), MotorSet::from_motors([1, 2, 3, 4]));
+    while let Some((&op, tail)) = rest.split_first() {
+        rest = tail;
+        match op {
+            0..=15 => {
+                let _ = core.command(seeds::LINES[op as usize % seeds::LINES.len()]);
+            }
+            16 => {
+                let _ = core.start_loop("LOOP", layout.clone());
+            }
+            17 => {
+                let _ = core.block(realtime::ControlHeader::DataFeedback, &[0; 8]);
+            }
+            18 => {
+                let _ = core.block(realtime::ControlHeader::Ack, &[]);
+            }
+            19 => {
+                core.abort();
+            }
+            20 => {
+                core.sync();
+            }
+            21 => core.expect_prompt(),
+            22 => core.give_up(),
+            n if n >= 0x40 => {
+                let k = ((n - 0x3f) as usize).min(rest.len());
+                core.handle_input(&rest[..k]);
+                rest = &rest[k..];
+                let mut settled = false;
+                for _ in 0..CLIENT_POLLS {
+                    match core.poll() {
+                        Ok(Some(_)) => {}
+                        Ok(None) | Err(_) => {
+                            settled = true;
+                            break;
+                        }
+                    }
+                }
+                assert!(settled, "client core: poll does not settle within {CLIENT_POLLS} polls");
+            }
+            _ => {}
+        }
+    }
 }

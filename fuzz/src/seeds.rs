@@ -28,6 +28,9 @@ pub fn generate() -> Vec<Seed> {
     seeds.extend(device());
     seeds.extend(realtime());
     seeds.extend(spec());
+    seeds.extend(wire());
+    seeds.extend(transcripts());
+    seeds.extend(client());
     seeds.extend(dictionaries());
     seeds
 }
@@ -348,4 +351,67 @@ fn dictionaries() -> Vec<Seed> {
         )
         .chain(EMBEDDED_FILES.iter().map(|(f, _)| format!("\"{f}\"").into_bytes()));
     vec![dict("grammar", grammar), dict("device", device), dict("spec", spec)]
+}
+
+/// `wire` inputs: a profile, a fault (or none), the number of groups and their seeds, as
+/// `arbitrary` reads them; a spread of each.
+fn wire() -> Vec<Seed> {
+    (0u8..8)
+        .map(|i| {
+            let mut bytes = vec![i % 3, i.wrapping_mul(7), 1, 5];
+            for g in 0..6u64 {
+                bytes.extend((u64::from(i) * 1000 + g).to_le_bytes());
+            }
+            Seed { target: "wire", name: format!("seed-{i}"), bytes }
+        })
+        .collect()
+}
+
+/// `transcript` inputs: a few of the suite's golden transcripts of the seed profile (one of
+/// each kind of step: text, hex blocks, pauses, elisions, fields), and a broken header.
+fn transcripts() -> Vec<Seed> {
+    let Ok(p) = Profile::builtin("seed") else { return Vec::new() };
+    let cases = gcl_harness::suite::generate(&p).unwrap_or_default();
+    let mut out: Vec<Seed> = [
+        "framing-echo",
+        "abort-motion-discards-queue",
+        "rt-header-upper-c",
+        "cmd-fget",
+        "param-p-read-only",
+        "rt-lfdp-worked-example",
+    ]
+    .iter()
+    .filter_map(|id| cases.iter().find(|c| c.id() == *id))
+    .map(|c| Seed { target: "transcript", name: c.id().to_string(), bytes: c.text().into_bytes() })
+    .collect();
+    out.push(Seed {
+        target: "transcript",
+        name: "bad-header".into(),
+        bytes: b"gcl-transcript 1\nid: X\n\nsend \"A\"\n".to_vec(),
+    });
+    out
+}
+
+/// `client` inputs: a request and the hand's answer in chunks, for each profile and a few
+/// shapes (an answer, a refusal, a LOOP with its `*` and a feedback block, garbage).
+fn client() -> Vec<Seed> {
+    let chunk = |bytes: &[u8]| {
+        let mut v = Vec::new();
+        for c in bytes.chunks(0x40) {
+            v.push(0x3f + c.len() as u8);
+            v.extend_from_slice(c);
+        }
+        v
+    };
+    let mut out = Vec::new();
+    for p in 0..3u8 {
+        let hi = [&[p, 0][..], &chunk(b"HI\n\r=> ")].concat();
+        out.push(Seed { target: "client", name: format!("p{p}-answer"), bytes: hi });
+        let err = [&[p, 1][..], &chunk(b"FGET DP\n\rERR 64\n\r=> ")].concat();
+        out.push(Seed { target: "client", name: format!("p{p}-refusal"), bytes: err });
+    }
+    let lp = [&[0u8, 16][..], &chunk(b"LOOP*"), &[17][..], &chunk(&[b'*'; 22])].concat();
+    out.push(Seed { target: "client", name: "loop-block".into(), bytes: lp });
+    out.push(Seed { target: "client", name: "garbage".into(), bytes: [&[1u8, 3][..], &chunk(&[0xff; 100])].concat() });
+    out
 }

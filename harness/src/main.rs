@@ -37,6 +37,8 @@ enum Command {
     Certify(cli::certify::Args),
     /// Regenerate or check the committed golden transcripts.
     Suite(cli::suite::Args),
+    /// Fuzz a hand (`gcl fuzz device`) with the reference model as the oracle.
+    Fuzz(cli::fuzz::Args),
     /// Regenerate or check the committed JSON test vectors (also done by `gcl suite`).
     Vectors(cli::vectors::Args),
 }
@@ -52,6 +54,7 @@ fn main() -> ExitCode {
         Command::Conform(a) => cli::conform::run(a),
         Command::Certify(a) => cli::certify::run(a),
         Command::Suite(a) => cli::suite::run(a),
+        Command::Fuzz(a) => cli::fuzz::run(a),
         Command::Vectors(a) => cli::vectors::run(a),
     };
     match result {

@@ -5,6 +5,7 @@
 pub mod certify;
 pub mod conform;
 pub mod explain;
+pub mod fuzz;
 pub mod record;
 pub mod replay;
 pub mod sim;

@@ -15,7 +15,7 @@
 //! - [`check`] / [`regenerate`]: staleness, and rewriting the files;
 //! - [`suite_hash`]: a version of the suite for reports and certificates.
 
-mod build;
+pub(crate) mod build;
 mod cases;
 mod depends;
 

@@ -1,0 +1,203 @@
+//! `gcl fuzz`: fuzzers that check someone else's hand (and, later, host library) against
+//! the reference model. This module only turns arguments into the library's options and
+//! prints; the fuzzers live in `gcl_harness::fuzz`.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use gcl_model::Fault;
+
+use super::{EXIT_FAIL, EXIT_OK, load_profile};
+
+/// Arguments of `gcl fuzz`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// What to fuzz.
+    #[command(subcommand)]
+    pub command: FuzzCommand,
+}
+
+/// The fuzzers.
+#[derive(Debug, clap::Subcommand)]
+pub enum FuzzCommand {
+    /// Fuzz a hand over the wire with host actions drawn from the profile; the reference model
+    /// judges every answer.
+    Device(DeviceArgs),
+}
+
+/// Arguments of `gcl fuzz device`.
+#[derive(Debug, clap::Args)]
+#[command(after_help = "Exit codes: 0 no finding; 1 findings (each written as a minimized transcript with \
+--out); 2 usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
+writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
+--target sim --fault fget-reversed --seed 1 --runs 500 --out findings\n  gcl fuzz device --target 'exec:gcl sim \
+--stdio' --duration 30s --jobs 2 --corpus corpus\n  gcl fuzz device --target serial:/dev/ttyUSB0?baud=9600 \
+--profile bh8-262-4.3 --no motion --duration 5m --report reports/fuzz")]
+pub struct DeviceArgs {
+    /// The hand: `sim[:PROFILE]`, `serial:PATH[?baud=N]`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
+    #[arg(long, value_name = "TARGET")]
+    pub target: gcl_harness::target::Target,
+    /// sim targets: a deliberate firmware bug (repeatable; see `gcl sim --help`).
+    #[arg(long, value_name = "NAME")]
+    pub fault: Vec<Fault>,
+    /// The profile the model speaks (default: the sim target's profile, else bh8-262).
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Seed of the generator (worker i uses SEED + i).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// How long to fuzz, e.g. `30s`, `5m` (default 60s unless --runs is given).
+    #[arg(long, value_parser = humantime::parse_duration, conflicts_with = "runs")]
+    pub duration: Option<Duration>,
+    /// How many cases to run.
+    #[arg(long, value_name = "N")]
+    pub runs: Option<u64>,
+    /// Stop after N distinct findings.
+    #[arg(long, value_name = "N")]
+    pub max_findings: Option<usize>,
+    /// A corpus directory: read at the start, and every case that reaches new model coverage
+    /// is added (one file per entry, named by its content hash, so corpora merge).
+    #[arg(long, value_name = "DIR")]
+    pub corpus: Option<PathBuf>,
+    /// Write each distinct finding's minimized transcript into DIR (`gcl replay` runs it).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Refuse what the hand may not do: motion, realtime, eeprom, abort-timing (repeatable).
+    #[arg(long = "no", value_name = "REQUIREMENT")]
+    pub refuse: Vec<String>,
+    /// The most EEPROM writes the run may make (restores included); serial targets: 0 unless given.
+    #[arg(long, value_name = "N")]
+    pub write_budget: Option<u64>,
+    /// Write fuzz-device.json, junit.xml and fuzz-device.html into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+    /// Workers, each with its own connection (sim, exec: and tcp:// targets).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=64))]
+    pub jobs: u64,
+    /// Keep findings as found, without minimizing them.
+    #[arg(long)]
+    pub no_minimize: bool,
+    /// Print only the summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `gcl fuzz`.
+pub fn run(a: Args) -> anyhow::Result<u8> {
+    match a.command {
+        FuzzCommand::Device(d) => device(d),
+    }
+}
+
+fn device(a: DeviceArgs) -> anyhow::Result<u8> {
+    use gcl_harness::fuzz::device::{self as fd, Budget, FuzzOptions, Progress};
+    use gcl_harness::target::Target;
+    let name = a
+        .profile
+        .clone()
+        .or_else(|| a.target.sim_profile(None).map(str::to_string))
+        .unwrap_or_else(|| gcl_harness::target::DEFAULT_SIM_PROFILE.to_string());
+    let profile = load_profile(&name)?;
+    if !a.fault.is_empty() && !matches!(a.target, Target::Sim { .. }) {
+        anyhow::bail!("--fault applies to sim targets only");
+    }
+    let serial = matches!(a.target, Target::Serial { .. });
+    if serial && a.jobs > 1 {
+        anyhow::bail!("--jobs: a serial port can be opened once; use one worker");
+    }
+    let mut o = FuzzOptions::new(a.target.clone(), profile);
+    o.open.faults = a.fault.clone();
+    o.seed = a.seed;
+    o.budget = match (a.runs, a.duration) {
+        (Some(n), _) => Budget::Runs(n),
+        (None, Some(d)) => Budget::Time(d),
+        (None, None) => Budget::Time(Duration::from_secs(60)),
+    };
+    o.max_findings = a.max_findings;
+    o.corpus = a.corpus.clone();
+    o.out = a.out.clone();
+    o.jobs = a.jobs as usize;
+    o.minimize = !a.no_minimize;
+    if let Some(b) = a.write_budget {
+        o.write_budget = Some(b);
+        o.allowed.eeprom = b > 0;
+    }
+    for r in &a.refuse {
+        match r.as_str() {
+            "motion" => o.allowed.motion = false,
+            "realtime" => o.allowed.realtime = false,
+            "eeprom" => {
+                o.allowed.eeprom = false;
+                o.write_budget = Some(0);
+            }
+            "abort-timing" => o.allowed.abort_timing = false,
+            other => anyhow::bail!("unknown requirement `{other}` (motion, realtime, eeprom, abort-timing)"),
+        }
+    }
+    let live = !a.quiet && std::io::stderr().is_terminal();
+    let last = Mutex::new(Instant::now());
+    let progress = |p: Progress<'_>| match p {
+        Progress::Run { runs, findings, features, elapsed } if live => {
+            let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
+            if l.elapsed() >= Duration::from_millis(250) {
+                *l = Instant::now();
+                let rate = runs as f64 / elapsed.as_secs_f64().max(1e-3);
+                let _ = write!(
+                    std::io::stderr(),
+                    "\r{runs} runs, {findings} findings, {features} features, {rate:.0} cases/s   "
+                );
+            }
+        }
+        Progress::Finding(f) if !a.quiet => {
+            let at = f.path.as_ref().map_or(String::new(), |p| format!(" -> {}", p.display()));
+            let _ = writeln!(
+                std::io::stderr(),
+                "\rfinding: {} (run {}, {} ms, {} actions){at}",
+                f.signature,
+                f.run,
+                f.found_after.as_millis(),
+                f.actions.len()
+            );
+        }
+        _ => {}
+    };
+    let s = fd::run(&o, &progress).context("gcl fuzz device")?;
+    if live {
+        eprintln!();
+    }
+    let report = fd::report::FuzzReport::new(&o, &s);
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
+        s.runs,
+        s.dropped,
+        s.elapsed.as_secs_f64(),
+        s.cases_per_second(),
+        s.wire_bytes as f64 / s.elapsed.saturating_sub(s.minimizing).as_secs_f64().max(1e-3),
+        s.findings.len(),
+        s.corpus,
+        s.eeprom_writes
+    )?;
+    for f in &s.findings {
+        writeln!(
+            out,
+            "  {} ({} actions){}",
+            f.signature,
+            f.actions.len(),
+            f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display()))
+        )?;
+    }
+    if !a.quiet {
+        write!(out, "{}", fd::coverage::render(&report.coverage))?;
+    }
+    if let Some(dir) = &a.report {
+        for p in fd::report::write_all(dir, &report)? {
+            writeln!(out, "wrote {}", p.display())?;
+        }
+    }
+    Ok(if s.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+}

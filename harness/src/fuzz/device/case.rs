@@ -1,0 +1,421 @@
+//! From host actions to a golden transcript, the suite's way: the actions follow the suite's
+//! preamble in a `CaseB`, each answer gets the suite's `Shape` (positions in a band of
+//! MPE around the model's, other live values in their ranges, banners elided, feedback
+//! blocks with the suite's field rules), and `suite::build` runs the host side against the
+//! in-process model and checks every shaped answer against the model's own. The transcript
+//! is then the set of answers the model accepts.
+//!
+//! A shadow [`Device`] walks the same bytes while the case is assembled: it gives the
+//! RealTime layout a block is encoded with, the model's positions for the bands, and the
+//! coverage features ([`super::coverage`]), all through the model's public API.
+
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::spec::{CommandKind, Scope};
+use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
+
+use super::action::HostAction;
+use crate::record::{Captured, RecordOptions, capture};
+use crate::suite::build::{CaseB, FieldRule, Range, Shape, build, value_range};
+use gcl_transcript::script::ScriptStep;
+use gcl_transcript::{Requirement, Transcript};
+
+/// A case the model has answered.
+#[derive(Debug, Clone)]
+pub struct BuiltCase {
+    /// The golden transcript (preamble, the actions, a restore of the EEPROM if it was written).
+    pub transcript: Transcript,
+    /// Coverage features the shadow model reached (see [`super::coverage`]).
+    pub features: BTreeSet<String>,
+    /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
+    pub eeprom_writes: usize,
+}
+
+/// Why actions did not make a case: the model itself gave no complete answer, or an answer
+/// the shapes do not cover (the case is dropped, never reported).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("the model could not make a case of these actions: {0}")]
+pub struct NotACase(pub String);
+
+/// The shadow model's quiet time after a step that ends on silence (the recorder's default).
+const QUIET: Duration = Duration::from_millis(100);
+
+struct Walk {
+    shadow: Device,
+    features: BTreeSet<String>,
+    /// Whether the model's positions may differ from the hand's by more than a band (after
+    /// ^C mid-motion).
+    positions_uncertain: bool,
+}
+
+impl Walk {
+    /// Feeds one step to the shadow, the way the recorder's shadow does; returns its answer.
+    fn feed(&mut self, step: &ScriptStep, terminator: u8) -> Vec<u8> {
+        if let Some(p) = step.pause {
+            let t = self.shadow.now() + p;
+            self.shadow.handle_timeout(t);
+        }
+        let before = self.shadow.mode();
+        let sent = step.action.wire_bytes(terminator);
+        self.shadow.clear_output();
+        self.shadow.handle_input(self.shadow.now(), &sent);
+        if step.action.ends_on_quiet() {
+            let t = self.shadow.now() + QUIET;
+            self.shadow.handle_timeout(t);
+        } else {
+            self.shadow.run_until_idle(Duration::from_secs(600));
+        }
+        let after = self.shadow.mode();
+        if before != after {
+            self.features.insert(format!("mode:{before:?}->{after:?}"));
+        }
+        let st = self.shadow.last_status();
+        for bit in st.iter() {
+            self.features.insert(format!("status:{}", bit.code()));
+        }
+        if after == Mode::Loop
+            && let Some(l) = self.shadow.rt_layout()
+        {
+            self.features.insert(format!("layout:{}/{}/{}", l.motors, l.control.size, l.feedback.size));
+        }
+        self.shadow.take_output()
+    }
+}
+
+/// How a step's answer is shaped once the model's answer is known.
+enum ShapeKind {
+    /// As [`Shape::Exact`], [`Shape::ListValues`] or [`Shape::Banner`].
+    Fixed(Shape),
+    /// A get line's values ([`get_shape`]); `true` after ^C mid-motion.
+    Get(Vec<gcl_model::spec::ParamId>, bool),
+    /// A feedback block: LFAP in a band around the model's; `true` after ^C mid-motion.
+    Block(bool),
+}
+
+fn mpe(p: &Profile, motor: u8) -> i64 {
+    p.param_id("MPE").map_or(0, |id| p.default_for(id, motor))
+}
+
+/// The shape of a get line's answer, from the model's answer: positions in a band of MPE,
+/// other live values in their ranges, everything else exact.
+fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], uncertain: bool, wide: bool) -> Shape {
+    let eol = p.framing.line_ending.as_bytes();
+    let text = String::from_utf8_lossy(answer);
+    let lines: Vec<&str> = text.split(std::str::from_utf8(eol).unwrap_or("\n\r")).skip(1).collect();
+    let mut out = Vec::new();
+    for (i, id) in names.iter().enumerate() {
+        let spec = p.param(*id);
+        let tokens = lines.get(i).map(|l| l.split(' ').collect::<Vec<_>>()).unwrap_or_default();
+        let ranges: Vec<Option<Range>> = tokens
+            .iter()
+            .enumerate()
+            .map(|(j, tok)| {
+                let motor = (j as u8 + 1).min(4);
+                // Positions within MPE of the model's (wider after ^C mid-motion, where the
+                // hand's timing and the model's part), strain within the free strain.
+                let band = match spec.name.as_str() {
+                    "P" if uncertain && wide => Some(spec.max - spec.min),
+                    "P" if uncertain => Some(3 * mpe(p, motor)),
+                    "P" => Some(mpe(p, motor)),
+                    "SG" => Some(p.hand.free_strain.max(1)),
+                    _ => None,
+                };
+                if let (Some(band), Ok(v)) = (band, tok.parse::<i64>()) {
+                    return Some(((v - band).max(spec.min), (v + band).min(spec.max)));
+                }
+                value_range(spec, if spec.scope == Scope::Global { 1 } else { motor }, None)
+            })
+            .collect();
+        out.push(ranges);
+    }
+    Shape::Values(out)
+}
+
+/// The transcript and coverage of `actions` after the preamble. `id` names the case.
+///
+/// `wide` is for hands outside this process: there the model's clock and the hand's part as
+/// soon as motors move under RealTime control or a ^C lands mid-motion (a wait advances the
+/// in-process model's clock, not a child's or a real hand's), so what follows reads
+/// positions, velocities and position changes in their whole range; in-process the model is
+/// its own clock and only MPE bands apply.
+///
+/// `home` starts every case with HI (a hand outside this process keeps its positions across
+/// RESET; the in-process sim is fresh for every case), which a case that moves does anyway.
+pub fn build_case(
+    p: &Arc<Profile>,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+) -> Result<BuiltCase, NotACase> {
+    let term = p.framing.terminator;
+    let parsed = |l: &str| match parse_line(p, l.as_bytes()) {
+        Ok(Line::Command(c)) => Some(c),
+        _ => None,
+    };
+    let moves = actions.iter().any(|a| match a {
+        HostAction::Line(l) => parsed(l).is_some_and(|c| {
+            let k = c.kind(p);
+            k.is_motion() || k == CommandKind::Loop
+        }),
+        HostAction::LineThenAbort { .. } => true,
+        _ => false,
+    });
+    let mut k = CaseB::new(p, id, title).src("Supervisory mode").preamble(moves || home);
+    let homed = moves || home;
+    let mut walk = Walk {
+        shadow: Device::new(p.clone(), DeviceConfig::default()),
+        features: BTreeSet::new(),
+        positions_uncertain: false,
+    };
+    walk.shadow.clear_output();
+    for plan in &k.def.plans {
+        walk.feed(&plan.step.clone(), term);
+    }
+    walk.features.clear();
+    let mut eeprom = false;
+    let mut kinds: Vec<(usize, ShapeKind)> = Vec::new();
+    for a in actions {
+        let in_loop = walk.shadow.mode() == Mode::Loop;
+        match a {
+            HostAction::Line(l) => {
+                if in_loop {
+                    // A line in RealTime mode is a stream of invalid headers: not a case.
+                    continue;
+                }
+                let step = ScriptStep::new(gcl_transcript::script::Action::Line(l.as_bytes().to_vec()));
+                let cmd = if in_loop { None } else { parsed(l) };
+                if !in_loop {
+                    note_line(p, l, &mut walk.features);
+                }
+                let answer = walk.feed(&step, term);
+                let refused = answer.windows(3).any(|w| w == b"ERR");
+                let shape = match &cmd {
+                    Some(c) if !refused => match (c.kind(p), &c.args) {
+                        (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => {
+                            ShapeKind::Get(ids.clone(), walk.positions_uncertain)
+                        }
+                        (
+                            CommandKind::MotorListValues
+                            | CommandKind::GlobalListValues
+                            | CommandKind::MotorListAllValues
+                            | CommandKind::GlobalListAllValues,
+                            _,
+                        ) => ShapeKind::Fixed(Shape::ListValues),
+                        (CommandKind::Reset, _) => ShapeKind::Fixed(Shape::Banner),
+                        _ => ShapeKind::Fixed(Shape::Exact),
+                    },
+                    _ => ShapeKind::Fixed(Shape::Exact),
+                };
+                if let Some(c) = &cmd {
+                    match c.kind(p) {
+                        CommandKind::MotorSave | CommandKind::GlobalSave => eeprom = true,
+                        CommandKind::Loop => k = k.requires(Requirement::Realtime),
+                        kd if kd.is_motion() && !refused => walk.positions_uncertain = false,
+                        _ => {}
+                    }
+                }
+                kinds.push((k.def.plans.len(), shape));
+                k = k.line(l);
+            }
+            HostAction::Raw(b) => {
+                let step = ScriptStep::new(gcl_transcript::script::Action::Bytes {
+                    bytes: b.clone(),
+                    form: gcl_transcript::Form::Text,
+                });
+                walk.features.insert("framing:control-byte".into());
+                walk.feed(&step, term);
+                k = k.step(step.action.clone());
+            }
+            HostAction::LineThenAbort { line, after_ms } => {
+                note_line(p, line, &mut walk.features);
+                walk.features.insert("abort:mid-motion".into());
+                let s1 = ScriptStep::new(gcl_transcript::script::Action::NoWait(line.as_bytes().to_vec()));
+                walk.feed(&s1, term);
+                let s2 = ScriptStep {
+                    pause: Some(Duration::from_millis(*after_ms)),
+                    ..ScriptStep::new(gcl_transcript::script::Action::abort())
+                };
+                walk.feed(&s2, term);
+                walk.positions_uncertain = true;
+                k = k.requires(Requirement::AbortTiming).nowait(line).pause_ms(*after_ms).abort();
+            }
+            HostAction::PartialThenAbort(text) => {
+                walk.features.insert(if in_loop { "abort:mid-block" } else { "abort:mid-line" }.into());
+                let s1 = ScriptStep::new(gcl_transcript::script::Action::Partial(text.as_bytes().to_vec()));
+                walk.feed(&s1, term);
+                walk.feed(&ScriptStep::new(gcl_transcript::script::Action::abort()), term);
+                k = k.step(gcl_transcript::script::Action::Partial(text.as_bytes().to_vec())).abort();
+            }
+            HostAction::Abort => {
+                walk.features.insert(if in_loop { "abort:loop" } else { "abort:idle" }.into());
+                walk.feed(&ScriptStep::new(gcl_transcript::script::Action::abort()), term);
+                k = k.abort();
+            }
+            HostAction::Block { header, values, extra } => {
+                let Some(layout) = walk.shadow.rt_layout().cloned().filter(|_| in_loop) else { continue };
+                let h = ControlHeader::from_byte(*header);
+                walk.features.insert(format!(
+                    "rt-header:{}",
+                    if h.is_some() { (*header as char).to_string() } else { "invalid".into() }
+                ));
+                let mut bytes = Vec::new();
+                if h.is_some_and(|h| h.has_data()) {
+                    let n = layout.control.fields.len();
+                    let vals: Vec<i64> = (0..n).map(|i| values.get(i).copied().unwrap_or(0)).collect();
+                    layout.control.encode_clamped(*header, &vals, &mut bytes);
+                } else {
+                    bytes.push(*header);
+                }
+                if *extra > 0 {
+                    bytes.extend(std::iter::repeat_n(0u8, *extra as usize));
+                } else if *extra < 0 && bytes.len() > 1 {
+                    bytes.pop();
+                }
+                let short = *extra < 0;
+                let step = ScriptStep::new(if short {
+                    gcl_transcript::script::Action::Partial(bytes.clone())
+                } else {
+                    gcl_transcript::script::Action::Bytes { bytes: bytes.clone(), form: gcl_transcript::Form::Hex }
+                });
+                walk.feed(&step, term);
+                if short {
+                    walk.features.insert("abort:mid-block".into());
+                    walk.feed(&ScriptStep::new(gcl_transcript::script::Action::abort()), term);
+                    k = k.step(gcl_transcript::script::Action::Partial(bytes.clone())).abort();
+                    continue;
+                }
+                kinds.push((k.def.plans.len(), ShapeKind::Block(walk.positions_uncertain)));
+                // Motors that move under RealTime control leave the model's clock and the
+                // hand's apart: what follows reads positions widely.
+                walk.positions_uncertain = true;
+                k = k.block(&bytes, Shape::Exact);
+            }
+        }
+    }
+    if walk.shadow.mode() == Mode::Loop {
+        k = k.abort();
+    }
+    if eeprom {
+        k = k.requires(Requirement::Eeprom);
+    }
+    let mut def = k.finish();
+    // The model's answers as the wire meets them, then the shapes from them.
+    let mut link = crate::SimLink::new(p.clone(), DeviceConfig::default());
+    let mut ro = RecordOptions::new(p.clone());
+    ro.timeout = Duration::from_secs(120);
+    let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
+    let caps = capture(&mut link, &steps, &ro).map_err(|e| NotACase(e.to_string()))?;
+    if wide {
+        // A feedback block inside an answer shaped as text or bytes (a block with bytes too
+        // many, the answer to ^C mid-block) holds strain and positions exactly: such a case
+        // would judge a real hand by the model's noise.
+        let block_steps: BTreeSet<usize> =
+            kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
+        for (i, c) in caps.iter().enumerate() {
+            let fb = c.layout.as_ref().map(|l| l.feedback.size);
+            let is_feedback =
+                c.realtime && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && c.output.len() > 1;
+            if is_feedback && !(block_steps.contains(&i) && fb == Some(c.output.len())) {
+                return Err(NotACase(format!("step {i}: a feedback block inside another answer")));
+            }
+        }
+    }
+    for (i, kind) in kinds {
+        let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
+        plan.shape = match kind {
+            ShapeKind::Fixed(s) => s,
+            ShapeKind::Get(_, _) if c.output.windows(3).any(|w| w == b"ERR") => Shape::Exact,
+            ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain || !homed, wide),
+            ShapeKind::Block(uncertain) => {
+                let size = c.layout.as_ref().map(|l| l.feedback.size);
+                if wide
+                    && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER)
+                    && size != Some(c.output.len())
+                {
+                    return Err(NotACase("a block answer that is not a feedback block".into()));
+                }
+                Shape::Block(block_rules(p, c, uncertain, wide))
+            }
+        };
+    }
+    let eeprom_writes = def
+        .plans
+        .iter()
+        .filter(|pl| match &pl.step.action {
+            gcl_transcript::script::Action::Line(l) => match parse_line(p, l) {
+                Ok(Line::Command(c)) => matches!(c.kind(p), CommandKind::MotorSave | CommandKind::GlobalSave),
+                _ => false,
+            },
+            _ => false,
+        })
+        .count();
+    let transcript = build(p, &def).map_err(NotACase)?;
+    // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
+    // runs past its step, or timing the recorder's shadow does not follow, is no case).
+    let mut fresh = crate::SimLink::new(p.clone(), DeviceConfig::default());
+    let out = crate::replay::replay(&transcript, &mut fresh, &crate::suite::replay_options());
+    if !out.is_pass() {
+        return Err(NotACase(out.summary()));
+    }
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes })
+}
+
+/// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with
+/// `wide` after motion, LFAP, LFV, LFDP and LFBP anywhere in their fields.
+fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<FieldRule> {
+    let Some(layout) = &c.layout else { return Vec::new() };
+    if wide && uncertain {
+        let any = Some((i64::MIN / 2, i64::MAX / 2));
+        return layout
+            .feedback
+            .fields
+            .iter()
+            .filter(|f| matches!(f.name.as_str(), "LFAP" | "LFV" | "LFDP" | "LFBP"))
+            .filter_map(|f| {
+                let name = ["LFAP", "LFV", "LFDP", "LFBP"].into_iter().find(|n| *n == f.name)?;
+                Some(FieldRule { motor: f.motor, name, range: any })
+            })
+            .collect();
+    }
+    let Ok((_, values)) = layout.feedback.decode(&c.output) else { return Vec::new() };
+    (1..=4u8)
+        .filter_map(|m| {
+            let v = layout.feedback.value_of(&values, Some(m), "LFAP")?;
+            let band = if uncertain { 3 * mpe(p, m) } else { mpe(p, m) };
+            Some(FieldRule { motor: Some(m), name: "LFAP", range: Some((v - band, v + band)) })
+        })
+        .collect()
+}
+
+/// Coverage features of a line as the model's grammar reads it.
+fn note_line(p: &Profile, line: &str, f: &mut BTreeSet<String>) {
+    match parse_line(p, line.as_bytes()) {
+        Ok(Line::Empty) => {
+            f.insert("command:(empty line)".into());
+        }
+        Ok(Line::Command(c)) => {
+            let name = &p.command(c.command).name;
+            f.insert(format!("command:{name}"));
+            f.insert(format!("prefix:{}", c.prefix.map_or("none".to_string(), |m| m.to_string())));
+            match &c.args {
+                Args::Names(ids) => ids.iter().for_each(|id| {
+                    f.insert(format!("param-read:{}", p.param(*id).name));
+                }),
+                Args::Pairs(ps) => ps.iter().for_each(|(id, _)| {
+                    f.insert(format!("param-write:{}", p.param(*id).name));
+                }),
+                _ => {}
+            }
+        }
+        Err(r) => {
+            for bit in r.status.iter() {
+                f.insert(format!("status:{}", StatusBits::code(bit)));
+            }
+            f.insert(format!("refused:{}", r.status.code()));
+        }
+    }
+}

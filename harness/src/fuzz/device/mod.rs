@@ -1,0 +1,666 @@
+//! `gcl fuzz device`: grammar-aware wire fuzzing of a hand with the reference model as the
+//! oracle.
+//!
+//! Each run draws a short list of host actions from the profile ([`action`]) or mutates a
+//! corpus entry, turns it into a golden transcript the suite's way ([`case`]: the suite's
+//! preamble, the model's answers with the suite's elisions), and replays it against the
+//! target with the suite's replayer. Any difference, timeout (the hand went silent, or a CR
+//! got no prompt), flood or lost link is a finding. Findings are deduplicated by signature
+//! (the command being answered where the answer parts from the model's, and the kind of
+//! difference, as [`crate::triage`] names them, plus `restart` for an unexpected banner, a
+//! watchdog reset), minimized by dropping and simplifying actions while the signature holds,
+//! and written as `gcl-transcript 1` files that `gcl replay` runs.
+//!
+//! Inputs that reach new model features ([`coverage`]) are kept in the corpus; a corpus
+//! directory holds one JSON file per entry named by its content hash, so workers, machines
+//! and runs share and merge corpora.
+//!
+//! The library prints nothing: progress goes to a callback, errors are [`FuzzError`].
+
+pub mod action;
+pub mod case;
+pub mod coverage;
+pub mod report;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use gcl_model::Profile;
+use serde::Serialize;
+use sha2::{Digest, Sha256};
+
+use self::action::{Allowed, Dice, Generator, HostAction, simpler};
+use self::case::{BuiltCase, build_case};
+use crate::deadline::{self, DeadlinePolicy};
+use crate::link::{Link, LinkError};
+use crate::replay::{ReplayOptions, ReplayOutcome, replay};
+use crate::suite::Case;
+use crate::target::{OpenOptions, Target};
+use gcl_transcript::Transcript;
+
+/// How long a run goes on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Budget {
+    /// This many cases (over all workers).
+    Runs(u64),
+    /// This much wall time.
+    Time(Duration),
+}
+
+/// What a fuzzing run does.
+#[derive(Debug, Clone)]
+pub struct FuzzOptions {
+    /// The hand.
+    pub target: Target,
+    /// How to open it (the sim's faults, profile, noise seed).
+    pub open: OpenOptions,
+    /// The profile the model speaks.
+    pub profile: Arc<Profile>,
+    /// Seed of the generator (worker `i` uses `seed + i`).
+    pub seed: u64,
+    /// When to stop.
+    pub budget: Budget,
+    /// Stop after this many distinct findings (`None`: run out the budget).
+    pub max_findings: Option<usize>,
+    /// A corpus directory, read at the start and added to as new coverage is found.
+    pub corpus: Option<PathBuf>,
+    /// Where minimized transcripts are written.
+    pub out: Option<PathBuf>,
+    /// What the hand may be asked to do.
+    pub allowed: Allowed,
+    /// The most EEPROM writes (FSAVE, PSAVE, restores included) the whole run may make.
+    pub write_budget: Option<u64>,
+    /// Workers (each opens the target once).
+    pub jobs: usize,
+    /// Minimize findings (on by default; off for raw speed figures).
+    pub minimize: bool,
+    /// The most replays one minimization may spend.
+    pub minimize_budget: usize,
+    /// Start the corpus from the suite's cases of the profile (their host sides).
+    pub suite_seeds: bool,
+}
+
+impl FuzzOptions {
+    /// Options for `target` with the defaults: 1000 runs, one worker, minimization on, and
+    /// for `serial:` targets no EEPROM writes at all (a real hand's EEPROM wears out).
+    pub fn new(target: Target, profile: Arc<Profile>) -> FuzzOptions {
+        let serial = matches!(target, Target::Serial { .. });
+        FuzzOptions {
+            open: OpenOptions { loaded_profile: Some(profile.clone()), ..OpenOptions::default() },
+            target,
+            profile,
+            seed: 0,
+            budget: Budget::Runs(1000),
+            max_findings: None,
+            corpus: None,
+            out: None,
+            allowed: Allowed { eeprom: !serial, ..Allowed::default() },
+            write_budget: serial.then_some(0),
+            jobs: 1,
+            minimize: true,
+            minimize_budget: 300,
+            suite_seeds: true,
+        }
+    }
+}
+
+impl FuzzOptions {
+    /// Whether answers get the wide bands of a hand outside this process (see
+    /// [`case::build_case`]).
+    pub fn wide(&self) -> bool {
+        !matches!(self.target, Target::Sim { .. })
+    }
+
+    /// Whether every case starts with HI (a hand outside this process, when motion is allowed).
+    pub fn home(&self) -> bool {
+        self.wide() && self.allowed.motion
+    }
+}
+
+/// Why a run could not go on (exit code 2): the target, the corpus or the output.
+#[derive(Debug, thiserror::Error)]
+pub enum FuzzError {
+    /// The target could not be opened (or reopened).
+    #[error("opening the target: {0}")]
+    Open(#[source] LinkError),
+    /// The corpus directory could not be read or written.
+    #[error("corpus {path}: {source}")]
+    Corpus {
+        /// The file or directory.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A finding could not be written.
+    #[error("writing {path}: {source}")]
+    Out {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The hand vanished and did not come back.
+    #[error("the hand vanished and could not be reopened: {0}")]
+    Vanished(String),
+}
+
+/// Where a finding parts from the model: the command being answered and the kind of
+/// difference (`framing`, `status`, `order`, `value`, `missing-answer`, `silence`, `flood`,
+/// `link`, `restart`).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+pub struct FindingSignature {
+    /// The command word (`FGET`, `^C`, `CR`, `RealTime block`).
+    pub command: String,
+    /// The kind of difference.
+    pub kind: String,
+}
+
+impl std::fmt::Display for FindingSignature {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} at {}", self.kind, self.command)
+    }
+}
+
+/// One distinct finding.
+#[derive(Debug, Clone, Serialize)]
+pub struct Finding {
+    /// Its signature.
+    pub signature: FindingSignature,
+    /// The run (1-based, over all workers) that first found it.
+    pub run: u64,
+    /// Wall time from the start of the fuzzing run until it was first seen.
+    #[serde(serialize_with = "ser_ms", rename = "found_after_ms")]
+    pub found_after: Duration,
+    /// Actions of the case that first found it.
+    pub original_actions: usize,
+    /// The minimized actions.
+    pub actions: Vec<HostAction>,
+    /// The minimized transcript (the model's expectations).
+    #[serde(skip)]
+    pub transcript: Transcript,
+    /// The transcript's text.
+    pub transcript_text: String,
+    /// How the minimized transcript ends on the target (expected against actual).
+    pub diff: String,
+    /// Where the transcript was written.
+    pub path: Option<PathBuf>,
+}
+
+fn ser_ms<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_u64(d.as_millis() as u64)
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct FuzzSummary {
+    /// Cases replayed against the target.
+    pub runs: u64,
+    /// Drawn action lists the model could not make a case of (dropped, not run).
+    pub dropped: u64,
+    /// Distinct findings, in the order found.
+    pub findings: Vec<Finding>,
+    /// Every coverage feature reached.
+    pub features: BTreeSet<String>,
+    /// Corpus entries at the end (loaded and new).
+    pub corpus: usize,
+    /// EEPROM writes made.
+    pub eeprom_writes: u64,
+    /// Bytes on the wire in both directions during the cases (drains and minimization aside).
+    pub wire_bytes: u64,
+    /// Wall time of the run.
+    pub elapsed: Duration,
+    /// Time spent minimizing (part of `elapsed`).
+    pub minimizing: Duration,
+}
+
+impl FuzzSummary {
+    /// Cases per second of wall time, minimization excluded.
+    pub fn cases_per_second(&self) -> f64 {
+        let t = self.elapsed.saturating_sub(self.minimizing).as_secs_f64();
+        if t > 0.0 { self.runs as f64 / t } else { 0.0 }
+    }
+}
+
+/// What the run tells its caller as it goes.
+#[derive(Debug)]
+pub enum Progress<'a> {
+    /// A case ran.
+    Run {
+        /// Cases so far.
+        runs: u64,
+        /// Distinct findings so far.
+        findings: usize,
+        /// Coverage features so far.
+        features: usize,
+        /// Wall time so far.
+        elapsed: Duration,
+    },
+    /// A new distinct finding, minimized.
+    Finding(&'a Finding),
+}
+
+struct Shared {
+    corpus: Vec<Vec<HostAction>>,
+    features: BTreeSet<String>,
+    findings: Vec<Finding>,
+    /// Signatures seen (found or being minimized).
+    seen: BTreeSet<FindingSignature>,
+    dropped: u64,
+    wire_bytes: u64,
+    minimizing: Duration,
+    error: Option<FuzzError>,
+}
+
+/// The host sides of the suite's cases of a profile, as action lists (generated once per
+/// profile and process).
+pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
+    static CACHE: Mutex<BTreeMap<String, Arc<Vec<Vec<HostAction>>>>> = Mutex::new(BTreeMap::new());
+    let mut c = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+    c.entry(p.id.clone())
+        .or_insert_with(|| {
+            let cases = crate::suite::generate(p).unwrap_or_default();
+            Arc::new(
+                cases.iter().map(|c| action::from_transcript(p, &c.transcript)).filter(|a| !a.is_empty()).collect(),
+            )
+        })
+        .clone()
+}
+
+/// The content-hash name of a corpus entry.
+pub fn corpus_name(actions: &[HostAction]) -> String {
+    let json = serde_json::to_vec(actions).unwrap_or_default();
+    let h = Sha256::digest(&json);
+    format!("{}.json", h.iter().take(10).map(|b| format!("{b:02x}")).collect::<String>())
+}
+
+/// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
+/// parse are skipped and counted.
+pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, usize), FuzzError> {
+    let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
+    std::fs::create_dir_all(dir).map_err(err)?;
+    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(err)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    names.sort();
+    let (mut out, mut bad) = (Vec::new(), 0);
+    for p in names {
+        match crate::files::read_text_limited(&p, 1 << 20).ok().and_then(|t| serde_json::from_str(&t).ok()) {
+            Some(a) => out.push(a),
+            None => bad += 1,
+        }
+    }
+    Ok((out, bad))
+}
+
+fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
+    let path = dir.join(corpus_name(actions));
+    if path.exists() {
+        return Ok(());
+    }
+    let json = serde_json::to_vec_pretty(actions).unwrap_or_default();
+    crate::report::write_atomic(&path, &json).map_err(|source| FuzzError::Corpus { path, source })
+}
+
+/// A worker's connection to the target: reopened when it fails; for `sim` targets a fresh
+/// hand for every case, so a case never depends on the one before.
+struct Hand<'o> {
+    opts: &'o FuzzOptions,
+    link: Option<Box<dyn Link>>,
+    /// Whether the link was just opened (its power-up banner may still be on the way).
+    new: bool,
+}
+
+impl Hand<'_> {
+    fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
+        let fresh = matches!(self.opts.target, Target::Sim { .. });
+        if fresh || self.link.is_none() {
+            self.new = true;
+            self.link = Some(crate::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
+        }
+        self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
+    }
+
+    /// Replays a case's transcript with deadlines from the model.
+    fn run(&mut self, t: &Transcript) -> Result<ReplayOutcome, FuzzError> {
+        let p = self.opts.profile.clone();
+        let mut ro = ReplayOptions { trailing: Duration::from_millis(50), ..crate::suite::replay_options() };
+        if !matches!(self.opts.target, Target::Sim { .. }) {
+            let case = Case { profile: p.id.clone(), transcript: t.clone() };
+            let policy = DeadlinePolicy::for_target(&self.opts.target);
+            if let Some(pred) = deadline::predict(&case, &p) {
+                let baud = match &self.opts.target {
+                    Target::Serial { baud, .. } => Some(*baud),
+                    _ => None,
+                };
+                ro.budgets = deadline::budgets(&p, &case, &pred, &policy, baud);
+            }
+            ro.silent_wait = policy.silent_wait;
+            // Every case begins with ^C and RESET, so the start-of-case drain only clears
+            // what the last case left; a serial hand keeps the replayer's default.
+            if !matches!(self.opts.target, Target::Serial { .. }) && !self.new && self.link.is_some() {
+                ro.drain_quiet = Duration::from_millis(20);
+            }
+        }
+        if self.link.is_none() {
+            ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
+        }
+        let link = self.link()?;
+        let out = replay(t, link.as_mut(), &ro);
+        self.new = false;
+        if matches!(out, ReplayOutcome::Disconnected(_)) {
+            self.link = None;
+        }
+        Ok(out)
+    }
+}
+
+/// The signature of a failed replay, `None` for a pass.
+pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
+    let case = Case { profile: p.id.clone(), transcript: t.clone() };
+    let (sig, _) = crate::triage::signature(&case, out, p)?;
+    let step = out.failed_step().unwrap_or(0);
+    let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
+    let banner = crate::record::BANNER_TEXT;
+    let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
+    let kind = if !expected_banner && got.windows(banner.len()).any(|w| w == banner) {
+        "restart".to_string()
+    } else {
+        match out {
+            ReplayOutcome::Timeout(to) if to.offset == 0 => "silence".to_string(),
+            _ => sig.kind.to_string(),
+        }
+    };
+    // A refused line's first word may hold control bytes: shown escaped, as everywhere.
+    Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
+}
+
+/// Runs the fuzzer. `progress` is called from worker threads.
+pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
+    let start = Instant::now();
+    let mut corpus = Vec::new();
+    if let Some(dir) = &opts.corpus {
+        corpus = load_corpus(dir)?.0;
+    }
+    if opts.suite_seeds {
+        corpus.extend(suite_seeds(&opts.profile).iter().cloned());
+    }
+    // Entries from other runs or the suite may do what this run refuses.
+    let generator = Generator::new(&opts.profile, opts.allowed);
+    corpus.retain(|a| generator.permits(a));
+    let shared = Mutex::new(Shared {
+        corpus,
+        features: BTreeSet::new(),
+        findings: Vec::new(),
+        seen: BTreeSet::new(),
+        dropped: 0,
+        wire_bytes: 0,
+        minimizing: Duration::ZERO,
+        error: None,
+    });
+    let runs = AtomicU64::new(0);
+    let tickets = AtomicU64::new(0);
+    let writes = AtomicU64::new(0);
+    let stop = AtomicBool::new(false);
+    let jobs = opts.jobs.max(1);
+    std::thread::scope(|s| {
+        for w in 0..jobs {
+            let counters = Counters { runs: &runs, tickets: &tickets, writes: &writes, stop: &stop };
+            let shared = &shared;
+            s.spawn(move || {
+                if let Err(e) = worker(opts, w, start, shared, counters, progress) {
+                    let stop = counters.stop;
+                    stop.store(true, Ordering::SeqCst);
+                    let mut g = shared.lock().unwrap_or_else(|e| e.into_inner());
+                    g.error.get_or_insert(e);
+                }
+            });
+        }
+    });
+    let sh = shared.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(e) = sh.error {
+        return Err(e);
+    }
+    Ok(FuzzSummary {
+        runs: runs.load(Ordering::SeqCst),
+        dropped: sh.dropped,
+        findings: sh.findings,
+        features: sh.features,
+        corpus: sh.corpus.len(),
+        eeprom_writes: writes.load(Ordering::SeqCst),
+        wire_bytes: sh.wire_bytes,
+        elapsed: start.elapsed(),
+        minimizing: sh.minimizing,
+    })
+}
+
+/// The run's counters, shared by the workers.
+#[derive(Clone, Copy)]
+struct Counters<'a> {
+    /// Cases run.
+    runs: &'a AtomicU64,
+    /// Cases started (a `Runs` budget is handed out as tickets).
+    tickets: &'a AtomicU64,
+    /// EEPROM writes.
+    writes: &'a AtomicU64,
+    /// Set to end every worker.
+    stop: &'a AtomicBool,
+}
+
+fn worker(
+    opts: &FuzzOptions,
+    w: usize,
+    start: Instant,
+    shared: &Mutex<Shared>,
+    c: Counters<'_>,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+) -> Result<(), FuzzError> {
+    let Counters { runs, tickets, writes, stop } = c;
+    let p = opts.profile.clone();
+    let lock = || shared.lock().unwrap_or_else(|e| e.into_inner());
+    let mut allowed = opts.allowed;
+    let gen_all = Generator::new(&p, allowed);
+    allowed.eeprom = false;
+    let gen_no_eeprom = Generator::new(&p, allowed);
+    let mut dice = Dice::new(opts.seed.wrapping_add(w as u64));
+    let mut hand = Hand { opts, link: None, new: true };
+    loop {
+        if stop.load(Ordering::SeqCst) {
+            return Ok(());
+        }
+        if let Budget::Time(t) = opts.budget
+            && start.elapsed() >= t
+        {
+            return Ok(());
+        }
+        if let Budget::Runs(r) = opts.budget
+            && tickets.load(Ordering::SeqCst) >= r
+        {
+            return Ok(());
+        }
+        let budget_left = opts.write_budget.is_none_or(|b| writes.load(Ordering::SeqCst) < b);
+        let g = if budget_left { &gen_all } else { &gen_no_eeprom };
+        let base = {
+            let sh = lock();
+            if !sh.corpus.is_empty() && dice.chance(50) {
+                sh.corpus.get(dice.below(sh.corpus.len())).cloned()
+            } else {
+                None
+            }
+        };
+        let actions = match base {
+            Some(b) => g.mutate(&mut dice, &b),
+            None => g.case(&mut dice),
+        };
+        let Ok(built) = build_case(&p, &actions, "fuzz", "a generated case", opts.wide(), opts.home()) else {
+            lock().dropped += 1;
+            continue;
+        };
+        if let Some(b) = opts.write_budget {
+            let w = built.eeprom_writes as u64;
+            if w > 0 && writes.fetch_add(w, Ordering::SeqCst) + w > b {
+                writes.fetch_sub(w, Ordering::SeqCst);
+                lock().dropped += 1;
+                continue;
+            }
+        } else {
+            writes.fetch_add(built.eeprom_writes as u64, Ordering::SeqCst);
+        }
+        if let Budget::Runs(r) = opts.budget
+            && tickets.fetch_add(1, Ordering::SeqCst) >= r
+        {
+            return Ok(());
+        }
+        let outcome = hand.run(&built.transcript)?;
+        let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
+        let sig = signature(&p, &built.transcript, &outcome);
+        let (new_cov, nfeat, nfind) = {
+            let mut sh = lock();
+            sh.wire_bytes += outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum::<u64>();
+            let new_cov = !built.features.is_subset(&sh.features);
+            if new_cov {
+                sh.features.extend(built.features.iter().cloned());
+                sh.corpus.push(actions.clone());
+            }
+            (new_cov, sh.features.len(), sh.findings.len())
+        };
+        if new_cov && let Some(dir) = &opts.corpus {
+            save_corpus(dir, &actions)?;
+        }
+        progress(Progress::Run { runs: run_no, findings: nfind, features: nfeat, elapsed: start.elapsed() });
+        let Some(sig) = sig else { continue };
+        if !lock().seen.insert(sig.clone()) {
+            continue;
+        }
+        let found_after = start.elapsed();
+        let t0 = Instant::now();
+        let (min_actions, min_case) = if opts.minimize {
+            minimize(opts, &mut hand, &actions, &built, &sig)?
+        } else {
+            (actions.clone(), built.clone())
+        };
+        let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+        let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
+        let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
+        let diff = hand.run(&final_case.transcript)?.render();
+        let text = final_case.transcript.to_text();
+        let path = match &opts.out {
+            Some(dir) => {
+                let path = dir.join(format!("{id}.gcl"));
+                crate::report::write_atomic(&path, text.as_bytes())
+                    .map_err(|source| FuzzError::Out { path: path.clone(), source })?;
+                Some(path)
+            }
+            None => None,
+        };
+        let finding = Finding {
+            signature: sig,
+            run: run_no,
+            found_after,
+            original_actions: actions.len(),
+            actions: min_actions,
+            transcript: final_case.transcript,
+            transcript_text: text,
+            diff,
+            path,
+        };
+        progress(Progress::Finding(&finding));
+        let mut sh = lock();
+        sh.minimizing += t0.elapsed();
+        sh.findings.push(finding);
+        if opts.max_findings.is_some_and(|m| sh.findings.len() >= m) {
+            stop.store(true, Ordering::SeqCst);
+        }
+    }
+}
+
+/// Delta debugging over the action list: drop chunks (halves, quarters, ... single
+/// actions), then simplify each action's arguments, keeping every change after which the
+/// case still fails with the same signature. Each try rebuilds the expectations from the
+/// model.
+fn minimize(
+    opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    sig: &FindingSignature,
+) -> Result<(Vec<HostAction>, BuiltCase), FuzzError> {
+    let p = opts.profile.clone();
+    let mut tries = 0usize;
+    let mut best = (actions.to_vec(), built.clone());
+    let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
+        *tries += 1;
+        let Ok(b) = build_case(&p, cand, "fuzz", "minimizing", opts.wide(), opts.home()) else { return Ok(None) };
+        if b.eeprom_writes > built.eeprom_writes {
+            return Ok(None);
+        }
+        let out = hand.run(&b.transcript)?;
+        Ok((signature(&p, &b.transcript, &out).as_ref() == Some(sig)).then_some(b))
+    };
+    let mut chunk = best.0.len().div_ceil(2).max(1);
+    while chunk >= 1 && tries < opts.minimize_budget {
+        let mut i = 0;
+        let mut changed = false;
+        while i < best.0.len() && tries < opts.minimize_budget {
+            let mut cand = best.0.clone();
+            cand.drain(i..(i + chunk).min(cand.len()));
+            if !cand.is_empty()
+                && let Some(b) = check(&cand, &mut tries)?
+            {
+                best = (cand, b);
+                changed = true;
+            } else {
+                i += chunk;
+            }
+        }
+        if chunk == 1 && !changed {
+            break;
+        }
+        if !changed || chunk > 1 {
+            chunk = (chunk / 2).max(1);
+        }
+    }
+    let mut i = 0;
+    while i < best.0.len() && tries < opts.minimize_budget {
+        let mut improved = false;
+        for s in simpler(&best.0[i]) {
+            let mut cand = best.0.clone();
+            cand[i] = s;
+            if let Some(b) = check(&cand, &mut tries)? {
+                best = (cand, b);
+                improved = true;
+                break;
+            }
+        }
+        if !improved {
+            i += 1;
+        }
+    }
+    Ok(best)
+}
+
+/// A command word as part of a file name: `^C` is `abort`, `RealTime block` is `block`.
+fn slug(command: &str) -> String {
+    let s: String = match command {
+        "^C" => "abort".into(),
+        "RealTime block" => "block".into(),
+        "CR" => "cr".into(),
+        c => c.to_ascii_lowercase().chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect(),
+    };
+    if s.is_empty() { "line".into() } else { s }
+}
+
+/// Findings grouped by signature kind, for summaries.
+pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
+    let mut m = BTreeMap::new();
+    for f in findings {
+        *m.entry(f.signature.kind.clone()).or_insert(0) += 1;
+    }
+    m
+}

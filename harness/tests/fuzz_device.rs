@@ -1,0 +1,202 @@
+//! `gcl fuzz device` finds every deliberate fault of the sim it can, minimizes it to a
+//! transcript that fails on that mutant and passes on the unmutated sim, and finds nothing
+//! on the unmutated sim, in-process and over `exec:`. Faults it does not find within the
+//! budget are listed with a reason in `fuzz_device_unfound.toml`; the list is checked both
+//! ways (a listed fault that is found fails the test, so the list stays true).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use gcl_harness::fuzz::device::{Budget, FuzzOptions, load_corpus, report, run};
+use gcl_harness::replay::replay;
+use gcl_harness::target::{OpenOptions, Target};
+use gcl_model::{Fault, Profile};
+use gcl_transcript::parse;
+
+/// The generator's seed of the fault sweep.
+const SEED: u64 = 1;
+/// Cases per fault before it counts as not found.
+const RUNS_PER_FAULT: u64 = 1500;
+
+fn opts(faults: Vec<Fault>, runs: u64) -> FuzzOptions {
+    let p = Profile::builtin("bh8-262").unwrap();
+    let mut o = FuzzOptions::new(Target::Sim { profile: None }, p);
+    o.open.faults = faults;
+    o.budget = Budget::Runs(runs);
+    o
+}
+
+fn unfound_list() -> BTreeMap<String, String> {
+    #[derive(serde::Deserialize)]
+    struct Entry {
+        fault: String,
+        reason: String,
+    }
+    #[derive(serde::Deserialize)]
+    struct List {
+        #[serde(default)]
+        unfound: Vec<Entry>,
+    }
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_device_unfound.toml")).unwrap();
+    let l: List = toml::from_str(&text).unwrap();
+    l.unfound.into_iter().map(|e| (e.fault, e.reason)).collect()
+}
+
+fn replays_on(t: &gcl_transcript::Transcript, faults: Vec<Fault>) -> bool {
+    let p = Profile::builtin("bh8-262").unwrap();
+    let mut link = gcl_harness::target::open(
+        &Target::Sim { profile: None },
+        &OpenOptions { loaded_profile: Some(p), faults, ..OpenOptions::default() },
+    )
+    .unwrap();
+    replay(t, link.as_mut(), &gcl_harness::suite::replay_options()).is_pass()
+}
+
+#[test]
+fn every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason() {
+    let listed = unfound_list();
+    for name in listed.keys() {
+        assert!(name.parse::<Fault>().is_ok(), "fuzz_device_unfound.toml lists `{name}`, which is no fault");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut missed = Vec::new();
+    let mut wrongly_listed = Vec::new();
+    for f in Fault::ALL {
+        let mut o = opts(vec![*f], RUNS_PER_FAULT);
+        o.seed = SEED;
+        o.max_findings = Some(1);
+        o.out = Some(dir.path().join(f.name()));
+        let s = run(&o, &|_| {}).unwrap();
+        let Some(found) = s.findings.first() else {
+            eprintln!("{:<24} not found in {} runs", f.name(), s.runs);
+            if !listed.contains_key(f.name()) {
+                missed.push(f.name());
+            }
+            continue;
+        };
+        eprintln!(
+            "{:<24} found at run {:>4} ({} ms): {} minimized from {} to {} actions",
+            f.name(),
+            found.run,
+            found.found_after.as_millis(),
+            found.signature,
+            found.original_actions,
+            found.actions.len()
+        );
+        if listed.contains_key(f.name()) {
+            wrongly_listed.push(f.name());
+        }
+        assert!(found.actions.len() <= found.original_actions, "{f}: minimizing made it longer");
+        // The written file is a transcript `gcl replay` reads: it fails on the mutant and
+        // passes on the unmutated sim.
+        let path = found.path.as_ref().expect("written to --out");
+        let t = parse(&std::fs::read_to_string(path).unwrap()).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(!replays_on(&t, vec![*f]), "{f}: the minimized transcript passes on the mutant");
+        assert!(replays_on(&t, vec![]), "{f}: the minimized transcript fails on the unmutated sim");
+    }
+    assert!(missed.is_empty(), "not found and not listed in fuzz_device_unfound.toml: {missed:?}");
+    assert!(wrongly_listed.is_empty(), "listed as not found in fuzz_device_unfound.toml but found: {wrongly_listed:?}");
+}
+
+#[test]
+fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = opts(vec![], 2000);
+    o.jobs = 2;
+    o.seed = 7;
+    o.corpus = Some(dir.path().to_path_buf());
+    // Only what this run keeps (the suite's cases seed the corpus in memory, not on disk).
+    o.suite_seeds = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.findings.is_empty(), "false positives: {:#?}", s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>());
+    assert_eq!(s.runs, 2000);
+    // Every kept entry is one file named by its content, readable by the next run.
+    let (entries, bad) = load_corpus(dir.path()).unwrap();
+    assert_eq!(bad, 0);
+    assert_eq!(entries.len(), s.corpus);
+    assert!(s.corpus > 10, "new coverage was kept: {}", s.corpus);
+    let names: std::collections::BTreeSet<String> =
+        entries.iter().map(|e| gcl_harness::fuzz::device::corpus_name(e)).collect();
+    assert_eq!(names.len(), entries.len());
+    // A second run starts from the corpus and merges into it.
+    o.seed = 8;
+    o.budget = Budget::Runs(200);
+    let s2 = run(&o, &|_| {}).unwrap();
+    assert!(s2.findings.is_empty());
+    assert!(s2.corpus >= s.corpus);
+}
+
+#[test]
+fn the_unmutated_sim_over_exec_yields_no_findings() {
+    let p = Profile::builtin("bh8-262").unwrap();
+    let t: Target = format!("exec:{} sim --stdio", env!("CARGO_BIN_EXE_gcl")).parse().unwrap();
+    let mut o = FuzzOptions::new(t, p);
+    o.budget = Budget::Runs(40);
+    o.seed = 3;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(
+        s.findings.is_empty(),
+        "false positives over exec: {:#?}",
+        s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
+    );
+    assert_eq!(s.runs, 40);
+}
+
+#[test]
+fn the_report_validates_against_its_schema_with_one_junit_testcase_per_finding() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = opts(vec![Fault::FgetReversed, Fault::UnknownCommand64], 150);
+    o.out = Some(dir.path().join("out"));
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.findings.len() >= 2, "{:?}", s.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>());
+    let r = report::FuzzReport::new(&o, &s);
+    let files = report::write_all(&dir.path().join("rep"), &r).unwrap();
+    assert_eq!(files.len(), 3);
+    let schema: serde_json::Value = serde_json::from_str(report::SCHEMA).unwrap();
+    let v = jsonschema::validator_for(&schema).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&files[0]).unwrap()).unwrap();
+    let errors: Vec<String> = v.iter_errors(&json).map(|e| format!("{} at {}", e, e.instance_path())).collect();
+    assert!(errors.is_empty(), "{errors:#?}");
+    let junit = std::fs::read_to_string(&files[1]).unwrap();
+    assert_eq!(junit.matches("<testcase ").count(), s.findings.len());
+    assert_eq!(junit.matches("<failure ").count(), s.findings.len());
+    let html = std::fs::read_to_string(&files[2]).unwrap();
+    for f in &s.findings {
+        assert!(html.contains("gcl-transcript 1"), "the HTML holds each transcript");
+        assert!(html.contains(&f.signature.kind));
+    }
+    // The coverage table names what was not reached.
+    assert!(r.coverage.iter().any(|c| c.category == "command" && c.total.is_some()));
+}
+
+#[test]
+fn the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(gcl)
+        .args(["fuzz", "device", "--target", "sim", "--fault", "no-echo", "--runs", "20", "-q", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let written: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(!written.is_empty(), "a transcript per finding");
+    let out = std::process::Command::new(gcl)
+        .args(["fuzz", "device", "--target", "sim", "--runs", "20", "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new(gcl)
+        .args(["fuzz", "device", "--target", "exec:/nonexistent/hand", "--runs", "5", "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("opening the target"));
+    let out = std::process::Command::new(gcl)
+        .args(["fuzz", "device", "--target", "sim", "--duration", "soon"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
