@@ -9,6 +9,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::realtime::{FieldType, RtFlag};
 use crate::status::StatusBits;
 
 /// Files under `spec/` compiled into the model, by their path relative to `spec/`.
@@ -53,6 +54,24 @@ pub enum SpecError {
     /// Includes loop back on themselves.
     #[error("spec include cycle through `{0}`")]
     IncludeCycle(String),
+    /// A parameter has an `rt` table but its name is not a RealTime flag GCL defines.
+    #[error("profile `{profile}`: parameter `{param}` has an rt field but is not a RealTime flag (known: {known})", known = RtFlag::ALL.map(RtFlag::name).join(", "))]
+    UnknownRtFlag {
+        /// The profile being resolved.
+        profile: String,
+        /// The parameter.
+        param: String,
+    },
+    /// A RealTime flag's field does not have a GCL field type, block or scope.
+    #[error("profile `{profile}`: RealTime flag `{param}`: {message}")]
+    RtField {
+        /// The profile being resolved.
+        profile: String,
+        /// The parameter.
+        param: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// One spec file as written. Lists from included files come first; an entry with the same
@@ -567,6 +586,111 @@ impl Decision {
     }
 }
 
+/// A RealTime flag of a profile, resolved at load: the parameter that switches it, and the
+/// type of the field it adds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RtSlot {
+    /// The parameter.
+    pub param: ParamId,
+    /// The flag.
+    pub flag: RtFlag,
+    /// The field's wire type.
+    pub ty: FieldType,
+}
+
+macro_rules! roles {
+    ($( $(#[doc = $doc:literal])* $variant:ident => [$($name:literal),+], )*) => {
+        /// What the device does with a parameter beyond storing it: the parameters the
+        /// hand's behaviour reads or that read back its state. Resolved by name when a
+        /// profile loads (see [`Profile::role`]); a profile may lack any of them.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Role {
+            $( $(#[doc = $doc])* $variant, )*
+        }
+
+        impl Role {
+            /// Every role.
+            pub const ALL: &'static [Role] = &[$(Role::$variant,)*];
+
+            /// The parameter names that take this role, first match wins.
+            pub fn names(self) -> &'static [&'static str] {
+                match self { $(Role::$variant => &[$($name),+],)* }
+            }
+        }
+    };
+}
+
+roles! {
+    /// P: present position (live).
+    Position => ["P"],
+    /// S: motor state (live).
+    State => ["S"],
+    /// SG: strain gauge (live).
+    Strain => ["SG"],
+    /// TEMP: board temperature (live).
+    Temperature => ["TEMP"],
+    /// PTEMP: peak temperature (kept by the hand).
+    PeakTemperature => ["PTEMP"],
+    /// UPSECS: powered seconds (kept by the hand).
+    UpSeconds => ["UPSECS"],
+    /// SN: serial number (kept by the hand).
+    SerialNumber => ["SN"],
+    /// OD: odometer (kept by the hand).
+    Odometer => ["OD"],
+    /// BD: breakaway detected.
+    BreakawayDetected => ["BD"],
+    /// BP: breakaway position.
+    BreakawayPosition => ["BP"],
+    /// EN: motor enabled for unprefixed motion.
+    Enabled => ["EN"],
+    /// DP: default position of M.
+    DefaultPosition => ["DP"],
+    /// DS: default step of IC/IO.
+    DefaultStep => ["DS"],
+    /// CT: close target.
+    CloseTarget => ["CT"],
+    /// OT: open target.
+    OpenTarget => ["OT"],
+    /// MCV: maximum close velocity.
+    CloseVelocity => ["MCV"],
+    /// MOV: maximum open velocity.
+    OpenVelocity => ["MOV"],
+    /// IVEL: HI velocity.
+    InitVelocity => ["IVEL"],
+    /// ACCEL: acceleration.
+    Acceleration => ["ACCEL"],
+    /// MPE: maximum position error of a move.
+    PositionError => ["MPE"],
+    /// TSTOP: stall time that ends a move.
+    StopTime => ["TSTOP"],
+    /// HOLD: keep power after a move.
+    Hold => ["HOLD"],
+    /// HSG (MSG in the seed): high strain that stops a close.
+    HighStrain => ["HSG", "MSG"],
+    /// LSG: low strain.
+    LowStrain => ["LSG"],
+    /// BS: breakaway on.
+    Breakaway => ["BS"],
+    /// SGFLIP: strain reading mirrored.
+    StrainFlip => ["SGFLIP"],
+    /// IHIT: HI settle repetitions.
+    InitHoldTime => ["IHIT"],
+    /// OTEMP: overtemperature threshold.
+    OverTemperature => ["OTEMP"],
+    /// BAUD: serial rate in hundreds of bit/s.
+    Baud => ["BAUD"],
+    /// LCVC: LCV coefficient.
+    VelocityCoefficient => ["LCVC"],
+    /// LFVC: LFV coefficient.
+    FeedbackVelocityCoefficient => ["LFVC"],
+    /// LFDPC: LFDP coefficient.
+    DeltaCoefficient => ["LFDPC"],
+    /// LFDPD: LFDP discards the clipped rest.
+    DeltaDiscard => ["LFDPD"],
+    /// LCPG: the control-gain flag (read when control data arrives).
+    ControlGain => ["LCPG"],
+}
+
 /// Index of a command in [`Profile::commands`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 pub struct CommandId(pub u16);
@@ -608,6 +732,15 @@ pub struct Profile {
     /// Number of distinct storage slots.
     #[serde(skip)]
     pub(crate) slots: usize,
+    /// The RealTime flags, in field order.
+    #[serde(skip)]
+    rt_slots: Vec<RtSlot>,
+    /// The parameter of each [`Role`], by `Role as usize`.
+    #[serde(skip)]
+    roles: Vec<Option<ParamId>>,
+    /// The role of each parameter, by [`ParamId`].
+    #[serde(skip)]
+    role_of: Vec<Option<Role>>,
 }
 
 /// The largest magnitude a parameter value, range or argument may have in a spec file, so
@@ -856,12 +989,29 @@ impl Profile {
                     )));
                 }
             }
-            if let Some(rt) = &p.rt
-                && !(rt.size == 1 || rt.size == 2)
-            {
-                return Err(invalid(format!("RealTime field `{}` must be 1 or 2 bytes", p.name)));
-            }
         }
+        // RealTime flags: closed names and types, in field order (`order`, then listing).
+        let mut rt_slots = Vec::new();
+        let mut orders = Vec::new();
+        for (i, p) in f.params.iter().enumerate() {
+            let Some(rt) = &p.rt else { continue };
+            let flag = RtFlag::from_name(&p.name)
+                .ok_or_else(|| SpecError::UnknownRtFlag { profile: id.clone(), param: p.name.clone() })?;
+            let bad = |message: String| SpecError::RtField { profile: id.clone(), param: p.name.clone(), message };
+            let ty = FieldType::new(rt.size, rt.signed)
+                .ok_or_else(|| bad(format!("a field of {} bytes is not u8, i8, u16 or i16", rt.size)))?;
+            if rt.block != flag.block() {
+                return Err(bad(format!("belongs in the {:?} block", flag.block()).to_lowercase()));
+            }
+            if flag.is_global() != (p.scope == Scope::Global) {
+                return Err(bad(format!("must have {} scope", if flag.is_global() { "global" } else { "motor" })));
+            }
+            rt_slots.push(RtSlot { param: ParamId(i as u16), flag, ty });
+            orders.push(rt.order);
+        }
+        let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
+        by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
+        let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
         }
@@ -884,7 +1034,25 @@ impl Profile {
                 slot[i] = slot[t];
             }
         }
+        let find = |name: &str| {
+            f.params.iter().position(|p| {
+                p.name.eq_ignore_ascii_case(name) || p.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name))
+            })
+        };
+        let roles = Role::ALL
+            .iter()
+            .map(|r| r.names().iter().find_map(|n| find(n)).map(|i| ParamId(i as u16)))
+            .collect::<Vec<Option<ParamId>>>();
+        let mut role_of = vec![None; f.params.len()];
+        for (r, id) in Role::ALL.iter().zip(&roles) {
+            if let Some(slot) = id.and_then(|id| role_of.get_mut(id.0 as usize)) {
+                *slot = Some(*r);
+            }
+        }
         Ok(Profile {
+            rt_slots,
+            roles,
+            role_of,
             title: f.title.unwrap_or_default(),
             aliases: f.aliases,
             framing,
@@ -900,6 +1068,21 @@ impl Profile {
             slots,
             id,
         })
+    }
+
+    /// The parameter that plays `role` in this profile, if it has one.
+    pub fn role(&self, role: Role) -> Option<ParamId> {
+        self.roles.get(role as usize).copied().flatten()
+    }
+
+    /// The role a parameter plays, if any.
+    pub fn role_of(&self, id: ParamId) -> Option<Role> {
+        self.role_of.get(id.0 as usize).copied().flatten()
+    }
+
+    /// The RealTime flags, in the order their fields appear (per motor, then hand-wide).
+    pub fn rt_slots(&self) -> &[RtSlot] {
+        &self.rt_slots
     }
 
     /// Finds a command by name, ignoring ASCII case.
@@ -1016,5 +1199,72 @@ mod evidence_tests {
         };
         let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
         assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
+    }
+}
+
+#[cfg(test)]
+mod closed_names_tests {
+    use super::*;
+
+    /// Loads the seed with `extra` TOML appended to its top file.
+    fn seed_with(extra: &str) -> Result<Profile, SpecError> {
+        let seed = embedded("seed.toml").unwrap_or_default();
+        let resolve = |p: &str| {
+            if p == "top.toml" { Some(format!("{seed}\n{extra}")) } else { embedded(p).map(str::to_string) }
+        };
+        Profile::load_with("top.toml", &resolve)
+    }
+
+    const FLAG: &str = "[[params]]\nname = \"{name}\"\nscope = \"{scope}\"\nsection = \"realtime\"\ndescription = \"d\"\nmin = 0\nmax = 1\ndefault = 0\nrt = {{ block = \"{block}\", size = {size}, signed = false, order = 9 }}\n";
+
+    fn flag(name: &str, scope: &str, block: &str, size: usize) -> String {
+        FLAG.replace("{name}", name)
+            .replace("{scope}", scope)
+            .replace("{block}", block)
+            .replace("{size}", &size.to_string())
+            .replace("{{", "{")
+            .replace("}}", "}")
+    }
+
+    #[test]
+    fn an_unknown_realtime_flag_is_refused_by_name() {
+        let err = seed_with(&flag("LFXYZ", "motor", "feedback", 1)).unwrap_err();
+        assert_eq!(err, SpecError::UnknownRtFlag { profile: "seed".into(), param: "LFXYZ".into() });
+        assert!(err.to_string().contains("LFXYZ") && err.to_string().contains("LFAP"), "{err}");
+    }
+
+    #[test]
+    fn a_realtime_field_must_have_a_gcl_type_block_and_scope() {
+        for (extra, says) in [
+            (flag("LFT", "global", "feedback", 3), "3 bytes"),
+            (flag("LFT", "global", "control", 1), "feedback block"),
+            (flag("LFT", "motor", "feedback", 1), "global scope"),
+        ] {
+            match seed_with(&extra) {
+                Err(SpecError::RtField { param, message, .. }) => {
+                    assert_eq!(param, "LFT");
+                    assert!(message.contains(says), "{message}");
+                }
+                other => panic!("expected an RtField error for {says}, got {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn roles_resolve_by_name_and_alias() {
+        let seed = Profile::builtin("seed").unwrap();
+        let bh8 = Profile::builtin("bh8-262").unwrap();
+        let name = |p: &Profile, r: Role| p.role(r).map(|id| p.param(id).name.clone());
+        // The seed calls the high strain MSG; bh8-262 calls it HSG.
+        assert_eq!(name(&seed, Role::HighStrain).as_deref(), Some("MSG"));
+        assert_eq!(name(&bh8, Role::HighStrain).as_deref(), Some("HSG"));
+        assert_eq!(name(&bh8, Role::Position).as_deref(), Some("P"));
+        for p in [&seed, &bh8] {
+            for r in Role::ALL {
+                if let Some(id) = p.role(*r) {
+                    assert_eq!(p.role_of(id), Some(*r), "{} {r:?}", p.id);
+                }
+            }
+        }
     }
 }

@@ -51,7 +51,7 @@ fn worked_example(profile: &str, discard: bool) -> Vec<Vec<u8>> {
     assert_eq!(d.position(1), 2000);
     assert_eq!(send(&mut d, "1LOOP"), b"1LOOP*");
     let layout = d.rt_layout().unwrap();
-    assert_eq!(layout.feedback.size, 2, "header and one LFDP byte");
+    assert_eq!(layout.feedback().size(), 2, "header and one LFDP byte");
     feedback_blocks(&mut d, 3)
 }
 

@@ -23,8 +23,8 @@ use physics::{Goal, Motor, Termination};
 use crate::grammar::{self, Args, Command, Line, ParseOptions};
 use crate::motor::MotorSet;
 use crate::params::{NvMemory, ParamStore, Transfer};
-use crate::realtime::{self, ControlHeader, RtLayout};
-use crate::spec::{CommandKind, ParamId, Profile, Scope};
+use crate::realtime::{self, Control, ControlHeader, Feedback, MotorControl, RtFlag, RtLayout};
+use crate::spec::{CommandKind, ParamId, Profile, Role, Scope};
 use crate::status::StatusBits;
 
 /// Conditions in and around the hand that the protocol cannot set: objects, temperature,
@@ -98,10 +98,6 @@ struct LoopState {
     /// The header whose data is being received, and the data so far.
     pending: Option<ControlHeader>,
     data: Vec<u8>,
-    /// Decoded control values, reused.
-    values: Vec<i64>,
-    /// Feedback values, reused.
-    feedback: Vec<i64>,
 }
 
 /// One physics tick, in nanoseconds.
@@ -135,88 +131,6 @@ pub struct Device {
     last_status: StatusBits,
     eol: Vec<u8>,
     prompt: Vec<u8>,
-    ids: Ids,
-}
-
-/// Parameter ids the device uses, looked up once.
-#[derive(Debug, Clone, Copy, Default)]
-struct Ids {
-    p: Option<ParamId>,
-    s: Option<ParamId>,
-    sg: Option<ParamId>,
-    temp: Option<ParamId>,
-    ptemp: Option<ParamId>,
-    upsecs: Option<ParamId>,
-    sn: Option<ParamId>,
-    od: Option<ParamId>,
-    bd: Option<ParamId>,
-    bp: Option<ParamId>,
-    en: Option<ParamId>,
-    dp: Option<ParamId>,
-    ds: Option<ParamId>,
-    ct: Option<ParamId>,
-    ot: Option<ParamId>,
-    mcv: Option<ParamId>,
-    mov: Option<ParamId>,
-    ivel: Option<ParamId>,
-    accel: Option<ParamId>,
-    mpe: Option<ParamId>,
-    tstop: Option<ParamId>,
-    hold: Option<ParamId>,
-    hsg: Option<ParamId>,
-    lsg: Option<ParamId>,
-    bs: Option<ParamId>,
-    sgflip: Option<ParamId>,
-    ihit: Option<ParamId>,
-    otemp: Option<ParamId>,
-    baud: Option<ParamId>,
-    lcvc: Option<ParamId>,
-    lfvc: Option<ParamId>,
-    lfdpc: Option<ParamId>,
-    lfdpd: Option<ParamId>,
-    lcpg: Option<ParamId>,
-}
-
-impl Ids {
-    fn new(p: &Profile) -> Ids {
-        let f = |n: &str| p.param_id(n);
-        Ids {
-            p: f("P"),
-            s: f("S"),
-            sg: f("SG"),
-            temp: f("TEMP"),
-            ptemp: f("PTEMP"),
-            upsecs: f("UPSECS"),
-            sn: f("SN"),
-            od: f("OD"),
-            bd: f("BD"),
-            bp: f("BP"),
-            en: f("EN"),
-            dp: f("DP"),
-            ds: f("DS"),
-            ct: f("CT"),
-            ot: f("OT"),
-            mcv: f("MCV"),
-            mov: f("MOV"),
-            ivel: f("IVEL"),
-            accel: f("ACCEL"),
-            mpe: f("MPE"),
-            tstop: f("TSTOP"),
-            hold: f("HOLD"),
-            hsg: f("HSG").or_else(|| f("MSG")),
-            lsg: f("LSG"),
-            bs: f("BS"),
-            sgflip: f("SGFLIP"),
-            ihit: f("IHIT"),
-            otemp: f("OTEMP"),
-            baud: f("BAUD"),
-            lcvc: f("LCVC"),
-            lfvc: f("LFVC"),
-            lfdpc: f("LFDPC"),
-            lfdpd: f("LFDPD"),
-            lcpg: f("LCPG"),
-        }
-    }
 }
 
 impl Device {
@@ -235,7 +149,6 @@ impl Device {
         }
         let motors = std::array::from_fn(|i| Motor::new(config.scenario.initial_positions[i] as f64));
         let mut d = Device {
-            ids: Ids::new(&profile),
             faults: config.faults,
             rng: rand_pcg::Pcg32::seed_from_u64(config.seed),
             scenario: config.scenario,
@@ -270,6 +183,11 @@ impl Device {
 
     fn has(&self, f: Fault) -> bool {
         self.faults.contains(&f)
+    }
+
+    /// The parameter that plays `role` in the hand's profile.
+    fn id(&self, role: Role) -> Option<ParamId> {
+        self.profile.role(role)
     }
 
     // ------------------------------------------------------------------ public surface
@@ -370,7 +288,7 @@ impl Device {
 
     /// The serial rate the hand is set to, in bit/s.
     pub fn baud(&self) -> u32 {
-        self.ids.baud.map_or(9600, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
+        self.id(Role::Baud).map_or(9600, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
     }
 
     /// Present position of a motor (1..=4), rounded.
@@ -446,21 +364,25 @@ impl Device {
         let hand = &profile.hand;
         let i = (m - 1) as usize;
         let vel_unit = hand.counts_per_ms_per_velocity_unit;
-        let (mcv, mov) = (self.get(self.ids.mcv, m) as f64 * vel_unit, self.get(self.ids.mov, m) as f64 * vel_unit);
+        let (mcv, mov) = (
+            self.get(self.id(Role::CloseVelocity), m) as f64 * vel_unit,
+            self.get(self.id(Role::OpenVelocity), m) as f64 * vel_unit,
+        );
         physics::StepLimits {
             limit: self.limit(m),
             object: self.scenario.objects[i].map(|o| (o, hand.object_compliance)),
             accel: self.accel(m),
             close_speed: mcv,
             open_speed: mov,
-            init_speed: self.ids.ivel.map_or(mov, |id| self.behaviour(id, m) as f64 * vel_unit),
-            tstop_ms: self.get(self.ids.tstop, m).clamp(0, i64::from(u32::MAX)) as u32,
-            settle_ms: hand.hi_settle_ms * self.ids.ihit.map_or(1, |id| self.behaviour(id, m).max(1) as u64),
+            init_speed: self.id(Role::InitVelocity).map_or(mov, |id| self.behaviour(id, m) as f64 * vel_unit),
+            tstop_ms: self.get(self.id(Role::StopTime), m).clamp(0, i64::from(u32::MAX)) as u32,
+            settle_ms: hand.hi_settle_ms
+                * self.id(Role::InitHoldTime).map_or(1, |id| self.behaviour(id, m).max(1) as u64),
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
-            high_strain: self.get(self.ids.hsg, m),
-            low_strain: self.ids.lsg.map_or(256, |id| self.behaviour(id, m)),
-            breakaway: self.get(self.ids.bs, m) != 0,
+            high_strain: self.get(self.id(Role::HighStrain), m),
+            low_strain: self.id(Role::LowStrain).map_or(256, |id| self.behaviour(id, m)),
+            breakaway: self.get(self.id(Role::Breakaway), m) != 0,
         }
     }
 
@@ -496,7 +418,7 @@ impl Device {
 
     fn terminate_motor(&mut self, m: u8, t: Termination) {
         let i = (m - 1) as usize;
-        let hold = self.get(self.ids.hold, m) != 0;
+        let hold = self.get(self.id(Role::Hold), m) != 0;
         let goal = self.motors[i].goal.take();
         self.motors[i].velocity = 0.0;
         self.motors[i].powered = hold;
@@ -512,10 +434,10 @@ impl Device {
         }
         if t == Termination::Breakaway {
             let at = self.motors[i].position();
-            self.set_live(self.ids.bd, m, 1);
-            self.set_live(self.ids.bp, m, at);
+            self.set_live(self.id(Role::BreakawayDetected), m, 1);
+            self.set_live(self.id(Role::BreakawayPosition), m, at);
         }
-        let mpe = self.get(self.ids.mpe, m);
+        let mpe = self.get(self.id(Role::PositionError), m);
         if let (Some(task), Some(Goal::Position { target, .. })) = (&mut self.task, goal)
             && task.check_mpe
             && !self.faults.contains(&Fault::MpeIgnored)
@@ -530,8 +452,8 @@ impl Device {
             if task.kind == CommandKind::Initialize {
                 for m in task.motors.iter() {
                     self.motors[(m - 1) as usize].reported = None;
-                    self.set_live(self.ids.bd, m, 0);
-                    self.set_live(self.ids.bp, m, 0);
+                    self.set_live(self.id(Role::BreakawayDetected), m, 0);
+                    self.set_live(self.id(Role::BreakawayPosition), m, 0);
                 }
             }
             self.mode = Mode::Idle;
@@ -754,7 +676,7 @@ impl Device {
     }
 
     fn enabled_motors(&self) -> MotorSet {
-        match self.ids.en {
+        match self.id(Role::Enabled) {
             Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.behaviour(en, *m) != 0)),
             None => MotorSet::ALL,
         }
@@ -802,7 +724,7 @@ impl Device {
     }
 
     fn accel(&self, m: u8) -> f64 {
-        let a = self.get(self.ids.accel, m).max(1) as f64;
+        let a = self.get(self.id(Role::Acceleration), m).max(1) as f64;
         a * self.profile.hand.velocity_units_per_ms_per_accel * self.profile.hand.counts_per_ms_per_velocity_unit
     }
 
@@ -829,32 +751,28 @@ impl Device {
         let raw = self.motors[i].strain(self.scenario.objects[i], hand.free_strain, hand.strain_per_count);
         let n = self.scenario.strain_noise;
         let v = (raw + self.noise(n)).clamp(0, 255);
-        if self.get(self.ids.sgflip, m) != 0 { 255 - v } else { v }
+        if self.get(self.id(Role::StrainFlip), m) != 0 { 255 - v } else { v }
     }
 
     /// The value FGET/PGET prints for a parameter and motor.
     fn read_param(&mut self, id: ParamId, m: u8) -> i64 {
         let i = (m.clamp(1, 4) - 1) as usize;
-        let ids = self.ids;
-        let is = |x: Option<ParamId>| x == Some(id);
-        if is(ids.p) {
-            self.motors[i].position()
-        } else if is(ids.s) {
-            if self.motors[i].initialized { 0 } else { self.profile.hand.uninitialized_state_value }
-        } else if is(ids.sg) {
-            self.strain(m)
-        } else if is(ids.temp) {
-            self.temperature()
-        } else if is(ids.ptemp) {
-            self.nv.peak_temperature
-        } else if is(ids.upsecs) {
-            (self.nv.powered_ms / 1000) as i64
-        } else if is(ids.sn) {
-            self.nv.serial_number
-        } else if is(ids.od) {
-            (self.nv.odometer_counts[i] / 1000) as i64
-        } else {
-            self.params.get(&self.profile, id, m)
+        match self.profile.role_of(id) {
+            Some(Role::Position) => self.motors[i].position(),
+            Some(Role::State) => {
+                if self.motors[i].initialized {
+                    0
+                } else {
+                    self.profile.hand.uninitialized_state_value
+                }
+            }
+            Some(Role::Strain) => self.strain(m),
+            Some(Role::Temperature) => self.temperature(),
+            Some(Role::PeakTemperature) => self.nv.peak_temperature,
+            Some(Role::UpSeconds) => (self.nv.powered_ms / 1000) as i64,
+            Some(Role::SerialNumber) => self.nv.serial_number,
+            Some(Role::Odometer) => (self.nv.odometer_counts[i] / 1000) as i64,
+            _ => self.params.get(&self.profile, id, m),
         }
     }
 
@@ -914,7 +832,10 @@ impl Device {
                     _ => Transfer::Save,
                 };
                 let keep_mcv = (t == Transfer::Defaults && self.has(Fault::FdefSkipsMcv))
-                    .then(|| self.ids.mcv.map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m)))))
+                    .then(|| {
+                        self.id(Role::CloseVelocity)
+                            .map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m))))
+                    })
                     .flatten();
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
                 if t == Transfer::Defaults && self.has(Fault::FdefWritesEeprom) {
@@ -1044,7 +965,7 @@ impl Device {
                 }
             }
         }
-        if Some(id) == self.ids.p && !named && !self.has(Fault::FgetPKeepsReported) {
+        if Some(id) == self.id(Role::Position) && !named && !self.has(Fault::FgetPKeepsReported) {
             for (m, v) in &vals {
                 self.motors[(*m - 1) as usize].reported = Some(*v);
             }
@@ -1067,7 +988,7 @@ impl Device {
 
     fn overtemperature(&mut self) -> bool {
         let hand_status = self.profile.hand.overtemp_status;
-        let otemp = self.get(self.ids.otemp, 1);
+        let otemp = self.get(self.id(Role::OverTemperature), 1);
         hand_status != 0 && otemp != 0 && self.temperature() > otemp
     }
 
@@ -1098,29 +1019,34 @@ impl Device {
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
                 CommandKind::Close => Goal::Position {
-                    target: self.ids.ct.map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
+                    target: self
+                        .id(Role::CloseTarget)
+                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
                         as f64,
                     stall_ms: 0,
                 },
-                CommandKind::Open => Goal::Position { target: self.get(self.ids.ot, m) as f64, stall_ms: 0 },
-                CommandKind::Move => {
-                    Goal::Position { target: arg.unwrap_or_else(|| self.get(self.ids.dp, m)) as f64, stall_ms: 0 }
+                CommandKind::Open => {
+                    Goal::Position { target: self.get(self.id(Role::OpenTarget), m) as f64, stall_ms: 0 }
                 }
+                CommandKind::Move => Goal::Position {
+                    target: arg.unwrap_or_else(|| self.get(self.id(Role::DefaultPosition), m)) as f64,
+                    stall_ms: 0,
+                },
                 CommandKind::Home => Goal::Position { target: 0.0, stall_ms: 0 },
                 CommandKind::IncrementalClose => Goal::Position {
-                    target: p.round() + arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64,
+                    target: p.round() + arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
                     stall_ms: 0,
                 },
                 CommandKind::IncrementalOpen => Goal::Position {
-                    target: p.round() - arg.unwrap_or_else(|| self.get(self.ids.ds, m)) as f64,
+                    target: p.round() - arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
                     stall_ms: 0,
                 },
                 CommandKind::TorqueClose => Goal::Velocity { direction: 1.0, stall_ms: 0 },
                 _ => Goal::Velocity { direction: -1.0, stall_ms: 0 },
             };
             if matches!(kind, CommandKind::Open | CommandKind::TorqueOpen) {
-                self.set_live(self.ids.bd, m, 0);
-                self.set_live(self.ids.bp, m, 0);
+                self.set_live(self.id(Role::BreakawayDetected), m, 0);
+                self.set_live(self.id(Role::BreakawayPosition), m, 0);
             }
             let motor = &mut self.motors[i];
             motor.goal = Some(goal);
@@ -1150,7 +1076,7 @@ impl Device {
             let i = (m - 1) as usize;
             if self.motors[i].goal.take().is_some() {
                 self.motors[i].velocity = 0.0;
-                self.motors[i].powered = self.get(self.ids.hold, m) != 0;
+                self.motors[i].powered = self.get(self.id(Role::Hold), m) != 0;
             }
         }
         self.mode = Mode::Idle;
@@ -1206,15 +1132,7 @@ impl Device {
         }
         self.out.push(realtime::FEEDBACK_HEADER);
         self.last_status = StatusBits::empty();
-        let n_control = layout.control.fields.len();
-        let n_feedback = layout.feedback.fields.len();
-        self.rt = Some(Box::new(LoopState {
-            layout,
-            pending: None,
-            data: Vec::with_capacity(16),
-            values: vec![0; n_control],
-            feedback: vec![0; n_feedback],
-        }));
+        self.rt = Some(Box::new(LoopState { layout, pending: None, data: Vec::with_capacity(16) }));
         self.mode = Mode::Loop;
         self.refresh_limits();
     }
@@ -1227,15 +1145,14 @@ impl Device {
         if rt.pending.is_some() {
             // `data` holds the header byte, then the control data so far.
             rt.data.push(b);
-            if rt.data.len() >= rt.layout.control.size {
-                let LoopState { layout, values, data, .. } = &mut *rt;
-                if layout.control.decode_into(data, values).is_ok() {
-                    self.apply_control(&rt);
+            if rt.data.len() >= rt.layout.control().size() {
+                if let Ok(control) = Control::parse(rt.layout.control(), &rt.data) {
+                    self.apply_control(&rt.layout, &control);
                 }
                 // The answer follows the whole block, as a hand reads a block before it
                 // answers: no exchange beats the line's wire time in both directions.
                 if rt.pending.is_some_and(|h| h.wants_feedback()) {
-                    self.emit_feedback(&mut rt);
+                    self.emit_feedback(&rt.layout);
                 } else {
                     self.out.push(realtime::FEEDBACK_HEADER);
                 }
@@ -1252,13 +1169,13 @@ impl Device {
             }
             Some(h) => {
                 self.last_status = StatusBits::empty();
-                if h.has_data() && rt.layout.control.size > 1 {
+                if h.has_data() && rt.layout.control().size() > 1 {
                     // Answered once the data is in (above).
                     rt.pending = Some(h);
                     rt.data.clear();
                     rt.data.push(h.byte());
                 } else if h.wants_feedback() {
-                    self.emit_feedback(&mut rt);
+                    self.emit_feedback(&rt.layout);
                 } else {
                     self.out.push(realtime::FEEDBACK_HEADER);
                 }
@@ -1288,83 +1205,76 @@ impl Device {
         }
     }
 
-    fn apply_control(&mut self, rt: &LoopState) {
+    fn apply_control(&mut self, layout: &RtLayout, control: &Control) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        for (f, v) in rt.layout.control.fields.iter().zip(&rt.values) {
-            let Some(m) = f.motor else { continue };
+        for m in layout.motors().iter() {
+            let MotorControl { velocity, gain, torque } = control.motor(m);
             let i = (m - 1) as usize;
-            match f.name.as_str() {
-                "LCV" => {
-                    let v = &if self.has(Fault::LcvUnsigned) { i64::from(*v as u8) } else { *v };
-                    let lcvc = self.get(self.ids.lcvc, m);
-                    self.motors[i].rt_velocity =
-                        realtime::control_velocity(*v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
-                }
-                "LCPG" => self.motors[i].rt_gain = *v,
-                "LCT" => {
-                    self.motors[i].rt_velocity =
-                        realtime::control_velocity(*v, 1, hand.lcv_fraction_bits + 4) * hand.rt_velocity_counts_per_ms;
-                }
-                _ => {}
+            if let Some(v) = velocity {
+                let v = if self.has(Fault::LcvUnsigned) { i64::from(v as u8) } else { v };
+                let lcvc = self.get(self.id(Role::VelocityCoefficient), m);
+                self.motors[i].rt_velocity =
+                    realtime::control_velocity(v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
             }
-        }
-        for m in rt.layout.motors.iter() {
-            let has_gain = self.ids.lcpg.is_some_and(|id| self.behaviour(id, m) != 0);
-            self.motors[(m - 1) as usize].rt_uses_gain = has_gain;
+            if let Some(g) = gain {
+                self.motors[i].rt_gain = g;
+            }
+            if let Some(t) = torque {
+                self.motors[i].rt_velocity =
+                    realtime::control_velocity(t, 1, hand.lcv_fraction_bits + 4) * hand.rt_velocity_counts_per_ms;
+            }
+            let has_gain = self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0);
+            self.motors[i].rt_uses_gain = has_gain;
         }
     }
 
-    fn emit_feedback(&mut self, rt: &mut LoopState) {
+    /// Sends a feedback block: one value per field of the layout, computed in wire order (the
+    /// noise of strain and temperature is drawn in that order).
+    fn emit_feedback(&mut self, layout: &RtLayout) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        let discard = self.get(self.ids.lfdpd, 1) != 0;
-        for k in 0..rt.layout.feedback.fields.len() {
-            let f = &rt.layout.feedback.fields[k];
-            let v = match f.motor {
-                Some(m) => {
-                    let i = (m - 1) as usize;
-                    match f.name.as_str() {
-                        "LFV" => {
-                            let c = self.get(self.ids.lfvc, m).max(1) as f64;
-                            (self.motors[i].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
-                        }
-                        "LFS" => self.strain(m),
-                        "LFAP" => {
-                            let p = self.motors[i].position().clamp(0, 65535);
-                            if self.faults.contains(&Fault::LittleEndianLfap) {
-                                ((p & 0xFF) << 8) | (p >> 8)
-                            } else {
-                                p
-                            }
-                        }
-                        "LFDP" => {
-                            let present = self.motors[i].position();
-                            let c = self.get(self.ids.lfdpc, m);
-                            let mut r = self.motors[i].reported.unwrap_or(present);
-                            let q = if self.faults.contains(&Fault::LfdpNotClipped) {
-                                let d = (present - r) / c.max(1);
-                                r += d * c.max(1);
-                                i64::from(d as i8)
-                            } else {
-                                i64::from(realtime::lfdp_step(&mut r, present, c, discard))
-                            };
-                            self.motors[i].reported = Some(r);
-                            q
-                        }
-                        "LFBP" => self.get(self.ids.bp, m),
-                        "LFAIN" => self.scenario.analog_input[i],
-                        _ => 0,
-                    }
+        let discard = self.get(self.id(Role::DeltaDiscard), 1) != 0;
+        let mut feedback = Feedback::default();
+        for f in layout.feedback().fields() {
+            let i = f.motor().map_or(0, |m| usize::from(m.clamp(1, 4) - 1));
+            let m = (i + 1) as u8;
+            let v = match f.flag() {
+                RtFlag::Lfv => {
+                    let c = self.get(self.id(Role::FeedbackVelocityCoefficient), m).max(1) as f64;
+                    (self.motors[i].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
                 }
-                None => {
+                RtFlag::Lfs => self.strain(m),
+                RtFlag::Lfap => {
+                    let p = self.motors[i].position().clamp(0, 65535);
+                    if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
+                }
+                RtFlag::Lfdp => {
+                    let present = self.motors[i].position();
+                    let c = self.get(self.id(Role::DeltaCoefficient), m);
+                    let mut r = self.motors[i].reported.unwrap_or(present);
+                    let q = if self.faults.contains(&Fault::LfdpNotClipped) {
+                        let d = (present - r) / c.max(1);
+                        r += d * c.max(1);
+                        i64::from(d as i8)
+                    } else {
+                        i64::from(realtime::lfdp_step(&mut r, present, c, discard))
+                    };
+                    self.motors[i].reported = Some(r);
+                    q
+                }
+                RtFlag::Lfbp => self.get(self.id(Role::BreakawayPosition), m),
+                RtFlag::Lfain => self.scenario.analog_input[i],
+                RtFlag::Lft => {
                     let t = self.temperature();
-                    if f.size == 1 && hand.lft_whole_degrees { t / 10 } else { t }
+                    if f.size() == 1 && hand.lft_whole_degrees { t / 10 } else { t }
                 }
+                // Control flags never make a feedback field.
+                RtFlag::Lcv | RtFlag::Lcpg | RtFlag::Lct => 0,
             };
-            rt.feedback[k] = v;
+            feedback.set(f, v);
         }
-        rt.layout.feedback.encode_clamped(realtime::FEEDBACK_HEADER, &rt.feedback, &mut self.out);
+        feedback.emit_clamped(layout.feedback(), &mut self.out);
     }
 }
 

@@ -153,9 +153,9 @@ fn seed_realtime_example_layout() {
     seed_rt(&mut d);
     assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
     let l = d.rt_layout().unwrap();
-    assert_eq!(l.control.size, 3);
-    assert_eq!(l.feedback.size, 6);
-    let names: Vec<_> = l.feedback.fields.iter().map(|f| (f.motor, f.name.as_str())).collect();
+    assert_eq!(l.control().size(), 3);
+    assert_eq!(l.feedback().size(), 6);
+    let names: Vec<_> = l.feedback().fields().iter().map(|f| (f.motor(), f.name())).collect();
     assert_eq!(
         names,
         vec![(Some(1), "LFS"), (Some(1), "LFDP"), (Some(2), "LFS"), (Some(2), "LFDP"), (Some(4), "LFDP")]
@@ -203,14 +203,14 @@ fn manual_example_43_feedback_is_8_bytes() {
     send(&mut d, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut d, "PSET LFT 1");
     assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
-    assert_eq!(d.rt_layout().unwrap().feedback.size, 8);
+    assert_eq!(d.rt_layout().unwrap().feedback().size(), 8);
     let mut e = hand("bh8-262-4.4");
     send(&mut e, "HI");
     send(&mut e, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut e, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut e, "PSET LFT 1");
     send(&mut e, "124LOOP");
-    assert_eq!(e.rt_layout().unwrap().feedback.size, 7);
+    assert_eq!(e.rt_layout().unwrap().feedback().size(), 7);
 }
 
 #[test]
