@@ -9,8 +9,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::level::Level;
 use crate::realtime::{FieldType, RtFlag};
-use crate::status::StatusBits;
+use crate::status::{StatusBits, StatusTexts};
 
 /// Files under `spec/` compiled into the model, by their path relative to `spec/`.
 pub const EMBEDDED_FILES: &[(&str, &str)] = &[
@@ -473,9 +474,10 @@ pub struct Decision {
     pub clause: String,
     /// What the model does.
     pub resolution: String,
-    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO. The loader
-    /// bounds it by [`Decision::evidence`] (see [`Evidence::strongest_level`]).
-    pub level: String,
+    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO (any other name
+    /// is refused when the file loads). The loader bounds it by [`Decision::evidence`] (see
+    /// [`Evidence::strongest_level`]).
+    pub level: Level,
     /// What supports the resolution, graded as in `protocol-notes.md`: `[doc]` (a Barrett
     /// manual or the seed says it), `[code×N]` (N independent host libraries depend on it;
     /// `[code]` is one, `x` may stand for `×`), `[open]` (no source settles it). `[doc]` and
@@ -541,25 +543,14 @@ impl Evidence {
 
     /// The strongest level a conformance check resting on this evidence may carry: MUST on
     /// `[doc]` or `[code×N]` with N ≥ 2; SHOULD on one host library; INFO when open.
-    pub fn strongest_level(self) -> &'static str {
+    pub fn strongest_level(self) -> Level {
         if self.doc || self.code >= 2 {
-            "MUST"
+            Level::Must
         } else if self.code == 1 {
-            "SHOULD"
+            Level::Should
         } else {
-            "INFO"
+            Level::Info
         }
-    }
-}
-
-/// The rank of a level name (MUST strongest), or `None` for an unknown name.
-pub fn level_rank(level: &str) -> Option<u8> {
-    match level {
-        "MUST" => Some(0),
-        "SHOULD" => Some(1),
-        "MAY" => Some(2),
-        "INFO" => Some(3),
-        _ => None,
     }
 }
 
@@ -569,14 +560,11 @@ impl Decision {
         Evidence::parse(&self.evidence).unwrap_or_default()
     }
 
-    /// Checks the level name and that the evidence supports the level.
+    /// Checks that the evidence supports the level.
     fn check(&self) -> Result<(), String> {
         let e = Evidence::parse(&self.evidence).map_err(|m| format!("decision `{}`: {m}", self.id))?;
-        let rank = level_rank(&self.level).ok_or_else(|| {
-            format!("decision `{}`: level `{}` is not MUST, SHOULD, MAY or INFO", self.id, self.level)
-        })?;
         let max = e.strongest_level();
-        if rank < level_rank(max).unwrap_or(3) {
+        if self.level < max {
             return Err(format!(
                 "decision `{}` is {} but its evidence {} supports at most {max}",
                 self.id, self.level, self.evidence
@@ -1012,6 +1000,13 @@ impl Profile {
         let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
         by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
         let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
+        if !f.params.iter().any(|p| Role::CloseTarget.names().contains(&p.name.as_str()))
+            && (hand.finger_close_target.is_none() || hand.spread_close_target.is_none())
+        {
+            return Err(invalid(
+                "without a CT parameter, [hand] needs finger_close_target and spread_close_target".into(),
+            ));
+        }
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
         }
@@ -1164,6 +1159,12 @@ impl Profile {
     }
 }
 
+impl StatusTexts for Profile {
+    fn status_text(&self, bit: u32) -> Option<&str> {
+        Profile::status_text(self, bit)
+    }
+}
+
 /// The text of an embedded spec file, by its path relative to `spec/`.
 pub fn embedded(path: &str) -> Option<&'static str> {
     EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
@@ -1176,9 +1177,9 @@ mod evidence_tests {
     #[test]
     fn evidence_grades_parse_and_bound_the_level() {
         let e = Evidence::parse("[doc][code×3]").unwrap();
-        assert_eq!((e.doc, e.code, e.strongest_level()), (true, 3, "MUST"));
-        assert_eq!(Evidence::parse("[codex2]").unwrap().strongest_level(), "MUST");
-        assert_eq!(Evidence::parse("[code]").unwrap().strongest_level(), "SHOULD");
+        assert_eq!((e.doc, e.code, e.strongest_level()), (true, 3, Level::Must));
+        assert_eq!(Evidence::parse("[codex2]").unwrap().strongest_level(), Level::Must);
+        assert_eq!(Evidence::parse("[code]").unwrap().strongest_level(), Level::Should);
         assert!(Evidence::parse("[open]").unwrap().is_open());
         for bad in ["", "doc", "[open][doc]", "[code×0]", "[guess]", "[doc][doc]"] {
             assert!(Evidence::parse(bad).is_err(), "{bad:?}");
@@ -1199,6 +1200,27 @@ mod evidence_tests {
         };
         let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
         assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
+    }
+
+    #[test]
+    fn a_typo_in_a_decision_level_is_refused_at_load() {
+        let seed = embedded("seed.toml").unwrap();
+        let resolve = |p: &str| {
+            if p == "top.toml" {
+                Some(format!(
+                    "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
+                ))
+            } else {
+                embedded(p).map(str::to_string)
+            }
+        };
+        match Profile::load_with("top.toml", &resolve) {
+            Err(SpecError::Syntax { file, message }) => {
+                assert_eq!(file, "top.toml");
+                assert!(message.contains("MUTS") && message.contains("INFO"), "{message}");
+            }
+            other => panic!("a level typo must be refused, got {other:?}"),
+        }
     }
 }
 

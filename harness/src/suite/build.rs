@@ -531,7 +531,7 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
     // The case binds no more strongly than the weakest decision it rests on.
     let mut level = def.level.unwrap_or(Level::Must);
     for d in profile.decisions.iter().filter(|d| decisions.contains(&d.id)) {
-        level = level.max(d.level.parse().unwrap_or(Level::Info));
+        level = level.max(d.level);
     }
     let mut extensions = Vec::new();
     if !decisions.is_empty() {

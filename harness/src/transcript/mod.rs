@@ -19,11 +19,9 @@ pub mod record;
 pub mod script;
 
 use std::fmt::{self, Write as _};
-use std::str::FromStr;
 use std::time::Duration;
 
 use gcl_model::realtime::FieldType;
-use serde::{Deserialize, Serialize};
 
 pub use matcher::{Feed, Matcher};
 pub use parse::{ParseError, ParseErrorKind, parse, parse_bytes};
@@ -40,54 +38,7 @@ pub const MAX_DURATION: Duration = Duration::from_secs(86_400);
 /// Transcript files larger than this are refused unread.
 pub const MAX_FILE_BYTES: usize = 4 << 20;
 
-/// How strongly a case binds an implementation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "UPPERCASE")]
-pub enum Level {
-    /// Required by the protocol's sources; a failure is non-conformance.
-    #[default]
-    Must,
-    /// Expected; a decision of this project with good evidence.
-    Should,
-    /// Allowed behaviour.
-    May,
-    /// Informational: the project's choice where no source settles it. Never a failure of
-    /// conformance by itself.
-    Info,
-}
-
-impl Level {
-    /// Every level, strongest first.
-    pub const ALL: [Level; 4] = [Level::Must, Level::Should, Level::May, Level::Info];
-
-    /// The upper-case name as written in files.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Level::Must => "MUST",
-            Level::Should => "SHOULD",
-            Level::May => "MAY",
-            Level::Info => "INFO",
-        }
-    }
-}
-
-impl fmt::Display for Level {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-/// A level name that is not MUST, SHOULD, MAY or INFO.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown level `{0}` (expected MUST, SHOULD, MAY or INFO)")]
-pub struct UnknownLevel(pub String);
-
-impl FromStr for Level {
-    type Err = UnknownLevel;
-    fn from_str(s: &str) -> Result<Level, UnknownLevel> {
-        Level::ALL.into_iter().find(|l| l.as_str().eq_ignore_ascii_case(s)).ok_or_else(|| UnknownLevel(s.to_string()))
-    }
-}
+pub use gcl_model::level::{Level, UnknownLevel};
 
 /// Something a case needs from its target beyond a supervisory conversation. A runner skips
 /// cases whose requirements the target (or the operator) does not grant.

@@ -100,6 +100,12 @@ struct LoopState {
     data: Vec<u8>,
 }
 
+/// The serial rate of a profile without a BAUD parameter: GCL's factory 9600 bit/s.
+const BAUD_WITHOUT_PARAMETER: u32 = 9600;
+
+/// The low-strain stop of a profile without LSG: above any strain byte, so it never trips.
+const LOW_STRAIN_OFF: i64 = 256;
+
 /// One physics tick, in nanoseconds.
 const TICK_NS: u64 = 1_000_000;
 
@@ -288,7 +294,7 @@ impl Device {
 
     /// The serial rate the hand is set to, in bit/s.
     pub fn baud(&self) -> u32 {
-        self.id(Role::Baud).map_or(9600, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
+        self.id(Role::Baud).map_or(BAUD_WITHOUT_PARAMETER, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
     }
 
     /// Present position of a motor (1..=4), rounded.
@@ -381,7 +387,7 @@ impl Device {
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
             high_strain: self.get(self.id(Role::HighStrain), m),
-            low_strain: self.id(Role::LowStrain).map_or(256, |id| self.behaviour(id, m)),
+            low_strain: self.id(Role::LowStrain).map_or(LOW_STRAIN_OFF, |id| self.behaviour(id, m)),
             breakaway: self.get(self.id(Role::Breakaway), m) != 0,
         }
     }
@@ -1014,8 +1020,9 @@ impl Device {
         for m in motors.iter() {
             let i = (m - 1) as usize;
             let p = self.motors[i].pos;
-            let finger_ct = hand.finger_close_target.unwrap_or(17000);
-            let spread_ct = hand.spread_close_target.unwrap_or(3150);
+            // The loader requires both targets of a profile without CT.
+            let finger_ct = hand.finger_close_target.unwrap_or_default();
+            let spread_ct = hand.spread_close_target.unwrap_or_default();
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
                 CommandKind::Close => Goal::Position {
