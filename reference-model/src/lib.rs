@@ -31,7 +31,7 @@ pub mod realtime;
 pub mod spec;
 pub mod status;
 
-pub use device::{Device, DeviceConfig, Fault, Mode, Scenario};
+pub use device::{Device, DeviceConfig, Event, Fault, Mode, Scenario};
 pub use grammar::{Args, Command, Line, Rejected, parse_line};
 pub use level::Level;
 pub use motor::MotorSet;

@@ -5,6 +5,10 @@
 //! a transport (pty, TCP, stdio, the in-process target, a fuzzer, a test) owns those. The
 //! same inputs at the same times give the same bytes; noise comes from a seeded generator.
 //!
+//! Time is monotonic: every `now` is the time since power-up, and a `now` earlier than the
+//! time the hand has reached ([`Device::now`]) means "no time passed" (never an error, never
+//! a step back). Time arithmetic saturates, so any `Duration` up to `Duration::MAX` is safe.
+//!
 //! Physics runs in 1 ms ticks, only while something moves.
 
 pub mod fault;
@@ -84,6 +88,34 @@ pub enum Mode {
     Loop,
 }
 
+/// Something that happened in the hand, reported by [`Device::poll_event`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Event {
+    /// The hand powered up (or RESET): its banner and a prompt were written.
+    PoweredUp,
+    /// A command line finished with this status (empty: success); its prompt was written.
+    LineDone(StatusBits),
+    /// `LOOP` was accepted: the hand is in RealTime mode.
+    LoopEntered,
+    /// The hand left RealTime mode (^C, a bad header, RESET).
+    LoopLeft,
+}
+
+/// How many events the hand keeps for [`Device::poll_event`] before it drops the oldest.
+pub const MAX_EVENTS: usize = 64;
+
+/// What the hand is doing, with the data each activity needs.
+#[derive(Debug, Clone)]
+enum State {
+    /// Supervisory mode, waiting for a command line.
+    Idle,
+    /// Supervisory mode, a command running.
+    Busy(Task),
+    /// RealTime mode.
+    Loop(Box<LoopState>),
+}
+
 #[derive(Debug, Clone)]
 struct Task {
     kind: CommandKind,
@@ -119,12 +151,11 @@ pub struct Device {
     nv: NvMemory,
     params: ParamStore,
     motors: [Motor; 4],
-    mode: Mode,
+    state: State,
     line: Vec<u8>,
     overflow: bool,
     queue: VecDeque<u8>,
-    task: Option<Task>,
-    rt: Option<Box<LoopState>>,
+    events: VecDeque<Event>,
     /// Per-motor physics inputs, refreshed when a command or loop starts.
     limits: [physics::StepLimits; 4],
     out: Vec<u8>,
@@ -161,12 +192,11 @@ impl Device {
             nv,
             params,
             motors,
-            mode: Mode::Idle,
+            state: State::Idle,
             line: Vec::with_capacity(profile.framing.max_line),
             overflow: false,
             queue: VecDeque::new(),
-            task: None,
-            rt: None,
+            events: VecDeque::new(),
             limits: [physics::StepLimits::default(); 4],
             out: Vec::with_capacity(256),
             now_ns: 0,
@@ -219,7 +249,7 @@ impl Device {
     /// When the hand next needs [`Device::handle_timeout`] to make progress on its own (a
     /// running command), or `None` when it only waits for input.
     pub fn poll_timeout(&self) -> Option<Duration> {
-        (self.mode == Mode::Busy).then(|| Duration::from_nanos(self.next_tick_ns.max(self.now_ns)))
+        self.is_busy().then(|| Duration::from_nanos(self.next_tick_ns.max(self.now_ns)))
     }
 
     /// Runs a supervisory command in progress to completion, as fast as possible, and returns
@@ -264,12 +294,23 @@ impl Device {
 
     /// What the hand is doing.
     pub fn mode(&self) -> Mode {
-        self.mode
+        match self.state {
+            State::Idle => Mode::Idle,
+            State::Busy(_) => Mode::Busy,
+            State::Loop(_) => Mode::Loop,
+        }
     }
 
     /// Whether a supervisory command is running.
     pub fn is_busy(&self) -> bool {
-        self.mode == Mode::Busy
+        matches!(self.state, State::Busy(_))
+    }
+
+    /// The next thing that happened in the hand since the last call, oldest first: a line
+    /// done (with its status), the loop entered or left, a power-up. The hand keeps the last
+    /// [`MAX_EVENTS`] events; older ones are dropped when nobody polls.
+    pub fn poll_event(&mut self) -> Option<Event> {
+        self.events.pop_front()
     }
 
     /// The status of the last finished command line (empty for success).
@@ -279,7 +320,10 @@ impl Device {
 
     /// The RealTime layouts while in LOOP.
     pub fn rt_layout(&self) -> Option<&RtLayout> {
-        self.rt.as_ref().map(|r| &r.layout)
+        match &self.state {
+            State::Loop(rt) => Some(&rt.layout),
+            State::Idle | State::Busy(_) => None,
+        }
     }
 
     /// The working parameter values.
@@ -327,26 +371,30 @@ impl Device {
         }
         let elapsed_ms = (now_ns - self.now_ns) / 1_000_000;
         self.nv.powered_ms = self.powered_at_boot_ms.saturating_add(now_ns / 1_000_000);
-        let active = self.mode == Mode::Busy || (self.mode == Mode::Loop && self.loop_moving());
+        let active = match self.state {
+            State::Busy(_) => true,
+            State::Loop(_) => self.loop_moving(),
+            State::Idle => false,
+        };
         if !active {
             self.heat = (self.heat - 0.0002 * elapsed_ms as f64).max(0.0);
             self.now_ns = now_ns;
-            self.next_tick_ns = now_ns + TICK_NS;
+            self.next_tick_ns = now_ns.saturating_add(TICK_NS);
             return;
         }
         while self.next_tick_ns <= now_ns {
             self.now_ns = self.next_tick_ns;
-            self.next_tick_ns += TICK_NS;
+            self.next_tick_ns = self.next_tick_ns.saturating_add(TICK_NS);
             let moved = self.tick();
-            if self.mode == Mode::Loop && moved == 0 {
+            if matches!(self.state, State::Loop(_)) && moved == 0 {
                 // Every loop motor is still (pinned at a stop, or commanded to 0): nothing
                 // changes until the next control block, so jump ahead.
                 break;
             }
-            if self.mode == Mode::Idle {
+            if matches!(self.state, State::Idle) {
                 // The command finished: queued input runs at this instant.
                 self.drain_queue();
-                if self.mode == Mode::Idle {
+                if matches!(self.state, State::Idle) {
                     break;
                 }
             }
@@ -354,7 +402,7 @@ impl Device {
         if self.now_ns < now_ns {
             self.now_ns = now_ns;
             if self.next_tick_ns <= now_ns {
-                self.next_tick_ns = now_ns + TICK_NS;
+                self.next_tick_ns = now_ns.saturating_add(TICK_NS);
             }
         }
     }
@@ -414,7 +462,7 @@ impl Device {
             }
         }
         self.heat += 0.0005 * f64::from(moving);
-        if let Some(task) = &self.task
+        if let State::Busy(task) = &self.state
             && task.motors.iter().all(|m| self.motors[(m - 1) as usize].goal.is_none())
         {
             self.finish_task();
@@ -444,54 +492,55 @@ impl Device {
             self.set_live(self.id(Role::BreakawayPosition), m, at);
         }
         let mpe = self.get(self.id(Role::PositionError), m);
-        if let (Some(task), Some(Goal::Position { target, .. })) = (&mut self.task, goal)
+        let missed = StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
+        let position = self.motors[i].position();
+        let ignore_mpe = self.faults.contains(&Fault::MpeIgnored);
+        if let (State::Busy(task), Some(Goal::Position { target, .. })) = (&mut self.state, goal)
             && task.check_mpe
-            && !self.faults.contains(&Fault::MpeIgnored)
-            && (self.motors[i].position() - target.round() as i64).abs() > mpe
+            && !ignore_mpe
+            && (position - target.round() as i64).abs() > mpe
         {
-            task.status |= StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
+            task.status |= missed;
         }
     }
 
     fn finish_task(&mut self) {
-        if let Some(task) = self.task.take() {
-            if task.kind == CommandKind::Initialize {
-                for m in task.motors.iter() {
-                    self.motors[(m - 1) as usize].reported = None;
-                    self.set_live(self.id(Role::BreakawayDetected), m, 0);
-                    self.set_live(self.id(Role::BreakawayPosition), m, 0);
-                }
+        let State::Busy(task) = std::mem::replace(&mut self.state, State::Idle) else { return };
+        if task.kind == CommandKind::Initialize {
+            for m in task.motors.iter() {
+                self.motors[(m - 1) as usize].reported = None;
+                self.set_live(self.id(Role::BreakawayDetected), m, 0);
+                self.set_live(self.id(Role::BreakawayPosition), m, 0);
             }
-            self.mode = Mode::Idle;
-            self.end_line(task.status);
         }
+        self.end_line(task.status);
     }
 
     // ------------------------------------------------------------------ bytes
 
     fn input_byte(&mut self, b: u8) {
-        match self.mode {
-            Mode::Busy => {
+        match std::mem::replace(&mut self.state, State::Idle) {
+            State::Busy(task) => {
                 if b == self.profile.framing.abort {
-                    self.abort_task();
-                } else if self.queue.len() < 2 * self.profile.framing.max_line + 4 {
-                    self.queue.push_back(b);
+                    self.abort_task(task);
+                } else {
+                    self.state = State::Busy(task);
+                    if self.queue.len() < 2 * self.profile.framing.max_line + 4 {
+                        self.queue.push_back(b);
+                    }
                 }
             }
-            Mode::Loop => self.loop_byte(b),
-            Mode::Idle => self.line_byte(b),
+            State::Loop(rt) => self.loop_byte(rt, b),
+            State::Idle => self.line_byte(b),
         }
     }
 
+    /// Runs the input that arrived while a command ran, until the queue is empty or a queued
+    /// command starts running in turn.
     fn drain_queue(&mut self) {
-        while self.mode == Mode::Idle {
+        while !self.is_busy() {
             let Some(b) = self.queue.pop_front() else { break };
-            self.line_byte(b);
-        }
-        if self.mode == Mode::Loop {
-            while let Some(b) = self.queue.pop_front() {
-                self.loop_byte(b);
-            }
+            self.input_byte(b);
         }
     }
 
@@ -501,6 +550,7 @@ impl Device {
             self.line.clear();
             self.overflow = false;
             self.last_status = StatusBits::empty();
+            self.push_event(Event::LineDone(StatusBits::empty()));
             self.prompt();
         } else if b == framing.terminator {
             let line = std::mem::take(&mut self.line);
@@ -537,6 +587,7 @@ impl Device {
     /// Ends a command: the status line if any, then the prompt.
     fn end_line(&mut self, status: StatusBits) {
         self.last_status = status;
+        self.push_event(Event::LineDone(status));
         if !status.is_empty() {
             let text = format!("ERR {}", status.code());
             self.print_line(&text);
@@ -544,7 +595,15 @@ impl Device {
         self.prompt();
     }
 
+    fn push_event(&mut self, e: Event) {
+        if self.events.len() >= MAX_EVENTS {
+            self.events.pop_front();
+        }
+        self.events.push_back(e);
+    }
+
     fn print_banner(&mut self) {
+        self.push_event(Event::PoweredUp);
         for i in 0..self.profile.banner.len() {
             let l = self.profile.banner[i].clone();
             self.print_line(&l);
@@ -563,6 +622,7 @@ impl Device {
             Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             Ok(Line::Empty) => {
                 self.last_status = StatusBits::empty();
+                self.push_event(Event::LineDone(StatusBits::empty()));
                 self.prompt();
             }
             Ok(Line::Command(mut c)) => {
@@ -1060,7 +1120,7 @@ impl Device {
             motor.powered = true;
             motor.rt_velocity = 0.0;
         }
-        self.task = Some(Task {
+        self.state = State::Busy(Task {
             kind,
             motors,
             status: StatusBits::empty(),
@@ -1069,16 +1129,13 @@ impl Device {
                 CommandKind::Move | CommandKind::Home | CommandKind::IncrementalClose | CommandKind::IncrementalOpen
             ),
         });
-        self.mode = Mode::Busy;
         self.refresh_limits();
-        self.next_tick_ns = self.now_ns + TICK_NS;
+        self.next_tick_ns = self.now_ns.saturating_add(TICK_NS);
     }
 
-    fn abort_task(&mut self) {
+    /// ^C while a command runs: the task is dropped, its moving motors stop.
+    fn abort_task(&mut self, _task: Task) {
         self.queue.clear();
-        if self.task.take().is_none() {
-            return;
-        }
         for m in 1..=4u8 {
             let i = (m - 1) as usize;
             if self.motors[i].goal.take().is_some() {
@@ -1086,7 +1143,7 @@ impl Device {
                 self.motors[i].powered = self.get(self.id(Role::Hold), m) != 0;
             }
         }
-        self.mode = Mode::Idle;
+        self.state = State::Idle;
         let status = if self.has(Fault::AbortSilent) {
             StatusBits::empty()
         } else {
@@ -1105,12 +1162,14 @@ impl Device {
         for m in &mut self.motors {
             m.power_down();
         }
-        self.task = None;
-        self.rt = None;
+        if matches!(self.state, State::Loop(_)) {
+            self.push_event(Event::LoopLeft);
+        }
+        self.state = State::Idle;
         self.queue.clear();
-        self.mode = Mode::Idle;
         self.last_status = StatusBits::empty();
         if self.has(Fault::ResetNoBanner) {
+            self.push_event(Event::PoweredUp);
             self.prompt();
         } else {
             self.print_banner();
@@ -1139,16 +1198,14 @@ impl Device {
         }
         self.out.push(realtime::FEEDBACK_HEADER);
         self.last_status = StatusBits::empty();
-        self.rt = Some(Box::new(LoopState { layout, pending: None, data: Vec::with_capacity(16) }));
-        self.mode = Mode::Loop;
+        self.state = State::Loop(Box::new(LoopState { layout, pending: None, data: Vec::with_capacity(16) }));
+        self.push_event(Event::LoopEntered);
         self.refresh_limits();
     }
 
-    fn loop_byte(&mut self, b: u8) {
-        let Some(mut rt) = self.rt.take() else {
-            self.mode = Mode::Idle;
-            return self.line_byte(b);
-        };
+    /// One byte in RealTime mode. The loop's state is handed in (the hand is `Idle` meanwhile)
+    /// and put back unless the byte ends the loop.
+    fn loop_byte(&mut self, mut rt: Box<LoopState>, b: u8) {
         if rt.pending.is_some() {
             // `data` holds the header byte, then the control data so far.
             rt.data.push(b);
@@ -1166,7 +1223,7 @@ impl Device {
                 rt.pending = None;
                 rt.data.clear();
             }
-            self.rt = Some(rt);
+            self.state = State::Loop(rt);
             return;
         }
         match ControlHeader::from_byte(b) {
@@ -1186,12 +1243,12 @@ impl Device {
                 } else {
                     self.out.push(realtime::FEEDBACK_HEADER);
                 }
-                self.rt = Some(rt);
+                self.state = State::Loop(rt);
             }
             None => {
                 let status = StatusBits::from_bits_truncate(self.profile.hand.bad_header_status);
                 if self.has(Fault::StayInLoop) {
-                    self.rt = Some(rt);
+                    self.state = State::Loop(rt);
                     self.print_line(&format!("ERR {}", status.code()));
                     self.prompt();
                     self.last_status = status;
@@ -1203,9 +1260,10 @@ impl Device {
         }
     }
 
+    /// Ends the loop (its state already taken by [`Device::loop_byte`]).
     fn leave_loop(&mut self) {
-        self.rt = None;
-        self.mode = Mode::Idle;
+        self.state = State::Idle;
+        self.push_event(Event::LoopLeft);
         for m in &mut self.motors {
             m.rt_velocity = 0.0;
             m.velocity = 0.0;

@@ -249,3 +249,52 @@ fn faults_change_the_bytes() {
     d.clear_output();
     assert_eq!(send(&mut d, "FGET DP"), "FGET DP\r\n150 1000 1000 1000\r\n=> ");
 }
+
+#[test]
+fn the_longest_time_saturates_instead_of_overflowing() {
+    let mut d = hand("bh8-262");
+    // A command running, then the end of time: the command finishes, nothing overflows.
+    d.handle_input(Duration::ZERO, b"HI\r");
+    assert!(d.is_busy());
+    d.handle_timeout(Duration::MAX);
+    assert!(!d.is_busy());
+    assert_eq!(d.now(), Duration::from_nanos(u64::MAX));
+    assert!(String::from_utf8_lossy(&d.take_output()).ends_with("HI\n\r=> "));
+    // Time going back is no time passing; the hand still answers.
+    d.handle_input(Duration::from_secs(1), b"FGET S\r");
+    assert_eq!(String::from_utf8_lossy(&d.take_output()), "FGET S\n\r0 0 0 0\n\r=> ");
+    // In the loop, with the fingers moving, too.
+    assert!(send(&mut d, "LOOP").ends_with('*'));
+    d.handle_input(Duration::MAX, b"C\x40\x00\x40\x00\x40\x00\x40\x00");
+    d.handle_timeout(Duration::MAX);
+    assert_eq!(d.mode(), Mode::Loop);
+    assert!(d.run_until_idle(Duration::MAX) >= d.now());
+}
+
+#[test]
+fn events_report_lines_loops_and_power_ups() {
+    let mut d = Device::with_profile(Profile::builtin("seed").unwrap());
+    assert_eq!(d.poll_event(), Some(Event::PoweredUp));
+    assert_eq!(d.poll_event(), None);
+    send(&mut d, "BOGUS");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::UNKNOWN_COMMAND)));
+    send(&mut d, "HI");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::empty())));
+    send(&mut d, "");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::empty())));
+    send(&mut d, "LOOP");
+    assert_eq!(d.poll_event(), Some(Event::LoopEntered));
+    d.handle_input(d.now(), b"Z");
+    assert_eq!(d.poll_event(), Some(Event::LoopLeft));
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::BAD_HEADER)));
+    send(&mut d, "RESET");
+    assert_eq!(d.poll_event(), Some(Event::PoweredUp));
+    // Nobody polling: the oldest are dropped, the newest kept.
+    for _ in 0..2 * MAX_EVENTS {
+        send(&mut d, "BOGUS");
+    }
+    send(&mut d, "HI");
+    let kept: Vec<Event> = std::iter::from_fn(|| d.poll_event()).collect();
+    assert_eq!(kept.len(), MAX_EVENTS);
+    assert_eq!(kept.last(), Some(&Event::LineDone(StatusBits::empty())));
+}
