@@ -80,6 +80,7 @@ impl Explained {
 pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[String]) -> anyhow::Result<Vec<Explained>> {
     let mut hand = Device::new(profile.clone(), gcl_model::DeviceConfig { seed, ..Default::default() });
     hand.clear_output();
+    while hand.poll_event().is_some() {}
     let mut out = Vec::new();
     for text in lines {
         let bytes = unescape(text).map_err(|e| anyhow::anyhow!("LINE `{text}`: {e}"))?;
@@ -113,12 +114,20 @@ pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[Stri
 
 fn step(hand: &mut Device, line: String, supervisory: bool, parsed: Value) -> Explained {
     hand.run_until_idle(Duration::from_secs(600));
+    // The status is the one the hand reported for the line; a RealTime block answered with
+    // feedback or `*` reports none and ends with no status.
+    let mut status = gcl_model::StatusBits::empty();
+    while let Some(e) = hand.poll_event() {
+        if let gcl_model::Event::LineDone(s) = e {
+            status = s;
+        }
+    }
     Explained {
         line,
         supervisory,
         parsed,
         response: hand.take_output(),
-        status: hand.last_status(),
+        status,
         mode_after: hand.mode(),
         layout: hand.rt_layout().cloned(),
     }

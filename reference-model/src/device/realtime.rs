@@ -1,0 +1,170 @@
+//! RealTime mode: entering and leaving the loop, control blocks in, feedback blocks out.
+
+use super::*;
+
+impl Device {
+    pub(super) fn start_loop(&mut self, motors: MotorSet) {
+        let profile = self.profile.clone();
+        if motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+            return self.end_line(StatusBits::from_bits_truncate(profile.hand.uninitialized_status));
+        }
+        let layout = RtLayout::compute(&profile, &self.behaviour_store(), motors);
+        for m in motors.iter() {
+            let motor = &mut self.motors[(m - 1) as usize];
+            if motor.reported.is_none() {
+                motor.reported = Some(motor.position());
+            }
+            motor.rt_velocity = 0.0;
+            motor.rt_gain = 0;
+            motor.powered = true;
+        }
+        if self.has(Fault::LoopAckNewline) {
+            self.out.extend_from_slice(&self.eol.clone());
+        }
+        self.out.push(crate::realtime::FEEDBACK_HEADER);
+        self.last_status = StatusBits::empty();
+        self.state = State::Loop(Box::new(LoopState { layout, pending: None, data: Vec::with_capacity(16) }));
+        self.push_event(Event::LoopEntered);
+        self.refresh_limits();
+    }
+
+    /// One byte in RealTime mode. The loop's state is handed in (the hand is `Idle` meanwhile)
+    /// and put back unless the byte ends the loop.
+    pub(super) fn loop_byte(&mut self, mut rt: Box<LoopState>, b: u8) {
+        if rt.pending.is_some() {
+            // `data` holds the header byte, then the control data so far.
+            rt.data.push(b);
+            if rt.data.len() >= rt.layout.control().size() {
+                if let Ok(control) = Control::parse(rt.layout.control(), &rt.data) {
+                    self.apply_control(&rt.layout, &control);
+                }
+                // The answer follows the whole block, as a hand reads a block before it
+                // answers: no exchange beats the line's wire time in both directions.
+                if rt.pending.is_some_and(|h| h.wants_feedback()) {
+                    self.emit_feedback(&rt.layout);
+                } else {
+                    self.out.push(crate::realtime::FEEDBACK_HEADER);
+                }
+                rt.pending = None;
+                rt.data.clear();
+            }
+            self.state = State::Loop(rt);
+            return;
+        }
+        match ControlHeader::from_byte(b) {
+            Some(ControlHeader::Abort) => {
+                self.leave_loop();
+                self.prompt();
+            }
+            Some(h) => {
+                self.last_status = StatusBits::empty();
+                if h.has_data() && rt.layout.control().size() > 1 {
+                    // Answered once the data is in (above).
+                    rt.pending = Some(h);
+                    rt.data.clear();
+                    rt.data.push(h.byte());
+                } else if h.wants_feedback() {
+                    self.emit_feedback(&rt.layout);
+                } else {
+                    self.out.push(crate::realtime::FEEDBACK_HEADER);
+                }
+                self.state = State::Loop(rt);
+            }
+            None => {
+                let status = StatusBits::from_bits_truncate(self.profile.hand.bad_header_status);
+                if self.has(Fault::StayInLoop) {
+                    self.state = State::Loop(rt);
+                    self.print_line(&format!("ERR {}", status.code()));
+                    self.prompt();
+                    self.last_status = status;
+                    self.push_event(Event::LineDone(status));
+                } else {
+                    self.leave_loop();
+                    self.end_line(status);
+                }
+            }
+        }
+    }
+
+    /// Ends the loop (its state already taken by [`Device::loop_byte`]).
+    pub(super) fn leave_loop(&mut self) {
+        self.state = State::Idle;
+        self.push_event(Event::LoopLeft);
+        for m in &mut self.motors {
+            m.rt_velocity = 0.0;
+            m.velocity = 0.0;
+        }
+    }
+
+    pub(super) fn apply_control(&mut self, layout: &RtLayout, control: &Control) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        for m in layout.motors().iter() {
+            let MotorControl { velocity, gain, torque } = control.motor(m);
+            let i = (m - 1) as usize;
+            if let Some(v) = velocity {
+                let v = if self.has(Fault::LcvUnsigned) { i64::from(v as u8) } else { v };
+                let lcvc = self.get(self.id(Role::VelocityCoefficient), m);
+                self.motors[i].rt_velocity =
+                    crate::realtime::control_velocity(v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
+            }
+            if let Some(g) = gain {
+                self.motors[i].rt_gain = g;
+            }
+            if let Some(t) = torque {
+                self.motors[i].rt_velocity = crate::realtime::control_velocity(t, 1, hand.lcv_fraction_bits + 4)
+                    * hand.rt_velocity_counts_per_ms;
+            }
+            let has_gain = self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0);
+            self.motors[i].rt_uses_gain = has_gain;
+        }
+    }
+
+    /// Sends a feedback block: one value per field of the layout, computed in wire order (the
+    /// noise of strain and temperature is drawn in that order).
+    pub(super) fn emit_feedback(&mut self, layout: &RtLayout) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        let discard = self.get(self.id(Role::DeltaDiscard), 1) != 0;
+        let mut feedback = Feedback::default();
+        for f in layout.feedback().fields() {
+            let i = f.motor().map_or(0, |m| usize::from(m.clamp(1, 4) - 1));
+            let m = (i + 1) as u8;
+            let v = match f.flag() {
+                RtFlag::Lfv => {
+                    let c = self.get(self.id(Role::FeedbackVelocityCoefficient), m).max(1) as f64;
+                    (self.motors[i].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
+                }
+                RtFlag::Lfs => self.strain(m),
+                RtFlag::Lfap => {
+                    let p = self.motors[i].position().clamp(0, 65535);
+                    if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
+                }
+                RtFlag::Lfdp => {
+                    let present = self.motors[i].position();
+                    let c = self.get(self.id(Role::DeltaCoefficient), m);
+                    let mut r = self.motors[i].reported.unwrap_or(present);
+                    let q = if self.faults.contains(&Fault::LfdpNotClipped) {
+                        let d = (present - r) / c.max(1);
+                        r += d * c.max(1);
+                        i64::from(d as i8)
+                    } else {
+                        i64::from(crate::realtime::lfdp_step(&mut r, present, c, discard))
+                    };
+                    self.motors[i].reported = Some(r);
+                    q
+                }
+                RtFlag::Lfbp => self.get(self.id(Role::BreakawayPosition), m),
+                RtFlag::Lfain => self.scenario.analog_input[i],
+                RtFlag::Lft => {
+                    let t = self.temperature();
+                    if f.size() == 1 && hand.lft_whole_degrees { t / 10 } else { t }
+                }
+                // Control flags never make a feedback field.
+                RtFlag::Lcv | RtFlag::Lcpg | RtFlag::Lct => 0,
+            };
+            feedback.set(f, v);
+        }
+        feedback.emit_clamped(layout.feedback(), &mut self.out);
+    }
+}

@@ -1,0 +1,578 @@
+//! Supervisory mode: running a parsed command line, the parameters the behaviour reads, and
+//! the fault hooks that bend it.
+
+use super::*;
+
+impl Device {
+    pub(super) fn run_line(&mut self, line: &[u8]) {
+        let opts = ParseOptions { case_sensitive_commands: self.has(Fault::LowercaseRejected) };
+        if self.has(Fault::TabNotSeparator) && line.contains(&b'\t') {
+            return self.end_line(StatusBits::UNKNOWN_COMMAND);
+        }
+        match grammar::parse_line_with(&self.profile, line, opts) {
+            Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
+            Ok(Line::Empty) => {
+                self.last_status = StatusBits::empty();
+                self.push_event(Event::LineDone(StatusBits::empty()));
+                self.prompt();
+            }
+            Ok(Line::Command(mut c)) => {
+                if self.has(Fault::GIncludesSpread) && prefix_text(&self.profile, line).contains(['G', 'g']) {
+                    c.prefix = c.prefix.map(|p| p | MotorSet::single(4).unwrap_or_default());
+                }
+                self.run_command(&c)
+            }
+            Err(mut r) => {
+                if self.has(Fault::UnknownCommand64) && r.status.contains(StatusBits::UNKNOWN_COMMAND) {
+                    r.status = (r.status - StatusBits::UNKNOWN_COMMAND) | StatusBits::UNKNOWN_PARAMETER;
+                }
+                if self.has(Fault::UnknownParam128) && r.status.contains(StatusBits::UNKNOWN_PARAMETER) {
+                    r.status = (r.status - StatusBits::UNKNOWN_PARAMETER) | StatusBits::INVALID_VALUE;
+                }
+                if self.has(Fault::PartialSetApplied) {
+                    self.apply_valid_pairs(line);
+                }
+                if self.has(Fault::MissingValueIgnored)
+                    && r.status == StatusBits::INVALID_VALUE
+                    && let Some(cut) = self.without_last_name(line)
+                {
+                    return self.run_command(&cut);
+                }
+                if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
+                    return self.end_line(StatusBits::empty());
+                }
+                if self.has(Fault::PrefixNotRefused) && r.status == StatusBits::PREFIX_NOT_ALLOWED {
+                    let skip = line.len() - line.trim_ascii_start().len() + prefix_text(&self.profile, line).len();
+                    if let Ok(Line::Command(c)) = grammar::parse_line(&self.profile, &line[skip..]) {
+                        return self.run_command(&c);
+                    }
+                }
+                if self.has(Fault::ReadOnlyStatus) && r.status.contains(StatusBits::READ_ONLY) {
+                    r.status = (r.status - StatusBits::READ_ONLY) | StatusBits::INVALID_VALUE;
+                }
+                if self.has(Fault::RangeOffByOne)
+                    && r.status == StatusBits::INVALID_VALUE
+                    && let Some(c) = self.off_by_one_accepts(line)
+                {
+                    return self.run_command(&c);
+                }
+                self.end_line(r.status)
+            }
+        }
+    }
+
+    /// The missing-value-ignored fault: a set line with an odd token count, run without its
+    /// last token.
+    pub(super) fn without_last_name(&self, line: &[u8]) -> Option<Command> {
+        let text = std::str::from_utf8(line).ok()?;
+        let toks: Vec<&str> = text.split_ascii_whitespace().collect();
+        if toks.len() < 2 || !toks.len().is_multiple_of(2) {
+            return None;
+        }
+        // A lone name: the set of nothing (parsed with a dummy pair, then emptied).
+        let probe = format!("{} {} 0", toks[..toks.len() - 1].join(" "), toks[toks.len() - 1]);
+        let text = if toks.len() == 2 { probe } else { toks[..toks.len() - 1].join(" ") };
+        match grammar::parse_line(&self.profile, text.as_bytes()) {
+            Ok(Line::Command(mut c)) if matches!(c.args, Args::Pairs(_)) => {
+                if toks.len() == 2 {
+                    c.args = Args::Pairs(Vec::new());
+                }
+                Some(c)
+            }
+            _ => None,
+        }
+    }
+
+    /// The partial-set-applied fault: the pairs of a refused set line that parse alone.
+    pub(super) fn apply_valid_pairs(&mut self, line: &[u8]) {
+        let Ok(text) = std::str::from_utf8(line) else { return };
+        let mut toks = text.split_ascii_whitespace();
+        let Some(head) = toks.next() else { return };
+        let rest: Vec<&str> = toks.collect();
+        let profile = self.profile.clone();
+        for pair in rest.chunks(2) {
+            let one = format!("{head} {}", pair.join(" "));
+            if let Ok(Line::Command(c)) = grammar::parse_line(&profile, one.as_bytes())
+                && let Args::Pairs(ps) = &c.args
+            {
+                for (id, v) in ps {
+                    self.params.set_unchecked(&profile, *id, c.prefix.unwrap_or(MotorSet::ALL), *v);
+                }
+            }
+        }
+    }
+
+    /// The range-off-by-one fault: a set whose only problem is a value one past a maximum.
+    pub(super) fn off_by_one_accepts(&self, line: &[u8]) -> Option<Command> {
+        let text = std::str::from_utf8(line).ok()?;
+        let mut toks: Vec<String> = text.split_ascii_whitespace().map(str::to_string).collect();
+        let mut changed = false;
+        for i in 1..toks.len() {
+            if let (Some(id), Ok(v)) = (self.profile.param_id(&toks[i - 1]), toks[i].parse::<i64>()) {
+                let p = self.profile.param(id);
+                if p.values.is_none() && v == p.max + 1 {
+                    toks[i] = p.max.to_string();
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            return None;
+        }
+        let Ok(Line::Command(mut c)) = grammar::parse_line(&self.profile, toks.join(" ").as_bytes()) else {
+            return None;
+        };
+        if let Args::Pairs(ps) = &mut c.args {
+            for (id, v) in ps.iter_mut() {
+                if *v == self.profile.param(*id).max && self.profile.param(*id).values.is_none() {
+                    *v += 1;
+                }
+            }
+        }
+        Some(c)
+    }
+
+    pub(super) fn enabled_motors(&self) -> MotorSet {
+        match self.id(Role::Enabled) {
+            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.behaviour(en, *m) != 0)),
+            None => MotorSet::ALL,
+        }
+    }
+
+    /// The value a parameter has for the hand's behaviour (not for FGET): what was set, or
+    /// its factory value when a `*-ignored` fault makes the hand ignore it.
+    pub(super) fn get(&self, id: Option<ParamId>, motor: u8) -> i64 {
+        id.map_or(0, |id| self.behaviour(id, motor))
+    }
+
+    pub(super) fn behaviour(&self, id: ParamId, motor: u8) -> i64 {
+        if self.ignores(id) { self.profile.default_for(id, motor) } else { self.params.get(&self.profile, id, motor) }
+    }
+
+    pub(super) fn ignores(&self, id: ParamId) -> bool {
+        let name = self.profile.param(id).name.as_str();
+        self.faults.iter().any(|f| f.ignored_params().contains(&name))
+    }
+
+    /// The parameters as the hand's behaviour sees them (see [`Device::get`]).
+    pub(super) fn behaviour_store(&self) -> std::borrow::Cow<'_, ParamStore> {
+        if self.faults.iter().all(|f| f.ignored_params().is_empty()) {
+            return std::borrow::Cow::Borrowed(&self.params);
+        }
+        let mut store = self.params.clone();
+        for id in self.profile.param_ids().filter(|id| self.ignores(*id)) {
+            for m in 1..=4u8 {
+                let v = self.profile.default_for(id, m);
+                store.set_unchecked(&self.profile, id, MotorSet::single(m).unwrap_or_default(), v);
+            }
+        }
+        std::borrow::Cow::Owned(store)
+    }
+
+    pub(super) fn set_live(&mut self, id: Option<ParamId>, motor: u8, v: i64) {
+        if let Some(id) = id {
+            let profile = self.profile.clone();
+            self.params.set_unchecked(&profile, id, MotorSet::single(motor).unwrap_or_default(), v);
+        }
+    }
+
+    pub(super) fn limit(&self, m: u8) -> i64 {
+        if m == 4 { self.profile.hand.spread_limit } else { self.profile.hand.finger_limit }
+    }
+
+    pub(super) fn accel(&self, m: u8) -> f64 {
+        let a = self.get(self.id(Role::Acceleration), m).max(1) as f64;
+        a * self.profile.hand.velocity_units_per_ms_per_accel * self.profile.hand.counts_per_ms_per_velocity_unit
+    }
+
+    pub(super) fn temperature(&mut self) -> i64 {
+        let n = self.scenario.temperature_noise;
+        let t = self.scenario.temperature + self.heat.round() as i64 + self.noise(n);
+        if t > self.nv.peak_temperature {
+            self.nv.peak_temperature = t;
+        }
+        t
+    }
+
+    pub(super) fn noise(&mut self, half_width: i64) -> i64 {
+        if half_width <= 0 {
+            return 0;
+        }
+        let span = (2 * half_width + 1) as u32;
+        i64::from(self.rng.next_u32() % span) - half_width
+    }
+
+    pub(super) fn strain(&mut self, m: u8) -> i64 {
+        let i = (m - 1) as usize;
+        let hand = &self.profile.hand;
+        let raw = self.motors[i].strain(self.scenario.objects[i], hand.free_strain, hand.strain_per_count);
+        let n = self.scenario.strain_noise;
+        let v = (raw + self.noise(n)).clamp(0, 255);
+        if self.get(self.id(Role::StrainFlip), m) != 0 { 255 - v } else { v }
+    }
+
+    /// The value FGET/PGET prints for a parameter and motor.
+    pub(super) fn read_param(&mut self, id: ParamId, m: u8) -> i64 {
+        let i = (m.clamp(1, 4) - 1) as usize;
+        match self.profile.role_of(id) {
+            Some(Role::Position) => self.motors[i].position(),
+            Some(Role::State) => {
+                if self.motors[i].initialized {
+                    0
+                } else {
+                    self.profile.hand.uninitialized_state_value
+                }
+            }
+            Some(Role::Strain) => self.strain(m),
+            Some(Role::Temperature) => self.temperature(),
+            Some(Role::PeakTemperature) => self.nv.peak_temperature,
+            Some(Role::UpSeconds) => (self.nv.powered_ms / 1000) as i64,
+            Some(Role::SerialNumber) => self.nv.serial_number,
+            Some(Role::Odometer) => (self.nv.odometer_counts[i] / 1000) as i64,
+            _ => self.params.get(&self.profile, id, m),
+        }
+    }
+
+    pub(super) fn run_command(&mut self, c: &Command) {
+        let profile = self.profile.clone();
+        let spec = profile.command(c.command);
+        let kind = spec.kind;
+        let is_motion_like =
+            kind.is_motion() || matches!(kind, CommandKind::Initialize | CommandKind::Terminate | CommandKind::Loop);
+        let motors = match c.prefix {
+            Some(p) => p,
+            None if is_motion_like => self.enabled_motors(),
+            None => MotorSet::ALL,
+        };
+        match kind {
+            k if k.is_motion() || k == CommandKind::Initialize => self.start_motion(k, motors, c),
+            CommandKind::Terminate => {
+                let mut status = StatusBits::empty();
+                for m in motors.iter() {
+                    let motor = &mut self.motors[(m - 1) as usize];
+                    if motor.initialized {
+                        motor.powered = false;
+                        motor.goal = None;
+                        motor.velocity = 0.0;
+                    } else {
+                        status |= StatusBits::from_bits_truncate(profile.hand.terminate_uninitialized_status);
+                    }
+                }
+                self.end_line(status);
+            }
+            CommandKind::Loop => self.start_loop(motors),
+            CommandKind::MotorSet | CommandKind::GlobalSet => {
+                if let Args::Pairs(pairs) = &c.args {
+                    for (id, v) in pairs {
+                        self.params.set_unchecked(&profile, *id, motors, *v);
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorGet | CommandKind::GlobalGet => {
+                // PGET prints one value per name; FGET one per selected motor (the seed's
+                // BAUD, a hand value read through FGET, repeats).
+                let motors =
+                    if kind == CommandKind::GlobalGet { MotorSet::single(1).unwrap_or_default() } else { motors };
+                if let Args::Names(names) = &c.args {
+                    for id in names {
+                        let line = self.value_line(*id, motors, false);
+                        self.print_line(&line);
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorDefaults | CommandKind::MotorLoad | CommandKind::MotorSave => {
+                let t = match kind {
+                    CommandKind::MotorDefaults => Transfer::Defaults,
+                    CommandKind::MotorLoad => Transfer::Load,
+                    _ => Transfer::Save,
+                };
+                let keep_mcv = (t == Transfer::Defaults && self.has(Fault::FdefSkipsMcv))
+                    .then(|| {
+                        self.id(Role::CloseVelocity)
+                            .map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m))))
+                    })
+                    .flatten();
+                self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
+                if t == Transfer::Defaults && self.has(Fault::FdefWritesEeprom) {
+                    self.params.transfer(&profile, &mut self.nv, Transfer::Save, Scope::Motor, motors);
+                }
+                if let Some((id, vals)) = keep_mcv {
+                    for m in 1..=4u8 {
+                        self.params.set_unchecked(
+                            &profile,
+                            id,
+                            MotorSet::single(m).unwrap_or_default(),
+                            vals[m as usize - 1],
+                        );
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::GlobalDefaults | CommandKind::GlobalLoad | CommandKind::GlobalSave => {
+                let t = match kind {
+                    CommandKind::GlobalDefaults => Transfer::Defaults,
+                    CommandKind::GlobalLoad => Transfer::Load,
+                    _ => Transfer::Save,
+                };
+                self.params.transfer(&profile, &mut self.nv, t, Scope::Global, MotorSet::ALL);
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorList
+            | CommandKind::MotorListAll
+            | CommandKind::GlobalList
+            | CommandKind::GlobalListAll => {
+                let scope = if matches!(kind, CommandKind::MotorList | CommandKind::MotorListAll) {
+                    Scope::Motor
+                } else {
+                    Scope::Global
+                };
+                let all = matches!(kind, CommandKind::MotorListAll | CommandKind::GlobalListAll);
+                for id in self.listed(kind, scope, all) {
+                    let p = profile.param(id);
+                    let line = format!("{} {}  {}", p.name, if p.read_only { "RO" } else { "RW" }, p.description);
+                    self.print_line(&line);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::MotorListValues
+            | CommandKind::MotorListAllValues
+            | CommandKind::GlobalListValues
+            | CommandKind::GlobalListAllValues => {
+                let scope = if matches!(kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
+                    Scope::Motor
+                } else {
+                    Scope::Global
+                };
+                let all = matches!(kind, CommandKind::MotorListAllValues | CommandKind::GlobalListAllValues);
+                for id in self.listed(kind, scope, all) {
+                    let line = self.value_line(id, motors, true);
+                    self.print_line(&line);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Reset => {
+                self.power_cycle();
+            }
+            CommandKind::ErrorText => {
+                let bits = match c.args {
+                    Args::Integer(n) => StatusBits::from_bits_truncate(n as u32),
+                    _ => StatusBits::all(),
+                };
+                for l in bits.describe(&profile) {
+                    self.print_line(&l);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Version => {
+                for l in &profile.version {
+                    self.print_line(l);
+                }
+                self.end_line(StatusBits::empty());
+            }
+            CommandKind::Help | CommandKind::HelpAll => {
+                let topic = match c.args {
+                    Args::Topic(t) => Some(t),
+                    _ => None,
+                };
+                for (i, cmd) in profile.commands.iter().enumerate() {
+                    let wanted = match topic {
+                        Some(t) => t.0 as usize == i,
+                        None => {
+                            kind == CommandKind::HelpAll || !(profile.hand.help_lists_standard_only && cmd.advanced)
+                        }
+                    };
+                    if wanted {
+                        self.print_line(&format!("{}  {}", cmd.name, cmd.help));
+                    }
+                }
+                self.end_line(StatusBits::empty());
+            }
+            _ => self.end_line(StatusBits::UNKNOWN_COMMAND),
+        }
+    }
+
+    /// The parameters a list command shows. The seed's FLISTA/FLISTAV list every parameter
+    /// (motor and hand) in FGET order; bh8-262 splits motor and global lists.
+    pub(super) fn listed(&self, kind: CommandKind, scope: Scope, all: bool) -> Vec<ParamId> {
+        let profile = &self.profile;
+        let seed_style = matches!(kind, CommandKind::MotorListAll | CommandKind::MotorListAllValues)
+            && profile.command_of_kind(CommandKind::GlobalList).is_none();
+        profile
+            .param_ids()
+            .filter(|id| {
+                let p = profile.param(*id);
+                (seed_style || p.scope == scope) && (all || !p.advanced)
+            })
+            .collect()
+    }
+
+    /// One FGET-style line: values for the motors in order (globals once). With `named`, the
+    /// parameter's name first (the list commands).
+    pub(super) fn value_line(&mut self, id: ParamId, motors: MotorSet, named: bool) -> String {
+        let profile = self.profile.clone();
+        let p = profile.param(id);
+        let mut vals: Vec<(u8, i64)> = Vec::with_capacity(4);
+        match (p.scope, named) {
+            (Scope::Global, true) => vals.push((1, self.read_param(id, 1))),
+            _ => {
+                for m in motors.iter() {
+                    vals.push((m, self.read_param(id, m)));
+                }
+            }
+        }
+        if Some(id) == self.id(Role::Position) && !named && !self.has(Fault::FgetPKeepsReported) {
+            for (m, v) in &vals {
+                self.motors[(*m - 1) as usize].reported = Some(*v);
+            }
+        }
+        if self.has(Fault::FgetReversed) && !named {
+            vals.reverse();
+        }
+        let mut s = String::new();
+        if named {
+            s.push_str(&p.name);
+        }
+        for (i, (_, v)) in vals.iter().enumerate() {
+            if i > 0 || named {
+                s.push(' ');
+            }
+            s.push_str(&v.to_string());
+        }
+        s
+    }
+
+    pub(super) fn overtemperature(&mut self) -> bool {
+        let hand_status = self.profile.hand.overtemp_status;
+        let otemp = self.get(self.id(Role::OverTemperature), 1);
+        hand_status != 0 && otemp != 0 && self.temperature() > otemp
+    }
+
+    pub(super) fn start_motion(&mut self, kind: CommandKind, motors: MotorSet, c: &Command) {
+        let profile = self.profile.clone();
+        let hand = &profile.hand;
+        if kind != CommandKind::Initialize
+            && !self.has(Fault::UninitializedMoves)
+            && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized)
+        {
+            return self.end_line(StatusBits::from_bits_truncate(hand.uninitialized_status));
+        }
+        if kind.is_motion() && self.overtemperature() {
+            return self.end_line(StatusBits::from_bits_truncate(hand.overtemp_status));
+        }
+        if motors.is_empty() {
+            return self.end_line(StatusBits::empty());
+        }
+        let arg = match c.args {
+            Args::Integer(v) => Some(v),
+            _ => None,
+        };
+        for m in motors.iter() {
+            let i = (m - 1) as usize;
+            let p = self.motors[i].pos;
+            // The loader requires both targets of a profile without CT.
+            let finger_ct = hand.finger_close_target.unwrap_or_default();
+            let spread_ct = hand.spread_close_target.unwrap_or_default();
+            let goal = match kind {
+                CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
+                CommandKind::Close => Goal::Position {
+                    target: self
+                        .id(Role::CloseTarget)
+                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
+                        as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::Open => {
+                    Goal::Position { target: self.get(self.id(Role::OpenTarget), m) as f64, stall_ms: 0 }
+                }
+                CommandKind::Move => Goal::Position {
+                    target: arg.unwrap_or_else(|| self.get(self.id(Role::DefaultPosition), m)) as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::Home => Goal::Position { target: 0.0, stall_ms: 0 },
+                CommandKind::IncrementalClose => Goal::Position {
+                    target: p.round() + arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::IncrementalOpen => Goal::Position {
+                    target: p.round() - arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
+                    stall_ms: 0,
+                },
+                CommandKind::TorqueClose => Goal::Velocity { direction: 1.0, stall_ms: 0 },
+                _ => Goal::Velocity { direction: -1.0, stall_ms: 0 },
+            };
+            if matches!(kind, CommandKind::Open | CommandKind::TorqueOpen) {
+                self.set_live(self.id(Role::BreakawayDetected), m, 0);
+                self.set_live(self.id(Role::BreakawayPosition), m, 0);
+            }
+            let motor = &mut self.motors[i];
+            motor.goal = Some(goal);
+            motor.powered = true;
+            motor.rt_velocity = 0.0;
+        }
+        self.state = State::Busy(Task {
+            kind,
+            motors,
+            status: StatusBits::empty(),
+            check_mpe: matches!(
+                kind,
+                CommandKind::Move | CommandKind::Home | CommandKind::IncrementalClose | CommandKind::IncrementalOpen
+            ),
+        });
+        self.refresh_limits();
+        self.next_tick_ns = self.now_ns.saturating_add(TICK_NS);
+    }
+
+    /// ^C while a command runs: the task is dropped, its moving motors stop.
+    pub(super) fn abort_task(&mut self, _task: Task) {
+        self.queue.clear();
+        for m in 1..=4u8 {
+            let i = (m - 1) as usize;
+            if self.motors[i].goal.take().is_some() {
+                self.motors[i].velocity = 0.0;
+                self.motors[i].powered = self.get(self.id(Role::Hold), m) != 0;
+            }
+        }
+        self.state = State::Idle;
+        let status = if self.has(Fault::AbortSilent) {
+            StatusBits::empty()
+        } else {
+            StatusBits::from_bits_truncate(self.profile.hand.abort_status)
+        };
+        self.end_line(status);
+    }
+
+    pub(super) fn power_cycle(&mut self) {
+        let profile = self.profile.clone();
+        let ram = self.params.clone();
+        self.params = ParamStore::power_up(&profile, &mut self.nv);
+        if self.has(Fault::ResetKeepsRam) {
+            self.params = ram;
+        }
+        for m in &mut self.motors {
+            m.power_down();
+        }
+        if matches!(self.state, State::Loop(_)) {
+            self.push_event(Event::LoopLeft);
+        }
+        self.state = State::Idle;
+        self.queue.clear();
+        self.last_status = StatusBits::empty();
+        if self.has(Fault::ResetNoBanner) {
+            self.push_event(Event::PoweredUp);
+            self.prompt();
+        } else {
+            self.print_banner();
+        }
+    }
+}
+
+/// The run of prefix characters a line starts with (after leading separators).
+pub(super) fn prefix_text(profile: &Profile, line: &[u8]) -> String {
+    line.trim_ascii_start()
+        .iter()
+        .take_while(|b| b.is_ascii() && profile.prefix_motors(**b as char).is_some())
+        .map(|b| *b as char)
+        .collect()
+}
