@@ -325,7 +325,7 @@ pub fn device(data: &[u8]) -> DeviceRun {
             hand.poll_timeout()
         );
         // Public accessors on every state.
-        for m in 1..=4 {
+        for m in gcl_model::Motor::ALL {
             let _ = (hand.position(m), hand.initialized(m));
         }
         let _ = (hand.last_status().code(), hand.baud(), hand.nv().writes);

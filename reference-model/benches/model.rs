@@ -113,7 +113,7 @@ fn profile() -> Arc<Profile> {
 fn initialized_hand() -> Device {
     let mut d = Device::with_profile(profile());
     send(&mut d, b"HI\r");
-    assert!((1..=4).all(|m| d.initialized(m)), "HI initialises every motor");
+    assert!(gcl_model::Motor::ALL.into_iter().all(|m| d.initialized(m)), "HI initialises every motor");
     d
 }
 

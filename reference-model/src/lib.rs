@@ -20,6 +20,7 @@
 //! assert_eq!(hand.take_output(), b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic))]
 
 pub mod device;
 pub mod escape;
@@ -34,7 +35,7 @@ pub mod status;
 pub use device::{Device, DeviceConfig, Event, Fault, Mode, Scenario};
 pub use grammar::{Args, Command, Line, Rejected, parse_line};
 pub use level::Level;
-pub use motor::MotorSet;
+pub use motor::{Motor, MotorSet, PerMotor};
 pub use realtime::{BlockLayout, ControlHeader, Field, RtLayout};
 pub use spec::Profile;
 pub use status::StatusBits;

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use gcl_model::{Device, Profile};
+use gcl_model::{Device, Motor, Profile};
 
 /// A powered-up hand of a built-in profile, banner taken.
 fn hand(profile: &str) -> Device {
@@ -48,7 +48,7 @@ fn worked_example(profile: &str, discard: bool) -> Vec<Vec<u8>> {
     ok(&mut d, "1M 1500");
     assert_eq!(send(&mut d, "1FGET P"), b"1FGET P\n\r1500\n\r=> ");
     ok(&mut d, "1M 2000");
-    assert_eq!(d.position(1), 2000);
+    assert_eq!(d.position(Motor::F1), 2000);
     assert_eq!(send(&mut d, "1LOOP"), b"1LOOP*");
     let layout = d.rt_layout().unwrap();
     assert_eq!(layout.feedback().size(), 2, "header and one LFDP byte");

@@ -31,10 +31,10 @@ use rand_core::{RngCore, SeedableRng};
 use serde::{Deserialize, Serialize};
 
 pub use fault::{Fault, UnknownFault};
-use physics::{Goal, Motor, Termination};
+use physics::{Goal, Motor as Joint, Termination};
 
 use crate::grammar::{self, Args, Command, Line, ParseOptions};
-use crate::motor::MotorSet;
+use crate::motor::{Motor, MotorSet, PerMotor};
 use crate::params::{NvMemory, ParamStore, Transfer};
 use crate::realtime::{Control, ControlHeader, Feedback, MotorControl, RtFlag, RtLayout};
 use crate::spec::{CommandKind, ParamId, Profile, Role, Scope};
@@ -159,14 +159,14 @@ pub struct Device {
     rng: rand_pcg::Pcg32,
     nv: NvMemory,
     params: ParamStore,
-    motors: [Motor; 4],
+    motors: PerMotor<Joint>,
     state: State,
     line: Vec<u8>,
     overflow: bool,
     queue: VecDeque<u8>,
     events: VecDeque<Event>,
     /// Per-motor physics inputs, refreshed when a command or loop starts.
-    limits: [physics::StepLimits; 4],
+    limits: PerMotor<physics::StepLimits>,
     out: Vec<u8>,
     /// Simulated time since power-up, ns.
     now_ns: u64,
@@ -193,7 +193,7 @@ impl Device {
                 prompt.pop();
             }
         }
-        let motors = std::array::from_fn(|i| Motor::new(config.scenario.initial_positions[i] as f64));
+        let motors = PerMotor(config.scenario.initial_positions.map(|p| Joint::new(p as f64)));
         let mut d = Device {
             faults: config.faults,
             rng: rand_pcg::Pcg32::seed_from_u64(config.seed),
@@ -206,7 +206,7 @@ impl Device {
             overflow: false,
             queue: VecDeque::new(),
             events: VecDeque::new(),
-            limits: [physics::StepLimits::default(); 4],
+            limits: PerMotor([physics::StepLimits::default(); 4]),
             out: Vec::with_capacity(256),
             now_ns: 0,
             next_tick_ns: TICK_NS,
@@ -351,13 +351,13 @@ impl Device {
     }
 
     /// Present position of a motor (1..=4), rounded.
-    pub fn position(&self, motor: u8) -> i64 {
-        self.motors[(motor.clamp(1, 4) - 1) as usize].position()
+    pub fn position(&self, motor: Motor) -> i64 {
+        self.motors[motor].position()
     }
 
     /// Whether a motor has been initialised by HI.
-    pub fn initialized(&self, motor: u8) -> bool {
-        self.motors[(motor.clamp(1, 4) - 1) as usize].initialized
+    pub fn initialized(&self, motor: Motor) -> bool {
+        self.motors[motor].initialized
     }
 
     /// The world around the hand.

@@ -5,12 +5,12 @@ use super::*;
 impl Device {
     pub(super) fn start_loop(&mut self, motors: MotorSet) {
         let profile = self.profile.clone();
-        if motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized) {
+        if motors.motors().any(|m| !self.motors[m].initialized) {
             return self.end_line(StatusBits::from_bits_truncate(profile.hand.uninitialized_status));
         }
         let layout = RtLayout::compute(&profile, &self.behaviour_store(), motors);
-        for m in motors.iter() {
-            let motor = &mut self.motors[(m - 1) as usize];
+        for m in motors.motors() {
+            let motor = &mut self.motors[m];
             if motor.reported.is_none() {
                 motor.reported = Some(motor.position());
             }
@@ -90,7 +90,7 @@ impl Device {
     pub(super) fn leave_loop(&mut self) {
         self.state = State::Idle;
         self.push_event(Event::LoopLeft);
-        for m in &mut self.motors {
+        for m in self.motors.values_mut() {
             m.rt_velocity = 0.0;
             m.velocity = 0.0;
         }
@@ -99,24 +99,23 @@ impl Device {
     pub(super) fn apply_control(&mut self, layout: &RtLayout, control: &Control) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        for m in layout.motors().iter() {
-            let MotorControl { velocity, gain, torque } = control.motor(m);
-            let i = (m - 1) as usize;
+        for m in layout.motors().motors() {
+            let MotorControl { velocity, gain, torque } = control.motor(m.number());
             if let Some(v) = velocity {
                 let v = if self.has(Fault::LcvUnsigned) { i64::from(v as u8) } else { v };
                 let lcvc = self.get(self.id(Role::VelocityCoefficient), m);
-                self.motors[i].rt_velocity =
+                self.motors[m].rt_velocity =
                     crate::realtime::control_velocity(v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
             }
             if let Some(g) = gain {
-                self.motors[i].rt_gain = g;
+                self.motors[m].rt_gain = g;
             }
             if let Some(t) = torque {
-                self.motors[i].rt_velocity = crate::realtime::control_velocity(t, 1, hand.lcv_fraction_bits + 4)
+                self.motors[m].rt_velocity = crate::realtime::control_velocity(t, 1, hand.lcv_fraction_bits + 4)
                     * hand.rt_velocity_counts_per_ms;
             }
             let has_gain = self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0);
-            self.motors[i].rt_uses_gain = has_gain;
+            self.motors[m].rt_uses_gain = has_gain;
         }
     }
 
@@ -125,25 +124,25 @@ impl Device {
     pub(super) fn emit_feedback(&mut self, layout: &RtLayout) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        let discard = self.get(self.id(Role::DeltaDiscard), 1) != 0;
+        let discard = self.get(self.id(Role::DeltaDiscard), Motor::F1) != 0;
         let mut feedback = Feedback::default();
         for f in layout.feedback().fields() {
-            let i = f.motor().map_or(0, |m| usize::from(m.clamp(1, 4) - 1));
-            let m = (i + 1) as u8;
+            // A hand-wide field (LFT) reads no motor; F1 stands in for the arithmetic below.
+            let m = f.motor().and_then(Motor::new).unwrap_or(Motor::F1);
             let v = match f.flag() {
                 RtFlag::Lfv => {
                     let c = self.get(self.id(Role::FeedbackVelocityCoefficient), m).max(1) as f64;
-                    (self.motors[i].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
+                    (self.motors[m].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
                 }
                 RtFlag::Lfs => self.strain(m),
                 RtFlag::Lfap => {
-                    let p = self.motors[i].position().clamp(0, 65535);
+                    let p = self.motors[m].position().clamp(0, 65535);
                     if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
                 }
                 RtFlag::Lfdp => {
-                    let present = self.motors[i].position();
+                    let present = self.motors[m].position();
                     let c = self.get(self.id(Role::DeltaCoefficient), m);
-                    let mut r = self.motors[i].reported.unwrap_or(present);
+                    let mut r = self.motors[m].reported.unwrap_or(present);
                     let q = if self.faults.contains(&Fault::LfdpNotClipped) {
                         let d = (present - r) / c.max(1);
                         r += d * c.max(1);
@@ -151,11 +150,11 @@ impl Device {
                     } else {
                         i64::from(crate::realtime::lfdp_step(&mut r, present, c, discard))
                     };
-                    self.motors[i].reported = Some(r);
+                    self.motors[m].reported = Some(r);
                     q
                 }
                 RtFlag::Lfbp => self.get(self.id(Role::BreakawayPosition), m),
-                RtFlag::Lfain => self.scenario.analog_input[i],
+                RtFlag::Lfain => *m.pick(&self.scenario.analog_input),
                 RtFlag::Lft => {
                     let t = self.temperature();
                     if f.size() == 1 && hand.lft_whole_degrees { t / 10 } else { t }

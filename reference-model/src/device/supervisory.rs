@@ -134,19 +134,25 @@ impl Device {
 
     pub(super) fn enabled_motors(&self) -> MotorSet {
         match self.id(Role::Enabled) {
-            Some(en) => MotorSet::from_motors((1..=4).filter(|m| self.behaviour(en, *m) != 0)),
+            Some(en) => {
+                MotorSet::from_motors(Motor::ALL.into_iter().filter(|m| self.behaviour(en, *m) != 0).map(Motor::number))
+            }
             None => MotorSet::ALL,
         }
     }
 
     /// The value a parameter has for the hand's behaviour (not for FGET): what was set, or
     /// its factory value when a `*-ignored` fault makes the hand ignore it.
-    pub(super) fn get(&self, id: Option<ParamId>, motor: u8) -> i64 {
+    pub(super) fn get(&self, id: Option<ParamId>, motor: Motor) -> i64 {
         id.map_or(0, |id| self.behaviour(id, motor))
     }
 
-    pub(super) fn behaviour(&self, id: ParamId, motor: u8) -> i64 {
-        if self.ignores(id) { self.profile.default_for(id, motor) } else { self.params.get(&self.profile, id, motor) }
+    pub(super) fn behaviour(&self, id: ParamId, motor: Motor) -> i64 {
+        if self.ignores(id) {
+            self.profile.default_for(id, motor.number())
+        } else {
+            self.params.get(&self.profile, id, motor.number())
+        }
     }
 
     pub(super) fn ignores(&self, id: ParamId) -> bool {
@@ -169,18 +175,18 @@ impl Device {
         std::borrow::Cow::Owned(store)
     }
 
-    pub(super) fn set_live(&mut self, id: Option<ParamId>, motor: u8, v: i64) {
+    pub(super) fn set_live(&mut self, id: Option<ParamId>, motor: Motor, v: i64) {
         if let Some(id) = id {
             let profile = self.profile.clone();
-            self.params.set_unchecked(&profile, id, MotorSet::single(motor).unwrap_or_default(), v);
+            self.params.set_unchecked(&profile, id, MotorSet::from(motor), v);
         }
     }
 
-    pub(super) fn limit(&self, m: u8) -> i64 {
-        if m == 4 { self.profile.hand.spread_limit } else { self.profile.hand.finger_limit }
+    pub(super) fn limit(&self, m: Motor) -> i64 {
+        if m == Motor::SPREAD { self.profile.hand.spread_limit } else { self.profile.hand.finger_limit }
     }
 
-    pub(super) fn accel(&self, m: u8) -> f64 {
+    pub(super) fn accel(&self, m: Motor) -> f64 {
         let a = self.get(self.id(Role::Acceleration), m).max(1) as f64;
         a * self.profile.hand.velocity_units_per_ms_per_accel * self.profile.hand.counts_per_ms_per_velocity_unit
     }
@@ -202,22 +208,20 @@ impl Device {
         i64::from(self.rng.next_u32() % span) - half_width
     }
 
-    pub(super) fn strain(&mut self, m: u8) -> i64 {
-        let i = (m - 1) as usize;
+    pub(super) fn strain(&mut self, m: Motor) -> i64 {
         let hand = &self.profile.hand;
-        let raw = self.motors[i].strain(self.scenario.objects[i], hand.free_strain, hand.strain_per_count);
+        let raw = self.motors[m].strain(*m.pick(&self.scenario.objects), hand.free_strain, hand.strain_per_count);
         let n = self.scenario.strain_noise;
         let v = (raw + self.noise(n)).clamp(0, 255);
         if self.get(self.id(Role::StrainFlip), m) != 0 { 255 - v } else { v }
     }
 
     /// The value FGET/PGET prints for a parameter and motor.
-    pub(super) fn read_param(&mut self, id: ParamId, m: u8) -> i64 {
-        let i = (m.clamp(1, 4) - 1) as usize;
+    pub(super) fn read_param(&mut self, id: ParamId, m: Motor) -> i64 {
         match self.profile.role_of(id) {
-            Some(Role::Position) => self.motors[i].position(),
+            Some(Role::Position) => self.motors[m].position(),
             Some(Role::State) => {
-                if self.motors[i].initialized {
+                if self.motors[m].initialized {
                     0
                 } else {
                     self.profile.hand.uninitialized_state_value
@@ -228,8 +232,8 @@ impl Device {
             Some(Role::PeakTemperature) => self.nv.peak_temperature,
             Some(Role::UpSeconds) => (self.nv.powered_ms / 1000) as i64,
             Some(Role::SerialNumber) => self.nv.serial_number,
-            Some(Role::Odometer) => (self.nv.odometer_counts[i] / 1000) as i64,
-            _ => self.params.get(&self.profile, id, m),
+            Some(Role::Odometer) => (m.pick(&self.nv.odometer_counts) / 1000) as i64,
+            _ => self.params.get(&self.profile, id, m.number()),
         }
     }
 
@@ -248,8 +252,8 @@ impl Device {
             k if k.is_motion() || k == CommandKind::Initialize => self.start_motion(k, motors, c),
             CommandKind::Terminate => {
                 let mut status = StatusBits::empty();
-                for m in motors.iter() {
-                    let motor = &mut self.motors[(m - 1) as usize];
+                for m in motors.motors() {
+                    let motor = &mut self.motors[m];
                     if motor.initialized {
                         motor.powered = false;
                         motor.goal = None;
@@ -413,18 +417,18 @@ impl Device {
     pub(super) fn value_line(&mut self, id: ParamId, motors: MotorSet, named: bool) -> String {
         let profile = self.profile.clone();
         let p = profile.param(id);
-        let mut vals: Vec<(u8, i64)> = Vec::with_capacity(4);
+        let mut vals: Vec<(Motor, i64)> = Vec::with_capacity(4);
         match (p.scope, named) {
-            (Scope::Global, true) => vals.push((1, self.read_param(id, 1))),
+            (Scope::Global, true) => vals.push((Motor::F1, self.read_param(id, Motor::F1))),
             _ => {
-                for m in motors.iter() {
+                for m in motors.motors() {
                     vals.push((m, self.read_param(id, m)));
                 }
             }
         }
         if Some(id) == self.id(Role::Position) && !named && !self.has(Fault::FgetPKeepsReported) {
             for (m, v) in &vals {
-                self.motors[(*m - 1) as usize].reported = Some(*v);
+                self.motors[*m].reported = Some(*v);
             }
         }
         if self.has(Fault::FgetReversed) && !named {
@@ -445,7 +449,7 @@ impl Device {
 
     pub(super) fn overtemperature(&mut self) -> bool {
         let hand_status = self.profile.hand.overtemp_status;
-        let otemp = self.get(self.id(Role::OverTemperature), 1);
+        let otemp = self.get(self.id(Role::OverTemperature), Motor::F1);
         hand_status != 0 && otemp != 0 && self.temperature() > otemp
     }
 
@@ -454,7 +458,7 @@ impl Device {
         let hand = &profile.hand;
         if kind != CommandKind::Initialize
             && !self.has(Fault::UninitializedMoves)
-            && motors.iter().any(|m| !self.motors[(m - 1) as usize].initialized)
+            && motors.motors().any(|m| !self.motors[m].initialized)
         {
             return self.end_line(StatusBits::from_bits_truncate(hand.uninitialized_status));
         }
@@ -468,9 +472,8 @@ impl Device {
             Args::Integer(v) => Some(v),
             _ => None,
         };
-        for m in motors.iter() {
-            let i = (m - 1) as usize;
-            let p = self.motors[i].pos;
+        for m in motors.motors() {
+            let p = self.motors[m].pos;
             // The loader requires both targets of a profile without CT.
             let finger_ct = hand.finger_close_target.unwrap_or_default();
             let spread_ct = hand.spread_close_target.unwrap_or_default();
@@ -479,7 +482,7 @@ impl Device {
                 CommandKind::Close => Goal::Position {
                     target: self
                         .id(Role::CloseTarget)
-                        .map_or(if m == 4 { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
+                        .map_or(if m == Motor::SPREAD { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
                         as f64,
                     stall_ms: 0,
                 },
@@ -506,7 +509,7 @@ impl Device {
                 self.set_live(self.id(Role::BreakawayDetected), m, 0);
                 self.set_live(self.id(Role::BreakawayPosition), m, 0);
             }
-            let motor = &mut self.motors[i];
+            let motor = &mut self.motors[m];
             motor.goal = Some(goal);
             motor.powered = true;
             motor.rt_velocity = 0.0;
@@ -527,11 +530,10 @@ impl Device {
     /// ^C while a command runs: the task is dropped, its moving motors stop.
     pub(super) fn abort_task(&mut self, _task: Task) {
         self.queue.clear();
-        for m in 1..=4u8 {
-            let i = (m - 1) as usize;
-            if self.motors[i].goal.take().is_some() {
-                self.motors[i].velocity = 0.0;
-                self.motors[i].powered = self.get(self.id(Role::Hold), m) != 0;
+        for m in Motor::ALL {
+            if self.motors[m].goal.take().is_some() {
+                self.motors[m].velocity = 0.0;
+                self.motors[m].powered = self.get(self.id(Role::Hold), m) != 0;
             }
         }
         self.state = State::Idle;
@@ -550,7 +552,7 @@ impl Device {
         if self.has(Fault::ResetKeepsRam) {
             self.params = ram;
         }
-        for m in &mut self.motors {
+        for m in self.motors.values_mut() {
             m.power_down();
         }
         if matches!(self.state, State::Loop(_)) {

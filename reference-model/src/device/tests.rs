@@ -53,7 +53,7 @@ fn close_and_open_move_the_fingers() {
     send(&mut d, "123O");
     assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r0 0 0 0\n\r=> ");
     assert_eq!(send(&mut d, "2M 5000"), "2M 5000\n\r=> ");
-    assert_eq!(d.position(2), 5000);
+    assert_eq!(d.position(Motor::F2), 5000);
 }
 
 #[test]
@@ -67,7 +67,7 @@ fn missed_position_gives_16() {
     sc.objects[0] = Some(4000);
     d.set_scenario(sc);
     assert_eq!(send(&mut d, "1M 8000"), "1M 8000\n\rERR 16\n\r=> ");
-    let p = d.position(1);
+    let p = d.position(Motor::F1);
     assert!((4000..=4600).contains(&p), "{p}");
     // Closing into it is not an error.
     send(&mut d, "1O");
@@ -84,7 +84,7 @@ fn strain_limit_stops_a_finger() {
     send(&mut d, "HI");
     send(&mut d, "2FSET MSG 60");
     assert_eq!(send(&mut d, "2C"), "2C\n\r=> ");
-    let p = d.position(2);
+    let p = d.position(Motor::F2);
     // 20 + 0.25 * (p - 3000) > 60 first at p = 3161.
     assert!((3150..3200).contains(&p), "{p}");
 }
@@ -181,8 +181,8 @@ fn realtime_velocity_moves_the_finger() {
     d.handle_input(t, b"a");
     d.take_output();
     // 55 × LCVC 1 × 0.1 counts/ms for 1000 ms.
-    assert_eq!(d.position(1), 5500);
-    assert_eq!(d.position(2), 0);
+    assert_eq!(d.position(Motor::F1), 5500);
+    assert_eq!(d.position(Motor::F2), 0);
 }
 
 #[test]

@@ -49,15 +49,14 @@ impl Device {
     }
 
     pub(super) fn loop_moving(&self) -> bool {
-        self.motors.iter().any(|m| m.rt_velocity != 0.0 || m.velocity != 0.0)
+        self.motors.iter().any(|(_, m)| m.rt_velocity != 0.0 || m.velocity != 0.0)
     }
 
     /// What one motor's physics needs from the parameters and the world. Parameters cannot
     /// change while a command runs or a loop is open, so this is computed when one starts.
-    pub(super) fn step_limits(&self, m: u8) -> physics::StepLimits {
+    pub(super) fn step_limits(&self, m: Motor) -> physics::StepLimits {
         let profile = &self.profile;
         let hand = &profile.hand;
-        let i = (m - 1) as usize;
         let vel_unit = hand.counts_per_ms_per_velocity_unit;
         let (mcv, mov) = (
             self.get(self.id(Role::CloseVelocity), m) as f64 * vel_unit,
@@ -65,7 +64,7 @@ impl Device {
         );
         physics::StepLimits {
             limit: self.limit(m),
-            object: self.scenario.objects[i].map(|o| (o, hand.object_compliance)),
+            object: m.pick(&self.scenario.objects).map(|o| (o, hand.object_compliance)),
             accel: self.accel(m),
             close_speed: mcv,
             open_speed: mov,
@@ -82,21 +81,21 @@ impl Device {
     }
 
     pub(super) fn refresh_limits(&mut self) {
-        self.limits = std::array::from_fn(|i| self.step_limits((i + 1) as u8));
+        self.limits = PerMotor(Motor::ALL.map(|m| self.step_limits(m)));
     }
 
     /// One millisecond of physics. Returns how many motors moved.
     pub(super) fn tick(&mut self) -> u32 {
         let mut moving = 0;
-        for i in 0..4 {
-            let m = (i + 1) as u8;
-            let before = self.motors[i].pos;
-            let motor = &mut self.motors[i];
-            let term = motor.step(self.limits[i]);
+        for m in Motor::ALL {
+            let before = self.motors[m].pos;
+            let motor = &mut self.motors[m];
+            let term = motor.step(self.limits[m]);
             let moved = (motor.pos - before).abs();
             if moved > 0.0 {
                 moving += 1;
-                self.nv.odometer_counts[i] = self.nv.odometer_counts[i].saturating_add(moved.round() as u64);
+                let odometer = m.pick_mut(&mut self.nv.odometer_counts);
+                *odometer = odometer.saturating_add(moved.round() as u64);
             }
             if let Some(t) = term {
                 self.terminate_motor(m, t);
@@ -104,37 +103,36 @@ impl Device {
         }
         self.heat += 0.0005 * f64::from(moving);
         if let State::Busy(task) = &self.state
-            && task.motors.iter().all(|m| self.motors[(m - 1) as usize].goal.is_none())
+            && task.motors.motors().all(|m| self.motors[m].goal.is_none())
         {
             self.finish_task();
         }
         moving
     }
 
-    pub(super) fn terminate_motor(&mut self, m: u8, t: Termination) {
-        let i = (m - 1) as usize;
+    pub(super) fn terminate_motor(&mut self, m: Motor, t: Termination) {
         let hold = self.get(self.id(Role::Hold), m) != 0;
-        let goal = self.motors[i].goal.take();
-        self.motors[i].velocity = 0.0;
-        self.motors[i].powered = hold;
+        let goal = self.motors[m].goal.take();
+        self.motors[m].velocity = 0.0;
+        self.motors[m].powered = hold;
         if let Some(Goal::Initialize { .. }) = goal {
             if t == Termination::Goal {
-                self.motors[i].finish_initialize();
+                self.motors[m].finish_initialize();
             } else {
                 // A HI that stalled before the open stop leaves the motor uninitialised.
-                self.motors[i].initialized = false;
+                self.motors[m].initialized = false;
             }
-            self.motors[i].powered = hold;
+            self.motors[m].powered = hold;
             return;
         }
         if t == Termination::Breakaway {
-            let at = self.motors[i].position();
+            let at = self.motors[m].position();
             self.set_live(self.id(Role::BreakawayDetected), m, 1);
             self.set_live(self.id(Role::BreakawayPosition), m, at);
         }
         let mpe = self.get(self.id(Role::PositionError), m);
         let missed = StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
-        let position = self.motors[i].position();
+        let position = self.motors[m].position();
         let ignore_mpe = self.faults.contains(&Fault::MpeIgnored);
         if let (State::Busy(task), Some(Goal::Position { target, .. })) = (&mut self.state, goal)
             && task.check_mpe
@@ -148,8 +146,8 @@ impl Device {
     pub(super) fn finish_task(&mut self) {
         let State::Busy(task) = std::mem::replace(&mut self.state, State::Idle) else { return };
         if task.kind == CommandKind::Initialize {
-            for m in task.motors.iter() {
-                self.motors[(m - 1) as usize].reported = None;
+            for m in task.motors.motors() {
+                self.motors[m].reported = None;
                 self.set_live(self.id(Role::BreakawayDetected), m, 0);
                 self.set_live(self.id(Role::BreakawayPosition), m, 0);
             }
