@@ -34,8 +34,8 @@ pub fn unescape(text: &str) -> Result<Vec<u8>, UnescapeError> {
     let b = text.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
-    while i < b.len() {
-        match b[i] {
+    while let Some(&c) = b.get(i) {
+        match c {
             b'\\' => {
                 let next = b.get(i + 1).copied();
                 match next {

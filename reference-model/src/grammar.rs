@@ -149,33 +149,28 @@ pub fn parse_line(profile: &Profile, line: &[u8]) -> Result<Line, Rejected> {
 
 /// Parses one command line with explicit options.
 pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Result<Line, Rejected> {
-    let mut i = 0;
-    while i < line.len() && is_sep(line[i]) {
-        i += 1;
-    }
-    if i == line.len() {
+    let skip_seps = |s: &[u8]| -> usize { s.iter().take_while(|b| is_sep(**b)).count() };
+    let mut rest = line.get(skip_seps(line)..).unwrap_or_default();
+    if rest.is_empty() {
         return Ok(Line::Empty);
     }
     // The prefix: the leading run of prefix characters.
     let mut prefix = MotorSet::EMPTY;
     let mut has_prefix = false;
-    while i < line.len() {
-        match profile.prefix_motors(line[i] as char) {
-            Some(ms) if line[i].is_ascii() => {
+    while let Some((&c, after)) = rest.split_first() {
+        match profile.prefix_motors(c as char) {
+            Some(ms) if c.is_ascii() => {
                 prefix = prefix | MotorSet::from_motors(ms.iter().copied());
                 has_prefix = true;
-                i += 1;
+                rest = after;
             }
             _ => break,
         }
     }
-    while i < line.len() && is_sep(line[i]) {
-        i += 1;
-    }
-    let rest = &line[i..];
+    let rest = rest.get(skip_seps(rest)..).unwrap_or_default();
     let word_end = rest.iter().position(|b| is_sep(*b)).unwrap_or(rest.len());
-    let word = &rest[..word_end];
-    let mut args = tokens(&rest[word_end..]);
+    let (word, after_word) = rest.split_at_checked(word_end).unwrap_or((rest, &[]));
+    let mut args = tokens(after_word);
     let mut problems = Vec::new();
 
     if word.is_empty() {
@@ -193,10 +188,10 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
     // `?CMD`: the help command with the topic glued on.
     let (id, topic) = match lookup(word) {
         Some(id) => (id, None),
-        None if word[0] == b'?' => match profile.command_of_kind(CommandKind::Help) {
-            Some(help) => match lookup(&word[1..]) {
+        None if let Some(topic) = word.strip_prefix(b"?") => match profile.command_of_kind(CommandKind::Help) {
+            Some(help) => match lookup(topic) {
                 Some(t) => (help, Some(t)),
-                None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(&word[1..]))])),
+                None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(topic))])),
             },
             None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(word))])),
         },

@@ -28,7 +28,7 @@ pub const EMBEDDED_PROFILES: &[(&str, &str)] =
     &[("seed", "seed.toml"), ("bh8-262-4.3", "bh8-262-4.3.toml"), ("bh8-262-4.4", "bh8-262-4.4.toml")];
 
 /// Why a spec file could not become a profile.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Debug, Clone, thiserror::Error, PartialEq, Eq)]
 pub enum SpecError {
     /// No embedded profile or alias has this name.
     #[error("unknown profile `{0}` (known: seed, bh8-262-4.3, bh8-262-4.4, bh8-262)")]
@@ -818,19 +818,20 @@ impl Profile {
     /// The embedded profile with this name or alias (`bh8-262` is `bh8-262-4.4`).
     pub fn builtin(name: &str) -> Result<Arc<Profile>, SpecError> {
         use std::sync::OnceLock;
-        static CACHE: OnceLock<Vec<Arc<Profile>>> = OnceLock::new();
+        static CACHE: OnceLock<Vec<Result<Arc<Profile>, SpecError>>> = OnceLock::new();
+        // The embedded files are checked by this crate's tests; should one still fail to load,
+        // asking for any built-in profile says why.
         let all = CACHE.get_or_init(|| {
             EMBEDDED_PROFILES
                 .iter()
-                .map(|(_, file)| {
-                    let p = Profile::load_with(file, &|f| embedded(f).map(str::to_string));
-                    // The embedded files are checked by this crate's tests; a failure here is
-                    // a build defect, not bad input.
-                    Arc::new(p.unwrap_or_else(|e| panic!("embedded spec is invalid: {e}")))
-                })
+                .map(|(_, file)| Profile::load_with(file, &|f| embedded(f).map(str::to_string)).map(Arc::new))
                 .collect()
         });
+        if let Some(Err(e)) = all.iter().find(|p| p.is_err()) {
+            return Err(e.clone());
+        }
         all.iter()
+            .flatten()
             .find(|p| p.id.eq_ignore_ascii_case(name) || p.aliases.iter().any(|a| a.eq_ignore_ascii_case(name)))
             .cloned()
             .ok_or_else(|| SpecError::UnknownProfile(name.to_string()))
@@ -1013,9 +1014,9 @@ impl Profile {
         // Storage slots: aliases share the slot of their target.
         let mut slot = vec![0u16; f.params.len()];
         let mut slots = 0usize;
-        for (i, p) in f.params.iter().enumerate() {
+        for (s, p) in slot.iter_mut().zip(&f.params) {
             if p.alias_of.is_none() {
-                slot[i] = slots as u16;
+                *s = slots as u16;
                 slots += 1;
             }
         }
@@ -1025,8 +1026,11 @@ impl Profile {
                     .params
                     .iter()
                     .position(|q| &q.name == target && q.alias_of.is_none())
+                    .and_then(|t| slot.get(t).copied())
                     .ok_or_else(|| invalid(format!("`{}` is an alias of unknown `{target}`", p.name)))?;
-                slot[i] = slot[t];
+                if let Some(s) = slot.get_mut(i) {
+                    *s = t;
+                }
             }
         }
         let find = |name: &str| {
@@ -1085,9 +1089,10 @@ impl Profile {
         self.commands.iter().position(|c| c.name.eq_ignore_ascii_case(name)).map(|i| CommandId(i as u16))
     }
 
-    /// The command with this id.
+    /// The command with this id (an id of another profile, out of range, reads as a
+    /// nameless command that does nothing).
     pub fn command(&self, id: CommandId) -> &CommandSpec {
-        &self.commands[id.0 as usize]
+        self.commands.get(usize::from(id.0)).unwrap_or(&NO_COMMAND)
     }
 
     /// The first command of this kind, if the profile has one.
@@ -1105,9 +1110,15 @@ impl Profile {
             .map(|i| ParamId(i as u16))
     }
 
-    /// The parameter with this id.
+    /// The parameter with this id (an id of another profile, out of range, reads as a
+    /// nameless read-only parameter).
     pub fn param(&self, id: ParamId) -> &ParamSpec {
-        &self.params[id.0 as usize]
+        self.params.get(usize::from(id.0)).unwrap_or(&NO_PARAM)
+    }
+
+    /// The storage slot of a parameter (aliases share their target's).
+    pub(crate) fn slot_of(&self, id: ParamId) -> usize {
+        self.slot.get(usize::from(id.0)).map_or(usize::MAX, |s| usize::from(*s))
     }
 
     /// All parameter ids, in listing order.
@@ -1164,6 +1175,44 @@ impl StatusTexts for Profile {
         Profile::status_text(self, bit)
     }
 }
+
+/// What [`Profile::command`] gives for an id the profile does not have.
+static NO_COMMAND: CommandSpec = CommandSpec {
+    name: String::new(),
+    category: String::new(),
+    kind: CommandKind::Help,
+    prefix: PrefixRule::Forbidden,
+    args: ArgRule::None,
+    arg_min: None,
+    arg_max: None,
+    advanced: true,
+    prints: String::new(),
+    help: String::new(),
+};
+
+/// What [`Profile::param`] gives for an id the profile does not have.
+static NO_PARAM: ParamSpec = ParamSpec {
+    name: String::new(),
+    scope: Scope::Global,
+    section: String::new(),
+    description: String::new(),
+    min: 0,
+    max: 0,
+    values: None,
+    default: None,
+    default_spread: None,
+    read_only: true,
+    advanced: true,
+    persist: Vec::new(),
+    get: None,
+    set: None,
+    alias_of: None,
+    input_aliases: Vec::new(),
+    live: true,
+    self_stored: false,
+    rt: None,
+    effect: None,
+};
 
 /// The text of an embedded spec file, by its path relative to `spec/`.
 pub fn embedded(path: &str) -> Option<&'static str> {
@@ -1270,6 +1319,21 @@ mod closed_names_tests {
                 other => panic!("expected an RtField error for {says}, got {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn an_id_of_another_profile_reads_as_nothing_instead_of_panicking() {
+        let seed = Profile::builtin("seed").unwrap();
+        let store = crate::params::ParamStore::defaults(&seed);
+        let foreign = ParamId(u16::MAX);
+        assert_eq!(seed.param(foreign).name, "");
+        assert!(seed.param(foreign).read_only);
+        assert_eq!(seed.command(CommandId(u16::MAX)).name, "");
+        assert_eq!(store.get(&seed, foreign, 1), 0);
+        let dp = seed.param_id("DP").unwrap();
+        assert_eq!(store.get(&seed, dp, 2), 1000);
+        assert_eq!(store.get(&seed, dp, 0), 0, "motor 0 does not exist");
+        assert_eq!(store.get(&seed, dp, 5), 0, "motor 5 does not exist");
     }
 
     #[test]

@@ -91,9 +91,9 @@ impl Device {
 
     pub(super) fn print_banner(&mut self) {
         self.push_event(Event::PoweredUp);
-        for i in 0..self.profile.banner.len() {
-            let l = self.profile.banner[i].clone();
-            self.print_line(&l);
+        let profile = self.profile.clone();
+        for l in &profile.banner {
+            self.print_line(l);
         }
         self.prompt();
     }

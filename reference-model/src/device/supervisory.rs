@@ -43,7 +43,9 @@ impl Device {
                 }
                 if self.has(Fault::PrefixNotRefused) && r.status == StatusBits::PREFIX_NOT_ALLOWED {
                     let skip = line.len() - line.trim_ascii_start().len() + prefix_text(&self.profile, line).len();
-                    if let Ok(Line::Command(c)) = grammar::parse_line(&self.profile, &line[skip..]) {
+                    if let Ok(Line::Command(c)) =
+                        grammar::parse_line(&self.profile, line.get(skip..).unwrap_or_default())
+                    {
                         return self.run_command(&c);
                     }
                 }
@@ -69,9 +71,9 @@ impl Device {
         if toks.len() < 2 || !toks.len().is_multiple_of(2) {
             return None;
         }
+        let (last, head) = toks.split_last()?;
         // A lone name: the set of nothing (parsed with a dummy pair, then emptied).
-        let probe = format!("{} {} 0", toks[..toks.len() - 1].join(" "), toks[toks.len() - 1]);
-        let text = if toks.len() == 2 { probe } else { toks[..toks.len() - 1].join(" ") };
+        let text = if toks.len() == 2 { format!("{} {last} 0", head.join(" ")) } else { head.join(" ") };
         match grammar::parse_line(&self.profile, text.as_bytes()) {
             Ok(Line::Command(mut c)) if matches!(c.args, Args::Pairs(_)) => {
                 if toks.len() == 2 {
@@ -107,14 +109,16 @@ impl Device {
         let text = std::str::from_utf8(line).ok()?;
         let mut toks: Vec<String> = text.split_ascii_whitespace().map(str::to_string).collect();
         let mut changed = false;
-        for i in 1..toks.len() {
-            if let (Some(id), Ok(v)) = (self.profile.param_id(&toks[i - 1]), toks[i].parse::<i64>()) {
+        let mut name: Option<String> = None;
+        for tok in &mut toks {
+            if let (Some(id), Ok(v)) = (name.as_deref().and_then(|n| self.profile.param_id(n)), tok.parse::<i64>()) {
                 let p = self.profile.param(id);
                 if p.values.is_none() && v == p.max + 1 {
-                    toks[i] = p.max.to_string();
+                    *tok = p.max.to_string();
                     changed = true;
                 }
             }
+            name = Some(tok.clone());
         }
         if !changed {
             return None;
@@ -295,7 +299,7 @@ impl Device {
                 let keep_mcv = (t == Transfer::Defaults && self.has(Fault::FdefSkipsMcv))
                     .then(|| {
                         self.id(Role::CloseVelocity)
-                            .map(|id| (id, [1, 2, 3, 4].map(|m| self.params.get(&profile, id, m))))
+                            .map(|id| (id, Motor::ALL.map(|m| self.params.get(&profile, id, m.number()))))
                     })
                     .flatten();
                 self.params.transfer(&profile, &mut self.nv, t, Scope::Motor, motors);
@@ -303,13 +307,8 @@ impl Device {
                     self.params.transfer(&profile, &mut self.nv, Transfer::Save, Scope::Motor, motors);
                 }
                 if let Some((id, vals)) = keep_mcv {
-                    for m in 1..=4u8 {
-                        self.params.set_unchecked(
-                            &profile,
-                            id,
-                            MotorSet::single(m).unwrap_or_default(),
-                            vals[m as usize - 1],
-                        );
+                    for (m, v) in Motor::ALL.into_iter().zip(vals) {
+                        self.params.set_unchecked(&profile, id, MotorSet::from(m), v);
                     }
                 }
                 self.end_line(StatusBits::empty());
