@@ -352,13 +352,6 @@ mod tests {
         Profile::builtin("seed").unwrap()
     }
 
-    fn status(line: &str) -> u32 {
-        match parse_line(&seed(), line.as_bytes()) {
-            Ok(_) => 0,
-            Err(r) => r.status.code(),
-        }
-    }
-
     #[test]
     fn prefixes_and_case() {
         let p = seed();
@@ -370,31 +363,6 @@ mod tests {
         let Ok(Line::Command(c)) = parse_line(&p, b"SFSET DS 100") else { panic!() };
         assert_eq!(c.prefix, Some(MotorSet::SPREAD));
         assert_eq!(parse_line(&p, b"   "), Ok(Line::Empty));
-    }
-
-    #[test]
-    fn rejections_map_to_firmware_status() {
-        assert_eq!(status("BOGUS"), 32);
-        assert_eq!(status("12"), 32);
-        assert_eq!(status("FGET NOPE"), 64);
-        assert_eq!(status("FSET DP 70000"), 128);
-        assert_eq!(status("FSET DP"), 128);
-        assert_eq!(status("FSET DP 1x"), 128);
-        assert_eq!(status("FSET P 5"), 256);
-        assert_eq!(status("C 5"), 1024);
-        assert_eq!(status("M 1 2"), 1024);
-        assert_eq!(status("1RESET"), 4096);
-        assert_eq!(status("1VERS 3"), 4096 | 1024);
-        assert_eq!(status("FSET NOPE 1 DP 99999"), 64 | 128);
-        assert_eq!(status("FSET TEMP 5"), 64);
-        assert_eq!(status("PGET TMP"), 0);
-        assert_eq!(status("?HI"), 0);
-        assert_eq!(status("?BOGUS"), 32);
-        assert_eq!(status("? HI"), 1024);
-        assert_eq!(status("1?HI"), 4096);
-        assert_eq!(status("FSET BAUD 97"), 128);
-        assert_eq!(status("FSET BAUD 384"), 0);
-        assert_eq!(status("FSET LCV 2"), 128);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use std::time::Duration;
 use gcl_model::params::ParamStore;
 use gcl_model::realtime::BlockError;
 use gcl_model::spec::{BlockKind, ParamId, Scope};
-use gcl_model::{Device, DeviceConfig, Mode, MotorSet, Profile, RtLayout};
+use gcl_model::{Device, Mode, MotorSet, Profile, RtLayout};
 use proptest::prelude::*;
 use proptest::sample::select;
 
@@ -21,23 +21,11 @@ fn profile(name: &str) -> Arc<Profile> {
     Profile::builtin(name).unwrap()
 }
 
-/// A powered-up hand, banner taken.
-fn hand(name: &str) -> Device {
-    let mut d = Device::new(profile(name), DeviceConfig { seed: 5, ..DeviceConfig::default() });
-    d.clear_output();
-    d
-}
+mod support;
+use support::{hand, send};
 
 fn count(haystack: &[u8], needle: &[u8]) -> usize {
     haystack.windows(needle.len()).filter(|w| *w == needle).count()
-}
-
-/// Sends one line, runs it to completion, returns the bytes.
-fn send(d: &mut Device, line: &str) -> String {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(600));
-    String::from_utf8_lossy(&d.take_output()).into_owned()
 }
 
 // ------------------------------------------------------------------ any bytes, any times

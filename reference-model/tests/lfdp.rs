@@ -1,24 +1,10 @@
 //! Byte-array tests of the LFDP worked example and of LFAP's byte order, through the whole
 //! device: supervisory commands set the scene, RealTime `A` blocks read the bytes.
 
-use std::time::Duration;
+use gcl_model::{Device, Motor};
 
-use gcl_model::{Device, Motor, Profile};
-
-/// A powered-up hand of a built-in profile, banner taken.
-fn hand(profile: &str) -> Device {
-    let mut d = Device::with_profile(Profile::builtin(profile).unwrap());
-    d.clear_output();
-    d
-}
-
-/// Sends one line, runs it to completion, returns the bytes the hand wrote.
-fn send(d: &mut Device, line: &str) -> Vec<u8> {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(120));
-    d.take_output()
-}
+mod support;
+use support::{hand, send_bytes as send};
 
 /// Sends a line and insists on the plain `<echo>\n\r=> ` answer.
 fn ok(d: &mut Device, line: &str) {

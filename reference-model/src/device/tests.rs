@@ -23,26 +23,6 @@ fn banner_at_power_up() {
 }
 
 #[test]
-fn seed_examples_from_the_issue() {
-    let mut d = hand("seed");
-    assert_eq!(send(&mut d, "HI"), "HI\n\r=> ");
-    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\n\r1000 1000 1000 150\n\r=> ");
-    assert_eq!(send(&mut d, "BOGUS"), "BOGUS\n\rERR 32\n\r=> ");
-    assert_eq!(send(&mut d, "FSET DP 70000"), "FSET DP 70000\n\rERR 128\n\r=> ");
-    assert_eq!(send(&mut d, ""), "\n\r=> ");
-}
-
-#[test]
-fn motion_before_hi_is_refused() {
-    let mut d = hand("seed");
-    assert_eq!(send(&mut d, "C"), "C\n\rERR 4\n\r=> ");
-    assert_eq!(send(&mut d, "T"), "T\n\rERR 1\n\r=> ");
-    assert_eq!(send(&mut d, "FGET S"), "FGET S\n\r1 1 1 1\n\r=> ");
-    let mut b = hand("bh8-262");
-    assert_eq!(send(&mut b, "FGET S"), "FGET S\n\r4 4 4 4\n\r=> ");
-}
-
-#[test]
 fn close_and_open_move_the_fingers() {
     let mut d = hand("seed");
     send(&mut d, "HI");
