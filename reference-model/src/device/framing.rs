@@ -50,7 +50,7 @@ impl Device {
             self.line = line;
             self.line.clear();
         } else {
-            if framing.echo && !self.has(Fault::NoEcho) {
+            if framing.echo {
                 self.out.push(b);
             }
             if self.line.len() < framing.max_line {

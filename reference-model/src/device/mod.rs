@@ -30,7 +30,7 @@ use std::time::Duration;
 use rand_core::{RngCore, SeedableRng};
 use serde::{Deserialize, Serialize};
 
-pub use fault::{Fault, UnknownFault};
+pub use fault::{Fault, FaultSet, UnknownFault};
 use physics::{Goal, Motor as Joint, Termination};
 
 use crate::grammar::{self, Args, Command, Line, ParseOptions};
@@ -154,7 +154,7 @@ const TICK_NS: u64 = 1_000_000;
 #[derive(Debug, Clone)]
 pub struct Device {
     profile: Arc<Profile>,
-    faults: Vec<Fault>,
+    faults: FaultSet,
     scenario: Scenario,
     rng: rand_pcg::Pcg32,
     nv: NvMemory,
@@ -185,17 +185,21 @@ impl Device {
         let mut nv = config.nv;
         let powered_at_boot_ms = nv.powered_ms;
         let params = ParamStore::power_up(&profile, &mut nv);
-        let has = |f: Fault| config.faults.contains(&f);
-        let eol = if has(Fault::CrLf) { b"\r\n".to_vec() } else { profile.framing.line_ending.as_bytes().to_vec() };
-        let mut prompt = profile.framing.prompt.as_bytes().to_vec();
-        if has(Fault::PromptNoSpace) {
-            while prompt.last() == Some(&b' ') {
-                prompt.pop();
-            }
-        }
+        // Faults of framing alone are patches of the profile the hand runs.
+        let mut framing = profile.framing.clone();
+        let faults: FaultSet = config.faults.into_iter().filter(|f| !f.patch_framing(&mut framing)).collect();
+        let profile = if framing == profile.framing {
+            profile
+        } else {
+            let mut patched = (*profile).clone();
+            patched.framing = framing;
+            Arc::new(patched)
+        };
+        let eol = profile.framing.line_ending.as_bytes().to_vec();
+        let prompt = profile.framing.prompt.as_bytes().to_vec();
         let motors = PerMotor(config.scenario.initial_positions.map(|p| Joint::new(p as f64)));
         let mut d = Device {
-            faults: config.faults,
+            faults,
             rng: rand_pcg::Pcg32::seed_from_u64(config.seed),
             scenario: config.scenario,
             nv,
@@ -227,7 +231,7 @@ impl Device {
     }
 
     fn has(&self, f: Fault) -> bool {
-        self.faults.contains(&f)
+        self.faults.contains(f)
     }
 
     /// The parameter that plays `role` in the hand's profile.
@@ -237,7 +241,8 @@ impl Device {
 
     // ------------------------------------------------------------------ public surface
 
-    /// The profile the hand runs.
+    /// The profile the hand runs: the one it was built with, with the framing faults among
+    /// its [`DeviceConfig::faults`] applied.
     pub fn profile(&self) -> &Arc<Profile> {
         &self.profile
     }

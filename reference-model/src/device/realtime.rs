@@ -137,13 +137,13 @@ impl Device {
                 RtFlag::Lfs => self.strain(m),
                 RtFlag::Lfap => {
                     let p = self.motors[m].position().clamp(0, 65535);
-                    if self.faults.contains(&Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
+                    if self.has(Fault::LittleEndianLfap) { ((p & 0xFF) << 8) | (p >> 8) } else { p }
                 }
                 RtFlag::Lfdp => {
                     let present = self.motors[m].position();
                     let c = self.get(self.id(Role::DeltaCoefficient), m);
                     let mut r = self.motors[m].reported.unwrap_or(present);
-                    let q = if self.faults.contains(&Fault::LfdpNotClipped) {
+                    let q = if self.has(Fault::LfdpNotClipped) {
                         let d = (present - r) / c.max(1);
                         r += d * c.max(1);
                         i64::from(d as i8)

@@ -278,3 +278,20 @@ fn events_report_lines_loops_and_power_ups() {
     assert_eq!(kept.len(), MAX_EVENTS);
     assert_eq!(kept.last(), Some(&Event::LineDone(StatusBits::empty())));
 }
+
+#[test]
+fn framing_faults_are_profile_patches() {
+    let p = Profile::builtin("seed").unwrap();
+    let faults = vec![Fault::CrLf, Fault::PromptNoSpace, Fault::NoEcho, Fault::FgetReversed];
+    let mut d = Device::new(p.clone(), DeviceConfig { faults, ..Default::default() });
+    assert_eq!(d.profile().framing.line_ending, "\r\n");
+    assert_eq!(d.profile().framing.prompt, "=>");
+    assert!(!d.profile().framing.echo);
+    assert_eq!(p.framing.line_ending, "\n\r", "the shared profile is untouched");
+    d.clear_output();
+    d.handle_input(Duration::ZERO, b"FGET DP\r");
+    assert_eq!(d.take_output(), b"\r\n150 1000 1000 1000\r\n=>");
+    // No framing fault: the very profile the hand was given.
+    let plain = Device::new(p.clone(), DeviceConfig { faults: vec![Fault::FgetReversed], ..Default::default() });
+    assert!(Arc::ptr_eq(plain.profile(), &p));
+}

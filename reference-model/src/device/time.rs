@@ -133,7 +133,7 @@ impl Device {
         let mpe = self.get(self.id(Role::PositionError), m);
         let missed = StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
         let position = self.motors[m].position();
-        let ignore_mpe = self.faults.contains(&Fault::MpeIgnored);
+        let ignore_mpe = self.has(Fault::MpeIgnored);
         if let (State::Busy(task), Some(Goal::Position { target, .. })) = (&mut self.state, goal)
             && task.check_mpe
             && !ignore_mpe
