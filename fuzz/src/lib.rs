@@ -101,7 +101,8 @@ fn check_line(profile: &Profile, line: &[u8]) {
             assert_eq!(r.status, bits, "grammar: `{}`: status is not the OR of its problems", escape(line));
         }
     }
-    let strict = parse_line_with(profile, line, ParseOptions { case_sensitive_commands: true });
+    let strict =
+        parse_line_with(profile, line, ParseOptions { case_sensitive_commands: true, ..ParseOptions::default() });
     if let Ok(s) = &strict {
         assert_eq!(
             parsed.as_ref().ok(),

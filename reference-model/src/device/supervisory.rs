@@ -4,8 +4,16 @@
 use super::*;
 
 impl Device {
+    /// Runs one command line. The faults that bend the grammar are parse options; the rest
+    /// are read here, at the hooks named by their `self.has(...)`.
     pub(super) fn run_line(&mut self, line: &[u8]) {
-        let opts = ParseOptions { case_sensitive_commands: self.has(Fault::LowercaseRejected) };
+        let opts = ParseOptions {
+            case_sensitive_commands: self.has(Fault::LowercaseRejected),
+            ignore_forbidden_prefix: self.has(Fault::PrefixNotRefused),
+            drop_last_name_without_value: self.has(Fault::MissingValueIgnored),
+            accept_one_past_max: self.has(Fault::RangeOffByOne),
+            g_includes_spread: self.has(Fault::GIncludesSpread),
+        };
         if self.has(Fault::TabNotSeparator) && line.contains(&b'\t') {
             return self.end_line(StatusBits::UNKNOWN_COMMAND);
         }
@@ -16,12 +24,7 @@ impl Device {
                 self.push_event(Event::LineDone(StatusBits::empty()));
                 self.prompt();
             }
-            Ok(Line::Command(mut c)) => {
-                if self.has(Fault::GIncludesSpread) && prefix_text(&self.profile, line).contains(['G', 'g']) {
-                    c.prefix = c.prefix.map(|p| p | MotorSet::single(4).unwrap_or_default());
-                }
-                self.run_command(&c)
-            }
+            Ok(Line::Command(c)) => self.run_command(&c),
             Err(mut r) => {
                 if self.has(Fault::UnknownCommand64) && r.status.contains(StatusBits::UNKNOWN_COMMAND) {
                     r.status = (r.status - StatusBits::UNKNOWN_COMMAND) | StatusBits::UNKNOWN_PARAMETER;
@@ -29,111 +32,23 @@ impl Device {
                 if self.has(Fault::UnknownParam128) && r.status.contains(StatusBits::UNKNOWN_PARAMETER) {
                     r.status = (r.status - StatusBits::UNKNOWN_PARAMETER) | StatusBits::INVALID_VALUE;
                 }
-                if self.has(Fault::PartialSetApplied) {
-                    self.apply_valid_pairs(line);
-                }
-                if self.has(Fault::MissingValueIgnored)
-                    && r.status == StatusBits::INVALID_VALUE
-                    && let Some(cut) = self.without_last_name(line)
+                if self.has(Fault::PartialSetApplied)
+                    && let Some(Command { prefix, args: Args::Pairs(pairs), .. }) = &r.partial
                 {
-                    return self.run_command(&cut);
+                    let profile = self.profile.clone();
+                    for (id, v) in pairs {
+                        self.params.set_unchecked(&profile, *id, prefix.unwrap_or(MotorSet::ALL), *v);
+                    }
                 }
                 if self.has(Fault::TooManyArgsSilent) && r.status == StatusBits::TOO_MANY_ARGUMENTS {
                     return self.end_line(StatusBits::empty());
                 }
-                if self.has(Fault::PrefixNotRefused) && r.status == StatusBits::PREFIX_NOT_ALLOWED {
-                    let skip = line.len() - line.trim_ascii_start().len() + prefix_text(&self.profile, line).len();
-                    if let Ok(Line::Command(c)) =
-                        grammar::parse_line(&self.profile, line.get(skip..).unwrap_or_default())
-                    {
-                        return self.run_command(&c);
-                    }
-                }
                 if self.has(Fault::ReadOnlyStatus) && r.status.contains(StatusBits::READ_ONLY) {
                     r.status = (r.status - StatusBits::READ_ONLY) | StatusBits::INVALID_VALUE;
-                }
-                if self.has(Fault::RangeOffByOne)
-                    && r.status == StatusBits::INVALID_VALUE
-                    && let Some(c) = self.off_by_one_accepts(line)
-                {
-                    return self.run_command(&c);
                 }
                 self.end_line(r.status)
             }
         }
-    }
-
-    /// The missing-value-ignored fault: a set line with an odd token count, run without its
-    /// last token.
-    pub(super) fn without_last_name(&self, line: &[u8]) -> Option<Command> {
-        let text = std::str::from_utf8(line).ok()?;
-        let toks: Vec<&str> = text.split_ascii_whitespace().collect();
-        if toks.len() < 2 || !toks.len().is_multiple_of(2) {
-            return None;
-        }
-        let (last, head) = toks.split_last()?;
-        // A lone name: the set of nothing (parsed with a dummy pair, then emptied).
-        let text = if toks.len() == 2 { format!("{} {last} 0", head.join(" ")) } else { head.join(" ") };
-        match grammar::parse_line(&self.profile, text.as_bytes()) {
-            Ok(Line::Command(mut c)) if matches!(c.args, Args::Pairs(_)) => {
-                if toks.len() == 2 {
-                    c.args = Args::Pairs(Vec::new());
-                }
-                Some(c)
-            }
-            _ => None,
-        }
-    }
-
-    /// The partial-set-applied fault: the pairs of a refused set line that parse alone.
-    pub(super) fn apply_valid_pairs(&mut self, line: &[u8]) {
-        let Ok(text) = std::str::from_utf8(line) else { return };
-        let mut toks = text.split_ascii_whitespace();
-        let Some(head) = toks.next() else { return };
-        let rest: Vec<&str> = toks.collect();
-        let profile = self.profile.clone();
-        for pair in rest.chunks(2) {
-            let one = format!("{head} {}", pair.join(" "));
-            if let Ok(Line::Command(c)) = grammar::parse_line(&profile, one.as_bytes())
-                && let Args::Pairs(ps) = &c.args
-            {
-                for (id, v) in ps {
-                    self.params.set_unchecked(&profile, *id, c.prefix.unwrap_or(MotorSet::ALL), *v);
-                }
-            }
-        }
-    }
-
-    /// The range-off-by-one fault: a set whose only problem is a value one past a maximum.
-    pub(super) fn off_by_one_accepts(&self, line: &[u8]) -> Option<Command> {
-        let text = std::str::from_utf8(line).ok()?;
-        let mut toks: Vec<String> = text.split_ascii_whitespace().map(str::to_string).collect();
-        let mut changed = false;
-        let mut name: Option<String> = None;
-        for tok in &mut toks {
-            if let (Some(id), Ok(v)) = (name.as_deref().and_then(|n| self.profile.param_id(n)), tok.parse::<i64>()) {
-                let p = self.profile.param(id);
-                if p.values.is_none() && v == p.max + 1 {
-                    *tok = p.max.to_string();
-                    changed = true;
-                }
-            }
-            name = Some(tok.clone());
-        }
-        if !changed {
-            return None;
-        }
-        let Ok(Line::Command(mut c)) = grammar::parse_line(&self.profile, toks.join(" ").as_bytes()) else {
-            return None;
-        };
-        if let Args::Pairs(ps) = &mut c.args {
-            for (id, v) in ps.iter_mut() {
-                if *v == self.profile.param(*id).max && self.profile.param(*id).values.is_none() {
-                    *v += 1;
-                }
-            }
-        }
-        Some(c)
     }
 
     pub(super) fn enabled_motors(&self) -> MotorSet {
@@ -567,13 +482,4 @@ impl Device {
             self.print_banner();
         }
     }
-}
-
-/// The run of prefix characters a line starts with (after leading separators).
-pub(super) fn prefix_text(profile: &Profile, line: &[u8]) -> String {
-    line.trim_ascii_start()
-        .iter()
-        .take_while(|b| b.is_ascii() && profile.prefix_motors(**b as char).is_some())
-        .map(|b| *b as char)
-        .collect()
 }
