@@ -12,9 +12,9 @@
 //! Physics runs in 1 ms ticks, only while something moves.
 //!
 //! This file holds the hand's state and its public surface; the behaviour is split by
-//! concern: [`framing`] (bytes in, lines out, events), [`supervisory`] (command lines and the
-//! parameters behaviour reads), [`realtime`] (the loop's blocks), [`time`] (ticks and the end
-//! of a command), [`physics`] (one motor's motion) and [`fault`] (the deliberate bugs).
+//! concern: `framing` (bytes in, lines out, events), `supervisory` (command lines and the
+//! parameters behaviour reads), `realtime` (the loop's blocks), `time` (ticks and the end
+//! of a command), `physics` (one motor's motion) and [`fault`] (the deliberate bugs).
 
 pub mod fault;
 mod framing;
