@@ -139,6 +139,20 @@ struct LoopState {
     /// The header whose data is being received, and the data so far.
     pending: Option<ControlHeader>,
     data: Vec<u8>,
+    /// What the blocks' arithmetic reads from the parameters, read once at LOOP: no parameter
+    /// can change while the loop is open.
+    params: PerMotor<LoopParams>,
+    /// LFDPD: LFDP discards the clipped rest.
+    discard: bool,
+}
+
+/// One motor's parameters as the loop's arithmetic reads them (see [`LoopState::params`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct LoopParams {
+    lcvc: i64,
+    lfvc: i64,
+    lfdpc: i64,
+    uses_gain: bool,
 }
 
 /// The serial rate of a profile without a BAUD parameter: GCL's factory 9600 bit/s.

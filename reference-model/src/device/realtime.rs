@@ -23,7 +23,15 @@ impl Device {
         }
         self.out.push(crate::realtime::FEEDBACK_HEADER);
         self.last_status = StatusBits::empty();
-        self.state = State::Loop(Box::new(LoopState { layout, pending: None, data: Vec::with_capacity(16) }));
+        let params = PerMotor(Motor::ALL.map(|m| LoopParams {
+            lcvc: self.get(self.id(Role::VelocityCoefficient), m),
+            lfvc: self.get(self.id(Role::FeedbackVelocityCoefficient), m),
+            lfdpc: self.get(self.id(Role::DeltaCoefficient), m),
+            uses_gain: self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0),
+        }));
+        let discard = self.get(self.id(Role::DeltaDiscard), Motor::F1) != 0;
+        let data = Vec::with_capacity(16);
+        self.state = State::Loop(Box::new(LoopState { layout, pending: None, data, params, discard }));
         self.push_event(Event::LoopEntered);
         self.refresh_limits();
     }
@@ -36,12 +44,12 @@ impl Device {
             rt.data.push(b);
             if rt.data.len() >= rt.layout.control().size() {
                 if let Ok(control) = Control::parse(rt.layout.control(), &rt.data) {
-                    self.apply_control(&rt.layout, &control);
+                    self.apply_control(&rt, &control);
                 }
                 // The answer follows the whole block, as a hand reads a block before it
                 // answers: no exchange beats the line's wire time in both directions.
                 if rt.pending.is_some_and(|h| h.wants_feedback()) {
-                    self.emit_feedback(&rt.layout);
+                    self.emit_feedback(&rt);
                 } else {
                     self.out.push(crate::realtime::FEEDBACK_HEADER);
                 }
@@ -64,7 +72,7 @@ impl Device {
                     rt.data.clear();
                     rt.data.push(h.byte());
                 } else if h.wants_feedback() {
-                    self.emit_feedback(&rt.layout);
+                    self.emit_feedback(&rt);
                 } else {
                     self.out.push(crate::realtime::FEEDBACK_HEADER);
                 }
@@ -96,14 +104,14 @@ impl Device {
         }
     }
 
-    pub(super) fn apply_control(&mut self, layout: &RtLayout, control: &Control) {
+    pub(super) fn apply_control(&mut self, rt: &LoopState, control: &Control) {
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        for m in layout.motors().motors() {
+        for m in rt.layout.motors().motors() {
             let MotorControl { velocity, gain, torque } = control.motor(m.number());
             if let Some(v) = velocity {
                 let v = if self.has(Fault::LcvUnsigned) { i64::from(v as u8) } else { v };
-                let lcvc = self.get(self.id(Role::VelocityCoefficient), m);
+                let lcvc = rt.params[m].lcvc;
                 self.motors[m].rt_velocity =
                     crate::realtime::control_velocity(v, lcvc, hand.lcv_fraction_bits) * hand.rt_velocity_counts_per_ms;
             }
@@ -114,24 +122,24 @@ impl Device {
                 self.motors[m].rt_velocity = crate::realtime::control_velocity(t, 1, hand.lcv_fraction_bits + 4)
                     * hand.rt_velocity_counts_per_ms;
             }
-            let has_gain = self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0);
-            self.motors[m].rt_uses_gain = has_gain;
+            self.motors[m].rt_uses_gain = rt.params[m].uses_gain;
         }
     }
 
     /// Sends a feedback block: one value per field of the layout, computed in wire order (the
     /// noise of strain and temperature is drawn in that order).
-    pub(super) fn emit_feedback(&mut self, layout: &RtLayout) {
+    pub(super) fn emit_feedback(&mut self, rt: &LoopState) {
+        let layout = &rt.layout;
         let profile = self.profile.clone();
         let hand = &profile.hand;
-        let discard = self.get(self.id(Role::DeltaDiscard), Motor::F1) != 0;
+        let discard = rt.discard;
         let mut feedback = Feedback::default();
         for f in layout.feedback().fields() {
             // A hand-wide field (LFT) reads no motor; F1 stands in for the arithmetic below.
             let m = f.motor().and_then(Motor::new).unwrap_or(Motor::F1);
             let v = match f.flag() {
                 RtFlag::Lfv => {
-                    let c = self.get(self.id(Role::FeedbackVelocityCoefficient), m).max(1) as f64;
+                    let c = rt.params[m].lfvc.max(1) as f64;
                     (self.motors[m].velocity / hand.lfv_counts_per_ms / c).trunc() as i64
                 }
                 RtFlag::Lfs => self.strain(m),
@@ -141,7 +149,7 @@ impl Device {
                 }
                 RtFlag::Lfdp => {
                     let present = self.motors[m].position();
-                    let c = self.get(self.id(Role::DeltaCoefficient), m);
+                    let c = rt.params[m].lfdpc;
                     let mut r = self.motors[m].reported.unwrap_or(present);
                     let q = if self.has(Fault::LfdpNotClipped) {
                         let d = (present - r) / c.max(1);

@@ -75,6 +75,9 @@ impl Device {
     }
 
     pub(super) fn ignores(&self, id: ParamId) -> bool {
+        if self.faults.is_empty() {
+            return false;
+        }
         let name = self.profile.param(id).name.as_str();
         self.faults.iter().any(|f| f.ignored_params().contains(&name))
     }

@@ -295,3 +295,13 @@ fn framing_faults_are_profile_patches() {
     let plain = Device::new(p.clone(), DeviceConfig { faults: vec![Fault::FgetReversed], ..Default::default() });
     assert!(Arc::ptr_eq(plain.profile(), &p));
 }
+
+#[test]
+fn a_fault_set_holds_what_was_put_in_in_declaration_order() {
+    let set: FaultSet = [Fault::RangeOffByOne, Fault::CrLf, Fault::RangeOffByOne].into_iter().collect();
+    assert_eq!(set.iter().collect::<Vec<_>>(), vec![Fault::CrLf, Fault::RangeOffByOne]);
+    assert!(set.contains(Fault::CrLf) && !set.contains(Fault::NoEcho));
+    assert_eq!(FaultSet::default().iter().count(), 0);
+    let all: FaultSet = Fault::ALL.iter().copied().collect();
+    assert_eq!(all.iter().collect::<Vec<_>>(), Fault::ALL.to_vec());
+}
