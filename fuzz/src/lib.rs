@@ -372,7 +372,7 @@ pub fn realtime(data: &[u8]) {
     }
     let layout = RtLayout::compute(profile, &store, motors);
     assert_eq!(layout.motors(), motors);
-    for block in [&layout.control(), &layout.feedback()] {
+    for block in [layout.control(), layout.feedback()] {
         check_block_layout(block, motors);
         check_block_codec(block, rest);
     }

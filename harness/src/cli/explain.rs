@@ -68,8 +68,8 @@ impl Explained {
             "mode_after": self.mode_after,
         });
         if let Some(l) = &self.layout {
-            obj["control_block"] = block_json(&l.control());
-            obj["feedback_block"] = block_json(&l.feedback());
+            obj["control_block"] = block_json(l.control());
+            obj["feedback_block"] = block_json(l.feedback());
         }
         obj
     }
@@ -233,8 +233,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         )?;
         if let Some(l) = &r.layout {
             writeln!(w, "  mode:     RealTime, motors {}", l.motors())?;
-            writeln!(w, "  control:  {}", block_text(&l.control(), "header C/c (A/a: the header alone)"))?;
-            writeln!(w, "  feedback: {}", block_text(&l.feedback(), "'*' (reply to c/a: '*' alone)"))?;
+            writeln!(w, "  control:  {}", block_text(l.control(), "header C/c (A/a: the header alone)"))?;
+            writeln!(w, "  feedback: {}", block_text(l.feedback(), "'*' (reply to c/a: '*' alone)"))?;
         }
     }
     Ok(EXIT_OK)

@@ -72,7 +72,7 @@ pub enum Answer {
     /// `LOOP` was answered with `*`: the hand is in RealTime mode.
     LoopStarted,
     /// A feedback block, typed per motor (`feedback.motor(m).strain`).
-    Feedback(Feedback),
+    Feedback(Box<Feedback>),
     /// `*` alone (after `c` or `a`).
     Ack,
     /// A prompt after ^C or a bare CR, with the lines before it (such as `ERR 16384`).
@@ -544,7 +544,7 @@ impl HostCore {
                         Ok(feedback) => {
                             self.rx.drain(..size);
                             self.waiting = Await::Nothing;
-                            Ok(Some(Answer::Feedback(feedback)))
+                            Ok(Some(Answer::Feedback(Box::new(feedback))))
                         }
                         Err(error) => {
                             let got = self.rx[..size].to_vec();

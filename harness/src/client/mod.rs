@@ -819,7 +819,7 @@ impl Hand {
                         s.positions[i] = Some(s.positions[i].unwrap_or(0) + dp * s.lfdpc[i]);
                     }
                 }
-                s.feedback = Some(v);
+                s.feedback = Some(*v);
                 Ok(())
             }
             _ => {

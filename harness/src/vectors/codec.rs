@@ -51,7 +51,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             }
             b.push(
                 Test::new(
-                    format!("{}-{what}", slug(&f.name())),
+                    format!("{}-{what}", slug(f.name())),
                     format!("{} is {kind}: {v} is {}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": v, "bytes": hex_bytes(&bytes), "direction": "both", "clipped_from": null }),
@@ -64,7 +64,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             let clipped = v.clamp(f.min(), f.max());
             b.push(
                 Test::new(
-                    format!("{}-clip-{what}", slug(&f.name())),
+                    format!("{}-clip-{what}", slug(f.name())),
                     format!("{v} does not fit {} ({kind}): a hand sends {clipped}, {}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": clipped, "bytes": hex_bytes(&bytes), "direction": "encode", "clipped_from": v }),
@@ -84,7 +84,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             };
             b.push(
                 Test::new(
-                    format!("{}-read-{}", slug(&f.name()), hex_bytes(&bytes).replace(' ', "").to_ascii_lowercase()),
+                    format!("{}-read-{}", slug(f.name()), hex_bytes(&bytes).replace(' ', "").to_ascii_lowercase()),
                     format!("{} ({kind}) reads {} as {v}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": v, "bytes": hex_bytes(&bytes), "direction": "decode", "clipped_from": null }),

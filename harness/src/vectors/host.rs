@@ -160,8 +160,8 @@ fn request_json(r: &Request) -> Value {
     let layout = |l: &RtLayout| {
         json!({
             "motors": l.motors().iter().collect::<Vec<u8>>(),
-            "control": block_json(&l.control()),
-            "feedback": block_json(&l.feedback()),
+            "control": block_json(l.control()),
+            "feedback": block_json(l.feedback()),
         })
     };
     match r {

@@ -82,8 +82,8 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         let body = json!({
             "motors": motors.iter().collect::<Vec<u8>>(),
             "flags_on": on,
-            "control": block_json(&l.control()),
-            "feedback": block_json(&l.feedback()),
+            "control": block_json(l.control()),
+            "feedback": block_json(l.feedback()),
         });
         let comment = format!(
             "{comment}: control {} bytes, feedback {} bytes (headers included)",
