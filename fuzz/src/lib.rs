@@ -104,7 +104,8 @@ fn check_line(profile: &Profile, line: &[u8]) {
             assert_eq!(r.status, bits, "grammar: `{}`: status is not the OR of its problems", escape(line));
         }
     }
-    let strict = parse_line_with(profile, line, ParseOptions { case_sensitive_commands: true });
+    let strict =
+        parse_line_with(profile, line, ParseOptions { case_sensitive_commands: true, ..ParseOptions::default() });
     if let Ok(s) = &strict {
         assert_eq!(
             parsed.as_ref().ok(),
@@ -319,7 +320,7 @@ pub fn device(data: &[u8]) -> DeviceRun {
             mode == Mode::Loop,
             hand.rt_layout().is_some(),
             "device: step {n}: mode {mode:?} but RealTime layout {:?}",
-            hand.rt_layout().map(|l| l.motors)
+            hand.rt_layout().map(|l| l.motors())
         );
         assert_eq!(
             mode == Mode::Busy,
@@ -328,7 +329,7 @@ pub fn device(data: &[u8]) -> DeviceRun {
             hand.poll_timeout()
         );
         // Public accessors on every state.
-        for m in 1..=4 {
+        for m in gcl_model::Motor::ALL {
             let _ = (hand.position(m), hand.initialized(m));
         }
         let _ = (hand.last_status().code(), hand.baud(), hand.nv().writes);
@@ -373,8 +374,8 @@ pub fn realtime(data: &[u8]) {
         store.set_unchecked(profile, *id, MotorSet::ALL, i64::from(on));
     }
     let layout = RtLayout::compute(profile, &store, motors);
-    assert_eq!(layout.motors, motors);
-    for block in [&layout.control, &layout.feedback] {
+    assert_eq!(layout.motors(), motors);
+    for block in [layout.control(), layout.feedback()] {
         check_block_layout(block, motors);
         check_block_codec(block, rest);
     }
@@ -396,21 +397,23 @@ pub fn realtime(data: &[u8]) {
 
 fn check_block_layout(block: &BlockLayout, motors: MotorSet) {
     let mut offset = 1;
-    for f in &block.fields {
-        assert_eq!(f.offset, offset, "realtime: field {} of motor {:?} is not back to back", f.name, f.motor);
-        assert!(f.size == 1 || f.size == 2, "realtime: field {} is {} bytes", f.name, f.size);
-        assert!(f.motor.is_none_or(|m| motors.contains(m)), "realtime: field {} of motor {:?}", f.name, f.motor);
-        offset += f.size;
+    for f in block.fields() {
+        assert_eq!(f.offset(), offset, "realtime: field {} of motor {:?} is not back to back", f.name(), f.motor());
+        assert!(f.size() == 1 || f.size() == 2, "realtime: field {} is {} bytes", f.name(), f.size());
+        assert!(f.motor().is_none_or(|m| motors.contains(m)), "realtime: field {} of motor {:?}", f.name(), f.motor());
+        offset += f.size();
     }
     assert_eq!(
-        block.size, offset,
+        block.size(),
+        offset,
         "realtime: {:?} block size {} for fields ending at {offset}",
-        block.kind, block.size
+        block.kind(),
+        block.size()
     );
 }
 
 fn check_block_codec(block: &BlockLayout, bytes: &[u8]) {
-    let header_ok = |h: u8| match block.kind {
+    let header_ok = |h: u8| match block.kind() {
         BlockKind::Feedback => h == realtime::FEEDBACK_HEADER,
         BlockKind::Control => h == b'C' || h == b'c',
     };
@@ -418,11 +421,11 @@ fn check_block_codec(block: &BlockLayout, bytes: &[u8]) {
     let whole = block.decode(bytes);
     assert_eq!(
         whole.is_ok(),
-        bytes.len() == block.size && header_ok(bytes[0]),
+        bytes.len() == block.size() && header_ok(bytes[0]),
         "realtime: decode of {} bytes",
         bytes.len()
     );
-    if let Some(candidate) = bytes.get(..block.size) {
+    if let Some(candidate) = bytes.get(..block.size()) {
         match block.decode(candidate) {
             Ok((h, values)) => {
                 assert!(header_ok(h));
@@ -441,21 +444,27 @@ fn check_block_codec(block: &BlockLayout, bytes: &[u8]) {
             i64::from_le_bytes(b)
         })
         .chain(std::iter::repeat(0))
-        .take(block.fields.len())
+        .take(block.fields().len())
         .collect();
-    let header = match block.kind {
+    let header = match block.kind() {
         BlockKind::Feedback => realtime::FEEDBACK_HEADER,
         BlockKind::Control => b'C',
     };
     let mut clamped = Vec::new();
     block.encode_clamped(header, &values, &mut clamped);
-    assert_eq!(clamped.len(), block.size);
+    assert_eq!(clamped.len(), block.size());
     let (h, decoded) = block.decode(&clamped).expect("an encoded block decodes");
     assert_eq!(h, header);
-    for ((f, v), d) in block.fields.iter().zip(&values).zip(&decoded) {
-        assert_eq!(*d, (*v).clamp(f.min(), f.max()), "realtime: field {} of motor {:?} round trip", f.name, f.motor);
+    for ((f, v), d) in block.fields().iter().zip(&values).zip(&decoded) {
+        assert_eq!(
+            *d,
+            (*v).clamp(f.min(), f.max()),
+            "realtime: field {} of motor {:?} round trip",
+            f.name(),
+            f.motor()
+        );
     }
-    let fits = block.fields.iter().zip(&values).all(|(f, v)| (f.min()..=f.max()).contains(v));
+    let fits = block.fields().iter().zip(&values).all(|(f, v)| (f.min()..=f.max()).contains(v));
     let mut checked = Vec::new();
     match block.encode(header, &values, &mut checked) {
         Ok(()) => assert!(fits && checked == clamped, "realtime: checked encode accepted a value that does not fit"),
@@ -581,7 +590,7 @@ pub fn exercise(profile: Arc<Profile>) {
         let now = hand.now();
         hand.handle_input(now, &line(&format!("{all}LOOP")));
         if let Some(layout) = hand.rt_layout().cloned() {
-            let data = |b: u8| vec![b; layout.control.data_len()];
+            let data = |b: u8| vec![b; layout.control().data_len()];
             let mut t = now;
             for (header, fill) in [(b'C', 0x7F), (b'c', 0x80), (b'C', 0x01), (b'C', 0xFF)] {
                 let block = [&[header][..], &data(fill)].concat();

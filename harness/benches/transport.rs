@@ -120,7 +120,7 @@ fn round_trips(kind: &str, server: &Server, n: usize) {
     print(&format!("FGET P round trip, {kind}"), &stats(v));
 
     hand.rt_start("1234").unwrap();
-    assert_eq!(hand.rt_layout().unwrap().feedback.size, 21);
+    assert_eq!(hand.rt_layout().unwrap().feedback().size(), 21);
     for _ in 0..n / 10 + 1 {
         hand.rt_update_with(false, true).unwrap();
     }

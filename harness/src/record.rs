@@ -20,7 +20,7 @@ use std::time::Duration;
 use gcl_model::grammar::{self, Line};
 use gcl_model::realtime::RtLayout;
 use gcl_model::spec::CommandKind;
-use gcl_model::{Device, DeviceConfig, Mode, Profile};
+use gcl_model::{Device, DeviceConfig, Event, Mode, Profile};
 
 use crate::client::core::Framing;
 use crate::link::{Link, LinkError, byte_time, drain};
@@ -81,6 +81,7 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
     let framing = Framing::of(profile);
     let mut shadow = Device::new(profile.clone(), DeviceConfig::default());
     shadow.clear_output();
+    while shadow.poll_event().is_some() {}
     drain(link, opts.quiet, Duration::from_secs(10))?;
     let mut carry: Vec<u8> = Vec::new();
     let mut out = Vec::with_capacity(steps.len());
@@ -99,7 +100,16 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
             shadow.run_until_idle(Duration::from_secs(600));
         }
         let shadow_out = shadow.take_output();
-        let entered_loop = !was_loop && shadow.mode() == Mode::Loop;
+        // Whether this step entered the loop (and stayed in it), from what the shadow reports.
+        let mut in_loop = was_loop;
+        while let Some(e) = shadow.poll_event() {
+            match e {
+                Event::LoopEntered => in_loop = true,
+                Event::LoopLeft => in_loop = false,
+                Event::PoweredUp | Event::LineDone(_) => {}
+            }
+        }
+        let entered_loop = !was_loop && in_loop;
         if !sent.is_empty() {
             link.send(&sent)?;
         }

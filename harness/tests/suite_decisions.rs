@@ -6,7 +6,6 @@ use std::path::Path;
 
 use gcl_harness::suite::{self, Case};
 use gcl_model::Profile;
-use gcl_model::spec::level_rank;
 use gcl_transcript::Level;
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
@@ -46,7 +45,13 @@ fn the_framing_list_is_short_and_every_framing_decision_is_a_must() {
     assert!(suite::FRAMING.len() <= 12);
     for (p, _) in profiles() {
         for d in p.decisions.iter().filter(|d| suite::FRAMING.contains(&d.id.as_str())) {
-            assert_eq!(d.level, "MUST", "{}: framing decision {} must be MUST, or no case could be", p.id, d.id);
+            assert_eq!(
+                d.level,
+                gcl_model::Level::Must,
+                "{}: framing decision {} must be MUST, or no case could be",
+                p.id,
+                d.id
+            );
         }
     }
 }
@@ -55,23 +60,15 @@ fn the_framing_list_is_short_and_every_framing_decision_is_a_must() {
 fn a_case_binds_no_more_than_the_weakest_evidence_it_rests_on() {
     for (p, cases) in profiles() {
         for c in &cases {
-            let rank = level_rank(c.level().as_str()).unwrap();
+            let level = c.level();
             for d in c.decisions() {
                 let dec = p.decisions.iter().find(|x| x.id == d).unwrap();
                 let grade = dec.grade();
-                assert!(
-                    rank >= level_rank(&dec.level).unwrap(),
-                    "{}/{} is {} but rests on {} ({})",
-                    p.id,
-                    c.id(),
-                    c.level(),
-                    d,
-                    dec.level
-                );
+                assert!(level >= dec.level, "{}/{} is {} but rests on {} ({})", p.id, c.id(), c.level(), d, dec.level);
                 if grade.is_open() {
                     assert_ne!(c.level(), Level::Must, "{}/{} is MUST but rests on [open] {d}", p.id, c.id());
                 }
-                assert!(rank >= level_rank(grade.strongest_level()).unwrap(), "{}/{}: {d}", p.id, c.id());
+                assert!(level >= grade.strongest_level(), "{}/{}: {d}", p.id, c.id());
             }
         }
     }

@@ -26,6 +26,7 @@ use std::sync::Arc;
 
 use gcl_harness::SimLink;
 use gcl_harness::suite::{self, Case};
+use gcl_model::level::Level;
 use gcl_model::{DeviceConfig, Fault, Profile};
 use serde::Deserialize;
 
@@ -69,8 +70,8 @@ fn allow_list() -> Vec<Entry> {
     list.uncovered
 }
 
-fn is_wire_promise(level: &str) -> bool {
-    matches!(level, "MUST" | "SHOULD")
+fn is_wire_promise(level: &Level) -> bool {
+    matches!(level, Level::Must | Level::Should)
 }
 
 fn is_framing(id: &str) -> bool {

@@ -113,7 +113,7 @@ fn profile() -> Arc<Profile> {
 fn initialized_hand() -> Device {
     let mut d = Device::with_profile(profile());
     send(&mut d, b"HI\r");
-    assert!((1..=4).all(|m| d.initialized(m)), "HI initialises every motor");
+    assert!(gcl_model::Motor::ALL.into_iter().all(|m| d.initialized(m)), "HI initialises every motor");
     d
 }
 
@@ -143,18 +143,18 @@ fn looping_hand() -> Device {
 /// LCPG 10, so the fingers move back and forth and stay inside their stops.
 fn control_blocks(d: &Device) -> (Vec<Vec<u8>>, usize) {
     let layout = d.rt_layout().expect("in LOOP");
-    assert_eq!(layout.motors.len(), 4);
+    assert_eq!(layout.motors().len(), 4);
     let blocks = [8, -8]
         .iter()
         .map(|lcv| {
             let values: Vec<i64> =
-                layout.control.fields.iter().map(|f| if f.name == "LCV" { *lcv } else { 10 }).collect();
+                layout.control().fields().iter().map(|f| if f.name() == "LCV" { *lcv } else { 10 }).collect();
             let mut block = Vec::new();
-            layout.control.encode(b'C', &values, &mut block).expect("values fit");
+            layout.control().encode(b'C', &values, &mut block).expect("values fit");
             block
         })
         .collect();
-    (blocks, layout.feedback.size)
+    (blocks, layout.feedback().size())
 }
 
 fn bench_parse(c: &mut Criterion, tally: &Tally) {

@@ -100,12 +100,16 @@ pub struct Rejected {
     pub status: StatusBits,
     /// What was wrong, in the order found.
     pub problems: Vec<Problem>,
+    /// For a refused set line: the command with only the pairs that were valid on their own
+    /// (what a hand that applies half a line would apply); `None` otherwise.
+    #[serde(skip)]
+    pub partial: Option<Command>,
 }
 
 impl Rejected {
     fn new(problems: Vec<Problem>) -> Rejected {
         let status = problems.iter().fold(StatusBits::empty(), |s, p| s | p.status());
-        Rejected { status, problems }
+        Rejected { status, problems, partial: None }
     }
 }
 
@@ -115,6 +119,16 @@ impl Rejected {
 pub struct ParseOptions {
     /// Refuse command words that are not upper case (a plausible firmware bug).
     pub case_sensitive_commands: bool,
+    /// A prefix on a command that takes none is ignored, when it is the line's only problem.
+    pub ignore_forbidden_prefix: bool,
+    /// A set line whose last name has no value runs without that name, when that is the
+    /// line's only problem.
+    pub drop_last_name_without_value: bool,
+    /// A value one past a parameter's maximum is accepted, when such values are the line's
+    /// only problems.
+    pub accept_one_past_max: bool,
+    /// The `G` prefix names the spread too.
+    pub g_includes_spread: bool,
 }
 
 fn is_sep(b: u8) -> bool {
@@ -149,33 +163,31 @@ pub fn parse_line(profile: &Profile, line: &[u8]) -> Result<Line, Rejected> {
 
 /// Parses one command line with explicit options.
 pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Result<Line, Rejected> {
-    let mut i = 0;
-    while i < line.len() && is_sep(line[i]) {
-        i += 1;
-    }
-    if i == line.len() {
+    let skip_seps = |s: &[u8]| -> usize { s.iter().take_while(|b| is_sep(**b)).count() };
+    let mut rest = line.get(skip_seps(line)..).unwrap_or_default();
+    if rest.is_empty() {
         return Ok(Line::Empty);
     }
     // The prefix: the leading run of prefix characters.
     let mut prefix = MotorSet::EMPTY;
     let mut has_prefix = false;
-    while i < line.len() {
-        match profile.prefix_motors(line[i] as char) {
-            Some(ms) if line[i].is_ascii() => {
+    while let Some((&c, after)) = rest.split_first() {
+        match profile.prefix_motors(c as char) {
+            Some(ms) if c.is_ascii() => {
                 prefix = prefix | MotorSet::from_motors(ms.iter().copied());
+                if opts.g_includes_spread && c.eq_ignore_ascii_case(&b'G') {
+                    prefix = prefix | MotorSet::SPREAD;
+                }
                 has_prefix = true;
-                i += 1;
+                rest = after;
             }
             _ => break,
         }
     }
-    while i < line.len() && is_sep(line[i]) {
-        i += 1;
-    }
-    let rest = &line[i..];
+    let rest = rest.get(skip_seps(rest)..).unwrap_or_default();
     let word_end = rest.iter().position(|b| is_sep(*b)).unwrap_or(rest.len());
-    let word = &rest[..word_end];
-    let mut args = tokens(&rest[word_end..]);
+    let (word, after_word) = rest.split_at_checked(word_end).unwrap_or((rest, &[]));
+    let mut args = tokens(after_word);
     let mut problems = Vec::new();
 
     if word.is_empty() {
@@ -193,19 +205,21 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
     // `?CMD`: the help command with the topic glued on.
     let (id, topic) = match lookup(word) {
         Some(id) => (id, None),
-        None if word[0] == b'?' => match profile.command_of_kind(CommandKind::Help) {
-            Some(help) => match lookup(&word[1..]) {
+        None if let Some(topic) = word.strip_prefix(b"?") => match profile.command_of_kind(CommandKind::Help) {
+            Some(help) => match lookup(topic) {
                 Some(t) => (help, Some(t)),
-                None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(&word[1..]))])),
+                None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(topic))])),
             },
             None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(word))])),
         },
         None => return Err(Rejected::new(vec![Problem::UnknownCommand(show(word))])),
     };
     let spec = profile.command(id);
-    if has_prefix && spec.prefix == PrefixRule::Forbidden {
+    let forbidden_prefix = has_prefix && spec.prefix == PrefixRule::Forbidden;
+    if forbidden_prefix {
         problems.push(Problem::PrefixNotAllowed);
     }
+    let mut partial = None;
 
     let parsed_args = if let Some(t) = topic {
         if args.next().is_some() {
@@ -252,6 +266,10 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
             }
             ArgRule::Pairs => {
                 let mut pairs = Vec::new();
+                // Pairs valid only one past the maximum (with `accept_one_past_max`), and
+                // their problems in case they are not the only ones.
+                let mut one_past = Vec::new();
+                let mut missing_last = false;
                 let mut any = false;
                 while let Some(name) = args.next() {
                     any = true;
@@ -259,9 +277,24 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
                     let param = name_for(profile, name, &spec.name, true);
                     match (param, value) {
                         (Err(pr), _) => problems.push(pr),
-                        (Ok(_), None) => problems.push(Problem::InvalidValue(format!("no value for `{}`", show(name)))),
+                        (Ok(_), None) => {
+                            missing_last = true;
+                            problems.push(Problem::InvalidValue(format!("no value for `{}`", show(name))))
+                        }
                         (Ok(p), Some(v)) => match parse_integer(v) {
                             Some(v) if profile.value_ok(p, v) => pairs.push((p, v)),
+                            Some(v)
+                                if opts.accept_one_past_max
+                                    && profile.param(p).values.is_none()
+                                    && v == profile.param(p).max + 1 =>
+                            {
+                                let ps = profile.param(p);
+                                let pr = Problem::InvalidValue(format!(
+                                    "`{v}` for {} (expected {}..{})",
+                                    ps.name, ps.min, ps.max
+                                ));
+                                one_past.push((pairs.len(), (p, v), pr));
+                            }
                             _ => {
                                 let ps = profile.param(p);
                                 problems.push(Problem::InvalidValue(format!(
@@ -280,12 +313,32 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
                 if !any {
                     problems.push(Problem::InvalidValue("a name and a value are required".into()));
                 }
+                if opts.drop_last_name_without_value && missing_last && problems.len() == 1 && one_past.is_empty() {
+                    problems.clear();
+                }
+                if !problems.is_empty() || !opts.accept_one_past_max {
+                    problems.extend(one_past.drain(..).map(|(_, _, pr)| pr));
+                } else {
+                    for (at, pair, _) in one_past.into_iter().rev() {
+                        pairs.insert(at.min(pairs.len()), pair);
+                    }
+                }
+                if !problems.is_empty() && !forbidden_prefix && !pairs.is_empty() {
+                    partial = Some(Command {
+                        prefix: has_prefix.then_some(prefix),
+                        command: id,
+                        args: Args::Pairs(pairs.clone()),
+                    });
+                }
                 Args::Pairs(pairs)
             }
         }
     };
+    if opts.ignore_forbidden_prefix && problems == [Problem::PrefixNotAllowed] {
+        return Ok(Line::Command(Command { prefix: None, command: id, args: parsed_args }));
+    }
     if !problems.is_empty() {
-        return Err(Rejected::new(problems));
+        return Err(Rejected { partial, ..Rejected::new(problems) });
     }
     Ok(Line::Command(Command { prefix: has_prefix.then_some(prefix), command: id, args: parsed_args }))
 }
@@ -357,13 +410,6 @@ mod tests {
         Profile::builtin("seed").unwrap()
     }
 
-    fn status(line: &str) -> u32 {
-        match parse_line(&seed(), line.as_bytes()) {
-            Ok(_) => 0,
-            Err(r) => r.status.code(),
-        }
-    }
-
     #[test]
     fn prefixes_and_case() {
         let p = seed();
@@ -378,34 +424,39 @@ mod tests {
     }
 
     #[test]
-    fn rejections_map_to_firmware_status() {
-        assert_eq!(status("BOGUS"), 32);
-        assert_eq!(status("12"), 32);
-        assert_eq!(status("FGET NOPE"), 64);
-        assert_eq!(status("FSET DP 70000"), 128);
-        assert_eq!(status("FSET DP"), 128);
-        assert_eq!(status("FSET DP 1x"), 128);
-        assert_eq!(status("FSET P 5"), 256);
-        assert_eq!(status("C 5"), 1024);
-        assert_eq!(status("M 1 2"), 1024);
-        assert_eq!(status("1RESET"), 4096);
-        assert_eq!(status("1VERS 3"), 4096 | 1024);
-        assert_eq!(status("FSET NOPE 1 DP 99999"), 64 | 128);
-        assert_eq!(status("FSET TEMP 5"), 64);
-        assert_eq!(status("PGET TMP"), 0);
-        assert_eq!(status("?HI"), 0);
-        assert_eq!(status("?BOGUS"), 32);
-        assert_eq!(status("? HI"), 1024);
-        assert_eq!(status("1?HI"), 4096);
-        assert_eq!(status("FSET BAUD 97"), 128);
-        assert_eq!(status("FSET BAUD 384"), 0);
-        assert_eq!(status("FSET LCV 2"), 128);
+    fn fault_options_bend_only_the_line_they_are_for() {
+        let p = seed();
+        let parse = |line: &str, opts: ParseOptions| parse_line_with(&p, line.as_bytes(), opts);
+        let code = |r: Result<Line, Rejected>| r.err().map_or(0, |r| r.status.code());
+        let prefix = ParseOptions { ignore_forbidden_prefix: true, ..ParseOptions::default() };
+        let Ok(Line::Command(c)) = parse("1RESET", prefix) else { panic!("1RESET runs as RESET") };
+        assert_eq!(c.prefix, None);
+        assert_eq!(code(parse("1VERS 3", prefix)), 4096 | 1024, "not the only problem");
+        let missing = ParseOptions { drop_last_name_without_value: true, ..ParseOptions::default() };
+        let Ok(Line::Command(c)) = parse("FSET DP 5 MCV", missing) else { panic!("runs without MCV") };
+        assert_eq!(c.to_line(&p), "FSET DP 5");
+        assert_eq!(code(parse("FSET NOPE 1 DP", missing)), 64 | 128, "not the only problem");
+        let past = ParseOptions { accept_one_past_max: true, ..ParseOptions::default() };
+        let max = p.param(p.param_id("DP").unwrap()).max;
+        let line = format!("FSET MCV 5 DP {}", max + 1);
+        let Ok(Line::Command(c)) = parse(&line, past) else { panic!("one past the maximum accepted") };
+        assert_eq!(c.to_line(&p), line);
+        assert_eq!(code(parse(&format!("FSET DP {}", max + 2), past)), 128, "two past is still refused");
+        assert_eq!(code(parse(&format!("FSET NOPE 1 DP {}", max + 1), past)), 64 | 128, "not the only problem");
+        let g = ParseOptions { g_includes_spread: true, ..ParseOptions::default() };
+        let Ok(Line::Command(c)) = parse("GC", g) else { panic!() };
+        assert_eq!(c.prefix, Some(MotorSet::ALL));
+        // A refused set line carries the pairs that were valid on their own.
+        let r = parse_line(&p, b"12FSET DP 5 MCV 999999 DS 7").unwrap_err();
+        let partial = r.partial.map(|c| c.to_line(&p));
+        assert_eq!(partial.as_deref(), Some("12FSET DP 5 DS 7"));
+        assert_eq!(parse_line(&p, b"1RESET").unwrap_err().partial, None);
     }
 
     #[test]
     fn case_sensitive_fault_refuses_lower_case() {
         let p = seed();
-        let opts = ParseOptions { case_sensitive_commands: true };
+        let opts = ParseOptions { case_sensitive_commands: true, ..ParseOptions::default() };
         assert!(parse_line_with(&p, b"hi", opts).is_err());
         assert!(parse_line_with(&p, b"HI", opts).is_ok());
     }

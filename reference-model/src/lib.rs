@@ -2,7 +2,7 @@
 //!
 //! GCL is the serial protocol of Barrett's BH8-series robot hands. This crate is its
 //! reference: the protocol as data ([`spec`]), the grammar of a command line ([`grammar`]),
-//! motor sets ([`motor`]), status bits ([`status`]), the parameter store and EEPROM
+//! motor sets ([`motor`]), status bits ([`status`]), conformance levels ([`level`]), the parameter store and EEPROM
 //! ([`params`]), RealTime block layouts ([`realtime`]) and a whole simulated grasper as a
 //! sans-IO state machine ([`device`]).
 //!
@@ -20,19 +20,22 @@
 //! assert_eq!(hand.take_output(), b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic))]
 
 pub mod device;
 pub mod escape;
 pub mod grammar;
+pub mod level;
 pub mod motor;
 pub mod params;
 pub mod realtime;
 pub mod spec;
 pub mod status;
 
-pub use device::{Device, DeviceConfig, Fault, Mode, Scenario};
+pub use device::{Device, DeviceConfig, Event, Fault, Mode, Scenario};
 pub use grammar::{Args, Command, Line, Rejected, parse_line};
-pub use motor::MotorSet;
+pub use level::Level;
+pub use motor::{Motor, MotorSet, PerMotor};
 pub use realtime::{BlockLayout, ControlHeader, Field, RtLayout};
 pub use spec::Profile;
 pub use status::StatusBits;

@@ -1,6 +1,100 @@
-//! Motor sets: which of the four motors (F1, F2, F3, spread) a command names.
+//! Motors and motor sets: one of the four motors (F1, F2, F3, spread), which of them a
+//! command names, and values kept per motor.
 
 use std::fmt;
+use std::ops::{Index, IndexMut};
+
+/// One motor of the hand: 1..=3 the fingers F1..F3, 4 the spread. Built only from a number
+/// in 1..=4 ([`Motor::new`]), so indexing per-motor values by it cannot go out of bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(transparent)]
+pub struct Motor(u8);
+
+impl Motor {
+    /// Finger 1.
+    pub const F1: Motor = Motor(1);
+    /// Finger 2.
+    pub const F2: Motor = Motor(2);
+    /// Finger 3.
+    pub const F3: Motor = Motor(3);
+    /// The spread.
+    pub const SPREAD: Motor = Motor(4);
+    /// The four motors in order.
+    pub const ALL: [Motor; 4] = [Motor::F1, Motor::F2, Motor::F3, Motor::SPREAD];
+
+    /// The motor with this number; `None` outside 1..=4.
+    pub fn new(number: u8) -> Option<Motor> {
+        (1..=4).contains(&number).then_some(Motor(number))
+    }
+
+    /// Its number, 1..=4.
+    pub fn number(self) -> u8 {
+        self.0
+    }
+
+    /// This motor's element of a per-motor array.
+    pub fn pick<T>(self, values: &[T; 4]) -> &T {
+        let [a, b, c, d] = values;
+        match self.0 {
+            1 => a,
+            2 => b,
+            3 => c,
+            _ => d,
+        }
+    }
+
+    /// This motor's element of a per-motor array, mutably.
+    pub fn pick_mut<T>(self, values: &mut [T; 4]) -> &mut T {
+        let [a, b, c, d] = values;
+        match self.0 {
+            1 => a,
+            2 => b,
+            3 => c,
+            _ => d,
+        }
+    }
+
+    /// Its position in per-motor arrays, 0..=3.
+    pub fn index(self) -> usize {
+        usize::from(self.0 - 1)
+    }
+}
+
+impl fmt::Display for Motor {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// One value for each of the four motors, indexed by [`Motor`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct PerMotor<T>(pub [T; 4]);
+
+impl<T> PerMotor<T> {
+    /// The values with their motors, in motor order.
+    pub fn iter(&self) -> impl Iterator<Item = (Motor, &T)> {
+        Motor::ALL.into_iter().zip(self.0.iter())
+    }
+
+    /// The values, mutably, in motor order.
+    pub fn values_mut(&mut self) -> impl Iterator<Item = &mut T> {
+        self.0.iter_mut()
+    }
+}
+
+impl<T> Index<Motor> for PerMotor<T> {
+    type Output = T;
+    fn index(&self, m: Motor) -> &T {
+        m.pick(&self.0)
+    }
+}
+
+impl<T> IndexMut<Motor> for PerMotor<T> {
+    fn index_mut(&mut self, m: Motor) -> &mut T {
+        m.pick_mut(&mut self.0)
+    }
+}
 
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +152,22 @@ impl MotorSet {
     pub fn iter(self) -> impl Iterator<Item = u8> {
         (1..=4u8).filter(move |m| self.contains(*m))
     }
+
+    /// The motors in ascending order.
+    pub fn motors(self) -> impl Iterator<Item = Motor> {
+        Motor::ALL.into_iter().filter(move |m| self.contains(m.0))
+    }
+
+    /// Whether motor `m` is in the set.
+    pub fn has(self, m: Motor) -> bool {
+        self.contains(m.0)
+    }
+}
+
+impl From<Motor> for MotorSet {
+    fn from(m: Motor) -> MotorSet {
+        MotorSet(1 << (m.0 - 1))
+    }
 }
 
 impl std::ops::BitOr for MotorSet {
@@ -101,5 +211,17 @@ mod tests {
         assert_eq!(s.len(), 3);
         assert!(s.contains(4) && !s.contains(3) && !s.contains(0));
         assert_eq!(MotorSet::FINGERS | MotorSet::SPREAD, MotorSet::ALL);
+        assert_eq!(s.motors().map(Motor::number).collect::<Vec<_>>(), vec![1, 2, 4]);
+    }
+
+    #[test]
+    fn motors_exist_only_in_one_to_four() {
+        assert_eq!(Motor::new(0), None);
+        assert_eq!(Motor::new(5), None);
+        assert_eq!(Motor::new(4), Some(Motor::SPREAD));
+        let mut v = PerMotor([10, 20, 30, 40]);
+        v[Motor::F2] += 1;
+        assert_eq!(Motor::ALL.map(|m| v[m]), [10, 21, 30, 40]);
+        assert_eq!(Motor::ALL.map(Motor::index), [0, 1, 2, 3]);
     }
 }

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::motor::MotorSet;
+use crate::motor::{Motor, MotorSet};
 use crate::spec::{ParamId, Profile, Scope};
 
 /// A write the store refused.
@@ -62,21 +62,22 @@ impl ParamStore {
             if profile.param(id).alias_of.is_some() {
                 continue;
             }
-            let slot = profile.slot[id.0 as usize] as usize;
-            for m in 1..=4u8 {
-                values[slot][m as usize - 1] = profile.default_for(id, m);
+            if let Some(v) = values.get_mut(profile.slot_of(id)) {
+                *v = Motor::ALL.map(|m| profile.default_for(id, m.number()));
             }
         }
         ParamStore { values }
     }
 
-    /// The stored value of a parameter for a motor (1..=4; ignored for globals).
+    /// The stored value of a parameter for a motor (1..=4; ignored for globals). A number
+    /// outside 1..=4, or an id of another profile, reads 0.
     pub fn get(&self, profile: &Profile, id: ParamId, motor: u8) -> i64 {
-        let slot = profile.slot[id.0 as usize] as usize;
-        match profile.param(id).scope {
-            Scope::Motor => self.values[slot][(motor.clamp(1, 4) - 1) as usize],
-            Scope::Global => self.values[slot][0],
-        }
+        let Some(values) = self.values.get(profile.slot_of(id)) else { return 0 };
+        let motor = match profile.param(id).scope {
+            Scope::Motor => Motor::new(motor),
+            Scope::Global => Some(Motor::F1),
+        };
+        motor.map_or(0, |m| *m.pick(values))
     }
 
     /// Looks a parameter up by name and reads it; `None` if the profile lacks it.
@@ -98,14 +99,14 @@ impl ParamStore {
 
     /// Writes a value with no checks (the model's own bookkeeping and faults).
     pub fn set_unchecked(&mut self, profile: &Profile, id: ParamId, motors: MotorSet, value: i64) {
-        let slot = profile.slot[id.0 as usize] as usize;
+        let Some(values) = self.values.get_mut(profile.slot_of(id)) else { return };
         match profile.param(id).scope {
             Scope::Motor => {
-                for m in motors.iter() {
-                    self.values[slot][m as usize - 1] = value;
+                for m in motors.motors() {
+                    *m.pick_mut(values) = value;
                 }
             }
-            Scope::Global => self.values[slot][0] = value,
+            Scope::Global => *Motor::F1.pick_mut(values) = value,
         }
     }
 
@@ -182,7 +183,7 @@ impl NvMemory {
     pub fn load(&self, profile: &Profile, id: ParamId, motor: u8) -> i64 {
         let p = profile.param(id);
         let saved = match p.scope {
-            Scope::Motor => self.motor.get(&p.name).map(|v| v[(motor.clamp(1, 4) - 1) as usize]),
+            Scope::Motor => self.motor.get(&p.name).zip(Motor::new(motor)).map(|(v, m)| *m.pick(v)),
             Scope::Global => self.global.get(&p.name).copied(),
         };
         match saved {
@@ -196,14 +197,13 @@ impl NvMemory {
         self.writes += 1;
         match p.scope {
             Scope::Motor => {
-                let entry = self.motor.entry(p.name.clone()).or_insert_with(|| {
-                    let mut d = [0; 4];
-                    for m in 1..=4u8 {
-                        d[m as usize - 1] = profile.default_for(id, m);
-                    }
-                    d
-                });
-                entry[(motor.clamp(1, 4) - 1) as usize] = value;
+                let entry = self
+                    .motor
+                    .entry(p.name.clone())
+                    .or_insert_with(|| Motor::ALL.map(|m| profile.default_for(id, m.number())));
+                if let Some(m) = Motor::new(motor) {
+                    *m.pick_mut(entry) = value;
+                }
             }
             Scope::Global => {
                 self.global.insert(p.name.clone(), value);

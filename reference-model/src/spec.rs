@@ -9,7 +9,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::status::StatusBits;
+use crate::level::Level;
+use crate::realtime::{FieldType, RtFlag};
+use crate::status::{StatusBits, StatusTexts};
 
 /// Files under `spec/` compiled into the model, by their path relative to `spec/`.
 pub const EMBEDDED_FILES: &[(&str, &str)] = &[
@@ -26,7 +28,7 @@ pub const EMBEDDED_PROFILES: &[(&str, &str)] =
     &[("seed", "seed.toml"), ("bh8-262-4.3", "bh8-262-4.3.toml"), ("bh8-262-4.4", "bh8-262-4.4.toml")];
 
 /// Why a spec file could not become a profile.
-#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+#[derive(Debug, Clone, thiserror::Error, PartialEq, Eq)]
 pub enum SpecError {
     /// No embedded profile or alias has this name.
     #[error("unknown profile `{0}` (known: seed, bh8-262-4.3, bh8-262-4.4, bh8-262)")]
@@ -53,6 +55,24 @@ pub enum SpecError {
     /// Includes loop back on themselves.
     #[error("spec include cycle through `{0}`")]
     IncludeCycle(String),
+    /// A parameter has an `rt` table but its name is not a RealTime flag GCL defines.
+    #[error("profile `{profile}`: parameter `{param}` has an rt field but is not a RealTime flag (known: {known})", known = RtFlag::ALL.map(RtFlag::name).join(", "))]
+    UnknownRtFlag {
+        /// The profile being resolved.
+        profile: String,
+        /// The parameter.
+        param: String,
+    },
+    /// A RealTime flag's field does not have a GCL field type, block or scope.
+    #[error("profile `{profile}`: RealTime flag `{param}`: {message}")]
+    RtField {
+        /// The profile being resolved.
+        profile: String,
+        /// The parameter.
+        param: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// One spec file as written. Lists from included files come first; an entry with the same
@@ -454,9 +474,10 @@ pub struct Decision {
     pub clause: String,
     /// What the model does.
     pub resolution: String,
-    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO. The loader
-    /// bounds it by [`Decision::evidence`] (see [`Evidence::strongest_level`]).
-    pub level: String,
+    /// How a conformance check of it is graded: MUST, SHOULD, MAY or INFO (any other name
+    /// is refused when the file loads). The loader bounds it by [`Decision::evidence`] (see
+    /// [`Evidence::strongest_level`]).
+    pub level: Level,
     /// What supports the resolution, graded as in `protocol-notes.md`: `[doc]` (a Barrett
     /// manual or the seed says it), `[code×N]` (N independent host libraries depend on it;
     /// `[code]` is one, `x` may stand for `×`), `[open]` (no source settles it). `[doc]` and
@@ -522,25 +543,14 @@ impl Evidence {
 
     /// The strongest level a conformance check resting on this evidence may carry: MUST on
     /// `[doc]` or `[code×N]` with N ≥ 2; SHOULD on one host library; INFO when open.
-    pub fn strongest_level(self) -> &'static str {
+    pub fn strongest_level(self) -> Level {
         if self.doc || self.code >= 2 {
-            "MUST"
+            Level::Must
         } else if self.code == 1 {
-            "SHOULD"
+            Level::Should
         } else {
-            "INFO"
+            Level::Info
         }
-    }
-}
-
-/// The rank of a level name (MUST strongest), or `None` for an unknown name.
-pub fn level_rank(level: &str) -> Option<u8> {
-    match level {
-        "MUST" => Some(0),
-        "SHOULD" => Some(1),
-        "MAY" => Some(2),
-        "INFO" => Some(3),
-        _ => None,
     }
 }
 
@@ -550,14 +560,11 @@ impl Decision {
         Evidence::parse(&self.evidence).unwrap_or_default()
     }
 
-    /// Checks the level name and that the evidence supports the level.
+    /// Checks that the evidence supports the level.
     fn check(&self) -> Result<(), String> {
         let e = Evidence::parse(&self.evidence).map_err(|m| format!("decision `{}`: {m}", self.id))?;
-        let rank = level_rank(&self.level).ok_or_else(|| {
-            format!("decision `{}`: level `{}` is not MUST, SHOULD, MAY or INFO", self.id, self.level)
-        })?;
         let max = e.strongest_level();
-        if rank < level_rank(max).unwrap_or(3) {
+        if self.level < max {
             return Err(format!(
                 "decision `{}` is {} but its evidence {} supports at most {max}",
                 self.id, self.level, self.evidence
@@ -565,6 +572,111 @@ impl Decision {
         }
         Ok(())
     }
+}
+
+/// A RealTime flag of a profile, resolved at load: the parameter that switches it, and the
+/// type of the field it adds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RtSlot {
+    /// The parameter.
+    pub param: ParamId,
+    /// The flag.
+    pub flag: RtFlag,
+    /// The field's wire type.
+    pub ty: FieldType,
+}
+
+macro_rules! roles {
+    ($( $(#[doc = $doc:literal])* $variant:ident => [$($name:literal),+], )*) => {
+        /// What the device does with a parameter beyond storing it: the parameters the
+        /// hand's behaviour reads or that read back its state. Resolved by name when a
+        /// profile loads (see [`Profile::role`]); a profile may lack any of them.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Role {
+            $( $(#[doc = $doc])* $variant, )*
+        }
+
+        impl Role {
+            /// Every role.
+            pub const ALL: &'static [Role] = &[$(Role::$variant,)*];
+
+            /// The parameter names that take this role, first match wins.
+            pub fn names(self) -> &'static [&'static str] {
+                match self { $(Role::$variant => &[$($name),+],)* }
+            }
+        }
+    };
+}
+
+roles! {
+    /// P: present position (live).
+    Position => ["P"],
+    /// S: motor state (live).
+    State => ["S"],
+    /// SG: strain gauge (live).
+    Strain => ["SG"],
+    /// TEMP: board temperature (live).
+    Temperature => ["TEMP"],
+    /// PTEMP: peak temperature (kept by the hand).
+    PeakTemperature => ["PTEMP"],
+    /// UPSECS: powered seconds (kept by the hand).
+    UpSeconds => ["UPSECS"],
+    /// SN: serial number (kept by the hand).
+    SerialNumber => ["SN"],
+    /// OD: odometer (kept by the hand).
+    Odometer => ["OD"],
+    /// BD: breakaway detected.
+    BreakawayDetected => ["BD"],
+    /// BP: breakaway position.
+    BreakawayPosition => ["BP"],
+    /// EN: motor enabled for unprefixed motion.
+    Enabled => ["EN"],
+    /// DP: default position of M.
+    DefaultPosition => ["DP"],
+    /// DS: default step of IC/IO.
+    DefaultStep => ["DS"],
+    /// CT: close target.
+    CloseTarget => ["CT"],
+    /// OT: open target.
+    OpenTarget => ["OT"],
+    /// MCV: maximum close velocity.
+    CloseVelocity => ["MCV"],
+    /// MOV: maximum open velocity.
+    OpenVelocity => ["MOV"],
+    /// IVEL: HI velocity.
+    InitVelocity => ["IVEL"],
+    /// ACCEL: acceleration.
+    Acceleration => ["ACCEL"],
+    /// MPE: maximum position error of a move.
+    PositionError => ["MPE"],
+    /// TSTOP: stall time that ends a move.
+    StopTime => ["TSTOP"],
+    /// HOLD: keep power after a move.
+    Hold => ["HOLD"],
+    /// HSG (MSG in the seed): high strain that stops a close.
+    HighStrain => ["HSG", "MSG"],
+    /// LSG: low strain.
+    LowStrain => ["LSG"],
+    /// BS: breakaway on.
+    Breakaway => ["BS"],
+    /// SGFLIP: strain reading mirrored.
+    StrainFlip => ["SGFLIP"],
+    /// IHIT: HI settle repetitions.
+    InitHoldTime => ["IHIT"],
+    /// OTEMP: overtemperature threshold.
+    OverTemperature => ["OTEMP"],
+    /// BAUD: serial rate in hundreds of bit/s.
+    Baud => ["BAUD"],
+    /// LCVC: LCV coefficient.
+    VelocityCoefficient => ["LCVC"],
+    /// LFVC: LFV coefficient.
+    FeedbackVelocityCoefficient => ["LFVC"],
+    /// LFDPC: LFDP coefficient.
+    DeltaCoefficient => ["LFDPC"],
+    /// LFDPD: LFDP discards the clipped rest.
+    DeltaDiscard => ["LFDPD"],
+    /// LCPG: the control-gain flag (read when control data arrives).
+    ControlGain => ["LCPG"],
 }
 
 /// Index of a command in [`Profile::commands`].
@@ -608,6 +720,15 @@ pub struct Profile {
     /// Number of distinct storage slots.
     #[serde(skip)]
     pub(crate) slots: usize,
+    /// The RealTime flags, in field order.
+    #[serde(skip)]
+    rt_slots: Vec<RtSlot>,
+    /// The parameter of each [`Role`], by `Role as usize`.
+    #[serde(skip)]
+    roles: Vec<Option<ParamId>>,
+    /// The role of each parameter, by [`ParamId`].
+    #[serde(skip)]
+    role_of: Vec<Option<Role>>,
 }
 
 /// The largest magnitude a parameter value, range or argument may have in a spec file, so
@@ -697,19 +818,20 @@ impl Profile {
     /// The embedded profile with this name or alias (`bh8-262` is `bh8-262-4.4`).
     pub fn builtin(name: &str) -> Result<Arc<Profile>, SpecError> {
         use std::sync::OnceLock;
-        static CACHE: OnceLock<Vec<Arc<Profile>>> = OnceLock::new();
+        static CACHE: OnceLock<Vec<Result<Arc<Profile>, SpecError>>> = OnceLock::new();
+        // The embedded files are checked by this crate's tests; should one still fail to load,
+        // asking for any built-in profile says why.
         let all = CACHE.get_or_init(|| {
             EMBEDDED_PROFILES
                 .iter()
-                .map(|(_, file)| {
-                    let p = Profile::load_with(file, &|f| embedded(f).map(str::to_string));
-                    // The embedded files are checked by this crate's tests; a failure here is
-                    // a build defect, not bad input.
-                    Arc::new(p.unwrap_or_else(|e| panic!("embedded spec is invalid: {e}")))
-                })
+                .map(|(_, file)| Profile::load_with(file, &|f| embedded(f).map(str::to_string)).map(Arc::new))
                 .collect()
         });
+        if let Some(Err(e)) = all.iter().find(|p| p.is_err()) {
+            return Err(e.clone());
+        }
         all.iter()
+            .flatten()
             .find(|p| p.id.eq_ignore_ascii_case(name) || p.aliases.iter().any(|a| a.eq_ignore_ascii_case(name)))
             .cloned()
             .ok_or_else(|| SpecError::UnknownProfile(name.to_string()))
@@ -856,11 +978,35 @@ impl Profile {
                     )));
                 }
             }
-            if let Some(rt) = &p.rt
-                && !(rt.size == 1 || rt.size == 2)
-            {
-                return Err(invalid(format!("RealTime field `{}` must be 1 or 2 bytes", p.name)));
+        }
+        // RealTime flags: closed names and types, in field order (`order`, then listing).
+        let mut rt_slots = Vec::new();
+        let mut orders = Vec::new();
+        for (i, p) in f.params.iter().enumerate() {
+            let Some(rt) = &p.rt else { continue };
+            let flag = RtFlag::from_name(&p.name)
+                .ok_or_else(|| SpecError::UnknownRtFlag { profile: id.clone(), param: p.name.clone() })?;
+            let bad = |message: String| SpecError::RtField { profile: id.clone(), param: p.name.clone(), message };
+            let ty = FieldType::new(rt.size, rt.signed)
+                .ok_or_else(|| bad(format!("a field of {} bytes is not u8, i8, u16 or i16", rt.size)))?;
+            if rt.block != flag.block() {
+                return Err(bad(format!("belongs in the {:?} block", flag.block()).to_lowercase()));
             }
+            if flag.is_global() != (p.scope == Scope::Global) {
+                return Err(bad(format!("must have {} scope", if flag.is_global() { "global" } else { "motor" })));
+            }
+            rt_slots.push(RtSlot { param: ParamId(i as u16), flag, ty });
+            orders.push(rt.order);
+        }
+        let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
+        by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
+        let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
+        if !f.params.iter().any(|p| Role::CloseTarget.names().contains(&p.name.as_str()))
+            && (hand.finger_close_target.is_none() || hand.spread_close_target.is_none())
+        {
+            return Err(invalid(
+                "without a CT parameter, [hand] needs finger_close_target and spread_close_target".into(),
+            ));
         }
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
@@ -868,9 +1014,9 @@ impl Profile {
         // Storage slots: aliases share the slot of their target.
         let mut slot = vec![0u16; f.params.len()];
         let mut slots = 0usize;
-        for (i, p) in f.params.iter().enumerate() {
+        for (s, p) in slot.iter_mut().zip(&f.params) {
             if p.alias_of.is_none() {
-                slot[i] = slots as u16;
+                *s = slots as u16;
                 slots += 1;
             }
         }
@@ -880,11 +1026,32 @@ impl Profile {
                     .params
                     .iter()
                     .position(|q| &q.name == target && q.alias_of.is_none())
+                    .and_then(|t| slot.get(t).copied())
                     .ok_or_else(|| invalid(format!("`{}` is an alias of unknown `{target}`", p.name)))?;
-                slot[i] = slot[t];
+                if let Some(s) = slot.get_mut(i) {
+                    *s = t;
+                }
+            }
+        }
+        let find = |name: &str| {
+            f.params.iter().position(|p| {
+                p.name.eq_ignore_ascii_case(name) || p.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name))
+            })
+        };
+        let roles = Role::ALL
+            .iter()
+            .map(|r| r.names().iter().find_map(|n| find(n)).map(|i| ParamId(i as u16)))
+            .collect::<Vec<Option<ParamId>>>();
+        let mut role_of = vec![None; f.params.len()];
+        for (r, id) in Role::ALL.iter().zip(&roles) {
+            if let Some(slot) = id.and_then(|id| role_of.get_mut(id.0 as usize)) {
+                *slot = Some(*r);
             }
         }
         Ok(Profile {
+            rt_slots,
+            roles,
+            role_of,
             title: f.title.unwrap_or_default(),
             aliases: f.aliases,
             framing,
@@ -902,14 +1069,30 @@ impl Profile {
         })
     }
 
+    /// The parameter that plays `role` in this profile, if it has one.
+    pub fn role(&self, role: Role) -> Option<ParamId> {
+        self.roles.get(role as usize).copied().flatten()
+    }
+
+    /// The role a parameter plays, if any.
+    pub fn role_of(&self, id: ParamId) -> Option<Role> {
+        self.role_of.get(id.0 as usize).copied().flatten()
+    }
+
+    /// The RealTime flags, in the order their fields appear (per motor, then hand-wide).
+    pub fn rt_slots(&self) -> &[RtSlot] {
+        &self.rt_slots
+    }
+
     /// Finds a command by name, ignoring ASCII case.
     pub fn command_id(&self, name: &str) -> Option<CommandId> {
         self.commands.iter().position(|c| c.name.eq_ignore_ascii_case(name)).map(|i| CommandId(i as u16))
     }
 
-    /// The command with this id.
+    /// The command with this id (an id of another profile, out of range, reads as a
+    /// nameless command that does nothing).
     pub fn command(&self, id: CommandId) -> &CommandSpec {
-        &self.commands[id.0 as usize]
+        self.commands.get(usize::from(id.0)).unwrap_or(&NO_COMMAND)
     }
 
     /// The first command of this kind, if the profile has one.
@@ -927,9 +1110,15 @@ impl Profile {
             .map(|i| ParamId(i as u16))
     }
 
-    /// The parameter with this id.
+    /// The parameter with this id (an id of another profile, out of range, reads as a
+    /// nameless read-only parameter).
     pub fn param(&self, id: ParamId) -> &ParamSpec {
-        &self.params[id.0 as usize]
+        self.params.get(usize::from(id.0)).unwrap_or(&NO_PARAM)
+    }
+
+    /// The storage slot of a parameter (aliases share their target's).
+    pub(crate) fn slot_of(&self, id: ParamId) -> usize {
+        self.slot.get(usize::from(id.0)).map_or(usize::MAX, |s| usize::from(*s))
     }
 
     /// All parameter ids, in listing order.
@@ -981,6 +1170,50 @@ impl Profile {
     }
 }
 
+impl StatusTexts for Profile {
+    fn status_text(&self, bit: u32) -> Option<&str> {
+        Profile::status_text(self, bit)
+    }
+}
+
+/// What [`Profile::command`] gives for an id the profile does not have.
+static NO_COMMAND: CommandSpec = CommandSpec {
+    name: String::new(),
+    category: String::new(),
+    kind: CommandKind::Help,
+    prefix: PrefixRule::Forbidden,
+    args: ArgRule::None,
+    arg_min: None,
+    arg_max: None,
+    advanced: true,
+    prints: String::new(),
+    help: String::new(),
+};
+
+/// What [`Profile::param`] gives for an id the profile does not have.
+static NO_PARAM: ParamSpec = ParamSpec {
+    name: String::new(),
+    scope: Scope::Global,
+    section: String::new(),
+    description: String::new(),
+    min: 0,
+    max: 0,
+    values: None,
+    default: None,
+    default_spread: None,
+    read_only: true,
+    advanced: true,
+    persist: Vec::new(),
+    get: None,
+    set: None,
+    alias_of: None,
+    input_aliases: Vec::new(),
+    live: true,
+    self_stored: false,
+    rt: None,
+    effect: None,
+};
+
 /// The text of an embedded spec file, by its path relative to `spec/`.
 pub fn embedded(path: &str) -> Option<&'static str> {
     EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
@@ -993,9 +1226,9 @@ mod evidence_tests {
     #[test]
     fn evidence_grades_parse_and_bound_the_level() {
         let e = Evidence::parse("[doc][code×3]").unwrap();
-        assert_eq!((e.doc, e.code, e.strongest_level()), (true, 3, "MUST"));
-        assert_eq!(Evidence::parse("[codex2]").unwrap().strongest_level(), "MUST");
-        assert_eq!(Evidence::parse("[code]").unwrap().strongest_level(), "SHOULD");
+        assert_eq!((e.doc, e.code, e.strongest_level()), (true, 3, Level::Must));
+        assert_eq!(Evidence::parse("[codex2]").unwrap().strongest_level(), Level::Must);
+        assert_eq!(Evidence::parse("[code]").unwrap().strongest_level(), Level::Should);
         assert!(Evidence::parse("[open]").unwrap().is_open());
         for bad in ["", "doc", "[open][doc]", "[code×0]", "[guess]", "[doc][doc]"] {
             assert!(Evidence::parse(bad).is_err(), "{bad:?}");
@@ -1016,5 +1249,108 @@ mod evidence_tests {
         };
         let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
         assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
+    }
+
+    #[test]
+    fn a_typo_in_a_decision_level_is_refused_at_load() {
+        let seed = embedded("seed.toml").unwrap();
+        let resolve = |p: &str| {
+            if p == "top.toml" {
+                Some(format!(
+                    "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
+                ))
+            } else {
+                embedded(p).map(str::to_string)
+            }
+        };
+        match Profile::load_with("top.toml", &resolve) {
+            Err(SpecError::Syntax { file, message }) => {
+                assert_eq!(file, "top.toml");
+                assert!(message.contains("MUTS") && message.contains("INFO"), "{message}");
+            }
+            other => panic!("a level typo must be refused, got {other:?}"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod closed_names_tests {
+    use super::*;
+
+    /// Loads the seed with `extra` TOML appended to its top file.
+    fn seed_with(extra: &str) -> Result<Profile, SpecError> {
+        let seed = embedded("seed.toml").unwrap_or_default();
+        let resolve = |p: &str| {
+            if p == "top.toml" { Some(format!("{seed}\n{extra}")) } else { embedded(p).map(str::to_string) }
+        };
+        Profile::load_with("top.toml", &resolve)
+    }
+
+    const FLAG: &str = "[[params]]\nname = \"{name}\"\nscope = \"{scope}\"\nsection = \"realtime\"\ndescription = \"d\"\nmin = 0\nmax = 1\ndefault = 0\nrt = {{ block = \"{block}\", size = {size}, signed = false, order = 9 }}\n";
+
+    fn flag(name: &str, scope: &str, block: &str, size: usize) -> String {
+        FLAG.replace("{name}", name)
+            .replace("{scope}", scope)
+            .replace("{block}", block)
+            .replace("{size}", &size.to_string())
+            .replace("{{", "{")
+            .replace("}}", "}")
+    }
+
+    #[test]
+    fn an_unknown_realtime_flag_is_refused_by_name() {
+        let err = seed_with(&flag("LFXYZ", "motor", "feedback", 1)).unwrap_err();
+        assert_eq!(err, SpecError::UnknownRtFlag { profile: "seed".into(), param: "LFXYZ".into() });
+        assert!(err.to_string().contains("LFXYZ") && err.to_string().contains("LFAP"), "{err}");
+    }
+
+    #[test]
+    fn a_realtime_field_must_have_a_gcl_type_block_and_scope() {
+        for (extra, says) in [
+            (flag("LFT", "global", "feedback", 3), "3 bytes"),
+            (flag("LFT", "global", "control", 1), "feedback block"),
+            (flag("LFT", "motor", "feedback", 1), "global scope"),
+        ] {
+            match seed_with(&extra) {
+                Err(SpecError::RtField { param, message, .. }) => {
+                    assert_eq!(param, "LFT");
+                    assert!(message.contains(says), "{message}");
+                }
+                other => panic!("expected an RtField error for {says}, got {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn an_id_of_another_profile_reads_as_nothing_instead_of_panicking() {
+        let seed = Profile::builtin("seed").unwrap();
+        let store = crate::params::ParamStore::defaults(&seed);
+        let foreign = ParamId(u16::MAX);
+        assert_eq!(seed.param(foreign).name, "");
+        assert!(seed.param(foreign).read_only);
+        assert_eq!(seed.command(CommandId(u16::MAX)).name, "");
+        assert_eq!(store.get(&seed, foreign, 1), 0);
+        let dp = seed.param_id("DP").unwrap();
+        assert_eq!(store.get(&seed, dp, 2), 1000);
+        assert_eq!(store.get(&seed, dp, 0), 0, "motor 0 does not exist");
+        assert_eq!(store.get(&seed, dp, 5), 0, "motor 5 does not exist");
+    }
+
+    #[test]
+    fn roles_resolve_by_name_and_alias() {
+        let seed = Profile::builtin("seed").unwrap();
+        let bh8 = Profile::builtin("bh8-262").unwrap();
+        let name = |p: &Profile, r: Role| p.role(r).map(|id| p.param(id).name.clone());
+        // The seed calls the high strain MSG; bh8-262 calls it HSG.
+        assert_eq!(name(&seed, Role::HighStrain).as_deref(), Some("MSG"));
+        assert_eq!(name(&bh8, Role::HighStrain).as_deref(), Some("HSG"));
+        assert_eq!(name(&bh8, Role::Position).as_deref(), Some("P"));
+        for p in [&seed, &bh8] {
+            for r in Role::ALL {
+                if let Some(id) = p.role(*r) {
+                    assert_eq!(p.role_of(id), Some(*r), "{} {r:?}", p.id);
+                }
+            }
+        }
     }
 }

@@ -1,11 +1,22 @@
 //! Status bits: the codes a hand sends after `ERR`, as a composable bitflags type.
 //!
 //! The numbers are the protocol's (powers of two, OR'ed on the wire); the texts come from the
-//! profile, so this module owns composition and decomposition only.
+//! profile (through [`StatusTexts`]), so this module owns composition and decomposition only.
+//! It is a leaf: it imports nothing else from the crate.
 
 use serde::{Deserialize, Serialize};
 
-use crate::spec::Profile;
+/// Where the `ERR n` description of each bit comes from (a profile).
+pub trait StatusTexts {
+    /// The text of one status bit, if defined.
+    fn status_text(&self, bit: u32) -> Option<&str>;
+}
+
+impl<T: StatusTexts + ?Sized> StatusTexts for std::sync::Arc<T> {
+    fn status_text(&self, bit: u32) -> Option<&str> {
+        T::status_text(self, bit)
+    }
+}
 
 bitflags::bitflags! {
     /// A set of GCL status bits. The wire form is the decimal sum.
@@ -58,8 +69,8 @@ impl StatusBits {
 
     /// The `ERR n` description lines for each set bit, as the profile words them:
     /// `bit: text`. Bits the profile does not define are skipped.
-    pub fn describe(self, profile: &Profile) -> Vec<String> {
-        self.iter().filter_map(|b| profile.status_text(b.bits()).map(|t| format!("{}: {}", b.bits(), t))).collect()
+    pub fn describe<T: StatusTexts + ?Sized>(self, texts: &T) -> Vec<String> {
+        self.iter().filter_map(|b| texts.status_text(b.bits()).map(|t| format!("{}: {}", b.bits(), t))).collect()
     }
 }
 
@@ -71,6 +82,7 @@ pub struct UnknownStatusBits(pub u32);
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::spec::Profile;
 
     #[test]
     fn composes_and_decomposes() {

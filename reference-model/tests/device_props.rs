@@ -10,7 +10,7 @@ use std::time::Duration;
 use gcl_model::params::ParamStore;
 use gcl_model::realtime::BlockError;
 use gcl_model::spec::{BlockKind, ParamId, Scope};
-use gcl_model::{Device, DeviceConfig, Mode, MotorSet, Profile, RtLayout};
+use gcl_model::{Device, Mode, MotorSet, Profile, RtLayout};
 use proptest::prelude::*;
 use proptest::sample::select;
 
@@ -21,23 +21,11 @@ fn profile(name: &str) -> Arc<Profile> {
     Profile::builtin(name).unwrap()
 }
 
-/// A powered-up hand, banner taken.
-fn hand(name: &str) -> Device {
-    let mut d = Device::new(profile(name), DeviceConfig { seed: 5, ..DeviceConfig::default() });
-    d.clear_output();
-    d
-}
+mod support;
+use support::{hand, send};
 
 fn count(haystack: &[u8], needle: &[u8]) -> usize {
     haystack.windows(needle.len()).filter(|w| *w == needle).count()
-}
-
-/// Sends one line, runs it to completion, returns the bytes.
-fn send(d: &mut Device, line: &str) -> String {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(600));
-    String::from_utf8_lossy(&d.take_output()).into_owned()
 }
 
 // ------------------------------------------------------------------ any bytes, any times
@@ -249,8 +237,8 @@ fn layout_of(name: &str, flags: &[bool], motors: MotorSet) -> RtLayout {
 fn layout_and_values() -> impl Strategy<Value = (RtLayout, Vec<i64>, Vec<i64>)> {
     flags_and_motors().prop_flat_map(|(name, flags, motors)| {
         let l = layout_of(name, &flags, motors);
-        let control: Vec<_> = l.control.fields.iter().map(|f| f.min()..=f.max()).collect();
-        let feedback: Vec<_> = l.feedback.fields.iter().map(|f| f.min()..=f.max()).collect();
+        let control: Vec<_> = l.control().fields().iter().map(|f| f.min()..=f.max()).collect();
+        let feedback: Vec<_> = l.feedback().fields().iter().map(|f| f.min()..=f.max()).collect();
         (Just(l), control, feedback)
     })
 }
@@ -264,30 +252,30 @@ proptest! {
         ack in any::<bool>(),
     ) {
         for (block, values, header) in [
-            (&layout.control, &control, if ack { b'c' } else { b'C' }),
-            (&layout.feedback, &feedback, b'*'),
+            (&layout.control(), &control, if ack { b'c' } else { b'C' }),
+            (&layout.feedback(), &feedback, b'*'),
         ] {
             // The fields tile the block after its header, motors in ascending order.
             let mut offset = 1;
-            for f in &block.fields {
-                prop_assert_eq!(f.offset, offset);
-                prop_assert!(f.motor.is_none_or(|m| layout.motors.contains(m)));
-                offset += f.size;
+            for f in block.fields() {
+                prop_assert_eq!(f.offset(), offset);
+                prop_assert!(f.motor().is_none_or(|m| layout.motors().contains(m)));
+                offset += f.size();
             }
-            prop_assert_eq!(block.size, offset);
-            let motors: Vec<u8> = block.fields.iter().filter_map(|f| f.motor).collect();
+            prop_assert_eq!(block.size(), offset);
+            let motors: Vec<u8> = block.fields().iter().filter_map(|f| f.motor()).collect();
             prop_assert!(motors.is_sorted());
-            prop_assert!(block.fields.iter().skip_while(|f| f.motor.is_some()).all(|f| f.motor.is_none()));
+            prop_assert!(block.fields().iter().skip_while(|f| f.motor().is_some()).all(|f| f.motor().is_none()));
 
             let mut bytes = Vec::new();
             block.encode(header, values, &mut bytes).unwrap();
-            prop_assert_eq!(bytes.len(), block.size);
+            prop_assert_eq!(bytes.len(), block.size());
             prop_assert_eq!(block.decode(&bytes), Ok((header, values.clone())));
             // Two-byte fields go high byte first.
-            for (f, v) in block.fields.iter().zip(values.iter()) {
-                if f.size == 2 {
-                    let raw = u16::from_be_bytes([bytes[f.offset], bytes[f.offset + 1]]);
-                    let back = if f.signed { i64::from(raw as i16) } else { i64::from(raw) };
+            for (f, v) in block.fields().iter().zip(values.iter()) {
+                if f.size() == 2 {
+                    let raw = u16::from_be_bytes([bytes[f.offset()], bytes[f.offset() + 1]]);
+                    let back = if f.signed() { i64::from(raw as i16) } else { i64::from(raw) };
                     prop_assert_eq!(back, *v);
                 }
             }
@@ -300,17 +288,17 @@ proptest! {
         junk in proptest::collection::vec(any::<u8>(), 0..40),
         header in any::<u8>(),
     ) {
-        for (block, values, kind) in [(&layout.control, &control, BlockKind::Control), (&layout.feedback, &feedback, BlockKind::Feedback)] {
+        for (block, values, kind) in [(&layout.control(), &control, BlockKind::Control), (&layout.feedback(), &feedback, BlockKind::Feedback)] {
             let good_header = if kind == BlockKind::Control { b'C' } else { b'*' };
             let mut bytes = Vec::new();
             block.encode(good_header, values, &mut bytes).unwrap();
             // Too short and too long.
             for n in 0..bytes.len() {
-                prop_assert_eq!(block.decode(&bytes[..n]), Err(BlockError::Length { got: n, want: block.size }));
+                prop_assert_eq!(block.decode(&bytes[..n]), Err(BlockError::Length { got: n, want: block.size() }));
             }
             let mut longer = bytes.clone();
             longer.push(0);
-            prop_assert_eq!(block.decode(&longer), Err(BlockError::Length { got: block.size + 1, want: block.size }));
+            prop_assert_eq!(block.decode(&longer), Err(BlockError::Length { got: block.size() + 1, want: block.size() }));
             // Random bytes of any length: a value or a typed error.
             let _ = block.decode(&junk);
             // A header that does not belong to this kind of block.
@@ -332,7 +320,7 @@ proptest! {
                 }
             }
             // Values that do not fit are refused when encoding.
-            if let Some(f) = block.fields.first() {
+            if let Some(f) = block.fields().first() {
                 let mut too_big = values.clone();
                 too_big[0] = f.max() + 1;
                 let refused = matches!(block.encode(good_header, &too_big, &mut Vec::new()), Err(BlockError::Range { .. }));

@@ -1,24 +1,10 @@
 //! Byte-array tests of the LFDP worked example and of LFAP's byte order, through the whole
 //! device: supervisory commands set the scene, RealTime `A` blocks read the bytes.
 
-use std::time::Duration;
+use gcl_model::{Device, Motor};
 
-use gcl_model::{Device, Profile};
-
-/// A powered-up hand of a built-in profile, banner taken.
-fn hand(profile: &str) -> Device {
-    let mut d = Device::with_profile(Profile::builtin(profile).unwrap());
-    d.clear_output();
-    d
-}
-
-/// Sends one line, runs it to completion, returns the bytes the hand wrote.
-fn send(d: &mut Device, line: &str) -> Vec<u8> {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(120));
-    d.take_output()
-}
+mod support;
+use support::{hand, send_bytes as send};
 
 /// Sends a line and insists on the plain `<echo>\n\r=> ` answer.
 fn ok(d: &mut Device, line: &str) {
@@ -48,10 +34,10 @@ fn worked_example(profile: &str, discard: bool) -> Vec<Vec<u8>> {
     ok(&mut d, "1M 1500");
     assert_eq!(send(&mut d, "1FGET P"), b"1FGET P\n\r1500\n\r=> ");
     ok(&mut d, "1M 2000");
-    assert_eq!(d.position(1), 2000);
+    assert_eq!(d.position(Motor::F1), 2000);
     assert_eq!(send(&mut d, "1LOOP"), b"1LOOP*");
     let layout = d.rt_layout().unwrap();
-    assert_eq!(layout.feedback.size, 2, "header and one LFDP byte");
+    assert_eq!(layout.feedback().size(), 2, "header and one LFDP byte");
     feedback_blocks(&mut d, 3)
 }
 

@@ -95,7 +95,7 @@ fn hi_from_closed_opens_at_ivel_then_settles() {
             .fold(0.0f64, f64::max)
             + settle;
         near(took, want, 0.03, &format!("{name}: HI from closed"));
-        assert!((0..4).all(|i| d.position(i + 1) == 0), "{name}: HI ends at 0");
+        assert!(gcl_model::Motor::ALL.iter().all(|&m| d.position(m) == 0), "{name}: HI ends at 0");
     }
 }
 

@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
 
 use gcl_model::spec::{ArgRule, PrefixRule};
 use gcl_model::{Device, Profile};
@@ -101,12 +100,8 @@ fn fresh(profile: &Arc<Profile>) -> Device {
     d
 }
 
-fn send(d: &mut Device, line: &str) -> String {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(120));
-    String::from_utf8_lossy(&d.take_output()).into_owned()
-}
+mod support;
+use support::send;
 
 fn err(line: &str, status: u32) -> String {
     format!("{line}\n\rERR {status}\n\r=> ")

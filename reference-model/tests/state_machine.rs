@@ -260,7 +260,11 @@ impl StateMachineTest for Sut {
         let p = d.profile().clone();
         assert_eq!(d.mode(), Mode::Idle);
         for m in 1..=4u8 {
-            assert_eq!(d.initialized(m), model.initialized[m as usize - 1], "motor {m} initialised");
+            assert_eq!(
+                d.initialized(gcl_model::Motor::new(m).unwrap()),
+                model.initialized[m as usize - 1],
+                "motor {m} initialised"
+            );
             for (i, name) in PARAMS.iter().enumerate() {
                 assert_eq!(d.params().get_named(&p, name, m), Some(model.values[i][m as usize - 1]), "{name} of {m}");
             }

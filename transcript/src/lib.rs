@@ -50,10 +50,9 @@ mod parse;
 pub mod script;
 
 use std::fmt::{self, Write as _};
-use std::str::FromStr;
 use std::time::Duration;
 
-use serde::{Deserialize, Serialize};
+use gcl_model::realtime::FieldType;
 
 pub use matcher::{Feed, Matcher};
 pub use parse::{HeaderFields, ParseError, ParseErrorKind, parse, parse_bytes};
@@ -70,54 +69,7 @@ pub const MAX_DURATION: Duration = Duration::from_secs(86_400);
 /// Transcript files larger than this are refused unread.
 pub const MAX_FILE_BYTES: usize = 4 << 20;
 
-/// How strongly a case binds an implementation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
-#[serde(rename_all = "UPPERCASE")]
-pub enum Level {
-    /// Required by the protocol's sources; a failure is non-conformance.
-    #[default]
-    Must,
-    /// Expected; a decision of this project with good evidence.
-    Should,
-    /// Allowed behaviour.
-    May,
-    /// Informational: the project's choice where no source settles it. Never a failure of
-    /// conformance by itself.
-    Info,
-}
-
-impl Level {
-    /// Every level, strongest first.
-    pub const ALL: [Level; 4] = [Level::Must, Level::Should, Level::May, Level::Info];
-
-    /// The upper-case name as written in files.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Level::Must => "MUST",
-            Level::Should => "SHOULD",
-            Level::May => "MAY",
-            Level::Info => "INFO",
-        }
-    }
-}
-
-impl fmt::Display for Level {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-/// A level name that is not MUST, SHOULD, MAY or INFO.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown level `{0}` (expected MUST, SHOULD, MAY or INFO)")]
-pub struct UnknownLevel(pub String);
-
-impl FromStr for Level {
-    type Err = UnknownLevel;
-    fn from_str(s: &str) -> Result<Level, UnknownLevel> {
-        Level::ALL.into_iter().find(|l| l.as_str().eq_ignore_ascii_case(s)).ok_or_else(|| UnknownLevel(s.to_string()))
-    }
-}
+pub use gcl_model::level::{Level, UnknownLevel};
 
 /// Something a case needs from its target beyond a supervisory conversation. A runner skips
 /// cases whose requirements the target (or the operator) does not grant.
@@ -250,51 +202,16 @@ pub enum Piece {
     Any,
     /// `{byte}`, or `??` in hex: exactly one byte of any value.
     AnyByte,
-    /// `{u8 A..B}`, `{i8 A..B}`, `{u16 A..B}`, `{i16 A..B}`: a binary field (two-byte fields
-    /// big-endian) whose value lies within `min..=max`.
-    Field(FieldSpec),
-}
-
-/// A binary field elision.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct FieldSpec {
-    /// Width in bytes: 1 or 2.
-    pub width: u8,
-    /// Two's complement or unsigned.
-    pub signed: bool,
-    /// Lowest accepted value.
-    pub min: i64,
-    /// Highest accepted value.
-    pub max: i64,
-}
-
-impl FieldSpec {
-    /// The values a field of this width and signedness can carry.
-    pub fn representable(width: u8, signed: bool) -> (i64, i64) {
-        let bits = u32::from(width) * 8;
-        if signed { (-(1i64 << (bits - 1)), (1i64 << (bits - 1)) - 1) } else { (0, (1i64 << bits) - 1) }
-    }
-
-    /// The type name as written: `u8`, `i8`, `u16`, `i16`.
-    pub fn type_name(&self) -> &'static str {
-        match (self.width, self.signed) {
-            (1, false) => "u8",
-            (1, true) => "i8",
-            (_, false) => "u16",
-            (_, true) => "i16",
-        }
-    }
-
-    /// Reads the field's value from its bytes (big-endian). `bytes.len()` must be `width`.
-    pub fn value(&self, bytes: &[u8]) -> i64 {
-        match (bytes, self.signed) {
-            ([b], false) => i64::from(*b),
-            ([b], true) => i64::from(*b as i8),
-            ([h, l], false) => i64::from(u16::from_be_bytes([*h, *l])),
-            ([h, l], true) => i64::from(i16::from_be_bytes([*h, *l])),
-            _ => i64::MIN,
-        }
-    }
+    /// `{u8 A..B}`, `{i8 A..B}`, `{u16 A..B}`, `{i16 A..B}`: a binary field of a RealTime
+    /// field type (two-byte types big-endian) whose value lies within `min..=max`.
+    Field {
+        /// The wire type.
+        ty: FieldType,
+        /// Lowest accepted value.
+        min: i64,
+        /// Highest accepted value.
+        max: i64,
+    },
 }
 
 impl Piece {
@@ -393,13 +310,11 @@ impl Expect {
         for (_, p) in self.pieces() {
             match p {
                 Piece::Int(Some((a, b))) if a > b => return Err(format!("{{int {a}..{b}}}: empty range")),
-                Piece::Field(f) => {
-                    if !(f.width == 1 || f.width == 2) {
-                        return Err(format!("field width {} (1 or 2)", f.width));
-                    }
-                    let (lo, hi) = FieldSpec::representable(f.width, f.signed);
-                    if f.min > f.max || f.min < lo || f.max > hi {
-                        return Err(format!("{{{} {}..{}}}: range outside {lo}..{hi}", f.type_name(), f.min, f.max));
+                Piece::Field { ty, min, max } => {
+                    let r = ty.range();
+                    if min > max || !r.contains(min) || !r.contains(max) {
+                        let (lo, hi) = r.into_inner();
+                        return Err(format!("{{{ty} {min}..{max}}}: range outside {lo}..{hi}"));
                     }
                 }
                 _ => {}
@@ -599,7 +514,7 @@ fn elision_text(p: &Piece) -> String {
         Piece::Line => "{line}".into(),
         Piece::Any => "{any}".into(),
         Piece::AnyByte => "{byte}".into(),
-        Piece::Field(f) => format!("{{{} {}..{}}}", f.type_name(), f.min, f.max),
+        Piece::Field { ty, min, max } => format!("{{{ty} {min}..{max}}}"),
     }
 }
 

@@ -8,7 +8,9 @@
 //! their range, and two-byte fields against theirs after the high byte, so a wrong value is
 //! reported at its first impossible byte rather than at the end of the line.
 
-use super::{Expect, FieldSpec, Form, Piece, hex_bytes, pieces_hex, pieces_text};
+use gcl_model::realtime::FieldType;
+
+use super::{Expect, Form, Piece, hex_bytes, pieces_hex, pieces_text};
 
 /// Most digits an integer may have (as `gcl_model::grammar::parse_integer`).
 const MAX_DIGITS: u32 = 18;
@@ -132,7 +134,9 @@ impl Matcher {
                 digits >= 1 && !(s.neg && s.acc == 0) && in_range(*r, if s.neg { -s.acc } else { s.acc })
             }
             Piece::AnyByte => false,
-            Piece::Field(f) => s.k == u32::from(f.width) && (f.min..=f.max).contains(&signed_value(f, s.acc)),
+            Piece::Field { ty, min, max } => {
+                s.k as usize == ty.size() && (*min..=*max).contains(&signed_value(*ty, s.acc))
+            }
         };
         if skip {
             self.close(next, out);
@@ -160,22 +164,23 @@ impl Matcher {
                 let t = State { k: s.k + 1, acc, ..s };
                 extendable(*r, t.neg, acc, digits + 1).then_some(t)
             }
-            Piece::Field(f) => {
+            Piece::Field { ty, min, max } => {
+                let (ty, min, max) = (*ty, *min, *max);
                 let acc = (s.acc << 8) | i64::from(b);
                 let k = s.k + 1;
-                if k == u32::from(f.width) {
+                if k as usize == ty.size() {
                     // The range check happens in `close`; a value out of range leaves a state
                     // that cannot advance, so check it here to die on this byte.
-                    (f.min..=f.max).contains(&signed_value(f, acc)).then_some(State { k, acc, ..s })
+                    (min..=max).contains(&signed_value(ty, acc)).then_some(State { k, acc, ..s })
                 } else {
                     // High byte of a two-byte field: some low byte must land in range.
-                    let (lo, hi) = if f.signed {
+                    let (lo, hi) = if ty.signed() {
                         let h = i64::from(b as i8);
                         (h * 256, h * 256 + 255)
                     } else {
                         (acc * 256, acc * 256 + 255)
                     };
-                    (lo <= f.max && hi >= f.min).then_some(State { k, acc, ..s })
+                    (lo <= max && hi >= min).then_some(State { k, acc, ..s })
                 }
             }
         }
@@ -248,11 +253,12 @@ pub fn show(bytes: &[u8], form: Form) -> String {
     }
 }
 
-fn signed_value(f: &FieldSpec, acc: i64) -> i64 {
-    match (f.width, f.signed) {
-        (1, true) => i64::from(acc as u8 as i8),
-        (2, true) => i64::from(acc as u16 as i16),
-        _ => acc,
+/// The value of a whole field from its bytes accumulated big-endian into `acc`.
+fn signed_value(ty: FieldType, acc: i64) -> i64 {
+    match ty {
+        FieldType::I8 => i64::from(acc as u8 as i8),
+        FieldType::I16 => i64::from(acc as u16 as i16),
+        FieldType::U8 | FieldType::U16 => acc,
     }
 }
 
@@ -310,7 +316,8 @@ pub fn match_prefix(expect: &Expect, actual: &[u8]) -> Outcome {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{FieldSpec, Form, Piece};
+    use crate::{Form, Piece};
+    use gcl_model::realtime::FieldType;
 
     fn text(parts: &[Piece]) -> Expect {
         let mut e = Expect::default();
@@ -370,13 +377,13 @@ mod tests {
         let mut e = Expect::default();
         e.push_bytes(Form::Hex, b"*");
         e.push(Form::Hex, Piece::AnyByte);
-        e.push(Form::Hex, Piece::Field(FieldSpec { width: 2, signed: false, min: 4950, max: 5050 }));
-        e.push(Form::Hex, Piece::Field(FieldSpec { width: 1, signed: true, min: -3, max: 3 }));
+        e.push(Form::Hex, Piece::Field { ty: FieldType::U16, min: 4950, max: 5050 });
+        e.push(Form::Hex, Piece::Field { ty: FieldType::I8, min: -3, max: 3 });
         assert!(e.matches(&[b'*', 0x80, 0x13, 0x88, 0xFE]));
         // Little-endian 5000 parts at its first byte.
         assert_eq!(match_prefix(&e, &[b'*', 0x80, 0x88, 0x13, 0]), Outcome::Parted(2));
         assert_eq!(match_prefix(&e, &[b'*', 0x80, 0x13, 0x88, 0x04]), Outcome::Parted(4));
-        let s16 = Piece::Field(FieldSpec { width: 2, signed: true, min: -550, max: 1250 });
+        let s16 = Piece::Field { ty: FieldType::I16, min: -550, max: 1250 };
         let mut t = Expect::default();
         t.push(Form::Hex, s16);
         t.push_bytes(Form::Hex, b"!");
@@ -395,7 +402,7 @@ mod tests {
         assert!(!m.is_alive());
         assert_eq!(m.expected_at_parting(), "\\n\\r1000\\n\\r=> ");
         let mut h = Expect::hex(b"*");
-        h.push(Form::Hex, Piece::Field(FieldSpec { width: 2, signed: false, min: 0, max: 50 }));
+        h.push(Form::Hex, Piece::Field { ty: FieldType::U16, min: 0, max: 50 });
         let mut m = Matcher::new(&h);
         m.feed(b'*');
         m.feed(0x13);

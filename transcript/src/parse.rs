@@ -1,13 +1,14 @@
 //! Untrusted transcript text to a typed [`Transcript`]. Every error carries the 1-based line
 //! (and where useful the column) it was found on; nothing here panics on any input.
 
+use gcl_model::realtime::FieldType;
 use std::time::Duration;
 
 use gcl_model::escape::{UnescapeError, unescape_into};
 
 use super::{
-    Expect, FieldSpec, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step,
-    Transcript, is_slug,
+    Expect, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step, Transcript,
+    is_slug,
 };
 
 /// Why transcript (or script) text does not parse.
@@ -441,13 +442,11 @@ fn elision(inner: &str) -> Option<Piece> {
         ("byte", None) => Piece::AnyByte,
         (t @ ("u8" | "i8" | "u16" | "i16"), Some(r)) => {
             let (min, max) = range(r)?;
-            let width = if t.ends_with('8') { 1 } else { 2 };
-            let signed = t.starts_with('i');
-            let (lo, hi) = FieldSpec::representable(width, signed);
-            if min < lo || max > hi {
+            let ty = FieldType::new(if t.ends_with('8') { 1 } else { 2 }, t.starts_with('i'))?;
+            if !ty.range().contains(&min) || !ty.range().contains(&max) {
                 return None;
             }
-            Piece::Field(FieldSpec { width, signed, min, max })
+            Piece::Field { ty, min, max }
         }
         _ => return None,
     })

@@ -57,9 +57,9 @@ fn parses_every_element() {
         pieces,
         vec![
             &Piece::Bytes(vec![0x2A]),
-            &Piece::Field(FieldSpec { width: 2, signed: false, min: 4950, max: 5050 }),
+            &Piece::Field { ty: FieldType::U16, min: 4950, max: 5050 },
             &Piece::AnyByte,
-            &Piece::Field(FieldSpec { width: 1, signed: true, min: -3, max: 3 }),
+            &Piece::Field { ty: FieldType::I8, min: -3, max: 3 },
         ]
     );
     assert_eq!(t.steps[5].pause, Some(Duration::from_millis(200)));
@@ -183,13 +183,14 @@ fn arb_duration() -> impl Strategy<Value = Duration> {
     prop_oneof![(0u64..100_000).prop_map(Duration::from_millis), (1u64..3600).prop_map(Duration::from_secs)]
 }
 
-fn arb_field() -> impl Strategy<Value = FieldSpec> {
-    (1u8..=2, any::<bool>(), any::<i64>(), any::<i64>()).prop_map(|(width, signed, a, b)| {
-        let (lo, hi) = FieldSpec::representable(width, signed);
+fn arb_field() -> impl Strategy<Value = Piece> {
+    let types = [FieldType::U8, FieldType::I8, FieldType::U16, FieldType::I16];
+    (proptest::sample::select(types.to_vec()), any::<i64>(), any::<i64>()).prop_map(|(ty, a, b)| {
+        let (lo, hi) = ty.range().into_inner();
         let span = (hi - lo + 1) as u64;
         let x = lo + (a as u64 % span) as i64;
         let y = lo + (b as u64 % span) as i64;
-        FieldSpec { width, signed, min: x.min(y), max: x.max(y) }
+        Piece::Field { ty, min: x.min(y), max: x.max(y) }
     })
 }
 
@@ -201,7 +202,7 @@ fn arb_piece() -> impl Strategy<Value = Piece> {
         1 => Just(Piece::Line),
         1 => Just(Piece::Any),
         1 => Just(Piece::AnyByte),
-        1 => arb_field().prop_map(Piece::Field),
+        1 => arb_field(),
     ]
 }
 

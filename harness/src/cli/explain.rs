@@ -68,8 +68,8 @@ impl Explained {
             "mode_after": self.mode_after,
         });
         if let Some(l) = &self.layout {
-            obj["control_block"] = block_json(&l.control);
-            obj["feedback_block"] = block_json(&l.feedback);
+            obj["control_block"] = block_json(l.control());
+            obj["feedback_block"] = block_json(l.feedback());
         }
         obj
     }
@@ -80,6 +80,7 @@ impl Explained {
 pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[String]) -> anyhow::Result<Vec<Explained>> {
     let mut hand = Device::new(profile.clone(), gcl_model::DeviceConfig { seed, ..Default::default() });
     hand.clear_output();
+    while hand.poll_event().is_some() {}
     let mut out = Vec::new();
     for text in lines {
         let bytes = unescape(text).map_err(|e| anyhow::anyhow!("LINE `{text}`: {e}"))?;
@@ -113,12 +114,20 @@ pub fn explain_lines(profile: &std::sync::Arc<Profile>, seed: u64, lines: &[Stri
 
 fn step(hand: &mut Device, line: String, supervisory: bool, parsed: Value) -> Explained {
     hand.run_until_idle(Duration::from_secs(600));
+    // The status is the one the hand reported for the line; a RealTime block answered with
+    // feedback or `*` reports none and ends with no status.
+    let mut status = gcl_model::StatusBits::empty();
+    while let Some(e) = hand.poll_event() {
+        if let gcl_model::Event::LineDone(s) = e {
+            status = s;
+        }
+    }
     Explained {
         line,
         supervisory,
         parsed,
         response: hand.take_output(),
-        status: hand.last_status(),
+        status,
         mode_after: hand.mode(),
         layout: hand.rt_layout().cloned(),
     }
@@ -155,21 +164,24 @@ fn parsed(profile: &Profile, bytes: &[u8]) -> Value {
 
 fn block_json(b: &BlockLayout) -> Value {
     json!({
-        "size": b.size,
-        "fields": b.fields.iter().map(|f| json!({
-            "motor": f.motor, "name": f.name, "offset": f.offset, "size": f.size, "signed": f.signed,
+        "size": b.size(),
+        "fields": b.fields().iter().map(|f| json!({
+            "motor": f.motor(), "name": f.name(), "offset": f.offset(), "size": f.size(), "signed": f.signed(),
         })).collect::<Vec<_>>(),
     })
 }
 
 fn block_text(b: &BlockLayout, header: &str) -> String {
-    let mut s = format!("{} bytes: [0] {header}", b.size);
-    for f in &b.fields {
-        let who = f.motor.map_or("hand".to_string(), |m| format!("motor {m}"));
-        let ty = format!("{}{}", if f.signed { "i" } else { "u" }, f.size * 8);
-        let range =
-            if f.size == 1 { format!("[{}]", f.offset) } else { format!("[{}..{}]", f.offset, f.offset + f.size - 1) };
-        s.push_str(&format!(", {range} {who} {} {ty}{}", f.name, if f.size > 1 { " big-endian" } else { "" }));
+    let mut s = format!("{} bytes: [0] {header}", b.size());
+    for f in b.fields() {
+        let who = f.motor().map_or("hand".to_string(), |m| format!("motor {m}"));
+        let ty = format!("{}{}", if f.signed() { "i" } else { "u" }, f.size() * 8);
+        let range = if f.size() == 1 {
+            format!("[{}]", f.offset())
+        } else {
+            format!("[{}..{}]", f.offset(), f.offset() + f.size() - 1)
+        };
+        s.push_str(&format!(", {range} {who} {} {ty}{}", f.name(), if f.size() > 1 { " big-endian" } else { "" }));
     }
     s
 }
@@ -220,9 +232,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             if texts.is_empty() { String::new() } else { format!(" ({texts})") }
         )?;
         if let Some(l) = &r.layout {
-            writeln!(w, "  mode:     RealTime, motors {}", l.motors)?;
-            writeln!(w, "  control:  {}", block_text(&l.control, "header C/c (A/a: the header alone)"))?;
-            writeln!(w, "  feedback: {}", block_text(&l.feedback, "'*' (reply to c/a: '*' alone)"))?;
+            writeln!(w, "  mode:     RealTime, motors {}", l.motors())?;
+            writeln!(w, "  control:  {}", block_text(l.control(), "header C/c (A/a: the header alone)"))?;
+            writeln!(w, "  feedback: {}", block_text(l.feedback(), "'*' (reply to c/a: '*' alone)"))?;
         }
     }
     Ok(EXIT_OK)

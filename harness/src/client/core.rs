@@ -15,7 +15,7 @@
 //! The core never blocks, never reads a clock and never panics, whatever bytes it is fed.
 
 use gcl_model::escape::escape;
-use gcl_model::realtime::{BlockError, ControlHeader, FEEDBACK_HEADER};
+use gcl_model::realtime::{BlockError, ControlHeader, FEEDBACK_HEADER, Feedback};
 use gcl_model::{Profile, RtLayout, StatusBits};
 
 /// Longest answer the core buffers before calling the bytes a framing error.
@@ -71,8 +71,8 @@ pub enum Answer {
     Refused(Refusal),
     /// `LOOP` was answered with `*`: the hand is in RealTime mode.
     LoopStarted,
-    /// A feedback block, one value per field of the feedback layout.
-    Feedback(Vec<i64>),
+    /// A feedback block, typed per motor (`feedback.motor(m).strain`).
+    Feedback(Box<Feedback>),
     /// `*` alone (after `c` or `a`).
     Ack,
     /// A prompt after ^C or a bare CR, with the lines before it (such as `ERR 16384`).
@@ -374,10 +374,10 @@ impl HostCore {
         if self.mode != HostMode::RealTime {
             return Err(Misuse::NotInRealTime);
         }
-        let mut out = Vec::with_capacity(layout.control.size);
+        let mut out = Vec::with_capacity(layout.control().size());
         match header {
             ControlHeader::Abort => return Ok(self.abort()),
-            h if h.has_data() => layout.control.encode(h.byte(), values, &mut out).map_err(Misuse::Block)?,
+            h if h.has_data() => layout.control().encode(h.byte(), values, &mut out).map_err(Misuse::Block)?,
             h => out.push(h.byte()),
         }
         self.begin(if header.wants_feedback() { Await::Feedback } else { Await::Ack });
@@ -536,15 +536,15 @@ impl HostCore {
                     }
                     // `block` waits for feedback only with a layout; without one, wait on.
                     let Some(layout) = &self.layout else { return Ok(None) };
-                    let size = layout.feedback.size;
+                    let size = layout.feedback().size();
                     if self.rx.len() < size {
                         return Ok(None);
                     }
-                    return match layout.feedback.decode(&self.rx[..size]) {
-                        Ok((_, values)) => {
+                    return match Feedback::parse(layout.feedback(), &self.rx[..size]) {
+                        Ok(feedback) => {
                             self.rx.drain(..size);
                             self.waiting = Await::Nothing;
-                            Ok(Some(Answer::Feedback(values)))
+                            Ok(Some(Answer::Feedback(Box::new(feedback))))
                         }
                         Err(error) => {
                             let got = self.rx[..size].to_vec();
@@ -684,7 +684,11 @@ mod tests {
         assert_eq!(c.block(ControlHeader::DataFeedback, &[55, 0, -1]).unwrap(), b"C\x37\x00\xff");
         assert!(c.block(ControlHeader::DataFeedback, &[500, 0, 0]).is_err());
         c.block(ControlHeader::DataFeedback, &[55, 0, 0]).unwrap();
-        assert_eq!(feed(&mut c, b"*\x13\x88\x00\x01\xff\xff").unwrap(), Some(Answer::Feedback(vec![5000, 1, 65535])));
+        let Some(Answer::Feedback(fb)) = feed(&mut c, b"*\x13\x88\x00\x01\xff\xff").unwrap() else {
+            panic!("a feedback block of three LFAP fields")
+        };
+        assert_eq!([1, 2, 3].map(|m| fb.motor(m).absolute_position), [Some(5000), Some(1), Some(65535)]);
+        assert_eq!(fb.motor(1).strain, None, "LFS is off");
         c.block(ControlHeader::Ack, &[]).unwrap();
         assert_eq!(feed(&mut c, b"*").unwrap(), Some(Answer::Ack));
         c.block(ControlHeader::Feedback, &[]).unwrap();

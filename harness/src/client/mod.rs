@@ -29,7 +29,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::params::ParamStore;
-use gcl_model::realtime::ControlHeader;
+use gcl_model::realtime::{ControlHeader, Feedback, MotorFeedback};
 use gcl_model::spec::Scope;
 use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
 
@@ -245,7 +245,7 @@ const QUIET: Duration = Duration::from_millis(50);
 struct RtSession {
     layout: RtLayout,
     control: Vec<i64>,
-    feedback: Option<Vec<i64>>,
+    feedback: Option<Feedback>,
     positions: [Option<i64>; 4],
     lfvc: [i64; 4],
     lfdpc: [i64; 4],
@@ -740,7 +740,7 @@ impl Hand {
         self.send(&bytes)?;
         // `LOOP` is answered by `*` or a refusal: `poll` gives nothing else.
         self.await_reply(self.timeouts.reply, &line)?;
-        let n_control = layout.control.fields.len();
+        let n_control = layout.control().fields().len();
         self.rt =
             Some(RtSession { layout, control: vec![0; n_control], feedback: None, positions, lfvc, lfdpc, updates: 0 });
         Ok(())
@@ -763,10 +763,10 @@ impl Hand {
         let s = self.session()?;
         let i = s
             .layout
-            .control
+            .control()
             .position(Some(m), name)
             .ok_or_else(|| Misuse::NoSuchField { motor: m, name: name.to_string() })?;
-        let f = &s.layout.control.fields[i];
+        let f = &s.layout.control().fields()[i];
         s.control[i] = value.clamp(f.min(), f.max());
         Ok(())
     }
@@ -790,7 +790,7 @@ impl Hand {
     /// `RTUpdate`: sends a `C` block with the control values (or `A` when the control block
     /// is empty) and reads the feedback.
     pub fn rt_update(&mut self) -> Result<(), ClientError> {
-        let no_control = self.session()?.layout.control.fields.is_empty();
+        let no_control = self.session()?.layout.control().fields().is_empty();
         self.rt_update_with(!no_control, true)
     }
 
@@ -810,15 +810,16 @@ impl Hand {
             Answer::Feedback(v) => {
                 let s = self.session()?;
                 s.updates += 1;
-                for m in s.layout.motors.iter() {
+                for m in s.layout.motors().iter() {
                     let i = (m - 1) as usize;
-                    if let Some(ap) = s.layout.feedback.value_of(&v, Some(m), "LFAP") {
+                    let fb = v.motor(m);
+                    if let Some(ap) = fb.absolute_position {
                         s.positions[i] = Some(ap);
-                    } else if let Some(dp) = s.layout.feedback.value_of(&v, Some(m), "LFDP") {
+                    } else if let Some(dp) = fb.delta_position {
                         s.positions[i] = Some(s.positions[i].unwrap_or(0) + dp * s.lfdpc[i]);
                     }
                 }
-                s.feedback = Some(v);
+                s.feedback = Some(*v);
                 Ok(())
             }
             _ => {
@@ -828,10 +829,11 @@ impl Hand {
         }
     }
 
-    fn feedback(&self, motor: char, name: &str) -> Option<i64> {
+    /// The last feedback of one motor.
+    fn feedback(&self, motor: char) -> Option<MotorFeedback> {
         let s = self.rt.as_ref()?;
         let m = parse_motors(&motor.to_string()).ok()?.iter().next()?;
-        s.layout.feedback.value_of(s.feedback.as_ref()?, Some(m), name)
+        Some(s.feedback.as_ref()?.motor(m))
     }
 
     /// `RTGetPosition`: from LFAP, or reckoned from LFDP × LFDPC since `rt_start`.
@@ -842,25 +844,24 @@ impl Hand {
 
     /// `RTGetStrain`: LFS of the last feedback.
     pub fn rt_get_strain(&self, motor: char) -> Option<i64> {
-        self.feedback(motor, "LFS")
+        self.feedback(motor)?.strain
     }
 
     /// `RTGetVelocity`: LFV × LFVC of the last feedback.
     pub fn rt_get_velocity(&self, motor: char) -> Option<i64> {
         let m = parse_motors(&motor.to_string()).ok()?.iter().next()?;
         let c = self.rt.as_ref()?.lfvc[(m - 1) as usize];
-        self.feedback(motor, "LFV").map(|v| v * c)
+        self.feedback(motor)?.velocity.map(|v| v * c)
     }
 
     /// `RTGetDeltaPos`: the raw LFDP of the last feedback.
     pub fn rt_get_delta_position(&self, motor: char) -> Option<i64> {
-        self.feedback(motor, "LFDP")
+        self.feedback(motor)?.delta_position
     }
 
     /// LFT of the last feedback (bh8-262).
     pub fn rt_get_temperature(&self) -> Option<i64> {
-        let s = self.rt.as_ref()?;
-        s.layout.feedback.value_of(s.feedback.as_ref()?, None, "LFT")
+        self.rt.as_ref()?.feedback.as_ref()?.temperature
     }
 
     /// Blocks exchanged since `rt_start`.
@@ -934,8 +935,8 @@ mod tests {
         h.initialize().unwrap();
         h.rt_set_flags("123", RtFlags::barrett(1, 1, 0, 0, 1, 0, 1, 0, 1)).unwrap();
         h.rt_start("123").unwrap();
-        assert_eq!(h.rt_layout().unwrap().control.size, 4);
-        assert_eq!(h.rt_layout().unwrap().feedback.size, 7);
+        assert_eq!(h.rt_layout().unwrap().control().size(), 4);
+        assert_eq!(h.rt_layout().unwrap().feedback().size(), 7);
         h.rt_set_velocity('1', 55).unwrap();
         assert!(h.rt_set_gain('1', 3).is_err());
         for _ in 0..100 {
@@ -954,7 +955,7 @@ mod tests {
         h.initialize().unwrap();
         h.rt_start("1234").unwrap();
         // bh8-262's default flags: LCV, LCPG in control; LFV, LFS, LFAP, LFDP in feedback.
-        assert_eq!(h.rt_layout().unwrap().feedback.size, 21);
+        assert_eq!(h.rt_layout().unwrap().feedback().size(), 21);
         h.rt_update().unwrap();
         assert!(h.rt_get_strain('1').is_some());
         h.rt_abort().unwrap();

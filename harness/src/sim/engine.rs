@@ -195,6 +195,7 @@ impl Engine {
             let out = d.take_output();
             let bt = self.byte_time();
             self.emit(&out, bt);
+            self.trace_device_events();
             if !self.link.device().is_busy() {
                 self.persist();
             }
@@ -224,7 +225,17 @@ impl Engine {
             }
         }
         self.emit_at(&out, bt, arrived);
+        self.trace_device_events();
         self.persist();
+    }
+
+    /// Writes what the hand reported since the last call into the trace.
+    fn trace_device_events(&mut self) {
+        let sim = self.link.elapsed();
+        let Some(t) = &mut self.trace else { return };
+        while let Some(e) = self.link.device_mut().poll_event() {
+            t.device_event(sim, e);
+        }
     }
 
     /// When [`Engine::wake`] or a paced write is next due, if ever. A paced byte that is due

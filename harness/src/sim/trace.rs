@@ -3,7 +3,8 @@
 //!
 //! ```text
 //! # gcl sim trace; columns: wall-seconds sim-seconds direction bytes
-//! #   '>' host to hand, '<' hand to host, '#' an event
+//! #   '>' host to hand, '<' hand to host, '#' an event (the link's, or the hand's own:
+//! #   power-up, a line done with its status, the RealTime loop entered or left)
 //!     0.000000     0.000000 < \n\rBarrettHand Firmware ...\n\r=>
 //!     1.204113     0.003125 > FGET P\r
 //!     1.204131     0.003125 < FGET P\n\r0 0 0 0\n\r=>
@@ -14,6 +15,7 @@ use std::io::{BufWriter, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use gcl_model::Event;
 use gcl_model::escape::escape;
 
 use super::SimError;
@@ -62,6 +64,18 @@ impl Trace {
     pub fn event(&mut self, sim: Duration, what: &str) {
         let wall = self.started.elapsed();
         self.line(&format!("{:12.6} {:12.6} # {what}", wall.as_secs_f64(), sim.as_secs_f64()));
+    }
+
+    /// Logs what the hand reported ([`gcl_model::Device::poll_event`]), as `# hand: ...`.
+    pub fn device_event(&mut self, sim: Duration, e: Event) {
+        let what = match e {
+            Event::PoweredUp => "powered up".to_string(),
+            Event::LineDone(s) if s.is_empty() => "line done".to_string(),
+            Event::LineDone(s) => format!("line done, ERR {}", s.code()),
+            Event::LoopEntered => "RealTime loop entered".to_string(),
+            Event::LoopLeft => "RealTime loop left".to_string(),
+        };
+        self.event(sim, &format!("hand: {what}"));
     }
 
     fn line(&mut self, text: &str) {

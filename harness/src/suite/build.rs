@@ -6,14 +6,14 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use gcl_model::realtime::{ControlHeader, Field};
+use gcl_model::realtime::{ControlHeader, Field, RtFlag};
 use gcl_model::spec::{CommandKind, ParamSpec, Scope};
 use gcl_model::{DeviceConfig, Profile};
 
 use crate::SimLink;
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_transcript::script::{Action, ScriptStep};
-use gcl_transcript::{Expect, FieldSpec, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
+use gcl_transcript::{Expect, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
 /// The header key listing every decision a case rests on (those it checks and those its
 /// framing, preamble, read-backs and teardown touch), space-separated, in the profile's order.
@@ -333,14 +333,14 @@ pub(crate) fn eol_prompt(p: &Profile) -> Vec<u8> {
 /// A feedback field's accepted range at rest, unless a rule overrides it: strain any byte,
 /// the temperature its parameter's range in the field's units, everything else exact.
 fn field_range(p: &Profile, f: &Field, rules: &[FieldRule]) -> Option<Range> {
-    if let Some(r) = rules.iter().find(|r| r.motor == f.motor && r.name == f.name) {
+    if let Some(r) = rules.iter().find(|r| r.motor == f.motor() && r.name == f.name()) {
         return r.range;
     }
-    match f.name.as_str() {
-        "LFS" => Some((f.min(), f.max())),
-        "LFT" => {
+    match f.flag() {
+        RtFlag::Lfs => Some((f.min(), f.max())),
+        RtFlag::Lft => {
             let t = p.param_id("TEMP").map(|id| p.param(id)).map_or((f.min(), f.max()), |s| (s.min, s.max));
-            let (lo, hi) = if f.size == 1 && p.hand.lft_whole_degrees { (t.0 / 10, t.1 / 10) } else { (t.0, t.1) };
+            let (lo, hi) = if f.size() == 1 && p.hand.lft_whole_degrees { (t.0 / 10, t.1 / 10) } else { (t.0, t.1) };
             Some((lo.max(f.min()), hi.min(f.max())))
         }
         _ => None,
@@ -351,30 +351,24 @@ fn shape_block(p: &Profile, c: &Captured, rules: &[FieldRule]) -> Expect {
     let mut e = Expect::default();
     let header = c.sent.first().copied().and_then(ControlHeader::from_byte);
     let Some(layout) = &c.layout else { return Expect::hex(&c.output) };
-    let fb = &layout.feedback;
-    if !header.is_some_and(|h| h.wants_feedback()) || c.output.len() != fb.size {
+    let fb = layout.feedback();
+    if !header.is_some_and(|h| h.wants_feedback()) || c.output.len() != fb.size() {
         return match answer_form(c, &eol_prompt(p)) {
             Form::Hex => Expect::hex(&c.output),
             Form::Text => Expect::text(&c.output),
         };
     }
     e.push_bytes(Form::Hex, &c.output[..1]);
-    for f in &fb.fields {
-        let bytes = &c.output[f.offset..f.offset + f.size];
+    for f in fb.fields() {
+        let bytes = &c.output[f.offset()..f.offset() + f.size()];
         match field_range(p, f, rules) {
             None => e.push_bytes(Form::Hex, bytes),
-            Some((lo, hi)) if f.size == 1 && lo <= f.min() && hi >= f.max() => e.push(Form::Hex, Piece::AnyByte),
+            Some((lo, hi)) if f.size() == 1 && lo <= f.min() && hi >= f.max() => e.push(Form::Hex, Piece::AnyByte),
             // A range of one value is that value's bytes.
             Some((lo, hi)) if lo == hi => e.push_bytes(Form::Hex, bytes),
-            Some((lo, hi)) => e.push(
-                Form::Hex,
-                Piece::Field(FieldSpec {
-                    width: f.size as u8,
-                    signed: f.signed,
-                    min: lo.max(f.min()),
-                    max: hi.min(f.max()),
-                }),
-            ),
+            Some((lo, hi)) => {
+                e.push(Form::Hex, Piece::Field { ty: f.ty(), min: lo.max(f.min()), max: hi.min(f.max()) })
+            }
         }
     }
     e
@@ -537,7 +531,7 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
     // The case binds no more strongly than the weakest decision it rests on.
     let mut level = def.level.unwrap_or(Level::Must);
     for d in profile.decisions.iter().filter(|d| decisions.contains(&d.id)) {
-        level = level.max(d.level.parse().unwrap_or(Level::Info));
+        level = level.max(d.level);
     }
     let mut extensions = Vec::new();
     if !decisions.is_empty() {

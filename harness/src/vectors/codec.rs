@@ -1,30 +1,28 @@
 //! `codec`: field values to bytes and bytes to values, at the edges of each field type and
 //! past them (what a hand clips), and whole blocks. Two-byte fields are big-endian. The
-//! oracle is the model's `BlockLayout::encode_clamped` and `decode`.
+//! oracle is the model's `FieldType::write` and `read` for single fields, and
+//! `BlockLayout::encode` and `decode` for whole blocks.
 
 use gcl_model::MotorSet;
-use gcl_model::realtime::{BlockLayout, FEEDBACK_HEADER, Field};
+use gcl_model::realtime::{FEEDBACK_HEADER, Field};
 use serde_json::json;
 
 use super::layout::{block_json, layout_flags, layout_with, rt_flags};
 use super::{FileBuilder, Test, VectorsError, slug};
 use gcl_transcript::hex_bytes;
 
-/// Encodes one value into a one-field block and returns the field's bytes.
+/// Encodes one value into a field of `f`'s type (clamped, as a hand does) and returns its bytes.
 fn field_bytes(f: &Field, v: i64) -> Vec<u8> {
-    let one = Field { offset: 1, ..f.clone() };
-    let l = BlockLayout { kind: gcl_model::spec::BlockKind::Feedback, size: 1 + f.size, fields: vec![one] };
-    let mut out = Vec::new();
-    l.encode_clamped(FEEDBACK_HEADER, &[v], &mut out);
-    out.split_off(1)
+    let mut out = vec![0; f.size()];
+    f.ty().write(v, &mut out);
+    out
 }
 
 fn field_value(f: &Field, bytes: &[u8]) -> Option<i64> {
-    let one = Field { offset: 1, ..f.clone() };
-    let l = BlockLayout { kind: gcl_model::spec::BlockKind::Feedback, size: 1 + f.size, fields: vec![one] };
-    let mut block = vec![FEEDBACK_HEADER];
-    block.extend_from_slice(bytes);
-    l.decode(&block).ok().map(|(_, v)| v[0])
+    if bytes.len() != f.size() {
+        return None;
+    }
+    f.ty().read(bytes)
 }
 
 pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
@@ -33,28 +31,28 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
     let all: Vec<&str> = names.iter().map(String::as_str).collect();
     let full = layout_with(p, MotorSet::ALL, &all);
     let mut seen = std::collections::BTreeSet::new();
-    for f in full.control.fields.iter().chain(&full.feedback.fields) {
-        if !seen.insert(f.name.clone()) {
+    for f in full.control().fields().iter().chain(full.feedback().fields()) {
+        if !seen.insert(f.name()) {
             continue;
         }
-        let kind = format!("{}{}", if f.signed { "i" } else { "u" }, f.size * 8);
-        let field = json!({ "name": f.name, "size": f.size, "signed": f.signed });
+        let kind = format!("{}{}", if f.signed() { "i" } else { "u" }, f.size() * 8);
+        let field = json!({ "name": f.name(), "size": f.size(), "signed": f.signed() });
         let mut values = vec![("min", f.min()), ("max", f.max()), ("zero", 0), ("one", 1)];
-        if f.signed {
+        if f.signed() {
             values.push(("minus-one", -1));
         }
-        if f.size == 2 {
+        if f.size() == 2 {
             values.push(("5000", 5000.min(f.max())));
         }
         for (what, v) in values {
             let bytes = field_bytes(f, v);
             if field_value(f, &bytes) != Some(v) {
-                return Err(VectorsError::Generate(format!("{}: {v} does not survive a round trip", f.name)));
+                return Err(VectorsError::Generate(format!("{}: {v} does not survive a round trip", f.name())));
             }
             b.push(
                 Test::new(
-                    format!("{}-{what}", slug(&f.name)),
-                    format!("{} is {kind}: {v} is {}", f.name, hex_bytes(&bytes)),
+                    format!("{}-{what}", slug(f.name())),
+                    format!("{} is {kind}: {v} is {}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": v, "bytes": hex_bytes(&bytes), "direction": "both", "clipped_from": null }),
                 )
@@ -66,8 +64,8 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             let clipped = v.clamp(f.min(), f.max());
             b.push(
                 Test::new(
-                    format!("{}-clip-{what}", slug(&f.name)),
-                    format!("{v} does not fit {} ({kind}): a hand sends {clipped}, {}", f.name, hex_bytes(&bytes)),
+                    format!("{}-clip-{what}", slug(f.name())),
+                    format!("{v} does not fit {} ({kind}): a hand sends {clipped}, {}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": clipped, "bytes": hex_bytes(&bytes), "direction": "encode", "clipped_from": v }),
                 )
@@ -75,19 +73,19 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             )?;
         }
         // The byte patterns at the sign edge, read back.
-        let patterns: Vec<Vec<u8>> = if f.size == 1 {
+        let patterns: Vec<Vec<u8>> = if f.size() == 1 {
             vec![vec![0x7F], vec![0x80], vec![0xFF]]
         } else {
             vec![vec![0x7F, 0xFF], vec![0x80, 0x00], vec![0xFF, 0xFF], vec![0x13, 0x88], vec![0x00, 0xFF]]
         };
         for bytes in patterns {
             let Some(v) = field_value(f, &bytes) else {
-                return Err(VectorsError::Generate(format!("{}: {} does not decode", f.name, hex_bytes(&bytes))));
+                return Err(VectorsError::Generate(format!("{}: {} does not decode", f.name(), hex_bytes(&bytes))));
             };
             b.push(
                 Test::new(
-                    format!("{}-read-{}", slug(&f.name), hex_bytes(&bytes).replace(' ', "").to_ascii_lowercase()),
-                    format!("{} ({kind}) reads {} as {v}", f.name, hex_bytes(&bytes)),
+                    format!("{}-read-{}", slug(f.name()), hex_bytes(&bytes).replace(' ', "").to_ascii_lowercase()),
+                    format!("{} ({kind}) reads {} as {v}", f.name(), hex_bytes(&bytes)),
                     true,
                     json!({ "field": field, "value": v, "bytes": hex_bytes(&bytes), "direction": "decode", "clipped_from": null }),
                 )
@@ -105,9 +103,9 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             continue;
         }
         let l = layout_with(p, motors, &on);
-        for (which, layout, header) in [("control", &l.control, b'C'), ("feedback", &l.feedback, FEEDBACK_HEADER)] {
+        for (which, layout, header) in [("control", l.control(), b'C'), ("feedback", l.feedback(), FEEDBACK_HEADER)] {
             let values: Vec<i64> =
-                layout.fields.iter().enumerate().map(|(i, f)| if i % 2 == 0 { f.max() } else { f.min() }).collect();
+                layout.fields().iter().enumerate().map(|(i, f)| if i % 2 == 0 { f.max() } else { f.min() }).collect();
             let mut bytes = Vec::new();
             layout.encode(header, &values, &mut bytes).map_err(|e| VectorsError::Generate(e.to_string()))?;
             let body = json!({
@@ -121,7 +119,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             b.push(
                 Test::new(
                     format!("block-{which}-{id}"),
-                    format!("a {which} block with {} fields, each at an edge of its type", layout.fields.len()),
+                    format!("a {which} block with {} fields, each at an edge of its type", layout.fields().len()),
                     true,
                     body,
                 )

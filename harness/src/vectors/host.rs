@@ -63,7 +63,7 @@ fn outcome(p: &Profile, request: &Request, stream: &[u8]) -> Result<(Vec<u8>, Va
             Request::Loop(line, l) => core.start_loop(line, l.clone()).map_err(|e| e.to_string()),
             Request::Block(h, l) => {
                 enter(core, l)?;
-                core.block(*h, &vec![0; if h.has_data() { l.control.fields.len() } else { 0 }])
+                core.block(*h, &vec![0; if h.has_data() { l.control().fields().len() } else { 0 }])
                     .map_err(|e| e.to_string())
             }
             Request::Abort => Ok(core.abort()),
@@ -77,7 +77,13 @@ fn outcome(p: &Profile, request: &Request, stream: &[u8]) -> Result<(Vec<u8>, Va
         match r {
             Ok(Some(Answer::Done(lines))) => (json!({ "kind": "lines", "lines": lines }), true),
             Ok(Some(Answer::LoopStarted)) => (json!({ "kind": "loop-started" }), true),
-            Ok(Some(Answer::Feedback(values))) => (json!({ "kind": "feedback", "values": values }), true),
+            Ok(Some(Answer::Feedback(feedback))) => {
+                let values = match request {
+                    Request::Block(_, l) => feedback.values(l.feedback()),
+                    _ => Vec::new(),
+                };
+                (json!({ "kind": "feedback", "values": values }), true)
+            }
             Ok(Some(Answer::Ack)) => (json!({ "kind": "ack" }), true),
             Ok(Some(Answer::Prompt(lines))) => (json!({ "kind": "prompt", "lines": lines }), true),
             Ok(Some(Answer::Refused(Refusal { code, lines, .. }))) => {
@@ -153,9 +159,9 @@ fn replace(hay: &[u8], from: &[u8], to: &[u8], once: bool) -> Vec<u8> {
 fn request_json(r: &Request) -> Value {
     let layout = |l: &RtLayout| {
         json!({
-            "motors": l.motors.iter().collect::<Vec<u8>>(),
-            "control": block_json(&l.control),
-            "feedback": block_json(&l.feedback),
+            "motors": l.motors().iter().collect::<Vec<u8>>(),
+            "control": block_json(l.control()),
+            "feedback": block_json(l.feedback()),
         })
     };
     match r {
@@ -308,7 +314,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             &["bh8-loop-failure"],
         );
         let mut fb = Vec::new();
-        l.feedback.encode(b'*', &[5000, 0, 65535], &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
+        l.feedback().encode(b'*', &[5000, 0, 65535], &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
         add(
             "feedback-block",
             "a feedback block: `*` then LFAP of motors 1, 2, 3, high byte first",
@@ -375,10 +381,15 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         );
         let all: Vec<&str> = names.iter().map(String::as_str).collect();
         let big = layout_with(p, MotorSet::ALL, &all);
-        let values: Vec<i64> =
-            big.feedback.fields.iter().enumerate().map(|(i, f)| if i % 2 == 0 { f.min() } else { f.max() }).collect();
+        let values: Vec<i64> = big
+            .feedback()
+            .fields()
+            .iter()
+            .enumerate()
+            .map(|(i, f)| if i % 2 == 0 { f.min() } else { f.max() })
+            .collect();
         let mut fb = Vec::new();
-        big.feedback.encode(b'*', &values, &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
+        big.feedback().encode(b'*', &values, &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
         add(
             "feedback-every-field",
             "every feedback flag on all motors, each field at an edge of its type",

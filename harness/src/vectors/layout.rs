@@ -32,13 +32,13 @@ pub(crate) fn layout_with(p: &Profile, motors: MotorSet, on: &[&str]) -> RtLayou
 /// A block layout as JSON: size and fields.
 pub(crate) fn block_json(l: &BlockLayout) -> Value {
     json!({
-        "size": l.size,
-        "fields": l.fields.iter().map(|f| json!({
-            "motor": f.motor,
-            "name": f.name,
-            "offset": f.offset,
-            "size": f.size,
-            "signed": f.signed,
+        "size": l.size(),
+        "fields": l.fields().iter().map(|f| json!({
+            "motor": f.motor(),
+            "name": f.name(),
+            "offset": f.offset(),
+            "size": f.size(),
+            "signed": f.signed(),
         })).collect::<Vec<_>>(),
     })
 }
@@ -82,12 +82,13 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         let body = json!({
             "motors": motors.iter().collect::<Vec<u8>>(),
             "flags_on": on,
-            "control": block_json(&l.control),
-            "feedback": block_json(&l.feedback),
+            "control": block_json(l.control()),
+            "feedback": block_json(l.feedback()),
         });
         let comment = format!(
             "{comment}: control {} bytes, feedback {} bytes (headers included)",
-            l.control.size, l.feedback.size
+            l.control().size(),
+            l.feedback().size()
         );
         b.push(Test::new(format!("layout-{id}"), comment, true, body).flags(&layout_flags(&on)))?;
     }

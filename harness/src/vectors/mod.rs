@@ -202,7 +202,9 @@ impl<'a> FileBuilder<'a> {
             )));
         }
         let flags: Vec<&str> = t.flags.iter().copied().filter(|f| self.has_decision(f)).collect();
-        let open = flags.iter().any(|f| self.profile.decisions.iter().any(|d| d.id == *f && d.level == "INFO"));
+        let open = flags
+            .iter()
+            .any(|f| self.profile.decisions.iter().any(|d| d.id == *f && d.level == gcl_model::Level::Info));
         let result = match (open, t.positive) {
             (true, _) => "acceptable",
             (false, true) => "valid",

@@ -6,6 +6,8 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
+use crate::spec::Framing;
+
 macro_rules! faults {
     ($( $(#[doc = $doc:literal])* $variant:ident => $name:literal, )*) => {
         /// A plausible firmware bug the simulated hand can be told to have.
@@ -152,6 +154,19 @@ faults! {
 }
 
 impl Fault {
+    /// Applies the fault to the profile's framing, if it is a fault of framing alone (line
+    /// ending, prompt, echo): such a fault is a patch of the profile, and the hand then runs
+    /// the patched profile with no further check. Returns whether it was one.
+    pub fn patch_framing(self, framing: &mut Framing) -> bool {
+        match self {
+            Fault::CrLf => framing.line_ending = "\r\n".to_string(),
+            Fault::PromptNoSpace => framing.prompt = framing.prompt.trim_end_matches(' ').to_string(),
+            Fault::NoEcho => framing.echo = false,
+            _ => return false,
+        }
+        true
+    }
+
     /// The parameters a `*-ignored` fault makes the hand ignore (it behaves as if each had its
     /// factory value, while FGET still reads back what was set), or none.
     pub fn ignored_params(self) -> &'static [&'static str] {
@@ -186,6 +201,56 @@ impl Fault {
             Fault::LftIgnored => &["LFT"],
             _ => &[],
         }
+    }
+}
+
+/// The faults a hand has, as a set: each is read at the named hook where it bends the
+/// hand's behaviour (`Device::has`), in O(1).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct FaultSet(u128);
+
+const _: () = assert!(Fault::ALL.len() <= 128, "FaultSet holds at most 128 faults");
+
+impl FaultSet {
+    /// Whether the set holds `f`.
+    pub fn contains(self, f: Fault) -> bool {
+        self.0 & (1u128 << (f as u32)) != 0
+    }
+
+    /// Adds `f`.
+    pub fn insert(&mut self, f: Fault) {
+        self.0 |= 1u128 << (f as u32);
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The faults in declaration order (visiting only the faults held: the empty set, every
+    /// unmutated hand's, costs nothing).
+    pub fn iter(self) -> impl Iterator<Item = Fault> {
+        let mut bits = self.0;
+        std::iter::from_fn(move || {
+            while bits != 0 {
+                let i = bits.trailing_zeros();
+                bits &= bits - 1;
+                if let Some(f) = Fault::ALL.get(i as usize) {
+                    return Some(*f);
+                }
+            }
+            None
+        })
+    }
+}
+
+impl FromIterator<Fault> for FaultSet {
+    fn from_iter<I: IntoIterator<Item = Fault>>(iter: I) -> FaultSet {
+        let mut s = FaultSet::default();
+        for f in iter {
+            s.insert(f);
+        }
+        s
     }
 }
 

@@ -23,26 +23,6 @@ fn banner_at_power_up() {
 }
 
 #[test]
-fn seed_examples_from_the_issue() {
-    let mut d = hand("seed");
-    assert_eq!(send(&mut d, "HI"), "HI\n\r=> ");
-    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\n\r1000 1000 1000 150\n\r=> ");
-    assert_eq!(send(&mut d, "BOGUS"), "BOGUS\n\rERR 32\n\r=> ");
-    assert_eq!(send(&mut d, "FSET DP 70000"), "FSET DP 70000\n\rERR 128\n\r=> ");
-    assert_eq!(send(&mut d, ""), "\n\r=> ");
-}
-
-#[test]
-fn motion_before_hi_is_refused() {
-    let mut d = hand("seed");
-    assert_eq!(send(&mut d, "C"), "C\n\rERR 4\n\r=> ");
-    assert_eq!(send(&mut d, "T"), "T\n\rERR 1\n\r=> ");
-    assert_eq!(send(&mut d, "FGET S"), "FGET S\n\r1 1 1 1\n\r=> ");
-    let mut b = hand("bh8-262");
-    assert_eq!(send(&mut b, "FGET S"), "FGET S\n\r4 4 4 4\n\r=> ");
-}
-
-#[test]
 fn close_and_open_move_the_fingers() {
     let mut d = hand("seed");
     send(&mut d, "HI");
@@ -53,7 +33,7 @@ fn close_and_open_move_the_fingers() {
     send(&mut d, "123O");
     assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r0 0 0 0\n\r=> ");
     assert_eq!(send(&mut d, "2M 5000"), "2M 5000\n\r=> ");
-    assert_eq!(d.position(2), 5000);
+    assert_eq!(d.position(Motor::F2), 5000);
 }
 
 #[test]
@@ -67,7 +47,7 @@ fn missed_position_gives_16() {
     sc.objects[0] = Some(4000);
     d.set_scenario(sc);
     assert_eq!(send(&mut d, "1M 8000"), "1M 8000\n\rERR 16\n\r=> ");
-    let p = d.position(1);
+    let p = d.position(Motor::F1);
     assert!((4000..=4600).contains(&p), "{p}");
     // Closing into it is not an error.
     send(&mut d, "1O");
@@ -84,7 +64,7 @@ fn strain_limit_stops_a_finger() {
     send(&mut d, "HI");
     send(&mut d, "2FSET MSG 60");
     assert_eq!(send(&mut d, "2C"), "2C\n\r=> ");
-    let p = d.position(2);
+    let p = d.position(Motor::F2);
     // 20 + 0.25 * (p - 3000) > 60 first at p = 3161.
     assert!((3150..3200).contains(&p), "{p}");
 }
@@ -153,9 +133,9 @@ fn seed_realtime_example_layout() {
     seed_rt(&mut d);
     assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
     let l = d.rt_layout().unwrap();
-    assert_eq!(l.control.size, 3);
-    assert_eq!(l.feedback.size, 6);
-    let names: Vec<_> = l.feedback.fields.iter().map(|f| (f.motor, f.name.as_str())).collect();
+    assert_eq!(l.control().size(), 3);
+    assert_eq!(l.feedback().size(), 6);
+    let names: Vec<_> = l.feedback().fields().iter().map(|f| (f.motor(), f.name())).collect();
     assert_eq!(
         names,
         vec![(Some(1), "LFS"), (Some(1), "LFDP"), (Some(2), "LFS"), (Some(2), "LFDP"), (Some(4), "LFDP")]
@@ -181,8 +161,8 @@ fn realtime_velocity_moves_the_finger() {
     d.handle_input(t, b"a");
     d.take_output();
     // 55 × LCVC 1 × 0.1 counts/ms for 1000 ms.
-    assert_eq!(d.position(1), 5500);
-    assert_eq!(d.position(2), 0);
+    assert_eq!(d.position(Motor::F1), 5500);
+    assert_eq!(d.position(Motor::F2), 0);
 }
 
 #[test]
@@ -203,14 +183,14 @@ fn manual_example_43_feedback_is_8_bytes() {
     send(&mut d, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut d, "PSET LFT 1");
     assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
-    assert_eq!(d.rt_layout().unwrap().feedback.size, 8);
+    assert_eq!(d.rt_layout().unwrap().feedback().size(), 8);
     let mut e = hand("bh8-262-4.4");
     send(&mut e, "HI");
     send(&mut e, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut e, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
     send(&mut e, "PSET LFT 1");
     send(&mut e, "124LOOP");
-    assert_eq!(e.rt_layout().unwrap().feedback.size, 7);
+    assert_eq!(e.rt_layout().unwrap().feedback().size(), 7);
 }
 
 #[test]
@@ -248,4 +228,80 @@ fn faults_change_the_bytes() {
     let mut d = Device::new(p, DeviceConfig { faults: vec![Fault::CrLf, Fault::FgetReversed], ..Default::default() });
     d.clear_output();
     assert_eq!(send(&mut d, "FGET DP"), "FGET DP\r\n150 1000 1000 1000\r\n=> ");
+}
+
+#[test]
+fn the_longest_time_saturates_instead_of_overflowing() {
+    let mut d = hand("bh8-262");
+    // A command running, then the end of time: the command finishes, nothing overflows.
+    d.handle_input(Duration::ZERO, b"HI\r");
+    assert!(d.is_busy());
+    d.handle_timeout(Duration::MAX);
+    assert!(!d.is_busy());
+    assert_eq!(d.now(), Duration::from_nanos(u64::MAX));
+    assert!(String::from_utf8_lossy(&d.take_output()).ends_with("HI\n\r=> "));
+    // Time going back is no time passing; the hand still answers.
+    d.handle_input(Duration::from_secs(1), b"FGET S\r");
+    assert_eq!(String::from_utf8_lossy(&d.take_output()), "FGET S\n\r0 0 0 0\n\r=> ");
+    // In the loop, with the fingers moving, too.
+    assert!(send(&mut d, "LOOP").ends_with('*'));
+    d.handle_input(Duration::MAX, b"C\x40\x00\x40\x00\x40\x00\x40\x00");
+    d.handle_timeout(Duration::MAX);
+    assert_eq!(d.mode(), Mode::Loop);
+    assert!(d.run_until_idle(Duration::MAX) >= d.now());
+}
+
+#[test]
+fn events_report_lines_loops_and_power_ups() {
+    let mut d = Device::with_profile(Profile::builtin("seed").unwrap());
+    assert_eq!(d.poll_event(), Some(Event::PoweredUp));
+    assert_eq!(d.poll_event(), None);
+    send(&mut d, "BOGUS");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::UNKNOWN_COMMAND)));
+    send(&mut d, "HI");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::empty())));
+    send(&mut d, "");
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::empty())));
+    send(&mut d, "LOOP");
+    assert_eq!(d.poll_event(), Some(Event::LoopEntered));
+    d.handle_input(d.now(), b"Z");
+    assert_eq!(d.poll_event(), Some(Event::LoopLeft));
+    assert_eq!(d.poll_event(), Some(Event::LineDone(StatusBits::BAD_HEADER)));
+    send(&mut d, "RESET");
+    assert_eq!(d.poll_event(), Some(Event::PoweredUp));
+    // Nobody polling: the oldest are dropped, the newest kept.
+    for _ in 0..2 * MAX_EVENTS {
+        send(&mut d, "BOGUS");
+    }
+    send(&mut d, "HI");
+    let kept: Vec<Event> = std::iter::from_fn(|| d.poll_event()).collect();
+    assert_eq!(kept.len(), MAX_EVENTS);
+    assert_eq!(kept.last(), Some(&Event::LineDone(StatusBits::empty())));
+}
+
+#[test]
+fn framing_faults_are_profile_patches() {
+    let p = Profile::builtin("seed").unwrap();
+    let faults = vec![Fault::CrLf, Fault::PromptNoSpace, Fault::NoEcho, Fault::FgetReversed];
+    let mut d = Device::new(p.clone(), DeviceConfig { faults, ..Default::default() });
+    assert_eq!(d.profile().framing.line_ending, "\r\n");
+    assert_eq!(d.profile().framing.prompt, "=>");
+    assert!(!d.profile().framing.echo);
+    assert_eq!(p.framing.line_ending, "\n\r", "the shared profile is untouched");
+    d.clear_output();
+    d.handle_input(Duration::ZERO, b"FGET DP\r");
+    assert_eq!(d.take_output(), b"\r\n150 1000 1000 1000\r\n=>");
+    // No framing fault: the very profile the hand was given.
+    let plain = Device::new(p.clone(), DeviceConfig { faults: vec![Fault::FgetReversed], ..Default::default() });
+    assert!(Arc::ptr_eq(plain.profile(), &p));
+}
+
+#[test]
+fn a_fault_set_holds_what_was_put_in_in_declaration_order() {
+    let set: FaultSet = [Fault::RangeOffByOne, Fault::CrLf, Fault::RangeOffByOne].into_iter().collect();
+    assert_eq!(set.iter().collect::<Vec<_>>(), vec![Fault::CrLf, Fault::RangeOffByOne]);
+    assert!(set.contains(Fault::CrLf) && !set.contains(Fault::NoEcho));
+    assert_eq!(FaultSet::default().iter().count(), 0);
+    let all: FaultSet = Fault::ALL.iter().copied().collect();
+    assert_eq!(all.iter().collect::<Vec<_>>(), Fault::ALL.to_vec());
 }

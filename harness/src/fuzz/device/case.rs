@@ -78,7 +78,7 @@ impl Walk {
         if after == Mode::Loop
             && let Some(l) = self.shadow.rt_layout()
         {
-            self.features.insert(format!("layout:{}/{}/{}", l.motors, l.control.size, l.feedback.size));
+            self.features.insert(format!("layout:{}/{}/{}", l.motors(), l.control().size(), l.feedback().size()));
         }
         self.shadow.take_output()
     }
@@ -264,9 +264,9 @@ pub fn build_case(
                 ));
                 let mut bytes = Vec::new();
                 if h.is_some_and(|h| h.has_data()) {
-                    let n = layout.control.fields.len();
+                    let n = layout.control().fields().len();
                     let vals: Vec<i64> = (0..n).map(|i| values.get(i).copied().unwrap_or(0)).collect();
-                    layout.control.encode_clamped(*header, &vals, &mut bytes);
+                    layout.control().encode_clamped(*header, &vals, &mut bytes);
                 } else {
                     bytes.push(*header);
                 }
@@ -316,7 +316,7 @@ pub fn build_case(
         let block_steps: BTreeSet<usize> =
             kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
         for (i, c) in caps.iter().enumerate() {
-            let fb = c.layout.as_ref().map(|l| l.feedback.size);
+            let fb = c.layout.as_ref().map(|l| l.feedback().size());
             let is_feedback =
                 c.realtime && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER) && c.output.len() > 1;
             if is_feedback && !(block_steps.contains(&i) && fb == Some(c.output.len())) {
@@ -331,7 +331,7 @@ pub fn build_case(
             ShapeKind::Get(_, _) if c.output.windows(3).any(|w| w == b"ERR") => Shape::Exact,
             ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain || !homed, wide),
             ShapeKind::Block(uncertain) => {
-                let size = c.layout.as_ref().map(|l| l.feedback.size);
+                let size = c.layout.as_ref().map(|l| l.feedback().size());
                 if wide
                     && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER)
                     && size != Some(c.output.len())
@@ -371,20 +371,20 @@ fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<Fi
     if wide && uncertain {
         let any = Some((i64::MIN / 2, i64::MAX / 2));
         return layout
-            .feedback
-            .fields
+            .feedback()
+            .fields()
             .iter()
-            .filter(|f| matches!(f.name.as_str(), "LFAP" | "LFV" | "LFDP" | "LFBP"))
+            .filter(|f| matches!(f.name(), "LFAP" | "LFV" | "LFDP" | "LFBP"))
             .filter_map(|f| {
-                let name = ["LFAP", "LFV", "LFDP", "LFBP"].into_iter().find(|n| *n == f.name)?;
-                Some(FieldRule { motor: f.motor, name, range: any })
+                let name = ["LFAP", "LFV", "LFDP", "LFBP"].into_iter().find(|n| *n == f.name())?;
+                Some(FieldRule { motor: f.motor(), name, range: any })
             })
             .collect();
     }
-    let Ok((_, values)) = layout.feedback.decode(&c.output) else { return Vec::new() };
+    let Ok((_, values)) = layout.feedback().decode(&c.output) else { return Vec::new() };
     (1..=4u8)
         .filter_map(|m| {
-            let v = layout.feedback.value_of(&values, Some(m), "LFAP")?;
+            let v = layout.feedback().value_of(&values, Some(m), "LFAP")?;
             let band = if uncertain { 3 * mpe(p, m) } else { mpe(p, m) };
             Some(FieldRule { motor: Some(m), name: "LFAP", range: Some((v - band, v + band)) })
         })

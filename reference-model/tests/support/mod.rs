@@ -1,0 +1,81 @@
+//! The one driver of the model's integration tests: a fresh hand, a line in and its answer
+//! out, and [`check`] for a whole session (what the `.gcl` files under `testdata/sessions/`
+//! hold). Each test file includes it with `mod support;`.
+#![allow(dead_code)]
+
+use std::time::Duration;
+
+use gcl_model::escape::{escape, unescape};
+use gcl_model::{Device, DeviceConfig, Profile};
+
+/// A powered-up hand of a built-in profile (noise seed 5), banner taken.
+pub fn hand(profile: &str) -> Device {
+    let p = Profile::builtin(profile).unwrap_or_else(|e| panic!("{e}"));
+    let mut d = Device::new(p, DeviceConfig { seed: 5, ..DeviceConfig::default() });
+    d.clear_output();
+    d
+}
+
+/// Sends one line and its CR, runs it to completion, returns the bytes the hand wrote.
+pub fn send_bytes(d: &mut Device, line: &str) -> Vec<u8> {
+    let now = d.now();
+    d.handle_input(now, format!("{line}\r").as_bytes());
+    d.run_until_idle(Duration::from_secs(600));
+    d.take_output()
+}
+
+/// [`send_bytes`] as text (lossy).
+pub fn send(d: &mut Device, line: &str) -> String {
+    String::from_utf8_lossy(&send_bytes(d, line)).into_owned()
+}
+
+/// Runs `script` (one line each) on a fresh hand of `profile` and checks each answer against
+/// `expected` (escaped as [`escape`] writes bytes).
+pub fn check(profile: &str, script: &[&str], expected: &[&str]) {
+    assert_eq!(script.len(), expected.len(), "one expected answer per line");
+    let mut d = hand(profile);
+    for (line, want) in script.iter().zip(expected) {
+        let got = send_bytes(&mut d, line);
+        let want_bytes = unescape(want).unwrap_or_else(|e| panic!("expected answer {want:?}: {e}"));
+        assert_eq!(escape(&got), escape(&want_bytes), "{profile}: answer to {line:?}");
+    }
+}
+
+/// Runs a session file: `profile NAME` lines start a fresh hand (one file may cover several
+/// profiles), `> LINE` sends a line, `< "ANSWER"` is the escaped answer to the line before;
+/// `#` starts a comment.
+pub fn run_session(name: &str, text: &str) {
+    let mut profile: Option<String> = None;
+    let mut script: Vec<String> = Vec::new();
+    let mut expected: Vec<String> = Vec::new();
+    let flush = |profile: &Option<String>, script: &mut Vec<String>, expected: &mut Vec<String>| {
+        if let Some(p) = profile {
+            let s: Vec<&str> = script.iter().map(String::as_str).collect();
+            let e: Vec<&str> = expected.iter().map(String::as_str).collect();
+            check(p, &s, &e);
+        }
+        script.clear();
+        expected.clear();
+    };
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim_end();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        if let Some(p) = line.strip_prefix("profile ") {
+            flush(&profile, &mut script, &mut expected);
+            profile = Some(p.trim().to_string());
+        } else if let Some(l) = line.strip_prefix("> ").or_else(|| (line == ">").then_some("")) {
+            assert_eq!(script.len(), expected.len(), "{name}:{}: a line without its answer before it", n + 1);
+            script.push(l.to_string());
+        } else if let Some(a) = line.strip_prefix("< ") {
+            let a = a.strip_prefix('"').and_then(|a| a.strip_suffix('"'));
+            let a = a.unwrap_or_else(|| panic!("{name}:{}: an answer is quoted", n + 1));
+            expected.push(a.to_string());
+        } else {
+            panic!("{name}:{}: not `profile`, `>`, `<` or `#`: {raw:?}", n + 1);
+        }
+    }
+    assert!(profile.is_some(), "{name}: no `profile` line");
+    flush(&profile, &mut script, &mut expected);
+}
