@@ -14,6 +14,7 @@ pub mod client;
 pub mod conform;
 pub mod deadline;
 pub mod files;
+pub mod fuzz;
 pub mod link;
 pub mod links;
 pub mod preflight;
