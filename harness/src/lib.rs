@@ -9,6 +9,7 @@
 extern crate self as gcl_harness;
 
 pub mod certify;
+pub mod check_host;
 pub mod cli;
 pub mod client;
 pub mod conform;

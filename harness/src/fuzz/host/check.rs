@@ -188,7 +188,9 @@ impl HostChecker {
             }
             if b == abort {
                 self.line.clear();
-                self.pending = false;
+                self.pending = true;
+                self.broken = true;
+                self.last_command = Some("^C".into());
                 self.prev = Some(b);
                 continue;
             }

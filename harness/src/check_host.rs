@@ -1,0 +1,129 @@
+//! `gcl check-host`: host conformance. A perfect simulated hand (no misbehaviour) runs the host
+//! command once and grades its traffic clause by clause ([`HostClause`]); the result is a
+//! [`RunReport`] like `conform`'s, one case per clause, so the same JSON, JUnit and HTML
+//! writers serve. Optionally the bytes the host sent are compared with the `send` steps of a
+//! golden host transcript.
+
+use std::time::Instant;
+
+use crate::fuzz::host::bundle::{BundleInfo, transcript};
+use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once};
+use crate::report::{CaseResult, Diff, Liveness, RunOptions, RunReport, Verdict};
+use crate::sim::misbehave::Schedule;
+use crate::transcript::Transcript;
+
+/// What `check_host` needs.
+#[derive(Debug, Clone)]
+pub struct CheckHostOptions {
+    /// The run (its schedule is empty).
+    pub run: HostRun,
+    /// Exit codes that pass.
+    pub ok_exit_codes: Vec<i32>,
+    /// A golden host transcript whose `send` steps the host's bytes must equal.
+    pub golden: Option<Transcript>,
+}
+
+/// Runs the host once against a perfect hand and grades it.
+pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), RunError> {
+    let started = time::OffsetDateTime::now_utc();
+    let t0 = Instant::now();
+    let r = run_once(&opts.run, &Schedule::default())?;
+    let verdicts = judge(&r, &opts.ok_exit_codes);
+    let info = BundleInfo {
+        kind: FindingKind::Violation,
+        signature: "check-host".into(),
+        message: String::new(),
+        seed: 0,
+        run: 0,
+        found_after_ms: 0,
+        hits: 0,
+        hand_seed: opts.run.hand_seed,
+        profile: opts.run.profile.id.clone(),
+        transport: opts.run.transport,
+        time: opts.run.time.name().to_string(),
+        command: opts.run.command.clone(),
+        end: r.end.clone(),
+        fired: Vec::new(),
+    };
+    let session = transcript(&info, &r.exchanges);
+    let mut cases = Vec::new();
+    for clause in HostClause::ALL {
+        let broken: Vec<String> = if clause == HostClause::ExitsCleanly {
+            verdicts.iter().filter(|v| v.kind != FindingKind::Violation).map(|v| v.message.clone()).collect()
+        } else {
+            r.violations.iter().filter(|v| v.clause == clause).map(|v| format!("{}: {}", v.kind, v.detail)).collect()
+        };
+        let verdict = match (&r.end, clause, broken.is_empty()) {
+            (_, _, true) => Verdict::Pass,
+            (HostEnd::Hung(_) | HostEnd::OverBudget(_), HostClause::ExitsCleanly, _) => Verdict::Timeout,
+            _ => Verdict::Fail,
+        };
+        cases.push(case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), verdict, &broken, &session));
+    }
+    if let Some(g) = &opts.golden {
+        let want: Vec<u8> = g.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|h| h.bytes.iter().copied()).collect();
+        let got: Vec<u8> =
+            r.exchanges.iter().filter(|e| e.dir == crate::fuzz::host::Dir::Host).flat_map(|e| e.bytes.iter().copied()).collect();
+        let mut c = case(
+            "host-golden",
+            &format!("the host sends what golden transcript {} sends", g.header.id),
+            "host: golden transcript",
+            Verdict::Pass,
+            &[],
+            &session,
+        );
+        if want != got {
+            let at = want.iter().zip(&got).take_while(|(a, b)| a == b).count();
+            let esc = |b: &[u8]| gcl_model::escape::escape(&b[at.min(b.len())..(at + 60).min(b.len())]);
+            c.verdict = Verdict::Fail;
+            c.message = Some(format!("the host's bytes part from the golden's at byte {at}"));
+            c.diff = Some(Diff {
+                step: 1,
+                offset: at,
+                expected: esc(&want),
+                actual: esc(&got),
+                before: gcl_model::escape::escape(&want[at.saturating_sub(40)..at]),
+                golden: String::new(),
+            });
+            c.transcript = Some(crate::report::truncate_note(&session, crate::report::MAX_SHOWN));
+        }
+        cases.push(c);
+    }
+    let mut report = RunReport {
+        format: crate::report::REPORT_FORMAT,
+        tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
+        target: format!("host: {}", opts.run.command.join(" ")),
+        profile: opts.run.profile.id.clone(),
+        level: "all".into(),
+        started: started.replace_nanosecond(0).unwrap_or(started).format(&time::format_description::well_known::Rfc3339).unwrap_or_default(),
+        duration_ms: t0.elapsed().as_secs_f64() * 1000.0,
+        suite_hash: String::new(),
+        liveness: Liveness { before: true, after: true },
+        options: RunOptions { seed: Some(opts.run.hand_seed), ..Default::default() },
+        preflight: None,
+        stopped: None,
+        groups: Vec::new(),
+        wire: None,
+        summary: Default::default(),
+        clauses: Vec::new(),
+        cases,
+    };
+    report.tally();
+    Ok((report, r))
+}
+
+fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {
+    let failed = verdict != Verdict::Pass;
+    CaseResult {
+        id: id.to_string(),
+        title: title.to_string(),
+        clauses: vec![clause.to_string()],
+        decisions: Vec::new(),
+        level: "MUST".into(),
+        verdict,
+        duration_ms: 0.0,
+        message: failed.then(|| crate::report::truncate_note(&broken.join("; "), 1000)),
+        diff: None,
+        transcript: failed.then(|| crate::report::truncate_note(session, crate::report::MAX_SHOWN)),
+    }
+}
