@@ -1,5 +1,5 @@
-"""Mutant: after RESET, takes the firmware version from a fixed word of a fixed banner line.
-Plausible bug: a banner variant (a line missing, a restart) gives IndexError.
+"""Mutant: after RESET, unpacks the first banner line into exactly two words.
+Plausible bug: a banner variant (a version suffix, a line missing) raises ValueError.
 Expected finding: crash (Python traceback)."""
 import gclhost
 
@@ -7,9 +7,9 @@ import gclhost
 def scenario(port):
     gclhost.sync(port)
     lines = gclhost.command(port, "RESET", deadline=2.0)
-    version = lines[1].split()[3]
-    if not version.startswith(b"(P"):
-        raise gclhost.HostError("unknown firmware %r" % version)
+    vendor, kind = lines[0].split()
+    if kind != b"Firmware":
+        raise gclhost.HostError("not a BarrettHand: %r" % lines[0])
     for line in gclhost.SCENARIO[:4]:
         gclhost.command(port, line)
 
