@@ -26,7 +26,8 @@ use gcl_harness::sim::misbehave::Schedule;
 use gcl_harness::sim::{Pace, TimeMode};
 use gcl_harness::target::{OpenOptions, Target};
 
-const SCENARIO: [&str; 10] = ["FGET DP", "HI", "1M 5000", "1FGET P", "C", "FGET P", "O", "2M 1000", "123FGET P", "FGET DP"];
+const SCENARIO: [&str; 10] =
+    ["FGET DP", "HI", "1M 5000", "1FGET P", "C", "FGET P", "O", "2M 1000", "123FGET P", "FGET DP"];
 
 /// The host side: ten commands over the port named by GCL_PORT.
 fn host() -> std::process::ExitCode {
@@ -79,7 +80,11 @@ fn clean_runs(label: &str, run: &HostRun, n: usize, jobs: usize) {
         }
     });
     let secs = t0.elapsed().as_secs_f64();
-    println!("{label}, {jobs} job(s): {n} runs in {secs:.2} s: {:.1} runs/s, {:.1} ms/run", n as f64 / secs, secs * 1000.0 / n as f64);
+    println!(
+        "{label}, {jobs} job(s): {n} runs in {secs:.2} s: {:.1} runs/s, {:.1} ms/run",
+        n as f64 / secs,
+        secs * 1000.0 / n as f64
+    );
 }
 
 fn main() -> std::process::ExitCode {
@@ -106,6 +111,11 @@ fn main() -> std::process::ExitCode {
     };
     let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).expect("campaign");
     let secs = c.elapsed_ms as f64 / 1000.0;
-    println!("fuzzing campaign, 2 jobs: {} runs in {secs:.2} s: {:.1} runs/s, {} finding(s)", c.runs, c.runs as f64 / secs, c.findings.len());
+    println!(
+        "fuzzing campaign, 2 jobs: {} runs in {secs:.2} s: {:.1} runs/s, {} finding(s)",
+        c.runs,
+        c.runs as f64 / secs,
+        c.findings.len()
+    );
     std::process::ExitCode::SUCCESS
 }

@@ -26,7 +26,8 @@ struct Args {
     profile: Option<String>,
 }
 
-const SCENARIO: [&str; 10] = ["FGET DP", "HI", "1M 5000", "1FGET P", "C", "FGET P", "O", "2M 1000", "123FGET P", "FGET DP"];
+const SCENARIO: [&str; 10] =
+    ["FGET DP", "HI", "1M 5000", "1FGET P", "C", "FGET P", "O", "2M 1000", "123FGET P", "FGET DP"];
 
 fn scenario(hand: &mut Hand) -> Result<(), ClientError> {
     let t = Duration::from_millis(500);

@@ -58,12 +58,24 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), Run
             (HostEnd::Hung(_) | HostEnd::OverBudget(_), HostClause::ExitsCleanly, _) => Verdict::Timeout,
             _ => Verdict::Fail,
         };
-        cases.push(case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), verdict, &broken, &session));
+        cases.push(case(
+            &format!("host-{}", clause.id()),
+            clause.title(),
+            clause.spec_clause(),
+            verdict,
+            &broken,
+            &session,
+        ));
     }
     if let Some(g) = &opts.golden {
-        let want: Vec<u8> = g.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|h| h.bytes.iter().copied()).collect();
-        let got: Vec<u8> =
-            r.exchanges.iter().filter(|e| e.dir == crate::fuzz::host::Dir::Host).flat_map(|e| e.bytes.iter().copied()).collect();
+        let want: Vec<u8> =
+            g.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|h| h.bytes.iter().copied()).collect();
+        let got: Vec<u8> = r
+            .exchanges
+            .iter()
+            .filter(|e| e.dir == crate::fuzz::host::Dir::Host)
+            .flat_map(|e| e.bytes.iter().copied())
+            .collect();
         let mut c = case(
             "host-golden",
             &format!("the host sends what golden transcript {} sends", g.header.id),
@@ -95,7 +107,11 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), Run
         target: format!("host: {}", opts.run.command.join(" ")),
         profile: opts.run.profile.id.clone(),
         level: "all".into(),
-        started: started.replace_nanosecond(0).unwrap_or(started).format(&time::format_description::well_known::Rfc3339).unwrap_or_default(),
+        started: started
+            .replace_nanosecond(0)
+            .unwrap_or(started)
+            .format(&time::format_description::well_known::Rfc3339)
+            .unwrap_or_default(),
         duration_ms: t0.elapsed().as_secs_f64() * 1000.0,
         suite_hash: String::new(),
         liveness: Liveness { before: true, after: true },

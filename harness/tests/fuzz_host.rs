@@ -180,7 +180,13 @@ fn example(name: &str) -> Option<PathBuf> {
 fn correct_hosts_have_no_finding_in_a_longer_run() {
     let mut hosts = Vec::new();
     if let Some(p) = example("host_scenario") {
-        hosts.push(vec![p.display().to_string(), "--target".into(), "serial:{port}".into(), "--profile".into(), "seed".into()]);
+        hosts.push(vec![
+            p.display().to_string(),
+            "--target".into(),
+            "serial:{port}".into(),
+            "--profile".into(),
+            "seed".into(),
+        ]);
     }
     if python_ready() {
         hosts.push(python("gclhost.py"));
@@ -208,7 +214,11 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
 
 fn gcl(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_gcl")).args(args).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -221,19 +231,39 @@ fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
     let report = dir.path().join("report");
     let host = mutants().join("py_err_table.py").display().to_string();
     let (code, _, err) = gcl(&[
-        "fuzz", "host", "--profile", "seed", "--seed", "5", "--runs", "12", "--timeout-hang", "2500ms",
-        "--ops", "err-bits,crlf", "--max-misbehaviours", "3", "--out", out.to_str().unwrap(), "--report",
-        report.to_str().unwrap(), "--", "python3", &host,
+        "fuzz",
+        "host",
+        "--profile",
+        "seed",
+        "--seed",
+        "5",
+        "--runs",
+        "12",
+        "--timeout-hang",
+        "2500ms",
+        "--ops",
+        "err-bits,crlf",
+        "--max-misbehaviours",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--",
+        "python3",
+        &host,
     ]);
     assert_eq!(code, 1, "{err}");
-    let bundle = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).find(|p| {
-        p.file_name().unwrap().to_str().unwrap().starts_with("crash-")
-    });
+    let bundle = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_str().unwrap().starts_with("crash-"));
     let bundle = bundle.unwrap_or_else(|| panic!("no crash bundle: {err}"));
     let finding = std::fs::read_to_string(bundle.join("finding.json")).unwrap();
     assert!(finding.contains("KeyError"), "{finding}");
     // Minimized: one ERR with odd bits is all it takes.
-    let schedule: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(bundle.join("schedule.json")).unwrap()).unwrap();
+    let schedule: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(bundle.join("schedule.json")).unwrap()).unwrap();
     let planned = schedule["planned"].as_array().unwrap();
     assert_eq!(planned.len(), 1, "{schedule}");
     assert_eq!(planned[0]["op"], "err-bits");
@@ -273,14 +303,23 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
     let report = dir.path().join("r");
     let good = mutants().join("gclhost.py").display().to_string();
     let (code, out, err) = gcl(&[
-        "check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--report", report.to_str().unwrap(), "--",
-        "python3", &good,
+        "check-host",
+        "--profile",
+        "seed",
+        "--golden",
+        golden.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--",
+        "python3",
+        &good,
     ]);
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("PASS    host-golden"), "{out}");
     assert!(report.join("junit.xml").exists());
     let lf = mutants().join("py_sends_lf.py").display().to_string();
-    let (code, out, _) = gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);
     assert_eq!(code, 1, "{out}");
     assert!(out.contains("FAIL    host-golden") && out.contains("FAIL    host-line-ending"), "{out}");
     // Usage errors are 2.

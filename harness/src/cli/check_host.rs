@@ -44,7 +44,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
         None => None,
     };
-    let opts = CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
+    let opts =
+        CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
     let (report, _) = check_host(&opts).context("running the host")?;
     for c in &report.cases {
         println!("{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title);

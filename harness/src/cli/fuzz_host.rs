@@ -7,7 +7,9 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
-use gcl_harness::fuzz::host::{Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once};
+use gcl_harness::fuzz::host::{
+    Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
+};
 use gcl_harness::report::{CaseResult, Liveness, RunOptions, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
@@ -89,8 +91,10 @@ impl HostArgs {
 }
 
 fn after_help() -> String {
-    let ops: Vec<String> =
-        Operator::ALL.iter().map(|o| format!("  {:<16} {:>2}  {}", o.name(), o.default_weight(), o.description())).collect();
+    let ops: Vec<String> = Operator::ALL
+        .iter()
+        .map(|o| format!("  {:<16} {:>2}  {}", o.name(), o.default_weight(), o.description()))
+        .collect();
     format!(
         "\
 Each run starts a fresh simulated hand on a fresh pty (or TCP port), runs COMMAND to its end,
@@ -299,7 +303,11 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
         target: format!("host: {}", opts.run.command.join(" ")),
         profile: opts.run.profile.id.clone(),
         level: "all".into(),
-        started: started.replace_nanosecond(0).unwrap_or(started).format(&time::format_description::well_known::Rfc3339).unwrap_or_default(),
+        started: started
+            .replace_nanosecond(0)
+            .unwrap_or(started)
+            .format(&time::format_description::well_known::Rfc3339)
+            .unwrap_or_default(),
         duration_ms: c.elapsed_ms as f64,
         suite_hash: String::new(),
         liveness: Liveness { before: true, after: true },

@@ -260,7 +260,14 @@ fn noise(arg: u32, n: usize) -> Vec<u8> {
 }
 
 /// Applies one operator to `out` when it applies to this answer; says what it did.
-fn apply(op: Operator, arg: u32, kind: AnswerKind, device: &Device, power_up: &[u8], out: &mut Shaped) -> Option<String> {
+fn apply(
+    op: Operator,
+    arg: u32,
+    kind: AnswerKind,
+    device: &Device,
+    power_up: &[u8],
+    out: &mut Shaped,
+) -> Option<String> {
     let b = &mut out.bytes;
     let sup = kind == AnswerKind::Supervisory;
     let ends_prompt = b.ends_with(PROMPT);
@@ -328,7 +335,10 @@ fn apply(op: Operator, arg: u32, kind: AnswerKind, device: &Device, power_up: &[
         }
         Operator::ErrBits => {
             let e = echo_end.filter(|&e| sup && ends_prompt && e > 0)?;
-            let err = pick(&["ERR 32768", "ERR 65535", "ERR 2147483648", "ERR 4294967295", "ERR -1", "ERR 99999999999999999999"], arg);
+            let err = pick(
+                &["ERR 32768", "ERR 65535", "ERR 2147483648", "ERR 4294967295", "ERR -1", "ERR 99999999999999999999"],
+                arg,
+            );
             b.truncate(e);
             b.extend_from_slice(EOL);
             b.extend_from_slice(err.as_bytes());
@@ -340,8 +350,18 @@ fn apply(op: Operator, arg: u32, kind: AnswerKind, device: &Device, power_up: &[
             let e = echo_end.filter(|&e| sup && e > 0)?;
             let i = arg as usize % e;
             let c = b[i];
-            b[i] = if c.is_ascii_alphabetic() { c ^ 0x20 } else if c == b'?' { b'!' } else { b'?' };
-            Some(format!("echo byte {i} {} sent as {}", gcl_model::escape::escape(&[c]), gcl_model::escape::escape(&[b[i]])))
+            b[i] = if c.is_ascii_alphabetic() {
+                c ^ 0x20
+            } else if c == b'?' {
+                b'!'
+            } else {
+                b'?'
+            };
+            Some(format!(
+                "echo byte {i} {} sent as {}",
+                gcl_model::escape::escape(&[c]),
+                gcl_model::escape::escape(&[b[i]])
+            ))
         }
         Operator::CrLf => {
             if !sup || echo_end.is_none() {
@@ -408,7 +428,7 @@ fn apply(op: Operator, arg: u32, kind: AnswerKind, device: &Device, power_up: &[
                 return None;
             }
             let n = 1 + (arg as usize / 2) % 2;
-            if arg % 2 == 0 {
+            if arg.is_multiple_of(2) {
                 b.truncate(b.len() - n.min(b.len() - 1));
                 Some(format!("feedback block {n} bytes short"))
             } else {
@@ -445,7 +465,7 @@ fn apply(op: Operator, arg: u32, kind: AnswerKind, device: &Device, power_up: &[
                 let v: i64 = match f.name.as_str() {
                     "LFAP" | "LFBP" => 65535,
                     "LFV" | "LFDP" => -128,
-                    _ if arg % 2 == 0 => f.max(),
+                    _ if arg.is_multiple_of(2) => f.max(),
                     _ => f.min(),
                 };
                 let v = v.clamp(f.min(), f.max());
@@ -508,7 +528,8 @@ mod tests {
     #[test]
     fn an_operator_that_does_not_apply_waits_for_an_answer_it_applies_to() {
         let d = device();
-        let mut m = Misbehave::new(Schedule { planned: vec![Planned { answer: 1, op: Operator::ErrBits, arg: 1 }] }, &d);
+        let mut m =
+            Misbehave::new(Schedule { planned: vec![Planned { answer: 1, op: Operator::ErrBits, arg: 1 }] }, &d);
         assert_eq!(m.shape(&d, b"\n\r=> ", "abort").bytes, b"\n\r=> ".to_vec(), "no echo line to answer after");
         assert!(m.fired().is_empty());
         assert_eq!(m.shape(&d, b"X\n\r=> ", "answer to X").bytes, b"X\n\rERR 65535\n\r=> ".to_vec());

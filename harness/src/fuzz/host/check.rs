@@ -230,7 +230,12 @@ impl HostChecker {
         match gcl_model::parse_line(&self.profile, &text) {
             Ok(Line::Command(c)) => {
                 let canon = c.to_line(&self.profile);
-                let word = canon.split_whitespace().next().unwrap_or_default().trim_start_matches(|c: char| c.is_ascii_digit()).to_string();
+                let word = canon
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or_default()
+                    .trim_start_matches(|c: char| c.is_ascii_digit())
+                    .to_string();
                 self.last_command = Some(word.clone());
                 self.commands.push(word);
             }
@@ -242,7 +247,8 @@ impl HostChecker {
                     "invalid command",
                     format!("\"{}\": {}", esc(&text), problems.join("; ")),
                 );
-                self.last_command = Some(String::from_utf8_lossy(text.split(|c| *c == b' ').next().unwrap_or(&[])).into_owned());
+                self.last_command =
+                    Some(String::from_utf8_lossy(text.split(|c| *c == b' ').next().unwrap_or(&[])).into_owned());
             }
         }
         self.pending = true;
@@ -305,7 +311,11 @@ impl HostChecker {
     /// The host went away: grades how it left.
     pub fn finish(&mut self) {
         if self.mode == Mode::Loop {
-            self.violate(HostClause::LeavesCleanly, "left in RealTime", "the host went away with the hand in its RealTime loop".into());
+            self.violate(
+                HostClause::LeavesCleanly,
+                "left in RealTime",
+                "the host went away with the hand in its RealTime loop".into(),
+            );
         }
         if self.block_due > 0 {
             self.violate(
@@ -315,7 +325,11 @@ impl HostChecker {
             );
         }
         if !self.line.is_empty() {
-            self.violate(HostClause::LeavesCleanly, "unterminated line", format!("\"{}\" never ended with CR", esc(&self.line)));
+            self.violate(
+                HostClause::LeavesCleanly,
+                "unterminated line",
+                format!("\"{}\" never ended with CR", esc(&self.line)),
+            );
         }
     }
 }

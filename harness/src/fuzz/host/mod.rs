@@ -133,7 +133,9 @@ impl Weights {
         let mut v = Vec::new();
         for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (name, w) = match item.split_once('=') {
-                Some((n, w)) => (n, w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?),
+                Some((n, w)) => {
+                    (n, w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?)
+                }
                 None => (item, 0),
             };
             let op: Operator = name.parse().map_err(|e: crate::sim::misbehave::UnknownOperator| e.to_string())?;
@@ -269,7 +271,7 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
         op: opts.weights.pick(rng),
         arg: rng.next_u64() as u32,
     };
-    if corpus.is_empty() || rng.next_u64() % 2 == 0 {
+    if corpus.is_empty() || rng.next_u64().is_multiple_of(2) {
         let n = 1 + (rng.next_u64() as usize % opts.max_planned.max(1));
         let mut s = Schedule { planned: (0..n).map(|_| fresh(rng)).collect() };
         s.planned.sort_by_key(|p| p.answer);
@@ -289,7 +291,7 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
         _ if !s.planned.is_empty() => {
             let i = rng.next_u64() as usize % s.planned.len();
             let a = s.planned[i].answer;
-            s.planned[i].answer = if rng.next_u64() % 2 == 0 { a.saturating_sub(1).max(1) } else { a + 1 };
+            s.planned[i].answer = if rng.next_u64().is_multiple_of(2) { a.saturating_sub(1).max(1) } else { a + 1 };
         }
         _ => s.planned.push(fresh(rng)),
     }

@@ -191,7 +191,10 @@ impl LineTap for Tap {
             log.reactions.push((f.op.name().to_string(), f.state.clone(), "-".to_string()));
             log.awaiting.push((log.reactions.len() - 1, seen));
         }
-        let marks = new.iter().map(|f| format!("misbehaviour {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what)).collect();
+        let marks = new
+            .iter()
+            .map(|f| format!("misbehaviour {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what))
+            .collect();
         let mut quiet = Instant::now();
         if let Some((_, d)) = shaped.hold {
             quiet += d;
@@ -251,7 +254,8 @@ pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunErr
         }
     };
 
-    let args: Vec<String> = spec.command[1..].iter().map(|a| a.replace("{port}", &port).replace("{url}", &url)).collect();
+    let args: Vec<String> =
+        spec.command[1..].iter().map(|a| a.replace("{port}", &port).replace("{url}", &url)).collect();
     let mut child = Command::new(program)
         .args(&args)
         .env("GCL_PORT", &port)
