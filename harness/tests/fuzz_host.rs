@@ -149,6 +149,26 @@ fn c_mutants_are_found_with_the_right_kind() {
 }
 
 #[test]
+fn a_rust_mutant_panic_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let exe = dir.path().join("rs_unwrap_values");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let built = Command::new(rustc)
+        .args(["--edition", "2021", "-O", "-o"])
+        .arg(&exe)
+        .arg(mutants().join("rs_unwrap_values.rs"))
+        .output();
+    if !built.is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: rustc could not build the Rust mutant");
+        return;
+    }
+    let (sig, t) = first_finding(vec![exe.display().to_string()], "garbage,truncate,err-bits", FindingKind::Crash, 60)
+        .expect("rs_unwrap_values: no crash in 60 runs");
+    println!("rs_unwrap_values: crash after {:.2} s: {sig}", t.as_secs_f64());
+    assert!(sig.starts_with("crash: panic at ") && sig.contains("rs_unwrap_values.rs:"), "{sig}");
+}
+
+#[test]
 fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     if !python_ready() {
         return;
