@@ -542,6 +542,35 @@ mod tests {
         }
     }
 
+    /// A tap that records the host's bytes and holds every answer back 10 s.
+    struct Holding(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+    impl LineTap for Holding {
+        fn host_bytes(&mut self, _: &Device, bytes: &[u8]) {
+            self.0.lock().unwrap().extend_from_slice(bytes);
+        }
+        fn hand_bytes(&mut self, _: &Device, bytes: &[u8]) -> Shaped {
+            Shaped { bytes: bytes.to_vec(), hold: Some((0, Duration::from_secs(10))), hang_up: false }
+        }
+    }
+
+    #[test]
+    fn the_engine_holds_back_what_a_tap_holds_and_shows_it_the_host_bytes() {
+        use std::time::Instant;
+        let mut e = crate::sim::Engine::new(&crate::sim::SimOptions::new(Profile::builtin("seed").unwrap())).unwrap();
+        let banner = e.ready_output(Instant::now()).len();
+        e.consumed(banner);
+        let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        e.set_tap(Box::new(Holding(seen.clone())));
+        e.input(b"FGET DP\r");
+        assert_eq!(*seen.lock().unwrap(), b"FGET DP\r");
+        assert!(e.has_output());
+        assert!(e.ready_output(Instant::now()).is_empty(), "held back");
+        assert!(e.deadline().is_some_and(|d| d > Instant::now() + Duration::from_secs(5)));
+        let later = Instant::now() + Duration::from_secs(11);
+        assert_eq!(e.ready_output(later), b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
+    }
+
     #[test]
     fn never_panics_on_odd_answers() {
         let d = device();
