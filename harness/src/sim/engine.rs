@@ -64,6 +64,8 @@ pub struct Engine {
     tap: Option<Box<dyn LineTap>>,
     /// Output from this many bytes of `out` on is held back until then (a misbehaviour).
     hold: Option<(usize, Instant)>,
+    /// What the model was powered up with (a restart powers it up again, EEPROM kept).
+    config: DeviceConfig,
 }
 
 impl std::fmt::Debug for Engine {
@@ -99,7 +101,7 @@ impl Engine {
         );
         let trace = opts.trace.as_deref().map(|p| Trace::create(p, &header)).transpose()?;
         let config = DeviceConfig { seed: opts.seed, scenario: opts.scenario.clone(), nv, faults: opts.faults.clone() };
-        let link = SimLink::new(opts.profile.clone(), config);
+        let link = SimLink::new(opts.profile.clone(), config.clone());
         let now = Instant::now();
         let mut e = Engine {
             link,
@@ -118,6 +120,7 @@ impl Engine {
             listening: true,
             tap: None,
             hold: None,
+            config,
         };
         let mut banner = Vec::new();
         let _ = e.link.recv(&mut banner, Duration::ZERO);
@@ -387,6 +390,12 @@ impl Engine {
             Some(tap) if self.listening => tap.hand_bytes(self.link.device(), bytes),
             _ => Shaped::plain(bytes),
         };
+        if shaped.restart {
+            // The tap sends the power-up output itself; the model starts afresh, EEPROM kept.
+            let config = DeviceConfig { nv: self.link.device().nv().clone(), ..self.config.clone() };
+            self.link = SimLink::new(self.link.device().profile().clone(), config);
+            let _ = self.link.recv(&mut Vec::new(), Duration::ZERO);
+        }
         let bytes = &shaped.bytes[..];
         if bytes.is_empty() {
             return;

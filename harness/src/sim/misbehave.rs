@@ -33,12 +33,15 @@ pub struct Shaped {
     pub hold: Option<(usize, Duration)>,
     /// Send `bytes`, then hang up the line.
     pub hang_up: bool,
+    /// The hand restarted: the model powers up afresh (its EEPROM kept); `bytes` already end
+    /// with its power-up output.
+    pub restart: bool,
 }
 
 impl Shaped {
     /// The answer unchanged.
     pub fn plain(bytes: &[u8]) -> Shaped {
-        Shaped { bytes: bytes.to_vec(), hold: None, hang_up: false }
+        Shaped { bytes: bytes.to_vec(), hold: None, hang_up: false, restart: false }
     }
 }
 
@@ -98,7 +101,7 @@ operators! {
     OverlongLine => "overlong-line", 3;
     /// Prints a variant of the banner (after RESET): a version suffix, an extra line, upper case, a line missing.
     BannerVariant => "banner-variant", 2;
-    /// Restarts mid-answer: the answer is cut and the power-up banner and prompt follow.
+    /// Restarts mid-answer: the answer is cut, the hand powers up afresh (motors no longer initialized, EEPROM kept) and its banner and prompt follow.
     Restart => "restart", 2;
     /// RealTime: a feedback block one or two bytes short or long.
     RtBlockLength => "rt-block-length", 3;
@@ -421,7 +424,8 @@ fn apply(
             let at = arg as usize % b.len();
             b.truncate(at);
             b.extend_from_slice(power_up);
-            Some(format!("restart after {at} bytes: banner and prompt"))
+            out.restart = true;
+            Some(format!("restart after {at} bytes: the hand powers up again (banner, prompt)"))
         }
         Operator::RtBlockLength => {
             if kind != AnswerKind::Feedback || b.len() < 2 {
@@ -550,7 +554,7 @@ mod tests {
             self.0.lock().unwrap().extend_from_slice(bytes);
         }
         fn hand_bytes(&mut self, _: &Device, bytes: &[u8]) -> Shaped {
-            Shaped { bytes: bytes.to_vec(), hold: Some((0, Duration::from_secs(10))), hang_up: false }
+            Shaped { bytes: bytes.to_vec(), hold: Some((0, Duration::from_secs(10))), hang_up: false, restart: false }
         }
     }
 
@@ -569,6 +573,29 @@ mod tests {
         assert!(e.deadline().is_some_and(|d| d > Instant::now() + Duration::from_secs(5)));
         let later = Instant::now() + Duration::from_secs(11);
         assert_eq!(e.ready_output(later), b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
+    }
+
+    /// A tap that restarts the hand on its first answer.
+    struct Restarting(bool);
+
+    impl LineTap for Restarting {
+        fn host_bytes(&mut self, _: &Device, _: &[u8]) {}
+        fn hand_bytes(&mut self, _: &Device, bytes: &[u8]) -> Shaped {
+            let restart = !std::mem::replace(&mut self.0, true);
+            Shaped { bytes: bytes.to_vec(), hold: None, hang_up: false, restart }
+        }
+    }
+
+    #[test]
+    fn a_restart_powers_the_model_up_again() {
+        use std::time::Instant;
+        let mut e = crate::sim::Engine::new(&crate::sim::SimOptions::new(Profile::builtin("seed").unwrap())).unwrap();
+        e.set_tap(Box::new(Restarting(false)));
+        e.input(b"HI\r");
+        e.input(b"1M 100\r");
+        let out = e.ready_output(Instant::now()).to_vec();
+        let text = String::from_utf8_lossy(&out);
+        assert!(text.ends_with("1M 100\n\rERR 4\n\r=> "), "the motors are no longer initialized: {text}");
     }
 
     #[test]
