@@ -113,7 +113,7 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), Run
             .format(&time::format_description::well_known::Rfc3339)
             .unwrap_or_default(),
         duration_ms: t0.elapsed().as_secs_f64() * 1000.0,
-        suite_hash: String::new(),
+        suite_hash: host_suite_hash(false),
         liveness: Liveness { before: true, after: true },
         options: RunOptions { seed: Some(opts.run.hand_seed), ..Default::default() },
         preflight: None,
@@ -126,6 +126,22 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), Run
     };
     report.tally();
     Ok((report, r))
+}
+
+/// The version of the host clauses, where a conformance report has its suite hash: SHA-256
+/// over each clause's id and title (and, for `gcl fuzz host`, each operator's name).
+pub fn host_suite_hash(with_operators: bool) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for c in HostClause::ALL {
+        h.update(format!("{}\t{}\n", c.id(), c.title()));
+    }
+    if with_operators {
+        for o in crate::sim::misbehave::Operator::ALL {
+            h.update(format!("{}\n", o.name()));
+        }
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
 fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {

@@ -232,6 +232,15 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
     }
 }
 
+/// The report validates against `reports/report.schema.json`, like `conform`'s.
+fn schema_valid(path: &Path) {
+    let schema: serde_json::Value = serde_json::from_str(gcl_harness::report::SCHEMA).unwrap();
+    let v = jsonschema::validator_for(&schema).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let errors: Vec<String> = v.iter_errors(&report).map(|e| format!("{} at {}", e, e.instance_path())).collect();
+    assert!(errors.is_empty(), "{}: {errors:?}", path.display());
+}
+
 fn gcl(args: &[&str]) -> (i32, String, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_gcl")).args(args).output().unwrap();
     (
@@ -292,6 +301,7 @@ fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
     gcl_harness::transcript::parse(&transcript).unwrap();
     let junit = std::fs::read_to_string(report.join("junit.xml")).unwrap();
     assert!(junit.contains("<failure"), "{junit}");
+    schema_valid(&report.join("report.json"));
     assert!(report.join("fuzz.json").exists() && report.join("report.html").exists());
     // Replay gives the same finding, twice.
     for _ in 0..2 {
@@ -337,6 +347,7 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
     assert_eq!(code, 0, "{out}{err}");
     assert!(out.contains("PASS    host-golden"), "{out}");
     assert!(report.join("junit.xml").exists());
+    schema_valid(&report.join("report.json"));
     let lf = mutants().join("py_sends_lf.py").display().to_string();
     let (code, out, _) =
         gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);

@@ -309,7 +309,7 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
             .format(&time::format_description::well_known::Rfc3339)
             .unwrap_or_default(),
         duration_ms: c.elapsed_ms as f64,
-        suite_hash: String::new(),
+        suite_hash: gcl_harness::check_host::host_suite_hash(true),
         liveness: Liveness { before: true, after: true },
         options: RunOptions { seed: Some(opts.seed), ..Default::default() },
         preflight: None,
