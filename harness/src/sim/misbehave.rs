@@ -133,14 +133,18 @@ impl std::str::FromStr for Operator {
     }
 }
 
-/// Host timeouts common in host libraries (pyserial scripts, the Barrett C library's
-/// defaults, ROS drivers): delays are placed just below and above them.
-pub const COMMON_TIMEOUTS: [Duration; 5] = [
+/// Read timeouts hosts commonly use; delays are placed just below and above them. 1 s is the
+/// default of Arduino's `Serial.setTimeout` (arduino.cc reference); 2 s and 5 s are this
+/// project's own client's RealTime-block and reply timeouts (`client::Timeouts::default`), 5 s
+/// also the default of Ignition's `system.serial.readUntil` (docs.inductiveautomation.com);
+/// 100 to 500 ms are what polling hosts pick for a 9600-baud line.
+pub const COMMON_TIMEOUTS: [Duration; 6] = [
     Duration::from_millis(100),
     Duration::from_millis(250),
     Duration::from_millis(500),
     Duration::from_secs(1),
     Duration::from_secs(2),
+    Duration::from_secs(5),
 ];
 
 /// One planned misbehaviour.
