@@ -413,10 +413,10 @@ impl Engine {
         if self.out.is_empty() {
             self.out_free_at = self.out_free_at.max(at.min(Instant::now()));
         }
-        if let Some((at, d)) = shaped.hold
+        if let Some((offset, d)) = shaped.hold
             && self.hold.is_none()
         {
-            self.hold = Some((self.out.len() + at, Instant::now() + d));
+            self.hold = Some((self.out.len() + offset, Instant::now() + d));
         }
         self.out.extend(bytes);
         match self.out_rates.back_mut() {

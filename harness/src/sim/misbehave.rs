@@ -6,9 +6,10 @@
 //! answer and hold part of it back ([`Shaped`]). [`Misbehave`] is the tap's misbehaving half:
 //! it runs a [`Schedule`] of named [`Operator`]s, each planned for the Nth answer of the
 //! session (or the next answer after it that the operator applies to), and remembers what it
-//! did ([`Fired`]). The model is never touched: only its bytes change on their way out. Like
-//! the engine, this module does no I/O; the hang-up operator only says so ([`Shaped::hang_up`])
-//! and the transport's owner closes the line.
+//! did ([`Fired`]). The model's state is never touched, except by a restart, which powers it
+//! up afresh ([`Shaped::restart`]); every other operator changes only bytes on their way out.
+//! Like the engine, this module does no I/O; the hang-up operator only says so
+//! ([`Shaped::hang_up`]) and the transport's owner closes the line.
 
 use std::time::Duration;
 
