@@ -182,7 +182,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let stop = AtomicBool::new(false);
     let out = args.out.clone();
     let info_of = |f: &Finding| info(&opts, f);
-    let written = std::sync::Mutex::new(Vec::new());
     let on_event = |e: Event| match e {
         Event::Run { .. } => {}
         Event::Found(f) => {
@@ -200,12 +199,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 f.schedule.planned.len(),
                 where_
             );
-            if let Ok(mut w) = written.lock() {
-                w.push(dir.ok());
-            }
         }
     };
     let campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    // Once more with the final hit counts.
+    for f in &campaign.findings {
+        let _ = bundle::write(&out, &info(&opts, f), f);
+    }
     let secs = campaign.elapsed_ms as f64 / 1000.0;
     eprintln!(
         "gcl fuzz host: {} runs (+{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
@@ -329,8 +329,13 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     run.profile = load_profile(&info.profile)?;
     run.transport = info.transport;
     run.hand_seed = info.hand_seed;
-    if info.time != run.time.name() {
-        eprintln!("gcl fuzz host: note: the bundle ran in {} time, this replay in {}", info.time, run.time.name());
+    // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
+    let time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
+    if time != run.time {
+        run.time = time;
+        if args.host.baud.is_none() {
+            run.pace = if time == TimeMode::Real { Pace::Hand } else { Pace::Unpaced };
+        }
     }
     let r = run_once(&run, &schedule)?;
     let verdicts = judge(&r, &args.host.ok_exit_codes());
