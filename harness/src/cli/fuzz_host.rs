@@ -2,7 +2,8 @@
 //! `gcl_harness::fuzz::host`). Also owns the arguments `gcl check-host` shares.
 
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::Context;
@@ -14,7 +15,10 @@ use gcl_harness::report::{CaseResult, Liveness, RunOptions, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
+use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
+use nix::sys::signalfd::SignalFd;
+
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
 fn duration(s: &str) -> Result<Duration, String> {
     humantime::parse_duration(s).map_err(|e| format!("`{s}`: {e} (write durations as 30s, 500ms or 5m)"))
@@ -179,7 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         opts.jobs,
         args.out.display()
     );
-    let stop = AtomicBool::new(false);
+    let stop = stop_on_signals()?;
     let out = args.out.clone();
     let info_of = |f: &Finding| info(&opts, f);
     let on_event = |e: Event| match e {
@@ -202,6 +206,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
     };
     let campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    if stop.load(Ordering::Relaxed) {
+        eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
+    }
     // Once more with the final hit counts.
     for f in &campaign.findings {
         let _ = bundle::write(&out, &info(&opts, f), f);
@@ -234,6 +241,29 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         eprintln!("wrote {}", p.display());
     }
     Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+}
+
+/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign after the runs in
+/// flight, so that bundles and reports are still written; a second one exits at once.
+fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
+    let mut mask = SigSet::empty();
+    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        mask.add(s);
+    }
+    // Threads started from here on inherit the mask; host processes do not (std resets it).
+    pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
+    let mut signals = SignalFd::new(&mask).context("signalfd")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    std::thread::spawn(move || {
+        while let Ok(Some(_)) = signals.read_signal() {
+            if flag.swap(true, Ordering::Relaxed) {
+                std::process::exit(i32::from(EXIT_ERROR));
+            }
+            eprintln!("gcl fuzz host: stopping after the runs in flight (again to stop now)");
+        }
+    });
+    Ok(stop)
 }
 
 fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
