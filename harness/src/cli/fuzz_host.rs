@@ -252,7 +252,7 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
     }
     // Threads started from here on inherit the mask; host processes do not (std resets it).
     pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
-    let mut signals = SignalFd::new(&mask).context("signalfd")?;
+    let signals = SignalFd::new(&mask).context("signalfd")?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     std::thread::spawn(move || {
