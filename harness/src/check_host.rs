@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use crate::fuzz::host::bundle::{BundleInfo, transcript};
+use crate::fuzz::host::bundle::session_transcript;
 use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once};
 use crate::report::{CaseResult, Diff, Liveness, RunOptions, RunReport, Verdict};
 use crate::sim::misbehave::Schedule;
@@ -23,29 +23,29 @@ pub struct CheckHostOptions {
     pub golden: Option<Transcript>,
 }
 
+/// What `check_host` found.
+#[derive(Debug, Clone)]
+pub struct CheckHostOutcome {
+    /// One case per clause (and the golden comparison), as `conform` reports.
+    pub report: RunReport,
+    /// The run itself.
+    pub run: RunResult,
+    /// The session as a `gcl-transcript 1` (usable as a golden for later checks).
+    pub session: String,
+}
+
 /// Runs the host once against a perfect hand and grades it.
-pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), RunError> {
+pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError> {
     let started = time::OffsetDateTime::now_utc();
     let t0 = Instant::now();
     let r = run_once(&opts.run, &Schedule::default())?;
     let verdicts = judge(&r, &opts.ok_exit_codes);
-    let info = BundleInfo {
-        kind: FindingKind::Violation,
-        signature: "check-host".into(),
-        message: String::new(),
-        seed: 0,
-        run: 0,
-        found_after_ms: 0,
-        hits: 0,
-        hand_seed: opts.run.hand_seed,
-        profile: opts.run.profile.id.clone(),
-        transport: opts.run.transport,
-        time: opts.run.time.name().to_string(),
-        command: opts.run.command.clone(),
-        end: r.end.clone(),
-        fired: Vec::new(),
-    };
-    let session = transcript(&info, &r.exchanges);
+    let header = format!(
+        "id: check-host-session\ntitle: {}\nclause: host: gcl check-host\nlevel: INFO\nprofile: {}\n",
+        opts.run.command.join(" ").chars().filter(|c| !c.is_control()).collect::<String>(),
+        opts.run.profile.id
+    );
+    let session = session_transcript(&header, &r.exchanges);
     let mut cases = Vec::new();
     for clause in HostClause::ALL {
         let broken: Vec<String> = if clause == HostClause::ExitsCleanly {
@@ -125,7 +125,7 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<(RunReport, RunResult), Run
         cases,
     };
     report.tally();
-    Ok((report, r))
+    Ok(CheckHostOutcome { report, run: r, session })
 }
 
 /// The version of the host clauses, where a conformance report has its suite hash: SHA-256

@@ -180,7 +180,7 @@ fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     }
     let grade = |file: &str| {
         let opts = CheckHostOptions { run: host_run(python(file)), ok_exit_codes: vec![0, 1], golden: None };
-        let (report, _) = check_host(&opts).unwrap();
+        let report = check_host(&opts).unwrap().report;
         report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
     };
     let id = |c: HostClause| format!("host-{}", c.id());
@@ -360,6 +360,18 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
         gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);
     assert_eq!(code, 1, "{out}");
     assert!(out.contains("FAIL    host-golden") && out.contains("FAIL    host-line-ending"), "{out}");
+    // A saved session is a golden for the next run of the same host.
+    let session = dir.path().join("session.gcl");
+    let (code, out, err) =
+        gcl(&["check-host", "--profile", "seed", "--save-session", session.to_str().unwrap(), "--", "python3", &good]);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &good]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("PASS    host-golden"), "{out}");
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &lf]);
+    assert_eq!(code, 1, "{out}");
     // Usage errors are 2.
     assert_eq!(gcl(&["check-host", "--profile", "nope", "--", "true"]).0, 2);
     assert_eq!(gcl(&["fuzz", "host", "--ops", "nonsense", "--", "true"]).0, 2);

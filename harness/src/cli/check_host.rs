@@ -30,6 +30,10 @@ pub struct Args {
     /// Compare the bytes the host sends with the `send` steps of this transcript.
     #[arg(long, value_name = "FILE")]
     golden: Option<PathBuf>,
+    /// Write the session (what the host sent and the hand answered) to FILE as a transcript;
+    /// a later run can take it as its --golden.
+    #[arg(long, value_name = "FILE")]
+    save_session: Option<PathBuf>,
     /// Seed of the hand's noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -46,7 +50,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let opts =
         CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
-    let (report, _) = check_host(&opts).context("running the host")?;
+    let outcome = check_host(&opts).context("running the host")?;
+    let report = outcome.report;
+    if let Some(p) = &args.save_session {
+        gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?;
+        eprintln!("wrote {}", p.display());
+    }
     for c in &report.cases {
         println!("{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title);
         if let Some(m) = &c.message {

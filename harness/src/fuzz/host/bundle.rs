@@ -123,18 +123,26 @@ fn quote(b: &[u8]) -> String {
     format!("\"{e}\"")
 }
 
-/// The exchange as a `gcl-transcript 1`: each host chunk a `send`, the hand's bytes until the
-/// next one its `expect`, each misbehaviour a comment before the step it shaped.
+/// The exchange of a finding as a `gcl-transcript 1` (see [`session_transcript`]).
 pub fn transcript(info: &BundleInfo, exchanges: &[Exchange]) -> String {
-    let mut s = String::from("gcl-transcript 1\n");
-    s.push_str(&format!("id: fuzz-host-{}\n", dir_name(info.kind, &info.signature)));
     let title: String = info.signature.chars().filter(|c| !c.is_control()).collect();
-    s.push_str(&format!("title: {title}\n"));
-    s.push_str("clause: host: gcl fuzz host\n");
-    s.push_str("level: INFO\n");
-    s.push_str(&format!("profile: {}\n", info.profile));
-    s.push_str(&format!("x-fuzz-seed: {} run {} hand-seed {}\n", info.seed, info.run, info.hand_seed));
-    s.push_str("note: what a fuzzed hand sent, not what a conforming hand sends\n");
+    let header = format!(
+        "id: fuzz-host-{}\ntitle: {title}\nclause: host: gcl fuzz host\nlevel: INFO\nprofile: {}\nx-fuzz-seed: {} run {} hand-seed {}\nnote: what a fuzzed hand sent, not what a conforming hand sends\n",
+        dir_name(info.kind, &info.signature),
+        info.profile,
+        info.seed,
+        info.run,
+        info.hand_seed
+    );
+    session_transcript(&header, exchanges)
+}
+
+/// An exchange as a `gcl-transcript 1` with the given header lines: each host chunk a
+/// `send`, the hand's bytes until the next one its `expect`, each misbehaviour a comment
+/// before the step it shaped. Its `send` steps make a golden for `gcl check-host --golden`.
+pub fn session_transcript(header: &str, exchanges: &[Exchange]) -> String {
+    let mut s = String::from("gcl-transcript 1\n");
+    s.push_str(header);
     let mut pending_marks: Vec<String> = Vec::new();
     let mut send: Option<Vec<u8>> = None;
     let mut expect: Vec<u8> = Vec::new();
