@@ -27,7 +27,7 @@ use rand_pcg::Pcg64Mcg;
 use serde::{Deserialize, Serialize};
 
 pub use check::{HostChecker, HostClause, HostViolation};
-pub use session::{Dir, Exchange, HostEnd, HostRun, RunError, RunResult, Transport, run_once};
+pub use session::{Dir, Exchange, HostEnd, HostRun, RunError, RunResult, Transport, run_once, run_once_until};
 
 use crate::sim::misbehave::{Operator, Planned, Schedule};
 
@@ -299,16 +299,17 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
     s
 }
 
-/// Removes misbehaviours one at a time while the run still gives `signature`.
+/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`).
 pub fn minimize(
     opts: &FuzzOptions,
     schedule: &Schedule,
     signature: &str,
     runs: &mut u64,
+    stop: &AtomicBool,
 ) -> Result<(Schedule, RunResult), RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
-        let r = run_once(&opts.run, s)?;
+        let r = run_once_until(&opts.run, s, stop)?;
         Ok(judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature).then_some(r))
     };
     // Keep only what fired: entries that never fired changed nothing.
@@ -327,7 +328,7 @@ pub fn minimize(
     }
     let r = match best_run {
         Some(r) => r,
-        None => run_once(&opts.run, &best)?,
+        None => run_once_until(&opts.run, &best, stop)?,
     };
     Ok((best, r))
 }
@@ -366,8 +367,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let Ok(sh) = shared.lock() else { break };
                 next_schedule(&mut rng, opts, &sh.corpus, sh.answers)
             };
-            let r = match run_once(&opts.run, &schedule) {
+            let r = match run_once_until(&opts.run, &schedule, stop) {
                 Ok(r) => r,
+                Err(RunError::Cancelled) => break,
                 Err(e) => {
                     if let Ok(mut sh) = shared.lock() {
                         sh.error.get_or_insert(e.to_string());
@@ -420,7 +422,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             for (k, sig) in new_sigs {
                 if opts.minimize && schedule.planned.len() > 1 {
                     let mut runs = 0;
-                    let m = minimize(opts, &schedule, &sig, &mut runs);
+                    let m = minimize(opts, &schedule, &sig, &mut runs, stop);
                     if let Ok(mut sh) = shared.lock() {
                         sh.minimize_runs += runs;
                         if let Ok((s, mr)) = m {

@@ -10,6 +10,7 @@ use std::io::Read;
 use std::os::fd::AsFd;
 use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
@@ -134,6 +135,9 @@ pub enum RunError {
     /// A thread or pipe could not be made.
     #[error("{0}")]
     Io(#[from] std::io::Error),
+    /// The run was called off (the campaign is stopping); the host was killed.
+    #[error("the run was called off")]
+    Cancelled,
 }
 
 /// Shared between the tap (in the hand's thread) and the run.
@@ -216,6 +220,11 @@ const STDERR_CAP: usize = 256 * 1024;
 
 /// Runs the host once against a hand that follows `schedule`.
 pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunError> {
+    run_once_until(spec, schedule, &AtomicBool::new(false))
+}
+
+/// [`run_once`], called off ([`RunError::Cancelled`], the host killed) once `cancel` is set.
+pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
     let program = spec.command.first().ok_or(RunError::NoCommand)?;
     let started = Instant::now();
     let mut opts = SimOptions::new(spec.profile.clone());
@@ -289,6 +298,7 @@ pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunErr
     });
 
     let state = |log: &Arc<Mutex<Log>>| log.lock().map(|l| l.checker.state()).unwrap_or_default();
+    let mut cancelled = false;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
             Ok(Ok(status)) => {
@@ -304,7 +314,10 @@ pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunErr
         }
         let now = Instant::now();
         let quiet_since = log.lock().map(|l| l.last_activity).unwrap_or(started);
-        let verdict = if now.duration_since(started) > spec.budget {
+        cancelled = cancel.load(Ordering::Relaxed);
+        let verdict = if cancelled {
+            Some(HostEnd::Exit(-1))
+        } else if now.duration_since(started) > spec.budget {
             Some(HostEnd::OverBudget(state(&log)))
         } else if now > quiet_since && now.duration_since(quiet_since) > spec.timeout_hang {
             Some(HostEnd::Hung(state(&log)))
@@ -325,6 +338,9 @@ pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunErr
     let served = hand.join();
     if let Ok(Err(e)) = served {
         return Err(RunError::Sim(e));
+    }
+    if cancelled {
+        return Err(RunError::Cancelled);
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
     if !log.hung_up {
