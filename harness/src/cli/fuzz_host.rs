@@ -243,8 +243,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
 }
 
-/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign after the runs in
-/// flight, so that bundles and reports are still written; a second one exits at once.
+/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign: the runs in flight
+/// are called off (their hosts killed) and bundles and reports are still written; a second
+/// signal exits at once.
 fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
     let mut mask = SigSet::empty();
     for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
@@ -260,7 +261,7 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
             if flag.swap(true, Ordering::Relaxed) {
                 std::process::exit(i32::from(EXIT_ERROR));
             }
-            eprintln!("gcl fuzz host: stopping after the runs in flight (again to stop now)");
+            eprintln!("gcl fuzz host: stopping: the runs in flight are called off (again to exit now)");
         }
     });
     Ok(stop)
