@@ -13,6 +13,7 @@
 extern crate self as gcl_harness;
 
 pub mod certify;
+pub mod check_host;
 pub mod client;
 pub mod conform;
 pub mod deadline;

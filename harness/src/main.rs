@@ -35,10 +35,13 @@ enum Command {
     Conform(cli::conform::Args),
     /// Run the suite at MUST and SHOULD and write a certificate bundle, or verify one.
     Certify(cli::certify::Args),
+    /// Fuzz a hand (`gcl fuzz device`) with the reference model as the oracle, or a host
+    /// program against a misbehaving simulated hand (`gcl fuzz host`).
+    Fuzz(cli::fuzz::Args),
+    /// Grade a host program's traffic against a perfect simulated hand, clause by clause.
+    CheckHost(cli::check_host::Args),
     /// Regenerate or check the committed golden transcripts.
     Suite(cli::suite::Args),
-    /// Fuzz a hand (`gcl fuzz device`) with the reference model as the oracle.
-    Fuzz(cli::fuzz::Args),
     /// Regenerate or check the committed JSON test vectors (also done by `gcl suite`).
     Vectors(cli::vectors::Args),
 }
@@ -53,8 +56,9 @@ fn main() -> ExitCode {
         Command::Replay(a) => cli::replay::run(a),
         Command::Conform(a) => cli::conform::run(a),
         Command::Certify(a) => cli::certify::run(a),
-        Command::Suite(a) => cli::suite::run(a),
         Command::Fuzz(a) => cli::fuzz::run(a),
+        Command::CheckHost(a) => cli::check_host::run(a),
+        Command::Suite(a) => cli::suite::run(a),
         Command::Vectors(a) => cli::vectors::run(a),
     };
     match result {

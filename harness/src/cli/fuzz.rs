@@ -1,5 +1,5 @@
-//! `gcl fuzz`: fuzzers that check someone else's hand (and, later, host library) against
-//! the reference model. This module only turns arguments into the library's options and
+//! `gcl fuzz`: fuzzers that check someone else's hand or host library against the reference
+//! model. This module only turns arguments into the library's options and
 //! prints; the fuzzers live in `gcl_harness::fuzz`.
 
 use std::io::{IsTerminal, Write};
@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use gcl_model::Fault;
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
+use super::{EXIT_FAIL, EXIT_OK, fuzz_host, load_profile};
 
 /// Arguments of `gcl fuzz`.
 #[derive(Debug, clap::Args)]
@@ -26,6 +26,9 @@ pub enum FuzzCommand {
     /// Fuzz a hand over the wire with host actions drawn from the profile; the reference model
     /// judges every answer.
     Device(DeviceArgs),
+    /// Put a misbehaving simulated hand in front of a host program: crashes, hangs, protocol
+    /// violations, with reproducers.
+    Host(fuzz_host::Args),
 }
 
 /// Arguments of `gcl fuzz device`.
@@ -89,6 +92,7 @@ pub struct DeviceArgs {
 pub fn run(a: Args) -> anyhow::Result<u8> {
     match a.command {
         FuzzCommand::Device(d) => device(d),
+        FuzzCommand::Host(h) => fuzz_host::run(h),
     }
 }
 

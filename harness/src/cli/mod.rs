@@ -3,9 +3,11 @@
 //! infrastructure errors (errors returned as `Err` become 2 in `main`).
 
 pub mod certify;
+pub mod check_host;
 pub mod conform;
 pub mod explain;
 pub mod fuzz;
+pub mod fuzz_host;
 pub mod record;
 pub mod replay;
 pub mod sim;

@@ -141,7 +141,7 @@ pub struct Args {
 
 /// `--time`: the command line's names for a [`TimeMode`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum TimeArg {
+pub(super) enum TimeArg {
     /// Simulated time advances by the wire time of every byte exchanged (at the hand's BAUD)
     /// and by the duration of each motion, which completes as fast as the CPU allows. The same
     /// bytes always give the same answers, whatever the host's speed.

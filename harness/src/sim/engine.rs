@@ -23,6 +23,7 @@ use std::time::{Duration, Instant};
 use gcl_model::params::NvMemory;
 use gcl_model::{Device, DeviceConfig};
 
+use super::misbehave::{LineTap, Shaped};
 use super::trace::Direction;
 use super::{EepromFile, Pace, SimError, SimOptions, TimeMode, Trace};
 use crate::link::{Link, SimLink, byte_time};
@@ -59,6 +60,12 @@ pub struct Engine {
     /// When the last byte passed to the model had crossed the line.
     in_last: Instant,
     listening: bool,
+    /// What sees and shapes the traffic (`gcl fuzz host`, `gcl check-host`), if anything.
+    tap: Option<Box<dyn LineTap>>,
+    /// Output from this many bytes of `out` on is held back until then (a misbehaviour).
+    hold: Option<(usize, Instant)>,
+    /// What the model was powered up with (a restart powers it up again, EEPROM kept).
+    config: DeviceConfig,
 }
 
 impl std::fmt::Debug for Engine {
@@ -94,7 +101,7 @@ impl Engine {
         );
         let trace = opts.trace.as_deref().map(|p| Trace::create(p, &header)).transpose()?;
         let config = DeviceConfig { seed: opts.seed, scenario: opts.scenario.clone(), nv, faults: opts.faults.clone() };
-        let link = SimLink::new(opts.profile.clone(), config);
+        let link = SimLink::new(opts.profile.clone(), config.clone());
         let now = Instant::now();
         let mut e = Engine {
             link,
@@ -111,12 +118,21 @@ impl Engine {
             in_due: now,
             in_last: now,
             listening: true,
+            tap: None,
+            hold: None,
+            config,
         };
         let mut banner = Vec::new();
         let _ = e.link.recv(&mut banner, Duration::ZERO);
         let bt = e.byte_time();
         e.emit(&banner, bt);
         Ok(e)
+    }
+
+    /// Installs a tap that sees the host's bytes and sees and shapes the hand's answers from
+    /// now on (the power-up banner has been queued already).
+    pub fn set_tap(&mut self, tap: Box<dyn LineTap>) {
+        self.tap = Some(tap);
     }
 
     /// The model.
@@ -153,6 +169,9 @@ impl Engine {
     pub fn input(&mut self, bytes: &[u8]) {
         if bytes.is_empty() {
             return;
+        }
+        if let Some(tap) = &mut self.tap {
+            tap.host_bytes(self.link.device(), bytes);
         }
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
@@ -248,7 +267,8 @@ impl Engine {
         };
         let input = (!self.inq.is_empty() && self.out.len() < OUT_CAP).then_some(self.in_due);
         let output = self.out_rates.front().map(|&(_, bt)| self.out_free_at + bt).filter(|t| *t > now);
-        [model, input, output].into_iter().flatten().min()
+        let held = self.hold.map(|(_, t)| t).filter(|t| *t > now);
+        [model, input, output, held].into_iter().flatten().min()
     }
 
     /// Whether output is waiting to be written (now or later).
@@ -280,6 +300,13 @@ impl Engine {
                 break;
             }
         }
+        if let Some((k, until)) = self.hold {
+            if now < until {
+                n = n.min(k);
+            } else {
+                self.hold = None;
+            }
+        }
         let all = self.out.make_contiguous();
         &all[..n]
     }
@@ -296,6 +323,9 @@ impl Engine {
     /// Records that the transport wrote `n` bytes of [`Engine::ready_output`].
     pub fn consumed(&mut self, n: usize) {
         let mut n = n.min(self.out.len());
+        if let Some((k, _)) = &mut self.hold {
+            *k = k.saturating_sub(n);
+        }
         self.out.drain(..n);
         while n > 0 {
             let Some((count, bt)) = self.out_rates.front_mut() else { break };
@@ -326,6 +356,7 @@ impl Engine {
         let discarded = self.out.len();
         self.out.clear();
         self.out_rates.clear();
+        self.hold = None;
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
             t.event(sim, &format!("host gone: {why}; {discarded} bytes not taken discarded"));
@@ -366,6 +397,20 @@ impl Engine {
         if bytes.is_empty() {
             return;
         }
+        let shaped = match &mut self.tap {
+            Some(tap) if self.listening => tap.hand_bytes(self.link.device(), bytes),
+            _ => Shaped::plain(bytes),
+        };
+        if shaped.restart {
+            // The tap sends the power-up output itself; the model starts afresh, EEPROM kept.
+            let config = DeviceConfig { nv: self.link.device().nv().clone(), ..self.config.clone() };
+            self.link = SimLink::new(self.link.device().profile().clone(), config);
+            let _ = self.link.recv(&mut Vec::new(), Duration::ZERO);
+        }
+        let bytes = &shaped.bytes[..];
+        if bytes.is_empty() {
+            return;
+        }
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
             t.bytes(sim, Direction::Out, bytes);
@@ -378,6 +423,11 @@ impl Engine {
         }
         if self.out.is_empty() {
             self.out_free_at = self.out_free_at.max(at.min(Instant::now()));
+        }
+        if let Some((offset, d)) = shaped.hold
+            && self.hold.is_none()
+        {
+            self.hold = Some((self.out.len() + offset, Instant::now() + d));
         }
         self.out.extend(bytes);
         match self.out_rates.back_mut() {

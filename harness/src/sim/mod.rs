@@ -12,6 +12,7 @@
 
 mod eeprom;
 mod engine;
+pub mod misbehave;
 pub mod pty;
 mod scenario;
 pub mod stdio;

@@ -1,0 +1,161 @@
+//! `gcl check-host`: host conformance. A perfect simulated hand (no misbehaviour) runs the host
+//! command once and grades its traffic clause by clause ([`HostClause`]); the result is a
+//! [`RunReport`] like `conform`'s, one case per clause, so the same JSON, JUnit and HTML
+//! writers serve. Optionally the bytes the host sent are compared with the `send` steps of a
+//! golden host transcript.
+
+use std::time::Instant;
+
+use crate::fuzz::host::bundle::session_transcript;
+use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once};
+use crate::report::{CaseResult, Diff, Liveness, RunOptions, RunReport, Verdict};
+use crate::sim::misbehave::Schedule;
+use gcl_transcript::Transcript;
+
+/// What `check_host` needs.
+#[derive(Debug, Clone)]
+pub struct CheckHostOptions {
+    /// The run (its schedule is empty).
+    pub run: HostRun,
+    /// Exit codes that pass.
+    pub ok_exit_codes: Vec<i32>,
+    /// A golden host transcript whose `send` steps the host's bytes must equal.
+    pub golden: Option<Transcript>,
+}
+
+/// What `check_host` found.
+#[derive(Debug, Clone)]
+pub struct CheckHostOutcome {
+    /// One case per clause (and the golden comparison), as `conform` reports.
+    pub report: RunReport,
+    /// The run itself.
+    pub run: RunResult,
+    /// The session as a `gcl-transcript 1` (usable as a golden for later checks).
+    pub session: String,
+}
+
+/// Runs the host once against a perfect hand and grades it.
+pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError> {
+    let started = time::OffsetDateTime::now_utc();
+    let t0 = Instant::now();
+    let r = run_once(&opts.run, &Schedule::default())?;
+    let verdicts = judge(&r, &opts.ok_exit_codes);
+    let header = format!(
+        "id: check-host-session\ntitle: {}\nclause: host: gcl check-host\nlevel: INFO\nprofile: {}\n",
+        opts.run.command.join(" ").chars().filter(|c| !c.is_control()).collect::<String>(),
+        opts.run.profile.id
+    );
+    let session = session_transcript(&header, &r.exchanges);
+    let mut cases = Vec::new();
+    for clause in HostClause::ALL {
+        let broken: Vec<String> = if clause == HostClause::ExitsCleanly {
+            verdicts.iter().filter(|v| v.kind != FindingKind::Violation).map(|v| v.message.clone()).collect()
+        } else {
+            r.violations.iter().filter(|v| v.clause == clause).map(|v| format!("{}: {}", v.kind, v.detail)).collect()
+        };
+        let verdict = match (&r.end, clause, broken.is_empty()) {
+            (_, _, true) => Verdict::Pass,
+            (HostEnd::Hung(_) | HostEnd::OverBudget(_), HostClause::ExitsCleanly, _) => Verdict::Timeout,
+            _ => Verdict::Fail,
+        };
+        cases.push(case(
+            &format!("host-{}", clause.id()),
+            clause.title(),
+            clause.spec_clause(),
+            verdict,
+            &broken,
+            &session,
+        ));
+    }
+    if let Some(g) = &opts.golden {
+        let want: Vec<u8> =
+            g.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|h| h.bytes.iter().copied()).collect();
+        let got: Vec<u8> = r
+            .exchanges
+            .iter()
+            .filter(|e| e.dir == crate::fuzz::host::Dir::Host)
+            .flat_map(|e| e.bytes.iter().copied())
+            .collect();
+        let mut c = case(
+            "host-golden",
+            &format!("the host sends what golden transcript {} sends", g.header.id),
+            "host: golden transcript",
+            Verdict::Pass,
+            &[],
+            &session,
+        );
+        if want != got {
+            let at = want.iter().zip(&got).take_while(|(a, b)| a == b).count();
+            let esc = |b: &[u8]| gcl_model::escape::escape(&b[at.min(b.len())..(at + 60).min(b.len())]);
+            c.verdict = Verdict::Fail;
+            c.message = Some(format!("the host's bytes part from the golden's at byte {at}"));
+            c.diff = Some(Diff {
+                step: 1,
+                offset: at,
+                expected: esc(&want),
+                actual: esc(&got),
+                before: gcl_model::escape::escape(&want[at.saturating_sub(40)..at]),
+                golden: String::new(),
+            });
+            c.transcript = Some(crate::report::truncate_note(&session, crate::report::MAX_SHOWN));
+        }
+        cases.push(c);
+    }
+    let mut report = RunReport {
+        format: crate::report::REPORT_FORMAT,
+        tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
+        target: format!("host: {}", opts.run.command.join(" ")),
+        profile: opts.run.profile.id.clone(),
+        level: "all".into(),
+        started: started
+            .replace_nanosecond(0)
+            .unwrap_or(started)
+            .format(&time::format_description::well_known::Rfc3339)
+            .unwrap_or_default(),
+        duration_ms: t0.elapsed().as_secs_f64() * 1000.0,
+        suite_hash: host_suite_hash(false),
+        liveness: Liveness { before: true, after: true },
+        options: RunOptions { seed: Some(opts.run.hand_seed), ..Default::default() },
+        preflight: None,
+        stopped: None,
+        groups: Vec::new(),
+        wire: None,
+        summary: Default::default(),
+        clauses: Vec::new(),
+        cases,
+    };
+    report.tally();
+    Ok(CheckHostOutcome { report, run: r, session })
+}
+
+/// The version of the host clauses, where a conformance report has its suite hash: SHA-256
+/// over each clause's id and title (and, for `gcl fuzz host`, each operator's name).
+pub fn host_suite_hash(with_operators: bool) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for c in HostClause::ALL {
+        h.update(format!("{}\t{}\n", c.id(), c.title()));
+    }
+    if with_operators {
+        for o in crate::sim::misbehave::Operator::ALL {
+            h.update(format!("{}\n", o.name()));
+        }
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {
+    let failed = verdict != Verdict::Pass;
+    CaseResult {
+        id: id.to_string(),
+        title: title.to_string(),
+        clauses: vec![clause.to_string()],
+        decisions: Vec::new(),
+        level: "MUST".into(),
+        verdict,
+        duration_ms: 0.0,
+        message: failed.then(|| crate::report::truncate_note(&broken.join("; "), 1000)),
+        diff: None,
+        transcript: failed.then(|| crate::report::truncate_note(session, crate::report::MAX_SHOWN)),
+    }
+}

@@ -1,0 +1,74 @@
+//! `gcl check-host`: a perfect simulated hand grades a host program's traffic clause by clause
+//! (library code in `gcl_harness::check_host`).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use gcl_harness::check_host::{CheckHostOptions, check_host};
+use gcl_harness::report::Verdict;
+
+use super::fuzz_host::HostArgs;
+use super::{EXIT_FAIL, EXIT_OK};
+
+/// Arguments of `gcl check-host`.
+#[derive(Debug, clap::Args)]
+#[command(after_long_help = "\
+Clauses: host-line-ending (lines end in a single CR, never LF), host-valid-commands (command
+words, prefixes and values valid for the profile), host-waits-for-answer (nothing sent while an
+answer is still coming, except ^C), host-realtime-blocks (control blocks of the layout's size
+with a valid header), host-leaves-cleanly (the loop left and the last line ended before the
+host goes), host-exits-cleanly (no crash, no hang, an accepted exit code); with --golden,
+host-golden (the host sends exactly the golden transcript's `send` bytes).
+
+Exit codes: 0 every clause passes, 1 a clause fails, 2 usage or infrastructure.
+
+Example:
+  gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}")]
+pub struct Args {
+    #[command(flatten)]
+    host: HostArgs,
+    /// Compare the bytes the host sends with the `send` steps of this transcript.
+    #[arg(long, value_name = "FILE")]
+    golden: Option<PathBuf>,
+    /// Write the session (what the host sent and the hand answered) to FILE as a transcript;
+    /// a later run can take it as its --golden.
+    #[arg(long, value_name = "FILE")]
+    save_session: Option<PathBuf>,
+    /// Seed of the hand's noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+/// Runs `gcl check-host`.
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let golden = match &args.golden {
+        Some(p) => {
+            let text = gcl_harness::files::read_input_text(p).with_context(|| format!("golden {}", p.display()))?;
+            Some(gcl_transcript::parse(&text).with_context(|| format!("golden {}", p.display()))?)
+        }
+        None => None,
+    };
+    let opts =
+        CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
+    let outcome = check_host(&opts).context("running the host")?;
+    let report = outcome.report;
+    if let Some(p) = &args.save_session {
+        gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?;
+        eprintln!("wrote {}", p.display());
+    }
+    for c in &report.cases {
+        println!("{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title);
+        if let Some(m) = &c.message {
+            println!("        {m}");
+        }
+    }
+    let failed = report.cases.iter().filter(|c| c.verdict != Verdict::Pass).count();
+    println!("{} clause(s), {failed} failing", report.cases.len());
+    if let Some(dir) = args.host.report_dir() {
+        for p in gcl_harness::report::write_all(dir, &report)? {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    Ok(if failed == 0 { EXIT_OK } else { EXIT_FAIL })
+}

@@ -1,0 +1,387 @@
+//! `gcl fuzz host`: the adversarial hand for host libraries (library code in
+//! `gcl_harness::fuzz::host`). Also owns the arguments `gcl check-host` shares.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use anyhow::Context;
+use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
+use gcl_harness::fuzz::host::{
+    Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
+};
+use gcl_harness::report::{CaseResult, Liveness, RunOptions, RunReport, Verdict};
+use gcl_harness::sim::misbehave::Operator;
+use gcl_harness::sim::{Pace, TimeMode};
+
+use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
+use nix::sys::signalfd::SignalFd;
+
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
+
+fn duration(s: &str) -> Result<Duration, String> {
+    humantime::parse_duration(s).map_err(|e| format!("`{s}`: {e} (write durations as 30s, 500ms or 5m)"))
+}
+
+/// What `gcl fuzz host` and `gcl check-host` share: the line, the hand, the host.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("line").args(["pty", "tcp"])))]
+pub struct HostArgs {
+    /// The host opens a pseudo-terminal (the default); `{port}` is its path.
+    #[arg(long)]
+    pty: bool,
+    /// The host connects to a loopback TCP port; `{port}` is 127.0.0.1:N, `{url}` socket://127.0.0.1:N.
+    #[arg(long)]
+    tcp: bool,
+    /// Profile of the simulated hand: seed, bh8-262-4.3, bh8-262-4.4 (alias bh8-262), or a spec TOML file.
+    #[arg(long, default_value = "bh8-262")]
+    profile: String,
+    /// fast: simulated time follows the bytes, motion completes at once (default); real: the wall clock.
+    #[arg(long, value_enum, default_value = "fast")]
+    time: super::sim::TimeArg,
+    /// Pace both directions at this rate; default: unpaced in fast time, the hand's BAUD in real time.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(50..=4_000_000))]
+    baud: Option<u32>,
+    /// A hang: the host neither sends nor exits for this long after the hand's last answer.
+    #[arg(long, value_name = "D", default_value = "3s", value_parser = duration)]
+    timeout_hang: Duration,
+    /// A hang too: one run taking longer than this.
+    #[arg(long, value_name = "D", default_value = "60s", value_parser = duration)]
+    run_budget: Duration,
+    /// Exit codes of the host that are no finding (a host that reports a broken hand and
+    /// exits 1 is doing its job).
+    #[arg(long, value_name = "LIST", default_value = "0,1", value_delimiter = ',', allow_hyphen_values = true)]
+    ok_exit_codes: Vec<i32>,
+    /// Write report.json, junit.xml and report.html into DIR.
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+    /// The host program and its arguments (after --); `{port}`/`{url}` in them, or GCL_PORT
+    /// and GCL_PORT_URL in its environment, name the port.
+    #[arg(last = true, required = true, value_name = "COMMAND")]
+    command: Vec<String>,
+}
+
+impl HostArgs {
+    /// The run these arguments describe, with the hand's noise seed.
+    pub fn host_run(&self, hand_seed: u64) -> anyhow::Result<HostRun> {
+        let profile = load_profile(&self.profile)?;
+        let time = TimeMode::from(self.time);
+        let pace = match (self.baud, time) {
+            (Some(b), _) => Pace::Fixed(b),
+            (None, TimeMode::Fast) => Pace::Unpaced,
+            (None, TimeMode::Real) => Pace::Hand,
+        };
+        Ok(HostRun {
+            command: self.command.clone(),
+            transport: if self.tcp { Transport::Tcp } else { Transport::Pty },
+            profile,
+            time,
+            pace,
+            hand_seed,
+            timeout_hang: self.timeout_hang,
+            budget: self.run_budget,
+        })
+    }
+
+    /// Exit codes that pass.
+    pub fn ok_exit_codes(&self) -> Vec<i32> {
+        self.ok_exit_codes.clone()
+    }
+
+    /// Where reports go.
+    pub fn report_dir(&self) -> Option<&std::path::Path> {
+        self.report.as_deref()
+    }
+}
+
+fn after_help() -> String {
+    let ops: Vec<String> = Operator::ALL
+        .iter()
+        .map(|o| format!("  {:<16} {:>2}  {}", o.name(), o.default_weight(), o.description()))
+        .collect();
+    format!(
+        "\
+Each run starts a fresh simulated hand on a fresh pty (or TCP port), runs COMMAND to its end,
+and judges it: a crash (death by signal; an AddressSanitizer report, Rust panic or Python
+traceback on stderr), a hang (--timeout-hang of silence after the hand's last answer, or
+--run-budget), an exit code outside --ok-exit-codes, or a protocol violation (the clauses of
+`gcl check-host`). Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
+or a mutation of a schedule that made the host take a new path. Each distinct finding is
+minimized and written to --out as a bundle; --replay BUNDLE runs it again.
+
+Misbehaviours (--ops NAME[,NAME=WEIGHT...]; default weight shown):
+{}
+
+Exit codes: 0 no finding, 1 findings, 2 usage or infrastructure.
+
+Examples:
+  gcl fuzz host --duration 5m --report reports/host -- python3 my_host.py {{port}}
+  gcl fuzz host --ops delay-above,truncate --runs 200 -- ./host_c --port {{port}}
+  gcl fuzz host --replay fuzz-host-findings/hang-1a2b3c4d -- python3 my_host.py {{port}}",
+        ops.join("\n")
+    )
+}
+
+/// Arguments of `gcl fuzz host`.
+#[derive(Debug, clap::Args)]
+#[command(after_long_help = after_help())]
+pub struct Args {
+    #[command(flatten)]
+    host: HostArgs,
+    /// Seed of the schedules (and of the hand's noise).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Stop after N runs (default: 1000 when --duration is not given either).
+    #[arg(long, value_name = "N", conflicts_with = "duration")]
+    runs: Option<u64>,
+    /// Stop after this long (30s, 5m).
+    #[arg(long, value_name = "D", value_parser = duration)]
+    duration: Option<Duration>,
+    /// Where bundles go.
+    #[arg(long, value_name = "DIR", default_value = "fuzz-host-findings")]
+    out: PathBuf,
+    /// Run a bundle's schedule once and say whether its finding comes back.
+    #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
+    replay: Option<PathBuf>,
+    /// N hands and N hosts at once, each pair on its own line.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=64))]
+    jobs: u64,
+    /// Only these misbehaviours, optionally weighted: delay-above,truncate=5.
+    #[arg(long, value_name = "LIST", value_parser = Weights::parse)]
+    ops: Option<Weights>,
+    /// Most misbehaviours in a fresh schedule.
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    max_misbehaviours: usize,
+    /// Keep each finding's schedule as found.
+    #[arg(long)]
+    no_minimize: bool,
+}
+
+/// Runs `gcl fuzz host`.
+pub fn run(args: Args) -> anyhow::Result<u8> {
+    let run = args.host.host_run(args.seed)?;
+    if let Some(b) = &args.replay {
+        return replay(&args, run, b);
+    }
+    let opts = FuzzOptions {
+        run,
+        seed: args.seed,
+        runs: args.runs,
+        duration: args.duration,
+        ok_exit_codes: args.host.ok_exit_codes(),
+        jobs: args.jobs as usize,
+        weights: args.ops.clone().unwrap_or_default(),
+        max_planned: args.max_misbehaviours.max(1),
+        minimize: !args.no_minimize,
+    };
+    eprintln!(
+        "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",
+        opts.seed,
+        opts.run.profile.id,
+        if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" },
+        opts.run.time.name(),
+        opts.jobs,
+        args.out.display()
+    );
+    let stop = stop_on_signals()?;
+    let out = args.out.clone();
+    let info_of = |f: &Finding| info(&opts, f);
+    let on_event = |e: Event| match e {
+        Event::Run { .. } => {}
+        Event::Found(f) => {
+            let dir = bundle::write(&out, &info_of(&f), &f);
+            let where_ = match &dir {
+                Ok(d) => d.display().to_string(),
+                Err(e) => format!("bundle not written: {e}"),
+            };
+            eprintln!(
+                "  [{}] {} (run {}, {:.1} s, {} misbehaviour(s)) -> {}",
+                f.verdict.kind.name(),
+                f.verdict.signature,
+                f.run,
+                f.found_after_ms as f64 / 1000.0,
+                f.schedule.planned.len(),
+                where_
+            );
+        }
+    };
+    let campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    if stop.load(Ordering::Relaxed) {
+        eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
+    }
+    // Once more with the final hit counts.
+    for f in &campaign.findings {
+        let _ = bundle::write(&out, &info(&opts, f), f);
+    }
+    let secs = campaign.elapsed_ms as f64 / 1000.0;
+    eprintln!(
+        "gcl fuzz host: {} runs (+{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
+        campaign.runs,
+        campaign.minimize_runs,
+        secs,
+        campaign.runs as f64 / secs.max(1e-3),
+        campaign.findings.len(),
+        campaign.paths,
+        campaign.corpus
+    );
+    if !campaign.fired_at.is_empty() {
+        eprintln!("misbehaviours fired, by protocol state:");
+        for (op, states) in &campaign.fired_at {
+            let list: Vec<String> = states.iter().map(|(s, n)| format!("{s} x{n}")).collect();
+            eprintln!("  {op:<16} {}", list.join(", "));
+        }
+    }
+    if let Some(dir) = args.host.report_dir() {
+        let report = campaign_report(&opts, &campaign);
+        for p in gcl_harness::report::write_all(dir, &report)? {
+            eprintln!("wrote {}", p.display());
+        }
+        let p = dir.join("fuzz.json");
+        gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(&campaign)?)?;
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+}
+
+/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign: the runs in flight
+/// are called off (their hosts killed) and bundles and reports are still written; a second
+/// signal exits at once.
+fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
+    let mut mask = SigSet::empty();
+    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        mask.add(s);
+    }
+    // Threads started from here on inherit the mask; host processes do not (std resets it).
+    pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
+    let signals = SignalFd::new(&mask).context("signalfd")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    std::thread::spawn(move || {
+        while let Ok(Some(_)) = signals.read_signal() {
+            if flag.swap(true, Ordering::Relaxed) {
+                std::process::exit(i32::from(EXIT_ERROR));
+            }
+            eprintln!("gcl fuzz host: stopping: the runs in flight are called off (again to exit now)");
+        }
+    });
+    Ok(stop)
+}
+
+fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
+    BundleInfo {
+        kind: f.verdict.kind,
+        signature: f.verdict.signature.clone(),
+        message: f.verdict.message.clone(),
+        seed: opts.seed,
+        run: f.run,
+        found_after_ms: f.found_after_ms,
+        hits: f.hits,
+        hand_seed: opts.run.hand_seed,
+        profile: opts.run.profile.id.clone(),
+        transport: opts.run.transport,
+        time: opts.run.time.name().to_string(),
+        command: opts.run.command.clone(),
+        end: f.end.clone(),
+        fired: f.fired.clone(),
+    }
+}
+
+/// A report with one case per distinct finding (or one passing case when there is none).
+fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
+    let started = time::OffsetDateTime::now_utc() - time::Duration::milliseconds(c.elapsed_ms as i64);
+    let mut cases: Vec<CaseResult> = c
+        .findings
+        .iter()
+        .map(|f| CaseResult {
+            id: format!("fuzz-host-{}", bundle::dir_name(f.verdict.kind, &f.verdict.signature)),
+            title: f.verdict.signature.clone(),
+            clauses: vec![format!("host: {}", f.verdict.kind.name())],
+            decisions: Vec::new(),
+            level: "MUST".into(),
+            verdict: if f.verdict.kind == FindingKind::Hang { Verdict::Timeout } else { Verdict::Fail },
+            duration_ms: 0.0,
+            message: Some(format!(
+                "{} (run {}, {} hit(s), schedule: {})",
+                f.verdict.message,
+                f.run,
+                f.hits,
+                f.schedule.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(", ")
+            )),
+            diff: None,
+            transcript: Some(gcl_harness::report::truncate_note(
+                &bundle::transcript(&info(opts, f), &f.exchanges),
+                gcl_harness::report::MAX_SHOWN,
+            )),
+        })
+        .collect();
+    if cases.is_empty() {
+        cases.push(CaseResult {
+            id: "fuzz-host-campaign".into(),
+            title: format!("{} runs against a misbehaving hand without a finding", c.runs),
+            clauses: vec!["host: fuzz".into()],
+            decisions: Vec::new(),
+            level: "MUST".into(),
+            verdict: Verdict::Pass,
+            duration_ms: c.elapsed_ms as f64,
+            message: None,
+            diff: None,
+            transcript: None,
+        });
+    }
+    let mut r = RunReport {
+        format: gcl_harness::report::REPORT_FORMAT,
+        tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
+        target: format!("host: {}", opts.run.command.join(" ")),
+        profile: opts.run.profile.id.clone(),
+        level: "all".into(),
+        started: started
+            .replace_nanosecond(0)
+            .unwrap_or(started)
+            .format(&time::format_description::well_known::Rfc3339)
+            .unwrap_or_default(),
+        duration_ms: c.elapsed_ms as f64,
+        suite_hash: gcl_harness::check_host::host_suite_hash(true),
+        liveness: Liveness { before: true, after: true },
+        options: RunOptions { seed: Some(opts.seed), ..Default::default() },
+        preflight: None,
+        stopped: None,
+        groups: Vec::new(),
+        wire: None,
+        summary: Default::default(),
+        clauses: Vec::new(),
+        cases,
+    };
+    r.tally();
+    r
+}
+
+fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Result<u8> {
+    let (info, schedule) = bundle::read(dir)?;
+    run.profile = load_profile(&info.profile)?;
+    run.transport = info.transport;
+    run.hand_seed = info.hand_seed;
+    // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
+    let time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
+    if time != run.time {
+        run.time = time;
+        if args.host.baud.is_none() {
+            run.pace = if time == TimeMode::Real { Pace::Hand } else { Pace::Unpaced };
+        }
+    }
+    let r = run_once(&run, &schedule)?;
+    let verdicts = judge(&r, &args.host.ok_exit_codes());
+    for f in &r.fired {
+        eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what);
+    }
+    if verdicts.iter().any(|v| v.signature == info.signature) {
+        eprintln!("gcl fuzz host: reproduced: {}", info.signature);
+        Ok(EXIT_FAIL)
+    } else {
+        eprintln!("gcl fuzz host: NOT reproduced: {}", info.signature);
+        for v in &verdicts {
+            eprintln!("  instead: {}", v.signature);
+        }
+        Ok(if verdicts.is_empty() { EXIT_OK } else { EXIT_FAIL })
+    }
+}

@@ -1,0 +1,376 @@
+//! The host's side of the protocol, graded clause by clause from the bytes it sends (`gcl
+//! check-host`, and every run of `gcl fuzz host`).
+//!
+//! [`HostChecker`] is fed the host's bytes as the hand reads them and the hand's answers as
+//! they go out, and keeps the host-side protocol state: the line being typed, whether an
+//! answer is still coming, the RealTime block being sent. It never panics on any bytes and
+//! never reads a clock.
+
+use std::sync::Arc;
+
+use gcl_model::grammar::Line;
+use gcl_model::{ControlHeader, Device, Mode, Profile};
+use serde::{Deserialize, Serialize};
+
+/// A clause of host conformance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HostClause {
+    /// Lines end in a single CR, never LF.
+    LineEnding,
+    /// Command words, prefixes and values are valid for the profile.
+    ValidCommands,
+    /// Nothing is sent while an answer is still coming, except ^C.
+    WaitsForAnswer,
+    /// RealTime blocks have the size the layout demands and a valid header.
+    RealtimeBlocks,
+    /// The host leaves the RealTime loop (and its last line) cleanly before it goes.
+    LeavesCleanly,
+    /// The host program ends by itself with an accepted exit code, without crashing.
+    ExitsCleanly,
+}
+
+impl HostClause {
+    /// Every clause, in report order.
+    pub const ALL: [HostClause; 6] = [
+        HostClause::LineEnding,
+        HostClause::ValidCommands,
+        HostClause::WaitsForAnswer,
+        HostClause::RealtimeBlocks,
+        HostClause::LeavesCleanly,
+        HostClause::ExitsCleanly,
+    ];
+
+    /// Its stable id (report case ids are `host-<id>`).
+    pub fn id(self) -> &'static str {
+        match self {
+            HostClause::LineEnding => "line-ending",
+            HostClause::ValidCommands => "valid-commands",
+            HostClause::WaitsForAnswer => "waits-for-answer",
+            HostClause::RealtimeBlocks => "realtime-blocks",
+            HostClause::LeavesCleanly => "leaves-cleanly",
+            HostClause::ExitsCleanly => "exits-cleanly",
+        }
+    }
+
+    /// What it demands, one line.
+    pub fn title(self) -> &'static str {
+        match self {
+            HostClause::LineEnding => "command lines end in a single CR, never LF",
+            HostClause::ValidCommands => "command words, prefixes and values are valid for the profile",
+            HostClause::WaitsForAnswer => "nothing is sent while an answer is still coming, except ^C",
+            HostClause::RealtimeBlocks => "RealTime control blocks have the layout's size and a valid header",
+            HostClause::LeavesCleanly => "the host leaves the RealTime loop and ends its last line before it goes",
+            HostClause::ExitsCleanly => "the host exits by itself with an accepted code, without a crash",
+        }
+    }
+
+    /// The spec clause it rests on (report `clauses`).
+    pub fn spec_clause(self) -> &'static str {
+        match self {
+            HostClause::LineEnding => "decision:framing-line-ending",
+            HostClause::ValidCommands => "seed: Command reference",
+            HostClause::WaitsForAnswer => "decision:framing-prompt",
+            HostClause::RealtimeBlocks => "seed: RealTime Control",
+            HostClause::LeavesCleanly => "seed: RealTime Control",
+            HostClause::ExitsCleanly => "host: process",
+        }
+    }
+}
+
+/// One thing the host did wrong.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HostViolation {
+    /// The clause broken.
+    pub clause: HostClause,
+    /// A short, stable description (used in signatures: no byte counts or values that vary).
+    pub kind: String,
+    /// What exactly, with the bytes escaped.
+    pub detail: String,
+}
+
+/// Longest line kept for grading (longer lines are graded on their start).
+const LINE_CAP: usize = 4096;
+
+/// The host-side protocol state, fed both directions.
+#[derive(Debug, Clone)]
+pub struct HostChecker {
+    profile: Arc<Profile>,
+    line: Vec<u8>,
+    /// The last byte the host sent (for CR CR).
+    prev: Option<u8>,
+    /// A command line was sent and its answer has not ended yet.
+    pending: bool,
+    /// The answer still coming was broken by a misbehaviour: the host may give up on it.
+    broken: bool,
+    /// The command word of the last line sent.
+    last_command: Option<String>,
+    /// In RealTime: data bytes still due for the block being sent.
+    block_due: usize,
+    /// In RealTime: the size of that block.
+    block_size: usize,
+    /// The mode the hand was in after its last answer.
+    mode: Mode,
+    /// Command words the host sent, in order.
+    commands: Vec<String>,
+    violations: Vec<HostViolation>,
+}
+
+impl HostChecker {
+    /// A checker for a hand of this profile, at the prompt.
+    pub fn new(profile: Arc<Profile>) -> HostChecker {
+        HostChecker {
+            profile,
+            line: Vec::new(),
+            prev: None,
+            pending: false,
+            broken: false,
+            last_command: None,
+            block_due: 0,
+            block_size: 0,
+            mode: Mode::Idle,
+            commands: Vec::new(),
+            violations: Vec::new(),
+        }
+    }
+
+    /// What the host did wrong so far.
+    pub fn violations(&self) -> &[HostViolation] {
+        &self.violations
+    }
+
+    /// The command words the host sent, in order (its path through the protocol).
+    pub fn commands(&self) -> &[String] {
+        &self.commands
+    }
+
+    /// The protocol state now, for people and for hang signatures.
+    pub fn state(&self) -> String {
+        let after = self.last_command.as_deref().map(|c| format!(" after {c}")).unwrap_or_default();
+        match self.mode {
+            Mode::Loop if self.block_due > 0 => format!("RealTime, mid-block{after}"),
+            Mode::Loop if self.pending => format!("RealTime, awaiting feedback{after}"),
+            Mode::Loop => format!("RealTime loop{after}"),
+            _ if self.pending => format!("awaiting the answer{after}"),
+            _ if !self.line.is_empty() => format!("mid-line{after}"),
+            _ => format!("at the prompt{after}"),
+        }
+    }
+
+    /// The name of the answer the hand is about to send (for misbehaviour reports).
+    pub fn answer_state(&self, device: &Device) -> String {
+        if device.mode() == Mode::Loop {
+            return "RealTime feedback".to_string();
+        }
+        match &self.last_command {
+            Some(c) => format!("answer to {c}"),
+            None => "answer to an empty line".to_string(),
+        }
+    }
+
+    fn violate(&mut self, clause: HostClause, kind: &str, detail: String) {
+        // One of each kind per session is enough to grade and to deduplicate.
+        if !self.violations.iter().any(|v| v.clause == clause && v.kind == kind) {
+            self.violations.push(HostViolation { clause, kind: kind.to_string(), detail });
+        }
+    }
+
+    /// Host bytes as the hand reads them.
+    pub fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
+        let in_loop = device.mode() == Mode::Loop || self.mode == Mode::Loop;
+        let abort = self.profile.framing.abort;
+        let mut looping = in_loop;
+        for &b in bytes {
+            if looping {
+                self.realtime_byte(device, b, &mut looping);
+                self.prev = Some(b);
+                continue;
+            }
+            if b == abort {
+                self.line.clear();
+                self.pending = true;
+                self.broken = true;
+                self.last_command = Some("^C".into());
+                self.prev = Some(b);
+                continue;
+            }
+            if b == b'\n' {
+                self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
+                self.prev = Some(b);
+                continue;
+            }
+            if self.pending && !self.broken {
+                let cmd = self.last_command.clone().unwrap_or_default();
+                self.violate(
+                    HostClause::WaitsForAnswer,
+                    "sent before the prompt",
+                    format!("byte \"{}\" sent before the answer to {cmd} had ended", esc(&[b])),
+                );
+            }
+            if b == self.profile.framing.terminator {
+                self.end_line();
+            } else if self.line.len() < LINE_CAP {
+                self.line.push(b);
+            }
+            self.prev = Some(b);
+        }
+    }
+
+    fn end_line(&mut self) {
+        let line = std::mem::take(&mut self.line);
+        let text: Vec<u8> = line.iter().copied().filter(|&c| c != b'\n').collect();
+        if text.iter().all(|c| c.is_ascii_whitespace()) {
+            if self.prev == Some(self.profile.framing.terminator) {
+                self.violate(HostClause::LineEnding, "CR CR", "an empty line (two CRs in a row)".into());
+            }
+            self.pending = true;
+            self.broken = false;
+            return;
+        }
+        match gcl_model::parse_line(&self.profile, &text) {
+            Ok(Line::Command(c)) => {
+                let canon = c.to_line(&self.profile);
+                let word = canon
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or_default()
+                    .trim_start_matches(|c: char| c.is_ascii_digit())
+                    .to_string();
+                self.last_command = Some(word.clone());
+                self.commands.push(word);
+            }
+            Ok(Line::Empty) => {}
+            Err(r) => {
+                let problems: Vec<String> = r.problems.iter().map(|p| p.to_string()).collect();
+                self.violate(
+                    HostClause::ValidCommands,
+                    "invalid command",
+                    format!("\"{}\": {}", esc(&text), problems.join("; ")),
+                );
+                self.last_command =
+                    Some(String::from_utf8_lossy(text.split(|c| *c == b' ').next().unwrap_or(&[])).into_owned());
+            }
+        }
+        self.pending = true;
+        self.broken = false;
+    }
+
+    fn realtime_byte(&mut self, device: &Device, b: u8, looping: &mut bool) {
+        if self.block_due > 0 {
+            self.block_due -= 1;
+            return;
+        }
+        if self.pending && !self.broken && b != self.profile.framing.abort {
+            self.violate(
+                HostClause::WaitsForAnswer,
+                "block before feedback",
+                format!("header \"{}\" sent before the answer to the last block", esc(&[b])),
+            );
+        }
+        match ControlHeader::from_byte(b) {
+            Some(ControlHeader::Abort) => {
+                *looping = false;
+                self.mode = Mode::Idle;
+                self.pending = true;
+                self.broken = false;
+                self.last_command = Some("^C".into());
+            }
+            Some(h) => {
+                let size = device.rt_layout().map_or(1, |l| l.control().size());
+                if h.has_data() {
+                    self.block_due = size.saturating_sub(1);
+                    self.block_size = size;
+                }
+                self.pending = true;
+                self.broken = false;
+            }
+            None => self.violate(
+                HostClause::RealtimeBlocks,
+                "bad header",
+                format!(
+                    "byte \"{}\" where a control block header was due (the block before had {} bytes)",
+                    esc(&[b]),
+                    self.block_size
+                ),
+            ),
+        }
+    }
+
+    /// The hand's answer as it goes out; `misbehaved` when the fuzzer changed it.
+    pub fn hand_bytes(&mut self, device: &Device, bytes: &[u8], misbehaved: bool) {
+        self.mode = device.mode();
+        if misbehaved {
+            self.broken = true;
+        }
+        let prompt = self.profile.framing.prompt.as_bytes();
+        if self.mode == Mode::Loop || bytes.ends_with(prompt) {
+            self.pending = false;
+        }
+    }
+
+    /// The host went away: grades how it left.
+    pub fn finish(&mut self) {
+        if self.mode == Mode::Loop {
+            self.violate(
+                HostClause::LeavesCleanly,
+                "left in RealTime",
+                "the host went away with the hand in its RealTime loop".into(),
+            );
+        }
+        if self.block_due > 0 {
+            self.violate(
+                HostClause::RealtimeBlocks,
+                "short block",
+                format!("the last control block lacks {} of its {} bytes", self.block_due, self.block_size),
+            );
+        }
+        if !self.line.is_empty() {
+            self.violate(
+                HostClause::LeavesCleanly,
+                "unterminated line",
+                format!("\"{}\" never ended with CR", esc(&self.line)),
+            );
+        }
+    }
+}
+
+fn esc(b: &[u8]) -> String {
+    gcl_model::escape::escape(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(host: &[&[u8]]) -> Vec<HostClause> {
+        let p = Profile::builtin("seed").unwrap();
+        let mut d = Device::with_profile(p.clone());
+        d.take_output();
+        let mut c = HostChecker::new(p);
+        for chunk in host {
+            c.host_bytes(&d, chunk);
+            d.handle_input(d.now(), chunk);
+            d.run_until_idle(std::time::Duration::from_secs(100));
+            let out = d.take_output();
+            c.hand_bytes(&d, &out, false);
+        }
+        c.finish();
+        c.violations().iter().map(|v| v.clause).collect()
+    }
+
+    #[test]
+    fn a_correct_session_has_no_violation() {
+        assert_eq!(run(&[b"\x03", b"FGET DP\r", b"1M 500\r", b"FGET P\r"]), vec![]);
+    }
+
+    #[test]
+    fn each_clause_is_caught() {
+        assert_eq!(run(&[b"FGET DP\n"]), vec![HostClause::LineEnding, HostClause::LeavesCleanly]);
+        assert_eq!(run(&[b"FGET DP\r\n"]), vec![HostClause::LineEnding]);
+        assert_eq!(run(&[b"FGET QQ\r"]), vec![HostClause::ValidCommands]);
+        assert_eq!(run(&[b"FGET DP\rFGET DP\r"]), vec![HostClause::WaitsForAnswer]);
+        assert_eq!(run(&[b"FGET DP"]), vec![HostClause::LeavesCleanly]);
+        // ^C may interrupt anything.
+        assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+}

@@ -1,0 +1,475 @@
+//! `gcl fuzz host`: an adversarial hand for host libraries.
+//!
+//! Each run starts a fresh simulated hand ([`session`]) whose answers a seeded
+//! [`Schedule`] of misbehaviours changes ([`crate::sim::misbehave`]), runs the host command to
+//! its end, and judges it ([`judge`]): a crash (signal, sanitizer report, Rust panic, Python
+//! traceback), a hang, an unexpected exit code, or a protocol violation ([`check`]). Findings
+//! are deduplicated by signature; each distinct one is minimized (the fewest misbehaviours
+//! that still give the same signature) and written as a bundle ([`bundle`]) that `--replay`
+//! runs again. Guidance keeps the schedules whose runs made the host take a new path after a
+//! misbehaviour (an operator at a protocol state followed by a command not seen there before,
+//! or a new command sequence) and mutates them.
+//!
+//! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
+
+pub mod bundle;
+pub mod check;
+pub mod detect;
+pub mod session;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use rand_core::{RngCore, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use serde::{Deserialize, Serialize};
+
+pub use check::{HostChecker, HostClause, HostViolation};
+pub use session::{Dir, Exchange, HostEnd, HostRun, RunError, RunResult, Transport, run_once, run_once_until};
+
+use crate::sim::misbehave::{Operator, Planned, Schedule};
+
+/// What kind of finding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FindingKind {
+    /// Death by a signal, or a sanitizer report, Rust panic or Python traceback on stderr.
+    Crash,
+    /// The host went silent, or overran its run budget.
+    Hang,
+    /// The host exited with a code not in `--ok-exit-codes`.
+    ExitCode,
+    /// The host broke the protocol.
+    Violation,
+}
+
+impl FindingKind {
+    /// The kebab-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FindingKind::Crash => "crash",
+            FindingKind::Hang => "hang",
+            FindingKind::ExitCode => "exit-code",
+            FindingKind::Violation => "violation",
+        }
+    }
+}
+
+/// One problem a run showed.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Verdict {
+    /// Its kind.
+    pub kind: FindingKind,
+    /// Stable across runs of the same bug (the deduplication key).
+    pub signature: String,
+    /// One line for people.
+    pub message: String,
+}
+
+/// Judges a run: every problem it shows, the most serious first (crash, hang, exit code,
+/// violations).
+pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
+    let mut v = Vec::new();
+    let report = detect::crash_report(&r.stderr);
+    match &r.end {
+        HostEnd::Signal(s) => {
+            let frames = report.as_ref().map(|c| format!(" ({})", c.signature)).unwrap_or_default();
+            let name = detect::signal_name(*s);
+            v.push(Verdict {
+                kind: FindingKind::Crash,
+                signature: format!("crash: {name}{frames}"),
+                message: format!("the host died of {name}{frames}"),
+            });
+        }
+        _ if report.is_some() => {
+            let c = report.as_ref().map(|c| (c.signature.clone(), c.headline.clone())).unwrap_or_default();
+            v.push(Verdict { kind: FindingKind::Crash, signature: format!("crash: {}", c.0), message: c.1 });
+        }
+        HostEnd::Hung(state) => v.push(Verdict {
+            kind: FindingKind::Hang,
+            signature: format!("hang: {state}"),
+            message: format!("the host neither sent nor exited ({state})"),
+        }),
+        HostEnd::OverBudget(state) => v.push(Verdict {
+            kind: FindingKind::Hang,
+            signature: format!("hang: over budget, {state}"),
+            message: format!("the host overran its run budget ({state})"),
+        }),
+        HostEnd::Exit(c) if !ok_exit_codes.contains(c) => {
+            let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
+            v.push(Verdict {
+                kind: FindingKind::ExitCode,
+                signature: format!("exit-code: {c}"),
+                message: format!("the host exited with {c}: {}", crate::report::truncate_note(last.trim(), 200)),
+            });
+        }
+        HostEnd::Exit(_) => {}
+    }
+    for x in &r.violations {
+        v.push(Verdict {
+            kind: FindingKind::Violation,
+            signature: format!("violation: {}: {}", x.clause.id(), x.kind),
+            message: format!("{}: {}", x.clause.title(), x.detail),
+        });
+    }
+    v
+}
+
+/// Operators and their weights.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Weights(pub Vec<(Operator, u32)>);
+
+impl Default for Weights {
+    fn default() -> Weights {
+        Weights(Operator::ALL.iter().map(|o| (*o, o.default_weight())).collect())
+    }
+}
+
+impl Weights {
+    /// Only these operators, at their default weights (`--ops a,b`), or `op=weight` pairs.
+    pub fn parse(list: &str) -> Result<Weights, String> {
+        let mut v = Vec::new();
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let (name, w) = match item.split_once('=') {
+                Some((n, w)) => {
+                    (n, w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?)
+                }
+                None => (item, 0),
+            };
+            let op: Operator = name.parse().map_err(|e: crate::sim::misbehave::UnknownOperator| e.to_string())?;
+            v.push((op, if w == 0 && !item.contains('=') { op.default_weight() } else { w }));
+        }
+        if v.iter().all(|(_, w)| *w == 0) {
+            return Err("no operator with a weight above 0".into());
+        }
+        Ok(Weights(v))
+    }
+
+    fn pick(&self, rng: &mut Pcg64Mcg) -> Operator {
+        let total: u64 = self.0.iter().map(|(_, w)| u64::from(*w)).sum();
+        let mut x = rng.next_u64() % total.max(1);
+        for (op, w) in &self.0 {
+            if x < u64::from(*w) {
+                return *op;
+            }
+            x -= u64::from(*w);
+        }
+        self.0[0].0
+    }
+}
+
+/// How a campaign runs.
+#[derive(Debug, Clone)]
+pub struct FuzzOptions {
+    /// The run itself.
+    pub run: HostRun,
+    /// The campaign's seed.
+    pub seed: u64,
+    /// Stop after this many runs...
+    pub runs: Option<u64>,
+    /// ...or after this long.
+    pub duration: Option<Duration>,
+    /// Exit codes that are no finding.
+    pub ok_exit_codes: Vec<i32>,
+    /// Runs at once, each on its own line.
+    pub jobs: usize,
+    /// The operators and their weights.
+    pub weights: Weights,
+    /// Most misbehaviours in a fresh schedule.
+    pub max_planned: usize,
+    /// Minimize each new finding's schedule.
+    pub minimize: bool,
+}
+
+/// A distinct finding.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Finding {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The run that first showed it (0 is the run without misbehaviour).
+    pub run: u64,
+    /// Wall time from the campaign's start to that run's end.
+    pub found_after_ms: u64,
+    /// How many runs showed it.
+    pub hits: u64,
+    /// The schedule that gave it, minimized.
+    pub schedule: Schedule,
+    /// The schedule as first found.
+    pub original: Schedule,
+    /// The misbehaviours that fired in the minimized run, with their states.
+    pub fired: Vec<crate::sim::misbehave::Fired>,
+    /// How the host ended in it.
+    pub end: HostEnd,
+    /// The host's stderr in it.
+    #[serde(skip)]
+    pub stderr: String,
+    /// The bytes both ways in it.
+    #[serde(skip)]
+    pub exchanges: Vec<Exchange>,
+}
+
+/// What a campaign tells its caller as it goes.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// A run ended.
+    Run {
+        /// Its number.
+        index: u64,
+        /// Its length.
+        elapsed: Duration,
+    },
+    /// A new distinct finding (after minimization).
+    Found(Box<Finding>),
+}
+
+/// A campaign's results.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Campaign {
+    /// Runs made (minimization runs not counted).
+    pub runs: u64,
+    /// Runs made to minimize.
+    pub minimize_runs: u64,
+    /// Wall time, milliseconds.
+    pub elapsed_ms: u64,
+    /// Distinct findings, in the order found.
+    pub findings: Vec<Finding>,
+    /// How often each operator fired at each protocol state.
+    pub fired_at: BTreeMap<String, BTreeMap<String, u64>>,
+    /// Schedules kept by guidance.
+    pub corpus: usize,
+    /// Distinct paths seen (operator at state, then the host's next command).
+    pub paths: usize,
+}
+
+/// Shared state of a campaign's workers.
+struct Shared {
+    corpus: Vec<Schedule>,
+    paths: BTreeSet<String>,
+    findings: Vec<Finding>,
+    by_sig: BTreeMap<String, usize>,
+    fired_at: BTreeMap<String, BTreeMap<String, u64>>,
+    answers: u32,
+    minimize_runs: u64,
+    error: Option<String>,
+}
+
+/// The paths a run took that guidance counts: each misbehaviour at its state with the command
+/// that followed, and the host's command sequence.
+fn paths_of(r: &RunResult) -> Vec<String> {
+    let mut v: Vec<String> = r.reactions.iter().map(|(op, st, next)| format!("{op}@{st}->{next}")).collect();
+    v.push(format!("seq:{}", r.commands.join(" ")));
+    v
+}
+
+/// A fresh schedule or a mutation of a kept one.
+fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], answers: u32) -> Schedule {
+    let span = answers.max(1) + 2;
+    let fresh = |rng: &mut Pcg64Mcg| Planned {
+        answer: 1 + (rng.next_u64() % u64::from(span)) as u32,
+        op: opts.weights.pick(rng),
+        arg: rng.next_u64() as u32,
+    };
+    if corpus.is_empty() || rng.next_u64().is_multiple_of(2) {
+        let n = 1 + (rng.next_u64() as usize % opts.max_planned.max(1));
+        let mut s = Schedule { planned: (0..n).map(|_| fresh(rng)).collect() };
+        s.planned.sort_by_key(|p| p.answer);
+        return s;
+    }
+    let mut s = corpus[rng.next_u64() as usize % corpus.len()].clone();
+    match rng.next_u64() % 4 {
+        0 if s.planned.len() < opts.max_planned + 2 => s.planned.push(fresh(rng)),
+        1 if s.planned.len() > 1 => {
+            let i = rng.next_u64() as usize % s.planned.len();
+            s.planned.remove(i);
+        }
+        2 if !s.planned.is_empty() => {
+            let i = rng.next_u64() as usize % s.planned.len();
+            s.planned[i].arg = rng.next_u64() as u32;
+        }
+        _ if !s.planned.is_empty() => {
+            let i = rng.next_u64() as usize % s.planned.len();
+            let a = s.planned[i].answer;
+            s.planned[i].answer = if rng.next_u64().is_multiple_of(2) { a.saturating_sub(1).max(1) } else { a + 1 };
+        }
+        _ => s.planned.push(fresh(rng)),
+    }
+    s.planned.sort_by_key(|p| p.answer);
+    s
+}
+
+/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`).
+pub fn minimize(
+    opts: &FuzzOptions,
+    schedule: &Schedule,
+    signature: &str,
+    runs: &mut u64,
+    stop: &AtomicBool,
+) -> Result<(Schedule, RunResult), RunError> {
+    let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
+        *runs += 1;
+        let r = run_once_until(&opts.run, s, stop)?;
+        Ok(judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature).then_some(r))
+    };
+    // Keep only what fired: entries that never fired changed nothing.
+    let mut best = schedule.clone();
+    let mut best_run = None;
+    let mut i = 0;
+    while i < best.planned.len() {
+        let mut trial = best.clone();
+        trial.planned.remove(i);
+        if let Some(r) = gives(&trial, runs)? {
+            best = trial;
+            best_run = Some(r);
+        } else {
+            i += 1;
+        }
+    }
+    let r = match best_run {
+        Some(r) => r,
+        None => run_once_until(&opts.run, &best, stop)?,
+    };
+    Ok((best, r))
+}
+
+/// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
+pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
+    let started = Instant::now();
+    let next = AtomicU64::new(0);
+    let completed = AtomicU64::new(0);
+    let shared = Mutex::new(Shared {
+        corpus: Vec::new(),
+        paths: BTreeSet::new(),
+        findings: Vec::new(),
+        by_sig: BTreeMap::new(),
+        fired_at: BTreeMap::new(),
+        answers: 8,
+        minimize_runs: 0,
+        error: None,
+    });
+    let done = |i: u64| {
+        stop.load(Ordering::Relaxed)
+            || opts.runs.is_some_and(|n| i >= n)
+            || opts.duration.is_some_and(|d| started.elapsed() >= d)
+            || (opts.runs.is_none() && opts.duration.is_none() && i >= 1000)
+    };
+    let worker = || {
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if done(i) {
+                break;
+            }
+            let schedule = if i == 0 {
+                Schedule::default()
+            } else {
+                let mut rng = Pcg64Mcg::seed_from_u64(opts.seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+                let Ok(sh) = shared.lock() else { break };
+                next_schedule(&mut rng, opts, &sh.corpus, sh.answers)
+            };
+            let r = match run_once_until(&opts.run, &schedule, stop) {
+                Ok(r) => r,
+                Err(RunError::Cancelled) => break,
+                Err(e) => {
+                    if let Ok(mut sh) = shared.lock() {
+                        sh.error.get_or_insert(e.to_string());
+                    }
+                    stop.store(true, Ordering::Relaxed);
+                    break;
+                }
+            };
+            completed.fetch_add(1, Ordering::Relaxed);
+            on_event(Event::Run { index: i, elapsed: r.elapsed });
+            let verdicts = judge(&r, &opts.ok_exit_codes);
+            let mut new_sigs = Vec::new();
+            if let Ok(mut sh) = shared.lock() {
+                if i == 0 {
+                    sh.answers = r.answers.max(1);
+                }
+                for f in &r.fired {
+                    *sh.fired_at.entry(f.op.name().to_string()).or_default().entry(f.state.clone()).or_default() += 1;
+                }
+                let mut fresh_path = false;
+                for p in paths_of(&r) {
+                    fresh_path |= sh.paths.insert(p);
+                }
+                if fresh_path && !r.fired.is_empty() {
+                    sh.corpus.push(schedule.clone());
+                }
+                for v in verdicts {
+                    match sh.by_sig.get(&v.signature) {
+                        Some(&k) => sh.findings[k].hits += 1,
+                        None => {
+                            let k = sh.findings.len();
+                            sh.by_sig.insert(v.signature.clone(), k);
+                            sh.findings.push(Finding {
+                                verdict: v.clone(),
+                                run: i,
+                                found_after_ms: started.elapsed().as_millis() as u64,
+                                hits: 1,
+                                schedule: schedule.clone(),
+                                original: schedule.clone(),
+                                fired: r.fired.clone(),
+                                end: r.end.clone(),
+                                stderr: r.stderr.clone(),
+                                exchanges: r.exchanges.clone(),
+                            });
+                            new_sigs.push((k, v.signature));
+                        }
+                    }
+                }
+            }
+            for (k, sig) in new_sigs {
+                if opts.minimize && schedule.planned.len() > 1 {
+                    let mut runs = 0;
+                    let m = minimize(opts, &schedule, &sig, &mut runs, stop);
+                    if let Ok(mut sh) = shared.lock() {
+                        sh.minimize_runs += runs;
+                        if let Ok((s, mr)) = m {
+                            let f = &mut sh.findings[k];
+                            f.schedule = s;
+                            f.fired = mr.fired;
+                            f.end = mr.end;
+                            f.stderr = mr.stderr;
+                            f.exchanges = mr.exchanges;
+                        }
+                    }
+                }
+                if let Ok(sh) = shared.lock() {
+                    on_event(Event::Found(Box::new(sh.findings[k].clone())));
+                }
+            }
+        }
+    };
+    std::thread::scope(|s| {
+        for _ in 0..opts.jobs.max(1) {
+            s.spawn(worker);
+        }
+    });
+    let sh = shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
+    if let Some(e) = sh.error {
+        return Err(RunError::Io(std::io::Error::other(e)));
+    }
+    Ok(Campaign {
+        runs: completed.load(Ordering::Relaxed),
+        minimize_runs: sh.minimize_runs,
+        elapsed_ms: started.elapsed().as_millis() as u64,
+        findings: sh.findings,
+        fired_at: sh.fired_at,
+        corpus: sh.corpus.len(),
+        paths: sh.paths.len(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_parse_names_and_pairs() {
+        let w = Weights::parse("delay-above,truncate=7").unwrap();
+        assert_eq!(w.0, vec![(Operator::DelayAbove, 1), (Operator::Truncate, 7)]);
+        assert!(Weights::parse("truncate=0").is_err());
+        assert!(Weights::parse("nonsense").unwrap_err().contains("unknown misbehaviour"));
+    }
+}

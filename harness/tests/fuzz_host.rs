@@ -1,0 +1,379 @@
+//! `gcl fuzz host` and `gcl check-host` against deliberately buggy host programs
+//! (`host_mutants/`, listed in its README): the fuzzer finds each within a bounded number of
+//! runs and names the right kind of finding; `check-host` flags each protocol violation; the
+//! correct hosts (our own client's example program and a pyserial script) have no finding.
+//!
+//! Python mutants need python3 with pyserial, C mutants a C compiler with AddressSanitizer;
+//! each group is skipped (with a line saying so) when its tools are missing. The time to the
+//! first finding of each mutant is printed (`cargo test --test fuzz_host -- --nocapture`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use gcl_harness::check_host::{CheckHostOptions, check_host};
+use gcl_harness::fuzz::host::{Event, FindingKind, FuzzOptions, HostClause, HostRun, Transport, Weights, fuzz};
+use gcl_harness::report::Verdict;
+use gcl_harness::sim::{Pace, TimeMode};
+
+fn mutants() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants")
+}
+
+fn python_ready() -> bool {
+    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
+    if !ok {
+        eprintln!("skipped: python3 with pyserial is not available");
+    }
+    ok
+}
+
+/// Compiles a C mutant with AddressSanitizer into `dir`; `None` (and a line) without a compiler.
+fn compile_c(name: &str, dir: &Path) -> Option<PathBuf> {
+    let out = dir.join(name);
+    let src = mutants().join(format!("{name}.c"));
+    let built = Command::new("cc")
+        .args(["-fsanitize=address", "-fno-omit-frame-pointer", "-g", "-O0", "-o"])
+        .arg(&out)
+        .arg(&src)
+        .output();
+    match built {
+        Ok(o) if o.status.success() => Some(out),
+        Ok(o) => {
+            eprintln!("skipped: cc -fsanitize=address failed: {}", String::from_utf8_lossy(&o.stderr));
+            None
+        }
+        Err(e) => {
+            eprintln!("skipped: no C compiler ({e})");
+            None
+        }
+    }
+}
+
+fn host_run(command: Vec<String>) -> HostRun {
+    HostRun {
+        command,
+        transport: Transport::Pty,
+        profile: gcl_model::Profile::builtin("seed").unwrap(),
+        time: TimeMode::Fast,
+        pace: Pace::Unpaced,
+        hand_seed: 0,
+        // Above every timeout the hosts use (at most 2 s), so waiting out its own timeout is
+        // never a hang.
+        timeout_hang: Duration::from_millis(2500),
+        budget: Duration::from_secs(30),
+    }
+}
+
+fn python(file: &str) -> Vec<String> {
+    vec!["python3".into(), mutants().join(file).display().to_string()]
+}
+
+/// Fuzzes until a finding of `kind` whose signature holds `needle` (or `runs` runs); returns
+/// its signature and the time to it.
+fn first_finding(
+    command: Vec<String>,
+    ops: &str,
+    kind: FindingKind,
+    needle: &str,
+    runs: u64,
+) -> Option<(String, Duration)> {
+    let opts = FuzzOptions {
+        run: host_run(command),
+        seed: 7,
+        runs: Some(runs),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 2,
+        weights: Weights::parse(ops).unwrap(),
+        max_planned: 3,
+        minimize: false,
+    };
+    let stop = AtomicBool::new(false);
+    let found = Mutex::new(None);
+    let started = Instant::now();
+    fuzz(&opts, &stop, &|e| {
+        if let Event::Found(f) = e
+            && f.verdict.kind == kind
+            && f.verdict.signature.contains(needle)
+        {
+            found.lock().unwrap().get_or_insert((f.verdict.signature.clone(), started.elapsed()));
+            stop.store(true, Ordering::Relaxed);
+        }
+    })
+    .unwrap();
+    found.into_inner().unwrap()
+}
+
+/// (file, operators it is fuzzed with, the kind of finding it must give, what its signature names).
+const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
+    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt", FindingKind::Hang, "awaiting the answer"),
+    ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
+    ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
+    ("py_pipelines.py", "truncate", FindingKind::Violation, "waits-for-answer"),
+    ("py_parse_values.py", "crlf,garbage,restart", FindingKind::Crash, "python ValueError"),
+    ("py_rt_length.py", "rt-block-length,rt-err", FindingKind::Crash, "python IndexError"),
+    ("py_banner_version.py", "banner-variant,restart", FindingKind::Crash, "python ValueError"),
+    ("py_loop_no_abort.py", "truncate", FindingKind::Violation, "leaves-cleanly"),
+    ("py_rt_short_block.py", "truncate", FindingKind::Violation, "realtime-blocks"),
+];
+
+#[test]
+fn python_mutants_are_found_with_the_right_kind() {
+    if !python_ready() {
+        return;
+    }
+    for (file, ops, kind, needle) in PYTHON_MUTANTS {
+        let (sig, t) = first_finding(python(file), ops, kind, needle, 60)
+            .unwrap_or_else(|| panic!("{file}: no {} finding naming `{needle}` in 60 runs", kind.name()));
+        println!("{file}: {} after {:.2} s: {sig}", kind.name(), t.as_secs_f64());
+    }
+}
+
+#[test]
+fn c_mutants_are_found_with_the_right_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, ops, kind, needle) in [
+        ("c_line_buffer", "overlong-line,truncate", FindingKind::Crash, "asan stack-buffer-overflow in read_line"),
+        ("c_err_bits", "err-bits", FindingKind::Crash, "asan global-buffer-overflow in main"),
+        ("c_status_exit", "err-bits", FindingKind::ExitCode, "exit-code: 255"),
+    ] {
+        let Some(exe) = compile_c(name, dir.path()) else { return };
+        let (sig, t) = first_finding(vec![exe.display().to_string(), "{port}".into()], ops, kind, needle, 60)
+            .unwrap_or_else(|| panic!("{name}: no {} finding naming `{needle}` in 60 runs", kind.name()));
+        println!("{name}: {} after {:.2} s: {sig}", kind.name(), t.as_secs_f64());
+    }
+}
+
+#[test]
+fn a_rust_mutant_panic_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let exe = dir.path().join("rs_unwrap_values");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let built = Command::new(rustc)
+        .args(["--edition", "2021", "-O", "-o"])
+        .arg(&exe)
+        .arg(mutants().join("rs_unwrap_values.rs"))
+        .output();
+    if !built.is_ok_and(|o| o.status.success()) {
+        eprintln!("skipped: rustc could not build the Rust mutant");
+        return;
+    }
+    let (sig, t) = first_finding(
+        vec![exe.display().to_string()],
+        "garbage,truncate,err-bits",
+        FindingKind::Crash,
+        "crash: panic at ",
+        60,
+    )
+    .expect("rs_unwrap_values: no panic in 60 runs");
+    println!("rs_unwrap_values: crash after {:.2} s: {sig}", t.as_secs_f64());
+    assert!(sig.contains("rs_unwrap_values.rs:"), "{sig}");
+}
+
+#[test]
+fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
+    if !python_ready() {
+        return;
+    }
+    let grade = |file: &str| {
+        let opts = CheckHostOptions { run: host_run(python(file)), ok_exit_codes: vec![0, 1], golden: None };
+        let report = check_host(&opts).unwrap().report;
+        report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
+    };
+    let id = |c: HostClause| format!("host-{}", c.id());
+    assert_eq!(grade("py_sends_lf.py"), vec![id(HostClause::LineEnding)]);
+    assert_eq!(grade("py_pipelines.py"), vec![id(HostClause::WaitsForAnswer)]);
+    assert_eq!(grade("py_loop_no_abort.py"), vec![id(HostClause::LeavesCleanly)]);
+    // Misaligned blocks also send bytes before their feedback: the size is the root.
+    assert!(grade("py_rt_short_block.py").contains(&id(HostClause::RealtimeBlocks)));
+    for correct in ["gclhost.py", "py_rt_length.py", "py_err_table.py"] {
+        assert_eq!(grade(correct), Vec::<String>::new(), "{correct} talks correctly to a perfect hand");
+    }
+}
+
+fn example(name: &str) -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_BIN_EXE_gcl")).with_file_name("examples").join(name);
+    if !p.exists() {
+        eprintln!("skipped: {} is not built", p.display());
+        return None;
+    }
+    Some(p)
+}
+
+#[test]
+fn correct_hosts_have_no_finding_in_a_longer_run() {
+    let mut hosts = Vec::new();
+    if let Some(p) = example("host_scenario") {
+        hosts.push(vec![
+            p.display().to_string(),
+            "--target".into(),
+            "serial:{port}".into(),
+            "--profile".into(),
+            "seed".into(),
+        ]);
+    }
+    if python_ready() {
+        hosts.push(python("gclhost.py"));
+    }
+    for command in hosts {
+        let opts = FuzzOptions {
+            run: host_run(command.clone()),
+            seed: 3,
+            runs: Some(80),
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs: 2,
+            weights: Weights::default(),
+            max_planned: 3,
+            minimize: false,
+        };
+        let fired = Arc::new(Mutex::new(0));
+        let c = fuzz(&opts, &AtomicBool::new(false), &|_| *fired.lock().unwrap() += 1).unwrap();
+        assert_eq!(c.runs, 80);
+        assert!(c.fired_at.len() > 5, "misbehaviours fired: {:?}", c.fired_at);
+        let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+        assert!(found.is_empty(), "{command:?}: {found:?}");
+    }
+}
+
+/// The report validates against `reports/report.schema.json`, like `conform`'s.
+fn schema_valid(path: &Path) {
+    let schema: serde_json::Value = serde_json::from_str(gcl_harness::report::SCHEMA).unwrap();
+    let v = jsonschema::validator_for(&schema).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let errors: Vec<String> = v.iter_errors(&report).map(|e| format!("{} at {}", e, e.instance_path())).collect();
+    assert!(errors.is_empty(), "{}: {errors:?}", path.display());
+}
+
+fn gcl(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_gcl")).args(args).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
+    if !python_ready() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bundles");
+    let report = dir.path().join("report");
+    let host = mutants().join("py_err_table.py").display().to_string();
+    let (code, _, err) = gcl(&[
+        "fuzz",
+        "host",
+        "--profile",
+        "seed",
+        "--seed",
+        "5",
+        "--runs",
+        "12",
+        "--timeout-hang",
+        "2500ms",
+        "--ops",
+        "err-bits,crlf",
+        "--max-misbehaviours",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--",
+        "python3",
+        &host,
+    ]);
+    assert_eq!(code, 1, "{err}");
+    let bundle = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_str().unwrap().starts_with("crash-"));
+    let bundle = bundle.unwrap_or_else(|| panic!("no crash bundle: {err}"));
+    let finding = std::fs::read_to_string(bundle.join("finding.json")).unwrap();
+    assert!(finding.contains("KeyError"), "{finding}");
+    // Minimized: one ERR with odd bits is all it takes.
+    let schedule: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(bundle.join("schedule.json")).unwrap()).unwrap();
+    let planned = schedule["planned"].as_array().unwrap();
+    assert_eq!(planned.len(), 1, "{schedule}");
+    assert_eq!(planned[0]["op"], "err-bits");
+    let transcript = std::fs::read_to_string(bundle.join("transcript.gcl")).unwrap();
+    assert!(transcript.contains("# misbehaviour err-bits"), "{transcript}");
+    gcl_transcript::parse(&transcript).unwrap();
+    let junit = std::fs::read_to_string(report.join("junit.xml")).unwrap();
+    assert!(junit.contains("<failure"), "{junit}");
+    schema_valid(&report.join("report.json"));
+    assert!(report.join("fuzz.json").exists() && report.join("report.html").exists());
+    // Replay gives the same finding, twice.
+    for _ in 0..2 {
+        let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", "python3", &host]);
+        assert_eq!(code, 1, "{err}");
+        assert!(err.contains("reproduced: crash: python KeyError"), "{err}");
+    }
+    // A clean host replayed against the bundle has no finding.
+    let clean = mutants().join("gclhost.py").display().to_string();
+    let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", "python3", &clean]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("NOT reproduced"), "{err}");
+}
+
+#[test]
+fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
+    if !python_ready() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let golden = dir.path().join("golden.gcl");
+    let mut text = String::from(
+        "gcl-transcript 1\nid: pyserial-host\ntitle: the pyserial host's scenario\nclause: host: golden transcript\nlevel: INFO\nprofile: seed\n\nsend \"\\x03\"\nexpect \"\"\n",
+    );
+    for line in ["HI", "FGET DP", "1M 5000", "1FGET P", "C", "O", "FGET P", "2M 1000", "123FGET P"] {
+        text.push_str(&format!("\nsend \"{line}\\r\"\nexpect \"\"\n"));
+    }
+    std::fs::write(&golden, text).unwrap();
+    let report = dir.path().join("r");
+    let good = mutants().join("gclhost.py").display().to_string();
+    let (code, out, err) = gcl(&[
+        "check-host",
+        "--profile",
+        "seed",
+        "--golden",
+        golden.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--",
+        "python3",
+        &good,
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("PASS    host-golden"), "{out}");
+    assert!(report.join("junit.xml").exists());
+    schema_valid(&report.join("report.json"));
+    let lf = mutants().join("py_sends_lf.py").display().to_string();
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("FAIL    host-golden") && out.contains("FAIL    host-line-ending"), "{out}");
+    // A saved session is a golden for the next run of the same host.
+    let session = dir.path().join("session.gcl");
+    let (code, out, err) =
+        gcl(&["check-host", "--profile", "seed", "--save-session", session.to_str().unwrap(), "--", "python3", &good]);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &good]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("PASS    host-golden"), "{out}");
+    let (code, out, _) =
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &lf]);
+    assert_eq!(code, 1, "{out}");
+    // Usage errors are 2.
+    assert_eq!(gcl(&["check-host", "--profile", "nope", "--", "true"]).0, 2);
+    assert_eq!(gcl(&["fuzz", "host", "--ops", "nonsense", "--", "true"]).0, 2);
+    assert_eq!(gcl(&["fuzz", "host", "--", "/nonexistent/host"]).0, 2);
+}
