@@ -641,7 +641,7 @@ pub fn wire(data: &[u8]) {
     let t = &built.transcript;
     let opts = gcl_harness::suite::replay_options();
     let fresh =
-        |faults: Vec<Fault>| gcl_harness::SimLink::new(p.clone(), DeviceConfig { faults, ..DeviceConfig::default() });
+        |faults: Vec<Fault>| gcl_host::SimLink::new(p.clone(), DeviceConfig { faults, ..DeviceConfig::default() });
     assert!(replay(t, &mut fresh(vec![]), &opts).is_pass(), "wire: the model's own case fails on the unmutated sim");
     let Some(f) = fault else { return };
     let out = replay(t, &mut fresh(vec![f]), &opts);
@@ -672,7 +672,7 @@ pub fn transcript(data: &[u8]) {
 /// Polls the host core may answer before it must be settled (each answer consumes bytes).
 const CLIENT_POLLS: usize = 4096;
 
-/// The host client core (`gcl_harness::client::core::HostCore`) driven by the input: the first
+/// The host client core (`gcl_host::client::core::HostCore`) driven by the input: the first
 /// byte picks the profile; then each byte is an operation (a request from [`seeds::LINES`],
 /// LOOP with the profile's default layout, a RealTime block, ^C, a sync, expecting a prompt,
 /// giving up) or, for bytes from 0x40, a chunk of that many bytes from the hand (the next
@@ -681,7 +681,7 @@ const CLIENT_POLLS: usize = 4096;
 /// Checks, besides not panicking: polling settles (`Ok(None)` or a violation) within
 /// `CLIENT_POLLS` polls, whatever the hand sends.
 pub fn client(data: &[u8]) {
-    use gcl_harness::client::core::{Framing, HostCore};
+    use gcl_host::client::core::{Framing, HostCore};
     let Some((&first, mut rest)) = data.split_first() else { return };
     let profiles = builtin_profiles();
     let p = &profiles[first as usize % profiles.len()];

@@ -16,7 +16,7 @@
 use std::time::Duration;
 
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, run};
-use gcl_harness::target::Target;
+use gcl_host::target::Target;
 use gcl_model::{Fault, Profile};
 
 fn main() {

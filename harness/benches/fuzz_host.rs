@@ -20,11 +20,11 @@
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use gcl_harness::client::{Hand, Timeouts};
 use gcl_harness::fuzz::host::{FuzzOptions, HostRun, Transport, Weights, fuzz, run_once};
 use gcl_harness::sim::misbehave::Schedule;
 use gcl_harness::sim::{Pace, TimeMode};
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::client::{Hand, Timeouts};
+use gcl_host::target::{OpenOptions, Target};
 
 const SCENARIO: [&str; 10] =
     ["FGET DP", "HI", "1M 5000", "1FGET P", "C", "FGET P", "O", "2M 1000", "123FGET P", "FGET DP"];

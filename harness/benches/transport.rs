@@ -27,10 +27,10 @@ use std::os::fd::AsFd;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use gcl_harness::client::Hand;
-use gcl_harness::links::{SerialLink, TcpLink};
 use gcl_harness::sim::{Engine, Pace, SimOptions, StopHandle, pty::Pty, stop_pair, tcp::TcpServer};
-use gcl_harness::{Link, LinkError};
+use gcl_host::client::Hand;
+use gcl_host::links::{SerialLink, TcpLink};
+use gcl_host::{Link, LinkError};
 use gcl_model::Profile;
 
 struct Server {

@@ -12,8 +12,8 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Parser;
-use gcl_harness::client::{ClientError, Hand, Timeouts};
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::client::{ClientError, Hand, Timeouts};
+use gcl_host::target::{OpenOptions, Target};
 
 /// Ten commands against a hand, each with a short deadline.
 #[derive(Debug, Parser)]

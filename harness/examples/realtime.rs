@@ -14,9 +14,9 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, ValueEnum};
-use gcl_harness::client::Hand;
-use gcl_harness::client::programs::{self, Clock};
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::client::Hand;
+use gcl_host::client::programs::{self, Clock};
+use gcl_host::target::{OpenOptions, Target};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum ClockArg {

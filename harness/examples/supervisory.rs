@@ -11,8 +11,8 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use gcl_harness::client::{Hand, programs};
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::client::{Hand, programs};
+use gcl_host::target::{OpenOptions, Target};
 
 /// Initialise a BarrettHand, close F1-F3 and open them again.
 #[derive(Debug, Parser)]

@@ -25,8 +25,11 @@ use ed25519_dalek::{Signature, Signer, SigningKey, Verifier, VerifyingKey};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::files::{MAX_INPUT_BYTES, MAX_KEY_BYTES, open_regular, read_limited, read_text_limited, too_large};
 use crate::report::{RunOptions, RunReport, Verdict, write_all, write_atomic};
+use gcl_host::files::{MAX_INPUT_BYTES, open_regular, read_limited, read_text_limited, too_large};
+
+/// The size limit of a key file.
+pub const MAX_KEY_BYTES: u64 = 64 << 10;
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "MANIFEST.sha256";

@@ -15,14 +15,14 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
 use crate::deadline::DeadlinePolicy;
-use crate::link::{Link, LinkError, SimLink, byte_time};
 use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard};
 use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
 };
 use crate::suite::{self, Case};
-use crate::target::{OpenOptions, Target, open};
+use gcl_host::link::{Link, LinkError, SimLink, byte_time};
+use gcl_host::target::{OpenOptions, Target, open};
 use gcl_transcript::{Form, Level, Requirement};
 
 /// Why a conformance run could not run (a failing hand is a report, not an error).
@@ -217,7 +217,7 @@ impl KnownFailures {
 
     /// Reads and parses a file.
     pub fn load(path: &Path) -> Result<KnownFailures, KnownFailuresError> {
-        let text = crate::files::read_input_text(path)
+        let text = gcl_host::files::read_input_text(path)
             .map_err(|error| KnownFailuresError::Read { path: path.to_path_buf(), error })?;
         let mut k = KnownFailures::parse(&text)
             .map_err(|e| KnownFailuresError::InFile { path: path.to_path_buf(), error: Box::new(e) })?;
@@ -455,8 +455,8 @@ pub fn firmware_version(
     link: &mut dyn Link,
     profile: &Profile,
     timeout: Duration,
-) -> Result<Vec<String>, crate::client::ClientError> {
-    crate::client::ask(link, crate::client::core::Framing::of(profile), "VERS", timeout)
+) -> Result<Vec<String>, gcl_host::client::ClientError> {
+    gcl_host::client::ask(link, gcl_host::client::core::Framing::of(profile), "VERS", timeout)
 }
 
 /// Something a run reports as it goes.

@@ -26,10 +26,10 @@ use std::time::Duration;
 
 use gcl_model::{DeviceConfig, Profile};
 
-use crate::link::{SimLink, byte_time};
 use crate::replay::{ReplayOptions, StepBudget, ceiling_for};
 use crate::suite::{self, Case};
-use crate::target::Target;
+use gcl_host::link::{SimLink, byte_time};
+use gcl_host::target::Target;
 use gcl_transcript::DEFAULT_STEP_TIMEOUT;
 
 /// How deadlines are derived from the model's prediction.

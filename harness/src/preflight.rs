@@ -16,8 +16,8 @@ use gcl_model::escape::escape;
 use gcl_model::{DeviceConfig, Profile};
 
 use crate::deadline::DeadlinePolicy;
-use crate::link::{Link, LinkError, SimLink};
 use crate::replay::discard;
+use gcl_host::link::{Link, LinkError, SimLink};
 
 /// The most bytes of one probe answer kept.
 pub const MAX_ANSWER: usize = 4096;
@@ -223,7 +223,7 @@ mod tests {
         let p = Profile::builtin("seed").unwrap();
         let mut hand = SimLink::new(p.clone(), DeviceConfig { faults, ..Default::default() });
         discard(&mut hand, Duration::from_millis(50), Duration::from_secs(1)).unwrap();
-        run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap()
+        run(&mut hand, &p, &DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None })).unwrap()
     }
 
     /// A hand that answers each probe with a fixed text.
@@ -267,7 +267,7 @@ mod tests {
             pending: Vec::new(),
             now: Duration::ZERO,
         };
-        let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&crate::Target::Sim { profile: None })).unwrap();
+        let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None })).unwrap();
         assert_eq!(r.findings, vec!["an error status reads `Error 32!`, not in the form `ERR 32`"], "{r:?}");
         assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
     }

@@ -22,8 +22,8 @@ use gcl_model::realtime::RtLayout;
 use gcl_model::spec::CommandKind;
 use gcl_model::{Device, DeviceConfig, Event, Mode, Profile};
 
-use crate::client::core::Framing;
-use crate::link::{Link, LinkError, byte_time, drain};
+use gcl_host::client::core::Framing;
+use gcl_host::link::{Link, LinkError, byte_time, drain};
 use gcl_transcript::script::{Action, Script, ScriptStep};
 use gcl_transcript::{DEFAULT_STEP_TIMEOUT, Expect, Form, Header, HostBytes, Piece, Step, Transcript};
 
@@ -302,7 +302,7 @@ pub fn record(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::SimLink;
+    use gcl_host::SimLink;
 
     #[test]
     fn records_lines_loops_blocks_and_banners() {

@@ -9,7 +9,7 @@
 use std::fmt::Write as _;
 use std::time::Duration;
 
-use crate::link::{Link, LinkError};
+use gcl_host::link::{Link, LinkError};
 use gcl_transcript::matcher::{Feed, Matcher, show};
 use gcl_transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
 
@@ -589,7 +589,7 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::SimLink;
+    use gcl_host::SimLink;
     use gcl_model::{DeviceConfig, Fault, Profile};
     use gcl_transcript::parse;
 

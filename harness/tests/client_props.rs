@@ -5,9 +5,9 @@
 
 use std::time::Duration;
 
-use gcl_harness::client::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusal, Violation};
-use gcl_harness::client::{ClientError, Hand, Timeouts};
-use gcl_harness::{Link, LinkError, SimLink};
+use gcl_host::client::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusal, Violation};
+use gcl_host::client::{ClientError, Hand, Timeouts};
+use gcl_host::{Link, LinkError, SimLink};
 use gcl_model::params::ParamStore;
 use gcl_model::realtime::ControlHeader;
 use gcl_model::spec::Scope;
@@ -163,7 +163,7 @@ proptest! {
         let m = motor.to_string();
         let mut link = SimLink::new(p.clone(), DeviceConfig::default());
         // The power-up banner is not an answer to anything.
-        gcl_harness::link::drain(&mut link, Duration::from_millis(100), Duration::from_secs(5)).unwrap();
+        gcl_host::link::drain(&mut link, Duration::from_millis(100), Duration::from_secs(5)).unwrap();
         let mut hand = Hand::new(Box::new(link), p.clone());
         let before = hand.get("1234", &x.name).unwrap();
         hand.set(&m, &x.name, value).unwrap();

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, load_corpus, report, run};
 use gcl_harness::replay::replay;
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::target::{OpenOptions, Target};
 use gcl_model::{Fault, Profile};
 use gcl_transcript::parse;
 
@@ -45,7 +45,7 @@ fn unfound_list() -> BTreeMap<String, String> {
 
 fn replays_on(t: &gcl_transcript::Transcript, faults: Vec<Fault>) -> bool {
     let p = Profile::builtin("bh8-262").unwrap();
-    let mut link = gcl_harness::target::open(
+    let mut link = gcl_host::target::open(
         &Target::Sim { profile: None },
         &OpenOptions { loaded_profile: Some(p), faults, ..OpenOptions::default() },
     )

@@ -270,7 +270,7 @@ fn a_busy_serial_port_is_one_clear_line_and_exit_2() {
     let target = sim.target();
     let path = target.strip_prefix("serial:").unwrap().to_string();
     {
-        let _held = gcl_harness::links::SerialLink::open(&path, 9600).unwrap();
+        let _held = gcl_host::links::SerialLink::open(&path, 9600).unwrap();
         let r = gcl(&["conform", "--target", &target, "--profile", "seed", "--only", "framing-echo"]);
         assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
         assert!(r.stderr.contains("is in use by another program"), "{}", r.stderr);

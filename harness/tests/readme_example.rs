@@ -2,7 +2,7 @@
 //! it must parse and pass against the reference model, so it cannot rot.
 
 use gcl_harness::replay::{ReplayOptions, replay};
-use gcl_harness::{SimLink, Target, target};
+use gcl_host::{SimLink, Target, target};
 use gcl_transcript::parse;
 
 #[test]

@@ -6,7 +6,7 @@ use std::str::FromStr;
 use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter};
 use gcl_harness::report::{self, Verdict};
 use gcl_harness::suite;
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::target::{OpenOptions, Target};
 use gcl_model::{Fault, Profile};
 
 fn validator() -> jsonschema::Validator {

@@ -6,9 +6,9 @@ mod sim_support;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use gcl_harness::Link;
-use gcl_harness::client::ClientError;
-use gcl_harness::links::{ExecLink, StderrMode};
+use gcl_host::Link;
+use gcl_host::client::ClientError;
+use gcl_host::links::{ExecLink, StderrMode};
 use sim_support::{GCL, SimProcess, Transport, stdio_argv, stdio_hand};
 
 /// Runs `gcl sim ARGS` to its end; returns (exit code, stderr).
@@ -116,8 +116,8 @@ fn the_pty_link_comes_and_goes_and_sigterm_exits_0() {
     let mut sim = SimProcess::start(Transport::Pty, &["--profile", "seed", "--link", &l]);
     assert_eq!(std::fs::read_link(&link).unwrap().display().to_string(), sim.address);
     {
-        let opts = gcl_harness::target::OpenOptions { profile: Some("seed".into()), ..Default::default() };
-        let mut hand = gcl_harness::client::Hand::open(&format!("serial:{l}").parse().unwrap(), &opts).unwrap();
+        let opts = gcl_host::target::OpenOptions { profile: Some("seed".into()), ..Default::default() };
+        let mut hand = gcl_host::client::Hand::open(&format!("serial:{l}").parse().unwrap(), &opts).unwrap();
         hand.resync().unwrap();
         assert_eq!(hand.get("4", "DP").unwrap(), vec![150]);
     }
@@ -154,7 +154,7 @@ fn faults_reach_the_hand() {
     hand.resync().unwrap();
     assert!(matches!(
         hand.command("FGET DP"),
-        Err(ClientError::Violation { violation: gcl_harness::client::core::Violation::EchoMismatch { .. }, .. })
+        Err(ClientError::Violation { violation: gcl_host::client::core::Violation::EchoMismatch { .. }, .. })
     ));
 }
 

@@ -5,9 +5,9 @@ mod sim_support;
 
 use std::time::Duration;
 
-use gcl_harness::client::Hand;
-use gcl_harness::client::programs::{self, Clock};
-use gcl_harness::target::OpenOptions;
+use gcl_host::client::Hand;
+use gcl_host::client::programs::{self, Clock};
+use gcl_host::target::OpenOptions;
 use sim_support::{ALL, start};
 
 const RUN: Duration = Duration::from_millis(2500);

@@ -5,9 +5,9 @@ mod sim_support;
 
 use std::time::Duration;
 
-use gcl_harness::Link;
-use gcl_harness::client::{Hand, RtFlags};
-use gcl_harness::links::{ExecLink, StderrMode};
+use gcl_host::Link;
+use gcl_host::client::{Hand, RtFlags};
+use gcl_host::links::{ExecLink, StderrMode};
 use sim_support::{ALL, SimProcess, Transport, noise, start, stdio_argv};
 
 fn fresh(hand: &mut Hand) {
@@ -159,15 +159,12 @@ fn a_vanished_simulator_is_a_disconnect() {
         hand.resync().unwrap();
         sim.kill();
         let e = hand.command("FGET DP").unwrap_err();
-        assert!(
-            matches!(e, gcl_harness::client::ClientError::Link(gcl_harness::LinkError::Disconnected)),
-            "{t:?}: {e}"
-        );
+        assert!(matches!(e, gcl_host::client::ClientError::Link(gcl_host::LinkError::Disconnected)), "{t:?}: {e}");
     }
     let mut link = ExecLink::spawn(&stdio_argv(&["--profile", "seed"]), StderrMode::Null).unwrap();
     let pid = nix::unistd::Pid::from_raw(link.pid() as i32);
     nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL).unwrap();
     let mut buf = Vec::new();
     let r = link.recv_until(&mut buf, Duration::from_secs(10), &|_| false);
-    assert!(matches!(r, Err(gcl_harness::LinkError::Disconnected)), "{r:?}");
+    assert!(matches!(r, Err(gcl_host::LinkError::Disconnected)), "{r:?}");
 }

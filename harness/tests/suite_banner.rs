@@ -6,8 +6,8 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use gcl_harness::SimLink;
 use gcl_harness::suite::{self, Case};
+use gcl_host::SimLink;
 use gcl_model::{DeviceConfig, Profile};
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");

@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use gcl_harness::SimLink;
 use gcl_harness::suite::{self, Case};
+use gcl_host::SimLink;
 use gcl_model::{DeviceConfig, Profile};
 use gcl_transcript::{Level, Requirement};
 

@@ -24,8 +24,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::sync::Arc;
 
-use gcl_harness::SimLink;
 use gcl_harness::suite::{self, Case};
+use gcl_host::SimLink;
 use gcl_model::level::Level;
 use gcl_model::{DeviceConfig, Fault, Profile};
 use serde::Deserialize;

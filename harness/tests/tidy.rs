@@ -117,13 +117,14 @@ fn pure_crates_do_no_io() {
 /// library's errors are typed.
 #[test]
 fn the_cli_and_its_crates_stay_in_the_binary() {
-    let lib: Vec<PathBuf> = rust_files("harness/src")
+    let mut lib: Vec<PathBuf> = rust_files("harness/src")
         .into_iter()
         .filter(|p| {
             let r = rel(p);
             !r.starts_with("harness/src/cli/") && r != "harness/src/main.rs"
         })
         .collect();
+    lib.extend(rust_files("host/src"));
     let bad = offenders(&lib, |_, l| {
         ["crate::cli", "gcl_harness::cli", "mod cli", "anyhow", "clap", "indicatif"].iter().any(|w| has_word(l, w))
     });
@@ -137,6 +138,38 @@ fn the_cli_and_its_crates_stay_in_the_binary() {
     assert!(bad.is_empty(), "`gcl_harness::cli` outside the binary:\n{}", bad.join("\n"));
 }
 
+/// Architecture invariant: the host library (`gcl-host`) carries nothing of the harness. Its
+/// manifest is what the compiler enforces (a module that reaches for the suite, a report or
+/// the CLI does not build); this keeps the manifest from growing the harness's crates back, and
+/// its sources from naming the harness.
+#[test]
+fn the_host_library_needs_nothing_of_the_harness() {
+    const HARNESS_ONLY: &[&str] = &[
+        "gcl-harness",
+        "gcl-transcript",
+        "clap",
+        "anyhow",
+        "indicatif",
+        "quick-xml",
+        "time",
+        "sha2",
+        "ed25519-dalek",
+        "getrandom",
+        "globset",
+    ];
+    let manifest: toml::Table =
+        std::fs::read_to_string(Path::new(ROOT).join("host/Cargo.toml")).unwrap().parse().unwrap();
+    let mut bad = Vec::new();
+    for table in ["dependencies", "build-dependencies"] {
+        let deps = manifest.get(table).and_then(|t| t.as_table()).cloned().unwrap_or_default();
+        bad.extend(deps.keys().filter(|k| HARNESS_ONLY.contains(&k.as_str())).map(|k| format!("[{table}] {k}")));
+    }
+    assert!(manifest.get("target").is_none(), "host/Cargo.toml: platform-specific dependencies escape this test");
+    assert!(bad.is_empty(), "host/Cargo.toml depends on the harness's crates:\n{}", bad.join("\n"));
+    let bad = offenders(&rust_files("host/src"), |_, l| has_word(l, "gcl_harness"));
+    assert!(bad.is_empty(), "the host library names the harness:\n{}", bad.join("\n"));
+}
+
 /// Architecture invariant: profiles are data. No code compares a profile's id with a name
 /// (`p.id == "seed"`, a match arm on `"seed"`): what differs between profiles lives in the spec
 /// TOML, in the case data under `harness/suite-cases/`, or in which decisions a profile has.
@@ -145,6 +178,7 @@ fn no_code_branches_on_a_profile_id() {
     let ids: Vec<String> = gcl_model::Profile::builtin_names().map(str::to_string).collect();
     assert!(ids.iter().any(|i| i == "seed"), "{ids:?}");
     let mut files = rust_files("harness/src");
+    files.extend(rust_files("host/src"));
     files.extend(rust_files("reference-model/src"));
     files.extend(rust_files("transcript/src"));
     files.extend(rust_files("fuzz/src"));

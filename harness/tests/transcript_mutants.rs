@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use gcl_harness::SimLink;
 use gcl_harness::replay::ReplayOutcome;
 use gcl_harness::suite;
+use gcl_host::SimLink;
 use gcl_model::{DeviceConfig, Fault, Profile};
 
 fn committed() -> Vec<suite::Case> {

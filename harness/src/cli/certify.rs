@@ -14,7 +14,7 @@ use gcl_harness::certify::{
     write_bundle,
 };
 use gcl_harness::conform::{LevelFilter, firmware_version};
-use gcl_harness::target::open;
+use gcl_host::target::open;
 
 /// Arguments of `gcl certify`.
 #[derive(Debug, clap::Args)]

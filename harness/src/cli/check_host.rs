@@ -43,7 +43,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let golden = match &args.golden {
         Some(p) => {
-            let text = gcl_harness::files::read_input_text(p).with_context(|| format!("golden {}", p.display()))?;
+            let text = gcl_host::files::read_input_text(p).with_context(|| format!("golden {}", p.display()))?;
             Some(gcl_transcript::parse(&text).with_context(|| format!("golden {}", p.display()))?)
         }
         None => None,

@@ -14,7 +14,7 @@ use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter, Run
 use gcl_harness::deadline::DeadlinePolicy;
 use gcl_harness::report::{CaseResult, ResultStream, RunReport, StopCause, Verdict, write_all};
 use gcl_harness::suite::{self, Case};
-use gcl_harness::target::{OpenOptions, Target};
+use gcl_host::target::{OpenOptions, Target};
 use gcl_transcript::{Level, Requirement};
 
 /// Arguments shared by `gcl conform` and `gcl certify`.
@@ -75,7 +75,7 @@ pub struct SuiteArgs {
     pub suite: Option<PathBuf>,
     /// The line rate the hand runs at, for the wire-time lower bound (serial targets give
     /// their own with ?baud=N); 50 to 4000000.
-    #[arg(long, value_parser = gcl_harness::target::parse_baud)]
+    #[arg(long, value_parser = gcl_host::target::parse_baud)]
     pub baud: Option<u32>,
     /// sim targets: seed of the model's noise.
     #[arg(long, default_value_t = 0)]
@@ -138,7 +138,7 @@ pub fn prepare(
         .profile
         .clone()
         .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| gcl_harness::target::DEFAULT_SIM_PROFILE.to_string());
+        .unwrap_or_else(|| gcl_host::target::DEFAULT_SIM_PROFILE.to_string());
     let profile = load_profile(&profile_name)?;
     let cases = match &a.suite {
         Some(dir) => {

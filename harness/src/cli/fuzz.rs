@@ -42,7 +42,7 @@ writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\
 pub struct DeviceArgs {
     /// The hand: `sim[:PROFILE]`, `serial:PATH[?baud=N]`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     #[arg(long, value_name = "TARGET")]
-    pub target: gcl_harness::target::Target,
+    pub target: gcl_host::target::Target,
     /// sim targets: a deliberate firmware bug (repeatable; see `gcl sim --help`).
     #[arg(long, value_name = "NAME")]
     pub fault: Vec<Fault>,
@@ -98,12 +98,12 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 
 fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     use gcl_harness::fuzz::device::{self as fd, Budget, FuzzOptions, Progress};
-    use gcl_harness::target::Target;
+    use gcl_host::target::Target;
     let name = a
         .profile
         .clone()
         .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| gcl_harness::target::DEFAULT_SIM_PROFILE.to_string());
+        .unwrap_or_else(|| gcl_host::target::DEFAULT_SIM_PROFILE.to_string());
     let profile = load_profile(&name)?;
     if !a.fault.is_empty() && !matches!(a.target, Target::Sim { .. }) {
         anyhow::bail!("--fault applies to sim targets only");

@@ -27,7 +27,7 @@ pub const EXIT_FAIL: u8 = 1;
 pub const EXIT_ERROR: u8 = 2;
 
 /// Loads a profile by built-in name or alias (`seed`, `bh8-262-4.3`, `bh8-262-4.4`,
-/// `bh8-262`) or from a TOML file ([`gcl_harness::profiles::load`]).
+/// `bh8-262`) or from a TOML file ([`gcl_host::profiles::load`]).
 pub fn load_profile(name: &str) -> anyhow::Result<Arc<Profile>> {
-    Ok(gcl_harness::profiles::load(name)?)
+    Ok(gcl_host::profiles::load(name)?)
 }

@@ -10,7 +10,7 @@ use anyhow::Context;
 
 use super::{EXIT_OK, load_profile};
 use gcl_harness::record::{RecordOptions, record};
-use gcl_harness::target::{DEFAULT_SIM_PROFILE, Target};
+use gcl_host::target::{DEFAULT_SIM_PROFILE, Target};
 use gcl_transcript::script::parse_script_bytes;
 use gcl_transcript::{Level, is_slug};
 
@@ -67,7 +67,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let target: Target = args.target.parse()?;
     let bytes =
-        gcl_harness::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
+        gcl_host::files::read_input(&args.script).with_context(|| format!("reading {}", args.script.display()))?;
     let script = parse_script_bytes(&bytes).with_context(|| format!("parsing {}", args.script.display()))?;
     let mut fields = script.fields.clone();
     if let Some(id) = args.id {

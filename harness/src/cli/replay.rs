@@ -11,7 +11,7 @@ use anyhow::Context;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
 use gcl_harness::replay::{ReplayOptions, ReplayOutcome, replay};
-use gcl_harness::target::Target;
+use gcl_host::target::Target;
 use gcl_transcript::parse_bytes;
 
 /// Arguments of `gcl replay`.
@@ -37,15 +37,15 @@ pub struct Args {
 }
 
 /// Opens a target for a transcript of `profile` (used when the target is a bare `sim`).
-pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Result<Box<dyn gcl_harness::Link>> {
-    let opts = gcl_harness::target::OpenOptions { profile: profile.map(str::to_string), ..Default::default() };
-    let mut link = gcl_harness::target::open(target, &opts).with_context(|| format!("opening {target}"))?;
+pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Result<Box<dyn gcl_host::Link>> {
+    let opts = gcl_host::target::OpenOptions { profile: profile.map(str::to_string), ..Default::default() };
+    let mut link = gcl_host::target::open(target, &opts).with_context(|| format!("opening {target}"))?;
     if matches!(target, Target::Exec { .. }) {
         // A freshly started process prints its power-up banner when it is ready, which may be
         // well after the first quiet period a transcript's drain allows: wait for it here.
         let mut junk = Vec::new();
         link.recv(&mut junk, Duration::from_secs(5))?;
-        gcl_harness::link::drain(link.as_mut(), Duration::from_millis(100), Duration::from_secs(5))?;
+        gcl_host::link::drain(link.as_mut(), Duration::from_millis(100), Duration::from_secs(5))?;
     }
     Ok(link)
 }
@@ -60,17 +60,17 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let mut transcripts = Vec::new();
     for f in &args.files {
-        let bytes = gcl_harness::files::read_input(f).with_context(|| format!("reading {}", f.display()))?;
+        let bytes = gcl_host::files::read_input(f).with_context(|| format!("reading {}", f.display()))?;
         let t = parse_bytes(&bytes).with_context(|| format!("parsing {}", f.display()))?;
         transcripts.push((f, t));
     }
     let mut code = EXIT_OK;
-    let mut shared: Option<Box<dyn gcl_harness::Link>> = None;
+    let mut shared: Option<Box<dyn gcl_host::Link>> = None;
     let mut w = std::io::stdout().lock();
     for (f, t) in &transcripts {
         // Each transcript gets a fresh simulated hand; a real hand is opened once.
         let mut fresh;
-        let link: &mut dyn gcl_harness::Link = if matches!(target, Target::Sim { .. }) {
+        let link: &mut dyn gcl_host::Link = if matches!(target, Target::Sim { .. }) {
             fresh = open_target(&target, t.header.profiles.first().map(String::as_str))?;
             fresh.as_mut()
         } else {

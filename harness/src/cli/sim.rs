@@ -165,8 +165,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let profile = load_profile(&args.profile)?;
     let scenario = match &args.scenario {
         Some(p) => {
-            let text =
-                gcl_harness::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
+            let text = gcl_host::files::read_input_text(p).with_context(|| format!("scenario file {}", p.display()))?;
             let s = parse_scenario(&text).with_context(|| format!("scenario file {}", p.display()))?;
             check_scenario(&s, &profile).with_context(|| format!("scenario file {}", p.display()))?;
             s

@@ -37,7 +37,7 @@ impl EepromFile {
     /// empty memory).
     pub fn open(path: &Path) -> Result<(EepromFile, NvMemory), SimError> {
         remove_stale_temporaries(path);
-        let nv = match crate::files::read_input(path) {
+        let nv = match gcl_host::files::read_input(path) {
             Ok(bytes) => serde_json::from_slice::<NvMemory>(&bytes)
                 .map_err(|e| err(path, format!("not an EEPROM image (JSON of NvMemory): {e}")))?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => NvMemory::default(),

@@ -26,7 +26,7 @@ use gcl_model::{Device, DeviceConfig};
 use super::misbehave::{LineTap, Shaped};
 use super::trace::Direction;
 use super::{EepromFile, Pace, SimError, SimOptions, TimeMode, Trace};
-use crate::link::{Link, SimLink, byte_time};
+use gcl_host::link::{Link, SimLink, byte_time};
 
 /// Output the host has not taken, beyond which the engine stops passing the host's bytes to
 /// the model (one command's answer may go past it; nothing is ever dropped).

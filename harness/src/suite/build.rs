@@ -10,8 +10,8 @@ use gcl_model::realtime::{ControlHeader, Field, RtFlag};
 use gcl_model::spec::{CommandKind, ParamSpec, Scope};
 use gcl_model::{DeviceConfig, Profile};
 
-use crate::SimLink;
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
+use gcl_host::SimLink;
 use gcl_transcript::script::{Action, ScriptStep};
 use gcl_transcript::{Expect, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 

@@ -30,8 +30,8 @@ use gcl_model::Profile;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
-use crate::link::Link;
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
+use gcl_host::link::Link;
 use gcl_transcript::{Header, Level, ParseError, Requirement, Transcript, parse_bytes};
 
 /// Where the committed suite lives, relative to the repository root.
@@ -168,7 +168,7 @@ pub fn generate_all() -> Result<Vec<Case>, SuiteError> {
 /// Loads one committed file, checking that it parses, that its id matches its file name and
 /// that its header lists the profile of its directory.
 pub fn load_file(path: &Path, profile: &str) -> Result<Case, SuiteError> {
-    let bytes = crate::files::read_input(path).map_err(io(path))?;
+    let bytes = gcl_host::files::read_input(path).map_err(io(path))?;
     let t = parse_bytes(&bytes).map_err(|error| SuiteError::Parse { path: path.to_path_buf(), error })?;
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
     if stem != t.header.id {
@@ -349,7 +349,7 @@ pub fn check(dir: &Path, cases: &[Case]) -> Result<CheckReport, SuiteError> {
     let mut r = CheckReport { checked: cases.len(), ..Default::default() };
     for (rel, text) in &want {
         let path = dir.join(rel);
-        match crate::files::read_input(&path) {
+        match gcl_host::files::read_input(&path) {
             Ok(b) if b == text.as_bytes() => {}
             Ok(_) => r.stale.push(rel.clone()),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => r.missing.push(rel.clone()),

@@ -50,7 +50,7 @@ struct HostCase {
 ///
 /// The stream is fed one byte at a time and then all at once; both must agree.
 fn outcome(p: &Profile, request: &Request, stream: &[u8]) -> Result<(Vec<u8>, Value, bool), VectorsError> {
-    use crate::client::core::{Answer, Framing, HostCore, Misuse, Refusal, Violation};
+    use gcl_host::client::core::{Answer, Framing, HostCore, Misuse, Refusal, Violation};
     let start = |core: &mut HostCore| -> Result<Vec<u8>, String> {
         let enter = |core: &mut HostCore, l: &RtLayout| -> Result<(), String> {
             core.start_loop("123LOOP", l.clone()).map_err(|e: Misuse| e.to_string())?;

@@ -8,7 +8,7 @@
 //! goldens (the hash `gcl conform` reports), the generator version and the number of tests.
 //!
 //! The model is the oracle for every kind but `host`, whose oracle is the host client core
-//! (`crate::client::core`), reached through one function (`outcome` in the `host` module).
+//! (`gcl_host::client::core`), reached through one function (`outcome` in the `host` module).
 //!
 //! This module only computes file texts; [`check`] and [`regenerate`] compare and write them.
 //! It never edits the goldens of `vectors/suite/`.

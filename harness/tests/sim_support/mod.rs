@@ -7,9 +7,9 @@ use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-use gcl_harness::client::{Hand, Timeouts};
-use gcl_harness::links::{ExecLink, StderrMode};
-use gcl_harness::target::OpenOptions;
+use gcl_host::client::{Hand, Timeouts};
+use gcl_host::links::{ExecLink, StderrMode};
+use gcl_host::target::OpenOptions;
 
 /// The `gcl` binary under test.
 pub const GCL: &str = env!("CARGO_BIN_EXE_gcl");
@@ -143,7 +143,7 @@ pub fn stdio_hand(profile: &str, args: &[&str]) -> Hand {
     let mut all = vec!["--profile", profile];
     all.extend_from_slice(args);
     let link = ExecLink::spawn(&stdio_argv(&all), StderrMode::Null).expect("spawn gcl sim --stdio");
-    let mut h = Hand::new(Box::new(link), gcl_harness::profiles::load(profile).unwrap());
+    let mut h = Hand::new(Box::new(link), gcl_host::profiles::load(profile).unwrap());
     h.set_timeouts(test_timeouts());
     h
 }

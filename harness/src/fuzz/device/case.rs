@@ -304,7 +304,7 @@ pub fn build_case(
     }
     let mut def = k.finish();
     // The model's answers as the wire meets them, then the shapes from them.
-    let mut link = crate::SimLink::new(p.clone(), DeviceConfig::default());
+    let mut link = gcl_host::SimLink::new(p.clone(), DeviceConfig::default());
     let mut ro = RecordOptions::new(p.clone());
     ro.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
@@ -356,7 +356,7 @@ pub fn build_case(
     let transcript = build(p, &def).map_err(NotACase)?;
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let mut fresh = crate::SimLink::new(p.clone(), DeviceConfig::default());
+    let mut fresh = gcl_host::SimLink::new(p.clone(), DeviceConfig::default());
     let out = crate::replay::replay(&transcript, &mut fresh, &crate::suite::replay_options());
     if !out.is_pass() {
         return Err(NotACase(out.summary()));

@@ -35,10 +35,10 @@ use sha2::{Digest, Sha256};
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
 use self::case::{BuiltCase, build_case};
 use crate::deadline::{self, DeadlinePolicy};
-use crate::link::{Link, LinkError};
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
 use crate::suite::Case;
-use crate::target::{OpenOptions, Target};
+use gcl_host::link::{Link, LinkError};
+use gcl_host::target::{OpenOptions, Target};
 use gcl_transcript::Transcript;
 
 /// How long a run goes on.
@@ -291,7 +291,7 @@ pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, usize), FuzzErro
     names.sort();
     let (mut out, mut bad) = (Vec::new(), 0);
     for p in names {
-        match crate::files::read_text_limited(&p, 1 << 20).ok().and_then(|t| serde_json::from_str(&t).ok()) {
+        match gcl_host::files::read_text_limited(&p, 1 << 20).ok().and_then(|t| serde_json::from_str(&t).ok()) {
             Some(a) => out.push(a),
             None => bad += 1,
         }
@@ -322,7 +322,7 @@ impl Hand<'_> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
             self.new = true;
-            self.link = Some(crate::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
+            self.link = Some(gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
         }
         self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
     }

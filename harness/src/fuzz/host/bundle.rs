@@ -111,7 +111,8 @@ fn json<T: Serialize>(v: &T) -> Vec<u8> {
 /// Reads a bundle's `finding.json` and `schedule.json`.
 pub fn read(dir: &Path) -> Result<(BundleInfo, Schedule), BundleError> {
     fn load<T: serde::de::DeserializeOwned>(p: PathBuf) -> Result<T, BundleError> {
-        let text = crate::files::read_input_text(&p).map_err(|source| BundleError::Io { path: p.clone(), source })?;
+        let text =
+            gcl_host::files::read_input_text(&p).map_err(|source| BundleError::Io { path: p.clone(), source })?;
         serde_json::from_str(&text).map_err(|e| BundleError::Invalid { path: p, reason: e.to_string() })
     }
     Ok((load(dir.join("finding.json"))?, load(dir.join("schedule.json"))?))

@@ -7,8 +7,8 @@
 //! gain, abort). [`programs`] holds the seed document's two example programs.
 //!
 //! ```
-//! use gcl_harness::client::Hand;
-//! use gcl_harness::target::{self, OpenOptions};
+//! use gcl_host::client::Hand;
+//! use gcl_host::target::{self, OpenOptions};
 //!
 //! let mut hand = Hand::open(&"sim:seed".parse().unwrap(), &OpenOptions::default()).unwrap();
 //! hand.initialize().unwrap();

@@ -1,6 +1,6 @@
-//! Reading input files without trusting them: every file `gcl` reads (transcripts, scripts,
-//! suite files, known-failures lists, scenarios, EEPROM images, profile TOML, keys,
-//! certificate bundles) goes through [`read_limited`] or [`open_regular`].
+//! Reading input files without trusting them: every file `gcl` and this crate read
+//! (transcripts, scripts, suite files, known-failures lists, scenarios, EEPROM images, profile
+//! TOML, keys, certificate bundles) goes through [`read_limited`] or [`open_regular`].
 //!
 //! - Only regular files are accepted. A FIFO is opened without blocking and refused, so a
 //!   named pipe called `x.gcl` in a suite directory cannot hang a run; `/dev/zero`, a
@@ -17,11 +17,10 @@ use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::Path;
 
 /// The size limit of an input file a person writes or a tool generates: transcripts,
-/// scripts, suite files, known-failures lists, scenarios, EEPROM images, profile TOML.
-pub const MAX_INPUT_BYTES: u64 = gcl_transcript::MAX_FILE_BYTES as u64;
-
-/// The size limit of a key file.
-pub const MAX_KEY_BYTES: u64 = 64 << 10;
+/// scripts, suite files, known-failures lists, scenarios, EEPROM images, profile TOML. It is
+/// the transcript crate's `MAX_FILE_BYTES` (this crate does not depend on that one;
+/// `gcl-harness` asserts the two agree at compile time).
+pub const MAX_INPUT_BYTES: u64 = 4 << 20;
 
 fn kind_of(ft: &std::fs::FileType) -> &'static str {
     if ft.is_dir() {
