@@ -157,6 +157,14 @@ impl CaseB {
         self
     }
 
+    /// Gives the last step's answer this shape.
+    pub fn shape_last(mut self, shape: Shape) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.shape = shape;
+        }
+        self
+    }
+
     /// A comment written before the next step.
     pub fn comment(mut self, c: impl Into<String>) -> CaseB {
         self.pending_comments.push(c.into());

@@ -17,9 +17,20 @@
 //! ```
 //!
 //! Steps are the script's: host lines, `line:`, `nowait:`, `raw:`, `partial:`, `abort`,
-//! `wait`, `pause:`; every answer is written exactly as the model gives it. A `timeout:` line
-//! gives the step after it a `within` floor. Cases whose answers need a shape (elided values,
-//! RealTime blocks) or whose lines are computed from the profile stay in the generators.
+//! `wait`, `pause:`; every answer is written exactly as the model gives it, unless an
+//! `expect:` line after the step gives it a shape (the suite's own key, read here and not by
+//! the script parser):
+//!
+//! ```text
+//! expect: banner          a RESET banner: `{any}BarrettHand Firmware{any}`
+//! expect: banner-lines    a banner checked for the line endings hosts rely on
+//! expect: any-lines       the echo, then any lines (only their presence is checked)
+//! expect: list-values     `NAME value...` lines, live values elided to their ranges
+//! ```
+//!
+//! A `timeout:` line gives the step after it a `within` floor. Cases whose answers need
+//! per-value ranges or RealTime blocks, or whose lines are computed from the profile, stay in
+//! the generators.
 
 use gcl_transcript::ParseError;
 use gcl_transcript::script::{ScriptStep, parse_script};
@@ -46,6 +57,10 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("persist-fload", include_str!("../../../suite-cases/persistence/persist-fload.gcls")),
     ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
     ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
+    ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
+    ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
+    ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
+    ("persist-psave-reset", include_str!("../../../suite-cases/persistence/persist-psave-reset.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -94,8 +109,9 @@ impl Gen {
     /// The case of one script for this profile: `None` when the script names other profiles.
     pub(super) fn script_case(&self, id: &str) -> Result<Option<CaseB>, ScriptError> {
         let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
-        let script = parse_script(text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
+        let (text, expects) = split_expects(text).map_err(invalid)?;
+        let script = parse_script(&text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let f = &script.fields;
         if f.id.as_deref() != Some(id) {
             return Err(invalid(format!("its `id:` is {:?}, not its file name", f.id)));
@@ -154,9 +170,20 @@ impl Gen {
             k = k.preamble(preamble == Preamble::Motion);
         }
         let mut timeout = None;
-        for step in &script.steps {
+        let mut expects = expects.into_iter().peekable();
+        for (i, step) in script.steps.iter().enumerate() {
             k = Self::script_step(k, step, timeout);
             timeout = step.timeout;
+            let next = script.steps.get(i + 1).map_or(usize::MAX, |s| s.line);
+            if let Some((n, shape)) = expects.next_if(|(n, _)| *n < next) {
+                if expects.peek().is_some_and(|(m, _)| *m < next) {
+                    return Err(invalid(format!("line {n}: two `expect:` lines for one step")));
+                }
+                k = k.shape_last(shape);
+            }
+        }
+        if let Some((n, _)) = expects.next() {
+            return Err(invalid(format!("line {n}: `expect:` before any step")));
         }
         Ok(Some(k))
     }
@@ -175,6 +202,34 @@ impl Gen {
             _ => k,
         }
     }
+}
+
+/// The script without its `expect:` lines (blanked, so line numbers stay), and each one's
+/// line with the shape it names, in order. An `expect:` line shapes the step before it.
+fn split_expects(text: &str) -> Result<(String, Vec<(usize, Shape)>), String> {
+    let mut out = String::with_capacity(text.len());
+    let mut expects = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if let Some(v) = line.trim_start().strip_prefix("expect:") {
+            let shape = match v.trim() {
+                "banner" => Shape::Banner,
+                "banner-lines" => Shape::BannerLines,
+                "any-lines" => Shape::AnyLines,
+                "list-values" => Shape::ListValues,
+                other => {
+                    return Err(format!(
+                        "line {}: expect `{other}`: banner, banner-lines, any-lines or list-values",
+                        i + 1
+                    ));
+                }
+            };
+            expects.push((i + 1, shape));
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    Ok((out, expects))
 }
 
 /// The clause prefix that names a decision (`clause: decision:framing-echo`).
