@@ -11,7 +11,7 @@
 //! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
 //! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
 //! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
-//!                                     param:NAME, decision:ID)
+//!                                     param:NAME, decision:ID); `a|b` holds when either does
 //! profile: seed                       only for these profiles (default: every profile)
 //! level: MUST  requires: motion  note: ...   as in a transcript
 //! ```
@@ -57,6 +57,7 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("persist-fload", include_str!("../../../suite-cases/persistence/persist-fload.gcls")),
     ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
     ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
+    ("banner-lines", include_str!("../../../suite-cases/firmware/banner-lines.gcls")),
     ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
     ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
     ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
@@ -135,12 +136,15 @@ impl Gen {
             match key.as_str() {
                 "x-when" => {
                     for cond in value.split_whitespace() {
-                        let holds = match cond.split_once(':') {
-                            Some(("command", n)) => self.has_cmd(n),
-                            Some(("param", n)) => self.has_param(n),
-                            Some(("decision", d)) => self.has_decision(d),
-                            _ => return Err(invalid(format!("x-when `{cond}`: command:, param: or decision:"))),
-                        };
+                        let mut holds = false;
+                        for alt in cond.split('|') {
+                            holds |= match alt.split_once(':') {
+                                Some(("command", n)) => self.has_cmd(n),
+                                Some(("param", n)) => self.has_param(n),
+                                Some(("decision", d)) => self.has_decision(d),
+                                _ => return Err(invalid(format!("x-when `{alt}`: command:, param: or decision:"))),
+                            };
+                        }
                         if !holds {
                             return Ok(None);
                         }
