@@ -11,7 +11,9 @@
 //! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
 //! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
 //! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
-//!                                     param:NAME, decision:ID); `a|b` holds when either does
+//!                                     param:NAME, alias:NAME (a parameter that names
+//!                                     another's value), decision:ID); `a|b` holds when
+//!                                     either does
 //! profile: seed                       only for these profiles (default: every profile)
 //! level: MUST  requires: motion  note: ...   as in a transcript
 //! ```
@@ -26,6 +28,8 @@
 //! expect: banner-lines    a banner checked for the line endings hosts rely on
 //! expect: any-lines       the echo, then any lines (only their presence is checked)
 //! expect: list-values     `NAME value...` lines, live values elided to their ranges
+//! expect: values          a get line's values (`[motors]FGET|PGET NAME...`), each live value
+//!                         elided to its parameter's range, as the generators' `get` does
 //! ```
 //!
 //! A `timeout:` line gives the step after it a `within` floor. Cases whose answers need
@@ -58,6 +62,9 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
     ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
     ("banner-lines", include_str!("../../../suite-cases/firmware/banner-lines.gcls")),
+    ("param-temp-global", include_str!("../../../suite-cases/params/param-temp-global.gcls")),
+    ("param-tmp-alias", include_str!("../../../suite-cases/params/param-tmp-alias.gcls")),
+    ("param-msg-hsg-alias", include_str!("../../../suite-cases/params/param-msg-hsg-alias.gcls")),
     ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
     ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
     ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
@@ -141,8 +148,13 @@ impl Gen {
                             holds |= match alt.split_once(':') {
                                 Some(("command", n)) => self.has_cmd(n),
                                 Some(("param", n)) => self.has_param(n),
+                                Some(("alias", n)) => self.param(n).is_some_and(|x| x.alias_of.is_some()),
                                 Some(("decision", d)) => self.has_decision(d),
-                                _ => return Err(invalid(format!("x-when `{alt}`: command:, param: or decision:"))),
+                                _ => {
+                                    return Err(invalid(format!(
+                                        "x-when `{alt}`: command:, param:, alias: or decision:"
+                                    )));
+                                }
                             };
                         }
                         if !holds {
@@ -183,7 +195,10 @@ impl Gen {
                 if expects.peek().is_some_and(|(m, _)| *m < next) {
                     return Err(invalid(format!("line {n}: two `expect:` lines for one step")));
                 }
-                k = k.shape_last(shape);
+                k = match shape {
+                    Expected::Shape(shape) => k.shape_last(shape),
+                    Expected::Values => k.values_last().map_err(|e| invalid(format!("line {n}: {e}")))?,
+                };
             }
         }
         if let Some((n, _)) = expects.next() {
@@ -208,21 +223,30 @@ impl Gen {
     }
 }
 
+/// What an `expect:` line names.
+enum Expected {
+    /// A shape that needs nothing more.
+    Shape(Shape),
+    /// The values of the step's get line.
+    Values,
+}
+
 /// The script without its `expect:` lines (blanked, so line numbers stay), and each one's
 /// line with the shape it names, in order. An `expect:` line shapes the step before it.
-fn split_expects(text: &str) -> Result<(String, Vec<(usize, Shape)>), String> {
+fn split_expects(text: &str) -> Result<(String, Vec<(usize, Expected)>), String> {
     let mut out = String::with_capacity(text.len());
     let mut expects = Vec::new();
     for (i, line) in text.lines().enumerate() {
         if let Some(v) = line.trim_start().strip_prefix("expect:") {
             let shape = match v.trim() {
-                "banner" => Shape::Banner,
-                "banner-lines" => Shape::BannerLines,
-                "any-lines" => Shape::AnyLines,
-                "list-values" => Shape::ListValues,
+                "banner" => Expected::Shape(Shape::Banner),
+                "banner-lines" => Expected::Shape(Shape::BannerLines),
+                "any-lines" => Expected::Shape(Shape::AnyLines),
+                "list-values" => Expected::Shape(Shape::ListValues),
+                "values" => Expected::Values,
                 other => {
                     return Err(format!(
-                        "line {}: expect `{other}`: banner, banner-lines, any-lines or list-values",
+                        "line {}: expect `{other}`: banner, banner-lines, any-lines, list-values or values",
                         i + 1
                     ));
                 }
