@@ -229,10 +229,10 @@ impl CaseB {
         self.line_shaped(&format!("{prefix}{getter} {}", names.join(" ")), shape)
     }
 
-    /// Shapes the last step's answer as [`CaseB::get`] shapes its line's: the step is a host
-    /// line `[prefix]GETTER NAME...` whose getter is the first name's. A line whose first
-    /// name is no parameter stays exact, as in `get`.
-    pub fn values_last(mut self) -> Result<CaseB, String> {
+    /// Shapes the last step's answer as [`CaseB::get`] shapes its line's (positions by
+    /// `pos`): the step is a host line `[prefix]GETTER NAME...` whose getter is the first
+    /// name's. A line whose first name is no parameter stays exact, as in `get`.
+    pub fn values_last(mut self, pos: Option<[Range; 4]>) -> Result<CaseB, String> {
         let Some(Action::Line(bytes)) = self.def.plans.last().map(|plan| &plan.step.action) else {
             return Err("`expect: values` follows a host line".into());
         };
@@ -250,7 +250,7 @@ impl CaseB {
             .checked_sub(getter.len())
             .and_then(|at| cmd.get(at..).filter(|g| g.eq_ignore_ascii_case(getter)).and_then(|_| cmd.get(..at)))
             .ok_or_else(|| format!("`expect: values`: `{text}` is not a {getter} line"))?;
-        let shape = values_shape(&p, prefix, getter, &names, None);
+        let shape = values_shape(&p, prefix, getter, &names, pos);
         if let Some(plan) = self.def.plans.last_mut() {
             plan.shape = shape;
         }

@@ -32,17 +32,7 @@ impl Gen {
             }
         }
         self.scripts(&["param-scope-commands", "param-temp-global", "param-tmp-alias", "param-msg-hsg-alias"]);
-        let k = self
-            .case("param-en-narrows-motion", "EN narrows motion commands without a prefix, never parameter commands")
-            .src("Parameter EN")
-            .decision("seed-param-prefix-en")
-            .decision("bh8-param-prefix-en")
-            .preamble(true)
-            .line("SFSET EN 0")
-            .line("FGET EN DP")
-            .line("M 3000")
-            .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
-        self.add(k);
+        self.scripts(&["param-en-narrows-motion"]);
 
         if self.p.decisions.iter().any(|d| d.id == "bh8-spread-defaults") {
             let k = self

@@ -30,6 +30,8 @@
 //! expect: list-values     `NAME value...` lines, live values elided to their ranges
 //! expect: values          a get line's values (`[motors]FGET|PGET NAME...`), each live value
 //!                         elided to its parameter's range, as the generators' `get` does
+//! expect: near 5000 5000 5000 0   as `values`, positions (P) within MPE of these goals, one
+//!                         per motor (the profile's MPE defaults)
 //! ```
 //!
 //! A `timeout:` line gives the step after it a `within` floor. Cases whose answers need
@@ -65,6 +67,8 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("param-temp-global", include_str!("../../../suite-cases/params/param-temp-global.gcls")),
     ("param-tmp-alias", include_str!("../../../suite-cases/params/param-tmp-alias.gcls")),
     ("param-msg-hsg-alias", include_str!("../../../suite-cases/params/param-msg-hsg-alias.gcls")),
+    ("param-en-narrows-motion", include_str!("../../../suite-cases/params/param-en-narrows-motion.gcls")),
+    ("motion-goal-within-mpe", include_str!("../../../suite-cases/motion/motion-goal-within-mpe.gcls")),
     ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
     ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
     ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
@@ -197,7 +201,9 @@ impl Gen {
                 }
                 k = match shape {
                     Expected::Shape(shape) => k.shape_last(shape),
-                    Expected::Values => k.values_last().map_err(|e| invalid(format!("line {n}: {e}")))?,
+                    Expected::Values(goals) => {
+                        k.values_last(goals.map(|g| self.near(g))).map_err(|e| invalid(format!("line {n}: {e}")))?
+                    }
                 };
             }
         }
@@ -227,8 +233,8 @@ impl Gen {
 enum Expected {
     /// A shape that needs nothing more.
     Shape(Shape),
-    /// The values of the step's get line.
-    Values,
+    /// The values of the step's get line; positions within MPE of these goals, if given.
+    Values(Option<[i64; 4]>),
 }
 
 /// The script without its `expect:` lines (blanked, so line numbers stay), and each one's
@@ -243,10 +249,16 @@ fn split_expects(text: &str) -> Result<(String, Vec<(usize, Expected)>), String>
                 "banner-lines" => Expected::Shape(Shape::BannerLines),
                 "any-lines" => Expected::Shape(Shape::AnyLines),
                 "list-values" => Expected::Shape(Shape::ListValues),
-                "values" => Expected::Values,
+                "values" => Expected::Values(None),
+                near if near.starts_with("near ") => {
+                    let goals: Vec<i64> = near.split_whitespace().skip(1).filter_map(|g| g.parse().ok()).collect();
+                    let goals = <[i64; 4]>::try_from(goals)
+                        .map_err(|_| format!("line {}: `expect: near` takes four positions", i + 1))?;
+                    Expected::Values(Some(goals))
+                }
                 other => {
                     return Err(format!(
-                        "line {}: expect `{other}`: banner, banner-lines, any-lines, list-values or values",
+                        "line {}: expect `{other}`: banner, banner-lines, any-lines, list-values, values or near",
                         i + 1
                     ));
                 }
