@@ -306,4 +306,26 @@ mod tests {
         let g = Gen { p, out: Vec::new() };
         assert!(matches!(g.script_case("no-such-case"), Err(ScriptError::Missing(_))));
     }
+
+    /// `expect:` lines leave the script's line numbers as they were and say what is wrong.
+    #[test]
+    fn expect_lines_are_read_and_checked() {
+        let (text, expects) = split_expects("id: x\nRESET\nexpect: banner\nFGET P\nexpect: near 1 2 3 4\n").unwrap();
+        assert_eq!(text, "id: x\nRESET\n\nFGET P\n\n");
+        assert!(matches!(
+            expects.as_slice(),
+            [(3, Expected::Shape(Shape::Banner)), (5, Expected::Values(Some([1, 2, 3, 4])))]
+        ));
+        let e = split_expects("RESET\nexpect: banners\n").map(|_| ()).unwrap_err();
+        assert!(e.starts_with("line 2: expect `banners`"), "{e}");
+        let e = split_expects("FGET P\nexpect: near 1 2\n").map(|_| ()).unwrap_err();
+        assert!(e.contains("four positions"), "{e}");
+        // `values` needs a get line of the first name's getter.
+        let p = Profile::builtin("seed").unwrap();
+        let k = CaseB::new(&p, "x", "x").line("FSET DP 5");
+        let e = k.values_last(None).map(|_| ()).unwrap_err();
+        assert!(e.contains("not a FGET line"), "{e}");
+        let k = CaseB::new(&p, "x", "x").abort();
+        assert!(k.values_last(None).map(|_| ()).is_err());
+    }
 }
