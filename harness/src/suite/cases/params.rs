@@ -31,26 +31,14 @@ impl Gen {
                 self.add(k);
             }
         }
-        self.scripts(&["param-scope-commands", "param-temp-global", "param-tmp-alias", "param-msg-hsg-alias"]);
-        self.scripts(&["param-en-narrows-motion"]);
-
-        if self.p.decisions.iter().any(|d| d.id == "bh8-spread-defaults") {
-            let k = self
-                .case(
-                    "param-spread-finger-defaults",
-                    "Where the manual gives the spread no default (BDAT, BS), the spread starts at the finger default and can be set",
-                )
-                .src("Parameter BDAT")
-                .src("Parameter BS")
-                .decision("bh8-spread-defaults")
-                .preamble(false)
-                .get("", &["BDAT", "BS"], None)
-                .line("SFSET BDAT 1000 BS 1")
-                .get("", &["BDAT", "BS"], None)
-                .line("SFDEF")
-                .get("S", &["BDAT", "BS"], None);
-            self.add(k);
-        }
+        self.scripts(&[
+            "param-scope-commands",
+            "param-temp-global",
+            "param-tmp-alias",
+            "param-msg-hsg-alias",
+            "param-en-narrows-motion",
+            "param-spread-finger-defaults",
+        ]);
 
         if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
             let new = ["LCT", "LFBP", "LFAIN"];

@@ -69,6 +69,7 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("param-msg-hsg-alias", include_str!("../../../suite-cases/params/param-msg-hsg-alias.gcls")),
     ("param-en-narrows-motion", include_str!("../../../suite-cases/params/param-en-narrows-motion.gcls")),
     ("motion-goal-within-mpe", include_str!("../../../suite-cases/motion/motion-goal-within-mpe.gcls")),
+    ("param-spread-finger-defaults", include_str!("../../../suite-cases/params/param-spread-finger-defaults.gcls")),
     ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
     ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
     ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
