@@ -687,6 +687,11 @@ pub fn client(data: &[u8]) {
     let p = &profiles[first as usize % profiles.len()];
     let mut core = HostCore::new(Framing::of(p));
     let layout = RtLayout::compute(p, &ParamStore::defaults(p), MotorSet::from_motors([1, 2, 3, 4]));
+    // A `C` block of that layout, every datum 0.
+    let mut zeros = realtime::Control::new(realtime::ControlHeader::DataFeedback);
+    for f in layout.control().fields() {
+        zeros.set(f, 0);
+    }
     while let Some((&op, tail)) = rest.split_first() {
         rest = tail;
         match op {
@@ -697,10 +702,10 @@ pub fn client(data: &[u8]) {
                 let _ = core.start_loop("LOOP", layout.clone());
             }
             17 => {
-                let _ = core.block(realtime::ControlHeader::DataFeedback, &[0; 8]);
+                let _ = core.block(&zeros);
             }
             18 => {
-                let _ = core.block(realtime::ControlHeader::Ack, &[]);
+                let _ = core.block(&realtime::Control::new(realtime::ControlHeader::Ack));
             }
             19 => {
                 core.abort();

@@ -9,7 +9,7 @@ use gcl_host::client::core::{Answer, Framing, HostCore, HostMode, Misuse, Refusa
 use gcl_host::client::{ClientError, Hand, Timeouts};
 use gcl_host::{Link, LinkError, SimLink};
 use gcl_model::params::ParamStore;
-use gcl_model::realtime::ControlHeader;
+use gcl_model::realtime::{Control, ControlHeader};
 use gcl_model::spec::Scope;
 use gcl_model::{DeviceConfig, MotorSet, Profile, RtLayout, StatusBits};
 use proptest::prelude::*;
@@ -34,7 +34,7 @@ fn prime(core: &mut HostCore, state: u8, p: &Profile) -> Result<(), Misuse> {
             core.handle_input(b"1234LOOP*");
             assert_eq!(core.poll(), Ok(Some(Answer::LoopStarted)));
             let h = if state % 6 == 2 { ControlHeader::Feedback } else { ControlHeader::Ack };
-            core.block(h, &[])?;
+            core.block(&Control::new(h))?;
         }
         4 => {
             core.abort();

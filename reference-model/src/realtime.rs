@@ -733,6 +733,18 @@ impl Control {
         self.motors.get_mut(motor_index(Some(m))?)
     }
 
+    /// The value of one field of a layout, if this block has it.
+    pub fn get(&self, field: &Field) -> Option<i64> {
+        self.value(field)
+    }
+
+    /// Sets the value of one field of a layout (a feedback field is ignored).
+    pub fn set(&mut self, field: &Field, value: i64) {
+        if let Some(v) = self.slot(field.motor, field.flag) {
+            *v = Some(value);
+        }
+    }
+
     /// Appends the block: the header, then every field of `layout`, which must each have a
     /// value that fits.
     pub fn emit(&self, layout: &BlockLayout, out: &mut Vec<u8>) -> Result<(), BlockError> {

@@ -157,6 +157,14 @@ impl CaseB {
         self
     }
 
+    /// Gives the last step's answer this shape.
+    pub fn shape_last(mut self, shape: Shape) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.shape = shape;
+        }
+        self
+    }
+
     /// A comment written before the next step.
     pub fn comment(mut self, c: impl Into<String>) -> CaseB {
         self.pending_comments.push(c.into());
@@ -217,18 +225,36 @@ impl CaseB {
             return self.line(&format!("{prefix}FGET {}", names.join(" ")));
         };
         let getter = p.getter(first).to_string();
-        let motors = prefix_motors(&p, prefix);
-        let mut lines = Vec::new();
-        for n in names {
-            let Some(id) = p.param_id(n) else {
-                lines.push(Vec::new());
-                continue;
-            };
-            let spec = p.param(id);
-            let per_value: Vec<u8> = if getter == "PGET" { vec![1] } else { motors.clone() };
-            lines.push(per_value.iter().map(|m| value_range(spec, *m, pos)).collect());
+        let shape = values_shape(&p, prefix, &getter, names, pos);
+        self.line_shaped(&format!("{prefix}{getter} {}", names.join(" ")), shape)
+    }
+
+    /// Shapes the last step's answer as [`CaseB::get`] shapes its line's (positions by
+    /// `pos`): the step is a host line `[prefix]GETTER NAME...` whose getter is the first
+    /// name's. A line whose first name is no parameter stays exact, as in `get`.
+    pub fn values_last(mut self, pos: Option<[Range; 4]>) -> Result<CaseB, String> {
+        let Some(Action::Line(bytes)) = self.def.plans.last().map(|plan| &plan.step.action) else {
+            return Err("`expect: values` follows a host line".into());
+        };
+        let text = String::from_utf8_lossy(bytes).into_owned();
+        let mut words = text.split_whitespace();
+        let cmd = words.next().unwrap_or_default();
+        let names: Vec<&str> = words.collect();
+        let p = self.p.clone();
+        let Some(first) = names.first().and_then(|n| p.param_id(n)) else {
+            return Ok(self);
+        };
+        let getter = p.getter(first);
+        let prefix = cmd
+            .len()
+            .checked_sub(getter.len())
+            .and_then(|at| cmd.get(at..).filter(|g| g.eq_ignore_ascii_case(getter)).and_then(|_| cmd.get(..at)))
+            .ok_or_else(|| format!("`expect: values`: `{text}` is not a {getter} line"))?;
+        let shape = values_shape(&p, prefix, getter, &names, pos);
+        if let Some(plan) = self.def.plans.last_mut() {
+            plan.shape = shape;
         }
-        self.line_shaped(&format!("{prefix}{getter} {}", names.join(" ")), Shape::Values(lines))
+        Ok(self)
     }
 
     pub fn within(mut self, d: Duration) -> CaseB {
@@ -297,6 +323,23 @@ pub(crate) fn prefix_motors(p: &Profile, prefix: &str) -> Vec<u8> {
     ms.sort_unstable();
     ms.dedup();
     ms
+}
+
+/// The answer of `[prefix]GETTER NAME...`: for each name a line of values (one for a
+/// `PGET`, else one per motor of the prefix), each elided as [`value_range`] says.
+fn values_shape(p: &Profile, prefix: &str, getter: &str, names: &[&str], pos: Option<[Range; 4]>) -> Shape {
+    let motors = prefix_motors(p, prefix);
+    let mut lines = Vec::new();
+    for n in names {
+        let Some(id) = p.param_id(n) else {
+            lines.push(Vec::new());
+            continue;
+        };
+        let spec = p.param(id);
+        let per_value: Vec<u8> = if getter == "PGET" { vec![1] } else { motors.clone() };
+        lines.push(per_value.iter().map(|m| value_range(spec, *m, pos)).collect());
+    }
+    Shape::Values(lines)
 }
 
 /// The range a read of a parameter is elided to, or `None` when it is exact.

@@ -9,7 +9,7 @@
 
 use std::time::Duration;
 
-use gcl_model::realtime::ControlHeader;
+use gcl_model::realtime::{Control, ControlHeader};
 use gcl_model::{Device, MotorSet, Profile, RtLayout};
 use serde_json::{Value, json};
 
@@ -63,8 +63,11 @@ fn outcome(p: &Profile, request: &Request, stream: &[u8]) -> Result<(Vec<u8>, Va
             Request::Loop(line, l) => core.start_loop(line, l.clone()).map_err(|e| e.to_string()),
             Request::Block(h, l) => {
                 enter(core, l)?;
-                core.block(*h, &vec![0; if h.has_data() { l.control().fields().len() } else { 0 }])
-                    .map_err(|e| e.to_string())
+                let mut control = Control::new(*h);
+                for f in l.control().fields() {
+                    control.set(f, 0);
+                }
+                core.block(&control).map_err(|e| e.to_string())
             }
             Request::Abort => Ok(core.abort()),
             Request::AbortLoop(l) => {

@@ -15,7 +15,7 @@
 //! The core never blocks, never reads a clock and never panics, whatever bytes it is fed.
 
 use gcl_model::escape::escape;
-use gcl_model::realtime::{BlockError, ControlHeader, FEEDBACK_HEADER, Feedback};
+use gcl_model::realtime::{BlockError, Control, ControlHeader, FEEDBACK_HEADER, Feedback};
 use gcl_model::{Profile, RtLayout, StatusBits};
 
 /// Longest answer the core buffers before calling the bytes a framing error.
@@ -365,19 +365,22 @@ impl HostCore {
         Ok(out)
     }
 
-    /// A RealTime block: `header` and, for `C`/`c`, one value per control field. Use
-    /// [`HostCore::abort`] for ^C.
-    pub fn block(&mut self, header: ControlHeader, values: &[i64]) -> Result<Vec<u8>, Misuse> {
+    /// A RealTime block: `control`'s header and, for `C`/`c`, its values, one for each field
+    /// of the loop's control layout (a header without data sends no values). A control that
+    /// lacks a field of the layout, or whose value does not fit its field, is a
+    /// [`Misuse::Block`]. Use [`HostCore::abort`] for ^C.
+    pub fn block(&mut self, control: &Control) -> Result<Vec<u8>, Misuse> {
         let Some(layout) = &self.layout else {
             return Err(Misuse::NotInRealTime);
         };
         if self.mode != HostMode::RealTime {
             return Err(Misuse::NotInRealTime);
         }
+        let header = control.header;
         let mut out = Vec::with_capacity(layout.control().size());
         match header {
             ControlHeader::Abort => return Ok(self.abort()),
-            h if h.has_data() => layout.control().encode(h.byte(), values, &mut out).map_err(Misuse::Block)?,
+            h if h.has_data() => control.emit(layout.control(), &mut out).map_err(Misuse::Block)?,
             h => out.push(h.byte()),
         }
         self.begin(if header.wants_feedback() { Await::Feedback } else { Await::Ack });
@@ -675,23 +678,40 @@ mod tests {
             store.set_unchecked(&p, p.param_id(n).unwrap(), MotorSet::FINGERS, v);
         }
         let layout = RtLayout::compute(&p, &store, MotorSet::FINGERS);
+        // A `C` block with LCV for motors 1, 2 and 3.
+        let velocities = |v: [i64; 3]| {
+            let mut control = Control::new(ControlHeader::DataFeedback);
+            for (m, v) in (1..).zip(v) {
+                control.motor_mut(m).unwrap().velocity = Some(v);
+            }
+            control
+        };
         let mut c = core();
-        assert!(c.block(ControlHeader::Feedback, &[]).is_err());
+        assert_eq!(c.block(&Control::new(ControlHeader::Feedback)), Err(Misuse::NotInRealTime));
         c.start_loop("123LOOP", layout).unwrap();
         assert_eq!(feed(&mut c, b"123LOOP*").unwrap(), Some(Answer::LoopStarted));
         assert_eq!(c.mode(), HostMode::RealTime);
         assert!(c.command("FGET P").is_err());
-        assert_eq!(c.block(ControlHeader::DataFeedback, &[55, 0, -1]).unwrap(), b"C\x37\x00\xff");
-        assert!(c.block(ControlHeader::DataFeedback, &[500, 0, 0]).is_err());
-        c.block(ControlHeader::DataFeedback, &[55, 0, 0]).unwrap();
+        assert_eq!(c.block(&velocities([55, 0, -1])).unwrap(), b"C\x37\x00\xff");
+        // A value that does not fit its field, or a field of the layout the control lacks, is
+        // the caller's error: nothing to send.
+        assert!(matches!(c.block(&velocities([500, 0, 0])), Err(Misuse::Block(BlockError::Range { value: 500, .. }))));
+        let mut two = Control::new(ControlHeader::DataAck);
+        two.motor_mut(1).unwrap().velocity = Some(1);
+        two.motor_mut(2).unwrap().velocity = Some(1);
+        assert!(matches!(c.block(&two), Err(Misuse::Block(BlockError::Missing { motor: Some(3), .. }))));
+        // A value for a field the layout does not carry (LCPG is off) is not sent.
+        let mut extra = velocities([55, 0, 0]);
+        extra.motor_mut(1).unwrap().gain = Some(9);
+        assert_eq!(c.block(&extra).unwrap(), b"C\x37\x00\x00");
         let Some(Answer::Feedback(fb)) = feed(&mut c, b"*\x13\x88\x00\x01\xff\xff").unwrap() else {
             panic!("a feedback block of three LFAP fields")
         };
         assert_eq!([1, 2, 3].map(|m| fb.motor(m).absolute_position), [Some(5000), Some(1), Some(65535)]);
         assert_eq!(fb.motor(1).strain, None, "LFS is off");
-        c.block(ControlHeader::Ack, &[]).unwrap();
+        c.block(&Control::new(ControlHeader::Ack)).unwrap();
         assert_eq!(feed(&mut c, b"*").unwrap(), Some(Answer::Ack));
-        c.block(ControlHeader::Feedback, &[]).unwrap();
+        c.block(&Control::new(ControlHeader::Feedback)).unwrap();
         assert!(matches!(feed(&mut c, b"\n\rERR 2048\n\r=> "), Ok(Some(Answer::Refused(Refusal { code: 2048, .. })))));
         assert_eq!(c.mode(), HostMode::Supervisory);
     }
@@ -717,9 +737,9 @@ mod tests {
         assert_eq!(e, Violation::LoopNotEntered { lines: vec!["OK".into()] });
         c.start_loop("123LOOP", layout).unwrap();
         feed(&mut c, b"123LOOP*").unwrap();
-        c.block(ControlHeader::Feedback, &[]).unwrap();
+        c.block(&Control::new(ControlHeader::Feedback)).unwrap();
         assert_eq!(feed(&mut c, b"?").unwrap_err(), Violation::NotABlock { byte: b'?' });
-        c.block(ControlHeader::Feedback, &[]).unwrap();
+        c.block(&Control::new(ControlHeader::Feedback)).unwrap();
         let e = feed(&mut c, b"\n\rbye\n\r=> ").unwrap_err();
         assert_eq!(e, Violation::LoopEndedWithoutStatus { lines: vec!["bye".into()] });
         assert_eq!(c.mode(), HostMode::Supervisory);

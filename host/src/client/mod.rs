@@ -29,7 +29,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::params::ParamStore;
-use gcl_model::realtime::{ControlHeader, Feedback, MotorFeedback};
+use gcl_model::realtime::{Control, ControlHeader, Feedback, MotorFeedback, RtFlag};
 use gcl_model::spec::Scope;
 use gcl_model::{MotorSet, Profile, RtLayout, StatusBits};
 
@@ -244,7 +244,8 @@ const QUIET: Duration = Duration::from_millis(50);
 #[derive(Debug, Clone)]
 struct RtSession {
     layout: RtLayout,
-    control: Vec<i64>,
+    /// The values of the next control block: every field of the layout, 0 until set.
+    control: Control,
     feedback: Option<Feedback>,
     positions: [Option<i64>; 4],
     lfvc: [i64; 4],
@@ -740,9 +741,11 @@ impl Hand {
         self.send(&bytes)?;
         // `LOOP` is answered by `*` or a refusal: `poll` gives nothing else.
         self.await_reply(self.timeouts.reply, &line)?;
-        let n_control = layout.control().fields().len();
-        self.rt =
-            Some(RtSession { layout, control: vec![0; n_control], feedback: None, positions, lfvc, lfdpc, updates: 0 });
+        let mut control = Control::new(ControlHeader::DataFeedback);
+        for f in layout.control().fields() {
+            control.set(f, 0);
+        }
+        self.rt = Some(RtSession { layout, control, feedback: None, positions, lfvc, lfdpc, updates: 0 });
         Ok(())
     }
 
@@ -755,36 +758,37 @@ impl Hand {
         self.rt.as_mut().ok_or(ClientError::Misuse(Misuse::NotInRealTime))
     }
 
-    fn set_control(&mut self, motor: char, name: &str, value: i64) -> Result<(), ClientError> {
+    fn set_control(&mut self, motor: char, flag: RtFlag, value: i64) -> Result<(), ClientError> {
         let m = parse_motors(&motor.to_string())?;
         let Some(m) = m.iter().next().filter(|_| m.len() == 1) else {
             return Err(Misuse::NotOneMotor { motor }.into());
         };
         let s = self.session()?;
-        let i = s
+        let f = s
             .layout
             .control()
-            .position(Some(m), name)
-            .ok_or_else(|| Misuse::NoSuchField { motor: m, name: name.to_string() })?;
-        let f = &s.layout.control().fields()[i];
-        s.control[i] = value.clamp(f.min(), f.max());
+            .fields()
+            .iter()
+            .find(|f| f.motor() == Some(m) && f.flag() == flag)
+            .ok_or_else(|| Misuse::NoSuchField { motor: m, name: flag.name().to_string() })?;
+        s.control.set(f, value.clamp(f.min(), f.max()));
         Ok(())
     }
 
     /// `RTSetVelocity`: the LCV datum for a motor in the next control block (clamped to a
     /// signed byte).
     pub fn rt_set_velocity(&mut self, motor: char, velocity: i64) -> Result<(), ClientError> {
-        self.set_control(motor, "LCV", velocity)
+        self.set_control(motor, RtFlag::Lcv, velocity)
     }
 
     /// `RTSetGain`: the LCPG datum for a motor in the next control block.
     pub fn rt_set_gain(&mut self, motor: char, gain: i64) -> Result<(), ClientError> {
-        self.set_control(motor, "LCPG", gain)
+        self.set_control(motor, RtFlag::Lcpg, gain)
     }
 
     /// `RTSetTorque` (bh8-262-4.4): the LCT datum for a motor.
     pub fn rt_set_torque(&mut self, motor: char, torque: i64) -> Result<(), ClientError> {
-        self.set_control(motor, "LCT", torque)
+        self.set_control(motor, RtFlag::Lct, torque)
     }
 
     /// `RTUpdate`: sends a `C` block with the control values (or `A` when the control block
@@ -802,9 +806,10 @@ impl Hand {
             (false, true) => ControlHeader::Feedback,
             (false, false) => ControlHeader::Ack,
         };
-        let values = self.session()?.control.clone();
+        let mut control = self.session()?.control;
+        control.header = header;
         let what = format!("RealTime block {}", header.byte() as char);
-        let bytes = self.core.block(header, &values)?;
+        let bytes = self.core.block(&control)?;
         self.send(&bytes)?;
         match self.await_reply(self.timeouts.block, &what)? {
             Answer::Feedback(v) => {

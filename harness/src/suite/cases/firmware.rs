@@ -42,26 +42,8 @@ impl Gen {
 
 impl Gen {
     /// What host libraries look for after RESET (Barrett's C++ API fails to initialise
-    /// without it): `BarrettHand Firmware`, the line ending straight after it, more banner
-    /// text, the prompt.
+    /// without it): a script, `harness/suite-cases/firmware/banner-lines.gcls`.
     pub(super) fn banner(&mut self) {
-        // The profile's own banner decision (`seed-banner-text`, `bh8-banner-text`): data, not
-        // a branch on the profile's id.
-        let Some(decision) = self.p.decisions.iter().map(|d| d.id.clone()).find(|id| id.ends_with("-banner-text"))
-        else {
-            return;
-        };
-        let k = self
-            .case(
-                "banner-lines",
-                "After RESET, 'BarrettHand Firmware' ends its line and more banner text follows before the prompt",
-            )
-            .src("Command RESET")
-            .decision(&decision)
-            .comment("a host's start-up: ^C, then RESET; it searches the answer for the banner line")
-            .abort()
-            .comment("the check")
-            .line_shaped("RESET", Shape::BannerLines);
-        self.add(k);
+        self.scripts(&["banner-lines"]);
     }
 }

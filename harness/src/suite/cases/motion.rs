@@ -1,20 +1,12 @@
-//! Motion: where HI, C, O, M, IC and IO leave the motors.
+//! Motion: where HI, C, O, M, IC and IO leave the motors. `motion-goal-within-mpe` is a
+//! script (`harness/suite-cases/motion/`); the others compute their lines and bounds from the
+//! profile's joint limits and status codes.
 
 use super::*;
 
 impl Gen {
     pub(super) fn motion(&mut self) {
-        let k = self
-            .case("motion-goal-within-mpe", "M ends within MPE of its goal and gives no status")
-            .src("Command M")
-            .src("Parameter MPE")
-            .level(Level::Must)
-            .preamble(true)
-            .line("GM 5000")
-            .get("", &["P"], Some(self.near([5000, 5000, 5000, 0])))
-            .line("SM 1000")
-            .get("", &["P"], Some(self.near([5000, 5000, 5000, 1000])));
-        self.add(k);
+        self.scripts(&["motion-goal-within-mpe"]);
 
         let msg = if self.has_param("HSG") { "HSG" } else { "MSG" };
         let k = self

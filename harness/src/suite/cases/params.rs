@@ -1,4 +1,5 @@
-//! Parameters: each parameter's default, setting, range and access.
+//! Parameters: each parameter's default, setting, range and access. Cases about one named
+//! parameter are scripts (`harness/suite-cases/params/`) where their lines are fixed.
 
 use super::*;
 
@@ -30,73 +31,14 @@ impl Gen {
                 self.add(k);
             }
         }
-        self.scripts(&["param-scope-commands"]);
-        if self.p.decisions.iter().any(|d| d.id == "seed-temp-global") {
-            let k = self
-                .case("param-temp-global", "TEMP is read only through PGET; FGET TEMP and FSET TEMP give 64")
-                .decision("seed-temp-global")
-                .preamble(false)
-                .get("", &["TEMP"], None)
-                .line("FGET TEMP")
-                .line("FSET TEMP 5");
-            self.add(k);
-        }
-        if self.has_cmd("PGET") {
-            let id =
-                if self.p.decisions.iter().any(|d| d.id == "seed-pget-tmp") { "seed-pget-tmp" } else { "bh8-no-tmp" };
-            let mut k = self
-                .case("param-tmp-alias", "Whether PGET accepts the seed's name TMP for TEMP")
-                .decision(id)
-                .preamble(false);
-            k = match self.param("TEMP") {
-                Some(t) if t.input_aliases.iter().any(|a| a == "TMP") => {
-                    let r = (t.min, t.max);
-                    k.line_shaped("PGET TMP", Shape::Values(vec![vec![Some(r)]]))
-                }
-                _ => k.line("PGET TMP"),
-            };
-            self.add(k);
-        }
-        if self.has_param("HSG") && self.param("MSG").is_some_and(|m| m.alias_of.is_some()) {
-            let k = self
-                .case("param-msg-hsg-alias", "MSG and HSG name one value per motor")
-                .decision("bh8-msg-alias")
-                .preamble(false)
-                .line("2FSET MSG 100")
-                .line("FGET HSG MSG")
-                .line("3FSET HSG 200")
-                .line("FGET MSG HSG");
-            self.add(k);
-        }
-        let k = self
-            .case("param-en-narrows-motion", "EN narrows motion commands without a prefix, never parameter commands")
-            .src("Parameter EN")
-            .decision("seed-param-prefix-en")
-            .decision("bh8-param-prefix-en")
-            .preamble(true)
-            .line("SFSET EN 0")
-            .line("FGET EN DP")
-            .line("M 3000")
-            .get("", &["P"], Some(self.near([3000, 3000, 3000, 0])));
-        self.add(k);
-
-        if self.p.decisions.iter().any(|d| d.id == "bh8-spread-defaults") {
-            let k = self
-                .case(
-                    "param-spread-finger-defaults",
-                    "Where the manual gives the spread no default (BDAT, BS), the spread starts at the finger default and can be set",
-                )
-                .src("Parameter BDAT")
-                .src("Parameter BS")
-                .decision("bh8-spread-defaults")
-                .preamble(false)
-                .get("", &["BDAT", "BS"], None)
-                .line("SFSET BDAT 1000 BS 1")
-                .get("", &["BDAT", "BS"], None)
-                .line("SFDEF")
-                .get("S", &["BDAT", "BS"], None);
-            self.add(k);
-        }
+        self.scripts(&[
+            "param-scope-commands",
+            "param-temp-global",
+            "param-tmp-alias",
+            "param-msg-hsg-alias",
+            "param-en-narrows-motion",
+            "param-spread-finger-defaults",
+        ]);
 
         if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
             let new = ["LCT", "LFBP", "LFAIN"];

@@ -1,62 +1,18 @@
-//! Persistence: the saved sets, FDEF/FLOAD/FSAVE and their P forms, RESET.
+//! Persistence: the saved sets, FDEF/FLOAD/FSAVE and their P forms, RESET. The cases are
+//! scripts (`harness/suite-cases/persistence/`) except `persist-saved-set`, whose lines are
+//! computed from the profile's saved set.
 
 use super::*;
 
 impl Gen {
     pub(super) fn persistence(&mut self) {
-        self.scripts(&["persist-fdef"]);
-
-        let k = self
-            .case("persist-fdef-ram-only", "FDEF changes RAM only: the saved values come back at RESET")
-            .src("Command FDEF")
-            .decision("seed-saved-set")
-            .decision("bh8-saved-sets")
-            .level(Level::Must)
-            .requires(Requirement::Eeprom)
-            .preamble(false)
-            .line("FSET DP 1234")
-            .line("FSAVE")
-            .line("FDEF")
-            .line("1FGET DP")
-            .line_shaped("RESET", Shape::Banner)
-            .line("1FGET DP");
-        self.add(k);
-
-        let k = self
-            .case(
-                "persist-fsave-reset",
-                "FSAVE keeps values across RESET; FDEF and FSAVE bring the factory values back",
-            )
-            .src("Command FSAVE")
-            .src("Command RESET")
-            .level(Level::Must)
-            .requires(Requirement::Eeprom)
-            .preamble(false)
-            .line("FSET DP 1234")
-            .line("FSAVE")
-            .line_shaped("RESET", Shape::Banner)
-            .line("FGET DP")
-            .comment("restore the factory values in the EEPROM")
-            .line("FDEF")
-            .line("FSAVE")
-            .line_shaped("RESET", Shape::Banner)
-            .line("FGET DP");
-        self.add(k);
-
-        self.scripts(&["persist-fload"]);
-
-        let k = self
-            .case("persist-reset-discards-ram", "RESET forgets values that were not saved")
-            .src("Command RESET")
-            .decision("seed-reset-output")
-            .decision("bh8-reset")
-            .requires(Requirement::Eeprom)
-            .preamble(false)
-            .line("FSAVE")
-            .line("FSET DP 1234")
-            .line_shaped("RESET", Shape::Banner)
-            .line("FGET DP");
-        self.add(k);
+        self.scripts(&[
+            "persist-fdef",
+            "persist-fdef-ram-only",
+            "persist-fsave-reset",
+            "persist-fload",
+            "persist-reset-discards-ram",
+        ]);
 
         // The whole saved set: every parameter FSAVE covers survives RESET.
         let saved: Vec<ParamSpec> = self
@@ -87,28 +43,6 @@ impl Gen {
             self.add(k);
         }
 
-        self.scripts(&["persist-pdef"]);
-        if self.has_cmd("PSAVE") && self.has_param("OTEMP") {
-            let k = self
-                .case(
-                    "persist-psave-reset",
-                    "PSAVE keeps global values across RESET; PDEF and PSAVE bring the factory values back",
-                )
-                .src("Command PSAVE")
-                .decision("bh8-saved-sets")
-                .requires(Requirement::Eeprom)
-                .preamble(false)
-                .line("PSET OTEMP 700")
-                .line("PSAVE")
-                .line_shaped("RESET", Shape::Banner)
-                .line("PGET OTEMP")
-                .comment("restore the factory values in the EEPROM")
-                .line("PDEF")
-                .line("PSAVE")
-                .line_shaped("RESET", Shape::Banner)
-                .line("PGET OTEMP");
-            self.add(k);
-        }
-        self.scripts(&["persist-pload"]);
+        self.scripts(&["persist-pdef", "persist-psave-reset", "persist-pload"]);
     }
 }

@@ -11,15 +11,32 @@
 //! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
 //! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
 //! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
-//!                                     param:NAME, decision:ID)
+//!                                     param:NAME, alias:NAME (a parameter that names
+//!                                     another's value), decision:ID); `a|b` holds when
+//!                                     either does
 //! profile: seed                       only for these profiles (default: every profile)
 //! level: MUST  requires: motion  note: ...   as in a transcript
 //! ```
 //!
 //! Steps are the script's: host lines, `line:`, `nowait:`, `raw:`, `partial:`, `abort`,
-//! `wait`, `pause:`; every answer is written exactly as the model gives it. A `timeout:` line
-//! gives the step after it a `within` floor. Cases whose answers need a shape (elided values,
-//! RealTime blocks) or whose lines are computed from the profile stay in the generators.
+//! `wait`, `pause:`; every answer is written exactly as the model gives it, unless an
+//! `expect:` line after the step gives it a shape (the suite's own key, read here and not by
+//! the script parser):
+//!
+//! ```text
+//! expect: banner          a RESET banner: `{any}BarrettHand Firmware{any}`
+//! expect: banner-lines    a banner checked for the line endings hosts rely on
+//! expect: any-lines       the echo, then any lines (only their presence is checked)
+//! expect: list-values     `NAME value...` lines, live values elided to their ranges
+//! expect: values          a get line's values (`[motors]FGET|PGET NAME...`), each live value
+//!                         elided to its parameter's range, as the generators' `get` does
+//! expect: near 5000 5000 5000 0   as `values`, positions (P) within MPE of these goals, one
+//!                         per motor (the profile's MPE defaults)
+//! ```
+//!
+//! A `timeout:` line gives the step after it a `within` floor. Cases whose answers need
+//! per-value ranges or RealTime blocks, or whose lines are computed from the profile, stay in
+//! the generators.
 
 use gcl_transcript::ParseError;
 use gcl_transcript::script::{ScriptStep, parse_script};
@@ -46,6 +63,17 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("persist-fload", include_str!("../../../suite-cases/persistence/persist-fload.gcls")),
     ("persist-pdef", include_str!("../../../suite-cases/persistence/persist-pdef.gcls")),
     ("persist-pload", include_str!("../../../suite-cases/persistence/persist-pload.gcls")),
+    ("banner-lines", include_str!("../../../suite-cases/firmware/banner-lines.gcls")),
+    ("param-temp-global", include_str!("../../../suite-cases/params/param-temp-global.gcls")),
+    ("param-tmp-alias", include_str!("../../../suite-cases/params/param-tmp-alias.gcls")),
+    ("param-msg-hsg-alias", include_str!("../../../suite-cases/params/param-msg-hsg-alias.gcls")),
+    ("param-en-narrows-motion", include_str!("../../../suite-cases/params/param-en-narrows-motion.gcls")),
+    ("motion-goal-within-mpe", include_str!("../../../suite-cases/motion/motion-goal-within-mpe.gcls")),
+    ("param-spread-finger-defaults", include_str!("../../../suite-cases/params/param-spread-finger-defaults.gcls")),
+    ("persist-fdef-ram-only", include_str!("../../../suite-cases/persistence/persist-fdef-ram-only.gcls")),
+    ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
+    ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
+    ("persist-psave-reset", include_str!("../../../suite-cases/persistence/persist-psave-reset.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -94,8 +122,9 @@ impl Gen {
     /// The case of one script for this profile: `None` when the script names other profiles.
     pub(super) fn script_case(&self, id: &str) -> Result<Option<CaseB>, ScriptError> {
         let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
-        let script = parse_script(text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
+        let (text, expects) = split_expects(text).map_err(invalid)?;
+        let script = parse_script(&text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let f = &script.fields;
         if f.id.as_deref() != Some(id) {
             return Err(invalid(format!("its `id:` is {:?}, not its file name", f.id)));
@@ -119,12 +148,20 @@ impl Gen {
             match key.as_str() {
                 "x-when" => {
                     for cond in value.split_whitespace() {
-                        let holds = match cond.split_once(':') {
-                            Some(("command", n)) => self.has_cmd(n),
-                            Some(("param", n)) => self.has_param(n),
-                            Some(("decision", d)) => self.has_decision(d),
-                            _ => return Err(invalid(format!("x-when `{cond}`: command:, param: or decision:"))),
-                        };
+                        let mut holds = false;
+                        for alt in cond.split('|') {
+                            holds |= match alt.split_once(':') {
+                                Some(("command", n)) => self.has_cmd(n),
+                                Some(("param", n)) => self.has_param(n),
+                                Some(("alias", n)) => self.param(n).is_some_and(|x| x.alias_of.is_some()),
+                                Some(("decision", d)) => self.has_decision(d),
+                                _ => {
+                                    return Err(invalid(format!(
+                                        "x-when `{alt}`: command:, param:, alias: or decision:"
+                                    )));
+                                }
+                            };
+                        }
                         if !holds {
                             return Ok(None);
                         }
@@ -154,9 +191,25 @@ impl Gen {
             k = k.preamble(preamble == Preamble::Motion);
         }
         let mut timeout = None;
-        for step in &script.steps {
+        let mut expects = expects.into_iter().peekable();
+        for (i, step) in script.steps.iter().enumerate() {
             k = Self::script_step(k, step, timeout);
             timeout = step.timeout;
+            let next = script.steps.get(i + 1).map_or(usize::MAX, |s| s.line);
+            if let Some((n, shape)) = expects.next_if(|(n, _)| *n < next) {
+                if expects.peek().is_some_and(|(m, _)| *m < next) {
+                    return Err(invalid(format!("line {n}: two `expect:` lines for one step")));
+                }
+                k = match shape {
+                    Expected::Shape(shape) => k.shape_last(shape),
+                    Expected::Values(goals) => {
+                        k.values_last(goals.map(|g| self.near(g))).map_err(|e| invalid(format!("line {n}: {e}")))?
+                    }
+                };
+            }
+        }
+        if let Some((n, _)) = expects.next() {
+            return Err(invalid(format!("line {n}: `expect:` before any step")));
         }
         Ok(Some(k))
     }
@@ -175,6 +228,49 @@ impl Gen {
             _ => k,
         }
     }
+}
+
+/// What an `expect:` line names.
+enum Expected {
+    /// A shape that needs nothing more.
+    Shape(Shape),
+    /// The values of the step's get line; positions within MPE of these goals, if given.
+    Values(Option<[i64; 4]>),
+}
+
+/// The script without its `expect:` lines (blanked, so line numbers stay), and each one's
+/// line with the shape it names, in order. An `expect:` line shapes the step before it.
+fn split_expects(text: &str) -> Result<(String, Vec<(usize, Expected)>), String> {
+    let mut out = String::with_capacity(text.len());
+    let mut expects = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if let Some(v) = line.trim_start().strip_prefix("expect:") {
+            let shape = match v.trim() {
+                "banner" => Expected::Shape(Shape::Banner),
+                "banner-lines" => Expected::Shape(Shape::BannerLines),
+                "any-lines" => Expected::Shape(Shape::AnyLines),
+                "list-values" => Expected::Shape(Shape::ListValues),
+                "values" => Expected::Values(None),
+                near if near.starts_with("near ") => {
+                    let goals: Vec<i64> = near.split_whitespace().skip(1).filter_map(|g| g.parse().ok()).collect();
+                    let goals = <[i64; 4]>::try_from(goals)
+                        .map_err(|_| format!("line {}: `expect: near` takes four positions", i + 1))?;
+                    Expected::Values(Some(goals))
+                }
+                other => {
+                    return Err(format!(
+                        "line {}: expect `{other}`: banner, banner-lines, any-lines, list-values, values or near",
+                        i + 1
+                    ));
+                }
+            };
+            expects.push((i + 1, shape));
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    Ok((out, expects))
 }
 
 /// The clause prefix that names a decision (`clause: decision:framing-echo`).
@@ -210,5 +306,27 @@ mod tests {
         let p = Profile::builtin("seed").unwrap();
         let g = Gen { p, out: Vec::new() };
         assert!(matches!(g.script_case("no-such-case"), Err(ScriptError::Missing(_))));
+    }
+
+    /// `expect:` lines leave the script's line numbers as they were and say what is wrong.
+    #[test]
+    fn expect_lines_are_read_and_checked() {
+        let (text, expects) = split_expects("id: x\nRESET\nexpect: banner\nFGET P\nexpect: near 1 2 3 4\n").unwrap();
+        assert_eq!(text, "id: x\nRESET\n\nFGET P\n\n");
+        assert!(matches!(
+            expects.as_slice(),
+            [(3, Expected::Shape(Shape::Banner)), (5, Expected::Values(Some([1, 2, 3, 4])))]
+        ));
+        let e = split_expects("RESET\nexpect: banners\n").map(|_| ()).unwrap_err();
+        assert!(e.starts_with("line 2: expect `banners`"), "{e}");
+        let e = split_expects("FGET P\nexpect: near 1 2\n").map(|_| ()).unwrap_err();
+        assert!(e.contains("four positions"), "{e}");
+        // `values` needs a get line of the first name's getter.
+        let p = Profile::builtin("seed").unwrap();
+        let k = CaseB::new(&p, "x", "x").line("FSET DP 5");
+        let e = k.values_last(None).map(|_| ()).unwrap_err();
+        assert!(e.contains("not a FGET line"), "{e}");
+        let k = CaseB::new(&p, "x", "x").abort();
+        assert!(k.values_last(None).map(|_| ()).is_err());
     }
 }
