@@ -194,6 +194,36 @@ fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     }
 }
 
+/// "Nothing is sent while an answer is still coming" is judged when the answer's last byte is
+/// handed to the line: on a paced line, a host that sends its next command once it has the
+/// echo sends it while the values and the prompt are still crossing; on an unpaced line the
+/// whole answer was there already. A pipelining host is caught either way.
+#[test]
+fn waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered() {
+    if !python_ready() {
+        return;
+    }
+    let grade = |file: &str, pace: Pace| {
+        let mut run = host_run(python(file));
+        run.pace = pace;
+        // Exit 1 is a host that gave up on the hand with a message: no crash.
+        let opts = CheckHostOptions { run, ok_exit_codes: vec![0, 1], golden: None };
+        let report = check_host(&opts).unwrap().report;
+        for c in report.cases.iter().filter(|c| c.verdict != Verdict::Pass) {
+            println!("{file} at {pace}: {}: {}", c.id, c.message.as_deref().unwrap_or_default());
+        }
+        report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
+    };
+    let waits = vec![format!("host-{}", HostClause::WaitsForAnswer.id())];
+    // At 1200 bit/s (the mutant's own port speed) the 25 bytes after an echo take some 200 ms,
+    // far longer than the host's turn.
+    assert_eq!(grade("py_echo_is_ack.py", Pace::Fixed(1200)), waits, "paced");
+    assert_eq!(grade("py_echo_is_ack.py", Pace::Unpaced), Vec::<String>::new(), "unpaced");
+    // The other hosts open the port at 9600 bit/s.
+    assert_eq!(grade("py_pipelines.py", Pace::Fixed(9600)), waits, "a pipelining host, paced");
+    assert_eq!(grade("gclhost.py", Pace::Fixed(9600)), Vec::<String>::new(), "the correct host, paced");
+}
+
 fn example(name: &str) -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_BIN_EXE_gcl")).with_file_name("examples").join(name);
     if !p.exists() {

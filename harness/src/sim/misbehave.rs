@@ -23,6 +23,11 @@ pub trait LineTap: Send {
     /// One answer of the hand (whatever the model produced for one line, one block or one
     /// timer), before it is queued for the host: what actually goes out.
     fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped;
+    /// The transport took the last byte of the oldest answer not yet taken (as shaped, and
+    /// only answers with bytes count): under pacing, when that byte's wire time has passed.
+    fn delivered(&mut self, _device: &Device) {}
+    /// The host went away and the answers it had not taken were discarded.
+    fn discarded(&mut self, _device: &Device) {}
 }
 
 /// An answer as it goes out.
