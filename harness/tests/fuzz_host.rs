@@ -14,8 +14,11 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gcl_harness::check_host::{CheckHostOptions, check_host};
-use gcl_harness::fuzz::host::{Event, FindingKind, FuzzOptions, HostClause, HostRun, Transport, Weights, fuzz};
+use gcl_harness::fuzz::host::{
+    Event, FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, run_once,
+};
 use gcl_harness::report::Verdict;
+use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};
 
 fn mutants() -> PathBuf {
@@ -109,7 +112,7 @@ fn first_finding(
 
 /// (file, operators it is fuzzed with, the kind of finding it must give, what its signature names).
 const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
-    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt", FindingKind::Hang, "awaiting the answer"),
+    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt,silence", FindingKind::Hang, "awaiting the answer"),
     ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
     ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
     ("py_pipelines.py", "truncate", FindingKind::Violation, "waits-for-answer"),
@@ -222,6 +225,24 @@ fn waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered() {
     // The other hosts open the port at 9600 bit/s.
     assert_eq!(grade("py_pipelines.py", Pace::Fixed(9600)), waits, "a pipelining host, paced");
     assert_eq!(grade("gclhost.py", Pace::Fixed(9600)), Vec::<String>::new(), "the correct host, paced");
+}
+
+/// `silence` (a pulled cable: the port stays open, nothing more comes) is a hang for a host
+/// that waits without a deadline, and nothing for one that gives up in time.
+#[test]
+fn silence_hangs_a_host_without_a_deadline_only() {
+    if !python_ready() {
+        return;
+    }
+    let silence = Schedule { planned: vec![Planned { answer: 3, op: Operator::Silence, arg: 0 }] };
+    let mut run = host_run(python("py_prompt_forever.py"));
+    run.timeout_hang = Duration::from_millis(1500);
+    let r = run_once(&run, &silence).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert!(matches!(&r.end, HostEnd::Hung(s) if s.contains("awaiting the answer")), "{:?}", r.end);
+    let r = run_once(&host_run(python("gclhost.py")), &silence).unwrap();
+    assert_eq!(r.end, HostEnd::Exit(1), "gave up with a message: {}", r.stderr);
+    assert!(r.stderr.contains("no b'=> '"), "{}", r.stderr);
 }
 
 fn example(name: &str) -> Option<PathBuf> {
