@@ -93,6 +93,7 @@ fn first_finding(
         weights: Weights::parse(ops).unwrap(),
         max_planned: 3,
         minimize: false,
+        guided: true,
     };
     let stop = AtomicBool::new(false);
     let found = Mutex::new(None);
@@ -264,6 +265,7 @@ fn parallel_campaigns_are_reproducible_run_for_run() {
             weights: Weights::parse("crlf,garbage,err-bits,wrong-echo,extra-bytes").unwrap(),
             max_planned: 3,
             minimize: true,
+            guided: true,
         };
         let mut c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 24);
@@ -313,6 +315,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
             weights: Weights::default(),
             max_planned: 3,
             minimize: false,
+            guided: true,
         };
         let fired = Arc::new(Mutex::new(0));
         let c = fuzz(&opts, &AtomicBool::new(false), &|_| *fired.lock().unwrap() += 1).unwrap();

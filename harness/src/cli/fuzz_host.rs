@@ -160,6 +160,9 @@ pub struct Args {
     /// Keep each finding's schedule as found.
     #[arg(long)]
     no_minimize: bool,
+    /// Every schedule fresh from the seed: no mutation of the runs that took a new path.
+    #[arg(long)]
+    no_guidance: bool,
 }
 
 /// Runs `gcl fuzz host`.
@@ -178,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         weights: args.ops.clone().unwrap_or_default(),
         max_planned: args.max_misbehaviours.max(1),
         minimize: !args.no_minimize,
+        guided: !args.no_guidance,
     };
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",

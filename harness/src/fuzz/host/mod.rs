@@ -181,6 +181,8 @@ pub struct FuzzOptions {
     pub max_planned: usize,
     /// Minimize each new finding's schedule.
     pub minimize: bool,
+    /// Mutate the schedules of runs that took a new path (off: every schedule is fresh).
+    pub guided: bool,
 }
 
 /// A distinct finding.
@@ -473,7 +475,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 if sh.taken < visible {
                     break;
                 }
-                let kept = sh.corpus.partition_point(|(j, _)| *j < visible);
+                let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
                 let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
                 let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
                 drop(sh);
