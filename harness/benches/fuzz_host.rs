@@ -13,14 +13,18 @@
 //!   so this is far lower; it depends on the host's timeouts, here 200 ms).
 //! - the per-run overhead of pty + hand + process: runs/s and ms/run with `/bin/true` as the
 //!   host (it opens nothing and exits at once).
+//! - how much guidance helps: for each Python host mutant (`tests/host_mutants/`, needs
+//!   python3 with pyserial), the runs to its first finding of the expected kind with guidance
+//!   and without (`guided: false`, every schedule fresh), over several seeds, and the mean.
 //!
 //! Without `--bench` (as under `cargo test --all-targets`) it makes a few runs of each and
 //! prints the same lines.
 
-use std::sync::atomic::AtomicBool;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use gcl_harness::fuzz::host::{FuzzOptions, HostRun, Transport, Weights, fuzz, run_once};
+use gcl_harness::fuzz::host::{Event, FindingKind, FuzzOptions, HostRun, Transport, Weights, fuzz, run_once};
 use gcl_harness::sim::misbehave::Schedule;
 use gcl_harness::sim::{Pace, TimeMode};
 use gcl_host::client::{Hand, Timeouts};
@@ -87,6 +91,90 @@ fn clean_runs(label: &str, run: &HostRun, n: usize, jobs: usize) {
     );
 }
 
+/// Python mutants: file, the operators fuzzed, the kind of finding and what its signature names
+/// (as in `tests/fuzz_host.rs`).
+const MUTANTS: [(&str, &str, FindingKind, &str); 6] = [
+    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt,silence", FindingKind::Hang, "awaiting the answer"),
+    ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
+    ("py_parse_values.py", "crlf,garbage,restart", FindingKind::Crash, "python ValueError"),
+    ("py_rt_length.py", "rt-block-length,rt-err", FindingKind::Crash, "python IndexError"),
+    ("py_banner_version.py", "banner-variant,restart", FindingKind::Crash, "python ValueError"),
+    ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
+];
+
+/// Runs (1-based) until the first finding of `kind` naming `needle`, or `None` within `cap`.
+fn runs_to_first(
+    command: Vec<String>,
+    ops: &str,
+    kind: FindingKind,
+    needle: &str,
+    seed: u64,
+    guided: bool,
+    cap: u64,
+) -> Option<u64> {
+    let mut run = spec(command);
+    run.timeout_hang = Duration::from_millis(2500);
+    let opts = FuzzOptions {
+        run,
+        seed,
+        runs: Some(cap),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 1,
+        weights: Weights::parse(ops).expect("ops"),
+        max_planned: 3,
+        minimize: false,
+        guided,
+    };
+    let stop = AtomicBool::new(false);
+    let first = Mutex::new(None);
+    fuzz(&opts, &stop, &|e| {
+        if let Event::Found(f) = e
+            && f.verdict.kind == kind
+            && f.verdict.signature.contains(needle)
+        {
+            first.lock().unwrap().get_or_insert(f.run + 1);
+            stop.store(true, Ordering::Relaxed);
+        }
+    })
+    .expect("campaign");
+    first.into_inner().unwrap()
+}
+
+fn guidance(bench: bool) {
+    let ok =
+        std::process::Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
+    if !ok {
+        println!("guidance: skipped (python3 with pyserial is not available)");
+        return;
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants");
+    let (seeds, cap, mutants) = if bench { (1..=5u64, 60, &MUTANTS[..]) } else { (1..=1u64, 10, &MUTANTS[..1]) };
+    let mut totals = [(0u64, 0u64, 0u64); 2];
+    for (file, ops, kind, needle) in mutants {
+        let command = vec!["python3".to_string(), dir.join(file).display().to_string()];
+        let mut line = format!("guidance, {file}:");
+        for (g, guided) in [true, false].into_iter().enumerate() {
+            let found: Vec<Option<u64>> =
+                seeds.clone().map(|s| runs_to_first(command.clone(), ops, *kind, needle, s, guided, cap)).collect();
+            let hit: Vec<u64> = found.iter().flatten().copied().collect();
+            totals[g].0 += hit.iter().sum::<u64>();
+            totals[g].1 += hit.len() as u64;
+            totals[g].2 += (found.len() - hit.len()) as u64;
+            let shown: Vec<String> = found.iter().map(|f| f.map_or(format!(">{cap}"), |n| n.to_string())).collect();
+            line += &format!(" {} [{}]", if guided { "guided" } else { "unguided" }, shown.join(" "));
+        }
+        println!("{line}");
+    }
+    for (g, name) in [(0, "guided"), (1, "unguided")] {
+        let (sum, n, missed) = totals[g];
+        println!(
+            "guidance, {name}: mean {:.1} runs to the first finding over {n} campaigns, {missed} without one in {cap} runs",
+            sum as f64 / n.max(1) as f64
+        );
+    }
+}
+
 fn main() -> std::process::ExitCode {
     if std::env::args().nth(1).as_deref() == Some("--as-host") {
         return host();
@@ -108,6 +196,7 @@ fn main() -> std::process::ExitCode {
         weights: Weights::default(),
         max_planned: 3,
         minimize: false,
+        guided: true,
     };
     let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).expect("campaign");
     let secs = c.elapsed_ms as f64 / 1000.0;
@@ -117,5 +206,6 @@ fn main() -> std::process::ExitCode {
         c.runs as f64 / secs,
         c.findings.len()
     );
+    guidance(bench);
     std::process::ExitCode::SUCCESS
 }

@@ -14,8 +14,11 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gcl_harness::check_host::{CheckHostOptions, check_host};
-use gcl_harness::fuzz::host::{Event, FindingKind, FuzzOptions, HostClause, HostRun, Transport, Weights, fuzz};
+use gcl_harness::fuzz::host::{
+    Event, FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, run_once,
+};
 use gcl_harness::report::Verdict;
+use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};
 
 fn mutants() -> PathBuf {
@@ -90,6 +93,7 @@ fn first_finding(
         weights: Weights::parse(ops).unwrap(),
         max_planned: 3,
         minimize: false,
+        guided: true,
     };
     let stop = AtomicBool::new(false);
     let found = Mutex::new(None);
@@ -109,7 +113,7 @@ fn first_finding(
 
 /// (file, operators it is fuzzed with, the kind of finding it must give, what its signature names).
 const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
-    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt", FindingKind::Hang, "awaiting the answer"),
+    ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt,silence", FindingKind::Hang, "awaiting the answer"),
     ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
     ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
     ("py_pipelines.py", "truncate", FindingKind::Violation, "waits-for-answer"),
@@ -194,6 +198,88 @@ fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     }
 }
 
+/// "Nothing is sent while an answer is still coming" is judged when the answer's last byte is
+/// handed to the line: on a paced line, a host that sends its next command once it has the
+/// echo sends it while the values and the prompt are still crossing; on an unpaced line the
+/// whole answer was there already. A pipelining host is caught either way.
+#[test]
+fn waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered() {
+    if !python_ready() {
+        return;
+    }
+    let grade = |file: &str, pace: Pace| {
+        let mut run = host_run(python(file));
+        run.pace = pace;
+        // Exit 1 is a host that gave up on the hand with a message: no crash.
+        let opts = CheckHostOptions { run, ok_exit_codes: vec![0, 1], golden: None };
+        let report = check_host(&opts).unwrap().report;
+        for c in report.cases.iter().filter(|c| c.verdict != Verdict::Pass) {
+            println!("{file} at {pace}: {}: {}", c.id, c.message.as_deref().unwrap_or_default());
+        }
+        report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
+    };
+    let waits = vec![format!("host-{}", HostClause::WaitsForAnswer.id())];
+    // At 1200 bit/s (the mutant's own port speed) the 25 bytes after an echo take some 200 ms,
+    // far longer than the host's turn.
+    assert_eq!(grade("py_echo_is_ack.py", Pace::Fixed(1200)), waits, "paced");
+    assert_eq!(grade("py_echo_is_ack.py", Pace::Unpaced), Vec::<String>::new(), "unpaced");
+    // The other hosts open the port at 9600 bit/s.
+    assert_eq!(grade("py_pipelines.py", Pace::Fixed(9600)), waits, "a pipelining host, paced");
+    assert_eq!(grade("gclhost.py", Pace::Fixed(9600)), Vec::<String>::new(), "the correct host, paced");
+}
+
+/// `silence` (a pulled cable: the port stays open, nothing more comes) is a hang for a host
+/// that waits without a deadline, and nothing for one that gives up in time.
+#[test]
+fn silence_hangs_a_host_without_a_deadline_only() {
+    if !python_ready() {
+        return;
+    }
+    let silence = Schedule { planned: vec![Planned { answer: 3, op: Operator::Silence, arg: 0 }] };
+    let mut run = host_run(python("py_prompt_forever.py"));
+    run.timeout_hang = Duration::from_millis(1500);
+    let r = run_once(&run, &silence).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert!(matches!(&r.end, HostEnd::Hung(s) if s.contains("awaiting the answer")), "{:?}", r.end);
+    let r = run_once(&host_run(python("gclhost.py")), &silence).unwrap();
+    assert_eq!(r.end, HostEnd::Exit(1), "gave up with a message: {}", r.stderr);
+    assert!(r.stderr.contains("no b'=> '"), "{}", r.stderr);
+}
+
+/// With `--jobs` above 1 the schedules do not depend on which thread ends first: two
+/// campaigns with the same seed against the same (deterministic) host keep the same
+/// schedules and find the same findings at the same runs, minimized the same way.
+#[test]
+fn parallel_campaigns_are_reproducible_run_for_run() {
+    if !python_ready() {
+        return;
+    }
+    let campaign = || {
+        let opts = FuzzOptions {
+            run: host_run(python("py_parse_values.py")),
+            seed: 11,
+            runs: Some(24),
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs: 3,
+            weights: Weights::parse("crlf,garbage,err-bits,wrong-echo,extra-bytes").unwrap(),
+            max_planned: 3,
+            minimize: true,
+            guided: true,
+        };
+        let mut c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+        assert_eq!(c.runs, 24);
+        c.elapsed_ms = 0;
+        for f in &mut c.findings {
+            f.found_after_ms = 0;
+        }
+        serde_json::to_value(&c).unwrap()
+    };
+    let (a, b) = (campaign(), campaign());
+    assert!(!a["findings"].as_array().unwrap().is_empty(), "{a}");
+    assert_eq!(a, b);
+}
+
 fn example(name: &str) -> Option<PathBuf> {
     let p = Path::new(env!("CARGO_BIN_EXE_gcl")).with_file_name("examples").join(name);
     if !p.exists() {
@@ -229,6 +315,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
             weights: Weights::default(),
             max_planned: 3,
             minimize: false,
+            guided: true,
         };
         let fired = Arc::new(Mutex::new(0));
         let c = fuzz(&opts, &AtomicBool::new(false), &|_| *fired.lock().unwrap() += 1).unwrap();

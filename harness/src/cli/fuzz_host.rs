@@ -144,7 +144,11 @@ pub struct Args {
     /// Run a bundle's schedule once and say whether its finding comes back.
     #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
     replay: Option<PathBuf>,
-    /// N hands and N hosts at once, each pair on its own line.
+    /// N hands and N hosts at once, each pair on its own line. The schedules are the same for
+    /// the same --seed and --jobs: run i's guidance sees runs 0..=i-N in order (a worker waits
+    /// for a slow one), so with a host that answers the same bytes the same way, the findings,
+    /// their first run and minimized schedules come back run for run. Wall times do not, nor
+    /// how many runs a --duration makes.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=64))]
     jobs: u64,
     /// Only these misbehaviours, optionally weighted: delay-above,truncate=5.
@@ -156,6 +160,9 @@ pub struct Args {
     /// Keep each finding's schedule as found.
     #[arg(long)]
     no_minimize: bool,
+    /// Every schedule fresh from the seed: no mutation of the runs that took a new path.
+    #[arg(long)]
+    no_guidance: bool,
 }
 
 /// Runs `gcl fuzz host`.
@@ -174,6 +181,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         weights: args.ops.clone().unwrap_or_default(),
         max_planned: args.max_misbehaviours.max(1),
         minimize: !args.no_minimize,
+        guided: !args.no_guidance,
     };
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",

@@ -64,6 +64,9 @@ pub struct Engine {
     tap: Option<Box<dyn LineTap>>,
     /// Output from this many bytes of `out` on is held back until then (a misbehaviour).
     hold: Option<(usize, Instant)>,
+    /// Where each answer queued for a tapped line ends, counted from the start of `out`: the
+    /// tap hears when the transport takes an answer's last byte ([`LineTap::delivered`]).
+    answer_ends: VecDeque<usize>,
     /// What the model was powered up with (a restart powers it up again, EEPROM kept).
     config: DeviceConfig,
 }
@@ -120,6 +123,7 @@ impl Engine {
             listening: true,
             tap: None,
             hold: None,
+            answer_ends: VecDeque::new(),
             config,
         };
         let mut banner = Vec::new();
@@ -327,6 +331,15 @@ impl Engine {
             *k = k.saturating_sub(n);
         }
         self.out.drain(..n);
+        for end in self.answer_ends.iter_mut() {
+            *end = end.saturating_sub(n);
+        }
+        while self.answer_ends.front() == Some(&0) {
+            self.answer_ends.pop_front();
+            if let Some(tap) = &mut self.tap {
+                tap.delivered(self.link.device());
+            }
+        }
         while n > 0 {
             let Some((count, bt)) = self.out_rates.front_mut() else { break };
             let k = n.min(*count);
@@ -357,6 +370,11 @@ impl Engine {
         self.out.clear();
         self.out_rates.clear();
         self.hold = None;
+        if !std::mem::take(&mut self.answer_ends).is_empty()
+            && let Some(tap) = &mut self.tap
+        {
+            tap.discarded(self.link.device());
+        }
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
             t.event(sim, &format!("host gone: {why}; {discarded} bytes not taken discarded"));
@@ -430,6 +448,9 @@ impl Engine {
             self.hold = Some((self.out.len() + offset, Instant::now() + d));
         }
         self.out.extend(bytes);
+        if self.tap.is_some() {
+            self.answer_ends.push_back(self.out.len());
+        }
         match self.out_rates.back_mut() {
             Some((count, b)) if *b == bt => *count += bytes.len(),
             _ => self.out_rates.push_back((bytes.len(), bt)),

@@ -23,6 +23,11 @@ pub trait LineTap: Send {
     /// One answer of the hand (whatever the model produced for one line, one block or one
     /// timer), before it is queued for the host: what actually goes out.
     fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped;
+    /// The transport took the last byte of the oldest answer not yet taken (as shaped, and
+    /// only answers with bytes count): under pacing, when that byte's wire time has passed.
+    fn delivered(&mut self, _device: &Device) {}
+    /// The host went away and the answers it had not taken were discarded.
+    fn discarded(&mut self, _device: &Device) {}
 }
 
 /// An answer as it goes out.
@@ -114,6 +119,8 @@ operators! {
     RtExtreme => "rt-extreme", 3;
     /// Hangs up the line part-way through an answer.
     HangUp => "hang-up", 1;
+    /// Goes silent part-way through an answer, the port left open (a pulled cable, a hand powered off): nothing more is sent in the session.
+    Silence => "silence", 1;
 }
 
 impl std::fmt::Display for Operator {
@@ -199,6 +206,8 @@ pub struct Misbehave {
     answers: u32,
     power_up: Vec<u8>,
     fired: Vec<Fired>,
+    /// The `silence` operator fired: every answer from then on is dropped.
+    silent: bool,
 }
 
 impl Misbehave {
@@ -207,7 +216,7 @@ impl Misbehave {
         let mut fresh = Device::with_profile(device.profile().clone());
         let power_up = fresh.take_output();
         let done = vec![false; schedule.planned.len()];
-        Misbehave { schedule, done, answers: 0, power_up, fired: Vec::new() }
+        Misbehave { schedule, done, answers: 0, power_up, fired: Vec::new(), silent: false }
     }
 
     /// What fired so far.
@@ -228,14 +237,18 @@ impl Misbehave {
         } else {
             AnswerKind::Supervisory
         };
+        if self.silent {
+            return Shaped::plain(&[]);
+        }
         let mut out = Shaped::plain(bytes);
         for i in 0..self.schedule.planned.len() {
             let p = self.schedule.planned[i];
-            if self.done[i] || p.answer > self.answers || out.hang_up {
+            if self.done[i] || p.answer > self.answers || out.hang_up || self.silent {
                 continue;
             }
             if let Some(what) = apply(p.op, p.arg, kind, device, &self.power_up, &mut out) {
                 self.done[i] = true;
+                self.silent |= p.op == Operator::Silence;
                 self.fired.push(Fired { index: i, answer: self.answers, op: p.op, state: state.to_string(), what });
             }
         }
@@ -485,6 +498,12 @@ fn apply(
             }
             Some("feedback values at their extremes".into())
         }
+        Operator::Silence => {
+            let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
+            b.truncate(at);
+            out.hold = None;
+            Some(format!("silent after {at} bytes of the answer, the line left open"))
+        }
         Operator::HangUp => {
             let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
             b.truncate(at);
@@ -549,6 +568,21 @@ mod tests {
         for op in [Operator::RtErr, Operator::RtByteFlip, Operator::RtExtreme, Operator::RtBlockLength] {
             assert!(shape(op, 0, b"FGET DP\n\r1\n\r=> ").1.is_empty(), "{op}");
         }
+    }
+
+    #[test]
+    fn silence_cuts_the_answer_and_drops_every_later_one() {
+        let d = device();
+        let planned = vec![
+            Planned { answer: 1, op: Operator::Silence, arg: 5 },
+            Planned { answer: 2, op: Operator::Garbage, arg: 1 },
+        ];
+        let mut m = Misbehave::new(Schedule { planned }, &d);
+        assert_eq!(m.shape(&d, b"FGET DP\n\r1\n\r=> ", "answer to FGET").bytes, b"FGET ".to_vec());
+        assert!(m.shape(&d, b"HI\n\r=> ", "answer to HI").bytes.is_empty());
+        assert!(m.shape(&d, b"*\x01\x02", "RealTime feedback").bytes.is_empty());
+        assert_eq!(m.fired().len(), 1, "nothing fires on a silent line: {:?}", m.fired());
+        assert_eq!(m.answers(), 3);
     }
 
     /// A tap that records the host's bytes and holds every answer back 10 s.

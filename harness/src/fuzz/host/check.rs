@@ -6,6 +6,7 @@
 //! answer is still coming, the RealTime block being sent. It never panics on any bytes and
 //! never reads a clock.
 
+use std::collections::VecDeque;
 use std::sync::Arc;
 
 use gcl_model::grammar::Line;
@@ -99,8 +100,12 @@ pub struct HostChecker {
     line: Vec<u8>,
     /// The last byte the host sent (for CR CR).
     prev: Option<u8>,
-    /// A command line was sent and its answer has not ended yet.
+    /// A command line was sent and its answer has not ended yet (its last byte has not been
+    /// delivered to the line).
     pending: bool,
+    /// Answers made but not yet delivered, oldest first: whether each ends the wait (it ends
+    /// with the prompt, or it is RealTime feedback).
+    in_flight: VecDeque<bool>,
     /// The answer still coming was broken by a misbehaviour: the host may give up on it.
     broken: bool,
     /// The command word of the last line sent.
@@ -124,6 +129,7 @@ impl HostChecker {
             line: Vec::new(),
             prev: None,
             pending: false,
+            in_flight: VecDeque::new(),
             broken: false,
             last_command: None,
             block_due: 0,
@@ -296,16 +302,34 @@ impl HostChecker {
         }
     }
 
-    /// The hand's answer as it goes out; `misbehaved` when the fuzzer changed it.
+    /// The hand's answer as it is queued for the line (after any misbehaviour); `misbehaved`
+    /// when the fuzzer changed it. The wait it ends is over only once it is
+    /// [delivered](HostChecker::delivered).
     pub fn hand_bytes(&mut self, device: &Device, bytes: &[u8], misbehaved: bool) {
         self.mode = device.mode();
         if misbehaved {
             self.broken = true;
         }
+        if bytes.is_empty() {
+            return;
+        }
         let prompt = self.profile.framing.prompt.as_bytes();
-        if self.mode == Mode::Loop || bytes.ends_with(prompt) {
+        self.in_flight.push_back(self.mode == Mode::Loop || bytes.ends_with(prompt));
+    }
+
+    /// The last byte of the oldest answer not yet delivered has been handed to the line (for a
+    /// paced line, once its wire time has passed): host bytes read before this are judged as
+    /// sent while that answer was still coming, whatever the order the hand made them in.
+    pub fn delivered(&mut self) {
+        if self.in_flight.pop_front() == Some(true) {
             self.pending = false;
         }
+    }
+
+    /// The answers not yet delivered were discarded (the host went away).
+    pub fn discarded(&mut self) {
+        self.in_flight.clear();
+        self.pending = false;
     }
 
     /// The host went away: grades how it left.
@@ -353,6 +377,7 @@ mod tests {
             d.run_until_idle(std::time::Duration::from_secs(100));
             let out = d.take_output();
             c.hand_bytes(&d, &out, false);
+            c.delivered();
         }
         c.finish();
         c.violations().iter().map(|v| v.clause).collect()
@@ -372,5 +397,22 @@ mod tests {
         assert_eq!(run(&[b"FGET DP"]), vec![HostClause::LeavesCleanly]);
         // ^C may interrupt anything.
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+
+    #[test]
+    fn an_answer_made_but_not_yet_delivered_is_still_coming() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let mut c = HostChecker::new(p);
+        c.host_bytes(&d, b"FGET DP\r");
+        c.hand_bytes(&d, b"FGET DP\n\r1000 1000 1000 150\n\r=> ", false);
+        c.host_bytes(&d, b"F");
+        assert_eq!(c.violations()[0].clause, HostClause::WaitsForAnswer);
+        let mut c = HostChecker::new(Profile::builtin("seed").unwrap());
+        c.host_bytes(&d, b"FGET DP\r");
+        c.hand_bytes(&d, b"FGET DP\n\r1000 1000 1000 150\n\r=> ", false);
+        c.delivered();
+        c.host_bytes(&d, b"FGET P\r");
+        assert!(c.violations().is_empty(), "{:?}", c.violations());
     }
 }

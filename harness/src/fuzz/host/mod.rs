@@ -18,8 +18,8 @@ pub mod detect;
 pub mod session;
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use rand_core::{RngCore, SeedableRng};
@@ -181,6 +181,8 @@ pub struct FuzzOptions {
     pub max_planned: usize,
     /// Minimize each new finding's schedule.
     pub minimize: bool,
+    /// Mutate the schedules of runs that took a new path (off: every schedule is fresh).
+    pub guided: bool,
 }
 
 /// A distinct finding.
@@ -243,16 +245,78 @@ pub struct Campaign {
     pub paths: usize,
 }
 
-/// Shared state of a campaign's workers.
+/// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
+/// the order of their index, whatever order they end in, so that what guidance knows when
+/// run `i` is scheduled does not depend on thread timing.
 struct Shared {
-    corpus: Vec<Schedule>,
+    /// Kept schedules, each with the index of the run that kept it (increasing).
+    corpus: Vec<(u64, Schedule)>,
     paths: BTreeSet<String>,
     findings: Vec<Finding>,
     by_sig: BTreeMap<String, usize>,
     fired_at: BTreeMap<String, BTreeMap<String, u64>>,
-    answers: u32,
+    /// Answers in the run without misbehaviour (run 0), once taken.
+    answers: Option<u32>,
     minimize_runs: u64,
     error: Option<String>,
+    /// Runs 0..taken have been taken in.
+    taken: u64,
+    /// Runs that ended but wait for an earlier one to be taken in first.
+    ended: BTreeMap<u64, (Schedule, RunResult)>,
+}
+
+impl Shared {
+    /// Takes in run `i`: counts its operators, keeps its schedule when it took a new path,
+    /// records its findings; returns the indices of new findings.
+    fn take(&mut self, i: u64, schedule: Schedule, r: RunResult, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
+        if i == 0 {
+            self.answers = Some(r.answers.max(1));
+        }
+        for f in &r.fired {
+            *self.fired_at.entry(f.op.name().to_string()).or_default().entry(f.state.clone()).or_default() += 1;
+        }
+        let mut fresh_path = false;
+        for p in paths_of(&r) {
+            fresh_path |= self.paths.insert(p);
+        }
+        if fresh_path && !r.fired.is_empty() {
+            self.corpus.push((i, schedule.clone()));
+        }
+        let mut new = Vec::new();
+        for v in judge(&r, &opts.ok_exit_codes) {
+            match self.by_sig.get(&v.signature) {
+                Some(&k) => self.findings[k].hits += 1,
+                None => {
+                    let k = self.findings.len();
+                    self.by_sig.insert(v.signature.clone(), k);
+                    self.findings.push(Finding {
+                        verdict: v,
+                        run: i,
+                        found_after_ms: started.elapsed().as_millis() as u64,
+                        hits: 1,
+                        schedule: schedule.clone(),
+                        original: schedule.clone(),
+                        fired: r.fired.clone(),
+                        end: r.end.clone(),
+                        stderr: r.stderr.clone(),
+                        exchanges: r.exchanges.clone(),
+                    });
+                    new.push(k);
+                }
+            }
+        }
+        new
+    }
+
+    /// Takes in every ended run whose turn has come.
+    fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
+        let mut new = Vec::new();
+        while let Some((s, r)) = self.ended.remove(&self.taken) {
+            new.extend(self.take(self.taken, s, r, opts, started));
+            self.taken += 1;
+        }
+        new
+    }
 }
 
 /// The paths a run took that guidance counts: each misbehaviour at its state with the command
@@ -334,25 +398,61 @@ pub fn minimize(
 }
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
+///
+/// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of runs
+/// `0..=i-jobs` (guidance sees those, taken in index order, and no others; a worker waits for
+/// them when a slow run holds them up). With a host that behaves the same given the same
+/// bytes, a campaign with the same seed and `jobs` makes the same schedules and findings (first
+/// run, hits, minimized schedule) run for run; wall times are not reproducible, nor is which
+/// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
     let next = AtomicU64::new(0);
     let completed = AtomicU64::new(0);
+    let jobs = opts.jobs.max(1) as u64;
     let shared = Mutex::new(Shared {
         corpus: Vec::new(),
         paths: BTreeSet::new(),
         findings: Vec::new(),
         by_sig: BTreeMap::new(),
         fired_at: BTreeMap::new(),
-        answers: 8,
+        answers: None,
         minimize_runs: 0,
         error: None,
+        taken: 0,
+        ended: BTreeMap::new(),
     });
+    let turn = Condvar::new();
     let done = |i: u64| {
         stop.load(Ordering::Relaxed)
             || opts.runs.is_some_and(|n| i >= n)
             || opts.duration.is_some_and(|d| started.elapsed() >= d)
             || (opts.runs.is_none() && opts.duration.is_none() && i >= 1000)
+    };
+    let announce = |new: Vec<usize>, shrink: bool| {
+        for k in new {
+            let Ok(sh) = shared.lock() else { return };
+            let (schedule, sig) = (sh.findings[k].original.clone(), sh.findings[k].verdict.signature.clone());
+            drop(sh);
+            if shrink && opts.minimize && schedule.planned.len() > 1 {
+                let mut runs = 0;
+                let m = minimize(opts, &schedule, &sig, &mut runs, stop);
+                if let Ok(mut sh) = shared.lock() {
+                    sh.minimize_runs += runs;
+                    if let Ok((s, mr)) = m {
+                        let f = &mut sh.findings[k];
+                        f.schedule = s;
+                        f.fired = mr.fired;
+                        f.end = mr.end;
+                        f.stderr = mr.stderr;
+                        f.exchanges = mr.exchanges;
+                    }
+                }
+            }
+            if let Ok(sh) = shared.lock() {
+                on_event(Event::Found(Box::new(sh.findings[k].clone())));
+            }
+        }
     };
     let worker = || {
         loop {
@@ -363,9 +463,24 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             let schedule = if i == 0 {
                 Schedule::default()
             } else {
+                // Guidance sees runs 0..visible, whatever else has ended by now.
+                let visible = (i + 1).saturating_sub(jobs);
+                let Ok(mut sh) = shared.lock() else { break };
+                while sh.taken < visible && !done(i) {
+                    sh = match turn.wait_timeout(sh, Duration::from_millis(50)) {
+                        Ok((g, _)) => g,
+                        Err(_) => return,
+                    };
+                }
+                if sh.taken < visible {
+                    break;
+                }
+                let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
+                let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
+                let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
+                drop(sh);
                 let mut rng = Pcg64Mcg::seed_from_u64(opts.seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-                let Ok(sh) = shared.lock() else { break };
-                next_schedule(&mut rng, opts, &sh.corpus, sh.answers)
+                next_schedule(&mut rng, opts, &corpus, answers)
             };
             let r = match run_once_until(&opts.run, &schedule, stop) {
                 Ok(r) => r,
@@ -380,72 +495,35 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             };
             completed.fetch_add(1, Ordering::Relaxed);
             on_event(Event::Run { index: i, elapsed: r.elapsed });
-            let verdicts = judge(&r, &opts.ok_exit_codes);
-            let mut new_sigs = Vec::new();
-            if let Ok(mut sh) = shared.lock() {
-                if i == 0 {
-                    sh.answers = r.answers.max(1);
+            let new = match shared.lock() {
+                Ok(mut sh) => {
+                    sh.ended.insert(i, (schedule, r));
+                    sh.take_ready(opts, started)
                 }
-                for f in &r.fired {
-                    *sh.fired_at.entry(f.op.name().to_string()).or_default().entry(f.state.clone()).or_default() += 1;
-                }
-                let mut fresh_path = false;
-                for p in paths_of(&r) {
-                    fresh_path |= sh.paths.insert(p);
-                }
-                if fresh_path && !r.fired.is_empty() {
-                    sh.corpus.push(schedule.clone());
-                }
-                for v in verdicts {
-                    match sh.by_sig.get(&v.signature) {
-                        Some(&k) => sh.findings[k].hits += 1,
-                        None => {
-                            let k = sh.findings.len();
-                            sh.by_sig.insert(v.signature.clone(), k);
-                            sh.findings.push(Finding {
-                                verdict: v.clone(),
-                                run: i,
-                                found_after_ms: started.elapsed().as_millis() as u64,
-                                hits: 1,
-                                schedule: schedule.clone(),
-                                original: schedule.clone(),
-                                fired: r.fired.clone(),
-                                end: r.end.clone(),
-                                stderr: r.stderr.clone(),
-                                exchanges: r.exchanges.clone(),
-                            });
-                            new_sigs.push((k, v.signature));
-                        }
-                    }
-                }
-            }
-            for (k, sig) in new_sigs {
-                if opts.minimize && schedule.planned.len() > 1 {
-                    let mut runs = 0;
-                    let m = minimize(opts, &schedule, &sig, &mut runs, stop);
-                    if let Ok(mut sh) = shared.lock() {
-                        sh.minimize_runs += runs;
-                        if let Ok((s, mr)) = m {
-                            let f = &mut sh.findings[k];
-                            f.schedule = s;
-                            f.fired = mr.fired;
-                            f.end = mr.end;
-                            f.stderr = mr.stderr;
-                            f.exchanges = mr.exchanges;
-                        }
-                    }
-                }
-                if let Ok(sh) = shared.lock() {
-                    on_event(Event::Found(Box::new(sh.findings[k].clone())));
-                }
-            }
+                Err(_) => break,
+            };
+            turn.notify_all();
+            announce(new, true);
         }
     };
     std::thread::scope(|s| {
-        for _ in 0..opts.jobs.max(1) {
+        for _ in 0..jobs {
             s.spawn(worker);
         }
     });
+    // Runs that ended after one before them was called off: taken in (in order), unminimized.
+    let left = match shared.lock() {
+        Ok(mut sh) => {
+            let ended = std::mem::take(&mut sh.ended);
+            let mut new = Vec::new();
+            for (i, (s, r)) in ended {
+                new.extend(sh.take(i, s, r, opts, started));
+            }
+            new
+        }
+        Err(_) => Vec::new(),
+    };
+    announce(left, false);
     let sh = shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
     if let Some(e) = sh.error {
         return Err(RunError::Io(std::io::Error::other(e)));

@@ -213,6 +213,18 @@ impl LineTap for Tap {
         }
         shaped
     }
+
+    fn delivered(&mut self, _device: &Device) {
+        if let Ok(mut log) = self.0.lock() {
+            log.checker.delivered();
+        }
+    }
+
+    fn discarded(&mut self, _device: &Device) {
+        if let Ok(mut log) = self.0.lock() {
+            log.checker.discarded();
+        }
+    }
 }
 
 /// Longest stderr kept.
