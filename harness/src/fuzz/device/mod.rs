@@ -313,8 +313,8 @@ fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
 ///
 /// A hand outside this process is driven in two gears. A *quick* run starts with a drain
 /// that ends at the first quiet moment of a few byte-times and has no trailing wait: the
-/// case's end is known from the model, and whatever a hand sends after it is met by the
-/// next case's drain, which sets [`Hand::leftover`]. A *thorough* run keeps the replayer's
+/// case's end is known from the model, and whatever a hand sends after it is met by
+/// [`Hand::settle`] before the next case. A *thorough* run keeps the replayer's
 /// quiet drain and trailing wait. Nothing is reported on a quick run alone: a failure, or
 /// bytes left over after a case, is judged again by a thorough run (see `worker`).
 struct Hand<'o> {
@@ -322,9 +322,6 @@ struct Hand<'o> {
     link: Option<Box<dyn Link>>,
     /// Whether the link was just opened (its power-up banner may still be on the way).
     new: bool,
-    /// Whether the last quick drain threw bytes away: the case before it said more than the
-    /// model did (or said it late).
-    leftover: bool,
     /// Whether the last run failed: it stopped reading mid-case, so the next run drains
     /// thoroughly.
     dirty: bool,
@@ -355,6 +352,28 @@ impl Hand<'_> {
         }
     }
 
+    /// Whether a quick run comes next.
+    fn quick(&self, thorough: bool) -> bool {
+        !matches!(self.opts.target, Target::Sim { .. }) && !thorough && !self.new && !self.dirty && self.link.is_some()
+    }
+
+    /// Before a quick run: drains the line to its first quiet moment and says whether there
+    /// was anything to drain (the case before said more than the model did, or said it late).
+    fn settle(&mut self) -> Result<bool, FuzzError> {
+        if !self.quick(false) {
+            return Ok(false);
+        }
+        let quiet = self.quick_quiet();
+        let limit = crate::suite::replay_options().drain_limit;
+        match crate::replay::discard(self.link()?.as_mut(), quiet, limit) {
+            Ok(d) => Ok(d.bytes > 0),
+            Err(_) => {
+                self.link = None;
+                Ok(false)
+            }
+        }
+    }
+
     /// Replays a case's transcript with deadlines from the model; `thorough` as the type says.
     fn run(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
@@ -372,7 +391,7 @@ impl Hand<'_> {
             }
             ro.silent_wait = policy.silent_wait;
         }
-        let quick = outside && !thorough && !self.new && !self.dirty && self.link.is_some();
+        let quick = self.quick(thorough);
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
@@ -380,7 +399,7 @@ impl Hand<'_> {
         if quick {
             let drained = crate::replay::discard(self.link()?.as_mut(), quiet, ro.drain_limit);
             match drained {
-                Ok(d) => self.leftover |= d.bytes > 0,
+                Ok(_) => {}
                 Err(_) => {
                     self.link = None;
                     return self.run(t, true);
@@ -508,7 +527,7 @@ fn worker(
     allowed.eeprom = false;
     let gen_no_eeprom = Generator::new(&p, allowed);
     let mut dice = Dice::new(opts.seed.wrapping_add(w as u64));
-    let mut hand = Hand { opts, link: None, new: true, leftover: false, dirty: false };
+    let mut hand = Hand { opts, link: None, new: true, dirty: false };
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     loop {
@@ -558,6 +577,20 @@ fn worker(
         {
             return Ok(());
         }
+        // Bytes on the line before this case belong to the case before it, which passed
+        // without a trailing wait: that case is judged again, thoroughly, first.
+        if hand.settle()?
+            && let Some((pa, pb, prun)) = prev.take()
+        {
+            let out = hand.run(&pb.transcript, true)?;
+            if let Some(sig) = signature(&p, &pb.transcript, &out) {
+                let new = lock().seen.insert(sig.clone());
+                if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
+                    stop.store(true, Ordering::SeqCst);
+                    return Ok(());
+                }
+            }
+        }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
         let mut sig = signature(&p, &built.transcript, &outcome);
@@ -580,39 +613,20 @@ fn worker(
             save_corpus(dir, &actions)?;
         }
         progress(Progress::Run { runs: run_no, findings: nfind, features: nfeat, elapsed: start.elapsed() });
-        // Bytes the quick drain met belong to the case before this one, which passed without
-        // a trailing wait: that case is judged again, thoroughly.
-        let mut judge = Vec::new();
-        if std::mem::take(&mut hand.leftover)
-            && let Some((pa, pb, prun)) = prev.take()
-        {
-            let out = hand.run(&pb.transcript, true)?;
-            if let Some(s) = signature(&p, &pb.transcript, &out) {
-                judge.push((pa, pb, s, prun));
-            }
-        }
-        match sig {
-            None => prev = Some((actions, built, run_no)),
-            Some(s) => {
-                prev = None;
-                judge.push((actions, built, s, run_no));
-            }
-        }
-        for (actions, built, sig, run_no) in judge {
-            if !lock().seen.insert(sig.clone()) {
-                continue;
-            }
-            prev = None;
-            report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)?;
-            let sh = lock();
-            if opts.max_findings.is_some_and(|m| sh.findings.len() >= m) {
-                stop.store(true, Ordering::SeqCst);
-            }
+        let Some(sig) = sig else {
+            prev = Some((actions, built, run_no));
+            continue;
+        };
+        prev = None;
+        let new = lock().seen.insert(sig.clone());
+        if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
+            stop.store(true, Ordering::SeqCst);
         }
     }
 }
 
-/// Minimizes a new finding, writes its transcript, and adds it to the run's findings.
+/// Minimizes a new finding, writes its transcript, and adds it to the run's findings; says
+/// whether the run has found as many as it was to find.
 #[allow(clippy::too_many_arguments)]
 fn report_finding(
     opts: &FuzzOptions,
@@ -624,7 +638,7 @@ fn report_finding(
     sig: FindingSignature,
     run_no: u64,
     progress: &(dyn Fn(Progress<'_>) + Sync),
-) -> Result<(), FuzzError> {
+) -> Result<bool, FuzzError> {
     let p = opts.profile.clone();
     let found_after = start.elapsed();
     let t0 = Instant::now();
@@ -659,7 +673,7 @@ fn report_finding(
     let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
     sh.minimizing += t0.elapsed();
     sh.findings.push(finding);
-    Ok(())
+    Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
 }
 
 /// Delta debugging over the action list: drop chunks (halves, quarters, ... single
