@@ -16,7 +16,8 @@
 //! into a venv under `target/`).
 //!
 //! Without `--bench` (as under `cargo test --all-targets`) it runs a few cases of each as a
-//! smoke test.
+//! smoke test. A word after `--` picks the figures whose name holds it (`in-process`, `exec`,
+//! `pty`, `faults`), e.g. `cargo bench -p gcl-harness --bench fuzz_device -- pty`.
 
 use std::io::BufRead;
 use std::process::{Command, Stdio};
@@ -28,11 +29,29 @@ use gcl_model::{Fault, Profile};
 
 fn main() {
     let bench = std::env::args().any(|a| a == "--bench");
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let wanted = |name: &str| filter.as_ref().is_none_or(|f| name.contains(f.as_str()));
     let p = Profile::builtin("bh8-262").unwrap();
     let n = |full: u64, smoke: u64| if bench { full } else { smoke };
 
+    if wanted("in-process") {
+        in_process(&p, n(3000, 20));
+    }
+    if wanted("exec") {
+        exec(&p, n(300, 5));
+    }
+    if wanted("pty") {
+        pty_figure(&p, n(20, 1));
+    }
+    if wanted("faults") {
+        faults(&p, bench);
+    }
+}
+
+/// Cases per second against the in-process sim.
+fn in_process(p: &std::sync::Arc<Profile>, runs: u64) {
     let mut o = FuzzOptions::new(Target::Sim { profile: None }, p.clone());
-    o.budget = Budget::Runs(n(3000, 20));
+    o.budget = Budget::Runs(runs);
     o.minimize = false;
     let s = run(&o, &|_| {}).unwrap();
     println!(
@@ -42,10 +61,13 @@ fn main() {
         s.cases_per_second(),
         s.dropped
     );
+}
 
+/// Cases per second over `exec:gcl sim --stdio`.
+fn exec(p: &std::sync::Arc<Profile>, runs: u64) {
     let exec: Target = format!("exec:{} sim --stdio", env!("CARGO_BIN_EXE_gcl")).parse().unwrap();
     let mut o = FuzzOptions::new(exec, p.clone());
-    o.budget = Budget::Runs(n(300, 5));
+    o.budget = Budget::Runs(runs);
     o.minimize = false;
     o.allowed.abort_timing = false;
     let s = run(&o, &|_| {}).unwrap();
@@ -56,9 +78,11 @@ fn main() {
         s.cases_per_second(),
         s.findings.len()
     );
+}
 
-    pty_figure(&p, n(20, 1));
-
+/// Time to the first finding of every fault, in-process.
+fn faults(p: &std::sync::Arc<Profile>, bench: bool) {
+    let n = |full: u64, smoke: u64| if bench { full } else { smoke };
     let faults: &[Fault] = if bench { Fault::ALL } else { &Fault::ALL[..2] };
     let mut under = 0;
     for f in faults {
