@@ -7,12 +7,20 @@
 //! - for every fault of the sim, the wall time to the first finding with seed 1 (in-process,
 //!   up to 3000 cases), and the share found under 10 s. Aim: at least 90 %.
 //!
-//! Not measured here (see the report of the branch): bytes per second over a pty at 38400
-//! against the line rate, and the side-by-side with boofuzz.
+//! - over a pty at 38400 (`gcl sim --pty --time fast --baud 38400`, fuzzed as
+//!   `serial:PATH?baud=38400`, `--no abort-timing` since fast time ends motion at once, 20 s):
+//!   cases per second and wire bytes per second (both directions) ÷ the line rate (3840 bytes/s
+//!   at 8N1). Aim: at least 0.9.
+//!
+//! The side-by-side with boofuzz is `harness/benches/boofuzz/compare.sh` (it installs boofuzz
+//! into a venv under `target/`).
 //!
 //! Without `--bench` (as under `cargo test --all-targets`) it runs a few cases of each as a
-//! smoke test.
+//! smoke test. A word after `--` picks the figures whose name holds it (`in-process`, `exec`,
+//! `pty`, `faults`), e.g. `cargo bench -p gcl-harness --bench fuzz_device -- pty`.
 
+use std::io::BufRead;
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, run};
@@ -21,11 +29,29 @@ use gcl_model::{Fault, Profile};
 
 fn main() {
     let bench = std::env::args().any(|a| a == "--bench");
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let wanted = |name: &str| filter.as_ref().is_none_or(|f| name.contains(f.as_str()));
     let p = Profile::builtin("bh8-262").unwrap();
     let n = |full: u64, smoke: u64| if bench { full } else { smoke };
 
+    if wanted("in-process") {
+        in_process(&p, n(3000, 20));
+    }
+    if wanted("exec") {
+        exec(&p, n(300, 5));
+    }
+    if wanted("pty") {
+        pty_figure(&p, n(20, 1));
+    }
+    if wanted("faults") {
+        faults(&p, bench);
+    }
+}
+
+/// Cases per second against the in-process sim.
+fn in_process(p: &std::sync::Arc<Profile>, runs: u64) {
     let mut o = FuzzOptions::new(Target::Sim { profile: None }, p.clone());
-    o.budget = Budget::Runs(n(3000, 20));
+    o.budget = Budget::Runs(runs);
     o.minimize = false;
     let s = run(&o, &|_| {}).unwrap();
     println!(
@@ -35,10 +61,13 @@ fn main() {
         s.cases_per_second(),
         s.dropped
     );
+}
 
+/// Cases per second over `exec:gcl sim --stdio`.
+fn exec(p: &std::sync::Arc<Profile>, runs: u64) {
     let exec: Target = format!("exec:{} sim --stdio", env!("CARGO_BIN_EXE_gcl")).parse().unwrap();
     let mut o = FuzzOptions::new(exec, p.clone());
-    o.budget = Budget::Runs(n(300, 5));
+    o.budget = Budget::Runs(runs);
     o.minimize = false;
     o.allowed.abort_timing = false;
     let s = run(&o, &|_| {}).unwrap();
@@ -49,7 +78,11 @@ fn main() {
         s.cases_per_second(),
         s.findings.len()
     );
+}
 
+/// Time to the first finding of every fault, in-process.
+fn faults(p: &std::sync::Arc<Profile>, bench: bool) {
+    let n = |full: u64, smoke: u64| if bench { full } else { smoke };
     let faults: &[Fault] = if bench { Fault::ALL } else { &Fault::ALL[..2] };
     let mut under = 0;
     for f in faults {
@@ -80,5 +113,41 @@ fn main() {
         "faults found in-process under 10 s: {under} of {} = {:.0} % (aim: at least 90 %)",
         faults.len(),
         100.0 * under as f64 / faults.len() as f64
+    );
+}
+
+/// Bytes per second over a pty at 38400 against the line rate.
+fn pty_figure(p: &std::sync::Arc<Profile>, seconds: u64) {
+    const BAUD: u32 = 38400;
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["sim", "--pty", "--time", "fast", "--baud", &BAUD.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("starting gcl sim --pty");
+    let mut path = String::new();
+    if let Some(out) = sim.stdout.take() {
+        std::io::BufReader::new(out).read_line(&mut path).expect("reading the pty path");
+    }
+    let target: Target = format!("serial:{}?baud={BAUD}", path.trim()).parse().expect("a serial target");
+    let mut o = FuzzOptions::new(target, p.clone());
+    o.budget = Budget::Time(Duration::from_secs(seconds));
+    o.minimize = false;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {});
+    let _ = sim.kill();
+    let _ = sim.wait();
+    let s = s.expect("fuzzing the pty");
+    let busy = s.elapsed.saturating_sub(s.minimizing).as_secs_f64().max(1e-3);
+    let line_rate = f64::from(BAUD) / 10.0;
+    println!(
+        "pty at {BAUD}: {} cases in {:.1} s = {:.1} cases/s, {:.0} wire bytes/s = {:.2} of the line rate \
+         ({line_rate:.0} bytes/s; aim: at least 0.9), {} findings (expected 0)",
+        s.runs,
+        s.elapsed.as_secs_f64(),
+        s.cases_per_second(),
+        s.wire_bytes as f64 / busy,
+        s.wire_bytes as f64 / busy / line_rate,
+        s.findings.len()
     );
 }

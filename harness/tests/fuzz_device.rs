@@ -1,11 +1,13 @@
 //! `gcl fuzz device` finds every deliberate fault of the sim it can, minimizes it to a
 //! transcript that fails on that mutant and passes on the unmutated sim, and finds nothing
-//! on the unmutated sim, in-process and over `exec:`. Faults it does not find within the
+//! on the unmutated sim, in-process, over `exec:` and over a pty. Faults it does not find within the
 //! budget are listed with a reason in `fuzz_device_unfound.toml`; the list is checked both
 //! ways (a listed fault that is found fails the test, so the list stays true).
 
 use std::collections::BTreeMap;
+use std::io::BufRead;
 use std::path::Path;
+use std::process::{Child, Command, Stdio};
 
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, load_corpus, report, run};
 use gcl_harness::replay::replay;
@@ -142,6 +144,66 @@ fn the_unmutated_sim_over_exec_yields_no_findings() {
         s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
     );
     assert_eq!(s.runs, 40);
+}
+
+/// `gcl sim --pty --time fast --baud 38400` with `faults`: the child (killed on drop) and a
+/// `serial:` target on its pty.
+struct PtySim(Child);
+
+impl PtySim {
+    fn start(faults: &[&str]) -> (PtySim, Target) {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
+        cmd.args(["sim", "--pty", "--time", "fast", "--baud", "38400"]);
+        for f in faults {
+            cmd.args(["--fault", f]);
+        }
+        let mut child = cmd.stdout(Stdio::piped()).stderr(Stdio::null()).spawn().unwrap();
+        let mut path = String::new();
+        std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut path).unwrap();
+        (PtySim(child), format!("serial:{}?baud=38400", path.trim()).parse().unwrap())
+    }
+}
+
+impl Drop for PtySim {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Cases after the first run quick on the kept pty (no quiet drain, no trailing wait); none
+/// of them may be taken for a finding.
+#[test]
+fn the_unmutated_sim_over_a_pty_yields_no_findings() {
+    let (_sim, t) = PtySim::start(&[]);
+    let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(40);
+    o.seed = 5;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(
+        s.findings.is_empty(),
+        "false positives over a pty: {:#?}",
+        s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
+    );
+    assert_eq!(s.runs, 40);
+}
+
+/// A failure of a quick run is run again thoroughly and reported: the minimized transcript
+/// fails on the mutant and passes on the unmutated sim.
+#[test]
+fn a_faulty_sim_over_a_pty_is_found_and_the_transcript_replays() {
+    let (_sim, t) = PtySim::start(&["fget-reversed"]);
+    let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.max_findings = Some(1);
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    let f = s.findings.first().expect("fget-reversed found over a pty");
+    assert_eq!(f.signature.command, "FGET", "{}", f.diff);
+    assert!(!replays_on(&f.transcript, vec![Fault::FgetReversed]), "fails on the mutant");
+    assert!(replays_on(&f.transcript, vec![]), "passes on the unmutated sim");
 }
 
 #[test]

@@ -310,12 +310,25 @@ fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
 
 /// A worker's connection to the target: reopened when it fails; for `sim` targets a fresh
 /// hand for every case, so a case never depends on the one before.
+///
+/// A hand outside this process is driven in two gears. A *quick* run starts with a drain
+/// that ends at the first quiet moment of a few byte-times and has no trailing wait: the
+/// case's end is known from the model, and whatever a hand sends after it is met by
+/// [`Hand::settle`] before the next case. A *thorough* run keeps the replayer's
+/// quiet drain and trailing wait. Nothing is reported on a quick run alone: a failure, or
+/// bytes left over after a case, is judged again by a thorough run (see `worker`).
 struct Hand<'o> {
     opts: &'o FuzzOptions,
     link: Option<Box<dyn Link>>,
     /// Whether the link was just opened (its power-up banner may still be on the way).
     new: bool,
+    /// Whether the last run failed: it stopped reading mid-case, so the next run drains
+    /// thoroughly.
+    dirty: bool,
 }
+
+/// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
+const TRAILING: Duration = Duration::from_millis(50);
 
 impl Hand<'_> {
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
@@ -327,11 +340,46 @@ impl Hand<'_> {
         self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
     }
 
-    /// Replays a case's transcript with deadlines from the model.
-    fn run(&mut self, t: &Transcript) -> Result<ReplayOutcome, FuzzError> {
+    /// The quiet that ends a quick drain: four byte-times on a serial line (at least 1 ms),
+    /// 1 ms elsewhere. Only what the last case left is drained; every case begins with ^C
+    /// and RESET, whose exact answers catch anything later.
+    fn quick_quiet(&self) -> Duration {
+        match &self.opts.target {
+            Target::Serial { baud, .. } => {
+                Duration::from_secs_f64(40.0 / f64::from((*baud).max(1))).max(Duration::from_millis(1))
+            }
+            _ => Duration::from_millis(1),
+        }
+    }
+
+    /// Whether a quick run comes next.
+    fn quick(&self, thorough: bool) -> bool {
+        !matches!(self.opts.target, Target::Sim { .. }) && !thorough && !self.new && !self.dirty && self.link.is_some()
+    }
+
+    /// Before a quick run: drains the line to its first quiet moment and says whether there
+    /// was anything to drain (the case before said more than the model did, or said it late).
+    fn settle(&mut self) -> Result<bool, FuzzError> {
+        if !self.quick(false) {
+            return Ok(false);
+        }
+        let quiet = self.quick_quiet();
+        let limit = crate::suite::replay_options().drain_limit;
+        match crate::replay::discard(self.link()?.as_mut(), quiet, limit) {
+            Ok(d) => Ok(d.bytes > 0),
+            Err(_) => {
+                self.link = None;
+                Ok(false)
+            }
+        }
+    }
+
+    /// Replays a case's transcript with deadlines from the model; `thorough` as the type says.
+    fn run(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
-        let mut ro = ReplayOptions { trailing: Duration::from_millis(50), ..crate::suite::replay_options() };
-        if !matches!(self.opts.target, Target::Sim { .. }) {
+        let mut ro = ReplayOptions { trailing: TRAILING, ..crate::suite::replay_options() };
+        let outside = !matches!(self.opts.target, Target::Sim { .. });
+        if outside {
             let case = Case { profile: p.id.clone(), transcript: t.clone() };
             let policy = DeadlinePolicy::for_target(&self.opts.target);
             if let Some(pred) = deadline::predict(&case, &p) {
@@ -342,18 +390,28 @@ impl Hand<'_> {
                 ro.budgets = deadline::budgets(&p, &case, &pred, &policy, baud);
             }
             ro.silent_wait = policy.silent_wait;
-            // Every case begins with ^C and RESET, so the start-of-case drain only clears
-            // what the last case left; a serial hand keeps the replayer's default.
-            if !matches!(self.opts.target, Target::Serial { .. }) && !self.new && self.link.is_some() {
-                ro.drain_quiet = Duration::from_millis(20);
-            }
         }
+        let quick = self.quick(thorough);
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
+        }
+        let quiet = self.quick_quiet();
+        if quick {
+            let drained = crate::replay::discard(self.link()?.as_mut(), quiet, ro.drain_limit);
+            match drained {
+                Ok(_) => {}
+                Err(_) => {
+                    self.link = None;
+                    return self.run(t, true);
+                }
+            }
+            ro.drain_quiet = Duration::ZERO;
+            ro.trailing = Duration::ZERO;
         }
         let link = self.link()?;
         let out = replay(t, link.as_mut(), &ro);
         self.new = false;
+        self.dirty = !out.is_pass();
         if matches!(out, ReplayOutcome::Disconnected(_)) {
             self.link = None;
         }
@@ -469,7 +527,9 @@ fn worker(
     allowed.eeprom = false;
     let gen_no_eeprom = Generator::new(&p, allowed);
     let mut dice = Dice::new(opts.seed.wrapping_add(w as u64));
-    let mut hand = Hand { opts, link: None, new: true };
+    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    // The last case that passed a quick run, with its run number.
+    let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     loop {
         if stop.load(Ordering::SeqCst) {
             return Ok(());
@@ -517,9 +577,28 @@ fn worker(
         {
             return Ok(());
         }
-        let outcome = hand.run(&built.transcript)?;
+        // Bytes on the line before this case belong to the case before it, which passed
+        // without a trailing wait: that case is judged again, thoroughly, first.
+        if hand.settle()?
+            && let Some((pa, pb, prun)) = prev.take()
+        {
+            let out = hand.run(&pb.transcript, true)?;
+            if let Some(sig) = signature(&p, &pb.transcript, &out) {
+                let new = lock().seen.insert(sig.clone());
+                if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
+                    stop.store(true, Ordering::SeqCst);
+                    return Ok(());
+                }
+            }
+        }
+        let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let sig = signature(&p, &built.transcript, &outcome);
+        let mut sig = signature(&p, &built.transcript, &outcome);
+        // A quick run's new failure counts only if a thorough run of the case fails too.
+        if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(s)) {
+            outcome = hand.run(&built.transcript, true)?;
+            sig = signature(&p, &built.transcript, &outcome);
+        }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
             sh.wire_bytes += outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum::<u64>();
@@ -534,50 +613,67 @@ fn worker(
             save_corpus(dir, &actions)?;
         }
         progress(Progress::Run { runs: run_no, findings: nfind, features: nfeat, elapsed: start.elapsed() });
-        let Some(sig) = sig else { continue };
-        if !lock().seen.insert(sig.clone()) {
+        let Some(sig) = sig else {
+            prev = Some((actions, built, run_no));
             continue;
-        }
-        let found_after = start.elapsed();
-        let t0 = Instant::now();
-        let (min_actions, min_case) = if opts.minimize {
-            minimize(opts, &mut hand, &actions, &built, &sig)?
-        } else {
-            (actions.clone(), built.clone())
         };
-        let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
-        let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-        let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
-        let diff = hand.run(&final_case.transcript)?.render();
-        let text = final_case.transcript.to_text();
-        let path = match &opts.out {
-            Some(dir) => {
-                let path = dir.join(format!("{id}.gcl"));
-                crate::report::write_atomic(&path, text.as_bytes())
-                    .map_err(|source| FuzzError::Out { path: path.clone(), source })?;
-                Some(path)
-            }
-            None => None,
-        };
-        let finding = Finding {
-            signature: sig,
-            run: run_no,
-            found_after,
-            original_actions: actions.len(),
-            actions: min_actions,
-            transcript: final_case.transcript,
-            transcript_text: text,
-            diff,
-            path,
-        };
-        progress(Progress::Finding(&finding));
-        let mut sh = lock();
-        sh.minimizing += t0.elapsed();
-        sh.findings.push(finding);
-        if opts.max_findings.is_some_and(|m| sh.findings.len() >= m) {
+        prev = None;
+        let new = lock().seen.insert(sig.clone());
+        if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
             stop.store(true, Ordering::SeqCst);
         }
     }
+}
+
+/// Minimizes a new finding, writes its transcript, and adds it to the run's findings; says
+/// whether the run has found as many as it was to find.
+#[allow(clippy::too_many_arguments)]
+fn report_finding(
+    opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
+    shared: &Mutex<Shared>,
+    start: Instant,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    sig: FindingSignature,
+    run_no: u64,
+    progress: &(dyn Fn(Progress<'_>) + Sync),
+) -> Result<bool, FuzzError> {
+    let p = opts.profile.clone();
+    let found_after = start.elapsed();
+    let t0 = Instant::now();
+    let (min_actions, min_case) =
+        if opts.minimize { minimize(opts, hand, actions, built, &sig)? } else { (actions.to_vec(), built.clone()) };
+    let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+    let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
+    let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
+    let diff = hand.run(&final_case.transcript, true)?.render();
+    let text = final_case.transcript.to_text();
+    let path = match &opts.out {
+        Some(dir) => {
+            let path = dir.join(format!("{id}.gcl"));
+            crate::report::write_atomic(&path, text.as_bytes())
+                .map_err(|source| FuzzError::Out { path: path.clone(), source })?;
+            Some(path)
+        }
+        None => None,
+    };
+    let finding = Finding {
+        signature: sig,
+        run: run_no,
+        found_after,
+        original_actions: actions.len(),
+        actions: min_actions,
+        transcript: final_case.transcript,
+        transcript_text: text,
+        diff,
+        path,
+    };
+    progress(Progress::Finding(&finding));
+    let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
+    sh.minimizing += t0.elapsed();
+    sh.findings.push(finding);
+    Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
 }
 
 /// Delta debugging over the action list: drop chunks (halves, quarters, ... single
@@ -600,7 +696,7 @@ fn minimize(
         if b.eeprom_writes > built.eeprom_writes {
             return Ok(None);
         }
-        let out = hand.run(&b.transcript)?;
+        let out = hand.run(&b.transcript, true)?;
         Ok((signature(&p, &b.transcript, &out).as_ref() == Some(sig)).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
