@@ -101,21 +101,45 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
         }
         cases.push(c);
     }
+    let report = host_report(
+        &opts.run.command,
+        &opts.run.profile.id,
+        started,
+        t0.elapsed().as_secs_f64() * 1000.0,
+        opts.run.hand_seed,
+        false,
+        cases,
+    );
+    Ok(CheckHostOutcome { report, run: r, session })
+}
+
+/// A conformance report over host runs (`gcl check-host`, and `gcl fuzz host` with
+/// `fuzz = true`): one case per clause or finding, tallied, its suite hash over the host
+/// clauses (and the operators when fuzzing).
+pub fn host_report(
+    command: &[String],
+    profile: &str,
+    started: time::OffsetDateTime,
+    duration_ms: f64,
+    seed: u64,
+    fuzz: bool,
+    cases: Vec<crate::report::CaseResult>,
+) -> RunReport {
     let mut report = RunReport {
         format: crate::report::REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
-        target: format!("host: {}", opts.run.command.join(" ")),
-        profile: opts.run.profile.id.clone(),
+        target: format!("host: {}", command.join(" ")),
+        profile: profile.to_string(),
         level: "all".into(),
         started: started
             .replace_nanosecond(0)
             .unwrap_or(started)
             .format(&time::format_description::well_known::Rfc3339)
             .unwrap_or_default(),
-        duration_ms: t0.elapsed().as_secs_f64() * 1000.0,
-        suite_hash: host_suite_hash(false),
+        duration_ms,
+        suite_hash: host_suite_hash(fuzz),
         liveness: Liveness { before: true, after: true },
-        options: RunOptions { seed: Some(opts.run.hand_seed), ..Default::default() },
+        options: RunOptions { seed: Some(seed), ..Default::default() },
         preflight: None,
         stopped: None,
         groups: Vec::new(),
@@ -125,7 +149,7 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
         cases,
     };
     report.tally();
-    Ok(CheckHostOutcome { report, run: r, session })
+    report
 }
 
 /// The version of the host clauses, where a conformance report has its suite hash: SHA-256

@@ -11,7 +11,7 @@ use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
 use gcl_harness::fuzz::host::{
     Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
 };
-use gcl_harness::report::{CaseResult, Liveness, RunOptions, RunReport, Verdict};
+use gcl_harness::report::{CaseResult, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 
@@ -337,31 +337,15 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
             transcript: None,
         });
     }
-    let mut r = RunReport {
-        format: gcl_harness::report::REPORT_FORMAT,
-        tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
-        target: format!("host: {}", opts.run.command.join(" ")),
-        profile: opts.run.profile.id.clone(),
-        level: "all".into(),
-        started: started
-            .replace_nanosecond(0)
-            .unwrap_or(started)
-            .format(&time::format_description::well_known::Rfc3339)
-            .unwrap_or_default(),
-        duration_ms: c.elapsed_ms as f64,
-        suite_hash: gcl_harness::check_host::host_suite_hash(true),
-        liveness: Liveness { before: true, after: true },
-        options: RunOptions { seed: Some(opts.seed), ..Default::default() },
-        preflight: None,
-        stopped: None,
-        groups: Vec::new(),
-        wire: None,
-        summary: Default::default(),
-        clauses: Vec::new(),
+    gcl_harness::check_host::host_report(
+        &opts.run.command,
+        &opts.run.profile.id,
+        started,
+        c.elapsed_ms as f64,
+        opts.seed,
+        true,
         cases,
-    };
-    r.tally();
-    r
+    )
 }
 
 fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Result<u8> {
