@@ -84,6 +84,37 @@ fn offenders(files: &[PathBuf], hit: impl Fn(&Path, &str) -> bool) -> Vec<String
 
 /// Architecture invariant: the reference model and the transcript crate do no I/O, read no
 /// clock, never sleep and never print. Time and bytes come in as arguments.
+/// `.ci/run` checks unreferenced snapshots with `cargo insta test -p gcl-model` only, so a
+/// snapshot anywhere else (or a test of another crate that takes one) would go unchecked.
+#[test]
+fn insta_snapshots_live_only_in_the_model() {
+    let mut outside = Vec::new();
+    for dir in ["harness", "host", "transcript", "fuzz", "reference-model"] {
+        let mut stack = vec![Path::new(ROOT).join(dir)];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
+                let p = e.unwrap().path();
+                let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+                if p.is_dir() && name != "target" {
+                    stack.push(p);
+                } else if name.ends_with(".snap")
+                    && !p.starts_with(Path::new(ROOT).join("reference-model/tests/snapshots"))
+                {
+                    outside.push(rel(&p));
+                }
+            }
+        }
+    }
+    for dir in ["harness", "host", "transcript", "fuzz"] {
+        outside.extend(offenders(&rust_files(dir), |_, l| l.contains(concat!("insta", "::"))));
+    }
+    assert!(
+        outside.is_empty(),
+        "insta snapshots outside gcl-model, which .ci/run does not check:\n{}",
+        outside.join("\n")
+    );
+}
+
 #[test]
 fn pure_crates_do_no_io() {
     const FORBIDDEN: &[&str] = &[
