@@ -41,6 +41,8 @@
 use gcl_transcript::ParseError;
 use gcl_transcript::script::{ScriptStep, parse_script};
 
+use gcl_model::realtime::RtFlag;
+
 use super::*;
 
 /// Every case script, by id, in no particular order (the generators place them).
@@ -74,6 +76,11 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("persist-fsave-reset", include_str!("../../../suite-cases/persistence/persist-fsave-reset.gcls")),
     ("persist-reset-discards-ram", include_str!("../../../suite-cases/persistence/persist-reset-discards-ram.gcls")),
     ("persist-psave-reset", include_str!("../../../suite-cases/persistence/persist-psave-reset.gcls")),
+    ("abort-motion", include_str!("../../../suite-cases/abort/abort-motion.gcls")),
+    ("motion-strain-limit", include_str!("../../../suite-cases/motion/motion-strain-limit.gcls")),
+    ("motion-close-stall-no-status", include_str!("../../../suite-cases/motion/motion-close-stall-no-status.gcls")),
+    ("motion-mpe-boundary", include_str!("../../../suite-cases/motion/motion-mpe-boundary.gcls")),
+    ("motion-hi-stall", include_str!("../../../suite-cases/motion/motion-hi-stall.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -82,6 +89,16 @@ pub(crate) enum ScriptError {
     /// No script has this id.
     #[error("no case script `{0}`")]
     Missing(String),
+    /// An `{expression}` has no value for the profile.
+    #[error("case script `{id}`, line {line}: {error}")]
+    Expr {
+        /// The script's id.
+        id: String,
+        /// The line of the expression.
+        line: usize,
+        /// Why it has no value.
+        error: ExprError,
+    },
     /// The text is not a script.
     #[error("case script `{id}`: {error}")]
     Parse {
@@ -123,17 +140,18 @@ impl Gen {
     pub(super) fn script_case(&self, id: &str) -> Result<Option<CaseB>, ScriptError> {
         let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
         let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
-        let (text, expects) = split_expects(text).map_err(invalid)?;
+        let text = self.expand(text).map_err(|(line, error)| ScriptError::Expr { id: id.into(), line, error })?;
+        let SuiteLines { text, expects, whens } = split_suite_lines(&text).map_err(invalid)?;
         let script = parse_script(&text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let f = &script.fields;
         if f.id.as_deref() != Some(id) {
             return Err(invalid(format!("its `id:` is {:?}, not its file name", f.id)));
         }
-        let title = f.title.clone().ok_or_else(|| invalid("no `title:`".into()))?;
+        let mut title = f.title.clone().ok_or_else(|| invalid("no `title:`".into()))?;
         if !f.profiles.is_empty() && !f.profiles.contains(&self.p.id) {
             return Ok(None);
         }
-        let mut k = self.case(id.to_string(), title);
+        let mut k = self.case(id.to_string(), title.clone());
         for c in &f.clauses {
             k = if let Some(d) = c.strip_prefix(DECISION_PREFIX) {
                 k.decision(d.trim())
@@ -147,24 +165,15 @@ impl Gen {
         for (key, value) in &f.extensions {
             match key.as_str() {
                 "x-when" => {
-                    for cond in value.split_whitespace() {
-                        let mut holds = false;
-                        for alt in cond.split('|') {
-                            holds |= match alt.split_once(':') {
-                                Some(("command", n)) => self.has_cmd(n),
-                                Some(("param", n)) => self.has_param(n),
-                                Some(("alias", n)) => self.param(n).is_some_and(|x| x.alias_of.is_some()),
-                                Some(("decision", d)) => self.has_decision(d),
-                                _ => {
-                                    return Err(invalid(format!(
-                                        "x-when `{alt}`: command:, param:, alias: or decision:"
-                                    )));
-                                }
-                            };
-                        }
-                        if !holds {
-                            return Ok(None);
-                        }
+                    if !self.conditions_hold(value).map_err(invalid)? {
+                        return Ok(None);
+                    }
+                }
+                "x-title-when" => {
+                    let (conds, t) =
+                        value.split_once("=>").ok_or_else(|| invalid("x-title-when: CONDITIONS => TITLE".into()))?;
+                    if self.conditions_hold(conds).map_err(invalid)? {
+                        t.trim().clone_into(&mut title);
                     }
                 }
                 "x-preamble" => {
@@ -175,9 +184,10 @@ impl Gen {
                         _ => return Err(invalid(format!("x-preamble `{value}`: none, idle or motion"))),
                     }
                 }
-                _ => return Err(invalid(format!("unknown key `{key}` (x-preamble, x-when)"))),
+                _ => return Err(invalid(format!("unknown key `{key}` (x-preamble, x-when, x-title-when)"))),
             }
         }
+        k = k.title_set(title);
         if let Some(l) = f.level {
             k = k.level(l);
         }
@@ -192,18 +202,34 @@ impl Gen {
         }
         let mut timeout = None;
         let mut expects = expects.into_iter().peekable();
+        let mut whens = whens.into_iter().peekable();
         for (i, step) in script.steps.iter().enumerate() {
+            // The `step-when:` lines before this step (and after the one before it).
+            let mut runs = true;
+            while let Some((n, conds)) = whens.next_if(|(n, _)| *n < step.line) {
+                runs &= self.conditions_hold(&conds).map_err(|e| invalid(format!("line {n}: {e}")))?;
+            }
+            let next = script.steps.get(i + 1).map_or(usize::MAX, |s| s.line);
+            let expect = expects.next_if(|(n, _)| *n < next);
+            if let Some((n, _)) = &expect
+                && expects.peek().is_some_and(|(m, _)| *m < next)
+            {
+                return Err(invalid(format!("line {n}: two `expect:` lines for one step")));
+            }
+            if !runs {
+                continue;
+            }
             k = Self::script_step(k, step, timeout);
             timeout = step.timeout;
-            let next = script.steps.get(i + 1).map_or(usize::MAX, |s| s.line);
-            if let Some((n, shape)) = expects.next_if(|(n, _)| *n < next) {
-                if expects.peek().is_some_and(|(m, _)| *m < next) {
-                    return Err(invalid(format!("line {n}: two `expect:` lines for one step")));
-                }
+            if let Some((n, shape)) = expect {
                 k = match shape {
                     Expected::Shape(shape) => k.shape_last(shape),
-                    Expected::Values(goals) => {
-                        k.values_last(goals.map(|g| self.near(g))).map_err(|e| invalid(format!("line {n}: {e}")))?
+                    Expected::Values(pos) => {
+                        let pos = pos.map(|p| match p {
+                            Positions::Near(goals) => self.near(goals),
+                            Positions::Ranges(ranges) => ranges,
+                        });
+                        k.values_last(pos).map_err(|e| invalid(format!("line {n}: {e}")))?
                     }
                 };
             }
@@ -211,7 +237,110 @@ impl Gen {
         if let Some((n, _)) = expects.next() {
             return Err(invalid(format!("line {n}: `expect:` before any step")));
         }
+        if let Some((n, _)) = whens.next() {
+            return Err(invalid(format!("line {n}: `step-when:` after the last step")));
+        }
         Ok(Some(k))
+    }
+
+    /// Whether a profile has what every space-separated condition names (`a|b`: either).
+    fn conditions_hold(&self, conds: &str) -> Result<bool, String> {
+        for cond in conds.split_whitespace() {
+            let mut holds = false;
+            for alt in cond.split('|') {
+                holds |= match alt.split_once(':') {
+                    Some(("command", n)) => self.has_cmd(n),
+                    Some(("param", n)) => self.has_param(n),
+                    Some(("alias", n)) => self.param(n).is_some_and(|x| x.alias_of.is_some()),
+                    Some(("zero-min", n)) => self.param(n).is_some_and(|x| x.min == 0),
+                    Some(("decision", d)) => self.has_decision(d),
+                    _ => return Err(format!("condition `{alt}`: command:, param:, alias:, zero-min: or decision:")),
+                };
+            }
+            if !holds {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// The script with every `{expression}` replaced by its value for this profile, or the
+    /// line and error of the first that has none.
+    fn expand(&self, text: &str) -> Result<String, (usize, ExprError)> {
+        let mut out = String::with_capacity(text.len());
+        for (i, line) in text.lines().enumerate() {
+            let mut rest = line;
+            while let Some(at) = rest.find('{') {
+                out.push_str(&rest[..at]);
+                let end = rest[at..].find('}').ok_or((i + 1, ExprError::Unclosed))?;
+                let value = self.eval(&rest[at + 1..at + end]).map_err(|e| (i + 1, e))?;
+                match value {
+                    Value::Int(v) => out.push_str(&v.to_string()),
+                    Value::Text(t) => out.push_str(&t),
+                }
+                rest = &rest[at + end + 1..];
+            }
+            out.push_str(rest);
+            out.push('\n');
+        }
+        Ok(out)
+    }
+
+    /// One expression: terms joined by ` + ` and ` - ` (spaces around the operator, since
+    /// names hold dashes), or one text term alone.
+    fn eval(&self, expr: &str) -> Result<Value, ExprError> {
+        let mut words = expr.split_whitespace();
+        let first = self.term(words.next().ok_or_else(|| ExprError::Empty(expr.into()))?)?;
+        let Some(op) = words.next() else { return Ok(first) };
+        let number = |v: Value| match v {
+            Value::Int(v) => Ok(v),
+            Value::Text(t) => Err(ExprError::NotANumber(t)),
+        };
+        let mut sum = number(first)?;
+        let mut op = Some(op);
+        while let Some(o) = op {
+            let t = number(self.term(words.next().ok_or_else(|| ExprError::Empty(expr.into()))?)?)?;
+            sum = match o {
+                "+" => sum.saturating_add(t),
+                "-" => sum.saturating_sub(t),
+                other => return Err(ExprError::Operator(other.into())),
+            };
+            op = words.next();
+        }
+        Ok(Value::Int(sum))
+    }
+
+    /// One term: a whole number or a name of the profile's (see the module doc).
+    fn term(&self, t: &str) -> Result<Value, ExprError> {
+        if let Ok(v) = t.parse::<i64>() {
+            return Ok(Value::Int(v));
+        }
+        let motor = |m: &str| match m.parse::<u8>() {
+            Ok(m @ 1..=4) => Ok(m),
+            _ => Err(ExprError::BadMotor(t.into())),
+        };
+        let h = &self.p.hand;
+        Ok(Value::Int(match t.split_once(':') {
+            Some(("limit", m)) => self.limit(motor(m)?),
+            Some(("mpe", m)) => self.mpe(motor(m)?),
+            Some(("close-target", m)) => self.close_target(motor(m)?),
+            Some(("code", s)) => i64::from(self.code(match s {
+                "missed-position" => h.missed_position_status,
+                "uninitialized" => h.uninitialized_status,
+                "terminate-uninitialized" => h.terminate_uninitialized_status,
+                "bad-header" => h.bad_header_status,
+                "overtemp" => h.overtemp_status,
+                "abort" => h.abort_status,
+                _ => return Err(ExprError::UnknownStatus(s.into())),
+            })),
+            Some(("first-param", names)) => {
+                let names: Vec<&str> = names.split('|').collect();
+                let found = names.iter().find(|n| self.has_param(n)).or(names.last());
+                return Ok(Value::Text(found.map_or(String::new(), |n| (*n).to_string())));
+            }
+            None if t == "uninitialized-state" => h.uninitialized_state_value,
+            _ => return Err(ExprError::UnknownName(t.into())),
+        }))
     }
 
     /// One script step as a planned step; a `timeout:` new since the step before is its floor.
@@ -230,47 +359,138 @@ impl Gen {
     }
 }
 
+/// What an expression in braces gives.
+enum Value {
+    /// A number (limits, MPE, status codes, sums).
+    Int(i64),
+    /// A name (`first-param:`).
+    Text(String),
+}
+
+/// Why an `{expression}` has no value for a profile.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub(crate) enum ExprError {
+    /// A `{` with no `}` after it on its line.
+    #[error("`{{` without a closing `}}`")]
+    Unclosed,
+    /// Nothing where a term belongs.
+    #[error("`{{{0}}}`: a term is missing")]
+    Empty(String),
+    /// A name the grammar does not have.
+    #[error("unknown name `{0}` (limit:M, mpe:M, close-target:M, code:STATUS, uninitialized-state, first-param:A|B)")]
+    UnknownName(String),
+    /// A motor outside 1 to 4.
+    #[error("`{0}`: the motor is 1, 2, 3 or 4")]
+    BadMotor(String),
+    /// A status the hand does not name.
+    #[error(
+        "unknown status `{0}` (missed-position, uninitialized, terminate-uninitialized, bad-header, overtemp, abort)"
+    )]
+    UnknownStatus(String),
+    /// Text where arithmetic needs a number.
+    #[error("`{0}` is a name, not a number")]
+    NotANumber(String),
+    /// An operator other than `+` or `-`.
+    #[error("operator `{0}`: `+` or `-`, with spaces around it")]
+    Operator(String),
+}
+
+/// Where an `expect: values` step's positions (P) must read.
+enum Positions {
+    /// Within MPE of these goals (`expect: near`).
+    Near([i64; 4]),
+    /// In these ranges (`expect: positions`).
+    Ranges([Range; 4]),
+}
+
 /// What an `expect:` line names.
 enum Expected {
     /// A shape that needs nothing more.
     Shape(Shape),
-    /// The values of the step's get line; positions within MPE of these goals, if given.
-    Values(Option<[i64; 4]>),
+    /// The values of the step's get line, positions as given (else their parameter's range).
+    Values(Option<Positions>),
 }
 
-/// The script without its `expect:` lines (blanked, so line numbers stay), and each one's
-/// line with the shape it names, in order. An `expect:` line shapes the step before it.
-fn split_expects(text: &str) -> Result<(String, Vec<(usize, Expected)>), String> {
-    let mut out = String::with_capacity(text.len());
-    let mut expects = Vec::new();
+/// The lines of a case script that the suite reads and the script parser does not.
+struct SuiteLines {
+    /// The script with those lines blanked, so that line numbers stay.
+    text: String,
+    /// Each `expect:` line's number and shape, in order; it shapes the step before it.
+    expects: Vec<(usize, Expected)>,
+    /// Each `step-when:` line's number and conditions; they gate the step after it.
+    whens: Vec<(usize, String)>,
+}
+
+/// Splits the `expect:` and `step-when:` lines off a script.
+fn split_suite_lines(text: &str) -> Result<SuiteLines, String> {
+    let mut out = SuiteLines { text: String::with_capacity(text.len()), expects: Vec::new(), whens: Vec::new() };
     for (i, line) in text.lines().enumerate() {
+        let n = i + 1;
         if let Some(v) = line.trim_start().strip_prefix("expect:") {
-            let shape = match v.trim() {
-                "banner" => Expected::Shape(Shape::Banner),
-                "banner-lines" => Expected::Shape(Shape::BannerLines),
-                "any-lines" => Expected::Shape(Shape::AnyLines),
-                "list-values" => Expected::Shape(Shape::ListValues),
-                "values" => Expected::Values(None),
-                near if near.starts_with("near ") => {
-                    let goals: Vec<i64> = near.split_whitespace().skip(1).filter_map(|g| g.parse().ok()).collect();
-                    let goals = <[i64; 4]>::try_from(goals)
-                        .map_err(|_| format!("line {}: `expect: near` takes four positions", i + 1))?;
-                    Expected::Values(Some(goals))
-                }
-                other => {
-                    return Err(format!(
-                        "line {}: expect `{other}`: banner, banner-lines, any-lines, list-values, values or near",
-                        i + 1
-                    ));
-                }
-            };
-            expects.push((i + 1, shape));
+            out.expects.push((n, expected(v.trim()).map_err(|e| format!("line {n}: {e}"))?));
+        } else if let Some(v) = line.trim_start().strip_prefix("step-when:") {
+            out.whens.push((n, v.trim().to_string()));
         } else {
-            out.push_str(line);
+            out.text.push_str(line);
         }
-        out.push('\n');
+        out.text.push('\n');
     }
-    Ok((out, expects))
+    Ok(out)
+}
+
+/// The shape an `expect:` line names.
+fn expected(v: &str) -> Result<Expected, String> {
+    let (word, rest) = v.split_once(' ').unwrap_or((v, ""));
+    let four = |what: &str, items: Vec<Range>| {
+        <[Range; 4]>::try_from(items).map_err(|_| format!("`expect: {what}` takes four positions"))
+    };
+    Ok(match word {
+        "banner" => Expected::Shape(Shape::Banner),
+        "banner-lines" => Expected::Shape(Shape::BannerLines),
+        "any-lines" => Expected::Shape(Shape::AnyLines),
+        "list-values" => Expected::Shape(Shape::ListValues),
+        "values" => Expected::Values(None),
+        "near" => {
+            let goals = rest.split_whitespace().map(|g| g.parse().map(|g| (g, g))).collect::<Result<Vec<_>, _>>();
+            let goals = four("near", goals.map_err(|_| "`expect: near` takes four positions".to_string())?)?;
+            Expected::Values(Some(Positions::Near(goals.map(|g| g.0))))
+        }
+        "positions" => {
+            let ranges = rest.split_whitespace().map(range).collect::<Result<Vec<_>, _>>()?;
+            Expected::Values(Some(Positions::Ranges(four("positions", ranges)?)))
+        }
+        "block" => Expected::Shape(Shape::Block(rest.split_whitespace().map(field_rule).collect::<Result<_, _>>()?)),
+        other => {
+            return Err(format!(
+                "expect `{other}`: banner, banner-lines, any-lines, list-values, values, near, positions or block"
+            ));
+        }
+    })
+}
+
+/// `LO..HI`, both whole numbers.
+fn range(r: &str) -> Result<Range, String> {
+    let bad = || format!("`{r}` is not a range LO..HI");
+    let (lo, hi) = r.split_once("..").ok_or_else(bad)?;
+    let (lo, hi) = (lo.parse().map_err(|_| bad())?, hi.parse().map_err(|_| bad())?);
+    if lo > hi {
+        return Err(bad());
+    }
+    Ok((lo, hi))
+}
+
+/// `[MOTOR:]FLAG=LO..HI`: a feedback field's accepted range (no motor: a hand-wide field).
+fn field_rule(r: &str) -> Result<FieldRule, String> {
+    let (field, lohi) = r.split_once('=').ok_or_else(|| format!("`{r}` is not [MOTOR:]FLAG=LO..HI"))?;
+    let (motor, flag) = match field.split_once(':') {
+        Some((m, f)) => match m.parse::<u8>() {
+            Ok(m @ 1..=4) => (Some(m), f),
+            _ => return Err(format!("`{r}`: the motor is 1, 2, 3 or 4")),
+        },
+        None => (None, field),
+    };
+    let flag = RtFlag::from_name(flag).ok_or_else(|| format!("`{r}`: `{flag}` is no RealTime flag"))?;
+    Ok(FieldRule { motor, name: flag.name(), range: Some(range(lohi)?) })
 }
 
 /// The clause prefix that names a decision (`clause: decision:framing-echo`).
