@@ -40,29 +40,7 @@ impl Gen {
             "param-spread-finger-defaults",
         ]);
 
-        if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
-            let new = ["LCT", "LFBP", "LFAIN"];
-            let known = new.iter().all(|n| self.has_param(n));
-            let title = if known {
-                "Firmware 4.4x knows LCT, LFBP and LFAIN; each defaults to 0 on every motor"
-            } else {
-                "Firmware 4.3x does not know LCT, LFBP or LFAIN: FGET and FSET of them give 64"
-            };
-            let k = self
-                .case("param-44-rt-flags", title)
-                .src("Command FGET")
-                .src("Command FSET")
-                .decision("bh8-new-rt-fields-defaults")
-                .decision("bh8-43-no-44-params")
-                .preamble(false)
-                .get("", &new, None)
-                .line("FSET LCT 0 LFBP 0 LFAIN 0")
-                .get("", &["LCT"], None)
-                .get("", &["LFBP"], None)
-                .get("", &["LFAIN"], None)
-                .line("FGET DP");
-            self.add(k);
-        }
+        self.scripts(&["param-44-rt-flags"]);
     }
 
     /// The source clause of a parameter case, and the decisions that govern it: those about

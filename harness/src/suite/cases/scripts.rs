@@ -81,6 +81,11 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("motion-close-stall-no-status", include_str!("../../../suite-cases/motion/motion-close-stall-no-status.gcls")),
     ("motion-mpe-boundary", include_str!("../../../suite-cases/motion/motion-mpe-boundary.gcls")),
     ("motion-hi-stall", include_str!("../../../suite-cases/motion/motion-hi-stall.gcls")),
+    ("example-realtime-seed", include_str!("../../../suite-cases/examples/example-realtime-seed.gcls")),
+    ("example-realtime-program", include_str!("../../../suite-cases/examples/example-realtime-program.gcls")),
+    ("example-supervisory-program", include_str!("../../../suite-cases/examples/example-supervisory-program.gcls")),
+    ("firmware-shared-tables", include_str!("../../../suite-cases/firmware/firmware-shared-tables.gcls")),
+    ("param-44-rt-flags", include_str!("../../../suite-cases/params/param-44-rt-flags.gcls")),
 ];
 
 /// Why a case script does not make a case.
