@@ -86,6 +86,14 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("example-supervisory-program", include_str!("../../../suite-cases/examples/example-supervisory-program.gcls")),
     ("firmware-shared-tables", include_str!("../../../suite-cases/firmware/firmware-shared-tables.gcls")),
     ("param-44-rt-flags", include_str!("../../../suite-cases/params/param-44-rt-flags.gcls")),
+    ("rt-header-upper-c", include_str!("../../../suite-cases/realtime/rt-header-upper-c.gcls")),
+    ("rt-header-lower-c", include_str!("../../../suite-cases/realtime/rt-header-lower-c.gcls")),
+    ("rt-header-upper-a", include_str!("../../../suite-cases/realtime/rt-header-upper-a.gcls")),
+    ("rt-header-lower-a", include_str!("../../../suite-cases/realtime/rt-header-lower-a.gcls")),
+    ("rt-lfap-byte-order", include_str!("../../../suite-cases/realtime/rt-lfap-byte-order.gcls")),
+    ("rt-bad-header-returns-to-supervisory", include_str!("../../../suite-cases/realtime/rt-bad-header-returns-to-supervisory.gcls")),
+    ("rt-loop-en-motors", include_str!("../../../suite-cases/realtime/rt-loop-en-motors.gcls")),
+    ("rt-coefficients-no-field", include_str!("../../../suite-cases/realtime/rt-coefficients-no-field.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -146,7 +154,7 @@ impl Gen {
         let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
         let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
         let text = self.expand(text).map_err(|(line, error)| ScriptError::Expr { id: id.into(), line, error })?;
-        let SuiteLines { text, expects, whens } = split_suite_lines(&text).map_err(invalid)?;
+        let SuiteLines { text, expects, whens, rt_flags } = split_suite_lines(&text).map_err(invalid)?;
         let script = parse_script(&text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let f = &script.fields;
         if f.id.as_deref() != Some(id) {
@@ -208,7 +216,14 @@ impl Gen {
         let mut timeout = None;
         let mut expects = expects.into_iter().peekable();
         let mut whens = whens.into_iter().peekable();
+        let mut rt_flags = rt_flags.into_iter().peekable();
         for (i, step) in script.steps.iter().enumerate() {
+            while let Some((n, args)) = rt_flags.next_if(|(n, _)| *n < step.line) {
+                let (prefix, on) = self.rt_flags_args(&args).map_err(|e| invalid(format!("line {n}: {e}")))?;
+                for l in self.rt_flags(prefix, &on) {
+                    k = k.line(&l);
+                }
+            }
             // The `step-when:` lines before this step (and after the one before it).
             let mut runs = true;
             while let Some((n, conds)) = whens.next_if(|(n, _)| *n < step.line) {
@@ -242,10 +257,27 @@ impl Gen {
         if let Some((n, _)) = expects.next() {
             return Err(invalid(format!("line {n}: `expect:` before any step")));
         }
+        if let Some((n, _)) = rt_flags.next() {
+            return Err(invalid(format!("line {n}: `rt-flags:` after the last step")));
+        }
         if let Some((n, _)) = whens.next() {
             return Err(invalid(format!("line {n}: `step-when:` after the last step")));
         }
         Ok(Some(k))
+    }
+
+    /// The arguments of an `rt-flags:` line: a motor prefix (if the first word is one) and
+    /// the RealTime flags to turn on, each a flag the model knows.
+    fn rt_flags_args<'a>(&self, args: &'a str) -> Result<(&'a str, Vec<&'a str>), String> {
+        let mut words: Vec<&str> = args.split_whitespace().collect();
+        let prefix = match words.first() {
+            Some(w) if w.chars().all(|c| self.p.prefix_motors(c).is_some()) => words.remove(0),
+            _ => "",
+        };
+        if let Some(bad) = words.iter().find(|w| RtFlag::from_name(w).is_none()) {
+            return Err(format!("rt-flags: `{bad}` is no RealTime flag"));
+        }
+        Ok((prefix, words))
     }
 
     /// Whether a profile has what every space-separated condition names (`a|b`: either).
@@ -424,17 +456,26 @@ struct SuiteLines {
     expects: Vec<(usize, Expected)>,
     /// Each `step-when:` line's number and conditions; they gate the step after it.
     whens: Vec<(usize, String)>,
+    /// Each `rt-flags:` line's number and arguments; its set lines go before the step after it.
+    rt_flags: Vec<(usize, String)>,
 }
 
 /// Splits the `expect:` and `step-when:` lines off a script.
 fn split_suite_lines(text: &str) -> Result<SuiteLines, String> {
-    let mut out = SuiteLines { text: String::with_capacity(text.len()), expects: Vec::new(), whens: Vec::new() };
+    let mut out = SuiteLines {
+        text: String::with_capacity(text.len()),
+        expects: Vec::new(),
+        whens: Vec::new(),
+        rt_flags: Vec::new(),
+    };
     for (i, line) in text.lines().enumerate() {
         let n = i + 1;
         if let Some(v) = line.trim_start().strip_prefix("expect:") {
             out.expects.push((n, expected(v.trim()).map_err(|e| format!("line {n}: {e}"))?));
         } else if let Some(v) = line.trim_start().strip_prefix("step-when:") {
             out.whens.push((n, v.trim().to_string()));
+        } else if let Some(v) = line.trim_start().strip_prefix("rt-flags:") {
+            out.rt_flags.push((n, v.trim().to_string()));
         } else {
             out.text.push_str(line);
         }
