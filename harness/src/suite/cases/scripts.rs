@@ -94,6 +94,23 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("rt-bad-header-returns-to-supervisory", include_str!("../../../suite-cases/realtime/rt-bad-header-returns-to-supervisory.gcls")),
     ("rt-loop-en-motors", include_str!("../../../suite-cases/realtime/rt-loop-en-motors.gcls")),
     ("rt-coefficients-no-field", include_str!("../../../suite-cases/realtime/rt-coefficients-no-field.gcls")),
+    ("status-1024-too-many-arguments", include_str!("../../../suite-cases/status/status-1024-too-many-arguments.gcls")),
+    ("status-128-invalid-value", include_str!("../../../suite-cases/status/status-128-invalid-value.gcls")),
+    ("status-256-read-only", include_str!("../../../suite-cases/status/status-256-read-only.gcls")),
+    ("status-32-unknown-command", include_str!("../../../suite-cases/status/status-32-unknown-command.gcls")),
+    ("status-4096-prefix-not-allowed", include_str!("../../../suite-cases/status/status-4096-prefix-not-allowed.gcls")),
+    ("status-64-unknown-parameter", include_str!("../../../suite-cases/status/status-64-unknown-parameter.gcls")),
+    ("status-abort", include_str!("../../../suite-cases/status/status-abort.gcls")),
+    ("status-bad-header", include_str!("../../../suite-cases/status/status-bad-header.gcls")),
+    ("status-combined-grammar-and-not-initialized", include_str!("../../../suite-cases/status/status-combined-grammar-and-not-initialized.gcls")),
+    ("status-combined-invalid-and-read-only", include_str!("../../../suite-cases/status/status-combined-invalid-and-read-only.gcls")),
+    ("status-combined-prefix-and-arguments", include_str!("../../../suite-cases/status/status-combined-prefix-and-arguments.gcls")),
+    ("status-combined-unknown-and-invalid", include_str!("../../../suite-cases/status/status-combined-unknown-and-invalid.gcls")),
+    ("status-combined-unknown-and-read-only", include_str!("../../../suite-cases/status/status-combined-unknown-and-read-only.gcls")),
+    ("status-missed-position", include_str!("../../../suite-cases/status/status-missed-position.gcls")),
+    ("status-not-initialized", include_str!("../../../suite-cases/status/status-not-initialized.gcls")),
+    ("status-overtemperature", include_str!("../../../suite-cases/status/status-overtemperature.gcls")),
+    ("status-terminate-before-hi", include_str!("../../../suite-cases/status/status-terminate-before-hi.gcls")),
 ];
 
 /// Why a case script does not make a case.
@@ -153,18 +170,20 @@ impl Gen {
     pub(super) fn script_case(&self, id: &str) -> Result<Option<CaseB>, ScriptError> {
         let text = SCRIPTS.iter().find(|(i, _)| *i == id).map(|(_, t)| *t).ok_or(ScriptError::Missing(id.into()))?;
         let invalid = |reason: String| ScriptError::Invalid { id: id.into(), reason };
+        let raw_id = text.lines().find_map(|l| l.trim().strip_prefix("id:")).map(str::trim);
+        if raw_id.map(script_name).as_deref() != Some(id) {
+            return Err(invalid(format!("its `id:` is {raw_id:?}, which does not name the file")));
+        }
         let text = self.expand(text).map_err(|(line, error)| ScriptError::Expr { id: id.into(), line, error })?;
         let SuiteLines { text, expects, whens, rt_flags } = split_suite_lines(&text).map_err(invalid)?;
         let script = parse_script(&text).map_err(|error| ScriptError::Parse { id: id.into(), error })?;
         let f = &script.fields;
-        if f.id.as_deref() != Some(id) {
-            return Err(invalid(format!("its `id:` is {:?}, not its file name", f.id)));
-        }
+        let case_id = f.id.clone().ok_or_else(|| invalid("no `id:`".into()))?;
         let mut title = f.title.clone().ok_or_else(|| invalid("no `title:`".into()))?;
         if !f.profiles.is_empty() && !f.profiles.contains(&self.p.id) {
             return Ok(None);
         }
-        let mut k = self.case(id.to_string(), title.clone());
+        let mut k = self.case(case_id, title.clone());
         for c in &f.clauses {
             k = if let Some(d) = c.strip_prefix(DECISION_PREFIX) {
                 k.decision(d.trim())
@@ -290,8 +309,13 @@ impl Gen {
                     Some(("param", n)) => self.has_param(n),
                     Some(("alias", n)) => self.param(n).is_some_and(|x| x.alias_of.is_some()),
                     Some(("zero-min", n)) => self.param(n).is_some_and(|x| x.min == 0),
+                    Some(("status", n)) => self.status_bits(n).map_err(|e| e.to_string())? != 0,
                     Some(("decision", d)) => self.has_decision(d),
-                    _ => return Err(format!("condition `{alt}`: command:, param:, alias:, zero-min: or decision:")),
+                    _ => {
+                        return Err(format!(
+                            "condition `{alt}`: command:, param:, alias:, zero-min:, status: or decision:"
+                        ));
+                    }
                 };
             }
             if !holds {
@@ -347,6 +371,20 @@ impl Gen {
         Ok(Value::Int(sum))
     }
 
+    /// The status bits of a status the hand sends on its own (0: the profile never sends it).
+    fn status_bits(&self, name: &str) -> Result<u32, ExprError> {
+        let h = &self.p.hand;
+        Ok(match name {
+            "missed-position" => h.missed_position_status,
+            "uninitialized" => h.uninitialized_status,
+            "terminate-uninitialized" => h.terminate_uninitialized_status,
+            "bad-header" => h.bad_header_status,
+            "overtemp" => h.overtemp_status,
+            "abort" => h.abort_status,
+            _ => return Err(ExprError::UnknownStatus(name.into())),
+        })
+    }
+
     /// One term: a whole number or a name of the profile's (see the module doc).
     fn term(&self, t: &str) -> Result<Value, ExprError> {
         if let Ok(v) = t.parse::<i64>() {
@@ -356,26 +394,21 @@ impl Gen {
             Ok(m @ 1..=4) => Ok(m),
             _ => Err(ExprError::BadMotor(t.into())),
         };
-        let h = &self.p.hand;
         Ok(Value::Int(match t.split_once(':') {
             Some(("limit", m)) => self.limit(motor(m)?),
             Some(("mpe", m)) => self.mpe(motor(m)?),
             Some(("close-target", m)) => self.close_target(motor(m)?),
-            Some(("code", s)) => i64::from(self.code(match s {
-                "missed-position" => h.missed_position_status,
-                "uninitialized" => h.uninitialized_status,
-                "terminate-uninitialized" => h.terminate_uninitialized_status,
-                "bad-header" => h.bad_header_status,
-                "overtemp" => h.overtemp_status,
-                "abort" => h.abort_status,
-                _ => return Err(ExprError::UnknownStatus(s.into())),
-            })),
+            Some(("code", s)) => i64::from(self.code(self.status_bits(s)?)),
+            Some(("status-text", n)) => {
+                let text = n.parse().ok().and_then(|bit| self.p.status_text(bit));
+                return text.map(|t| Value::Text(t.to_string())).ok_or_else(|| ExprError::UnknownStatus(n.into()));
+            }
             Some(("first-param", names)) => {
                 let names: Vec<&str> = names.split('|').collect();
                 let found = names.iter().find(|n| self.has_param(n)).or(names.last());
                 return Ok(Value::Text(found.map_or(String::new(), |n| (*n).to_string())));
             }
-            None if t == "uninitialized-state" => h.uninitialized_state_value,
+            None if t == "uninitialized-state" => self.p.hand.uninitialized_state_value,
             _ => return Err(ExprError::UnknownName(t.into())),
         }))
     }
@@ -396,6 +429,23 @@ impl Gen {
     }
 }
 
+/// The name of a script's file (and its key in [`SCRIPTS`]): its `id:` with every
+/// `{expression}` dropped, and the dashes around it merged (`status-{code:abort}-abort` is
+/// `status-abort`).
+fn script_name(raw_id: &str) -> String {
+    let mut out = String::with_capacity(raw_id.len());
+    let mut rest = raw_id;
+    while let Some(at) = rest.find('{') {
+        out.push_str(&rest[..at]);
+        rest = rest[at..].find('}').map_or("", |end| &rest[at + end + 1..]);
+    }
+    out.push_str(rest);
+    while out.contains("--") {
+        out = out.replace("--", "-");
+    }
+    out.trim_matches('-').to_string()
+}
+
 /// What an expression in braces gives.
 enum Value {
     /// A number (limits, MPE, status codes, sums).
@@ -414,14 +464,18 @@ pub(crate) enum ExprError {
     #[error("`{{{0}}}`: a term is missing")]
     Empty(String),
     /// A name the grammar does not have.
-    #[error("unknown name `{0}` (limit:M, mpe:M, close-target:M, code:STATUS, uninitialized-state, first-param:A|B)")]
+    #[error(
+        "unknown name `{0}` (limit:M, mpe:M, close-target:M, code:STATUS, status-text:N, uninitialized-state, \
+         first-param:A|B)"
+    )]
     UnknownName(String),
     /// A motor outside 1 to 4.
     #[error("`{0}`: the motor is 1, 2, 3 or 4")]
     BadMotor(String),
-    /// A status the hand does not name.
+    /// A status the hand does not name, or a status number the profile has no text for.
     #[error(
-        "unknown status `{0}` (missed-position, uninitialized, terminate-uninitialized, bad-header, overtemp, abort)"
+        "unknown status `{0}` (missed-position, uninitialized, terminate-uninitialized, bad-header, overtemp, \
+         abort; status-text: a number the profile has)"
     )]
     UnknownStatus(String),
     /// Text where arithmetic needs a number.
@@ -560,7 +614,8 @@ mod tests {
                 let g = Gen { p: p.clone(), out: Vec::new() };
                 let made = g.script_case(id).unwrap_or_else(|e| panic!("{e}"));
                 applies |= made.is_some();
-                let placed = catalogue(&p).iter().filter(|c| c.id == *id).count();
+                let case_id = made.as_ref().map(|k| k.def.id.clone());
+                let placed = catalogue(&p).iter().filter(|c| Some(&c.id) == case_id.as_ref()).count();
                 assert_eq!(placed, usize::from(made.is_some()), "{name}: case script `{id}` placed {placed} times");
             }
             assert!(applies, "case script `{id}` applies to no built-in profile");
@@ -574,19 +629,40 @@ mod tests {
         assert!(matches!(g.script_case("no-such-case"), Err(ScriptError::Missing(_))));
     }
 
-    /// `expect:` lines leave the script's line numbers as they were and say what is wrong.
+    /// `expect:`, `step-when:` and `rt-flags:` lines leave the script's line numbers as they
+    /// were and say what is wrong.
     #[test]
-    fn expect_lines_are_read_and_checked() {
-        let (text, expects) = split_expects("id: x\nRESET\nexpect: banner\nFGET P\nexpect: near 1 2 3 4\n").unwrap();
-        assert_eq!(text, "id: x\nRESET\n\nFGET P\n\n");
-        assert!(matches!(
-            expects.as_slice(),
-            [(3, Expected::Shape(Shape::Banner)), (5, Expected::Values(Some([1, 2, 3, 4])))]
-        ));
-        let e = split_expects("RESET\nexpect: banners\n").map(|_| ()).unwrap_err();
+    fn suite_lines_are_read_and_checked() {
+        let lines = split_suite_lines(
+            "id: x\nRESET\nexpect: banner\nFGET P\nexpect: near 1 2 3 4\nstep-when: command:PDEF\nPDEF\nrt-flags: 1 LFAP\n\
+             1LOOP\nblock: 41\nexpect: block 1:LFAP=0..20 LFT=-5..5\nFGET P\nexpect: positions 0..1 0..2 0..3 -4..4\n",
+        )
+        .unwrap();
+        assert_eq!(lines.text, "id: x\nRESET\n\nFGET P\n\n\nPDEF\n\n1LOOP\nblock: 41\n\nFGET P\n\n");
+        let [
+            (3, Expected::Shape(Shape::Banner)),
+            (5, Expected::Values(Some(Positions::Near([1, 2, 3, 4])))),
+            (11, Expected::Shape(Shape::Block(rules))),
+            (13, Expected::Values(Some(Positions::Ranges(ranges)))),
+        ] = lines.expects.as_slice()
+        else {
+            panic!("expects read wrong")
+        };
+        assert_eq!(ranges, &[(0, 1), (0, 2), (0, 3), (-4, 4)]);
+        assert_eq!(rules.len(), 2);
+        assert_eq!((rules[0].motor, rules[0].name, rules[0].range), (Some(1), "LFAP", Some((0, 20))));
+        assert_eq!((rules[1].motor, rules[1].name, rules[1].range), (None, "LFT", Some((-5, 5))));
+        assert_eq!(lines.whens, vec![(6, "command:PDEF".to_string())]);
+        assert_eq!(lines.rt_flags, vec![(8, "1 LFAP".to_string())]);
+
+        let err = |t: &str| split_suite_lines(t).map(|_| ()).unwrap_err();
+        let e = err("RESET\nexpect: banners\n");
         assert!(e.starts_with("line 2: expect `banners`"), "{e}");
-        let e = split_expects("FGET P\nexpect: near 1 2\n").map(|_| ()).unwrap_err();
-        assert!(e.contains("four positions"), "{e}");
+        assert!(err("FGET P\nexpect: near 1 2\n").contains("four positions"));
+        assert!(err("FGET P\nexpect: positions 0..1 0..2 0..3 5..4\n").contains("not a range"));
+        assert!(err("A\nexpect: block 5:LFAP=0..1\n").contains("motor is 1, 2, 3 or 4"));
+        assert!(err("A\nexpect: block 1:LFXX=0..1\n").contains("no RealTime flag"));
+        assert!(err("A\nexpect: block 1:LFAP\n").contains("FLAG=LO..HI"));
         // `values` needs a get line of the first name's getter.
         let p = Profile::builtin("seed").unwrap();
         let k = CaseB::new(&p, "x", "x").line("FSET DP 5");
@@ -594,5 +670,45 @@ mod tests {
         assert!(e.contains("not a FGET line"), "{e}");
         let k = CaseB::new(&p, "x", "x").abort();
         assert!(k.values_last(None).map(|_| ()).is_err());
+    }
+
+    /// Expressions take the profile's numbers and names; anything else is a typed error with
+    /// its line, never a panic.
+    #[test]
+    fn expressions_read_the_profile_and_refuse_unknown_names() {
+        let p = Profile::builtin("seed").unwrap();
+        let g = Gen { p: p.clone(), out: Vec::new() };
+        let (l4, mpe4) = (p.hand.spread_limit, g.mpe(4));
+        let mp = StatusBits::from_bits_truncate(p.hand.missed_position_status).code();
+        assert_eq!(
+            g.expand("SM {limit:4 + mpe:4 + 1}\ngives {code:missed-position}\n{limit:4 - 10}..{limit:4}\n").unwrap(),
+            format!("SM {}\ngives {mp}\n{}..{l4}\n", l4 + mpe4 + 1, l4 - 10)
+        );
+        let msg = if g.has_param("HSG") { "HSG" } else { "MSG" };
+        assert_eq!(g.expand("GFSET {first-param:HSG|MSG} 0").unwrap(), format!("GFSET {msg} 0\n"));
+        assert_eq!(g.expand("{first-param:NOPE|ALSO-NOT}").unwrap(), "ALSO-NOT\n");
+        let e = |t: &str| g.expand(t).unwrap_err();
+        assert_eq!(e("ok\nSM {limt:4}"), (2, ExprError::UnknownName("limt:4".into())));
+        assert_eq!(e("{mpe:5}"), (1, ExprError::BadMotor("mpe:5".into())));
+        assert_eq!(e("{mpe:x}"), (1, ExprError::BadMotor("mpe:x".into())));
+        assert_eq!(e("{code:missed}"), (1, ExprError::UnknownStatus("missed".into())));
+        assert_eq!(e("{status-text:3}"), (1, ExprError::UnknownStatus("3".into())));
+        assert_eq!(e("{first-param:HSG|MSG + 1}"), (1, ExprError::NotANumber(msg.into())));
+        assert_eq!(e("{limit:4 * 2}"), (1, ExprError::Operator("*".into())));
+        assert_eq!(e("{limit:4 +}"), (1, ExprError::Empty("limit:4 +".into())));
+        assert_eq!(e("{}"), (1, ExprError::Empty(String::new())));
+        assert_eq!(e("SM {limit:4"), (1, ExprError::Unclosed));
+        assert!(matches!(g.conditions_hold("status:nope"), Err(e) if e.contains("unknown status")));
+        assert!(matches!(g.conditions_hold("nope:X"), Err(e) if e.contains("condition `nope:X`")));
+        assert_eq!(g.conditions_hold("command:HI zero-min:NOPE|command:FGET"), Ok(true));
+        assert_eq!(g.conditions_hold("command:HI param:NOPE"), Ok(false));
+    }
+
+    /// A file is named by its id with the expressions dropped.
+    #[test]
+    fn script_names_drop_expressions() {
+        assert_eq!(script_name("status-{code:abort}-abort"), "status-abort");
+        assert_eq!(script_name("framing-echo"), "framing-echo");
+        assert_eq!(script_name("{code:abort}-x-{mpe:1}"), "x");
     }
 }
