@@ -16,21 +16,12 @@ impl Gen {
                 self.param_read_only(x);
             }
         }
-        for (cmd, line) in
-            [("FGET", "FGET NOPE"), ("FSET", "FSET NOPE 1"), ("PGET", "PGET NOPE"), ("PSET", "PSET NOPE 1")]
-        {
-            if self.has_cmd(cmd) {
-                let k = self
-                    .case(format!("param-unknown-name-{}", slug(cmd)), format!("{cmd} of an unknown name gives 64"))
-                    .src(&format!("Command {cmd}"))
-                    .src("Status codes 64")
-                    .level(Level::Must)
-                    .preamble(false)
-                    .line(line)
-                    .line("FGET DP");
-                self.add(k);
-            }
-        }
+        self.scripts(&[
+            "param-unknown-name-fget",
+            "param-unknown-name-fset",
+            "param-unknown-name-pget",
+            "param-unknown-name-pset",
+        ]);
         self.scripts(&[
             "param-scope-commands",
             "param-temp-global",

@@ -111,6 +111,16 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("status-not-initialized", include_str!("../../../suite-cases/status/status-not-initialized.gcls")),
     ("status-overtemperature", include_str!("../../../suite-cases/status/status-overtemperature.gcls")),
     ("status-terminate-before-hi", include_str!("../../../suite-cases/status/status-terminate-before-hi.gcls")),
+    ("param-dp-effect", include_str!("../../../suite-cases/params/param-dp-effect.gcls")),
+    ("param-ds-effect", include_str!("../../../suite-cases/params/param-ds-effect.gcls")),
+    ("param-ct-effect", include_str!("../../../suite-cases/params/param-ct-effect.gcls")),
+    ("param-ot-effect", include_str!("../../../suite-cases/params/param-ot-effect.gcls")),
+    ("param-mpe-effect", include_str!("../../../suite-cases/params/param-mpe-effect.gcls")),
+    ("param-lsg-effect", include_str!("../../../suite-cases/params/param-lsg-effect.gcls")),
+    ("param-unknown-name-fget", include_str!("../../../suite-cases/params/param-unknown-name-fget.gcls")),
+    ("param-unknown-name-fset", include_str!("../../../suite-cases/params/param-unknown-name-fset.gcls")),
+    ("param-unknown-name-pget", include_str!("../../../suite-cases/params/param-unknown-name-pget.gcls")),
+    ("param-unknown-name-pset", include_str!("../../../suite-cases/params/param-unknown-name-pset.gcls")),
 ];
 
 /// Why a case script does not make a case.
