@@ -721,4 +721,86 @@ mod tests {
         assert_eq!(script_name("framing-echo"), "framing-echo");
         assert_eq!(script_name("{code:abort}-x-{mpe:1}"), "x");
     }
+
+    /// One family of `harness/suite-cases/generated.toml`.
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Family {
+        ids: String,
+        #[serde(default)]
+        only: Vec<String>,
+        kind: String,
+        source: String,
+        why: String,
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Generated {
+        family: Vec<Family>,
+    }
+
+    /// Whether `id` is one of the family's ids for this profile: its placeholder stands for
+    /// an entry of the profile's table (limited to `only` where given).
+    fn family_has(f: &Family, p: &Profile, id: &str) -> bool {
+        let Some((head, rest)) = f.ids.split_once('{') else { return f.ids == id };
+        let Some((table, tail)) = rest.split_once('}') else { return false };
+        let entries: Vec<String> = match table {
+            "command" => p.commands.iter().map(|c| c.name.clone()).collect(),
+            "param" => p.params.iter().map(|x| x.name.clone()).collect(),
+            "rt-flag" => p.params.iter().filter(|x| x.rt.is_some()).map(|x| x.name.clone()).collect(),
+            "status" => p.status.iter().map(|s| s.bit.to_string()).collect(),
+            _ => return false,
+        };
+        entries
+            .iter()
+            .filter(|e| f.only.is_empty() || f.only.contains(e))
+            .any(|e| id.strip_prefix(head).and_then(|r| r.strip_suffix(tail)) == Some(slug(e).as_str()))
+    }
+
+    /// Architecture invariant: a case written by hand is a script. Every case the code builds
+    /// belongs to a family `harness/suite-cases/generated.toml` lists with its reason (a
+    /// profile table it iterates, or arithmetic scripts cannot say), and every family listed
+    /// still builds a case.
+    #[test]
+    fn every_case_in_code_is_a_listed_generator() {
+        let generated: Generated = toml::from_str(include_str!("../../../suite-cases/generated.toml"))
+            .unwrap_or_else(|e| panic!("generated.toml: {e}"));
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/suite/cases");
+        for f in &generated.family {
+            assert!(["table", "computed"].contains(&f.kind.as_str()), "{}: kind `{}`", f.ids, f.kind);
+            assert!(dir.join(&f.source).is_file(), "{}: no source {}", f.ids, f.source);
+            assert!(!f.why.trim().is_empty(), "{}: no reason", f.ids);
+        }
+        let mut used = vec![false; generated.family.len()];
+        let mut bad = Vec::new();
+        for name in Profile::builtin_names() {
+            let p = Profile::builtin(name).unwrap();
+            let g = Gen { p: p.clone(), out: Vec::new() };
+            let scripted: Vec<String> = SCRIPTS
+                .iter()
+                .filter_map(|(id, _)| g.script_case(id).ok().flatten().map(|k| k.def.id))
+                .collect();
+            for case in catalogue(&p).iter().filter(|c| !scripted.contains(&c.id)) {
+                let mut listed = false;
+                for (f, u) in generated.family.iter().zip(used.iter_mut()) {
+                    if family_has(f, &p, &case.id) {
+                        (listed, *u) = (true, true);
+                    }
+                }
+                if !listed {
+                    bad.push(format!("{name}: {}", case.id));
+                }
+            }
+        }
+        assert!(
+            bad.is_empty(),
+            "cases built in code that no family of harness/suite-cases/generated.toml names (write a \
+             hand-written case as a script):\n{}",
+            bad.join("\n")
+        );
+        let dead: Vec<&str> =
+            generated.family.iter().zip(&used).filter(|(_, u)| !**u).map(|(f, _)| f.ids.as_str()).collect();
+        assert!(dead.is_empty(), "families in generated.toml that build no case: {dead:?}");
+    }
 }
