@@ -25,11 +25,13 @@ mod persistence;
 mod realtime;
 mod scripts;
 mod status;
+pub(crate) use scripts::ScriptError;
 use gcl_transcript::{Level, Requirement};
 
-/// Every case of a profile, in catalogue order.
-pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
-    let mut g = Gen { p: p.clone(), out: Vec::new() };
+/// Every case of a profile, in catalogue order, or the first case script that has no case
+/// for it (an expression or condition the profile cannot answer).
+pub(crate) fn catalogue(p: &Arc<Profile>) -> Result<Vec<CaseDef>, ScriptError> {
+    let mut g = Gen { p: p.clone(), out: Vec::new(), failed: None };
     g.framing();
     g.commands();
     g.params();
@@ -42,12 +44,17 @@ pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
     g.examples();
     g.firmware();
     g.banner();
-    g.out
+    match g.failed {
+        Some(e) => Err(e),
+        None => Ok(g.out),
+    }
 }
 
 struct Gen {
     p: Arc<Profile>,
     out: Vec<CaseDef>,
+    /// The first case script that made no case.
+    failed: Option<ScriptError>,
 }
 
 /// A command or parameter name as part of an id.

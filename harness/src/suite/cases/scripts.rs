@@ -167,11 +167,15 @@ enum Preamble {
 
 impl Gen {
     /// Adds the cases of these scripts, in this order (each only for the profiles it names).
-    /// A script that does not make a case adds nothing; the tests below name it.
+    /// A script that makes no case for this profile is kept as the catalogue's error.
     pub(super) fn scripts(&mut self, ids: &[&str]) {
         for id in ids {
-            if let Ok(Some(k)) = self.script_case(id) {
-                self.add(k);
+            match self.script_case(id) {
+                Ok(Some(k)) => self.add(k),
+                Ok(None) => {}
+                Err(e) => {
+                    self.failed.get_or_insert(e);
+                }
             }
         }
     }
@@ -621,11 +625,11 @@ mod tests {
             let mut applies = false;
             for name in Profile::builtin_names() {
                 let p = Profile::builtin(name).unwrap();
-                let g = Gen { p: p.clone(), out: Vec::new() };
+                let g = Gen { p: p.clone(), out: Vec::new(), failed: None };
                 let made = g.script_case(id).unwrap_or_else(|e| panic!("{e}"));
                 applies |= made.is_some();
                 let case_id = made.as_ref().map(|k| k.def.id.clone());
-                let placed = catalogue(&p).iter().filter(|c| Some(&c.id) == case_id.as_ref()).count();
+                let placed = catalogue(&p).unwrap().iter().filter(|c| Some(&c.id) == case_id.as_ref()).count();
                 assert_eq!(placed, usize::from(made.is_some()), "{name}: case script `{id}` placed {placed} times");
             }
             assert!(applies, "case script `{id}` applies to no built-in profile");
@@ -635,7 +639,7 @@ mod tests {
     #[test]
     fn bad_scripts_are_clear_errors() {
         let p = Profile::builtin("seed").unwrap();
-        let g = Gen { p, out: Vec::new() };
+        let g = Gen { p, out: Vec::new(), failed: None };
         assert!(matches!(g.script_case("no-such-case"), Err(ScriptError::Missing(_))));
     }
 
@@ -687,7 +691,7 @@ mod tests {
     #[test]
     fn expressions_read_the_profile_and_refuse_unknown_names() {
         let p = Profile::builtin("seed").unwrap();
-        let g = Gen { p: p.clone(), out: Vec::new() };
+        let g = Gen { p: p.clone(), out: Vec::new(), failed: None };
         let (l4, mpe4) = (p.hand.spread_limit, g.mpe(4));
         let mp = StatusBits::from_bits_truncate(p.hand.missed_position_status).code();
         assert_eq!(
@@ -712,6 +716,20 @@ mod tests {
         assert!(matches!(g.conditions_hold("nope:X"), Err(e) if e.contains("condition `nope:X`")));
         assert_eq!(g.conditions_hold("command:HI zero-min:NOPE|command:FGET"), Ok(true));
         assert_eq!(g.conditions_hold("command:HI param:NOPE"), Ok(false));
+    }
+
+    /// A profile a script cannot answer (here: no text for status 32) gets an error that
+    /// names the script and line, not a suite with a case silently missing.
+    #[test]
+    fn a_profile_a_script_cannot_answer_is_an_error() {
+        let mut p = (*Profile::builtin("seed").unwrap()).clone();
+        p.status.retain(|s| s.bit != 32);
+        let e = catalogue(&Arc::new(p)).map(|_| ()).unwrap_err();
+        assert!(
+            matches!(&e, ScriptError::Expr { id, line: 2, error: ExprError::UnknownStatus(n) }
+                if id == "status-32-unknown-command" && n == "32"),
+            "{e}"
+        );
     }
 
     /// A file is named by its id with the expressions dropped.
@@ -776,12 +794,12 @@ mod tests {
         let mut bad = Vec::new();
         for name in Profile::builtin_names() {
             let p = Profile::builtin(name).unwrap();
-            let g = Gen { p: p.clone(), out: Vec::new() };
+            let g = Gen { p: p.clone(), out: Vec::new(), failed: None };
             let scripted: Vec<String> = SCRIPTS
                 .iter()
                 .filter_map(|(id, _)| g.script_case(id).ok().flatten().map(|k| k.def.id))
                 .collect();
-            for case in catalogue(&p).iter().filter(|c| !scripted.contains(&c.id)) {
+            for case in catalogue(&p).unwrap().iter().filter(|c| !scripted.contains(&c.id)) {
                 let mut listed = false;
                 for (f, u) in generated.family.iter().zip(used.iter_mut()) {
                     if family_has(f, &p, &case.id) {
