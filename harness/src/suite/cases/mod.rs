@@ -1,8 +1,12 @@
-//! The catalogue: which cases each profile gets. Most are generated from the profile's tables
-//! (every command with its prefix and argument rules, every parameter's default, range and
-//! access, every status bit); a few are written by hand (the seed's examples, RealTime worked
-//! examples, abort timing). Each case starts from the same preamble, so cases are independent
-//! on a real hand, and takes its level from the decisions it checks.
+//! The catalogue: which cases each profile gets, in order. Most are generated from the
+//! profile's tables (every command with its prefix and argument rules, every parameter's
+//! default, range and access, every RealTime flag, every status bit); every case written by
+//! hand is a script (`harness/suite-cases/<area>/`, read by `scripts.rs`), placed by its area's
+//! module. The few cases still built in code besides the table generators need arithmetic
+//! the scripts' expressions lack; `harness/suite-cases/generated.toml` lists every family built
+//! here and why, and a test fails on a case it does not name. Each case starts from the same
+//! preamble, so cases are independent on a real hand, and takes its level from the decisions
+//! it checks.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -25,8 +29,8 @@ mod persistence;
 mod realtime;
 mod scripts;
 mod status;
-pub(crate) use scripts::ScriptError;
 use gcl_transcript::{Level, Requirement};
+pub(crate) use scripts::ScriptError;
 
 /// Every case of a profile, in catalogue order, or the first case script that has no case
 /// for it (an expression or condition the profile cannot answer).

@@ -1,5 +1,6 @@
-//! Parameters: each parameter's default, setting, range and access. Cases about one named
-//! parameter are scripts (`harness/suite-cases/params/`) where their lines are fixed.
+//! Parameters: a generator over the profile's parameter table (each parameter's default,
+//! setting, range and access). Cases about one named parameter, the unknown-name cases and the
+//! fixed-line effect cases are scripts (`harness/suite-cases/params/`).
 
 use super::*;
 

@@ -1,4 +1,8 @@
-//! RealTime: the loop, block layouts from the flags, the codec, LFDP.
+//! RealTime: the loop, block layouts from the flags, the codec, LFDP. Here are the generators
+//! over the profile's RealTime flags (`rt-field-*`, `rt-all-fields`) and the cases whose bounds
+//! need the model's arithmetic (LFDP stepping, velocity data fitted to LFV's byte, strain
+//! clamps); the fixed-line cases are scripts (`harness/suite-cases/realtime/`), which set
+//! their flags with `rt-flags:` through [`Gen::rt_flags`].
 
 use super::*;
 

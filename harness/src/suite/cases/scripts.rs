@@ -1,27 +1,44 @@
 //! Hand-written cases as data: `harness/suite-cases/<area>/<id>.gcls`, embedded in the binary.
+//! Every case the suite has that is not generated from a profile table (or computed, see
+//! `harness/suite-cases/generated.toml`) is one of these.
 //!
 //! A case script is a `gcl record` script ([`gcl_transcript::script`]) whose header says what
 //! the suite needs besides the steps:
 //!
 //! ```text
-//! id: framing-echo                    the case id (also the file name)
+//! id: framing-echo                    the case id; the file is named by it, with any
+//!                                     `{expression}` dropped (`status-{code:abort}-abort`
+//!                                     is `status-abort.gcls`)
 //! title: Every byte of a line is echoed as sent
 //! clause: decision:framing-echo       a decision the case checks, cited when the profile has it
 //! clause: src:Command ^C              a clause of the profile's own source (`seed:`/`manual:`)
 //! clause: seed: Example Programs      any other clause, literally (clauses keep their order)
 //! x-preamble: motion                  none | idle (^C, RESET, FDEF, PDEF) | motion (idle + HI)
-//! x-when: command:PSAVE param:OTEMP   only for profiles with all of these (command:NAME,
-//!                                     param:NAME, alias:NAME (a parameter that names
-//!                                     another's value), decision:ID); `a|b` holds when
-//!                                     either does
+//! x-when: command:PSAVE param:OTEMP   only for profiles with all of these conditions
+//! x-title-when: param:LCT => Title    this title instead where the conditions hold
 //! profile: seed                       only for these profiles (default: every profile)
 //! level: MUST  requires: motion  note: ...   as in a transcript
 //! ```
 //!
-//! Steps are the script's: host lines, `line:`, `nowait:`, `raw:`, `partial:`, `abort`,
-//! `wait`, `pause:`; every answer is written exactly as the model gives it, unless an
-//! `expect:` line after the step gives it a shape (the suite's own key, read here and not by
-//! the script parser):
+//! Conditions (`x-when:`, `x-title-when:`, `step-when:`) are space-separated, all must hold,
+//! and `a|b` holds when either does: `command:NAME`, `param:NAME`, `alias:NAME` (a parameter
+//! that names another's value), `zero-min:NAME` (a parameter whose minimum is 0),
+//! `status:NAME` (a status the hand sends, as in `code:`) and `decision:ID`.
+//!
+//! **Expressions.** `{...}` anywhere in a script (header, steps, `expect:` lines) is replaced
+//! by its value for the profile before the script is read. An expression is one term, or
+//! number terms joined by ` + ` and ` - ` (spaces around the operator: names hold dashes).
+//! Terms: a whole number; `limit:M` (the joint limit of motor M, 1 to 4), `mpe:M` (MPE's
+//! default), `close-target:M` (where C goes), `code:STATUS` (the wire number of
+//! `missed-position`, `uninitialized`, `terminate-uninitialized`, `bad-header`, `overtemp`,
+//! `abort`), `uninitialized-state` (what S reads before HI); and two names, used alone:
+//! `status-text:N` (status N's text) and `first-param:A|B` (the first of these parameters the
+//! profile has, else the last). Anything else is an [`ExprError`] with its line.
+//!
+//! Steps are the script's: host lines, `line:`, `nowait:`, `raw:`, `partial:`, `block:`,
+//! `abort`, `wait`, `pause:`; every answer is written exactly as the model gives it, unless an
+//! `expect:` line after the step gives it a shape. These lines are the suite's own, read here
+//! and not by the script parser:
 //!
 //! ```text
 //! expect: banner          a RESET banner: `{any}BarrettHand Firmware{any}`
@@ -32,11 +49,17 @@
 //!                         elided to its parameter's range, as the generators' `get` does
 //! expect: near 5000 5000 5000 0   as `values`, positions (P) within MPE of these goals, one
 //!                         per motor (the profile's MPE defaults)
+//! expect: positions 0..{mpe:1} 0..10 0..10 0..10   as `values`, positions in these ranges
+//! expect: block 1:LFAP=0..{mpe:1} LFT=0..60   a RealTime feedback block, each field as the
+//!                         model gives it except strain and temperature (their ranges) and
+//!                         the fields named here ([MOTOR:]FLAG=LO..HI; no motor: hand-wide)
+//! step-when: command:PDEF   the next step only where these conditions hold
+//! rt-flags: 1 LCV LFAP    before the next step, the set lines that turn these RealTime flags
+//!                         on and every other off (for the motors of an optional prefix)
 //! ```
 //!
-//! A `timeout:` line gives the step after it a `within` floor. Cases whose answers need
-//! per-value ranges or RealTime blocks, or whose lines are computed from the profile, stay in
-//! the generators.
+//! A `timeout:` line gives the step after it a `within` floor. What a shape expands to is the
+//! builder's ([`CaseB`]), as for the generators: one way of writing each answer.
 
 use gcl_transcript::ParseError;
 use gcl_transcript::script::{ScriptStep, parse_script};
@@ -91,7 +114,10 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("rt-header-upper-a", include_str!("../../../suite-cases/realtime/rt-header-upper-a.gcls")),
     ("rt-header-lower-a", include_str!("../../../suite-cases/realtime/rt-header-lower-a.gcls")),
     ("rt-lfap-byte-order", include_str!("../../../suite-cases/realtime/rt-lfap-byte-order.gcls")),
-    ("rt-bad-header-returns-to-supervisory", include_str!("../../../suite-cases/realtime/rt-bad-header-returns-to-supervisory.gcls")),
+    (
+        "rt-bad-header-returns-to-supervisory",
+        include_str!("../../../suite-cases/realtime/rt-bad-header-returns-to-supervisory.gcls"),
+    ),
     ("rt-loop-en-motors", include_str!("../../../suite-cases/realtime/rt-loop-en-motors.gcls")),
     ("rt-coefficients-no-field", include_str!("../../../suite-cases/realtime/rt-coefficients-no-field.gcls")),
     ("status-1024-too-many-arguments", include_str!("../../../suite-cases/status/status-1024-too-many-arguments.gcls")),
@@ -102,11 +128,26 @@ pub(crate) const SCRIPTS: &[(&str, &str)] = &[
     ("status-64-unknown-parameter", include_str!("../../../suite-cases/status/status-64-unknown-parameter.gcls")),
     ("status-abort", include_str!("../../../suite-cases/status/status-abort.gcls")),
     ("status-bad-header", include_str!("../../../suite-cases/status/status-bad-header.gcls")),
-    ("status-combined-grammar-and-not-initialized", include_str!("../../../suite-cases/status/status-combined-grammar-and-not-initialized.gcls")),
-    ("status-combined-invalid-and-read-only", include_str!("../../../suite-cases/status/status-combined-invalid-and-read-only.gcls")),
-    ("status-combined-prefix-and-arguments", include_str!("../../../suite-cases/status/status-combined-prefix-and-arguments.gcls")),
-    ("status-combined-unknown-and-invalid", include_str!("../../../suite-cases/status/status-combined-unknown-and-invalid.gcls")),
-    ("status-combined-unknown-and-read-only", include_str!("../../../suite-cases/status/status-combined-unknown-and-read-only.gcls")),
+    (
+        "status-combined-grammar-and-not-initialized",
+        include_str!("../../../suite-cases/status/status-combined-grammar-and-not-initialized.gcls"),
+    ),
+    (
+        "status-combined-invalid-and-read-only",
+        include_str!("../../../suite-cases/status/status-combined-invalid-and-read-only.gcls"),
+    ),
+    (
+        "status-combined-prefix-and-arguments",
+        include_str!("../../../suite-cases/status/status-combined-prefix-and-arguments.gcls"),
+    ),
+    (
+        "status-combined-unknown-and-invalid",
+        include_str!("../../../suite-cases/status/status-combined-unknown-and-invalid.gcls"),
+    ),
+    (
+        "status-combined-unknown-and-read-only",
+        include_str!("../../../suite-cases/status/status-combined-unknown-and-read-only.gcls"),
+    ),
     ("status-missed-position", include_str!("../../../suite-cases/status/status-missed-position.gcls")),
     ("status-not-initialized", include_str!("../../../suite-cases/status/status-not-initialized.gcls")),
     ("status-overtemperature", include_str!("../../../suite-cases/status/status-overtemperature.gcls")),
@@ -795,10 +836,8 @@ mod tests {
         for name in Profile::builtin_names() {
             let p = Profile::builtin(name).unwrap();
             let g = Gen { p: p.clone(), out: Vec::new(), failed: None };
-            let scripted: Vec<String> = SCRIPTS
-                .iter()
-                .filter_map(|(id, _)| g.script_case(id).ok().flatten().map(|k| k.def.id))
-                .collect();
+            let scripted: Vec<String> =
+                SCRIPTS.iter().filter_map(|(id, _)| g.script_case(id).ok().flatten().map(|k| k.def.id)).collect();
             for case in catalogue(&p).unwrap().iter().filter(|c| !scripted.contains(&c.id)) {
                 let mut listed = false;
                 for (f, u) in generated.family.iter().zip(used.iter_mut()) {
