@@ -773,6 +773,33 @@ mod tests {
         );
     }
 
+    /// Every `.gcls` file under `harness/suite-cases/` is embedded under its file name, and
+    /// nothing else is: a script left out of [`SCRIPTS`] would silently check nothing.
+    #[test]
+    fn every_script_file_is_embedded() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("suite-cases");
+        let mut files = Vec::new();
+        for area in std::fs::read_dir(&root).unwrap() {
+            let area = area.unwrap().path();
+            if !area.is_dir() {
+                continue;
+            }
+            for f in std::fs::read_dir(&area).unwrap() {
+                let f = f.unwrap().path();
+                assert_eq!(f.extension().and_then(|e| e.to_str()), Some("gcls"), "{}", f.display());
+                let stem = f.file_stem().and_then(|s| s.to_str()).unwrap().to_string();
+                let text = std::fs::read_to_string(&f).unwrap();
+                let embedded = SCRIPTS.iter().find(|(id, _)| *id == stem).map(|(_, t)| *t);
+                assert_eq!(embedded, Some(text.as_str()), "{} is not embedded as `{stem}`", f.display());
+                files.push(stem);
+            }
+        }
+        files.sort();
+        let mut keys: Vec<String> = SCRIPTS.iter().map(|(id, _)| (*id).to_string()).collect();
+        keys.sort();
+        assert_eq!(files, keys, "SCRIPTS and the files under harness/suite-cases differ");
+    }
+
     /// A file is named by its id with the expressions dropped.
     #[test]
     fn script_names_drop_expressions() {
