@@ -596,9 +596,6 @@ fn split_suite_lines(text: &str) -> Result<SuiteLines, String> {
 /// The shape an `expect:` line names.
 fn expected(v: &str) -> Result<Expected, String> {
     let (word, rest) = v.split_once(' ').unwrap_or((v, ""));
-    let four = |what: &str, items: Vec<Range>| {
-        <[Range; 4]>::try_from(items).map_err(|_| format!("`expect: {what}` takes four positions"))
-    };
     Ok(match word {
         "banner" => Expected::Shape(Shape::Banner),
         "banner-lines" => Expected::Shape(Shape::BannerLines),
@@ -606,13 +603,19 @@ fn expected(v: &str) -> Result<Expected, String> {
         "list-values" => Expected::Shape(Shape::ListValues),
         "values" => Expected::Values(None),
         "near" => {
-            let goals = rest.split_whitespace().map(|g| g.parse().map(|g| (g, g))).collect::<Result<Vec<_>, _>>();
-            let goals = four("near", goals.map_err(|_| "`expect: near` takes four positions".to_string())?)?;
-            Expected::Values(Some(Positions::Near(goals.map(|g| g.0))))
+            let goals: Vec<i64> = rest
+                .split_whitespace()
+                .map(str::parse)
+                .collect::<Result<_, _>>()
+                .map_err(|_| "`expect: near` takes four positions".to_string())?;
+            let goals = <[i64; 4]>::try_from(goals).map_err(|_| "`expect: near` takes four positions".to_string())?;
+            Expected::Values(Some(Positions::Near(goals)))
         }
         "positions" => {
             let ranges = rest.split_whitespace().map(range).collect::<Result<Vec<_>, _>>()?;
-            Expected::Values(Some(Positions::Ranges(four("positions", ranges)?)))
+            let ranges = <[Range; 4]>::try_from(ranges)
+                .map_err(|_| "`expect: positions` takes four ranges LO..HI".to_string())?;
+            Expected::Values(Some(Positions::Ranges(ranges)))
         }
         "block" => Expected::Shape(Shape::Block(rest.split_whitespace().map(field_rule).collect::<Result<_, _>>()?)),
         other => {
