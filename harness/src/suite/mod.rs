@@ -145,7 +145,7 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> SuiteError + '_ {
 pub fn generate(profile: &Arc<Profile>) -> Result<Vec<Case>, SuiteError> {
     let mut out = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
-    for def in cases::catalogue(profile) {
+    for def in cases::catalogue(profile).map_err(|e| SuiteError::Generate(e.to_string()))? {
         if !seen.insert(def.id.clone()) {
             return Err(SuiteError::Generate(format!("duplicate case id {} in {}", def.id, profile.id)));
         }

@@ -1,4 +1,6 @@
-//! Commands: each command's prefix and argument rules, before-HI and over-temperature answers, and what a run of it prints.
+//! Commands: a generator over the profile's command table: each command's prefix and argument
+//! rules, before-HI and over-temperature answers, and what a run of it prints. No case here is
+//! written by hand (those are scripts, `harness/suite-cases/`).
 
 use super::*;
 

@@ -1,4 +1,7 @@
-//! Parameter effects: a case per parameter that changes what a motion does.
+//! Parameter effects: a case per parameter that changes what a motion does. Those with fixed
+//! lines are scripts (`harness/suite-cases/params/param-*-effect.gcls`); the ones here compute
+//! their bounds: SGFLIP's from the free strain, and the timed ones (MCV, MOV, ACCEL, TSTOP)
+//! from the model's motion trapezoid.
 
 use super::*;
 
@@ -6,102 +9,14 @@ impl Gen {
     /// For parameters whose value changes what the hand does: a case that sets one to a value
     /// other than its default and shows the difference on the wire.
     pub(super) fn effects(&mut self) {
-        let dp = 3000;
-        let k = self
-            .case("param-dp-effect", format!("M without an argument goes to DP: 1FSET DP {dp}, 1M"))
-            .src("Parameter DP")
-            .src("Command M")
-            .level(Level::Must)
-            .preamble(true)
-            .line(&format!("1FSET DP {dp}"))
-            .line("1M")
-            .get("1", &["P"], Some(self.near([dp; 4])));
-        self.add(k);
-
-        let (up, down) = (2500, 1000);
-        let k = self
-            .case(
-                "param-ds-effect",
-                format!(
-                    "IC and IO without an argument step by DS: DS {up} closes to {up}, DS {down} opens back to {}",
-                    up - down
-                ),
-            )
-            .src("Parameter DS")
-            .src("Command IC")
-            .src("Command IO")
-            .level(Level::Must)
-            .preamble(true)
-            .line(&format!("1FSET DS {up}"))
-            .line("1IC")
-            .get("1", &["P"], Some(self.near([up; 4])))
-            .line(&format!("1FSET DS {down}"))
-            .line("1IO")
-            .get("1", &["P"], Some(self.near([up - down; 4])));
-        self.add(k);
-
-        if self.has_param("CT") {
-            let ct = 5000;
-            let k = self
-                .case("param-ct-effect", format!("C closes to CT: 1FSET CT {ct}, 1C"))
-                .src("Parameter CT")
-                .src("Command C")
-                .level(Level::Must)
-                .preamble(true)
-                .line(&format!("1FSET CT {ct}"))
-                .line("1C")
-                .get("1", &["P"], Some(self.near([ct; 4])));
-            self.add(k);
-        }
-        if self.has_param("OT") {
-            let ot = 1000;
-            let k = self
-                .case("param-ot-effect", format!("O opens to OT: 1FSET OT {ot}, 1O from 3000"))
-                .src("Parameter OT")
-                .src("Command O")
-                .level(Level::Must)
-                .preamble(true)
-                .line("1M 3000")
-                .line(&format!("1FSET OT {ot}"))
-                .line("1O")
-                .get("1", &["P"], Some(self.near([ot; 4])));
-            self.add(k);
-        }
-
-        // MPE: the spread stalls at its joint stop 850 counts short of the goal; with MPE
-        // 1000 that is no error.
-        let l4 = self.limit(4);
-        let mpe = 1000;
-        let k = self
-            .case(
-                "param-mpe-effect",
-                format!("With MPE {mpe} a move that ends 850 counts short of its goal gives no status"),
-            )
-            .src("Parameter MPE")
-            .src("Command M")
-            .decision("seed-motion-model")
-            .decision("bh8-position-bounds")
-            .preamble(true)
-            .line(&format!("SFSET MPE {mpe}"))
-            .line(&format!("SM {}", l4 + 850))
-            .get("S", &["P"], Some([(l4 - mpe, l4); 4]));
-        self.add(k);
-
-        if self.has_param("LSG") {
-            let k = self
-                .case(
-                    "param-lsg-effect",
-                    "With LSG 100 a move stops at once (a free finger's strain is lower); M then gives 16",
-                )
-                .src("Parameter LSG")
-                .decision("bh8-strain-limits-disable")
-                .decision("bh8-missed-position-code")
-                .preamble(true)
-                .line("1FSET LSG 100")
-                .line("1M 5000")
-                .get("1", &["P"], Some([(0, self.mpe(1)); 4]));
-            self.add(k);
-        }
+        self.scripts(&[
+            "param-dp-effect",
+            "param-ds-effect",
+            "param-ct-effect",
+            "param-ot-effect",
+            "param-mpe-effect",
+            "param-lsg-effect",
+        ]);
 
         // SGFLIP turns FGET SG over.
         let f = self.p.hand.free_strain;

@@ -1,6 +1,6 @@
 //! Framing: echo, line endings, empty lines, line length, case, separators. The cases are
-//! scripts (`harness/suite-cases/framing/`) except the line-length one, whose lines follow the
-//! profile's limit.
+//! scripts (`harness/suite-cases/framing/`) except the line-length one, whose lines are filled
+//! to the profile's limit.
 
 use super::*;
 

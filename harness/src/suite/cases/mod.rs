@@ -1,8 +1,12 @@
-//! The catalogue: which cases each profile gets. Most are generated from the profile's tables
-//! (every command with its prefix and argument rules, every parameter's default, range and
-//! access, every status bit); a few are written by hand (the seed's examples, RealTime worked
-//! examples, abort timing). Each case starts from the same preamble, so cases are independent
-//! on a real hand, and takes its level from the decisions it checks.
+//! The catalogue: which cases each profile gets, in order. Most are generated from the
+//! profile's tables (every command with its prefix and argument rules, every parameter's
+//! default, range and access, every RealTime flag, every status bit); every case written by
+//! hand is a script (`harness/suite-cases/<area>/`, read by `scripts.rs`), placed by its area's
+//! module. The few cases still built in code besides the table generators need arithmetic
+//! the scripts' expressions lack; `harness/suite-cases/generated.toml` lists every family built
+//! here and why, and a test fails on a case it does not name. Each case starts from the same
+//! preamble, so cases are independent on a real hand, and takes its level from the decisions
+//! it checks.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -26,10 +30,12 @@ mod realtime;
 mod scripts;
 mod status;
 use gcl_transcript::{Level, Requirement};
+pub(crate) use scripts::ScriptError;
 
-/// Every case of a profile, in catalogue order.
-pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
-    let mut g = Gen { p: p.clone(), out: Vec::new() };
+/// Every case of a profile, in catalogue order, or the first case script that has no case
+/// for it (an expression or condition the profile cannot answer).
+pub(crate) fn catalogue(p: &Arc<Profile>) -> Result<Vec<CaseDef>, ScriptError> {
+    let mut g = Gen { p: p.clone(), out: Vec::new(), failed: None };
     g.framing();
     g.commands();
     g.params();
@@ -42,12 +48,17 @@ pub(crate) fn catalogue(p: &Arc<Profile>) -> Vec<CaseDef> {
     g.examples();
     g.firmware();
     g.banner();
-    g.out
+    match g.failed {
+        Some(e) => Err(e),
+        None => Ok(g.out),
+    }
 }
 
 struct Gen {
     p: Arc<Profile>,
     out: Vec<CaseDef>,
+    /// The first case script that made no case.
+    failed: Option<ScriptError>,
 }
 
 /// A command or parameter name as part of an id.

@@ -1,5 +1,6 @@
-//! Parameters: each parameter's default, setting, range and access. Cases about one named
-//! parameter are scripts (`harness/suite-cases/params/`) where their lines are fixed.
+//! Parameters: a generator over the profile's parameter table (each parameter's default,
+//! setting, range and access). Cases about one named parameter, the unknown-name cases and the
+//! fixed-line effect cases are scripts (`harness/suite-cases/params/`).
 
 use super::*;
 
@@ -16,21 +17,12 @@ impl Gen {
                 self.param_read_only(x);
             }
         }
-        for (cmd, line) in
-            [("FGET", "FGET NOPE"), ("FSET", "FSET NOPE 1"), ("PGET", "PGET NOPE"), ("PSET", "PSET NOPE 1")]
-        {
-            if self.has_cmd(cmd) {
-                let k = self
-                    .case(format!("param-unknown-name-{}", slug(cmd)), format!("{cmd} of an unknown name gives 64"))
-                    .src(&format!("Command {cmd}"))
-                    .src("Status codes 64")
-                    .level(Level::Must)
-                    .preamble(false)
-                    .line(line)
-                    .line("FGET DP");
-                self.add(k);
-            }
-        }
+        self.scripts(&[
+            "param-unknown-name-fget",
+            "param-unknown-name-fset",
+            "param-unknown-name-pget",
+            "param-unknown-name-pset",
+        ]);
         self.scripts(&[
             "param-scope-commands",
             "param-temp-global",
@@ -40,29 +32,7 @@ impl Gen {
             "param-spread-finger-defaults",
         ]);
 
-        if self.p.decisions.iter().any(|d| d.id == "bh8-new-rt-fields-defaults") {
-            let new = ["LCT", "LFBP", "LFAIN"];
-            let known = new.iter().all(|n| self.has_param(n));
-            let title = if known {
-                "Firmware 4.4x knows LCT, LFBP and LFAIN; each defaults to 0 on every motor"
-            } else {
-                "Firmware 4.3x does not know LCT, LFBP or LFAIN: FGET and FSET of them give 64"
-            };
-            let k = self
-                .case("param-44-rt-flags", title)
-                .src("Command FGET")
-                .src("Command FSET")
-                .decision("bh8-new-rt-fields-defaults")
-                .decision("bh8-43-no-44-params")
-                .preamble(false)
-                .get("", &new, None)
-                .line("FSET LCT 0 LFBP 0 LFAIN 0")
-                .get("", &["LCT"], None)
-                .get("", &["LFBP"], None)
-                .get("", &["LFAIN"], None)
-                .line("FGET DP");
-            self.add(k);
-        }
+        self.scripts(&["param-44-rt-flags"]);
     }
 
     /// The source clause of a parameter case, and the decisions that govern it: those about

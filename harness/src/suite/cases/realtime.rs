@@ -1,4 +1,8 @@
-//! RealTime: the loop, block layouts from the flags, the codec, LFDP.
+//! RealTime: the loop, block layouts from the flags, the codec, LFDP. Here are the generators
+//! over the profile's RealTime flags (`rt-field-*`, `rt-all-fields`) and the cases whose bounds
+//! need the model's arithmetic (LFDP stepping, velocity data fitted to LFV's byte, strain
+//! clamps); the fixed-line cases are scripts (`harness/suite-cases/realtime/`), which set
+//! their flags with `rt-flags:` through [`Gen::rt_flags`].
 
 use super::*;
 
@@ -33,24 +37,7 @@ impl Gen {
     }
 
     pub(super) fn realtime(&mut self) {
-        let headers: [(&str, &str, u8, &[u8]); 4] = [
-            ("upper-c", "C: control data follows; the answer is a feedback block", b'C', &[0]),
-            ("lower-c", "c: control data follows; the answer is * alone", b'c', &[0]),
-            ("upper-a", "A: no data; the answer is a feedback block", b'A', &[]),
-            ("lower-a", "a: no data; the answer is * alone", b'a', &[]),
-        ];
-        for (name, title, h, data) in headers {
-            let mut block = vec![h];
-            block.extend_from_slice(data);
-            let k = self
-                .rt_case(&format!("rt-header-{name}"), title, "1", &["LCV", "LFAP"])
-                .level(Level::Must)
-                .line("1LOOP")
-                .block(&block, Shape::Block(self.at_rest()))
-                .block(&block, Shape::Block(self.at_rest()))
-                .abort();
-            self.add(k);
-        }
+        self.scripts(&["rt-header-upper-c", "rt-header-lower-c", "rt-header-upper-a", "rt-header-lower-a"]);
 
         let flags: Vec<ParamSpec> = self.p.params.iter().filter(|x| x.rt.is_some()).cloned().collect();
         for f in &flags {
@@ -118,18 +105,7 @@ impl Gen {
             .abort();
         self.add(k);
 
-        let mpe1 = self.mpe(1);
-        let k = self
-            .rt_case("rt-lfap-byte-order", "LFAP is two bytes, high byte first: 5000 is 13 88", "1", &["LFAP"])
-            .level(Level::Must)
-            .line("1M 5000")
-            .line("1LOOP")
-            .block(
-                b"A",
-                Shape::Block(vec![FieldRule { motor: Some(1), name: "LFAP", range: Some((5000 - mpe1, 5000 + mpe1)) }]),
-            )
-            .abort();
-        self.add(k);
+        self.scripts(&["rt-lfap-byte-order"]);
 
         self.lfdp_case(
             "rt-lfdp-worked-example",
@@ -187,21 +163,7 @@ impl Gen {
             .abort();
         self.add(k);
 
-        let k = self
-            .rt_case(
-                "rt-bad-header-returns-to-supervisory",
-                "After an invalid header the hand is back in supervisory mode",
-                "1",
-                &["LFAP"],
-            )
-            .level(Level::Must)
-            .line("1LOOP")
-            .block(b"A", Shape::Block(self.at_rest()))
-            .block(b"X", Shape::Exact)
-            .line("FGET DP")
-            .line("1LOOP")
-            .abort();
-        self.add(k);
+        self.scripts(&["rt-bad-header-returns-to-supervisory"]);
 
         self.realtime_decisions();
     }
@@ -313,28 +275,7 @@ impl Gen {
             .abort();
         self.add(k);
 
-        // LOOP with no prefix takes the motors whose EN is 1; a prefix names them whatever EN.
-        let rest: Vec<FieldRule> = self.at_rest();
-        let mut k = self
-            .rt_case(
-                "rt-loop-en-motors",
-                "LOOP with no prefix runs the motors whose EN is 1 (fewer fields); a prefix names its motors whatever EN",
-                "",
-                &["LFAP"],
-            )
-            .src("Parameter EN");
-        k = k.decision("seed-param-prefix-en").decision("bh8-loop-motors").decision("bh8-param-prefix-en");
-        let k = k
-            .line("SFSET EN 0")
-            .comment("motors 1, 2 and 3: three LFAP fields")
-            .line("LOOP")
-            .block(b"A", Shape::Block(rest.clone()))
-            .abort()
-            .comment("the spread alone: one LFAP field")
-            .line("4LOOP")
-            .block(b"A", Shape::Block(rest))
-            .abort();
-        self.add(k);
+        self.scripts(&["rt-loop-en-motors"]);
 
         // SGFLIP turns the LFS byte over as it turns FGET SG over.
         if self.p.decisions.iter().any(|d| d.id == "bh8-lfs-sgflip") {
@@ -369,24 +310,7 @@ impl Gen {
             self.add(k);
         }
 
-        // LCVC, LFVC, LFDPC and LFDPD shape the data but add no field.
-        if self.p.decisions.iter().any(|d| d.id == "bh8-rt-coefficients") {
-            let k = self
-                .rt_case(
-                    "rt-coefficients-no-field",
-                    "LCVC, LFVC, LFDPC and LFDPD add no field: with LCV and LFAP the blocks stay 2 and 3 bytes",
-                    "1",
-                    &["LCV", "LFAP"],
-                )
-                .decision("bh8-rt-coefficients")
-                .line("1FSET LCVC 2 LFVC 2 LFDPC 2")
-                .line("PSET LFDPD 1")
-                .line("1LOOP")
-                .block(&[b'C', 0], Shape::Block(self.at_rest()))
-                .block(b"A", Shape::Block(self.at_rest()))
-                .abort();
-            self.add(k);
-        }
+        self.scripts(&["rt-coefficients-no-field"]);
 
         // A coefficient of 0 is accepted and divides as 1.
         if self.p.decisions.iter().any(|d| d.id == "bh8-coefficient-range") {
