@@ -387,6 +387,3 @@ impl Device {
         self.refresh_limits();
     }
 }
-
-#[cfg(test)]
-mod tests;
