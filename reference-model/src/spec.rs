@@ -63,6 +63,17 @@ pub enum SpecError {
         /// The parameter.
         param: String,
     },
+    /// A `[hand]` key that says where a behaviour value comes from names a parameter the
+    /// profile does not have.
+    #[error("profile `{profile}`: [hand] {key} names parameter `{param}`, which the profile lacks")]
+    UnknownHandParam {
+        /// The profile being resolved.
+        profile: String,
+        /// The `[hand]` key.
+        key: &'static str,
+        /// The parameter name it gives.
+        param: String,
+    },
     /// A RealTime flag's field does not have a GCL field type, block or scope.
     #[error("profile `{profile}`: RealTime flag `{param}`: {message}")]
     RtField {
@@ -200,6 +211,50 @@ pub struct Hand {
     pub lft_whole_degrees: bool,
     /// Whether a bare `?` lists only standard commands (advanced ones through `A?`).
     pub help_lists_standard_only: bool,
+    /// The speed HI opens a motor at, in MCV/MOV units: a parameter (IVEL) or a value.
+    pub hi_velocity: HandValue,
+    /// How many times HI spends `hi_settle_ms` at the open stop (at least once): a
+    /// parameter (IHIT) or a value.
+    pub hi_hold_repetitions: HandValue,
+    /// The serial rate: a parameter in hundreds of bit/s (BAUD), or a value in bit/s.
+    pub baud: HandValue,
+    /// The strain below which a moving motor stops: a parameter (LSG) or a value; 255 and
+    /// above never stop a motor.
+    pub low_strain_stop: HandValue,
+}
+
+/// Where the hand reads one of its behaviour values (a `[hand]` key such as `hi_velocity`):
+/// a parameter of the profile, by name, or a fixed value.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(untagged)]
+pub enum HandValue {
+    /// The parameter's value, per motor, as the hand's behaviour reads it.
+    Param(String),
+    /// This value, whatever the parameters say.
+    Fixed(i64),
+}
+
+/// A [`HandValue`] resolved when the profile loads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValueSource {
+    /// The value of this parameter.
+    Param(ParamId),
+    /// This value.
+    Fixed(i64),
+}
+
+/// The `[hand]` keys that say where a behaviour value comes from, resolved against the
+/// profile's parameters (see [`Profile::hand_sources`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HandSources {
+    /// [`Hand::hi_velocity`].
+    pub hi_velocity: ValueSource,
+    /// [`Hand::hi_hold_repetitions`].
+    pub hi_hold_repetitions: ValueSource,
+    /// [`Hand::baud`].
+    pub baud: ValueSource,
+    /// [`Hand::low_strain_stop`].
+    pub low_strain_stop: ValueSource,
 }
 
 /// One motor prefix character.
@@ -643,8 +698,6 @@ roles! {
     CloseVelocity => ["MCV"],
     /// MOV: maximum open velocity.
     OpenVelocity => ["MOV"],
-    /// IVEL: HI velocity.
-    InitVelocity => ["IVEL"],
     /// ACCEL: acceleration.
     Acceleration => ["ACCEL"],
     /// MPE: maximum position error of a move.
@@ -655,18 +708,12 @@ roles! {
     Hold => ["HOLD"],
     /// HSG (MSG in the seed): high strain that stops a close.
     HighStrain => ["HSG", "MSG"],
-    /// LSG: low strain.
-    LowStrain => ["LSG"],
     /// BS: breakaway on.
     Breakaway => ["BS"],
     /// SGFLIP: strain reading mirrored.
     StrainFlip => ["SGFLIP"],
-    /// IHIT: HI settle repetitions.
-    InitHoldTime => ["IHIT"],
     /// OTEMP: overtemperature threshold.
     OverTemperature => ["OTEMP"],
-    /// BAUD: serial rate in hundreds of bit/s.
-    Baud => ["BAUD"],
     /// LCVC: LCV coefficient.
     VelocityCoefficient => ["LCVC"],
     /// LFVC: LFV coefficient.
@@ -729,6 +776,9 @@ pub struct Profile {
     /// The role of each parameter, by [`ParamId`].
     #[serde(skip)]
     role_of: Vec<Option<Role>>,
+    /// The `[hand]` value sources, resolved.
+    #[serde(skip)]
+    hand_sources: HandSources,
 }
 
 /// The largest magnitude a parameter value, range or argument may have in a spec file, so
@@ -797,6 +847,18 @@ fn check_bounds(framing: &Framing, hand: &Hand) -> Result<(), String> {
     }
     if hand.lft_size > 2 {
         return Err(format!("hand.lft_size = {} must be 0, 1 or 2", hand.lft_size));
+    }
+    for (name, v, max) in [
+        ("hand.hi_velocity", &hand.hi_velocity, MAX_VALUE),
+        ("hand.hi_hold_repetitions", &hand.hi_hold_repetitions, MAX_VALUE),
+        ("hand.baud", &hand.baud, i64::from(u32::MAX)),
+        ("hand.low_strain_stop", &hand.low_strain_stop, MAX_VALUE),
+    ] {
+        if let HandValue::Fixed(v) = v
+            && !(0..=max).contains(v)
+        {
+            return Err(format!("{name} = {v} must be 0..={max}"));
+        }
     }
     Ok(())
 }
@@ -1042,6 +1104,18 @@ impl Profile {
             .iter()
             .map(|r| r.names().iter().find_map(|n| find(n)).map(|i| ParamId(i as u16)))
             .collect::<Vec<Option<ParamId>>>();
+        let source = |key: &'static str, v: &HandValue| match v {
+            HandValue::Fixed(v) => Ok(ValueSource::Fixed(*v)),
+            HandValue::Param(name) => find(name)
+                .map(|i| ValueSource::Param(ParamId(i as u16)))
+                .ok_or_else(|| SpecError::UnknownHandParam { profile: id.clone(), key, param: name.clone() }),
+        };
+        let hand_sources = HandSources {
+            hi_velocity: source("hi_velocity", &hand.hi_velocity)?,
+            hi_hold_repetitions: source("hi_hold_repetitions", &hand.hi_hold_repetitions)?,
+            baud: source("baud", &hand.baud)?,
+            low_strain_stop: source("low_strain_stop", &hand.low_strain_stop)?,
+        };
         let mut role_of = vec![None; f.params.len()];
         for (r, id) in Role::ALL.iter().zip(&roles) {
             if let Some(slot) = id.and_then(|id| role_of.get_mut(id.0 as usize)) {
@@ -1052,6 +1126,7 @@ impl Profile {
             rt_slots,
             roles,
             role_of,
+            hand_sources,
             title: f.title.unwrap_or_default(),
             aliases: f.aliases,
             framing,
@@ -1072,6 +1147,12 @@ impl Profile {
     /// The parameter that plays `role` in this profile, if it has one.
     pub fn role(&self, role: Role) -> Option<ParamId> {
         self.roles.get(role as usize).copied().flatten()
+    }
+
+    /// Where the hand reads the behaviour values its `[hand]` table names by source: HI's
+    /// speed and hold repetitions, the serial rate, the low-strain stop.
+    pub fn hand_sources(&self) -> &HandSources {
+        &self.hand_sources
     }
 
     /// The role a parameter plays, if any.
@@ -1295,6 +1376,74 @@ mod closed_names_tests {
             .replace("{size}", &size.to_string())
             .replace("{{", "{")
             .replace("}}", "}")
+    }
+
+    /// Loads the seed with `line` of its top file replaced by `by`.
+    fn seed_replacing(line: &str, by: &str) -> Result<Profile, SpecError> {
+        let seed = embedded("seed.toml").unwrap_or_default();
+        assert!(seed.contains(line), "the seed has no line `{line}`");
+        let top = seed.replacen(line, by, 1);
+        Profile::load_with("top.toml", &|p| {
+            if p == "top.toml" { Some(top.clone()) } else { embedded(p).map(str::to_string) }
+        })
+    }
+
+    #[test]
+    fn the_hand_states_where_hi_the_line_rate_and_the_strain_stop_read_their_values() {
+        let seed = Profile::builtin("seed").unwrap();
+        let mov = seed.param_id("MOV").unwrap();
+        let baud = seed.param_id("BAUD").unwrap();
+        assert_eq!(
+            *seed.hand_sources(),
+            HandSources {
+                hi_velocity: ValueSource::Param(mov),
+                hi_hold_repetitions: ValueSource::Fixed(1),
+                baud: ValueSource::Param(baud),
+                low_strain_stop: ValueSource::Fixed(256),
+            }
+        );
+        for name in ["bh8-262-4.3", "bh8-262-4.4"] {
+            let p = Profile::builtin(name).unwrap();
+            let param = |s: ValueSource| match s {
+                ValueSource::Param(id) => p.param(id).name.clone(),
+                ValueSource::Fixed(v) => panic!("{name}: a fixed {v} where the manual names a parameter"),
+            };
+            let s = p.hand_sources();
+            assert_eq!(
+                [s.hi_velocity, s.hi_hold_repetitions, s.baud, s.low_strain_stop].map(param),
+                ["IVEL", "IHIT", "BAUD", "LSG"],
+                "{name}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_hand_without_a_value_source_is_refused() {
+        for key in ["hi_velocity = \"MOV\"", "hi_hold_repetitions = 1", "baud = \"BAUD\"", "low_strain_stop = 256"] {
+            let name = key.split(' ').next().unwrap_or_default();
+            match seed_replacing(key, "") {
+                Err(SpecError::Syntax { message, .. }) => assert!(message.contains(name), "{key}: {message}"),
+                other => panic!("without `{key}` the seed loaded or failed otherwise: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_value_source_naming_an_unknown_parameter_is_refused() {
+        // IVEL is a BH8-262 parameter the seed does not have.
+        let err = seed_replacing("hi_velocity = \"MOV\"", "hi_velocity = \"IVEL\"").unwrap_err();
+        assert_eq!(
+            err,
+            SpecError::UnknownHandParam { profile: "seed".into(), key: "hi_velocity", param: "IVEL".into() }
+        );
+        let err = seed_replacing("low_strain_stop = 256", "low_strain_stop = \"LSG\"").unwrap_err();
+        assert_eq!(
+            err,
+            SpecError::UnknownHandParam { profile: "seed".into(), key: "low_strain_stop", param: "LSG".into() }
+        );
+        // A fixed rate must fit the serial port's u32.
+        let err = seed_replacing("baud = \"BAUD\"", "baud = 5000000000").unwrap_err();
+        assert!(matches!(&err, SpecError::Invalid { message, .. } if message.contains("hand.baud")), "{err}");
     }
 
     #[test]

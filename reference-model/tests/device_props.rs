@@ -22,7 +22,7 @@ fn profile(name: &str) -> Arc<Profile> {
 }
 
 mod support;
-use support::{hand, send};
+use support::{hand, send, send_bytes};
 
 fn count(haystack: &[u8], needle: &[u8]) -> usize {
     haystack.windows(needle.len()).filter(|w| *w == needle).count()
@@ -194,11 +194,8 @@ proptest! {
         let mut d = hand(name);
         let mut all = Vec::new();
         for line in &lines {
-            let now = d.now();
-            d.handle_input(now, format!("{line}\r").as_bytes());
-            d.run_until_idle(Duration::from_secs(600));
+            let out = send_bytes(&mut d, line);
             prop_assert_eq!(d.mode(), Mode::Idle, "{:?} still running", line);
-            let out = d.take_output();
             prop_assert!(out.starts_with(line.as_bytes()), "{:?} answered {:?}", line, String::from_utf8_lossy(&out));
             prop_assert!(out.ends_with(PROMPT), "{:?} answered {:?}", line, String::from_utf8_lossy(&out));
             prop_assert_eq!(count(&out, PROMPT), 1, "{:?} answered {:?}", line, String::from_utf8_lossy(&out));

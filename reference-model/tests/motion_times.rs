@@ -10,6 +10,8 @@ use std::time::Duration;
 
 use gcl_model::{Device, DeviceConfig, Profile, Scenario};
 
+mod support;
+
 const PROFILES: [&str; 2] = ["bh8-262-4.3", "bh8-262-4.4"];
 
 /// The HCTL-1100 clock of the BH8-262 (1.25 MHz) and the SAMPLE parameter's default (31).
@@ -31,17 +33,14 @@ fn travel_ms(profile: &Profile, counts: f64, units: f64) -> f64 {
 /// A hand whose joints start at `at`, banner taken.
 fn hand(profile: &str, at: [i64; 4]) -> Device {
     let scenario = Scenario { initial_positions: at, ..Scenario::default() };
-    let mut d = Device::new(Profile::builtin(profile).unwrap(), DeviceConfig { scenario, ..DeviceConfig::default() });
-    d.clear_output();
-    d
+    support::hand_with(support::profile(profile), DeviceConfig { scenario, ..DeviceConfig::default() })
 }
 
 /// Sends `line` and runs it to completion; returns how long it took in ms and what it printed.
 fn timed(d: &mut Device, line: &str) -> (f64, String) {
     let start = d.now();
-    d.handle_input(start, format!("{line}\r").as_bytes());
-    let end = d.run_until_idle(Duration::from_secs(600));
-    (end.saturating_sub(start).as_secs_f64() * 1000.0, String::from_utf8_lossy(&d.take_output()).into_owned())
+    let out = support::send(d, line);
+    (d.now().saturating_sub(start).as_secs_f64() * 1000.0, out)
 }
 
 /// `got` is within `frac` of `want` (the acceleration ramp and whole-ms ticks add a little).

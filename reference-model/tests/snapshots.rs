@@ -6,7 +6,9 @@
 use std::time::Duration;
 
 use gcl_model::escape::escape;
-use gcl_model::{Device, DeviceConfig, Profile, Scenario};
+use gcl_model::{Device, DeviceConfig, Scenario};
+
+mod support;
 
 /// A recorded conversation with a hand.
 struct Transcript {
@@ -19,7 +21,7 @@ impl Transcript {
     fn new(profile: &str) -> Transcript {
         let scenario = Scenario { strain_noise: 0, temperature_noise: 0, ..Scenario::default() };
         let config = DeviceConfig { seed: 1, scenario, ..DeviceConfig::default() };
-        let mut device = Device::new(Profile::builtin(profile).unwrap(), config);
+        let mut device = Device::new(support::profile(profile), config);
         let banner = device.take_output();
         let mut t = Transcript { device, lines: Vec::new() };
         t.record(b"", &banner);
@@ -33,10 +35,7 @@ impl Transcript {
 
     /// Sends bytes at the present time and runs any command they start to completion.
     fn send(&mut self, bytes: &[u8]) -> Vec<u8> {
-        let now = self.device.now();
-        self.device.handle_input(now, bytes);
-        self.device.run_until_idle(Duration::from_secs(120));
-        let out = self.device.take_output();
+        let out = support::exchange(&mut self.device, bytes);
         self.record(bytes, &out);
         out
     }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use gcl_model::spec::{ArgRule, PrefixRule};
-use gcl_model::{Device, Profile};
+use gcl_model::{Device, DeviceConfig, Profile};
 use toml::Value;
 
 fn spec_dir() -> PathBuf {
@@ -95,9 +95,7 @@ fn file_profiles() -> Vec<FileProfile> {
 }
 
 fn fresh(profile: &Arc<Profile>) -> Device {
-    let mut d = Device::with_profile(profile.clone());
-    d.clear_output();
-    d
+    support::hand_with(profile.clone(), DeviceConfig::default())
 }
 
 mod support;

@@ -2,13 +2,12 @@
 //! values of a handful of writable motor parameters, their saved copy in EEPROM, and which
 //! motors HI has initialised. Every transition is a command line; after each one the hand's
 //! exact answer must be the one the model predicts.
-
-use std::time::Duration;
-
 use gcl_model::{Device, DeviceConfig, Mode, MotorSet, Profile};
 use proptest::prelude::*;
 use proptest::sample::select;
 use proptest_state_machine::{ReferenceStateMachine, StateMachineTest, prop_state_machine};
+
+mod support;
 
 /// The profiles under test.
 const PROFILES: [&str; 2] = ["seed", "bh8-262"];
@@ -238,18 +237,14 @@ impl StateMachineTest for Sut {
     type Reference = Model;
 
     fn init_test(state: &Hand) -> Sut {
-        let mut device =
-            Device::new(Profile::builtin(state.profile).unwrap(), DeviceConfig { seed: 3, ..DeviceConfig::default() });
-        device.clear_output();
+        let device =
+            support::hand_with(support::profile(state.profile), DeviceConfig { seed: 3, ..DeviceConfig::default() });
         Sut { device, model: state.clone() }
     }
 
     fn apply(mut sut: Sut, after: &Hand, step: Step) -> Sut {
         let want = expected(&sut.model, after, &step);
-        let now = sut.device.now();
-        sut.device.handle_input(now, format!("{}\r", step.line()).as_bytes());
-        sut.device.run_until_idle(Duration::from_secs(600));
-        let got = String::from_utf8_lossy(&sut.device.take_output()).into_owned();
+        let got = support::send(&mut sut.device, &step.line());
         assert_eq!(got, want, "answer to {:?} ({})", step.line(), sut.model.profile);
         sut.model = after.clone();
         sut

@@ -37,7 +37,7 @@ use crate::grammar::{self, Args, Command, Line, ParseOptions};
 use crate::motor::{Motor, MotorSet, PerMotor};
 use crate::params::{NvMemory, ParamStore, Transfer};
 use crate::realtime::{Control, ControlHeader, Feedback, MotorControl, RtFlag, RtLayout};
-use crate::spec::{CommandKind, ParamId, Profile, Role, Scope};
+use crate::spec::{CommandKind, ParamId, Profile, Role, Scope, ValueSource};
 use crate::status::StatusBits;
 
 /// Conditions in and around the hand that the protocol cannot set: objects, temperature,
@@ -154,12 +154,6 @@ struct LoopParams {
     lfdpc: i64,
     uses_gain: bool,
 }
-
-/// The serial rate of a profile without a BAUD parameter: GCL's factory 9600 bit/s.
-const BAUD_WITHOUT_PARAMETER: u32 = 9600;
-
-/// The low-strain stop of a profile without LSG: above any strain byte, so it never trips.
-const LOW_STRAIN_OFF: i64 = 256;
 
 /// One physics tick, in nanoseconds.
 const TICK_NS: u64 = 1_000_000;
@@ -366,7 +360,10 @@ impl Device {
 
     /// The serial rate the hand is set to, in bit/s.
     pub fn baud(&self) -> u32 {
-        self.id(Role::Baud).map_or(BAUD_WITHOUT_PARAMETER, |id| (self.params.get(&self.profile, id, 1) * 100) as u32)
+        match self.profile.hand_sources().baud {
+            ValueSource::Param(id) => (self.params.get(&self.profile, id, 1) * 100) as u32,
+            ValueSource::Fixed(bits_per_s) => bits_per_s as u32,
+        }
     }
 
     /// Present position of a motor (1..=4), rounded.
@@ -390,6 +387,3 @@ impl Device {
         self.refresh_limits();
     }
 }
-
-#[cfg(test)]
-mod tests;

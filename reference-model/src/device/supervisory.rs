@@ -66,6 +66,15 @@ impl Device {
         id.map_or(0, |id| self.behaviour(id, motor))
     }
 
+    /// A behaviour value the profile's `[hand]` table names by source (see
+    /// [`Profile::hand_sources`]).
+    pub(super) fn source(&self, source: ValueSource, motor: Motor) -> i64 {
+        match source {
+            ValueSource::Param(id) => self.behaviour(id, motor),
+            ValueSource::Fixed(v) => v,
+        }
+    }
+
     pub(super) fn behaviour(&self, id: ParamId, motor: Motor) -> i64 {
         if self.ignores(id) {
             self.profile.default_for(id, motor.number())

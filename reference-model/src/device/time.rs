@@ -57,25 +57,21 @@ impl Device {
     pub(super) fn step_limits(&self, m: Motor) -> physics::StepLimits {
         let profile = &self.profile;
         let hand = &profile.hand;
+        let sources = profile.hand_sources();
         let vel_unit = hand.counts_per_ms_per_velocity_unit;
-        let (mcv, mov) = (
-            self.get(self.id(Role::CloseVelocity), m) as f64 * vel_unit,
-            self.get(self.id(Role::OpenVelocity), m) as f64 * vel_unit,
-        );
         physics::StepLimits {
             limit: self.limit(m),
             object: m.pick(&self.scenario.objects).map(|o| (o, hand.object_compliance)),
             accel: self.accel(m),
-            close_speed: mcv,
-            open_speed: mov,
-            init_speed: self.id(Role::InitVelocity).map_or(mov, |id| self.behaviour(id, m) as f64 * vel_unit),
+            close_speed: self.get(self.id(Role::CloseVelocity), m) as f64 * vel_unit,
+            open_speed: self.get(self.id(Role::OpenVelocity), m) as f64 * vel_unit,
+            init_speed: self.source(sources.hi_velocity, m) as f64 * vel_unit,
             tstop_ms: self.get(self.id(Role::StopTime), m).clamp(0, i64::from(u32::MAX)) as u32,
-            settle_ms: hand.hi_settle_ms
-                * self.id(Role::InitHoldTime).map_or(1, |id| self.behaviour(id, m).max(1) as u64),
+            settle_ms: hand.hi_settle_ms * self.source(sources.hi_hold_repetitions, m).max(1) as u64,
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
             high_strain: self.get(self.id(Role::HighStrain), m),
-            low_strain: self.id(Role::LowStrain).map_or(LOW_STRAIN_OFF, |id| self.behaviour(id, m)),
+            low_strain: self.source(sources.low_strain_stop, m),
             breakaway: self.get(self.id(Role::Breakaway), m) != 0,
         }
     }

@@ -3,25 +3,41 @@
 //! hold). Each test file includes it with `mod support;`.
 #![allow(dead_code)]
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::escape::{escape, unescape};
 use gcl_model::{Device, DeviceConfig, Profile};
 
+/// A built-in profile.
+pub fn profile(name: &str) -> Arc<Profile> {
+    Profile::builtin(name).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// A powered-up hand of a built-in profile (noise seed 5), banner taken.
-pub fn hand(profile: &str) -> Device {
-    let p = Profile::builtin(profile).unwrap_or_else(|e| panic!("{e}"));
-    let mut d = Device::new(p, DeviceConfig { seed: 5, ..DeviceConfig::default() });
+pub fn hand(profile_name: &str) -> Device {
+    hand_with(profile(profile_name), DeviceConfig { seed: 5, ..DeviceConfig::default() })
+}
+
+/// A powered-up hand of any profile and conditions, banner taken.
+pub fn hand_with(profile: Arc<Profile>, config: DeviceConfig) -> Device {
+    let mut d = Device::new(profile, config);
     d.clear_output();
     d
 }
 
-/// Sends one line and its CR, runs it to completion, returns the bytes the hand wrote.
-pub fn send_bytes(d: &mut Device, line: &str) -> Vec<u8> {
+/// Sends bytes at the hand's present time, runs any command they start to completion (at
+/// most 600 s of simulated time), returns the bytes the hand wrote.
+pub fn exchange(d: &mut Device, bytes: &[u8]) -> Vec<u8> {
     let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
+    d.handle_input(now, bytes);
     d.run_until_idle(Duration::from_secs(600));
     d.take_output()
+}
+
+/// Sends one line and its CR, runs it to completion, returns the bytes the hand wrote.
+pub fn send_bytes(d: &mut Device, line: &str) -> Vec<u8> {
+    exchange(d, format!("{line}\r").as_bytes())
 }
 
 /// [`send_bytes`] as text (lossy).

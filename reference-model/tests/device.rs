@@ -1,37 +1,34 @@
-use super::*;
+//! The device through its public surface, where a plain line/answer session under
+//! `testdata/sessions/` cannot say it: simulated time, the world around the hand, bytes sent
+//! mid-command, RealTime blocks, faults, events and the ends of time.
 
-fn hand(profile: &str) -> Device {
-    let mut d = Device::with_profile(Profile::builtin(profile).unwrap());
-    d.clear_output();
-    d
-}
+use std::sync::Arc;
+use std::time::Duration;
 
-/// Sends one line, runs it to completion, returns the bytes.
-fn send(d: &mut Device, line: &str) -> String {
-    let now = d.now();
-    d.handle_input(now, format!("{line}\r").as_bytes());
-    d.run_until_idle(Duration::from_secs(120));
-    String::from_utf8_lossy(&d.take_output()).into_owned()
-}
+use gcl_model::device::{FaultSet, MAX_EVENTS};
+use gcl_model::spec::embedded;
+use gcl_model::{Device, DeviceConfig, Event, Fault, Mode, Motor, Profile, StatusBits};
+
+mod support;
+use support::{hand, hand_with, profile, send};
 
 #[test]
 fn banner_at_power_up() {
-    let mut d = Device::with_profile(Profile::builtin("seed").unwrap());
+    let mut d = Device::with_profile(profile("seed"));
     let out = String::from_utf8(d.take_output()).unwrap();
     assert!(out.starts_with("\n\rBarrettHand Firmware"), "{out:?}");
     assert!(out.ends_with("\n\r=> "));
 }
 
+/// The answers of C, O and M are in `testdata/sessions/close-and-open.gcl`; this is the time
+/// they take.
 #[test]
-fn close_and_open_move_the_fingers() {
+fn closing_takes_simulated_time() {
     let mut d = hand("seed");
     send(&mut d, "HI");
     let t0 = d.now();
     assert_eq!(send(&mut d, "123C"), "123C\n\r=> ");
     assert!(d.now() - t0 > Duration::from_secs(1), "closing takes time");
-    assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r17000 17000 17000 0\n\r=> ");
-    send(&mut d, "123O");
-    assert_eq!(send(&mut d, "FGET P"), "FGET P\n\r0 0 0 0\n\r=> ");
     assert_eq!(send(&mut d, "2M 5000"), "2M 5000\n\r=> ");
     assert_eq!(d.position(Motor::F2), 5000);
 }
@@ -96,23 +93,6 @@ fn input_during_motion_waits_its_turn() {
 }
 
 #[test]
-fn persistence() {
-    let mut d = hand("seed");
-    send(&mut d, "FSET DP 5000 BAUD 192");
-    send(&mut d, "FSAVE");
-    send(&mut d, "FSET DP 7000");
-    assert_eq!(send(&mut d, "FGET DP"), "FGET DP\n\r7000 7000 7000 7000\n\r=> ");
-    send(&mut d, "FLOAD");
-    assert_eq!(send(&mut d, "FGET DP BAUD"), "FGET DP BAUD\n\r5000 5000 5000 5000\n\r192 192 192 192\n\r=> ");
-    send(&mut d, "FDEF");
-    assert_eq!(send(&mut d, "1FGET DP"), "1FGET DP\n\r1000\n\r=> ");
-    let out = send(&mut d, "RESET");
-    assert!(out.starts_with("RESET\n\rBarrettHand Firmware"), "{out}");
-    assert_eq!(send(&mut d, "FGET DP BAUD"), "FGET DP BAUD\n\r5000 5000 5000 5000\n\r96 96 96 96\n\r=> ");
-    assert_eq!(send(&mut d, "C"), "C\n\rERR 4\n\r=> ");
-}
-
-#[test]
 fn overlong_line_is_an_error_and_bounded() {
     let mut d = hand("seed");
     let long = "X".repeat(10_000);
@@ -121,6 +101,7 @@ fn overlong_line_is_an_error_and_bounded() {
     assert_eq!(send(&mut d, "FGET MPE"), "FGET MPE\n\r25 25 25 25\n\r=> ");
 }
 
+/// The seed's RealTime example: F1 and F2 with LCV, LFS and LFDP; the spread with LFDP only.
 fn seed_rt(d: &mut Device) {
     send(d, "HI");
     send(d, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
@@ -213,20 +194,20 @@ fn lfdp_worked_example_through_the_device() {
 #[test]
 fn same_inputs_same_bytes() {
     let run = || {
-        let mut d = Device::new(Profile::builtin("bh8-262").unwrap(), DeviceConfig { seed: 7, ..Default::default() });
-        for l in ["HI", "FGET SG", "PGET TEMP", "GC", "FGET P SG", "GO", "PGET TEMP UPSECS"] {
-            send(&mut d, l);
-        }
-        d.take_output()
+        let mut d = hand_with(profile("bh8-262"), DeviceConfig { seed: 7, ..Default::default() });
+        ["HI", "FGET SG", "PGET TEMP", "GC", "FGET P SG", "GO", "PGET TEMP UPSECS"].map(|l| send(&mut d, l))
     };
-    assert_eq!(run(), run());
+    let first = run();
+    assert!(first[1].starts_with("FGET SG\n\r"), "{first:?}");
+    assert_eq!(first, run());
 }
 
 #[test]
 fn faults_change_the_bytes() {
-    let p = Profile::builtin("seed").unwrap();
-    let mut d = Device::new(p, DeviceConfig { faults: vec![Fault::CrLf, Fault::FgetReversed], ..Default::default() });
-    d.clear_output();
+    let mut d = hand_with(
+        profile("seed"),
+        DeviceConfig { faults: vec![Fault::CrLf, Fault::FgetReversed], ..Default::default() },
+    );
     assert_eq!(send(&mut d, "FGET DP"), "FGET DP\r\n150 1000 1000 1000\r\n=> ");
 }
 
@@ -253,7 +234,7 @@ fn the_longest_time_saturates_instead_of_overflowing() {
 
 #[test]
 fn events_report_lines_loops_and_power_ups() {
-    let mut d = Device::with_profile(Profile::builtin("seed").unwrap());
+    let mut d = Device::with_profile(profile("seed"));
     assert_eq!(d.poll_event(), Some(Event::PoweredUp));
     assert_eq!(d.poll_event(), None);
     send(&mut d, "BOGUS");
@@ -281,14 +262,13 @@ fn events_report_lines_loops_and_power_ups() {
 
 #[test]
 fn framing_faults_are_profile_patches() {
-    let p = Profile::builtin("seed").unwrap();
+    let p = profile("seed");
     let faults = vec![Fault::CrLf, Fault::PromptNoSpace, Fault::NoEcho, Fault::FgetReversed];
-    let mut d = Device::new(p.clone(), DeviceConfig { faults, ..Default::default() });
+    let mut d = hand_with(p.clone(), DeviceConfig { faults, ..Default::default() });
     assert_eq!(d.profile().framing.line_ending, "\r\n");
     assert_eq!(d.profile().framing.prompt, "=>");
     assert!(!d.profile().framing.echo);
     assert_eq!(p.framing.line_ending, "\n\r", "the shared profile is untouched");
-    d.clear_output();
     d.handle_input(Duration::ZERO, b"FGET DP\r");
     assert_eq!(d.take_output(), b"\r\n150 1000 1000 1000\r\n=>");
     // No framing fault: the very profile the hand was given.
@@ -304,4 +284,21 @@ fn a_fault_set_holds_what_was_put_in_in_declaration_order() {
     assert_eq!(FaultSet::default().iter().count(), 0);
     let all: FaultSet = Fault::ALL.iter().copied().collect();
     assert_eq!(all.iter().collect::<Vec<_>>(), Fault::ALL.to_vec());
+}
+
+#[test]
+fn the_line_rate_is_read_where_the_profile_says() {
+    let mut d = hand("seed");
+    assert_eq!(d.baud(), 9600);
+    send(&mut d, "FSET BAUD 192");
+    assert_eq!(d.baud(), 19200);
+    // A hand whose `[hand] baud` is a fixed rate keeps it whatever BAUD says.
+    let top = embedded("seed.toml").unwrap().replacen("baud = \"BAUD\"", "baud = 38400", 1);
+    let fixed = Profile::load_with("top.toml", &|f| {
+        if f == "top.toml" { Some(top.clone()) } else { embedded(f).map(str::to_string) }
+    })
+    .unwrap();
+    let mut d = hand_with(Arc::new(fixed), DeviceConfig::default());
+    assert_eq!(send(&mut d, "FSET BAUD 192"), "FSET BAUD 192\n\r=> ");
+    assert_eq!(d.baud(), 38400);
 }
