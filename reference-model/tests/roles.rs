@@ -161,3 +161,31 @@ fn without_bd_and_bp_a_breakaway_still_stops_the_finger_but_is_not_reported() {
     let (answer_without, at_without, _) = run(loaded("bh8-262-4.3.toml", &["BD", "BP"]));
     assert_eq!((answer_without, at_without), (answer, at));
 }
+
+#[test]
+fn spec_readme_table_says_what_each_roles_absence_is() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec/README.md");
+    let readme = std::fs::read_to_string(&path).unwrap();
+    let section = readme.split("## Roles").nth(1).expect("spec/README.md has a Roles section");
+    let mut seen: Vec<Role> = Vec::new();
+    for row in section.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| parameter")) {
+        let cells: Vec<&str> = row.trim_matches('|').split('|').map(str::trim).collect();
+        let [names, absence] = cells[..] else { panic!("row `{row}` needs two cells") };
+        for name in names.split(", ").flat_map(|n| n.split(" or ")) {
+            let role = *Role::ALL.iter().find(|r| r.names().contains(&name)).unwrap_or_else(|| panic!("{name}: no role"));
+            let says = match role.absence() {
+                Absence::Required => absence == "required",
+                Absence::RequiredWith(_) => absence.starts_with("required with"),
+                Absence::Value(v) => absence.starts_with(&format!("reads as {v}:")),
+                Absence::HandCloseTargets => absence.starts_with("`[hand]`"),
+                Absence::Unreported => absence.starts_with("not reported"),
+            };
+            assert!(says, "spec/README.md says {name} absent is `{absence}`, the code {:?}", role.absence());
+            if !seen.contains(&role) {
+                seen.push(role);
+            }
+        }
+    }
+    let missing: Vec<&Role> = Role::ALL.iter().filter(|r| !seen.contains(r)).collect();
+    assert!(missing.is_empty(), "roles spec/README.md does not list: {missing:?}");
+}
