@@ -1147,9 +1147,7 @@ impl Profile {
             let needed = match r.absence() {
                 Absence::Required => true,
                 Absence::RequiredWith(flag) => rt_slots.iter().any(|s| s.flag == flag),
-                Absence::HandCloseTargets => {
-                    hand.finger_close_target.is_none() || hand.spread_close_target.is_none()
-                }
+                Absence::HandCloseTargets => hand.finger_close_target.is_none() || hand.spread_close_target.is_none(),
                 Absence::Value(_) | Absence::Unreported => false,
             };
             if param.is_none() && needed {

@@ -13,7 +13,9 @@ use support::{hand_with, send};
 
 /// Loads `top` as the top file of a profile; includes resolve to the embedded spec files.
 fn load(top: &str) -> Result<Profile, SpecError> {
-    Profile::load_with("top.toml", &|f| if f == "top.toml" { Some(top.to_string()) } else { embedded(f).map(str::to_string) })
+    Profile::load_with("top.toml", &|f| {
+        if f == "top.toml" { Some(top.to_string()) } else { embedded(f).map(str::to_string) }
+    })
 }
 
 /// `base` (a built-in top file) as profile `x` without the parameters `removed`.
@@ -172,7 +174,8 @@ fn spec_readme_table_says_what_each_roles_absence_is() {
         let cells: Vec<&str> = row.trim_matches('|').split('|').map(str::trim).collect();
         let [names, absence] = cells[..] else { panic!("row `{row}` needs two cells") };
         for name in names.split(", ").flat_map(|n| n.split(" or ")) {
-            let role = *Role::ALL.iter().find(|r| r.names().contains(&name)).unwrap_or_else(|| panic!("{name}: no role"));
+            let role =
+                *Role::ALL.iter().find(|r| r.names().contains(&name)).unwrap_or_else(|| panic!("{name}: no role"));
             let says = match role.absence() {
                 Absence::Required => absence == "required",
                 Absence::RequiredWith(_) => absence.starts_with("required with"),

@@ -405,13 +405,8 @@ impl Device {
             let p = self.motors[m].pos;
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
-                CommandKind::Close => Goal::Position {
-                    target: self.role(Role::CloseTarget, m) as f64,
-                    stall_ms: 0,
-                },
-                CommandKind::Open => {
-                    Goal::Position { target: self.role(Role::OpenTarget, m) as f64, stall_ms: 0 }
-                }
+                CommandKind::Close => Goal::Position { target: self.role(Role::CloseTarget, m) as f64, stall_ms: 0 },
+                CommandKind::Open => Goal::Position { target: self.role(Role::OpenTarget, m) as f64, stall_ms: 0 },
                 CommandKind::Move => Goal::Position {
                     target: arg.unwrap_or_else(|| self.role(Role::DefaultPosition, m)) as f64,
                     stall_ms: 0,
