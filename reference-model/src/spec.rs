@@ -734,7 +734,8 @@ roles! {
     /// DS: default step of IC/IO.
     DefaultStep => ["DS"], absent: Absence::Required, "IC and IO without an argument have no step",
     /// CT: close target.
-    CloseTarget => ["CT"], absent: Absence::HandCloseTargets, "C closes to fixed targets (decision seed-close-open-targets)",
+    CloseTarget => ["CT"], absent: Absence::HandCloseTargets,
+        "C closes to [hand] finger_close_target and spread_close_target, both needed then",
     /// OT: open target.
     OpenTarget => ["OT"], absent: Absence::Value(0), "O opens to 0, the open stop HI finds (decision seed-close-open-targets)",
     /// MCV: maximum close velocity.
