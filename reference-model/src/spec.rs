@@ -74,6 +74,16 @@ pub enum SpecError {
         /// The parameter name it gives.
         param: String,
     },
+    /// The profile lacks a parameter whose role it cannot do without (see [`Absence`]).
+    #[error("profile `{profile}` lacks parameter {names} ({role:?}): {why}", names = names.join(" or "), why = role.absence_reason())]
+    MissingRole {
+        /// The profile being resolved.
+        profile: String,
+        /// The role no parameter plays.
+        role: Role,
+        /// The names that would take the role.
+        names: &'static [&'static str],
+    },
     /// A RealTime flag's field does not have a GCL field type, block or scope.
     #[error("profile `{profile}`: RealTime flag `{param}`: {message}")]
     RtField {
@@ -641,11 +651,32 @@ pub struct RtSlot {
     pub ty: FieldType,
 }
 
+/// What a profile without a role's parameter means. Each [`Role`] declares one, with its
+/// reason, in the `roles!` table; the loader checks it (see [`SpecError::MissingRole`]) and
+/// the device applies it in one place, so no reader invents a default of its own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Absence {
+    /// The hand cannot do its job without it: a profile that lacks it does not load.
+    Required,
+    /// Required when the profile has this RealTime flag, whose field is the parameter's only
+    /// reader; without the flag nothing reads it.
+    RequiredWith(RtFlag),
+    /// The hand behaves as if the parameter held this value on every motor.
+    Value(i64),
+    /// C closes to `[hand]` `finger_close_target` / `spread_close_target`; a profile without
+    /// the parameter needs both.
+    HandCloseTargets,
+    /// A quantity the hand keeps for itself and reports only through this parameter: without
+    /// it nothing reads it back and what the hand would record there is dropped.
+    Unreported,
+}
+
 macro_rules! roles {
-    ($( $(#[doc = $doc:literal])* $variant:ident => [$($name:literal),+], )*) => {
+    ($( $(#[doc = $doc:literal])* $variant:ident => [$($name:literal),+], absent: $absent:expr, $why:literal, )*) => {
         /// What the device does with a parameter beyond storing it: the parameters the
         /// hand's behaviour reads or that read back its state. Resolved by name when a
-        /// profile loads (see [`Profile::role`]); a profile may lack any of them.
+        /// profile loads (see [`Profile::role`]); what a profile without one means is the
+        /// role's [`Role::absence`], checked at load.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Role {
             $( $(#[doc = $doc])* $variant, )*
@@ -659,71 +690,86 @@ macro_rules! roles {
             pub fn names(self) -> &'static [&'static str] {
                 match self { $(Role::$variant => &[$($name),+],)* }
             }
+
+            /// What a profile without this role's parameter means.
+            pub fn absence(self) -> Absence {
+                match self { $(Role::$variant => $absent,)* }
+            }
+
+            /// Why the absence means what [`Role::absence`] says.
+            pub fn absence_reason(self) -> &'static str {
+                match self { $(Role::$variant => $why,)* }
+            }
         }
     };
 }
 
 roles! {
     /// P: present position (live).
-    Position => ["P"],
+    Position => ["P"], absent: Absence::Required,
+        "a host sees where a motor stopped only through P (LFAP exists only inside the RealTime loop)",
     /// S: motor state (live).
-    State => ["S"],
+    State => ["S"], absent: Absence::Unreported, "the hand still tracks initialisation; nothing reads it back",
     /// SG: strain gauge (live).
-    Strain => ["SG"],
+    Strain => ["SG"], absent: Absence::Unreported, "the hand still senses strain (HSG, LFS); nothing reads it back",
     /// TEMP: board temperature (live).
-    Temperature => ["TEMP"],
+    Temperature => ["TEMP"], absent: Absence::Unreported, "the hand still heats (OTEMP, LFT); nothing reads it back",
     /// PTEMP: peak temperature (kept by the hand).
-    PeakTemperature => ["PTEMP"],
+    PeakTemperature => ["PTEMP"], absent: Absence::Unreported, "the seed's hand keeps no record a host can read",
     /// UPSECS: powered seconds (kept by the hand).
-    UpSeconds => ["UPSECS"],
+    UpSeconds => ["UPSECS"], absent: Absence::Unreported, "the seed's hand keeps no record a host can read",
     /// SN: serial number (kept by the hand).
-    SerialNumber => ["SN"],
+    SerialNumber => ["SN"], absent: Absence::Unreported, "the seed's hand keeps no record a host can read",
     /// OD: odometer (kept by the hand).
-    Odometer => ["OD"],
+    Odometer => ["OD"], absent: Absence::Unreported, "the seed's hand keeps no record a host can read",
     /// BD: breakaway detected.
-    BreakawayDetected => ["BD"],
+    BreakawayDetected => ["BD"], absent: Absence::Unreported, "a breakaway (if BS is on) is not reported",
     /// BP: breakaway position.
-    BreakawayPosition => ["BP"],
+    BreakawayPosition => ["BP"], absent: Absence::RequiredWith(RtFlag::Lfbp),
+        "the LFBP feedback field reports it; without LFBP a breakaway position is not reported",
     /// EN: motor enabled for unprefixed motion.
-    Enabled => ["EN"],
+    Enabled => ["EN"], absent: Absence::Value(1), "every motor takes unprefixed motion commands",
     /// DP: default position of M.
-    DefaultPosition => ["DP"],
+    DefaultPosition => ["DP"], absent: Absence::Required, "M without an argument has no target",
     /// DS: default step of IC/IO.
-    DefaultStep => ["DS"],
+    DefaultStep => ["DS"], absent: Absence::Required, "IC and IO without an argument have no step",
     /// CT: close target.
-    CloseTarget => ["CT"],
+    CloseTarget => ["CT"], absent: Absence::HandCloseTargets,
+        "C closes to [hand] finger_close_target and spread_close_target, both needed then",
     /// OT: open target.
-    OpenTarget => ["OT"],
+    OpenTarget => ["OT"], absent: Absence::Value(0), "O opens to 0, the open stop HI finds (decision seed-close-open-targets)",
     /// MCV: maximum close velocity.
-    CloseVelocity => ["MCV"],
+    CloseVelocity => ["MCV"], absent: Absence::Required, "C and TC have no speed",
     /// MOV: maximum open velocity.
-    OpenVelocity => ["MOV"],
+    OpenVelocity => ["MOV"], absent: Absence::Required, "O and TO have no speed",
     /// ACCEL: acceleration.
-    Acceleration => ["ACCEL"],
+    Acceleration => ["ACCEL"], absent: Absence::Required, "no move can ramp up",
     /// MPE: maximum position error of a move.
-    PositionError => ["MPE"],
+    PositionError => ["MPE"], absent: Absence::Required, "no move can say whether it missed its target",
     /// TSTOP: stall time that ends a move.
-    StopTime => ["TSTOP"],
+    StopTime => ["TSTOP"], absent: Absence::Required, "a stalled move never ends",
     /// HOLD: keep power after a move.
-    Hold => ["HOLD"],
+    Hold => ["HOLD"], absent: Absence::Value(0), "the motors are not held: power drops when a move ends",
     /// HSG (MSG in the seed): high strain that stops a close.
-    HighStrain => ["HSG", "MSG"],
+    HighStrain => ["HSG", "MSG"], absent: Absence::Required, "a close against an object never stops on strain",
     /// BS: breakaway on.
-    Breakaway => ["BS"],
+    Breakaway => ["BS"], absent: Absence::Value(0), "no breakaway: a finger that meets an object stops there",
     /// SGFLIP: strain reading mirrored.
-    StrainFlip => ["SGFLIP"],
+    StrainFlip => ["SGFLIP"], absent: Absence::Value(0), "strain reads unmirrored",
     /// OTEMP: overtemperature threshold.
-    OverTemperature => ["OTEMP"],
+    OverTemperature => ["OTEMP"], absent: Absence::Value(0), "no overtemperature refusal (OTEMP 0 turns it off)",
     /// LCVC: LCV coefficient.
-    VelocityCoefficient => ["LCVC"],
+    VelocityCoefficient => ["LCVC"], absent: Absence::RequiredWith(RtFlag::Lcv), "an LCV datum has no scale",
     /// LFVC: LFV coefficient.
-    FeedbackVelocityCoefficient => ["LFVC"],
+    FeedbackVelocityCoefficient => ["LFVC"], absent: Absence::RequiredWith(RtFlag::Lfv),
+        "an LFV value has no scale",
     /// LFDPC: LFDP coefficient.
-    DeltaCoefficient => ["LFDPC"],
+    DeltaCoefficient => ["LFDPC"], absent: Absence::RequiredWith(RtFlag::Lfdp), "an LFDP value has no scale",
     /// LFDPD: LFDP discards the clipped rest.
-    DeltaDiscard => ["LFDPD"],
+    DeltaDiscard => ["LFDPD"], absent: Absence::Value(0),
+        "LFDP carries the clipped rest into later blocks, as LFDPD 0 does in bh8-262",
     /// LCPG: the control-gain flag (read when control data arrives).
-    ControlGain => ["LCPG"],
+    ControlGain => ["LCPG"], absent: Absence::Value(0), "control blocks carry no gain",
 }
 
 /// Index of a command in [`Profile::commands`].
@@ -1063,13 +1109,6 @@ impl Profile {
         let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
         by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
         let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
-        if !f.params.iter().any(|p| Role::CloseTarget.names().contains(&p.name.as_str()))
-            && (hand.finger_close_target.is_none() || hand.spread_close_target.is_none())
-        {
-            return Err(invalid(
-                "without a CT parameter, [hand] needs finger_close_target and spread_close_target".into(),
-            ));
-        }
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
         }
@@ -1104,6 +1143,18 @@ impl Profile {
             .iter()
             .map(|r| r.names().iter().find_map(|n| find(n)).map(|i| ParamId(i as u16)))
             .collect::<Vec<Option<ParamId>>>();
+        // Each role's absence, checked once here so that the device can rely on it.
+        for (r, param) in Role::ALL.iter().zip(&roles) {
+            let needed = match r.absence() {
+                Absence::Required => true,
+                Absence::RequiredWith(flag) => rt_slots.iter().any(|s| s.flag == flag),
+                Absence::HandCloseTargets => hand.finger_close_target.is_none() || hand.spread_close_target.is_none(),
+                Absence::Value(_) | Absence::Unreported => false,
+            };
+            if param.is_none() && needed {
+                return Err(SpecError::MissingRole { profile: id.clone(), role: *r, names: r.names() });
+            }
+        }
         let source = |key: &'static str, v: &HandValue| match v {
             HandValue::Fixed(v) => Ok(ValueSource::Fixed(*v)),
             HandValue::Param(name) => find(name)
@@ -1147,6 +1198,19 @@ impl Profile {
     /// The parameter that plays `role` in this profile, if it has one.
     pub fn role(&self, role: Role) -> Option<ParamId> {
         self.roles.get(role as usize).copied().flatten()
+    }
+
+    /// What the hand reads for `role` on `motor` when this profile lacks its
+    /// parameter: the role's [`Absence`] resolved against the profile. `None` when nothing
+    /// may read it: a required role is present in every loaded profile, one required with a
+    /// RealTime flag is read only by that flag's field, and an unreported one is never read.
+    pub fn absent_value(&self, role: Role, motor: crate::motor::Motor) -> Option<i64> {
+        match role.absence() {
+            Absence::Value(v) => Some(v),
+            Absence::HandCloseTargets if motor == crate::motor::Motor::SPREAD => self.hand.spread_close_target,
+            Absence::HandCloseTargets => self.hand.finger_close_target,
+            Absence::Required | Absence::RequiredWith(_) | Absence::Unreported => None,
+        }
     }
 
     /// Where the hand reads the behaviour values its `[hand]` table names by source: HI's

@@ -24,12 +24,12 @@ impl Device {
         self.out.push(crate::realtime::FEEDBACK_HEADER);
         self.last_status = StatusBits::empty();
         let params = PerMotor(Motor::ALL.map(|m| LoopParams {
-            lcvc: self.get(self.id(Role::VelocityCoefficient), m),
-            lfvc: self.get(self.id(Role::FeedbackVelocityCoefficient), m),
-            lfdpc: self.get(self.id(Role::DeltaCoefficient), m),
-            uses_gain: self.id(Role::ControlGain).is_some_and(|id| self.behaviour(id, m) != 0),
+            lcvc: self.role(Role::VelocityCoefficient, m),
+            lfvc: self.role(Role::FeedbackVelocityCoefficient, m),
+            lfdpc: self.role(Role::DeltaCoefficient, m),
+            uses_gain: self.role(Role::ControlGain, m) != 0,
         }));
-        let discard = self.get(self.id(Role::DeltaDiscard), Motor::F1) != 0;
+        let discard = self.role(Role::DeltaDiscard, Motor::F1) != 0;
         let data = Vec::with_capacity(16);
         self.state = State::Loop(Box::new(LoopState { layout, pending: None, data, params, discard }));
         self.push_event(Event::LoopEntered);
@@ -161,7 +161,7 @@ impl Device {
                     self.motors[m].reported = Some(r);
                     q
                 }
-                RtFlag::Lfbp => self.get(self.id(Role::BreakawayPosition), m),
+                RtFlag::Lfbp => self.role(Role::BreakawayPosition, m),
                 RtFlag::Lfain => *m.pick(&self.scenario.analog_input),
                 RtFlag::Lft => {
                     let t = self.temperature();

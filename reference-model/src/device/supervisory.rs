@@ -52,18 +52,19 @@ impl Device {
     }
 
     pub(super) fn enabled_motors(&self) -> MotorSet {
-        match self.id(Role::Enabled) {
-            Some(en) => {
-                MotorSet::from_motors(Motor::ALL.into_iter().filter(|m| self.behaviour(en, *m) != 0).map(Motor::number))
-            }
-            None => MotorSet::ALL,
-        }
+        MotorSet::from_motors(Motor::ALL.into_iter().filter(|m| self.role(Role::Enabled, *m) != 0).map(Motor::number))
     }
 
-    /// The value a parameter has for the hand's behaviour (not for FGET): what was set, or
-    /// its factory value when a `*-ignored` fault makes the hand ignore it.
-    pub(super) fn get(&self, id: Option<ParamId>, motor: Motor) -> i64 {
-        id.map_or(0, |id| self.behaviour(id, motor))
+    /// The value the hand's behaviour (not FGET) reads for `role` on `motor`: its parameter's
+    /// (see [`Device::behaviour`]) or, in a profile without one, what the role declares its
+    /// absence means ([`Profile::absent_value`]). The loader has checked that a role without
+    /// an absent value is present wherever something reads it, so the last arm is only
+    /// reached for a value nobody uses (a RealTime coefficient of a flag the profile lacks).
+    pub(super) fn role(&self, role: Role, motor: Motor) -> i64 {
+        match self.profile.role(role) {
+            Some(id) => self.behaviour(id, motor),
+            None => self.profile.absent_value(role, motor).unwrap_or_default(),
+        }
     }
 
     /// A behaviour value the profile's `[hand]` table names by source (see
@@ -106,8 +107,10 @@ impl Device {
         std::borrow::Cow::Owned(store)
     }
 
-    pub(super) fn set_live(&mut self, id: Option<ParamId>, motor: Motor, v: i64) {
-        if let Some(id) = id {
+    /// Records a value the hand keeps in `role`'s parameter; a profile without one does not
+    /// report it ([`Absence::Unreported`](crate::spec::Absence::Unreported)).
+    pub(super) fn set_live(&mut self, role: Role, motor: Motor, v: i64) {
+        if let Some(id) = self.id(role) {
             let profile = self.profile.clone();
             self.params.set_unchecked(&profile, id, MotorSet::from(motor), v);
         }
@@ -118,7 +121,7 @@ impl Device {
     }
 
     pub(super) fn accel(&self, m: Motor) -> f64 {
-        let a = self.get(self.id(Role::Acceleration), m).max(1) as f64;
+        let a = self.role(Role::Acceleration, m).max(1) as f64;
         a * self.profile.hand.velocity_units_per_ms_per_accel * self.profile.hand.counts_per_ms_per_velocity_unit
     }
 
@@ -144,7 +147,7 @@ impl Device {
         let raw = self.motors[m].strain(*m.pick(&self.scenario.objects), hand.free_strain, hand.strain_per_count);
         let n = self.scenario.strain_noise;
         let v = (raw + self.noise(n)).clamp(0, 255);
-        if self.get(self.id(Role::StrainFlip), m) != 0 { 255 - v } else { v }
+        if self.role(Role::StrainFlip, m) != 0 { 255 - v } else { v }
     }
 
     /// The value FGET/PGET prints for a parameter and motor.
@@ -375,7 +378,7 @@ impl Device {
 
     pub(super) fn overtemperature(&mut self) -> bool {
         let hand_status = self.profile.hand.overtemp_status;
-        let otemp = self.get(self.id(Role::OverTemperature), Motor::F1);
+        let otemp = self.role(Role::OverTemperature, Motor::F1);
         hand_status != 0 && otemp != 0 && self.temperature() > otemp
     }
 
@@ -400,40 +403,29 @@ impl Device {
         };
         for m in motors.motors() {
             let p = self.motors[m].pos;
-            // The loader requires both targets of a profile without CT.
-            let finger_ct = hand.finger_close_target.unwrap_or_default();
-            let spread_ct = hand.spread_close_target.unwrap_or_default();
             let goal = match kind {
                 CommandKind::Initialize => Goal::Initialize { settled_ms: 0, stall_ms: 0 },
-                CommandKind::Close => Goal::Position {
-                    target: self
-                        .id(Role::CloseTarget)
-                        .map_or(if m == Motor::SPREAD { spread_ct } else { finger_ct }, |id| self.behaviour(id, m))
-                        as f64,
-                    stall_ms: 0,
-                },
-                CommandKind::Open => {
-                    Goal::Position { target: self.get(self.id(Role::OpenTarget), m) as f64, stall_ms: 0 }
-                }
+                CommandKind::Close => Goal::Position { target: self.role(Role::CloseTarget, m) as f64, stall_ms: 0 },
+                CommandKind::Open => Goal::Position { target: self.role(Role::OpenTarget, m) as f64, stall_ms: 0 },
                 CommandKind::Move => Goal::Position {
-                    target: arg.unwrap_or_else(|| self.get(self.id(Role::DefaultPosition), m)) as f64,
+                    target: arg.unwrap_or_else(|| self.role(Role::DefaultPosition, m)) as f64,
                     stall_ms: 0,
                 },
                 CommandKind::Home => Goal::Position { target: 0.0, stall_ms: 0 },
                 CommandKind::IncrementalClose => Goal::Position {
-                    target: p.round() + arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
+                    target: p.round() + arg.unwrap_or_else(|| self.role(Role::DefaultStep, m)) as f64,
                     stall_ms: 0,
                 },
                 CommandKind::IncrementalOpen => Goal::Position {
-                    target: p.round() - arg.unwrap_or_else(|| self.get(self.id(Role::DefaultStep), m)) as f64,
+                    target: p.round() - arg.unwrap_or_else(|| self.role(Role::DefaultStep, m)) as f64,
                     stall_ms: 0,
                 },
                 CommandKind::TorqueClose => Goal::Velocity { direction: 1.0, stall_ms: 0 },
                 _ => Goal::Velocity { direction: -1.0, stall_ms: 0 },
             };
             if matches!(kind, CommandKind::Open | CommandKind::TorqueOpen) {
-                self.set_live(self.id(Role::BreakawayDetected), m, 0);
-                self.set_live(self.id(Role::BreakawayPosition), m, 0);
+                self.set_live(Role::BreakawayDetected, m, 0);
+                self.set_live(Role::BreakawayPosition, m, 0);
             }
             let motor = &mut self.motors[m];
             motor.goal = Some(goal);
@@ -459,7 +451,7 @@ impl Device {
         for m in Motor::ALL {
             if self.motors[m].goal.take().is_some() {
                 self.motors[m].velocity = 0.0;
-                self.motors[m].powered = self.get(self.id(Role::Hold), m) != 0;
+                self.motors[m].powered = self.role(Role::Hold, m) != 0;
             }
         }
         self.state = State::Idle;

@@ -63,16 +63,16 @@ impl Device {
             limit: self.limit(m),
             object: m.pick(&self.scenario.objects).map(|o| (o, hand.object_compliance)),
             accel: self.accel(m),
-            close_speed: self.get(self.id(Role::CloseVelocity), m) as f64 * vel_unit,
-            open_speed: self.get(self.id(Role::OpenVelocity), m) as f64 * vel_unit,
+            close_speed: self.role(Role::CloseVelocity, m) as f64 * vel_unit,
+            open_speed: self.role(Role::OpenVelocity, m) as f64 * vel_unit,
             init_speed: self.source(sources.hi_velocity, m) as f64 * vel_unit,
-            tstop_ms: self.get(self.id(Role::StopTime), m).clamp(0, i64::from(u32::MAX)) as u32,
+            tstop_ms: self.role(Role::StopTime, m).clamp(0, i64::from(u32::MAX)) as u32,
             settle_ms: hand.hi_settle_ms * self.source(sources.hi_hold_repetitions, m).max(1) as u64,
             free_strain: hand.free_strain,
             strain_per_count: hand.strain_per_count,
-            high_strain: self.get(self.id(Role::HighStrain), m),
+            high_strain: self.role(Role::HighStrain, m),
             low_strain: self.source(sources.low_strain_stop, m),
-            breakaway: self.get(self.id(Role::Breakaway), m) != 0,
+            breakaway: self.role(Role::Breakaway, m) != 0,
         }
     }
 
@@ -107,7 +107,7 @@ impl Device {
     }
 
     pub(super) fn terminate_motor(&mut self, m: Motor, t: Termination) {
-        let hold = self.get(self.id(Role::Hold), m) != 0;
+        let hold = self.role(Role::Hold, m) != 0;
         let goal = self.motors[m].goal.take();
         self.motors[m].velocity = 0.0;
         self.motors[m].powered = hold;
@@ -123,10 +123,10 @@ impl Device {
         }
         if t == Termination::Breakaway {
             let at = self.motors[m].position();
-            self.set_live(self.id(Role::BreakawayDetected), m, 1);
-            self.set_live(self.id(Role::BreakawayPosition), m, at);
+            self.set_live(Role::BreakawayDetected, m, 1);
+            self.set_live(Role::BreakawayPosition, m, at);
         }
-        let mpe = self.get(self.id(Role::PositionError), m);
+        let mpe = self.role(Role::PositionError, m);
         let missed = StatusBits::from_bits_truncate(self.profile.hand.missed_position_status);
         let position = self.motors[m].position();
         let ignore_mpe = self.has(Fault::MpeIgnored);
@@ -144,8 +144,8 @@ impl Device {
         if task.kind == CommandKind::Initialize {
             for m in task.motors.motors() {
                 self.motors[m].reported = None;
-                self.set_live(self.id(Role::BreakawayDetected), m, 0);
-                self.set_live(self.id(Role::BreakawayPosition), m, 0);
+                self.set_live(Role::BreakawayDetected, m, 0);
+                self.set_live(Role::BreakawayPosition, m, 0);
             }
         }
         self.end_line(task.status);
