@@ -130,10 +130,12 @@ impl Gen {
     fn close_target(&self, motor: u8) -> i64 {
         if self.has_param("CT") {
             self.default("CT", motor)
-        } else if motor == 4 {
-            self.p.hand.spread_close_target.unwrap_or(self.p.hand.spread_limit)
         } else {
-            self.p.hand.finger_close_target.unwrap_or(self.p.hand.finger_limit)
+            // Where C goes without a CT parameter is the role's declared absence (the
+            // `[hand]` targets); a profile that has neither does not load.
+            gcl_model::Motor::new(motor)
+                .and_then(|m| self.p.absent_value(gcl_model::spec::Role::CloseTarget, m))
+                .unwrap_or_default()
         }
     }
 
