@@ -152,8 +152,13 @@ struct PtySim(Child);
 
 impl PtySim {
     fn start(faults: &[&str]) -> (PtySim, Target) {
+        PtySim::start_timed("fast", faults)
+    }
+
+    /// As [`PtySim::start`] with the sim's `--time` (`fast` or `real`).
+    fn start_timed(time: &str, faults: &[&str]) -> (PtySim, Target) {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
-        cmd.args(["sim", "--pty", "--time", "fast", "--baud", "38400"]);
+        cmd.args(["sim", "--pty", "--time", time, "--baud", "38400"]);
         for f in faults {
             cmd.args(["--fault", f]);
         }
@@ -187,6 +192,36 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
         s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
     );
     assert_eq!(s.runs, 40);
+}
+
+/// A sim whose motion ends at once (`--time fast`) would make every ^C mid-motion a false
+/// finding: with abort timing allowed the campaign refuses it at the start (exit 2, a message
+/// naming `--no abort-timing`); with `--no abort-timing` it runs and finds nothing.
+#[test]
+fn a_sim_in_fast_time_is_refused_unless_abort_timing_is_off() {
+    let (_sim, t) = PtySim::start(&[]);
+    let target = t.to_string();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let out = Command::new(gcl).args(["fuzz", "device", "--target", &target, "--runs", "5", "-q"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("motions end at once") && err.contains("--no abort-timing"), "{err}");
+    assert!(out.stdout.is_empty(), "no campaign ran: {}", String::from_utf8_lossy(&out.stdout));
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &target, "--runs", "5", "-q", "--no", "abort-timing"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("5 runs"));
+}
+
+/// The same sim in real time moves as the model's hand does: the check lets it through.
+#[test]
+fn a_sim_in_real_time_passes_the_real_time_check() {
+    let (_sim, t) = PtySim::start_timed("real", &[]);
+    let o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    assert!(o.allowed.abort_timing);
+    gcl_harness::fuzz::device::check_real_time(&o).unwrap();
 }
 
 /// A failure of a quick run is run again thoroughly and reported: the minimized transcript

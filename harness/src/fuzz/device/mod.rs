@@ -147,6 +147,22 @@ pub enum FuzzError {
     /// The hand vanished and did not come back.
     #[error("the hand vanished and could not be reopened: {0}")]
     Vanished(String),
+    /// The target's motions end far sooner than a hand's (a simulator whose time follows the
+    /// wire, such as `gcl sim --time fast`): ^C cannot land mid-motion there, so every ^C
+    /// mid-motion would be a false finding.
+    #[error(
+        "the target's motions end at once: `{command}` from the home position took {took_ms} ms, \
+         where the model's hand takes {model_ms} ms (a simulator with `--time fast`?); ^C cannot \
+         land mid-motion on it, so run with `--no abort-timing`"
+    )]
+    NotRealTime {
+        /// The motion command of the probe.
+        command: String,
+        /// How long the target took for it, bytes included.
+        took_ms: u64,
+        /// How long the model's hand moves for it, bytes aside.
+        model_ms: u64,
+    },
 }
 
 /// Where a finding parts from the model: the command being answered and the kind of
@@ -212,6 +228,11 @@ pub struct FuzzSummary {
     pub eeprom_writes: u64,
     /// Bytes on the wire in both directions during the cases (drains and minimization aside).
     pub wire_bytes: u64,
+    /// The part of `wire_bytes` sent to the hand (the rest came from it: echoes, answers,
+    /// prompts, banners).
+    pub bytes_sent: u64,
+    /// Lines (CRs) sent during the cases, counted as `wire_bytes` is.
+    pub lines_sent: u64,
     /// Wall time of the run.
     pub elapsed: Duration,
     /// Time spent minimizing (part of `elapsed`).
@@ -221,8 +242,13 @@ pub struct FuzzSummary {
 impl FuzzSummary {
     /// Cases per second of wall time, minimization excluded.
     pub fn cases_per_second(&self) -> f64 {
+        self.per_second(self.runs)
+    }
+
+    /// A count per second of wall time, minimization excluded (as the counts are).
+    pub fn per_second(&self, n: u64) -> f64 {
         let t = self.elapsed.saturating_sub(self.minimizing).as_secs_f64();
-        if t > 0.0 { self.runs as f64 / t } else { 0.0 }
+        if t > 0.0 { n as f64 / t } else { 0.0 }
     }
 }
 
@@ -252,6 +278,8 @@ struct Shared {
     seen: BTreeSet<FindingSignature>,
     dropped: u64,
     wire_bytes: u64,
+    bytes_sent: u64,
+    lines_sent: u64,
     minimizing: Duration,
     error: Option<FuzzError>,
 }
@@ -439,8 +467,51 @@ pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<Fin
     Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
 }
 
+/// A target whose motion takes under this share of the model's time does not move in real time.
+const REAL_TIME_SHARE: u32 = 4;
+
+/// Before a campaign that lands ^C mid-motion on a hand outside this process: closes the
+/// hand from its home position once and compares the time the target took with the model's.
+/// A target that took under a quarter of it (a simulator whose motion ends at once) is
+/// refused with [`FuzzError::NotRealTime`]: its answers to ^C mid-motion are right for it
+/// and wrong for the model, so every such case would be a false finding. A slow or loaded
+/// target only takes longer, never shorter. A probe that does not pass decides nothing (the
+/// campaign finds why).
+pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
+    if !(opts.wide() && opts.allowed.motion && opts.allowed.abort_timing) {
+        return Ok(());
+    }
+    let p = &opts.profile;
+    let Some(close) = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close) else {
+        return Ok(());
+    };
+    let line = close.name.clone();
+    let Ok(built) = build_case(p, &[HostAction::Line(line.clone())], "probe", "real-time probe", true, true) else {
+        return Ok(());
+    };
+    let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
+    let Some(pred) = deadline::predict(&case, p) else { return Ok(()) };
+    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let out = hand.run(&built.transcript, true)?;
+    let sent = format!("{line}{}", p.framing.terminator as char);
+    let done = out.failed_step().unwrap_or(usize::MAX);
+    let Some(e) = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes()) else {
+        return Ok(());
+    };
+    let model = pred.get(e.step).map_or(Duration::ZERO, |s| s.busy());
+    if model > deadline::BUSY && e.took < model / REAL_TIME_SHARE {
+        return Err(FuzzError::NotRealTime {
+            command: line,
+            took_ms: e.took.as_millis() as u64,
+            model_ms: model.as_millis() as u64,
+        });
+    }
+    Ok(())
+}
+
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
+    check_real_time(opts)?;
     let start = Instant::now();
     let mut corpus = Vec::new();
     if let Some(dir) = &opts.corpus {
@@ -459,6 +530,8 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         seen: BTreeSet::new(),
         dropped: 0,
         wire_bytes: 0,
+        bytes_sent: 0,
+        lines_sent: 0,
         minimizing: Duration::ZERO,
         error: None,
     });
@@ -493,6 +566,8 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         corpus: sh.corpus.len(),
         eeprom_writes: writes.load(Ordering::SeqCst),
         wire_bytes: sh.wire_bytes,
+        bytes_sent: sh.bytes_sent,
+        lines_sent: sh.lines_sent,
         elapsed: start.elapsed(),
         minimizing: sh.minimizing,
     })
@@ -601,7 +676,11 @@ fn worker(
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
-            sh.wire_bytes += outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum::<u64>();
+            for e in outcome.exchange() {
+                sh.wire_bytes += (e.sent.len() + e.received.len()) as u64;
+                sh.bytes_sent += e.sent.len() as u64;
+                sh.lines_sent += e.sent.iter().filter(|&&b| b == b'\r').count() as u64;
+            }
             let new_cov = !built.features.is_subset(&sh.features);
             if new_cov {
                 sh.features.extend(built.features.iter().cloned());
