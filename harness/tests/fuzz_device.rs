@@ -194,6 +194,29 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
     assert_eq!(s.runs, 40);
 }
 
+/// A hand that says more after a case's last answer (a second prompt for an empty line): on
+/// a kept link the case passes its quick run, the bytes meet the next case's start, and the
+/// case before is judged again thoroughly and reported; its minimized transcript fails on
+/// the mutant and passes on the unmutated sim.
+#[test]
+fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
+    let (_sim, t) = PtySim::start(&["empty-line-two-prompts"]);
+    let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.rejudged > 0, "no case was judged again in {} runs", s.runs);
+    // The extra prompt parts from the model at whatever the host sends next, so one bug can
+    // sign more than one finding; the empty line's own is among them, and each is real.
+    let sigs: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
+    assert!(sigs.contains(&"framing at CR".to_string()), "{sigs:?}");
+    for f in &s.findings {
+        assert!(!replays_on(&f.transcript, vec![Fault::EmptyLineTwoPrompts]), "{}: fails on the mutant", f.signature);
+        assert!(replays_on(&f.transcript, vec![]), "{}: passes on the unmutated sim", f.signature);
+    }
+}
+
 /// A sim whose motion ends at once (`--time fast`) would make every ^C mid-motion a false
 /// finding: with abort timing allowed the campaign refuses it at the start (exit 2, a message
 /// naming `--no abort-timing`); with `--no abort-timing` it runs and finds nothing.

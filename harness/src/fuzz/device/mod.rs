@@ -33,7 +33,7 @@ use serde::Serialize;
 use sha2::{Digest, Sha256};
 
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
-use self::case::{BuiltCase, build_case};
+use self::case::{BuiltCase, NotACase, build_case};
 use crate::deadline::{self, DeadlinePolicy};
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
 use crate::suite::Case;
@@ -233,6 +233,9 @@ pub struct FuzzSummary {
     pub bytes_sent: u64,
     /// Lines (CRs) sent during the cases, counted as `wire_bytes` is.
     pub lines_sent: u64,
+    /// Cases that passed a quick run on a kept link and were judged again thoroughly because
+    /// bytes followed them (met when the next case's line was not quiet).
+    pub rejudged: u64,
     /// Wall time of the run.
     pub elapsed: Duration,
     /// Time spent minimizing (part of `elapsed`).
@@ -280,6 +283,7 @@ struct Shared {
     wire_bytes: u64,
     bytes_sent: u64,
     lines_sent: u64,
+    rejudged: u64,
     minimizing: Duration,
     error: Option<FuzzError>,
 }
@@ -467,6 +471,16 @@ pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<Fin
     Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
 }
 
+/// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
+/// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
+fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
+    let b = build_case(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    if !opts.allowed.abort_timing && b.transcript.header.requires.contains(&gcl_transcript::Requirement::AbortTiming) {
+        return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
+    }
+    Ok(b)
+}
+
 /// A target whose motion takes under this share of the model's time does not move in real time.
 const REAL_TIME_SHARE: u32 = 4;
 
@@ -532,6 +546,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         wire_bytes: 0,
         bytes_sent: 0,
         lines_sent: 0,
+        rejudged: 0,
         minimizing: Duration::ZERO,
         error: None,
     });
@@ -568,6 +583,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         wire_bytes: sh.wire_bytes,
         bytes_sent: sh.bytes_sent,
         lines_sent: sh.lines_sent,
+        rejudged: sh.rejudged,
         elapsed: start.elapsed(),
         minimizing: sh.minimizing,
     })
@@ -633,7 +649,7 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let Ok(built) = build_case(&p, &actions, "fuzz", "a generated case", opts.wide(), opts.home()) else {
+        let Ok(built) = build_for(opts, &actions, "fuzz", "a generated case") else {
             lock().dropped += 1;
             continue;
         };
@@ -657,6 +673,7 @@ fn worker(
         if hand.settle()?
             && let Some((pa, pb, prun)) = prev.take()
         {
+            lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
             if let Some(sig) = signature(&p, &pb.transcript, &out) {
                 let new = lock().seen.insert(sig.clone());
@@ -718,14 +735,13 @@ fn report_finding(
     run_no: u64,
     progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<bool, FuzzError> {
-    let p = opts.profile.clone();
     let found_after = start.elapsed();
     let t0 = Instant::now();
     let (min_actions, min_case) =
         if opts.minimize { minimize(opts, hand, actions, built, &sig)? } else { (actions.to_vec(), built.clone()) };
     let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-    let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
+    let final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
     let diff = hand.run(&final_case.transcript, true)?.render();
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
@@ -771,7 +787,7 @@ fn minimize(
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
         *tries += 1;
-        let Ok(b) = build_case(&p, cand, "fuzz", "minimizing", opts.wide(), opts.home()) else { return Ok(None) };
+        let Ok(b) = build_for(opts, cand, "fuzz", "minimizing") else { return Ok(None) };
         if b.eeprom_writes > built.eeprom_writes {
             return Ok(None);
         }
