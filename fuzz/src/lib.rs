@@ -261,12 +261,8 @@ pub fn device(data: &[u8]) -> DeviceRun {
     let session = DeviceSession::from_bytes(data);
     let profiles = builtin_profiles();
     let profile = profiles[usize::from(session.profile) % profiles.len()].clone();
-    let faults = Fault::ALL
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| session.faults & (1 << i) != 0)
-        .map(|(_, f)| *f)
-        .collect();
+    let faults =
+        Fault::ALL.iter().enumerate().filter(|(i, _)| session.faults & (1 << i) != 0).map(|(_, f)| *f).collect();
     let config = DeviceConfig {
         seed: u64::from(session.scenario),
         scenario: scenario_of(session.scenario),
