@@ -50,7 +50,19 @@ struct Walk {
     positions_uncertain: bool,
 }
 
+/// How near the end of a motion (by the model's clock) a ^C may not land on a hand outside
+/// this process.
+const ABORT_MARGIN: Duration = Duration::from_millis(150);
+
 impl Walk {
+    /// Whether the shadow is still running a command after `t` more without input.
+    fn busy_after(&self, t: Duration) -> bool {
+        let mut d = self.shadow.clone();
+        let at = d.now() + t;
+        d.handle_timeout(at);
+        d.mode() == Mode::Busy
+    }
+
     /// Feeds one step to the shadow, the way the recorder's shadow does; returns its answer.
     fn feed(&mut self, step: &ScriptStep, terminator: u8) -> Vec<u8> {
         if let Some(p) = step.pause {
@@ -262,6 +274,12 @@ pub fn build_case(
                 walk.features.insert("abort:mid-motion".into());
                 let s1 = ScriptStep::new(gcl_transcript::script::Action::NoWait(line.as_bytes().to_vec()));
                 walk.feed(&s1, term);
+                // On a hand outside this process the motion's end is known only roughly: a ^C
+                // near it lands before or after as that hand's clock decides, not the model's.
+                let at = Duration::from_millis(*after_ms);
+                if wide && walk.busy_after(at.saturating_sub(ABORT_MARGIN)) != walk.busy_after(at + ABORT_MARGIN) {
+                    return Err(NotACase("a ^C too near the end of the motion it is to stop".into()));
+                }
                 let s2 = ScriptStep {
                     pause: Some(Duration::from_millis(*after_ms)),
                     ..ScriptStep::new(gcl_transcript::script::Action::abort())
