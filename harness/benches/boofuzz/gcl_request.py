@@ -1,6 +1,6 @@
 """A GCL request for boofuzz, run against a hand on a serial port for a fixed time.
 
-Usage: gcl_request.py PORT BAUD SECONDS [best|plain|reset|fresh]
+Usage: gcl_request.py PORT BAUD SECONDS [best|plain|reset|fresh|logged]
 
 The setup (default `best`) is boofuzz configured at its best for a serial hand: one
 connection reused for every case, a content checker that ends a receive at the prompt `=> `
@@ -15,6 +15,8 @@ spoil the next one. Two other setups a boofuzz user might pick:
 - `reset`: the content checker, and before each case a RESET whose banner and prompt are
   awaited instead of the ^C: the way a boofuzz user gets the same known state for every
   case (boofuzz itself has no notion of one).
+- `logged`: as `best`, with boofuzz's default loggers (every case written as text to
+  stdout) and its web UI on port 26000.
 - `fresh`: as `best`, but the port is closed and opened again for every case (boofuzz's
   default, `reuse_target_connection=False`).
 
@@ -82,8 +84,8 @@ class CountingSerial(SerialConnection):
 def main() -> None:
     port, baud, seconds = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
     mode = sys.argv[4] if len(sys.argv) > 4 else "best"
-    if mode not in ("best", "plain", "reset", "fresh"):
-        sys.exit(f"unknown setup {mode!r} (best, plain, reset, fresh)")
+    if mode not in ("best", "plain", "reset", "fresh", "logged"):
+        sys.exit(f"unknown setup {mode!r} (best, plain, reset, fresh, logged)")
     conn = CountingSerial(
         port=port,
         baudrate=baud,
@@ -136,9 +138,9 @@ def main() -> None:
     session = Session(
         target=Target(connection=conn),
         sleep_time=0,
-        web_port=None,
+        web_port=26000 if mode == "logged" else None,
         keep_web_open=False,
-        fuzz_loggers=[],
+        fuzz_loggers=None if mode == "logged" else [],
         reuse_target_connection=mode != "fresh",
         receive_data_after_fuzz=True,
         pre_send_callbacks=[to_known_state],
