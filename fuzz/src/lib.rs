@@ -151,18 +151,21 @@ pub struct Step {
     pub bytes: Vec<u8>,
 }
 
+// Every fault has a bit in `DeviceSession::faults`.
+const _: () = assert!(Fault::ALL.len() <= u64::BITS as usize);
+
 /// What the `device` target reads from its input bytes.
 ///
-/// Layout: `profile`, `faults` (two bytes, little-endian, bit `i` = `Fault::ALL[i]`; the
-/// faults past the sixteenth are not reachable from here),
+/// Layout: `profile`, `faults` (eight bytes, little-endian, bit `i` = `Fault::ALL[i]`, so
+/// every fault is reachable),
 /// `scenario` (bit flags, see [`scenario_of`]), then steps, each `wait`, `len`, `len` bytes.
 /// Missing bytes read as zero, a short last chunk is kept as it is: every input is a session.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct DeviceSession {
     /// Index into the embedded profiles, modulo their number.
     pub profile: u8,
-    /// Deliberate faults to switch on.
-    pub faults: u16,
+    /// Deliberate faults to switch on, bit `i` for `Fault::ALL[i]`.
+    pub faults: u64,
     /// Scenario flags, also the noise seed.
     pub scenario: u8,
     /// The steps.
@@ -175,11 +178,11 @@ impl DeviceSession {
         let at = |i: usize| data.get(i).copied().unwrap_or(0);
         let mut s = DeviceSession {
             profile: at(0),
-            faults: u16::from_le_bytes([at(1), at(2)]),
-            scenario: at(3),
+            faults: u64::from_le_bytes(std::array::from_fn(|i| at(1 + i))),
+            scenario: at(9),
             steps: vec![],
         };
-        let mut rest = data.get(4..).unwrap_or(&[]);
+        let mut rest = data.get(10..).unwrap_or(&[]);
         while let [wait, tail @ ..] = rest {
             let (len, tail) = match tail {
                 [len, tail @ ..] => (usize::from(*len), tail),
@@ -258,13 +261,8 @@ pub fn device(data: &[u8]) -> DeviceRun {
     let session = DeviceSession::from_bytes(data);
     let profiles = builtin_profiles();
     let profile = profiles[usize::from(session.profile) % profiles.len()].clone();
-    let faults = Fault::ALL
-        .iter()
-        .take(16)
-        .enumerate()
-        .filter(|(i, _)| session.faults & (1 << i) != 0)
-        .map(|(_, f)| *f)
-        .collect();
+    let faults =
+        Fault::ALL.iter().enumerate().filter(|(i, _)| session.faults & (1 << i) != 0).map(|(_, f)| *f).collect();
     let config = DeviceConfig {
         seed: u64::from(session.scenario),
         scenario: scenario_of(session.scenario),

@@ -121,7 +121,7 @@ fn loop_steps() -> Vec<Step> {
 
 fn device() -> Vec<Seed> {
     let profiles = EMBEDDED_PROFILES.len() as u8;
-    let session = |profile: u8, faults: u16, scenario: u8, steps: Vec<Step>| {
+    let session = |profile: u8, faults: u64, scenario: u8, steps: Vec<Step>| {
         DeviceSession { profile, faults, scenario, steps }.to_bytes()
     };
     let mut seeds = Vec::new();
@@ -193,8 +193,9 @@ fn device() -> Vec<Seed> {
     bad.push(step(MS1, b"FGET P\r"));
     add("bad-header".into(), session(2, 0, 0, bad));
     add("lowercase".into(), session(0, 0, 0, lines(IDLE, &["hi", "fget p", "gc", "fset dp 70000"])));
-    add("every-fault-hot-hand".into(), session(2, 0x7FFF, 0xFF, loop_steps()));
-    add("every-fault-seed".into(), session(0, 0x7FFF, 0b0001_0100, loop_steps()));
+    let every_fault = u64::MAX >> (u64::BITS as usize - gcl_model::device::Fault::ALL.len());
+    add("every-fault-hot-hand".into(), session(2, every_fault, 0xFF, loop_steps()));
+    add("every-fault-seed".into(), session(0, every_fault, 0b0001_0100, loop_steps()));
     seeds
 }
 

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use gcl_fuzz::seeds::{LINES, generate};
 use gcl_fuzz::{DeviceSession, MAX_RESPONSE, Step, TARGETS, Wait, builtin_profiles};
-use gcl_model::device::{Device, Mode};
+use gcl_model::device::{Device, Fault, Mode};
 use gcl_model::grammar::{Line, parse_line};
 
 fn seed_dir(target: &str) -> PathBuf {
@@ -95,7 +95,8 @@ fn known_crashes_are_reported() {
 fn device_sessions_round_trip_through_bytes() {
     let s = DeviceSession {
         profile: 2,
-        faults: 0x1234,
+        // A fault past the sixteenth and the last one.
+        faults: 0x1234 | 1 << 40 | 1 << (Fault::ALL.len() - 1),
         scenario: 7,
         steps: vec![Step { wait: 199, bytes: b"HI\r".to_vec() }, Step { wait: 3, bytes: vec![] }],
     };
@@ -108,7 +109,10 @@ fn device_sessions_round_trip_through_bytes() {
     assert_eq!(back.steps.iter().map(|s| s.bytes.len()).sum::<usize>(), 300);
     // Every input is a session, a truncated one included.
     assert_eq!(DeviceSession::from_bytes(&[]).steps, vec![]);
-    assert_eq!(DeviceSession::from_bytes(&[0, 0, 0, 0, 9, 200, b'x']).steps, vec![Step { wait: 9, bytes: vec![b'x'] }]);
+    assert_eq!(
+        DeviceSession::from_bytes(&[0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 9, 200, b'x']).steps,
+        vec![Step { wait: 9, bytes: vec![b'x'] }]
+    );
     assert_eq!(Wait::from_byte(65), Wait::For(Duration::from_millis(50)));
     assert_eq!(Wait::from_byte(255), Wait::UntilIdle(Duration::from_secs(64)));
 }

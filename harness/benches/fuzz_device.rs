@@ -23,7 +23,11 @@ use std::io::BufRead;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
+use gcl_harness::deadline::predict;
+use gcl_harness::fuzz::device::action::HostAction;
+use gcl_harness::fuzz::device::case::build_case;
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, run};
+use gcl_harness::suite::Case;
 use gcl_host::target::Target;
 use gcl_model::{Fault, Profile};
 
@@ -150,4 +154,22 @@ fn pty_figure(p: &std::sync::Arc<Profile>, seconds: u64) {
         s.wire_bytes as f64 / busy / line_rate,
         s.findings.len()
     );
+    println!(
+        "  each way: {:.0} bytes/s sent = {:.2}, {:.0} received = {:.2} of the line; per case {:.0} bytes sent, {:.0} received",
+        s.per_second(s.bytes_sent),
+        s.per_second(s.bytes_sent) / line_rate,
+        s.per_second(s.wire_bytes - s.bytes_sent),
+        s.per_second(s.wire_bytes - s.bytes_sent) / line_rate,
+        s.bytes_sent as f64 / s.runs.max(1) as f64,
+        (s.wire_bytes - s.bytes_sent) as f64 / s.runs.max(1) as f64,
+    );
+    // Where a case's bytes go: the preamble every case starts with (a case of one ^C, less
+    // the ^C's own step), as the model answers it.
+    let built = build_case(p, &[HostAction::Abort], "preamble", "preamble", true, true).expect("a case of one ^C");
+    let case = Case { profile: p.id.clone(), transcript: built.transcript };
+    let pred = predict(&case, p).expect("the model passes its own case");
+    let pre = &pred[..pred.len() - 1];
+    let sent: usize = pre.iter().map(|s| s.wire_bytes - s.answer_len).sum();
+    let back: usize = pre.iter().map(|s| s.answer_len).sum();
+    println!("  the preamble of every case: {} steps, {sent} bytes sent, {back} received", pre.len());
 }

@@ -74,6 +74,7 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("missing-value-ignored", B44, &["cmd-fset-args", "cmd-pset-args"]),
     ("empty-line-error", B44, &["framing-empty-line"]),
     ("overlong-line-runs", B44, &["framing-max-line"]),
+    ("empty-line-two-prompts", B44, &["framing-empty-line"]),
 ];
 
 const B44: &str = "bh8-262-4.4";

@@ -86,6 +86,7 @@ const FAULT_CLAUSES: &[(&str, &[&str])] = &[
     ("tab-not-separator", &["decision:framing-whitespace"]),
     ("empty-line-error", &["decision:framing-empty-line"]),
     ("overlong-line-runs", &["decision:framing-max-line"]),
+    ("empty-line-two-prompts", &["decision:framing-empty-line"]),
 ];
 
 fn matches(clause: &str, want: &str) -> bool {

@@ -152,8 +152,13 @@ struct PtySim(Child);
 
 impl PtySim {
     fn start(faults: &[&str]) -> (PtySim, Target) {
+        PtySim::start_timed("fast", faults)
+    }
+
+    /// As [`PtySim::start`] with the sim's `--time` (`fast` or `real`).
+    fn start_timed(time: &str, faults: &[&str]) -> (PtySim, Target) {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
-        cmd.args(["sim", "--pty", "--time", "fast", "--baud", "38400"]);
+        cmd.args(["sim", "--pty", "--time", time, "--baud", "38400"]);
         for f in faults {
             cmd.args(["--fault", f]);
         }
@@ -187,6 +192,59 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
         s.findings.iter().map(|f| &f.diff).collect::<Vec<_>>()
     );
     assert_eq!(s.runs, 40);
+}
+
+/// A hand that says more after a case's last answer (a second prompt for an empty line): on
+/// a kept link the case passes its quick run, the bytes meet the next case's start, and the
+/// case before is judged again thoroughly and reported; its minimized transcript fails on
+/// the mutant and passes on the unmutated sim.
+#[test]
+fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
+    let (_sim, t) = PtySim::start(&["empty-line-two-prompts"]);
+    let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.rejudged > 0, "no case was judged again in {} runs", s.runs);
+    // The extra prompt parts from the model at whatever the host sends next, so one bug can
+    // sign more than one finding; the empty line's own is among them, and each is real.
+    let sigs: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
+    assert!(sigs.contains(&"framing at CR".to_string()), "{sigs:?}");
+    for f in &s.findings {
+        assert!(!replays_on(&f.transcript, vec![Fault::EmptyLineTwoPrompts]), "{}: fails on the mutant", f.signature);
+        assert!(replays_on(&f.transcript, vec![]), "{}: passes on the unmutated sim", f.signature);
+    }
+}
+
+/// A sim whose motion ends at once (`--time fast`) would make every ^C mid-motion a false
+/// finding: with abort timing allowed the campaign refuses it at the start (exit 2, a message
+/// naming `--no abort-timing`); with `--no abort-timing` it runs and finds nothing.
+#[test]
+fn a_sim_in_fast_time_is_refused_unless_abort_timing_is_off() {
+    let (_sim, t) = PtySim::start(&[]);
+    let target = t.to_string();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let out = Command::new(gcl).args(["fuzz", "device", "--target", &target, "--runs", "5", "-q"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("motions end at once") && err.contains("--no abort-timing"), "{err}");
+    assert!(out.stdout.is_empty(), "no campaign ran: {}", String::from_utf8_lossy(&out.stdout));
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &target, "--runs", "5", "-q", "--no", "abort-timing"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("5 runs"));
+}
+
+/// The same sim in real time moves as the model's hand does: the check lets it through.
+#[test]
+fn a_sim_in_real_time_passes_the_real_time_check() {
+    let (_sim, t) = PtySim::start_timed("real", &[]);
+    let o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+    assert!(o.allowed.abort_timing);
+    gcl_harness::fuzz::device::check_real_time(&o).unwrap();
 }
 
 /// A failure of a quick run is run again thoroughly and reported: the minimized transcript

@@ -69,6 +69,8 @@ pub struct DeviceArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Refuse what the hand may not do: motion, realtime, eeprom, abort-timing (repeatable).
+    /// Needed: `--no abort-timing` against a simulator in fast time (`gcl sim --stdio`,
+    /// `--time fast`), whose motions end at once; such a target is refused (exit 2) without it.
     #[arg(long = "no", value_name = "REQUIREMENT")]
     pub refuse: Vec<String>,
     /// The most EEPROM writes the run may make (restores included); serial targets: 0 unless given.
@@ -176,12 +178,15 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
+        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),
         s.cases_per_second(),
-        s.wire_bytes as f64 / s.elapsed.saturating_sub(s.minimizing).as_secs_f64().max(1e-3),
+        s.per_second(s.wire_bytes),
+        s.per_second(s.bytes_sent),
+        s.per_second(s.wire_bytes - s.bytes_sent),
+        s.per_second(s.lines_sent),
         s.findings.len(),
         s.corpus,
         s.eeprom_writes

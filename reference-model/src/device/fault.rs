@@ -151,6 +151,10 @@ faults! {
     EmptyLineError => "empty-line-error",
     /// A line past the length limit runs cut short instead of giving its status.
     OverlongLineRuns => "overlong-line-runs",
+    /// An empty line gets its prompt twice (the line handler and the main loop each print one):
+    /// the second comes after the answer a host expects, so a host that stops reading at the
+    /// first prompt meets it before its next answer.
+    EmptyLineTwoPrompts => "empty-line-two-prompts",
 }
 
 impl Fault {

@@ -23,6 +23,9 @@ impl Device {
                 self.last_status = StatusBits::empty();
                 self.push_event(Event::LineDone(StatusBits::empty()));
                 self.prompt();
+                if self.has(Fault::EmptyLineTwoPrompts) {
+                    self.prompt();
+                }
             }
             Ok(Line::Command(c)) => self.run_command(&c),
             Err(mut r) => {

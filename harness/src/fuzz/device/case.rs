@@ -13,7 +13,7 @@ use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Duration;
 
-use gcl_model::spec::{CommandKind, Scope};
+use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
 
 use super::action::HostAction;
@@ -50,7 +50,19 @@ struct Walk {
     positions_uncertain: bool,
 }
 
+/// How near the end of a motion (by the model's clock) a ^C may not land on a hand outside
+/// this process.
+const ABORT_MARGIN: Duration = Duration::from_millis(150);
+
 impl Walk {
+    /// Whether the shadow is still running a command after `t` more without input.
+    fn busy_after(&self, t: Duration) -> bool {
+        let mut d = self.shadow.clone();
+        let at = d.now() + t;
+        d.handle_timeout(at);
+        d.mode() == Mode::Busy
+    }
+
     /// Feeds one step to the shadow, the way the recorder's shadow does; returns its answer.
     fn feed(&mut self, step: &ScriptStep, terminator: u8) -> Vec<u8> {
         if let Some(p) = step.pause {
@@ -191,6 +203,17 @@ pub fn build_case(
                 if !in_loop {
                     note_line(p, l, &mut walk.features);
                 }
+                // Whether a motion trips the over-temperature limit depends on how warm the
+                // hand is, which on a hand outside this process earlier cases and the room
+                // decide, not the model's fresh start: such a case is not one the model can judge.
+                if wide
+                    && cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
+                    && p.role(Role::OverTemperature).is_some_and(|id| walk.shadow.params().get(p, id, 1) != 0)
+                {
+                    return Err(NotACase(
+                        "a motion with the over-temperature limit set, on a hand outside this process".into(),
+                    ));
+                }
                 let answer = walk.feed(&step, term);
                 let refused = answer.windows(3).any(|w| w == b"ERR");
                 let shape = match &cmd {
@@ -222,6 +245,22 @@ pub fn build_case(
                 k = k.line(l);
             }
             HostAction::Raw(b) => {
+                // Raw bytes are answered exactly; a read among them on a hand outside this
+                // process would judge live values (temperature, time powered, positions) by
+                // the model's fresh start.
+                if wide
+                    && b.split(|c| *c == term).any(|l| {
+                        matches!(parse_line(p, l), Ok(Line::Command(c)) if matches!(c.kind(p),
+                            CommandKind::MotorGet
+                                | CommandKind::GlobalGet
+                                | CommandKind::MotorListValues
+                                | CommandKind::GlobalListValues
+                                | CommandKind::MotorListAllValues
+                                | CommandKind::GlobalListAllValues))
+                    })
+                {
+                    return Err(NotACase("a read among raw bytes, on a hand outside this process".into()));
+                }
                 let step = ScriptStep::new(gcl_transcript::script::Action::Bytes {
                     bytes: b.clone(),
                     form: gcl_transcript::Form::Text,
@@ -235,6 +274,12 @@ pub fn build_case(
                 walk.features.insert("abort:mid-motion".into());
                 let s1 = ScriptStep::new(gcl_transcript::script::Action::NoWait(line.as_bytes().to_vec()));
                 walk.feed(&s1, term);
+                // On a hand outside this process the motion's end is known only roughly: a ^C
+                // near it lands before or after as that hand's clock decides, not the model's.
+                let at = Duration::from_millis(*after_ms);
+                if wide && walk.busy_after(at.saturating_sub(ABORT_MARGIN)) != walk.busy_after(at + ABORT_MARGIN) {
+                    return Err(NotACase("a ^C too near the end of the motion it is to stop".into()));
+                }
                 let s2 = ScriptStep {
                     pause: Some(Duration::from_millis(*after_ms)),
                     ..ScriptStep::new(gcl_transcript::script::Action::abort())
@@ -309,6 +354,18 @@ pub fn build_case(
     ro.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
     let caps = capture(&mut link, &steps, &ro).map_err(|e| NotACase(e.to_string()))?;
+    // A ^C the model answers with the abort status landed while a command ran (queued lines
+    // and RealTime exits can start a motion no action named): only a hand moving in real
+    // time answers it so.
+    let aborted = format!("ERR {}", p.hand.abort_status).into_bytes();
+    if p.hand.abort_status != 0
+        && steps.iter().zip(&caps).any(|(st, c)| {
+            st.action.wire_bytes(term) == [p.framing.abort] && c.output.windows(aborted.len()).any(|w| w == aborted)
+        })
+        && !def.requires.contains(&Requirement::AbortTiming)
+    {
+        def.requires.push(Requirement::AbortTiming);
+    }
     if wide {
         // A feedback block inside an answer shaped as text or bytes (a block with bytes too
         // many, the answer to ^C mid-block) holds strain and positions exactly: such a case

@@ -33,7 +33,7 @@ use serde::Serialize;
 use sha2::{Digest, Sha256};
 
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
-use self::case::{BuiltCase, build_case};
+use self::case::{BuiltCase, NotACase, build_case};
 use crate::deadline::{self, DeadlinePolicy};
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
 use crate::suite::Case;
@@ -147,6 +147,22 @@ pub enum FuzzError {
     /// The hand vanished and did not come back.
     #[error("the hand vanished and could not be reopened: {0}")]
     Vanished(String),
+    /// The target's motions end far sooner than a hand's (a simulator whose time follows the
+    /// wire, such as `gcl sim --time fast`): ^C cannot land mid-motion there, so every ^C
+    /// mid-motion would be a false finding.
+    #[error(
+        "the target's motions end at once: `{command}` from the home position took {took_ms} ms, \
+         where the model's hand takes {model_ms} ms (a simulator with `--time fast`?); ^C cannot \
+         land mid-motion on it, so run with `--no abort-timing`"
+    )]
+    NotRealTime {
+        /// The motion command of the probe.
+        command: String,
+        /// How long the target took for it, bytes included.
+        took_ms: u64,
+        /// How long the model's hand moves for it, bytes aside.
+        model_ms: u64,
+    },
 }
 
 /// Where a finding parts from the model: the command being answered and the kind of
@@ -212,6 +228,14 @@ pub struct FuzzSummary {
     pub eeprom_writes: u64,
     /// Bytes on the wire in both directions during the cases (drains and minimization aside).
     pub wire_bytes: u64,
+    /// The part of `wire_bytes` sent to the hand (the rest came from it: echoes, answers,
+    /// prompts, banners).
+    pub bytes_sent: u64,
+    /// Lines (CRs) sent during the cases, counted as `wire_bytes` is.
+    pub lines_sent: u64,
+    /// Cases that passed a quick run on a kept link and were judged again thoroughly because
+    /// bytes followed them (met when the next case's line was not quiet).
+    pub rejudged: u64,
     /// Wall time of the run.
     pub elapsed: Duration,
     /// Time spent minimizing (part of `elapsed`).
@@ -221,8 +245,13 @@ pub struct FuzzSummary {
 impl FuzzSummary {
     /// Cases per second of wall time, minimization excluded.
     pub fn cases_per_second(&self) -> f64 {
+        self.per_second(self.runs)
+    }
+
+    /// A count per second of wall time, minimization excluded (as the counts are).
+    pub fn per_second(&self, n: u64) -> f64 {
         let t = self.elapsed.saturating_sub(self.minimizing).as_secs_f64();
-        if t > 0.0 { self.runs as f64 / t } else { 0.0 }
+        if t > 0.0 { n as f64 / t } else { 0.0 }
     }
 }
 
@@ -252,6 +281,9 @@ struct Shared {
     seen: BTreeSet<FindingSignature>,
     dropped: u64,
     wire_bytes: u64,
+    bytes_sent: u64,
+    lines_sent: u64,
+    rejudged: u64,
     minimizing: Duration,
     error: Option<FuzzError>,
 }
@@ -439,8 +471,61 @@ pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<Fin
     Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
 }
 
+/// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
+/// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
+fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
+    let b = build_case(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    if !opts.allowed.abort_timing && b.transcript.header.requires.contains(&gcl_transcript::Requirement::AbortTiming) {
+        return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
+    }
+    Ok(b)
+}
+
+/// A target whose motion takes under this share of the model's time does not move in real time.
+const REAL_TIME_SHARE: u32 = 4;
+
+/// Before a campaign that lands ^C mid-motion on a hand outside this process: closes the
+/// hand from its home position once and compares the time the target took with the model's.
+/// A target that took under a quarter of it (a simulator whose motion ends at once) is
+/// refused with [`FuzzError::NotRealTime`]: its answers to ^C mid-motion are right for it
+/// and wrong for the model, so every such case would be a false finding. A slow or loaded
+/// target only takes longer, never shorter. A probe that does not pass decides nothing (the
+/// campaign finds why).
+pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
+    if !(opts.wide() && opts.allowed.motion && opts.allowed.abort_timing) {
+        return Ok(());
+    }
+    let p = &opts.profile;
+    let Some(close) = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close) else {
+        return Ok(());
+    };
+    let line = close.name.clone();
+    let Ok(built) = build_case(p, &[HostAction::Line(line.clone())], "probe", "real-time probe", true, true) else {
+        return Ok(());
+    };
+    let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
+    let Some(pred) = deadline::predict(&case, p) else { return Ok(()) };
+    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let out = hand.run(&built.transcript, true)?;
+    let sent = format!("{line}{}", p.framing.terminator as char);
+    let done = out.failed_step().unwrap_or(usize::MAX);
+    let Some(e) = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes()) else {
+        return Ok(());
+    };
+    let model = pred.get(e.step).map_or(Duration::ZERO, |s| s.busy());
+    if model > deadline::BUSY && e.took < model / REAL_TIME_SHARE {
+        return Err(FuzzError::NotRealTime {
+            command: line,
+            took_ms: e.took.as_millis() as u64,
+            model_ms: model.as_millis() as u64,
+        });
+    }
+    Ok(())
+}
+
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
+    check_real_time(opts)?;
     let start = Instant::now();
     let mut corpus = Vec::new();
     if let Some(dir) = &opts.corpus {
@@ -459,6 +544,9 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         seen: BTreeSet::new(),
         dropped: 0,
         wire_bytes: 0,
+        bytes_sent: 0,
+        lines_sent: 0,
+        rejudged: 0,
         minimizing: Duration::ZERO,
         error: None,
     });
@@ -493,6 +581,9 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         corpus: sh.corpus.len(),
         eeprom_writes: writes.load(Ordering::SeqCst),
         wire_bytes: sh.wire_bytes,
+        bytes_sent: sh.bytes_sent,
+        lines_sent: sh.lines_sent,
+        rejudged: sh.rejudged,
         elapsed: start.elapsed(),
         minimizing: sh.minimizing,
     })
@@ -558,7 +649,7 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let Ok(built) = build_case(&p, &actions, "fuzz", "a generated case", opts.wide(), opts.home()) else {
+        let Ok(built) = build_for(opts, &actions, "fuzz", "a generated case") else {
             lock().dropped += 1;
             continue;
         };
@@ -582,6 +673,7 @@ fn worker(
         if hand.settle()?
             && let Some((pa, pb, prun)) = prev.take()
         {
+            lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
             if let Some(sig) = signature(&p, &pb.transcript, &out) {
                 let new = lock().seen.insert(sig.clone());
@@ -601,7 +693,11 @@ fn worker(
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
-            sh.wire_bytes += outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum::<u64>();
+            for e in outcome.exchange() {
+                sh.wire_bytes += (e.sent.len() + e.received.len()) as u64;
+                sh.bytes_sent += e.sent.len() as u64;
+                sh.lines_sent += e.sent.iter().filter(|&&b| b == b'\r').count() as u64;
+            }
             let new_cov = !built.features.is_subset(&sh.features);
             if new_cov {
                 sh.features.extend(built.features.iter().cloned());
@@ -639,14 +735,13 @@ fn report_finding(
     run_no: u64,
     progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<bool, FuzzError> {
-    let p = opts.profile.clone();
     let found_after = start.elapsed();
     let t0 = Instant::now();
     let (min_actions, min_case) =
         if opts.minimize { minimize(opts, hand, actions, built, &sig)? } else { (actions.to_vec(), built.clone()) };
     let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-    let final_case = build_case(&p, &min_actions, &id, &title, opts.wide(), opts.home()).unwrap_or(min_case);
+    let final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
     let diff = hand.run(&final_case.transcript, true)?.render();
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
@@ -692,7 +787,7 @@ fn minimize(
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
         *tries += 1;
-        let Ok(b) = build_case(&p, cand, "fuzz", "minimizing", opts.wide(), opts.home()) else { return Ok(None) };
+        let Ok(b) = build_for(opts, cand, "fuzz", "minimizing") else { return Ok(None) };
         if b.eeprom_writes > built.eeprom_writes {
             return Ok(None);
         }
