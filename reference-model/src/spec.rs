@@ -215,6 +215,13 @@ pub struct Hand {
     pub object_compliance: i64,
     /// Time HI spends at the open stop (vibration, commutation), in ms, per motor.
     pub hi_settle_ms: u64,
+    /// How fast the board warms while motors move: tenths of a degree Celsius per second
+    /// for each moving motor.
+    pub heat_per_motor_s: f64,
+    /// The time constant, in seconds, with which the board cools toward its ambient
+    /// temperature (Newton's law, moving or not): with `m` motors moving for long, the board
+    /// settles `m` × `heat_per_motor_s` × `cooling_time_s` tenths above ambient.
+    pub cooling_time_s: f64,
     /// Whether the RealTime LFT field exists and its width in bytes (0: none).
     pub lft_size: usize,
     /// Whether an LFT of width 1 carries whole degrees (true) or tenths (false).
@@ -880,6 +887,8 @@ fn check_bounds(framing: &Framing, hand: &Hand) -> Result<(), String> {
         ("hand.rt_velocity_counts_per_ms", hand.rt_velocity_counts_per_ms),
         ("hand.lfv_counts_per_ms", hand.lfv_counts_per_ms),
         ("hand.strain_per_count", hand.strain_per_count),
+        ("hand.heat_per_motor_s", hand.heat_per_motor_s),
+        ("hand.cooling_time_s", hand.cooling_time_s),
     ] {
         if !(v.is_finite() && v > 0.0 && v <= 10_000.0) {
             return Err(format!("{name} = {v} must be a number in (0, 10000]"));

@@ -302,3 +302,28 @@ fn the_line_rate_is_read_where_the_profile_says() {
     assert_eq!(send(&mut d, "FSET BAUD 192"), "FSET BAUD 192\n\r=> ");
     assert_eq!(d.baud(), 38400);
 }
+
+/// A hand that moves for twenty simulated minutes without a rest settles warmer than it
+/// started but inside TEMP's declared range: the board cools toward ambient while it warms
+/// (decision `bh8-board-heat`). Heat that only grows read past TEMP's maximum of 1250 here.
+#[test]
+fn a_hand_that_never_rests_stays_inside_the_temperature_range() {
+    let p = profile("bh8-262-4.4");
+    let temp_max = p.params.iter().find(|x| x.name == "TEMP").map(|x| x.max).unwrap();
+    let mut d = hand("bh8-262-4.4");
+    send(&mut d, "HI");
+    let start = d.now();
+    while d.now() - start < Duration::from_secs(20 * 60) {
+        send(&mut d, "M 9000");
+        send(&mut d, "M 1000");
+    }
+    let read = |d: &mut Device, name: &str| -> i64 {
+        let answer = send(d, &format!("PGET {name}"));
+        answer.lines().nth(1).and_then(|l| l.trim().parse().ok()).unwrap_or_else(|| panic!("{answer:?}"))
+    };
+    let (temp, peak) = (read(&mut d, "TEMP"), read(&mut d, "PTEMP"));
+    let ambient = gcl_model::device::Scenario::default().temperature;
+    assert!(temp > ambient + 100, "the moving hand warmed: TEMP {temp}");
+    assert!(temp <= temp_max && peak <= temp_max, "TEMP {temp}, PTEMP {peak}, range max {temp_max}");
+    assert!(temp <= ambient + 400 + 3, "settles at most 40.0 C above ambient: TEMP {temp}");
+}

@@ -18,7 +18,8 @@ impl Device {
             State::Idle => false,
         };
         if !active {
-            self.heat = (self.heat - 0.0002 * elapsed_ms as f64).max(0.0);
+            // Newton's cooling over the idle stretch, in closed form.
+            self.heat *= (-(elapsed_ms as f64) / (self.profile.hand.cooling_time_s * 1000.0)).exp();
             self.now_ns = now_ns;
             self.next_tick_ns = now_ns.saturating_add(TICK_NS);
             return;
@@ -97,7 +98,10 @@ impl Device {
                 self.terminate_motor(m, t);
             }
         }
-        self.heat += 0.0005 * f64::from(moving);
+        // One millisecond of heating by the moving motors and of cooling toward ambient: the
+        // board settles at moving × heat_per_motor_s × cooling_time_s tenths above ambient.
+        let hand = &self.profile.hand;
+        self.heat += hand.heat_per_motor_s / 1000.0 * f64::from(moving) - self.heat / (hand.cooling_time_s * 1000.0);
         if let State::Busy(task) = &self.state
             && task.motors.motors().all(|m| self.motors[m].goal.is_none())
         {
