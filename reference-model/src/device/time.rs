@@ -18,8 +18,11 @@ impl Device {
             State::Idle => false,
         };
         if !active {
-            // Newton's cooling over the idle stretch, in closed form.
-            self.heat *= (-(elapsed_ms as f64) / (self.profile.hand.cooling_time_s * 1000.0)).exp();
+            // Newton's cooling over the idle stretch, in closed form (nothing to do for a cold
+            // board or within the same millisecond, the common case between idle commands).
+            if self.heat > 0.0 && elapsed_ms > 0 {
+                self.heat *= (-(elapsed_ms as f64) / (self.profile.hand.cooling_time_s * 1000.0)).exp();
+            }
             self.now_ns = now_ns;
             self.next_tick_ns = now_ns.saturating_add(TICK_NS);
             return;
