@@ -1373,6 +1373,14 @@ pub fn embedded(path: &str) -> Option<&'static str> {
     EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
 }
 
+/// Loads `top` as the top file of a profile; its includes resolve to the embedded spec files.
+#[cfg(test)]
+fn load_top(top: &str) -> Result<Profile, SpecError> {
+    Profile::load_with("top.toml", &|p| {
+        if p == "top.toml" { Some(top.to_string()) } else { embedded(p).map(str::to_string) }
+    })
+}
+
 #[cfg(test)]
 mod evidence_tests {
     use super::*;
@@ -1392,32 +1400,20 @@ mod evidence_tests {
     #[test]
     fn the_loader_refuses_a_must_without_two_sources() {
         let seed = embedded("seed.toml").unwrap();
-        let resolve = |p: &str| {
-            if p == "top.toml" {
-                Some(format!(
-                    "{seed}\n[[decisions]]\nid = \"x-guess\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUST\"\nevidence = \"[code]\"\n"
-                ))
-            } else {
-                embedded(p).map(str::to_string)
-            }
-        };
-        let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
+        let top = format!(
+            "{seed}\n[[decisions]]\nid = \"x-guess\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUST\"\nevidence = \"[code]\"\n"
+        );
+        let err = load_top(&top).unwrap_err().to_string();
         assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
     }
 
     #[test]
     fn a_typo_in_a_decision_level_is_refused_at_load() {
         let seed = embedded("seed.toml").unwrap();
-        let resolve = |p: &str| {
-            if p == "top.toml" {
-                Some(format!(
-                    "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
-                ))
-            } else {
-                embedded(p).map(str::to_string)
-            }
-        };
-        match Profile::load_with("top.toml", &resolve) {
+        let top = format!(
+            "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
+        );
+        match load_top(&top) {
             Err(SpecError::Syntax { file, message }) => {
                 assert_eq!(file, "top.toml");
                 assert!(message.contains("MUTS") && message.contains("INFO"), "{message}");
@@ -1434,10 +1430,7 @@ mod closed_names_tests {
     /// Loads the seed with `extra` TOML appended to its top file.
     fn seed_with(extra: &str) -> Result<Profile, SpecError> {
         let seed = embedded("seed.toml").unwrap_or_default();
-        let resolve = |p: &str| {
-            if p == "top.toml" { Some(format!("{seed}\n{extra}")) } else { embedded(p).map(str::to_string) }
-        };
-        Profile::load_with("top.toml", &resolve)
+        load_top(&format!("{seed}\n{extra}"))
     }
 
     const FLAG: &str = "[[params]]\nname = \"{name}\"\nscope = \"{scope}\"\nsection = \"realtime\"\ndescription = \"d\"\nmin = 0\nmax = 1\ndefault = 0\nrt = {{ block = \"{block}\", size = {size}, signed = false, order = 9 }}\n";
@@ -1455,10 +1448,7 @@ mod closed_names_tests {
     fn seed_replacing(line: &str, by: &str) -> Result<Profile, SpecError> {
         let seed = embedded("seed.toml").unwrap_or_default();
         assert!(seed.contains(line), "the seed has no line `{line}`");
-        let top = seed.replacen(line, by, 1);
-        Profile::load_with("top.toml", &|p| {
-            if p == "top.toml" { Some(top.clone()) } else { embedded(p).map(str::to_string) }
-        })
+        load_top(&seed.replacen(line, by, 1))
     }
 
     #[test]
