@@ -20,9 +20,7 @@ impl Device {
         match grammar::parse_line_with(&self.profile, line, opts) {
             Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             Ok(Line::Empty) => {
-                self.last_status = StatusBits::empty();
-                self.push_event(Event::LineDone(StatusBits::empty()));
-                self.prompt();
+                self.end_line(StatusBits::empty());
                 if self.has(Fault::EmptyLineTwoPrompts) {
                     self.prompt();
                 }
