@@ -1098,7 +1098,6 @@ impl Profile {
         }
         // RealTime flags: closed names and types, in field order (`order`, then listing).
         let mut rt_slots = Vec::new();
-        let mut orders = Vec::new();
         for (i, p) in f.params.iter().enumerate() {
             let Some(rt) = &p.rt else { continue };
             let flag = RtFlag::from_name(&p.name)
@@ -1112,12 +1111,11 @@ impl Profile {
             if flag.is_global() != (p.scope == Scope::Global) {
                 return Err(bad(format!("must have {} scope", if flag.is_global() { "global" } else { "motor" })));
             }
-            rt_slots.push(RtSlot { param: ParamId(i as u16), flag, ty });
-            orders.push(rt.order);
+            rt_slots.push((rt.order, RtSlot { param: ParamId(i as u16), flag, ty }));
         }
-        let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
-        by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
-        let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
+        // A stable sort: equal orders keep their listing order.
+        rt_slots.sort_by_key(|(order, _)| *order);
+        let rt_slots: Vec<RtSlot> = rt_slots.into_iter().map(|(_, s)| s).collect();
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
         }
