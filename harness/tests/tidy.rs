@@ -6,21 +6,30 @@ use std::path::{Path, PathBuf};
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
-/// Every `.rs` file under `dir` (relative to the workspace root), sorted.
-fn rust_files(dir: &str) -> Vec<PathBuf> {
+/// Every file with extension `ext` under `dir` (relative to the workspace root), sorted;
+/// `target` directories are skipped.
+fn files_with_ext(dir: &str, ext: &str) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![Path::new(ROOT).join(dir)];
     while let Some(d) = stack.pop() {
         for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
             let p = e.unwrap().path();
             if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "rs") {
+                if !p.ends_with("target") {
+                    stack.push(p);
+                }
+            } else if p.extension().is_some_and(|x| x == ext) {
                 out.push(p);
             }
         }
     }
     out.sort();
+    out
+}
+
+/// Every `.rs` file under `dir` (relative to the workspace root), sorted.
+fn rust_files(dir: &str) -> Vec<PathBuf> {
+    let out = files_with_ext(dir, "rs");
     assert!(!out.is_empty(), "no Rust files under {dir}");
     out
 }
@@ -88,22 +97,10 @@ fn offenders(files: &[PathBuf], hit: impl Fn(&Path, &str) -> bool) -> Vec<String
 /// snapshot anywhere else (or a test of another crate that takes one) would go unchecked.
 #[test]
 fn insta_snapshots_live_only_in_the_model() {
+    let home = Path::new(ROOT).join("reference-model/tests/snapshots");
     let mut outside = Vec::new();
     for dir in ["harness", "host", "transcript", "fuzz", "reference-model"] {
-        let mut stack = vec![Path::new(ROOT).join(dir)];
-        while let Some(d) = stack.pop() {
-            for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
-                let p = e.unwrap().path();
-                let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-                if p.is_dir() && name != "target" {
-                    stack.push(p);
-                } else if name.ends_with(".snap")
-                    && !p.starts_with(Path::new(ROOT).join("reference-model/tests/snapshots"))
-                {
-                    outside.push(rel(&p));
-                }
-            }
-        }
+        outside.extend(files_with_ext(dir, "snap").iter().filter(|p| !p.starts_with(&home)).map(|p| rel(p)));
     }
     for dir in ["harness", "host", "transcript", "fuzz"] {
         outside.extend(offenders(&rust_files(dir), |_, l| l.contains(concat!("insta", "::"))));
@@ -263,22 +260,12 @@ fn cited_decisions_exist_in_the_spec() {
         }
     }
     // Case scripts cite decisions as `clause: decision:ID`.
-    let mut scripts = vec![Path::new(ROOT).join("harness/suite-cases")];
-    while let Some(d) = scripts.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                scripts.push(p);
-            } else if p.extension().is_some_and(|x| x == "gcls") {
-                for (n, line) in std::fs::read_to_string(&p).unwrap().lines().enumerate() {
-                    if let Some(id) =
-                        line.trim().strip_prefix("clause:").and_then(|c| c.trim().strip_prefix("decision:"))
-                    {
-                        named += 1;
-                        if !all.iter().any(|d| d == id.trim()) {
-                            bad.push(format!("{}:{}: `{}`", rel(&p), n + 1, id.trim()));
-                        }
-                    }
+    for p in files_with_ext("harness/suite-cases", "gcls") {
+        for (n, line) in std::fs::read_to_string(&p).unwrap().lines().enumerate() {
+            if let Some(id) = line.trim().strip_prefix("clause:").and_then(|c| c.trim().strip_prefix("decision:")) {
+                named += 1;
+                if !all.iter().any(|d| d == id.trim()) {
+                    bad.push(format!("{}:{}: `{}`", rel(&p), n + 1, id.trim()));
                 }
             }
         }
@@ -496,23 +483,14 @@ fn goldens_match_the_abnf_grammar() {
     for rule in ["transcript", "header-line", "body-line", "expect-string", "elision", "hextoken", "duration"] {
         assert!(grammar.lines().any(|l| l.starts_with(&format!("{rule} "))), "rule `{rule}` left the grammar");
     }
-    let mut checked = 0;
+    let goldens = files_with_ext("vectors/suite", "gcl");
     let mut bad = Vec::new();
-    let mut stack = vec![Path::new(ROOT).join("vectors/suite")];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "gcl") {
-                checked += 1;
-                if let Err(e) = abnf::check(&std::fs::read_to_string(&p).unwrap()) {
-                    bad.push(format!("{}: {e}", rel(&p)));
-                }
-            }
+    for p in &goldens {
+        if let Err(e) = abnf::check(&std::fs::read_to_string(p).unwrap()) {
+            bad.push(format!("{}: {e}", rel(p)));
         }
     }
-    assert!(checked > 100, "only {checked} goldens found");
+    assert!(goldens.len() > 100, "only {} goldens found", goldens.len());
     assert!(bad.is_empty(), "goldens the grammar rejects:\n{}", bad.join("\n"));
     // The checker is not a yes-machine.
     for wrong in [

@@ -4,9 +4,16 @@
 
 /// Escapes bytes so that every byte is visible and the text is one line.
 pub fn escape(bytes: &[u8]) -> String {
+    escape_also(bytes, &[])
+}
+
+/// [`escape`], with every byte of `also` written as `\xHH` too: for a format where some
+/// printable bytes delimit text (transcript strings: `"` and `{`). [`unescape`] inverts it.
+pub fn escape_also(bytes: &[u8], also: &[u8]) -> String {
     let mut s = String::with_capacity(bytes.len());
     for &b in bytes {
         match b {
+            _ if also.contains(&b) => s.push_str(&format!("\\x{b:02X}")),
             b'\n' => s.push_str("\\n"),
             b'\r' => s.push_str("\\r"),
             b'\t' => s.push_str("\\t"),
@@ -86,5 +93,6 @@ mod tests {
         assert!(unescape("\\q").is_err());
         assert!(unescape("\\x4").is_err());
         assert!(unescape("\\x+F").is_err());
+        assert_eq!(escape_also(b"a\"{\n", b"\"{"), "a\\x22\\x7B\\n");
     }
 }

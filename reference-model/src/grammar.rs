@@ -281,31 +281,25 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
                             missing_last = true;
                             problems.push(Problem::InvalidValue(format!("no value for `{}`", show(name))))
                         }
-                        (Ok(p), Some(v)) => match parse_integer(v) {
+                        (Ok(p), Some(text)) => match parse_integer(text) {
                             Some(v) if profile.value_ok(p, v) => pairs.push((p, v)),
-                            Some(v)
-                                if opts.accept_one_past_max
-                                    && profile.param(p).values.is_none()
-                                    && v == profile.param(p).max + 1 =>
-                            {
+                            parsed => {
                                 let ps = profile.param(p);
                                 let pr = Problem::InvalidValue(format!(
-                                    "`{v}` for {} (expected {}..{})",
-                                    ps.name, ps.min, ps.max
-                                ));
-                                one_past.push((pairs.len(), (p, v), pr));
-                            }
-                            _ => {
-                                let ps = profile.param(p);
-                                problems.push(Problem::InvalidValue(format!(
                                     "`{}` for {} (expected {})",
-                                    show(v),
+                                    show(text),
                                     ps.name,
                                     match &ps.values {
                                         Some(vs) => format!("one of {vs:?}"),
                                         None => format!("{}..{}", ps.min, ps.max),
                                     }
-                                )))
+                                ));
+                                match parsed {
+                                    Some(v) if opts.accept_one_past_max && ps.values.is_none() && v == ps.max + 1 => {
+                                        one_past.push((pairs.len(), (p, v), pr))
+                                    }
+                                    _ => problems.push(pr),
+                                }
                             }
                         },
                     }
@@ -316,8 +310,9 @@ pub fn parse_line_with(profile: &Profile, line: &[u8], opts: ParseOptions) -> Re
                 if opts.drop_last_name_without_value && missing_last && problems.len() == 1 && one_past.is_empty() {
                     problems.clear();
                 }
-                if !problems.is_empty() || !opts.accept_one_past_max {
-                    problems.extend(one_past.drain(..).map(|(_, _, pr)| pr));
+                // `one_past` is empty unless `accept_one_past_max`.
+                if !problems.is_empty() {
+                    problems.extend(one_past.into_iter().map(|(_, _, pr)| pr));
                 } else {
                     for (at, pair, _) in one_past.into_iter().rev() {
                         pairs.insert(at.min(pairs.len()), pair);

@@ -53,11 +53,6 @@ impl Motor {
             _ => d,
         }
     }
-
-    /// Its position in per-motor arrays, 0..=3.
-    pub fn index(self) -> usize {
-        usize::from(self.0 - 1)
-    }
 }
 
 impl fmt::Display for Motor {
@@ -157,11 +152,6 @@ impl MotorSet {
     pub fn motors(self) -> impl Iterator<Item = Motor> {
         Motor::ALL.into_iter().filter(move |m| self.contains(m.0))
     }
-
-    /// Whether motor `m` is in the set.
-    pub fn has(self, m: Motor) -> bool {
-        self.contains(m.0)
-    }
 }
 
 impl From<Motor> for MotorSet {
@@ -222,6 +212,5 @@ mod tests {
         let mut v = PerMotor([10, 20, 30, 40]);
         v[Motor::F2] += 1;
         assert_eq!(Motor::ALL.map(|m| v[m]), [10, 21, 30, 40]);
-        assert_eq!(Motor::ALL.map(Motor::index), [0, 1, 2, 3]);
     }
 }

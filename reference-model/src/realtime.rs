@@ -11,7 +11,7 @@ use std::ops::RangeInclusive;
 
 use serde::Serialize;
 
-use crate::motor::MotorSet;
+use crate::motor::{Motor, MotorSet};
 use crate::params::ParamStore;
 use crate::spec::{BlockKind, Profile};
 
@@ -642,14 +642,10 @@ trait Repr {
     }
 }
 
-fn motor_index(m: Option<u8>) -> Option<usize> {
-    m.and_then(|m| usize::from(m).checked_sub(1)).filter(|i| *i < 4)
-}
-
 impl Repr for Control {
     const KIND: BlockKind = BlockKind::Control;
     fn slot(&mut self, motor: Option<u8>, flag: RtFlag) -> Option<&mut Option<i64>> {
-        let m = self.motors.get_mut(motor_index(motor)?)?;
+        let m = self.motor_mut(motor?)?;
         match flag {
             RtFlag::Lcv => Some(&mut m.velocity),
             RtFlag::Lcpg => Some(&mut m.gain),
@@ -660,7 +656,7 @@ impl Repr for Control {
         }
     }
     fn peek(&self, motor: Option<u8>, flag: RtFlag) -> Option<i64> {
-        let m = self.motors.get(motor_index(motor)?)?;
+        let m = Motor::new(motor?)?.pick(&self.motors);
         match flag {
             RtFlag::Lcv => m.velocity,
             RtFlag::Lcpg => m.gain,
@@ -678,7 +674,7 @@ impl Repr for Feedback {
         if flag == RtFlag::Lft {
             return motor.is_none().then_some(&mut self.temperature);
         }
-        let m = self.motors.get_mut(motor_index(motor)?)?;
+        let m = self.motor_mut(motor?)?;
         match flag {
             RtFlag::Lfv => Some(&mut m.velocity),
             RtFlag::Lfs => Some(&mut m.strain),
@@ -693,7 +689,7 @@ impl Repr for Feedback {
         if flag == RtFlag::Lft {
             return if motor.is_none() { self.temperature } else { None };
         }
-        let m = self.motors.get(motor_index(motor)?)?;
+        let m = Motor::new(motor?)?.pick(&self.motors);
         match flag {
             RtFlag::Lfv => m.velocity,
             RtFlag::Lfs => m.strain,
@@ -705,9 +701,6 @@ impl Repr for Feedback {
         }
     }
 }
-
-/// No values: what [`Feedback::motor`] and [`Control::motor`] give for a motor outside 1..=4.
-const NO_MOTOR: usize = 4;
 
 impl Control {
     /// A block with this header and no values yet.
@@ -725,12 +718,12 @@ impl Control {
 
     /// The values of motor `m` (1..=4; none for another number).
     pub fn motor(&self, m: u8) -> MotorControl {
-        self.motors.get(motor_index(Some(m)).unwrap_or(NO_MOTOR)).copied().unwrap_or_default()
+        Motor::new(m).map(|m| *m.pick(&self.motors)).unwrap_or_default()
     }
 
     /// The values of motor `m` to fill in, or `None` outside 1..=4.
     pub fn motor_mut(&mut self, m: u8) -> Option<&mut MotorControl> {
-        self.motors.get_mut(motor_index(Some(m))?)
+        Motor::new(m).map(|m| m.pick_mut(&mut self.motors))
     }
 
     /// The value of one field of a layout, if this block has it.
@@ -762,12 +755,12 @@ impl Feedback {
 
     /// The values of motor `m` (1..=4; none for another number).
     pub fn motor(&self, m: u8) -> MotorFeedback {
-        self.motors.get(motor_index(Some(m)).unwrap_or(NO_MOTOR)).copied().unwrap_or_default()
+        Motor::new(m).map(|m| *m.pick(&self.motors)).unwrap_or_default()
     }
 
     /// The values of motor `m` to fill in, or `None` outside 1..=4.
     pub fn motor_mut(&mut self, m: u8) -> Option<&mut MotorFeedback> {
-        self.motors.get_mut(motor_index(Some(m))?)
+        Motor::new(m).map(|m| m.pick_mut(&mut self.motors))
     }
 
     /// The value of one field of a layout, if this block has it.

@@ -1098,7 +1098,6 @@ impl Profile {
         }
         // RealTime flags: closed names and types, in field order (`order`, then listing).
         let mut rt_slots = Vec::new();
-        let mut orders = Vec::new();
         for (i, p) in f.params.iter().enumerate() {
             let Some(rt) = &p.rt else { continue };
             let flag = RtFlag::from_name(&p.name)
@@ -1112,12 +1111,11 @@ impl Profile {
             if flag.is_global() != (p.scope == Scope::Global) {
                 return Err(bad(format!("must have {} scope", if flag.is_global() { "global" } else { "motor" })));
             }
-            rt_slots.push(RtSlot { param: ParamId(i as u16), flag, ty });
-            orders.push(rt.order);
+            rt_slots.push((rt.order, RtSlot { param: ParamId(i as u16), flag, ty }));
         }
-        let mut by_order: Vec<usize> = (0..rt_slots.len()).collect();
-        by_order.sort_by_key(|k| orders.get(*k).copied().unwrap_or_default());
-        let rt_slots: Vec<RtSlot> = by_order.into_iter().filter_map(|k| rt_slots.get(k).copied()).collect();
+        // A stable sort: equal orders keep their listing order.
+        rt_slots.sort_by_key(|(order, _)| *order);
+        let rt_slots: Vec<RtSlot> = rt_slots.into_iter().map(|(_, s)| s).collect();
         for d in &f.decisions {
             d.check().map_err(&invalid)?;
         }
@@ -1373,6 +1371,14 @@ pub fn embedded(path: &str) -> Option<&'static str> {
     EMBEDDED_FILES.iter().find(|(p, _)| *p == path).map(|(_, t)| *t)
 }
 
+/// Loads `top` as the top file of a profile; its includes resolve to the embedded spec files.
+#[cfg(test)]
+fn load_top(top: &str) -> Result<Profile, SpecError> {
+    Profile::load_with("top.toml", &|p| {
+        if p == "top.toml" { Some(top.to_string()) } else { embedded(p).map(str::to_string) }
+    })
+}
+
 #[cfg(test)]
 mod evidence_tests {
     use super::*;
@@ -1392,32 +1398,20 @@ mod evidence_tests {
     #[test]
     fn the_loader_refuses_a_must_without_two_sources() {
         let seed = embedded("seed.toml").unwrap();
-        let resolve = |p: &str| {
-            if p == "top.toml" {
-                Some(format!(
-                    "{seed}\n[[decisions]]\nid = \"x-guess\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUST\"\nevidence = \"[code]\"\n"
-                ))
-            } else {
-                embedded(p).map(str::to_string)
-            }
-        };
-        let err = Profile::load_with("top.toml", &resolve).unwrap_err().to_string();
+        let top = format!(
+            "{seed}\n[[decisions]]\nid = \"x-guess\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUST\"\nevidence = \"[code]\"\n"
+        );
+        let err = load_top(&top).unwrap_err().to_string();
         assert!(err.contains("x-guess") && err.contains("at most SHOULD"), "{err}");
     }
 
     #[test]
     fn a_typo_in_a_decision_level_is_refused_at_load() {
         let seed = embedded("seed.toml").unwrap();
-        let resolve = |p: &str| {
-            if p == "top.toml" {
-                Some(format!(
-                    "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
-                ))
-            } else {
-                embedded(p).map(str::to_string)
-            }
-        };
-        match Profile::load_with("top.toml", &resolve) {
+        let top = format!(
+            "{seed}\n[[decisions]]\nid = \"x-typo\"\nclause = \"c\"\nresolution = \"r\"\nlevel = \"MUTS\"\nevidence = \"[doc]\"\n"
+        );
+        match load_top(&top) {
             Err(SpecError::Syntax { file, message }) => {
                 assert_eq!(file, "top.toml");
                 assert!(message.contains("MUTS") && message.contains("INFO"), "{message}");
@@ -1434,10 +1428,7 @@ mod closed_names_tests {
     /// Loads the seed with `extra` TOML appended to its top file.
     fn seed_with(extra: &str) -> Result<Profile, SpecError> {
         let seed = embedded("seed.toml").unwrap_or_default();
-        let resolve = |p: &str| {
-            if p == "top.toml" { Some(format!("{seed}\n{extra}")) } else { embedded(p).map(str::to_string) }
-        };
-        Profile::load_with("top.toml", &resolve)
+        load_top(&format!("{seed}\n{extra}"))
     }
 
     const FLAG: &str = "[[params]]\nname = \"{name}\"\nscope = \"{scope}\"\nsection = \"realtime\"\ndescription = \"d\"\nmin = 0\nmax = 1\ndefault = 0\nrt = {{ block = \"{block}\", size = {size}, signed = false, order = 9 }}\n";
@@ -1455,10 +1446,7 @@ mod closed_names_tests {
     fn seed_replacing(line: &str, by: &str) -> Result<Profile, SpecError> {
         let seed = embedded("seed.toml").unwrap_or_default();
         assert!(seed.contains(line), "the seed has no line `{line}`");
-        let top = seed.replacen(line, by, 1);
-        Profile::load_with("top.toml", &|p| {
-            if p == "top.toml" { Some(top.clone()) } else { embedded(p).map(str::to_string) }
-        })
+        load_top(&seed.replacen(line, by, 1))
     }
 
     #[test]

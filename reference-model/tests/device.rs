@@ -7,10 +7,10 @@ use std::time::Duration;
 
 use gcl_model::device::{FaultSet, MAX_EVENTS};
 use gcl_model::spec::embedded;
-use gcl_model::{Device, DeviceConfig, Event, Fault, Mode, Motor, Profile, StatusBits};
+use gcl_model::{Device, DeviceConfig, Event, Fault, Mode, Motor, StatusBits};
 
 mod support;
-use support::{hand, hand_with, profile, send};
+use support::{hand, hand_with, load_top, profile, send};
 
 #[test]
 fn banner_at_power_up() {
@@ -158,20 +158,15 @@ fn bad_header_returns_to_supervisory() {
 
 #[test]
 fn manual_example_43_feedback_is_8_bytes() {
-    let mut d = hand("bh8-262-4.3");
-    send(&mut d, "HI");
-    send(&mut d, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
-    send(&mut d, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
-    send(&mut d, "PSET LFT 1");
-    assert_eq!(send(&mut d, "124LOOP"), "124LOOP*");
-    assert_eq!(d.rt_layout().unwrap().feedback().size(), 8);
-    let mut e = hand("bh8-262-4.4");
-    send(&mut e, "HI");
-    send(&mut e, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
-    send(&mut e, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
-    send(&mut e, "PSET LFT 1");
-    send(&mut e, "124LOOP");
-    assert_eq!(e.rt_layout().unwrap().feedback().size(), 7);
+    for (profile, size) in [("bh8-262-4.3", 8), ("bh8-262-4.4", 7)] {
+        let mut d = hand(profile);
+        send(&mut d, "HI");
+        send(&mut d, "12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1");
+        send(&mut d, "4FSET LCV 0 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1");
+        send(&mut d, "PSET LFT 1");
+        assert_eq!(send(&mut d, "124LOOP"), "124LOOP*", "{profile}");
+        assert_eq!(d.rt_layout().unwrap().feedback().size(), size, "{profile}");
+    }
 }
 
 #[test]
@@ -294,10 +289,7 @@ fn the_line_rate_is_read_where_the_profile_says() {
     assert_eq!(d.baud(), 19200);
     // A hand whose `[hand] baud` is a fixed rate keeps it whatever BAUD says.
     let top = embedded("seed.toml").unwrap().replacen("baud = \"BAUD\"", "baud = 38400", 1);
-    let fixed = Profile::load_with("top.toml", &|f| {
-        if f == "top.toml" { Some(top.clone()) } else { embedded(f).map(str::to_string) }
-    })
-    .unwrap();
+    let fixed = load_top(&top).unwrap();
     let mut d = hand_with(Arc::new(fixed), DeviceConfig::default());
     assert_eq!(send(&mut d, "FSET BAUD 192"), "FSET BAUD 192\n\r=> ");
     assert_eq!(d.baud(), 38400);

@@ -4,7 +4,6 @@
 //! FDEF and RESET.
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::params::ParamStore;
@@ -17,12 +16,8 @@ use proptest::sample::select;
 const PROFILES: [&str; 3] = ["seed", "bh8-262-4.3", "bh8-262-4.4"];
 const PROMPT: &[u8] = b"\n\r=> ";
 
-fn profile(name: &str) -> Arc<Profile> {
-    Profile::builtin(name).unwrap()
-}
-
 mod support;
-use support::{hand, send, send_bytes};
+use support::{hand, profile, send, send_bytes};
 
 fn count(haystack: &[u8], needle: &[u8]) -> usize {
     haystack.windows(needle.len()).filter(|w| *w == needle).count()

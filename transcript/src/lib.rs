@@ -481,15 +481,7 @@ pub fn format_duration(d: Duration) -> String {
 /// Escapes bytes for a transcript string: [`gcl_model::escape::escape`], plus `"` as `\x22`
 /// and `{` as `\x7B` (they delimit strings and elisions).
 pub fn escape_text(bytes: &[u8]) -> String {
-    let mut s = String::with_capacity(bytes.len());
-    for &b in bytes {
-        match b {
-            b'"' => s.push_str("\\x22"),
-            b'{' => s.push_str("\\x7B"),
-            _ => s.push_str(&gcl_model::escape::escape(&[b])),
-        }
-    }
-    s
+    gcl_model::escape::escape_also(bytes, b"\"{")
 }
 
 /// Writes bytes as space-separated upper-case hex.

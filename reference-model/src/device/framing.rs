@@ -36,9 +36,7 @@ impl Device {
         if b == framing.abort {
             self.line.clear();
             self.overflow = false;
-            self.last_status = StatusBits::empty();
-            self.push_event(Event::LineDone(StatusBits::empty()));
-            self.prompt();
+            self.end_line(StatusBits::empty());
         } else if b == framing.terminator {
             let line = std::mem::take(&mut self.line);
             let overflow = std::mem::replace(&mut self.overflow, false);

@@ -82,14 +82,10 @@ impl Device {
                 let status = StatusBits::from_bits_truncate(self.profile.hand.bad_header_status);
                 if self.has(Fault::StayInLoop) {
                     self.state = State::Loop(rt);
-                    self.print_line(&format!("ERR {}", status.code()));
-                    self.prompt();
-                    self.last_status = status;
-                    self.push_event(Event::LineDone(status));
                 } else {
                     self.leave_loop();
-                    self.end_line(status);
                 }
+                self.end_line(status);
             }
         }
     }

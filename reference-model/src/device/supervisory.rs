@@ -20,9 +20,7 @@ impl Device {
         match grammar::parse_line_with(&self.profile, line, opts) {
             Ok(Line::Empty) if self.has(Fault::EmptyLineError) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             Ok(Line::Empty) => {
-                self.last_status = StatusBits::empty();
-                self.push_event(Event::LineDone(StatusBits::empty()));
-                self.prompt();
+                self.end_line(StatusBits::empty());
                 if self.has(Fault::EmptyLineTwoPrompts) {
                     self.prompt();
                 }
@@ -259,13 +257,7 @@ impl Device {
             | CommandKind::MotorListAll
             | CommandKind::GlobalList
             | CommandKind::GlobalListAll => {
-                let scope = if matches!(kind, CommandKind::MotorList | CommandKind::MotorListAll) {
-                    Scope::Motor
-                } else {
-                    Scope::Global
-                };
-                let all = matches!(kind, CommandKind::MotorListAll | CommandKind::GlobalListAll);
-                for id in self.listed(kind, scope, all) {
+                for id in self.listed(kind) {
                     let p = profile.param(id);
                     let line = format!("{} {}  {}", p.name, if p.read_only { "RO" } else { "RW" }, p.description);
                     self.print_line(&line);
@@ -276,13 +268,7 @@ impl Device {
             | CommandKind::MotorListAllValues
             | CommandKind::GlobalListValues
             | CommandKind::GlobalListAllValues => {
-                let scope = if matches!(kind, CommandKind::MotorListValues | CommandKind::MotorListAllValues) {
-                    Scope::Motor
-                } else {
-                    Scope::Global
-                };
-                let all = matches!(kind, CommandKind::MotorListAllValues | CommandKind::GlobalListAllValues);
-                for id in self.listed(kind, scope, all) {
+                for id in self.listed(kind) {
                     let line = self.value_line(id, motors, true);
                     self.print_line(&line);
                 }
@@ -329,9 +315,28 @@ impl Device {
         }
     }
 
-    /// The parameters a list command shows. The seed's FLISTA/FLISTAV list every parameter
-    /// (motor and hand) in FGET order; bh8-262 splits motor and global lists.
-    pub(super) fn listed(&self, kind: CommandKind, scope: Scope, all: bool) -> Vec<ParamId> {
+    /// The parameters a list command shows: the motor lists show motor parameters, the global
+    /// lists global ones, and only the "all" lists show advanced ones. The seed's FLISTA/FLISTAV
+    /// list every parameter (motor and hand) in FGET order; bh8-262 splits motor and global lists.
+    pub(super) fn listed(&self, kind: CommandKind) -> Vec<ParamId> {
+        let scope = if matches!(
+            kind,
+            CommandKind::MotorList
+                | CommandKind::MotorListAll
+                | CommandKind::MotorListValues
+                | CommandKind::MotorListAllValues
+        ) {
+            Scope::Motor
+        } else {
+            Scope::Global
+        };
+        let all = matches!(
+            kind,
+            CommandKind::MotorListAll
+                | CommandKind::GlobalListAll
+                | CommandKind::MotorListAllValues
+                | CommandKind::GlobalListAllValues
+        );
         let profile = &self.profile;
         let seed_style = matches!(kind, CommandKind::MotorListAll | CommandKind::MotorListAllValues)
             && profile.command_of_kind(CommandKind::GlobalList).is_none();

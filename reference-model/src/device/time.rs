@@ -125,7 +125,6 @@ impl Device {
                 // A HI that stalled before the open stop leaves the motor uninitialised.
                 self.motors[m].initialized = false;
             }
-            self.motors[m].powered = hold;
             return;
         }
         if t == Termination::Breakaway {

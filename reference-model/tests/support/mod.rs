@@ -7,11 +7,19 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::escape::{escape, unescape};
+use gcl_model::spec::{SpecError, embedded};
 use gcl_model::{Device, DeviceConfig, Profile};
 
 /// A built-in profile.
 pub fn profile(name: &str) -> Arc<Profile> {
     Profile::builtin(name).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Loads `top` as the top file of a profile; its includes resolve to the embedded spec files.
+pub fn load_top(top: &str) -> Result<Profile, SpecError> {
+    Profile::load_with("top.toml", &|f| {
+        if f == "top.toml" { Some(top.to_string()) } else { embedded(f).map(str::to_string) }
+    })
 }
 
 /// A powered-up hand of a built-in profile (noise seed 5), banner taken.
