@@ -30,7 +30,6 @@ use std::time::{Duration, Instant};
 
 use gcl_model::Profile;
 use serde::Serialize;
-use sha2::{Digest, Sha256};
 
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
 use self::case::{BuiltCase, NotACase, build_case};
@@ -306,8 +305,7 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
 /// The content-hash name of a corpus entry.
 pub fn corpus_name(actions: &[HostAction]) -> String {
     let json = serde_json::to_vec(actions).unwrap_or_default();
-    let h = Sha256::digest(&json);
-    format!("{}.json", h.iter().take(10).map(|b| format!("{b:02x}")).collect::<String>())
+    format!("{}.json", &crate::certify::sha256_hex(&json)[..20])
 }
 
 /// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
