@@ -341,10 +341,10 @@ fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
 /// A worker's connection to the target: reopened when it fails; for `sim` targets a fresh
 /// hand for every case, so a case never depends on the one before.
 ///
-/// A hand outside this process is driven in two gears. A *quick* run starts with a drain
-/// that ends at the first quiet moment of a few byte-times and has no trailing wait: the
-/// case's end is known from the model, and whatever a hand sends after it is met by
-/// [`Hand::settle`] before the next case. A *thorough* run keeps the replayer's
+/// A hand outside this process is driven in two gears. A *quick* run follows the drain of
+/// [`Hand::settle`], which ends at the first quiet moment of a few byte-times, and has no
+/// trailing wait: the case's end is known from the model, and whatever a hand sends after it
+/// is met by the next case's settle. A *thorough* run keeps the replayer's
 /// quiet drain and trailing wait. Nothing is reported on a quick run alone: a failure, or
 /// bytes left over after a case, is judged again by a thorough run (see `worker`).
 struct Hand<'o> {
@@ -421,20 +421,11 @@ impl Hand<'_> {
             }
             ro.silent_wait = policy.silent_wait;
         }
-        let quick = self.quick(thorough);
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
-        let quiet = self.quick_quiet();
-        if quick {
-            let drained = crate::replay::discard(self.link()?.as_mut(), quiet, ro.drain_limit);
-            match drained {
-                Ok(_) => {}
-                Err(_) => {
-                    self.link = None;
-                    return self.run(t, true);
-                }
-            }
+        // A quick run's drain is the one [`Hand::settle`] made just before it.
+        if self.quick(thorough) {
             ro.drain_quiet = Duration::ZERO;
             ro.trailing = Duration::ZERO;
         }
