@@ -442,9 +442,10 @@ impl Hand<'_> {
 
 /// The signature of a failed replay, `None` for a pass.
 pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
+    // A pass (most cases) has no signature: decided before the transcript is copied into a case.
+    let step = out.failed_step()?;
     let case = Case { profile: p.id.clone(), transcript: t.clone() };
     let (sig, _) = crate::triage::signature(&case, out, p)?;
-    let step = out.failed_step().unwrap_or(0);
     let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
     let banner = crate::record::BANNER_TEXT;
     let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
