@@ -23,6 +23,10 @@ pub const DECISIONS_KEY: &str = "x-decisions";
 /// The clause prefix naming a decision a case checks.
 pub const DECISION_CLAUSE: &str = "decision:";
 
+/// The comment before a case's first step after its preamble: where what the case checks
+/// begins (the fuzzer seeds its corpus from the steps after it).
+pub(crate) const CHECK_COMMENT: &str = "the check";
+
 /// An inclusive range of values.
 pub(crate) type Range = (i64, i64);
 
@@ -182,7 +186,7 @@ impl CaseB {
         if motion {
             self = self.requires(Requirement::Motion).line("HI");
         }
-        self.comment("the check")
+        self.comment(CHECK_COMMENT)
     }
 
     /// A step of a case script, its answer written exactly.
