@@ -357,7 +357,8 @@ pub fn build_case(
     let aborted = format!("ERR {}", p.hand.abort_status).into_bytes();
     if p.hand.abort_status != 0
         && def.plans.iter().zip(&caps).any(|(pl, c)| {
-            pl.step.action.wire_bytes(term) == [p.framing.abort] && c.output.windows(aborted.len()).any(|w| w == aborted)
+            pl.step.action.wire_bytes(term) == [p.framing.abort]
+                && c.output.windows(aborted.len()).any(|w| w == aborted)
         })
         && !def.requires.contains(&Requirement::AbortTiming)
     {
