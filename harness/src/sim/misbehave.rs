@@ -256,10 +256,12 @@ impl Misbehave {
     }
 }
 
-const PROMPT: &[u8] = b"=> ";
-const EOL: &[u8] = b"\n\r";
-
+/// Where `needle` first occurs in `hay` (an empty needle, as a loaded profile's framing may
+/// give, occurs nowhere).
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    if needle.is_empty() {
+        return None;
+    }
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
@@ -289,10 +291,12 @@ fn apply(
     power_up: &[u8],
     out: &mut Shaped,
 ) -> Option<String> {
+    let framing = &device.profile().framing;
+    let (eol, prompt) = (framing.line_ending.as_bytes(), framing.prompt.as_bytes());
     let b = &mut out.bytes;
     let sup = kind == AnswerKind::Supervisory;
-    let ends_prompt = b.ends_with(PROMPT);
-    let echo_end = find(b, EOL);
+    let ends_prompt = b.ends_with(prompt);
+    let echo_end = find(b, eol);
     match op {
         Operator::DelayBelow | Operator::DelayAbove => {
             if b.is_empty() || out.hold.is_some() {
@@ -300,7 +304,7 @@ fn apply(
             }
             let t = pick(&COMMON_TIMEOUTS, arg);
             let d = if op == Operator::DelayBelow { t * 9 / 10 } else { t * 11 / 10 };
-            let at = if ends_prompt && arg / 8 % 2 == 1 { b.len() - PROMPT.len() } else { 0 };
+            let at = if ends_prompt && arg / 8 % 2 == 1 { b.len() - prompt.len() } else { 0 };
             out.hold = Some((at, d));
             let whr = if at == 0 { "the answer" } else { "the prompt" };
             Some(format!("{whr} held back {} ms", d.as_millis()))
@@ -309,7 +313,7 @@ fn apply(
             if !sup || !ends_prompt {
                 return None;
             }
-            b.truncate(b.len() - PROMPT.len());
+            b.truncate(b.len() - prompt.len());
             Some("prompt left out".into())
         }
         Operator::BadPrompt => {
@@ -317,7 +321,7 @@ fn apply(
                 return None;
             }
             let bad = pick::<&[u8]>(&[b"=>", b"> ", b"=>  ", b"-> "], arg);
-            b.truncate(b.len() - PROMPT.len());
+            b.truncate(b.len() - prompt.len());
             b.extend_from_slice(bad);
             Some(format!("prompt sent as \"{}\"", gcl_model::escape::escape(bad)))
         }
@@ -345,8 +349,8 @@ fn apply(
                 return None;
             }
             let extra: Vec<u8> = match arg % 4 {
-                0 => b"\n\r=> ".to_vec(),
-                1 => EOL.to_vec(),
+                0 => [eol, prompt].concat(),
+                1 => eol.to_vec(),
                 2 => vec![0],
                 _ => noise(arg, 4),
             };
@@ -361,10 +365,10 @@ fn apply(
                 arg,
             );
             b.truncate(e);
-            b.extend_from_slice(EOL);
+            b.extend_from_slice(eol);
             b.extend_from_slice(err.as_bytes());
-            b.extend_from_slice(EOL);
-            b.extend_from_slice(PROMPT);
+            b.extend_from_slice(eol);
+            b.extend_from_slice(prompt);
             Some(format!("answered {err}"))
         }
         Operator::WrongEcho => {
@@ -391,9 +395,9 @@ fn apply(
             let mut v = Vec::with_capacity(b.len());
             let mut i = 0;
             while i < b.len() {
-                if b[i..].starts_with(EOL) {
+                if b[i..].starts_with(eol) {
                     v.extend_from_slice(b"\r\n");
-                    i += 2;
+                    i += eol.len();
                 } else {
                     v.push(b[i]);
                     i += 1;
@@ -405,7 +409,7 @@ fn apply(
         Operator::OverlongLine => {
             let e = echo_end.filter(|_| sup && ends_prompt)?;
             let n = pick(&[81usize, 256, 1024, 4096], arg);
-            let mut line = EOL.to_vec();
+            let mut line = eol.to_vec();
             line.extend(b"1234567890".iter().cycle().take(n));
             b.splice(e..e, line);
             Some(format!("a {n}-byte line added"))
@@ -420,7 +424,7 @@ fn apply(
                     "version suffix on the banner"
                 }
                 1 => {
-                    b.splice(end..end, b"\n\rCopyright (c) 2026 nobody".iter().copied());
+                    b.splice(end..end, [eol, b"Copyright (c) 2026 nobody"].concat());
                     "extra banner line"
                 }
                 2 => {
@@ -428,7 +432,7 @@ fn apply(
                     "banner in upper case"
                 }
                 _ => {
-                    let cut = if b[end..].starts_with(EOL) { end + 2 } else { end };
+                    let cut = if b[end..].starts_with(eol) { end + eol.len() } else { end };
                     b.drain(at..cut);
                     "first banner line missing"
                 }
@@ -464,7 +468,7 @@ fn apply(
             }
             let err = pick(&["ERR 2048", "ERR 1024", "ERR 32768"], arg);
             b.clear();
-            b.extend_from_slice(EOL);
+            b.extend_from_slice(eol);
             b.extend_from_slice(err.as_bytes());
             Some(format!("\\n\\r{err} in place of the feedback block"))
         }

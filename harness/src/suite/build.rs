@@ -12,6 +12,7 @@ use gcl_model::{DeviceConfig, Profile};
 
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_host::SimLink;
+use gcl_host::link::LinkError;
 use gcl_transcript::script::{Action, ScriptStep};
 use gcl_transcript::{Expect, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
 
@@ -21,6 +22,10 @@ pub const DECISIONS_KEY: &str = "x-decisions";
 
 /// The clause prefix naming a decision a case checks.
 pub const DECISION_CLAUSE: &str = "decision:";
+
+/// The comment before a case's first step after its preamble: where what the case checks
+/// begins (the fuzzer seeds its corpus from the steps after it).
+pub(crate) const CHECK_COMMENT: &str = "the check";
 
 /// An inclusive range of values.
 pub(crate) type Range = (i64, i64);
@@ -181,7 +186,7 @@ impl CaseB {
         if motion {
             self = self.requires(Requirement::Motion).line("HI");
         }
-        self.comment("the check")
+        self.comment(CHECK_COMMENT)
     }
 
     /// A step of a case script, its answer written exactly.
@@ -528,14 +533,24 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<E
 
 /// Runs a plan against a fresh simulated hand of `profile` and writes the golden transcript.
 pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript, String> {
-    let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
+    let caps = capture_plan(profile, &def.plans).map_err(|e| format!("case {} ({}): {e}", def.id, profile.id))?;
+    build_from(profile, def, &caps)
+}
+
+/// What a fresh simulated hand of `profile` answers to the plans' steps (shapes aside).
+pub(crate) fn capture_plan(profile: &Arc<Profile>, plans: &[Plan]) -> Result<Vec<Captured>, LinkError> {
     let mut link = SimLink::new(profile.clone(), DeviceConfig::default());
     let mut opts = RecordOptions::new(profile.clone());
     opts.timeout = Duration::from_secs(120);
-    let steps: Vec<ScriptStep> = def.plans.iter().map(|p| p.step.clone()).collect();
-    let caps = capture(&mut link, &steps, &opts).map_err(|e| fail(e.to_string()))?;
+    let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();
+    capture(&mut link, &steps, &opts)
+}
+
+/// [`build`] from the answers [`capture_plan`] gave for `def`'s plans.
+pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured]) -> Result<Transcript, String> {
+    let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
     let mut out = Vec::with_capacity(caps.len());
-    for (i, (plan, c)) in def.plans.iter().zip(&caps).enumerate() {
+    for (i, (plan, c)) in def.plans.iter().zip(caps).enumerate() {
         if c.timed_out {
             return Err(fail(format!("step {i} got no complete answer: \"{}\"", gcl_model::escape::escape(&c.output))));
         }
@@ -564,7 +579,7 @@ pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript,
     // The decisions the case rests on: those it checks, then those its steps touch.
     let mut decisions: Vec<String> =
         def.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
-    for d in super::depends::decisions_of(profile, &def.plans, &caps) {
+    for d in super::depends::decisions_of(profile, &def.plans, caps) {
         if !decisions.contains(&d) {
             decisions.push(d);
         }

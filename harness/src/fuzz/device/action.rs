@@ -630,8 +630,9 @@ pub fn simpler(a: &HostAction) -> Vec<HostAction> {
 /// once) [`HostAction::Raw`].
 pub fn from_transcript(p: &Profile, t: &gcl_transcript::Transcript) -> Vec<HostAction> {
     let fr = &p.framing;
-    // The preamble ends where the suite's "the check" comment stands.
-    let start = t.steps.iter().position(|s| s.comments.iter().any(|c| c == "the check")).unwrap_or(0);
+    // The preamble ends where the suite's check comment stands.
+    let check = crate::suite::build::CHECK_COMMENT;
+    let start = t.steps.iter().position(|s| s.comments.iter().any(|c| c == check)).unwrap_or(0);
     let mut out: Vec<HostAction> = Vec::new();
     for s in &t.steps[start..] {
         let Some(h) = &s.send else { continue };

@@ -17,8 +17,8 @@ use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
 
 use super::action::HostAction;
-use crate::record::{Captured, RecordOptions, capture};
-use crate::suite::build::{CaseB, FieldRule, Range, Shape, build, value_range};
+use crate::record::Captured;
+use crate::suite::build::{CaseB, FieldRule, Range, Shape, build_from, capture_plan, value_range};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
 
@@ -348,19 +348,17 @@ pub fn build_case(
         k = k.requires(Requirement::Eeprom);
     }
     let mut def = k.finish();
-    // The model's answers as the wire meets them, then the shapes from them.
-    let mut link = gcl_host::SimLink::new(p.clone(), DeviceConfig::default());
-    let mut ro = RecordOptions::new(p.clone());
-    ro.timeout = Duration::from_secs(120);
-    let steps: Vec<ScriptStep> = def.plans.iter().map(|pl| pl.step.clone()).collect();
-    let caps = capture(&mut link, &steps, &ro).map_err(|e| NotACase(e.to_string()))?;
+    // The model's answers as the wire meets them, then the shapes from them (and the
+    // transcript from the same answers).
+    let caps = capture_plan(p, &def.plans).map_err(|e| NotACase(e.to_string()))?;
     // A ^C the model answers with the abort status landed while a command ran (queued lines
     // and RealTime exits can start a motion no action named): only a hand moving in real
     // time answers it so.
     let aborted = format!("ERR {}", p.hand.abort_status).into_bytes();
     if p.hand.abort_status != 0
-        && steps.iter().zip(&caps).any(|(st, c)| {
-            st.action.wire_bytes(term) == [p.framing.abort] && c.output.windows(aborted.len()).any(|w| w == aborted)
+        && def.plans.iter().zip(&caps).any(|(pl, c)| {
+            pl.step.action.wire_bytes(term) == [p.framing.abort]
+                && c.output.windows(aborted.len()).any(|w| w == aborted)
         })
         && !def.requires.contains(&Requirement::AbortTiming)
     {
@@ -410,7 +408,7 @@ pub fn build_case(
             _ => false,
         })
         .count();
-    let transcript = build(p, &def).map_err(NotACase)?;
+    let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let mut fresh = gcl_host::SimLink::new(p.clone(), DeviceConfig::default());

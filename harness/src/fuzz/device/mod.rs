@@ -30,7 +30,6 @@ use std::time::{Duration, Instant};
 
 use gcl_model::Profile;
 use serde::Serialize;
-use sha2::{Digest, Sha256};
 
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
 use self::case::{BuiltCase, NotACase, build_case};
@@ -306,8 +305,7 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
 /// The content-hash name of a corpus entry.
 pub fn corpus_name(actions: &[HostAction]) -> String {
     let json = serde_json::to_vec(actions).unwrap_or_default();
-    let h = Sha256::digest(&json);
-    format!("{}.json", h.iter().take(10).map(|b| format!("{b:02x}")).collect::<String>())
+    format!("{}.json", &crate::certify::sha256_hex(&json)[..20])
 }
 
 /// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
@@ -343,10 +341,10 @@ fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
 /// A worker's connection to the target: reopened when it fails; for `sim` targets a fresh
 /// hand for every case, so a case never depends on the one before.
 ///
-/// A hand outside this process is driven in two gears. A *quick* run starts with a drain
-/// that ends at the first quiet moment of a few byte-times and has no trailing wait: the
-/// case's end is known from the model, and whatever a hand sends after it is met by
-/// [`Hand::settle`] before the next case. A *thorough* run keeps the replayer's
+/// A hand outside this process is driven in two gears. A *quick* run follows the drain of
+/// [`Hand::settle`], which ends at the first quiet moment of a few byte-times, and has no
+/// trailing wait: the case's end is known from the model, and whatever a hand sends after it
+/// is met by the next case's settle. A *thorough* run keeps the replayer's
 /// quiet drain and trailing wait. Nothing is reported on a quick run alone: a failure, or
 /// bytes left over after a case, is judged again by a thorough run (see `worker`).
 struct Hand<'o> {
@@ -423,20 +421,11 @@ impl Hand<'_> {
             }
             ro.silent_wait = policy.silent_wait;
         }
-        let quick = self.quick(thorough);
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
-        let quiet = self.quick_quiet();
-        if quick {
-            let drained = crate::replay::discard(self.link()?.as_mut(), quiet, ro.drain_limit);
-            match drained {
-                Ok(_) => {}
-                Err(_) => {
-                    self.link = None;
-                    return self.run(t, true);
-                }
-            }
+        // A quick run's drain is the one [`Hand::settle`] made just before it.
+        if self.quick(thorough) {
             ro.drain_quiet = Duration::ZERO;
             ro.trailing = Duration::ZERO;
         }
@@ -453,9 +442,10 @@ impl Hand<'_> {
 
 /// The signature of a failed replay, `None` for a pass.
 pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
+    // A pass (most cases) has no signature: decided before the transcript is copied into a case.
+    let step = out.failed_step()?;
     let case = Case { profile: p.id.clone(), transcript: t.clone() };
     let (sig, _) = crate::triage::signature(&case, out, p)?;
-    let step = out.failed_step().unwrap_or(0);
     let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
     let banner = crate::record::BANNER_TEXT;
     let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
