@@ -73,8 +73,8 @@ pub struct Verdict {
 pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
     let mut v = Vec::new();
     let report = detect::crash_report(&r.stderr);
-    match &r.end {
-        HostEnd::Signal(s) => {
+    match (&r.end, &report) {
+        (HostEnd::Signal(s), _) => {
             let frames = report.as_ref().map(|c| format!(" ({})", c.signature)).unwrap_or_default();
             let name = detect::signal_name(*s);
             v.push(Verdict {
@@ -83,21 +83,22 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 message: format!("the host died of {name}{frames}"),
             });
         }
-        _ if report.is_some() => {
-            let c = report.as_ref().map(|c| (c.signature.clone(), c.headline.clone())).unwrap_or_default();
-            v.push(Verdict { kind: FindingKind::Crash, signature: format!("crash: {}", c.0), message: c.1 });
-        }
-        HostEnd::Hung(state) => v.push(Verdict {
+        (_, Some(c)) => v.push(Verdict {
+            kind: FindingKind::Crash,
+            signature: format!("crash: {}", c.signature),
+            message: c.headline.clone(),
+        }),
+        (HostEnd::Hung(state), _) => v.push(Verdict {
             kind: FindingKind::Hang,
             signature: format!("hang: {state}"),
             message: format!("the host neither sent nor exited ({state})"),
         }),
-        HostEnd::OverBudget(state) => v.push(Verdict {
+        (HostEnd::OverBudget(state), _) => v.push(Verdict {
             kind: FindingKind::Hang,
             signature: format!("hang: over budget, {state}"),
             message: format!("the host overran its run budget ({state})"),
         }),
-        HostEnd::Exit(c) if !ok_exit_codes.contains(c) => {
+        (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
             v.push(Verdict {
                 kind: FindingKind::ExitCode,
@@ -105,7 +106,7 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 message: format!("the host exited with {c}: {}", crate::report::truncate_note(last.trim(), 200)),
             });
         }
-        HostEnd::Exit(_) => {}
+        (HostEnd::Exit(_), _) => {}
     }
     for x in &r.violations {
         v.push(Verdict {
