@@ -133,14 +133,13 @@ impl Weights {
     pub fn parse(list: &str) -> Result<Weights, String> {
         let mut v = Vec::new();
         for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (name, w) = match item.split_once('=') {
-                Some((n, w)) => {
-                    (n, w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?)
-                }
-                None => (item, 0),
-            };
+            let (name, weight) = item.split_once('=').map_or((item, None), |(n, w)| (n, Some(w)));
             let op: Operator = name.parse().map_err(|e: crate::sim::misbehave::UnknownOperator| e.to_string())?;
-            v.push((op, if w == 0 && !item.contains('=') { op.default_weight() } else { w }));
+            let w = match weight {
+                Some(w) => w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?,
+                None => op.default_weight(),
+            };
+            v.push((op, w));
         }
         if v.iter().all(|(_, w)| *w == 0) {
             return Err("no operator with a weight above 0".into());
