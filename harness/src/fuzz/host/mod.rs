@@ -363,14 +363,16 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
     s
 }
 
-/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`).
+/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`):
+/// the smaller schedule and its run, or `None` when none could go (the run that found it
+/// stands).
 pub fn minimize(
     opts: &FuzzOptions,
     schedule: &Schedule,
     signature: &str,
     runs: &mut u64,
     stop: &AtomicBool,
-) -> Result<(Schedule, RunResult), RunError> {
+) -> Result<Option<(Schedule, RunResult)>, RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
         let r = run_once_until(&opts.run, s, stop)?;
@@ -390,11 +392,7 @@ pub fn minimize(
             i += 1;
         }
     }
-    let r = match best_run {
-        Some(r) => r,
-        None => run_once_until(&opts.run, &best, stop)?,
-    };
-    Ok((best, r))
+    Ok(best_run.map(|r| (best, r)))
 }
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
@@ -439,7 +437,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let m = minimize(opts, &schedule, &sig, &mut runs, stop);
                 if let Ok(mut sh) = shared.lock() {
                     sh.minimize_runs += runs;
-                    if let Ok((s, mr)) = m {
+                    if let Ok(Some((s, mr))) = m {
                         let f = &mut sh.findings[k];
                         f.schedule = s;
                         f.fired = mr.fired;
