@@ -223,8 +223,8 @@ impl HostChecker {
     }
 
     fn end_line(&mut self) {
-        let line = std::mem::take(&mut self.line);
-        let text: Vec<u8> = line.iter().copied().filter(|&c| c != b'\n').collect();
+        // LF never enters the line (`host_bytes` grades it apart).
+        let text = std::mem::take(&mut self.line);
         if text.iter().all(|c| c.is_ascii_whitespace()) {
             if self.prev == Some(self.profile.framing.terminator) {
                 self.violate(HostClause::LineEnding, "CR CR", "an empty line (two CRs in a row)".into());
