@@ -68,8 +68,7 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
         ));
     }
     if let Some(g) = &opts.golden {
-        let want: Vec<u8> =
-            g.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|h| h.bytes.iter().copied()).collect();
+        let want = g.host_bytes();
         let got: Vec<u8> = r
             .exchanges
             .iter()

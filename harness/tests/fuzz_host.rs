@@ -9,8 +9,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gcl_harness::check_host::{CheckHostOptions, check_host};
@@ -317,8 +317,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
             minimize: false,
             guided: true,
         };
-        let fired = Arc::new(Mutex::new(0));
-        let c = fuzz(&opts, &AtomicBool::new(false), &|_| *fired.lock().unwrap() += 1).unwrap();
+        let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 80);
         assert!(c.fired_at.len() > 5, "misbehaviours fired: {:?}", c.fired_at);
         let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();

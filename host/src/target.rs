@@ -181,6 +181,12 @@ impl Target {
             _ => None,
         }
     }
+
+    /// The profile the model speaks with this target: `chosen` (a `--profile`), else a `sim`
+    /// target's own, else [`DEFAULT_SIM_PROFILE`].
+    pub fn model_profile<'a>(&'a self, chosen: Option<&'a str>) -> &'a str {
+        chosen.or(self.sim_profile(None)).unwrap_or(DEFAULT_SIM_PROFILE)
+    }
 }
 
 /// Opens a link to `target`.
@@ -237,6 +243,16 @@ mod tests {
         for t in ["sim", "sim:seed", "serial:/dev/x?baud=9600", "tcp://h:1", "exec:a b"] {
             assert_eq!(t.parse::<Target>().unwrap().to_string(), t);
         }
+        // The model's profile: a chosen one, else the sim's own, else the default.
+        let (sim, seed, tcp) = (
+            Target::Sim { profile: None },
+            "sim:seed".parse::<Target>().unwrap(),
+            "tcp://h:1".parse::<Target>().unwrap(),
+        );
+        assert_eq!(seed.model_profile(Some("bh8-262-4.3")), "bh8-262-4.3");
+        assert_eq!(seed.model_profile(None), "seed");
+        assert_eq!(sim.model_profile(None), DEFAULT_SIM_PROFILE);
+        assert_eq!(tcp.model_profile(None), DEFAULT_SIM_PROFILE);
     }
 
     #[test]

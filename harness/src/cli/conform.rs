@@ -134,12 +134,7 @@ pub fn prepare(
     level: LevelFilter,
     keep_transcripts: bool,
 ) -> anyhow::Result<(ConformOptions, Vec<Case>)> {
-    let profile_name = a
-        .profile
-        .clone()
-        .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| gcl_host::target::DEFAULT_SIM_PROFILE.to_string());
-    let profile = load_profile(&profile_name)?;
+    let profile = load_profile(a.target.model_profile(a.profile.as_deref()))?;
     let cases = match &a.suite {
         Some(dir) => {
             let c = suite::load_profile(dir, &profile.id)

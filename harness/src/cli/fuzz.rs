@@ -101,12 +101,7 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     use gcl_harness::fuzz::device::{self as fd, Budget, FuzzOptions, Progress};
     use gcl_host::target::Target;
-    let name = a
-        .profile
-        .clone()
-        .or_else(|| a.target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| gcl_host::target::DEFAULT_SIM_PROFILE.to_string());
-    let profile = load_profile(&name)?;
+    let profile = load_profile(a.target.model_profile(a.profile.as_deref()))?;
     if !a.fault.is_empty() && !matches!(a.target, Target::Sim { .. }) {
         anyhow::bail!("--fault applies to sim targets only");
     }

@@ -67,21 +67,25 @@ impl HostArgs {
     pub fn host_run(&self, hand_seed: u64) -> anyhow::Result<HostRun> {
         let profile = load_profile(&self.profile)?;
         let time = TimeMode::from(self.time);
-        let pace = match (self.baud, time) {
-            (Some(b), _) => Pace::Fixed(b),
-            (None, TimeMode::Fast) => Pace::Unpaced,
-            (None, TimeMode::Real) => Pace::Hand,
-        };
         Ok(HostRun {
             command: self.command.clone(),
             transport: if self.tcp { Transport::Tcp } else { Transport::Pty },
             profile,
             time,
-            pace,
+            pace: self.pace(time),
             hand_seed,
             timeout_hang: self.timeout_hang,
             budget: self.run_budget,
         })
+    }
+
+    /// `--baud`, else unpaced in fast time and the hand's BAUD in real time.
+    fn pace(&self, time: TimeMode) -> Pace {
+        match (self.baud, time) {
+            (Some(b), _) => Pace::Fixed(b),
+            (None, TimeMode::Fast) => Pace::Unpaced,
+            (None, TimeMode::Real) => Pace::Hand,
+        }
     }
 
     /// Exit codes that pass.
@@ -354,13 +358,8 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     run.transport = info.transport;
     run.hand_seed = info.hand_seed;
     // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
-    let time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
-    if time != run.time {
-        run.time = time;
-        if args.host.baud.is_none() {
-            run.pace = if time == TimeMode::Real { Pace::Hand } else { Pace::Unpaced };
-        }
-    }
+    run.time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
+    run.pace = args.host.pace(run.time);
     let r = run_once(&run, &schedule)?;
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {

@@ -10,7 +10,7 @@ use anyhow::Context;
 
 use super::{EXIT_OK, load_profile};
 use gcl_harness::record::{RecordOptions, record};
-use gcl_host::target::{DEFAULT_SIM_PROFILE, Target};
+use gcl_host::target::Target;
 use gcl_transcript::script::parse_script_bytes;
 use gcl_transcript::{Level, is_slug};
 
@@ -95,13 +95,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if !args.profiles.is_empty() {
         fields.profiles = args.profiles;
     }
-    let model = fields
-        .profiles
-        .first()
-        .cloned()
-        .or_else(|| target.sim_profile(None).map(str::to_string))
-        .unwrap_or_else(|| DEFAULT_SIM_PROFILE.to_string());
-    let profile = load_profile(&model)?;
+    let profile = load_profile(target.model_profile(fields.profiles.first().map(String::as_str)))?;
     if fields.profiles.is_empty() {
         fields.profiles.push(profile.id.clone());
     }

@@ -120,8 +120,7 @@ pub fn read(dir: &Path) -> Result<(BundleInfo, Schedule), BundleError> {
 
 /// Bytes as a transcript string.
 fn quote(b: &[u8]) -> String {
-    let e = gcl_model::escape::escape(b).replace('"', "\\x22").replace('{', "\\x7B");
-    format!("\"{e}\"")
+    format!("\"{}\"", gcl_transcript::escape_text(b))
 }
 
 /// The exchange of a finding as a `gcl-transcript 1` (see [`session_transcript`]).

@@ -183,48 +183,47 @@ impl HostChecker {
 
     /// Host bytes as the hand reads them.
     pub fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
-        let in_loop = device.mode() == Mode::Loop || self.mode == Mode::Loop;
-        let abort = self.profile.framing.abort;
-        let mut looping = in_loop;
+        let mut looping = device.mode() == Mode::Loop || self.mode == Mode::Loop;
         for &b in bytes {
             if looping {
                 self.realtime_byte(device, b, &mut looping);
-                self.prev = Some(b);
-                continue;
-            }
-            if b == abort {
-                self.line.clear();
-                self.pending = true;
-                self.broken = true;
-                self.last_command = Some("^C".into());
-                self.prev = Some(b);
-                continue;
-            }
-            if b == b'\n' {
-                self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
-                self.prev = Some(b);
-                continue;
-            }
-            if self.pending && !self.broken {
-                let cmd = self.last_command.clone().unwrap_or_default();
-                self.violate(
-                    HostClause::WaitsForAnswer,
-                    "sent before the prompt",
-                    format!("byte \"{}\" sent before the answer to {cmd} had ended", esc(&[b])),
-                );
-            }
-            if b == self.profile.framing.terminator {
-                self.end_line();
-            } else if self.line.len() < LINE_CAP {
-                self.line.push(b);
+            } else {
+                self.supervisory_byte(b);
             }
             self.prev = Some(b);
         }
     }
 
+    fn supervisory_byte(&mut self, b: u8) {
+        if b == self.profile.framing.abort {
+            self.line.clear();
+            self.pending = true;
+            self.broken = true;
+            self.last_command = Some("^C".into());
+            return;
+        }
+        if b == b'\n' {
+            self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
+            return;
+        }
+        if self.pending && !self.broken {
+            let cmd = self.last_command.clone().unwrap_or_default();
+            self.violate(
+                HostClause::WaitsForAnswer,
+                "sent before the prompt",
+                format!("byte \"{}\" sent before the answer to {cmd} had ended", esc(&[b])),
+            );
+        }
+        if b == self.profile.framing.terminator {
+            self.end_line();
+        } else if self.line.len() < LINE_CAP {
+            self.line.push(b);
+        }
+    }
+
     fn end_line(&mut self) {
-        let line = std::mem::take(&mut self.line);
-        let text: Vec<u8> = line.iter().copied().filter(|&c| c != b'\n').collect();
+        // LF never enters the line (`host_bytes` grades it apart).
+        let text = std::mem::take(&mut self.line);
         if text.iter().all(|c| c.is_ascii_whitespace()) {
             if self.prev == Some(self.profile.framing.terminator) {
                 self.violate(HostClause::LineEnding, "CR CR", "an empty line (two CRs in a row)".into());

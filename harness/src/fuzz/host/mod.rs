@@ -73,8 +73,8 @@ pub struct Verdict {
 pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
     let mut v = Vec::new();
     let report = detect::crash_report(&r.stderr);
-    match &r.end {
-        HostEnd::Signal(s) => {
+    match (&r.end, &report) {
+        (HostEnd::Signal(s), _) => {
             let frames = report.as_ref().map(|c| format!(" ({})", c.signature)).unwrap_or_default();
             let name = detect::signal_name(*s);
             v.push(Verdict {
@@ -83,21 +83,22 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 message: format!("the host died of {name}{frames}"),
             });
         }
-        _ if report.is_some() => {
-            let c = report.as_ref().map(|c| (c.signature.clone(), c.headline.clone())).unwrap_or_default();
-            v.push(Verdict { kind: FindingKind::Crash, signature: format!("crash: {}", c.0), message: c.1 });
-        }
-        HostEnd::Hung(state) => v.push(Verdict {
+        (_, Some(c)) => v.push(Verdict {
+            kind: FindingKind::Crash,
+            signature: format!("crash: {}", c.signature),
+            message: c.headline.clone(),
+        }),
+        (HostEnd::Hung(state), _) => v.push(Verdict {
             kind: FindingKind::Hang,
             signature: format!("hang: {state}"),
             message: format!("the host neither sent nor exited ({state})"),
         }),
-        HostEnd::OverBudget(state) => v.push(Verdict {
+        (HostEnd::OverBudget(state), _) => v.push(Verdict {
             kind: FindingKind::Hang,
             signature: format!("hang: over budget, {state}"),
             message: format!("the host overran its run budget ({state})"),
         }),
-        HostEnd::Exit(c) if !ok_exit_codes.contains(c) => {
+        (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
             v.push(Verdict {
                 kind: FindingKind::ExitCode,
@@ -105,7 +106,7 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 message: format!("the host exited with {c}: {}", crate::report::truncate_note(last.trim(), 200)),
             });
         }
-        HostEnd::Exit(_) => {}
+        (HostEnd::Exit(_), _) => {}
     }
     for x in &r.violations {
         v.push(Verdict {
@@ -132,14 +133,13 @@ impl Weights {
     pub fn parse(list: &str) -> Result<Weights, String> {
         let mut v = Vec::new();
         for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let (name, w) = match item.split_once('=') {
-                Some((n, w)) => {
-                    (n, w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?)
-                }
-                None => (item, 0),
-            };
+            let (name, weight) = item.split_once('=').map_or((item, None), |(n, w)| (n, Some(w)));
             let op: Operator = name.parse().map_err(|e: crate::sim::misbehave::UnknownOperator| e.to_string())?;
-            v.push((op, if w == 0 && !item.contains('=') { op.default_weight() } else { w }));
+            let w = match weight {
+                Some(w) => w.parse::<u32>().map_err(|_| format!("`{item}`: the weight must be a whole number"))?,
+                None => op.default_weight(),
+            };
+            v.push((op, w));
         }
         if v.iter().all(|(_, w)| *w == 0) {
             return Err("no operator with a weight above 0".into());
@@ -363,14 +363,16 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
     s
 }
 
-/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`).
+/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`):
+/// the smaller schedule and its run, or `None` when none could go (the run that found it
+/// stands).
 pub fn minimize(
     opts: &FuzzOptions,
     schedule: &Schedule,
     signature: &str,
     runs: &mut u64,
     stop: &AtomicBool,
-) -> Result<(Schedule, RunResult), RunError> {
+) -> Result<Option<(Schedule, RunResult)>, RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
         let r = run_once_until(&opts.run, s, stop)?;
@@ -390,11 +392,7 @@ pub fn minimize(
             i += 1;
         }
     }
-    let r = match best_run {
-        Some(r) => r,
-        None => run_once_until(&opts.run, &best, stop)?,
-    };
-    Ok((best, r))
+    Ok(best_run.map(|r| (best, r)))
 }
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
@@ -439,7 +437,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let m = minimize(opts, &schedule, &sig, &mut runs, stop);
                 if let Ok(mut sh) = shared.lock() {
                     sh.minimize_runs += runs;
-                    if let Ok((s, mr)) = m {
+                    if let Ok(Some((s, mr))) = m {
                         let f = &mut sh.findings[k];
                         f.schedule = s;
                         f.fired = mr.fired;

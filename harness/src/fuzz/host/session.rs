@@ -167,18 +167,18 @@ struct Tap(Arc<Mutex<Log>>);
 impl LineTap for Tap {
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
         let Ok(mut log) = self.0.lock() else { return };
+        let log = &mut *log;
         log.last_activity = Instant::now();
         log.checker.host_bytes(device, bytes);
-        let n = log.checker.commands().len();
-        let cmds = log.checker.commands().to_vec();
-        let awaiting = std::mem::take(&mut log.awaiting);
-        for (i, seen) in awaiting {
-            if n > seen {
-                log.reactions[i].2 = cmds[seen].clone();
-            } else {
-                log.awaiting.push((i, seen));
+        // A reaction is the first command sent after its misbehaviour.
+        let commands = log.checker.commands();
+        log.awaiting.retain(|&(i, seen)| match commands.get(seen) {
+            Some(c) => {
+                log.reactions[i].2 = c.clone();
+                false
             }
-        }
+            None => true,
+        });
         log.push(Dir::Host, bytes, Vec::new());
     }
 
