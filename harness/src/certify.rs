@@ -188,7 +188,12 @@ pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
 
 /// SHA-256 of bytes, lower-case hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+    hex(&Sha256::digest(bytes))
+}
+
+/// Bytes as lower-case hex (a digest's usual spelling).
+pub fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 fn safe_name(id: &str) -> String {
@@ -222,10 +227,6 @@ pub fn write_bundle(
         write_atomic(&dir.join(SIGNATURE), signature_text(key, lines.as_bytes()).as_bytes())?;
     }
     Ok(())
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 fn unhex(s: &str) -> Option<Vec<u8>> {

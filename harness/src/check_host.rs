@@ -164,7 +164,7 @@ pub fn host_suite_hash(with_operators: bool) -> String {
             h.update(format!("{}\n", o.name()));
         }
     }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+    crate::certify::hex(&h.finalize())
 }
 
 fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {

@@ -226,7 +226,11 @@ fn phrase(kind: &str) -> &'static str {
 /// Where a case's own check begins: the first step after a `# the check` comment (0 when the
 /// case has none: all of it is its check).
 fn check_start(case: &Case) -> usize {
-    case.transcript.steps.iter().position(|s| s.comments.iter().any(|c| c.contains("the check"))).unwrap_or(0)
+    case.transcript
+        .steps
+        .iter()
+        .position(|s| s.comments.iter().any(|c| c.contains(crate::suite::build::CHECK_COMMENT)))
+        .unwrap_or(0)
 }
 
 fn size(case: &Case) -> (usize, usize) {

@@ -244,7 +244,7 @@ pub fn suite_hash(cases: &[Case]) -> String {
         h.update(c.text().as_bytes());
         h.update([0]);
     }
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+    crate::certify::hex(&h.finalize())
 }
 
 #[derive(Serialize)]

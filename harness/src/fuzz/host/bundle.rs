@@ -13,7 +13,6 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
 use super::session::{Dir, Exchange, HostEnd};
 use super::{Finding, FindingKind};
@@ -76,8 +75,7 @@ pub enum BundleError {
 
 /// The folder name of a finding: its kind and a short hash of its signature.
 pub fn dir_name(kind: FindingKind, signature: &str) -> String {
-    let h = Sha256::digest(signature.as_bytes());
-    format!("{}-{:02x}{:02x}{:02x}{:02x}", kind.name(), h[0], h[1], h[2], h[3])
+    format!("{}-{}", kind.name(), &crate::certify::sha256_hex(signature.as_bytes())[..8])
 }
 
 /// Writes a finding's bundle under `out`; returns its folder.
