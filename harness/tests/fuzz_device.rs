@@ -286,6 +286,15 @@ fn the_report_validates_against_its_schema_with_one_junit_testcase_per_finding()
     let junit = std::fs::read_to_string(&files[1]).unwrap();
     assert_eq!(junit.matches("<testcase ").count(), s.findings.len());
     assert_eq!(junit.matches("<failure ").count(), s.findings.len());
+    // Well-formed XML, as a CI system's parser reads it (the transcripts hold `<`, `&`, quotes).
+    let mut xml = quick_xml::Reader::from_str(&junit);
+    loop {
+        match xml.read_event() {
+            Ok(quick_xml::events::Event::Eof) => break,
+            Ok(_) => {}
+            Err(e) => panic!("junit.xml is not well-formed at {}: {e}\n{junit}", xml.buffer_position()),
+        }
+    }
     let html = std::fs::read_to_string(&files[2]).unwrap();
     for f in &s.findings {
         assert!(html.contains("gcl-transcript 1"), "the HTML holds each transcript");

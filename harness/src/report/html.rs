@@ -7,7 +7,8 @@ use std::fmt::Write;
 use super::{RunReport, Verdict};
 
 /// Escapes text for HTML element content and attribute values.
-fn esc(s: &str) -> String {
+/// Text escaped for HTML content and attribute values.
+pub(crate) fn esc(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for ch in s.chars() {
         match ch {

@@ -4,7 +4,7 @@
 //! Results are also streamed to `results.jsonl` as each case ends (one flushed line per
 //! case), so a crash or a kill mid-run leaves everything already decided readable.
 
-mod html;
+pub(crate) mod html;
 mod junit;
 
 use std::collections::BTreeMap;

@@ -6,10 +6,13 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
 use serde::Serialize;
 
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
+use crate::report::html::esc;
 
 /// The JSON report.
 #[derive(Debug, Clone, Serialize)]
@@ -82,36 +85,47 @@ impl FuzzReport {
     }
 }
 
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
-}
-
 /// JUnit XML: one testcase per distinct finding (each a failure), or one passing testcase
-/// when nothing was found.
-pub fn to_junit(r: &FuzzReport) -> String {
-    let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    let n = r.findings.len().max(1);
-    let _ = writeln!(
-        s,
-        "<testsuites><testsuite name=\"gcl fuzz device {}\" tests=\"{n}\" failures=\"{}\" time=\"{:.3}\">",
-        esc(&r.target),
-        r.findings.len(),
-        r.duration_ms as f64 / 1000.0
-    );
+/// when nothing was found. Written with quick_xml, as the conformance report's JUnit is.
+pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+    w.write_event(Event::Start(BytesStart::new("testsuites")))?;
+    let name = format!("gcl fuzz device {}", r.target);
+    let (tests, failures) = (r.findings.len().max(1).to_string(), r.findings.len().to_string());
+    let time = format!("{:.3}", r.duration_ms as f64 / 1000.0);
+    let mut suite = BytesStart::new("testsuite");
+    suite.push_attribute(("name", name.as_str()));
+    suite.push_attribute(("tests", tests.as_str()));
+    suite.push_attribute(("failures", failures.as_str()));
+    suite.push_attribute(("time", time.as_str()));
+    w.write_event(Event::Start(suite))?;
     if r.findings.is_empty() {
-        let _ = writeln!(s, "<testcase classname=\"fuzz.device\" name=\"no finding in {} runs\"/>", r.runs);
+        let passed = format!("no finding in {} runs", r.runs);
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("classname", "fuzz.device"));
+        tc.push_attribute(("name", passed.as_str()));
+        w.write_event(Event::Empty(tc))?;
     }
     for f in &r.findings {
-        let _ = writeln!(
-            s,
-            "<testcase classname=\"fuzz.device\" name=\"{}\"><failure message=\"{}\">{}</failure></testcase>",
-            esc(&f.signature.to_string()),
-            esc(&f.signature.to_string()),
-            esc(&format!("{}\n\n{}", f.diff, f.transcript_text))
-        );
+        let signature = f.signature.to_string();
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("classname", "fuzz.device"));
+        tc.push_attribute(("name", signature.as_str()));
+        w.write_event(Event::Start(tc))?;
+        let mut failure = BytesStart::new("failure");
+        failure.push_attribute(("message", signature.as_str()));
+        w.write_event(Event::Start(failure))?;
+        let body = format!("{}\n\n{}", f.diff, f.transcript_text);
+        w.write_event(Event::Text(BytesText::new(&body)))?;
+        w.write_event(Event::End(BytesEnd::new("failure")))?;
+        w.write_event(Event::End(BytesEnd::new("testcase")))?;
     }
-    s.push_str("</testsuite></testsuites>\n");
-    s
+    w.write_event(Event::End(BytesEnd::new("testsuite")))?;
+    w.write_event(Event::End(BytesEnd::new("testsuites")))?;
+    let mut out = String::from_utf8_lossy(&w.into_inner()).into_owned();
+    out.push('\n');
+    Ok(out)
 }
 
 /// A self-contained HTML page: summary, coverage table, each finding's transcript and diff.
@@ -160,9 +174,10 @@ pub fn to_html(r: &FuzzReport) -> String {
 
 /// Writes `fuzz-device.json`, `junit.xml` and `fuzz-device.html` into `dir`.
 pub fn write_all(dir: &Path, r: &FuzzReport) -> Result<Vec<PathBuf>, FuzzError> {
+    let junit = to_junit(r).map_err(|source| FuzzError::Out { path: dir.join("junit.xml"), source })?;
     let files = [
         ("fuzz-device.json", serde_json::to_string_pretty(r).unwrap_or_default() + "\n"),
-        ("junit.xml", to_junit(r)),
+        ("junit.xml", junit),
         ("fuzz-device.html", to_html(r)),
     ];
     let mut out = Vec::new();
