@@ -686,10 +686,7 @@ pub fn client(data: &[u8]) {
     let mut core = HostCore::new(Framing::of(p));
     let layout = RtLayout::compute(p, &ParamStore::defaults(p), MotorSet::from_motors([1, 2, 3, 4]));
     // A `C` block of that layout, every datum 0.
-    let mut zeros = realtime::Control::new(realtime::ControlHeader::DataFeedback);
-    for f in layout.control().fields() {
-        zeros.set(f, 0);
-    }
+    let zeros = realtime::Control::zeroed(realtime::ControlHeader::DataFeedback, layout.control());
     while let Some((&op, tail)) = rest.split_first() {
         rest = tail;
         match op {

@@ -708,6 +708,16 @@ impl Control {
         Control { header, motors: [MotorControl::default(); 4] }
     }
 
+    /// A block with this header and every field of `layout` set to 0: what a host sends
+    /// before it has values of its own.
+    pub fn zeroed(header: ControlHeader, layout: &BlockLayout) -> Control {
+        let mut control = Control::new(header);
+        for f in layout.fields() {
+            control.set(f, 0);
+        }
+        control
+    }
+
     /// Parses a whole control block of `layout` (length and header checked).
     pub fn parse(layout: &BlockLayout, block: &[u8]) -> Result<Control, BlockError> {
         let mut c = Control::new(ControlHeader::DataFeedback);
@@ -915,6 +925,16 @@ mod tests {
         let mut no_data = c;
         no_data.header = ControlHeader::Feedback;
         assert_eq!(no_data.emit(l.control(), &mut Vec::new()), Err(BlockError::Header(b'A')));
+    }
+
+    #[test]
+    fn a_zeroed_control_fills_every_field_of_its_layout() {
+        let l = layout();
+        let mut out = Vec::new();
+        Control::zeroed(ControlHeader::DataAck, l.control()).emit(l.control(), &mut out).unwrap();
+        assert_eq!(out, [b'c', 0, 0, 0, 0]);
+        // A bare `new` has no values, so it does not make a block of that layout.
+        assert!(Control::new(ControlHeader::DataAck).emit(l.control(), &mut Vec::new()).is_err());
     }
 
     /// The worked example: LFDPC 2, last reported 1500, position jumps to 2000.

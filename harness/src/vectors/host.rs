@@ -63,11 +63,7 @@ fn outcome(p: &Profile, request: &Request, stream: &[u8]) -> Result<(Vec<u8>, Va
             Request::Loop(line, l) => core.start_loop(line, l.clone()).map_err(|e| e.to_string()),
             Request::Block(h, l) => {
                 enter(core, l)?;
-                let mut control = Control::new(*h);
-                for f in l.control().fields() {
-                    control.set(f, 0);
-                }
-                core.block(&control).map_err(|e| e.to_string())
+                core.block(&Control::zeroed(*h, l.control())).map_err(|e| e.to_string())
             }
             Request::Abort => Ok(core.abort()),
             Request::AbortLoop(l) => {

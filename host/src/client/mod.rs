@@ -741,10 +741,7 @@ impl Hand {
         self.send(&bytes)?;
         // `LOOP` is answered by `*` or a refusal: `poll` gives nothing else.
         self.await_reply(self.timeouts.reply, &line)?;
-        let mut control = Control::new(ControlHeader::DataFeedback);
-        for f in layout.control().fields() {
-            control.set(f, 0);
-        }
+        let control = Control::zeroed(ControlHeader::DataFeedback, layout.control());
         self.rt = Some(RtSession { layout, control, feedback: None, positions, lfvc, lfdpc, updates: 0 });
         Ok(())
     }
