@@ -44,11 +44,11 @@ pub struct SuiteArgs {
     /// A flat per-step deadline in milliseconds for steps that do not set their own, instead of
     /// deadlines from the model (the model's time for the step at the link's baud × 2 + the
     /// margin, at least 500 ms on serial and 200 ms on TCP targets).
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = super::millis)]
     pub timeout: Option<u64>,
     /// Added to every model-derived step deadline, in milliseconds (default 50; raise it for a
     /// hand or bridge with latency the model does not know).
-    #[arg(long, value_name = "MS", conflicts_with = "timeout")]
+    #[arg(long, value_name = "MS", conflicts_with = "timeout", value_parser = super::millis)]
     pub margin: Option<u64>,
     /// Stop after N failing cases; the rest are reported as SKIP, "not run".
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]

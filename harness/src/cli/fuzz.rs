@@ -53,7 +53,7 @@ pub struct DeviceArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// How long to fuzz, e.g. `30s`, `5m` (default 60s unless --runs is given).
-    #[arg(long, value_parser = humantime::parse_duration, conflicts_with = "runs")]
+    #[arg(long, value_parser = super::duration, conflicts_with = "runs")]
     pub duration: Option<Duration>,
     /// How many cases to run.
     #[arg(long, value_name = "N")]

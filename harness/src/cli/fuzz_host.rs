@@ -21,7 +21,7 @@ use nix::sys::signalfd::SignalFd;
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
 fn duration(s: &str) -> Result<Duration, String> {
-    humantime::parse_duration(s).map_err(|e| format!("`{s}`: {e} (write durations as 30s, 500ms or 5m)"))
+    super::duration(s)
 }
 
 /// What `gcl fuzz host` and `gcl check-host` share: the line, the hand, the host.
@@ -51,7 +51,8 @@ pub struct HostArgs {
     run_budget: Duration,
     /// Exit codes of the host that are no finding (a host that reports a broken hand and
     /// exits 1 is doing its job).
-    #[arg(long, value_name = "LIST", default_value = "0,1", value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(long, value_name = "LIST", default_value = "0,1", value_delimiter = ',', allow_hyphen_values = true,
+          value_parser = clap::value_parser!(i32).range(0..=255))]
     ok_exit_codes: Vec<i32>,
     /// Write report.json, junit.xml and report.html into DIR.
     #[arg(long, value_name = "DIR")]

@@ -31,3 +31,28 @@ pub const EXIT_ERROR: u8 = 2;
 pub fn load_profile(name: &str) -> anyhow::Result<Arc<Profile>> {
     Ok(gcl_host::profiles::load(name)?)
 }
+
+/// The longest wait a millisecond argument may name (`--timeout`, `--quiet`, `--margin`): one
+/// hour. Beyond it a typo (`--quiet 1000000000000000`) would mean a run that never ends.
+pub const MAX_WAIT_MS: u64 = 3_600_000;
+
+/// The longest campaign a duration argument may name (`--duration`, `--run-budget`): 7 days.
+pub const MAX_DURATION: std::time::Duration = std::time::Duration::from_secs(7 * 24 * 3600);
+
+/// Parses a millisecond argument of at most [`MAX_WAIT_MS`].
+pub fn millis(s: &str) -> Result<u64, String> {
+    let ms: u64 = s.parse().map_err(|e| format!("`{s}`: {e} (a number of milliseconds)"))?;
+    if ms > MAX_WAIT_MS {
+        return Err(format!("{ms} ms is more than the limit of {MAX_WAIT_MS} ms (one hour)"));
+    }
+    Ok(ms)
+}
+
+/// Parses a duration argument (`30s`, `500ms`, `5m`) of at most [`MAX_DURATION`].
+pub fn duration(s: &str) -> Result<std::time::Duration, String> {
+    let d = humantime::parse_duration(s).map_err(|e| format!("`{s}`: {e} (write durations as 30s, 500ms or 5m)"))?;
+    if d > MAX_DURATION {
+        return Err(format!("`{s}` is more than the limit of {}", humantime::format_duration(MAX_DURATION)));
+    }
+    Ok(d)
+}

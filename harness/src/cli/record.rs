@@ -50,10 +50,10 @@ pub struct Args {
     #[arg(long = "requires")]
     requires: Vec<String>,
     /// Capture timeout of a step whose script sets none, in milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = 30_000)]
+    #[arg(long, value_name = "MS", default_value_t = 30_000, value_parser = super::millis)]
     timeout: u64,
     /// Silence that ends a `nowait:` step, in milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = 100)]
+    #[arg(long, value_name = "MS", default_value_t = 100, value_parser = super::millis)]
     quiet: u64,
     /// Write RESET banners exactly instead of as `{any}BarrettHand Firmware{any}`.
     #[arg(long)]

@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(long, default_value = "sim")]
     target: String,
     /// Wait of a step without `within`, in milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = gcl_transcript::DEFAULT_STEP_TIMEOUT.as_millis() as u64)]
+    #[arg(long, value_name = "MS", default_value_t = gcl_transcript::DEFAULT_STEP_TIMEOUT.as_millis() as u64, value_parser = super::millis)]
     timeout: u64,
     /// Send ^C and drain the answer before the first step.
     #[arg(long)]
