@@ -70,10 +70,11 @@ pub struct Certificate {
     pub date: String,
     /// The levels run (MUST and SHOULD).
     pub levels: Vec<String>,
-    /// `PASS` when every case of the levels ran and passed (or was a known failure), `FAIL`
-    /// when one did not; `PARTIAL: R of T cases` when only R of the T cases ran (or
-    /// `--partial` was given) and those passed, `FAIL (PARTIAL: R of T cases)` when not.
-    /// See [`verdict_text`].
+    /// `PASS` when every case of the levels ran and passed, `FAIL` when one did not;
+    /// `PARTIAL: R of T cases` when only R of the T cases ran (or `--partial` was given) and
+    /// those passed, `FAIL (PARTIAL: R of T cases)` when not. A known failure (XFAIL) narrows
+    /// the certificate as a skip does: `PARTIAL: P of T cases passed, K known failures
+    /// excused`. See [`verdict_text`].
     pub verdict: String,
     /// Whether the certificate covers only part of the suite.
     pub partial: bool,
@@ -83,6 +84,10 @@ pub struct Certificate {
     pub cases_total: usize,
     /// Every option that changed what ran.
     pub options: RunOptions,
+    /// The cases whose failure was excused as a known failure (XFAIL): the certificate does
+    /// not cover them.
+    #[serde(default)]
+    pub excused: Vec<String>,
     /// The verdict per spec clause.
     pub clauses: Vec<ClauseVerdict>,
 }
@@ -98,14 +103,25 @@ pub struct ClauseVerdict {
     pub cases: usize,
 }
 
-/// The certificate's verdict for a run: see [`Certificate::verdict`].
-pub fn verdict_text(passed: bool, partial: bool, cases_run: usize, cases_total: usize) -> String {
-    match (partial, passed) {
+/// The certificate's verdict for a run: see [`Certificate::verdict`]. `excused` is the
+/// number of known failures (XFAIL) among the `cases_run`; any makes the verdict partial.
+pub fn verdict_text(passed: bool, partial: bool, cases_run: usize, cases_total: usize, excused: usize) -> String {
+    let covered = if excused > 0 {
+        format!("{} of {cases_total} cases passed, {excused} known failures excused", cases_run.saturating_sub(excused))
+    } else {
+        format!("{cases_run} of {cases_total} cases")
+    };
+    match (partial || excused > 0, passed) {
         (false, true) => "PASS".to_string(),
         (false, false) => "FAIL".to_string(),
-        (true, true) => format!("PARTIAL: {cases_run} of {cases_total} cases"),
-        (true, false) => format!("FAIL (PARTIAL: {cases_run} of {cases_total} cases)"),
+        (true, true) => format!("PARTIAL: {covered}"),
+        (true, false) => format!("FAIL (PARTIAL: {covered})"),
     }
+}
+
+/// The cases of a report whose failure a known-failures list excused (XFAIL).
+pub fn excused_cases(report: &RunReport) -> Vec<String> {
+    report.cases.iter().filter(|c| c.verdict == Verdict::Xfail).map(|c| c.id.clone()).collect()
 }
 
 impl Certificate {
@@ -113,7 +129,8 @@ impl Certificate {
     /// levels in the whole suite, `partial` whether the operator asked for part of it.
     pub fn of_run(report: &RunReport, firmware_version: Vec<String>, cases_total: usize, partial: bool) -> Certificate {
         let cases_run = report.ran();
-        let partial = partial || cases_run < cases_total;
+        let excused = excused_cases(report);
+        let partial = partial || cases_run < cases_total || !excused.is_empty();
         Certificate {
             firmware_version,
             profile: report.profile.clone(),
@@ -122,11 +139,12 @@ impl Certificate {
             harness_version: report.tool.clone(),
             date: report.started.clone(),
             levels: vec!["MUST".into(), "SHOULD".into()],
-            verdict: verdict_text(report.passed(), partial, cases_run, cases_total),
+            verdict: verdict_text(report.passed(), partial, cases_run, cases_total, excused.len()),
             partial,
             cases_run,
             cases_total,
             options: RunOptions { partial, ..report.options.clone() },
+            excused,
             clauses: clause_verdicts(report),
         }
     }
@@ -158,7 +176,8 @@ pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
     same("suite hash", cert.suite_hash.clone(), report.suite_hash.clone());
     same("date", cert.date.clone(), report.started.clone());
     same("count of cases run", cert.cases_run.to_string(), report.ran().to_string());
-    let expected = verdict_text(report.passed(), cert.partial, report.ran(), cert.cases_total);
+    let excused = excused_cases(report);
+    let expected = verdict_text(report.passed(), cert.partial, report.ran(), cert.cases_total, excused.len());
     same("verdict", cert.verdict.clone(), expected);
     if !cert.partial {
         let certified = report.cases.iter().filter(|c| c.level == "MUST" || c.level == "SHOULD").count();
@@ -166,6 +185,16 @@ pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
         if cert.cases_run < cert.cases_total {
             out.push("a certificate that is not partial says cases did not run".to_string());
         }
+    }
+    if cert.excused != excused {
+        out.push(format!(
+            "the certificate excuses {} known failures, the report has {} (XFAIL)",
+            cert.excused.len(),
+            excused.len()
+        ));
+    }
+    if !cert.partial && !excused.is_empty() {
+        out.push("a certificate that is not partial excuses known failures".to_string());
     }
     let opts = RunOptions { partial: cert.partial, ..report.options.clone() };
     if cert.options != opts {
@@ -672,6 +701,30 @@ mod tests {
         assert!(problems.iter().any(|p| matches!(p, Tamper::Signature(m) if m.contains("unsigned"))));
     }
 
+    /// Issue 20 item 1: a run whose failures were all known failures is no PASS; the
+    /// certificate is partial and names the excused cases, and a forger who drops them from
+    /// the certificate is found.
+    #[test]
+    fn known_failures_narrow_a_certificate() {
+        let mut r = crate::report::tests::sample();
+        for c in &mut r.cases {
+            if c.verdict.fails_run() {
+                c.verdict = Verdict::Xfail;
+            }
+        }
+        r.tally();
+        let xfail: Vec<String> = r.cases.iter().filter(|c| c.verdict == Verdict::Xfail).map(|c| c.id.clone()).collect();
+        assert!(!xfail.is_empty() && r.passed());
+        let cert = Certificate::of_run(&r, vec![], r.cases.len(), false);
+        assert!(cert.partial && !cert.is_pass(), "{}", cert.verdict);
+        assert!(cert.verdict.contains("known failures excused"), "{}", cert.verdict);
+        assert_eq!(cert.excused, xfail);
+        assert!(disagreements(&cert, &r).is_empty(), "{:?}", disagreements(&cert, &r));
+        let forged = Certificate { verdict: "PASS".into(), partial: false, excused: vec![], ..cert.clone() };
+        let found = disagreements(&forged, &r);
+        assert!(found.iter().any(|m| m.contains("excuses 0 known failures")), "{found:?}");
+    }
+
     #[test]
     fn a_missing_folder_is_a_usage_error_not_tampering() {
         let dir = tempfile::tempdir().unwrap();
@@ -695,9 +748,10 @@ mod tests {
 
     #[test]
     fn partial_verdicts_say_so() {
-        assert_eq!(verdict_text(true, false, 336, 336), "PASS");
-        assert_eq!(verdict_text(true, true, 12, 336), "PARTIAL: 12 of 336 cases");
-        assert_eq!(verdict_text(false, true, 12, 336), "FAIL (PARTIAL: 12 of 336 cases)");
+        assert_eq!(verdict_text(true, false, 336, 336, 0), "PASS");
+        assert_eq!(verdict_text(true, true, 12, 336, 0), "PARTIAL: 12 of 336 cases");
+        assert_eq!(verdict_text(false, true, 12, 336, 0), "FAIL (PARTIAL: 12 of 336 cases)");
+        assert_eq!(verdict_text(true, false, 216, 216, 125), "PARTIAL: 91 of 216 cases passed, 125 known failures excused");
         let mut r = crate::report::tests::sample();
         for c in &mut r.cases {
             c.verdict = Verdict::Skip;

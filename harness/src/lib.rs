@@ -18,6 +18,7 @@ pub mod check_host;
 pub mod conform;
 pub mod deadline;
 pub mod fuzz;
+pub mod outputs;
 pub mod preflight;
 pub mod record;
 pub mod replay;

@@ -107,3 +107,142 @@ fn ok_exit_codes_are_exit_codes() {
         assert!(r.stderr.contains(bad), "{bad}: {}", r.stderr);
     }
 }
+
+/// Copies `vectors/suite` and `vectors/json` into `to` (as `to/suite`, `to/json`).
+fn copy_vectors(to: &Path) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors");
+    for sub in ["suite", "json"] {
+        let st = Command::new("cp").arg("-r").arg(root.join(sub)).arg(to.join(sub)).status().unwrap();
+        assert!(st.success());
+    }
+}
+
+/// Item 13: `suite check` and `vectors check` read the committed files through the one input
+/// reader: a FIFO is refused without waiting, `/dev/zero` and an 8 GB sparse file are refused
+/// without being read whole.
+#[test]
+fn checks_refuse_fifos_devices_and_huge_files() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_vectors(dir.path());
+    let json = dir.path().join("json");
+    let suite = dir.path().join("suite");
+    let victim = json.join("seed/grammar.json");
+    for (make, says) in [
+        (0, "named pipe"),
+        (1, "character device"),
+        (2, "larger than"),
+    ] {
+        std::fs::remove_file(&victim).unwrap();
+        match make {
+            0 => nix::unistd::mkfifo(&victim, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap(),
+            1 => std::os::unix::fs::symlink("/dev/zero", &victim).unwrap(),
+            _ => std::fs::File::create(&victim).unwrap().set_len(8 << 30).unwrap(),
+        }
+        for args in [
+            vec!["vectors", "check", "--dir", s(&json)],
+            vec!["suite", "check", "--dir", s(&suite), "--vectors-dir", s(&json)],
+        ] {
+            let r = gcl_bounded(None, &args, Duration::from_secs(120));
+            assert_eq!(r.code, Some(2), "{args:?} on {says}: {}{}", r.stdout, r.stderr);
+            assert!(r.stderr.contains(says) && r.stderr.contains("grammar.json"), "{args:?}: {}", r.stderr);
+        }
+    }
+}
+
+/// Item 15: `suite regenerate` writes new files: a golden or a vector that is a symbolic link
+/// to someone's file is replaced by the generated file, and the file it pointed at is left
+/// as it was.
+#[test]
+fn regenerate_never_writes_through_a_symlink() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_vectors(dir.path());
+    let victims = dir.path().join("victims");
+    std::fs::create_dir(&victims).unwrap();
+    let mut links = Vec::new();
+    for rel in ["suite/seed/framing-echo.gcl", "json/seed/status.json"] {
+        let victim = victims.join(rel.replace('/', "-"));
+        std::fs::write(&victim, b"precious").unwrap();
+        let at = dir.path().join(rel);
+        std::fs::remove_file(&at).unwrap();
+        std::os::unix::fs::symlink(&victim, &at).unwrap();
+        links.push((victim, at));
+    }
+    let suite = dir.path().join("suite");
+    let r = gcl_bounded(None, &["suite", "regenerate", "--dir", s(&suite)], Duration::from_secs(300));
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    for (victim, at) in links {
+        assert_eq!(std::fs::read(&victim).unwrap(), b"precious", "{} was written through", at.display());
+        assert!(!std::fs::symlink_metadata(&at).unwrap().file_type().is_symlink());
+        assert!(std::fs::read(&at).unwrap().len() > 100);
+    }
+    let leftovers: Vec<_> = walk(dir.path()).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+fn walk(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p.to_string_lossy().into_owned());
+        }
+    }
+    out
+}
+
+/// Items 1 and 3: a hand whose failures are all listed as known failures gets no PASS. Known
+/// failures need `--partial`; the certificate is PARTIAL and names the excused cases; and
+/// `--verify` without `--pubkey` says that nobody checked who made the bundle, exiting 1
+/// unless `--allow-unverified`.
+#[test]
+fn known_failures_narrow_a_certificate_and_verify_needs_a_key() {
+    let mut sim = sim_support::SimProcess::start(sim_support::Transport::Tcp, &["--profile", "seed", "--fault", "fget-reversed"]);
+    let target = sim.target();
+    let dir = tempfile::tempdir().unwrap();
+    let kf = dir.path().join("kf.toml");
+    // The cases fget-reversed fails among the parameter defaults (see `gcl conform`).
+    let failing = ["param-mov-default", "param-mcv-default", "param-ds-default", "param-dp-default", "param-fpg-default", "param-hold-default"];
+    let text: String = failing.iter().map(|c| format!("[[failure]]\ncase = \"{c}\"\nreason = \"FGET answers reversed\"\n\n")).collect();
+    std::fs::write(&kf, text).unwrap();
+    let out = dir.path().join("cert");
+    let r = gcl(&["certify", "--target", &target, "--profile", "seed", "--known-failures", s(&kf), "--out", s(&out)]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("--known-failures") && r.stderr.contains("--partial"), "{}", r.stderr);
+    let key = dir.path().join("key.pem");
+    assert_eq!(gcl(&["certify", "--keygen", s(&key)]).code, Some(0));
+    let r = gcl(&[
+        "certify", "--target", &target, "--profile", "seed", "--known-failures", s(&kf), "--partial", "--only",
+        "param-*-default", "--key", s(&key), "--out", s(&out),
+    ]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("certificate verdict: PARTIAL: 20 of"), "{}", r.stdout);
+    assert!(r.stdout.contains("6 known failures excused"), "{}", r.stdout);
+    let cert: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("certificate.json")).unwrap()).unwrap();
+    let mut excused: Vec<&str> = cert["excused"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    excused.sort();
+    let mut want = failing.to_vec();
+    want.sort();
+    assert_eq!(excused, want);
+    assert_eq!(cert["partial"], true);
+    sim.terminate();
+
+    // Verified without a key: intact, but authenticity unchecked, exit 1.
+    let r = gcl(&["certify", "--verify", s(&out)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("AUTHENTICITY NOT CHECKED"), "{}", r.stdout);
+    assert!(r.stdout.contains("known failures excused"), "{}", r.stdout);
+    let r = gcl(&["certify", "--verify", s(&out), "--allow-unverified"]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("AUTHENTICITY NOT CHECKED"), "{}", r.stdout);
+    let pubkey = format!("{}.pub", s(&key));
+    let r = gcl(&["certify", "--verify", s(&out), "--pubkey", &pubkey]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(!r.stdout.contains("NOT CHECKED"), "{}", r.stdout);
+    // An unsigned forgery (the signature dropped) is no better without a key.
+    std::fs::remove_file(out.join("MANIFEST.sig")).unwrap();
+    let r = gcl(&["certify", "--verify", s(&out)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("unsigned") && r.stdout.contains("AUTHENTICITY NOT CHECKED"), "{}", r.stdout);
+}

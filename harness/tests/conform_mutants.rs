@@ -263,7 +263,9 @@ fn certificates_are_written_and_tampering_is_caught() {
     assert_eq!(json["verdict"], "PASS");
     assert_eq!(json["levels"], serde_json::json!(["MUST", "SHOULD"]));
     assert!(std::fs::read_dir(cert.join("transcripts")).unwrap().count() > 100);
-    assert_eq!(gcl(&["certify", "--verify", c]).status.code(), Some(0));
+    // Unsigned: intact, but its authenticity was not checked (exit 1 unless allowed).
+    assert_eq!(gcl(&["certify", "--verify", c]).status.code(), Some(1));
+    assert_eq!(gcl(&["certify", "--verify", c, "--allow-unverified"]).status.code(), Some(0));
     let t = cert.join("transcripts/framing-echo.gcl");
     let text = std::fs::read_to_string(&t).unwrap();
     std::fs::write(&t, text.replacen("=> ", "=>", 1)).unwrap();

@@ -22,14 +22,17 @@ use gcl_host::target::open;
     override_usage = "gcl certify --target TARGET [--key FILE] [--out DIR] [OPTIONS]\n       \
 gcl certify --verify DIR [--pubkey FILE]\n       gcl certify --keygen FILE",
     after_help = "A certificate covers the whole suite at MUST and SHOULD. --skip, --only, --fault and --suite \
-change what runs, so they are refused unless --partial is given; a partial certificate says so in its verdict \
+change what runs (and --known-failures what counts), so they are refused unless --partial is given; a partial certificate says so in its verdict \
 (`PARTIAL: 12 of 336 cases`), and so does one where cases did not run (--no). Every option that changed what ran \
 is recorded in the certificate and the reports.\n\nKeys: --keygen FILE writes an Ed25519 private key to FILE \
 (PKCS#8 PEM, mode 0600) and its public key to FILE.pub (SPKI PEM); `openssl genpkey -algorithm ed25519` keys work \
 too. --key FILE signs the bundle's manifest into MANIFEST.sig. --verify checks the manifest, the signature (against \
 --pubkey FILE when given) and that the certificate agrees with the bundled report.json; an unsigned bundle is \
-reported as unsigned.\n\nExit codes: 0 certified (or, with --verify, intact); 1 a case failed or nothing ran (or \
-the bundle was tampered with, or is unsigned while --pubkey was given); 2 usage or infrastructure error (a missing \
+reported as unsigned. Without --pubkey, --verify says that authenticity was not checked and exits 1 unless \
+--allow-unverified is given. Known failures (--known-failures) narrow a certificate as a skip does: they need \
+--partial, and the certificate names the excused cases.\n\nExit codes: 0 certified (or, with --verify, intact and \
+signed by --pubkey, or intact with --allow-unverified); 1 a case failed or nothing ran (or the bundle was tampered \
+with, is unsigned while --pubkey was given, or its authenticity was not checked); 2 usage or infrastructure error (a missing \
 bundle folder, an unreadable key).\n\nExamples:\n  gcl certify --keygen lab-key.pem\n  gcl certify --target \
 serial:/dev/ttyUSB0?baud=9600 --profile bh8-262-4.3 --key lab-key.pem --out cert-4.34\n  gcl certify --verify \
 cert-4.34 --pubkey lab-key.pem.pub"
@@ -39,16 +42,22 @@ pub struct Args {
     /// running anything.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["target", "out", "key", "keygen", "partial"])]
     verify: Option<PathBuf>,
-    /// With --verify: the public key (PEM) the bundle must be signed by.
+    /// With --verify: the public key (PEM) the bundle must be signed by. Without it nothing
+    /// says who made the bundle, and --verify exits 1 unless --allow-unverified is given.
     #[arg(long, value_name = "FILE", requires = "verify")]
     pubkey: Option<PathBuf>,
+    /// With --verify and no --pubkey: exit 0 for an intact bundle although its authenticity
+    /// was not checked (it checks only that the files match the manifest and the report).
+    #[arg(long, requires = "verify", conflicts_with = "pubkey")]
+    allow_unverified: bool,
     /// Make a key pair: the private key in FILE, the public key in FILE.pub.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["target", "out", "key", "partial"])]
     keygen: Option<PathBuf>,
     /// Sign the bundle with this private key (PKCS#8 PEM).
     #[arg(long, value_name = "FILE")]
     key: Option<PathBuf>,
-    /// Allow --skip, --only, --fault and --suite: the certificate's verdict says PARTIAL.
+    /// Allow --skip, --only, --fault, --suite and --known-failures: the certificate's verdict
+    /// says PARTIAL.
     #[arg(long)]
     partial: bool,
     /// Where to write the bundle (it must not exist yet, or be empty).
@@ -95,7 +104,22 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                     cert.clauses.len(),
                     cert.verdict
                 )?;
-                Ok(EXIT_OK)
+                if !cert.excused.is_empty() {
+                    writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
+                }
+                if matches!(v.signed, Signed::ByTrustedKey(_)) {
+                    return Ok(EXIT_OK);
+                }
+                // Without a trusted key, "intact" says only that the files agree with each
+                // other: a forger who re-signs with their own key, or writes no signature,
+                // makes a bundle that is just as intact.
+                writeln!(
+                    w,
+                    "AUTHENTICITY NOT CHECKED: no --pubkey was given, so nothing says who made this bundle; a re-signed \
+or unsigned forgery verifies the same. Give --pubkey FILE{}",
+                    if args.allow_unverified { "" } else { " (or --allow-unverified to accept it anyway)" }
+                )?;
+                Ok(if args.allow_unverified { EXIT_OK } else { EXIT_FAIL })
             }
             Err(problems) => {
                 writeln!(w, "TAMPERED: {}", dir.display())?;
@@ -126,6 +150,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         if !suite_args.skip_decision.is_empty() {
             changed.push("--skip-decision");
         }
+        // A known failure excuses a case exactly as a skip does: the certificate does not
+        // cover it.
+        if suite_args.known_failures.is_some() {
+            changed.push("--known-failures");
+        }
         if !changed.is_empty() {
             anyhow::bail!(
                 "{} change what a certificate covers; give --partial to write a certificate that says it is partial",
@@ -138,6 +167,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if args.out.exists() && std::fs::read_dir(&args.out).map(|mut d| d.next().is_some()).unwrap_or(true) {
         anyhow::bail!("{} exists and is not empty; choose a new --out", args.out.display());
     }
+    // Held until the bundle is written: a second certify on the same folder is refused.
+    let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
+    let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
     let (opts, cases) = prepare(suite_args, LevelFilter::Should, true)?;
     let cases_total = cases.iter().filter(|c| LevelFilter::Should.admits(c.level())).count();
     // The firmware's own words first, so a certificate names what was tested.
@@ -154,10 +186,17 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let cert = Certificate::of_run(report, vers, cases_total, args.partial);
     // The streamed results are part of the run's record, but the bundle is the final word.
     let _ = std::fs::remove_file(args.out.join("results.jsonl"));
+    // The lock file is ours and no part of the bundle; the lock itself holds until the bundle
+    // is written.
+    let _ = std::fs::remove_file(&lock_file);
     write_bundle(&args.out, &cert, report, &out.transcripts, key.as_ref())?;
+    drop(held);
     write!(w, "{}", summary_text(report))?;
     writeln!(w, "  firmware: {}", cert.firmware_version.join(" / "))?;
     writeln!(w, "  certificate verdict: {}", cert.verdict)?;
+    if !cert.excused.is_empty() {
+        writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
+    }
     let how = match &key {
         Some(k) => format!("signed by key {}", fingerprint(&k.verifying_key())),
         None => "unsigned (give --key to sign it)".to_string(),

@@ -428,11 +428,10 @@ pub struct ResultStream {
 }
 
 impl ResultStream {
-    /// Creates (truncates) `dir/results.jsonl`, creating `dir`.
+    /// Creates `dir/results.jsonl` afresh (a new file, never written through a link), creating `dir`.
     pub fn create(dir: &Path) -> std::io::Result<ResultStream> {
-        std::fs::create_dir_all(dir)?;
         let path = dir.join("results.jsonl");
-        Ok(ResultStream { out: BufWriter::new(File::create(&path)?), path })
+        Ok(ResultStream { out: BufWriter::new(crate::outputs::create_stream(&path)?), path })
     }
 
     /// Appends one result and flushes it to the file.
@@ -448,20 +447,7 @@ impl ResultStream {
     }
 }
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder, synced, then
-/// renamed over the target. A kill leaves the old file or the new one, never a torn one.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir)?;
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path)
-}
+pub use crate::outputs::write_atomic;
 
 /// Writes `report.json`, `junit.xml` and `report.html` into `dir`.
 pub fn write_all(dir: &Path, report: &RunReport) -> std::io::Result<Vec<PathBuf>> {

@@ -367,10 +367,9 @@ pub fn regenerate(dir: &Path, cases: &[Case]) -> Result<CheckReport, SuiteError>
     for (rel, text) in expected_files(cases) {
         if before.stale.contains(&rel) || before.missing.contains(&rel) {
             let path = dir.join(&rel);
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent).map_err(io(parent))?;
-            }
-            std::fs::write(&path, text).map_err(io(&path))?;
+            // A new file renamed into place: a symbolic link at the name is replaced, never
+            // written through.
+            crate::outputs::write_atomic(&path, text.as_bytes()).map_err(io(&path))?;
         }
     }
     for rel in &before.extra {

@@ -313,7 +313,7 @@ pub fn check(dir: &Path, want: &BTreeMap<PathBuf, String>) -> Result<CheckReport
     let mut r = CheckReport { checked: want.len(), ..Default::default() };
     for (rel, text) in want {
         let path = dir.join(rel);
-        match std::fs::read(&path) {
+        match gcl_host::files::read_input(&path) {
             Ok(b) if b == text.as_bytes() => {}
             Ok(_) => r.stale.push(rel.clone()),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => r.missing.push(rel.clone()),
@@ -331,10 +331,9 @@ pub fn regenerate(dir: &Path, want: &BTreeMap<PathBuf, String>) -> Result<CheckR
     for (rel, text) in want {
         if before.stale.contains(rel) || before.missing.contains(rel) {
             let path = dir.join(rel);
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent).map_err(io(parent))?;
-            }
-            std::fs::write(&path, text).map_err(io(&path))?;
+            // A new file renamed into place: a symbolic link at the name is replaced, never
+            // written through.
+            crate::outputs::write_atomic(&path, text.as_bytes()).map_err(io(&path))?;
         }
     }
     for rel in &before.extra {

@@ -1,0 +1,182 @@
+//! Writing output files without trusting what is already there: every file `gcl` writes
+//! (reports, `results.jsonl`, certificates, findings, corpus entries, goldens and vectors,
+//! recordings) goes through [`write_atomic`] or [`create_stream`], and every folder a
+//! long-running command fills (`--out`, `--report`) is held with [`OutLock`].
+//!
+//! - A file is always a new file: a temporary beside the target, created with `O_EXCL |
+//!   O_NOFOLLOW` (so a planted symbolic link or an old temporary is never written through),
+//!   then renamed over the target. A symbolic link at the target's name is replaced, never
+//!   followed: its target is left untouched.
+//! - A write that fails (a full disk) removes its temporary and names the file it was writing.
+//! - Nothing here deletes a file it did not create.
+//!
+//! Must never: write through a symbolic link, truncate an existing file in place, or leave a
+//! temporary behind on an error.
+
+use std::fs::File;
+use std::io::{self, Write};
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The folder `path` lives in (`.` for a bare name).
+fn dir_of(path: &Path) -> &Path {
+    path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."))
+}
+
+/// An I/O error that names the file it concerns (what a person needs on a full disk).
+fn named(path: &Path, e: io::Error) -> io::Error {
+    io::Error::new(e.kind(), format!("{}: {e}", path.display()))
+}
+
+/// Creates a fresh temporary beside `path`: `.NAME.tmpPID.N`, `O_EXCL | O_NOFOLLOW`, mode 0644.
+fn create_temporary(path: &Path) -> io::Result<(PathBuf, File)> {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let dir = dir_of(path);
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    loop {
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(".{name}.tmp{}.{n}", std::process::id()));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .mode(0o644)
+            .custom_flags(nix::libc::O_NOFOLLOW)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(named(&tmp, e)),
+        }
+    }
+}
+
+/// Writes `bytes` to `path` atomically: a new temporary file in the same folder, synced, then
+/// renamed over the target. A kill leaves the old file or the new one, never a torn one; a
+/// symbolic link at `path` is replaced, never written through; an error (a full disk)
+/// removes the temporary and names `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let dir = dir_of(path);
+    std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
+    let (tmp, mut f) = create_temporary(path)?;
+    let result = f.write_all(bytes).and_then(|()| f.sync_all()).and_then(|()| std::fs::rename(&tmp, path));
+    drop(f);
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(named(path, e));
+    }
+    Ok(())
+}
+
+/// Creates `path` afresh for streaming into it (`results.jsonl`): a new file renamed into
+/// place at once, so an existing file or a symbolic link at `path` is replaced, never
+/// truncated or followed.
+pub fn create_stream(path: &Path) -> io::Result<File> {
+    let dir = dir_of(path);
+    std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
+    let (tmp, f) = create_temporary(path)?;
+    if let Err(e) = std::fs::rename(&tmp, path) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(named(path, e));
+    }
+    Ok(f)
+}
+
+/// The name of the lock file in a held output folder.
+pub const LOCK_FILE: &str = ".gcl.lock";
+
+/// A folder held by one running command: `DIR/.gcl.lock`, locked with `flock` for as long
+/// as the value lives (the kernel drops the lock when the process ends, kill -9 included).
+/// A second campaign or report on the same folder is refused instead of overwriting the
+/// first one's files.
+#[derive(Debug)]
+pub struct OutLock {
+    _lock: nix::fcntl::Flock<File>,
+}
+
+impl OutLock {
+    /// Takes `dir` (creating it) for `what` (`fuzz device`, `conform --report`, ...), or says
+    /// which process holds it.
+    pub fn acquire(dir: &Path, what: &str) -> io::Result<OutLock> {
+        std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
+        let path = dir.join(LOCK_FILE);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .mode(0o644)
+            .custom_flags(nix::libc::O_NOFOLLOW)
+            .open(&path)
+            .map_err(|e| named(&path, e))?;
+        let held = file.try_clone().map_err(|e| named(&path, e))?;
+        let Ok(lock) = nix::fcntl::Flock::lock(held, nix::fcntl::FlockArg::LockExclusiveNonblock) else {
+            let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            let holder = holder.lines().next().unwrap_or("another gcl").chars().take(200).collect::<String>();
+            return Err(io::Error::new(
+                io::ErrorKind::ResourceBusy,
+                format!("{} is in use by {holder}; wait for it to end or choose another folder", dir.display()),
+            ));
+        };
+        file.set_len(0)?;
+        writeln!(file, "gcl {what} (pid {})", std::process::id())?;
+        Ok(OutLock { _lock: lock })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn writes_replace_files_and_links_never_their_targets() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.json");
+        write_atomic(&p, b"old").unwrap();
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"new");
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, b"precious").unwrap();
+        let link = dir.path().join("b.json");
+        std::os::unix::fs::symlink(&victim, &link).unwrap();
+        write_atomic(&link, b"ours").unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+        assert_eq!(std::fs::read(&link).unwrap(), b"ours");
+        let stream = dir.path().join("results.jsonl");
+        std::os::unix::fs::symlink(&victim, &stream).unwrap();
+        let mut f = create_stream(&stream).unwrap();
+        f.write_all(b"line\n").unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+        assert_eq!(std::fs::read(&stream).unwrap(), b"line\n");
+        assert_eq!(names(dir.path()), ["a.json", "b.json", "results.jsonl", "victim"]);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_no_temporary_and_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // A folder where the file should be: the rename fails after the temporary is written.
+        let p = dir.path().join("finding.json");
+        std::fs::create_dir(&p).unwrap();
+        std::fs::write(p.join("x"), b"x").unwrap();
+        let e = write_atomic(&p, b"data").unwrap_err();
+        assert!(e.to_string().contains("finding.json"), "{e}");
+        assert_eq!(names(dir.path()), ["finding.json"]);
+    }
+
+    #[test]
+    fn a_held_folder_is_refused_until_its_holder_lets_go() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = OutLock::acquire(dir.path(), "fuzz device").unwrap();
+        let e = OutLock::acquire(dir.path(), "fuzz device").unwrap_err();
+        assert!(e.to_string().contains("in use by gcl fuzz device (pid"), "{e}");
+        drop(first);
+        OutLock::acquire(dir.path(), "conform --report").unwrap();
+    }
+}
