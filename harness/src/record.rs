@@ -70,7 +70,18 @@ pub struct Captured {
     pub layout: Option<RtLayout>,
     /// Whether the step ended at its timeout instead of its natural end.
     pub timed_out: bool,
+    /// Whether the step ended because the answer passed [`MAX_STEP_ANSWER`] (a flooding
+    /// hand); `output` then holds the first [`MAX_STEP_ANSWER`] bytes and the recording stops.
+    pub flooded: bool,
 }
+
+/// The most bytes one step's answer may hold: the longest real answer (a RESET banner, a
+/// parameter listing) is a few kilobytes; a hand past this floods, and the recording stops
+/// there instead of keeping everything it sends.
+pub const MAX_STEP_ANSWER: usize = 1 << 20;
+
+/// The most bytes of an answer an error message shows.
+const SHOWN_IN_ERRORS: usize = 200;
 
 /// Runs the steps against `link` and captures each answer. The link should be fresh or idle:
 /// anything it sends before the first step is drained first.
@@ -135,10 +146,15 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
             prompt_end
         };
         let mut timed_out = false;
+        let mut flooded = false;
         let cut = if step.action.ends_on_quiet() {
             loop {
                 let before = link.elapsed();
                 let n = link.recv(&mut buf, opts.quiet)?;
+                if buf.len() > MAX_STEP_ANSWER {
+                    flooded = true;
+                    break MAX_STEP_ANSWER;
+                }
                 if n == 0 || link.elapsed().saturating_sub(t0) >= timeout || link.elapsed() == before {
                     break buf.len();
                 }
@@ -147,6 +163,10 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
             loop {
                 if let Some(e) = end(&buf) {
                     break e;
+                }
+                if buf.len() > MAX_STEP_ANSWER {
+                    flooded = true;
+                    break MAX_STEP_ANSWER;
                 }
                 let spent = link.elapsed().saturating_sub(t0);
                 if spent >= timeout {
@@ -169,7 +189,11 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
             realtime: was_loop,
             layout,
             timed_out,
+            flooded,
         });
+        if flooded {
+            break;
+        }
     }
     Ok(out)
 }
@@ -263,7 +287,7 @@ pub enum RecordError {
     #[error(transparent)]
     Link(#[from] LinkError),
     /// A step got no complete answer before its timeout.
-    #[error("step {step} (script line {line}): no complete answer within {timeout:?}; got \"{got}\"")]
+    #[error("step {step} (script line {line}): no complete answer within {timeout:?}; got {got}")]
     Timeout {
         /// The step, 0-based.
         step: usize,
@@ -271,9 +295,34 @@ pub enum RecordError {
         line: usize,
         /// Its capture timeout.
         timeout: Duration,
-        /// What arrived, escaped.
+        /// What arrived, escaped and quoted (at most its first 200 bytes, then a note of the rest).
         got: String,
     },
+    /// A step's answer passed [`MAX_STEP_ANSWER`]: the hand floods.
+    #[error(
+        "step {step} (script line {line}): the hand sent more than {limit} bytes without ending its answer (a flood); \
+it began {head}"
+    )]
+    Flooded {
+        /// The step, 0-based.
+        step: usize,
+        /// Its script line.
+        line: usize,
+        /// The ceiling passed, bytes.
+        limit: usize,
+        /// The answer's first 200 bytes, escaped and quoted.
+        head: String,
+    },
+}
+
+/// The first [`SHOWN_IN_ERRORS`] bytes of an answer, escaped and quoted, with a note of how many more
+/// there were: an error message never carries a flood.
+fn shown(bytes: &[u8]) -> String {
+    let head = gcl_transcript::escape_text(&bytes[..bytes.len().min(SHOWN_IN_ERRORS)]);
+    match bytes.len().checked_sub(SHOWN_IN_ERRORS) {
+        Some(more) if more > 0 => format!("\"{head}\" and {more} more bytes"),
+        _ => format!("\"{head}\""),
+    }
 }
 
 /// Records a script: runs it, then writes each answer down. With `allow_timeouts`, a step that
@@ -286,13 +335,21 @@ pub fn record(
     allow_timeouts: bool,
 ) -> Result<(Transcript, Vec<Captured>), RecordError> {
     let captured = capture(link, &script.steps, opts)?;
+    if let Some((i, c)) = captured.iter().enumerate().find(|(_, c)| c.flooded) {
+        return Err(RecordError::Flooded {
+            step: i,
+            line: script.steps[i].line,
+            limit: MAX_STEP_ANSWER,
+            head: shown(&c.output[..c.output.len().min(SHOWN_IN_ERRORS)]),
+        });
+    }
     if !allow_timeouts && let Some((i, c)) = captured.iter().enumerate().find(|(_, c)| c.timed_out) {
         let s = &script.steps[i];
         return Err(RecordError::Timeout {
             step: i,
             line: s.line,
             timeout: s.timeout.unwrap_or(opts.timeout),
-            got: gcl_transcript::escape_text(&c.output),
+            got: shown(&c.output),
         });
     }
     let steps = script.steps.iter().zip(&captured).map(|(s, c)| step_from(s, c, opts)).collect();

@@ -246,3 +246,52 @@ fn known_failures_narrow_a_certificate_and_verify_needs_a_key() {
     assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
     assert!(r.stdout.contains("unsigned") && r.stdout.contains("AUTHENTICITY NOT CHECKED"), "{}", r.stdout);
 }
+
+/// A hand on loopback TCP that sends `chunk` every `every` to whoever connects, for ever (or
+/// until the peer goes). Returns its `tcp://` target.
+fn flooding_hand(chunk: usize, every: Duration) -> String {
+    use std::io::Write as _;
+    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = l.local_addr().unwrap();
+    std::thread::spawn(move || {
+        for c in l.incoming() {
+            let Ok(mut c) = c else { return };
+            std::thread::spawn(move || {
+                let bytes = vec![b'y'; chunk];
+                while c.write_all(&bytes).is_ok() {
+                    if !every.is_zero() {
+                        std::thread::sleep(every);
+                    }
+                }
+            });
+        }
+    });
+    format!("tcp://{addr}")
+}
+
+/// Item 10: `record` and `replay` against a flooding hand (`exec:yes`, a flooding `tcp://`,
+/// a slower flood) stay within the memory limit, end with a clear error, and never put the
+/// flood into a message.
+#[test]
+fn floods_cost_record_and_replay_no_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("s.gcls");
+    std::fs::write(&script, "HI\n").unwrap();
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/cmd-hi.gcl");
+    let fast = flooding_hand(65536, Duration::ZERO);
+    let slow = flooding_hand(4096, Duration::from_millis(5));
+    for target in ["exec:yes", fast.as_str(), slow.as_str()] {
+        let r = gcl(&["record", "--target", target, "--profile", "seed", "--timeout", "3000", "--script", s(&script)]);
+        assert_eq!(r.code, Some(2), "record {target}: {}", r.stderr.len());
+        // Whichever comes first: the per-step ceiling (a flood) or the step's 3 s timeout.
+        assert!(
+            r.stderr.contains("flood") || r.stderr.contains("no complete answer"),
+            "record {target}: {}",
+            &r.stderr[..r.stderr.len().min(2000)]
+        );
+        assert!(r.stderr.len() < 4096, "record {target}: a {}-byte message", r.stderr.len());
+        let r = gcl(&["replay", "--target", target, s(&golden)]);
+        assert_eq!(r.code, Some(1), "replay {target}: {}", &r.stdout[..r.stdout.len().min(2000)]);
+        assert!(r.stdout.len() + r.stderr.len() < 16384, "replay {target}: {} bytes of output", r.stdout.len());
+    }
+}

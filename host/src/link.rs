@@ -72,15 +72,18 @@ pub trait Link: Send {
 }
 
 /// Reads and discards whatever the hand sends until it has been quiet for `quiet` (a power-up
-/// banner, the tail of an earlier conversation), for at most `limit`. Returns what it threw
-/// away.
-pub fn drain(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<Vec<u8>, LinkError> {
+/// banner, the tail of an earlier conversation), for at most `limit`. Returns how many bytes
+/// it threw away; it keeps none, so a flooding hand costs time, never memory.
+pub fn drain(link: &mut dyn Link, quiet: Duration, limit: Duration) -> Result<u64, LinkError> {
     let start = link.elapsed();
-    let mut junk = Vec::new();
+    let mut scratch = Vec::with_capacity(8192);
+    let mut thrown = 0u64;
     loop {
-        let n = link.recv(&mut junk, quiet)?;
+        scratch.clear();
+        let n = link.recv(&mut scratch, quiet)?;
+        thrown += n as u64;
         if n == 0 || link.elapsed().saturating_sub(start) >= limit {
-            return Ok(junk);
+            return Ok(thrown);
         }
     }
 }

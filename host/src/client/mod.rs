@@ -476,8 +476,7 @@ impl Hand {
     /// from before a resynchronisation (a banner, answers to garbage) must not be taken for
     /// the answer to the next command.
     fn drain_until_quiet(&mut self) -> Result<(), ClientError> {
-        let junk = drain(self.link.as_mut(), self.timeouts.sync.min(QUIET), self.timeouts.sync)?;
-        self.received += junk.len() as u64;
+        self.received += drain(self.link.as_mut(), self.timeouts.sync.min(QUIET), self.timeouts.sync)?;
         Ok(())
     }
 
