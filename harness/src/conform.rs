@@ -40,14 +40,15 @@ pub enum ConformError {
         id: String,
     },
     /// The hand did not answer the liveness probe before the run.
-    #[error("the hand at {target} did not answer the liveness probe (^C, CR, expecting `{prompt}`) within {waited:?}")]
+    #[error("the hand at {target} did not answer the liveness probe (^C, CR, expecting `{prompt}`): {why}")]
     NotAlive {
         /// The target as written.
         target: String,
         /// The prompt expected, escaped.
         prompt: String,
-        /// How long the probe waited.
-        waited: Duration,
+        /// What the probe found instead (nothing within the wait, a flood, a hang-up), for a
+        /// person.
+        why: String,
     },
     /// The target could not be opened.
     #[error(transparent)]
@@ -416,27 +417,98 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
 const AFTER_FAILURE_DRAIN: Duration = Duration::from_secs(2);
 
 /// A hand that sends more than this in answer to the liveness probe floods: it is not live.
-const LIVENESS_MAX_BYTES: usize = 1 << 20;
+pub const LIVENESS_MAX_BYTES: usize = 1 << 20;
+
+/// What the liveness probe found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Alive {
+    /// Two prompts came back, and the hand then fell quiet.
+    Yes,
+    /// Nothing came back within the wait.
+    Silent,
+    /// Bytes came back, but no prompts (`bytes` of them).
+    NoPrompt {
+        /// How many bytes came.
+        bytes: usize,
+    },
+    /// The hand kept sending: past [`LIVENESS_MAX_BYTES`], or still sending after its prompts.
+    Floods,
+    /// The link closed (EOF, an exited process) this long after the probe went out.
+    HungUp {
+        /// Time from the probe to the hang-up.
+        after: Duration,
+    },
+}
+
+impl Alive {
+    /// Whether the hand answered.
+    pub fn is_alive(self) -> bool {
+        self == Alive::Yes
+    }
+
+    /// Why a hand is not alive, for a person (empty for one that is).
+    pub fn why(self, waited: Duration) -> String {
+        match self {
+            Alive::Yes => String::new(),
+            Alive::Silent => format!("nothing came back within {waited:?}"),
+            Alive::NoPrompt { bytes } => format!("{bytes} bytes came back within {waited:?}, but no prompt"),
+            Alive::Floods => "it floods: it kept sending instead of answering with a prompt".to_string(),
+            Alive::HungUp { after } => format!("it hung up {:.2} s after the probe", after.as_secs_f64()),
+        }
+    }
+}
 
 /// Sends a bare CR (after ^C) and waits for a prompt: is anybody there?
 pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<bool, LinkError> {
+    probe(link, profile, timeout).map(Alive::is_alive)
+}
+
+/// [`liveness`], saying what it found: silence, a flood, a hang-up, bytes without a prompt.
+pub fn probe(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<Alive, LinkError> {
+    let t = profile.framing.terminator;
+    prompts_after(link, profile, &[profile.framing.abort, t], 2, timeout)
+}
+
+/// Whether the hand answers a command line (an unknown command word, which changes nothing)
+/// with a prompt: a hand that answers ^C and a bare CR but no command is not alive for a
+/// suite of commands.
+pub fn answers_a_command(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Result<Alive, LinkError> {
+    let line = [crate::preflight::UNKNOWN, &[profile.framing.terminator]].concat();
+    prompts_after(link, profile, &line, 1, timeout)
+}
+
+/// Sends `bytes` and counts prompts until `want` came, then waits for quiet.
+fn prompts_after(
+    link: &mut dyn Link,
+    profile: &Profile,
+    bytes: &[u8],
+    want: usize,
+    timeout: Duration,
+) -> Result<Alive, LinkError> {
     // Any prompt-like answer counts: a hand with a malformed prompt is alive, and its cases
     // will say what is wrong with it.
     let prompt = profile.framing.prompt.trim_end().as_bytes().to_vec();
-    link.send(&[profile.framing.abort])?;
-    link.send(&[profile.framing.terminator])?;
+    let hung_up = |e: LinkError, start: Duration, link: &dyn Link| match e {
+        LinkError::Disconnected => Ok(Alive::HungUp { after: link.elapsed().saturating_sub(start) }),
+        e => Err(e),
+    };
+    let start = link.elapsed();
+    if let Err(e) = link.send(bytes) {
+        return hung_up(e, start, link);
+    }
     // Count prompts as bytes arrive, keeping only a prompt's length of tail: a hand that
     // floods instead of answering costs time, never memory.
-    let start = link.elapsed();
     let (mut seen, mut tail, mut total) = (0usize, Vec::new(), 0usize);
     let mut chunk = Vec::new();
-    while seen < 2 && total <= LIVENESS_MAX_BYTES {
+    while seen < want && total <= LIVENESS_MAX_BYTES {
         let spent = link.elapsed().saturating_sub(start);
         if spent >= timeout {
             break;
         }
         chunk.clear();
-        link.recv(&mut chunk, timeout - spent)?;
+        if let Err(e) = link.recv(&mut chunk, timeout - spent) {
+            return hung_up(e, start, link);
+        }
         total += chunk.len();
         tail.extend_from_slice(&chunk);
         seen += tail.windows(prompt.len().max(1)).filter(|w| *w == prompt.as_slice() || prompt.is_empty()).count();
@@ -444,9 +516,20 @@ pub fn liveness(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Re
         let cut = tail.len().saturating_sub(prompt.len().saturating_sub(1));
         tail.drain(..cut);
     }
+    if total > LIVENESS_MAX_BYTES {
+        return Ok(Alive::Floods);
+    }
     // Let a slow second prompt land before the first case starts.
-    let settled = discard(link, Duration::from_millis(20), timeout)?;
-    Ok(seen >= 2 && settled.quiet)
+    let settled = match discard(link, Duration::from_millis(20), timeout) {
+        Ok(d) => d,
+        Err(e) => return hung_up(e, start, link),
+    };
+    Ok(match (seen >= want, settled.quiet) {
+        (true, true) => Alive::Yes,
+        (_, false) => Alive::Floods,
+        (false, true) if total == 0 => Alive::Silent,
+        (false, true) => Alive::NoPrompt { bytes: total },
+    })
 }
 
 /// Asks the hand for `VERS` and returns its lines; a hand that refuses (`ERR n`) or breaks GCL
@@ -488,9 +571,14 @@ pub fn run(
 /// prints (its power-up banner), then probes it, so that no case is blamed for a restart.
 fn reopen(opts: &ConformOptions, probe_timeout: Duration) -> Result<Box<dyn Link>, String> {
     let mut l = open(&opts.target, &opts.open).map_err(|e| format!("cannot reopen the target: {e}"))?;
-    match liveness(l.as_mut(), &opts.profile, probe_timeout) {
-        Ok(true) => {}
-        Ok(false) => return Err("reopened the target, but it does not answer the liveness probe".to_string()),
+    match probe(l.as_mut(), &opts.profile, probe_timeout) {
+        Ok(Alive::Yes) => {}
+        Ok(a) => {
+            return Err(format!(
+                "reopened the target, but it does not answer the liveness probe: {}",
+                a.why(probe_timeout)
+            ));
+        }
         Err(e) => return Err(format!("reopened the target, but the link failed: {e}")),
     }
     match discard(l.as_mut(), Duration::from_millis(100), Duration::from_secs(5)) {
@@ -524,7 +612,8 @@ pub fn run_with_events(
     let mut preflight = None;
     let before = {
         let mut l = open_link()?;
-        let ok = liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false);
+        let found = probe(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(Alive::Silent);
+        let ok = found.is_alive();
         if ok && opts.control.preflight {
             if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
                 let line = p.line();
@@ -536,15 +625,16 @@ pub fn run_with_events(
         if !fresh_per_case {
             shared = Some(l);
         }
-        ok
+        found
     };
-    if !before {
+    if !before.is_alive() {
         return Err(ConformError::NotAlive {
             target: opts.target.to_string(),
             prompt: gcl_model::escape::escape(opts.profile.framing.prompt.as_bytes()),
-            waited: probe_timeout,
+            why: before.why(probe_timeout),
         });
     }
+    let before = true;
 
     let mut ropts = suite::replay_options();
     if let Some(t) = opts.step_timeout {
@@ -745,22 +835,41 @@ pub fn run_with_events(
             stopped = Some(Stopped { cause: StopCause::Flooding, case: at, message });
         } else if opts.control.dead_after > 0 && timeouts_in_a_row >= opts.control.dead_after {
             timeouts_in_a_row = 0;
-            let alive = match shared.as_deref_mut() {
-                Some(l) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
+            // The probe of ^C and a bare CR is not enough: a hand that answers those and no
+            // command would time out case after case. It must answer a command line too.
+            let answers = |l: &mut dyn Link| -> Result<(), String> {
+                match probe(l, &opts.profile, probe_timeout) {
+                    Ok(Alive::Yes) => {}
+                    Ok(a) => return Err(format!("no answer to the liveness probe: {}", a.why(probe_timeout))),
+                    Err(e) => return Err(format!("the link failed: {e}")),
+                }
+                match answers_a_command(l, &opts.profile, probe_timeout) {
+                    Ok(Alive::Yes) => Ok(()),
+                    Ok(a) => Err(format!(
+                        "it answers ^C and a bare CR, but not a command line ({}: {})",
+                        gcl_model::escape::escape(crate::preflight::UNKNOWN),
+                        a.why(probe_timeout)
+                    )),
+                    Err(e) => Err(format!("the link failed: {e}")),
+                }
+            };
+            let dead = match shared.as_deref_mut() {
+                Some(l) if !fresh_per_case => answers(l).err(),
                 _ => match reopen(opts, probe_timeout) {
-                    Ok(l) => {
+                    Ok(mut l) => {
+                        let dead = answers(l.as_mut()).err();
                         if !fresh_per_case {
                             shared = Some(l);
                         }
-                        true
+                        dead
                     }
-                    Err(_) => false,
+                    Err(e) => Some(e),
                 },
             };
-            if !alive {
+            if let Some(why) = dead {
                 let at = std::mem::take(&mut first_timeout);
                 let message = format!(
-                    "the hand stopped answering at case {at} ({} timeouts in a row from there, then no answer to the liveness probe)",
+                    "the hand stopped answering at case {at} ({} timeouts in a row from there, then {why})",
                     opts.control.dead_after
                 );
                 stopped = Some(Stopped { cause: StopCause::DeadHand, case: at, message });

@@ -32,7 +32,7 @@ const QUIET: Duration = Duration::from_millis(60);
 const BANNER_TEXT: &[u8] = b"BarrettHand Firmware";
 
 /// An unknown command word: it changes nothing, and its answer carries an error status.
-const UNKNOWN: &[u8] = b"ZZQX";
+pub const UNKNOWN: &[u8] = b"ZZQX";
 
 /// What the pre-flight found.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -295,3 +295,28 @@ fn floods_cost_record_and_replay_no_memory() {
         assert!(r.stdout.len() + r.stderr.len() < 16384, "replay {target}: {} bytes of output", r.stdout.len());
     }
 }
+
+/// The folder of the small hand and host scripts these tests run.
+fn hands() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hands")
+}
+
+fn have_python() -> bool {
+    Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success())
+}
+
+/// Item 6: a hand that answers ^C and a bare CR but no command ends the run early (exit 2,
+/// the dead-hand rule) instead of timing out case after case for minutes.
+#[test]
+fn a_hand_answering_only_the_probe_ends_the_run() {
+    if !have_python() {
+        eprintln!("skipped: no python3");
+        return;
+    }
+    let hand = format!("exec:python3 {}", hands().join("probe_only.py").display());
+    let r = gcl(&["conform", "--target", &hand, "--profile", "seed", "--level", "must"]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("answers ^C and a bare CR, but not a command line"), "{}", r.stderr);
+    let timeouts: usize = r.stdout.lines().filter(|l| l.trim_start().starts_with("MUST")).filter_map(|l| l.split_whitespace().nth(4)?.parse::<usize>().ok()).sum();
+    assert!(timeouts <= 10, "{timeouts} timeouts before the run ended\n{}", r.stdout);
+}
