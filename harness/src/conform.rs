@@ -477,6 +477,26 @@ pub fn answers_a_command(link: &mut dyn Link, profile: &Profile, timeout: Durati
     prompts_after(link, profile, &line, 1, timeout)
 }
 
+/// The dead-hand rule's probe: `None` when the hand answers ^C and a bare CR with prompts
+/// *and* a command line with a prompt; otherwise why not, for a person. A hand that answers
+/// the first probe but no command would time out case after case.
+pub fn dead_hand(link: &mut dyn Link, profile: &Profile, timeout: Duration) -> Option<String> {
+    match probe(link, profile, timeout) {
+        Ok(Alive::Yes) => {}
+        Ok(a) => return Some(format!("no answer to the liveness probe: {}", a.why(timeout))),
+        Err(e) => return Some(format!("the link failed: {e}")),
+    }
+    match answers_a_command(link, profile, timeout) {
+        Ok(Alive::Yes) => None,
+        Ok(a) => Some(format!(
+            "it answers ^C and a bare CR, but not a command line ({}: {})",
+            gcl_model::escape::escape(crate::preflight::UNKNOWN),
+            a.why(timeout)
+        )),
+        Err(e) => Some(format!("the link failed: {e}")),
+    }
+}
+
 /// Sends `bytes` and counts prompts until `want` came, then waits for quiet.
 fn prompts_after(
     link: &mut dyn Link,
@@ -837,21 +857,9 @@ pub fn run_with_events(
             timeouts_in_a_row = 0;
             // The probe of ^C and a bare CR is not enough: a hand that answers those and no
             // command would time out case after case. It must answer a command line too.
-            let answers = |l: &mut dyn Link| -> Result<(), String> {
-                match probe(l, &opts.profile, probe_timeout) {
-                    Ok(Alive::Yes) => {}
-                    Ok(a) => return Err(format!("no answer to the liveness probe: {}", a.why(probe_timeout))),
-                    Err(e) => return Err(format!("the link failed: {e}")),
-                }
-                match answers_a_command(l, &opts.profile, probe_timeout) {
-                    Ok(Alive::Yes) => Ok(()),
-                    Ok(a) => Err(format!(
-                        "it answers ^C and a bare CR, but not a command line ({}: {})",
-                        gcl_model::escape::escape(crate::preflight::UNKNOWN),
-                        a.why(probe_timeout)
-                    )),
-                    Err(e) => Err(format!("the link failed: {e}")),
-                }
+            let answers = |l: &mut dyn Link| match dead_hand(l, &opts.profile, probe_timeout) {
+                Some(why) => Err(why),
+                None => Ok(()),
             };
             let dead = match shared.as_deref_mut() {
                 Some(l) if !fresh_per_case => answers(l).err(),

@@ -82,6 +82,36 @@ pub fn create_stream(path: &Path) -> io::Result<File> {
     Ok(f)
 }
 
+/// Writes `bytes` as a new file `DIR/STEM.EXT`, never replacing another file: when that name
+/// holds different bytes (another finding, from an earlier campaign or another worker), the
+/// next free `STEM-2.EXT`, `STEM-3.EXT`, ... is taken; when it holds the same bytes, that file
+/// is the answer. The file appears whole (a temporary, hard-linked into place).
+pub fn write_unique(dir: &Path, stem: &str, ext: &str, bytes: &[u8]) -> io::Result<PathBuf> {
+    std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
+    for n in 1..=10_000u32 {
+        let name = if n == 1 { format!("{stem}.{ext}") } else { format!("{stem}-{n}.{ext}") };
+        let path = dir.join(name);
+        if let Ok(old) = gcl_host::files::read_limited(&path, bytes.len() as u64) {
+            if old == bytes {
+                return Ok(path);
+            }
+            continue;
+        }
+        let (tmp, mut f) = create_temporary(&path)?;
+        let written = f.write_all(bytes).and_then(|()| f.sync_all());
+        drop(f);
+        // A hard link fails on an existing name: nothing is ever replaced.
+        let placed = written.and_then(|()| std::fs::hard_link(&tmp, &path));
+        let _ = std::fs::remove_file(&tmp);
+        match placed {
+            Ok(()) => return Ok(path),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(named(&path, e)),
+        }
+    }
+    Err(io::Error::new(io::ErrorKind::AlreadyExists, format!("{}: no free name for {stem}.{ext}", dir.display())))
+}
+
 /// The name of the lock file in a held output folder.
 pub const LOCK_FILE: &str = ".gcl.lock";
 
@@ -168,6 +198,20 @@ mod tests {
         let e = write_atomic(&p, b"data").unwrap_err();
         assert!(e.to_string().contains("finding.json"), "{e}");
         assert_eq!(names(dir.path()), ["finding.json"]);
+    }
+
+    #[test]
+    fn a_unique_write_never_replaces_another_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = write_unique(dir.path(), "fuzz-pset-status", "gcl", b"bug A").unwrap();
+        let b = write_unique(dir.path(), "fuzz-pset-status", "gcl", b"bug B").unwrap();
+        let again = write_unique(dir.path(), "fuzz-pset-status", "gcl", b"bug A").unwrap();
+        assert_eq!(a, dir.path().join("fuzz-pset-status.gcl"));
+        assert_eq!(b, dir.path().join("fuzz-pset-status-2.gcl"));
+        assert_eq!(again, a);
+        assert_eq!(std::fs::read(&a).unwrap(), b"bug A");
+        assert_eq!(std::fs::read(&b).unwrap(), b"bug B");
+        assert_eq!(names(dir.path()), ["fuzz-pset-status-2.gcl", "fuzz-pset-status.gcl"]);
     }
 
     #[test]

@@ -320,3 +320,119 @@ fn a_hand_answering_only_the_probe_ends_the_run() {
     let timeouts: usize = r.stdout.lines().filter(|l| l.trim_start().starts_with("MUST")).filter_map(|l| l.split_whitespace().nth(4)?.parse::<usize>().ok()).sum();
     assert!(timeouts <= 10, "{timeouts} timeouts before the run ended\n{}", r.stdout);
 }
+
+/// Item 18: the liveness message says what the probe found: a flood is a flood, a hang-up is
+/// a hang-up, and only silence is "nothing came back".
+#[test]
+fn the_liveness_message_says_what_happened() {
+    for (target, says) in [
+        ("exec:yes", "it floods"),
+        ("exec:true", "it hung up"),
+        ("exec:sleep 1000", "nothing came back within"),
+    ] {
+        let r = gcl(&["conform", "--target", target, "--profile", "seed", "-q"]);
+        assert_eq!(r.code, Some(2), "{target}: {}", r.stderr);
+        assert!(r.stderr.contains(says), "{target}: {}", r.stderr);
+    }
+}
+
+/// Item 7: `fuzz device` against a dead hand ends at once with exit 2, as `conform` does,
+/// and a hand that hangs mid-run ends the campaign (exit 2, the dead-hand rule) instead of
+/// stretching `--duration` with minimization against a hand that no longer answers.
+#[test]
+fn fuzz_device_ends_early_on_a_dead_hand() {
+    let r = gcl(&["fuzz", "device", "--target", "exec:sleep 1000", "--profile", "seed", "--duration", "60s", "-q"]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("did not answer the liveness probe"), "{}", r.stderr);
+    if !have_python() {
+        eprintln!("skipped the mid-run hang: no python3");
+        return;
+    }
+    let hand = format!("exec:python3 {} 4 {GCL} sim --stdio --profile seed", hands().join("hangs_after.py").display());
+    let r = gcl(&["fuzz", "device", "--target", &hand, "--profile", "seed", "--no", "motion", "--duration", "20s", "-q"]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("the hand stopped answering at run"), "{}", r.stderr);
+}
+
+/// Sends SIGTERM to a child.
+fn terminate(child: &std::process::Child) {
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM).unwrap();
+}
+
+/// Waits for a child, killing it and failing past `limit`.
+fn wait_bounded(mut child: std::process::Child, limit: Duration) -> std::process::Output {
+    let end = Instant::now() + limit;
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > end {
+            let _ = child.kill();
+            panic!("the child did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Items 8 and 16: a running `fuzz device` holds its `--out` and `--report` folders (a second
+/// campaign or a `conform --report` there is refused), and SIGTERM (a CI time limit) ends it
+/// with `fuzz-device.json` and `junit.xml` written.
+#[test]
+fn fuzz_device_holds_its_folders_and_reports_on_sigterm() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("findings");
+    let rep = dir.path().join("report");
+    let campaign = |o: &Path, r: &Path| {
+        let mut c = Command::new("prlimit");
+        c.arg(MEMORY).arg("--").arg(GCL).args(["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed"]);
+        c.args(["--duration", "10m", "-q", "--out", s(o), "--report", s(r)]);
+        c.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+        c.spawn().unwrap()
+    };
+    let first = campaign(&out, &rep);
+    // Wait until the first campaign holds its folders.
+    let end = Instant::now() + Duration::from_secs(60);
+    while !std::fs::read_to_string(rep.join(".gcl.lock")).is_ok_and(|t| t.contains("pid")) {
+        assert!(Instant::now() < end, "the campaign never took its folders");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let second = wait_bounded(campaign(&out, &dir.path().join("other")), Duration::from_secs(60));
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    assert!(err.contains("is in use by gcl fuzz device --out"), "{err}");
+    let r = gcl(&["conform", "--target", "sim:seed", "--only", "cmd-hi", "--report", s(&rep)]);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("is in use by gcl fuzz device --report"), "{}", r.stderr);
+    std::thread::sleep(Duration::from_secs(2));
+    terminate(&first);
+    let done = wait_bounded(first, Duration::from_secs(120));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert_eq!(done.status.code(), Some(1), "findings expected under fget-reversed: {err}");
+    assert!(err.contains("stopped by a signal"), "{err}");
+    for f in ["fuzz-device.json", "junit.xml"] {
+        assert!(rep.join(f).is_file(), "{f} was not written");
+    }
+}
+
+/// Item 16: a second campaign on the same `--out` never replaces a finding of another bug
+/// that an earlier campaign left under the same name.
+#[test]
+fn a_finding_is_never_replaced_by_another_bugs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("findings");
+    let args = ["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "300", "-q", "--out", s(&out)];
+    let r = gcl(&args);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    let found: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "gcl")).collect();
+    assert!(!found.is_empty());
+    // Another bug's findings under the same names, as an earlier campaign would leave them.
+    for p in &found {
+        std::fs::write(p, format!("another bug's finding: {}\n", p.display())).unwrap();
+    }
+    let r = gcl(&args);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    for p in &found {
+        assert_eq!(std::fs::read_to_string(p).unwrap(), format!("another bug's finding: {}\n", p.display()));
+    }
+    let now = std::fs::read_dir(&out).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "gcl")).count();
+    assert_eq!(now, 2 * found.len(), "the new findings were written beside the old ones");
+}

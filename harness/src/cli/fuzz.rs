@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use gcl_model::Fault;
 
-use super::{EXIT_FAIL, EXIT_OK, fuzz_host, load_profile};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, fuzz_host, load_profile};
 
 /// Arguments of `gcl fuzz`.
 #[derive(Debug, clap::Args)]
@@ -165,9 +165,24 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         }
         _ => {}
     };
+    // Held for the campaign: a second campaign on the same folders is refused, so neither
+    // replaces the other's findings or reports.
+    let mut _held = Vec::new();
+    for (dir, what) in [(&a.out, "fuzz device --out"), (&a.report, "fuzz device --report")] {
+        if let Some(d) = dir
+            && !(what.ends_with("--report") && a.out.as_ref() == Some(d))
+        {
+            _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
+        }
+    }
+    // A CI time limit (SIGTERM) ends the campaign with its reports written.
+    o.stop = super::stop_on_signals("fuzz device")?;
     let s = fd::run(&o, &progress).context("gcl fuzz device")?;
     if live {
         eprintln!();
+    }
+    if s.interrupted {
+        eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
     }
     let report = fd::report::FuzzReport::new(&o, &s);
     let mut out = std::io::stdout().lock();
@@ -202,6 +217,10 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         for p in fd::report::write_all(dir, &report)? {
             writeln!(out, "wrote {}", p.display())?;
         }
+    }
+    if let Some(why) = &s.dead_hand {
+        eprintln!("gcl fuzz device: {why}");
+        return Ok(EXIT_ERROR);
     }
     Ok(if s.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
 }

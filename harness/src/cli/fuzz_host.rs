@@ -15,10 +15,8 @@ use gcl_harness::report::{CaseResult, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 
-use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
-use nix::sys::signalfd::SignalFd;
 
-use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
+use super::{EXIT_FAIL, EXIT_OK, load_profile};
 
 fn duration(s: &str) -> Result<Duration, String> {
     super::duration(s)
@@ -261,24 +259,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
 /// are called off (their hosts killed) and bundles and reports are still written; a second
 /// signal exits at once.
 fn stop_on_signals() -> anyhow::Result<Arc<AtomicBool>> {
-    let mut mask = SigSet::empty();
-    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
-        mask.add(s);
-    }
-    // Threads started from here on inherit the mask; host processes do not (std resets it).
-    pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
-    let signals = SignalFd::new(&mask).context("signalfd")?;
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    std::thread::spawn(move || {
-        while let Ok(Some(_)) = signals.read_signal() {
-            if flag.swap(true, Ordering::Relaxed) {
-                std::process::exit(i32::from(EXIT_ERROR));
-            }
-            eprintln!("gcl fuzz host: stopping: the runs in flight are called off (again to exit now)");
-        }
-    });
-    Ok(stop)
+    super::stop_on_signals("fuzz host")
 }
 
 fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {

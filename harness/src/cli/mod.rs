@@ -56,3 +56,31 @@ pub fn duration(s: &str) -> Result<std::time::Duration, String> {
     }
     Ok(d)
 }
+
+/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end a campaign (`gcl fuzz host`, `gcl
+/// fuzz device`): the returned flag is set, the work in flight is called off, and the findings
+/// and reports are still written; a second signal exits at once (exit 2). `what` names the
+/// command in the message printed at the first signal.
+pub fn stop_on_signals(what: &'static str) -> anyhow::Result<std::sync::Arc<std::sync::atomic::AtomicBool>> {
+    use anyhow::Context;
+    use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let mut mask = SigSet::empty();
+    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        mask.add(s);
+    }
+    // Threads started from here on inherit the mask; child processes do not (std resets it).
+    pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
+    let signals = nix::sys::signalfd::SignalFd::new(&mask).context("signalfd")?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    std::thread::spawn(move || {
+        while let Ok(Some(_)) = signals.read_signal() {
+            if flag.swap(true, Ordering::Relaxed) {
+                std::process::exit(i32::from(EXIT_ERROR));
+            }
+            eprintln!("gcl {what}: stopping: the work in flight is called off (again to exit now)");
+        }
+    });
+    Ok(stop)
+}

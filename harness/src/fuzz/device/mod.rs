@@ -80,6 +80,9 @@ pub struct FuzzOptions {
     pub minimize_budget: usize,
     /// Start the corpus from the suite's cases of the profile (their host sides).
     pub suite_seeds: bool,
+    /// Set from outside (a signal handler: SIGTERM, SIGINT, SIGHUP) to end the campaign: the
+    /// workers finish the case in hand, minimization stops, and the run returns what it has.
+    pub stop: Arc<AtomicBool>,
 }
 
 impl FuzzOptions {
@@ -102,6 +105,7 @@ impl FuzzOptions {
             minimize: true,
             minimize_budget: 300,
             suite_seeds: true,
+            stop: Arc::new(AtomicBool::new(false)),
         }
     }
 }
@@ -146,6 +150,14 @@ pub enum FuzzError {
     /// The hand vanished and did not come back.
     #[error("the hand vanished and could not be reopened: {0}")]
     Vanished(String),
+    /// The hand did not answer the liveness probe before the campaign.
+    #[error("the hand at {target} did not answer the liveness probe (^C, CR, then a command line): {why}")]
+    NotAlive {
+        /// The target as written.
+        target: String,
+        /// What the probe found instead.
+        why: String,
+    },
     /// The target's motions end far sooner than a hand's (a simulator whose time follows the
     /// wire, such as `gcl sim --time fast`): ^C cannot land mid-motion there, so every ^C
     /// mid-motion would be a false finding.
@@ -239,6 +251,12 @@ pub struct FuzzSummary {
     pub elapsed: Duration,
     /// Time spent minimizing (part of `elapsed`).
     pub minimizing: Duration,
+    /// Why the campaign ended before its budget because the hand stopped answering (a case
+    /// met silence, then the hand failed the liveness probe or answered no command): an
+    /// infrastructure end, exit 2, as `gcl conform`'s dead-hand rule.
+    pub dead_hand: Option<String>,
+    /// Whether [`FuzzOptions::stop`] ended the campaign (a signal).
+    pub interrupted: bool,
 }
 
 impl FuzzSummary {
@@ -285,6 +303,16 @@ struct Shared {
     rejudged: u64,
     minimizing: Duration,
     error: Option<FuzzError>,
+    /// Why the hand was found dead mid-campaign (see [`FuzzSummary::dead_hand`]).
+    dead_hand: Option<String>,
+}
+
+/// The wait of the dead-hand probe (as `gcl conform`'s).
+const PROBE_WAIT: Duration = Duration::from_secs(5);
+
+/// Why the hand is dead, or `None` when it answers: [`crate::conform::dead_hand`].
+fn dead_hand(link: &mut dyn Link, p: &Profile) -> Option<String> {
+    crate::conform::dead_hand(link, p, PROBE_WAIT)
 }
 
 /// The host sides of the suite's cases of a profile, as action lists (generated once per
@@ -515,6 +543,14 @@ pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
 
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
+    if opts.wide() {
+        // As `gcl conform`: a hand that answers nothing is an infrastructure problem (exit 2),
+        // not a campaign of "silence" findings.
+        let mut l = gcl_host::target::open(&opts.target, &opts.open).map_err(FuzzError::Open)?;
+        if let Some(why) = dead_hand(l.as_mut(), &opts.profile) {
+            return Err(FuzzError::NotAlive { target: opts.target.to_string(), why });
+        }
+    }
     check_real_time(opts)?;
     let start = Instant::now();
     let mut corpus = Vec::new();
@@ -539,6 +575,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         rejudged: 0,
         minimizing: Duration::ZERO,
         error: None,
+        dead_hand: None,
     });
     let runs = AtomicU64::new(0);
     let tickets = AtomicU64::new(0);
@@ -575,6 +612,8 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         lines_sent: sh.lines_sent,
         rejudged: sh.rejudged,
         elapsed: start.elapsed(),
+        dead_hand: sh.dead_hand,
+        interrupted: opts.stop.load(Ordering::SeqCst),
         minimizing: sh.minimizing,
     })
 }
@@ -612,7 +651,7 @@ fn worker(
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     loop {
-        if stop.load(Ordering::SeqCst) {
+        if stop.load(Ordering::SeqCst) || opts.stop.load(Ordering::SeqCst) {
             return Ok(());
         }
         if let Budget::Time(t) = opts.budget
@@ -704,6 +743,23 @@ fn worker(
             continue;
         };
         prev = None;
+        // Silence from a hand outside this process: is it dead? Then the campaign ends (exit
+        // 2, as `gcl conform`), keeping the case that met the silence unminimized, since a
+        // dead hand cannot minimize it.
+        if opts.wide()
+            && sig.kind == "silence"
+            && let Some(why) = dead_hand(hand.link()?.as_mut(), &p)
+        {
+            lock().dead_hand.get_or_insert(format!(
+                "the hand stopped answering at run {run_no} (the case met silence, then {why})"
+            ));
+            stop.store(true, Ordering::SeqCst);
+            if lock().seen.insert(sig.clone()) {
+                let o = FuzzOptions { minimize: false, ..opts.clone() };
+                report_finding(&o, &mut hand, shared, start, &actions, &built, sig, run_no, progress)?;
+            }
+            return Ok(());
+        }
         let new = lock().seen.insert(sig.clone());
         if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
             stop.store(true, Ordering::SeqCst);
@@ -727,8 +783,16 @@ fn report_finding(
 ) -> Result<bool, FuzzError> {
     let found_after = start.elapsed();
     let t0 = Instant::now();
-    let (min_actions, min_case) =
-        if opts.minimize { minimize(opts, hand, actions, built, &sig)? } else { (actions.to_vec(), built.clone()) };
+    // Minimization ends with the campaign's time budget or a signal, keeping the best so far.
+    let until = match opts.budget {
+        Budget::Time(t) => Some(start + t),
+        Budget::Runs(_) => None,
+    };
+    let (min_actions, min_case) = if opts.minimize {
+        minimize(opts, hand, actions, built, &sig, until)?
+    } else {
+        (actions.to_vec(), built.clone())
+    };
     let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
     let final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
@@ -736,9 +800,10 @@ fn report_finding(
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
         Some(dir) => {
-            let path = dir.join(format!("{id}.gcl"));
-            crate::report::write_atomic(&path, text.as_bytes())
-                .map_err(|source| FuzzError::Out { path: path.clone(), source })?;
+            // Never over another finding (an earlier campaign's, of another bug, under the
+            // same name): the next free name instead.
+            let path = crate::outputs::write_unique(dir, &id, "gcl", text.as_bytes())
+                .map_err(|source| FuzzError::Out { path: dir.join(format!("{id}.gcl")), source })?;
             Some(path)
         }
         None => None,
@@ -771,11 +836,17 @@ fn minimize(
     actions: &[HostAction],
     built: &BuiltCase,
     sig: &FindingSignature,
+    until: Option<Instant>,
 ) -> Result<(Vec<HostAction>, BuiltCase), FuzzError> {
     let p = opts.profile.clone();
     let mut tries = 0usize;
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
+        if opts.stop.load(Ordering::SeqCst) || until.is_some_and(|u| Instant::now() >= u) {
+            // Out of time: every loop below ends at the budget of tries.
+            *tries = opts.minimize_budget;
+            return Ok(None);
+        }
         *tries += 1;
         let Ok(b) = build_for(opts, cand, "fuzz", "minimizing") else { return Ok(None) };
         if b.eeprom_writes > built.eeprom_writes {
