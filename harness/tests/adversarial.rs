@@ -436,3 +436,52 @@ fn a_finding_is_never_replaced_by_another_bugs() {
     let now = std::fs::read_dir(&out).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "gcl")).count();
     assert_eq!(now, 2 * found.len(), "the new findings were written beside the old ones");
 }
+
+/// Item 12: a profile file that is an include bomb (three levels of 200 includes of small
+/// files) is refused as a typed error within the memory limit, wherever a profile is named.
+#[test]
+fn an_include_bomb_is_refused_within_the_memory_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let list = |prefix: &str| -> String {
+        let names: Vec<String> = (0..200).map(|i| format!("\"{prefix}{i}.toml\"")).collect();
+        format!("include = [{}]\n", names.join(", "))
+    };
+    std::fs::write(dir.path().join("top.toml"), list("a")).unwrap();
+    for i in 0..200 {
+        std::fs::write(dir.path().join(format!("a{i}.toml")), list("b")).unwrap();
+        std::fs::write(dir.path().join(format!("b{i}.toml")), list("c")).unwrap();
+        std::fs::write(dir.path().join(format!("c{i}.toml")), "# small\n").unwrap();
+    }
+    let top = dir.path().join("top.toml");
+    for args in [
+        vec!["explain", "--profile", s(&top), "HI"],
+        vec!["conform", "--target", "sim", "--profile", s(&top)],
+    ] {
+        let r = gcl(&args);
+        assert_eq!(r.code, Some(2), "{args:?}: {}", r.stderr);
+        assert!(r.stderr.contains("include bomb"), "{args:?}: {}", r.stderr);
+    }
+}
+
+/// Item 14: `fuzz host --replay` takes the bundle's profile as a built-in name or a file
+/// inside the bundle; a bundle naming a file elsewhere is refused, and no message quotes it.
+#[test]
+fn a_bundle_cannot_name_a_file_outside_it_as_its_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("found");
+    let r = gcl(&["fuzz", "host", "--runs", "2", "--out", s(&out), "--", "sh", "-c", "kill -SEGV $$"]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    let bundle = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).find(|p| p.is_dir()).unwrap();
+    let secret = dir.path().join("shadow");
+    std::fs::write(&secret, "root:$6$secretsalt$hash:19000:0:99999:7:::\n").unwrap();
+    let finding = bundle.join("finding.json");
+    let mut info: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&finding).unwrap()).unwrap();
+    for named in [s(&secret).to_string(), "../../shadow".to_string()] {
+        info["profile"] = serde_json::Value::String(named.clone());
+        std::fs::write(&finding, serde_json::to_vec(&info).unwrap()).unwrap();
+        let r = gcl(&["fuzz", "host", "--replay", s(&bundle), "--", "sh", "-c", "kill -SEGV $$"]);
+        assert_eq!(r.code, Some(2), "{named}: {}", r.stderr);
+        assert!(r.stderr.contains("neither a built-in profile nor a profile file inside the bundle"), "{}", r.stderr);
+        assert!(!r.stderr.contains("secretsalt") && !r.stdout.contains("secretsalt"), "{}", r.stderr);
+    }
+}

@@ -23,6 +23,15 @@ pub const EMBEDDED_FILES: &[(&str, &str)] = &[
     ("bh8-262-4.4.toml", include_str!("../../spec/bh8-262-4.4.toml")),
 ];
 
+/// The most files a profile may expand to, counting a file once per time it is included: the
+/// built-in profiles use 4; an include bomb (three levels of 200 includes) is refused here
+/// before it costs memory.
+pub const MAX_SPEC_FILES: usize = 256;
+
+/// The most spec text a profile may expand to, all included files' text summed (the built-in
+/// profiles hold about 150 KB).
+pub const MAX_SPEC_BYTES: usize = 16 << 20;
+
 /// The profiles shipped with the model: `(name, top-level file)`.
 pub const EMBEDDED_PROFILES: &[(&str, &str)] =
     &[("seed", "seed.toml"), ("bh8-262-4.3", "bh8-262-4.3.toml"), ("bh8-262-4.4", "bh8-262-4.4.toml")];
@@ -55,6 +64,23 @@ pub enum SpecError {
     /// Includes loop back on themselves.
     #[error("spec include cycle through `{0}`")]
     IncludeCycle(String),
+    /// A profile's files, includes counted each time they are included, are more than
+    /// [`MAX_SPEC_FILES`] (an include bomb: many includes of many includes).
+    #[error("spec `{file}`: more than {limit} files once includes are expanded (an include bomb?)")]
+    TooManyIncludes {
+        /// The file whose include passed the limit.
+        file: String,
+        /// The limit.
+        limit: usize,
+    },
+    /// A profile's files, includes expanded, hold more than [`MAX_SPEC_BYTES`] of text.
+    #[error("spec `{file}`: more than {limit} bytes of spec text once includes are expanded (an include bomb?)")]
+    TooLarge {
+        /// The file whose text passed the limit.
+        file: String,
+        /// The limit.
+        limit: usize,
+    },
     /// A parameter has an `rt` table but its name is not a RealTime flag GCL defines.
     #[error("profile `{profile}`: parameter `{param}` has an rt field but is not a RealTime flag (known: {known})", known = RtFlag::ALL.map(RtFlag::name).join(", "))]
     UnknownRtFlag {
@@ -918,8 +944,19 @@ fn check_bounds(framing: &Framing, hand: &Hand) -> Result<(), String> {
     Ok(())
 }
 
+/// Parses one spec file. The error names the line and column and says what is wrong, but
+/// never quotes the file's text: a file named as a profile may be no profile at all (a
+/// bundle naming `/etc/shadow`), and its lines must not reach a message.
 fn parse_file(name: &str, text: &str) -> Result<SpecFile, SpecError> {
-    toml::from_str(text).map_err(|e| SpecError::Syntax { file: name.to_string(), message: e.to_string() })
+    toml::from_str(text).map_err(|e| {
+        let at = e.span().map(|span| {
+            let before = text.get(..span.start).unwrap_or_default();
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            format!("line {line}, column {column}: ")
+        });
+        SpecError::Syntax { file: name.to_string(), message: format!("{}{}", at.unwrap_or_default(), e.message()) }
+    })
 }
 
 fn merge_named<T: Clone>(into: &mut Vec<T>, from: &[T], name: impl Fn(&T) -> &str) {
@@ -964,24 +1001,41 @@ impl Profile {
     pub fn load_with(top: &str, resolve: &dyn Fn(&str) -> Option<String>) -> Result<Profile, SpecError> {
         let mut merged = SpecFile::default();
         let mut stack = Vec::new();
-        Self::merge_file(top, resolve, &mut merged, &mut stack)?;
+        let mut expanded = (0usize, 0usize);
+        Self::merge_file(top, resolve, &mut merged, &mut stack, &mut expanded)?;
         Self::resolve(merged)
     }
 
+    /// Merges `name` and its includes into `into`; `expanded` counts the files and bytes
+    /// resolved so far, against [`MAX_SPEC_FILES`] and [`MAX_SPEC_BYTES`].
     fn merge_file(
         name: &str,
         resolve: &dyn Fn(&str) -> Option<String>,
         into: &mut SpecFile,
         stack: &mut Vec<String>,
+        expanded: &mut (usize, usize),
     ) -> Result<(), SpecError> {
         if stack.iter().any(|s| s == name) {
             return Err(SpecError::IncludeCycle(name.to_string()));
         }
+        expanded.0 += 1;
+        if expanded.0 > MAX_SPEC_FILES {
+            return Err(SpecError::TooManyIncludes { file: name.to_string(), limit: MAX_SPEC_FILES });
+        }
         let text = resolve(name).ok_or_else(|| SpecError::MissingFile(name.to_string()))?;
+        expanded.1 = expanded.1.saturating_add(text.len());
+        if expanded.1 > MAX_SPEC_BYTES {
+            return Err(SpecError::TooLarge { file: name.to_string(), limit: MAX_SPEC_BYTES });
+        }
         let file = parse_file(name, &text)?;
+        // Checked before any include is resolved: a file of a million includes is refused
+        // whole, not after reading 256 of them.
+        if expanded.0 + file.include.len() > MAX_SPEC_FILES {
+            return Err(SpecError::TooManyIncludes { file: name.to_string(), limit: MAX_SPEC_FILES });
+        }
         stack.push(name.to_string());
         for inc in &file.include {
-            Self::merge_file(inc, resolve, into, stack)?;
+            Self::merge_file(inc, resolve, into, stack, expanded)?;
         }
         stack.pop();
         if file.id.is_some() {
@@ -1562,5 +1616,56 @@ mod closed_names_tests {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod include_limit_tests {
+    use super::*;
+
+    /// Issue 20 item 12: three levels of 200 includes of small files (8 million merges, 3.9 GB
+    /// before) are refused as a typed error after at most [`MAX_SPEC_FILES`] files.
+    #[test]
+    fn an_include_bomb_is_refused() {
+        let resolved = std::cell::Cell::new(0usize);
+        let list = |prefix: &str| -> String {
+            let names: Vec<String> = (0..200).map(|i| format!("\"{prefix}{i}.toml\"")).collect();
+            format!("include = [{}]\n", names.join(", "))
+        };
+        let resolve = |p: &str| -> Option<String> {
+            resolved.set(resolved.get() + 1);
+            Some(match p {
+                "top.toml" => list("a"),
+                p if p.starts_with('a') => list("b"),
+                p if p.starts_with('b') => list("c"),
+                _ => "# small\n".to_string(),
+            })
+        };
+        match Profile::load_with("top.toml", &resolve) {
+            Err(SpecError::TooManyIncludes { limit, .. }) => assert_eq!(limit, MAX_SPEC_FILES),
+            other => panic!("an include bomb must be refused, got {other:?}"),
+        }
+        assert!(resolved.get() <= MAX_SPEC_FILES, "{} files resolved", resolved.get());
+        // Few files, but each large: the expanded text is bounded too.
+        let big = format!("# {}\n", "x".repeat(1 << 20));
+        let resolve = |p: &str| -> Option<String> {
+            Some(if p == "top.toml" {
+                let names: Vec<String> = (0..40).map(|i| format!("\"f{i}.toml\"")).collect();
+                format!("include = [{}]\n", names.join(", "))
+            } else {
+                big.clone()
+            })
+        };
+        assert!(matches!(Profile::load_with("top.toml", &resolve), Err(SpecError::TooLarge { .. })));
+    }
+
+    /// Issue 20 item 14: a file that is no profile (a shadow file named as one) is refused
+    /// without its text in the message.
+    #[test]
+    fn a_syntax_error_never_quotes_the_file() {
+        let shadow = "root:$6$secretsalt$hash:19000:0:99999:7:::\n";
+        let err = Profile::load_with("top.toml", &|_| Some(shadow.to_string())).unwrap_err().to_string();
+        assert!(!err.contains("secretsalt") && !err.contains("root"), "{err}");
+        assert!(err.contains("top.toml") && err.contains("line 1"), "{err}");
     }
 }

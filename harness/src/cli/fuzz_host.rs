@@ -336,7 +336,8 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
 
 fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Result<u8> {
     let (info, schedule) = bundle::read(dir)?;
-    run.profile = load_profile(&info.profile)?;
+    // A built-in profile or a file inside the bundle: a bundle is data from anywhere.
+    run.profile = gcl_host::profiles::load_from_bundle(&info.profile, dir)?;
     run.transport = info.transport;
     run.hand_seed = info.hand_seed;
     // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
