@@ -485,3 +485,25 @@ fn a_bundle_cannot_name_a_file_outside_it_as_its_profile() {
         assert!(!r.stderr.contains("secretsalt") && !r.stdout.contains("secretsalt"), "{}", r.stderr);
     }
 }
+
+/// Item 15: `sim --pty --link` never replaces (nor deletes at exit) a symbolic link that is
+/// somebody's; `conform --report` never truncates what a `results.jsonl` link points at.
+#[test]
+fn outputs_never_write_through_or_remove_a_users_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = dir.path().join("victim");
+    std::fs::write(&victim, b"precious").unwrap();
+    let link = dir.path().join("hand");
+    std::os::unix::fs::symlink(&victim, &link).unwrap();
+    let r = gcl_bounded(None, &["sim", "--pty", "--profile", "seed", "--link", s(&link)], Duration::from_secs(30));
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("not a link a gcl sim left"), "{}", r.stderr);
+    assert_eq!(std::fs::read_link(&link).unwrap(), victim);
+    let rep = dir.path().join("report");
+    std::fs::create_dir(&rep).unwrap();
+    std::os::unix::fs::symlink(&victim, rep.join("results.jsonl")).unwrap();
+    let r = gcl(&["conform", "--target", "sim:seed", "--only", "cmd-hi", "--report", s(&rep)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+    assert!(std::fs::read_to_string(rep.join("results.jsonl")).unwrap().contains("cmd-hi"));
+}

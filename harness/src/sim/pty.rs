@@ -388,12 +388,19 @@ fn make_link(target: &Path, link: &Path) -> Result<(), SimError> {
         Ok(_) => {
             // A pty's node exists only while its master is open: a link to one that exists
             // belongs to a running simulator (or terminal), which must keep it.
-            if let Ok(old) = std::fs::read_link(link)
-                && old.starts_with("/dev/pts")
-                && std::fs::metadata(&old).is_ok_and(|m| m.file_type().is_char_device())
-            {
+            let old = std::fs::read_link(link).unwrap_or_default();
+            if old.starts_with("/dev/pts") && std::fs::metadata(&old).is_ok_and(|m| m.file_type().is_char_device()) {
                 return Err(SimError::Pty(format!(
                     "--link {}: points at {}, a pty in use (another gcl sim?); stop it, or remove the link",
+                    link.display(),
+                    old.display()
+                )));
+            }
+            // Only a simulator's leftover (a link to a pty that is gone) is replaced: any other
+            // link is somebody's, and is never replaced or deleted.
+            if !old.starts_with("/dev/pts") {
+                return Err(SimError::Pty(format!(
+                    "--link {}: exists (a link to {}) and is not a link a gcl sim left; remove it or choose another name",
                     link.display(),
                     old.display()
                 )));
@@ -402,11 +409,21 @@ fn make_link(target: &Path, link: &Path) -> Result<(), SimError> {
         Err(_) => {}
     }
     let name = link.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = link.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    let _ = std::fs::remove_file(&tmp);
-    std::os::unix::fs::symlink(target, &tmp)
-        .and_then(|_| std::fs::rename(&tmp, link))
-        .map_err(|e| SimError::Pty(format!("--link {}: {e}", link.display())))
+    // A new temporary link (never one already there: it is not ours to remove), renamed
+    // into place.
+    let mut n = 0u32;
+    let tmp = loop {
+        let tmp = link.with_file_name(format!(".{name}.tmp{}.{n}", std::process::id()));
+        match std::os::unix::fs::symlink(target, &tmp) {
+            Ok(()) => break tmp,
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 1000 => n += 1,
+            Err(e) => return Err(SimError::Pty(format!("--link {}: {e}", link.display()))),
+        }
+    };
+    std::fs::rename(&tmp, link).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        SimError::Pty(format!("--link {}: {e}", link.display()))
+    })
 }
 
 impl Drop for Pty {
