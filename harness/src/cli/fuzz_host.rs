@@ -221,9 +221,14 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if stop.load(Ordering::Relaxed) {
         eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
     }
-    // Once more with the final hit counts.
+    // Once more with the final hit counts. A bundle that cannot be written (a full disk) is
+    // an infrastructure error: it is marked incomplete, and the run exits 2 naming the file.
+    let mut unwritten = None;
     for f in &campaign.findings {
-        let _ = bundle::write(&out, &info(&opts, f), f);
+        if let Err(e) = bundle::write(&out, &info(&opts, f), f) {
+            eprintln!("gcl fuzz host: bundle not written: {e}");
+            unwritten.get_or_insert(e);
+        }
     }
     let secs = campaign.elapsed_ms as f64 / 1000.0;
     eprintln!(
@@ -251,6 +256,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let p = dir.join("fuzz.json");
         gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(&campaign)?)?;
         eprintln!("wrote {}", p.display());
+    }
+    if let Some(e) = unwritten {
+        return Err(e.into());
     }
     Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
 }

@@ -86,6 +86,10 @@ pub fn write(out: &Path, info: &BundleInfo, f: &Finding) -> Result<PathBuf, Bund
         move |source| BundleError::Io { path, source }
     };
     std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+    // Written first and removed last: a bundle cut short (a full disk, a kill) says so, and
+    // `read` refuses it instead of replaying half a finding.
+    let marker = dir.join(INCOMPLETE);
+    crate::report::write_atomic(&marker, b"this bundle was not written whole; do not trust it\n").map_err(io(&marker))?;
     let files: [(&str, Vec<u8>); 5] = [
         ("finding.json", json(info)),
         ("schedule.json", json(&f.schedule)),
@@ -97,8 +101,12 @@ pub fn write(out: &Path, info: &BundleInfo, f: &Finding) -> Result<PathBuf, Bund
         let p = dir.join(name);
         crate::report::write_atomic(&p, &bytes).map_err(io(&p))?;
     }
+    std::fs::remove_file(&marker).map_err(io(&marker))?;
     Ok(dir)
 }
+
+/// The file that marks a bundle whose writing did not finish.
+pub const INCOMPLETE: &str = "INCOMPLETE";
 
 fn json<T: Serialize>(v: &T) -> Vec<u8> {
     let mut b = serde_json::to_vec_pretty(v).unwrap_or_default();
@@ -112,6 +120,13 @@ pub fn read(dir: &Path) -> Result<(BundleInfo, Schedule), BundleError> {
         let text =
             gcl_host::files::read_input_text(&p).map_err(|source| BundleError::Io { path: p.clone(), source })?;
         serde_json::from_str(&text).map_err(|e| BundleError::Invalid { path: p, reason: e.to_string() })
+    }
+    let marker = dir.join(INCOMPLETE);
+    if std::fs::symlink_metadata(&marker).is_ok() {
+        return Err(BundleError::Invalid {
+            path: marker,
+            reason: "the bundle is incomplete: writing it did not finish (a full disk?)".into(),
+        });
     }
     Ok((load(dir.join("finding.json"))?, load(dir.join("schedule.json"))?))
 }
