@@ -582,3 +582,35 @@ fn a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid() {
     assert_eq!(r.code, Some(2), "{}", r.stderr);
     assert!(r.stderr.contains("incomplete"), "{}", r.stderr);
 }
+
+/// Item 18: a corpus file that does not parse is skipped with a warning naming it.
+#[test]
+fn malformed_corpus_files_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let corpus = dir.path().join("corpus");
+    std::fs::create_dir(&corpus).unwrap();
+    std::fs::write(corpus.join("broken.json"), b"{ not a corpus entry").unwrap();
+    let r = gcl(&["fuzz", "device", "--target", "sim:seed", "--runs", "5", "-q", "--corpus", s(&corpus)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("warning: corpus file") && r.stderr.contains("broken.json"), "{}", r.stderr);
+}
+
+/// Item 18: a hand that floods banners in answer to ^C is filed as a flood, not as "restart".
+#[test]
+fn a_banner_flood_is_a_flood_not_a_restart() {
+    use gcl_harness::replay::{Exchanged, Flooded, ReplayOutcome};
+    let p = gcl_model::Profile::builtin("seed").unwrap();
+    let golden = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/abort-idle.gcl")).unwrap();
+    let t = gcl_transcript::parse_bytes(&golden).unwrap();
+    // Step 0 is the preamble's ^C; the hand answers it with banners, over and over.
+    let flood: Vec<u8> = b"\n\rBarrettHand Firmware 4.4\n\r".repeat(2000);
+    let out = ReplayOutcome::Flooded(Box::new(Flooded {
+        step: 0,
+        line: 10,
+        ceiling: 4096,
+        expected_full: "\"\\n\\r=> \"".into(),
+        exchange: vec![Exchanged { step: 0, line: 10, sent: vec![3], received: flood[..4096].to_vec(), took: Duration::from_millis(5) }],
+    }));
+    let sig = gcl_harness::fuzz::device::signature(&p, &t, &out).expect("a failure has a signature");
+    assert_eq!(sig.kind, "flood", "{sig:?}");
+}

@@ -116,7 +116,7 @@ fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     assert_eq!(s.runs, 2000);
     // Every kept entry is one file named by its content, readable by the next run.
     let (entries, bad) = load_corpus(dir.path()).unwrap();
-    assert_eq!(bad, 0);
+    assert!(bad.is_empty(), "{bad:?}");
     assert_eq!(entries.len(), s.corpus);
     assert!(s.corpus > 10, "new coverage was kept: {}", s.corpus);
     for file in std::fs::read_dir(dir.path()).unwrap() {

@@ -181,6 +181,9 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     if live {
         eprintln!();
     }
+    for (p, why) in &s.malformed_corpus {
+        eprintln!("gcl fuzz device: warning: corpus file {} skipped: {why}", p.display());
+    }
     if s.interrupted {
         eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
     }

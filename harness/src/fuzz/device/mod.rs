@@ -257,6 +257,8 @@ pub struct FuzzSummary {
     pub dead_hand: Option<String>,
     /// Whether [`FuzzOptions::stop`] ended the campaign (a signal).
     pub interrupted: bool,
+    /// Corpus files that did not read or parse, with why: skipped, and worth a warning.
+    pub malformed_corpus: Vec<(PathBuf, String)>,
 }
 
 impl FuzzSummary {
@@ -337,8 +339,8 @@ pub fn corpus_name(actions: &[HostAction]) -> String {
 }
 
 /// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
-/// parse are skipped and counted.
-pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, usize), FuzzError> {
+/// read or parse are skipped, and returned with why, so the caller can warn about them.
+pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Vec<(PathBuf, String)>), FuzzError> {
     let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
     std::fs::create_dir_all(dir).map_err(err)?;
     let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -347,11 +349,12 @@ pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, usize), FuzzErro
         .filter(|p| p.extension().is_some_and(|x| x == "json"))
         .collect();
     names.sort();
-    let (mut out, mut bad) = (Vec::new(), 0);
+    let (mut out, mut bad) = (Vec::new(), Vec::new());
     for p in names {
-        match gcl_host::files::read_text_limited(&p, 1 << 20).ok().and_then(|t| serde_json::from_str(&t).ok()) {
-            Some(a) => out.push(a),
-            None => bad += 1,
+        let read = gcl_host::files::read_text_limited(&p, 1 << 20).map_err(|e| e.to_string());
+        match read.and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string())) {
+            Ok(a) => out.push(a),
+            Err(why) => bad.push((p, why)),
         }
     }
     Ok((out, bad))
@@ -477,7 +480,9 @@ pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<Fin
     let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
     let banner = crate::record::BANNER_TEXT;
     let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
-    let kind = if !expected_banner && got.windows(banner.len()).any(|w| w == banner) {
+    // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
+    let flooded = matches!(out, ReplayOutcome::Flooded(_));
+    let kind = if !flooded && !expected_banner && got.windows(banner.len()).any(|w| w == banner) {
         "restart".to_string()
     } else {
         match out {
@@ -553,9 +558,9 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     }
     check_real_time(opts)?;
     let start = Instant::now();
-    let mut corpus = Vec::new();
+    let (mut corpus, mut malformed) = (Vec::new(), Vec::new());
     if let Some(dir) = &opts.corpus {
-        corpus = load_corpus(dir)?.0;
+        (corpus, malformed) = load_corpus(dir)?;
     }
     if opts.suite_seeds {
         corpus.extend(suite_seeds(&opts.profile).iter().cloned());
@@ -614,6 +619,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         elapsed: start.elapsed(),
         dead_hand: sh.dead_hand,
         interrupted: opts.stop.load(Ordering::SeqCst),
+        malformed_corpus: malformed,
         minimizing: sh.minimizing,
     })
 }
