@@ -7,6 +7,7 @@ import os
 import sys
 
 from . import loader
+from .files import read_limited
 from .links import TargetError, open_target, parse_target
 from .replay import replay, wait_banner
 from .schema import SchemaError
@@ -24,9 +25,8 @@ def cmd_replay(args):
     transcripts = []
     for f in args.files:
         try:
-            with open(f, "rb") as fh:
-                transcripts.append((f, parse(fh.read())))
-        except (OSError, TranscriptError) as e:
+            transcripts.append((f, parse(read_limited(f))))
+        except (OSError, ValueError, TranscriptError) as e:
             print("gcl_vectors: error: %s: %s" % (f, e), file=sys.stderr)
             return EXIT_ERROR
     try:

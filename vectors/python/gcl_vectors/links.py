@@ -1,11 +1,23 @@
 """Links to a hand: `exec:COMMAND ARGS` (a subprocess on stdin/stdout), `tcp://HOST:PORT`
-and `serial:PATH?baud=N` (pyserial). Every read has a deadline."""
+and `serial:PATH?baud=N` (pyserial). Every read and every write has a deadline, and what a
+flooding hand sends is held back by its pipe or socket, not kept in memory."""
 
+import os
 import queue
+import select
 import socket
 import subprocess
 import threading
 import time
+
+
+# A write that makes no progress for this long fails: a hand that does not read (a process
+# that ignores its input, a peer that stopped reading) cannot hang a run (as gcl's 5 s).
+SEND_STALL = 5.0
+
+# Chunks the exec reader may hold before it waits for the runner (64 x 4 KiB): a flooding
+# process is then held back by its pipe.
+EXEC_QUEUE_CHUNKS = 64
 
 
 class TargetError(Exception):
@@ -34,8 +46,9 @@ class ExecLink(Link):
             self.proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
         except OSError as e:
             raise TargetError("cannot start `%s`: %s" % (" ".join(argv), e))
-        self.q = queue.Queue()
+        self.q = queue.Queue(maxsize=EXEC_QUEUE_CHUNKS)
         self.eof = False
+        os.set_blocking(self.proc.stdin.fileno(), False)
         threading.Thread(target=self._reader, daemon=True).start()
 
     def _reader(self):
@@ -50,11 +63,24 @@ class ExecLink(Link):
                 return
 
     def send(self, data):
-        try:
-            self.proc.stdin.write(data)
-            self.proc.stdin.flush()
-        except (OSError, ValueError) as e:
-            raise Disconnected("the process closed its input: %s" % e)
+        fd = self.proc.stdin.fileno()
+        view = memoryview(data)
+        deadline = time.monotonic() + SEND_STALL
+        while view:
+            try:
+                n = os.write(fd, view)
+            except BlockingIOError:
+                n = 0
+            except (OSError, ValueError) as e:
+                raise Disconnected("the process closed its input: %s" % e)
+            if n:
+                view = view[n:]
+                deadline = time.monotonic() + SEND_STALL
+                continue
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise Disconnected("the process does not read its input (no progress for %gs)" % SEND_STALL)
+            select.select([], [fd], [], left)
 
     def recv(self, timeout):
         if self.eof:
@@ -95,7 +121,10 @@ class TcpLink(Link):
 
     def send(self, data):
         try:
+            self.sock.settimeout(SEND_STALL)
             self.sock.sendall(data)
+        except socket.timeout:
+            raise Disconnected("the peer does not read (no progress for %gs)" % SEND_STALL)
         except OSError as e:
             raise Disconnected(str(e))
 
@@ -122,7 +151,7 @@ class SerialLink(Link):
         except ImportError:
             raise TargetError("serial targets need pyserial (python3 -m pip install pyserial)")
         try:
-            self.port = serial.Serial(path, baud, timeout=0)
+            self.port = serial.Serial(path, baud, timeout=0, write_timeout=SEND_STALL)
         except (serial.SerialException, OSError, ValueError) as e:
             raise TargetError("cannot open %s: %s" % (path, e))
         self.error = serial.SerialException

@@ -4,6 +4,7 @@ flag. Stdlib only."""
 import json
 import os
 
+from .files import read_text_limited
 from .schema import SchemaError, validate
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -40,11 +41,20 @@ def schema_for(kind, vectors_dir=VECTORS):
         return json.load(f)
 
 
+def parse_json(text, what):
+    """JSON text to a value; a document nested too deeply for the parser is a SchemaError for
+    this file, never a RecursionError that stops the other files."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise SchemaError("%s: nested too deeply to be a vector file" % what)
+
+
 def load(path, vectors_dir=VECTORS):
     """Reads and checks one vector file: its schema, its test count, unique ids and flags that
-    name decisions listed in its header. Raises SchemaError."""
-    with open(path, encoding="utf-8") as f:
-        data = json.load(f)
+    name decisions listed in its header. The file is read with the limits of files.py (a FIFO
+    or a device is refused, at most 4 MiB read). Raises SchemaError, FileError or OSError."""
+    data = parse_json(read_text_limited(path), path)
     if not isinstance(data, dict) or data.get("kind") not in KINDS:
         raise SchemaError("%s: not a gcl vector file (no known `kind`)" % path)
     try:

@@ -10,6 +10,10 @@ DRAIN_QUIET = 0.1
 DRAIN_LIMIT = 5.0
 TRAILING = 0.05
 EXEC_BANNER_WAIT = 5.0
+# The most bytes one step's answer may hold before the hand counts as flooding (FAIL), and
+# the most of an answer a message shows: a flood costs neither memory nor a screenful.
+MAX_ANSWER = 1 << 20
+SHOWN = 200
 
 
 def escape(data):
@@ -31,10 +35,13 @@ def escape(data):
 
 
 def show(data, hex_form):
-    """Bytes as a report shows them: hex pairs for a hex expectation, else an escaped string."""
+    """Bytes as a report shows them: hex pairs for a hex expectation, else an escaped string;
+    at most SHOWN bytes, then a count of the rest."""
+    more = " and %d more bytes" % (len(data) - SHOWN) if len(data) > SHOWN else ""
+    data = data[:SHOWN]
     if hex_form:
-        return " ".join("%02X" % b for b in data)
-    return '"%s"' % escape(data)
+        return " ".join("%02X" % b for b in data) + more
+    return '"%s"' % escape(data) + more
 
 
 def drain(link, quiet=DRAIN_QUIET, limit=DRAIN_LIMIT):
@@ -100,13 +107,20 @@ def replay(t, link, default_timeout=2.0, resync=False):
                         "%s: no complete answer within %gs (%d bytes so far)\n  expected: %s\n  actual:   %s"
                         % (_where(i, step), timeout, len(buf), step.expect_text, show(buf, step.expect_text.startswith("hex"))),
                     )
+                if len(buf) > MAX_ANSWER:
+                    return Outcome(
+                        "FAIL",
+                        i,
+                        "%s: the hand sent more than %d bytes without completing its answer (a flood)\n  expected: %s\n  actual:   %s"
+                        % (_where(i, step), MAX_ANSWER, step.expect_text, show(buf, step.expect_text.startswith("hex"))),
+                    )
                 buf += link.recv(left)
             buf = buf[fed:]
         buf += link.recv(TRAILING)
         if buf:
             last = len(t.steps) - 1
             return Outcome(
-                "FAIL", last, "after the last step the hand sent more: \"%s\"" % escape(buf)
+                "FAIL", last, "after the last step the hand sent more: %s" % show(buf, False)
             )
         return Outcome("PASS", len(t.steps))
     except Disconnected as e:

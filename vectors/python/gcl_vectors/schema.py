@@ -34,6 +34,13 @@ def _type_ok(value, t):
     raise SchemaError("unknown type `%s` in a schema" % t)
 
 
+def _pattern_matches(pattern, value):
+    """JSON Schema's `pattern` (ECMA-262, unanchored): `$` is the end of the string. Python's
+    `$` also matches before a final newline, so "aaa...a\\n" would pass `^[0-9a-f]{64}$`; an
+    unescaped `$` becomes `\\Z` here."""
+    return re.search(re.sub(r"(?<!\\)\$", r"\\Z", pattern), value) is not None
+
+
 def errors(value, schema, root=None, path="$"):
     """Every way `value` breaks `schema`, as messages with a path."""
     root = schema if root is None else root
@@ -54,7 +61,7 @@ def errors(value, schema, root=None, path="$"):
         out.append("%s: expected %r" % (path, schema["const"]))
     if "enum" in schema and value not in schema["enum"]:
         out.append("%s: %r is not one of %r" % (path, value, schema["enum"]))
-    if isinstance(value, str) and "pattern" in schema and not re.search(schema["pattern"], value):
+    if isinstance(value, str) and "pattern" in schema and not _pattern_matches(schema["pattern"], value):
         out.append("%s: %r does not match %s" % (path, value, schema["pattern"]))
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         if "minimum" in schema and value < schema["minimum"]:
