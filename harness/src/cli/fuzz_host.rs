@@ -195,6 +195,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         opts.jobs,
         args.out.display()
     );
+    // Held for the campaign: a second campaign on the same folders is refused (issue 20).
+    let mut _held = vec![gcl_harness::outputs::OutLock::acquire(&args.out, "fuzz host --out")?];
+    if let Some(d) = args.host.report_dir().filter(|d| *d != args.out.as_path()) {
+        _held.push(gcl_harness::outputs::OutLock::acquire(d, "fuzz host --report")?);
+    }
     let stop = stop_on_signals()?;
     let out = args.out.clone();
     let info_of = |f: &Finding| info(&opts, f);
