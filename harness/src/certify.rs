@@ -751,7 +751,10 @@ mod tests {
         assert_eq!(verdict_text(true, false, 336, 336, 0), "PASS");
         assert_eq!(verdict_text(true, true, 12, 336, 0), "PARTIAL: 12 of 336 cases");
         assert_eq!(verdict_text(false, true, 12, 336, 0), "FAIL (PARTIAL: 12 of 336 cases)");
-        assert_eq!(verdict_text(true, false, 216, 216, 125), "PARTIAL: 91 of 216 cases passed, 125 known failures excused");
+        assert_eq!(
+            verdict_text(true, false, 216, 216, 125),
+            "PARTIAL: 91 of 216 cases passed, 125 known failures excused"
+        );
         let mut r = crate::report::tests::sample();
         for c in &mut r.cases {
             c.verdict = Verdict::Skip;

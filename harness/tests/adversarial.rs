@@ -102,7 +102,11 @@ fn absurd_durations_are_refused_at_once() {
 #[test]
 fn ok_exit_codes_are_exit_codes() {
     for bad in ["256", "999", "-1"] {
-        let r = gcl_bounded(None, &["fuzz", "host", "--runs", "1", "--ok-exit-codes", bad, "--", "true"], Duration::from_secs(30));
+        let r = gcl_bounded(
+            None,
+            &["fuzz", "host", "--runs", "1", "--ok-exit-codes", bad, "--", "true"],
+            Duration::from_secs(30),
+        );
         assert_eq!(r.code, Some(2), "{bad}: {}", r.stderr);
         assert!(r.stderr.contains(bad), "{bad}: {}", r.stderr);
     }
@@ -127,11 +131,7 @@ fn checks_refuse_fifos_devices_and_huge_files() {
     let json = dir.path().join("json");
     let suite = dir.path().join("suite");
     let victim = json.join("seed/grammar.json");
-    for (make, says) in [
-        (0, "named pipe"),
-        (1, "character device"),
-        (2, "larger than"),
-    ] {
+    for (make, says) in [(0, "named pipe"), (1, "character device"), (2, "larger than")] {
         std::fs::remove_file(&victim).unwrap();
         match make {
             0 => nix::unistd::mkfifo(&victim, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap(),
@@ -175,7 +175,8 @@ fn regenerate_never_writes_through_a_symlink() {
         assert!(!std::fs::symlink_metadata(&at).unwrap().file_type().is_symlink());
         assert!(std::fs::read(&at).unwrap().len() > 100);
     }
-    let leftovers: Vec<_> = walk(dir.path()).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
+    let leftovers: Vec<_> =
+        walk(dir.path()).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
@@ -198,13 +199,24 @@ fn walk(dir: &Path) -> Vec<String> {
 /// unless `--allow-unverified`.
 #[test]
 fn known_failures_narrow_a_certificate_and_verify_needs_a_key() {
-    let mut sim = sim_support::SimProcess::start(sim_support::Transport::Tcp, &["--profile", "seed", "--fault", "fget-reversed"]);
+    let mut sim =
+        sim_support::SimProcess::start(sim_support::Transport::Tcp, &["--profile", "seed", "--fault", "fget-reversed"]);
     let target = sim.target();
     let dir = tempfile::tempdir().unwrap();
     let kf = dir.path().join("kf.toml");
     // The cases fget-reversed fails among the parameter defaults (see `gcl conform`).
-    let failing = ["param-mov-default", "param-mcv-default", "param-ds-default", "param-dp-default", "param-fpg-default", "param-hold-default"];
-    let text: String = failing.iter().map(|c| format!("[[failure]]\ncase = \"{c}\"\nreason = \"FGET answers reversed\"\n\n")).collect();
+    let failing = [
+        "param-mov-default",
+        "param-mcv-default",
+        "param-ds-default",
+        "param-dp-default",
+        "param-fpg-default",
+        "param-hold-default",
+    ];
+    let text: String = failing
+        .iter()
+        .map(|c| format!("[[failure]]\ncase = \"{c}\"\nreason = \"FGET answers reversed\"\n\n"))
+        .collect();
     std::fs::write(&kf, text).unwrap();
     let out = dir.path().join("cert");
     let r = gcl(&["certify", "--target", &target, "--profile", "seed", "--known-failures", s(&kf), "--out", s(&out)]);
@@ -213,13 +225,26 @@ fn known_failures_narrow_a_certificate_and_verify_needs_a_key() {
     let key = dir.path().join("key.pem");
     assert_eq!(gcl(&["certify", "--keygen", s(&key)]).code, Some(0));
     let r = gcl(&[
-        "certify", "--target", &target, "--profile", "seed", "--known-failures", s(&kf), "--partial", "--only",
-        "param-*-default", "--key", s(&key), "--out", s(&out),
+        "certify",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--known-failures",
+        s(&kf),
+        "--partial",
+        "--only",
+        "param-*-default",
+        "--key",
+        s(&key),
+        "--out",
+        s(&out),
     ]);
     assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
     assert!(r.stdout.contains("certificate verdict: PARTIAL: 20 of"), "{}", r.stdout);
     assert!(r.stdout.contains("6 known failures excused"), "{}", r.stdout);
-    let cert: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("certificate.json")).unwrap()).unwrap();
+    let cert: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("certificate.json")).unwrap()).unwrap();
     let mut excused: Vec<&str> = cert["excused"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
     excused.sort();
     let mut want = failing.to_vec();
@@ -317,7 +342,12 @@ fn a_hand_answering_only_the_probe_ends_the_run() {
     let r = gcl(&["conform", "--target", &hand, "--profile", "seed", "--level", "must"]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("answers ^C and a bare CR, but not a command line"), "{}", r.stderr);
-    let timeouts: usize = r.stdout.lines().filter(|l| l.trim_start().starts_with("MUST")).filter_map(|l| l.split_whitespace().nth(4)?.parse::<usize>().ok()).sum();
+    let timeouts: usize = r
+        .stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with("MUST"))
+        .filter_map(|l| l.split_whitespace().nth(4)?.parse::<usize>().ok())
+        .sum();
     assert!(timeouts <= 10, "{timeouts} timeouts before the run ended\n{}", r.stdout);
 }
 
@@ -325,11 +355,9 @@ fn a_hand_answering_only_the_probe_ends_the_run() {
 /// a hang-up, and only silence is "nothing came back".
 #[test]
 fn the_liveness_message_says_what_happened() {
-    for (target, says) in [
-        ("exec:yes", "it floods"),
-        ("exec:true", "it hung up"),
-        ("exec:sleep 1000", "nothing came back within"),
-    ] {
+    for (target, says) in
+        [("exec:yes", "it floods"), ("exec:true", "it hung up"), ("exec:sleep 1000", "nothing came back within")]
+    {
         let r = gcl(&["conform", "--target", target, "--profile", "seed", "-q"]);
         assert_eq!(r.code, Some(2), "{target}: {}", r.stderr);
         assert!(r.stderr.contains(says), "{target}: {}", r.stderr);
@@ -349,7 +377,8 @@ fn fuzz_device_ends_early_on_a_dead_hand() {
         return;
     }
     let hand = format!("exec:python3 {} 4 {GCL} sim --stdio --profile seed", hands().join("hangs_after.py").display());
-    let r = gcl(&["fuzz", "device", "--target", &hand, "--profile", "seed", "--no", "motion", "--duration", "20s", "-q"]);
+    let r =
+        gcl(&["fuzz", "device", "--target", &hand, "--profile", "seed", "--no", "motion", "--duration", "20s", "-q"]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("the hand stopped answering at run"), "{}", r.stderr);
 }
@@ -419,10 +448,15 @@ fn fuzz_device_holds_its_folders_and_reports_on_sigterm() {
 fn a_finding_is_never_replaced_by_another_bugs() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("findings");
-    let args = ["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "300", "-q", "--out", s(&out)];
+    let args =
+        ["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "300", "-q", "--out", s(&out)];
     let r = gcl(&args);
     assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
-    let found: Vec<_> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "gcl")).collect();
+    let found: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "gcl"))
+        .collect();
     assert!(!found.is_empty());
     // Another bug's findings under the same names, as an earlier campaign would leave them.
     for p in &found {
@@ -433,7 +467,10 @@ fn a_finding_is_never_replaced_by_another_bugs() {
     for p in &found {
         assert_eq!(std::fs::read_to_string(p).unwrap(), format!("another bug's finding: {}\n", p.display()));
     }
-    let now = std::fs::read_dir(&out).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "gcl")).count();
+    let now = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "gcl"))
+        .count();
     assert_eq!(now, 2 * found.len(), "the new findings were written beside the old ones");
 }
 
@@ -453,10 +490,8 @@ fn an_include_bomb_is_refused_within_the_memory_limit() {
         std::fs::write(dir.path().join(format!("c{i}.toml")), "# small\n").unwrap();
     }
     let top = dir.path().join("top.toml");
-    for args in [
-        vec!["explain", "--profile", s(&top), "HI"],
-        vec!["conform", "--target", "sim", "--profile", s(&top)],
-    ] {
+    for args in [vec!["explain", "--profile", s(&top), "HI"], vec!["conform", "--target", "sim", "--profile", s(&top)]]
+    {
         let r = gcl(&args);
         assert_eq!(r.code, Some(2), "{args:?}: {}", r.stderr);
         assert!(r.stderr.contains("include bomb"), "{args:?}: {}", r.stderr);
@@ -563,7 +598,8 @@ fn a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid() {
     let r = gcl(&["conform", "--target", "sim:seed", "--only", "cmd-*", "--report", s(&rep)]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("No space left") && r.stderr.contains(".json"), "{}", r.stderr);
-    let temporaries: Vec<String> = walk(&disk.at).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
+    let temporaries: Vec<String> =
+        walk(&disk.at).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
     assert!(temporaries.is_empty(), "{temporaries:?}");
     // fuzz host: a crashing host whose stderr (64 KiB) does not fit in the bundle.
     std::fs::remove_dir_all(&rep).unwrap();
@@ -576,7 +612,8 @@ fn a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid() {
     assert!(r.stderr.contains("No space left") && r.stderr.contains("stderr.txt"), "{}", r.stderr);
     let bundle = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).find(|p| p.is_dir()).unwrap();
     assert!(bundle.join("INCOMPLETE").is_file(), "a half-written bundle is not marked");
-    let temporaries: Vec<String> = walk(&disk.at).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
+    let temporaries: Vec<String> =
+        walk(&disk.at).into_iter().filter(|p| p.rsplit('/').next().unwrap().contains(".tmp")).collect();
     assert!(temporaries.is_empty(), "{temporaries:?}");
     let r = gcl(&["fuzz", "host", "--replay", s(&bundle), "--", "true"]);
     assert_eq!(r.code, Some(2), "{}", r.stderr);
@@ -600,7 +637,8 @@ fn malformed_corpus_files_are_named() {
 fn a_banner_flood_is_a_flood_not_a_restart() {
     use gcl_harness::replay::{Exchanged, Flooded, ReplayOutcome};
     let p = gcl_model::Profile::builtin("seed").unwrap();
-    let golden = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/abort-idle.gcl")).unwrap();
+    let golden =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/abort-idle.gcl")).unwrap();
     let t = gcl_transcript::parse_bytes(&golden).unwrap();
     // Step 0 is the preamble's ^C; the hand answers it with banners, over and over.
     let flood: Vec<u8> = b"\n\rBarrettHand Firmware 4.4\n\r".repeat(2000);
@@ -609,7 +647,13 @@ fn a_banner_flood_is_a_flood_not_a_restart() {
         line: 10,
         ceiling: 4096,
         expected_full: "\"\\n\\r=> \"".into(),
-        exchange: vec![Exchanged { step: 0, line: 10, sent: vec![3], received: flood[..4096].to_vec(), took: Duration::from_millis(5) }],
+        exchange: vec![Exchanged {
+            step: 0,
+            line: 10,
+            sent: vec![3],
+            received: flood[..4096].to_vec(),
+            took: Duration::from_millis(5),
+        }],
     }));
     let sig = gcl_harness::fuzz::device::signature(&p, &t, &out).expect("a failure has a signature");
     assert_eq!(sig.kind, "flood", "{sig:?}");

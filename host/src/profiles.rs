@@ -37,7 +37,9 @@ pub enum ProfileError {
         detail: String,
     },
     /// A bundle names a profile that is neither built in nor a file inside the bundle.
-    #[error("the bundle in {dir} names profile `{name}`, which is neither a built-in profile nor a profile file inside the bundle")]
+    #[error(
+        "the bundle in {dir} names profile `{name}`, which is neither a built-in profile nor a profile file inside the bundle"
+    )]
     NotInBundle {
         /// The name the bundle gives.
         name: String,
@@ -86,7 +88,11 @@ pub fn load_from_bundle(name: &str, dir: &Path) -> Result<Arc<Profile>, ProfileE
 
 /// A file name with no folder part, not `.` or `..`, and no control characters.
 fn is_plain_name(name: &str) -> bool {
-    !name.is_empty() && name != "." && name != ".." && !name.contains(['/', '\\']) && !name.chars().any(char::is_control)
+    !name.is_empty()
+        && name != "."
+        && name != ".."
+        && !name.contains(['/', '\\'])
+        && !name.chars().any(char::is_control)
 }
 
 /// A relative path below its folder: no root, no `..`, no control characters.

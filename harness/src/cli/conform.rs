@@ -391,7 +391,8 @@ fn clip(s: &str, n: usize) -> String {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(&args.suite, args.level.into(), false)?;
     // Held until the reports are written: a second run on the same folder is refused.
-    let _held = args.report.as_deref().map(|d| gcl_harness::outputs::OutLock::acquire(d, "conform --report")).transpose()?;
+    let _held =
+        args.report.as_deref().map(|d| gcl_harness::outputs::OutLock::acquire(d, "conform --report")).transpose()?;
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
     record_options(&mut out.report, &args.suite);
     let mut w = std::io::stdout().lock();

@@ -15,7 +15,6 @@ use gcl_harness::report::{CaseResult, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 
-
 use super::{EXIT_FAIL, EXIT_OK, load_profile};
 
 fn duration(s: &str) -> Result<Duration, String> {

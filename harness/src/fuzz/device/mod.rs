@@ -258,7 +258,7 @@ pub struct FuzzSummary {
     /// Whether [`FuzzOptions::stop`] ended the campaign (a signal).
     pub interrupted: bool,
     /// Corpus files that did not read or parse, with why: skipped, and worth a warning.
-    pub malformed_corpus: Vec<(PathBuf, String)>,
+    pub malformed_corpus: Malformed,
 }
 
 impl FuzzSummary {
@@ -338,9 +338,12 @@ pub fn corpus_name(actions: &[HostAction]) -> String {
     format!("{}.json", &crate::certify::sha256_hex(&json)[..20])
 }
 
+/// Corpus files that did not read or parse, each with why.
+pub type Malformed = Vec<(PathBuf, String)>;
+
 /// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
 /// read or parse are skipped, and returned with why, so the caller can warn about them.
-pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Vec<(PathBuf, String)>), FuzzError> {
+pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Malformed), FuzzError> {
     let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
     std::fs::create_dir_all(dir).map_err(err)?;
     let mut names: Vec<PathBuf> = std::fs::read_dir(dir)

@@ -89,7 +89,8 @@ pub fn write(out: &Path, info: &BundleInfo, f: &Finding) -> Result<PathBuf, Bund
     // Written first and removed last: a bundle cut short (a full disk, a kill) says so, and
     // `read` refuses it instead of replaying half a finding.
     let marker = dir.join(INCOMPLETE);
-    crate::report::write_atomic(&marker, b"this bundle was not written whole; do not trust it\n").map_err(io(&marker))?;
+    crate::report::write_atomic(&marker, b"this bundle was not written whole; do not trust it\n")
+        .map_err(io(&marker))?;
     let files: [(&str, Vec<u8>); 5] = [
         ("finding.json", json(info)),
         ("schedule.json", json(&f.schedule)),
