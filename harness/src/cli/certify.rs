@@ -164,12 +164,15 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     }
     // Read the key before the run, so a bad key costs seconds, not a whole suite.
     let key = args.key.as_deref().map(load_signing_key).transpose()?;
-    if args.out.exists() && std::fs::read_dir(&args.out).map(|mut d| d.next().is_some()).unwrap_or(true) {
+    // Empty: nothing in it but the lock file a certify that failed before its run left.
+    let lock_name = std::ffi::OsStr::new(gcl_harness::outputs::LOCK_FILE);
+    if args.out.exists()
+        && std::fs::read_dir(&args.out)
+            .map(|mut d| d.any(|e| e.map_or(true, |e| e.file_name() != lock_name)))
+            .unwrap_or(true)
+    {
         anyhow::bail!("{} exists and is not empty; choose a new --out", args.out.display());
     }
-    // Held until the bundle is written: a second certify on the same folder is refused.
-    let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
-    let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
     let (opts, cases) = prepare(suite_args, LevelFilter::Should, true)?;
     let cases_total = cases.iter().filter(|c| LevelFilter::Should.admits(c.level())).count();
     // The firmware's own words first, so a certificate names what was tested.
@@ -179,6 +182,9 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
         gcl_harness::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
         firmware_version(link.as_mut(), &opts.profile, timeout)?
     };
+    // Held until the bundle is written: a second certify on the same folder is refused.
+    let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
+    let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
     let mut out = run_with_progress(&opts, &cases, Some(&args.out), false)?;
     record_options(&mut out.report, suite_args);
     out.report.options.partial = args.partial;
