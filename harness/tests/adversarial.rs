@@ -395,6 +395,7 @@ fn wait_bounded(mut child: std::process::Child, limit: Duration) -> std::process
     while child.try_wait().unwrap().is_none() {
         if Instant::now() > end {
             let _ = child.kill();
+            let _ = child.wait();
             panic!("the child did not end within {limit:?}");
         }
         std::thread::sleep(Duration::from_millis(20));
@@ -417,7 +418,17 @@ fn fuzz_device_holds_its_folders_and_reports_on_sigterm() {
         c.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
         c.spawn().unwrap()
     };
-    let first = campaign(&out, &rep);
+    // Killed when the test ends, whatever happens (a gcl that ignores SIGTERM would run on).
+    struct KillOnDrop(Option<std::process::Child>);
+    impl Drop for KillOnDrop {
+        fn drop(&mut self) {
+            if let Some(c) = self.0.as_mut() {
+                let _ = c.kill();
+                let _ = c.wait();
+            }
+        }
+    }
+    let mut first = KillOnDrop(Some(campaign(&out, &rep)));
     // Wait until the first campaign holds its folders.
     let end = Instant::now() + Duration::from_secs(60);
     while !std::fs::read_to_string(rep.join(".gcl.lock")).is_ok_and(|t| t.contains("pid")) {
@@ -432,8 +443,8 @@ fn fuzz_device_holds_its_folders_and_reports_on_sigterm() {
     assert_eq!(r.code, Some(2), "{}", r.stderr);
     assert!(r.stderr.contains("is in use by gcl fuzz device --report"), "{}", r.stderr);
     std::thread::sleep(Duration::from_secs(2));
-    terminate(&first);
-    let done = wait_bounded(first, Duration::from_secs(120));
+    terminate(first.0.as_ref().unwrap());
+    let done = wait_bounded(first.0.take().unwrap(), Duration::from_secs(120));
     let err = String::from_utf8_lossy(&done.stderr);
     assert_eq!(done.status.code(), Some(1), "findings expected under fget-reversed: {err}");
     assert!(err.contains("stopped by a signal"), "{err}");
