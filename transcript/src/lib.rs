@@ -718,8 +718,8 @@ pub fn hex_bytes(bytes: &[u8]) -> String {
 }
 
 /// The elision syntax of a piece, `{...}` (the same in strings and hex segments; `??` is the
-/// hex shorthand of `{byte}`).
-fn elision_text(p: &Piece) -> String {
+/// hex shorthand of `{byte}`); empty for [`Piece::Bytes`].
+pub fn elision_text(p: &Piece) -> String {
     match p {
         Piece::Bytes(_) => String::new(),
         Piece::Int(None) => "{int}".into(),

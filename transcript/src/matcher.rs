@@ -261,8 +261,7 @@ impl Matcher {
                     }
                     Some(Reads::Field(ty, min, max)) => {
                         let v = signed_value(ty, s.acc);
-                        (s.k as usize == ty.size() && (min..=max).contains(&v))
-                            .then(|| s.next(capturing.then_some(v)))
+                        (s.k as usize == ty.size() && (min..=max).contains(&v)).then(|| s.next(capturing.then_some(v)))
                     }
                     None => None,
                 }

@@ -596,7 +596,9 @@ pub fn parse(text: &str) -> Result<Transcript, ParseError> {
                 if cur_args.peek_word() == "within" {
                     cur_args.take_word();
                     let w = cur_args.take_word();
-                    let dur = |t: &str| parse_duration(t).ok_or_else(|| ParseError::new(n, ParseErrorKind::BadDuration(t.into())));
+                    let dur = |t: &str| {
+                        parse_duration(t).ok_or_else(|| ParseError::new(n, ParseErrorKind::BadDuration(t.into())))
+                    };
                     // `within B`, or a window `within A..B`: no sooner than A, no later than B.
                     match w.split_once("..") {
                         Some((a, b)) => {
@@ -604,7 +606,9 @@ pub fn parse(text: &str) -> Result<Transcript, ParseError> {
                             if a > b {
                                 return Err(ParseError::new(
                                     n,
-                                    ParseErrorKind::BadCapture(format!("timing window `{w}`: its lower bound is above its upper")),
+                                    ParseErrorKind::BadCapture(format!(
+                                        "timing window `{w}`: its lower bound is above its upper"
+                                    )),
                                 ));
                             }
                             cur.step.earliest = Some(a);

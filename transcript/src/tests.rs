@@ -222,7 +222,9 @@ fn relations_and_windows_round_trip() {
     assert!(one.to_text().contains("{i8 v1 +-25% as v2}"));
     // A field captured without a range reads its whole type.
     let whole = parse(&RELATIONS.replace("{i8 1..127 as v1}", "{i8 as v1}")).unwrap();
-    assert!(whole.steps[1].expect.matches_with(&[("p1".to_string(), 100)].into(), &[0x2A, 0x80, 0xC0, 0, 100]).is_some());
+    assert!(
+        whole.steps[1].expect.matches_with(&[("p1".to_string(), 100)].into(), &[0x2A, 0x80, 0xC0, 0, 100]).is_some()
+    );
 }
 
 #[test]
