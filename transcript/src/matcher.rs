@@ -316,6 +316,13 @@ impl Matcher {
                         parts.push((*form, Piece::Bytes(rest.to_vec())));
                     }
                 }
+                // A relation whose value is known by now shows the band it stands for: what
+                // the answer had to be, in numbers (the whole expectation shows the relation).
+                Piece::Value(Value { relation: Some(_), capture: None, .. }) => match self.reads(i, s) {
+                    Some(Reads::Int(r)) => parts.push((*form, Piece::Int(r))),
+                    Some(Reads::Field(ty, min, max)) => parts.push((*form, Piece::Field { ty, min, max })),
+                    None => parts.push((*form, p.clone())),
+                },
                 _ => parts.push((*form, p.clone())),
             }
         }
@@ -527,6 +534,21 @@ mod tests {
         assert!(t.matches(&[0x01, 0x3B, b'!']));
         assert!(t.matches(&[0xFE, 0x00, b'!']));
         assert_eq!(match_prefix(&t, &[0x80, 0x00, b'!']), Outcome::Parted(0));
+    }
+
+    #[test]
+    fn a_relation_shows_its_band_where_the_answer_parts() {
+        let t = crate::parse(
+            "gcl-transcript 1\nid: a\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\
+             send hex 41\nexpect hex 2A {i8 4..127 as v1} {i8 v1/2 +-25%}\n",
+        )
+        .unwrap();
+        let mut m = Matcher::new(&t.steps[0].expect);
+        for b in [b'*', 80, 80] {
+            m.feed(b);
+        }
+        assert!(!m.is_alive());
+        assert_eq!(m.expected_at_parting(), "{i8 30..50}");
     }
 
     #[test]

@@ -789,6 +789,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn derived_relations_hold_every_pair_and_no_more_than_they_need() {
+        let pairs = [(100, 520), (120, 700), (150, 800), (200, 1100)];
+        let r = derive_relation("p1", &pairs, 0).unwrap();
+        // The factor is the midpoint of the ratios (5.2..5.83), over 100, reduced: 552/100.
+        assert_eq!((r.num, r.den), (138, 25));
+        let holds = |r: &Relation| {
+            pairs.iter().all(|(a, b)| {
+                let (lo, hi) = r.band(*a);
+                (lo..=hi).contains(b)
+            })
+        };
+        assert!(holds(&r));
+        // The least tolerance: one point less breaks a pair.
+        assert!(!holds(&Relation::new("p1", r.num, r.den, r.tolerance - 1)));
+        assert_eq!(derive_relation("p1", &pairs, 3).unwrap().tolerance, r.tolerance + 3);
+        // A fixed factor: the tolerance alone is fitted.
+        let half = fit_tolerance("d1", 1, 2, &[(95, 51), (102, 47)], 0).unwrap();
+        assert_eq!((half.num, half.den, half.tolerance), (1, 2, 6));
+        // Nothing to anchor on, or no tolerance up to 100 % holds: no relation.
+        assert!(derive_relation("p1", &[(0, 5)], 0).is_none());
+        assert!(fit_tolerance("d1", 1, 2, &[(10, 100)], 0).is_none());
+    }
+
+    #[test]
     fn sources_file_parses_and_names_only_builtin_profiles() {
         let text = include_str!("../../suite-cases/sources.toml");
         let parsed: std::collections::BTreeMap<String, String> = toml::from_str(text).unwrap();
