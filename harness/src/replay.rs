@@ -648,6 +648,33 @@ mod tests {
     }
 
     #[test]
+    fn captures_carry_from_step_to_step_and_windows_have_a_floor() {
+        // DP reads 1000 1000 1000 150 on the seed: motor 2's DP is captured, then the spread's
+        // is held to 3/20 of it (150), exactly.
+        let related = FGET.replace("{int 990..1010} 1000 1000 150", "1000 {int 1..20000 as dp} 1000 150").replace(
+            "\n\nsend \"FGET DP",
+            "\n\nsend \"FGET DP\\r\"\nexpect \"FGET DP\\n\\r1000 1000 1000 150\\n\\r=> \"\n\nsend \"FGET DP",
+        );
+        let t = parse(&format!(
+            "{related}\nsend \"SFGET DP\\r\"\nexpect \"SFGET DP\\n\\r{{int dp*3/20 +-0%}}\\n\\r=> \"\n"
+        ))
+        .unwrap();
+        let out = replay(&t, &mut sim(vec![]), &ReplayOptions::default());
+        assert!(out.is_pass(), "{}", out.render());
+        // 3/19 of 1000 is 157.9, rounded outward 157..158: 150 parts at its last digit.
+        let off = parse(&t.to_text().replace("dp*3/20 +-0%", "dp*3/19 +-0%")).unwrap();
+        let out = replay(&off, &mut sim(vec![]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!((m.step, m.expected.as_str()), (3, "{int 157..158}\\n\\r=> "));
+        // An answer that comes sooner than its window's lower bound fails.
+        let early = parse(&t.to_text().replacen("expect \"FGET DP", "expect within 1s..2s \"FGET DP", 1)).unwrap();
+        let out = replay(&early, &mut sim(vec![]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!(m.step, 1);
+        assert!(m.expected.starts_with("the answer complete no sooner than 1s"), "{}", m.expected);
+    }
+
+    #[test]
     fn mismatch_shows_the_parting_byte() {
         let t = parse(FGET).unwrap();
         let out = replay(&t, &mut sim(vec![Fault::CrLf]), &ReplayOptions::default());
