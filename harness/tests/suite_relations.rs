@@ -5,6 +5,8 @@
 //! - A hand whose velocity units differ from the model's (the seed profile with its RealTime
 //!   velocity units patched) passes every scaling case and fails only the cases that rest on
 //!   the units decision.
+//! - A hand whose motors run twice as slow or twice as fast passes the MCV, MOV, ACCEL and
+//!   TSTOP effect cases.
 //! - A hand that ignores LCVC fails the LCVC case, even when the units decision is skipped.
 //! - Every relation in a golden states its evidence in a note, and holds on the model's answers.
 
@@ -31,20 +33,47 @@ const SCALING: &[&str] = &["rt-lcvc-scaling", "rt-lfvc-scaling", "rt-lfv-formula
 /// model's (LCV x LCVC x 0.05 counts/ms) and the feedback velocity twice as coarse (LFV in
 /// 0.2 counts/ms), so every LFV reads a quarter of the model's.
 fn seed_with_other_units() -> Arc<Profile> {
+    seed_patched(&[
+        ("rt_velocity_counts_per_ms = 0.1\n", "rt_velocity_counts_per_ms = 0.05\n"),
+        ("lfv_counts_per_ms = 0.1\n", "lfv_counts_per_ms = 0.2\n"),
+    ])
+}
+
+/// The seed profile with lines of `seed.toml` replaced (each must be there).
+fn seed_patched(patch: &[(&str, &str)]) -> Arc<Profile> {
     let resolve = |f: &str| {
-        let text = std::fs::read_to_string(Path::new(SPEC).join(f)).ok()?;
-        if f != "seed.toml" {
-            return Some(text);
+        let mut text = std::fs::read_to_string(Path::new(SPEC).join(f)).ok()?;
+        if f == "seed.toml" {
+            for (from, to) in patch {
+                assert!(text.contains(from), "seed.toml no longer has `{}`", from.trim());
+                text = text.replace(from, to);
+            }
         }
-        for line in ["rt_velocity_counts_per_ms = 0.1\n", "lfv_counts_per_ms = 0.1\n"] {
-            assert!(text.contains(line), "seed.toml no longer has `{}`", line.trim());
-        }
-        Some(
-            text.replace("rt_velocity_counts_per_ms = 0.1\n", "rt_velocity_counts_per_ms = 0.05\n")
-                .replace("lfv_counts_per_ms = 0.1\n", "lfv_counts_per_ms = 0.2\n"),
-        )
+        Some(text)
     };
     Arc::new(Profile::load_with("seed.toml", &resolve).unwrap())
+}
+
+#[test]
+fn a_hand_whose_motors_run_at_another_speed_passes_the_speed_effect_cases() {
+    // Motors twice as slow and twice as fast (MCV, MOV and ACCEL in other units: the velocity
+    // unit is 0.05 or 0.2 counts/ms instead of 0.1, and the acceleration scales with it): the
+    // effects are ratios between two motors, so the cases pass; their absolute bands did not.
+    let cases = seed_cases();
+    let mut failed = Vec::new();
+    for unit in ["0.05", "0.2"] {
+        let to = format!("counts_per_ms_per_velocity_unit = {unit}\n");
+        let hand = seed_patched(&[("counts_per_ms_per_velocity_unit = 0.1\n", &to)]);
+        for id in ["param-mcv-effect", "param-mov-effect", "param-accel-effect", "param-tstop-effect"] {
+            let c = cases.iter().find(|c| c.id() == id).unwrap_or_else(|| panic!("no case {id}"));
+            let mut link = SimLink::new(hand.clone(), DeviceConfig::default());
+            let out = suite::run_case(c, &mut link, &suite::replay_options());
+            if !out.is_pass() {
+                failed.push(format!("{unit}: {id}: {}", out.render()));
+            }
+        }
+    }
+    assert!(failed.is_empty(), "{failed:#?}");
 }
 
 fn seed_cases() -> Vec<Case> {
