@@ -118,7 +118,7 @@ const FAULTS: &[(&str, &[&str])] = &[
     ("lfap-little-endian", &["rt-lfap-byte-order"]),
     // Relations: the Python runner carries captures from value to value.
     ("lcvc-ignored", &["rt-lcvc-scaling"]),
-    ("lfdpc-ignored", &["rt-lfdpc-scaling"]),
+    ("lfvc-ignored", &["rt-lfvc-scaling"]),
 ];
 const BYSTANDERS: &[&str] = &["framing-empty-line", "cmd-fget", "param-dp-default", "status-32-unknown-command"];
 

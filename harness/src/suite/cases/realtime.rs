@@ -127,7 +127,7 @@ impl Gen {
                 3,
             );
         }
-        self.lfdpc_scaling(10, 1000);
+        self.lfdpc_scaling();
 
         // LFVC divides the feedback velocity: two motors at one velocity, LFVC 2 on motor 1.
         let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
@@ -387,61 +387,76 @@ impl Gen {
         }
     }
 
-    /// LFDPC divides the movement LFDP reports: motors 1 and 2 make the same move, motor 2
-    /// with twice motor 1's LFDPC, so motor 2's LFDP is half motor 1's. The ratio is the clause;
-    /// which position LFDP counts from (the last reported one) is the same for both motors, so
-    /// the case does not rest on that decision.
-    fn lfdpc_scaling(&mut self, coeff: i64, to: i64) {
-        // The LFDP values each motor may send: its move starts anywhere FGET P may read within
-        // MPE of 0 and ends anywhere within MPE of the goal.
-        let values = |m: u8, c: i64| -> Vec<i64> {
-            let mpe = self.mpe(m);
-            let mut vs = Vec::new();
-            for p1 in 0..=mpe {
-                for p2 in (to - mpe).max(0)..=to + mpe {
-                    let mut r = p1;
-                    let v = i64::from(lfdp_step(&mut r, p2, c, false));
-                    if !vs.contains(&v) {
-                        vs.push(v);
+    /// LFDPC divides the movement LFDP reports: motors 1 and 2 run at one control velocity
+    /// in the loop, motor 2 with twice motor 1's LFDPC, so between two feedback blocks motor 2's
+    /// LFDP is half motor 1's. The ratio is the clause. The relation is read on the second of
+    /// two blocks, whose LFDP counts from the first: where LFDP counts from before any block
+    /// (the last reported position, an open point) does not matter, nor do the velocity units
+    /// or how long the host's pause really is.
+    fn lfdpc_scaling(&mut self) {
+        let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
+        let h = &self.p.hand;
+        let counts_per_ms =
+            gcl_model::realtime::control_velocity(datum, lcvc, h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms;
+        let pause = 50u64;
+        // The movement between the blocks in the model's units, and an LFDPC that reads it as
+        // about 40.
+        let m0 = (counts_per_ms * pause as f64).round() as i64;
+        let coeff = (m0 / 40).clamp(1, 127);
+        let least = LEAST_ANCHOR * coeff;
+        let (lo_m, hi_m) = ((m0 / 2).max(least), (2 * m0).min(127 * coeff));
+        // Every movement from half to twice the model's, and every rest a truncation leaves
+        // behind (LFDP carries it: the reported position advances by LFDP x LFDPC).
+        let mut pairs: Vec<(i64, i64)> = Vec::new();
+        for m in lo_m..=hi_m {
+            for r1 in 0..coeff {
+                for r2 in 0..2 * coeff {
+                    let pair = ((m + r1) / coeff, (m + r2) / (2 * coeff));
+                    if !pairs.contains(&pair) {
+                        pairs.push(pair);
                     }
                 }
             }
-            vs.sort_unstable();
-            vs
-        };
-        let (a, b) = (values(1, coeff), values(2, 2 * coeff));
-        let pairs: Vec<(i64, i64)> = a.iter().flat_map(|x| b.iter().map(move |y| (*x, *y))).collect();
+        }
         let Some(rel) = super::super::build::fit_tolerance("d1", 1, 2, &pairs, 2) else { return };
-        let (lo, hi) = (a.first().copied().unwrap_or(0), a.last().copied().unwrap_or(0));
         let evidence = format!(
-            "both motors move from within MPE of 0 to within MPE of {to}; motor 1 divides the movement by LFDPC \
-             {coeff}, motor 2 by {}, so motor 2's LFDP is half motor 1's; the tolerance is the least that holds every \
-             pair of end positions by the model's LFDP arithmetic ({} pairs; motor 1 reads {lo}..{hi}), plus 2 points; \
-             motor 1 must read {LEAST_ANCHOR}..127, a movement large enough for the ratio to show",
+            "both motors run at one control velocity (LCV {datum} x LCVC {lcvc}, about {m0} counts in the model \
+             between the two blocks); motor 1 divides the movement by LFDPC {coeff}, motor 2 by {}, so motor 2's \
+             LFDP is half motor 1's; the tolerance is the least that holds the model's LFDP arithmetic (truncation, \
+             with the rest carried) over every movement of {lo_m}..{hi_m} counts ({} pairs), plus 2 points; motor 1 \
+             must read {LEAST_ANCHOR}..127, a movement large enough for the ratio to show",
             2 * coeff,
             pairs.len()
         );
         let lfdp = |m: u8| Target::Field { motor: Some(m), name: "LFDP" };
+        let any = |name: &'static str| -> Vec<FieldRule> {
+            (1..=2u8).map(|m| FieldRule { motor: Some(m), name, range: Some((-128, 127)) }).collect()
+        };
         let k = self
             .rt_case(
                 "rt-lfdpc-scaling",
                 &format!(
-                    "LFDP is the movement divided by LFDPC: one move reads half as much with LFDPC {} as with {coeff}",
+                    "LFDP is the movement divided by LFDPC: at one velocity, LFDPC {} reads half what LFDPC {coeff} reads",
                     2 * coeff
                 ),
                 "12",
-                &["LFDP"],
+                &["LCV", "LFDP"],
             )
             .src("Parameter LFDPC")
+            // The movement between the blocks is made over the host's pause: a hand whose
+            // motions take no time moves too little for the ratio to show.
+            .requires(Requirement::AbortTiming)
+            .line(&format!("12FSET LCVC {lcvc}"))
             .line(&format!("1FSET LFDPC {coeff}"))
             .line(&format!("2FSET LFDPC {}", 2 * coeff))
-            .get("12", &["P"], Some(self.near([0; 4])))
-            .line(&format!("12M {to}"))
             .line("12LOOP")
-            .block(
-                b"A",
-                Shape::Block(vec![FieldRule { motor: Some(1), name: "LFDP", range: Some((LEAST_ANCHOR, 127)) }]),
-            )
+            .comment("both motors at one velocity; the first feedback counts from wherever LFDP starts")
+            .block(&[b'C', datum as u8, datum as u8], Shape::Block(any("LFDP")))
+            .pause_ms(pause)
+            .block(b"A", Shape::Block(any("LFDP")))
+            .comment("the movement since the block before")
+            .pause_ms(pause)
+            .block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFDP", range: Some((LEAST_ANCHOR, 127)) }]))
             .capture(lfdp(1), "d1")
             .relate(lfdp(2), rel, evidence, pairs)
             .abort();
