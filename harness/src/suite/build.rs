@@ -705,8 +705,7 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
             }) {
                 return Err(fail(format!("step {i}: relation {piece} does not hold the model's pair {x} -> {y}")));
             }
-            let text = piece.trim_start_matches("{int ").trim_end_matches('}');
-            notes.push(format!("relation `{text}`: {}", b.evidence));
+            notes.push(format!("relation `{}`: {}", r.text(), b.evidence));
         }
         if let Some((_, why)) = &plan.earliest {
             notes.push(format!("timing window: {why}"));
