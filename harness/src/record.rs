@@ -277,7 +277,7 @@ pub fn step_from(step: &ScriptStep, c: &Captured, opts: &RecordOptions) -> Step 
         _ => Expect::text(&c.output),
     };
     let within = suggest_within(profile, &step.action, &c.sent, c.took, c.output.len());
-    Step { line: 0, comments: step.comments.clone(), pause: step.pause, send, within, expect }
+    Step { line: 0, comments: step.comments.clone(), pause: step.pause, send, within, earliest: None, expect }
 }
 
 /// Why a recording failed.

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::time::Duration;
 
 use gcl_host::link::{Link, LinkError};
-use gcl_transcript::matcher::{Feed, Matcher, show};
+use gcl_transcript::matcher::{Captures, Feed, Matcher, show};
 use gcl_transcript::{DEFAULT_STEP_TIMEOUT, Form, HostBytes, Step, Transcript, escape_text};
 
 /// How to replay.
@@ -411,8 +411,10 @@ pub fn replay(t: &Transcript, link: &mut dyn Link, opts: &ReplayOptions) -> Repl
     }
     let mut exchange: Vec<Exchanged> = Vec::with_capacity(t.steps.len());
     let mut buf: Vec<u8> = Vec::new();
+    // Values the answers captured, for the relations of later answers.
+    let mut caps = Captures::new();
     for (i, step) in t.steps.iter().enumerate() {
-        match run_step(i, step, link, opts, &mut buf, &mut exchange) {
+        match run_step(i, step, link, opts, &mut buf, &mut exchange, &mut caps) {
             Ok(()) => {}
             Err(outcome) => return outcome,
         }
@@ -459,6 +461,7 @@ fn run_step(
     opts: &ReplayOptions,
     buf: &mut Vec<u8>,
     exchange: &mut Vec<Exchanged>,
+    caps: &mut Captures,
 ) -> Result<(), ReplayOutcome> {
     if let Some(p) = step.pause {
         link.pause(p);
@@ -475,7 +478,7 @@ fn run_step(
     let budget = opts.budgets.get(i).copied();
     let timeout = budget.map_or_else(|| step.within.unwrap_or(opts.default_timeout), |b| b.deadline);
     let ceiling = budget.map_or_else(|| default_ceiling(step), |b| b.ceiling);
-    let mut m = Matcher::new(&step.expect);
+    let mut m = Matcher::with_captures(&step.expect, caps);
     let mut fed = 0;
     // When the answer's first byte came after the deadline (a silent step's grace), the
     // rest of the answer gets the deadline again from there.
@@ -563,6 +566,33 @@ fn run_step(
     let rest = buf.split_off(consumed);
     let received = std::mem::replace(buf, rest);
     let took = link.elapsed().saturating_sub(t0);
+    if let Some(caught) = m.captures() {
+        *caps = caught;
+    }
+    // A timing window: an answer complete sooner than its lower bound fails at its last byte.
+    if let Some(earliest) = step.earliest
+        && took < earliest
+    {
+        let form = m.form_at_parting();
+        let offset = received.len().saturating_sub(1);
+        let actual = show(received.get(offset..).unwrap_or_default(), form);
+        exchange.push(Exchanged { step: i, line: step.line, sent, received, took });
+        return Err(ReplayOutcome::Mismatch(Box::new(Mismatch {
+            step: i,
+            line: step.line,
+            offset,
+            expected: format!(
+                "the answer complete no sooner than {} (it was complete after {})",
+                gcl_transcript::format_duration(earliest),
+                gcl_transcript::format_duration(took)
+            ),
+            actual,
+            expected_full: step.expect.to_text(),
+            trailing: false,
+            form,
+            exchange: std::mem::take(exchange),
+        })));
+    }
     exchange.push(Exchanged { step: i, line: step.line, sent, received, took });
     Ok(())
 }
@@ -580,7 +610,15 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
                 Form::Text => gcl_transcript::Expect::text(&e.received),
                 Form::Hex => gcl_transcript::Expect::hex(&e.received),
             };
-            Some(Step { line: 0, comments: Vec::new(), pause: s.pause, send: s.send.clone(), within: s.within, expect })
+            Some(Step {
+                line: 0,
+                comments: Vec::new(),
+                pause: s.pause,
+                send: s.send.clone(),
+                within: s.within,
+                earliest: s.earliest,
+                expect,
+            })
         })
         .collect();
     Transcript { header: t.header.clone(), steps }
@@ -607,6 +645,33 @@ mod tests {
         assert_eq!(out.exchange()[1].received, b"FGET DP\n\r1000 1000 1000 150\n\r=> ");
         let actual = actual_transcript(&t, out.exchange());
         assert!(actual.to_text().contains("expect \"FGET DP\\n\\r1000 1000 1000 150\\n\\r=> \""));
+    }
+
+    #[test]
+    fn captures_carry_from_step_to_step_and_windows_have_a_floor() {
+        // DP reads 1000 1000 1000 150 on the seed: motor 2's DP is captured, then the spread's
+        // is held to 3/20 of it (150), exactly.
+        let related = FGET.replace("{int 990..1010} 1000 1000 150", "1000 {int 1..20000 as dp} 1000 150").replace(
+            "\n\nsend \"FGET DP",
+            "\n\nsend \"FGET DP\\r\"\nexpect \"FGET DP\\n\\r1000 1000 1000 150\\n\\r=> \"\n\nsend \"FGET DP",
+        );
+        let t = parse(&format!(
+            "{related}\nsend \"SFGET DP\\r\"\nexpect \"SFGET DP\\n\\r{{int dp*3/20 +-0%}}\\n\\r=> \"\n"
+        ))
+        .unwrap();
+        let out = replay(&t, &mut sim(vec![]), &ReplayOptions::default());
+        assert!(out.is_pass(), "{}", out.render());
+        // 3/19 of 1000 is 157.9, rounded outward 157..158: 150 parts at its last digit.
+        let off = parse(&t.to_text().replace("dp*3/20 +-0%", "dp*3/19 +-0%")).unwrap();
+        let out = replay(&off, &mut sim(vec![]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!((m.step, m.expected.as_str()), (3, "{int 157..158}\\n\\r=> "));
+        // An answer that comes sooner than its window's lower bound fails.
+        let early = parse(&t.to_text().replacen("expect \"FGET DP", "expect within 1s..2s \"FGET DP", 1)).unwrap();
+        let out = replay(&early, &mut sim(vec![]), &ReplayOptions::default());
+        let ReplayOutcome::Mismatch(m) = &out else { panic!("{}", out.render()) };
+        assert_eq!(m.step, 1);
+        assert!(m.expected.starts_with("the answer complete no sooner than 1s"), "{}", m.expected);
     }
 
     #[test]

@@ -322,12 +322,47 @@ mod abnf {
         s.split_once("..").is_some_and(|(a, b)| integer(a) && integer(b))
     }
 
-    /// `elision = "{" ("int" [SP range] / "line" / "any" / "byte" / type SP range) "}"`,
-    /// given what is between the braces.
+    /// `name = LC-ALPHA *31(LC-ALPHA / DIGIT / "_")`
+    fn name(s: &str) -> bool {
+        s.len() <= 32
+            && s.starts_with(|c: char| c.is_ascii_lowercase())
+            && s.bytes().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == b'_')
+    }
+
+    /// `factor = %x31-39 *6DIGIT`
+    fn factor(s: &str) -> bool {
+        digits(s, 7) && !s.starts_with('0')
+    }
+
+    /// `relation = name ["*" factor] ["/" factor] SP "+-" percent "%"`, as its two words.
+    fn relation(term: &str, tol: &str) -> bool {
+        let (head, den) = term.split_once('/').unwrap_or((term, "1"));
+        let (n, num) = head.split_once('*').unwrap_or((head, "1"));
+        // percent = "0" / %x31-39 *2DIGIT
+        let pct = tol.strip_prefix("+-").and_then(|t| t.strip_suffix('%'));
+        name(n) && factor(num) && factor(den) && pct.is_some_and(|p| p == "0" || (digits(p, 3) && !p.starts_with('0')))
+    }
+
+    /// `elision = "{" ("int" [SP range] / "line" / "any" / "byte" / type SP range / value) "}"`
+    /// and `value = type [SP (range / relation)] [SP "as" SP name]`, given what is between the
+    /// braces.
     fn elision(inner: &str) -> bool {
-        match inner.split_once(' ') {
-            None => matches!(inner, "int" | "line" | "any" | "byte"),
-            Some((t, r)) => matches!(t, "int" | "u8" | "i8" | "u16" | "i16") && range(r),
+        let mut words: Vec<&str> = inner.split(' ').collect();
+        if words.len() >= 3 && words[words.len() - 2] == "as" && name(words[words.len() - 1]) {
+            words.truncate(words.len() - 2);
+            return matches!(words[0], "int" | "u8" | "i8" | "u16" | "i16")
+                && match &words[1..] {
+                    [] => true,
+                    [r] => range(r),
+                    [t, p] => relation(t, p),
+                    _ => false,
+                };
+        }
+        match words.as_slice() {
+            [w] => matches!(*w, "int" | "line" | "any" | "byte"),
+            [t, r] => matches!(*t, "int" | "u8" | "i8" | "u16" | "i16") && range(r),
+            [t, a, b] => matches!(*t, "int" | "u8" | "i8" | "u16" | "i16") && relation(a, b),
+            _ => false,
         }
     }
 
@@ -376,7 +411,9 @@ mod abnf {
                 if let Some(r) = rest.strip_prefix("within") {
                     let r = r.trim_start_matches([' ', '\t']);
                     let (d, r) = r.split_once([' ', '\t']).unwrap_or((r, ""));
-                    if !duration(d) {
+                    // [duration ".."] duration
+                    let (lower, d) = d.split_once("..").map_or(("1ms", d), |(a, b)| (a, b));
+                    if !duration(d) || !duration(lower) {
                         return Err(format!("bad duration `{d}`"));
                     }
                     rest = r.trim_start_matches([' ', '\t']);
@@ -480,7 +517,17 @@ mod abnf {
 fn goldens_match_the_abnf_grammar() {
     let grammar = std::fs::read_to_string(Path::new(ROOT).join("vectors/schema/transcript.abnf")).unwrap();
     // The checker follows these rules; one renamed or removed in the grammar must be followed here.
-    for rule in ["transcript", "header-line", "body-line", "expect-string", "elision", "hextoken", "duration"] {
+    for rule in [
+        "transcript",
+        "header-line",
+        "body-line",
+        "expect-string",
+        "elision",
+        "hextoken",
+        "duration",
+        "value",
+        "relation",
+    ] {
         assert!(grammar.lines().any(|l| l.starts_with(&format!("{rule} "))), "rule `{rule}` left the grammar");
     }
     let goldens = files_with_ext("vectors/suite", "gcl");
@@ -501,6 +548,10 @@ fn goldens_match_the_abnf_grammar() {
         "gcl-transcript 1\npause soon\n",
         "gcl-transcript 2\n",
         "gcl-transcript 1\nsend \"x\"",
+        "gcl-transcript 1\nexpect \"{int 2*p +-5%}\"\n",
+        "gcl-transcript 1\nexpect \"{int p*2 5%}\"\n",
+        "gcl-transcript 1\nexpect \"{line as p}\"\n",
+        "gcl-transcript 1\nexpect within 1s.. \"x\"\n",
     ] {
         assert!(abnf::check(wrong).is_err(), "the checker took {wrong:?}");
     }
@@ -508,4 +559,6 @@ fn goldens_match_the_abnf_grammar() {
         "gcl-transcript 1\nid: a\n\nsend hex 43 00\nexpect within 2s \"C\" hex {u16 0..9} ?? 2A \"{int}\\n\\r\"\n",
     )
     .unwrap();
+    abnf::check("gcl-transcript 1\nexpect within 1s..2s \"{int 1..9 as p} {int p*2/3 +-25%}\" hex {i8 p +-0% as q}\n")
+        .unwrap();
 }

@@ -116,6 +116,9 @@ const FAULTS: &[(&str, &[&str])] = &[
     ("no-echo", &["framing-echo"]),
     ("read-only-status", &["status-256-read-only", "param-p-read-only"]),
     ("lfap-little-endian", &["rt-lfap-byte-order"]),
+    // Relations: the Python runner carries captures from value to value.
+    ("lcvc-ignored", &["rt-lcvc-scaling"]),
+    ("lfvc-ignored", &["rt-lfvc-scaling"]),
 ];
 const BYSTANDERS: &[&str] = &["framing-empty-line", "cmd-fget", "param-dp-default", "status-32-unknown-command"];
 

@@ -54,7 +54,7 @@ use std::time::Duration;
 
 use gcl_model::realtime::FieldType;
 
-pub use matcher::{Feed, Matcher};
+pub use matcher::{Captures, Feed, Matcher};
 pub use parse::{HeaderFields, ParseError, ParseErrorKind, parse, parse_bytes};
 
 /// The first line of every transcript: the format and its version.
@@ -212,13 +212,170 @@ pub enum Piece {
         /// Highest accepted value.
         max: i64,
     },
+    /// An integer or a binary field that is captured under a name (`{i8 1..127 as v1}`), or
+    /// whose accepted values follow from a value captured before (`{i8 v1*2 +-25%}`), or
+    /// both. Without a capture or a relation it is written as [`Piece::Int`] or
+    /// [`Piece::Field`] ([`Expect::push`] keeps that normal form).
+    Value(Value),
 }
 
 impl Piece {
     /// Whether the piece can match a varying number of bytes (an expectation must not end
     /// with one: the match would be cut at its shortest).
     pub fn is_variable(&self) -> bool {
-        matches!(self, Piece::Int(_) | Piece::Line | Piece::Any)
+        matches!(self, Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(Value { kind: ValueKind::Int, .. }))
+    }
+}
+
+/// What kind of value a [`Value`] piece reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ValueKind {
+    /// A decimal integer as `{int}` reads it.
+    Int,
+    /// A binary field of a RealTime field type, as `{u8 ..}`, `{i16 ..}` read it.
+    Field(FieldType),
+}
+
+impl fmt::Display for ValueKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ValueKind::Int => f.write_str("int"),
+            ValueKind::Field(ty) => write!(f, "{ty}"),
+        }
+    }
+}
+
+/// An integer or a binary field with a name and/or a relation to a value captured before.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Value {
+    /// What is read.
+    pub kind: ValueKind,
+    /// The accepted values, `A..B` inclusive (`None`: any; a field's type bounds it). Never
+    /// together with a relation.
+    pub range: Option<(i64, i64)>,
+    /// The accepted values as a band around a multiple of a captured value.
+    pub relation: Option<Relation>,
+    /// The name the value read is captured under, for relations later in the transcript.
+    pub capture: Option<String>,
+}
+
+/// Most bytes a capture name may have.
+pub const MAX_NAME: usize = 32;
+
+/// The largest factor or divisor of a [`Relation`].
+pub const MAX_FACTOR: i64 = 1_000_000;
+
+/// The largest tolerance of a [`Relation`], in percent.
+pub const MAX_TOLERANCE: u32 = 100;
+
+/// Whether `s` can name a captured value: a lower-case letter, then lower-case letters, digits
+/// and `_`, at most [`MAX_NAME`] bytes.
+pub fn is_capture_name(s: &str) -> bool {
+    let b = s.as_bytes();
+    !b.is_empty()
+        && b.len() <= MAX_NAME
+        && b[0].is_ascii_lowercase()
+        && b.iter().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || *c == b'_')
+}
+
+/// `NAME[*N][/D] +-P%`: a value within P percent of the captured value NAME times N / D.
+///
+/// The band is rounded outward to whole numbers: with `E` = NAME × N / D (exactly), a value
+/// `x` matches when `floor(E - |E| × P / 100) <= x <= ceil(E + |E| × P / 100)`.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Relation {
+    /// The captured value it is relative to.
+    pub name: String,
+    /// The factor's numerator, 1..=[`MAX_FACTOR`].
+    pub num: i64,
+    /// The factor's denominator, 1..=[`MAX_FACTOR`].
+    pub den: i64,
+    /// The tolerance in percent, 0..=[`MAX_TOLERANCE`].
+    pub tolerance: u32,
+}
+
+impl Relation {
+    /// `name * num / den` within `tolerance` percent.
+    pub fn new(name: impl Into<String>, num: i64, den: i64, tolerance: u32) -> Relation {
+        Relation { name: name.into(), num, den, tolerance }
+    }
+
+    /// The accepted values, inclusive, when the captured value is `v`.
+    pub fn band(&self, v: i64) -> (i64, i64) {
+        let (num, den) = (i128::from(self.num.max(1)), i128::from(self.den.max(1)));
+        let p = i128::from(self.tolerance.min(MAX_TOLERANCE));
+        // E = v * num / den; the band's ends are E * (100 -+ p) / 100, taken over |E|.
+        let e = i128::from(v) * num;
+        let d = den * 100;
+        let (a, b) = (e * (100 - p), e * (100 + p));
+        let (lo, hi) = if e >= 0 { (a, b) } else { (b, a) };
+        let clamp = |x: i128| x.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64;
+        (clamp(lo.div_euclid(d)), clamp(-((-hi).div_euclid(d))))
+    }
+
+    /// The relation as written inside an elision: `v1*2 +-25%`.
+    pub fn text(&self) -> String {
+        let mut s = self.name.clone();
+        if self.num != 1 {
+            let _ = write!(s, "*{}", self.num);
+        }
+        if self.den != 1 {
+            let _ = write!(s, "/{}", self.den);
+        }
+        let _ = write!(s, " +-{}%", self.tolerance);
+        s
+    }
+
+    fn check(&self) -> Result<(), String> {
+        if !is_capture_name(&self.name) {
+            return Err(format!("`{}` is not a capture name", self.name));
+        }
+        if !(1..=MAX_FACTOR).contains(&self.num) || !(1..=MAX_FACTOR).contains(&self.den) {
+            return Err(format!("`{}`: factors are 1..{MAX_FACTOR}", self.text()));
+        }
+        if self.tolerance > MAX_TOLERANCE {
+            return Err(format!("`{}`: a tolerance is at most {MAX_TOLERANCE}%", self.text()));
+        }
+        Ok(())
+    }
+}
+
+impl Value {
+    /// The piece this value is: [`Piece::Int`] or [`Piece::Field`] when it has neither a
+    /// capture nor a relation, else [`Piece::Value`].
+    pub fn into_piece(self) -> Piece {
+        match (&self.capture, &self.relation, self.kind) {
+            (None, None, ValueKind::Int) => Piece::Int(self.range),
+            (None, None, ValueKind::Field(ty)) => {
+                let (min, max) = self.range.unwrap_or_else(|| ty.range().into_inner());
+                Piece::Field { ty, min, max }
+            }
+            _ => Piece::Value(self),
+        }
+    }
+
+    fn check(&self) -> Result<(), String> {
+        if let Some((a, b)) = self.range {
+            let fits = match self.kind {
+                ValueKind::Int => a <= b,
+                ValueKind::Field(ty) => a <= b && ty.range().contains(&a) && ty.range().contains(&b),
+            };
+            if !fits {
+                return Err(format!("{}: range outside the field or empty", elision_text(&Piece::Value(self.clone()))));
+            }
+        }
+        if self.range.is_some() && self.relation.is_some() {
+            return Err("a value has a range or a relation, not both".into());
+        }
+        if let Some(r) = &self.relation {
+            r.check()?;
+        }
+        if let Some(n) = &self.capture
+            && !is_capture_name(n)
+        {
+            return Err(format!("`{n}` is not a capture name"));
+        }
+        Ok(())
     }
 }
 
@@ -263,6 +420,10 @@ impl Expect {
 
     /// Appends a piece written in `form`, keeping the normal form.
     pub fn push(&mut self, form: Form, piece: Piece) {
+        let piece = match piece {
+            Piece::Value(v) => v.into_piece(),
+            p => p,
+        };
         if let Piece::Bytes(b) = &piece
             && b.is_empty()
         {
@@ -317,6 +478,7 @@ impl Expect {
                         return Err(format!("{{{ty} {min}..{max}}}: range outside {lo}..{hi}"));
                     }
                 }
+                Piece::Value(v) => v.check()?,
                 _ => {}
             }
         }
@@ -326,15 +488,38 @@ impl Expect {
         Ok(())
     }
 
-    /// Whether `actual` is exactly a complete answer (the whole of it, not a prefix).
+    /// Whether `actual` is exactly a complete answer (the whole of it, not a prefix), with no
+    /// value captured before (a relation to one never matches).
     pub fn matches(&self, actual: &[u8]) -> bool {
-        let mut m = Matcher::new(self);
+        self.matches_with(&Captures::new(), actual).is_some()
+    }
+
+    /// Whether `actual` is exactly a complete answer given the values captured by earlier
+    /// steps; if so, those values and the ones this answer captured.
+    pub fn matches_with(&self, captured: &Captures, actual: &[u8]) -> Option<Captures> {
+        let mut m = Matcher::with_captures(self, captured);
         for &b in actual {
             if m.feed(b) == Feed::Dead {
-                return false;
+                return None;
             }
         }
-        m.is_complete()
+        m.captures()
+    }
+
+    /// The names this expectation captures, in order.
+    pub fn captures(&self) -> impl Iterator<Item = &str> {
+        self.pieces().filter_map(|(_, p)| match p {
+            Piece::Value(Value { capture: Some(n), .. }) => Some(n.as_str()),
+            _ => None,
+        })
+    }
+
+    /// The relations this expectation holds values to, in order.
+    pub fn relations(&self) -> impl Iterator<Item = &Relation> {
+        self.pieces().filter_map(|(_, p)| match p {
+            Piece::Value(Value { relation: Some(r), .. }) => Some(r),
+            _ => None,
+        })
     }
 
     /// The expectation as written after `expect` (without `within`).
@@ -368,6 +553,9 @@ pub struct Step {
     /// How long the answer may take; [`DEFAULT_STEP_TIMEOUT`] (or a runner's override) when
     /// `None`.
     pub within: Option<Duration>,
+    /// The soonest the answer may be complete (`within A..B` gives A): an answer complete
+    /// sooner fails. Only with `within`.
+    pub earliest: Option<Duration>,
     /// The answer.
     pub expect: Expect,
 }
@@ -419,6 +607,33 @@ impl Transcript {
         self.steps.iter().filter_map(|s| s.send.as_ref()).flat_map(|s| s.bytes.iter().copied()).collect()
     }
 
+    /// Checks the transcript's captures and relations: a name is captured once, and a relation
+    /// refers to a name captured before it (earlier in its answer or in an earlier step). On
+    /// error, the index of the first step that breaks the rule and why.
+    pub fn check_captures(&self) -> Result<(), (usize, String)> {
+        let mut known: Vec<&str> = Vec::new();
+        for (i, step) in self.steps.iter().enumerate() {
+            if step.earliest.is_some_and(|a| step.within.is_none_or(|w| a > w)) {
+                return Err((i, "a timing window `within A..B` needs A <= B".into()));
+            }
+            for (_, p) in step.expect.pieces() {
+                let Piece::Value(v) = p else { continue };
+                if let Some(r) = &v.relation
+                    && !known.contains(&r.name.as_str())
+                {
+                    return Err((i, format!("`{}` is not captured before it is used", r.name)));
+                }
+                if let Some(n) = &v.capture {
+                    if known.contains(&n.as_str()) {
+                        return Err((i, format!("`{n}` is captured twice")));
+                    }
+                    known.push(n);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// A copy with every [`Step::line`] set to 0, for comparing a parsed transcript with a
     /// built one.
     pub fn without_lines(&self) -> Transcript {
@@ -465,8 +680,14 @@ fn write_step(s: &mut String, step: &Step) {
         s.push('\n');
     }
     s.push_str("expect ");
-    if let Some(w) = step.within {
-        let _ = write!(s, "within {} ", format_duration(w));
+    match (step.earliest, step.within) {
+        (Some(a), Some(w)) => {
+            let _ = write!(s, "within {}..{} ", format_duration(a), format_duration(w));
+        }
+        (_, Some(w)) => {
+            let _ = write!(s, "within {} ", format_duration(w));
+        }
+        _ => {}
     }
     s.push_str(&step.expect.to_text());
     s.push('\n');
@@ -497,8 +718,8 @@ pub fn hex_bytes(bytes: &[u8]) -> String {
 }
 
 /// The elision syntax of a piece, `{...}` (the same in strings and hex segments; `??` is the
-/// hex shorthand of `{byte}`).
-fn elision_text(p: &Piece) -> String {
+/// hex shorthand of `{byte}`); empty for [`Piece::Bytes`].
+pub fn elision_text(p: &Piece) -> String {
     match p {
         Piece::Bytes(_) => String::new(),
         Piece::Int(None) => "{int}".into(),
@@ -507,6 +728,20 @@ fn elision_text(p: &Piece) -> String {
         Piece::Any => "{any}".into(),
         Piece::AnyByte => "{byte}".into(),
         Piece::Field { ty, min, max } => format!("{{{ty} {min}..{max}}}"),
+        Piece::Value(v) => {
+            let mut s = format!("{{{}", v.kind);
+            if let Some((a, b)) = v.range {
+                let _ = write!(s, " {a}..{b}");
+            }
+            if let Some(r) = &v.relation {
+                let _ = write!(s, " {}", r.text());
+            }
+            if let Some(n) = &v.capture {
+                let _ = write!(s, " as {n}");
+            }
+            s.push('}');
+            s
+        }
     }
 }
 

@@ -8,14 +8,20 @@
 //! their range, and two-byte fields against theirs after the high byte, so a wrong value is
 //! reported at its first impossible byte rather than at the end of the line.
 
+use std::collections::BTreeMap;
+
 use gcl_model::realtime::FieldType;
 
-use super::{Expect, Form, Piece, hex_bytes, pieces_hex, pieces_text};
+use super::{Expect, Form, Piece, Value, ValueKind, hex_bytes, pieces_hex, pieces_text};
+
+/// Values captured so far (`{int as p1}`), by name: what a relation later in the transcript
+/// is measured against. A runner carries them from step to step.
+pub type Captures = BTreeMap<String, i64>;
 
 /// Most digits an integer may have (as `gcl_model::grammar::parse_integer`).
 const MAX_DIGITS: u32 = 18;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 struct State {
     /// Index of the piece being matched; `pieces.len()` when every piece has matched.
     piece: usize,
@@ -25,12 +31,50 @@ struct State {
     acc: i64,
     /// An integer's minus sign.
     neg: bool,
+    /// The values captured along this way through the pieces, in piece order.
+    caps: Vec<i64>,
 }
 
 impl State {
     fn at(piece: usize) -> State {
-        State { piece, k: 0, acc: 0, neg: false }
+        State { piece, k: 0, acc: 0, neg: false, caps: Vec::new() }
     }
+
+    /// The start of the next piece, keeping the captures (and adding `captured`).
+    fn next(&self, captured: Option<i64>) -> State {
+        let mut caps = self.caps.clone();
+        caps.extend(captured);
+        State { piece: self.piece + 1, k: 0, acc: 0, neg: false, caps }
+    }
+}
+
+/// What a relation is measured against, resolved when the matcher is made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Base {
+    /// A value an earlier step captured.
+    Known(i64),
+    /// The n-th value this expectation captures.
+    Local(usize),
+    /// A name nobody captured: no value matches.
+    Unknown,
+}
+
+/// A value piece's capture and relation, resolved for the matcher.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+struct Slot {
+    /// Its ordinal among this expectation's captures, if it captures.
+    capture: Option<usize>,
+    /// What its relation is measured against, if it has one.
+    base: Option<Base>,
+}
+
+/// What a numeric piece accepts for one state.
+#[derive(Debug, Clone, Copy)]
+enum Reads {
+    /// A GCL integer, within a range if any.
+    Int(Option<(i64, i64)>),
+    /// A binary field within `min..=max`.
+    Field(FieldType, i64, i64),
 }
 
 /// What one more byte did to a match.
@@ -48,6 +92,10 @@ pub enum Feed {
 #[derive(Debug, Clone)]
 pub struct Matcher {
     pieces: Vec<(Form, Piece)>,
+    /// For each piece, its capture and relation (value pieces only).
+    slots: Vec<Slot>,
+    /// The values captured before this expectation.
+    known: Captures,
     states: Vec<State>,
     /// The furthest state alive before the last byte, for reporting what was expected.
     best: State,
@@ -55,8 +103,14 @@ pub struct Matcher {
 }
 
 impl Matcher {
-    /// A matcher at the start of `expect`.
+    /// A matcher at the start of `expect`, with no value captured before (a relation to one
+    /// never matches).
     pub fn new(expect: &Expect) -> Matcher {
+        Matcher::with_captures(expect, &Captures::new())
+    }
+
+    /// A matcher at the start of `expect`, given the values earlier steps captured.
+    pub fn with_captures(expect: &Expect, known: &Captures) -> Matcher {
         let mut pieces: Vec<(Form, Piece)> = Vec::new();
         for (form, p) in expect.pieces() {
             match (pieces.last_mut(), p) {
@@ -64,7 +118,25 @@ impl Matcher {
                 _ => pieces.push((form, p.clone())),
             }
         }
-        let mut m = Matcher { pieces, states: Vec::new(), best: State::at(0), consumed: 0 };
+        let mut local: Vec<&str> = Vec::new();
+        let mut slots = Vec::with_capacity(pieces.len());
+        for (_, p) in &pieces {
+            let Piece::Value(v) = p else {
+                slots.push(Slot::default());
+                continue;
+            };
+            let base = v.relation.as_ref().map(|r| match local.iter().position(|n| *n == r.name) {
+                Some(i) => Base::Local(i),
+                None => known.get(&r.name).map_or(Base::Unknown, |v| Base::Known(*v)),
+            });
+            let capture = v.capture.as_deref().map(|n| {
+                local.push(n);
+                local.len() - 1
+            });
+            slots.push(Slot { capture, base });
+        }
+        let mut m =
+            Matcher { pieces, slots, known: known.clone(), states: Vec::new(), best: State::at(0), consumed: 0 };
         let mut start = Vec::new();
         m.close(State::at(0), &mut start);
         m.states = start;
@@ -85,6 +157,21 @@ impl Matcher {
     /// Whether some answer still starts with the bytes fed so far.
     pub fn is_alive(&self) -> bool {
         !self.states.is_empty()
+    }
+
+    /// When the bytes fed so far are a complete answer: the values captured before it and
+    /// the ones it captured (along the first complete way through the pieces).
+    pub fn captures(&self) -> Option<Captures> {
+        let done = self.states.iter().find(|s| s.piece == self.pieces.len())?;
+        let mut out = self.known.clone();
+        let names = self.pieces.iter().filter_map(|(_, p)| match p {
+            Piece::Value(Value { capture: Some(n), .. }) => Some(n),
+            _ => None,
+        });
+        for (n, v) in names.zip(&done.caps) {
+            out.insert(n.clone(), *v);
+        }
+        Some(out)
     }
 
     /// Feeds one byte. Feeding a dead matcher keeps it dead.
@@ -115,7 +202,43 @@ impl Matcher {
 
     /// The state that has matched the most pieces (the most progress inside its piece).
     fn furthest(&self) -> Option<State> {
-        self.states.iter().copied().max_by_key(|s| (s.piece, s.k))
+        self.states.iter().max_by_key(|s| (s.piece, s.k)).cloned()
+    }
+
+    /// What numeric piece `i` reads for state `s`; `None` for a piece that is not numeric or
+    /// that nothing can match (a relation to a name nobody captured, a band outside a field).
+    fn reads(&self, i: usize, s: &State) -> Option<Reads> {
+        let (_, p) = self.pieces.get(i)?;
+        Some(match p {
+            Piece::Int(r) => Reads::Int(*r),
+            Piece::Field { ty, min, max } => Reads::Field(*ty, *min, *max),
+            Piece::Value(v) => {
+                let band = match self.slots.get(i).and_then(|sl| sl.base) {
+                    None => v.range,
+                    Some(base) => {
+                        let x = match base {
+                            Base::Known(x) => x,
+                            Base::Local(j) => *s.caps.get(j)?,
+                            Base::Unknown => return None,
+                        };
+                        Some(v.relation.as_ref()?.band(x))
+                    }
+                };
+                match v.kind {
+                    ValueKind::Int => Reads::Int(band),
+                    ValueKind::Field(ty) => {
+                        let (lo, hi) = ty.range().into_inner();
+                        let (a, b) = band.unwrap_or((lo, hi));
+                        let (a, b) = (a.max(lo), b.min(hi));
+                        if a > b {
+                            return None;
+                        }
+                        Reads::Field(ty, a, b)
+                    }
+                }
+            }
+            _ => return None,
+        })
     }
 
     /// Adds `s` and every state reachable from it without a byte.
@@ -123,22 +246,29 @@ impl Matcher {
         if out.contains(&s) {
             return;
         }
-        out.push(s);
-        let Some((_, p)) = self.pieces.get(s.piece) else { return };
-        let next = State::at(s.piece + 1);
-        let skip = match p {
-            Piece::Bytes(b) => s.k as usize >= b.len(),
-            Piece::Line | Piece::Any => true,
-            Piece::Int(r) => {
-                let digits = s.k - u32::from(s.neg);
-                digits >= 1 && !(s.neg && s.acc == 0) && in_range(*r, if s.neg { -s.acc } else { s.acc })
-            }
-            Piece::AnyByte => false,
-            Piece::Field { ty, min, max } => {
-                s.k as usize == ty.size() && (*min..=*max).contains(&signed_value(*ty, s.acc))
+        let next = match self.pieces.get(s.piece).map(|(_, p)| p) {
+            None | Some(Piece::AnyByte) => None,
+            Some(Piece::Bytes(b)) => (s.k as usize >= b.len()).then(|| s.next(None)),
+            Some(Piece::Line | Piece::Any) => Some(s.next(None)),
+            Some(_) => {
+                let capturing = self.slots.get(s.piece).is_some_and(|sl| sl.capture.is_some());
+                match self.reads(s.piece, &s) {
+                    Some(Reads::Int(r)) => {
+                        let digits = s.k - u32::from(s.neg);
+                        let v = if s.neg { -s.acc } else { s.acc };
+                        (digits >= 1 && !(s.neg && s.acc == 0) && in_range(r, v))
+                            .then(|| s.next(capturing.then_some(v)))
+                    }
+                    Some(Reads::Field(ty, min, max)) => {
+                        let v = signed_value(ty, s.acc);
+                        (s.k as usize == ty.size() && (min..=max).contains(&v)).then(|| s.next(capturing.then_some(v)))
+                    }
+                    None => None,
+                }
             }
         };
-        if skip {
+        out.push(s);
+        if let Some(next) = next {
             self.close(next, out);
         }
     }
@@ -150,53 +280,25 @@ impl Matcher {
             Piece::Bytes(lit) => (lit.get(s.k as usize) == Some(&b)).then_some(State { k: s.k + 1, ..s }),
             Piece::Line => (b != b'\n' && b != b'\r').then_some(s),
             Piece::Any => Some(s),
-            Piece::AnyByte => Some(State::at(s.piece + 1)),
-            Piece::Int(r) => {
-                let digits = s.k - u32::from(s.neg);
-                if b == b'-' && s.k == 0 {
-                    let ok = r.is_none_or(|(lo, _)| lo <= -1);
-                    return ok.then_some(State { k: 1, neg: true, ..s });
-                }
-                if !b.is_ascii_digit() || digits >= MAX_DIGITS || (digits >= 1 && s.acc == 0) {
-                    return None;
-                }
-                let acc = s.acc * 10 + i64::from(b - b'0');
-                let t = State { k: s.k + 1, acc, ..s };
-                extendable(*r, t.neg, acc, digits + 1).then_some(t)
-            }
-            Piece::Field { ty, min, max } => {
-                let (ty, min, max) = (*ty, *min, *max);
-                let acc = (s.acc << 8) | i64::from(b);
-                let k = s.k + 1;
-                if k as usize == ty.size() {
-                    // The range check happens in `close`; a value out of range leaves a state
-                    // that cannot advance, so check it here to die on this byte.
-                    (min..=max).contains(&signed_value(ty, acc)).then_some(State { k, acc, ..s })
-                } else {
-                    // High byte of a two-byte field: some low byte must land in range.
-                    let (lo, hi) = if ty.signed() {
-                        let h = i64::from(b as i8);
-                        (h * 256, h * 256 + 255)
-                    } else {
-                        (acc * 256, acc * 256 + 255)
-                    };
-                    (lo <= max && hi >= min).then_some(State { k, acc, ..s })
-                }
-            }
+            Piece::AnyByte => Some(s.next(None)),
+            _ => match self.reads(s.piece, &s)? {
+                Reads::Int(r) => step_int(s, b, r),
+                Reads::Field(ty, min, max) => step_field(s, b, ty, min, max),
+            },
         }
     }
 
     /// How the expectation continues from where the furthest match stands, as written
     /// (escaped text, or hex when the piece there is in a hex segment).
     pub fn expected_rest(&self) -> String {
-        let s = self.furthest().unwrap_or(self.best);
-        self.render_from(s)
+        let s = self.furthest().unwrap_or_else(|| self.best.clone());
+        self.render_from(&s)
     }
 
     /// As [`Matcher::expected_rest`], from the furthest state before the last byte fed (what was
     /// expected at the byte that killed the match).
     pub fn expected_at_parting(&self) -> String {
-        self.render_from(self.best)
+        self.render_from(&self.best)
     }
 
     /// The form of the piece where the furthest match stands.
@@ -204,7 +306,7 @@ impl Matcher {
         self.pieces.get(self.best.piece).or(self.pieces.last()).map_or(Form::Text, |(f, _)| *f)
     }
 
-    fn render_from(&self, s: State) -> String {
+    fn render_from(&self, s: &State) -> String {
         let mut parts: Vec<(Form, Piece)> = Vec::new();
         for (i, (form, p)) in self.pieces.iter().enumerate().skip(s.piece) {
             match p {
@@ -214,6 +316,13 @@ impl Matcher {
                         parts.push((*form, Piece::Bytes(rest.to_vec())));
                     }
                 }
+                // A relation whose value is known by now shows the band it stands for: what
+                // the answer had to be, in numbers (the whole expectation shows the relation).
+                Piece::Value(Value { relation: Some(_), capture: None, .. }) => match self.reads(i, s) {
+                    Some(Reads::Int(r)) => parts.push((*form, Piece::Int(r))),
+                    Some(Reads::Field(ty, min, max)) => parts.push((*form, Piece::Field { ty, min, max })),
+                    None => parts.push((*form, p.clone())),
+                },
                 _ => parts.push((*form, p.clone())),
             }
         }
@@ -250,6 +359,41 @@ pub fn show(bytes: &[u8], form: Form) -> String {
     match form {
         Form::Text => super::escape_text(bytes),
         Form::Hex => hex_bytes(bytes),
+    }
+}
+
+/// An integer's next character.
+fn step_int(s: State, b: u8, r: Option<(i64, i64)>) -> Option<State> {
+    let digits = s.k - u32::from(s.neg);
+    if b == b'-' && s.k == 0 {
+        let ok = r.is_none_or(|(lo, _)| lo <= -1);
+        return ok.then_some(State { k: 1, neg: true, ..s });
+    }
+    if !b.is_ascii_digit() || digits >= MAX_DIGITS || (digits >= 1 && s.acc == 0) {
+        return None;
+    }
+    let acc = s.acc * 10 + i64::from(b - b'0');
+    let t = State { k: s.k + 1, acc, ..s };
+    extendable(r, t.neg, acc, digits + 1).then_some(t)
+}
+
+/// A binary field's next byte.
+fn step_field(s: State, b: u8, ty: FieldType, min: i64, max: i64) -> Option<State> {
+    let acc = (s.acc << 8) | i64::from(b);
+    let k = s.k + 1;
+    if k as usize == ty.size() {
+        // The range check happens in `close`; a value out of range leaves a state that
+        // cannot advance, so check it here to die on this byte.
+        (min..=max).contains(&signed_value(ty, acc)).then_some(State { k, acc, ..s })
+    } else {
+        // High byte of a two-byte field: some low byte must land in range.
+        let (lo, hi) = if ty.signed() {
+            let h = i64::from(b as i8);
+            (h * 256, h * 256 + 255)
+        } else {
+            (acc * 256, acc * 256 + 255)
+        };
+        (lo <= max && hi >= min).then_some(State { k, acc, ..s })
     }
 }
 
@@ -390,6 +534,21 @@ mod tests {
         assert!(t.matches(&[0x01, 0x3B, b'!']));
         assert!(t.matches(&[0xFE, 0x00, b'!']));
         assert_eq!(match_prefix(&t, &[0x80, 0x00, b'!']), Outcome::Parted(0));
+    }
+
+    #[test]
+    fn a_relation_shows_its_band_where_the_answer_parts() {
+        let t = crate::parse(
+            "gcl-transcript 1\nid: a\ntitle: t\nclause: c\nlevel: MUST\nprofile: seed\n\
+             send hex 41\nexpect hex 2A {i8 4..127 as v1} {i8 v1/2 +-25%}\n",
+        )
+        .unwrap();
+        let mut m = Matcher::new(&t.steps[0].expect);
+        for b in [b'*', 80, 80] {
+            m.feed(b);
+        }
+        assert!(!m.is_alive());
+        assert_eq!(m.expected_at_parting(), "{i8 30..50}");
     }
 
     #[test]

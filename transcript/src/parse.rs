@@ -7,8 +7,8 @@ use std::time::Duration;
 use gcl_model::escape::{UnescapeError, unescape_into};
 
 use super::{
-    Expect, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Requirement, Step, Transcript,
-    is_slug,
+    Expect, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Relation, Requirement, Step,
+    Transcript, Value, ValueKind, is_capture_name, is_slug,
 };
 
 /// Why transcript (or script) text does not parse.
@@ -82,6 +82,10 @@ pub enum ParseErrorKind {
     /// No step at all.
     #[error("no steps")]
     NoSteps,
+    /// A capture or a relation that breaks the rules: a name captured twice, a relation to a
+    /// name not captured before it, a timing window whose lower bound is above its upper.
+    #[error("{0}")]
+    BadCapture(String),
 }
 
 impl ParseError {
@@ -426,30 +430,72 @@ fn range(s: &str) -> Option<(i64, i64)> {
     (a <= b).then_some((a, b))
 }
 
-/// The piece an elision's inside (between the braces) stands for.
+/// The piece an elision's inside (between the braces) stands for: `KIND [CONSTRAINT] [as
+/// NAME]`, where the constraint is a range `A..B` or a relation `NAME[*N][/D] +-P%`.
 fn elision(inner: &str) -> Option<Piece> {
-    let mut words = inner.split(' ');
-    let kind = words.next()?;
-    let arg = words.next();
-    if words.next().is_some() {
-        return None;
+    let mut words: Vec<&str> = inner.split(' ').collect();
+    let kind = words.first().copied()?;
+    let mut capture = None;
+    if words.len() >= 3 && words[words.len() - 2] == "as" {
+        let name = words.pop()?;
+        words.pop();
+        if !is_capture_name(name) {
+            return None;
+        }
+        capture = Some(name.to_string());
     }
-    Some(match (kind, arg) {
-        ("int", None) => Piece::Int(None),
-        ("int", Some(r)) => Piece::Int(Some(range(r)?)),
-        ("line", None) => Piece::Line,
-        ("any", None) => Piece::Any,
-        ("byte", None) => Piece::AnyByte,
-        (t @ ("u8" | "i8" | "u16" | "i16"), Some(r)) => {
-            let (min, max) = range(r)?;
-            let ty = FieldType::new(if t.ends_with('8') { 1 } else { 2 }, t.starts_with('i'))?;
-            if !ty.range().contains(&min) || !ty.range().contains(&max) {
-                return None;
-            }
-            Piece::Field { ty, min, max }
+    let rest = &words[1..];
+    match (kind, rest, &capture) {
+        ("line", [], None) => return Some(Piece::Line),
+        ("any", [], None) => return Some(Piece::Any),
+        ("byte", [], None) => return Some(Piece::AnyByte),
+        _ => {}
+    }
+    let kind = match kind {
+        "int" => ValueKind::Int,
+        t @ ("u8" | "i8" | "u16" | "i16") => {
+            ValueKind::Field(FieldType::new(if t.ends_with('8') { 1 } else { 2 }, t.starts_with('i'))?)
         }
         _ => return None,
-    })
+    };
+    let (range, relation) = match rest {
+        [] => (None, None),
+        [r] => (Some(range(r)?), None),
+        [term, tol] => (None, Some(relation(term, tol)?)),
+        _ => return None,
+    };
+    // A field without a capture or a relation names its range, as it always has.
+    if matches!(kind, ValueKind::Field(_)) && range.is_none() && relation.is_none() && capture.is_none() {
+        return None;
+    }
+    let v = Value { kind, range, relation, capture };
+    v.check().ok()?;
+    Some(v.into_piece())
+}
+
+/// `NAME[*N][/D]` and `+-P%`.
+fn relation(term: &str, tol: &str) -> Option<Relation> {
+    let small = |t: &str| -> Option<i64> {
+        if t.is_empty() || t.len() > 7 || !t.bytes().all(|d| d.is_ascii_digit()) || t.starts_with('0') {
+            return None;
+        }
+        t.parse().ok()
+    };
+    let (head, den) = match term.split_once('/') {
+        Some((h, d)) => (h, small(d)?),
+        None => (term, 1),
+    };
+    let (name, num) = match head.split_once('*') {
+        Some((n, f)) => (n, small(f)?),
+        None => (head, 1),
+    };
+    let p = tol.strip_prefix("+-")?.strip_suffix('%')?;
+    if p.is_empty() || p.len() > 3 || !p.bytes().all(|d| d.is_ascii_digit()) || (p.len() > 1 && p.starts_with('0')) {
+        return None;
+    }
+    let r = Relation { name: name.to_string(), num, den, tolerance: p.parse().ok()? };
+    r.check().ok()?;
+    Some(r)
 }
 
 #[derive(Default)]
@@ -550,9 +596,26 @@ pub fn parse(text: &str) -> Result<Transcript, ParseError> {
                 if cur_args.peek_word() == "within" {
                     cur_args.take_word();
                     let w = cur_args.take_word();
-                    let d =
-                        parse_duration(w).ok_or_else(|| ParseError::new(n, ParseErrorKind::BadDuration(w.into())))?;
-                    cur.step.within = Some(d);
+                    let dur = |t: &str| {
+                        parse_duration(t).ok_or_else(|| ParseError::new(n, ParseErrorKind::BadDuration(t.into())))
+                    };
+                    // `within B`, or a window `within A..B`: no sooner than A, no later than B.
+                    match w.split_once("..") {
+                        Some((a, b)) => {
+                            let (a, b) = (dur(a)?, dur(b)?);
+                            if a > b {
+                                return Err(ParseError::new(
+                                    n,
+                                    ParseErrorKind::BadCapture(format!(
+                                        "timing window `{w}`: its lower bound is above its upper"
+                                    )),
+                                ));
+                            }
+                            cur.step.earliest = Some(a);
+                            cur.step.within = Some(b);
+                        }
+                        None => cur.step.within = Some(dur(w)?),
+                    }
                 }
                 let mut e = Expect::default();
                 while !cur_args.at_end() {
@@ -591,7 +654,12 @@ pub fn parse(text: &str) -> Result<Transcript, ParseError> {
     if steps.is_empty() {
         return Err(ParseError::new(last_line, ParseErrorKind::NoSteps));
     }
-    Ok(Transcript { header, steps })
+    let t = Transcript { header, steps };
+    if let Err((i, why)) = t.check_captures() {
+        let line = t.steps.get(i).map_or(last_line, |s| s.line);
+        return Err(ParseError::new(line, ParseErrorKind::BadCapture(why)));
+    }
+    Ok(t)
 }
 
 fn start(cur: &mut StepBuilder, line: usize, comments: &mut Vec<String>) {

@@ -163,6 +163,111 @@ fn errors_are_typed_with_line_numbers() {
     assert!(matches!(e.kind, ParseErrorKind::BadString(_)));
 }
 
+const RELATIONS: &str = r#"gcl-transcript 1
+id: rt-lcvc-scaling
+title: twice the LCVC, twice the velocity
+clause: seed: Parameter LCVC
+level: MUST
+profile: seed
+
+send "12FGET P\r"
+expect "12FGET P\n\r{int 1..17800 as p1} {int p1*11/2 +-15%}\n\r=> "
+
+send hex 41
+expect hex 2A {i8 1..127 as v1} {i8 v1/2 +-25% as v2} {u16 p1 +-0%}
+
+send "SM 4000\r"
+expect within 5s..30s "SM 4000\n\rERR 16\n\r=> "
+"#;
+
+#[test]
+fn relations_capture_and_bound_later_values() {
+    let t = parse(RELATIONS).unwrap();
+    let e0 = &t.steps[0].expect;
+    // The band is rounded outward: 100 * 11/2 = 550, +-15 % is 467.5..632.5, so 467..633.
+    assert_eq!(Relation::new("p1", 11, 2, 15).band(100), (467, 633));
+    assert_eq!(Relation::new("v", 1, 2, 25).band(-80), (-50, -30));
+    let got = e0.matches_with(&Captures::new(), b"12FGET P\n\r100 633\n\r=> ").unwrap();
+    assert_eq!(got.get("p1"), Some(&100));
+    assert!(e0.matches(b"12FGET P\n\r100 467\n\r=> "));
+    assert!(!e0.matches(b"12FGET P\n\r100 634\n\r=> "));
+    assert!(!e0.matches(b"12FGET P\n\r100 466\n\r=> "));
+    // The capture's own range holds: a motor that did not move cannot anchor the relation.
+    assert!(!e0.matches(b"12FGET P\n\r0 0\n\r=> "));
+    // Wrong values part at the first digit that cannot lead into the band.
+    assert_eq!(matcher::match_prefix(e0, b"12FGET P\n\r100 9"), matcher::Outcome::Parted(14));
+    // Across steps: v1 = 80, v2 within 30..50; the u16 must equal p1 (100) exactly.
+    let e1 = &t.steps[1].expect;
+    let next = e1.matches_with(&got, &[0x2A, 80, 40, 0, 100]).unwrap();
+    assert_eq!((next.get("v1"), next.get("v2"), next.get("p1")), (Some(&80), Some(&40), Some(&100)));
+    assert!(e1.matches_with(&got, &[0x2A, 80, 30, 0, 100]).is_some());
+    assert!(e1.matches_with(&got, &[0x2A, 80, 51, 0, 100]).is_none());
+    assert!(e1.matches_with(&got, &[0x2A, 80, 40, 0, 101]).is_none());
+    // Without the earlier step's capture, the relation to p1 matches nothing.
+    assert!(e1.matches_with(&Captures::new(), &[0x2A, 80, 40, 0, 100]).is_none());
+    // A timing window.
+    assert_eq!((t.steps[2].earliest, t.steps[2].within), (Some(Duration::from_secs(5)), Some(Duration::from_secs(30))));
+}
+
+#[test]
+fn relations_and_windows_round_trip() {
+    let t = parse(RELATIONS).unwrap();
+    let text = t.to_text();
+    assert_eq!(parse(&text).unwrap().without_lines(), t.without_lines());
+    assert!(text.contains("{int 1..17800 as p1} {int p1*11/2 +-15%}"), "{text}");
+    assert!(text.contains("{i8 1..127 as v1} {i8 v1/2 +-25% as v2} {u16 p1 +-0%}"), "{text}");
+    assert!(text.contains("expect within 5s..30s \"SM"), "{text}");
+    // `*1` and `/1` are not written.
+    let one = parse(&RELATIONS.replace("v1/2 +-25%", "v1*1/1 +-25%")).unwrap();
+    assert!(one.to_text().contains("{i8 v1 +-25% as v2}"));
+    // A field captured without a range reads its whole type.
+    let whole = parse(&RELATIONS.replace("{i8 1..127 as v1}", "{i8 as v1}")).unwrap();
+    assert!(
+        whole.steps[1].expect.matches_with(&[("p1".to_string(), 100)].into(), &[0x2A, 0x80, 0xC0, 0, 100]).is_some()
+    );
+}
+
+#[test]
+fn capture_errors_are_refused() {
+    let with = |from: &str, to: &str| {
+        assert!(RELATIONS.contains(from), "{from}");
+        err(&RELATIONS.replace(from, to))
+    };
+    // A relation to a name not captured before it, here or in an earlier step.
+    let e = with("{int p1*11/2 +-15%}", "{int q*11/2 +-15%}");
+    assert_eq!(e.line, 8);
+    assert!(matches!(e.kind, ParseErrorKind::BadCapture(_)), "{e}");
+    let e = with("{int 1..17800 as p1} {int p1*11/2 +-15%}", "{int p1*11/2 +-15%} {int 1..17800 as p1}");
+    assert!(matches!(e.kind, ParseErrorKind::BadCapture(_)), "{e}");
+    // A name captured twice.
+    let e = with("as v2", "as p1");
+    assert_eq!((e.line, e.kind), (11, ParseErrorKind::BadCapture("`p1` is captured twice".into())));
+    // Malformed relations and names.
+    for bad in [
+        "{i8 v1/2 +-25%% as v2}",
+        "{i8 v1/0 +-25% as v2}",
+        "{i8 v1*02 +-25% as v2}",
+        "{i8 v1/2 25% as v2}",
+        "{i8 v1/2 +-101% as v2}",
+        "{i8 v1/2 +-25% as V2}",
+        "{i8 v1/2 +-25% as}",
+        "{i8 1..2 v1/2 +-25%}",
+        "{i8 1..300 as v2}",
+        "{line as v2}",
+        "{i8 2*v1 +-25%}",
+    ] {
+        let e = with("{i8 v1/2 +-25% as v2}", bad);
+        assert!(matches!(e.kind, ParseErrorKind::BadElision(_)), "{bad}: {e}");
+    }
+    let e = with("within 5s..30s", "within 30s..5s");
+    assert!(matches!(e.kind, ParseErrorKind::BadCapture(_)), "{e}");
+    let e = with("within 5s..30s", "within 5s..");
+    assert!(matches!(e.kind, ParseErrorKind::BadDuration(_)), "{e}");
+    // A capture of a varying length must not end an expectation, like {int}.
+    let e = err(&format!("{HEAD}expect \"x{{int as a}}\"\n"));
+    assert!(matches!(e.kind, ParseErrorKind::BadExpect(_)), "{e}");
+}
+
 #[test]
 fn errors_display_with_their_line() {
     let e = err(&format!("{HEAD}pause soon\n"));
@@ -225,16 +330,25 @@ fn arb_step() -> impl Strategy<Value = Step> {
         proptest::collection::vec(arb_text(), 0..2),
         proptest::option::of(arb_duration()),
         proptest::option::of((proptest::collection::vec(any::<u8>(), 0..10), any::<bool>())),
-        proptest::option::of(arb_duration()),
+        proptest::option::of((arb_duration(), proptest::option::of(arb_duration()))),
         arb_expect(),
     )
-        .prop_map(|(comments, pause, send, within, expect)| Step {
-            line: 0,
-            comments,
-            pause,
-            send: send.map(|(bytes, hex)| HostBytes { bytes, form: if hex { Form::Hex } else { Form::Text } }),
-            within,
-            expect,
+        .prop_map(|(comments, pause, send, window, expect)| {
+            // A window's lower bound is never above its upper.
+            let (within, earliest) = match window {
+                Some((w, Some(a))) => (Some(w.max(a)), Some(w.min(a))),
+                Some((w, None)) => (Some(w), None),
+                None => (None, None),
+            };
+            Step {
+                line: 0,
+                comments,
+                pause,
+                send: send.map(|(bytes, hex)| HostBytes { bytes, form: if hex { Form::Hex } else { Form::Text } }),
+                within,
+                earliest,
+                expect,
+            }
         })
 }
 

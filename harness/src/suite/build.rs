@@ -13,8 +13,12 @@ use gcl_model::{DeviceConfig, Profile};
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_host::SimLink;
 use gcl_host::link::LinkError;
+use gcl_transcript::matcher::Captures;
 use gcl_transcript::script::{Action, ScriptStep};
-use gcl_transcript::{Expect, Form, Header, HostBytes, Level, Piece, Requirement, Step, Transcript};
+use gcl_transcript::{
+    Expect, Form, Header, HostBytes, Level, Piece, Relation, Requirement, Step, Transcript, Value, ValueKind,
+    elision_text,
+};
 
 /// The header key listing every decision a case rests on (those it checks and those its
 /// framing, preamble, read-backs and teardown touch), space-separated, in the profile's order.
@@ -67,12 +71,88 @@ pub(crate) struct FieldRule {
     pub range: Option<Range>,
 }
 
+/// Which value of an answer a [`Bind`] applies to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Target {
+    /// A feedback field of a RealTime answer (a [`Shape::Block`]).
+    Field {
+        /// The motor, or `None` for a hand-wide field.
+        motor: Option<u8>,
+        /// The flag name.
+        name: &'static str,
+    },
+    /// Token `token` of value line `line` of a [`Shape::Values`] answer (0-based).
+    Value { line: usize, token: usize },
+}
+
+/// A value of an answer captured under a name, or held to a relation with a value captured
+/// before it, or both. A relation is the case's subject written as arithmetic between two
+/// answers, so that the case does not rest on the absolute values another decision sets;
+/// it carries its evidence, which the golden states as a note.
+#[derive(Debug, Clone)]
+pub(crate) struct Bind {
+    pub target: Target,
+    pub capture: Option<String>,
+    pub relation: Option<Relation>,
+    /// Why the relation holds: the clause it writes down and how its factor and tolerance
+    /// follow from the model.
+    pub evidence: String,
+    /// Pairs (captured value, related value) the model gives over every situation the case
+    /// allows: each must lie in the relation's band, or the case is not built.
+    pub samples: Vec<(i64, i64)>,
+}
+
+/// A relation from the model's pairs (captured, related): the factor is the midpoint of their
+/// ratios as a fraction over 100, and the tolerance the least whole percent that holds every
+/// pair, plus `margin` points. `None` when no tolerance up to 100 % holds them all (or a
+/// captured value is 0).
+pub(crate) fn derive_relation(name: &str, pairs: &[(i64, i64)], margin: u32) -> Option<Relation> {
+    if pairs.is_empty() || pairs.iter().any(|(a, _)| *a == 0) {
+        return None;
+    }
+    let ratios: Vec<f64> = pairs.iter().map(|(a, b)| *b as f64 / *a as f64).collect();
+    let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut num = ((lo + hi) / 2.0 * 100.0).round() as i64;
+    let mut den = 100i64;
+    let g = gcd(num.abs(), den);
+    if g > 1 {
+        num /= g;
+        den /= g;
+    }
+    fit_tolerance(name, num, den, pairs, margin)
+}
+
+/// `name * num / den` with the least whole-percent tolerance that holds every pair, plus
+/// `margin` points (at most 100 %); `None` when none up to 100 % does.
+pub(crate) fn fit_tolerance(name: &str, num: i64, den: i64, pairs: &[(i64, i64)], margin: u32) -> Option<Relation> {
+    if num < 1 || den < 1 || pairs.is_empty() {
+        return None;
+    }
+    let holds = |r: &Relation| {
+        pairs.iter().all(|(a, b)| {
+            let (x, y) = r.band(*a);
+            (x..=y).contains(b)
+        })
+    };
+    let tolerance = (0..=gcl_transcript::MAX_TOLERANCE).find(|t| holds(&Relation::new(name, num, den, *t)))?;
+    Some(Relation::new(name, num, den, (tolerance + margin).min(gcl_transcript::MAX_TOLERANCE)))
+}
+
+fn gcd(a: i64, b: i64) -> i64 {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
 /// One planned step.
 #[derive(Debug, Clone)]
 pub(crate) struct Plan {
     pub step: ScriptStep,
     pub shape: Shape,
     pub within_floor: Option<Duration>,
+    /// The soonest the answer may come (a timing window's lower bound), with its evidence.
+    pub earliest: Option<(Duration, String)>,
+    /// Captures and relations on the answer's values.
+    pub binds: Vec<Bind>,
 }
 
 /// A case before it runs.
@@ -158,7 +238,7 @@ impl CaseB {
             comments: std::mem::take(&mut self.pending_comments),
             ..ScriptStep::new(action)
         };
-        self.def.plans.push(Plan { step, shape, within_floor: None });
+        self.def.plans.push(Plan { step, shape, within_floor: None, earliest: None, binds: Vec::new() });
         self
     }
 
@@ -260,6 +340,37 @@ impl CaseB {
             plan.shape = shape;
         }
         Ok(self)
+    }
+
+    /// Captures a value of the last step's answer under `name`.
+    pub fn capture(mut self, target: Target, name: &str) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.binds.push(Bind {
+                target,
+                capture: Some(name.to_string()),
+                relation: None,
+                evidence: String::new(),
+                samples: Vec::new(),
+            });
+        }
+        self
+    }
+
+    /// Holds a value of the last step's answer to a relation with a value captured before,
+    /// with its evidence and the model's pairs it must hold.
+    pub fn relate(mut self, target: Target, relation: Relation, evidence: String, samples: Vec<(i64, i64)>) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.binds.push(Bind { target, capture: None, relation: Some(relation), evidence, samples });
+        }
+        self
+    }
+
+    /// The last step's answer may come no sooner than `d` after its bytes went out.
+    pub fn no_sooner_than(mut self, d: Duration, evidence: String) -> CaseB {
+        if let Some(p) = self.def.plans.last_mut() {
+            p.earliest = Some((d, evidence));
+        }
+        self
     }
 
     pub fn within(mut self, d: Duration) -> CaseB {
@@ -395,7 +506,18 @@ fn field_range(p: &Profile, f: &Field, rules: &[FieldRule]) -> Option<Range> {
     }
 }
 
-fn shape_block(p: &Profile, c: &Captured, rules: &[FieldRule]) -> Expect {
+/// The bind on a target, if any.
+fn bind_on<'a>(binds: &'a [Bind], t: &Target) -> Option<&'a Bind> {
+    binds.iter().find(|b| &b.target == t)
+}
+
+/// A value piece for a bind: the relation, or the capture with the value's range.
+fn bound_piece(kind: ValueKind, range: Option<Range>, b: &Bind) -> Piece {
+    let range = if b.relation.is_some() { None } else { range };
+    Piece::Value(Value { kind, range, relation: b.relation.clone(), capture: b.capture.clone() })
+}
+
+fn shape_block(p: &Profile, c: &Captured, rules: &[FieldRule], binds: &[Bind]) -> Expect {
     let mut e = Expect::default();
     let header = c.sent.first().copied().and_then(ControlHeader::from_byte);
     let Some(layout) = &c.layout else { return Expect::hex(&c.output) };
@@ -409,6 +531,11 @@ fn shape_block(p: &Profile, c: &Captured, rules: &[FieldRule]) -> Expect {
     e.push_bytes(Form::Hex, &c.output[..1]);
     for f in fb.fields() {
         let bytes = &c.output[f.offset()..f.offset() + f.size()];
+        if let Some(b) = bind_on(binds, &Target::Field { motor: f.motor(), name: f.name() }) {
+            let range = field_range(p, f, rules).map(|(lo, hi)| (lo.max(f.min()), hi.min(f.max())));
+            e.push(Form::Hex, bound_piece(ValueKind::Field(f.ty()), range, b));
+            continue;
+        }
         match field_range(p, f, rules) {
             None => e.push_bytes(Form::Hex, bytes),
             Some((lo, hi)) if f.size() == 1 && lo <= f.min() && hi >= f.max() => e.push(Form::Hex, Piece::AnyByte),
@@ -444,10 +571,14 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len().max(1)).position(|w| w == needle)
 }
 
-fn push_values(e: &mut Expect, line: &[u8], ranges: &[Option<Range>]) {
+fn push_values(e: &mut Expect, line: &[u8], ranges: &[Option<Range>], i: usize, binds: &[Bind]) {
     for (j, tok) in line.split(|b| *b == b' ').enumerate() {
         if j > 0 {
             e.push_bytes(Form::Text, b" ");
+        }
+        if let Some(b) = bind_on(binds, &Target::Value { line: i, token: j }) {
+            e.push(Form::Text, bound_piece(ValueKind::Int, ranges.get(j).copied().flatten(), b));
+            continue;
         }
         match ranges.get(j).copied().flatten() {
             Some(r) => e.push(Form::Text, Piece::Int(Some(r))),
@@ -477,7 +608,7 @@ fn banner_lines_expect(output: &[u8], eol: &[u8], ep: &[u8]) -> Option<Expect> {
 }
 
 /// The expectation for a captured answer under a shape.
-pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<Expect, String> {
+pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape, binds: &[Bind]) -> Result<Expect, String> {
     let eol = p.framing.line_ending.as_bytes();
     let ep = eol_prompt(p);
     let exact = || match answer_form(c, &ep) {
@@ -488,7 +619,7 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<E
         Shape::Exact => exact(),
         Shape::Banner => banner_expect(&c.output, &ep).ok_or("no banner in the answer")?,
         Shape::BannerLines => banner_lines_expect(&c.output, eol, &ep).ok_or("no banner line in the answer")?,
-        Shape::Block(rules) => shape_block(p, c, rules),
+        Shape::Block(rules) => shape_block(p, c, rules, binds),
         Shape::AnyLines => {
             let (echo, _) = split_lines(&c.output, eol, &ep).ok_or("answer is not lines and a prompt")?;
             let mut e = Expect::default();
@@ -504,7 +635,7 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<E
             e.push_bytes(Form::Text, echo);
             for (i, l) in lines.iter().enumerate() {
                 e.push_bytes(Form::Text, eol);
-                push_values(&mut e, l, ranges.get(i).map(Vec::as_slice).unwrap_or_default());
+                push_values(&mut e, l, ranges.get(i).map(Vec::as_slice).unwrap_or_default(), i, binds);
             }
             e.push_bytes(Form::Text, &ep);
             e
@@ -523,7 +654,7 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape) -> Result<E
                         .collect(),
                     None => Vec::new(),
                 };
-                push_values(&mut e, l, &ranges);
+                push_values(&mut e, l, &ranges, usize::MAX, &[]);
             }
             e.push_bytes(Form::Text, &ep);
             e
@@ -550,18 +681,44 @@ pub(crate) fn capture_plan(profile: &Arc<Profile>, plans: &[Plan]) -> Result<Vec
 pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured]) -> Result<Transcript, String> {
     let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
     let mut out = Vec::with_capacity(caps.len());
+    let mut captured = Captures::new();
+    let mut notes = def.notes.clone();
     for (i, (plan, c)) in def.plans.iter().zip(caps).enumerate() {
         if c.timed_out {
             return Err(fail(format!("step {i} got no complete answer: \"{}\"", gcl_model::escape::escape(&c.output))));
         }
-        let expect = shape_answer(profile, c, &plan.shape).map_err(|m| fail(format!("step {i}: {m}")))?;
+        let expect = shape_answer(profile, c, &plan.shape, &plan.binds).map_err(|m| fail(format!("step {i}: {m}")))?;
         expect.check().map_err(|m| fail(format!("step {i}: {m}")))?;
-        if !expect.matches(&c.output) {
-            return Err(fail(format!(
-                "step {i}: the shaped answer {} does not match the model's \"{}\"",
-                expect.to_text(),
-                gcl_model::escape::escape(&c.output)
-            )));
+        if plan.binds.len() != expect.pieces().filter(|(_, p)| matches!(p, Piece::Value(_))).count() {
+            return Err(fail(format!("step {i}: a capture or relation names no value of the answer")));
+        }
+        // Every relation comes with its evidence, and holds the model's own pairs.
+        for b in &plan.binds {
+            let Some(r) = &b.relation else { continue };
+            let piece = elision_text(&bound_piece(ValueKind::Int, None, b));
+            if b.evidence.is_empty() || b.samples.is_empty() {
+                return Err(fail(format!("step {i}: relation {piece} without evidence or model pairs")));
+            }
+            if let Some((x, y)) = b.samples.iter().find(|(x, y)| {
+                let (lo, hi) = r.band(*x);
+                !(lo..=hi).contains(y)
+            }) {
+                return Err(fail(format!("step {i}: relation {piece} does not hold the model's pair {x} -> {y}")));
+            }
+            notes.push(format!("relation `{}`: {}", r.text(), b.evidence));
+        }
+        if let Some((_, why)) = &plan.earliest {
+            notes.push(format!("timing window: {why}"));
+        }
+        match expect.matches_with(&captured, &c.output) {
+            Some(now) => captured = now,
+            None => {
+                return Err(fail(format!(
+                    "step {i}: the shaped answer {} does not match the model's \"{}\"",
+                    expect.to_text(),
+                    gcl_model::escape::escape(&c.output)
+                )));
+            }
         }
         let send = match &plan.step.action {
             Action::Wait => None,
@@ -572,7 +729,22 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
         if let Some(f) = plan.within_floor {
             within = Some(within.map_or(f, |w| w.max(f)));
         }
-        out.push(Step { line: 0, comments: plan.step.comments.clone(), pause: plan.step.pause, send, within, expect });
+        let earliest = plan.earliest.as_ref().map(|(d, _)| *d);
+        if let Some(a) = earliest {
+            if c.took < a {
+                return Err(fail(format!("step {i}: the model answers sooner than the window's {a:?}")));
+            }
+            within = Some(within.map_or(a, |w| w.max(a)));
+        }
+        out.push(Step {
+            line: 0,
+            comments: plan.step.comments.clone(),
+            pause: plan.step.pause,
+            send,
+            within,
+            earliest,
+            expect,
+        });
     }
     let mut requires = def.requires.clone();
     requires.sort();
@@ -602,7 +774,7 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
         level,
         profiles: vec![profile.id.clone()],
         requires,
-        notes: def.notes.clone(),
+        notes,
         extensions,
     };
     if header.clauses.is_empty() {
@@ -614,6 +786,30 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn derived_relations_hold_every_pair_and_no_more_than_they_need() {
+        let pairs = [(100, 520), (120, 700), (150, 800), (200, 1100)];
+        let r = derive_relation("p1", &pairs, 0).unwrap();
+        // The factor is the midpoint of the ratios (5.2..5.83), over 100, reduced: 552/100.
+        assert_eq!((r.num, r.den), (138, 25));
+        let holds = |r: &Relation| {
+            pairs.iter().all(|(a, b)| {
+                let (lo, hi) = r.band(*a);
+                (lo..=hi).contains(b)
+            })
+        };
+        assert!(holds(&r));
+        // The least tolerance: one point less breaks a pair.
+        assert!(!holds(&Relation::new("p1", r.num, r.den, r.tolerance - 1)));
+        assert_eq!(derive_relation("p1", &pairs, 3).unwrap().tolerance, r.tolerance + 3);
+        // A fixed factor: the tolerance alone is fitted.
+        let half = fit_tolerance("d1", 1, 2, &[(95, 51), (102, 47)], 0).unwrap();
+        assert_eq!((half.num, half.den, half.tolerance), (1, 2, 6));
+        // Nothing to anchor on, or no tolerance up to 100 % holds: no relation.
+        assert!(derive_relation("p1", &[(0, 5)], 0).is_none());
+        assert!(fit_tolerance("d1", 1, 2, &[(10, 100)], 0).is_none());
+    }
 
     #[test]
     fn sources_file_parses_and_names_only_builtin_profiles() {

@@ -3,7 +3,7 @@
 The answer is the shortest prefix of the bytes received that matches; a byte that cannot
 continue any match is where the answer parts from the expectation."""
 
-from .transcript import INT_LIMIT
+from .transcript import INT_LIMIT, relation_band
 
 ALIVE, COMPLETE, DEAD = "alive", "complete", "dead"
 DIGITS = b"0123456789"
@@ -50,83 +50,148 @@ def _signed(v, width):
 
 class Matcher:
     """Feed bytes one at a time; `feed` says ALIVE, COMPLETE (the shortest match ends at this
-    byte) or DEAD (this byte parts from the expectation)."""
+    byte) or DEAD (this byte parts from the expectation). `known` holds the values earlier
+    steps captured, by name; `captures()` gives them with this answer's, once complete."""
 
-    def __init__(self, pieces):
+    def __init__(self, pieces, known=None):
         self.pieces = pieces
-        self.states = self._closure({(0, None)})
+        self.known = dict(known or {})
+        # For each value piece: its ordinal among this expectation's captures, and the
+        # ordinal (or the known value) its relation is measured against.
+        self.names = []
+        self.slots = []
+        for p in pieces:
+            slot = (None, None)
+            if isinstance(p, tuple) and p[0] == "value":
+                _, _, relation, capture = p
+                base = None
+                if relation is not None:
+                    if relation[0] in self.names:
+                        base = ("local", self.names.index(relation[0]))
+                    elif relation[0] in self.known:
+                        base = ("known", self.known[relation[0]])
+                    else:
+                        base = ("unknown", None)
+                if capture is not None:
+                    self.names.append(capture)
+                slot = (len(self.names) - 1 if capture is not None else None, base)
+            self.slots.append(slot)
+        self.states = self._closure({(0, None, ())})
         self.fed = 0
+
+    def _reads(self, i, caps):
+        """The int or bin piece that piece i reads for a state with captures `caps`, or None
+        when nothing can match (a relation to a name nobody captured, a band outside a field)."""
+        p = self.pieces[i]
+        if p[0] != "value":
+            return p
+        _, base, relation, _ = p
+        ref = self.slots[i][1]
+        if ref is None:
+            return base
+        if ref[0] == "unknown":
+            return None
+        x = caps[ref[1]] if ref[0] == "local" else ref[1]
+        lo, hi = relation_band(relation, x)
+        if base[0] == "int":
+            return ("int", lo, hi)
+        _, width, signed, blo, bhi = base
+        lo, hi = max(lo, blo), min(hi, bhi)
+        return ("bin", width, signed, lo, hi) if lo <= hi else None
+
+    def _next(self, i, caps, value):
+        if self.slots[i][0] is not None:
+            caps = caps + (value,)
+        return (i + 1, None, caps)
 
     def _closure(self, states):
         out = set(states)
         todo = list(states)
         n = len(self.pieces)
         while todo:
-            i, aux = todo.pop()
+            i, aux, caps = todo.pop()
             if i >= n:
                 continue
             p = self.pieces[i]
             nxt = None
             if p in (("line",), ("any",)):
-                nxt = (i + 1, None)
-            elif isinstance(p, tuple) and p[0] == "int" and aux is not None and _int_complete(aux, p[1], p[2]):
-                nxt = (i + 1, None)
+                nxt = (i + 1, None, caps)
+            elif isinstance(p, tuple) and p[0] in ("int", "value", "bin"):
+                r = self._reads(i, caps)
+                if r is not None and r[0] == "int" and aux is not None and _int_complete(aux, r[1], r[2]):
+                    nxt = self._next(i, caps, int(aux))
+                elif r is not None and r[0] == "bin" and isinstance(aux, tuple):
+                    nxt = self._next(i, caps, aux[0])
             if nxt is not None and nxt not in out:
                 out.add(nxt)
                 todo.append(nxt)
         return out
 
     def is_complete(self):
-        return any(i >= len(self.pieces) for i, _ in self.states)
+        return any(i >= len(self.pieces) for i, _, _ in self.states)
+
+    def captures(self):
+        """Once complete: the values known before and those this answer captured."""
+        for i, _, caps in sorted(self.states, key=lambda s: s[2]):
+            if i >= len(self.pieces):
+                out = dict(self.known)
+                out.update(zip(self.names, caps))
+                return out
+        return None
 
     def feed(self, b):
         self.fed += 1
         new = set()
         n = len(self.pieces)
-        for i, aux in self.states:
+        for i, aux, caps in self.states:
             if i >= n:
                 continue
             p = self.pieces[i]
             if isinstance(p, int):
                 if b == p:
-                    new.add((i + 1, None))
+                    new.add((i + 1, None, caps))
             elif p == ("byte",):
-                new.add((i + 1, None))
+                new.add((i + 1, None, caps))
             elif p == ("any",):
-                new.add((i, None))
+                new.add((i, None, caps))
             elif p == ("line",):
                 if b not in (10, 13):
-                    new.add((i, None))
-            elif p[0] == "int":
-                s = (aux or b"") + bytes([b])
-                if _int_viable(s, p[1], p[2]):
-                    new.add((i, s))
-            elif p[0] == "bin":
-                _, width, signed, lo, hi = p
+                    new.add((i, None, caps))
+            else:
+                r = self._reads(i, caps)
+                if r is None or isinstance(aux, tuple):
+                    continue
+                if r[0] == "int":
+                    s = (aux or b"") + bytes([b])
+                    if _int_viable(s, r[1], r[2]):
+                        new.add((i, s, caps))
+                    continue
+                _, width, signed, lo, hi = r
                 if width == 1:
                     v = _signed(b, 1) if signed else b
                     if lo <= v <= hi:
-                        new.add((i + 1, None))
+                        # A whole field: its value waits in `aux` for the closure to capture.
+                        new.add((i, (v,), caps))
                 elif aux is None:
                     h = _signed(b, 1) if signed else b
                     if h * 256 <= hi and h * 256 + 255 >= lo:
-                        new.add((i, b))
+                        new.add((i, b, caps))
                 else:
                     v = aux * 256 + b
                     if signed:
                         v = _signed(v, 2)
                     if lo <= v <= hi:
-                        new.add((i + 1, None))
+                        new.add((i, (v,), caps))
         self.states = self._closure(new)
         if not self.states:
             return DEAD
         return COMPLETE if self.is_complete() else ALIVE
 
 
-def match_prefix(pieces, data):
+def match_prefix(pieces, data, known=None):
     """(COMPLETE, length) for the shortest matching prefix of `data`, (DEAD, offset) where it
     parts, or (ALIVE, len(data)) when more bytes are needed."""
-    m = Matcher(pieces)
+    m = Matcher(pieces, known)
     if m.is_complete():
         return COMPLETE, 0
     for k, b in enumerate(data):

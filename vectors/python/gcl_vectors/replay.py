@@ -76,14 +76,16 @@ def replay(t, link, default_timeout=2.0, resync=False):
             link.send(b"\x03")
         drain(link)
         buf = b""
+        captured = {}  # values the answers captured, for the relations of later answers
         for i, step in enumerate(t.steps):
             if step.pause:
                 time.sleep(step.pause)
             if step.send:
                 link.send(step.send)
             timeout = step.within if step.within is not None else default_timeout
-            deadline = time.monotonic() + timeout
-            m = Matcher(step.expect)
+            started = time.monotonic()
+            deadline = started + timeout
+            m = Matcher(step.expect, captured)
             fed = 0
             while not m.is_complete():
                 r = ALIVE
@@ -115,6 +117,15 @@ def replay(t, link, default_timeout=2.0, resync=False):
                         % (_where(i, step), MAX_ANSWER, step.expect_text, show(buf, step.expect_text.startswith("hex"))),
                     )
                 buf += link.recv(left)
+            took = time.monotonic() - started
+            if step.earliest is not None and took < step.earliest:
+                return Outcome(
+                    "FAIL",
+                    i,
+                    "%s: the answer was complete after %gs, sooner than its window's %gs\n  expected: %s\n  actual:   %s"
+                    % (_where(i, step), took, step.earliest, step.expect_text, show(buf[:fed], step.expect_text.startswith("hex"))),
+                )
+            captured = m.captures() or captured
             buf = buf[fed:]
         buf += link.recv(TRAILING)
         if buf:

@@ -33,12 +33,34 @@ def bin_piece(width, signed, lo, hi):
     return ("bin", width, signed, lo, hi)
 
 
+def value_piece(base, relation, capture):
+    """An int or bin piece that is captured under a name, or held to a relation with a value
+    captured before (relation = (name, num, den, percent)), or both."""
+    return ("value", base, relation, capture)
+
+
+NAME = re.compile(r"^[a-z][a-z0-9_]{0,31}$")
+FACTOR = r"[1-9][0-9]{0,6}"
+
+
+def relation_band(relation, v):
+    """The values a relation accepts when its captured value is v: E = v * num / den exactly,
+    the band E -+ |E| * percent / 100 rounded outward to whole numbers (vectors/README.md 1.5)."""
+    _, num, den, pct = relation
+    e = v * num
+    d = den * 100
+    a, b = e * (100 - pct), e * (100 + pct)
+    lo, hi = (a, b) if e >= 0 else (b, a)
+    return lo // d, -((-hi) // d)
+
+
 class Step:
     def __init__(self, line):
         self.line = line  # the transcript line of the step's first directive
         self.pause = None  # seconds
         self.send = None  # bytes
         self.within = None  # seconds
+        self.earliest = None  # seconds: a timing window's lower bound
         self.expect = []  # pieces
         self.expect_text = ""  # as written, for reports
         self.has_expect = False
@@ -84,27 +106,64 @@ def _parse_range(text, lineno, lo_limit=-INT_LIMIT, hi_limit=INT_LIMIT):
     return lo, hi
 
 
+def _parse_relation(term, tol, lineno):
+    m = re.fullmatch(r"([a-z][a-z0-9_]*)(?:\*(%s))?(?:/(%s))?" % (FACTOR, FACTOR), term)
+    t = re.fullmatch(r"\+-(0|[1-9][0-9]{0,2})%", tol)
+    if not m or not t or not NAME.match(m.group(1)) or int(t.group(1)) > 100:
+        raise TranscriptError(lineno, "bad relation `%s %s` (NAME[*N][/D] +-P%%)" % (term, tol))
+    num, den = int(m.group(2) or 1), int(m.group(3) or 1)
+    if num > 1000000 or den > 1000000:
+        raise TranscriptError(lineno, "a relation's factors are 1..1000000")
+    return (m.group(1), num, den, int(t.group(1)))
+
+
 def parse_elision(body, lineno):
-    """The inside of `{...}` as a piece."""
-    words = body.split()
-    if not words:
+    """The inside of `{...}` as a piece: KIND [CONSTRAINT] [as NAME]."""
+    words = body.split(" ")
+    if not words or not words[0]:
         raise TranscriptError(lineno, "empty elision {}")
+    capture = None
+    if len(words) >= 3 and words[-2] == "as":
+        if not NAME.match(words[-1]):
+            raise TranscriptError(lineno, "bad capture name `%s`" % words[-1])
+        capture = words[-1]
+        words = words[:-2]
     name, rest = words[0], words[1:]
-    if name in ("line", "any", "byte") and not rest:
+    if name in ("line", "any", "byte") and not rest and capture is None:
         return {"line": LINE, "any": ANY, "byte": BYTE}[name]
-    if name == "int":
+    relation = None
+    if len(rest) == 2:
+        relation = _parse_relation(rest[0], rest[1], lineno)
+    if name == "int" and len(rest) != 2:
         if not rest:
-            return int_piece()
-        if len(rest) == 1:
-            return int_piece(*_parse_range(rest[0], lineno))
-    if name in ("u8", "i8", "u16", "i16") and len(rest) == 1:
+            base = int_piece()
+        elif len(rest) == 1:
+            base = int_piece(*_parse_range(rest[0], lineno))
+        else:
+            raise TranscriptError(lineno, "unknown elision {%s}" % body)
+    elif name == "int":
+        base = int_piece()
+    elif name in ("u8", "i8", "u16", "i16") and len(rest) <= 2:
         width = 1 if name.endswith("8") else 2
         signed = name[0] == "i"
         bits = width * 8
         lo_l, hi_l = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
-        lo, hi = _parse_range(rest[0], lineno, lo_l, hi_l)
-        return bin_piece(width, signed, lo, hi)
-    raise TranscriptError(lineno, "unknown elision {%s}" % body)
+        if len(rest) == 1:
+            lo, hi = _parse_range(rest[0], lineno, lo_l, hi_l)
+        elif rest or capture is not None:
+            lo, hi = lo_l, hi_l
+        else:
+            raise TranscriptError(lineno, "{%s} needs a range" % body)
+        base = bin_piece(width, signed, lo, hi)
+    else:
+        raise TranscriptError(lineno, "unknown elision {%s}" % body)
+    if relation is None and capture is None:
+        return base
+    return value_piece(base, relation, capture)
+
+
+def _is_int(piece):
+    return isinstance(piece, tuple) and (piece[0] == "int" or (piece[0] == "value" and piece[1][0] == "int"))
 
 
 ESCAPES = {"n": 10, "r": 13, "t": 9, "\\": 92}
@@ -205,6 +264,7 @@ def parse(data):
     seen_version = False
     in_header = True
     step = None
+    captured = set()  # names captured so far, for the relations of later pieces
     for lineno, raw in enumerate(text.split("\n"), start=1):
         if raw.endswith("\r"):
             raw = raw[:-1]
@@ -248,11 +308,29 @@ def parse(data):
                 step = Step(lineno)
             m = re.match(r"within +(\S+) *(.*)$", rest)
             if m:
-                step.within = parse_duration(m.group(1), lineno)
+                window = m.group(1)
+                if ".." in window:
+                    # A timing window: no sooner than its lower bound, no later than its upper.
+                    lower, upper = window.split("..", 1)
+                    step.earliest = parse_duration(lower, lineno)
+                    step.within = parse_duration(upper, lineno)
+                    if step.earliest > step.within:
+                        raise TranscriptError(lineno, "timing window `%s`: its lower bound is above its upper" % window)
+                else:
+                    step.within = parse_duration(window, lineno)
                 rest = m.group(2)
             step.expect = parse_segments(rest, lineno, allow_elisions=True)
-            if step.expect and step.expect[-1] in (LINE, ANY) or (step.expect and isinstance(step.expect[-1], tuple) and step.expect[-1][0] == "int"):
+            if step.expect and (step.expect[-1] in (LINE, ANY) or _is_int(step.expect[-1])):
                 raise TranscriptError(lineno, "an expect must not end with {int}, {line} or {any}")
+            for piece in step.expect:
+                if isinstance(piece, tuple) and piece[0] == "value":
+                    _, _, relation, capture = piece
+                    if relation is not None and relation[0] not in captured:
+                        raise TranscriptError(lineno, "`%s` is not captured before it is used" % relation[0])
+                    if capture is not None:
+                        if capture in captured:
+                            raise TranscriptError(lineno, "`%s` is captured twice" % capture)
+                        captured.add(capture)
             step.expect_text = rest
             step.has_expect = True
             t.steps.append(step)

@@ -81,6 +81,10 @@ class Runner(unittest.TestCase):
     def tearDown(self):
         os.unlink(self.path)
 
+    def write(self, text):
+        with open(self.path, "wb") as f:
+            f.write(text)
+
     def run_against(self, script, banner=b"", extra=()):
         hand = ScriptedHand(script, banner)
         out = io.StringIO()
@@ -122,6 +126,25 @@ class Runner(unittest.TestCase):
         code, out = self.run_against([(b"FGET DP\r", None)])
         self.assertEqual(code, 2, out)
         self.assertIn("ERROR", out)
+
+
+    def test_a_relation_carries_a_value_from_step_to_step(self):
+        related = TRANSCRIPT.replace(b"{int 0..2000}", b"{int 1..2000 as dp}").replace(
+            b"{u16 4950..5050}", b"{u16 dp*5 +-1%}"
+        )
+        self.write(related)
+        code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)])
+        self.assertEqual(code, 0, out)
+        # DP 1100: the block must read 5445..5555, and 5000 parts at its high byte.
+        code, out = self.run_against([(b"FGET DP\r", ANSWER.replace(b"1000", b"1100")), (b"A", BLOCK)])
+        self.assertEqual(code, 1, out)
+        self.assertIn("step 2", out)
+
+    def test_an_answer_sooner_than_its_window_fails(self):
+        self.write(TRANSCRIPT.replace(b'expect "FGET', b'expect within 300ms..2s "FGET'))
+        code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)])
+        self.assertEqual(code, 1, out)
+        self.assertIn("sooner than its window", out)
 
 
 if __name__ == "__main__":

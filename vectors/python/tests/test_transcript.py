@@ -95,3 +95,69 @@ class Transcripts(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+RELATIONS = b"""gcl-transcript 1
+id: relations
+title: captures, relations and a timing window
+clause: seed: Parameter LCVC
+level: MUST
+profile: seed
+
+send "12FGET P\\r"
+expect "12FGET P\\n\\r{int 1..17800 as p1} {int p1*11/2 +-15%}\\n\\r=> "
+
+send hex 41
+expect hex 2A {i8 1..127 as v1} {i8 v1/2 +-25% as v2} {u16 p1 +-0%}
+
+send "SM 4000\\r"
+expect within 5s..30s "SM 4000\\n\\rERR 16\\n\\r=> "
+"""
+
+
+class Relations(unittest.TestCase):
+    def test_bands_round_outward(self):
+        from gcl_vectors.transcript import relation_band
+
+        self.assertEqual(relation_band(("p1", 11, 2, 15), 100), (467, 633))
+        self.assertEqual(relation_band(("v", 1, 2, 25), -80), (-50, -30))
+
+    def test_captures_bound_later_values(self):
+        from gcl_vectors.matcher import Matcher
+
+        t = parse(RELATIONS)
+        e0, e1 = t.steps[0].expect, t.steps[1].expect
+        self.assertEqual(match_prefix(e0, b"12FGET P\n\r100 633\n\r=> ")[0], COMPLETE)
+        self.assertEqual(match_prefix(e0, b"12FGET P\n\r100 467\n\r=> ")[0], COMPLETE)
+        self.assertEqual(match_prefix(e0, b"12FGET P\n\r100 634\n\r=> ")[0], DEAD)
+        self.assertEqual(match_prefix(e0, b"12FGET P\n\r0 0\n\r=> ")[0], DEAD)
+        self.assertEqual(match_prefix(e0, b"12FGET P\n\r100 9"), (DEAD, 14))
+        m = Matcher(e0)
+        for b in b"12FGET P\n\r100 550\n\r=> ":
+            m.feed(b)
+        known = m.captures()
+        self.assertEqual(known, {"p1": 100})
+        m = Matcher(e1, known)
+        for b in bytes([0x2A, 80, 40, 0, 100]):
+            r = m.feed(b)
+        self.assertEqual(r, COMPLETE)
+        self.assertEqual(m.captures(), {"p1": 100, "v1": 80, "v2": 40})
+        self.assertEqual(match_prefix(e1, bytes([0x2A, 80, 51, 0, 100]), known)[0], DEAD)
+        self.assertEqual(match_prefix(e1, bytes([0x2A, 80, 40, 0, 101]), known)[0], DEAD)
+        # Without the earlier capture, the relation to p1 matches nothing.
+        self.assertEqual(match_prefix(e1, bytes([0x2A, 80, 40, 0, 100]))[0], DEAD)
+        self.assertEqual((t.steps[2].earliest, t.steps[2].within), (5.0, 30.0))
+
+    def test_capture_errors(self):
+        for old, new in [
+            (b"{int p1*11/2 +-15%}", b"{int q*11/2 +-15%}"),
+            (b"as v2", b"as p1"),
+            (b"v1/2 +-25%", b"v1/0 +-25%"),
+            (b"v1/2 +-25%", b"v1/2 +-101%"),
+            (b"v1/2 +-25%", b"2*v1 +-25%"),
+            (b"{i8 1..127 as v1}", b"{line as v1}"),
+            (b"within 5s..30s", b"within 30s..5s"),
+        ]:
+            self.assertIn(old, RELATIONS)
+            with self.assertRaises(TranscriptError, msg=new):
+                parse(RELATIONS.replace(old, new))

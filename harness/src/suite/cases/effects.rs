@@ -61,8 +61,9 @@ impl Gen {
     }
 
     /// Parameters whose effect is how fast a motor moves or how long it waits: seen through
-    /// where a motor is when a ^C lands, or whether its command is still running then. These
-    /// need a hand whose motion takes time (`abort-timing`).
+    /// where one motor is against another when a ^C lands (a relation between the two, so
+    /// the velocity units do not matter), or how soon a command ends. These need a hand whose
+    /// motion takes time (`abort-timing`).
     pub(super) fn timed_effects(&mut self) {
         // The ^C lands between `pause` and `pause + slack` ms after the command: the host's
         // pause, plus the echo and the recorder's quiet time.
@@ -75,43 +76,19 @@ impl Gen {
             let from = if kind == CommandKind::Close { 0 } else { 12000 };
             let to = if kind == CommandKind::Close { ct } else { 0 };
             let pause = 150u64;
-            let range = |v: i64| {
-                let (a, b) = (self.reach(from, to, accel, v, pause), self.reach(from, to, accel, v, pause + slack));
-                (a.min(b) - 2, a.max(b) + 2)
-            };
-            let (r1, r2) = (range(slow), range(def));
-            if r1.1 >= r2.0 && r2.1 >= r1.0 {
-                continue;
-            }
+            let at =
+                |v: i64| -> Vec<i64> { (pause..=pause + slack).map(|t| self.reach(from, to, accel, v, t)).collect() };
+            let pairs: Vec<(i64, i64)> = at(slow).into_iter().zip(at(def)).collect();
+            let ignored: Vec<(i64, i64)> = at(def).into_iter().map(|p| (p, p)).collect();
             let word = if kind == CommandKind::Close { "C" } else { "O" };
-            let mut k = self
-                .case(
-                    format!("param-{}-effect", slug(name)),
-                    format!("{name} sets how fast {word} moves: with {name} {slow} motor 1 is behind motor 2 ({name} {def}) when a ^C lands"),
-                )
-                .src(&format!("Parameter {name}"))
-                .src(&format!("Command {word}"))
-                .decision("seed-abort").decision("bh8-abort-motion")
-                .decision("seed-motion-model").decision("bh8-velocity-units")
-                .requires(Requirement::AbortTiming)
-                .note(format!(
-                    "The ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
-                    pause + slack,
-                    r1.0,
-                    r1.1,
-                    r2.0,
-                    r2.1
-                ))
-                .preamble(true);
-            if from > 0 {
-                k = k.line(&format!("12M {from}"));
-            }
-            let k = k.line(&format!("1FSET {name} {slow}")).nowait(&format!("12{word}")).pause_ms(pause).abort().get(
-                "12",
-                &["P"],
-                Some([r1, r2, (0, 0), (0, 0)]),
+            let why = format!(
+                "motor 1 moves at {name} {slow}, motor 2 at {name} {def}; where each is when the ^C lands {pause}..{} ms \
+                 after {word}, by the model's motion trapezoid",
+                pause + slack
             );
-            self.add(k);
+            let Some((k, rel)) = self.position_ratio(name, word, from, to, pairs, &ignored, why) else { continue };
+            let k = k.line(&format!("1FSET {name} {slow}")).nowait(&format!("12{word}")).pause_ms(pause).abort();
+            self.add(rel.read(k));
         }
 
         // ACCEL: where the ramp up takes long enough to see (the seed's units).
@@ -120,70 +97,137 @@ impl Gen {
             let speed = self.param("MCV").map_or(0, |m| m.max);
             let pause = 150u64;
             let slack = 100u64;
-            let range = |a: i64| {
-                let (lo, hi) = (self.reach(0, ct, a, speed, pause), self.reach(0, ct, a, speed, pause + slack));
-                (lo - 2, hi + 2)
-            };
-            let (r1, r2) = (range(fast), range(accel));
-            if r1.0 > r2.1 && r1.1 < ct - self.mpe(1) {
-                let k = self
-                    .case(
-                        "param-accel-effect",
-                        format!("ACCEL sets how fast a move speeds up: with ACCEL {fast} motor 1 is ahead of motor 2 (ACCEL {accel}) when a ^C lands"),
-                    )
-                    .src("Parameter ACCEL")
-                    .src("Command C")
-                    .decision("seed-abort").decision("bh8-abort-motion")
-                    .decision("seed-motion-model").decision("bh8-velocity-units")
-                    .requires(Requirement::AbortTiming)
-                    .note(format!(
-                        "Both motors close at MCV {speed}; the ^C lands {pause}..{} ms after the command: motor 1 is then within {}..{}, motor 2 within {}..{}.",
-                        pause + slack,
-                        r1.0,
-                        r1.1,
-                        r2.0,
-                        r2.1
-                    ))
-                    .preamble(true)
+            let at = |a: i64| -> Vec<i64> { (pause..=pause + slack).map(|t| self.reach(0, ct, a, speed, t)).collect() };
+            let pairs: Vec<(i64, i64)> = at(fast).into_iter().zip(at(accel)).collect();
+            let ignored: Vec<(i64, i64)> = at(accel).into_iter().map(|p| (p, p)).collect();
+            let still_moving = pairs.iter().all(|(a, _)| *a < ct - self.mpe(1));
+            let why = format!(
+                "both motors close at MCV {speed}, motor 1 with ACCEL {fast}, motor 2 with ACCEL {accel}; where each is \
+                 when the ^C lands {pause}..{} ms after C, by the model's motion trapezoid",
+                pause + slack
+            );
+            if still_moving && let Some((k, rel)) = self.position_ratio("ACCEL", "C", 0, ct, pairs, &ignored, why) {
+                let k = k
                     .line(&format!("12FSET MCV {speed}"))
                     .line(&format!("1FSET ACCEL {fast}"))
                     .nowait("12C")
                     .pause_ms(pause)
-                    .abort()
-                    .get("12", &["P"], Some([r1, r2, (0, 0), (0, 0)]));
-                self.add(k);
+                    .abort();
+                self.add(rel.read(k));
             }
         }
 
         // TSTOP: a motor stalled at its joint stop keeps driving for TSTOP ms. With TSTOP 5000
-        // the move is still running a second after the stall began, so the ^C stops it;
-        // with the factory TSTOP it would long have ended with 16.
+        // a move that stalls at the joint stop cannot end sooner than 5 s after it starts,
+        // however fast the motor got there; with the factory TSTOP it ends long before.
         let l4 = self.limit(4);
         let goal = l4 + 850;
+        let tstop = 5000u64;
         let (a4, v4) = (self.default("ACCEL", 4), self.default("MCV", 4));
         let mut t_stop = 0u64;
         while t_stop < 60_000 && self.reach(0, goal, a4, v4, t_stop) < l4 {
             t_stop += 10;
         }
-        let tstop = 5000;
-        let pause = t_stop + 1000;
+        let factory = u64::try_from(self.default("TSTOP", 4)).unwrap_or(0);
+        if factory >= tstop {
+            return;
+        }
         let k = self
             .case(
                 "param-tstop-effect",
-                format!("TSTOP sets how long a stalled motor keeps driving: with TSTOP {tstop} a move stalled at the joint stop is still running when a ^C lands 1 s later"),
+                format!("TSTOP sets how long a stalled motor keeps driving: with TSTOP {tstop} a move stalled at the joint stop ends no sooner than {tstop} ms after it starts"),
             )
             .src("Parameter TSTOP")
             .src("Command M")
-            .decision("seed-abort").decision("bh8-abort-motion")
             .decision("seed-motion-model").decision("bh8-position-bounds")
             .requires(Requirement::AbortTiming)
-            .note(format!("The spread reaches its joint stop ({l4}) about {t_stop} ms after SM {goal} starts."))
             .preamble(true)
             .line(&format!("SFSET TSTOP {tstop}"))
-            .nowait(&format!("SM {goal}"))
-            .pause_ms(pause)
-            .abort()
-            .get("S", &["P"], Some([(l4 - self.mpe(4), l4); 4]));
+            .line(&format!("SM {goal}"))
+            .no_sooner_than(
+                Duration::from_millis(tstop),
+                format!(
+                    "SM {goal} stalls at the joint stop ({l4}) and keeps driving TSTOP {tstop} ms before it ends, so its \
+                     answer comes no sooner than {tstop} ms after the line, whatever the motor's speed (the model reaches \
+                     the stop after about {t_stop} ms; with the factory TSTOP {factory} the move would end after about {} ms)",
+                    t_stop + factory
+                ),
+            );
         self.add(k);
+    }
+
+    /// A case that sets `name` on motor 1 only and shows where motor 1 is against motor 2 when
+    /// a ^C lands: `pairs` are the model's (motor 1, motor 2) positions over the landing
+    /// window; `ignored` the pairs of a hand that ignores the parameter, which the relation
+    /// must refuse (else no case: the effect would not show).
+    #[allow(clippy::too_many_arguments)]
+    fn position_ratio(
+        &self,
+        name: &str,
+        word: &str,
+        from: i64,
+        to: i64,
+        pairs: Vec<(i64, i64)>,
+        ignored: &[(i64, i64)],
+        why: String,
+    ) -> Option<(CaseB, PositionRatio)> {
+        // The widest margin, up to 5 points, that still refuses a hand ignoring the parameter.
+        let refuses = |rel: &Relation| {
+            ignored.iter().all(|(a, b)| {
+                let (lo, hi) = rel.band(*a);
+                !(lo..=hi).contains(b)
+            })
+        };
+        let (margin, rel) = (0..=5u32)
+            .rev()
+            .filter_map(|m| super::super::build::derive_relation("p1", &pairs, m).map(|r| (m, r)))
+            .find(|(_, r)| refuses(r))?;
+        let (lo, hi) = (from.min(to) + self.mpe(1), from.max(to) - self.mpe(1));
+        if pairs.iter().any(|(a, _)| !(lo < *a && *a < hi)) {
+            return None;
+        }
+        let (r_lo, r_hi) = pairs.iter().fold((f64::INFINITY, 0.0f64), |(l, h), (a, b)| {
+            let r = *b as f64 / *a as f64;
+            (l.min(r), h.max(r))
+        });
+        let evidence = format!(
+            "{why}, motor 2's position is {r_lo:.2}..{r_hi:.2} times motor 1's ({} model pairs); the relation is \
+             the midpoint of those ratios with the least tolerance that holds them all, plus {margin} points (the most, \
+             up to 5, that still refuses a hand that ignores {name}: both motors alike); motor 1 must be off its start and short of its goal \
+             (more than MPE from each)",
+            pairs.len()
+        );
+        let k = self
+            .case(
+                format!("param-{}-effect", slug(name)),
+                format!("{name} sets how fast {word} moves: with {name} set on motor 1 alone, motor 2 is where the model's ratio puts it against motor 1 when a ^C lands"),
+            )
+            .src(&format!("Parameter {name}"))
+            .src(&format!("Command {word}"))
+            .decision("seed-abort")
+            .decision("bh8-abort-motion")
+            .decision("seed-motion-model")
+            .requires(Requirement::AbortTiming)
+            .preamble(true);
+        let k = if from > 0 { k.line(&format!("12M {from}")) } else { k };
+        Some((k, PositionRatio { rel, evidence, pairs, anchor: (lo + 1, hi - 1) }))
+    }
+}
+
+/// Where motor 2 is against motor 1, as [`Gen::position_ratio`] derived it from the model.
+struct PositionRatio {
+    rel: Relation,
+    evidence: String,
+    pairs: Vec<(i64, i64)>,
+    /// Where motor 1 may be: off its start and short of its goal.
+    anchor: Range,
+}
+
+impl PositionRatio {
+    /// Reads both positions: motor 1's captured as `p1`, motor 2's held to the relation.
+    fn read(self, k: CaseB) -> CaseB {
+        k.get("12", &["P"], Some([self.anchor, (0, 0), (0, 0), (0, 0)]))
+            .capture(Target::Value { line: 0, token: 0 }, "p1")
+            .relate(Target::Value { line: 0, token: 1 }, self.rel, self.evidence, self.pairs)
     }
 }

@@ -15,7 +15,8 @@ use gcl_model::realtime::lfdp_step;
 use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, Scope};
 use gcl_model::{Profile, StatusBits};
 
-use super::build::{CaseB, CaseDef, FieldRule, Range, Shape};
+use super::build::{CaseB, CaseDef, FieldRule, Range, Shape, Target};
+use gcl_transcript::Relation;
 
 mod abort;
 mod commands;
@@ -151,19 +152,27 @@ fn tol(v: i64) -> (i64, i64) {
     (((v as f64) * 0.75).floor() as i64, ((v as f64) * 1.25).ceil() as i64)
 }
 
-/// Motors 1 and 2 in the loop, both sent `datum`; after a pause their feedback velocities read
-/// about `v1` and `v2`.
-fn two_motor_velocities(k: CaseB, datum: i64, v1: i64, v2: i64) -> CaseB {
+/// The least feedback velocity a relation between two motors' velocities is anchored on:
+/// from 4 on, the truncation of either value stays inside the 25 % tolerance, and a hand that
+/// ignores the parameter (both motors alike) falls outside a ratio of 2 or 1/2.
+const LEAST_ANCHOR: i64 = 4;
+
+/// Motors 1 and 2 in the loop, both sent `datum`; after a pause motor 1's feedback velocity
+/// (about `v1` in the model's units) is captured as `v1`, and motor 2's is held to `v1` times
+/// `num / den` within 25 %: the ratio is the clause, the units are not.
+fn two_motor_ratio(k: CaseB, datum: i64, (v1, v2): (i64, i64), (num, den): (i64, i64), why: &str) -> CaseB {
+    let motor = |m: u8| Target::Field { motor: Some(m), name: "LFV" };
+    let evidence = format!(
+        "{why}, so motor 2 reads motor 1's velocity times {num}/{den}, whatever the hand's velocity units \
+         (the model reads {v1} and {v2}); velocities during motion are compared with 25 % tolerance, and \
+         motor 1 must read {LEAST_ANCHOR}..127, the sign of the datum, large enough for the ratio to show"
+    );
     k.line("12LOOP")
         .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
         .pause_ms(50)
-        .block(
-            b"A",
-            Shape::Block(vec![
-                FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v1)) },
-                FieldRule { motor: Some(2), name: "LFV", range: Some(tol(v2)) },
-            ]),
-        )
+        .block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFV", range: Some((LEAST_ANCHOR, 127)) }]))
+        .capture(motor(1), "v1")
+        .relate(motor(2), Relation::new("v1", num, den, 25), evidence, vec![(v1, v2)])
         .abort()
 }
 

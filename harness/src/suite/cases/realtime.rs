@@ -127,35 +127,44 @@ impl Gen {
                 3,
             );
         }
-        self.lfdp_case(
-            "rt-lfdpc-scaling",
-            "LFDP is the movement divided by LFDPC: 1000 counts with LFDPC 10 read 100",
-            10,
-            0,
-            1000,
-            false,
-            2,
-        );
+        self.lfdpc_scaling();
 
-        // LFVC: the feedback velocity is the velocity divided by LFVC.
-        let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
-        let (datum, lcvc) = self.fit_lfv(40, lcvc, 1, 2);
-        let lfv = self.lfv_at(datum, lcvc, 2);
+        // LFVC divides the feedback velocity: two motors at one velocity, LFVC 2 on motor 1.
+        let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
+        let (v1, v2) = (self.lfv_at(datum, lcvc, 2), self.lfv_at(datum, lcvc, 1));
         let k = self
             .rt_case(
                 "rt-lfvc-scaling",
+                "LFV is the velocity divided by LFVC: at one velocity, LFVC 1 reads twice what LFVC 2 reads",
+                "12",
+                &["LCV", "LFV"],
+            )
+            .src("Parameter LFVC")
+            .line(&format!("12FSET LCVC {lcvc}"))
+            .line("1FSET LFVC 2")
+            .line("2FSET LFVC 1");
+        self.add(two_motor_ratio(k, datum, (v1, v2), (2, 1), "motor 1 divides by LFVC 2, motor 2 by 1"));
+
+        // The units of the control and feedback velocities: one datum, one LCVC, an absolute
+        // band. The only case that rests on them; the scaling cases above hold ratios.
+        let lcvc = ((1i64 << self.p.hand.lcv_fraction_bits) / 4).clamp(1, 255);
+        let (datum, lcvc) = self.fit_lfv(40, lcvc, 1, 1);
+        let lfv = self.lfv_at(datum, lcvc, 1);
+        let k = self
+            .rt_case(
+                "rt-velocity-units",
                 &format!(
-                    "LFV is the velocity divided by LFVC: LCV {datum} x LCVC {lcvc} reads about {lfv} with LFVC 2"
+                    "The velocity units: LCV {datum} x LCVC {lcvc} runs a motor at a velocity LFV reads as about {lfv}"
                 ),
                 "1",
                 &["LCV", "LFV"],
             )
-            .src("Parameter LFVC")
             .src("Parameter LCVC")
+            .src("Parameter LFV")
             .decision("seed-rt-velocity")
             .decision("bh8-velocity-units")
             .note("Velocities during motion are compared with 25% tolerance.")
-            .line(&format!("1FSET LCVC {lcvc} LFVC 2"))
+            .line(&format!("1FSET LCVC {lcvc}"))
             .line("1LOOP")
             .block(&[b'C', datum as u8], Shape::Block(Vec::new()))
             .pause_ms(50)
@@ -201,40 +210,47 @@ impl Gen {
         // LFV x LFVC is the velocity: two motors at one velocity, LFVC 1 and 2.
         let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
         let (v1, v2) = (self.lfv_at(datum, lcvc, 1), self.lfv_at(datum, lcvc, 2));
-        let mut k = self
+        let k = self
             .rt_case(
                 "rt-lfv-formula",
-                &format!("LFV x LFVC is the velocity: two motors at one velocity read about {v1} with LFVC 1 and {v2} with LFVC 2"),
+                "LFV x LFVC is the velocity: at one velocity, LFVC 2 reads half what LFVC 1 reads",
                 "12",
                 &["LCV", "LFV"],
             )
             .src("Parameter LFV")
-            .src("Parameter LFVC");
-        k = k.decision("seed-lfv-formula").decision("seed-rt-velocity").decision("bh8-velocity-units");
-        let k = k
-            .note("Velocities during motion are compared with 25% tolerance.")
+            .src("Parameter LFVC")
+            .decision("seed-lfv-formula")
             .line(&format!("12FSET LCVC {lcvc}"))
             .line("1FSET LFVC 1")
             .line("2FSET LFVC 2");
-        self.add(two_motor_velocities(k, datum, v1, v2));
+        self.add(two_motor_ratio(
+            k,
+            datum,
+            (v1, v2),
+            (1, 2),
+            "LFV x LFVC is one velocity: motor 1 has LFVC 1, motor 2 LFVC 2",
+        ));
 
         // LCVC multiplies the datum: two motors at one datum, LCVC twice as large on motor 1.
         let (v1, v2) = (self.lfv_at(datum, 2 * lcvc, 1), self.lfv_at(datum, lcvc, 1));
-        let mut k = self
+        let k = self
             .rt_case(
                 "rt-lcvc-scaling",
-                &format!("The control velocity is LCV x LCVC: one datum reads about {v1} with LCVC {} and {v2} with LCVC {lcvc}", 2 * lcvc),
+                "The control velocity is LCV x LCVC: one datum with twice the LCVC runs twice as fast",
                 "12",
                 &["LCV", "LFV"],
             )
             .src("Parameter LCVC")
-            .src("Parameter LCV");
-        k = k.decision("seed-rt-velocity").decision("bh8-velocity-units");
-        let k = k
-            .note("Velocities during motion are compared with 25% tolerance.")
+            .src("Parameter LCV")
             .line(&format!("1FSET LCVC {}", 2 * lcvc))
             .line(&format!("2FSET LCVC {lcvc}"));
-        self.add(two_motor_velocities(k, datum, v1, v2));
+        self.add(two_motor_ratio(
+            k,
+            datum,
+            (v1, v2),
+            (1, 2),
+            "the control velocity is LCV x LCVC: motor 1 has LCVC twice motor 2's",
+        ));
 
         // With LCPG 1 the gain starts at 0: a velocity alone does not move the motor. A motor
         // without LCV keeps its control velocity of 0 whatever its gain.
@@ -243,8 +259,9 @@ impl Gen {
         let still = |g: &Gen| -> Vec<FieldRule> {
             (1..=2u8).map(|m| FieldRule { motor: Some(m), name: "LFAP", range: Some((0, g.mpe(m))) }).collect()
         };
+        // Moving is the clause, not how fast: the sign of the datum, in whatever units.
         let moving = vec![
-            FieldRule { motor: Some(1), name: "LFV", range: Some(tol(v)) },
+            FieldRule { motor: Some(1), name: "LFV", range: Some((1, 127)) },
             FieldRule { motor: Some(1), name: "LFAP", range: Some((0, finger)) },
             FieldRule { motor: Some(2), name: "LFAP", range: Some((0, self.mpe(2))) },
         ];
@@ -260,7 +277,7 @@ impl Gen {
         let k = k
             .note(format!(
                 "Control blocks: motor 1 LCV then LCPG, motor 2 LCPG. The answer to a C block shows the state before \
-                 its data. Once a gain arrives motor 1 runs at about LFV {v} (25% tolerance)."
+                 its data. Once a gain arrives motor 1 runs: its LFV reads the datum's sign (1..127; the model reads about {v})."
             ))
             .line(&format!("1FSET LCV 1 LCVC {lcvc}"))
             .line("12LOOP")
@@ -341,9 +358,7 @@ impl Gen {
                 .src("Parameter LFVC")
                 .src("Parameter LFDPC")
                 .decision("bh8-coefficient-range")
-                .note(format!(
-                    "MPE is {mpe} so that LFDP after the move is narrow; velocities are compared with 25% tolerance."
-                ))
+                .note(format!("MPE is {mpe} so that LFDP after the move is narrow."))
                 .line("1FSET LFVC 0 LFDPC 0")
                 .line("2FSET LFVC 1 LFDPC 1")
                 .line(&format!("12FSET LCVC {lcvc} MPE {mpe}"))
@@ -354,15 +369,98 @@ impl Gen {
             for r in &lfdp {
                 k = k.block(b"A", Shape::Block(both("LFDP", Some(*r))));
             }
-            let mut moving = both("LFV", Some(tol(v)));
+            let mut moving = vec![FieldRule { motor: Some(1), name: "LFV", range: Some((LEAST_ANCHOR, 127)) }];
             moving.extend(both("LFDP", Some((0, 127))));
+            let lfv = |m: u8| Target::Field { motor: Some(m), name: "LFV" };
+            let evidence = format!(
+                "LFVC 0 acts as 1, so motor 1 (LFVC 0) reads motor 2's (LFVC 1) velocity, whatever the velocity units \
+                 (the model reads {v} on both); velocities during motion are compared with 25 % tolerance"
+            );
             let k = k
                 .block(&[b'C', datum as u8, datum as u8], Shape::Block(Vec::new()))
                 .pause_ms(50)
                 .block(b"A", Shape::Block(moving))
+                .capture(lfv(1), "v1")
+                .relate(lfv(2), Relation::new("v1", 1, 1, 25), evidence, vec![(v, v)])
                 .abort();
             self.add(k);
         }
+    }
+
+    /// LFDPC divides the movement LFDP reports: motors 1 and 2 run at one control velocity
+    /// in the loop, motor 2 with twice motor 1's LFDPC, so between two feedback blocks motor 2's
+    /// LFDP is half motor 1's. The ratio is the clause. The relation is read on the second of
+    /// two blocks, whose LFDP counts from the first: where LFDP counts from before any block
+    /// (the last reported position, an open point) does not matter, nor do the velocity units
+    /// or how long the host's pause really is.
+    fn lfdpc_scaling(&mut self) {
+        let (datum, lcvc) = self.fit_lfv(40, self.brisk_lcvc(), 2, 1);
+        let h = &self.p.hand;
+        let counts_per_ms =
+            gcl_model::realtime::control_velocity(datum, lcvc, h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms;
+        let pause = 50u64;
+        // The movement between the blocks in the model's units, and an LFDPC that reads it as
+        // about 40.
+        let m0 = (counts_per_ms * pause as f64).round() as i64;
+        let coeff = (m0 / 40).clamp(1, 127);
+        let least = LEAST_ANCHOR * coeff;
+        let (lo_m, hi_m) = ((m0 / 2).max(least), (2 * m0).min(127 * coeff));
+        // Every movement from half to twice the model's, and every rest a truncation leaves
+        // behind (LFDP carries it: the reported position advances by LFDP x LFDPC).
+        let mut pairs: Vec<(i64, i64)> = Vec::new();
+        for m in lo_m..=hi_m {
+            for r1 in 0..coeff {
+                for r2 in 0..2 * coeff {
+                    let pair = ((m + r1) / coeff, (m + r2) / (2 * coeff));
+                    if !pairs.contains(&pair) {
+                        pairs.push(pair);
+                    }
+                }
+            }
+        }
+        let Some(rel) = super::super::build::fit_tolerance("d1", 1, 2, &pairs, 2) else { return };
+        let evidence = format!(
+            "both motors run at one control velocity (LCV {datum} x LCVC {lcvc}, about {m0} counts in the model \
+             between the two blocks); motor 1 divides the movement by LFDPC {coeff}, motor 2 by {}, so motor 2's \
+             LFDP is half motor 1's; the tolerance is the least that holds the model's LFDP arithmetic (truncation, \
+             with the rest carried) over every movement of {lo_m}..{hi_m} counts ({} pairs), plus 2 points; motor 1 \
+             must read {LEAST_ANCHOR}..127, a movement large enough for the ratio to show",
+            2 * coeff,
+            pairs.len()
+        );
+        let lfdp = |m: u8| Target::Field { motor: Some(m), name: "LFDP" };
+        let any = |name: &'static str| -> Vec<FieldRule> {
+            (1..=2u8).map(|m| FieldRule { motor: Some(m), name, range: Some((-128, 127)) }).collect()
+        };
+        let k = self
+            .rt_case(
+                "rt-lfdpc-scaling",
+                &format!(
+                    "LFDP is the movement divided by LFDPC: at one velocity, LFDPC {} reads half what LFDPC {coeff} reads",
+                    2 * coeff
+                ),
+                "12",
+                &["LCV", "LFDP"],
+            )
+            .src("Parameter LFDPC")
+            // The movement between the blocks is made over the host's pause: a hand whose
+            // motions take no time moves too little for the ratio to show.
+            .requires(Requirement::AbortTiming)
+            .line(&format!("12FSET LCVC {lcvc}"))
+            .line(&format!("1FSET LFDPC {coeff}"))
+            .line(&format!("2FSET LFDPC {}", 2 * coeff))
+            .line("12LOOP")
+            .comment("both motors at one velocity; the first feedback counts from wherever LFDP starts")
+            .block(&[b'C', datum as u8, datum as u8], Shape::Block(any("LFDP")))
+            .pause_ms(pause)
+            .block(b"A", Shape::Block(any("LFDP")))
+            .comment("the movement since the block before")
+            .pause_ms(pause)
+            .block(b"A", Shape::Block(vec![FieldRule { motor: Some(1), name: "LFDP", range: Some((LEAST_ANCHOR, 127)) }]))
+            .capture(lfdp(1), "d1")
+            .relate(lfdp(2), rel, evidence, pairs)
+            .abort();
+        self.add(k);
     }
 
     #[allow(clippy::too_many_arguments)]
