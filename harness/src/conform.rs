@@ -693,14 +693,16 @@ pub fn run_with_events(
                 r.transcript = Some(truncate_note(&text, MAX_SHOWN * 4));
             }
         }
-        if r.verdict.fails_run() && !fresh_per_case && shared.is_some() {
+        // Drained by how the case ended, not by its verdict: a known failure (XFAIL) stopped
+        // reading mid-answer as a FAIL does, and leaves the link as a FAIL would.
+        if !outcome.is_pass() && !fresh_per_case && shared.is_some() {
             // Whatever the failing case left pending must not be blamed on the next one; a
             // hand that does not stop sending is reopened.
             if let Some(l) = shared.as_deref_mut() {
                 // A timed-out step has just waited through a quiet spell; others wait for one.
-                let quiet = Duration::from_millis(match r.verdict {
+                let quiet = Duration::from_millis(match outcome {
                     _ if flooded => 100,
-                    Verdict::Timeout => 20,
+                    ReplayOutcome::Timeout(_) => 20,
                     _ => 50,
                 });
                 match discard(l, quiet, AFTER_FAILURE_DRAIN) {
@@ -716,7 +718,7 @@ pub fn run_with_events(
                 }
             }
         }
-        if r.verdict == Verdict::Pass {
+        if outcome.is_pass() {
             unquiet_in_a_row = 0;
         }
         if r.verdict.fails_run() {
