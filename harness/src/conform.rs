@@ -121,6 +121,11 @@ impl LevelFilter {
         }
     }
 
+    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
+    pub fn from_name(name: &str) -> Option<LevelFilter> {
+        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
+    }
+
     /// The lower-case name.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -641,20 +646,21 @@ pub fn run_with_events(
                 r.verdict = Verdict::Fail;
                 r.message = Some(outcome.summary());
                 let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                r.diff = Some(diff_of(m.step, m.offset, &m.expected, &m.actual, got, m.form, &m.expected_full));
+                r.diff = Some(diff_of(m.step, m.offset, &m.expected, &m.actual, got, m.form, &golden_of(case, m.step)));
             }
             ReplayOutcome::Timeout(t) => {
                 r.verdict = Verdict::Timeout;
                 r.message = Some(outcome.summary());
                 let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                r.diff = Some(diff_of(t.step, t.offset, &t.expected, "", got, t.form, &t.expected_full));
+                r.diff = Some(diff_of(t.step, t.offset, &t.expected, "", got, t.form, &golden_of(case, t.step)));
             }
             ReplayOutcome::Flooded(f) => {
                 r.verdict = Verdict::Fail;
                 r.message = Some(outcome.summary());
                 let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
                 let actual = gcl_transcript::escape_text(got);
-                r.diff = Some(diff_of(f.step, 0, &f.expected_full, &actual, &[], Form::Text, &f.expected_full));
+                let golden = golden_of(case, f.step);
+                r.diff = Some(diff_of(f.step, 0, &golden, &actual, &[], Form::Text, &golden));
                 flooded = true;
             }
             ReplayOutcome::Disconnected(_) => {
@@ -823,6 +829,16 @@ pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
         skip_decisions: opts.known.skipped_decisions(&opts.profile.id).map(|d| d.id.clone()).collect(),
         partial: false,
     }
+}
+
+/// A step's whole golden expectation in the form of a diff's `expected` and `actual`: escaped
+/// text or hex tokens, elisions in braces, no quotes.
+fn golden_of(case: &Case, step: usize) -> String {
+    case.transcript
+        .steps
+        .get(step)
+        .map(|s| gcl_transcript::matcher::Matcher::new(&s.expect).expected_rest())
+        .unwrap_or_default()
 }
 
 /// A report's diff: 1-based step, the agreed answer before the parting byte for context, the

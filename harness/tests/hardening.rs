@@ -169,8 +169,22 @@ fn certify_refuses_selections_unless_partial_and_says_partial() {
         let r = gcl(&args);
         assert_eq!(r.code, Some(2), "{extra:?}: {}", r.stdout);
         assert!(r.stderr.contains(extra[0]) && r.stderr.contains("--partial"), "{}", r.stderr);
+        // One option changes; several change (issue 21 item 4).
+        assert!(r.stderr.contains(&format!("{} changes what a certificate covers", extra[0])), "{}", r.stderr);
         assert!(!out.exists(), "nothing written");
     }
+    let r = gcl(&[
+        "certify",
+        "--target",
+        "sim:seed",
+        "--only",
+        "framing-*",
+        "--fault",
+        "crlf",
+        "--out",
+        s(&dir.path().join("x")),
+    ]);
+    assert!(r.stderr.contains("--only, --fault change what a certificate covers"), "{}", r.stderr);
     // Everything skipped: not a PASS, even when partial.
     let none = dir.path().join("none");
     let r = gcl(&["certify", "--target", "sim:seed", "--partial", "--skip", "*", "--out", s(&none)]);

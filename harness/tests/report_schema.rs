@@ -67,6 +67,15 @@ fn the_schema_rejects_what_it_should() {
     };
     assert!(v.is_valid(&report(good)));
     assert!(!v.is_valid(&report(bad)), "an unknown verdict is refused");
+    // The golden is in the form of expected and actual, never a quoted string (issue 21 item 4).
+    let diff =
+        |golden: &str| serde_json::json!({"step": 1, "offset": 0, "expected": "x", "actual": "y", "golden": golden});
+    let mut failed = serde_json::to_value(sample_case()).unwrap();
+    failed["verdict"] = "FAIL".into();
+    failed["diff"] = diff("FGET DP\\n\\r{int 990..1010}");
+    assert!(v.is_valid(&report(failed.clone())));
+    failed["diff"] = diff("\"FGET DP\\n\\r{int 990..1010}\"");
+    assert!(!v.is_valid(&report(failed)), "a quoted golden is refused");
 }
 
 fn sample_case() -> report::CaseResult {

@@ -128,8 +128,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
         if !changed.is_empty() {
             anyhow::bail!(
-                "{} change what a certificate covers; give --partial to write a certificate that says it is partial",
-                changed.join(", ")
+                "{} {} what a certificate covers; give --partial to write a certificate that says it is partial",
+                changed.join(", "),
+                if changed.len() == 1 { "changes" } else { "change" }
             );
         }
     }
