@@ -31,8 +31,8 @@ too. --key FILE signs the bundle's manifest into MANIFEST.sig. --verify checks t
 reported as unsigned.\n\nExit codes: 0 certified (or, with --verify, intact); 1 a case failed or nothing ran (or \
 the bundle was tampered with, or is unsigned while --pubkey was given); 2 usage or infrastructure error (a missing \
 bundle folder, an unreadable key).\n\nExamples:\n  gcl certify --keygen lab-key.pem\n  gcl certify --target \
-serial:/dev/ttyUSB0?baud=9600 --profile bh8-262-4.3 --key lab-key.pem --out cert-4.34\n  gcl certify --verify \
-cert-4.34 --pubkey lab-key.pem.pub"
+serial:/dev/ttyUSB0 --profile bh8-262-4.3 --key lab-key.pem --out cert\n  gcl certify --verify \
+cert --pubkey lab-key.pem.pub"
 )]
 pub struct Args {
     /// Check the bundle in DIR (manifest, signature, agreement with its report) instead of

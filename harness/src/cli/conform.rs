@@ -90,8 +90,8 @@ pub struct SuiteArgs {
 #[command(after_help = "Exit codes: 0 every case passed (SKIP and XFAIL allowed); 1 a case failed, timed out, \
 errored or passed while listed as a known failure; 2 usage or infrastructure error (including a hand that \
 does not answer the liveness probe).\n\nExamples:\n  gcl conform --target sim\n  gcl conform --target \
-sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0?baud=9600 --profile \
-bh8-262-4.3 --known-failures known.toml")]
+sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0 --profile bh8-262-4.3 \
+--known-failures known.toml")]
 pub struct Args {
     /// The hand and the suite.
     #[command(flatten)]
