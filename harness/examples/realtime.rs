@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --example realtime -- --target sim:seed
-//! gcl sim --pty --profile seed            # time fast: the hand's clock is wire time
+//! gcl sim --pty --profile seed --time fast   # the hand's clock is wire time
 //! cargo run --example realtime -- --target serial:/dev/pts/N --profile seed --clock wire
 //! gcl sim --tcp 127.0.0.1:5000 --profile seed --time real
 //! cargo run --example realtime -- --target tcp://127.0.0.1:5000 --profile seed --clock link

@@ -257,6 +257,12 @@ fn certificates_are_written_and_tampering_is_caught() {
     let c = cert.to_str().unwrap();
     let out = gcl(&["certify", "--target", "sim:seed", "--out", c]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    // A certificate judges MUST and SHOULD: clauses with only INFO cases are out of its scope,
+    // and the summary says so instead of calling them not fully judged (issue 21 item 4).
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let clauses = stdout.lines().find(|l| l.trim_start().starts_with("clauses:")).unwrap();
+    assert!(clauses.contains(" 0 not fully judged"), "{clauses}");
+    assert!(clauses.contains(" out of this run's scope (only INFO cases"), "{clauses}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(cert.join("certificate.json")).unwrap()).unwrap();
     assert!(json["firmware_version"][0].as_str().unwrap().contains("seed"), "{json}");

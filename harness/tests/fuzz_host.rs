@@ -3,9 +3,12 @@
 //! runs and names the right kind of finding; `check-host` flags each protocol violation; the
 //! correct hosts (our own client's example program and a pyserial script) have no finding.
 //!
-//! Python mutants need python3 with pyserial, C mutants a C compiler with AddressSanitizer;
-//! each group is skipped (with a line saying so) when its tools are missing. The time to the
+//! Python mutants need a Python with pyserial (found as every test finds Python: `deps`), C
+//! mutants a C compiler with AddressSanitizer; each group is skipped when its tools are
+//! missing, with a line in `cargo test`'s output, and fails under CI (`CI=true`). The time to the
 //! first finding of each mutant is printed (`cargo test --test fuzz_host -- --nocapture`).
+
+mod deps;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,11 +29,7 @@ fn mutants() -> PathBuf {
 }
 
 fn python_ready() -> bool {
-    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("skipped: python3 with pyserial is not available");
-    }
-    ok
+    deps::python_with(&["serial"]).is_some()
 }
 
 /// Compiles a C mutant with AddressSanitizer into `dir`; `None` (and a line) without a compiler.
@@ -45,11 +44,14 @@ fn compile_c(name: &str, dir: &Path) -> Option<PathBuf> {
     match built {
         Ok(o) if o.status.success() => Some(out),
         Ok(o) => {
-            eprintln!("skipped: cc -fsanitize=address failed: {}", String::from_utf8_lossy(&o.stderr));
+            deps::missing(
+                &format!("cc -fsanitize=address ({})", String::from_utf8_lossy(&o.stderr).trim()),
+                "apt-get install gcc",
+            );
             None
         }
         Err(e) => {
-            eprintln!("skipped: no C compiler ({e})");
+            deps::missing(&format!("a C compiler ({e})"), "apt-get install gcc");
             None
         }
     }
@@ -71,7 +73,7 @@ fn host_run(command: Vec<String>) -> HostRun {
 }
 
 fn python(file: &str) -> Vec<String> {
-    vec!["python3".into(), mutants().join(file).display().to_string()]
+    vec![deps::python(), mutants().join(file).display().to_string()]
 }
 
 /// Fuzzes until a finding of `kind` whose signature holds `needle` (or `runs` runs); returns
@@ -162,7 +164,7 @@ fn a_rust_mutant_panic_is_found() {
         .arg(mutants().join("rs_unwrap_values.rs"))
         .output();
     if !built.is_ok_and(|o| o.status.success()) {
-        eprintln!("skipped: rustc could not build the Rust mutant");
+        deps::missing("a rustc that builds the Rust mutant", "set RUSTC");
         return;
     }
     let (sig, t) = first_finding(
@@ -281,12 +283,7 @@ fn parallel_campaigns_are_reproducible_run_for_run() {
 }
 
 fn example(name: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_BIN_EXE_gcl")).with_file_name("examples").join(name);
-    if !p.exists() {
-        eprintln!("skipped: {} is not built", p.display());
-        return None;
-    }
-    Some(p)
+    deps::example(name)
 }
 
 #[test]
@@ -348,6 +345,7 @@ fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
     if !python_ready() {
         return;
     }
+    let py = deps::python();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bundles");
     let report = dir.path().join("report");
@@ -372,7 +370,7 @@ fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
         "--report",
         report.to_str().unwrap(),
         "--",
-        "python3",
+        &py,
         &host,
     ]);
     assert_eq!(code, 1, "{err}");
@@ -398,13 +396,13 @@ fn the_cli_writes_minimized_bundles_that_replay_and_junit_reports() {
     assert!(report.join("fuzz.json").exists() && report.join("report.html").exists());
     // Replay gives the same finding, twice.
     for _ in 0..2 {
-        let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", "python3", &host]);
+        let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", &py, &host]);
         assert_eq!(code, 1, "{err}");
         assert!(err.contains("reproduced: crash: python KeyError"), "{err}");
     }
     // A clean host replayed against the bundle has no finding.
     let clean = mutants().join("gclhost.py").display().to_string();
-    let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", "python3", &clean]);
+    let (code, _, err) = gcl(&["fuzz", "host", "--replay", bundle.to_str().unwrap(), "--", &py, &clean]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("NOT reproduced"), "{err}");
 }
@@ -414,6 +412,7 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
     if !python_ready() {
         return;
     }
+    let py = deps::python();
     let dir = tempfile::tempdir().unwrap();
     let golden = dir.path().join("golden.gcl");
     let mut text = String::from(
@@ -434,7 +433,7 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
         "--report",
         report.to_str().unwrap(),
         "--",
-        "python3",
+        &py,
         &good,
     ]);
     assert_eq!(code, 0, "{out}{err}");
@@ -443,20 +442,20 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
     schema_valid(&report.join("report.json"));
     let lf = mutants().join("py_sends_lf.py").display().to_string();
     let (code, out, _) =
-        gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", "python3", &lf]);
+        gcl(&["check-host", "--profile", "seed", "--golden", golden.to_str().unwrap(), "--", &py, &lf]);
     assert_eq!(code, 1, "{out}");
     assert!(out.contains("FAIL    host-golden") && out.contains("FAIL    host-line-ending"), "{out}");
     // A saved session is a golden for the next run of the same host.
     let session = dir.path().join("session.gcl");
     let (code, out, err) =
-        gcl(&["check-host", "--profile", "seed", "--save-session", session.to_str().unwrap(), "--", "python3", &good]);
+        gcl(&["check-host", "--profile", "seed", "--save-session", session.to_str().unwrap(), "--", &py, &good]);
     assert_eq!(code, 0, "{out}{err}");
     let (code, out, _) =
-        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &good]);
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", &py, &good]);
     assert_eq!(code, 0, "{out}");
     assert!(out.contains("PASS    host-golden"), "{out}");
     let (code, out, _) =
-        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", "python3", &lf]);
+        gcl(&["check-host", "--profile", "seed", "--golden", session.to_str().unwrap(), "--", &py, &lf]);
     assert_eq!(code, 1, "{out}");
     // Usage errors are 2.
     assert_eq!(gcl(&["check-host", "--profile", "nope", "--", "true"]).0, 2);

@@ -169,8 +169,22 @@ fn certify_refuses_selections_unless_partial_and_says_partial() {
         let r = gcl(&args);
         assert_eq!(r.code, Some(2), "{extra:?}: {}", r.stdout);
         assert!(r.stderr.contains(extra[0]) && r.stderr.contains("--partial"), "{}", r.stderr);
+        // One option changes; several change (issue 21 item 4).
+        assert!(r.stderr.contains(&format!("{} changes what a certificate covers", extra[0])), "{}", r.stderr);
         assert!(!out.exists(), "nothing written");
     }
+    let r = gcl(&[
+        "certify",
+        "--target",
+        "sim:seed",
+        "--only",
+        "framing-*",
+        "--fault",
+        "crlf",
+        "--out",
+        s(&dir.path().join("x")),
+    ]);
+    assert!(r.stderr.contains("--only, --fault change what a certificate covers"), "{}", r.stderr);
     // Everything skipped: not a PASS, even when partial.
     let none = dir.path().join("none");
     let r = gcl(&["certify", "--target", "sim:seed", "--partial", "--skip", "*", "--out", s(&none)]);
@@ -357,13 +371,31 @@ fn absurd_bauds_are_refused_and_the_bound_counts_only_pass_and_fail() {
 }
 
 #[test]
-fn suite_commands_outside_the_repository_say_they_cannot_find_the_suite() {
+fn suite_commands_outside_the_repository_read_the_built_in_catalogue_or_say_what_is_missing() {
     let dir = tempfile::tempdir().unwrap();
-    for cmd in ["check", "list"] {
-        let r = gcl_in(Some(dir.path()), &["suite", cmd], Duration::from_secs(120));
-        assert_eq!(r.code, Some(2), "{cmd}: {}", r.stdout);
-        assert!(r.stderr.contains("cannot find a suite at vectors/suite"), "{}", r.stderr);
+    // Listing needs no files: the catalogue is built into gcl (issue 21 item 2), so the
+    // advice of `--only`'s error works wherever it is given.
+    let r = gcl_in(Some(dir.path()), &["suite", "list", "--profile", "seed"], Duration::from_secs(120));
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(r.stdout.lines().any(|l| l.starts_with("seed ") && l.contains(" framing-echo ")), "{}", r.stdout);
+    assert!(r.stdout.lines().all(|l| l.starts_with("seed ") || l.contains(" cases: ")), "{}", r.stdout);
+    let o =
+        gcl_in(Some(dir.path()), &["conform", "--target", "sim:seed", "--only", "no-such-*"], Duration::from_secs(120));
+    assert_eq!(o.code, Some(2));
+    assert!(o.stderr.contains("`gcl suite list --profile seed` lists them"), "{}", o.stderr);
+    // Checking compares committed files, and there are none here or above.
+    for args in [&["suite", "check"][..], &["vectors", "check"]] {
+        let r = gcl_in(Some(dir.path()), args, Duration::from_secs(120));
+        assert_eq!(r.code, Some(2), "{args:?}: {}", r.stdout);
+        assert!(r.stderr.contains("or any folder above it"), "{}", r.stderr);
         assert!(!r.stdout.contains("missing"), "{}", r.stdout);
+    }
+    // Inside the repository, from any folder of it, `check` finds the committed suite.
+    let deep = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/suite");
+    for args in [&["suite", "check"][..], &["vectors", "check"]] {
+        let r = gcl_in(Some(&deep), args, Duration::from_secs(300));
+        assert_eq!(r.code, Some(0), "{args:?}: {}{}", r.stdout, r.stderr);
+        assert!(r.stdout.contains("are fresh"), "{}", r.stdout);
     }
     let r = gcl_in(Some(dir.path()), &["suite", "regenerate"], Duration::from_secs(120));
     assert_eq!(r.code, Some(2), "{}", r.stdout);

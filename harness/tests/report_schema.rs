@@ -67,6 +67,15 @@ fn the_schema_rejects_what_it_should() {
     };
     assert!(v.is_valid(&report(good)));
     assert!(!v.is_valid(&report(bad)), "an unknown verdict is refused");
+    // The golden is in the form of expected and actual, never a quoted string (issue 21 item 4).
+    let diff =
+        |golden: &str| serde_json::json!({"step": 1, "offset": 0, "expected": "x", "actual": "y", "golden": golden});
+    let mut failed = serde_json::to_value(sample_case()).unwrap();
+    failed["verdict"] = "FAIL".into();
+    failed["diff"] = diff("FGET DP\\n\\r{int 990..1010}");
+    assert!(v.is_valid(&report(failed.clone())));
+    failed["diff"] = diff("\"FGET DP\\n\\r{int 990..1010}\"");
+    assert!(!v.is_valid(&report(failed)), "a quoted golden is refused");
 }
 
 fn sample_case() -> report::CaseResult {
@@ -82,4 +91,68 @@ fn sample_case() -> report::CaseResult {
         diff: None,
         transcript: None,
     }
+}
+
+/// `gcl fuzz host --report DIR` writes `fuzz.json` beside `report.json`: it validates against
+/// `reports/fuzz-host.schema.json`, as written by a real campaign and in every form a finding
+/// can take (issue 21 item 4).
+#[test]
+fn fuzz_host_campaigns_validate_against_their_schema() {
+    use gcl_harness::fuzz::host::{self, Campaign, FindingKind, HostEnd};
+    use gcl_harness::sim::misbehave::{Fired, Operator, Planned, Schedule};
+    let schema: serde_json::Value = serde_json::from_str(host::SCHEMA).unwrap();
+    let v = jsonschema::validator_for(&schema).unwrap();
+    let check = |json: &serde_json::Value| {
+        let errors: Vec<String> = v.iter_errors(json).map(|e| format!("{e} at {}", e.instance_path())).collect();
+        assert!(errors.is_empty(), "{errors:#?}\n{json:#}");
+    };
+    // The schema names every misbehaviour, and nothing else.
+    let names: Vec<&str> =
+        schema["$defs"]["operator"]["enum"].as_array().unwrap().iter().map(|o| o.as_str().unwrap()).collect();
+    assert_eq!(names, Operator::ALL.iter().map(|o| o.name()).collect::<Vec<_>>());
+
+    // A real campaign: a host that sends HI and exits 3 is an exit-code finding in run 0.
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "host", "--profile", "seed", "--runs", "3", "--report"])
+        .arg(dir.path().join("r"))
+        .arg("--out")
+        .arg(dir.path().join("b"))
+        .args(["--", "sh", "-c", "printf 'HI\\r' > \"$GCL_PORT\"; sleep 0.2; exit 3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("r/fuzz.json")).unwrap()).unwrap();
+    assert_eq!(json["findings"][0]["verdict"]["kind"], "exit-code", "{json:#}");
+    check(&json);
+
+    // Every way a host ends, a schedule and what fired, as serde writes them.
+    let mut c: Campaign = serde_json::from_value(json).unwrap();
+    let planned = Planned { answer: 2, op: Operator::Truncate, arg: 5 };
+    let f = &mut c.findings[0];
+    f.schedule = Schedule { planned: vec![planned] };
+    f.original = Schedule { planned: vec![planned, Planned { answer: 0, op: Operator::Silence, arg: 0 }] };
+    f.fired =
+        vec![Fired { index: 0, answer: 2, op: Operator::Truncate, state: "answer to HI".into(), what: "cut".into() }];
+    for end in [
+        HostEnd::Exit(-1),
+        HostEnd::Signal(11),
+        HostEnd::Hung("abort".into()),
+        HostEnd::OverBudget("answer to C".into()),
+    ] {
+        c.findings[0].end = end;
+        check(&serde_json::to_value(&c).unwrap());
+    }
+    for kind in [FindingKind::Crash, FindingKind::Hang, FindingKind::Violation] {
+        c.findings[0].verdict.kind = kind;
+        check(&serde_json::to_value(&c).unwrap());
+    }
+    // And it refuses what it should: an unknown field, an unknown misbehaviour.
+    let mut bad = serde_json::to_value(&c).unwrap();
+    bad["surprise"] = 1.into();
+    assert!(!v.is_valid(&bad));
+    let mut bad = serde_json::to_value(&c).unwrap();
+    bad["findings"][0]["schedule"]["planned"][0]["op"] = "teleport".into();
+    assert!(!v.is_valid(&bad));
 }

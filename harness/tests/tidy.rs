@@ -93,8 +93,8 @@ fn offenders(files: &[PathBuf], hit: impl Fn(&Path, &str) -> bool) -> Vec<String
 
 /// Architecture invariant: the reference model and the transcript crate do no I/O, read no
 /// clock, never sleep and never print. Time and bytes come in as arguments.
-/// `.ci/run` checks unreferenced snapshots with `cargo insta test -p gcl-model` only, so a
-/// snapshot anywhere else (or a test of another crate that takes one) would go unchecked.
+/// Snapshots have one home, the model's tests: `.ci/run` fails on a committed snapshot that
+/// no test used in its `cargo test` run, and one place keeps that list short to read.
 #[test]
 fn insta_snapshots_live_only_in_the_model() {
     let home = Path::new(ROOT).join("reference-model/tests/snapshots");

@@ -2,7 +2,10 @@
 //! unit tests pass (vector loader and schema check, transcript reader and matcher, the example
 //! host parser against the host vectors), its transcript runner passes the seed suite
 //! against `gcl sim --stdio`, and it fails against simulator faults naming the same cases
-//! `gcl conform` names. Skipped, with a message, when `python3` is not installed.
+//! `gcl conform` names. Python is found as every test finds it (`deps`); without one the tests
+//! say so in `cargo test`'s output, and fail under CI.
+
+mod deps;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -17,14 +20,6 @@ fn root() -> PathBuf {
 
 fn python_dir() -> PathBuf {
     root().join("vectors/python")
-}
-
-fn python3() -> bool {
-    let ok = Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("SKIPPED: python3 is not installed; the Python consumer of vectors/ was not tested");
-    }
-    ok
 }
 
 struct Ran {
@@ -81,32 +76,28 @@ fn suite_files(profile: &str) -> Vec<String> {
 
 #[test]
 fn the_python_package_tests_pass() {
-    if !python3() {
+    let Some(py) = deps::python_with(&[]) else {
         return;
-    }
-    let r = run(
-        &python_dir(),
-        "python3",
-        &["-m", "unittest", "discover", "-s", "tests", "-t", "."],
-        Duration::from_secs(120),
-    );
+    };
+    let r =
+        run(&python_dir(), &py, &["-m", "unittest", "discover", "-s", "tests", "-t", "."], Duration::from_secs(120));
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("OK"), "{}", r.stderr);
-    let r = run(&python_dir(), "python3", &["-m", "gcl_vectors", "check", "-q"], Duration::from_secs(60));
+    let r = run(&python_dir(), &py, &["-m", "gcl_vectors", "check", "-q"], Duration::from_secs(60));
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
 }
 
 #[test]
 fn the_python_runner_passes_the_seed_suite_against_the_simulator() {
-    if !python3() {
+    let Some(py) = deps::python_with(&[]) else {
         return;
-    }
+    };
     let files = suite_files("seed");
     assert!(files.len() > 150, "{}", files.len());
     let target = format!("exec:{GCL} sim --stdio --profile seed");
     let mut args = vec!["-m", "gcl_vectors", "replay", "--target", &target];
     args.extend(files.iter().map(String::as_str));
-    let r = run(&python_dir(), "python3", &args, Duration::from_secs(600));
+    let r = run(&python_dir(), &py, &args, Duration::from_secs(600));
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_eq!(r.stdout.lines().filter(|l| l.starts_with("PASS ")).count(), files.len(), "{}", r.stdout);
 }
@@ -124,9 +115,9 @@ const BYSTANDERS: &[&str] = &["framing-empty-line", "cmd-fget", "param-dp-defaul
 
 #[test]
 fn the_python_runner_fails_against_faults_naming_the_cases_gcl_conform_names() {
-    if !python3() {
+    let Some(py) = deps::python_with(&[]) else {
         return;
-    }
+    };
     let profile = "bh8-262-4.4";
     let mut ids: Vec<&str> = FAULTS.iter().flat_map(|(_, c)| c.iter().copied()).collect();
     ids.extend(BYSTANDERS);
@@ -159,7 +150,7 @@ fn the_python_runner_fails_against_faults_naming_the_cases_gcl_conform_names() {
         let files: Vec<String> = ids.iter().map(|id| format!("../suite/{profile}/{id}.gcl")).collect();
         let mut args = vec!["-m", "gcl_vectors", "replay", "-q", "--target", &target];
         args.extend(files.iter().map(String::as_str));
-        let p = run(&python_dir(), "python3", &args, Duration::from_secs(300));
+        let p = run(&python_dir(), &py, &args, Duration::from_secs(300));
         assert_eq!(p.code, Some(1), "{fault}: {}\n{}", p.stdout, p.stderr);
         let by_python: BTreeSet<String> = p
             .stdout
@@ -177,16 +168,16 @@ fn the_python_runner_fails_against_faults_naming_the_cases_gcl_conform_names() {
 
 #[test]
 fn the_python_runner_exits_2_on_bad_files_and_targets() {
-    if !python3() {
+    let Some(py) = deps::python_with(&[]) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.gcl");
     std::fs::write(&bad, "gcl-transcript 1\nid: x\n").unwrap();
     let target = format!("exec:{GCL} sim --stdio --profile seed");
     let r = run(
         &python_dir(),
-        "python3",
+        &py,
         &["-m", "gcl_vectors", "replay", "--target", &target, bad.to_str().unwrap()],
         Duration::from_secs(60),
     );
@@ -194,18 +185,13 @@ fn the_python_runner_exits_2_on_bad_files_and_targets() {
     assert!(r.stderr.contains("bad.gcl"), "{}", r.stderr);
     let good = "../suite/seed/framing-echo.gcl";
     for t in ["bogus:x", "sim:seed", "tcp://127.0.0.1", "exec:"] {
-        let r = run(
-            &python_dir(),
-            "python3",
-            &["-m", "gcl_vectors", "replay", "--target", t, good],
-            Duration::from_secs(60),
-        );
+        let r = run(&python_dir(), &py, &["-m", "gcl_vectors", "replay", "--target", t, good], Duration::from_secs(60));
         assert_eq!(r.code, Some(2), "{t}: {}\n{}", r.stdout, r.stderr);
     }
     // A hand that is gone before the first step (as `gcl replay` says of it: exit 2).
     let r = run(
         &python_dir(),
-        "python3",
+        &py,
         &["-m", "gcl_vectors", "replay", "--target", "exec:true", good],
         Duration::from_secs(60),
     );

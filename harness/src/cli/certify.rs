@@ -34,8 +34,8 @@ reported as unsigned. Without --pubkey, --verify says that authenticity was not 
 signed by --pubkey, or intact with --allow-unverified); 1 a case failed or nothing ran (or the bundle was tampered \
 with, is unsigned while --pubkey was given, or its authenticity was not checked); 2 usage or infrastructure error (a missing \
 bundle folder, an unreadable key).\n\nExamples:\n  gcl certify --keygen lab-key.pem\n  gcl certify --target \
-serial:/dev/ttyUSB0?baud=9600 --profile bh8-262-4.3 --key lab-key.pem --out cert-4.34\n  gcl certify --verify \
-cert-4.34 --pubkey lab-key.pem.pub"
+serial:/dev/ttyUSB0 --profile bh8-262-4.3 --key lab-key.pem --out cert\n  gcl certify --verify \
+cert --pubkey lab-key.pem.pub"
 )]
 pub struct Args {
     /// Check the bundle in DIR (manifest, signature, agreement with its report) instead of
@@ -157,8 +157,9 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
         }
         if !changed.is_empty() {
             anyhow::bail!(
-                "{} change what a certificate covers; give --partial to write a certificate that says it is partial",
-                changed.join(", ")
+                "{} {} what a certificate covers; give --partial to write a certificate that says it is partial",
+                changed.join(", "),
+                if changed.len() == 1 { "changes" } else { "change" }
             );
         }
     }

@@ -90,8 +90,8 @@ pub struct SuiteArgs {
 #[command(after_help = "Exit codes: 0 every case passed (SKIP and XFAIL allowed); 1 a case failed, timed out, \
 errored or passed while listed as a known failure; 2 usage or infrastructure error (including a hand that \
 does not answer the liveness probe).\n\nExamples:\n  gcl conform --target sim\n  gcl conform --target \
-sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0?baud=9600 --profile \
-bh8-262-4.3 --known-failures known.toml")]
+sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0 --profile bh8-262-4.3 \
+--known-failures known.toml")]
 pub struct Args {
     /// The hand and the suite.
     #[command(flatten)]
@@ -335,14 +335,41 @@ pub fn summary_text(r: &RunReport) -> String {
         s.push_str(&format!("{:>8}", totals.get(&v).copied().unwrap_or(0)));
     }
     s.push('\n');
+    // A case at a level the run does not judge (certify's INFO) is out of its scope: a clause
+    // is judged on its other cases, and one with only such cases is out of scope, not half
+    // judged.
+    let judged = LevelFilter::from_name(&r.level).unwrap_or(LevelFilter::All);
+    let in_scope = |c: &CaseResult| c.level.parse::<Level>().map_or(true, |l| judged.admits(l));
+    let (mut clean, mut failing, mut skipped, mut out_of_scope) = (0, 0, 0, 0);
+    let mut levels_out: Vec<Level> = Vec::new();
+    for cl in &r.clauses {
+        let cases: Vec<&CaseResult> = cl.cases.iter().filter_map(|id| r.cases.iter().find(|c| &c.id == id)).collect();
+        let scoped: Vec<&&CaseResult> = cases.iter().filter(|c| in_scope(c)).collect();
+        if scoped.is_empty() && !cases.is_empty() {
+            out_of_scope += 1;
+            levels_out.extend(cases.iter().filter_map(|c| c.level.parse::<Level>().ok()));
+        } else if scoped.iter().any(|c| c.verdict.fails_run()) {
+            failing += 1;
+        } else if scoped.iter().any(|c| matches!(c.verdict, Verdict::Skip | Verdict::Xfail)) {
+            skipped += 1;
+        } else {
+            clean += 1;
+        }
+    }
     let covered = r.clauses.len();
-    let count = |f: fn(Verdict) -> bool| r.clauses.iter().filter(|c| f(c.verdict)).count();
-    let clean = count(|v| v == Verdict::Pass);
-    let failing = count(Verdict::fails_run);
-    let skipped = count(|v| matches!(v, Verdict::Skip | Verdict::Xfail));
     s.push_str(&format!(
-        "  clauses: {covered} covered: {clean} with every case passing, {failing} failing, {skipped} not fully judged (a case skipped or a known failure)\n"
+        "  clauses: {covered} covered: {clean} with every case passing, {failing} failing, {skipped} not fully judged (a case skipped or a known failure)"
     ));
+    if out_of_scope > 0 {
+        levels_out.sort();
+        levels_out.dedup();
+        let names: Vec<&str> = levels_out.iter().map(|l| l.as_str()).collect();
+        s.push_str(&format!(
+            ", {out_of_scope} out of this run's scope (only {} cases, a level it does not judge)",
+            names.join("/")
+        ));
+    }
+    s.push('\n');
     let failing: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
     if !failing.is_empty() {
         s.push_str("  failing cases:\n");

@@ -18,8 +18,8 @@ use super::{EXIT_OK, load_profile};
 #[command(after_help = "Each LINE may use the escapes \\n \\r \\t \\\\ and \\xHH. In supervisory mode a CR \
 is added to each LINE, and a LINE holding CRs ('FGET DP\\rFGET MOV') is the commands the hand reads, each \
 explained on its own; in RealTime mode (after LOOP) a LINE is sent as raw bytes, so \
-'C\\x14\\xFB' is a control block and '\\x03' leaves the loop.\n\nExample:\n  gcl explain --profile seed HI \
-'12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1' \
+'C\\x14\\xFB' is a control block and '\\x03' leaves the loop.\n\nExample:\n  gcl explain --profile seed HI \\\n    \
+'12FSET LCV 1 LCVC 1 LCPG 0 LFV 0 LFS 1 LFAP 0 LFDP 1 LFDPC 1' \\\n    \
 '4FSET LCV 0 LCVC 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1 LFDPC 1' 124LOOP 'C\\x14\\xFB' '\\x03'")]
 pub struct Args {
     /// Profile: seed, bh8-262-4.3, bh8-262-4.4 (alias bh8-262), or a spec TOML file.

@@ -37,8 +37,8 @@ pub enum FuzzCommand {
 --out); 2 usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
 writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
 --target sim --fault fget-reversed --seed 1 --runs 500 --out findings\n  gcl fuzz device --target 'exec:gcl sim \
---stdio' --duration 30s --jobs 2 --corpus corpus\n  gcl fuzz device --target serial:/dev/ttyUSB0?baud=9600 \
---profile bh8-262-4.3 --no motion --duration 5m --report reports/fuzz")]
+--stdio' --no abort-timing --duration 30s --jobs 2\n  gcl fuzz device --target serial:/dev/ttyUSB0 \
+--profile bh8-262-4.3 --no motion --duration 5m")]
 pub struct DeviceArgs {
     /// The hand: `sim[:PROFILE]`, `serial:PATH[?baud=N]`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     #[arg(long, value_name = "TARGET")]

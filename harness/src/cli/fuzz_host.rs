@@ -51,7 +51,8 @@ pub struct HostArgs {
     #[arg(long, value_name = "LIST", default_value = "0,1", value_delimiter = ',', allow_hyphen_values = true,
           value_parser = clap::value_parser!(i32).range(0..=255))]
     ok_exit_codes: Vec<i32>,
-    /// Write report.json, junit.xml and report.html into DIR.
+    /// Write report.json, junit.xml and report.html into DIR (fuzz host adds fuzz.json: schema
+    /// reports/fuzz-host.schema.json).
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
     /// The host program and its arguments (after --); `{port}`/`{url}` in them, or GCL_PORT

@@ -2,6 +2,10 @@
 //! vectors of `vectors/json/`, whose headers carry the suite hash) from the reference model,
 //! `check` fails (exit 1, listing the files) when either is stale, missing or extra, `list`
 //! shows the cases.
+//!
+//! What only reads works from any directory: `list` shows the catalogue built into the binary
+//! (or a suite on disk with `--dir`), and `check` finds the committed suite in the current
+//! directory or the nearest folder above it that has one, as git finds its repository.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -32,22 +36,42 @@ enum Command {
     /// Fail (exit 1) when the committed goldens or JSON vectors differ from what the model
     /// generates.
     Check {
-        /// The suite directory.
-        #[arg(long, default_value = suite::DEFAULT_DIR)]
-        dir: PathBuf,
+        /// The suite directory [default: vectors/suite in this directory or the nearest folder
+        /// above it that has one].
+        #[arg(long)]
+        dir: Option<PathBuf>,
         /// The JSON vectors directory [default: `json` next to the suite directory].
         #[arg(long)]
         vectors_dir: Option<PathBuf>,
     },
-    /// List the committed cases: profile, id, level, requirements, title.
+    /// List the cases: profile, id, level, requirements, title. From the catalogue built into
+    /// gcl (works in any directory), or from a suite on disk with --dir.
     List {
         /// Only this profile.
         #[arg(long)]
         profile: Option<String>,
-        /// The suite directory.
-        #[arg(long, default_value = suite::DEFAULT_DIR)]
-        dir: PathBuf,
+        /// A suite directory to list instead of the built-in catalogue.
+        #[arg(long)]
+        dir: Option<PathBuf>,
     },
+}
+
+/// `rel` (a repository path such as `vectors/suite`) in the current directory or the nearest
+/// folder above it that has it, for the commands that only read it.
+pub(crate) fn find_upward(rel: &str) -> anyhow::Result<PathBuf> {
+    let cwd = std::env::current_dir()?;
+    for d in cwd.ancestors() {
+        let candidate = d.join(rel);
+        if candidate.is_dir() {
+            // Shown relative when it is the current directory's own, as before.
+            return Ok(if d == cwd { PathBuf::from(rel) } else { candidate });
+        }
+    }
+    anyhow::bail!(
+        "no {rel} in {} or any folder above it: run gcl inside a checkout of the repository, or give --dir DIR \
+(`gcl suite list` shows the cases built into gcl anywhere)",
+        cwd.display()
+    )
 }
 
 /// The suite directory, or a clear error when there is none: outside the repository the
@@ -107,6 +131,10 @@ inside an existing folder)",
             Ok(EXIT_OK)
         }
         Command::Check { dir, vectors_dir } => {
+            let dir = match dir {
+                Some(d) => d,
+                None => find_upward(suite::DEFAULT_DIR)?,
+            };
             existing_suite(&dir)?;
             let cases = suite::generate_all()?;
             let r = suite::check(&dir, &cases)?;
@@ -122,13 +150,21 @@ inside an existing folder)",
             Ok(EXIT_FAIL)
         }
         Command::List { profile, dir } => {
-            existing_suite(&dir)?;
-            let cases = match &profile {
-                Some(p) => {
-                    let id = super::load_profile(p)?.id.clone();
-                    suite::load_profile(&dir, &id)?
+            let id = profile.as_deref().map(super::load_profile).transpose()?.map(|p| p.id.clone());
+            let cases = match (&dir, &id) {
+                (Some(d), Some(id)) => {
+                    existing_suite(d)?;
+                    suite::load_profile(d, id)?
                 }
-                None => suite::load_dir(&dir)?,
+                (Some(d), None) => {
+                    existing_suite(d)?;
+                    suite::load_dir(d)?
+                }
+                (None, _) => {
+                    let mut all = suite::generate_all()?;
+                    all.retain(|c| id.as_ref().is_none_or(|id| &c.profile == id));
+                    all
+                }
             };
             for c in &cases {
                 let req: Vec<&str> = c.header().requires.iter().map(|r| r.as_str()).collect();

@@ -26,9 +26,10 @@ enum Command {
     },
     /// Fail (exit 1) when the committed vectors differ from what the model generates.
     Check {
-        /// The vectors directory.
-        #[arg(long, default_value = vectors::DEFAULT_DIR)]
-        dir: PathBuf,
+        /// The vectors directory [default: vectors/json in this directory or the nearest
+        /// folder above it that has one].
+        #[arg(long)]
+        dir: Option<PathBuf>,
     },
 }
 
@@ -74,6 +75,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             regenerate(&mut w, &dir, &cases)?;
             Ok(EXIT_OK)
         }
-        Command::Check { dir } => Ok(if check(&mut w, &dir, &cases)? { EXIT_OK } else { EXIT_FAIL }),
+        Command::Check { dir } => {
+            let dir = match dir {
+                Some(d) => d,
+                None => super::suite::find_upward(vectors::DEFAULT_DIR)?,
+            };
+            Ok(if check(&mut w, &dir, &cases)? { EXIT_OK } else { EXIT_FAIL })
+        }
     }
 }

@@ -48,7 +48,7 @@ fn diff_view(d: &super::Diff) -> String {
         d.offset
     );
     if !d.golden.is_empty() {
-        let _ = write!(p, "\ngolden:   {}", esc(&d.golden));
+        let _ = write!(p, "\ngolden:   \"{}\"", esc(&d.golden));
     }
     p.push_str("</pre>");
     p
@@ -230,7 +230,7 @@ mod tests {
         assert!(page.contains(r#"actual:   "FGET DP\r\n1000""#), "{page}");
         assert!(page.contains("step 2, parts at byte 7"), "{page}");
         assert!(page.contains("\n                  ^ byte 7"), "the caret sits under the parting byte: {page}");
-        assert!(page.contains("golden:   &quot;FGET DP"), "{page}");
+        assert!(page.contains(r#"golden:   "FGET DP\n\r1000""#), "{page}");
         assert!(page.contains("pre-flight: framing as the profile says"), "{page}");
         assert!(page.contains("<h1>gcl conform: FAILED</h1>"));
         assert!(page.contains("decision:framing-echo"));

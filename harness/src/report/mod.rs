@@ -85,7 +85,8 @@ pub struct Diff {
     /// the part both agree on, shown in front of `expected` and `actual`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub before: String,
-    /// The step's whole golden expectation, as written.
+    /// The step's whole golden expectation in the form of `expected` and `actual` (escaped
+    /// text or hex tokens, elisions in braces, no quotes).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub golden: String,
 }
@@ -513,7 +514,7 @@ pub(crate) mod tests {
                         expected: "\\n\\r1000".into(),
                         actual: "\\r\\n1000".into(),
                         before: "FGET DP".into(),
-                        golden: "\"FGET DP\\n\\r1000\"".into(),
+                        golden: "FGET DP\\n\\r1000".into(),
                     }),
                     transcript: Some("> FGET DP\\r\n< FGET DP\\r\\n1000".into()),
                 },

@@ -26,6 +26,9 @@ use rand_core::{RngCore, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use serde::{Deserialize, Serialize};
 
+/// The JSON Schema of the campaign's `fuzz.json` ([`Campaign`]).
+pub const SCHEMA: &str = include_str!("../../../../reports/fuzz-host.schema.json");
+
 pub use check::{HostChecker, HostClause, HostViolation};
 pub use session::{Dir, Exchange, HostEnd, HostRun, RunError, RunResult, Transport, run_once, run_once_until};
 

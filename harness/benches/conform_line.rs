@@ -1,0 +1,121 @@
+//! `gcl conform` at the speed of the line (issue 21, P1).
+//!
+//! Run with `cargo bench -p gcl-harness --bench conform_line`. For seed and bh8-262, at 9600
+//! and 38400 baud: `gcl sim --pty --baud B` (real time, its defaults otherwise) and `gcl
+//! conform --target serial:PTY?baud=B` over the whole suite, and the run's own figures from
+//! `report.json`: wall time, the wire-time lower bound, their ratio (aim: at most 1.05).
+//!
+//! The lower bound counts, per case, the larger of its bytes one way and the model's motion
+//! time. A hand that says nothing while it moves (the model's does not) cannot finish a case
+//! in less than the sum of the two, so the bench also prints the ratio against that sum, the
+//! model's own time for the cases at the line's rate: the share of the gap that is the
+//! runner's.
+//!
+//! `GCL_BENCH_BIN=PATH` measures another `gcl` binary (an older build, for a before/after).
+//! Without `--bench` (as under `cargo test --all-targets`) it runs the framing cases of seed at
+//! 38400 as a smoke test. A word after `--` picks the runs whose name holds it (`seed@9600`).
+
+use std::io::BufRead;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use gcl_harness::replay::ReplayOptions;
+use gcl_harness::suite;
+use gcl_host::link::{Link, SimLink, byte_time};
+use gcl_model::Profile;
+
+fn main() {
+    let bench = std::env::args().any(|a| a == "--bench");
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let bin = std::env::var("GCL_BENCH_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_gcl").to_string());
+    println!("gcl conform over gcl sim --pty (real time), {bin}");
+    let runs: &[(&str, u32)] = if bench {
+        &[("seed", 9600), ("seed", 38400), ("bh8-262", 9600), ("bh8-262", 38400)]
+    } else {
+        &[("seed", 38400)]
+    };
+    for (profile, baud) in runs {
+        let name = format!("{profile}@{baud}");
+        if filter.as_ref().is_some_and(|f| !name.contains(f.as_str())) {
+            continue;
+        }
+        let only: &[&str] = if bench { &[] } else { &["--only", "framing-*"] };
+        figure(&bin, profile, *baud, only);
+    }
+}
+
+fn figure(bin: &str, profile: &str, baud: u32, only: &[&str]) {
+    let mut sim = Command::new(bin)
+        .args(["sim", "--pty", "--profile", profile, "--baud", &baud.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("starting gcl sim --pty");
+    let mut pty = String::new();
+    if let Some(out) = sim.stdout.take() {
+        std::io::BufReader::new(out).read_line(&mut pty).expect("reading the pty path");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let target = format!("serial:{}?baud={baud}", pty.trim());
+    let out = Command::new(bin)
+        .args(["conform", "--target", &target, "--profile", profile, "--quiet", "--report"])
+        .arg(dir.path())
+        .args(only)
+        .output()
+        .expect("running gcl conform");
+    let _ = sim.kill();
+    let _ = sim.wait();
+    let report: serde_json::Value = match std::fs::read(dir.path().join("report.json")) {
+        Ok(b) => serde_json::from_slice(&b).unwrap(),
+        Err(e) => panic!("no report ({e}): {}", String::from_utf8_lossy(&out.stdout)),
+    };
+    let w = &report["wire"];
+    let actual = w["actual_ms"].as_f64().unwrap_or(0.0);
+    let bound = w["lower_bound_ms"].as_f64().unwrap_or(0.0);
+    let model = model_time_ms(profile, baud, &report);
+    let not_pass: Vec<String> = report["cases"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|c| c["verdict"] != "PASS")
+        .map(|c| format!("{} {}", c["id"].as_str().unwrap_or(""), c["verdict"].as_str().unwrap_or("")))
+        .collect();
+    println!(
+        "{profile:>8} @ {baud:>5}: {} cases, wall {:.1} s, lower bound {:.1} s, ratio {:.3}; model's time (bytes + motion) {:.1} s, ratio {:.3}{}",
+        w["counted_cases"],
+        actual / 1000.0,
+        bound / 1000.0,
+        if bound > 0.0 { actual / bound } else { 0.0 },
+        model / 1000.0,
+        if model > 0.0 { actual / model } else { 0.0 },
+        if not_pass.is_empty() { String::new() } else { format!("; not PASS: {}", not_pass.join(", ")) }
+    );
+}
+
+/// The model's time for the cases the report counts, at `baud`: per case the larger of its
+/// bytes one way at `baud` plus the time it spends beyond its bytes (motion, pauses).
+fn model_time_ms(profile: &str, baud: u32, report: &serde_json::Value) -> f64 {
+    let p = Profile::builtin(profile).unwrap();
+    let cases = suite::generate(&p).unwrap();
+    let ran: Vec<&str> = report["cases"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|c| c["verdict"] == "PASS")
+        .filter_map(|c| c["id"].as_str())
+        .collect();
+    let per_byte = byte_time(baud);
+    let mut total = Duration::ZERO;
+    for c in cases.iter().filter(|c| ran.contains(&c.id())) {
+        let mut link = SimLink::new(p.clone(), Default::default());
+        let quiet = ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
+        let out = suite::run_case(c, &mut link, &quiet);
+        let (s, r) = out
+            .exchange()
+            .iter()
+            .fold((0u32, 0u32), |(s, r), e| (s + e.sent.len() as u32, r + e.received.len() as u32));
+        let busy = link.elapsed().saturating_sub(byte_time(link.device().baud()) * (s + r));
+        total += per_byte * s.max(r) + busy;
+    }
+    total.as_secs_f64() * 1000.0
+}
