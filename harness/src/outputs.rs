@@ -118,39 +118,72 @@ pub const LOCK_FILE: &str = ".gcl.lock";
 /// A folder held by one running command: `DIR/.gcl.lock`, locked with `flock` for as long
 /// as the value lives (the kernel drops the lock when the process ends, kill -9 included).
 /// A second campaign or report on the same folder is refused instead of overwriting the
-/// first one's files.
+/// first one's files. When the value is dropped the lock file is removed (only if it is still
+/// this lock's file), and so is the folder if `acquire` made it and it is left empty: a run
+/// that wrote nothing leaves nothing behind.
 #[derive(Debug)]
 pub struct OutLock {
-    _lock: nix::fcntl::Flock<File>,
+    lock: nix::fcntl::Flock<File>,
+    path: PathBuf,
+    made_dir: Option<PathBuf>,
+}
+
+/// Device and inode of an open file or a path: the identity of a lock file.
+fn identity(m: &std::fs::Metadata) -> (u64, u64) {
+    use std::os::unix::fs::MetadataExt;
+    (m.dev(), m.ino())
 }
 
 impl OutLock {
     /// Takes `dir` (creating it) for `what` (`fuzz device`, `conform --report`, ...), or says
     /// which process holds it.
     pub fn acquire(dir: &Path, what: &str) -> io::Result<OutLock> {
+        let made_dir = (!dir.exists()).then(|| dir.to_path_buf());
         std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
         let path = dir.join(LOCK_FILE);
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .mode(0o644)
-            .custom_flags(nix::libc::O_NOFOLLOW)
-            .open(&path)
-            .map_err(|e| named(&path, e))?;
-        let held = file.try_clone().map_err(|e| named(&path, e))?;
-        let Ok(lock) = nix::fcntl::Flock::lock(held, nix::fcntl::FlockArg::LockExclusiveNonblock) else {
-            let holder = std::fs::read_to_string(&path).unwrap_or_default();
-            let holder = holder.lines().next().unwrap_or("another gcl").chars().take(200).collect::<String>();
-            return Err(io::Error::new(
-                io::ErrorKind::ResourceBusy,
-                format!("{} is in use by {holder}; wait for it to end or choose another folder", dir.display()),
-            ));
-        };
-        file.set_len(0)?;
-        writeln!(file, "gcl {what} (pid {})", std::process::id())?;
-        Ok(OutLock { _lock: lock })
+        loop {
+            let mut file = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .mode(0o644)
+                .custom_flags(nix::libc::O_NOFOLLOW)
+                .open(&path)
+                .map_err(|e| named(&path, e))?;
+            let held = file.try_clone().map_err(|e| named(&path, e))?;
+            let Ok(lock) = nix::fcntl::Flock::lock(held, nix::fcntl::FlockArg::LockExclusiveNonblock) else {
+                let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                let holder = holder.lines().next().unwrap_or("another gcl").chars().take(200).collect::<String>();
+                return Err(io::Error::new(
+                    io::ErrorKind::ResourceBusy,
+                    format!("{} is in use by {holder}; wait for it to end or choose another folder", dir.display()),
+                ));
+            };
+            // The holder before us may have removed the file between our open and our lock:
+            // then the lock is on a file nobody else will find, and we start again.
+            let ours = file.metadata().map(|m| identity(&m)).ok();
+            if std::fs::symlink_metadata(&path).map(|m| identity(&m)).ok() != ours {
+                continue;
+            }
+            file.set_len(0)?;
+            writeln!(file, "gcl {what} (pid {})", std::process::id())?;
+            return Ok(OutLock { lock, path, made_dir });
+        }
+    }
+}
+
+impl Drop for OutLock {
+    fn drop(&mut self) {
+        // Only our own lock file (another run may have made a new one since ours was removed).
+        let ours = self.lock.metadata().map(|m| identity(&m)).ok();
+        if ours.is_some() && std::fs::symlink_metadata(&self.path).map(|m| identity(&m)).ok() == ours {
+            let _ = std::fs::remove_file(&self.path);
+        }
+        if let Some(d) = &self.made_dir {
+            // Removes the folder only when empty: never a file somebody (or this run) wrote.
+            let _ = std::fs::remove_dir(d);
+        }
     }
 }
 
@@ -221,6 +254,17 @@ mod tests {
         let e = OutLock::acquire(dir.path(), "fuzz device").unwrap_err();
         assert!(e.to_string().contains("in use by gcl fuzz device (pid"), "{e}");
         drop(first);
-        OutLock::acquire(dir.path(), "conform --report").unwrap();
+        let second = OutLock::acquire(dir.path(), "conform --report").unwrap();
+        drop(second);
+        assert!(names(dir.path()).is_empty(), "the lock file is removed with the lock");
+        // A folder the lock made is removed with it when nothing was written there.
+        let made = dir.path().join("reports");
+        drop(OutLock::acquire(&made, "conform --report").unwrap());
+        assert!(!made.exists());
+        let kept = dir.path().join("kept");
+        let held = OutLock::acquire(&kept, "conform --report").unwrap();
+        std::fs::write(kept.join("report.json"), b"{}").unwrap();
+        drop(held);
+        assert_eq!(names(&kept), ["report.json"]);
     }
 }
