@@ -1,0 +1,59 @@
+"""CORRECT: a pyserial host with one long read timeout (10 s unless argv[1] says otherwise),
+as real host libraries have (5, 10, 15 s). It runs the supervisory scenario, then a short
+RealTime loop; anything the hand does wrong (a cut or garbled answer, a refusal, a broken
+feedback block, silence) is reported on one line and the host exits 1, in RealTime or not
+(exiting politely on a broken block, without ^C).
+
+Expected: no finding from `gcl fuzz host` with default options (the hang timeout is above
+this host's own timeout), and a pass from `gcl check-host`.
+"""
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "host_mutants"))
+import gclhost  # noqa: E402
+import serial  # noqa: E402
+
+TIMEOUT = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
+BLOCK = 9  # feedback of the loop below (seed profile)
+
+
+def read_exactly(port, n):
+    buf = b""
+    stop = time.monotonic() + TIMEOUT
+    while len(buf) < n:
+        if time.monotonic() > stop:
+            raise gclhost.HostError("feedback block: %d of %d bytes" % (len(buf), n))
+        buf += port.read(n - len(buf))
+    return buf
+
+
+def scenario(port):
+    port.reset_input_buffer()
+    port.write(b"\x03")
+    gclhost.read_until(port, gclhost.PROMPT, TIMEOUT)
+    for line in gclhost.SCENARIO:
+        port.reset_input_buffer()
+        gclhost.command(port, line, TIMEOUT)
+    gclhost.command(port, "123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0", TIMEOUT)
+    port.write(b"123LOOP\r")
+    got = gclhost.read_until(port, b"*", TIMEOUT)
+    if got != b"123LOOP\n\r*":
+        raise gclhost.HostError("LOOP answered %r" % got)
+    for _ in range(4):
+        port.write(b"C\x14\x14\x14")
+        gclhost.read_until(port, b"*", TIMEOUT)
+        read_exactly(port, BLOCK)
+        time.sleep(0.01)
+        if port.in_waiting:
+            raise gclhost.HostError("feedback block longer than %d bytes" % BLOCK)
+    port.write(b"\x03")
+    gclhost.read_until(port, gclhost.PROMPT, TIMEOUT)
+
+
+try:
+    gclhost.main(scenario)
+except (ValueError, UnicodeDecodeError) as e:
+    print("host: %s" % e, file=sys.stderr)
+    sys.exit(1)
