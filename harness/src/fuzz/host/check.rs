@@ -193,7 +193,8 @@ impl HostChecker {
 
     /// The name of the answer the hand is about to send (for misbehaviour reports).
     pub fn answer_state(&self, device: &Device) -> String {
-        if device.mode() == Mode::Loop {
+        // The answer to LOOP itself is the last supervisory one (the loop starts after it).
+        if device.mode() == Mode::Loop && self.mode == Mode::Loop {
             return "RealTime feedback".to_string();
         }
         match &self.last_command {
