@@ -13,10 +13,9 @@
 //! the host sends is). When the last host closes the port, what it had not read is discarded,
 //! both in the simulator's queue and in the slave's input buffer.
 
-use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
-use std::os::unix::fs::FileTypeExt;
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -34,7 +33,7 @@ const WRITE_RETRY: std::time::Duration = std::time::Duration::from_millis(5);
 /// A pseudo-terminal pair held by the simulator.
 #[derive(Debug)]
 pub struct Pty {
-    master: File,
+    master: nix::pty::PtyMaster,
     slave: OwnedFd,
     path: PathBuf,
     link: Option<PathBuf>,
@@ -64,25 +63,36 @@ impl Pty {
     /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
     /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
     pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
-        let pair = nix::pty::openpty(None, None).map_err(|e| pty_err("cannot create a pty", e))?;
-        let mut t = termios::tcgetattr(&pair.slave).map_err(|e| pty_err("tcgetattr", e))?;
+        // Both ends close-on-exec from the moment they exist (not set afterwards: a child
+        // another thread starts in between would keep them). A host holding the simulator's
+        // own slave would keep the port "open" after it closed it, so what it left unread would
+        // survive its reopen, unlike on `gcl sim --pty`; a leftover holding the master would
+        // keep the line up.
+        let master = nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC)
+            .map_err(|e| pty_err("cannot create a pty", e))?;
+        nix::pty::grantpt(&master).map_err(|e| pty_err("cannot create a pty (grantpt)", e))?;
+        nix::pty::unlockpt(&master).map_err(|e| pty_err("cannot create a pty (unlockpt)", e))?;
+        let path = PathBuf::from(nix::pty::ptsname_r(&master).map_err(|e| pty_err("ptsname", e))?);
+        // std opens with O_CLOEXEC.
+        let slave: OwnedFd = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
+            .open(&path)
+            .map_err(|e| pty_err("cannot open the pty's slave", e))?
+            .into();
+        let mut t = termios::tcgetattr(&slave).map_err(|e| pty_err("tcgetattr", e))?;
         termios::cfmakeraw(&mut t);
-        termios::tcsetattr(&pair.slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
-        let path = nix::unistd::ttyname(&pair.slave).map_err(|e| pty_err("ttyname", e))?;
-        fcntl(pair.master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
+        termios::tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
+        fcntl(master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| pty_err("cannot make the master non-blocking", e))?;
-        // Neither end goes to a child (a host run by `gcl fuzz host` / `gcl check-host`, or
-        // anything else this process starts): a host holding the simulator's own slave would
-        // keep the port "open" after it closes it, so what it left unread would survive its
-        // reopen, unlike on `gcl sim --pty`; and a leftover holding the master would keep the
-        // line up.
-        for fd in [pair.master.as_raw_fd(), pair.slave.as_raw_fd()] {
-            fcntl(fd, FcntlArg::F_SETFD(nix::fcntl::FdFlag::FD_CLOEXEC))
-                .map_err(|e| pty_err("cannot keep the pty from child processes", e))?;
+        // The simulator's own slave descriptor only ever drains what a host left unread (it
+        // was opened non-blocking).
+        struct Pair {
+            master: nix::pty::PtyMaster,
+            slave: OwnedFd,
         }
-        // The simulator's own slave descriptor only ever drains what a host left unread.
-        fcntl(pair.slave.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
-            .map_err(|e| pty_err("cannot make the slave non-blocking", e))?;
+        let pair = Pair { master, slave };
         let watch = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         watch
@@ -95,7 +105,7 @@ impl Pty {
             reads,
             wrote_since_read: false,
             wrote_unread: false,
-            master: File::from(pair.master),
+            master: pair.master,
             slave: pair.slave,
             path,
             link: None,
