@@ -20,7 +20,8 @@ import serial  # noqa: E402
 
 TIMEOUT = float(sys.argv[1]) if len(sys.argv) > 1 else 10.0
 RETRY = len(sys.argv) > 2 and sys.argv[2] == "retry"
-BLOCK = 9  # feedback of the loop below (seed profile)
+BLOCK = 9  # feedback of the loop below (seed profile): 3 x (velocity, position high, low)
+OBSERVE = int(os.environ.get("GCL_OBSERVE_FD", "2"))
 
 
 def read_exactly(port, n):
@@ -55,10 +56,13 @@ def scenario(port):
     for _ in range(4):
         port.write(b"C\x14\x14\x14")
         gclhost.read_until(port, b"*", TIMEOUT)
-        read_exactly(port, BLOCK)
+        block = read_exactly(port, BLOCK)
         time.sleep(0.01)
         if port.in_waiting:
             raise gclhost.HostError("feedback block longer than %d bytes" % BLOCK)
+        # What it believes, by the observation protocol (GCL_OBSERVE_FD): whole blocks only.
+        for m in range(3):
+            os.write(OBSERVE, b"gcl-observe: P %d %d\n" % (m + 1, block[3 * m + 1] * 256 + block[3 * m + 2]))
     port.write(b"\x03")
     gclhost.read_until(port, gclhost.PROMPT, TIMEOUT)
 

@@ -45,6 +45,10 @@ pub enum FindingKind {
     Violation,
     /// The host left a process behind that held the port or its stderr after it ended (killed).
     Leftover,
+    /// The host observed a value the hand never sent and did not say anything was wrong
+    /// (`gcl-observe:` lines).
+    #[serde(rename = "silent-wrong-value")]
+    WrongValue,
 }
 
 impl FindingKind {
@@ -56,6 +60,7 @@ impl FindingKind {
             FindingKind::ExitCode => "exit-code",
             FindingKind::Violation => "violation",
             FindingKind::Leftover => "leftover",
+            FindingKind::WrongValue => "silent-wrong-value",
         }
     }
 }
@@ -143,6 +148,17 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             message: format!(
                 "the host left {} behind holding the port or its stderr after it ended; killed",
                 r.leftovers.join(", ")
+            ),
+        });
+    }
+    if let Some(first) = r.wrong_values.first() {
+        let name = first.split_whitespace().next().unwrap_or_default();
+        v.push(Verdict {
+            kind: FindingKind::WrongValue,
+            signature: format!("silent wrong value: {name}"),
+            message: format!(
+                "the host observed {} that the hand never sent, and reported nothing wrong",
+                r.wrong_values.join(", ")
             ),
         });
     }

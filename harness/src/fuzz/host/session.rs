@@ -117,6 +117,11 @@ pub struct RunResult {
     pub gave_up_after: Option<Duration>,
     /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
     pub stderr: String,
+    /// Observations the host made (`gcl-observe:` lines, [`observe`]).
+    pub observations: u64,
+    /// Observations of values the hand never sent, before the host reported a problem: silent
+    /// wrong values (`P 1 5000`, the first few).
+    pub wrong_values: Vec<String>,
     /// Bytes both ways.
     pub exchanges: Vec<Exchange>,
     /// The misbehaviours that fired.
@@ -164,6 +169,16 @@ pub enum RunError {
 /// Most bytes of the traffic kept each way; the rest is counted, not kept.
 pub const KEEP_CAP: usize = 1 << 20;
 
+/// The start of an observation line (on the host's stderr, or on its stdout, which
+/// `GCL_OBSERVE_FD=1` names): `gcl-observe: NAME MOTOR VALUE` says what the host believes
+/// the hand reported (`gcl-observe: P 1 5000`: motor 1's position is 5000);
+/// `gcl-observe: error TEXT` says it saw the hand misbehave, after which its observations are
+/// not judged. An observation of a value the hand never sent is a silent wrong value.
+pub const OBSERVE: &str = "gcl-observe:";
+
+/// Most distinct values remembered as sent by the hand.
+const SENT_CAP: usize = 1 << 16;
+
 /// Shared between the tap (in the hand's thread) and the run.
 struct Log {
     misbehave: Misbehave,
@@ -172,6 +187,13 @@ struct Log {
     /// Bytes kept and bytes cut, host then hand.
     kept: [usize; 2],
     cut: [u64; 2],
+    /// Every value the hand really sent so far (the model's answers before any
+    /// misbehaviour: the numbers of its supervisory answers, the fields of its feedback).
+    sent: std::collections::BTreeSet<i64>,
+    observations: u64,
+    wrong_values: Vec<String>,
+    /// The host said it saw the hand misbehave (`gcl-observe: error`).
+    host_reported: bool,
     /// When a `silence` fired, and when the host first sent after it.
     silenced_at: Option<Instant>,
     acted_at: Option<Instant>,
@@ -196,6 +218,50 @@ impl Log {
         match self.exchanges.last_mut() {
             Some(e) if e.dir == dir && marks.is_empty() => e.bytes.extend_from_slice(keep),
             _ => self.exchanges.push(Exchange { dir, bytes: keep.to_vec(), marks }),
+        }
+    }
+
+    /// Takes the values of one answer: of the model's own (before any misbehaviour), or, with
+    /// `blocks_only`, of a well-formed feedback block as it went out (a flipped bit or an
+    /// extreme value in a block of the right size is what the hand sent as far as any host can
+    /// tell).
+    fn values_sent(&mut self, device: &Device, bytes: &[u8], blocks_only: bool) {
+        if self.sent.len() >= SENT_CAP {
+            return;
+        }
+        if let Some(layout) = device.rt_layout().map(|l| l.feedback()) {
+            let n = layout.size();
+            for block in [bytes, bytes.get(1..).unwrap_or_default()] {
+                if block.len() == n
+                    && let Ok((_, values)) = layout.decode(block)
+                {
+                    self.sent.extend(values);
+                    return;
+                }
+            }
+        }
+        if blocks_only {
+            return;
+        }
+        let text = String::from_utf8_lossy(bytes);
+        let numbers = text.split(|c: char| !(c.is_ascii_digit() || c == '-')).filter_map(|w| w.parse::<i64>().ok());
+        self.sent.extend(numbers);
+    }
+
+    /// One `gcl-observe:` line of the host.
+    fn observe(&mut self, line: &str) {
+        let Some(rest) = line.trim().strip_prefix(OBSERVE) else { return };
+        let words: Vec<&str> = rest.split_whitespace().collect();
+        match words.as_slice() {
+            ["error", ..] => self.host_reported = true,
+            [name, motor, value] => {
+                let (Ok(_), Ok(v)) = (motor.parse::<u8>(), value.parse::<i64>()) else { return };
+                self.observations += 1;
+                if !self.host_reported && !self.sent.contains(&v) && self.wrong_values.len() < 8 {
+                    self.wrong_values.push(format!("{name} {motor} {value}"));
+                }
+            }
+            _ => {}
         }
     }
 
@@ -243,6 +309,8 @@ impl LineTap for Tap {
         let before = log.misbehave.fired().len();
         let shaped = log.misbehave.shape(device, bytes, &state);
         let new: Vec<Fired> = log.misbehave.fired()[before..].to_vec();
+        log.values_sent(device, bytes, false);
+        log.values_sent(device, &shaped.bytes, true);
         // Changed in any way (a silence drops every answer after it; a delay holds one).
         let misbehaved = !new.is_empty() || shaped.bytes != bytes || shaped.hold.is_some() || shaped.hang_up;
         log.checker.hand_bytes(device, &shaped.bytes, misbehaved);
@@ -386,6 +454,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         exchanges: Vec::new(),
         kept: [0; 2],
         cut: [0; 2],
+        sent: std::collections::BTreeSet::new(),
+        observations: 0,
+        wrong_values: Vec::new(),
+        host_reported: false,
         silenced_at: None,
         acted_at: None,
         last_activity: started,
@@ -421,10 +493,11 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .env("GCL_PORT", &port)
         .env("GCL_PORT_URL", &url)
         .env("PYTHONFAULTHANDLER", "1")
+        .env("GCL_OBSERVE_FD", "1")
         .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan"))
         .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan"))
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0)
         .spawn();
@@ -438,11 +511,35 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     };
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
     let err_pipe = child.stderr.take();
+    // Stdout carries observations only (GCL_OBSERVE_FD=1); the rest of it is dropped.
+    let out_done = Arc::new(AtomicBool::new(child.stdout.is_none()));
+    if let Some(out) = child.stdout.take() {
+        let log = log.clone();
+        let done = out_done.clone();
+        std::thread::spawn(move || {
+            let mut lines = LineSplitter::default();
+            let mut r = out;
+            let mut buf = [0u8; 8192];
+            while let Ok(n) = r.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                lines.feed(&buf[..n], |l| {
+                    if let Ok(mut log) = log.lock() {
+                        log.observe(l);
+                    }
+                });
+            }
+            done.store(true, Ordering::Relaxed);
+        });
+    }
     let err_inode = err_pipe.as_ref().and_then(|p| std::fs::metadata(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(p))).ok()).map(|m| std::os::unix::fs::MetadataExt::ino(&m));
     let errbuf = Arc::new(Mutex::new(ErrBuf::default()));
     let err_reader = {
         let errbuf = errbuf.clone();
+        let log = log.clone();
         std::thread::spawn(move || {
+            let mut lines = LineSplitter::default();
             let Some(mut p) = err_pipe else {
                 if let Ok(mut b) = errbuf.lock() {
                     b.eof = true;
@@ -455,6 +552,11 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
                     Ok(0) | Err(_) => break,
                     Ok(n) => n,
                 };
+                lines.feed(&buf[..n], |l| {
+                    if let Ok(mut log) = log.lock() {
+                        log.observe(l);
+                    }
+                });
                 let Ok(mut b) = errbuf.lock() else { return };
                 let room = STDERR_CAP.saturating_sub(b.kept.len());
                 b.kept.extend_from_slice(&buf[..n.min(room)]);
@@ -534,6 +636,11 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     if wait_eof(&errbuf, Duration::ZERO) {
         let _ = err_reader.join();
     }
+    // The last observations on stdout, for the same grace.
+    let grace = Instant::now() + STDERR_GRACE;
+    while !out_done.load(Ordering::Relaxed) && Instant::now() < grace {
+        std::thread::sleep(Duration::from_millis(5));
+    }
     let mut stderr = errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
     stderr.push_str(&run_dir.sanitizer_logs());
     stop.stop();
@@ -564,6 +671,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         leftovers,
         gave_up_after,
         stderr,
+        observations: log.observations,
+        wrong_values: log.wrong_values.clone(),
         exchanges: std::mem::take(&mut log.exchanges),
         fired: log.misbehave.fired().to_vec(),
         violations,
@@ -638,4 +747,29 @@ fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32,
         }
     }
     found
+}
+
+/// Splits a byte stream into lines for observations; a line longer than 4 KiB is dropped.
+#[derive(Default)]
+struct LineSplitter {
+    line: Vec<u8>,
+    overlong: bool,
+}
+
+impl LineSplitter {
+    fn feed(&mut self, bytes: &[u8], mut each: impl FnMut(&str)) {
+        for &b in bytes {
+            if b == b'\n' {
+                if !self.overlong {
+                    each(&String::from_utf8_lossy(&self.line));
+                }
+                self.line.clear();
+                self.overlong = false;
+            } else if self.line.len() < 4096 {
+                self.line.push(b);
+            } else {
+                self.overlong = true;
+            }
+        }
+    }
 }
