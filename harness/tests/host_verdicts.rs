@@ -375,3 +375,36 @@ fn what_a_flooding_host_writes_is_capped() {
     assert!(text.len() < 3 << 20, "{} bytes kept", text.len());
     assert!(text.contains("# not kept: "), "no note of what was cut");
 }
+
+/// The observation protocol: a host that trusts a RealTime block two bytes short publishes a
+/// position the hand never sent (a silent wrong value, which no crash or hang shows); a host
+/// that checks its blocks observes only what the hand sent, and gives up on a broken block.
+/// (A value the hand sent at any time counts as sent: a stale one is not caught.)
+#[test]
+fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut trusting = run(python("py_trusts_short_block.py", &[]));
+    trusting.timeout_hang = Duration::from_secs(3);
+    let c = campaign(trusting.clone(), "rt-block-length", 10, false);
+    let wrong: Vec<&str> = c
+        .findings
+        .iter()
+        .filter(|f| f.verdict.kind == FindingKind::WrongValue)
+        .map(|f| f.verdict.signature.as_str())
+        .collect();
+    assert_eq!(wrong, vec!["silent wrong value: P"], "{:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+    // Without the misbehaviour, all it observes is what the hand sent.
+    let r = run_once(&trusting, &Schedule::default()).unwrap();
+    assert!(r.observations >= 18 && r.wrong_values.is_empty(), "{} {:?}", r.observations, r.wrong_values);
+    // The correct host observes whole blocks only (a flipped bit or an extreme value in a
+    // block of the right size is what the hand sent, as far as any host can tell).
+    let r = run_once(&run(python("py_timeout.py", &["1"])), &Schedule::default()).unwrap();
+    assert!(r.observations >= 12 && r.wrong_values.is_empty(), "{} {:?}", r.observations, r.wrong_values);
+    let mut correct = run(python("py_timeout.py", &["1"]));
+    correct.timeout_hang = Duration::from_secs(3);
+    let c = campaign(correct, "rt-block-length,rt-byte-flip,rt-extreme", 8, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, Vec::<&str>::new());
+}
