@@ -32,10 +32,8 @@ fn missing(what: &str) -> bool {
 }
 
 fn python_with(module: &str) -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", &format!("import {module}")])
-        .output()
-        .is_ok_and(|o| o.status.success());
+    let ok =
+        Command::new("python3").args(["-c", &format!("import {module}")]).output().is_ok_and(|o| o.status.success());
     ok || !missing(&format!("python3 with {module}"))
 }
 
@@ -274,8 +272,12 @@ fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
         let mut r = run(command.clone());
         r.timeout_hang = Duration::from_millis(1500);
         let c = campaign(r, "truncate,no-prompt,bad-prompt", 12, false);
-        let hangs: Vec<&str> =
-            c.findings.iter().filter(|f| f.verdict.kind == FindingKind::Hang).map(|f| f.verdict.signature.as_str()).collect();
+        let hangs: Vec<&str> = c
+            .findings
+            .iter()
+            .filter(|f| f.verdict.kind == FindingKind::Hang)
+            .map(|f| f.verdict.signature.as_str())
+            .collect();
         assert_eq!(hangs.len(), 1, "{command:?}: {hangs:?}");
         assert!(hangs[0].starts_with(needle), "{command:?}: {hangs:?}");
         assert!(c.findings.len() == 1, "{command:?}: {:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());

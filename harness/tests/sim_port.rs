@@ -196,11 +196,8 @@ fn a_host_at_another_speed_than_the_hand_exchanges_garbage_both_ways() {
 
     // --no-speed-check: the speed is ignored, and nothing is said.
     let log = tempfile::NamedTempFile::new().unwrap();
-    let sim = SimProcess::start_logged(
-        Transport::Pty,
-        &["--profile", "bh8-262", "--no-speed-check"],
-        log.reopen().unwrap(),
-    );
+    let sim =
+        SimProcess::start_logged(Transport::Pty, &["--profile", "bh8-262", "--no-speed-check"], log.reopen().unwrap());
     let mut port = open_port(&sim.address);
     set_port_speed(&port, BaudRate::B38400);
     port.write_all(b"\r").unwrap();

@@ -53,8 +53,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
         None => None,
     };
-    let opts =
-        CheckHostOptions { run: args.host.host_run(args.seed, CHECK_HANG_DEFAULT)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
+    let opts = CheckHostOptions {
+        run: args.host.host_run(args.seed, CHECK_HANG_DEFAULT)?,
+        ok_exit_codes: args.host.ok_exit_codes(),
+        golden,
+    };
     let outcome = check_host(&opts).context("running the host")?;
     let report = outcome.report;
     if let Some(p) = &args.save_session {

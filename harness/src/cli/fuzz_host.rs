@@ -131,7 +131,10 @@ takes to send or exit is its timeout; a hang is then silence for half as long ag
 (faulthandler for Python hosts, eu-stack or gdb for native ones when installed), else its
 protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
 is unsafe (a crash, a hang, an exit code, sending before an answer the hand sent whole);
-otherwise it is an INFO note in the report. Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
+otherwise it is an INFO note in the report. A host may say what it believes with
+`gcl-observe: NAME MOTOR VALUE` lines on stderr or on the descriptor GCL_OBSERVE_FD names
+(`gcl-observe: error TEXT` when it saw the hand misbehave): a value the hand never sent,
+before such an error, is a silent-wrong-value finding. Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
 or a mutation of a schedule that made the host take a new path. Each distinct finding is
 minimized and written to --out as a bundle; --replay BUNDLE runs it again.
 

@@ -100,7 +100,9 @@ impl Pty {
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let reads = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
-        reads.add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY).map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        reads
+            .add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY)
+            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
             reads,
             wrote_since_read: false,

@@ -144,17 +144,26 @@ pub fn native_frames(text: &str) -> Option<String> {
             continue;
         }
         let tail: Vec<&str> = words.collect();
-        let module = tail
-            .windows(2)
-            .find(|w| w[0] == "-" || w[0] == "from")
-            .map(|w| w[1])
-            .unwrap_or_default();
+        let module = tail.windows(2).find(|w| w[0] == "-" || w[0] == "from").map(|w| w[1]).unwrap_or_default();
         let library = module.contains(".so")
             || func.starts_with("__")
-            || ["std::", "<std::", "core::", "<core::", "alloc::", "<alloc::", "<&"].iter().any(|p| func.starts_with(p))
+            || ["std::", "<std::", "core::", "<core::", "alloc::", "<alloc::", "<&"]
+                .iter()
+                .any(|p| func.starts_with(p))
             || func.starts_with("_dl_")
-            || ["read", "poll", "select", "pselect", "ppoll", "nanosleep", "clock_nanosleep", "epoll_wait", "sleep", "usleep"]
-                .contains(&func.as_str());
+            || [
+                "read",
+                "poll",
+                "select",
+                "pselect",
+                "ppoll",
+                "nanosleep",
+                "clock_nanosleep",
+                "epoll_wait",
+                "sleep",
+                "usleep",
+            ]
+            .contains(&func.as_str());
         all.push((func, library));
     }
     own_first(all)

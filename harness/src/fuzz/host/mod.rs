@@ -532,7 +532,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     let calibration = if opts.calibrate {
         match calibrate(&opts.run, stop) {
             Ok(c) => Some(c),
-            Err(RunError::Cancelled) => return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() }),
+            Err(RunError::Cancelled) => {
+                return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
+            }
             Err(e) => return Err(e),
         }
     } else {

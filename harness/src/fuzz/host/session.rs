@@ -533,7 +533,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             done.store(true, Ordering::Relaxed);
         });
     }
-    let err_inode = err_pipe.as_ref().and_then(|p| std::fs::metadata(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(p))).ok()).map(|m| std::os::unix::fs::MetadataExt::ino(&m));
+    let err_inode = err_pipe
+        .as_ref()
+        .and_then(|p| std::fs::metadata(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(p))).ok())
+        .map(|m| std::os::unix::fs::MetadataExt::ino(&m));
     let errbuf = Arc::new(Mutex::new(ErrBuf::default()));
     let err_reader = {
         let errbuf = errbuf.clone();
@@ -737,9 +740,8 @@ fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32,
         }
         let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
         let holds = fds.flatten().any(|fd| {
-            std::fs::read_link(fd.path()).is_ok_and(|t| {
-                path.is_some_and(|p| t == p) || pipe.as_deref().is_some_and(|x| t.as_os_str() == x)
-            })
+            std::fs::read_link(fd.path())
+                .is_ok_and(|t| path.is_some_and(|p| t == p) || pipe.as_deref().is_some_and(|x| t.as_os_str() == x))
         });
         if holds {
             let name = std::fs::read_to_string(p.path().join("comm")).unwrap_or_default().trim().to_string();
