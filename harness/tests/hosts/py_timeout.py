@@ -34,6 +34,17 @@ def read_exactly(port, n):
     return buf
 
 
+def read_star(port):
+    """Up to the '*' that starts a feedback block, byte by byte (the block may be there too)."""
+    stop = time.monotonic() + TIMEOUT
+    got = b""
+    while not got.endswith(b"*"):
+        if time.monotonic() > stop:
+            raise gclhost.HostError("no '*' after %r" % got[-40:])
+        got += port.read(1)
+    return got
+
+
 def scenario(port):
     port.reset_input_buffer()
     port.write(b"\x03")
@@ -50,12 +61,12 @@ def scenario(port):
         return
     gclhost.command(port, "123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0", TIMEOUT)
     port.write(b"123LOOP\r")
-    got = gclhost.read_until(port, b"*", TIMEOUT)
+    got = read_star(port)
     if not got.startswith(b"123LOOP"):
         raise gclhost.HostError("LOOP answered %r" % got)
     for _ in range(4):
         port.write(b"C\x14\x14\x14")
-        gclhost.read_until(port, b"*", TIMEOUT)
+        read_star(port)
         block = read_exactly(port, BLOCK)
         time.sleep(0.01)
         if port.in_waiting:
