@@ -344,6 +344,7 @@ fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
         command: opts.run.command.clone(),
         end: f.end.clone(),
         fired: f.fired.clone(),
+        timeout_hang_ms: Some(f.timeout_hang_ms),
     }
 }
 
@@ -422,6 +423,9 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
     run.time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
     run.pace = args.host.pace(run.time);
+    if let (false, Some(ms)) = (args.host.timeout_hang_given(), info.timeout_hang_ms) {
+        run.timeout_hang = std::time::Duration::from_millis(ms);
+    }
     let r = run_once(&run, &schedule)?;
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {

@@ -317,6 +317,9 @@ pub struct Finding {
     pub fired: Vec<crate::sim::misbehave::Fired>,
     /// How the host ended in it.
     pub end: HostEnd,
+    /// The hang timeout it was found with, milliseconds (calibrated or given).
+    #[serde(default)]
+    pub timeout_hang_ms: u64,
     /// The host's stderr in it.
     #[serde(skip)]
     pub stderr: String,
@@ -422,6 +425,7 @@ impl Shared {
                         original: schedule.clone(),
                         fired: r.fired.clone(),
                         end: r.end.clone(),
+                        timeout_hang_ms: opts.run.timeout_hang.as_millis() as u64,
                         stderr: r.stderr.clone(),
                         exchanges: r.exchanges.clone(),
                     });
