@@ -198,6 +198,7 @@ mod tests {
             time: "fast".into(),
             command: vec!["host".into()],
             end: HostEnd::Hung("x".into()),
+            timeout_hang_ms: None,
             fired: vec![],
         };
         let ex = vec![

@@ -628,7 +628,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     // group) is found and killed, and named.
     let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&port));
     let mut leftovers = Vec::new();
-    if !wait_eof(&errbuf, STDERR_GRACE) || pty_path.as_deref().is_some_and(|p| !holders(Some(p), None).is_empty()) {
+    // The pipe's inode names it only while it is open (a closed pipe's number is reused).
+    let err_open = !wait_eof(&errbuf, STDERR_GRACE);
+    let err_inode = err_inode.filter(|_| err_open);
+    if err_open || pty_path.as_deref().is_some_and(|p| !holders(Some(p), None).is_empty()) {
         for (p, name) in holders(pty_path.as_deref(), err_inode) {
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
@@ -726,8 +729,10 @@ fn take_stack(
     super::detect::sample_native(pid)
 }
 
-/// Processes other than this one holding `path` (the pty's slave) or the pipe `pipe_inode`
-/// open, with their names.
+/// Processes holding `path` (the pty's slave) or the pipe `pipe_inode` open, with their
+/// names; not this process, nor its children: a child of ours is a host of another run, or
+/// one being started (between fork and exec it holds copies of all our descriptors), never
+/// what this run's host left behind (that was reparented away from us when the host died).
 fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32, String)> {
     let me = std::process::id() as i32;
     let pipe = pipe_inode.map(|i| format!("pipe:[{i}]"));
@@ -736,6 +741,13 @@ fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32,
     for p in procs.flatten() {
         let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
         if pid == me {
+            continue;
+        }
+        // The parent is the 4th field of stat, after the name in parentheses.
+        let stat = std::fs::read_to_string(p.path().join("stat")).unwrap_or_default();
+        let ppid =
+            stat.rsplit_once(')').and_then(|(_, r)| r.split_whitespace().nth(1)).and_then(|x| x.parse::<i32>().ok());
+        if ppid == Some(me) {
             continue;
         }
         let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
