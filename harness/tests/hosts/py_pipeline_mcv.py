@@ -22,4 +22,8 @@ def main():
     sys.stderr.write("read %r\n" % (got,))
 
 
-main()
+try:
+    main()
+except (serial.SerialException, OSError) as e:
+    print("host: %s" % e, file=sys.stderr)
+    sys.exit(1)

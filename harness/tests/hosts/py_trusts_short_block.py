@@ -11,6 +11,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "host_mutants"))
 import gclhost  # noqa: E402
+import serial  # noqa: E402
 
 FLAGS = "123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0"
 FEEDBACK = 10  # '*' + 3 x (velocity, position high, position low)
@@ -37,11 +38,12 @@ def scenario(port):
 
 
 def main():
-    port = gclhost.open_port(timeout=0.3)
     try:
+        port = gclhost.open_port(timeout=0.3)
         scenario(port)
-    except gclhost.HostError as e:
-        raise SystemExit("host: %s" % e)
+    except (gclhost.HostError, serial.SerialException, OSError) as e:
+        print("host: %s" % e, file=sys.stderr)
+        sys.exit(1)
 
 
 main()
