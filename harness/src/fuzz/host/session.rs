@@ -510,6 +510,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         }
     };
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    // When the host started (clock ticks since boot): what it leaves behind started later.
+    let host_start = start_time(pid.as_raw());
     let err_pipe = child.stderr.take();
     // Stdout carries observations only (GCL_OBSERVE_FD=1); the rest of it is dropped.
     let out_done = Arc::new(AtomicBool::new(child.stdout.is_none()));
@@ -626,13 +628,24 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let _ = waiter.join();
     // Stderr for a short grace; then whatever still holds the port or stderr (it left the
     // group) is found and killed, and named.
+    // A pty's number is ours only while its master is open, i.e. while the hand's thread
+    // runs (a hang-up ends it early): after that, the path may name another program's
+    // terminal, which must never be touched. So the port is looked for only while the thread
+    // runs, and what a search found counts only if it still ran after the search.
     let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&port));
+    let pty_alive = || !hand.is_finished();
     let mut leftovers = Vec::new();
     // The pipe's inode names it only while it is open (a closed pipe's number is reused).
     let err_open = !wait_eof(&errbuf, STDERR_GRACE);
     let err_inode = err_inode.filter(|_| err_open);
-    if err_open || pty_path.as_deref().is_some_and(|p| !holders(Some(p), None).is_empty()) {
-        for (p, name) in holders(pty_path.as_deref(), err_inode) {
+    let search = |err_inode: Option<u64>| {
+        let path = pty_path.as_deref().filter(|_| pty_alive());
+        let found = holders(path, err_inode, host_start);
+        if path.is_some() && !pty_alive() { holders(None, err_inode, host_start) } else { found }
+    };
+    let found = if err_open || pty_path.is_some() { search(err_inode) } else { Vec::new() };
+    if !found.is_empty() {
+        for (p, name) in found {
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             leftovers.push(format!("pid {p} ({name})"));
@@ -729,14 +742,26 @@ fn take_stack(
     super::detect::sample_native(pid)
 }
 
+/// A process's start time (clock ticks since boot, field 22 of its stat).
+fn start_time(pid: i32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit_once(')')?.1.split_whitespace().nth(19)?.parse().ok()
+}
+
 /// Processes holding `path` (the pty's slave) or the pipe `pipe_inode` open, with their
-/// names; not this process, nor its children: a child of ours is a host of another run, or
+/// names, that started no earlier than the host (`host_start`): what the host can have left
+/// behind. Not this process, nor its children: a child of ours is a host of another run, or
 /// one being started (between fork and exec it holds copies of all our descriptors), never
 /// what this run's host left behind (that was reparented away from us when the host died).
-fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32, String)> {
+/// With no start time for the host, nothing is found: no process is killed on a guess.
+fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>, host_start: Option<u64>) -> Vec<(i32, String)> {
     let me = std::process::id() as i32;
     let pipe = pipe_inode.map(|i| format!("pipe:[{i}]"));
     let mut found = Vec::new();
+    let Some(host_start) = host_start else { return found };
+    if path.is_none() && pipe.is_none() {
+        return found;
+    }
     let Ok(procs) = std::fs::read_dir("/proc") else { return found };
     for p in procs.flatten() {
         let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
@@ -745,9 +770,10 @@ fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>) -> Vec<(i32,
         }
         // The parent is the 4th field of stat, after the name in parentheses.
         let stat = std::fs::read_to_string(p.path().join("stat")).unwrap_or_default();
-        let ppid =
-            stat.rsplit_once(')').and_then(|(_, r)| r.split_whitespace().nth(1)).and_then(|x| x.parse::<i32>().ok());
-        if ppid == Some(me) {
+        let fields: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+        let ppid = fields.get(1).and_then(|x| x.parse::<i32>().ok());
+        let started = fields.get(19).and_then(|x| x.parse::<u64>().ok());
+        if ppid == Some(me) || started.is_none_or(|t| t < host_start) {
             continue;
         }
         let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
