@@ -50,8 +50,6 @@ pub struct Pty {
     reads: Inotify,
     /// Output went to the host since it was last seen reading.
     wrote_since_read: bool,
-    /// The host wrote while output it had not read was there.
-    wrote_unread: bool,
 }
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -100,13 +98,10 @@ impl Pty {
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let reads = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
-        reads
-            .add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY)
-            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        reads.add_watch(&path, AddWatchFlags::IN_ACCESS).map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
             reads,
             wrote_since_read: false,
-            wrote_unread: false,
             master: pair.master,
             slave: pair.slave,
             path,
@@ -219,7 +214,6 @@ impl Pty {
                 if ended {
                     self.open = false;
                     self.wrote_since_read = false;
-                    self.wrote_unread = false;
                     self.discard_unread();
                     engine.client_gone(&format!("{} closed", self.path.display()));
                 }
@@ -228,7 +222,6 @@ impl Pty {
                 self.open = true;
                 self.take_reads();
                 self.wrote_since_read = false;
-                self.wrote_unread = false;
                 engine.client_connected(&format!("{} opened", self.path.display()));
             }
             i += 1;
@@ -261,35 +254,31 @@ impl Pty {
         let _ = termios::tcflush(&self.slave, FlushArg::TCIFLUSH);
     }
 
-    /// Whether the host left output unread when it wrote the bytes about to be read. The
-    /// kernel reports each read and write of the slave through inotify (`IN_ACCESS`,
-    /// `IN_MODIFY`) in the order they happened, whatever the lag of the bytes between the
-    /// pty's two ends: a write of the host that came after output went out and before any
-    /// read of it, or output still unread now, means it sent without reading the answer.
-    /// (The slave's input buffer is looked at too, through the simulator's own descriptor of
-    /// the slave, which shares it and only looks.)
+    /// Whether the host left output unread when it wrote the bytes about to be read: output
+    /// went out and the kernel reported no read of the slave since (inotify's `IN_ACCESS`,
+    /// queued by the host's read before it can write again, so a host that read its answer is
+    /// never taken for one that did not), or the slave's input buffer still holds bytes (seen
+    /// through the simulator's own descriptor of the slave, which shares it and only looks).
+    /// A host that writes and then reads fast enough may be missed; it is never invented.
+    /// (The host's writes, `IN_MODIFY`, are not used: one can be queued after the simulator
+    /// already read its bytes, which would make a correct fast host look as if it wrote
+    /// before reading.)
     fn host_has_unread(&mut self) -> bool {
         self.take_reads();
-        let early = std::mem::take(&mut self.wrote_unread) || self.wrote_since_read;
         let mut fds = [PollFd::new(self.slave.as_fd(), PollFlags::POLLIN)];
         let buffered = nix::poll::poll(&mut fds, nix::poll::PollTimeout::ZERO).is_ok_and(|n| n > 0)
             && fds[0].revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
-        buffered || early
+        buffered || self.wrote_since_read
     }
 
-    /// Takes the host's reads and writes of the slave, in order.
+    /// Takes the host's reads of the slave.
     fn take_reads(&mut self) {
         while let Ok(events) = self.reads.read_events() {
             if events.is_empty() {
                 break;
             }
-            for e in events {
-                if e.mask.contains(AddWatchFlags::IN_ACCESS) {
-                    self.wrote_since_read = false;
-                }
-                if e.mask.contains(AddWatchFlags::IN_MODIFY) && self.wrote_since_read {
-                    self.wrote_unread = true;
-                }
+            if events.iter().any(|e| e.mask.contains(AddWatchFlags::IN_ACCESS)) {
+                self.wrote_since_read = false;
             }
         }
     }
