@@ -117,7 +117,7 @@ pub struct RunResult {
     pub gave_up_after: Option<Duration>,
     /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
     pub stderr: String,
-    /// Observations the host made (`gcl-observe:` lines, [`observe`]).
+    /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
     pub observations: u64,
     /// Observations of values the hand never sent, before the host reported a problem: silent
     /// wrong values (`P 1 5000`, the first few).
