@@ -45,7 +45,7 @@ pub struct HostArgs {
     baud: Option<u32>,
     /// A hang: the host neither sends nor exits for this long after the hand's last answer.
     /// Default for `fuzz host`: measured (the host's own give-up time when the hand goes
-    /// silent, half as long again plus 1 s, at least 3 s); for `check-host`, whose hand never
+    /// silent, twice as long plus 2 s, at least 3 s); for `check-host`, whose hand never
     /// goes silent: 20 s (above the 5 to 15 s timeouts of real host libraries).
     #[arg(long, value_name = "D", value_parser = duration)]
     timeout_hang: Option<Duration>,
@@ -126,8 +126,8 @@ or stderr, or a protocol violation (the clauses of `gcl check-host`).
 
 Before the campaign (unless --timeout-hang is given) the host's own give-up time is
 measured: the hand goes silent at its first, middle and last answer, and the time the host
-takes to send or exit is its timeout; a hang is then silence for half as long again plus 1 s
-(at least 3 s, at most --run-budget). A hang's signature is the host's stack where it waits
+takes to send or exit is its timeout; a hang is then silence for twice as long plus 2 s (at least
+3 s, at most --run-budget). A hang's signature is the host's stack where it waits
 (faulthandler for Python hosts, eu-stack or gdb for native ones when installed), else its
 protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
 is unsafe (a crash, a hang, an exit code, sending before an answer the hand sent whole);

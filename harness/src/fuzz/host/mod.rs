@@ -260,10 +260,11 @@ pub struct Calibration {
     pub runs: u64,
 }
 
-/// The hang timeout for a host that gives up after `host_timeout` at most: half as long
-/// again plus a second, at least `floor`, at most `cap`.
+/// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
+/// 2 s (a host may wait out two reads in a row before it sends or exits), at least `floor`,
+/// at most `cap`.
 pub fn hang_timeout(host_timeout: Option<Duration>, floor: Duration, cap: Duration) -> Duration {
-    let t = host_timeout.map_or(floor, |h| (h + h / 2 + Duration::from_secs(1)).max(floor));
+    let t = host_timeout.map_or(floor, |h| (h * 2 + Duration::from_secs(2)).max(floor));
     t.min(cap)
 }
 
