@@ -10,7 +10,9 @@
 //! - runs/s for the ten-command scenario, without misbehaviour, one job and two jobs.
 //!   Aim: at least 20 runs/s.
 //! - runs/s with a random schedule of misbehaviours (most runs then wait out a host timeout,
-//!   so this is far lower; it depends on the host's timeouts, here 200 ms).
+//!   so this is far lower; it depends on the host's timeouts, here 200 ms), with a fixed hang
+//!   timeout and as `gcl fuzz host` runs by default, calibrated (the host's give-up time
+//!   measured first, the calibration runs counted in the campaign's time).
 //! - the per-run overhead of pty + hand + process: runs/s and ms/run with `/bin/true` as the
 //!   host (it opens nothing and exits at once).
 //! - how much guidance helps: for each Python host mutant (`tests/host_mutants/`, needs
@@ -125,6 +127,7 @@ fn runs_to_first(
         max_planned: 3,
         minimize: false,
         guided,
+        calibrate: false,
     };
     let stop = AtomicBool::new(false);
     let first = Mutex::new(None);
@@ -197,6 +200,7 @@ fn main() -> std::process::ExitCode {
         max_planned: 3,
         minimize: false,
         guided: true,
+        calibrate: false,
     };
     let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).expect("campaign");
     let secs = c.elapsed_ms as f64 / 1000.0;
@@ -205,6 +209,20 @@ fn main() -> std::process::ExitCode {
         c.runs,
         c.runs as f64 / secs,
         c.findings.len()
+    );
+    // The same campaign as `gcl fuzz host` runs it by default: the host's give-up time
+    // measured first (its time counted in the campaign's).
+    let c = fuzz(&FuzzOptions { calibrate: true, ..opts }, &AtomicBool::new(false), &|_| {}).expect("campaign");
+    let secs = c.elapsed_ms as f64 / 1000.0;
+    let cal = c.calibration.clone().unwrap_or_default();
+    println!(
+        "fuzzing campaign, 2 jobs, calibrated: {} runs (+{} to calibrate) in {secs:.2} s: {:.1} runs/s, {} finding(s); host timeout {:?} ms, hang timeout {} ms",
+        c.runs,
+        cal.runs,
+        c.runs as f64 / secs,
+        c.findings.len(),
+        cal.host_timeout_ms,
+        cal.timeout_hang_ms
     );
     guidance(bench);
     std::process::ExitCode::SUCCESS

@@ -169,7 +169,8 @@ fn stdio_stops_on_sigterm_while_nobody_reads_its_output() {
 fn a_host_at_another_speed_than_the_hand_exchanges_garbage_both_ways() {
     use nix::sys::termios::BaudRate;
     use sim_support::{read_port, set_port_speed};
-    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", "bh8-262"]);
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let sim = SimProcess::start_logged(Transport::Pty, &["--profile", "bh8-262"], log.reopen().unwrap());
     let mut port = open_port(&sim.address);
     // The pty starts at the hand's rate: a host that sets no speed talks.
     port.write_all(b"\r").unwrap();
@@ -187,11 +188,19 @@ fn a_host_at_another_speed_than_the_hand_exchanges_garbage_both_ways() {
     assert!(got.ends_with(b"\n\r=> "), "{got:?}");
     port.write_all(b"FGET DP\r").unwrap();
     assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"FGET DP\n\r8500 8500 8500 1575\n\r=> ");
+    // The simulator said why, once for the one change of speed, however many bytes crossed.
+    let said = std::fs::read_to_string(log.path()).unwrap();
+    let line = "gcl sim: the host opened the port at 38400 baud; the hand runs at 9600: bytes are garbled as on a \
+                real line (--no-speed-check to turn this off)";
+    assert_eq!(said.lines().filter(|l| l.contains("baud; the hand runs at")).collect::<Vec<_>>(), vec![line], "{said}");
 
-    // --no-speed-check: the speed is ignored.
-    let sim = SimProcess::start_exact(Transport::Pty, &["--profile", "bh8-262", "--no-speed-check"]);
+    // --no-speed-check: the speed is ignored, and nothing is said.
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let sim =
+        SimProcess::start_logged(Transport::Pty, &["--profile", "bh8-262", "--no-speed-check"], log.reopen().unwrap());
     let mut port = open_port(&sim.address);
     set_port_speed(&port, BaudRate::B38400);
     port.write_all(b"\r").unwrap();
     assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"\n\r=> ");
+    assert!(!std::fs::read_to_string(log.path()).unwrap().contains("garbled"));
 }

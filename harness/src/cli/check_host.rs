@@ -10,6 +10,11 @@ use gcl_harness::report::Verdict;
 use super::fuzz_host::HostArgs;
 use super::{EXIT_FAIL, EXIT_OK};
 
+/// `gcl check-host`'s hang timeout when `--timeout-hang` is not given: a perfect hand never
+/// goes silent, so a host silent this long waits for nothing it will get; above the 5 to 15 s
+/// timeouts real host libraries use, so a host that waits out its own timeout is no hang.
+const CHECK_HANG_DEFAULT: std::time::Duration = std::time::Duration::from_secs(20);
+
 /// Arguments of `gcl check-host`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
@@ -48,8 +53,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
         None => None,
     };
-    let opts =
-        CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
+    let opts = CheckHostOptions {
+        run: args.host.host_run(args.seed, CHECK_HANG_DEFAULT)?,
+        ok_exit_codes: args.host.ok_exit_codes(),
+        golden,
+    };
     let outcome = check_host(&opts).context("running the host")?;
     let report = outcome.report;
     if let Some(p) = &args.save_session {

@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
 use gcl_harness::fuzz::host::{
-    Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
+    CALIBRATION_CAP, Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
 };
 use gcl_harness::report::{CaseResult, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
@@ -41,8 +41,11 @@ pub struct HostArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(50..=4_000_000))]
     baud: Option<u32>,
     /// A hang: the host neither sends nor exits for this long after the hand's last answer.
-    #[arg(long, value_name = "D", default_value = "3s", value_parser = duration)]
-    timeout_hang: Duration,
+    /// Default for `fuzz host`: measured (the host's own give-up time when the hand goes
+    /// silent, twice as long plus 2 s, at least 3 s); for `check-host`, whose hand never
+    /// goes silent: 20 s (above the 5 to 15 s timeouts of real host libraries).
+    #[arg(long, value_name = "D", value_parser = duration)]
+    timeout_hang: Option<Duration>,
     /// A hang too: one run taking longer than this.
     #[arg(long, value_name = "D", default_value = "60s", value_parser = duration)]
     run_budget: Duration,
@@ -62,8 +65,9 @@ pub struct HostArgs {
 }
 
 impl HostArgs {
-    /// The run these arguments describe, with the hand's noise seed.
-    pub fn host_run(&self, hand_seed: u64) -> anyhow::Result<HostRun> {
+    /// The run these arguments describe, with the hand's noise seed; `default_hang` when
+    /// `--timeout-hang` is not given.
+    pub fn host_run(&self, hand_seed: u64, default_hang: Duration) -> anyhow::Result<HostRun> {
         let profile = load_profile(&self.profile)?;
         let time = TimeMode::from(self.time);
         Ok(HostRun {
@@ -73,7 +77,7 @@ impl HostArgs {
             time,
             pace: self.pace(time),
             hand_seed,
-            timeout_hang: self.timeout_hang,
+            timeout_hang: self.timeout_hang.unwrap_or(default_hang),
             budget: self.run_budget,
         })
     }
@@ -96,7 +100,15 @@ impl HostArgs {
     pub fn report_dir(&self) -> Option<&std::path::Path> {
         self.report.as_deref()
     }
+
+    /// Whether `--timeout-hang` was given.
+    pub fn timeout_hang_given(&self) -> bool {
+        self.timeout_hang.is_some()
+    }
 }
+
+/// The least hang timeout of `gcl fuzz host` (calibration raises it to the host's own).
+pub const FUZZ_HANG_FLOOR: Duration = Duration::from_secs(3);
 
 fn after_help() -> String {
     let ops: Vec<String> = Operator::ALL
@@ -108,8 +120,20 @@ fn after_help() -> String {
 Each run starts a fresh simulated hand on a fresh pty (or TCP port), runs COMMAND to its end,
 and judges it: a crash (death by signal; an AddressSanitizer report, Rust panic or Python
 traceback on stderr), a hang (--timeout-hang of silence after the hand's last answer, or
---run-budget), an exit code outside --ok-exit-codes, or a protocol violation (the clauses of
-`gcl check-host`). Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
+--run-budget), an exit code outside --ok-exit-codes, a process left behind holding the port
+or stderr, or a protocol violation (the clauses of `gcl check-host`).
+
+Before the campaign (unless --timeout-hang is given) the host's own give-up time is
+measured: the hand goes silent at its first, middle and last answer, and the time the host
+takes to send or exit is its timeout; a hang is then silence for twice as long plus 2 s (at least
+3 s, at most --run-budget). A hang's signature is the host's stack where it waits
+(faulthandler for Python hosts, eu-stack or gdb for native ones when installed), else its
+protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
+is unsafe (a crash, a hang, an exit code, sending before an answer the hand sent whole);
+otherwise it is an INFO note in the report. A host may say what it believes with
+`gcl-observe: NAME MOTOR VALUE` lines on stderr or on the descriptor GCL_OBSERVE_FD names
+(`gcl-observe: error TEXT` when it saw the hand misbehave): a value the hand never sent,
+before such an error, is a silent-wrong-value finding. Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
 or a mutation of a schedule that made the host take a new path. Each distinct finding is
 minimized and written to --out as a bundle; --replay BUNDLE runs it again.
 
@@ -170,7 +194,7 @@ pub struct Args {
 
 /// Runs `gcl fuzz host`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let run = args.host.host_run(args.seed)?;
+    let run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -185,6 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         max_planned: args.max_misbehaviours.max(1),
         minimize: !args.no_minimize,
         guided: !args.no_guidance,
+        calibrate: !args.host.timeout_hang_given(),
     };
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",
@@ -246,6 +271,29 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         campaign.paths,
         campaign.corpus
     );
+    if let Some(c) = &campaign.calibration {
+        let points: Vec<String> = c
+            .points
+            .iter()
+            .map(|(a, w)| match w {
+                Some(ms) => format!("answer {a}: {:.1} s", *ms as f64 / 1000.0),
+                None => format!("answer {a}: waited past {} s", CALIBRATION_CAP.as_secs()),
+            })
+            .collect();
+        eprintln!(
+            "host timeouts (silence at {}): {}; hang timeout {:.1} s ({} calibration runs)",
+            points.join(", "),
+            c.host_timeout_ms.map_or("none seen".to_string(), |ms| format!("{:.1} s", ms as f64 / 1000.0)),
+            c.timeout_hang_ms as f64 / 1000.0,
+            c.runs
+        );
+    }
+    if !campaign.notes.is_empty() {
+        eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
+        for (n, runs) in &campaign.notes {
+            eprintln!("  {n} (x{runs})");
+        }
+    }
     if !campaign.fired_at.is_empty() {
         eprintln!("misbehaviours fired, by protocol state:");
         for (op, states) in &campaign.fired_at {
@@ -291,6 +339,7 @@ fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
         command: opts.run.command.clone(),
         end: f.end.clone(),
         fired: f.fired.clone(),
+        timeout_hang_ms: Some(f.timeout_hang_ms),
     }
 }
 
@@ -322,7 +371,21 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
             )),
         })
         .collect();
-    if cases.is_empty() {
+    for (n, runs) in &c.notes {
+        cases.push(CaseResult {
+            id: format!("fuzz-host-{}", bundle::dir_name(FindingKind::Violation, n).replacen("violation-", "note-", 1)),
+            title: n.clone(),
+            clauses: vec!["host: reaction to a misbehaving hand".into()],
+            decisions: Vec::new(),
+            level: "INFO".into(),
+            verdict: Verdict::Pass,
+            duration_ms: 0.0,
+            message: Some(format!("a note, no finding: seen in {runs} run(s)")),
+            diff: None,
+            transcript: None,
+        });
+    }
+    if c.findings.is_empty() {
         cases.push(CaseResult {
             id: "fuzz-host-campaign".into(),
             title: format!("{} runs against a misbehaving hand without a finding", c.runs),
@@ -356,6 +419,9 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     // The bundle's time mode, so the hand answers as it did; an explicit --baud still paces.
     run.time = if info.time == TimeMode::Real.name() { TimeMode::Real } else { TimeMode::Fast };
     run.pace = args.host.pace(run.time);
+    if let (false, Some(ms)) = (args.host.timeout_hang_given(), info.timeout_hang_ms) {
+        run.timeout_hang = std::time::Duration::from_millis(ms);
+    }
     let r = run_once(&run, &schedule)?;
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {

@@ -205,6 +205,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         pty.match_speed(&engine)?;
         pty.set_speed_check(!args.no_speed_check);
+        pty.on_speed_mismatch(|line| eprintln!("gcl sim: {line}"));
         announce(&pty.path().display().to_string())?;
         eprintln!(
             "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",

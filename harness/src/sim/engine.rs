@@ -168,6 +168,14 @@ impl Engine {
         self.inq.len() < IN_CAP && self.out.len() < OUT_CAP
     }
 
+    /// Before [`Engine::input`]: whether the host's side of the line still holds output the
+    /// host has not read (a transport that can see it says so; the tap hears of it).
+    pub fn host_unread(&mut self, unread: bool) {
+        if let Some(tap) = &mut self.tap {
+            tap.host_unread(unread);
+        }
+    }
+
     /// Bytes the host wrote, read from the transport now. They reach the model at their wire
     /// time (at once when unpaced), on the next [`Engine::wake`] that finds them due.
     pub fn input(&mut self, bytes: &[u8]) {
@@ -319,7 +327,7 @@ impl Engine {
     /// `None` when unpaced). A transport that checks the host's speed writes one run at a time.
     pub fn head_run(&self) -> Option<(usize, Option<u32>)> {
         self.out_rates.front().map(|&(count, bt)| {
-            let baud = (!bt.is_zero()).then(|| (10_000_000_000f64 / bt.as_nanos() as f64).round() as u32);
+            let baud = (!bt.is_zero()).then(|| rate_of(bt));
             (count, baud)
         })
     }
@@ -355,6 +363,9 @@ impl Engine {
     /// A host opened the port or connected: output is delivered again.
     pub fn client_connected(&mut self, who: &str) {
         self.listening = true;
+        if let Some(tap) = &mut self.tap {
+            tap.connection(self.link.device(), true);
+        }
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
             t.event(sim, &format!("host connected: {who}"));
@@ -374,6 +385,9 @@ impl Engine {
             && let Some(tap) = &mut self.tap
         {
             tap.discarded(self.link.device());
+        }
+        if let Some(tap) = &mut self.tap {
+            tap.connection(self.link.device(), false);
         }
         let sim = self.link.elapsed();
         if let Some(t) = &mut self.trace {
@@ -466,6 +480,12 @@ impl Engine {
             self.eeprom_warned = true;
         }
     }
+}
+
+/// The line rate (bit/s, ten bits a byte) of a byte time, as [`Engine::head_run`] reports it:
+/// rounded, so not always the rate the byte time was made from (115200 comes back as 115201).
+pub(crate) fn rate_of(bt: Duration) -> u32 {
+    (10_000_000_000f64 / bt.as_nanos().max(1) as f64).round() as u32
 }
 
 #[cfg(test)]

@@ -20,6 +20,9 @@ use serde::{Deserialize, Serialize};
 pub trait LineTap: Send {
     /// Host bytes as the transport read them, before the model sees them.
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]);
+    /// Before the host bytes that follow: whether the host's side of the line still held
+    /// bytes the host had not read (told only by transports that can see it, the pty).
+    fn host_unread(&mut self, _unread: bool) {}
     /// One answer of the hand (whatever the model produced for one line, one block or one
     /// timer), before it is queued for the host: what actually goes out.
     fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped;
@@ -28,6 +31,8 @@ pub trait LineTap: Send {
     fn delivered(&mut self, _device: &Device) {}
     /// The host went away and the answers it had not taken were discarded.
     fn discarded(&mut self, _device: &Device) {}
+    /// A host opened the port or connected (`true`), or the last one went away (`false`).
+    fn connection(&mut self, _device: &Device, _open: bool) {}
 }
 
 /// An answer as it goes out.

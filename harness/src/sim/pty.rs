@@ -13,10 +13,9 @@
 //! the host sends is). When the last host closes the port, what it had not read is discarded,
 //! both in the simulator's queue and in the slave's input buffer.
 
-use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
-use std::os::unix::fs::FileTypeExt;
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -34,7 +33,7 @@ const WRITE_RETRY: std::time::Duration = std::time::Duration::from_millis(5);
 /// A pseudo-terminal pair held by the simulator.
 #[derive(Debug)]
 pub struct Pty {
-    master: File,
+    master: nix::pty::PtyMaster,
     slave: OwnedFd,
     path: PathBuf,
     link: Option<PathBuf>,
@@ -45,6 +44,12 @@ pub struct Pty {
     speed_check: bool,
     /// The last mismatch noted in the trace (host rate, hand rate).
     mismatch: Option<(u32, u32)>,
+    /// Told each new speed mismatch (the CLI prints it on stderr).
+    on_mismatch: Option<fn(&str)>,
+    /// Reads of the slave (`IN_ACCESS`), drained only when the host's bytes are judged.
+    reads: Inotify,
+    /// Output went to the host since it was last seen reading.
+    wrote_since_read: bool,
 }
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -56,23 +61,48 @@ impl Pty {
     /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
     /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
     pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
-        let pair = nix::pty::openpty(None, None).map_err(|e| pty_err("cannot create a pty", e))?;
-        let mut t = termios::tcgetattr(&pair.slave).map_err(|e| pty_err("tcgetattr", e))?;
+        // Both ends close-on-exec from the moment they exist (not set afterwards: a child
+        // another thread starts in between would keep them). A host holding the simulator's
+        // own slave would keep the port "open" after it closed it, so what it left unread would
+        // survive its reopen, unlike on `gcl sim --pty`; a leftover holding the master would
+        // keep the line up.
+        let master = nix::pty::posix_openpt(OFlag::O_RDWR | OFlag::O_NOCTTY | OFlag::O_CLOEXEC)
+            .map_err(|e| pty_err("cannot create a pty", e))?;
+        nix::pty::grantpt(&master).map_err(|e| pty_err("cannot create a pty (grantpt)", e))?;
+        nix::pty::unlockpt(&master).map_err(|e| pty_err("cannot create a pty (unlockpt)", e))?;
+        let path = PathBuf::from(nix::pty::ptsname_r(&master).map_err(|e| pty_err("ptsname", e))?);
+        // std opens with O_CLOEXEC.
+        let slave: OwnedFd = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::libc::O_NOCTTY | nix::libc::O_NONBLOCK)
+            .open(&path)
+            .map_err(|e| pty_err("cannot open the pty's slave", e))?
+            .into();
+        let mut t = termios::tcgetattr(&slave).map_err(|e| pty_err("tcgetattr", e))?;
         termios::cfmakeraw(&mut t);
-        termios::tcsetattr(&pair.slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
-        let path = nix::unistd::ttyname(&pair.slave).map_err(|e| pty_err("ttyname", e))?;
-        fcntl(pair.master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
+        termios::tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
+        fcntl(master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| pty_err("cannot make the master non-blocking", e))?;
-        // The simulator's own slave descriptor only ever drains what a host left unread.
-        fcntl(pair.slave.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
-            .map_err(|e| pty_err("cannot make the slave non-blocking", e))?;
+        // The simulator's own slave descriptor only ever drains what a host left unread (it
+        // was opened non-blocking).
+        struct Pair {
+            master: nix::pty::PtyMaster,
+            slave: OwnedFd,
+        }
+        let pair = Pair { master, slave };
         let watch = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         watch
             .add_watch(&path, AddWatchFlags::IN_OPEN | AddWatchFlags::IN_CLOSE)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        let reads = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
+            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        reads.add_watch(&path, AddWatchFlags::IN_ACCESS).map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
-            master: File::from(pair.master),
+            reads,
+            wrote_since_read: false,
+            master: pair.master,
             slave: pair.slave,
             path,
             link: None,
@@ -80,6 +110,7 @@ impl Pty {
             open: true,
             speed_check: true,
             mismatch: None,
+            on_mismatch: None,
         };
         if let Some(l) = link {
             make_link(&pty.path, l)?;
@@ -105,6 +136,12 @@ impl Pty {
         self.speed_check = on;
     }
 
+    /// Tells `notice` of each speed mismatch, once per change (the same line goes into the
+    /// trace): `gcl sim` prints it, since a client at the wrong speed sees only garbage.
+    pub fn on_speed_mismatch(&mut self, notice: fn(&str)) {
+        self.on_mismatch = Some(notice);
+    }
+
     /// The speed the host set on the port (the slave's termios, shared by every descriptor of
     /// it), in bit/s.
     /// `None` when it is not one of the standard speeds (a host that set an arbitrary rate
@@ -122,15 +159,21 @@ impl Pty {
     fn garbled(&mut self, engine: &mut Engine, hand: Option<u32>) -> bool {
         let (Some(hand), true) = (hand, self.speed_check) else { return false };
         let Some(host) = self.host_speed() else { return false };
-        let uart = SPEEDS.iter().find(|(r, _)| *r >= hand).map_or(hand, |(r, _)| *r);
-        if host == uart {
+        if host == uart_rate(hand) {
             self.mismatch = None;
             return false;
         }
         if self.mismatch != Some((host, hand)) {
             self.mismatch = Some((host, hand));
-            engine
-                .note(&format!("speed mismatch: the host's port is at {host}, the hand at {hand}: garbage both ways"));
+            let line = format!(
+                "the host opened the port at {host} baud; the hand runs at {}: bytes are garbled as on a real line \
+                 (--no-speed-check to turn this off)",
+                uart_rate(hand)
+            );
+            engine.note(&format!("speed mismatch: {line}"));
+            if let Some(tell) = self.on_mismatch {
+                tell(&line);
+            }
         }
         true
     }
@@ -170,12 +213,15 @@ impl Pty {
                 };
                 if ended {
                     self.open = false;
+                    self.wrote_since_read = false;
                     self.discard_unread();
                     engine.client_gone(&format!("{} closed", self.path.display()));
                 }
             }
             if m.contains(AddWatchFlags::IN_OPEN) && !self.open {
                 self.open = true;
+                self.take_reads();
+                self.wrote_since_read = false;
                 engine.client_connected(&format!("{} opened", self.path.display()));
             }
             i += 1;
@@ -206,6 +252,41 @@ impl Pty {
             }
         }
         let _ = termios::tcflush(&self.slave, FlushArg::TCIFLUSH);
+    }
+
+    /// Whether the host left output unread when it wrote the bytes about to be read: output
+    /// went out and the kernel reported no read of the slave since (inotify's `IN_ACCESS`,
+    /// queued by the host's read before it can write again, so a host that read its answer is
+    /// never taken for one that did not), or the slave's input buffer still holds bytes (seen
+    /// through the simulator's own descriptor of the slave, which shares it and only looks).
+    /// A host that writes and then reads fast enough may be missed; it is never invented.
+    /// (The host's writes, `IN_MODIFY`, are not used: one can be queued after the simulator
+    /// already read its bytes, which would make a correct fast host look as if it wrote
+    /// before reading.)
+    fn host_has_unread(&mut self) -> bool {
+        self.take_reads();
+        let mut fds = [PollFd::new(self.slave.as_fd(), PollFlags::POLLIN)];
+        let buffered = nix::poll::poll(&mut fds, nix::poll::PollTimeout::ZERO).is_ok_and(|n| n > 0)
+            && fds[0].revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
+        buffered || self.wrote_since_read
+    }
+
+    /// Takes the host's reads of the slave.
+    fn take_reads(&mut self) {
+        while let Ok(events) = self.reads.read_events() {
+            if events.is_empty() {
+                break;
+            }
+            if events.iter().any(|e| e.mask.contains(AddWatchFlags::IN_ACCESS)) {
+                self.wrote_since_read = false;
+            }
+        }
+    }
+
+    /// Output is about to go to the host.
+    fn writing(&mut self) {
+        self.take_reads();
+        self.wrote_since_read = true;
     }
 
     /// Whether a descriptor other than the simulator's own refers to the slave.
@@ -294,6 +375,7 @@ impl Pty {
                             break;
                         }
                         Ok(n) => {
+                            engine.host_unread(self.host_has_unread());
                             if self.garbled(engine, engine.line_baud()) {
                                 buf[..n].iter_mut().for_each(|b| *b = garble(*b));
                             }
@@ -320,6 +402,7 @@ impl Pty {
                     break;
                 }
                 let n = out.len().min(run.max(1));
+                self.writing();
                 let written = if garble_out {
                     let g: Vec<u8> = out[..n].iter().map(|b| garble(*b)).collect();
                     self.master.write(&g)
@@ -375,9 +458,23 @@ const SPEEDS: &[(u32, BaudRate)] = &[
     (230_400, BaudRate::B230400),
 ];
 
-/// The termios speed nearest above a rate (a UART runs at one of these).
+/// The standard rate a UART set for `baud` bit/s runs at: a standard rate within 1 % of it
+/// (the engine's rate comes back from a whole number of nanoseconds per byte, so 115200
+/// reads as 115201), else the nearest standard rate above it.
+fn uart_rate(baud: u32) -> u32 {
+    let near = |r: u32| u64::from(r.abs_diff(baud)) * 100 <= u64::from(r);
+    SPEEDS
+        .iter()
+        .map(|(r, _)| *r)
+        .find(|&r| near(r))
+        .or_else(|| SPEEDS.iter().map(|(r, _)| *r).find(|&r| r >= baud))
+        .unwrap_or(baud)
+}
+
+/// The termios speed of the UART rate for `baud` (a UART runs at one of these).
 fn speed_for(baud: u32) -> BaudRate {
-    SPEEDS.iter().find(|(r, _)| *r >= baud).map_or(BaudRate::B230400, |(_, b)| *b)
+    let rate = uart_rate(baud);
+    SPEEDS.iter().find(|(r, _)| *r == rate).map_or(BaudRate::B230400, |(_, b)| *b)
 }
 
 fn make_link(target: &Path, link: &Path) -> Result<(), SimError> {
@@ -435,5 +532,25 @@ impl Drop for Pty {
             }
         }
         let _ = self.master.flush();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every standard rate the hand can run at matches a host that set that very rate on
+    /// the port, once it has gone through the engine's byte time and back.
+    #[test]
+    fn every_standard_rate_matches_itself() {
+        for &(rate, speed) in SPEEDS {
+            let back = super::super::engine::rate_of(gcl_host::link::byte_time(rate));
+            assert_eq!(uart_rate(back), rate, "{rate} bit/s came back as {back}");
+            assert_eq!(uart_rate(rate), rate);
+            assert_eq!(speed_for(rate), speed);
+        }
+        // A rate between standard ones runs at the next one up.
+        assert_eq!(uart_rate(10_000), 19200);
+        assert_eq!(uart_rate(1_000_000), 1_000_000);
     }
 }

@@ -36,7 +36,9 @@ impl AsFd for StopSignal {
 
 /// A new stop switch (a pipe).
 pub fn stop_pair() -> std::io::Result<(StopHandle, StopSignal)> {
-    let (rx, tx) = nix::unistd::pipe()?;
+    // Close-on-exec from the start: a child started meanwhile (a host) that kept the write
+    // end would keep the stop from ever being seen.
+    let (rx, tx) = nix::unistd::pipe2(nix::fcntl::OFlag::O_CLOEXEC)?;
     Ok((StopHandle { tx: Some(tx) }, StopSignal { rx }))
 }
 

@@ -44,6 +44,11 @@ impl SimProcess {
     /// Starts `gcl sim <transport flag> <args>` with exactly these arguments (the defaults of
     /// `gcl sim` otherwise: real time, paced at the hand's BAUD).
     pub fn start_exact(transport: Transport, args: &[&str]) -> SimProcess {
+        SimProcess::start_logged(transport, args, Stdio::null())
+    }
+
+    /// [`SimProcess::start_exact`] with its stderr going to `stderr`.
+    pub fn start_logged(transport: Transport, args: &[&str], stderr: impl Into<Stdio>) -> SimProcess {
         let flag: &[&str] = match transport {
             Transport::Pty => &["--pty"],
             Transport::Tcp => &["--tcp", "127.0.0.1:0"],
@@ -55,7 +60,7 @@ impl SimProcess {
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
-            .stderr(Stdio::null())
+            .stderr(stderr)
             .spawn()
             .expect("spawn gcl sim");
         let stdout = child.stdout.take().expect("stdout");

@@ -49,6 +49,10 @@ pub struct BundleInfo {
     pub end: HostEnd,
     /// What fired in it, at which protocol states.
     pub fired: Vec<Fired>,
+    /// The hang timeout of the campaign that found it, milliseconds (calibrated or given);
+    /// `--replay` uses it unless `--timeout-hang` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timeout_hang_ms: Option<u64>,
 }
 
 /// Why a bundle cannot be read or written.
@@ -210,6 +214,7 @@ mod tests {
             time: "fast".into(),
             command: vec!["host".into()],
             end: HostEnd::Hung("x".into()),
+            timeout_hang_ms: None,
             fired: vec![],
         };
         let ex = vec![

@@ -88,18 +88,44 @@ pub struct HostViolation {
     pub kind: String,
     /// What exactly, with the bytes escaped.
     pub detail: String,
+    /// The hand had misbehaved before it (a fuzzing run): how the host reacted to the hand's
+    /// own fault. Only a host that pipelines on regardless is a finding then; the rest is a
+    /// note ([`HostViolation::is_note`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub after_misbehaviour: bool,
+}
+
+impl HostViolation {
+    /// Whether this is an INFO note rather than a finding: it came after the hand misbehaved
+    /// and it is no unsafe reaction. Sending before an answer the hand sent whole (sending
+    /// before a broken one is not even a violation) stays a finding; a line ending, a command,
+    /// a RealTime block or a way of leaving that follows a broken answer, a restart or a
+    /// silence is what a host does to get the hand back, or to report it and go.
+    pub fn is_note(&self) -> bool {
+        self.after_misbehaviour && self.clause != HostClause::WaitsForAnswer
+    }
 }
 
 /// Longest line kept for grading (longer lines are graded on their start).
 const LINE_CAP: usize = 4096;
+
+/// Most command words kept (the host's path through the protocol); a host that sends more
+/// is graded on all of them all the same.
+const COMMANDS_CAP: usize = 1000;
 
 /// The host-side protocol state, fed both directions.
 #[derive(Debug, Clone)]
 pub struct HostChecker {
     profile: Arc<Profile>,
     line: Vec<u8>,
-    /// The last byte the host sent (for CR CR).
+    /// The last byte the host sent since the hand's last answer reached it or the port was
+    /// last opened (for CR CR: a lone CR after an answer or a reopen is a resync).
     prev: Option<u8>,
+    /// The host's side of the line still held answer bytes it had not read when it sent the
+    /// bytes it sends next (only a pty can tell).
+    unread: bool,
+    /// The hand has misbehaved in this session.
+    misbehaved: bool,
     /// A command line was sent and its answer has not ended yet (its last byte has not been
     /// delivered to the line).
     pending: bool,
@@ -128,6 +154,8 @@ impl HostChecker {
             profile,
             line: Vec::new(),
             prev: None,
+            unread: false,
+            misbehaved: false,
             pending: false,
             in_flight: VecDeque::new(),
             broken: false,
@@ -165,7 +193,8 @@ impl HostChecker {
 
     /// The name of the answer the hand is about to send (for misbehaviour reports).
     pub fn answer_state(&self, device: &Device) -> String {
-        if device.mode() == Mode::Loop {
+        // The answer to LOOP itself is the last supervisory one (the loop starts after it).
+        if device.mode() == Mode::Loop && self.mode == Mode::Loop {
             return "RealTime feedback".to_string();
         }
         match &self.last_command {
@@ -177,8 +206,16 @@ impl HostChecker {
     fn violate(&mut self, clause: HostClause, kind: &str, detail: String) {
         // One of each kind per session is enough to grade and to deduplicate.
         if !self.violations.iter().any(|v| v.clause == clause && v.kind == kind) {
-            self.violations.push(HostViolation { clause, kind: kind.to_string(), detail });
+            let after_misbehaviour = self.misbehaved;
+            self.violations.push(HostViolation { clause, kind: kind.to_string(), detail, after_misbehaviour });
         }
+    }
+
+    /// The host's side of the line holds answer bytes it has not read (`true`), as the
+    /// transport saw just before the host bytes it passes next: sending then is sending
+    /// before the answer, however fast the line delivered it.
+    pub fn host_unread(&mut self, unread: bool) {
+        self.unread = unread;
     }
 
     /// Host bytes as the hand reads them.
@@ -191,7 +228,15 @@ impl HostChecker {
                 self.supervisory_byte(b);
             }
             self.prev = Some(b);
+            // Only the first byte after the look: later ones follow it.
+            self.unread = false;
         }
+    }
+
+    /// Whether the host sends now while an answer is still coming, or with one it has not
+    /// read (pipelining), and the answer was whole (a host may give up on a broken one).
+    fn sends_early(&self) -> bool {
+        (self.pending || (self.unread && self.line.is_empty())) && !self.broken
     }
 
     fn supervisory_byte(&mut self, b: u8) {
@@ -206,7 +251,7 @@ impl HostChecker {
             self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
             return;
         }
-        if self.pending && !self.broken {
+        if self.sends_early() {
             let cmd = self.last_command.clone().unwrap_or_default();
             self.violate(
                 HostClause::WaitsForAnswer,
@@ -242,7 +287,9 @@ impl HostChecker {
                     .trim_start_matches(|c: char| c.is_ascii_digit())
                     .to_string();
                 self.last_command = Some(word.clone());
-                self.commands.push(word);
+                if self.commands.len() < COMMANDS_CAP {
+                    self.commands.push(word);
+                }
             }
             Ok(Line::Empty) => {}
             Err(r) => {
@@ -265,7 +312,7 @@ impl HostChecker {
             self.block_due -= 1;
             return;
         }
-        if self.pending && !self.broken && b != self.profile.framing.abort {
+        if self.sends_early() && b != self.profile.framing.abort {
             self.violate(
                 HostClause::WaitsForAnswer,
                 "block before feedback",
@@ -308,6 +355,7 @@ impl HostChecker {
         self.mode = device.mode();
         if misbehaved {
             self.broken = true;
+            self.misbehaved = true;
         }
         if bytes.is_empty() {
             return;
@@ -323,12 +371,31 @@ impl HostChecker {
         if self.in_flight.pop_front() == Some(true) {
             self.pending = false;
         }
+        self.prev = None;
     }
 
     /// The answers not yet delivered were discarded (the host went away).
     pub fn discarded(&mut self) {
         self.in_flight.clear();
         self.pending = false;
+    }
+
+    /// A host opened the port (`true`) or the last one closed it: a CR that follows is a
+    /// fresh start, not the second of two.
+    pub fn connection(&mut self, _open: bool) {
+        self.prev = None;
+    }
+
+    /// The hand restarted while answering (the answer just queued ends with its power-up
+    /// output): it is in supervisory mode, at the prompt once that output is delivered, with
+    /// no line or block under way, whatever mode it was in.
+    pub fn restarted(&mut self) {
+        self.mode = Mode::Idle;
+        self.block_due = 0;
+        self.block_size = 0;
+        self.line.clear();
+        self.misbehaved = true;
+        self.broken = true;
     }
 
     /// The host went away: grades how it left.

@@ -77,6 +77,155 @@ fn python(s: &str) -> Option<CrashReport> {
     Some(CrashReport { kind: "python", signature: format!("python {ty} in {}", top.join(" < ")), headline: exception })
 }
 
+/// Where a hung host was stuck: its innermost frames, its own code first.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct HangStack {
+    /// How it was taken: `faulthandler` (Python), `eu-stack` or `gdb` (native).
+    pub by: String,
+    /// The top frames, no addresses or line numbers (`read_line < main`,
+    /// `host.py:read_prompt < host.py:main`).
+    pub frames: String,
+}
+
+impl HangStack {
+    /// Where it waits: the innermost frame of the host's own code. The signature of a hang,
+    /// so that one wait without a deadline is one finding whatever the path that led to it.
+    pub fn site(&self) -> &str {
+        self.frames.split(" < ").next().unwrap_or(&self.frames)
+    }
+}
+
+/// Frames of a Python `faulthandler` dump (`File "x.py", line 12 in read_prompt`, most recent
+/// first) of the thread that was current, or of the first thread listed; the host's own
+/// files before the standard library and installed packages (where a read blocks).
+pub fn faulthandler_frames(dump: &str) -> Option<String> {
+    let start = dump.find("Current thread").or_else(|| dump.find("Thread 0x")).or_else(|| dump.find("Stack ("))?;
+    let mut all = Vec::new();
+    for l in dump[start..].lines().skip(1) {
+        let t = l.trim_start();
+        let Some(f) = t.strip_prefix("File \"") else { break };
+        let file = f.split('"').next().unwrap_or_default();
+        let func = t.rsplit(" in ").next().unwrap_or("?").trim();
+        let base = file.rsplit('/').next().unwrap_or(file);
+        let library = file.contains("/lib/python") || file.contains("-packages/") || file.starts_with('<');
+        all.push((format!("{base}:{func}"), library));
+    }
+    own_first(all)
+}
+
+/// Frames of a native stack as `eu-stack -m` (`#1 0x… read_line - /path/exe`) or `gdb -batch
+/// -ex bt` (`#1  0x… in read_line (fd=3) at host.c:20`, `from /lib/…` for a library) print
+/// them, for the first thread listed; the program's own frames before those of shared
+/// libraries (libc's `read`, the sanitizer's interceptors).
+pub fn native_frames(text: &str) -> Option<String> {
+    let mut all = Vec::new();
+    let mut seen_thread = false;
+    for l in text.lines() {
+        let t = l.trim();
+        if t.starts_with("TID ") || t.starts_with("Thread ") {
+            if seen_thread && !all.is_empty() {
+                break;
+            }
+            seen_thread = true;
+            continue;
+        }
+        let Some(rest) = t.strip_prefix('#') else { continue };
+        // Skip the frame number and the address.
+        let mut words = rest.split_whitespace().skip(1).peekable();
+        if words.peek().is_some_and(|w| w.starts_with("0x")) {
+            words.next();
+        }
+        if words.peek() == Some(&"in") {
+            words.next();
+        }
+        let Some(func) = words.next() else { continue };
+        let func = func.split('(').next().unwrap_or(func).to_string();
+        if func.is_empty() || func == "??" {
+            continue;
+        }
+        let tail: Vec<&str> = words.collect();
+        let module = tail.windows(2).find(|w| w[0] == "-" || w[0] == "from").map(|w| w[1]).unwrap_or_default();
+        let library = module.contains(".so")
+            || func.starts_with("__")
+            || ["std::", "<std::", "core::", "<core::", "alloc::", "<alloc::", "<&"]
+                .iter()
+                .any(|p| func.starts_with(p))
+            || func.starts_with("_dl_")
+            || [
+                "read",
+                "poll",
+                "select",
+                "pselect",
+                "ppoll",
+                "nanosleep",
+                "clock_nanosleep",
+                "epoll_wait",
+                "sleep",
+                "usleep",
+            ]
+            .contains(&func.as_str());
+        all.push((func, library));
+    }
+    own_first(all)
+}
+
+fn own_first(all: Vec<(String, bool)>) -> Option<String> {
+    if all.is_empty() {
+        return None;
+    }
+    let own: Vec<&String> = all.iter().filter(|(_, lib)| !lib).map(|(f, _)| f).collect();
+    let pick: Vec<&String> = if own.is_empty() { all.iter().map(|(f, _)| f).collect() } else { own };
+    Some(pick.into_iter().take(TOP_FRAMES).cloned().collect::<Vec<_>>().join(" < "))
+}
+
+/// Samples the stack of a stopped-in-place native process with `eu-stack` or, failing that,
+/// `gdb -batch` (each when installed; each given 10 s). `None` when neither is there, the
+/// process cannot be traced, or no frame could be read.
+pub fn sample_native(pid: i32) -> Option<HangStack> {
+    let tools: [(&str, Vec<String>); 2] = [
+        ("eu-stack", vec!["-m".into(), "-p".into(), pid.to_string()]),
+        ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), "bt".into()]),
+    ];
+    for (tool, args) in tools {
+        let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
+        if let Some(frames) = native_frames(&out) {
+            return Some(HangStack { by: tool.to_string(), frames });
+        }
+    }
+    None
+}
+
+/// Runs a tool with a deadline; its stdout, or `None` when it is missing or overran.
+fn run_bounded(tool: &str, args: &[String], limit: std::time::Duration) -> Option<String> {
+    use std::io::Read;
+    let mut child = std::process::Command::new(tool)
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .ok()?;
+    let mut out = child.stdout.take()?;
+    let reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = out.by_ref().take(1 << 20).read_to_end(&mut s);
+        s
+    });
+    let end = std::time::Instant::now() + limit;
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => break,
+            Ok(None) if std::time::Instant::now() < end => std::thread::sleep(std::time::Duration::from_millis(20)),
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return None;
+            }
+        }
+    }
+    reader.join().ok().map(|s| String::from_utf8_lossy(&s).into_owned())
+}
+
 /// The name of a signal number (`SIGSEGV`), or its number.
 pub fn signal_name(sig: i32) -> String {
     nix::sys::signal::Signal::try_from(sig).map_or_else(|_| format!("signal {sig}"), |s| s.as_str().to_string())
@@ -102,5 +251,16 @@ mod tests {
         assert_eq!(r.signature, "python ValueError in host.py:parse < host.py:<module>");
         assert_eq!(crash_report("all fine\n"), None);
         assert_eq!(signal_name(11), "SIGSEGV");
+    }
+
+    #[test]
+    fn hang_stacks_name_the_hosts_own_code() {
+        let py = "Fatal Python error: Aborted\n\nCurrent thread 0x00007f (most recent call first):\n  File \"/usr/lib/python3/dist-packages/serial/serialposix.py\", line 565 in read\n  File \"/t/hosts/py_host.py\", line 20 in read_prompt\n  File \"/t/hosts/py_host.py\", line 40 in main\n  File \"/t/hosts/py_host.py\", line 44 in <module>\n\nExtension modules: x\n";
+        assert_eq!(faulthandler_frames(py).unwrap(), "py_host.py:read_prompt < py_host.py:main < py_host.py:<module>");
+        let eu = "PID 12 - process\nTID 12:\n#0  0x00007f3 __GI___libc_read - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x0000555 read_line - /tmp/c_host\n#2  0x0000556 main - /tmp/c_host\n#3  0x00007f4 __libc_start_call_main - /usr/lib/x86_64-linux-gnu/libc.so.6\n";
+        assert_eq!(native_frames(eu).unwrap(), "read_line < main");
+        let gdb = "0x00007f in __GI___libc_read (fd=3, buf=0x7ff, nbytes=1) at ../sysdeps/unix/sysv/linux/read.c:26\n#0  0x00007f in __GI___libc_read (fd=3) at ../sysdeps/read.c:26\n#1  0x000055 in read_line (fd=3, buf=0x7ff \"\") at host.c:20\n#2  0x000055 in main () at host.c:40\n";
+        assert_eq!(native_frames(gdb).unwrap(), "read_line < main");
+        assert_eq!(native_frames("no frames here"), None);
     }
 }

@@ -46,6 +46,12 @@ pub enum FindingKind {
     ExitCode,
     /// The host broke the protocol.
     Violation,
+    /// The host left a process behind that held the port or its stderr after it ended (killed).
+    Leftover,
+    /// The host observed a value the hand never sent and did not say anything was wrong
+    /// (`gcl-observe:` lines).
+    #[serde(rename = "silent-wrong-value")]
+    WrongValue,
 }
 
 impl FindingKind {
@@ -56,6 +62,8 @@ impl FindingKind {
             FindingKind::Hang => "hang",
             FindingKind::ExitCode => "exit-code",
             FindingKind::Violation => "violation",
+            FindingKind::Leftover => "leftover",
+            FindingKind::WrongValue => "silent-wrong-value",
         }
     }
 }
@@ -71,8 +79,41 @@ pub struct Verdict {
     pub message: String,
 }
 
+/// A hang's signature and message: by the host's stack when it could be taken (one bug, one
+/// signature, whatever the protocol state it hangs in), else by the protocol state without
+/// the command it followed.
+fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
+    let what = if over_budget { "the host overran its run budget" } else { "the host neither sent nor exited" };
+    match &r.stack {
+        Some(st) => Verdict {
+            kind: FindingKind::Hang,
+            signature: format!("hang in {}", st.site()),
+            message: format!("{what} ({state}), stuck in {} ({})", st.frames, st.by),
+        },
+        None => {
+            let coarse = state.split(" after ").next().unwrap_or(state);
+            let budget = if over_budget { "over budget, " } else { "" };
+            Verdict {
+                kind: FindingKind::Hang,
+                signature: format!("hang: {budget}{coarse}"),
+                message: format!("{what} ({state}; no stack could be taken)"),
+            }
+        }
+    }
+}
+
+/// The INFO notes of a run: how the host reacted to the hand's own misbehaviour where that
+/// was no unsafe reaction ([`HostViolation::is_note`]), as `clause: kind` with the detail.
+pub fn notes(r: &RunResult) -> Vec<(String, String)> {
+    r.violations
+        .iter()
+        .filter(|x| x.is_note())
+        .map(|x| (format!("note: {}: {}", x.clause.id(), x.kind), format!("{}: {}", x.clause.title(), x.detail)))
+        .collect()
+}
+
 /// Judges a run: every problem it shows, the most serious first (crash, hang, exit code,
-/// violations).
+/// leftover processes, violations). Violations that are only notes are not among them.
 pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
     let mut v = Vec::new();
     let report = detect::crash_report(&r.stderr);
@@ -91,16 +132,8 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             signature: format!("crash: {}", c.signature),
             message: c.headline.clone(),
         }),
-        (HostEnd::Hung(state), _) => v.push(Verdict {
-            kind: FindingKind::Hang,
-            signature: format!("hang: {state}"),
-            message: format!("the host neither sent nor exited ({state})"),
-        }),
-        (HostEnd::OverBudget(state), _) => v.push(Verdict {
-            kind: FindingKind::Hang,
-            signature: format!("hang: over budget, {state}"),
-            message: format!("the host overran its run budget ({state})"),
-        }),
+        (HostEnd::Hung(state), _) => v.push(hang_verdict(r, state, false)),
+        (HostEnd::OverBudget(state), _) => v.push(hang_verdict(r, state, true)),
         (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
             v.push(Verdict {
@@ -111,7 +144,28 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
         }
         (HostEnd::Exit(_), _) => {}
     }
-    for x in &r.violations {
+    if !r.leftovers.is_empty() {
+        v.push(Verdict {
+            kind: FindingKind::Leftover,
+            signature: "leftover: a process held the port or stderr after the host ended".into(),
+            message: format!(
+                "the host left {} behind holding the port or its stderr after it ended; killed",
+                r.leftovers.join(", ")
+            ),
+        });
+    }
+    if let Some(first) = r.wrong_values.first() {
+        let name = first.split_whitespace().next().unwrap_or_default();
+        v.push(Verdict {
+            kind: FindingKind::WrongValue,
+            signature: format!("silent wrong value: {name}"),
+            message: format!(
+                "the host observed {} that the hand never sent, and reported nothing wrong",
+                r.wrong_values.join(", ")
+            ),
+        });
+    }
+    for x in r.violations.iter().filter(|x| !x.is_note()) {
         v.push(Verdict {
             kind: FindingKind::Violation,
             signature: format!("violation: {}: {}", x.clause.id(), x.kind),
@@ -186,6 +240,66 @@ pub struct FuzzOptions {
     pub minimize: bool,
     /// Mutate the schedules of runs that took a new path (off: every schedule is fresh).
     pub guided: bool,
+    /// Measure the host's own give-up time first ([`calibrate`]) and call a hang only well
+    /// past it (`run.timeout_hang` is then the least hang timeout).
+    pub calibrate: bool,
+}
+
+/// The longest a calibration run waits for the host to act after the hand goes silent.
+pub const CALIBRATION_CAP: Duration = Duration::from_secs(30);
+
+/// What calibration measured: how long the host waits for a hand that went silent.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// For each answer the hand went silent at: the host's give-up time in milliseconds, or
+    /// `None` when it neither sent nor exited within the calibration cap (it waits for ever
+    /// there).
+    pub points: Vec<(u32, Option<u64>)>,
+    /// The longest give-up time measured, milliseconds: the host's own timeout.
+    pub host_timeout_ms: Option<u64>,
+    /// The hang timeout the campaign used, milliseconds.
+    pub timeout_hang_ms: u64,
+    /// Runs it took.
+    pub runs: u64,
+}
+
+/// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
+/// 2 s (a host may wait out two reads in a row before it sends or exits), at least `floor`,
+/// at most `cap`.
+pub fn hang_timeout(host_timeout: Option<Duration>, floor: Duration, cap: Duration) -> Duration {
+    let t = host_timeout.map_or(floor, |h| (h * 2 + Duration::from_secs(2)).max(floor));
+    t.min(cap)
+}
+
+/// Measures how long the host waits when the hand goes silent: a run without misbehaviour
+/// (to count its answers), then runs where the hand goes silent at the first answer, the
+/// middle one and the last, each waiting up to [`CALIBRATION_CAP`] (or the run budget) for
+/// the host to send or exit. The hang timeout is [`hang_timeout`] of the longest wait seen.
+/// Known limit: a host whose timeouts differ from command to command may wait longer at an
+/// answer not measured; `--timeout-hang` then sets the hang timeout by hand.
+pub fn calibrate(run: &HostRun, stop: &AtomicBool) -> Result<Calibration, RunError> {
+    let cap = CALIBRATION_CAP.min(run.budget);
+    let mut quiet = run.clone();
+    quiet.timeout_hang = cap;
+    let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
+    let n = clean.answers.max(1);
+    let mut at = vec![1, n.div_ceil(2), n];
+    at.dedup();
+    let mut c = Calibration { runs: 1, ..Default::default() };
+    for a in at {
+        let silence = Schedule { planned: vec![Planned { answer: a, op: Operator::Silence, arg: 0 }] };
+        let r = run_once_until(&quiet, &silence, stop)?;
+        c.runs += 1;
+        if r.fired.is_empty() {
+            continue;
+        }
+        let waited = r.gave_up_after.map(|d| d.as_millis() as u64);
+        c.points.push((a, waited));
+    }
+    c.host_timeout_ms = c.points.iter().filter_map(|(_, w)| *w).max();
+    let t = hang_timeout(c.host_timeout_ms.map(Duration::from_millis), run.timeout_hang, run.budget);
+    c.timeout_hang_ms = t.as_millis() as u64;
+    Ok(c)
 }
 
 /// A distinct finding.
@@ -207,6 +321,9 @@ pub struct Finding {
     pub fired: Vec<crate::sim::misbehave::Fired>,
     /// How the host ended in it.
     pub end: HostEnd,
+    /// The hang timeout it was found with, milliseconds (calibrated or given).
+    #[serde(default)]
+    pub timeout_hang_ms: u64,
     /// The host's stderr in it.
     #[serde(skip)]
     pub stderr: String,
@@ -246,6 +363,13 @@ pub struct Campaign {
     pub corpus: usize,
     /// Distinct paths seen (operator at state, then the host's next command).
     pub paths: usize,
+    /// The host's own timeouts as calibration measured them, and the hang timeout used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<Calibration>,
+    /// INFO notes (how the host reacted to the hand's misbehaviour, no finding), with the
+    /// number of runs that showed each.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub notes: BTreeMap<String, u64>,
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -260,6 +384,7 @@ struct Shared {
     fired_at: BTreeMap<String, BTreeMap<String, u64>>,
     /// Answers in the run without misbehaviour (run 0), once taken.
     answers: Option<u32>,
+    notes: BTreeMap<String, u64>,
     minimize_runs: u64,
     error: Option<String>,
     /// Runs 0..taken have been taken in.
@@ -285,6 +410,9 @@ impl Shared {
         if fresh_path && !r.fired.is_empty() {
             self.corpus.push((i, schedule.clone()));
         }
+        for (sig, _) in notes(&r) {
+            *self.notes.entry(sig).or_default() += 1;
+        }
         let mut new = Vec::new();
         for v in judge(&r, &opts.ok_exit_codes) {
             match self.by_sig.get(&v.signature) {
@@ -301,6 +429,7 @@ impl Shared {
                         original: schedule.clone(),
                         fired: r.fired.clone(),
                         end: r.end.clone(),
+                        timeout_hang_ms: opts.run.timeout_hang.as_millis() as u64,
                         stderr: r.stderr.clone(),
                         exchanges: r.exchanges.clone(),
                     });
@@ -408,6 +537,27 @@ pub fn minimize(
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
+    let calibration = if opts.calibrate {
+        match calibrate(&opts.run, stop) {
+            Ok(c) => Some(c),
+            Err(RunError::Cancelled) => {
+                return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
+            }
+            Err(e) => return Err(e),
+        }
+    } else {
+        None
+    };
+    let calibrated;
+    let opts = match &calibration {
+        Some(c) => {
+            let mut o = opts.clone();
+            o.run.timeout_hang = Duration::from_millis(c.timeout_hang_ms);
+            calibrated = o;
+            &calibrated
+        }
+        None => opts,
+    };
     let next = AtomicU64::new(0);
     let completed = AtomicU64::new(0);
     let jobs = opts.jobs.max(1) as u64;
@@ -418,6 +568,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         by_sig: BTreeMap::new(),
         fired_at: BTreeMap::new(),
         answers: None,
+        notes: BTreeMap::new(),
         minimize_runs: 0,
         error: None,
         taken: 0,
@@ -537,6 +688,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         fired_at: sh.fired_at,
         corpus: sh.corpus.len(),
         paths: sh.paths.len(),
+        calibration,
+        notes: sh.notes,
     })
 }
 

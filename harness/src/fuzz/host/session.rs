@@ -5,6 +5,18 @@
 //! child process in its own process group (so a hang is ended with the whole group). A hang
 //! is the host neither sending nor exiting for the hang timeout after the hand's last answer
 //! (held-back output counts as an answer still coming), or the run outliving its budget.
+//! Before a hung host is killed its stack is taken: a Python host (run with
+//! `PYTHONFAULTHANDLER=1`) is sent SIGABRT and dumps its frames on stderr; a native one is
+//! sampled with `eu-stack` or `gdb` when installed. Sanitizers write their reports to a file
+//! per run (`ASAN_OPTIONS=log_path=`), read back after the run.
+//!
+//! Budgets hold whatever the host leaves behind: once it has ended (or been killed), its
+//! process group is killed, stderr is read for a short grace only, and any process that still
+//! holds the port or the host's stderr (one that left the group with `setsid`) is found
+//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]).
+//!
+//! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
+//! the rest is counted and noted, so a host writing without end costs no memory.
 
 use std::io::Read;
 use std::os::fd::AsFd;
@@ -95,13 +107,27 @@ pub enum HostEnd {
 pub struct RunResult {
     /// How the host ended.
     pub end: HostEnd,
-    /// Its stderr (the first 256 KiB).
+    /// Where a hung host was stuck, when its stack could be taken.
+    pub stack: Option<super::detect::HangStack>,
+    /// Processes the host left behind holding the port or its stderr, killed after it ended
+    /// (`pid N (name)`).
+    pub leftovers: Vec<String>,
+    /// How long the host took to send or exit once the hand went silent (a `silence` that
+    /// fired), or `None` (no silence, or the host did neither before the run ended).
+    pub gave_up_after: Option<Duration>,
+    /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
     pub stderr: String,
+    /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
+    pub observations: u64,
+    /// Observations of values the hand never sent, before the host reported a problem: silent
+    /// wrong values (`P 1 5000`, the first few).
+    pub wrong_values: Vec<String>,
     /// Bytes both ways.
     pub exchanges: Vec<Exchange>,
     /// The misbehaviours that fired.
     pub fired: Vec<Fired>,
-    /// The host's protocol violations.
+    /// The host's protocol violations (those that are only notes included:
+    /// [`HostViolation::is_note`]).
     pub violations: Vec<HostViolation>,
     /// Command words the host sent.
     pub commands: Vec<String>,
@@ -140,11 +166,37 @@ pub enum RunError {
     Cancelled,
 }
 
+/// Most bytes of the traffic kept each way; the rest is counted, not kept.
+pub const KEEP_CAP: usize = 1 << 20;
+
+/// The start of an observation line (on the host's stderr, or on its stdout, which
+/// `GCL_OBSERVE_FD=1` names): `gcl-observe: NAME MOTOR VALUE` says what the host believes
+/// the hand reported (`gcl-observe: P 1 5000`: motor 1's position is 5000);
+/// `gcl-observe: error TEXT` says it saw the hand misbehave, after which its observations are
+/// not judged. An observation of a value the hand never sent is a silent wrong value.
+pub const OBSERVE: &str = "gcl-observe:";
+
+/// Most distinct values remembered as sent by the hand.
+const SENT_CAP: usize = 1 << 16;
+
 /// Shared between the tap (in the hand's thread) and the run.
 struct Log {
     misbehave: Misbehave,
     checker: HostChecker,
     exchanges: Vec<Exchange>,
+    /// Bytes kept and bytes cut, host then hand.
+    kept: [usize; 2],
+    cut: [u64; 2],
+    /// Every value the hand really sent so far (the model's answers before any
+    /// misbehaviour: the numbers of its supervisory answers, the fields of its feedback).
+    sent: std::collections::BTreeSet<i64>,
+    observations: u64,
+    wrong_values: Vec<String>,
+    /// The host said it saw the hand misbehave (`gcl-observe: error`).
+    host_reported: bool,
+    /// When a `silence` fired, and when the host first sent after it.
+    silenced_at: Option<Instant>,
+    acted_at: Option<Instant>,
     last_activity: Instant,
     hang_up: Option<StopHandle>,
     hung_up: bool,
@@ -155,10 +207,75 @@ struct Log {
 
 impl Log {
     fn push(&mut self, dir: Dir, bytes: &[u8], marks: Vec<String>) {
-        match self.exchanges.last_mut() {
-            Some(e) if e.dir == dir && marks.is_empty() && e.bytes.len() < 1 << 20 => e.bytes.extend_from_slice(bytes),
-            _ => self.exchanges.push(Exchange { dir, bytes: bytes.to_vec(), marks }),
+        let k = usize::from(dir == Dir::Hand);
+        let room = KEEP_CAP.saturating_sub(self.kept[k]);
+        let (keep, cut) = bytes.split_at(bytes.len().min(room));
+        self.cut[k] += cut.len() as u64;
+        self.kept[k] += keep.len();
+        if keep.is_empty() && marks.is_empty() {
+            return;
         }
+        match self.exchanges.last_mut() {
+            Some(e) if e.dir == dir && marks.is_empty() => e.bytes.extend_from_slice(keep),
+            _ => self.exchanges.push(Exchange { dir, bytes: keep.to_vec(), marks }),
+        }
+    }
+
+    /// Takes the values of one answer: of the model's own (before any misbehaviour), or, with
+    /// `blocks_only`, of a well-formed feedback block as it went out (a flipped bit or an
+    /// extreme value in a block of the right size is what the hand sent as far as any host can
+    /// tell).
+    fn values_sent(&mut self, device: &Device, bytes: &[u8], blocks_only: bool) {
+        if self.sent.len() >= SENT_CAP {
+            return;
+        }
+        if let Some(layout) = device.rt_layout().map(|l| l.feedback()) {
+            let n = layout.size();
+            for block in [bytes, bytes.get(1..).unwrap_or_default()] {
+                if block.len() == n
+                    && let Ok((_, values)) = layout.decode(block)
+                {
+                    self.sent.extend(values);
+                    return;
+                }
+            }
+        }
+        if blocks_only {
+            return;
+        }
+        let text = String::from_utf8_lossy(bytes);
+        let numbers = text.split(|c: char| !(c.is_ascii_digit() || c == '-')).filter_map(|w| w.parse::<i64>().ok());
+        self.sent.extend(numbers);
+    }
+
+    /// One `gcl-observe:` line of the host.
+    fn observe(&mut self, line: &str) {
+        let Some(rest) = line.trim().strip_prefix(OBSERVE) else { return };
+        let words: Vec<&str> = rest.split_whitespace().collect();
+        match words.as_slice() {
+            ["error", ..] => self.host_reported = true,
+            [name, motor, value] => {
+                let (Ok(_), Ok(v)) = (motor.parse::<u8>(), value.parse::<i64>()) else { return };
+                self.observations += 1;
+                if !self.host_reported && !self.sent.contains(&v) && self.wrong_values.len() < 8 {
+                    self.wrong_values.push(format!("{name} {motor} {value}"));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Notes what the caps cut, at the end of the kept traffic.
+    fn note_cuts(&mut self) {
+        let [host, hand] = self.cut;
+        if host + hand == 0 {
+            return;
+        }
+        let mark = format!(
+            "not kept: {host} more byte(s) from the host and {hand} from the hand (only the first {} KiB each way are)",
+            KEEP_CAP / 1024
+        );
+        self.exchanges.push(Exchange { dir: Dir::Hand, bytes: Vec::new(), marks: vec![mark] });
     }
 }
 
@@ -169,6 +286,9 @@ impl LineTap for Tap {
         let Ok(mut log) = self.0.lock() else { return };
         let log = &mut *log;
         log.last_activity = Instant::now();
+        if log.silenced_at.is_some() && log.acted_at.is_none() {
+            log.acted_at = Some(log.last_activity);
+        }
         log.checker.host_bytes(device, bytes);
         // A reaction is the first command sent after its misbehaviour.
         let commands = log.checker.commands();
@@ -189,7 +309,17 @@ impl LineTap for Tap {
         let before = log.misbehave.fired().len();
         let shaped = log.misbehave.shape(device, bytes, &state);
         let new: Vec<Fired> = log.misbehave.fired()[before..].to_vec();
-        log.checker.hand_bytes(device, &shaped.bytes, !new.is_empty());
+        log.values_sent(device, bytes, false);
+        log.values_sent(device, &shaped.bytes, true);
+        // Changed in any way (a silence drops every answer after it; a delay holds one).
+        let misbehaved = !new.is_empty() || shaped.bytes != bytes || shaped.hold.is_some() || shaped.hang_up;
+        log.checker.hand_bytes(device, &shaped.bytes, misbehaved);
+        if shaped.restart {
+            log.checker.restarted();
+        }
+        if log.silenced_at.is_none() && new.iter().any(|f| f.op == crate::sim::misbehave::Operator::Silence) {
+            log.silenced_at = Some(Instant::now());
+        }
         let seen = log.checker.commands().len();
         for f in &new {
             log.reactions.push((f.op.name().to_string(), f.state.clone(), "-".to_string()));
@@ -225,14 +355,86 @@ impl LineTap for Tap {
             log.checker.discarded();
         }
     }
+
+    fn connection(&mut self, _device: &Device, open: bool) {
+        if let Ok(mut log) = self.0.lock() {
+            log.checker.connection(open);
+        }
+    }
+
+    fn host_unread(&mut self, unread: bool) {
+        if let Ok(mut log) = self.0.lock() {
+            log.checker.host_unread(unread);
+        }
+    }
 }
 
 /// Longest stderr kept.
-const STDERR_CAP: usize = 256 * 1024;
+pub const STDERR_CAP: usize = 256 * 1024;
+
+/// How long stderr is read after the host ended: what a leftover holding it writes later is
+/// not waited for.
+const STDERR_GRACE: Duration = Duration::from_millis(500);
+
+/// What the stderr reader has read so far.
+#[derive(Default)]
+struct ErrBuf {
+    kept: Vec<u8>,
+    eof: bool,
+}
 
 /// Runs the host once against a hand that follows `schedule`.
 pub fn run_once(spec: &HostRun, schedule: &Schedule) -> Result<RunResult, RunError> {
     run_once_until(spec, schedule, &AtomicBool::new(false))
+}
+
+/// A folder of this run's own (sanitizer logs), removed when dropped.
+struct RunDir(std::path::PathBuf);
+
+impl RunDir {
+    fn new() -> std::io::Result<RunDir> {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let p = std::env::temp_dir().join(format!("gcl-host-run-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir(&p)?;
+        Ok(RunDir(p))
+    }
+
+    /// The sanitizer logs written into it (`asan.PID`, ...), each under a heading.
+    fn sanitizer_logs(&self) -> String {
+        let mut out = String::new();
+        let Ok(entries) = std::fs::read_dir(&self.0) else { return out };
+        let mut files: Vec<_> = entries.flatten().map(|e| e.path()).collect();
+        files.sort();
+        for f in files {
+            let Ok(file) = std::fs::File::open(&f) else { continue };
+            let mut text = Vec::new();
+            let _ = file.take(STDERR_CAP as u64).read_to_end(&mut text);
+            let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            out.push_str(&format!("\n--- sanitizer log {name} ---\n{}", String::from_utf8_lossy(&text)));
+        }
+        out
+    }
+}
+
+impl Drop for RunDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The host's sanitizer options with a log file per process in `dir` (the user's own
+/// options kept; a `log_path` of theirs is replaced).
+fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str) -> String {
+    let mine = format!("log_path={}", dir.join(name).display());
+    match std::env::var(var) {
+        Ok(v) if !v.trim().is_empty() => {
+            let kept: Vec<&str> = v.split(':').filter(|o| !o.starts_with("log_path=") && !o.is_empty()).collect();
+            format!("{}:{mine}", kept.join(":"))
+        }
+        _ => mine,
+    }
 }
 
 /// [`run_once`], called off ([`RunError::Cancelled`], the host killed) once `cancel` is set.
@@ -250,6 +452,14 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         misbehave: Misbehave::new(schedule.clone(), engine.device()),
         checker: HostChecker::new(spec.profile.clone()),
         exchanges: Vec::new(),
+        kept: [0; 2],
+        cut: [0; 2],
+        sent: std::collections::BTreeSet::new(),
+        observations: 0,
+        wrong_values: Vec::new(),
+        host_reported: false,
+        silenced_at: None,
+        acted_at: None,
         last_activity: started,
         hang_up: Some(hang_up),
         hung_up: false,
@@ -257,6 +467,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         awaiting: Vec::new(),
     }));
     engine.set_tap(Box::new(Tap(log.clone())));
+    let run_dir = RunDir::new()?;
 
     // The hand: its transport in a thread; the line closes (hangs up) when the thread ends.
     let (port, url, hand) = match spec.transport {
@@ -277,33 +488,89 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 
     let args: Vec<String> =
         spec.command[1..].iter().map(|a| a.replace("{port}", &port).replace("{url}", &url)).collect();
-    let mut child = Command::new(program)
+    let spawned = Command::new(program)
         .args(&args)
         .env("GCL_PORT", &port)
         .env("GCL_PORT_URL", &url)
+        .env("PYTHONFAULTHANDLER", "1")
+        .env("GCL_OBSERVE_FD", "1")
+        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan"))
+        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan"))
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0)
-        .spawn()
-        .map_err(|source| RunError::Spawn { command: program.clone(), source })?;
+        .spawn();
+    let mut child = match spawned {
+        Ok(c) => c,
+        Err(source) => {
+            stop.stop();
+            let _ = hand.join();
+            return Err(RunError::Spawn { command: program.clone(), source });
+        }
+    };
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
-    let mut err_pipe = child.stderr.take();
-    let err_reader = std::thread::spawn(move || {
-        let mut kept = Vec::new();
-        if let Some(p) = &mut err_pipe {
+    // When the host started (clock ticks since boot): what it leaves behind started later.
+    let host_start = start_time(pid.as_raw());
+    let err_pipe = child.stderr.take();
+    // Stdout carries observations only (GCL_OBSERVE_FD=1); the rest of it is dropped.
+    let out_done = Arc::new(AtomicBool::new(child.stdout.is_none()));
+    if let Some(out) = child.stdout.take() {
+        let log = log.clone();
+        let done = out_done.clone();
+        std::thread::spawn(move || {
+            let mut lines = LineSplitter::default();
+            let mut r = out;
             let mut buf = [0u8; 8192];
-            while let Ok(n) = p.read(&mut buf) {
+            while let Ok(n) = r.read(&mut buf) {
                 if n == 0 {
                     break;
                 }
-                if kept.len() < STDERR_CAP {
-                    kept.extend_from_slice(&buf[..n.min(STDERR_CAP - kept.len())]);
-                }
+                lines.feed(&buf[..n], |l| {
+                    if let Ok(mut log) = log.lock() {
+                        log.observe(l);
+                    }
+                });
             }
-        }
-        String::from_utf8_lossy(&kept).into_owned()
-    });
+            done.store(true, Ordering::Relaxed);
+        });
+    }
+    let err_inode = err_pipe
+        .as_ref()
+        .and_then(|p| std::fs::metadata(format!("/proc/self/fd/{}", std::os::fd::AsRawFd::as_raw_fd(p))).ok())
+        .map(|m| std::os::unix::fs::MetadataExt::ino(&m));
+    let errbuf = Arc::new(Mutex::new(ErrBuf::default()));
+    let err_reader = {
+        let errbuf = errbuf.clone();
+        let log = log.clone();
+        std::thread::spawn(move || {
+            let mut lines = LineSplitter::default();
+            let Some(mut p) = err_pipe else {
+                if let Ok(mut b) = errbuf.lock() {
+                    b.eof = true;
+                }
+                return;
+            };
+            let mut buf = [0u8; 8192];
+            loop {
+                let n = match p.read(&mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => n,
+                };
+                lines.feed(&buf[..n], |l| {
+                    if let Ok(mut log) = log.lock() {
+                        log.observe(l);
+                    }
+                });
+                let Ok(mut b) = errbuf.lock() else { return };
+                let room = STDERR_CAP.saturating_sub(b.kept.len());
+                b.kept.extend_from_slice(&buf[..n.min(room)]);
+            }
+            if let Ok(mut b) = errbuf.lock() {
+                b.eof = true;
+            }
+        })
+    };
     let (tx, rx) = mpsc::channel();
     let waiter = std::thread::spawn(move || {
         let _ = tx.send(child.wait());
@@ -311,16 +578,24 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 
     let state = |log: &Arc<Mutex<Log>>| log.lock().map(|l| l.checker.state()).unwrap_or_default();
     let mut cancelled = false;
+    let mut stack = None;
+    let mut ended_at = None;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
             Ok(Ok(status)) => {
+                ended_at = Some(Instant::now());
                 break match (status.code(), status.signal()) {
                     (Some(c), _) => HostEnd::Exit(c),
                     (None, Some(s)) => HostEnd::Signal(s),
                     (None, None) => HostEnd::Exit(-1),
                 };
             }
-            Ok(Err(e)) => return Err(RunError::Io(e)),
+            Ok(Err(e)) => {
+                let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
+                stop.stop();
+                let _ = hand.join();
+                return Err(RunError::Io(e));
+            }
             Err(mpsc::RecvTimeoutError::Disconnected) => break HostEnd::Exit(-1),
             Err(mpsc::RecvTimeoutError::Timeout) => {}
         }
@@ -337,15 +612,56 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             None
         };
         if let Some(v) = verdict {
+            let mut reaped = false;
+            if !cancelled {
+                stack = take_stack(pid.as_raw(), &errbuf, &rx, &mut reaped);
+            }
             let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
-            let _ = rx.recv_timeout(Duration::from_secs(5));
+            if !reaped {
+                let _ = rx.recv_timeout(Duration::from_secs(5));
+            }
             break v;
         }
     };
     // Whatever the host left behind in its group goes with it.
     let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
     let _ = waiter.join();
-    let stderr = err_reader.join().unwrap_or_default();
+    // Stderr for a short grace; then whatever still holds the port or stderr (it left the
+    // group) is found and killed, and named.
+    // A pty's number is ours only while its master is open, i.e. while the hand's thread
+    // runs (a hang-up ends it early): after that, the path may name another program's
+    // terminal, which must never be touched. So the port is looked for only while the thread
+    // runs, and what a search found counts only if it still ran after the search.
+    let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&port));
+    let pty_alive = || !hand.is_finished();
+    let mut leftovers = Vec::new();
+    // The pipe's inode names it only while it is open (a closed pipe's number is reused).
+    let err_open = !wait_eof(&errbuf, STDERR_GRACE);
+    let err_inode = err_inode.filter(|_| err_open);
+    let search = |err_inode: Option<u64>| {
+        let path = pty_path.as_deref().filter(|_| pty_alive());
+        let found = holders(path, err_inode, host_start);
+        if path.is_some() && !pty_alive() { holders(None, err_inode, host_start) } else { found }
+    };
+    let found = if err_open || pty_path.is_some() { search(err_inode) } else { Vec::new() };
+    if !found.is_empty() {
+        for (p, name) in found {
+            let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+            let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+            leftovers.push(format!("pid {p} ({name})"));
+        }
+        wait_eof(&errbuf, STDERR_GRACE);
+    }
+    if wait_eof(&errbuf, Duration::ZERO) {
+        let _ = err_reader.join();
+    }
+    // The last observations on stdout, for the same grace.
+    let grace = Instant::now() + STDERR_GRACE;
+    while !out_done.load(Ordering::Relaxed) && Instant::now() < grace {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut stderr = errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
+    stderr.push_str(&run_dir.sanitizer_logs());
     stop.stop();
     let served = hand.join();
     if let Ok(Err(e)) = served {
@@ -363,9 +679,19 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     if log.hung_up || matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)) {
         violations.retain(|v| v.clause != super::check::HostClause::LeavesCleanly);
     }
+    let gave_up_after = log.silenced_at.and_then(|s| {
+        let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
+        Some(acted.saturating_duration_since(s))
+    });
+    log.note_cuts();
     Ok(RunResult {
         end,
+        stack,
+        leftovers,
+        gave_up_after,
         stderr,
+        observations: log.observations,
+        wrong_values: log.wrong_values.clone(),
         exchanges: std::mem::take(&mut log.exchanges),
         fired: log.misbehave.fired().to_vec(),
         violations,
@@ -374,4 +700,116 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         answers: log.misbehave.answers(),
         elapsed: started.elapsed(),
     })
+}
+
+/// Waits up to `limit` for the stderr reader to reach the end; whether it did.
+fn wait_eof(errbuf: &Mutex<ErrBuf>, limit: Duration) -> bool {
+    let end = Instant::now() + limit;
+    loop {
+        if errbuf.lock().map_or(true, |b| b.eof) {
+            return true;
+        }
+        if Instant::now() >= end {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// The stack of the hung host, taken before it is killed: a Python interpreter dumps its
+/// frames (`faulthandler`, on SIGABRT) on stderr; a native program is sampled.
+fn take_stack(
+    pid: i32,
+    errbuf: &Mutex<ErrBuf>,
+    ended: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
+    reaped: &mut bool,
+) -> Option<super::detect::HangStack> {
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok()?;
+    let name = exe.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    if name.starts_with("python") {
+        let from = errbuf.lock().ok()?.kept.len();
+        nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), nix::sys::signal::Signal::SIGABRT).ok()?;
+        // It dumps, then dies of the signal; its stderr is then at its end, or nearly.
+        *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
+        wait_eof(errbuf, Duration::from_millis(200));
+        let mut b = errbuf.lock().ok()?;
+        let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
+        // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
+        b.kept.truncate(from);
+        let frames = super::detect::faulthandler_frames(&dump)?;
+        return Some(super::detect::HangStack { by: "faulthandler".into(), frames });
+    }
+    super::detect::sample_native(pid)
+}
+
+/// A process's start time (clock ticks since boot, field 22 of its stat).
+fn start_time(pid: i32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit_once(')')?.1.split_whitespace().nth(19)?.parse().ok()
+}
+
+/// Processes holding `path` (the pty's slave) or the pipe `pipe_inode` open, with their
+/// names, that started no earlier than the host (`host_start`): what the host can have left
+/// behind. Not this process, nor its children: a child of ours is a host of another run, or
+/// one being started (between fork and exec it holds copies of all our descriptors), never
+/// what this run's host left behind (that was reparented away from us when the host died).
+/// With no start time for the host, nothing is found: no process is killed on a guess.
+fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>, host_start: Option<u64>) -> Vec<(i32, String)> {
+    let me = std::process::id() as i32;
+    let pipe = pipe_inode.map(|i| format!("pipe:[{i}]"));
+    let mut found = Vec::new();
+    let Some(host_start) = host_start else { return found };
+    if path.is_none() && pipe.is_none() {
+        return found;
+    }
+    let Ok(procs) = std::fs::read_dir("/proc") else { return found };
+    for p in procs.flatten() {
+        let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+        if pid == me {
+            continue;
+        }
+        // The parent is the 4th field of stat, after the name in parentheses.
+        let stat = std::fs::read_to_string(p.path().join("stat")).unwrap_or_default();
+        let fields: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+        let ppid = fields.get(1).and_then(|x| x.parse::<i32>().ok());
+        let started = fields.get(19).and_then(|x| x.parse::<u64>().ok());
+        if ppid == Some(me) || started.is_none_or(|t| t < host_start) {
+            continue;
+        }
+        let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+        let holds = fds.flatten().any(|fd| {
+            std::fs::read_link(fd.path())
+                .is_ok_and(|t| path.is_some_and(|p| t == p) || pipe.as_deref().is_some_and(|x| t.as_os_str() == x))
+        });
+        if holds {
+            let name = std::fs::read_to_string(p.path().join("comm")).unwrap_or_default().trim().to_string();
+            found.push((pid, name));
+        }
+    }
+    found
+}
+
+/// Splits a byte stream into lines for observations; a line longer than 4 KiB is dropped.
+#[derive(Default)]
+struct LineSplitter {
+    line: Vec<u8>,
+    overlong: bool,
+}
+
+impl LineSplitter {
+    fn feed(&mut self, bytes: &[u8], mut each: impl FnMut(&str)) {
+        for &b in bytes {
+            if b == b'\n' {
+                if !self.overlong {
+                    each(&String::from_utf8_lossy(&self.line));
+                }
+                self.line.clear();
+                self.overlong = false;
+            } else if self.line.len() < 4096 {
+                self.line.push(b);
+            } else {
+                self.overlong = true;
+            }
+        }
+    }
 }

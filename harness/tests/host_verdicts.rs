@@ -1,0 +1,411 @@
+//! Host verdicts a library author can act on (`gcl fuzz host`, `gcl check-host`): each test runs
+//! a host program of `hosts/` (listed in its README) modelled on a case where a verdict went
+//! wrong, and checks what a user would read: no finding for a correct host, one finding of the
+//! right kind naming the host's code for a buggy one, budgets and memory that hold.
+//!
+//! Python hosts need python3 (most with pyserial), C hosts a C compiler, the Rust host rustc;
+//! a missing tool skips its test with a line on stderr (a failure under `CI=true`). Hang
+//! signatures by stack need gdb or eu-stack (`.ci/run` installs them).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use gcl_harness::check_host::{CheckHostOptions, check_host};
+use gcl_harness::fuzz::host::{
+    FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, judge, notes, run_once,
+};
+use gcl_harness::report::Verdict;
+use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
+use gcl_harness::sim::{Pace, TimeMode};
+
+fn hosts() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hosts")
+}
+
+/// A missing tool: a failure under CI, else a visible skip.
+fn missing(what: &str) -> bool {
+    assert!(std::env::var("CI").is_err(), "{what} is missing under CI");
+    eprintln!("SKIPPED: {what} is not available");
+    true
+}
+
+fn python_with(module: &str) -> bool {
+    let ok =
+        Command::new("python3").args(["-c", &format!("import {module}")]).output().is_ok_and(|o| o.status.success());
+    ok || !missing(&format!("python3 with {module}"))
+}
+
+fn python(file: &str, args: &[&str]) -> Vec<String> {
+    let mut v = vec!["python3".to_string(), hosts().join(file).display().to_string()];
+    v.extend(args.iter().map(|a| a.to_string()));
+    v
+}
+
+fn build_c(name: &str, dir: &Path) -> Option<PathBuf> {
+    let out = dir.join(name);
+    let ok = Command::new("cc")
+        .args(["-g", "-O0", "-fno-omit-frame-pointer", "-o"])
+        .arg(&out)
+        .arg(hosts().join(format!("{name}.c")))
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ok || !missing("a C compiler") { ok.then_some(out) } else { None }
+}
+
+fn stack_tool() -> bool {
+    let ok = ["eu-stack", "gdb"].iter().any(|t| Command::new(t).arg("--version").output().is_ok());
+    ok || !missing("eu-stack or gdb")
+}
+
+fn run(command: Vec<String>) -> HostRun {
+    HostRun {
+        command,
+        transport: Transport::Pty,
+        profile: gcl_model::Profile::builtin("seed").unwrap(),
+        time: TimeMode::Fast,
+        pace: Pace::Unpaced,
+        hand_seed: 0,
+        timeout_hang: Duration::from_secs(20),
+        budget: Duration::from_secs(60),
+    }
+}
+
+fn campaign(run: HostRun, ops: &str, runs: u64, calibrate: bool) -> gcl_harness::fuzz::host::Campaign {
+    let opts = FuzzOptions {
+        run,
+        seed: 5,
+        runs: Some(runs),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 2,
+        weights: Weights::parse(ops).unwrap(),
+        max_planned: 3,
+        minimize: false,
+        guided: true,
+        calibrate,
+    };
+    fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap()
+}
+
+fn failing(r: &HostRun) -> Vec<String> {
+    let opts = CheckHostOptions { run: r.clone(), ok_exit_codes: vec![0, 1], golden: None };
+    let report = check_host(&opts).unwrap().report;
+    report
+        .cases
+        .iter()
+        .filter(|c| c.verdict != Verdict::Pass)
+        .map(|c| format!("{}: {}", c.id, c.message.as_deref().unwrap_or_default()))
+        .collect()
+}
+
+/// The probe writes FGET P, closes, waits 1 s, reopens and sends nothing: on a serial port
+/// (and so under all three commands, one pty implementation) it reads nothing.
+#[test]
+fn the_reopen_probe_reads_nothing_under_sim_fuzz_host_and_check_host() {
+    if !python_with("termios") {
+        return;
+    }
+    let probe = python("py_reopen_probe.py", &[]);
+    let r = run_once(&run(probe.clone()), &Schedule::default()).unwrap();
+    assert!(r.stderr.contains("probe read: b''"), "fuzz host's pty: {}", r.stderr);
+    let out = check_host(&CheckHostOptions { run: run(probe.clone()), ok_exit_codes: vec![0], golden: None }).unwrap();
+    assert!(out.run.stderr.contains("probe read: b''"), "check-host's pty: {}", out.run.stderr);
+    // gcl sim --pty, with its defaults (real time, paced).
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["sim", "--pty", "--profile", "seed"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(sim.stdout.take().unwrap()), &mut line).unwrap();
+    let o = Command::new("python3").args(&probe[1..]).arg(line.trim()).output().unwrap();
+    let _ = sim.kill();
+    let _ = sim.wait();
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(said.contains("probe read: b''"), "gcl sim --pty: {said}");
+}
+
+/// A host that closes with an answer unread, reopens and sends one CR for a fresh prompt
+/// (Barrett's API after PSET BAUD) is correct: no doubled line ending, nothing stale.
+#[test]
+fn a_host_that_reconnects_and_resyncs_with_one_cr_passes() {
+    if !python_with("serial") {
+        return;
+    }
+    let r = run_once(&run(python("py_reconnect.py", &[])), &Schedule::default()).unwrap();
+    assert_eq!(r.end, HostEnd::Exit(0), "{}", r.stderr);
+    assert!(r.violations.is_empty(), "{:?}", r.violations);
+    assert_eq!(failing(&run(python("py_reconnect.py", &[]))), Vec::<String>::new());
+}
+
+/// `1FGET MCV` then `GC` without reading the answer: on a serial line the G arrives while
+/// the answer is still coming. Flagged at every line speed, in fast and in real time.
+/// (Unpaced, where the answer is there at once, it is flagged when the G reaches the hand
+/// before the host reads anything, as when it comes with the command or the host is slow to
+/// read; a host that writes and then reads within microseconds can still be missed there.)
+#[test]
+fn a_host_that_pipelines_is_flagged_at_any_speed() {
+    if !python_with("serial") {
+        return;
+    }
+    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
+    let cases: [(Pace, TimeMode, &str); 5] = [
+        (Pace::Fixed(9600), TimeMode::Fast, "9600"),
+        (Pace::Fixed(1200), TimeMode::Fast, "1200"),
+        (Pace::Fixed(9600), TimeMode::Real, "9600"),
+        (Pace::Fixed(1200), TimeMode::Real, "1200"),
+        (Pace::Fixed(115_200), TimeMode::Real, "115200"),
+    ];
+    for (pace, time, baud) in cases {
+        let mut r = run(python("py_pipeline_mcv.py", &["{port}", baud]));
+        r.pace = pace;
+        r.time = time;
+        let f = failing(&r);
+        assert!(
+            f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
+            "{pace} {} at {baud}: {f:?}",
+            time.name()
+        );
+    }
+}
+
+/// The second of the four feedback blocks py_timeout.py reads before its last ^C.
+fn second_feedback() -> u32 {
+    let r = run_once(&run(python("py_timeout.py", &["1"])), &Schedule::default()).unwrap();
+    assert_eq!(r.end, HostEnd::Exit(0), "{}", r.stderr);
+    r.answers - 3
+}
+
+/// After a restart that cuts the answer to LOOP the checker follows the hand: it is back in
+/// supervisory mode, not in the loop the cut answer began; a host that sees the banner where
+/// the loop's `*` was due and gives up is no finding.
+#[test]
+fn the_checker_follows_the_hand_through_a_restart() {
+    if !python_with("serial") {
+        return;
+    }
+    let at = second_feedback() - 2;
+    let restart = Schedule { planned: vec![Planned { answer: at, op: Operator::Restart, arg: 5 }] };
+    let r = run_once(&run(python("py_timeout.py", &["1"])), &restart).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert_eq!(r.fired[0].state, "answer to LOOP");
+    assert_eq!(judge(&r, &[0, 1]), vec![], "{:?} {}", r.violations, r.stderr);
+}
+
+/// A host that gets a broken feedback block, says so and exits 1 in RealTime has reacted to
+/// the hand's fault: an INFO note, no finding. The same way of leaving, unprovoked, is one.
+#[test]
+fn a_reaction_to_the_hands_misbehaviour_is_a_note_not_a_finding() {
+    if !python_with("serial") {
+        return;
+    }
+    let short = Schedule { planned: vec![Planned { answer: second_feedback(), op: Operator::RtBlockLength, arg: 0 }] };
+    let r = run_once(&run(python("py_timeout.py", &["1"])), &short).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert_eq!(r.fired[0].state, "RealTime feedback");
+    assert_eq!(r.end, HostEnd::Exit(1), "{}", r.stderr);
+    assert_eq!(judge(&r, &[0, 1]), vec![]);
+    let n = notes(&r);
+    assert!(n.iter().any(|(sig, _)| sig.contains("leaves-cleanly")), "{n:?}");
+    // Silence: a host that times out and sends its next command did not send early.
+    let silence = Schedule { planned: vec![Planned { answer: 7, op: Operator::Silence, arg: 0 }] };
+    let r = run_once(&run(python("py_timeout.py", &["1", "retry"])), &silence).unwrap();
+    assert!(r.stderr.contains("going on"), "{}", r.stderr);
+    assert_eq!(judge(&r, &[0, 1]), vec![], "{:?}", r.violations);
+    // Unprovoked, leaving in RealTime is still found.
+    let mutant = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/py_loop_no_abort.py");
+    let r = run_once(&run(vec!["python3".into(), mutant.display().to_string()]), &Schedule::default()).unwrap();
+    assert!(judge(&r, &[0, 1]).iter().any(|v| v.signature.contains("leaves-cleanly")), "{:?}", r.violations);
+}
+
+/// A host that waits 4 s for each answer is not hung when the hand does not answer: the
+/// fuzzer measures that wait first and calls a hang only well past it. (A fixed 3 s, the
+/// old default, calls it a hang.)
+#[test]
+fn a_host_that_waits_out_its_own_timeout_is_not_hung() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut fixed = run(python("py_timeout.py", &["4"]));
+    fixed.timeout_hang = Duration::from_secs(3);
+    let silence = Schedule { planned: vec![Planned { answer: 3, op: Operator::Silence, arg: 0 }] };
+    assert!(matches!(run_once(&fixed, &silence).unwrap().end, HostEnd::Hung(_)), "a 3 s hang timeout");
+    let c = campaign(fixed, "no-prompt,truncate,silence,bad-prompt", 8, true);
+    let cal = c.calibration.clone().unwrap();
+    let measured = cal.host_timeout_ms.expect("the host gave up within the calibration cap");
+    assert!(measured >= 4000, "{cal:?}");
+    assert!(cal.timeout_hang_ms > measured, "{cal:?}");
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, Vec::<&str>::new());
+}
+
+/// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,
+/// one finding, named by the host's own code (its stack), in C, Python and Rust.
+#[test]
+fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cases: Vec<(Vec<String>, &str)> = Vec::new();
+    if stack_tool()
+        && let Some(exe) = build_c("c_read_forever", dir.path())
+    {
+        cases.push((vec![exe.display().to_string()], "hang in read_answer"));
+    }
+    let rs = dir.path().join("rs_read_forever");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let built = Command::new(rustc)
+        .args(["--edition", "2021", "-g", "-o"])
+        .arg(&rs)
+        .arg(hosts().join("rs_read_forever.rs"))
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if stack_tool() && (built || !missing("rustc")) {
+        cases.push((vec![rs.display().to_string()], "hang in rs_read_forever::wait_for_prompt"));
+    }
+    if python_with("serial") {
+        cases.push((python("py_read_forever.py", &[]), "hang in py_read_forever.py:read_answer"));
+    }
+    for (command, needle) in cases {
+        let mut r = run(command.clone());
+        r.timeout_hang = Duration::from_millis(1500);
+        let c = campaign(r, "truncate,no-prompt,bad-prompt", 12, false);
+        let hangs: Vec<&str> = c
+            .findings
+            .iter()
+            .filter(|f| f.verdict.kind == FindingKind::Hang)
+            .map(|f| f.verdict.signature.as_str())
+            .collect();
+        assert_eq!(hangs.len(), 1, "{command:?}: {hangs:?}");
+        assert!(hangs[0].starts_with(needle), "{command:?}: {hangs:?}");
+        assert!(c.findings.len() == 1, "{command:?}: {:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+    }
+}
+
+/// AddressSanitizer writes to a log file of the run's own (`log_path`), read back whole,
+/// even when the reporting thread dies before stderr has it all.
+#[test]
+fn sanitizer_reports_are_read_from_a_log_file_per_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let exe = dir.path().join("c_line_buffer");
+    let ok = Command::new("cc")
+        .args(["-fsanitize=address", "-fno-omit-frame-pointer", "-g", "-O0", "-o"])
+        .arg(&exe)
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/c_line_buffer.c"))
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok && missing("cc -fsanitize=address") {
+        return;
+    }
+    let overlong = Schedule { planned: vec![Planned { answer: 2, op: Operator::OverlongLine, arg: 2 }] };
+    let r = run_once(&run(vec![exe.display().to_string(), "{port}".into()]), &overlong).unwrap();
+    assert!(r.stderr.contains("--- sanitizer log asan."), "{}", r.stderr);
+    let v = judge(&r, &[0, 1]);
+    assert!(v.iter().any(|v| v.signature.contains("asan stack-buffer-overflow in read_line")), "{v:?}");
+}
+
+/// A host that leaves a detached (setsid) process holding the port and its stderr: the run
+/// ends within its budget, the process is killed, and the verdict says so; check-host does
+/// not pass host-exits-cleanly.
+#[test]
+fn a_process_left_behind_is_killed_and_named_within_the_budget() {
+    if !python_with("subprocess") {
+        return;
+    }
+    let mut r = run(python("py_leaves_setsid.py", &[]));
+    r.budget = Duration::from_secs(5);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let r2 = r.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send((run_once(&r2, &Schedule::default()), failing(&r2)));
+    });
+    let (result, failed) = rx.recv_timeout(Duration::from_secs(60)).expect("the run kept its budget");
+    let result = result.unwrap();
+    assert_eq!(result.leftovers.len(), 1, "{:?}", result.leftovers);
+    let pid: i32 = result.leftovers[0].split_whitespace().nth(1).unwrap().parse().unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let alive = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "));
+    assert!(!alive, "the leftover {pid} still runs");
+    assert!(judge(&result, &[0, 1]).iter().any(|v| v.kind == FindingKind::Leftover));
+    let exits = format!("host-{}", HostClause::ExitsCleanly.id());
+    assert!(failed.iter().any(|f| f.starts_with(&exits) && f.contains("behind")), "{failed:?}");
+}
+
+/// A host that writes 100 MB: `gcl check-host` stays within 512 MiB of address space and
+/// keeps only the first MiB each way, noting what it cut.
+#[test]
+fn what_a_flooding_host_writes_is_capped() {
+    if !python_with("threading") {
+        return;
+    }
+    if Command::new("prlimit").arg("--version").output().is_err() {
+        missing("prlimit");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let session = dir.path().join("session.gcl");
+    let mut child = Command::new("prlimit")
+        .arg("--as=536870912")
+        .arg(env!("CARGO_BIN_EXE_gcl"))
+        .args(["check-host", "--profile", "seed", "--save-session"])
+        .arg(&session)
+        .arg("--")
+        .args(python("py_flood.py", &["100"]))
+        .env("MALLOC_ARENA_MAX", "2")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if started.elapsed() > Duration::from_secs(300) {
+            let _ = child.kill();
+            panic!("check-host did not end within 300 s");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut err = String::new();
+    let _ = std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err);
+    // 1: the host's never-ended line fails host-leaves-cleanly; no abort, no signal.
+    assert_eq!(status.code(), Some(1), "{err}");
+    let text = std::fs::read_to_string(&session).unwrap();
+    assert!(text.len() < 3 << 20, "{} bytes kept", text.len());
+    assert!(text.contains("# not kept: "), "no note of what was cut");
+}
+
+/// The observation protocol: a host that trusts a RealTime block two bytes short publishes a
+/// position the hand never sent (a silent wrong value, which no crash or hang shows); a host
+/// that checks its blocks observes only what the hand sent, and gives up on a broken block.
+/// (A value the hand sent at any time counts as sent: a stale one is not caught.)
+#[test]
+fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut trusting = run(python("py_trusts_short_block.py", &[]));
+    trusting.timeout_hang = Duration::from_secs(3);
+    let c = campaign(trusting.clone(), "rt-block-length", 10, false);
+    let wrong: Vec<&str> = c
+        .findings
+        .iter()
+        .filter(|f| f.verdict.kind == FindingKind::WrongValue)
+        .map(|f| f.verdict.signature.as_str())
+        .collect();
+    assert_eq!(wrong, vec!["silent wrong value: P"], "{:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+    // Without the misbehaviour, all it observes is what the hand sent.
+    let r = run_once(&trusting, &Schedule::default()).unwrap();
+    assert!(r.observations >= 18 && r.wrong_values.is_empty(), "{} {:?}", r.observations, r.wrong_values);
+    // The correct host observes whole blocks only (a flipped bit or an extreme value in a
+    // block of the right size is what the hand sent, as far as any host can tell).
+    let r = run_once(&run(python("py_timeout.py", &["1"])), &Schedule::default()).unwrap();
+    assert!(r.observations >= 12 && r.wrong_values.is_empty(), "{} {:?}", r.observations, r.wrong_values);
+    let mut correct = run(python("py_timeout.py", &["1"]));
+    correct.timeout_hang = Duration::from_secs(3);
+    let c = campaign(correct, "rt-block-length,rt-byte-flip,rt-extreme", 8, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, Vec::<&str>::new());
+}
