@@ -125,6 +125,8 @@ pub fn host_report(
     cases: Vec<crate::report::CaseResult>,
 ) -> RunReport {
     let mut report = RunReport {
+        kind: if fuzz { crate::report::ReportKind::FuzzHost } else { crate::report::ReportKind::CheckHost },
+        host: None,
         format: crate::report::REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
         target: format!("host: {}", command.join(" ")),
