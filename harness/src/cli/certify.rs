@@ -147,9 +147,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         gcl_harness::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
         firmware_version(link.as_mut(), &opts.profile, timeout)?
     };
-    let mut out = run_with_progress(&opts, &cases, Some(&args.out), false)?;
+    let mut out = run_with_progress(&opts, &cases, Some(&args.out), false, "gcl certify")?;
     record_options(&mut out.report, suite_args);
     out.report.options.partial = args.partial;
+    out.report.kind = gcl_harness::report::ReportKind::Certify;
     let report = &out.report;
     let cert = Certificate::of_run(report, vers, cases_total, args.partial);
     // The streamed results are part of the run's record, but the bundle is the final word.

@@ -50,7 +50,17 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let opts =
         CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
-    let outcome = check_host(&opts).context("running the host")?;
+    let progress = super::progress::Progress::new(
+        "gcl check-host",
+        "runs",
+        "failing",
+        super::progress::Total::Units(1),
+        false,
+    );
+    let outcome = check_host(&opts).context("running the host");
+    progress.update(1, 0, "");
+    progress.finish();
+    let outcome = outcome?;
     let report = outcome.report;
     if let Some(p) = &args.save_session {
         gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
@@ -58,13 +68,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         eprintln!("wrote {}", p.display());
     }
     for c in &report.cases {
-        println!("{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title);
+        let verdict = if c.verdict == Verdict::Skip { "not exercised" } else { c.verdict.as_str() };
+        println!("{verdict:<7} {:<24} {}", c.id, c.title);
         if let Some(m) = &c.message {
             println!("        {m}");
         }
     }
-    let failed = report.cases.iter().filter(|c| c.verdict != Verdict::Pass).count();
-    println!("{} clause(s), {failed} failing", report.cases.len());
+    let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();
+    let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
+    println!("{} clause(s), {failed} failing, {idle} not exercised", report.cases.len());
     if let Some(dir) = args.host.report_dir() {
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());

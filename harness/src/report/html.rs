@@ -134,7 +134,7 @@ fn facts(r: &RunReport) -> Vec<(String, String)> {
         v.push(("profile".into(), esc(&r.profile)));
         v.push(("levels run".into(), esc(&r.level)));
         if let Some(p) = &r.preflight {
-            v.push(("pre-flight".into(), esc(p)));
+            v.push(("pre-flight".into(), esc(p.trim_start_matches("pre-flight: "))));
         }
         v.push((
             "liveness probe".into(),
@@ -433,7 +433,8 @@ fn field_table(rows: &[FieldRow]) -> String {
 /// the golden's range behind them, and a mark at the failing block.
 fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_text: &str, fail_step: usize) -> String {
     let Ok(actual) = gcl_transcript::parse(actual_text) else { return String::new() };
-    let layouts = diff::layouts(&r.profile, &actual).unwrap_or_default();
+    // The golden's sends are the actual transcript's, and go on past the failing step.
+    let layouts = diff::layouts(&r.profile, golden).unwrap_or_default();
     // (field, motor) → series of (block, value) and band (block, lo, hi).
     type Key = (String, Option<u8>);
     let mut values: BTreeMap<Key, Vec<(f64, f64)>> = BTreeMap::new();
@@ -460,7 +461,8 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
             mark = Some((first + 1) as f64);
         }
     }
-    if bands.is_empty() {
+    // A plot of one or two blocks says nothing the field table does not.
+    if block < 3 {
         return String::new();
     }
     let mut names: Vec<String> = bands.keys().map(|k| k.0.clone()).collect();
