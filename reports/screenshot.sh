@@ -49,7 +49,8 @@ ask(b"\x03", b"")
 answer = ask(b"FGET DP")
 values = answer.split(b"\n\r")[1].split()
 print("positions", [int(v) for v in values])
-ask(b"HI", b"\n")
+os.write(fd, b"HI\n")
+time.sleep(0.2)
 EOF
 
 set +e
@@ -59,9 +60,9 @@ set +e
 "$gcl" certify --target sim:seed --out "$work/certify" >/dev/null
 "$gcl" fuzz device --target sim --fault fget-reversed --runs 300 --out "$work/fuzz-device-findings" \
     --report "$work/fuzz-device" >/dev/null 2>&1
-"$gcl" fuzz host --runs 30 --out "$work/fuzz-host-findings" --report "$work/fuzz-host" \
+"$gcl" fuzz host --runs 30 --timeout-hang 1s --out "$work/fuzz-host-findings" --report "$work/fuzz-host" \
     -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
-"$gcl" check-host --report "$work/check-host" -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
+"$gcl" check-host --timeout-hang 1s --report "$work/check-host" -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
 set -e
 
 shot() { # page.html name
