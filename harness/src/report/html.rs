@@ -275,14 +275,30 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
         let label = if r.kind == ReportKind::FuzzHost { "Findings in detail" } else { "Failures" };
         p.heading("failures", label);
         let goldens = goldens_for(r, &failures);
+        let mut preambles = Vec::new();
         for c in &failures {
-            p.push(&failure_view(r, c, goldens.get(c.id.as_str())));
+            p.push(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles));
+        }
+        if !preambles.is_empty() {
+            p.heading("preambles", "Preambles");
+            p.push("<p>The steps that bring the hand to a known state before a case's check, as the failing cases above ran them (shown once each).</p>\n");
+            for (i, text) in preambles.iter().enumerate() {
+                p.push(&details(
+                    &format!("preamble {}", i + 1),
+                    &format!("<pre class=\"step\">{}</pre>\n", esc(text)),
+                    false,
+                    "",
+                    Some(&format!("preamble-{}", i + 1)),
+                ));
+            }
         }
     }
 
-    if r.kind.is_host() {
-        p.heading("clauses", if r.kind == ReportKind::CheckHost { "Clauses" } else { "Cases" });
+    if r.kind == ReportKind::CheckHost {
+        p.heading("clauses", "Clauses");
         p.push(&cases_table(r));
+    } else if r.kind == ReportKind::FuzzHost {
+        // The findings index and their details say it all; a case table would repeat them.
     } else {
         p.heading("clauses", "Clause coverage");
         p.push(&details(
@@ -325,6 +341,24 @@ fn clause_table(r: &RunReport) -> String {
 }
 
 fn cases_table(r: &RunReport) -> String {
+    if r.kind.is_host() {
+        // A host clause has no level to filter by and no time of its own.
+        let mut h = String::from("<table><tr><th>clause</th><th>what it asks</th><th>verdict</th><th>why</th></tr>\n");
+        for c in &r.cases {
+            let id = if failing(c) { case_link(r, &c.id) } else { esc(&c.id) };
+            let _ = writeln!(
+                h,
+                "<tr class=\"{}\" id=\"{}\"><td>{id}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                class(c.verdict),
+                esc(&c.id),
+                esc(&c.title),
+                verdict_word(r.kind, c.verdict),
+                esc(c.message.as_deref().unwrap_or(""))
+            );
+        }
+        h.push_str("</table>\n");
+        return h;
+    }
     let mut h = String::from(
         "<table><tr><th>id</th><th>title</th><th>level</th><th>verdict</th><th>ms</th><th>why</th></tr>\n",
     );
@@ -366,7 +400,7 @@ fn goldens_for<'a>(r: &RunReport, failures: &[&'a CaseResult]) -> BTreeMap<&'a s
     out
 }
 
-fn failure_view(r: &RunReport, c: &CaseResult, golden: Option<&Transcript>) -> String {
+fn failure_view(r: &RunReport, c: &CaseResult, golden: Option<&Transcript>, preambles: &mut Vec<String>) -> String {
     let one = c.diff.as_ref().map(diff::one_line).or_else(|| c.message.clone()).unwrap_or_default();
     let mut body = String::new();
     let _ = writeln!(
@@ -388,7 +422,7 @@ fn failure_view(r: &RunReport, c: &CaseResult, golden: Option<&Transcript>) -> S
         }
     }
     if let Some(t) = &c.transcript {
-        body.push_str(&transcript_view(t, c.diff.as_ref()));
+        body.push_str(&transcript_view(t, c.diff.as_ref(), "hand said", Some(preambles)));
     }
     details(
         &format!("<strong>{}</strong> <code>{}</code> <span class=\"muted\">{}</span>", c.verdict, esc(&c.id), esc(&one)),
@@ -493,7 +527,12 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
 /// A transcript as it happened, step by step: the preamble folded, the failing step marked
 /// with the golden and the actual answer aligned under a caret, the answers labelled as what
 /// the hand said (not what a golden expects).
-fn transcript_view(text: &str, d: Option<&super::Diff>) -> String {
+pub(crate) fn transcript_view(
+    text: &str,
+    d: Option<&super::Diff>,
+    answer: &str,
+    shared: Option<&mut Vec<String>>,
+) -> String {
     let Ok(t) = gcl_transcript::parse(text) else {
         return format!("<p>The exchange as it happened (the hand's answers written as a transcript):</p>\n{}", pre(text));
     };
@@ -514,7 +553,7 @@ fn transcript_view(text: &str, d: Option<&super::Diff>) -> String {
             };
             let _ = writeln!(out, "{:>3} send {shown}", i + 1);
         }
-        let _ = write!(out, "    hand said {}", s.expect.to_text());
+        let _ = write!(out, "    {answer} {}", s.expect.to_text());
         out
     };
     // The preamble: the steps from a "preamble" comment up to the "the check" comment.
@@ -527,16 +566,36 @@ fn transcript_view(text: &str, d: Option<&super::Diff>) -> String {
         Some(f) if f >= 1 && f - 1 < check => f - 1,
         _ => check,
     };
-    let mut h = String::from("<p>The exchange as it happened, step by step (\"hand said\": the bytes the hand sent):</p>\n");
+    let mut h = if answer == "expect" {
+        String::new()
+    } else {
+        format!("<p>The exchange as it happened, step by step (\"{answer}\": the bytes the hand sent):</p>\n")
+    };
     if check > 0 {
-        let inner: Vec<String> = (0..check).map(|i| format!("<pre class=\"step\">{}</pre>", esc(&step_text(i)))).collect();
-        h.push_str(&details(
-            &format!("steps 1–{check}: the preamble, as the golden has it"),
-            &inner.join("\n"),
-            false,
-            "",
-            None,
-        ));
+        let text = (0..check).map(step_text).collect::<Vec<_>>().join("\n\n");
+        match shared {
+            // The same preamble in many failures is shown once on the page, and linked.
+            Some(list) => {
+                let n = match list.iter().position(|p| *p == text) {
+                    Some(i) => i + 1,
+                    None => {
+                        list.push(text);
+                        list.len()
+                    }
+                };
+                let _ = writeln!(
+                    h,
+                    "<p class=\"muted\">steps 1–{check}: <a href=\"#preamble-{n}\">preamble {n}</a>, the hand's answers as the golden has them</p>"
+                );
+            }
+            None => h.push_str(&details(
+                &format!("steps 1–{check}: the preamble"),
+                &format!("<pre class=\"step\">{}</pre>\n", esc(&text)),
+                false,
+                "",
+                None,
+            )),
+        }
     }
     for i in check..t.steps.len() {
         if Some(i + 1) == fail {
@@ -642,7 +701,7 @@ mod tests {
         assert!(page.contains("golden: &quot;FGET DP\\n\\r1000&quot;"), "{page}");
         assert!(page.contains("actual: &quot;FGET DP\\r\\n1000&quot;"), "{page}");
         assert!(page.contains("\n                ^ byte 7 of step 2"), "the caret sits under the parting byte: {page}");
-        assert!(page.contains("pre-flight: framing as the profile says"), "{page}");
+        assert!(page.contains("<th>pre-flight</th><td>framing as the profile says"), "{page}");
         assert!(page.contains("<h1>gcl conform seed on sim</h1>"), "{page}");
         assert!(page.contains("<strong>FAILED</strong>: 1 of 2 cases fail (MUST 1)"), "{page}");
         assert!(page.contains("decision:framing-echo"));
@@ -667,8 +726,13 @@ mod tests {
             before: "FGET DP".into(),
             golden: "\"FGET DP\\n\\r1000\"".into(),
         };
-        let h = transcript_view(t, Some(&d));
-        assert!(h.contains("steps 1–1: the preamble"), "{h}");
+        let mut shared = Vec::new();
+        let h = transcript_view(t, Some(&d), "hand said", Some(&mut shared));
+        assert!(h.contains("steps 1–1: <a href=\"#preamble-1\">preamble 1</a>"), "{h}");
+        assert_eq!(shared.len(), 1, "the preamble is kept once for the page");
+        let again = transcript_view(t, Some(&d), "hand said", Some(&mut shared));
+        assert!(again.contains("#preamble-1"), "the same preamble links to the same place: {again}");
+        assert_eq!(shared.len(), 1);
         let bad = h.split("<pre class=\"step bad\" id=\"step-2\">").nth(1).expect("the failing step is marked");
         assert!(bad.contains("golden: &quot;FGET DP\\n\\r1000"), "{bad}");
         assert!(bad.contains("hand said"), "{bad}");

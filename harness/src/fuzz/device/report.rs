@@ -166,7 +166,7 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
         tc.push_attribute(("name", signature.as_str()));
         tc.push_attribute(("time", t.as_str()));
         w.write_event(Event::Start(tc))?;
-        let message = first_line(&f.diff).unwrap_or(&signature).to_string();
+        let message = summary_line(f);
         let mut failure = BytesStart::new("failure");
         failure.push_attribute(("message", message.as_str()));
         failure.push_attribute(("type", f.signature.kind.as_str()));
@@ -184,7 +184,18 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     Ok(out)
 }
 
-/// The first line of a finding's diff that says what differed (its one-line summary).
+/// A finding's one-line summary: the command, then expected against actual as its diff shows
+/// them (`FGET DP: expected "…", got "…"`), or the diff's first line when it has no such pair.
+pub fn summary_line(f: &Finding) -> String {
+    let field = |name: &str| {
+        f.diff.lines().map(str::trim).find_map(|l| l.strip_prefix(name)).map(|v| crate::report::diff::clip(v.trim(), 70))
+    };
+    match (field("expected:"), field("actual:")) {
+        (Some(e), Some(a)) => format!("{}: expected {e}, got {a}", f.signature.command),
+        _ => first_line(&f.diff).unwrap_or_default().to_string(),
+    }
+}
+
 fn first_line(diff: &str) -> Option<&str> {
     diff.lines().map(str::trim).find(|l| !l.is_empty())
 }
@@ -291,20 +302,20 @@ pub fn to_html(r: &FuzzReport) -> String {
         p.heading("details", "Each finding");
         for (i, f) in r.findings.iter().enumerate() {
             let body = format!(
-                "<p>run {}, after {} ms, minimized from {} to {} actions</p>\n<h4>How it parts</h4>\n{}<h4>The minimized transcript (the model's expectations)</h4>\n{}",
+                "<p>run {}, after {} ms, minimized from {} to {} actions</p>\n<h4>How it parts</h4>\n{}<h4>The minimized transcript (the model's expectations; the preamble folded)</h4>\n{}",
                 f.run,
                 f.found_after.as_millis(),
                 f.original_actions,
                 f.actions.len(),
                 pre(&f.diff),
-                pre(&f.transcript_text)
+                crate::report::html::transcript_view(&f.transcript_text, None, "expect", None)
             );
             p.push(&details(
                 &format!(
                     "<strong>#{}</strong> {} <span class=\"muted\">{}</span>",
                     i + 1,
                     esc(&f.signature.to_string()),
-                    esc(first_line(&f.diff).unwrap_or(""))
+                    esc(&summary_line(f))
                 ),
                 &body,
                 i == 0,
