@@ -246,7 +246,7 @@ pub fn to_html(r: &RunReport) -> String {
                 &format!("the {} case(s) of this group", g.cases.len()),
                 &format!("<p>{}</p>\n", members.join(" ")),
                 g.cases.len() <= 12,
-                "",
+                "members",
                 None,
             ));
             let line = g.diff.as_ref().map(diff::one_line).unwrap_or_default();

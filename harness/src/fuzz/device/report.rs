@@ -309,7 +309,7 @@ pub fn to_html(r: &FuzzReport) -> String {
                 f.actions.len(),
                 pre(&f.diff),
                 crate::report::html::transcript_view(&f.transcript_text, None, "expect", None)
-            );
+            ) + &details("the transcript file as written", &pre(&f.transcript_text), false, "", None);
             p.push(&details(
                 &format!(
                     "<strong>#{}</strong> {} <span class=\"muted\">{}</span>",
