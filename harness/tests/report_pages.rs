@@ -27,7 +27,7 @@ fn sel(s: &str) -> Selector {
 const ONE_BUG_PAGE_LIMIT: usize = 512 * 1024;
 
 /// The most text the same page may show before the reader opens anything. The 60,000 px page
-/// showed every transcript (some 300,000 characters); a reader should meet the verdict, the
+/// showed every transcript (254,665 characters of text); a reader should meet the verdict, the
 /// options, the level table, the root causes and one line per failing case (176 lines of
 /// about 110 characters): 40,000 characters, some 5,000 px at 1280 px wide.
 const ONE_BUG_SHOWN_LIMIT: usize = 40_000;
