@@ -61,7 +61,25 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     progress.update(1, 0, "");
     progress.finish();
     let outcome = outcome?;
-    let report = outcome.report;
+    let mut report = outcome.report;
+    use gcl_harness::fuzz::host::HostEnd;
+    let end = match &outcome.run.end {
+        HostEnd::Exit(c) => format!("exited with code {c}"),
+        HostEnd::Signal(s) => format!("killed by signal {s}"),
+        HostEnd::Hung(at) => format!("hung ({at}); killed"),
+        HostEnd::OverBudget(at) => format!("over the run budget ({at}); killed"),
+    };
+    let mut facts = vec![("the host".to_string(), end)];
+    if let Some(g) = &args.golden {
+        facts.push(("golden".into(), g.display().to_string()));
+    }
+    report.host = Some(gcl_harness::report::HostDetails {
+        command: opts.run.command.clone(),
+        runs: 1,
+        seed: args.seed,
+        facts,
+        ..Default::default()
+    });
     if let Some(p) = &args.save_session {
         gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;

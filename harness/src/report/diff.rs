@@ -204,6 +204,59 @@ pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -
     rows
 }
 
+/// One decimal value of a text answer against its golden window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Window {
+    /// Lowest accepted.
+    pub lo: i64,
+    /// Highest accepted.
+    pub hi: i64,
+    /// What the answer had there (`None` where it had no number).
+    pub value: Option<i64>,
+}
+
+/// Walks a golden text answer against the actual bytes and returns each ranged `{int A..B}`
+/// with the number the answer has at its place; stops where the two no longer line up (an
+/// elision of varying length, literal bytes that differ).
+pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
+    let mut out = Vec::new();
+    let mut at = 0usize;
+    for (form, piece) in golden.pieces() {
+        if form != Form::Text {
+            break;
+        }
+        match piece {
+            Piece::Bytes(b) => {
+                if actual.get(at..at + b.len()) != Some(b.as_slice()) {
+                    // The literal text differs: a number of another width before it. Skip to
+                    // the literal if it comes soon (one number's width), else stop.
+                    match actual.get(at..).and_then(|rest| rest.windows(b.len()).position(|w| w == b.as_slice())) {
+                        Some(skip) if skip <= 20 => at += skip + b.len(),
+                        _ => break,
+                    }
+                } else {
+                    at += b.len();
+                }
+            }
+            Piece::Int(range) => {
+                let start = at;
+                if actual.get(at) == Some(&b'-') {
+                    at += 1;
+                }
+                while actual.get(at).is_some_and(u8::is_ascii_digit) {
+                    at += 1;
+                }
+                let value = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
+                if let Some((lo, hi)) = range {
+                    out.push(Window { lo: *lo, hi: *hi, value });
+                }
+            }
+            _ => break,
+        }
+    }
+    out
+}
+
 /// The RealTime layout in force at each step of `t` (1-based step → layout), found by feeding
 /// the transcript's `send` bytes to a fresh model of `profile` as the hand would have seen
 /// them. `None` for a profile the model does not have built in.
@@ -276,6 +329,16 @@ mod tests {
         let caret = lines[2].find('^').unwrap();
         assert_eq!(&lines[0][caret..caret + 4], "8500");
         assert_eq!(&lines[1][caret..caret + 4], "1575");
+    }
+
+    #[test]
+    fn windows_pair_each_ranged_value_with_the_actual_number() {
+        let golden = parse_expect("\"FGET P\\n\\r{int 16950..17050} {int 0..50} 3000\\n\\r=> \"").unwrap();
+        let w = int_windows(&golden, b"FGET P\n\r0 17000 3000\n\r=> ");
+        assert_eq!(
+            w,
+            vec![Window { lo: 16950, hi: 17050, value: Some(0) }, Window { lo: 0, hi: 50, value: Some(17000) }]
+        );
     }
 
     #[test]

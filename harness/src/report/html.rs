@@ -147,9 +147,14 @@ fn facts(r: &RunReport) -> Vec<(String, String)> {
         v.push(("suite".into(), format!("<code>{}</code>", esc(&r.suite_hash))));
     }
     v.push(("started".into(), esc(&r.started)));
-    v.push(("duration".into(), format!("{:.1} s", r.duration_ms / 1000.0)));
+    v.push(("duration".into(), duration(r.duration_ms)));
     v.push(("tool".into(), esc(&r.tool)));
     v
+}
+
+/// A wall time for people: milliseconds under a second, else seconds.
+pub(crate) fn duration(ms: f64) -> String {
+    if ms < 1000.0 { format!("{ms:.0} ms") } else { format!("{:.1} s", ms / 1000.0) }
 }
 
 fn options(r: &RunReport) -> Vec<(String, String)> {
@@ -276,8 +281,17 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
         p.heading("failures", label);
         let goldens = goldens_for(r, &failures);
         let mut preambles = Vec::new();
+        // A window plot for each group's representative and each failure of a small group
+        // (or none): the members of a large group part the same way as their representative.
+        let big: std::collections::BTreeSet<&str> = r
+            .groups
+            .iter()
+            .filter(|g| g.cases.len() > 10)
+            .flat_map(|g| g.cases.iter().filter(|id| **id != g.representative).map(String::as_str))
+            .collect();
         for c in &failures {
-            p.push(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles));
+            let plot = !big.contains(c.id.as_str());
+            p.push(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles, plot));
         }
         if !preambles.is_empty() {
             p.heading("preambles", "Preambles");
@@ -400,16 +414,22 @@ fn goldens_for<'a>(r: &RunReport, failures: &[&'a CaseResult]) -> BTreeMap<&'a s
     out
 }
 
-fn failure_view(r: &RunReport, c: &CaseResult, golden: Option<&Transcript>, preambles: &mut Vec<String>) -> String {
+fn failure_view(
+    r: &RunReport,
+    c: &CaseResult,
+    golden: Option<&Transcript>,
+    preambles: &mut Vec<String>,
+    plot_windows: bool,
+) -> String {
     let one = c.diff.as_ref().map(diff::one_line).or_else(|| c.message.clone()).unwrap_or_default();
     let mut body = String::new();
+    let level = if r.kind.is_host() { String::new() } else { format!("; level {}", esc(&c.level)) };
     let _ = writeln!(
         body,
-        "<p>{} <span class=\"muted\">— {}; clauses: {}; level {}</span></p>",
+        "<p>{} <span class=\"muted\">— {}; clauses: {}{level}</span></p>",
         esc(c.message.as_deref().unwrap_or("")),
         esc(&c.title),
         esc(&c.clauses.join(", ")),
-        esc(&c.level)
     );
     if let Some(d) = &c.diff {
         body.push_str(&pre(&diff::aligned(d)));
@@ -419,6 +439,9 @@ fn failure_view(r: &RunReport, c: &CaseResult, golden: Option<&Transcript>, prea
         }
         if let (Some(g), Some(t)) = (golden, c.transcript.as_deref()) {
             body.push_str(&realtime_plots(r, c, g, t, d.step));
+        }
+        if plot_windows {
+            body.push_str(&window_plot(c, d));
         }
     }
     if let Some(t) = &c.transcript {
@@ -513,15 +536,54 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
                 .map(|k| Series {
                     name: k.1.map_or("hand".to_string(), |m| format!("motor {m}")),
                     points: values.get(*k).cloned().unwrap_or_default(),
-                    steps: false,
+                    ..Default::default()
                 })
                 .collect(),
             bands: keys.iter().map(|k| Band { points: bands[*k].clone() }).collect(),
             marks: mark.map(|x| vec![(x, "fails here".to_string())]).unwrap_or_default(),
+            windows: Vec::new(),
         };
         h.push_str(&plot.to_svg(&format!("rt-{}-{}", c.id, name)));
     }
     h
+}
+
+/// For a failing answer of decimal values with windows (positions after a motion or a ^C
+/// mid-motion, values in ranges): each value's window against where it was, one bar per value
+/// in the answer's order (one per motor for a per-motor get), the parting one marked.
+fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
+    if diff::is_hex(d) {
+        return String::new();
+    }
+    let Some(golden) = diff::parse_expect(&d.golden) else { return String::new() };
+    let Some(actual) = c
+        .transcript
+        .as_deref()
+        .and_then(|t| gcl_transcript::parse(t).ok())
+        .and_then(|t| t.steps.get(d.step.wrapping_sub(1)).and_then(|s| s.expect.exact_bytes()))
+    else {
+        return String::new();
+    };
+    let windows = diff::int_windows(&golden, &actual);
+    if windows.len() < 2 {
+        return String::new();
+    }
+    let parting = windows.iter().position(|w| w.value.is_none_or(|v| v < w.lo || v > w.hi));
+    let plot = Plot {
+        title: format!("{}: each value's window and where it was", diff::command(d)),
+        x_label: "value in the answer (motor order for a per-motor get)".into(),
+        y_label: "value".into(),
+        series: vec![Series {
+            name: "actual".into(),
+            points: windows.iter().enumerate().filter_map(|(i, w)| w.value.map(|v| ((i + 1) as f64, v as f64))).collect(),
+            dots: true,
+            steps: false,
+        }],
+        windows: windows.iter().enumerate().map(|(i, w)| ((i + 1) as f64, w.lo as f64, w.hi as f64)).collect(),
+        marks: parting.map(|i| vec![((i + 1) as f64, "parts here".to_string())]).unwrap_or_default(),
+        ..Default::default()
+    };
+    plot.to_svg(&format!("windows-{}", c.id))
 }
 
 /// A transcript as it happened, step by step: the preamble folded, the failing step marked
@@ -650,9 +712,8 @@ fn fuzz_host_sections(p: &mut Page, r: &RunReport) {
             title: "Distinct findings over runs".into(),
             x_label: "run".into(),
             y_label: "findings".into(),
-            series: vec![Series { name: "distinct findings".into(), points: pts, steps: true }],
-            bands: Vec::new(),
-            marks: Vec::new(),
+            series: vec![Series { name: "distinct findings".into(), points: pts, steps: true, dots: false }],
+            ..Default::default()
         };
         p.push(&plot.to_svg("fuzz-host-findings"));
     }

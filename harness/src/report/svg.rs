@@ -15,6 +15,8 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Drawn as steps (a count that holds until the next point) rather than straight lines.
     pub steps: bool,
+    /// Drawn as dots only (values of separate things, such as one per motor).
+    pub dots: bool,
 }
 
 /// A band: at x, y may lie in `lo..=hi` (drawn behind the series).
@@ -39,6 +41,8 @@ pub struct Plot {
     pub bands: Vec<Band>,
     /// Vertical marks at these x, each with a short label (a failure).
     pub marks: Vec<(f64, String)>,
+    /// Windows: at x, a value should lie in `lo..=hi` (drawn as a shaded bar behind the series).
+    pub windows: Vec<(f64, f64, f64)>,
 }
 
 const W: f64 = 640.0;
@@ -60,9 +64,11 @@ impl Plot {
         let xs = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
         let xs = xs.chain(self.bands.iter().flat_map(|b| b.points.iter().map(|p| p.0)));
         let xs = xs.chain(self.marks.iter().map(|m| m.0));
+        let xs = xs.chain(self.windows.iter().flat_map(|w| [w.0 - 0.5, w.0 + 0.5]));
         let (mut x0, mut x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
         let ys = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
         let ys = ys.chain(self.bands.iter().flat_map(|b| b.points.iter().flat_map(|p| [p.1, p.2])));
+        let ys = ys.chain(self.windows.iter().flat_map(|w| [w.1, w.2]));
         let (mut y0, mut y1) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
         if !x0.is_finite() {
             (x0, x1) = (0.0, 1.0);
@@ -101,6 +107,16 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                 "<polygon points=\"{} {}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"none\"/>",
                 top.join(" "),
                 bottom.join(" ")
+            );
+        }
+        for (x, lo, hi) in &self.windows {
+            let w = ((px(x + 0.5) - px(x - 0.5)) * 0.5).max(4.0);
+            let _ = write!(
+                s,
+                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{w:.1}\" height=\"{:.1}\" fill=\"#9fd19f\" fill-opacity=\"0.6\"/>",
+                px(*x) - w / 2.0,
+                py(*hi),
+                (py(*lo) - py(*hi)).max(2.0)
             );
         }
         // Axes and their end labels.
@@ -149,8 +165,10 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                 }
                 last = Some((x, y));
             }
-            let _ = write!(s, "<path d=\"{d}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.6\"/>");
-            if se.points.len() <= 40 {
+            if !se.dots {
+                let _ = write!(s, "<path d=\"{d}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.6\"/>");
+            }
+            if se.dots || se.points.len() <= 40 {
                 for &(x, y) in &se.points {
                     let _ = write!(s, "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\" fill=\"{c}\"/>", px(x), py(y));
                 }
@@ -179,7 +197,7 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                 esc(label)
             );
         }
-        if !self.bands.is_empty() {
+        if !self.bands.is_empty() || !self.windows.is_empty() {
             let _ = write!(
                 s,
                 "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"8\" fill=\"#9fd19f\"/><text x=\"{}\" y=\"{}\">golden range</text>",
@@ -204,9 +222,14 @@ mod tests {
             title: "LFAP, motor 1".into(),
             x_label: "block".into(),
             y_label: "counts".into(),
-            series: vec![Series { name: "actual".into(), points: vec![(1.0, 5000.0), (2.0, 34835.0)], steps: false }],
+            series: vec![Series {
+                name: "actual".into(),
+                points: vec![(1.0, 5000.0), (2.0, 34835.0)],
+                ..Default::default()
+            }],
             bands: vec![Band { points: vec![(1.0, 4950.0, 5050.0), (2.0, 4950.0, 5050.0)] }],
             marks: vec![(2.0, "fails".into())],
+            windows: Vec::new(),
         };
         let svg = p.to_svg("rt-lfap");
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));

@@ -274,14 +274,15 @@ pub fn to_html(r: &FuzzReport) -> String {
                 name: "features".into(),
                 points: r.coverage_over_time.iter().map(|c| (c.elapsed_ms as f64 / 1000.0, c.features as f64)).collect(),
                 steps: true,
+                dots: false,
             }],
-            bands: Vec::new(),
             marks: r
                 .findings
                 .iter()
                 .enumerate()
                 .map(|(i, f)| (f.found_after.as_secs_f64(), format!("#{}", i + 1)))
                 .collect(),
+            ..Default::default()
         };
         p.push(&plot.to_svg("fuzz-device-coverage"));
     }
