@@ -318,3 +318,17 @@ fn a_ci_log_gets_progress_lines_with_counts_and_the_end() {
     let report = gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*", "--quiet"]);
     assert!(!String::from_utf8_lossy(&report.stderr).contains("gcl conform: 0/"), "--quiet has no progress");
 }
+
+#[test]
+fn a_motion_effect_failure_plots_each_window_against_where_the_motor_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
+    let svg = html.select(&sel("#fail-param-mcv-effect svg[data-plot=\"windows-param-mcv-effect\"]")).next().unwrap();
+    // Two motors asked (12FGET P): two windows, two dots, and the value that parts marked.
+    assert_eq!(svg.select(&sel("rect[fill-opacity]")).count(), 2);
+    assert_eq!(svg.select(&sel("circle")).count(), 2);
+    assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_some());
+}
