@@ -61,7 +61,8 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
             (HostEnd::Hung(_) | HostEnd::OverBudget(_), HostClause::ExitsCleanly, _) => Verdict::Timeout,
             _ => Verdict::Fail,
         };
-        let mut c = case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), verdict, &broken, &session);
+        let mut c =
+            case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), verdict, &broken, &session);
         if verdict == Verdict::Skip {
             c.message = Some("not exercised: the host never entered RealTime".into());
             c.transcript = None;

@@ -590,7 +590,14 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
                 Form::Text => gcl_transcript::Expect::text(&e.received),
                 Form::Hex => gcl_transcript::Expect::hex(&e.received),
             };
-            Some(Step { line: 0, comments: s.comments.clone(), pause: s.pause, send: s.send.clone(), within: s.within, expect })
+            Some(Step {
+                line: 0,
+                comments: s.comments.clone(),
+                pause: s.pause,
+                send: s.send.clone(),
+                within: s.within,
+                expect,
+            })
         })
         .collect();
     Transcript { header: t.header.clone(), steps }

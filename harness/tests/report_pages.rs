@@ -115,7 +115,8 @@ for s in suites:
 fn the_conform_page_for_one_bug_is_small_and_leads_with_its_root_cause() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("r");
-    let o = gcl(&["conform", "--target", "sim", "--fault", "fget-reversed", "--quiet", "--report", out.to_str().unwrap()]);
+    let o =
+        gcl(&["conform", "--target", "sim", "--fault", "fget-reversed", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let path = out.join("report.html");
     let size = std::fs::metadata(&path).unwrap().len() as usize;
@@ -143,7 +144,10 @@ fn the_conform_page_for_one_bug_is_small_and_leads_with_its_root_cause() {
     let fail = html.select(&sel("#fail-framing-echo")).next().unwrap();
     assert_eq!(fail.value().name(), "details");
     let summary = fail.select(&sel("summary")).next().unwrap().text().collect::<String>();
-    assert!(summary.contains(r#"FGET DP (step 5): expected "8500 8500 8500 1575", got "1575 8500 8500 8500""#), "{summary}");
+    assert!(
+        summary.contains(r#"FGET DP (step 5): expected "8500 8500 8500 1575", got "1575 8500 8500 8500""#),
+        "{summary}"
+    );
     let bad = fail.select(&sel("pre.step.bad")).next().expect("the failing step is marked").text().collect::<String>();
     assert!(bad.contains("golden: \"FGET DP") && bad.contains("actual: \"FGET DP") && bad.contains('^'), "{bad}");
     assert!(html.select(&sel("#preamble-1")).next().is_some());
@@ -154,17 +158,21 @@ fn the_conform_page_for_one_bug_is_small_and_leads_with_its_root_cause() {
 fn realtime_failures_are_decoded_field_by_field_and_plotted() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("r");
-    let o = gcl(&["conform", "--target", "sim", "--fault", "lfap-little-endian", "--quiet", "--report", out.to_str().unwrap()]);
+    let o = gcl(&[
+        "conform",
+        "--target",
+        "sim",
+        "--fault",
+        "lfap-little-endian",
+        "--quiet",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
     let fail = html.select(&sel("#fail-rt-lfap-byte-order")).next().unwrap();
-    let row = fail
-        .select(&sel("table tr.fail"))
-        .next()
-        .expect("the out-of-range field")
-        .text()
-        .collect::<Vec<_>>()
-        .join("|");
+    let row =
+        fail.select(&sel("table tr.fail")).next().expect("the out-of-range field").text().collect::<Vec<_>>().join("|");
     for cell in ["LFAP", "u16", "4950..5050", "88 13", "34835", "5000: in range, the bytes are swapped"] {
         assert!(row.contains(cell), "{cell} in {row}");
     }
@@ -179,8 +187,14 @@ fn realtime_failures_are_decoded_field_by_field_and_plotted() {
     if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
         assert_eq!(cases.len(), 351);
         let lfap = cases.iter().find(|c| c.contains("|rt-lfap-byte-order|")).unwrap();
-        assert!(lfap.ends_with("|failure|RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13"), "{lfap}");
-        assert!(cases.iter().all(|c| c.split('|').nth(3).is_some_and(|t| t.parse::<f64>().is_ok())), "every case has a time");
+        assert!(
+            lfap.ends_with("|failure|RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13"),
+            "{lfap}"
+        );
+        assert!(
+            cases.iter().all(|c| c.split('|').nth(3).is_some_and(|t| t.parse::<f64>().is_ok())),
+            "every case has a time"
+        );
     }
 }
 
@@ -221,7 +235,10 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
     let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
     assert!(opts.contains("--fault") && opts.contains("fget-reversed"), "{opts}");
     let cmd = html.select(&sel("#findings + table code.cmd")).next().unwrap().text().collect::<String>();
-    assert!(cmd.starts_with("gcl replay --target 'exec:gcl sim --stdio --profile bh8-262-4.4 --fault fget-reversed' "), "{cmd}");
+    assert!(
+        cmd.starts_with("gcl replay --target 'exec:gcl sim --stdio --profile bh8-262-4.4 --fault fget-reversed' "),
+        "{cmd}"
+    );
     // The command replays the finding: it fails against the faulty hand.
     let path = cmd.rsplit(' ').next().unwrap();
     let exec = format!("exec:{} sim --stdio --profile bh8-262-4.4 --fault fget-reversed", env!("CARGO_BIN_EXE_gcl"));
@@ -264,7 +281,12 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
     assert!(rt.contains("not exercised"), "{rt}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
-        assert!(cases.iter().all(|c| c.starts_with(&format!("gcl check-host python3 {host} {{port}}|gcl.check-host.clause|"))), "{cases:?}");
+        assert!(
+            cases
+                .iter()
+                .all(|c| c.starts_with(&format!("gcl check-host python3 {host} {{port}}|gcl.check-host.clause|"))),
+            "{cases:?}"
+        );
         let lf = cases.iter().find(|c| c.contains("|host-line-ending|")).unwrap();
         assert!(lf.contains("|failure|"), "{lf}");
     }
@@ -307,23 +329,26 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
 
 #[test]
 fn a_ci_log_gets_progress_lines_with_counts_and_the_end() {
-    // stderr is a pipe here, as in CI: a first line, then (on a long run) one every 10 s, and
-    // a last one with the totals.
+    // stderr is a pipe here, as in CI: a first line with the first case, then (on a long run)
+    // one every 10 s, and a last one with the totals.
     let o = gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("gcl conform: ")).collect();
-    assert!(lines.first().is_some_and(|l| l.starts_with("gcl conform: 0/")), "{stderr}");
+    assert!(stderr.starts_with("pre-flight: "), "the pre-flight leads: {stderr}");
+    assert!(lines.first().is_some_and(|l| l.starts_with("gcl conform: 1/") && l.contains(" cases, ")), "{stderr}");
     let last = lines.last().unwrap();
     assert!(last.contains(" failing, ") && last.contains(" elapsed") && last.ends_with("(done)"), "{last}");
-    let report = gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*", "--quiet"]);
-    assert!(!String::from_utf8_lossy(&report.stderr).contains("gcl conform: 0/"), "--quiet has no progress");
+    let report =
+        gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*", "--quiet"]);
+    assert!(!String::from_utf8_lossy(&report.stderr).contains("gcl conform: 1/"), "--quiet has no progress");
 }
 
 #[test]
 fn a_motion_effect_failure_plots_each_window_against_where_the_motor_was() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("r");
-    let o = gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
+    let o =
+        gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
     let svg = html.select(&sel("#fail-param-mcv-effect svg[data-plot=\"windows-param-mcv-effect\"]")).next().unwrap();

@@ -50,13 +50,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     };
     let opts =
         CheckHostOptions { run: args.host.host_run(args.seed)?, ok_exit_codes: args.host.ok_exit_codes(), golden };
-    let progress = super::progress::Progress::new(
-        "gcl check-host",
-        "runs",
-        "failing",
-        super::progress::Total::Units(1),
-        false,
-    );
+    let progress =
+        super::progress::Progress::new("gcl check-host", "runs", "failing", super::progress::Total::Units(1), false);
     let outcome = check_host(&opts).context("running the host");
     progress.update(1, 0, "");
     progress.finish();

@@ -2,7 +2,8 @@
 //! way. On a terminal: a bar with done/total, failures and an ETA. Elsewhere (a CI log): a
 //! plain line when the command starts, then one at most every [`INTERVAL`] and at least every
 //! 30 s (a ticker thread prints even while one case or run takes long), and one when it ends:
-//! `gcl conform: 120/351 cases, 3 failing, 42 s elapsed, ETA 80 s`.
+//! `gcl conform: 120/351 cases, 3 failing, 42 s elapsed, ETA 80 s`. Plain lines begin with
+//! the first unit done (or after the first interval, whichever comes first).
 //!
 //! Lines other than progress (a failing case, a finding) go through [`Progress::println`], so
 //! they never tear the bar.
@@ -35,6 +36,7 @@ struct State {
     started: Instant,
     last_line: Mutex<Instant>,
     finished: AtomicBool,
+    started_line: AtomicBool,
 }
 
 impl State {
@@ -50,9 +52,7 @@ impl State {
                     .map(|d| format!(", ETA {}", secs(d)));
                 (format!("{done}/{n} {}", self.unit), eta.unwrap_or_default())
             }
-            Total::Time(t) => {
-                (format!("{done} {}", self.unit), format!(", ETA {}", secs(t.saturating_sub(elapsed))))
-            }
+            Total::Time(t) => (format!("{done} {}", self.unit), format!(", ETA {}", secs(t.saturating_sub(elapsed)))),
         };
         format!("{}: {count}, {failures} {}, {} elapsed{eta}", self.what, self.failing_word, secs(elapsed))
     }
@@ -86,6 +86,7 @@ impl Progress {
             started: Instant::now(),
             last_line: Mutex::new(Instant::now()),
             finished: AtomicBool::new(false),
+            started_line: AtomicBool::new(false),
         });
         let bar = (tty && !quiet).then(|| {
             let len = match total {
@@ -108,7 +109,8 @@ impl Progress {
         let plain = !tty && !quiet;
         let p = Progress { state, bar, plain };
         if p.plain {
-            eprintln!("{}", p.state.line());
+            // The first line comes with the first unit done (so a line the command prints
+            // before it starts, such as the pre-flight, leads), then one every INTERVAL.
             let st = p.state.clone();
             std::thread::spawn(move || {
                 while !st.finished.load(Ordering::Relaxed) {
@@ -139,6 +141,10 @@ impl Progress {
         if let Some(b) = &self.bar {
             b.set_position(done);
             b.set_message(msg.to_string());
+        }
+        if self.plain && !self.state.started_line.swap(true, Ordering::Relaxed) {
+            *self.state.last_line.lock().unwrap_or_else(|e| e.into_inner()) = Instant::now();
+            eprintln!("{}", self.state.line());
         }
     }
 

@@ -81,7 +81,12 @@ pub fn one_line(d: &Diff) -> String {
     if is_hex(d) {
         let join = |a: &str, b: &str| [a, b].iter().filter(|s| !s.is_empty()).copied().collect::<Vec<_>>().join(" ");
         let got = if d.actual.is_empty() { "nothing".to_string() } else { join(&d.before, &d.actual) };
-        return format!("{cmd} (step {}): expected {}, got {}", d.step, clip(&join(&d.before, &d.expected), 80), clip(&got, 80));
+        return format!(
+            "{cmd} (step {}): expected {}, got {}",
+            d.step,
+            clip(&join(&d.before, &d.expected), 80),
+            clip(&got, 80)
+        );
     }
     let (e, a) = parting_lines(d);
     let got = if d.actual.is_empty() && d.offset >= d.before.len() {

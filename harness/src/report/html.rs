@@ -188,7 +188,13 @@ fn level_table(r: &RunReport) -> String {
         let _ = write!(
             h,
             "<tr class=\"{}\"><th>{l}</th><td class=\"n\">{total}</td>",
-            if total == 0 { "skip" } else if bad { "fail" } else { "pass" }
+            if total == 0 {
+                "skip"
+            } else if bad {
+                "fail"
+            } else {
+                "pass"
+            }
         );
         for v in Verdict::ALL {
             let n = counts.get(&v).copied().unwrap_or(0);
@@ -271,7 +277,14 @@ pub fn to_html(r: &RunReport) -> String {
             "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (per case, the larger of its bytes one \
 way at {} baud, as the line is full duplex, and the model's motion time for it; {} bytes sent, {} received, motion \
 {:.0} ms); took {:.0} ms, ratio {:.2}.</p>\n",
-            w.lower_bound_ms, w.counted_cases, w.baud, w.bytes_sent, w.bytes_received, w.motion_ms, w.actual_ms, w.ratio
+            w.lower_bound_ms,
+            w.counted_cases,
+            w.baud,
+            w.bytes_sent,
+            w.bytes_received,
+            w.motion_ms,
+            w.actual_ms,
+            w.ratio
         ));
     }
 
@@ -448,7 +461,12 @@ fn failure_view(
         body.push_str(&transcript_view(t, c.diff.as_ref(), "hand said", Some(preambles)));
     }
     details(
-        &format!("<strong>{}</strong> <code>{}</code> <span class=\"muted\">{}</span>", c.verdict, esc(&c.id), esc(&one)),
+        &format!(
+            "<strong>{}</strong> <code>{}</code> <span class=\"muted\">{}</span>",
+            c.verdict,
+            esc(&c.id),
+            esc(&one)
+        ),
         &body,
         false,
         "case",
@@ -524,7 +542,9 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
     }
     let mut names: Vec<String> = bands.keys().map(|k| k.0.clone()).collect();
     names.dedup();
-    let mut h = String::from("<p>Each RealTime field over the case's blocks: the actual values, the golden's range behind them, and where the case fails.</p>\n");
+    let mut h = String::from(
+        "<p>Each RealTime field over the case's blocks: the actual values, the golden's range behind them, and where the case fails.</p>\n",
+    );
     for name in names.iter().take(8) {
         let keys: Vec<&Key> = bands.keys().filter(|k| &k.0 == name).collect();
         let plot = Plot {
@@ -575,7 +595,11 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
         y_label: "value".into(),
         series: vec![Series {
             name: "actual".into(),
-            points: windows.iter().enumerate().filter_map(|(i, w)| w.value.map(|v| ((i + 1) as f64, v as f64))).collect(),
+            points: windows
+                .iter()
+                .enumerate()
+                .filter_map(|(i, w)| w.value.map(|v| ((i + 1) as f64, v as f64)))
+                .collect(),
             dots: true,
             steps: false,
         }],
@@ -596,7 +620,10 @@ pub(crate) fn transcript_view(
     shared: Option<&mut Vec<String>>,
 ) -> String {
     let Ok(t) = gcl_transcript::parse(text) else {
-        return format!("<p>The exchange as it happened (the hand's answers written as a transcript):</p>\n{}", pre(text));
+        return format!(
+            "<p>The exchange as it happened (the hand's answers written as a transcript):</p>\n{}",
+            pre(text)
+        );
     };
     let fail = d.map(|d| d.step);
     let step_text = |i: usize| -> String {
@@ -772,7 +799,12 @@ mod tests {
     #[test]
     fn the_level_table_counts_each_level_and_the_clause_table_has_a_level_column() {
         let page = to_html(&crate::report::tests::sample());
-        assert!(page.contains("<tr class=\"fail\"><th>MUST</th><td class=\"n\">2</td><td class=\"n\">1</td><td class=\"n\">1</td>"), "{page}");
+        assert!(
+            page.contains(
+                "<tr class=\"fail\"><th>MUST</th><td class=\"n\">2</td><td class=\"n\">1</td><td class=\"n\">1</td>"
+            ),
+            "{page}"
+        );
         assert!(page.contains("<td>decision:framing-echo</td><td>MUST</td><td>FAIL</td>"), "{page}");
     }
 

@@ -68,7 +68,9 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
         // what judged it (the clauses of check-host, the findings of fuzz host).
         let classname = match r.kind {
             super::ReportKind::CheckHost => "gcl.check-host.clause".to_string(),
-            super::ReportKind::FuzzHost => format!("gcl.fuzz-host.{}", c.clauses.first().map_or("finding", |k| k.trim_start_matches("host: "))),
+            super::ReportKind::FuzzHost => {
+                format!("gcl.fuzz-host.{}", c.clauses.first().map_or("finding", |k| k.trim_start_matches("host: ")))
+            }
             _ => format!("gcl.{}.{}", r.profile, c.level),
         };
         let t = format!("{:.3}", c.duration_ms / 1000.0);

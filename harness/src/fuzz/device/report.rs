@@ -171,7 +171,8 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
         failure.push_attribute(("message", message.as_str()));
         failure.push_attribute(("type", f.signature.kind.as_str()));
         w.write_event(Event::Start(failure))?;
-        let replay = f.path.as_deref().map(|p| format!("run it again: {}\n\n", r.replay_command(p))).unwrap_or_default();
+        let replay =
+            f.path.as_deref().map(|p| format!("run it again: {}\n\n", r.replay_command(p))).unwrap_or_default();
         let body = format!("{replay}{}\n\n{}", f.diff, f.transcript_text);
         w.write_event(Event::Text(BytesText::new(&body)))?;
         w.write_event(Event::End(BytesEnd::new("failure")))?;
@@ -188,8 +189,44 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
 /// them (`FGET DP: expected "…", got "…"`), or the diff's first line when it has no such pair.
 pub fn summary_line(f: &Finding) -> String {
     let field = |name: &str| {
-        f.diff.lines().map(str::trim).find_map(|l| l.strip_prefix(name)).map(|v| crate::report::diff::clip(v.trim(), 70))
+        f.diff
+            .lines()
+            .map(str::trim)
+            .find_map(|l| l.strip_prefix(name))
+            .map(|v| crate::report::diff::clip(v.trim(), 70))
     };
+    let whole = |name: &str| f.diff.lines().map(str::trim).find_map(|l| l.strip_prefix(name)).map(str::trim);
+    // The replayer's lines show the golden and the answer from the same byte: rebuilt as a
+    // report's diff, the summary is the one conform's JUnit and console give.
+    if let (Some(e), Some(a)) = (whole("expected:"), whole("actual:"))
+        && !e.starts_with('(')
+    {
+        let hex = !e.starts_with('"');
+        let unq = |s: &str| s.trim_matches('"').trim_start_matches('…').to_string();
+        let (e, a) = (unq(e), unq(a));
+        let common = e
+            .char_indices()
+            .zip(a.chars())
+            .take_while(|((_, x), y)| x == y)
+            .last()
+            .map_or(0, |((i, c), _)| i + c.len_utf8());
+        let step = f
+            .diff
+            .split("step ")
+            .nth(1)
+            .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0);
+        let d = crate::report::Diff {
+            step,
+            offset: common,
+            expected: e[common..].trim_start().to_string(),
+            actual: a[common..].trim_start().to_string(),
+            before: e[..common].trim_end().to_string(),
+            golden: if hex { format!("hex {e}") } else { format!("\"{e}\"") },
+        };
+        return crate::report::diff::one_line(&d);
+    }
     match (field("expected:"), field("actual:")) {
         (Some(e), Some(a)) => format!("{}: expected {e}, got {a}", f.signature.command),
         _ => first_line(&f.diff).unwrap_or_default().to_string(),
@@ -272,7 +309,11 @@ pub fn to_html(r: &FuzzReport) -> String {
             y_label: "features".into(),
             series: vec![Series {
                 name: "features".into(),
-                points: r.coverage_over_time.iter().map(|c| (c.elapsed_ms as f64 / 1000.0, c.features as f64)).collect(),
+                points: r
+                    .coverage_over_time
+                    .iter()
+                    .map(|c| (c.elapsed_ms as f64 / 1000.0, c.features as f64))
+                    .collect(),
                 steps: true,
                 dots: false,
             }],
