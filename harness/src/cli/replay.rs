@@ -69,7 +69,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Target::Sim { profile: Some(p) } = &target {
         let simulated = super::load_profile(p)?.id.clone();
         for (f, t) in &transcripts {
-            if !t.header.profiles.is_empty() && !t.header.profiles.iter().any(|h| *h == simulated) {
+            if !t.header.profiles.is_empty() && !t.header.profiles.contains(&simulated) {
                 eprintln!(
                     "gcl replay: warning: {} is written for profile {}, but the target simulates {simulated}; \
 differences may come from the profile, not a bug (use --target sim:{} or sim to match)",

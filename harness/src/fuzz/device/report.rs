@@ -287,9 +287,9 @@ pub fn to_html(r: &FuzzReport) -> String {
             "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th><th>transcript</th><th>run it again</th></tr>\n",
         );
         for (i, f) in r.findings.iter().enumerate() {
-            let _ = write!(
+            let _ = writeln!(
                 t,
-                "<tr class=\"fail\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td><code>{}</code></td><td><code class=\"cmd\">{}</code></td></tr>\n",
+                "<tr class=\"fail\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td><code>{}</code></td><td><code class=\"cmd\">{}</code></td></tr>",
                 esc(&f.signature.kind),
                 esc(&f.signature.to_string()),
                 f.run,
