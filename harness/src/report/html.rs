@@ -445,7 +445,10 @@ fn failure_view(
         esc(&c.clauses.join(", ")),
     );
     if let Some(d) = &c.diff {
-        body.push_str(&pre(&diff::aligned(d)));
+        // The transcript below marks the failing step with the diff; without one, it goes here.
+        if c.transcript.as_deref().is_none_or(|t| gcl_transcript::parse(t).is_err()) {
+            body.push_str(&pre(&diff::aligned(d)));
+        }
         let rows = diff::realtime_rows(&r.profile, d, c.transcript.as_deref());
         if !rows.is_empty() {
             body.push_str(&field_table(&rows));
@@ -690,7 +693,11 @@ pub(crate) fn transcript_view(
         if Some(i + 1) == fail {
             let mut s = step_text(i);
             if let Some(d) = d {
-                s.push_str("\n    ← the answer parts from the golden here:\n");
+                // The golden and the answer aligned take the place of the answer alone.
+                if let Some(cut) = s.rfind(&format!("\n    {answer} ")) {
+                    s.truncate(cut);
+                }
+                s.push_str("\n    the answer parts from the golden:\n");
                 for line in diff::aligned(d).lines() {
                     let _ = writeln!(s, "    {line}");
                 }
@@ -828,6 +835,7 @@ mod tests {
         assert_eq!(shared.len(), 1);
         let bad = h.split("<pre class=\"step bad\" id=\"step-2\">").nth(1).expect("the failing step is marked");
         assert!(bad.contains("golden: &quot;FGET DP\\n\\r1000"), "{bad}");
-        assert!(bad.contains("hand said"), "{bad}");
+        assert!(bad.contains("actual: &quot;FGET DP\\r\\n1000"), "{bad}");
+        assert!(!bad.contains("hand said"), "the aligned answer replaces the bare one: {bad}");
     }
 }
