@@ -100,6 +100,7 @@ pub fn one_line(d: &Diff) -> String {
 /// The golden and the actual answer one above the other, aligned from the start of the agreed
 /// context, with a caret under the parting byte: three lines of plain text.
 pub fn aligned(d: &Diff) -> String {
+    let d = &Diff { expected: clip(&d.expected, SHOWN_AFTER), actual: clip(&d.actual, SHOWN_AFTER), ..d.clone() };
     let hex = is_hex(d);
     let lead = if d.offset > 0 && !hex && d.offset > d.before.len() { "…" } else { "" };
     let sep = if hex && !d.before.is_empty() { " " } else { "" };
@@ -112,6 +113,15 @@ pub fn aligned(d: &Diff) -> String {
     };
     let col = "golden: ".len() + q.len() + lead.chars().count() + d.before.chars().count() + sep.len();
     format!("{golden}\n{actual}\n{}^ byte {} of step {}'s answer", " ".repeat(col), d.offset, d.step)
+}
+
+/// Characters of each answer [`aligned`] shows after the parting byte: the lines stay short
+/// enough not to wrap, so the caret stays under the byte.
+pub const SHOWN_AFTER: usize = 60;
+
+/// Whether [`aligned`] leaves part of either answer out.
+pub fn clipped(d: &Diff) -> bool {
+    d.expected.chars().count() > SHOWN_AFTER || d.actual.chars().count() > SHOWN_AFTER
 }
 
 /// One field of a decoded RealTime block.

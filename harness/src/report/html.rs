@@ -693,8 +693,11 @@ pub(crate) fn transcript_view(
         if Some(i + 1) == fail {
             let mut s = step_text(i);
             if let Some(d) = d {
-                // The golden and the answer aligned take the place of the answer alone.
-                if let Some(cut) = s.rfind(&format!("\n    {answer} ")) {
+                // The golden and the answer aligned take the place of the answer alone, unless
+                // they show only part of it.
+                if !diff::clipped(d)
+                    && let Some(cut) = s.rfind(&format!("\n    {answer} "))
+                {
                     s.truncate(cut);
                 }
                 s.push_str("\n    the answer parts from the golden:\n");
