@@ -908,6 +908,8 @@ pub fn run_with_events(
     let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
     let groups = crate::triage::group(cases, &results, &signatures);
     let mut report = RunReport {
+        kind: crate::report::ReportKind::Conform,
+        host: None,
         format: REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
         target: opts.target.to_string(),

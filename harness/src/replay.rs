@@ -305,16 +305,16 @@ impl ReplayOutcome {
                 if let Some(e) = m.exchange.last() {
                     let _ = writeln!(s, "  sent:     \"{}\"", escape_text(&e.sent));
                 }
-                let _ = writeln!(s, "  golden:   {}", m.expected_full);
-                let _ = write!(s, "{}", side_by_side(got, m.offset, &m.expected, m.form, m.trailing));
+                let lines = side_by_side(got, m.offset, &m.expected, m.form, m.trailing);
+                let _ = write!(s, "{}{lines}", golden_line(&lines, &m.expected_full));
             }
             ReplayOutcome::Timeout(t) => {
                 let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
                 if let Some(e) = t.exchange.last() {
                     let _ = writeln!(s, "  sent:     \"{}\"", escape_text(&e.sent));
                 }
-                let _ = writeln!(s, "  golden:   {}", t.expected_full);
-                let _ = write!(s, "{}", side_by_side(got, t.offset, &t.expected, t.form, false));
+                let lines = side_by_side(got, t.offset, &t.expected, t.form, false);
+                let _ = write!(s, "{}{lines}", golden_line(&lines, &t.expected_full));
                 let _ = writeln!(s, "  (nothing more arrived)");
             }
             ReplayOutcome::Flooded(f) => {
@@ -344,6 +344,16 @@ const SHOWN_AFTER: usize = 400;
 
 /// Bytes of a flood shown in a rendering.
 const FLOOD_SHOWN: usize = 200;
+
+/// The step's whole golden, as a line of its own, unless the `expected:` line already shows
+/// all of it (the answer parts early and the golden has no elision before the parting byte).
+fn golden_line(side_by_side: &str, golden: &str) -> String {
+    if side_by_side.starts_with(&format!("  expected: {golden}\n")) {
+        String::new()
+    } else {
+        format!("  golden:   {golden}\n")
+    }
+}
 
 fn side_by_side(got: &[u8], offset: usize, expected_rest: &str, form: Form, trailing: bool) -> String {
     let offset = offset.min(got.len());
@@ -612,7 +622,7 @@ pub fn actual_transcript(t: &Transcript, exchange: &[Exchanged]) -> Transcript {
             };
             Some(Step {
                 line: 0,
-                comments: Vec::new(),
+                comments: s.comments.clone(),
                 pause: s.pause,
                 send: s.send.clone(),
                 within: s.within,

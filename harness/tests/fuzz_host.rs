@@ -194,7 +194,7 @@ fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     let grade = |file: &str| {
         let opts = CheckHostOptions { run: host_run(python(file)), ok_exit_codes: vec![0, 1], golden: None };
         let report = check_host(&opts).unwrap().report;
-        report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
+        report.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.clone()).collect::<Vec<_>>()
     };
     let id = |c: HostClause| format!("host-{}", c.id());
     assert_eq!(grade("py_sends_lf.py"), vec![id(HostClause::LineEnding)]);
@@ -202,6 +202,12 @@ fn check_host_flags_each_protocol_violation_and_passes_correct_hosts() {
     assert_eq!(grade("py_loop_no_abort.py"), vec![id(HostClause::LeavesCleanly)]);
     // Misaligned blocks also send bytes before their feedback: the size is the root.
     assert!(grade("py_rt_short_block.py").contains(&id(HostClause::RealtimeBlocks)));
+    // A host that never enters RealTime has not shown it sends blocks well: "not exercised".
+    let opts = CheckHostOptions { run: host_run(python("py_sends_lf.py")), ok_exit_codes: vec![0, 1], golden: None };
+    let report = check_host(&opts).unwrap().report;
+    let rt = report.cases.iter().find(|c| c.id == id(HostClause::RealtimeBlocks)).unwrap();
+    assert_eq!(rt.verdict, Verdict::Skip, "{rt:?}");
+    assert!(rt.message.as_deref().is_some_and(|m| m.starts_with("not exercised")), "{rt:?}");
     for correct in ["gclhost.py", "py_rt_length.py", "py_err_table.py"] {
         assert_eq!(grade(correct), Vec::<String>::new(), "{correct} talks correctly to a perfect hand");
     }
@@ -222,10 +228,10 @@ fn waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered() {
         // Exit 1 is a host that gave up on the hand with a message: no crash.
         let opts = CheckHostOptions { run, ok_exit_codes: vec![0, 1], golden: None };
         let report = check_host(&opts).unwrap().report;
-        for c in report.cases.iter().filter(|c| c.verdict != Verdict::Pass) {
+        for c in report.cases.iter().filter(|c| c.verdict.fails_run()) {
             println!("{file} at {pace}: {}: {}", c.id, c.message.as_deref().unwrap_or_default());
         }
-        report.cases.iter().filter(|c| c.verdict != Verdict::Pass).map(|c| c.id.clone()).collect::<Vec<_>>()
+        report.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.clone()).collect::<Vec<_>>()
     };
     let waits = vec![format!("host-{}", HostClause::WaitsForAnswer.id())];
     // At 1200 bit/s (the mutant's own port speed) the 25 bytes after an echo take some 200 ms,

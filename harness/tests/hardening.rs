@@ -209,7 +209,7 @@ fn certify_refuses_selections_unless_partial_and_says_partial() {
     let junit = std::fs::read_to_string(part.join("junit.xml")).unwrap();
     assert!(junit.contains("<property name=\"gcl.only\" value=\"framing-*\"/>"), "{junit}");
     let html = std::fs::read_to_string(part.join("report.html")).unwrap();
-    assert!(html.contains("<th>--only</th><td>framing-*</td>"));
+    assert!(html.contains("<th><code>--only</code></th><td>framing-*</td>"), "{html}");
     let r = gcl(&["certify", "--verify", s(&part), "--allow-unverified"]);
     assert_eq!(r.code, Some(0), "{}", r.stdout);
     assert!(r.stdout.contains("unsigned") && r.stdout.contains("verdict PARTIAL: "), "{}", r.stdout);

@@ -36,6 +36,22 @@ fn replay_exits_1_and_shows_the_parting_byte_on_a_mismatch() {
     assert!(stdout.contains("1001 150\\n\\r=> \""), "{stdout}");
     assert!(stdout.contains("1000 150\\n\\r=> \""), "{stdout}");
     assert!(stdout.contains("^ byte 22"), "{stdout}");
+    // The expected line shows the whole golden already: no second line repeats it.
+    assert!(!stdout.contains("golden:"), "{stdout}");
+}
+
+#[test]
+fn replaying_a_transcript_against_a_sim_of_another_profile_warns() {
+    let f = golden("seed", "framing-echo");
+    let out = gcl().args(["replay", "--target", "sim:bh8-262"]).arg(&f).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("is written for profile seed, but the target simulates bh8-262-4.4"),
+        "{stderr}{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let out = gcl().args(["replay", "--target", "sim:seed"]).arg(&f).output().unwrap();
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"), "the same profile: no warning");
 }
 
 #[test]
@@ -69,7 +85,9 @@ fn a_recording_of_the_simulator_replays_against_it() {
         .arg(&out_file)
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("gcl record: wrote ") && stderr.contains("abort-close.gcl ("), "success is said: {stderr}");
     let text = std::fs::read_to_string(&out_file).unwrap();
     assert!(text.contains("id: abort-close\ntitle: ^C during C\n"), "{text}");
     assert!(text.contains("profile: bh8-262-4.4\n"), "{text}");

@@ -186,9 +186,10 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     // Held until the bundle is written: a second certify on the same folder is refused.
     let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
     let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
-    let mut out = run_with_progress(&opts, &cases, Some(&args.out), false)?;
+    let mut out = run_with_progress(&opts, &cases, Some(&args.out), false, "gcl certify")?;
     record_options(&mut out.report, suite_args);
     out.report.options.partial = args.partial;
+    out.report.kind = gcl_harness::report::ReportKind::Certify;
     let report = &out.report;
     let cert = Certificate::of_run(report, vers, cases_total, args.partial);
     // The streamed results are part of the run's record, but the bundle is the final word.

@@ -58,21 +58,46 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         ok_exit_codes: args.host.ok_exit_codes(),
         golden,
     };
-    let outcome = check_host(&opts).context("running the host")?;
-    let report = outcome.report;
+    let progress =
+        super::progress::Progress::new("gcl check-host", "runs", "failing", super::progress::Total::Units(1), false);
+    let outcome = check_host(&opts).context("running the host");
+    progress.update(1, 0, "");
+    progress.finish();
+    let outcome = outcome?;
+    let mut report = outcome.report;
+    use gcl_harness::fuzz::host::HostEnd;
+    let end = match &outcome.run.end {
+        HostEnd::Exit(c) => format!("exited with code {c}"),
+        HostEnd::Signal(s) => format!("killed by signal {s}"),
+        HostEnd::Hung(at) => format!("hung ({at}); killed"),
+        HostEnd::OverBudget(at) => format!("over the run budget ({at}); killed"),
+    };
+    let mut facts = vec![("the host".to_string(), end)];
+    if let Some(g) = &args.golden {
+        facts.push(("golden".into(), g.display().to_string()));
+    }
+    report.host = Some(gcl_harness::report::HostDetails {
+        command: opts.run.command.clone(),
+        runs: 1,
+        seed: args.seed,
+        facts,
+        ..Default::default()
+    });
     if let Some(p) = &args.save_session {
         gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
         eprintln!("wrote {}", p.display());
     }
     for c in &report.cases {
-        println!("{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title);
+        let verdict = if c.verdict == Verdict::Skip { "not exercised" } else { c.verdict.as_str() };
+        println!("{verdict:<7} {:<24} {}", c.id, c.title);
         if let Some(m) = &c.message {
             println!("        {m}");
         }
     }
-    let failed = report.cases.iter().filter(|c| c.verdict != Verdict::Pass).count();
-    println!("{} clause(s), {failed} failing", report.cases.len());
+    let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();
+    let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
+    println!("{} clause(s), {failed} failing, {idle} not exercised", report.cases.len());
     if let Some(dir) = args.host.report_dir() {
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());

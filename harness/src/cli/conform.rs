@@ -2,7 +2,7 @@
 //! clause, reports CI systems read, and exit codes that mean something.
 
 use std::collections::BTreeMap;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -219,61 +219,44 @@ pub fn record_options(report: &mut RunReport, a: &SuiteArgs) {
     report.options.suite_dir = a.suite.as_ref().map(|d| d.display().to_string());
 }
 
-/// Runs the suite with a progress bar on a terminal, or a line per problem otherwise.
+/// Runs the suite with the shared progress (a bar with an ETA on a terminal, a line every
+/// 10 s in a CI log), a line per failing case, and the pre-flight and an early end said once,
+/// on stderr, as they happen (the summary on stdout does not repeat them).
 pub fn run_with_progress(
     opts: &ConformOptions,
     cases: &[Case],
     report_dir: Option<&std::path::Path>,
     quiet: bool,
+    what: &str,
 ) -> anyhow::Result<RunOutput> {
     let mut stream = match report_dir {
         Some(d) => Some(ResultStream::create(d).with_context(|| format!("creating {}", d.display()))?),
         None => None,
     };
-    let tty = std::io::stderr().is_terminal();
-    let bar = if tty && !quiet {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} [{bar:30}] {pos}/{len} {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
-        Some(b)
-    } else {
-        None
-    };
-    let progress = |r: &CaseResult, done: usize, total: usize| {
-        if r.verdict == Verdict::Skip && r.message.as_deref().is_some_and(|m| m.starts_with("not run:")) {
-            if let Some(b) = &bar {
-                b.set_position(done as u64);
-            }
-            return;
-        }
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-            b.set_message(r.id.clone());
-            if r.verdict.fails_run() {
-                b.println(format!("{:<7} {}: {}", r.verdict, r.id, r.message.as_deref().unwrap_or("")));
-            }
-        } else if !quiet && r.verdict.fails_run() {
-            eprintln!("{:<7} {}: {}", r.verdict, r.id, r.message.as_deref().unwrap_or(""));
-        }
-    };
+    let progress = super::progress::Progress::new(
+        what,
+        "cases",
+        "failing",
+        super::progress::Total::Units(cases.len() as u64),
+        quiet,
+    );
+    let mut failures = 0u64;
     let out = conform::run_with_events(cases, opts, stream.as_mut(), &mut |e| match e {
-        RunEvent::Preflight(line) => match &bar {
-            Some(b) => b.println(line),
-            None => eprintln!("{line}"),
-        },
-        RunEvent::Case(r, done, total) => progress(r, done, total),
-        RunEvent::Stopped(st) => match &bar {
-            Some(b) => b.println(&st.message),
-            None => eprintln!("{}", st.message),
-        },
+        RunEvent::Preflight(line) => progress.println(line),
+        RunEvent::Case(r, done, total) => {
+            if r.verdict.fails_run() {
+                failures += 1;
+            }
+            progress.set_total(total as u64);
+            progress.update(done as u64, failures, &r.id);
+            let not_run = r.verdict == Verdict::Skip && r.message.as_deref().is_some_and(|m| m.starts_with("not run:"));
+            if !quiet && !not_run && r.verdict.fails_run() {
+                progress.println(&format!("{:<7} {}: {}", r.verdict, r.id, r.message.as_deref().unwrap_or("")));
+            }
+        }
+        RunEvent::Stopped(st) => progress.println(&format!("{what}: {}", st.message)),
     })?;
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    progress.finish();
     Ok(out)
 }
 
@@ -281,9 +264,6 @@ pub fn run_with_progress(
 pub fn summary_text(r: &RunReport) -> String {
     let mut s = String::new();
     s.push_str(&format!("gcl conform: target {}, profile {}, level {}\n", r.target, r.profile, r.level));
-    if let Some(p) = &r.preflight {
-        s.push_str(&format!("  {p}\n"));
-    }
     let given = r.options.pairs();
     if !given.is_empty() {
         let text: Vec<String> = given.iter().map(|(k, v)| format!("--{k} {v}")).collect();
@@ -294,15 +274,7 @@ pub fn summary_text(r: &RunReport) -> String {
         for g in r.groups.iter().take(10) {
             s.push_str(&format!("    {}\n", g.summary));
             if let Some(d) = &g.diff {
-                s.push_str(&format!(
-                    "      step {}, byte {}: expected \"{}{}\", got \"{}{}\"\n",
-                    d.step,
-                    d.offset,
-                    d.before,
-                    clip(&d.expected, 60),
-                    d.before,
-                    clip(&d.actual, 60)
-                ));
+                s.push_str(&format!("      {}\n", gcl_harness::report::diff::one_line(d)));
             }
         }
         if r.groups.len() > 10 {
@@ -381,7 +353,8 @@ pub fn summary_text(r: &RunReport) -> String {
         }
     }
     if let Some(st) = &r.stopped {
-        s.push_str(&format!("  ended early: {}\n", st.message));
+        // The reason was said on stderr as it happened; the summary says where.
+        s.push_str(&format!("  ended early at case {} (the cases after it were not run)\n", st.case));
     }
     if !r.liveness.after {
         s.push_str("  the hand did not answer the liveness probe after the suite\n");
@@ -409,18 +382,13 @@ ratio {:.3}\n",
     s
 }
 
-/// `s` cut to `n` characters, with an ellipsis when cut.
-fn clip(s: &str, n: usize) -> String {
-    if s.chars().count() <= n { s.to_string() } else { format!("{}…", s.chars().take(n).collect::<String>()) }
-}
-
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(&args.suite, args.level.into(), false)?;
     // Held until the reports are written: a second run on the same folder is refused.
     let _held =
         args.report.as_deref().map(|d| gcl_harness::outputs::OutLock::acquire(d, "conform --report")).transpose()?;
-    let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet)?;
+    let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet, "gcl conform")?;
     record_options(&mut out.report, &args.suite);
     let mut w = std::io::stdout().lock();
     write!(w, "{}", summary_text(&out.report))?;
@@ -433,7 +401,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(st) = &out.report.stopped
         && st.cause != StopCause::MaxFailures
     {
-        eprintln!("gcl conform: {}", st.message);
         return Ok(EXIT_ERROR);
     }
     Ok(if out.report.passed() { EXIT_OK } else { EXIT_FAIL })

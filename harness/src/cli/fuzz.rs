@@ -2,10 +2,10 @@
 //! model. This module only turns arguments into the library's options and
 //! prints; the fuzzers live in `gcl_harness::fuzz`.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::Context;
 use gcl_model::Fault;
@@ -138,30 +138,34 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             other => anyhow::bail!("unknown requirement `{other}` (motion, realtime, eeprom, abort-timing)"),
         }
     }
-    let live = !a.quiet && std::io::stderr().is_terminal();
-    let last = Mutex::new(Instant::now());
-    let progress = |p: Progress<'_>| match p {
-        Progress::Run { runs, findings, features, elapsed } if live => {
-            let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
-            if l.elapsed() >= Duration::from_millis(250) {
-                *l = Instant::now();
-                let rate = runs as f64 / elapsed.as_secs_f64().max(1e-3);
-                let _ = write!(
-                    std::io::stderr(),
-                    "\r{runs} runs, {findings} findings, {features} features, {rate:.0} cases/s   "
-                );
+    let total = match o.budget {
+        Budget::Runs(n) => super::progress::Total::Units(n),
+        Budget::Time(d) => super::progress::Total::Time(d),
+    };
+    let progress = super::progress::Progress::new("gcl fuzz device", "runs", "findings", total, a.quiet);
+    // Coverage over time, for the report's plot: a point whenever the features grow.
+    let timeline: Mutex<Vec<fd::report::CoveragePoint>> = Mutex::new(Vec::new());
+    let on_progress = |p: Progress<'_>| match p {
+        Progress::Run { runs, findings, features, elapsed } => {
+            progress.update(runs, findings as u64, &format!("{findings} findings, {features} features"));
+            let mut t = timeline.lock().unwrap_or_else(|e| e.into_inner());
+            if t.last().is_none_or(|l| l.features < features as u64) {
+                t.push(fd::report::CoveragePoint {
+                    elapsed_ms: elapsed.as_millis() as u64,
+                    runs,
+                    features: features as u64,
+                });
             }
         }
         Progress::Finding(f) if !a.quiet => {
             let at = f.path.as_ref().map_or(String::new(), |p| format!(" -> {}", p.display()));
-            let _ = writeln!(
-                std::io::stderr(),
-                "\rfinding: {} (run {}, {} ms, {} actions){at}",
+            progress.println(&format!(
+                "finding: {} (run {}, {} ms, {} actions){at}",
                 f.signature,
                 f.run,
                 f.found_after.as_millis(),
                 f.actions.len()
-            );
+            ));
         }
         _ => {}
     };
@@ -177,21 +181,20 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     // A CI time limit (SIGTERM) ends the campaign with its reports written.
     o.stop = super::stop_on_signals("fuzz device")?;
-    let s = fd::run(&o, &progress).context("gcl fuzz device")?;
-    if live {
-        eprintln!();
-    }
+    let s = fd::run(&o, &on_progress).context("gcl fuzz device")?;
+    progress.finish();
     for (p, why) in &s.malformed_corpus {
         eprintln!("gcl fuzz device: warning: corpus file {} skipped: {why}", p.display());
     }
     if s.interrupted {
         eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
     }
-    let report = fd::report::FuzzReport::new(&o, &s);
+    let mut report = fd::report::FuzzReport::new(&o, &s);
+    report.coverage_over_time = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} dropped) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
+        "{} runs ({} drawn cases dropped: the model made no case of them, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings; {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),

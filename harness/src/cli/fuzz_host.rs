@@ -11,7 +11,7 @@ use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
 use gcl_harness::fuzz::host::{
     CALIBRATION_CAP, Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
 };
-use gcl_harness::report::{CaseResult, RunReport, Verdict};
+use gcl_harness::report::{CaseResult, HostDetails, HostFinding, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 
@@ -228,26 +228,39 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let stop = stop_on_signals()?;
     let out = args.out.clone();
     let info_of = |f: &Finding| info(&opts, f);
+    let total = match (opts.runs, opts.duration) {
+        (Some(n), _) => super::progress::Total::Units(n),
+        (None, Some(d)) => super::progress::Total::Time(d),
+        (None, None) => super::progress::Total::Units(1000),
+    };
+    let progress = super::progress::Progress::new("gcl fuzz host", "runs", "findings", total, false);
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let found = std::sync::atomic::AtomicU64::new(0);
     let on_event = |e: Event| match e {
-        Event::Run { .. } => {}
+        Event::Run { .. } => {
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.update(n, found.load(Ordering::Relaxed), "");
+        }
         Event::Found(f) => {
+            found.fetch_add(1, Ordering::Relaxed);
             let dir = bundle::write(&out, &info_of(&f), &f);
             let where_ = match &dir {
                 Ok(d) => d.display().to_string(),
                 Err(e) => format!("bundle not written: {e}"),
             };
-            eprintln!(
-                "  [{}] {} (run {}, {:.1} s, {} misbehaviour(s)) -> {}",
-                f.verdict.kind.name(),
+            // The signature begins with the kind (`crash: ...`), so it is not repeated.
+            progress.println(&format!(
+                "  finding: {} (run {}, {:.1} s, {} misbehaviour(s)) -> {}",
                 f.verdict.signature,
                 f.run,
                 f.found_after_ms as f64 / 1000.0,
                 f.schedule.planned.len(),
                 where_
-            );
+            ));
         }
     };
     let campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    progress.finish();
     if stop.load(Ordering::Relaxed) {
         eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
     }
@@ -302,7 +315,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         }
     }
     if let Some(dir) = args.host.report_dir() {
-        let report = campaign_report(&opts, &campaign);
+        let report = campaign_report(&opts, &campaign, &out, args.ops.is_some());
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());
         }
@@ -344,7 +357,7 @@ fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
 }
 
 /// A report with one case per distinct finding (or one passing case when there is none).
-fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
+fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> RunReport {
     let started = time::OffsetDateTime::now_utc() - time::Duration::milliseconds(c.elapsed_ms as i64);
     let mut cases: Vec<CaseResult> = c
         .findings
@@ -399,7 +412,7 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
             transcript: None,
         });
     }
-    gcl_harness::check_host::host_report(
+    let mut report = gcl_harness::check_host::host_report(
         &opts.run.command,
         &opts.run.profile.id,
         started,
@@ -407,7 +420,49 @@ fn campaign_report(opts: &FuzzOptions, c: &Campaign) -> RunReport {
         opts.seed,
         true,
         cases,
-    )
+    );
+    report.host = Some(host_details(opts, c, out, ops_given));
+    report
+}
+
+/// The campaign as the report's pages show it: runs, seed, ops, what fired where, and each
+/// finding's bundle with the command that replays it.
+fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> HostDetails {
+    let command = opts.run.command.join(" ");
+    HostDetails {
+        command: opts.run.command.clone(),
+        runs: c.runs,
+        minimize_runs: c.minimize_runs,
+        seed: opts.seed,
+        ops: if ops_given {
+            opts.weights.0.iter().map(|(o, w)| format!("{}={w}", o.name())).collect()
+        } else {
+            Vec::new()
+        },
+        fired_at: c.fired_at.clone(),
+        facts: vec![
+            ("line".into(), if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" }.into()),
+            ("time".into(), opts.run.time.name().to_string()),
+            ("jobs".into(), opts.jobs.to_string()),
+            ("paths seen".into(), format!("{} ({} schedules kept)", c.paths, c.corpus)),
+        ],
+        findings: c
+            .findings
+            .iter()
+            .map(|f| {
+                let dir = out.join(bundle::dir_name(f.verdict.kind, &f.verdict.signature));
+                HostFinding {
+                    case: format!("fuzz-host-{}", bundle::dir_name(f.verdict.kind, &f.verdict.signature)),
+                    kind: f.verdict.kind.name().to_string(),
+                    signature: f.verdict.signature.clone(),
+                    run: f.run,
+                    bundle: Some(dir.display().to_string()),
+                    replay: Some(format!("gcl fuzz host --replay {} -- {command}", dir.display())),
+                    stderr: f.stderr.clone(),
+                }
+            })
+            .collect(),
+    }
 }
 
 fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Result<u8> {

@@ -8,6 +8,7 @@ pub mod conform;
 pub mod explain;
 pub mod fuzz;
 pub mod fuzz_host;
+pub mod progress;
 pub mod record;
 pub mod replay;
 pub mod sim;

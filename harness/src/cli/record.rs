@@ -118,8 +118,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     match args.out {
         // Temporary file, then rename: a kill leaves the old file or the new one, never an
         // empty or torn one.
-        Some(path) => gcl_harness::report::write_atomic(&path, text.as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?,
+        Some(path) => {
+            gcl_harness::report::write_atomic(&path, text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+            eprintln!("gcl record: wrote {} ({} steps)", path.display(), t.steps.len());
+        }
         None => std::io::stdout().lock().write_all(text.as_bytes())?,
     }
     Ok(EXIT_OK)

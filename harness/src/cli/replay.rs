@@ -64,6 +64,22 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let t = parse_bytes(&bytes).with_context(|| format!("parsing {}", f.display()))?;
         transcripts.push((f, t));
     }
+    // A simulated hand of one profile answering a transcript written for another differs by
+    // the profile, not by a bug: say so before the verdicts.
+    if let Target::Sim { profile: Some(p) } = &target {
+        let simulated = super::load_profile(p)?.id.clone();
+        for (f, t) in &transcripts {
+            if !t.header.profiles.is_empty() && !t.header.profiles.contains(&simulated) {
+                eprintln!(
+                    "gcl replay: warning: {} is written for profile {}, but the target simulates {simulated}; \
+differences may come from the profile, not a bug (use --target sim:{} or sim to match)",
+                    f.display(),
+                    t.header.profiles.join(", "),
+                    t.header.profiles[0]
+                );
+            }
+        }
+    }
     let mut code = EXIT_OK;
     let mut shared: Option<Box<dyn gcl_host::Link>> = None;
     let mut w = std::io::stdout().lock();

@@ -17,7 +17,12 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
     let time = format!("{:.3}", r.duration_ms / 1000.0);
     let (tests, failures, errors, skipped) =
         (r.cases.len().to_string(), failures.to_string(), errors.to_string(), skipped.to_string());
-    let name = format!("gcl conform {} ({})", r.profile, r.target);
+    // A host suite is named for the host command; a hand's for the profile and target.
+    let name = match (&r.host, r.kind.is_host()) {
+        (Some(h), true) => format!("{} {}", r.kind.command(), h.command.join(" ")),
+        (None, true) => format!("{} {}", r.kind.command(), r.target.trim_start_matches("host: ")),
+        _ => format!("{} {} ({})", r.kind.command(), r.profile, r.target),
+    };
     let mut suites = BytesStart::new("testsuites");
     suites.push_attribute(("name", name.as_str()));
     suites.push_attribute(("tests", tests.as_str()));
@@ -59,21 +64,36 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
         w.write_event(Event::End(BytesEnd::new("properties")))?;
     }
     for c in &r.cases {
-        let classname = format!("gcl.{}.{}", r.profile, c.level);
+        // CI groups test cases by classname: a hand's by profile and level, a host's by
+        // what judged it (the clauses of check-host, the findings of fuzz host).
+        let classname = match r.kind {
+            super::ReportKind::CheckHost => "gcl.check-host.clause".to_string(),
+            super::ReportKind::FuzzHost => {
+                format!("gcl.fuzz-host.{}", c.clauses.first().map_or("finding", |k| k.trim_start_matches("host: ")))
+            }
+            _ => format!("gcl.{}.{}", r.profile, c.level),
+        };
         let t = format!("{:.3}", c.duration_ms / 1000.0);
         let mut tc = BytesStart::new("testcase");
         tc.push_attribute(("name", c.id.as_str()));
         tc.push_attribute(("classname", classname.as_str()));
         tc.push_attribute(("time", t.as_str()));
         w.write_event(Event::Start(tc))?;
-        let message = c.message.clone().unwrap_or_else(|| c.verdict.to_string());
+        // CI shows the message on one line: the diff's summary says what differed.
+        let message = match (&c.diff, &c.message) {
+            (Some(d), _) => super::diff::one_line(d),
+            (None, Some(m)) => m.clone(),
+            (None, None) => c.verdict.to_string(),
+        };
         let body = {
             let mut b = format!("{}\n{}\nclauses: {}\n", c.verdict, c.title, c.clauses.join(", "));
+            if let Some(m) = &c.message {
+                b.push_str(m);
+                b.push('\n');
+            }
             if let Some(d) = &c.diff {
-                b.push_str(&format!(
-                    "step {} parts at byte {}\nexpected: \"{}{}\"\nactual:   \"{}{}\"\n",
-                    d.step, d.offset, d.before, d.expected, d.before, d.actual
-                ));
+                b.push_str(&super::diff::aligned(d));
+                b.push('\n');
             }
             if let Some(t) = &c.transcript {
                 b.push_str("\ntranscript:\n");
@@ -118,8 +138,11 @@ mod tests {
         let r = crate::report::tests::sample();
         let xml = to_junit(&r).unwrap();
         assert!(xml.contains(r#"<testcase name="framing-echo" classname="gcl.seed.MUST""#), "{xml}");
-        assert!(xml.contains(r#"<failure message="answer differs at byte 7" type="FAIL">"#), "{xml}");
-        assert!(xml.contains("expected: \"FGET DP\\n\\r1000\""), "{xml}");
+        assert!(
+            xml.contains(r#"<failure message="FGET DP (step 2): expected &quot;FGET DP\n\r1000&quot;, got &quot;FGET DP\r\n1000&quot;" type="FAIL">"#),
+            "{xml}"
+        );
+        assert!(xml.contains("golden: \"FGET DP\\n\\r1000\""), "{xml}");
         // It is well-formed: quick-xml reads it back to the end.
         let mut reader = quick_xml::Reader::from_str(&xml);
         let mut cases = 0;

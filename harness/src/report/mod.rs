@@ -4,8 +4,11 @@
 //! Results are also streamed to `results.jsonl` as each case ends (one flushed line per
 //! case), so a crash or a kill mid-run leaves everything already decided readable.
 
+pub mod diff;
 pub(crate) mod html;
 mod junit;
+pub mod page;
+pub mod svg;
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -323,6 +326,9 @@ pub struct ClauseCoverage {
 pub struct RunReport {
     /// The report format version.
     pub format: u32,
+    /// The command that wrote it.
+    #[serde(default)]
+    pub kind: ReportKind,
     /// `gcl` and its version.
     pub tool: String,
     /// The target as given.
@@ -361,6 +367,93 @@ pub struct RunReport {
     pub clauses: Vec<ClauseCoverage>,
     /// Every case.
     pub cases: Vec<CaseResult>,
+    /// A host report's campaign (fuzz host, check-host).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub host: Option<HostDetails>,
+}
+
+/// Which command wrote a report: each has its own page title and leaves out what means nothing
+/// for it (a host report has no liveness probe, suite hash or level filter to show).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReportKind {
+    /// `gcl conform`.
+    #[default]
+    Conform,
+    /// `gcl certify`.
+    Certify,
+    /// `gcl fuzz host`.
+    FuzzHost,
+    /// `gcl check-host`.
+    CheckHost,
+}
+
+impl ReportKind {
+    /// The command, as a page title names it.
+    pub fn command(self) -> &'static str {
+        match self {
+            ReportKind::Conform => "gcl conform",
+            ReportKind::Certify => "gcl certify",
+            ReportKind::FuzzHost => "gcl fuzz host",
+            ReportKind::CheckHost => "gcl check-host",
+        }
+    }
+
+    /// Whether the report judges a host program (not a hand).
+    pub fn is_host(self) -> bool {
+        matches!(self, ReportKind::FuzzHost | ReportKind::CheckHost)
+    }
+}
+
+/// What a host report (`gcl fuzz host`, `gcl check-host`) adds to its cases: the command that
+/// ran, the campaign's figures, the misbehaviours fired by protocol state, and each finding's
+/// bundle. Fields a later version adds (measured host timeouts, say) go in `facts`, which
+/// every writer shows as they come.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct HostDetails {
+    /// The host command and its arguments.
+    pub command: Vec<String>,
+    /// Runs made (fuzz host; 1 for check-host).
+    pub runs: u64,
+    /// Runs made to minimize findings.
+    #[serde(default)]
+    pub minimize_runs: u64,
+    /// The schedules' seed.
+    pub seed: u64,
+    /// The misbehaviours drawn from (`--ops`), with weights; empty: every operator.
+    #[serde(default)]
+    pub ops: Vec<String>,
+    /// How often each misbehaviour fired at each protocol state.
+    #[serde(default)]
+    pub fired_at: BTreeMap<String, BTreeMap<String, u64>>,
+    /// Figures for people, in order (name, value): transport, time mode, timeouts measured...
+    #[serde(default)]
+    pub facts: Vec<(String, String)>,
+    /// Each distinct finding.
+    #[serde(default)]
+    pub findings: Vec<HostFinding>,
+}
+
+/// One finding of `gcl fuzz host`, with what a person needs to run it again.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HostFinding {
+    /// The case id it has in the report.
+    pub case: String,
+    /// crash, hang, exit or violation.
+    pub kind: String,
+    /// Its signature.
+    pub signature: String,
+    /// The run that first found it (0-based).
+    pub run: u64,
+    /// The bundle's folder, when written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bundle: Option<String>,
+    /// The command that replays it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<String>,
+    /// The host's whole stderr in that run (as kept: the first 256 KiB).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub stderr: String,
 }
 
 /// The liveness probe results.
@@ -471,6 +564,8 @@ pub(crate) mod tests {
     pub(crate) fn sample() -> RunReport {
         let mut r = RunReport {
             format: REPORT_FORMAT,
+            kind: ReportKind::Conform,
+            host: None,
             tool: "gcl 0.1.0".into(),
             target: "sim".into(),
             profile: "seed".into(),

@@ -44,6 +44,21 @@ def show(data, hex_form):
     return '"%s"' % escape(data) + more
 
 
+def aligned(golden, got, at):
+    """The golden as written and the actual answer, both from byte 0, with a caret under the
+    parting byte of the actual one (`at`; None: nothing more came): the notation `gcl replay`,
+    `gcl conform` and the reports use."""
+    hex_form = golden.startswith("hex")
+    lines = "  golden:   %s\n  actual:   %s" % (golden, show(got, hex_form))
+    if at is None:
+        return lines + "  (nothing more came)"
+    if hex_form:
+        col = len(show(got[:at], True)) + (1 if at > 0 else 0)
+    else:
+        col = len(show(got[:at], False)) - 1
+    return lines + "\n            %s^ byte %d" % (" " * col, at)
+
+
 def drain(link, quiet=DRAIN_QUIET, limit=DRAIN_LIMIT):
     """Reads and discards until the hand has been quiet for `quiet` seconds (at most `limit`)."""
     end = time.monotonic() + limit
@@ -98,16 +113,16 @@ def replay(t, link, default_timeout=2.0, resync=False):
                     return Outcome(
                         "FAIL",
                         i,
-                        "%s: the answer parts from the expectation at byte %d\n  expected: %s\n  actual:   %s"
-                        % (_where(i, step), fed - 1, step.expect_text, show(buf[fed - 1 :], step.expect_text.startswith("hex"))),
+                        "%s: the answer parts from the expectation at byte %d\n%s"
+                        % (_where(i, step), fed - 1, aligned(step.expect_text, buf, fed - 1)),
                     )
                 left = deadline - time.monotonic()
                 if left <= 0:
                     return Outcome(
                         "TIMEOUT",
                         i,
-                        "%s: no complete answer within %gs (%d bytes so far)\n  expected: %s\n  actual:   %s"
-                        % (_where(i, step), timeout, len(buf), step.expect_text, show(buf, step.expect_text.startswith("hex"))),
+                        "%s: no complete answer within %gs (%d bytes so far)\n%s"
+                        % (_where(i, step), timeout, len(buf), aligned(step.expect_text, buf, None)),
                     )
                 if len(buf) > MAX_ANSWER:
                     return Outcome(

@@ -105,6 +105,13 @@ class Runner(unittest.TestCase):
         self.assertEqual(code, 1, out)
         self.assertIn("FAIL", out)
         self.assertIn("at byte 12", out)
+        # The golden and the actual answer both from byte 0, the caret under the parting byte.
+        lines = out.splitlines()
+        actual = next(l for l in lines if l.startswith("  actual:   "))
+        caret = lines[lines.index(actual) + 1]
+        self.assertTrue(actual.startswith('  actual:   "FGET DP'), out)
+        # The matcher knows at the fourth digit that 3000 is out of 0..2000: byte 12.
+        self.assertEqual(actual[: caret.index("^")], '  actual:   "FGET DP\\n\\r300', out)
 
     def test_fail_on_a_block_in_the_wrong_byte_order(self):
         code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", b"\x2a\x88\x13")])

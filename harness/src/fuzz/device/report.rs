@@ -13,6 +13,8 @@ use serde::Serialize;
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
 use crate::report::html::esc;
+use crate::report::page::{Page, details, pre};
+use crate::report::svg::{Plot, Series};
 
 /// The JSON report.
 #[derive(Debug, Clone, Serialize)]
@@ -51,6 +53,50 @@ pub struct FuzzReport {
     pub coverage: Vec<CoverageRow>,
     /// Distinct findings.
     pub findings: Vec<Finding>,
+    /// Coverage features reached as the run went (a point whenever they grew), for the
+    /// report's plot; the caller that watches progress fills it.
+    #[serde(default)]
+    pub coverage_over_time: Vec<CoveragePoint>,
+}
+
+/// Coverage reached by a time in the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct CoveragePoint {
+    /// Wall time since the start.
+    pub elapsed_ms: u64,
+    /// Cases run by then.
+    pub runs: u64,
+    /// Distinct features reached by then.
+    pub features: u64,
+}
+
+impl FuzzReport {
+    /// The exact command that replays a finding's transcript against the hand it was found on:
+    /// the target as given, or for a simulated hand with faults, the simulator with the same
+    /// profile and faults behind `exec:` (the `sim` target takes no faults).
+    pub fn replay_command(&self, path: &Path) -> String {
+        let target = if self.target.starts_with("sim") && !self.faults.is_empty() {
+            let faults: String = self.faults.iter().map(|f| format!(" --fault {f}")).collect();
+            format!("exec:gcl sim --stdio --profile {}{faults}", self.profile)
+        } else {
+            self.target.clone()
+        };
+        format!("gcl replay --target '{target}' {}", shell_word(&path.display().to_string()))
+    }
+
+    /// Whether the run found nothing.
+    pub fn passed(&self) -> bool {
+        self.findings.is_empty()
+    }
+}
+
+/// `s` as one shell word: as is when it needs no quoting, else in single quotes.
+fn shell_word(s: &str) -> String {
+    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./:=+,@".contains(c)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
 }
 
 impl FuzzReport {
@@ -81,12 +127,14 @@ impl FuzzReport {
             refused,
             coverage: table(&opts.profile, &s.features),
             findings: s.findings.clone(),
+            coverage_over_time: Vec::new(),
         }
     }
 }
 
-/// JUnit XML: one testcase per distinct finding (each a failure), or one passing testcase
-/// when nothing was found. Written with quick_xml, as the conformance report's JUnit is.
+/// JUnit XML: one testcase per distinct finding (each a failure whose message is the finding's
+/// one-line summary and whose time is the wall time until it was found), or one passing
+/// testcase when nothing was found. Written with quick_xml, as the conformance report's JUnit is.
 pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
@@ -98,25 +146,34 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     suite.push_attribute(("name", name.as_str()));
     suite.push_attribute(("tests", tests.as_str()));
     suite.push_attribute(("failures", failures.as_str()));
+    suite.push_attribute(("errors", "0"));
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
     if r.findings.is_empty() {
         let passed = format!("no finding in {} runs", r.runs);
         let mut tc = BytesStart::new("testcase");
-        tc.push_attribute(("classname", "fuzz.device"));
+        tc.push_attribute(("classname", "gcl.fuzz-device"));
         tc.push_attribute(("name", passed.as_str()));
+        tc.push_attribute(("time", time.as_str()));
         w.write_event(Event::Empty(tc))?;
     }
     for f in &r.findings {
         let signature = f.signature.to_string();
+        let classname = format!("gcl.fuzz-device.{}", f.signature.kind);
+        let t = format!("{:.3}", f.found_after.as_secs_f64());
         let mut tc = BytesStart::new("testcase");
-        tc.push_attribute(("classname", "fuzz.device"));
+        tc.push_attribute(("classname", classname.as_str()));
         tc.push_attribute(("name", signature.as_str()));
+        tc.push_attribute(("time", t.as_str()));
         w.write_event(Event::Start(tc))?;
+        let message = summary_line(f);
         let mut failure = BytesStart::new("failure");
-        failure.push_attribute(("message", signature.as_str()));
+        failure.push_attribute(("message", message.as_str()));
+        failure.push_attribute(("type", f.signature.kind.as_str()));
         w.write_event(Event::Start(failure))?;
-        let body = format!("{}\n\n{}", f.diff, f.transcript_text);
+        let replay =
+            f.path.as_deref().map(|p| format!("run it again: {}\n\n", r.replay_command(p))).unwrap_or_default();
+        let body = format!("{replay}{}\n\n{}", f.diff, f.transcript_text);
         w.write_event(Event::Text(BytesText::new(&body)))?;
         w.write_event(Event::End(BytesEnd::new("failure")))?;
         w.write_event(Event::End(BytesEnd::new("testcase")))?;
@@ -128,48 +185,188 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     Ok(out)
 }
 
-/// A self-contained HTML page: summary, coverage table, each finding's transcript and diff.
+/// A finding's one-line summary: the command, then expected against actual as its diff shows
+/// them (`FGET DP: expected "…", got "…"`), or the diff's first line when it has no such pair.
+pub fn summary_line(f: &Finding) -> String {
+    let field = |name: &str| {
+        f.diff
+            .lines()
+            .map(str::trim)
+            .find_map(|l| l.strip_prefix(name))
+            .map(|v| crate::report::diff::clip(v.trim(), 70))
+    };
+    let whole = |name: &str| f.diff.lines().map(str::trim).find_map(|l| l.strip_prefix(name)).map(str::trim);
+    // The replayer's lines show the golden and the answer from the same byte: rebuilt as a
+    // report's diff, the summary is the one conform's JUnit and console give.
+    if let (Some(e), Some(a)) = (whole("expected:"), whole("actual:"))
+        && !e.starts_with('(')
+    {
+        let hex = !e.starts_with('"');
+        let unq = |s: &str| s.trim_matches('"').trim_start_matches('…').to_string();
+        let (e, a) = (unq(e), unq(a));
+        let common = e
+            .char_indices()
+            .zip(a.chars())
+            .take_while(|((_, x), y)| x == y)
+            .last()
+            .map_or(0, |((i, c), _)| i + c.len_utf8());
+        let step = f
+            .diff
+            .split("step ")
+            .nth(1)
+            .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0);
+        let d = crate::report::Diff {
+            step,
+            offset: common,
+            expected: e[common..].trim_start().to_string(),
+            actual: a[common..].trim_start().to_string(),
+            before: e[..common].trim_end().to_string(),
+            golden: if hex { format!("hex {e}") } else { format!("\"{e}\"") },
+        };
+        return crate::report::diff::one_line(&d);
+    }
+    match (field("expected:"), field("actual:")) {
+        (Some(e), Some(a)) => format!("{}: expected {e}, got {a}", f.signature.command),
+        _ => first_line(&f.diff).unwrap_or_default().to_string(),
+    }
+}
+
+fn first_line(diff: &str) -> Option<&str> {
+    diff.lines().map(str::trim).find(|l| !l.is_empty())
+}
+
+/// The page: the verdict, the options, an index of findings (kind, signature, transcript
+/// path, the exact `gcl replay` command), coverage over time and by category, then each
+/// finding's diff and transcript, folded.
 pub fn to_html(r: &FuzzReport) -> String {
-    let mut s = String::from("<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>gcl fuzz device</title>");
-    s.push_str("<style>body{font-family:sans-serif;margin:2em}pre{background:#f4f4f4;padding:1em;overflow:auto}td,th{padding:2px 8px;text-align:left}</style></head><body>");
-    let _ = write!(
-        s,
-        "<h1>gcl fuzz device</h1><p>target <code>{}</code>, profile {}, seed {}, {} runs in {:.1} s ({:.1} cases/s), {} distinct findings</p>",
-        esc(&r.target),
-        esc(&r.profile),
-        r.seed,
-        r.runs,
-        r.duration_ms as f64 / 1000.0,
-        r.cases_per_second,
-        r.findings.len()
+    let ok = r.passed();
+    let headline = if ok {
+        format!("no finding in {} runs ({:.1} s)", r.runs, r.duration_ms as f64 / 1000.0)
+    } else {
+        format!("{} distinct finding(s) in {} runs ({:.1} s)", r.findings.len(), r.runs, r.duration_ms as f64 / 1000.0)
+    };
+    let mut p = Page::new(
+        &format!("gcl fuzz device {} on {}", r.profile, r.target),
+        ok,
+        if ok { "NO FINDING" } else { "FINDINGS" },
+        &headline,
     );
-    s.push_str("<h2>Coverage</h2><table><tr><th>category</th><th>reached</th><th>of</th><th>not reached</th></tr>");
+    p.facts(&[
+        ("target".into(), format!("<code>{}</code>", esc(&r.target))),
+        ("profile".into(), esc(&r.profile)),
+        (
+            "runs".into(),
+            format!(
+                "{} ({:.1} cases/s); {} drawn cases dropped (the model made no case of them, or the EEPROM write budget was spent)",
+                r.runs, r.cases_per_second, r.dropped
+            ),
+        ),
+        ("corpus".into(), format!("{} entries", r.corpus)),
+        ("wire".into(), format!("{} bytes; {} EEPROM writes", r.wire_bytes, r.eeprom_writes)),
+        ("tool".into(), esc(&r.tool)),
+    ]);
+    let mut opts: Vec<(String, String)> = Vec::new();
+    if !r.faults.is_empty() {
+        opts.push(("fault".into(), r.faults.join(", ")));
+    }
+    opts.push(("seed".into(), r.seed.to_string()));
+    if r.jobs > 1 {
+        opts.push(("jobs".into(), r.jobs.to_string()));
+    }
+    if !r.refused.is_empty() {
+        opts.push(("no".into(), r.refused.join(", ")));
+    }
+    p.options(&opts);
+    p.heading("findings", "Findings");
+    if r.findings.is_empty() {
+        p.push("<p>None.</p>\n");
+    } else {
+        let mut t = String::from(
+            "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th><th>transcript</th><th>run it again</th></tr>\n",
+        );
+        for (i, f) in r.findings.iter().enumerate() {
+            let _ = writeln!(
+                t,
+                "<tr class=\"fail\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td><code>{}</code></td><td><code class=\"cmd\">{}</code></td></tr>",
+                esc(&f.signature.kind),
+                esc(&f.signature.to_string()),
+                f.run,
+                esc(&f.path.as_ref().map_or("not written (no --out)".into(), |p| p.display().to_string())),
+                esc(&f.path.as_deref().map(|p| r.replay_command(p)).unwrap_or_default()),
+                n = i + 1,
+            );
+        }
+        t.push_str("</table>\n");
+        p.push(&t);
+    }
+    p.heading("coverage", "Coverage");
+    if r.coverage_over_time.len() >= 2 {
+        let plot = Plot {
+            title: "Model features reached over the run".into(),
+            x_label: "seconds".into(),
+            y_label: "features".into(),
+            series: vec![Series {
+                name: "features".into(),
+                points: r
+                    .coverage_over_time
+                    .iter()
+                    .map(|c| (c.elapsed_ms as f64 / 1000.0, c.features as f64))
+                    .collect(),
+                steps: true,
+                dots: false,
+            }],
+            marks: r
+                .findings
+                .iter()
+                .enumerate()
+                .map(|(i, f)| (f.found_after.as_secs_f64(), format!("#{}", i + 1)))
+                .collect(),
+            ..Default::default()
+        };
+        p.push(&plot.to_svg("fuzz-device-coverage"));
+    }
+    let mut t = String::from("<table><tr><th>category</th><th>reached</th><th>of</th><th>not reached</th></tr>");
     for c in &r.coverage {
         let _ = write!(
-            s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            t,
+            "<tr><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td></tr>",
             esc(&c.category),
             c.reached,
             c.total.map_or("-".into(), |t| t.to_string()),
             esc(&c.missing.join(" "))
         );
     }
-    s.push_str("</table><h2>Findings</h2>");
-    for f in &r.findings {
-        let _ = write!(
-            s,
-            "<h3>{}</h3><p>run {}, after {} ms, minimized from {} to {} actions</p><h4>How it parts</h4><pre>{}</pre><h4>Transcript</h4><pre>{}</pre>",
-            esc(&f.signature.to_string()),
-            f.run,
-            f.found_after.as_millis(),
-            f.original_actions,
-            f.actions.len(),
-            esc(&f.diff),
-            esc(&f.transcript_text)
-        );
+    t.push_str("</table>\n");
+    p.push(&t);
+    if !r.findings.is_empty() {
+        p.heading("details", "Each finding");
+        for (i, f) in r.findings.iter().enumerate() {
+            let body = format!(
+                "<p>run {}, after {} ms, minimized from {} to {} actions</p>\n<h4>How it parts</h4>\n{}<h4>The minimized transcript (the model's expectations; the preamble folded)</h4>\n{}",
+                f.run,
+                f.found_after.as_millis(),
+                f.original_actions,
+                f.actions.len(),
+                pre(&f.diff),
+                crate::report::html::transcript_view(&f.transcript_text, None, "expect", None)
+            ) + &details("the transcript file as written", &pre(&f.transcript_text), false, "", None);
+            p.push(&details(
+                &format!(
+                    "<strong>#{}</strong> {} <span class=\"muted\">{}</span>",
+                    i + 1,
+                    esc(&f.signature.to_string()),
+                    esc(&summary_line(f))
+                ),
+                &body,
+                i == 0,
+                "case",
+                Some(&format!("finding-{}", i + 1)),
+            ));
+        }
     }
-    s.push_str("</body></html>\n");
-    s
+    p.finish()
 }
 
 /// Writes `fuzz-device.json`, `junit.xml` and `fuzz-device.html` into `dir`.

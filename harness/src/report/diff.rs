@@ -1,0 +1,399 @@
+//! Diffs a person reads: the one-line summary CI shows (`FGET DP: expected "8500 8500 8500
+//! 1575", got "1575 8500 8500 8500"`), the golden and the actual answer aligned with a caret
+//! under the parting byte, and a RealTime block decoded field by field.
+//!
+//! One notation for bytes everywhere a diff is shown (console, HTML, JUnit, the Python
+//! runner): a text answer as the transcript writes it, in double quotes with `\n`, `\r` and
+//! `\xNN` escapes; a binary answer as the transcript's `hex` form, upper-case byte pairs
+//! separated by single spaces, elisions in braces (`2A {u16 4950..5050}` against `2A 88 13`).
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_model::realtime::{FieldType, RtLayout};
+use gcl_model::{Device, DeviceConfig, Mode, Profile};
+use gcl_transcript::{Expect, Form, Piece, Transcript, Value, ValueKind};
+
+use super::Diff;
+
+/// Whether the diff's step answers in the `hex` form (a RealTime block).
+pub fn is_hex(d: &Diff) -> bool {
+    d.golden.trim_start().starts_with("hex")
+}
+
+/// The escaped line ends of the text form.
+const BREAKS: [&str; 2] = ["\\n\\r", "\\r\\n"];
+
+fn first_break(s: &str) -> Option<(usize, usize)> {
+    BREAKS.iter().filter_map(|b| s.find(b).map(|i| (i, b.len()))).min()
+}
+
+fn last_break_end(s: &str) -> usize {
+    BREAKS.iter().filter_map(|b| s.rfind(b).map(|i| i + b.len())).max().unwrap_or(0)
+}
+
+/// The command the step answered, as its golden echoes it (`FGET DP`), or `RealTime block`.
+pub fn command(d: &Diff) -> String {
+    if is_hex(d) {
+        return "RealTime block".into();
+    }
+    let g = d.golden.trim();
+    let body = match g.find('"') {
+        Some(i) => &g[i + 1..],
+        None => d.before.as_str(),
+    };
+    let end = first_break(body).map(|(i, _)| i).unwrap_or(body.len());
+    let cmd = body[..end].trim_end_matches('"').trim();
+    if cmd.is_empty() {
+        // The answer begins with a line break: an empty line, a CR or a ^C.
+        if d.golden.contains("\\x03") || g.starts_with("\"\\n\\r=> ") { "^C".into() } else { "the answer".into() }
+    } else {
+        clip(cmd, 40)
+    }
+}
+
+/// `s` cut to `n` characters, with an ellipsis when cut.
+pub fn clip(s: &str, n: usize) -> String {
+    if s.chars().count() <= n { s.to_string() } else { format!("{}…", s.chars().take(n).collect::<String>()) }
+}
+
+/// The line the answers part in, golden's and actual's: from the line start in `before` to the
+/// next line break after the parting byte.
+fn parting_lines(d: &Diff) -> (String, String) {
+    let head = &d.before[last_break_end(&d.before)..];
+    let tail = |s: &str| {
+        // Where the parting byte is a line break, the line after it shows what came instead.
+        let end = match first_break(s) {
+            Some((0, n)) => first_break(&s[n..]).map_or(s.len(), |(i, _)| n + i),
+            Some((i, _)) => i,
+            None => s.len(),
+        };
+        format!("{head}{}", &s[..end])
+    };
+    (tail(&d.expected), tail(&d.actual))
+}
+
+/// The one-line summary CI shows: `FGET DP: expected "8500 8500 8500 1575", got "1575 8500
+/// 8500 8500"`; for a RealTime block the bytes in the hex form and, when a field is out of
+/// range, what it decodes to.
+pub fn one_line(d: &Diff) -> String {
+    let cmd = command(d);
+    if is_hex(d) {
+        let join = |a: &str, b: &str| [a, b].iter().filter(|s| !s.is_empty()).copied().collect::<Vec<_>>().join(" ");
+        let got = if d.actual.is_empty() { "nothing".to_string() } else { join(&d.before, &d.actual) };
+        return format!(
+            "{cmd} (step {}): expected {}, got {}",
+            d.step,
+            clip(&join(&d.before, &d.expected), 80),
+            clip(&got, 80)
+        );
+    }
+    let (e, a) = parting_lines(d);
+    let got = if d.actual.is_empty() && d.offset >= d.before.len() {
+        "nothing more".to_string()
+    } else {
+        format!("\"{}\"", clip(&a, 60))
+    };
+    format!("{cmd} (step {}): expected \"{}\", got {got}", d.step, clip(&e, 60))
+}
+
+/// The golden and the actual answer one above the other, aligned from the start of the agreed
+/// context, with a caret under the parting byte: three lines of plain text.
+pub fn aligned(d: &Diff) -> String {
+    let d = &Diff { expected: clip(&d.expected, SHOWN_AFTER), actual: clip(&d.actual, SHOWN_AFTER), ..d.clone() };
+    let hex = is_hex(d);
+    let lead = if d.offset > 0 && !hex && d.offset > d.before.len() { "…" } else { "" };
+    let sep = if hex && !d.before.is_empty() { " " } else { "" };
+    let q = if hex { "" } else { "\"" };
+    let golden = format!("golden: {q}{lead}{}{sep}{}{q}", d.before, d.expected);
+    let actual = if d.actual.is_empty() {
+        format!("actual: {q}{lead}{}{q}  (nothing more came)", d.before)
+    } else {
+        format!("actual: {q}{lead}{}{sep}{}{q}", d.before, d.actual)
+    };
+    let col = "golden: ".len() + q.len() + lead.chars().count() + d.before.chars().count() + sep.len();
+    format!("{golden}\n{actual}\n{}^ byte {} of step {}'s answer", " ".repeat(col), d.offset, d.step)
+}
+
+/// Characters of each answer [`aligned`] shows after the parting byte: the lines stay short
+/// enough not to wrap, so the caret stays under the byte.
+pub const SHOWN_AFTER: usize = 60;
+
+/// Whether [`aligned`] leaves part of either answer out.
+pub fn clipped(d: &Diff) -> bool {
+    d.expected.chars().count() > SHOWN_AFTER || d.actual.chars().count() > SHOWN_AFTER
+}
+
+/// One field of a decoded RealTime block.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FieldRow {
+    /// The block in the step's answer (1-based).
+    pub block: usize,
+    /// Motor 1..=4, or `None` for a hand-wide field; `None` too when the layout is unknown.
+    pub motor: Option<u8>,
+    /// The field's name from the layout (`LFAP`), or its type when the layout is unknown.
+    pub name: String,
+    /// Its wire type.
+    pub ty: FieldType,
+    /// The golden's range for it.
+    pub range: (i64, i64),
+    /// Its value as sent (high byte first), when the actual answer has its bytes.
+    pub value: Option<i64>,
+    /// For a two-byte field, its value read the other way (low byte first).
+    pub swapped: Option<i64>,
+    /// The bytes, in the hex form.
+    pub bytes: String,
+}
+
+impl FieldRow {
+    /// Whether the actual value lies in the golden's range.
+    pub fn in_range(&self) -> bool {
+        self.value.is_some_and(|v| (self.range.0..=self.range.1).contains(&v))
+    }
+
+    /// Whether the field is out of range but in range read the other way: swapped bytes.
+    pub fn swapped_fits(&self) -> bool {
+        !self.in_range() && self.swapped.is_some_and(|v| (self.range.0..=self.range.1).contains(&v))
+    }
+}
+
+fn value(ty: FieldType, b: &[u8]) -> i64 {
+    match (ty, b) {
+        (FieldType::U8, [x]) => i64::from(*x),
+        (FieldType::I8, [x]) => i64::from(*x as i8),
+        (FieldType::U16, [h, l]) => i64::from(u16::from_be_bytes([*h, *l])),
+        (FieldType::I16, [h, l]) => i64::from(i16::from_be_bytes([*h, *l])),
+        _ => 0,
+    }
+}
+
+/// A golden `expect` as written (`hex 2A {u16 4950..5050}`) as its typed form.
+pub fn parse_expect(golden: &str) -> Option<Expect> {
+    let text = format!("gcl-transcript 1\nid: x\ntitle: x\nclause: x\nlevel: INFO\nprofile: x\n\nexpect {golden}\n");
+    gcl_transcript::parse(&text).ok()?.steps.into_iter().next().map(|s| s.expect)
+}
+
+/// Walks a golden binary answer against the actual bytes: each field of the golden with its
+/// range, type and the actual bytes at its place. `names` gives the feedback layout's fields
+/// in wire order (after the header), when known; a golden of several blocks repeats it.
+pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -> Vec<FieldRow> {
+    let mut rows = Vec::new();
+    let mut at = 0usize;
+    let mut block = 0usize;
+    let mut index = 0usize;
+    let fields = names.map(|l| l.feedback().fields());
+    for (form, piece) in golden.pieces() {
+        if form != Form::Hex {
+            break;
+        }
+        match piece {
+            Piece::Bytes(b) => {
+                // A header byte starts a block (a golden of several blocks has one per block).
+                if index == 0 || fields.is_some_and(|f| index >= f.len()) {
+                    block += 1;
+                    index = 0;
+                }
+                at += b.len();
+            }
+            Piece::AnyByte => at += 1,
+            Piece::Field { .. } | Piece::Value(Value { kind: ValueKind::Field(_), .. }) => {
+                // A field held to a relation has no fixed range: its type's range stands in.
+                let (ty, min, max) = match piece {
+                    Piece::Field { ty, min, max } => (ty, *min, *max),
+                    Piece::Value(Value { kind: ValueKind::Field(ty), range, .. }) => {
+                        let (lo, hi) = range.unwrap_or_else(|| (*ty.range().start(), *ty.range().end()));
+                        (ty, lo, hi)
+                    }
+                    _ => break,
+                };
+                let n = ty.size();
+                let got = actual.get(at..at + n);
+                let field = fields.and_then(|f| f.get(index));
+                rows.push(FieldRow {
+                    block: block.max(1),
+                    motor: field.and_then(|f| f.motor()),
+                    name: field.map_or_else(|| ty.name().to_string(), |f| f.name().to_string()),
+                    ty: *ty,
+                    range: (min, max),
+                    value: got.map(|b| value(*ty, b)),
+                    swapped: got.filter(|b| b.len() == 2).map(|b| value(*ty, &[b[1], b[0]])),
+                    bytes: got.map(gcl_transcript::hex_bytes).unwrap_or_default(),
+                });
+                at += n;
+                index += 1;
+            }
+            Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(_) => break,
+        }
+    }
+    rows
+}
+
+/// One decimal value of a text answer against its golden window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Window {
+    /// Lowest accepted.
+    pub lo: i64,
+    /// Highest accepted.
+    pub hi: i64,
+    /// What the answer had there (`None` where it had no number).
+    pub value: Option<i64>,
+}
+
+/// Walks a golden text answer against the actual bytes and returns each ranged `{int A..B}`
+/// with the number the answer has at its place; stops where the two no longer line up (an
+/// elision of varying length, literal bytes that differ).
+pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
+    let mut out = Vec::new();
+    let mut at = 0usize;
+    for (form, piece) in golden.pieces() {
+        if form != Form::Text {
+            break;
+        }
+        match piece {
+            Piece::Bytes(b) => {
+                if actual.get(at..at + b.len()) != Some(b.as_slice()) {
+                    // The literal text differs: a number of another width before it. Skip to
+                    // the literal if it comes soon (one number's width), else stop.
+                    match actual.get(at..).and_then(|rest| rest.windows(b.len()).position(|w| w == b.as_slice())) {
+                        Some(skip) if skip <= 20 => at += skip + b.len(),
+                        _ => break,
+                    }
+                } else {
+                    at += b.len();
+                }
+            }
+            Piece::Int(range) => {
+                let start = at;
+                if actual.get(at) == Some(&b'-') {
+                    at += 1;
+                }
+                while actual.get(at).is_some_and(u8::is_ascii_digit) {
+                    at += 1;
+                }
+                let value = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
+                if let Some((lo, hi)) = range {
+                    out.push(Window { lo: *lo, hi: *hi, value });
+                }
+            }
+            _ => break,
+        }
+    }
+    out
+}
+
+/// The RealTime layout in force at each step of `t` (1-based step → layout), found by feeding
+/// the transcript's `send` bytes to a fresh model of `profile` as the hand would have seen
+/// them. `None` for a profile the model does not have built in.
+pub fn layouts(profile: &str, t: &Transcript) -> Option<Vec<Option<RtLayout>>> {
+    let p: Arc<Profile> = Profile::builtin(profile).ok()?;
+    let mut d = Device::new(p, DeviceConfig::default());
+    let mut out = Vec::with_capacity(t.steps.len());
+    for s in &t.steps {
+        if let Some(pause) = s.pause {
+            let at = d.now() + pause;
+            d.handle_timeout(at);
+        }
+        if let Some(send) = &s.send {
+            d.handle_input(d.now(), &send.bytes);
+        }
+        d.run_until_idle(Duration::from_secs(600));
+        let _ = d.take_output();
+        out.push(d.rt_layout().filter(|_| d.mode() == Mode::Loop).cloned());
+    }
+    Some(out)
+}
+
+/// The failing step's RealTime fields, when the step answers a block: golden ranges against
+/// the actual values, named from the layout the transcript set up.
+pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<FieldRow> {
+    if !is_hex(d) {
+        return Vec::new();
+    }
+    let Some(golden) = parse_expect(&d.golden) else { return Vec::new() };
+    let parsed = transcript.and_then(|t| gcl_transcript::parse(t).ok());
+    let actual = parsed
+        .as_ref()
+        .and_then(|t| t.steps.get(d.step.wrapping_sub(1)))
+        .and_then(|s| s.expect.exact_bytes())
+        .unwrap_or_default();
+    let layout = parsed
+        .as_ref()
+        .and_then(|t| layouts(profile, t))
+        .and_then(|l| l.get(d.step.wrapping_sub(1)).cloned().flatten());
+    decode_blocks(&golden, &actual, layout.as_ref())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fget() -> Diff {
+        Diff {
+            step: 5,
+            offset: 9,
+            expected: "8500 8500 8500 1575\\n\\r=> ".into(),
+            actual: "1575 8500 8500 8500\\n\\r=> ".into(),
+            before: "FGET DP\\n\\r".into(),
+            golden: "\"FGET DP\\n\\r8500 8500 8500 1575\\n\\r=> \"".into(),
+        }
+    }
+
+    #[test]
+    fn one_line_names_the_command_and_the_parting_line() {
+        assert_eq!(
+            one_line(&fget()),
+            "FGET DP (step 5): expected \"8500 8500 8500 1575\", got \"1575 8500 8500 8500\""
+        );
+    }
+
+    #[test]
+    fn aligned_puts_the_caret_under_the_parting_byte() {
+        let text = aligned(&fget());
+        let lines: Vec<&str> = text.lines().collect();
+        let caret = lines[2].find('^').unwrap();
+        assert_eq!(&lines[0][caret..caret + 4], "8500");
+        assert_eq!(&lines[1][caret..caret + 4], "1575");
+    }
+
+    #[test]
+    fn windows_pair_each_ranged_value_with_the_actual_number() {
+        let golden = parse_expect("\"FGET P\\n\\r{int 16950..17050} {int 0..50} 3000\\n\\r=> \"").unwrap();
+        let w = int_windows(&golden, b"FGET P\n\r0 17000 3000\n\r=> ");
+        assert_eq!(
+            w,
+            vec![Window { lo: 16950, hi: 17050, value: Some(0) }, Window { lo: 0, hi: 50, value: Some(17000) }]
+        );
+    }
+
+    #[test]
+    fn a_swapped_field_is_decoded_both_ways_and_named_from_the_layout() {
+        let d = Diff {
+            step: 10,
+            offset: 1,
+            expected: "{u16 4950..5050}".into(),
+            actual: "88 13".into(),
+            before: "2A".into(),
+            golden: "hex 2A {u16 4950..5050}".into(),
+        };
+        assert_eq!(one_line(&d), "RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13");
+        let golden = parse_expect(&d.golden).unwrap();
+        let rows = decode_blocks(&golden, &[0x2A, 0x88, 0x13], None);
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0].value, Some(34835));
+        assert_eq!(rows[0].swapped, Some(5000));
+        assert!(rows[0].swapped_fits());
+        assert_eq!(rows[0].bytes, "88 13");
+        // With the transcript that set the layout up, the field has its name and motor.
+        let t = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../vectors/suite/bh8-262-4.4/rt-lfap-byte-order.gcl"
+        ))
+        .unwrap();
+        let parsed = gcl_transcript::parse(&t).unwrap();
+        let step = parsed.steps.iter().position(|s| s.expect.to_text().starts_with("hex")).unwrap() + 1;
+        let d = Diff { step, ..d };
+        let rows = realtime_rows("bh8-262-4.4", &d, Some(&t.replace("{u16 4950..5050}", "88 13")));
+        assert_eq!(rows[0].name, "LFAP");
+        assert_eq!(rows[0].motor, Some(1));
+    }
+}

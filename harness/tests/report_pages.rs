@@ -1,0 +1,359 @@
+//! Every kind of report page as a reader's browser and CI meet it: each page parses as HTML5
+//! without an error, every in-page link has its target, nothing is loaded from elsewhere, the
+//! verdict comes first, plots are where the pages promise them, the page for one bug stays
+//! small, and every JUnit file reads in a real JUnit consumer (Python's `junitparser`, in the
+//! venv `.ci/run` makes under `target/junit-venv`).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use scraper::{ElementRef, Html, Selector};
+
+fn gcl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gcl")).args(args).output().unwrap()
+}
+
+fn sel(s: &str) -> Selector {
+    Selector::parse(s).unwrap()
+}
+
+/// The largest `report.html` `gcl conform` may write against one firmware bug that fails half
+/// the suite (fget-reversed: 176 of 351 cases). The page has a fixed part that grows with the
+/// suite (the clause and case tables, some 150 KB for 351 cases) and about 1.5 KB per failing
+/// case (its one-line summary, aligned diff and own steps; the preamble is shown once for the
+/// page). 512 KiB leaves room for what other changes add per case (blocked cases, relations)
+/// while a page ten times larger, as before (every transcript in full, each with its
+/// preamble), fails.
+const ONE_BUG_PAGE_LIMIT: usize = 512 * 1024;
+
+/// The most text the same page may show before the reader opens anything. The 60,000 px page
+/// showed every transcript (254,665 characters of text); a reader should meet the verdict, the
+/// options, the level table, the root causes and one line per failing case (176 lines of
+/// about 110 characters): 40,000 characters, some 5,000 px at 1280 px wide.
+const ONE_BUG_SHOWN_LIMIT: usize = 40_000;
+
+/// Parses a page and checks what every page must be: well-formed HTML5, the title and the
+/// verdict first, internal links that resolve, no external resource and no script.
+fn page(path: &Path, title_starts: &str) -> Html {
+    let text = std::fs::read_to_string(path).unwrap();
+    let html = Html::parse_document(&text);
+    assert!(html.errors.is_empty(), "{}: HTML5 parse errors: {:?}", path.display(), html.errors);
+    let title = html.select(&sel("title")).next().unwrap().text().collect::<String>();
+    assert!(title.starts_with(title_starts), "{}: title {title:?}", path.display());
+    // The verdict is the first thing under the heading.
+    let body: Vec<_> = html.select(&sel("body > *")).take(2).collect();
+    assert_eq!(body[0].value().name(), "h1", "{}", path.display());
+    assert_eq!(body[1].value().id(), Some("verdict"), "{}", path.display());
+    for a in html.select(&sel("a[href]")) {
+        let href = a.value().attr("href").unwrap();
+        let id = href.strip_prefix('#').unwrap_or_else(|| panic!("{}: a link out of the page: {href}", path.display()));
+        let target = Selector::parse(&format!("[id=\"{id}\"]")).unwrap();
+        assert!(html.select(&target).next().is_some(), "{}: link {href} has no target", path.display());
+    }
+    assert!(html.select(&sel("script, link, iframe, object, embed, img")).next().is_none(), "{}", path.display());
+    if let Some(e) = html.select(&sel("[src], [srcset]")).next() {
+        panic!("{}: an element loads a resource: {:?}", path.display(), e.value());
+    }
+    let lower = text.to_ascii_lowercase();
+    assert!(!lower.contains("url(") && !lower.contains("@import"), "{}: the style sheet loads nothing", path.display());
+    html
+}
+
+/// The text a reader sees when the page opens: everything but the style sheet and the inside
+/// of folded `<details>` (their summaries show).
+fn visible_text(html: &Html) -> usize {
+    fn walk(el: ElementRef<'_>, folded: bool) -> usize {
+        if matches!(el.value().name(), "style" | "title") {
+            return 0;
+        }
+        let closed = el.value().name() == "details" && el.value().attr("open").is_none();
+        let mut n = 0;
+        for child in el.children() {
+            if let Some(c) = ElementRef::wrap(child) {
+                n += walk(c, folded || (closed && c.value().name() != "summary"));
+            } else if let Some(t) = child.value().as_text()
+                && !folded
+            {
+                n += t.len();
+            }
+        }
+        n
+    }
+    walk(html.root_element(), false)
+}
+
+fn plots(html: &Html) -> Vec<String> {
+    html.select(&sel("svg[data-plot]")).map(|s| s.value().attr("data-plot").unwrap().to_string()).collect()
+}
+
+/// Runs `junitparser` over a file and returns what it read: one line per test case
+/// (`suite|classname|name|time|result|message`). `None` when the venv is missing (outside CI).
+fn junit_consumer(path: &Path) -> Option<Vec<String>> {
+    let py = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/junit-venv/bin/python");
+    if !py.exists() {
+        eprintln!("skipped the JUnit consumer: {} is missing (.ci/run makes it)", py.display());
+        return None;
+    }
+    let script = r#"
+import sys
+from junitparser import JUnitXml, TestSuite
+xml = JUnitXml.fromfile(sys.argv[1])
+suites = [xml] if isinstance(xml, TestSuite) else list(xml)
+for s in suites:
+    for c in s:
+        r = c.result
+        kind = r[0]._tag if r else "passed"
+        msg = (r[0].message or "") if r else ""
+        print("%s|%s|%s|%s|%s|%s" % (s.name, c.classname, c.name, c.time, kind, msg))
+"#;
+    let o = Command::new(py).arg("-c").arg(script).arg(path).output().unwrap();
+    assert!(o.status.success(), "junitparser failed on {}: {}", path.display(), String::from_utf8_lossy(&o.stderr));
+    Some(String::from_utf8_lossy(&o.stdout).lines().map(str::to_string).collect())
+}
+
+#[test]
+fn the_conform_page_for_one_bug_is_small_and_leads_with_its_root_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o =
+        gcl(&["conform", "--target", "sim", "--fault", "fget-reversed", "--quiet", "--report", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let path = out.join("report.html");
+    let size = std::fs::metadata(&path).unwrap().len() as usize;
+    println!("fget-reversed page: {size} bytes (limit {ONE_BUG_PAGE_LIMIT})");
+    assert!(size < ONE_BUG_PAGE_LIMIT, "{size} bytes");
+    let html = page(&path, "gcl conform bh8-262-4.4 on sim: FAILED");
+    let shown = visible_text(&html);
+    println!("fget-reversed page: {shown} characters of text shown when it opens (limit {ONE_BUG_SHOWN_LIMIT})");
+    assert!(shown < ONE_BUG_SHOWN_LIMIT, "{shown}");
+    let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
+    assert!(verdict.contains("176 of 351 cases fail (MUST 125"), "{verdict}");
+    // The MUST/SHOULD/MAY/INFO table, and a level column in the clause table.
+    let levels: Vec<String> = html.select(&sel("#levels tr th:first-child")).map(|t| t.text().collect()).collect();
+    assert_eq!(levels, ["level", "MUST", "SHOULD", "MAY", "INFO"]);
+    let head: Vec<String> = html.select(&sel("#clauses + details table tr th")).map(|t| t.text().collect()).collect();
+    assert_eq!(&head[..3], ["clause", "level", "verdict"]);
+    // A group lists every member, each a link to its failure.
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let members = report["groups"][0]["cases"].as_array().unwrap().len();
+    assert!(members > 100);
+    let group = html.select(&sel("#group-1")).next().unwrap();
+    assert_eq!(group.select(&sel("details.members a[href^=\"#fail-\"]")).count(), members);
+    // Each failure is folded, the failing step marked inside its transcript with the golden
+    // and the actual answer; the preamble is shown once for the page.
+    let fail = html.select(&sel("#fail-framing-echo")).next().unwrap();
+    assert_eq!(fail.value().name(), "details");
+    let summary = fail.select(&sel("summary")).next().unwrap().text().collect::<String>();
+    assert!(
+        summary.contains(r#"FGET DP (step 5): expected "8500 8500 8500 1575", got "1575 8500 8500 8500""#),
+        "{summary}"
+    );
+    let bad = fail.select(&sel("pre.step.bad")).next().expect("the failing step is marked").text().collect::<String>();
+    assert!(bad.contains("golden: \"FGET DP") && bad.contains("actual: \"FGET DP") && bad.contains('^'), "{bad}");
+    assert!(html.select(&sel("#preamble-1")).next().is_some());
+    assert!(html.select(&sel("#preamble-3")).next().is_none(), "a handful of distinct preambles, not one per case");
+}
+
+#[test]
+fn realtime_failures_are_decoded_field_by_field_and_plotted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&[
+        "conform",
+        "--target",
+        "sim",
+        "--fault",
+        "lfap-little-endian",
+        "--quiet",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
+    let fail = html.select(&sel("#fail-rt-lfap-byte-order")).next().unwrap();
+    let row =
+        fail.select(&sel("table tr.fail")).next().expect("the out-of-range field").text().collect::<Vec<_>>().join("|");
+    for cell in ["LFAP", "u16", "4950..5050", "88 13", "34835", "5000: in range, the bytes are swapped"] {
+        assert!(row.contains(cell), "{cell} in {row}");
+    }
+    // A case of several blocks has a plot per field, with the golden's band and the failure.
+    let plotted = plots(&html);
+    assert!(plotted.iter().any(|p| p == "rt-rt-lcpg-zero-gain-LFAP"), "{plotted:?}");
+    assert!(plotted.iter().any(|p| p.starts_with("rt-example-realtime-program-")), "{plotted:?}");
+    let svg = html.select(&sel("svg[data-plot=\"rt-rt-lcpg-zero-gain-LFAP\"]")).next().unwrap();
+    assert!(svg.select(&sel("polygon")).next().is_some(), "the golden's band");
+    assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_some(), "where it fails");
+    // The JUnit message is the one-line diff in the one notation, in a real consumer.
+    if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
+        assert_eq!(cases.len(), 351);
+        let lfap = cases.iter().find(|c| c.contains("|rt-lfap-byte-order|")).unwrap();
+        assert!(
+            lfap.ends_with("|failure|RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13"),
+            "{lfap}"
+        );
+        assert!(
+            cases.iter().all(|c| c.split('|').nth(3).is_some_and(|t| t.parse::<f64>().is_ok())),
+            "every case has a time"
+        );
+    }
+}
+
+#[test]
+fn the_certify_and_passing_conform_pages_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cert");
+    let o = gcl(&["certify", "--target", "sim:seed", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = page(&out.join("report.html"), "gcl certify seed on sim:seed: PASSED");
+    assert!(html.select(&sel("#levels")).next().is_some());
+    if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
+        assert!(cases.iter().all(|c| c.starts_with("gcl certify seed (sim:seed)|gcl.seed.")), "{:?}", &cases[..2]);
+    }
+}
+
+#[test]
+fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage() {
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("rep");
+    let found = dir.path().join("found");
+    let o = gcl(&[
+        "fuzz",
+        "device",
+        "--target",
+        "sim",
+        "--fault",
+        "fget-reversed",
+        "--runs",
+        "150",
+        "--out",
+        found.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = page(&rep.join("fuzz-device.html"), "gcl fuzz device bh8-262-4.4 on sim: FINDINGS");
+    let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
+    assert!(opts.contains("--fault") && opts.contains("fget-reversed"), "{opts}");
+    let cmd = html.select(&sel("#findings + table code.cmd")).next().unwrap().text().collect::<String>();
+    assert!(
+        cmd.starts_with("gcl replay --target 'exec:gcl sim --stdio --profile bh8-262-4.4 --fault fget-reversed' "),
+        "{cmd}"
+    );
+    // The command replays the finding: it fails against the faulty hand.
+    let path = cmd.rsplit(' ').next().unwrap();
+    let exec = format!("exec:{} sim --stdio --profile bh8-262-4.4 --fault fget-reversed", env!("CARGO_BIN_EXE_gcl"));
+    let o = gcl(&["replay", "--target", &exec, path]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(plots(&html).contains(&"fuzz-device-coverage".to_string()), "{:?}", plots(&html));
+    if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
+        let f: Vec<&str> = cases[0].split('|').collect();
+        assert!(f[1].starts_with("gcl.fuzz-device."), "{cases:?}");
+        assert!(f[3].parse::<f64>().is_ok(), "a time: {cases:?}");
+        assert!(f[5].starts_with("FGET") && f[5].contains("expected") && f[5].contains("got"), "{cases:?}");
+    }
+}
+
+fn python_ready() -> bool {
+    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
+    if !ok {
+        eprintln!("skipped: python3 with pyserial is not available");
+    }
+    ok
+}
+
+fn mutant(file: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants").join(file).display().to_string()
+}
+
+#[test]
+fn host_pages_have_their_own_titles_tables_and_replay_commands() {
+    if !python_ready() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let host = mutant("py_sends_lf.py");
+    let rep = dir.path().join("check");
+    let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", "python3", &host, "{port}"]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = page(&rep.join("report.html"), "gcl check-host: python3 ");
+    let text = html.root_element().text().collect::<String>();
+    assert!(!text.contains("suite hash") && !text.contains("liveness"), "nothing of conform's");
+    let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
+    assert!(rt.contains("not exercised"), "{rt}");
+    if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
+        assert!(
+            cases
+                .iter()
+                .all(|c| c.starts_with(&format!("gcl check-host python3 {host} {{port}}|gcl.check-host.clause|"))),
+            "{cases:?}"
+        );
+        let lf = cases.iter().find(|c| c.contains("|host-line-ending|")).unwrap();
+        assert!(lf.contains("|failure|"), "{lf}");
+    }
+
+    let rep = dir.path().join("fuzz");
+    let bundles = dir.path().join("bundles");
+    let o = gcl(&[
+        "fuzz",
+        "host",
+        "--runs",
+        "4",
+        "--timeout-hang",
+        "1s",
+        "--out",
+        bundles.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+        "--",
+        "python3",
+        &host,
+        "{port}",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("] violation: "), "the kind is not said twice: {stderr}");
+    let html = page(&rep.join("report.html"), "gcl fuzz host: python3 ");
+    let facts = html.select(&sel("table")).next().unwrap().text().collect::<String>();
+    assert!(facts.contains("runs") && facts.contains("4 (+"), "{facts}");
+    let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
+    assert!(opts.contains("--seed") && opts.contains("--ops"), "{opts}");
+    let row = html.select(&sel("#findings + table tr.fail")).next().unwrap().text().collect::<String>();
+    assert!(row.contains(&bundles.display().to_string()), "the bundle's path: {row}");
+    assert!(row.contains(&format!("gcl fuzz host --replay {}", bundles.display())), "{row}");
+    assert!(html.select(&sel("#fired + table")).next().is_some(), "the misbehaviour × state table");
+    assert!(plots(&html).contains(&"fuzz-host-findings".to_string()));
+    if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
+        assert!(cases[0].starts_with(&format!("gcl fuzz host python3 {host} {{port}}|gcl.fuzz-host.")), "{cases:?}");
+    }
+}
+
+#[test]
+fn a_ci_log_gets_progress_lines_with_counts_and_the_end() {
+    // stderr is a pipe here, as in CI: a first line with the first case, then (on a long run)
+    // one every 10 s, and a last one with the totals.
+    let o = gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("gcl conform: ")).collect();
+    assert!(stderr.starts_with("pre-flight: "), "the pre-flight leads: {stderr}");
+    assert!(lines.first().is_some_and(|l| l.starts_with("gcl conform: 1/") && l.contains(" cases, ")), "{stderr}");
+    let last = lines.last().unwrap();
+    assert!(last.contains(" failing, ") && last.contains(" elapsed") && last.ends_with("(done)"), "{last}");
+    let report =
+        gcl(&["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--only", "framing-*", "--quiet"]);
+    assert!(!String::from_utf8_lossy(&report.stderr).contains("gcl conform: 1/"), "--quiet has no progress");
+}
+
+#[test]
+fn a_motion_effect_failure_plots_each_window_against_where_the_motor_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o =
+        gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
+    let svg = html.select(&sel("#fail-param-mcv-effect svg[data-plot=\"windows-param-mcv-effect\"]")).next().unwrap();
+    // Two motors asked (12FGET P): two windows, two dots, and the value that parts marked.
+    assert_eq!(svg.select(&sel("rect[fill-opacity]")).count(), 2);
+    assert_eq!(svg.select(&sel("circle")).count(), 2);
+    assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_some());
+}

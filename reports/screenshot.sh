@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Renders every kind of report page with headless Chromium into PNGs, so a person can look at
+# them (and so a change to the pages is looked at, not only generated).
+#
+#   reports/screenshot.sh [OUT_DIR]        (default: target/screenshots)
+#
+# It builds gcl, makes one report of each kind against the simulator (conform against the
+# fget-reversed and lfap-little-endian bugs, certify, fuzz device against fget-reversed, fuzz
+# host and check-host with a small Python host that breaks the protocol), and renders each
+# page twice: as it opens (the verdict, options and root causes) and with every <details>
+# open (GCL_SHOT_OPEN=1 forces them open through a print style). Chromium is installed with
+# apt when missing. Environment: GCL_SHOT_HEIGHT (viewport height, default 2200).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out="${1:-target/screenshots}"
+height="${GCL_SHOT_HEIGHT:-2200}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+
+browser=""
+for b in chromium chromium-browser google-chrome; do
+    if command -v "$b" >/dev/null 2>&1; then browser="$b"; break; fi
+done
+if [ -z "$browser" ]; then
+    echo "installing chromium with apt"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium fonts-dejavu-core >/dev/null
+    browser=chromium
+fi
+
+cargo build --release -q
+gcl="$PWD/target/release/gcl"
+work="$out/reports"
+rm -rf "$work"
+mkdir -p "$work"
+
+# A host that reads a few answers, then sends an LF-terminated line and never enters RealTime.
+cat >"$work/host.py" <<'EOF'
+import os, sys, time
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY)
+def ask(line, end=b"\r"):
+    os.write(fd, line + end)
+    buf = b""
+    deadline = time.time() + 2
+    while not buf.endswith(b"=> ") and time.time() < deadline:
+        buf += os.read(fd, 256)
+    return buf
+ask(b"\x03", b"")
+answer = ask(b"FGET DP")
+values = answer.split(b"\n\r")[1].split()
+print("positions", [int(v) for v in values])
+os.write(fd, b"HI\n")
+time.sleep(0.2)
+EOF
+
+set +e
+"$gcl" conform --target sim --fault fget-reversed --quiet --report "$work/conform-fget-reversed" >/dev/null
+"$gcl" conform --target sim --fault lfap-little-endian --quiet --report "$work/conform-lfap-little-endian" >/dev/null
+"$gcl" conform --target sim --quiet --report "$work/conform-pass" >/dev/null
+"$gcl" certify --target sim:seed --out "$work/certify" >/dev/null
+"$gcl" fuzz device --target sim --fault fget-reversed --runs 300 --out "$work/fuzz-device-findings" \
+    --report "$work/fuzz-device" >/dev/null 2>&1
+"$gcl" fuzz host --runs 30 --timeout-hang 1s --out "$work/fuzz-host-findings" --report "$work/fuzz-host" \
+    -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
+"$gcl" check-host --timeout-hang 1s --report "$work/check-host" -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
+set -e
+
+shot() { # page.html name
+    local page="$1" name="$2" profile
+    for mode in closed open; do
+        local url="file://$page"
+        if [ "$mode" = open ]; then
+            # Every <details> open: a copy of the page with the attribute set.
+            sed 's/<details\([ >]\)/<details open\1/g' "$page" >"${page%.html}.open.html"
+            url="file://${page%.html}.open.html"
+        fi
+        profile="$(mktemp -d)"
+        "$browser" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+            --disable-background-networking --disable-component-update --disable-sync \
+            --user-data-dir="$profile" --hide-scrollbars --window-size="1280,$height" \
+            --screenshot="$out/$name-$mode.png" "$url" >/dev/null 2>&1 || echo "chromium failed on $page" >&2
+        rm -rf "$profile"
+    done
+    echo "$out/$name-{closed,open}.png  ($(wc -c <"$page") bytes of HTML)"
+}
+
+shot "$work/conform-fget-reversed/report.html" conform-fget-reversed
+shot "$work/conform-lfap-little-endian/report.html" conform-lfap-little-endian
+shot "$work/conform-pass/report.html" conform-pass
+shot "$work/certify/report.html" certify
+shot "$work/fuzz-device/fuzz-device.html" fuzz-device
+shot "$work/fuzz-host/report.html" fuzz-host
+shot "$work/check-host/report.html" check-host
