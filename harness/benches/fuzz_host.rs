@@ -197,6 +197,7 @@ fn main() -> std::process::ExitCode {
         max_planned: 3,
         minimize: false,
         guided: true,
+        shard: None,
     };
     let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).expect("campaign");
     let secs = c.elapsed_ms as f64 / 1000.0;

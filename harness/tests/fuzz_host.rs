@@ -94,6 +94,7 @@ fn first_finding(
         max_planned: 3,
         minimize: false,
         guided: true,
+        shard: None,
     };
     let stop = AtomicBool::new(false);
     let found = Mutex::new(None);
@@ -266,6 +267,7 @@ fn parallel_campaigns_are_reproducible_run_for_run() {
             max_planned: 3,
             minimize: true,
             guided: true,
+            shard: None,
         };
         let mut c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 24);
@@ -316,6 +318,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
             max_planned: 3,
             minimize: false,
             guided: true,
+            shard: None,
         };
         let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 80);

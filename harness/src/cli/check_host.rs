@@ -23,8 +23,12 @@ host-golden (the host sends exactly the golden transcript's `send` bytes).
 Exit codes: 0 every clause passes, 1 a clause fails, 2 usage or infrastructure.
 
 Example:
-  gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}")]
+  gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}
+  gcl check-host --serve --profile seed --report reports/host   # grades whoever connects")]
+#[command(mut_arg("command", |a| a.required(false).required_unless_present("serve")))]
 pub struct Args {
+    #[command(flatten)]
+    serve: super::check_host_serve::ServeArgs,
     #[command(flatten)]
     host: HostArgs,
     /// Compare the bytes the host sends with the `send` steps of this transcript.
@@ -41,6 +45,9 @@ pub struct Args {
 
 /// Runs `gcl check-host`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    if args.serve.serve {
+        return super::check_host_serve::run(&args.host, &args.serve, args.seed, args.save_session.as_deref());
+    }
     let golden = match &args.golden {
         Some(p) => {
             let text = gcl_host::files::read_input_text(p).with_context(|| format!("golden {}", p.display()))?;

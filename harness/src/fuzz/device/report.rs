@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
 use crate::report::html::esc;
 
 /// The JSON report.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FuzzReport {
     /// Format version.
     pub format: u32,
