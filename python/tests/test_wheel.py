@@ -151,3 +151,55 @@ def test_the_short_block_bug_fails_under_misbehaviour_with_what_fired():
     assert "IndexError" in out.stdout
     assert "misbehaviours that fired:" in out.stdout
     assert re.search(r"(truncate|rt-block-length) at answer \d+ \(RealTime feedback\)", out.stdout), out.stdout
+
+
+MARKER_SUITE = '''
+import pytest
+import serial
+
+
+def ask(url, line):
+    port = serial.serial_for_url(url, baudrate=38400, timeout=0.05)
+    try:
+        port.write(b"\\x03")
+        buf = b""
+        for _ in range(100):
+            buf += port.read(64)
+            if buf.endswith(b"=> "):
+                break
+        port.write(line + b"\\r")
+        buf = b""
+        for _ in range(100):
+            buf += port.read(256)
+            if buf.endswith(b"=> "):
+                break
+        return buf
+    finally:
+        port.close()
+
+
+@pytest.mark.gcl(profile="bh8-262-4.3", tcp=True, baud=38400)
+def test_profile_tcp_and_baud(gcl_hand):
+    assert gcl_hand.url.startswith("socket://127.0.0.1:")
+    assert b"4.3" in ask(gcl_hand.url, b"VERS")
+
+
+@pytest.mark.gcl(profile="seed", fault="crlf")
+def test_fault(gcl_hand):
+    assert b"\\r\\n" in ask(gcl_hand.url, b"FGET DP")
+
+
+@pytest.mark.gcl(profile="seed", schedules=2, seed=9)
+def test_schedules(gcl_misbehaving_hand):
+    assert gcl_misbehaving_hand.planned
+'''
+
+
+def test_marker_options_reach_the_hand(tmp_path):
+    (tmp_path / "test_markers.py").write_text(MARKER_SUITE)
+    out = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-v", str(tmp_path)],
+                         cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         universal_newlines=True)
+    assert out.returncode == 0, out.stdout
+    assert "test_schedules[schedule-9:1]" in out.stdout and "test_schedules[schedule-9:2]" in out.stdout, out.stdout
+    assert re.search(r"\b4 passed\b", out.stdout), out.stdout
