@@ -15,9 +15,11 @@ export RUSTC_BOOTSTRAP=1
 if [[ "$sanitizer" == "none" ]]; then flags=(); else flags=(--sanitizer "$sanitizer"); fi
 cargo fuzz build "${flags[@]}"
 triple=$(rustc -vV | sed -n 's/^host: //p')
+# fuzz/ is a member of the workspace: its binaries land in the workspace's target folder.
+built="${CARGO_TARGET_DIR:-$src/target}/$triple/release"
 targets=$(sed -n 's/^name = "\(.*\)"$/\1/p' Cargo.toml | grep -v '^gcl-fuzz$')
 for t in $targets; do
-    cp "target/$triple/release/$t" "$out/$t"
+    cp "$built/$t" "$out/$t"
     mapfile -t seeds < <(find "seeds/$t" -maxdepth 1 -type f ! -name 'crash-*' 2>/dev/null | sort)
     if ((${#seeds[@]})); then
         python3 -m zipfile -c "$out/${t}_seed_corpus.zip" "${seeds[@]}"

@@ -104,7 +104,7 @@ class Hand:
     ``baud``: pace both directions at this rate (default: unpaced in fast time, the hand's
     BAUD in real time). ``time``: "fast" (default) or "real". ``fault``: a deliberate firmware
     bug or a list of them (``gcl sim --help`` lists them). ``misbehave``: (seed, run) plays
-    the misbehaviours of run ``run`` of an unguided ``gcl fuzz host --seed seed`` campaign;
+    the schedule an unguided ``gcl fuzz host --seed seed`` campaign draws for run ``run``;
     ``ops``: which misbehaviours (``"delay-above,truncate=5"``). ``name``: the session's
     name in the report. ``report``: a folder for report.json, junit.xml and report.html
     (default: a temporary folder, removed on stop).

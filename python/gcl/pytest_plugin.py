@@ -8,8 +8,8 @@ clause by clause, as ``gcl check-host`` does, and a test whose host code broke a
 fails with the clause, what was wrong and the session.
 
 ``gcl_misbehaving_hand``: the same under misbehaviours; the test runs once per seeded
-schedule (``schedules``, default 3: runs 1..N of an unguided ``gcl fuzz host --seed SEED``
-campaign). Wrap what may meet a broken answer in ``gcl_misbehaving_hand.tolerate(MyError)``:
+schedule (``schedules``, default 3: the schedules an unguided ``gcl fuzz host --seed SEED``
+campaign draws for its runs 1..N, planned within the first 10 answers). Wrap what may meet a broken answer in ``gcl_misbehaving_hand.tolerate(MyError)``:
 a host that reports a broken hand with its own error is doing its job; any other exception,
 a hang past ``timeout`` seconds, or a broken clause fails the test, with the misbehaviours
 that fired.

@@ -33,8 +33,8 @@ pub struct ServeArgs {
     /// With --serve: a deliberate firmware bug of the hand (repeatable; see `gcl sim --help`).
     #[arg(long, value_name = "NAME", requires = "serve")]
     fault: Vec<Fault>,
-    /// With --serve: misbehave as run I of an unguided `gcl fuzz host --seed SEED` campaign
-    /// does (SEED:I, I >= 1).
+    /// With --serve: misbehave by the schedule an unguided `gcl fuzz host --seed SEED` campaign
+    /// draws for its run I (SEED:I, I >= 1), planned within the session's first 10 answers.
     #[arg(long, value_name = "SEED:I", requires = "serve", value_parser = seed_run)]
     misbehave: Option<(u64, u64)>,
     /// With --misbehave: only these misbehaviours, optionally weighted (as `gcl fuzz host --ops`).
@@ -59,11 +59,14 @@ fn seed_run(s: &str) -> Result<(u64, u64), String> {
 /// schedule's planned answers is this + 2).
 const ASSUMED_ANSWERS: u32 = 8;
 
+/// Most misbehaviours in a schedule: `gcl fuzz host --max-misbehaviours`'s default.
+const MAX_PLANNED: usize = 3;
+
 /// Runs `gcl check-host --serve`.
 pub fn run(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&std::path::Path>) -> anyhow::Result<u8> {
     let mut run = host.host_run(seed)?;
     let schedule = match args.misbehave {
-        Some((s, i)) => fresh_schedule(s, i, &args.ops.clone().unwrap_or_default(), 3, ASSUMED_ANSWERS),
+        Some((s, i)) => fresh_schedule(s, i, &args.ops.clone().unwrap_or_default(), MAX_PLANNED, ASSUMED_ANSWERS),
         None => Schedule::default(),
     };
     let opts = ServeOptions {
@@ -82,7 +85,8 @@ pub fn run(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&s
     pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
     let signals = SignalFd::new(&mask).context("signalfd")?;
     let (mut eof_stop, eof_signal) = gcl_harness::sim::stop_pair()?;
-    if args.stop_on_eof {
+    // Without --stop-on-eof the switch is held (dropping it would stop the hand) until the end.
+    let _held = if args.stop_on_eof {
         std::thread::spawn(move || {
             let mut buf = [0u8; 256];
             while let Ok(n) = std::io::stdin().read(&mut buf) {
@@ -92,9 +96,10 @@ pub fn run(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&s
             }
             eof_stop.stop();
         });
+        None
     } else {
-        std::mem::forget(eof_stop);
-    }
+        Some(eof_stop)
+    };
     let started = time::OffsetDateTime::now_utc();
     let t0 = std::time::Instant::now();
     let mut announce = |s: &Served| {

@@ -388,7 +388,7 @@ fn run_rng(seed: u64, i: u64) -> Pcg64Mcg {
 }
 
 /// The schedule an unguided campaign of this seed gives run `i` (`i` >= 1) when run 0 saw
-/// `answers` answers: what `gcl check-host --serve --misbehave SEED:I` plays.
+/// `answers` answers (`gcl check-host --serve --misbehave SEED:I` plays it for 8).
 pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, answers: u32) -> Schedule {
     fresh_from(&mut run_rng(seed, i), weights, max_planned, answers)
 }
