@@ -125,6 +125,7 @@ fn runs_to_first(
         max_planned: 3,
         minimize: false,
         guided,
+        shard: None,
     };
     let stop = AtomicBool::new(false);
     let first = Mutex::new(None);
