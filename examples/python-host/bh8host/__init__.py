@@ -34,7 +34,7 @@ class Hand:
     #: What ends a command line (GCL: a single CR).
     LINE_END = b"\r"
 
-    def __init__(self, url, baud=9600, timeout=1.0):
+    def __init__(self, url, baud=9600, timeout=2.0):
         self.timeout = timeout
         try:
             self.port = serial.serial_for_url(url, baudrate=baud, timeout=0.05)
