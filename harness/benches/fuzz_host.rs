@@ -128,6 +128,7 @@ fn runs_to_first(
         minimize: false,
         guided,
         calibrate: false,
+        shard: None,
     };
     let stop = AtomicBool::new(false);
     let first = Mutex::new(None);
@@ -201,6 +202,7 @@ fn main() -> std::process::ExitCode {
         minimize: false,
         guided: true,
         calibrate: false,
+        shard: None,
     };
     let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).expect("campaign");
     let secs = c.elapsed_ms as f64 / 1000.0;

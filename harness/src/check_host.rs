@@ -39,6 +39,12 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
     let started = time::OffsetDateTime::now_utc();
     let t0 = Instant::now();
     let r = run_once(&opts.run, &Schedule::default())?;
+    Ok(grade(opts, r, started, t0))
+}
+
+/// Grades a run (the host's traffic clause by clause, how it ended, the golden): the body of
+/// [`check_host`], also used by `gcl check-host --serve` for a served session.
+pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTime, t0: Instant) -> CheckHostOutcome {
     let verdicts = judge(&r, &opts.ok_exit_codes);
     let header = format!(
         "id: check-host-session\ntitle: {}\nclause: host: gcl check-host\nlevel: INFO\nprofile: {}\n",
@@ -111,7 +117,7 @@ pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError>
         false,
         cases,
     );
-    Ok(CheckHostOutcome { report, run: r, session })
+    CheckHostOutcome { report, run: r, session }
 }
 
 /// A conformance report over host runs (`gcl check-host`, and `gcl fuzz host` with

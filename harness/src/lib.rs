@@ -15,6 +15,7 @@ extern crate self as gcl_harness;
 
 pub mod certify;
 pub mod check_host;
+pub mod check_host_serve;
 pub mod conform;
 pub mod deadline;
 pub mod fuzz;

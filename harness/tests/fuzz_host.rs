@@ -97,6 +97,7 @@ fn first_finding(
         minimize: false,
         guided: true,
         calibrate: false,
+        shard: None,
     };
     let stop = AtomicBool::new(false);
     let found = Mutex::new(None);
@@ -282,6 +283,7 @@ fn parallel_campaigns_are_reproducible_run_for_run() {
             minimize: true,
             guided: true,
             calibrate: false,
+            shard: None,
         };
         let mut c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 24);
@@ -328,6 +330,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
             minimize: false,
             guided: true,
             calibrate: false,
+            shard: None,
         };
         let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 80);

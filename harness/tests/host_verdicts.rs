@@ -85,6 +85,7 @@ fn campaign(run: HostRun, ops: &str, runs: u64, calibrate: bool) -> gcl_harness:
         minimize: false,
         guided: true,
         calibrate,
+        shard: None,
     };
     fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap()
 }

@@ -13,7 +13,7 @@ use super::{EXIT_FAIL, EXIT_OK};
 /// `gcl check-host`'s hang timeout when `--timeout-hang` is not given: a perfect hand never
 /// goes silent, so a host silent this long waits for nothing it will get; above the 5 to 15 s
 /// timeouts real host libraries use, so a host that waits out its own timeout is no hang.
-const CHECK_HANG_DEFAULT: std::time::Duration = std::time::Duration::from_secs(20);
+pub(super) const CHECK_HANG_DEFAULT: std::time::Duration = std::time::Duration::from_secs(20);
 
 /// Arguments of `gcl check-host`.
 #[derive(Debug, clap::Args)]
@@ -28,8 +28,12 @@ host-golden (the host sends exactly the golden transcript's `send` bytes).
 Exit codes: 0 every clause passes, 1 a clause fails, 2 usage or infrastructure.
 
 Example:
-  gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}")]
+  gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}
+  gcl check-host --serve --profile seed --report reports/host   # grades whoever connects")]
+#[command(mut_arg("command", |a| a.required(false).required_unless_present("serve")))]
 pub struct Args {
+    #[command(flatten)]
+    serve: super::check_host_serve::ServeArgs,
     #[command(flatten)]
     host: HostArgs,
     /// Compare the bytes the host sends with the `send` steps of this transcript.
@@ -46,6 +50,9 @@ pub struct Args {
 
 /// Runs `gcl check-host`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
+    if args.serve.serve {
+        return super::check_host_serve::run(&args.host, &args.serve, args.seed, args.save_session.as_deref());
+    }
     let golden = match &args.golden {
         Some(p) => {
             let text = gcl_host::files::read_input_text(p).with_context(|| format!("golden {}", p.display()))?;

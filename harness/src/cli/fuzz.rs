@@ -29,6 +29,9 @@ pub enum FuzzCommand {
     /// Put a misbehaving simulated hand in front of a host program: crashes, hangs, protocol
     /// violations, with reproducers.
     Host(fuzz_host::Args),
+    /// Fold the report, bundle, finding and corpus folders of a campaign's shards
+    /// (`--shard K/N`) into one.
+    Merge(super::fuzz_merge::Args),
 }
 
 /// Arguments of `gcl fuzz device`.
@@ -88,6 +91,11 @@ pub struct DeviceArgs {
     /// Print only the summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Run only shard K of N (for a CI matrix): its worker w draws from the generator stream
+    /// K-1+w*N (seed + that), and --runs is the whole campaign's, of which it runs its share;
+    /// `gcl fuzz merge` folds the shards' folders into one.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<gcl_harness::fuzz::shard::Shard>,
 }
 
 /// Runs `gcl fuzz`.
@@ -95,6 +103,7 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
     match a.command {
         FuzzCommand::Device(d) => device(d),
         FuzzCommand::Host(h) => fuzz_host::run(h),
+        FuzzCommand::Merge(m) => super::fuzz_merge::run(m),
     }
 }
 
@@ -112,8 +121,9 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     let mut o = FuzzOptions::new(a.target.clone(), profile);
     o.open.faults = a.fault.clone();
     o.seed = a.seed;
+    o.shard = a.shard;
     o.budget = match (a.runs, a.duration) {
-        (Some(n), _) => Budget::Runs(n),
+        (Some(n), _) => Budget::Runs(a.shard.map_or(n, |s| s.share(n))),
         (None, Some(d)) => Budget::Time(d),
         (None, None) => Budget::Time(Duration::from_secs(60)),
     };

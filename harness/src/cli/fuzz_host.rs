@@ -190,6 +190,10 @@ pub struct Args {
     /// Every schedule fresh from the seed: no mutation of the runs that took a new path.
     #[arg(long)]
     no_guidance: bool,
+    /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
+    /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<gcl_harness::fuzz::shard::Shard>,
 }
 
 /// Runs `gcl fuzz host`.
@@ -210,6 +214,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         minimize: !args.no_minimize,
         guided: !args.no_guidance,
         calibrate: !args.host.timeout_hang_given(),
+        shard: args.shard,
     };
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",
@@ -357,7 +362,7 @@ fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
 }
 
 /// A report with one case per distinct finding (or one passing case when there is none).
-fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> RunReport {
+pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> RunReport {
     let started = time::OffsetDateTime::now_utc() - time::Duration::milliseconds(c.elapsed_ms as i64);
     let mut cases: Vec<CaseResult> = c
         .findings

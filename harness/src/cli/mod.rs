@@ -4,10 +4,12 @@
 
 pub mod certify;
 pub mod check_host;
+pub mod check_host_serve;
 pub mod conform;
 pub mod explain;
 pub mod fuzz;
 pub mod fuzz_host;
+pub mod fuzz_merge;
 pub mod progress;
 pub mod record;
 pub mod replay;

@@ -9,7 +9,7 @@ use gcl_model::{Profile, StatusBits};
 use serde::Serialize;
 
 /// One row of the coverage table.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct CoverageRow {
     /// The category (`command`, `param-write`, `status`, ...).
     pub category: String,

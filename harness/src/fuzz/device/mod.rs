@@ -29,7 +29,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use gcl_model::Profile;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
 use self::case::{BuiltCase, NotACase, build_case};
@@ -83,6 +83,9 @@ pub struct FuzzOptions {
     /// Set from outside (a signal handler: SIGTERM, SIGINT, SIGHUP) to end the campaign: the
     /// workers finish the case in hand, minimization stops, and the run returns what it has.
     pub stop: Arc<AtomicBool>,
+    /// Only this slice of the campaign (`--shard K/N`): worker `w` draws from generator
+    /// stream `K-1 + w*N` (see [`crate::fuzz::shard`]).
+    pub shard: Option<crate::fuzz::shard::Shard>,
 }
 
 impl FuzzOptions {
@@ -106,6 +109,7 @@ impl FuzzOptions {
             minimize_budget: 300,
             suite_seeds: true,
             stop: Arc::new(AtomicBool::new(false)),
+            shard: None,
         }
     }
 }
@@ -179,7 +183,7 @@ pub enum FuzzError {
 /// Where a finding parts from the model: the command being answered and the kind of
 /// difference (`framing`, `status`, `order`, `value`, `missing-answer`, `silence`, `flood`,
 /// `link`, `restart`).
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct FindingSignature {
     /// The command word (`FGET`, `^C`, `CR`, `RealTime block`).
     pub command: String,
@@ -194,20 +198,21 @@ impl std::fmt::Display for FindingSignature {
 }
 
 /// One distinct finding.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Finding {
     /// Its signature.
     pub signature: FindingSignature,
     /// The run (1-based, over all workers) that first found it.
     pub run: u64,
     /// Wall time from the start of the fuzzing run until it was first seen.
-    #[serde(serialize_with = "ser_ms", rename = "found_after_ms")]
+    #[serde(serialize_with = "ser_ms", deserialize_with = "de_ms", rename = "found_after_ms")]
     pub found_after: Duration,
     /// Actions of the case that first found it.
     pub original_actions: usize,
     /// The minimized actions.
     pub actions: Vec<HostAction>,
-    /// The minimized transcript (the model's expectations).
+    /// The minimized transcript (the model's expectations; not in the JSON report, whose
+    /// `transcript_text` is its text).
     #[serde(skip)]
     pub transcript: Transcript,
     /// The transcript's text.
@@ -220,6 +225,10 @@ pub struct Finding {
 
 fn ser_ms<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_u64(d.as_millis() as u64)
+}
+
+fn de_ms<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Duration, D::Error> {
+    u64::deserialize(d).map(Duration::from_millis)
 }
 
 /// What a run did.
@@ -655,7 +664,8 @@ fn worker(
     let gen_all = Generator::new(&p, allowed);
     allowed.eeprom = false;
     let gen_no_eeprom = Generator::new(&p, allowed);
-    let mut dice = Dice::new(opts.seed.wrapping_add(w as u64));
+    let stream = opts.shard.map_or(w as u64, |s| s.global(w as u64));
+    let mut dice = Dice::new(opts.seed.wrapping_add(stream));
     let mut hand = Hand { opts, link: None, new: true, dirty: false };
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, BytesText, Event};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
@@ -17,7 +17,7 @@ use crate::report::page::{Page, details, pre};
 use crate::report::svg::{Plot, Series};
 
 /// The JSON report.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FuzzReport {
     /// Format version.
     pub format: u32,
@@ -60,7 +60,7 @@ pub struct FuzzReport {
 }
 
 /// Coverage reached by a time in the run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct CoveragePoint {
     /// Wall time since the start.
     pub elapsed_ms: u64,

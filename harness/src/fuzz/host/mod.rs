@@ -243,6 +243,18 @@ pub struct FuzzOptions {
     /// Measure the host's own give-up time first ([`calibrate`]) and call a hang only well
     /// past it (`run.timeout_hang` is then the least hang timeout).
     pub calibrate: bool,
+    /// Run only this slice of the campaign's run indices (`--shard K/N`). A sharded campaign
+    /// is unguided, its schedules drawn from the seed and the run index alone (guidance would
+    /// need the other machines' runs), so the shards of a campaign together make exactly the
+    /// runs of `--shard 1/1`, which are those of `guided: false` with one job.
+    pub shard: Option<super::shard::Shard>,
+}
+
+impl FuzzOptions {
+    /// The campaign's run index of this campaign's `t`-th run (its shard's).
+    fn run_index(&self, t: u64) -> u64 {
+        self.shard.map_or(t, |s| s.global(t))
+    }
 }
 
 /// The longest a calibration run waits for the host to act after the hand goes silent.
@@ -444,7 +456,7 @@ impl Shared {
     fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
         let mut new = Vec::new();
         while let Some((s, r)) = self.ended.remove(&self.taken) {
-            new.extend(self.take(self.taken, s, r, opts, started));
+            new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
             self.taken += 1;
         }
         new
@@ -461,17 +473,9 @@ fn paths_of(r: &RunResult) -> Vec<String> {
 
 /// A fresh schedule or a mutation of a kept one.
 fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], answers: u32) -> Schedule {
-    let span = answers.max(1) + 2;
-    let fresh = |rng: &mut Pcg64Mcg| Planned {
-        answer: 1 + (rng.next_u64() % u64::from(span)) as u32,
-        op: opts.weights.pick(rng),
-        arg: rng.next_u64() as u32,
-    };
+    let fresh = |rng: &mut Pcg64Mcg| planned(rng, &opts.weights, answers);
     if corpus.is_empty() || rng.next_u64().is_multiple_of(2) {
-        let n = 1 + (rng.next_u64() as usize % opts.max_planned.max(1));
-        let mut s = Schedule { planned: (0..n).map(|_| fresh(rng)).collect() };
-        s.planned.sort_by_key(|p| p.answer);
-        return s;
+        return fresh_from(rng, &opts.weights, opts.max_planned, answers);
     }
     let mut s = corpus[rng.next_u64() as usize % corpus.len()].clone();
     match rng.next_u64() % 4 {
@@ -493,6 +497,32 @@ fn next_schedule(rng: &mut Pcg64Mcg, opts: &FuzzOptions, corpus: &[Schedule], an
     }
     s.planned.sort_by_key(|p| p.answer);
     s
+}
+
+/// A fresh schedule: up to `max_planned` misbehaviours drawn by `weights` over the first
+/// `answers` + 2 answers.
+fn fresh_from(rng: &mut Pcg64Mcg, weights: &Weights, max_planned: usize, answers: u32) -> Schedule {
+    let n = 1 + (rng.next_u64() as usize % max_planned.max(1));
+    let mut s = Schedule { planned: (0..n).map(|_| planned(rng, weights, answers)).collect() };
+    s.planned.sort_by_key(|p| p.answer);
+    s
+}
+
+/// One misbehaviour drawn by `weights`, planned for one of the first `answers` + 2 answers.
+fn planned(rng: &mut Pcg64Mcg, weights: &Weights, answers: u32) -> Planned {
+    let span = answers.max(1) + 2;
+    Planned { answer: 1 + (rng.next_u64() % u64::from(span)) as u32, op: weights.pick(rng), arg: rng.next_u64() as u32 }
+}
+
+/// The generator of run `i` of a campaign with this seed.
+fn run_rng(seed: u64, i: u64) -> Pcg64Mcg {
+    Pcg64Mcg::seed_from_u64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// The schedule an unguided campaign of this seed gives run `i` (`i` >= 1) when run 0 saw
+/// `answers` answers (`gcl check-host --serve --misbehave SEED:I` plays it for 8).
+pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, answers: u32) -> Schedule {
+    fresh_from(&mut run_rng(seed, i), weights, max_planned, answers)
 }
 
 /// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`):
@@ -575,12 +605,24 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         ended: BTreeMap::new(),
     });
     let turn = Condvar::new();
-    let done = |i: u64| {
+    let done = |t: u64| {
+        let i = opts.run_index(t);
         stop.load(Ordering::Relaxed)
             || opts.runs.is_some_and(|n| i >= n)
             || opts.duration.is_some_and(|d| started.elapsed() >= d)
             || (opts.runs.is_none() && opts.duration.is_none() && i >= 1000)
     };
+    // A shard without run 0 learns how many answers a run without misbehaviour has (the span
+    // of its schedules) from one run of its own, not counted.
+    if let Some(s) = opts.shard
+        && !s.owns(0)
+        && !done(0)
+    {
+        let r = run_once_until(&opts.run, &Schedule::default(), stop)?;
+        if let Ok(mut sh) = shared.lock() {
+            sh.answers = Some(r.answers.max(1));
+        }
+    }
     let announce = |new: Vec<usize>, shrink: bool| {
         for k in new {
             let Ok(sh) = shared.lock() else { return };
@@ -608,17 +650,30 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     };
     let worker = || {
         loop {
-            let i = next.fetch_add(1, Ordering::Relaxed);
-            if done(i) {
+            let t = next.fetch_add(1, Ordering::Relaxed);
+            if done(t) {
                 break;
             }
+            let i = opts.run_index(t);
             let schedule = if i == 0 {
                 Schedule::default()
+            } else if opts.shard.is_some() {
+                // Unguided: only run 0's answer count is needed.
+                let Ok(mut sh) = shared.lock() else { break };
+                while sh.answers.is_none() && !done(t) {
+                    sh = match turn.wait_timeout(sh, Duration::from_millis(50)) {
+                        Ok((g, _)) => g,
+                        Err(_) => return,
+                    };
+                }
+                let Some(answers) = sh.answers else { break };
+                drop(sh);
+                fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers)
             } else {
                 // Guidance sees runs 0..visible, whatever else has ended by now.
-                let visible = (i + 1).saturating_sub(jobs);
+                let visible = (t + 1).saturating_sub(jobs);
                 let Ok(mut sh) = shared.lock() else { break };
-                while sh.taken < visible && !done(i) {
+                while sh.taken < visible && !done(t) {
                     sh = match turn.wait_timeout(sh, Duration::from_millis(50)) {
                         Ok((g, _)) => g,
                         Err(_) => return,
@@ -631,8 +686,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
                 let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
                 drop(sh);
-                let mut rng = Pcg64Mcg::seed_from_u64(opts.seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-                next_schedule(&mut rng, opts, &corpus, answers)
+                next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers)
             };
             let r = match run_once_until(&opts.run, &schedule, stop) {
                 Ok(r) => r,
@@ -649,7 +703,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             on_event(Event::Run { index: i, elapsed: r.elapsed });
             let new = match shared.lock() {
                 Ok(mut sh) => {
-                    sh.ended.insert(i, (schedule, r));
+                    sh.ended.insert(t, (schedule, r));
                     sh.take_ready(opts, started)
                 }
                 Err(_) => break,
@@ -668,8 +722,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         Ok(mut sh) => {
             let ended = std::mem::take(&mut sh.ended);
             let mut new = Vec::new();
-            for (i, (s, r)) in ended {
-                new.extend(sh.take(i, s, r, opts, started));
+            for (t, (s, r)) in ended {
+                new.extend(sh.take(opts.run_index(t), s, r, opts, started));
             }
             new
         }

@@ -1,0 +1,163 @@
+"""The gcl pytest plugin (entry point ``pytest11``): simulated hands that grade your host
+code.
+
+``gcl_hand``: a running ``gcl check-host --serve`` for the test, on a pty (or a loopback TCP
+port with ``tcp=True``); ``gcl_hand.port`` is the port's path (or ``127.0.0.1:N``),
+``gcl_hand.url`` a pyserial URL for it. When the test body ends, the hand grades the traffic
+clause by clause, as ``gcl check-host`` does, and a test whose host code broke a clause
+fails with the clause, what was wrong and the session.
+
+``gcl_misbehaving_hand``: the same under misbehaviours; the test runs once per seeded
+schedule (``schedules``, default 3: the schedules an unguided ``gcl fuzz host --seed SEED``
+campaign draws for its runs 1..N, planned within the first 10 answers). Wrap what may meet a broken answer in ``gcl_misbehaving_hand.tolerate(MyError)``:
+a host that reports a broken hand with its own error is doing its job; any other exception,
+a hang past ``timeout`` seconds, or a broken clause fails the test, with the misbehaviours
+that fired.
+
+Options, per test with ``@pytest.mark.gcl(...)`` or for the run on the command line:
+``profile`` (``--gcl-profile``, default bh8-262), ``baud``, ``time`` ("fast" or "real"),
+``fault`` (a deliberate firmware bug, or a list), ``tcp``, ``seed`` (``--gcl-seed``),
+``schedules`` (``--gcl-schedules``), ``ops`` (which misbehaviours, as ``gcl fuzz host
+--ops``), ``timeout`` (seconds, default 20, misbehaving hands only), ``allow`` (clause ids
+a test breaks on purpose, such as ``["host-valid-commands"]`` for a test that sends an
+unknown command to see it refused).
+"""
+
+import signal
+import threading
+
+import pytest
+
+from ._hand import Hand
+
+FIXTURES = ("gcl_hand", "gcl_misbehaving_hand")
+HAND_OPTIONS = ("profile", "baud", "time", "fault", "tcp", "seed")
+
+
+class HostHang(Exception):
+    """The host code neither returned nor failed within the test's timeout."""
+
+
+def pytest_addoption(parser):
+    group = parser.getgroup("gcl", "gcl simulated hands")
+    group.addoption("--gcl-profile", default=None, help="profile of gcl_hand (default bh8-262)")
+    group.addoption("--gcl-seed", type=int, default=None, help="seed of the misbehaviour schedules (default 0)")
+    group.addoption("--gcl-schedules", type=int, default=None,
+                    help="schedules each gcl_misbehaving_hand test runs under (default 3)")
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "markers",
+        "gcl(profile=, baud=, time=, fault=, tcp=, seed=, schedules=, ops=, timeout=, allow=): "
+        "options of the gcl_hand and gcl_misbehaving_hand fixtures")
+
+
+def _marker(node):
+    m = node.get_closest_marker("gcl")
+    return dict(m.kwargs) if m else {}
+
+
+def _setting(config, marker, name, default):
+    if name in marker:
+        return marker[name]
+    value = config.getoption("--gcl-" + name, None)
+    return default if value is None else value
+
+
+def pytest_generate_tests(metafunc):
+    if "gcl_misbehaving_hand" not in metafunc.fixturenames:
+        return
+    marker = _marker(metafunc.definition)
+    n = int(_setting(metafunc.config, marker, "schedules", 3))
+    seed = int(_setting(metafunc.config, marker, "seed", 0))
+    metafunc.parametrize("gcl_misbehaving_hand", [(seed, i) for i in range(1, n + 1)], indirect=True,
+                         ids=["schedule-{}:{}".format(seed, i) for i in range(1, n + 1)])
+
+
+def _hand(request, misbehave=None):
+    marker = _marker(request.node)
+    options = {k: marker[k] for k in HAND_OPTIONS if k in marker}
+    options["profile"] = _setting(request.config, marker, "profile", "bh8-262")
+    if misbehave is not None:
+        options["misbehave"] = misbehave
+        options["ops"] = marker.get("ops")
+    hand = Hand(name=request.node.nodeid, **options)
+    hand.timeout = float(marker.get("timeout", 20))
+    hand.start()
+    return hand
+
+
+@pytest.fixture
+def gcl_hand(request):
+    """A graded simulated hand (see the module's notes)."""
+    hand = _hand(request)
+    yield hand
+    hand.stop()
+
+
+@pytest.fixture
+def gcl_misbehaving_hand(request):
+    """A graded simulated hand that misbehaves by a seeded schedule (see the module's notes)."""
+    hand = _hand(request, misbehave=request.param)
+    yield hand
+    hand.stop()
+
+
+def _graded_hand(item):
+    funcargs = getattr(item, "funcargs", {})
+    for name in FIXTURES:
+        if name in funcargs:
+            return funcargs[name]
+    return None
+
+
+def _verdict(item, hand):
+    """Stops the hand; its verdict without the clauses the test allows itself to break."""
+    verdict = hand.stop()
+    if verdict is not None:
+        allowed = set(_marker(item).get("allow", ()))
+        verdict.failures = [f for f in verdict.failures if f.id not in allowed]
+    return verdict
+
+
+def _on_alarm(signum, frame):
+    raise HostHang()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_call(item):
+    """Runs the test body (under a hang timer for a misbehaving hand), then stops its hand and
+    fails the test on a broken clause."""
+    hand = _graded_hand(item)
+    if hand is None:
+        return (yield)
+    timer = hand.misbehave is not None and threading.current_thread() is threading.main_thread()
+    if timer:
+        previous = signal.signal(signal.SIGALRM, _on_alarm)
+        signal.setitimer(signal.ITIMER_REAL, hand.timeout)
+    try:
+        result = yield
+    except HostHang:
+        verdict = _verdict(item, hand)
+        raise pytest.fail.Exception("the host code hung: no return within {:.0f} s{}\n{}".format(
+            hand.timeout, " under misbehaviour" if hand.misbehave else "", verdict.explain()), pytrace=False) from None
+    except BaseException as e:
+        verdict = _verdict(item, hand)
+        if verdict is not None and verdict.failures:
+            # The broken clause is the root cause; what the test raised followed from it.
+            raise pytest.fail.Exception("the host code broke GCL ({}); the test then failed with {}: {}\n{}".format(
+                ", ".join(f.id for f in verdict.failures), type(e).__name__, e, verdict.explain()),
+                pytrace=False) from None
+        if verdict is not None and verdict.fired:
+            item.add_report_section("call", "gcl hand", verdict.explain())
+        raise
+    finally:
+        if timer:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, previous)
+    verdict = _verdict(item, hand)
+    if verdict.failures:
+        pytest.fail("the host code broke GCL ({}):\n{}".format(
+            ", ".join(f.id for f in verdict.failures), verdict.explain()), pytrace=False)
+    return result

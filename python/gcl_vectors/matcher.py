@@ -1,0 +1,1 @@
+../../vectors/python/gcl_vectors/matcher.py
