@@ -84,7 +84,7 @@ pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Opt
 
 /// The command word of a step's first line: `^C`, `CR`, `RealTime block`, or the word itself
 /// without its motor prefix.
-fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
+pub(crate) fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
     let fr = &profile.framing;
     if sent.first() == Some(&fr.abort) {
         return "^C".to_string();
@@ -170,44 +170,90 @@ fn classify(
     (kind, None)
 }
 
-/// Whether `actual` holds the tokens of `expected` in another order (an elision `{...}` in
-/// `expected` stands for any one token).
-fn is_reordering(actual: &str, expected: &str) -> bool {
+/// Whether `actual` holds the tokens of `expected` in another order: the tokens do not match
+/// in place, but each expected token (a literal, or an elision `{int A..B}` with its range,
+/// or any other elision) matches a different actual token. A wrong value that happens to fit
+/// a wide elision elsewhere is still a wrong value unless every token finds a partner.
+pub fn is_reordering(actual: &str, expected: &str) -> bool {
     let a: Vec<&str> = actual.split_whitespace().collect();
-    let e = elisions_as_one(expected);
-    let e: Vec<&str> = e.split_whitespace().collect();
-    if a.len() != e.len() || a.len() < 2 || a == e {
+    let e = expected_tokens(expected);
+    if a.len() != e.len() || a.len() < 2 || a.len() > 64 {
         return false;
     }
-    let mut pool = a.clone();
-    for t in e.iter().filter(|t| !t.starts_with('{')) {
-        match pool.iter().position(|x| x == t) {
-            Some(i) => {
-                pool.swap_remove(i);
-            }
-            None => return false,
-        }
+    if a.iter().zip(&e).all(|(x, t)| t.accepts(x)) {
+        return false;
     }
-    true
+    // A perfect matching of expected tokens to actual ones (Kuhn's augmenting paths).
+    fn augment(i: usize, e: &[Token], a: &[&str], seen: &mut [bool], owner: &mut [Option<usize>]) -> bool {
+        for j in 0..a.len() {
+            if !seen[j] && e[i].accepts(a[j]) {
+                seen[j] = true;
+                if owner[j].is_none_or(|k| augment(k, e, a, seen, owner)) {
+                    owner[j] = Some(i);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+    let mut owner = vec![None; a.len()];
+    (0..e.len()).all(|i| augment(i, &e, &a, &mut vec![false; a.len()], &mut owner))
 }
 
-/// `text` with every elision (`{int 990..1010}`) written `{}`, so that it is one token.
-fn elisions_as_one(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut depth = 0usize;
-    for ch in text.chars() {
-        match ch {
-            '{' => {
-                if depth == 0 {
-                    out.push_str("{}");
-                }
-                depth += 1;
-            }
-            '}' => depth = depth.saturating_sub(1),
-            c if depth == 0 => out.push(c),
-            _ => {}
+/// One expected token of a golden line: a literal, an integer in a range, or anything.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Token {
+    /// These characters exactly.
+    Literal(String),
+    /// A decimal integer within the range (inclusive).
+    Int(i64, i64),
+    /// Any token (an elision without a range).
+    Any,
+}
+
+impl Token {
+    /// Whether an actual token fits.
+    pub fn accepts(&self, actual: &str) -> bool {
+        match self {
+            Token::Literal(l) => l == actual,
+            Token::Int(lo, hi) => actual.parse::<i64>().is_ok_and(|v| (*lo..=*hi).contains(&v)),
+            Token::Any => true,
         }
     }
+}
+
+/// The tokens of a golden line as written (escaped text with elisions): `{int A..B}` keeps its
+/// range, any other elision matches anything.
+pub fn expected_tokens(text: &str) -> Vec<Token> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut elision: Option<String> = None;
+    let flush = |cur: &mut String, out: &mut Vec<Token>| {
+        if !cur.is_empty() {
+            out.push(Token::Literal(std::mem::take(cur)));
+        }
+    };
+    for ch in text.chars() {
+        match (&mut elision, ch) {
+            (None, '{') => {
+                flush(&mut cur, &mut out);
+                elision = Some(String::new());
+            }
+            (Some(body), '}') => {
+                let body = std::mem::take(body);
+                elision = None;
+                let range = body.strip_prefix("int ").and_then(|r| {
+                    let (lo, hi) = r.trim().split_once("..")?;
+                    Some((lo.parse().ok()?, hi.parse().ok()?))
+                });
+                out.push(range.map_or(Token::Any, |(lo, hi)| Token::Int(lo, hi)));
+            }
+            (Some(body), c) => body.push(c),
+            (None, c) if c.is_whitespace() => flush(&mut cur, &mut out),
+            (None, c) => cur.push(c),
+        }
+    }
+    flush(&mut cur, &mut out);
     out
 }
 
@@ -323,5 +369,8 @@ mod tests {
         assert!(is_reordering("150 1000 1000 1000", "{int 990..1010} 1000 1000 150"));
         assert!(!is_reordering("150 1000 1000 1001", "1000 1000 1000 150"));
         assert!(!is_reordering("1000 1000 1000 150", "1000 1000 1000 150"));
+        // A wrong value is not an order because an elision elsewhere is wide (mcv-ignored).
+        assert!(!is_reordering("793 793", "{int 144..298} {int 765..1744}"));
+        assert!(is_reordering("800 200", "{int 144..298} {int 765..1744}"));
     }
 }

@@ -18,6 +18,7 @@
 //! The library prints nothing: progress goes to a callback, errors are [`FuzzError`].
 
 pub mod action;
+pub mod align;
 pub mod case;
 pub mod coverage;
 pub mod report;
@@ -164,22 +165,7 @@ pub enum FuzzError {
     },
 }
 
-/// Where a finding parts from the model: the command being answered and the kind of
-/// difference (`framing`, `status`, `order`, `value`, `missing-answer`, `silence`, `flood`,
-/// `link`, `restart`).
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
-pub struct FindingSignature {
-    /// The command word (`FGET`, `^C`, `CR`, `RealTime block`).
-    pub command: String,
-    /// The kind of difference.
-    pub kind: String,
-}
-
-impl std::fmt::Display for FindingSignature {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} at {}", self.kind, self.command)
-    }
-}
+pub use self::align::FindingSignature;
 
 /// One distinct finding.
 #[derive(Debug, Clone, Serialize)]
@@ -277,7 +263,7 @@ struct Shared {
     features: BTreeSet<String>,
     findings: Vec<Finding>,
     /// Signatures seen (found or being minimized).
-    seen: BTreeSet<FindingSignature>,
+    seen: BTreeSet<String>,
     dropped: u64,
     wire_bytes: u64,
     bytes_sent: u64,
@@ -440,25 +426,11 @@ impl Hand<'_> {
     }
 }
 
-/// The signature of a failed replay, `None` for a pass.
-pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
-    // A pass (most cases) has no signature: decided before the transcript is copied into a case.
-    let step = out.failed_step()?;
-    let case = Case { profile: p.id.clone(), transcript: t.clone() };
-    let (sig, _) = crate::triage::signature(&case, out, p)?;
-    let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
-    let banner = crate::record::BANNER_TEXT;
-    let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
-    let kind = if !expected_banner && got.windows(banner.len()).any(|w| w == banner) {
-        "restart".to_string()
-    } else {
-        match out {
-            ReplayOutcome::Timeout(to) if to.offset == 0 => "silence".to_string(),
-            _ => sig.kind.to_string(),
-        }
-    };
-    // A refused line's first word may hold control bytes: shown escaped, as everywhere.
-    Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
+/// The signature of a failed replay of a built case, `None` for a pass (see [`align`]).
+pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_reads: bool) -> Option<FindingSignature> {
+    // A pass (most cases) has no signature.
+    out.failed_step()?;
+    align::signature(p, &built.transcript, &built.model, out, whole_reads)
 }
 
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
@@ -665,8 +637,8 @@ fn worker(
         {
             lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
-            if let Some(sig) = signature(&p, &pb.transcript, &out) {
-                let new = lock().seen.insert(sig.clone());
+            if let Some(sig) = signature(&p, &pb, &out, !opts.wide()) {
+                let new = lock().seen.insert(sig.key());
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
@@ -675,11 +647,11 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut sig = signature(&p, &built.transcript, &outcome);
+        let mut sig = signature(&p, &built, &outcome, !opts.wide());
         // A quick run's new failure counts only if a thorough run of the case fails too.
-        if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(s)) {
+        if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(&s.key())) {
             outcome = hand.run(&built.transcript, true)?;
-            sig = signature(&p, &built.transcript, &outcome);
+            sig = signature(&p, &built, &outcome, !opts.wide());
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
@@ -704,7 +676,7 @@ fn worker(
             continue;
         };
         prev = None;
-        let new = lock().seen.insert(sig.clone());
+        let new = lock().seen.insert(sig.key());
         if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
             stop.store(true, Ordering::SeqCst);
         }
@@ -782,7 +754,7 @@ fn minimize(
             return Ok(None);
         }
         let out = hand.run(&b.transcript, true)?;
-        Ok((signature(&p, &b.transcript, &out).as_ref() == Some(sig)).then_some(b))
+        Ok((signature(&p, &b, &out, !opts.wide()).is_some_and(|s| s.key() == sig.key())).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
     while chunk >= 1 && tries < opts.minimize_budget {
