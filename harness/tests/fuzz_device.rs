@@ -102,6 +102,88 @@ fn every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason() {
     assert!(wrongly_listed.is_empty(), "listed as not found in fuzz_device_unfound.toml but found: {wrongly_listed:?}");
 }
 
+/// Cases per fault in the one-finding sweep (in-process, fast time). The bound holds for
+/// 2000-run campaigns too (`gcl fuzz device --target sim --fault F --seed 1 --runs 2000`, the
+/// figures behind `fuzz_device_findings.toml`); fewer runs keep the debug test short, and
+/// findings only grow with runs, so a bound that holds at 2000 holds here.
+const RUNS_PER_CAMPAIGN: u64 = 300;
+
+#[derive(serde::Deserialize)]
+struct Few {
+    fault: String,
+    most: usize,
+    names: Vec<String>,
+    #[allow(dead_code)]
+    reason: String,
+}
+
+fn few_list() -> BTreeMap<String, Few> {
+    #[derive(serde::Deserialize)]
+    struct List {
+        few: Vec<Few>,
+    }
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_device_findings.toml")).unwrap();
+    let l: List = toml::from_str(&text).unwrap();
+    l.few.into_iter().map(|f| (f.fault.clone(), f)).collect()
+}
+
+#[test]
+fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
+    let few = few_list();
+    for name in few.keys() {
+        assert!(name.parse::<Fault>().is_ok(), "fuzz_device_findings.toml lists `{name}`, which is no fault");
+    }
+    let mut wrong = Vec::new();
+    for f in Fault::ALL {
+        let mut o = opts(vec![*f], RUNS_PER_CAMPAIGN);
+        o.seed = SEED;
+        o.minimize = false;
+        let s = run(&o, &|_| {}).unwrap();
+        let sigs: Vec<String> = s.findings.iter().map(|x| x.signature.to_string()).collect();
+        eprintln!("{:<24} {} finding(s): {}", f.name(), sigs.len(), sigs.join(" | "));
+        let (most, names) = few.get(f.name()).map_or((1, &[][..]), |x| (x.most, x.names.as_slice()));
+        if s.findings.len() > most {
+            wrong.push(format!("{f}: {} findings, at most {most}: {sigs:?}", s.findings.len()));
+        }
+        if s.findings.len() > 1 && !names.is_empty() {
+            for x in &s.findings {
+                let g = &x.signature;
+                if !names.contains(&g.command) && !names.contains(&g.cause) {
+                    wrong.push(format!("{f}: `{g}` names none of {names:?}"));
+                }
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{wrong:#?}");
+}
+
+/// The signatures name the command that broke, not the one read after it: FGET reversed is
+/// one finding (it was six: the command after a queued line or a ^C was blamed), and a wrong
+/// value that fits another elision's range is a value, not an order.
+#[test]
+fn a_bug_is_named_by_its_command_and_kind() {
+    let one = |fault: Fault| {
+        let mut o = opts(vec![fault], 1000);
+        o.seed = SEED;
+        o.minimize = false;
+        run(&o, &|_| {}).unwrap().findings.into_iter().map(|f| f.signature).collect::<Vec<_>>()
+    };
+    let s = one(Fault::FgetReversed);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].command.as_str(), s[0].kind.as_str()), ("FGET", "order"));
+    let s = one(Fault::LittleEndianLfap);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].command.as_str(), s[0].kind.as_str(), s[0].detail.as_str()), ("RealTime block", "value", "LFAP"));
+    let s = one(Fault::TooManyArgsSilent);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].kind.as_str(), s[0].detail.as_str()), ("status", "1024 missing"));
+    for f in one(Fault::McvIgnored) {
+        assert_eq!(f.kind, "value", "{f}");
+        assert!(["C", "M", "TC"].contains(&f.cause.as_str()), "{f}: not named by a closing motion");
+    }
+}
+
 #[test]
 fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     let dir = tempfile::tempdir().unwrap();

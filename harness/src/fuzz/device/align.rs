@@ -134,7 +134,14 @@ pub fn model_run(p: &Arc<Profile>, t: &Transcript) -> Result<ModelRun, Box<Repla
     let ReplayOutcome::Pass(pass) = out else { return Err(Box::new(out)) };
     let stream: Vec<u8> = pass.exchange.iter().flat_map(|e| e.received.iter().copied()).collect();
     // Sends are numbered over the steps that send; map them back to step indices.
-    let sending: Vec<u32> = t.steps.iter().enumerate().filter(|(_, s)| s.send.is_some()).map(|(i, _)| i as u32).collect();
+    // (the replayer sends nothing for a step whose bytes are empty).
+    let sending: Vec<u32> = t
+        .steps
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.send.as_ref().is_some_and(|h| !h.bytes.is_empty()))
+        .map(|(i, _)| i as u32)
+        .collect();
     let tags: Vec<u32> = link.tags.iter().map(|n| sending.get(*n as usize).copied().unwrap_or(*n)).collect();
     let mut layouts = vec![None; t.steps.len()];
     for (n, l) in link.layouts.into_iter().enumerate() {
@@ -304,7 +311,12 @@ pub fn signature(
     let fallback = || {
         let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
         let (s, _) = crate::triage::signature(&case, out, p)?;
-        Some(sig(s.command, s.kind, ""))
+        let kind = match s.kind {
+            "missing-answer" => "missing",
+            "flood" => "extra",
+            k => k,
+        };
+        Some(sig(s.command, kind, ""))
     };
     if let ReplayOutcome::Disconnected(_) = out {
         return Some(sig(command_at(p, t, step), "link", ""));
@@ -354,14 +366,13 @@ pub fn signature(
         let hand_start = pt.at - off.min(pt.at);
         let hand_len = pt.hand.len() - hand_start;
         if matches!(out, ReplayOutcome::Timeout(_)) {
-            return Some(sig(command, if hand_len == 0 { "missing" } else { "framing" }, "size"));
+            return Some(sig(command, if hand_len == 0 { "missing" } else { "framing" }, "block"));
         }
-        if off == 0 {
-            return Some(sig(command, "framing", "header"));
-        }
+        // A block that does not start where the model's does, or ends elsewhere: the hand
+        // reads or writes blocks of another layout.
         let model_len = run.tags[a..].iter().take_while(|s| **s as usize == owner).count();
-        if whole_reads && hand_len != model_len && model_len == fb.size() {
-            return Some(sig(command, "framing", "size"));
+        if off == 0 || whole_reads && hand_len != model_len && model_len == fb.size() {
+            return Some(sig(command, "framing", "block"));
         }
         return Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
             Some(f) => sig(command, "value", f.name()),
@@ -378,14 +389,27 @@ pub fn signature(
     // A prompt (or a status line) too many at the start of an answer, after which the hand
     // goes on with the model's answer: more than the answer before.
     if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
-        if let Some(e) = prompt_ends(got, &pe).first().copied() {
+        // (a bare prompt, or one status line and a prompt)
+        let bare = got.starts_with(&pe);
+        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ");
+        if let Some(e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
             let after = &got[e..];
             let want = &run.stream[x..unit_end.min(x + 4)];
-            if !after.is_empty() && !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+            // (what follows may not have been read yet)
+            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
                 let (_, _, _, c) = who(x - 1);
                 return Some(sig(c, "extra", ""));
             }
         }
+    }
+    // The first line of a line's answer, right after an input the model took as leaving
+    // RealTime mode: a hand that stayed in the loop takes the line for blocks.
+    let first_line = !run.stream[unit_start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
+    let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
+    let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
+    let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
+    if unit_start == a && first_line && leaves_loop {
+        return Some(sig("RealTime block".into(), "framing", "loop exit"));
     }
     if x < unit_start + echo_len {
         return Some(sig(command, "framing", "echo"));
@@ -442,7 +466,7 @@ pub fn signature(
         return Some(sig(command, "order", &param));
     }
     let motors = differing_motors(p, &line, &h_text, &golden);
-    let cause = cause_of(p, t, owner, &line, &param);
+    let cause = cause_of(p, t, owner, &line, &param, &motors);
     Some(FindingSignature { motors, cause, ..sig(command, "value", &param) })
 }
 
@@ -473,12 +497,19 @@ fn status_detail(model: u64, hand: u64) -> String {
     d.join(", ")
 }
 
-/// The command before the read that decided the value read: for a live parameter (positions,
-/// strain) the last line that moved the hand or reset it; for a stored one the last line that
-/// set it by name, restored defaults, loaded the EEPROM or reset the hand. Empty when none did.
-fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str) -> String {
+/// The command before the read that decided the value read: for a position, the last line
+/// that moved one of the motors whose values differ (or initialised or reset the hand); for
+/// a stored parameter, the last line that set it by name, restored its defaults, loaded it or
+/// reset the hand. Empty for other live values (strain, temperature: every read shows their
+/// bug, whatever came before) and when no line did.
+fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str, motors: &str) -> String {
     let Some(id) = p.param_id(param) else { return String::new() };
-    let live = p.param(id).live;
+    let spec = p.param(id);
+    let position = p.role(gcl_model::spec::Role::Position) == Some(id);
+    if spec.live && !position {
+        return String::new();
+    }
+    let global = spec.scope == gcl_model::spec::Scope::Global;
     let term = p.framing.terminator;
     let mut lines: Vec<Vec<u8>> = Vec::new();
     for s in t.steps.iter().take(owner + 1) {
@@ -493,20 +524,21 @@ fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str)
     if let Some(i) = lines.iter().rposition(|l| l.as_slice() == line) {
         lines.truncate(i);
     }
+    let differing = MotorSet::from_motors(motors.bytes().filter_map(|b| b.is_ascii_digit().then_some(b - b'0')));
     for l in lines.iter().rev() {
         let Ok(Line::Command(c)) = parse_line(p, l) else { continue };
         let k = c.kind(p);
-        let decides = if live {
-            k.is_motion() || matches!(k, CommandKind::Initialize | CommandKind::Loop | CommandKind::Reset)
+        let decides = if position {
+            let moved = c.prefix.unwrap_or(MotorSet::from_bits(0b1111));
+            let touches = differing.is_empty() || moved.bits() & differing.bits() != 0;
+            matches!(k, CommandKind::Initialize | CommandKind::Loop | CommandKind::Reset) || k.is_motion() && touches
         } else {
-            matches!(
-                k,
-                CommandKind::MotorDefaults
-                    | CommandKind::GlobalDefaults
-                    | CommandKind::MotorLoad
-                    | CommandKind::GlobalLoad
-                    | CommandKind::Reset
-            ) || matches!(&c.args, Args::Pairs(ps) if ps.iter().any(|(i, _)| *i == id))
+            let scoped = if global {
+                matches!(k, CommandKind::GlobalDefaults | CommandKind::GlobalLoad)
+            } else {
+                matches!(k, CommandKind::MotorDefaults | CommandKind::MotorLoad)
+            };
+            scoped || k == CommandKind::Reset || matches!(&c.args, Args::Pairs(ps) if ps.iter().any(|(i, _)| *i == id))
         };
         if decides {
             return p.command(c.command).name.clone();
