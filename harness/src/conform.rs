@@ -522,11 +522,13 @@ pub fn run_with_events(
 
     let mut shared: Option<Box<dyn Link>> = None;
     let mut preflight = None;
+    let mut framing_clauses: Vec<String> = Vec::new();
     let before = {
         let mut l = open_link()?;
         let ok = liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false);
         if ok && opts.control.preflight {
             if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
+                framing_clauses = p.clauses.clone();
                 let line = p.line();
                 on(RunEvent::Preflight(&line));
                 preflight = Some(line);
@@ -596,11 +598,17 @@ pub fn run_with_events(
                 None => match reopen(opts, probe_timeout) {
                     Ok(l) => shared.insert(l).as_mut(),
                     Err(e) => {
+                        // The link failed and the hand does not come back: the run ends
+                        // there, an infrastructure error, not a verdict on any clause.
+                        let message = format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
                         let r = result_of(case, Verdict::Error, 0.0, Some(e));
                         if let Some(s) = stream.as_deref_mut() {
                             s.push(&r).map_err(ConformError::Results)?;
                         }
                         on(RunEvent::Case(&r, results.len() + 1, total));
+                        let st = Stopped { cause: StopCause::DeadHand, case: case.id().to_string(), message };
+                        on(RunEvent::Stopped(&st));
+                        stopped = Some(st);
                         results.push(r);
                         failures += 1;
                         continue;
@@ -667,7 +675,7 @@ pub fn run_with_events(
         if timeouts_in_a_row == 1 {
             first_timeout = case.id().to_string();
         }
-        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile) {
+        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile, fresh_per_case) {
             let step = outcome.failed_step().unwrap_or(0);
             signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
         }
@@ -781,7 +789,7 @@ pub fn run_with_events(
     };
     let actual_ms = wall.elapsed().as_secs_f64() * 1000.0;
     let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
-    let groups = crate::triage::group(cases, &results, &signatures);
+    let groups = crate::triage::group(cases, &results, &signatures, &framing_clauses);
     let mut report = RunReport {
         format: REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),

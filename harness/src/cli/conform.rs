@@ -340,10 +340,14 @@ pub fn summary_text(r: &RunReport) -> String {
     let clean = count(|v| v == Verdict::Pass);
     let failing = count(Verdict::fails_run);
     let skipped = count(|v| matches!(v, Verdict::Skip | Verdict::Xfail));
+    let blocked_clauses = r.clauses.iter().filter(|c| c.blocked).count();
     s.push_str(&format!(
-        "  clauses: {covered} covered: {clean} with every case passing, {failing} failing, {skipped} not fully judged (a case skipped or a known failure)\n"
+        "  clauses: {covered} covered: {clean} with every case passing, {} failing, {blocked_clauses} blocked (failing only through another clause's bug), {skipped} not fully judged (a case skipped or a known failure)\n",
+        failing - blocked_clauses
     ));
-    let failing: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
+    let blocked = r.blocked();
+    let failing: Vec<&CaseResult> =
+        r.cases.iter().filter(|c| c.verdict.fails_run() && !blocked.contains(c.id.as_str())).collect();
     if !failing.is_empty() {
         s.push_str("  failing cases:\n");
         for c in failing.iter().take(50) {
@@ -351,6 +355,14 @@ pub fn summary_text(r: &RunReport) -> String {
         }
         if failing.len() > 50 {
             s.push_str(&format!("    ... and {} more\n", failing.len() - 50));
+        }
+    }
+    if !blocked.is_empty() {
+        s.push_str(&format!("  blocked cases ({}; each fails on another clause's bug, named by its group):\n", blocked.len()));
+        for g in r.groups.iter().filter(|g| !g.blocked.is_empty()) {
+            let ids: Vec<&str> = g.blocked.iter().take(8).map(String::as_str).collect();
+            let more = if g.blocked.len() > 8 { format!(" and {} more", g.blocked.len() - 8) } else { String::new() };
+            s.push_str(&format!("    by `{}`: {}{more}\n", g.clause, ids.join(", ")));
         }
     }
     if let Some(st) = &r.stopped {
@@ -378,7 +390,16 @@ ratio {:.3}\n",
     if r.ran() == 0 {
         s.push_str("  no case ran\n");
     }
-    s.push_str(&format!("  result: {}\n", if r.passed() { "PASS" } else { "FAIL" }));
+    // A run that ended because the hand stopped answering or vanished has no verdict.
+    let infrastructure = r.stopped.as_ref().is_some_and(|st| st.cause != StopCause::MaxFailures);
+    let result = if infrastructure {
+        "ERROR"
+    } else if r.passed() {
+        "PASS"
+    } else {
+        "FAIL"
+    };
+    s.push_str(&format!("  result: {result}\n"));
     s
 }
 

@@ -106,7 +106,11 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
             let _ = writeln!(
                 h,
                 "<tr class=\"fail\"><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td><a href=\"#fail-{}\">{}</a></td></tr>",
-                g.cases.len(),
+                if g.blocked.is_empty() {
+                    g.cases.len().to_string()
+                } else {
+                    format!("{} ({} blocked)", g.cases.len(), g.blocked.len())
+                },
                 esc(&g.command),
                 esc(&g.kind),
                 esc(&g.clause),
@@ -115,6 +119,13 @@ pre{{background:#f7f7f7;padding:.6em;overflow-x:auto;white-space:pre-wrap}}code{
             );
             if let Some(d) = &g.diff {
                 let _ = writeln!(h, "<tr><td></td><td colspan=\"4\">{}</td></tr>", diff_view(d));
+            }
+            if !g.blocked.is_empty() {
+                let _ = writeln!(
+                    h,
+                    "<tr class=\"blocked\"><td></td><td colspan=\"4\">blocked by this group (they fail on its clause's bug, not their own): {}</td></tr>",
+                    esc(&g.blocked.join(", "))
+                );
             }
         }
         h.push_str("</table>\n");
@@ -154,7 +165,8 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
     }
     h.push_str("<th>cases</th></tr>\n");
     for c in &r.clauses {
-        let _ = write!(h, "<tr class=\"{}\"><td>{}</td><td>{}</td>", class(c.verdict), esc(&c.clause), c.verdict);
+        let verdict = if c.blocked { format!("{} (blocked)", c.verdict) } else { c.verdict.to_string() };
+        let _ = write!(h, "<tr class=\"{}\"><td>{}</td><td>{}</td>", class(c.verdict), esc(&c.clause), verdict);
         for v in Verdict::ALL {
             let n = r.cases.iter().filter(|k| k.verdict == v && k.clauses.contains(&c.clause)).count();
             if n == 0 {

@@ -32,8 +32,8 @@ pub struct BuiltCase {
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
     /// The unmutated model's run of the transcript, each answer byte tagged with the step it
-    /// answers (see [`super::align`]).
-    pub model: super::align::ModelRun,
+    /// answers (see [`crate::align`]).
+    pub model: crate::align::ModelRun,
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -414,7 +414,7 @@ pub fn build_case(
     let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let model = super::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
+    let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
     Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model })
 }
 

@@ -18,7 +18,6 @@
 //! The library prints nothing: progress goes to a callback, errors are [`FuzzError`].
 
 pub mod action;
-pub mod align;
 pub mod case;
 pub mod coverage;
 pub mod report;
@@ -165,7 +164,8 @@ pub enum FuzzError {
     },
 }
 
-pub use self::align::FindingSignature;
+pub use crate::align::FindingSignature;
+use crate::align;
 
 /// One distinct finding.
 #[derive(Debug, Clone, Serialize)]
@@ -426,7 +426,7 @@ impl Hand<'_> {
     }
 }
 
-/// The signature of a failed replay of a built case, `None` for a pass (see [`align`]).
+/// The signature of a failed replay of a built case, `None` for a pass (see [`crate::align`]).
 pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_reads: bool) -> Option<FindingSignature> {
     // A pass (most cases) has no signature.
     out.failed_step()?;

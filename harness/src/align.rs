@@ -310,13 +310,13 @@ pub fn signature(
     // Without the model's tags (a run whose timing the tagging changed), the step read in.
     let fallback = || {
         let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
-        let (s, _) = crate::triage::signature(&case, out, p)?;
-        let kind = match s.kind {
+        let (s, _) = crate::triage::step_signature(&case, out, p)?;
+        let kind = match s.kind.as_str() {
             "missing-answer" => "missing",
             "flood" => "extra",
             k => k,
         };
-        Some(sig(s.command, kind, ""))
+        Some(sig(s.command.clone(), kind, ""))
     };
     if let ReplayOutcome::Disconnected(_) = out {
         return Some(sig(command_at(p, t, step), "link", ""));
