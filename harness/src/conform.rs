@@ -15,7 +15,7 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
 use crate::deadline::DeadlinePolicy;
-use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard};
+use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard, replay};
 use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
@@ -345,11 +345,22 @@ pub struct RunControl {
     pub deadlines: Option<DeadlinePolicy>,
     /// Run the framing pre-flight before the first case.
     pub preflight: bool,
+    /// Before a run with abort-timing cases on a hand outside this process, close the hand
+    /// once and compare the time with the model's ([`crate::fuzz::device::MotionProbe`], the
+    /// fuzzer's probe): a hand whose motions end at once cannot take a ^C mid-motion, so those
+    /// cases are SKIP with that reason (`--assume-real-time` turns the probe off).
+    pub real_time_probe: bool,
 }
 
 impl Default for RunControl {
     fn default() -> RunControl {
-        RunControl { max_failures: None, dead_after: DEFAULT_DEAD_AFTER, deadlines: None, preflight: true }
+        RunControl {
+            max_failures: None,
+            dead_after: DEFAULT_DEAD_AFTER,
+            deadlines: None,
+            preflight: true,
+            real_time_probe: true,
+        }
     }
 }
 
@@ -462,7 +473,8 @@ pub fn firmware_version(
 /// Something a run reports as it goes.
 #[derive(Debug, Clone, Copy)]
 pub enum RunEvent<'a> {
-    /// The framing pre-flight's one line, before the first case.
+    /// A line about the target before the first case: the framing pre-flight's, and the
+    /// motion-time probe's when the hand's motions end at once.
     Preflight(&'a str),
     /// A case ended: its result, how many results so far, and how many there will be.
     Case(&'a CaseResult, usize, usize),
@@ -510,7 +522,7 @@ pub fn run_with_events(
     let now = time::OffsetDateTime::now_utc();
     let started_at = now.replace_nanosecond(0).unwrap_or(now);
     let wall = Instant::now();
-    let (selected, skipped) = select(cases, opts)?;
+    let (mut selected, mut skipped) = select(cases, opts)?;
     let fresh_per_case = matches!(opts.target, Target::Sim { .. });
     let probe_timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5)).max(Duration::from_secs(2));
     let open_link = || open(&opts.target, &opts.open);
@@ -523,6 +535,7 @@ pub fn run_with_events(
     let mut shared: Option<Box<dyn Link>> = None;
     let mut preflight = None;
     let mut framing_clauses: Vec<String> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
     let before = {
         let mut l = open_link()?;
         let ok = liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false);
@@ -534,6 +547,27 @@ pub fn run_with_events(
                 preflight = Some(line);
             }
             let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+        }
+        if ok
+            && !fresh_per_case
+            && opts.control.real_time_probe
+            && selected.iter().any(|c| c.requires(&Requirement::AbortTiming))
+            && let Some(fast) = motion_time(l.as_mut(), opts, &policy, link_baud)
+        {
+            let line = format!(
+                "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
+                 (as with `--no abort-timing`; `--assume-real-time` runs them)"
+            );
+            on(RunEvent::Preflight(&line));
+            let reason = format!("requires abort-timing, which the target lacks: {fast}");
+            selected.retain(|c| {
+                let timing = c.requires(&Requirement::AbortTiming);
+                if timing {
+                    skipped.push(result_of(c, Verdict::Skip, 0.0, Some(reason.clone())));
+                }
+                !timing
+            });
+            notes.push(line);
         }
         if !fresh_per_case {
             shared = Some(l);
@@ -801,7 +835,11 @@ pub fn run_with_events(
         suite_hash: suite::suite_hash(cases),
         liveness: Liveness { before, after },
         options: run_options(cases, opts),
-        preflight,
+        preflight: match (preflight, notes.is_empty()) {
+            (Some(p), false) => Some(format!("{p}\n{}", notes.join("\n"))),
+            (None, false) => Some(notes.join("\n")),
+            (p, true) => p,
+        },
         stopped,
         groups,
         wire,
@@ -811,6 +849,26 @@ pub fn run_with_events(
     };
     report.tally();
     Ok(RunOutput { report, transcripts })
+}
+
+/// Runs the motion-time probe on `link` with the run's deadlines; says how the target's motion
+/// fell short of the model's, or `None` (it moves in real time, or the probe decided nothing).
+fn motion_time(
+    link: &mut dyn Link,
+    opts: &ConformOptions,
+    policy: &DeadlinePolicy,
+    baud: Option<u32>,
+) -> Option<crate::fuzz::device::NotRealTime> {
+    let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+    let case = Case { profile: opts.profile.id.clone(), transcript: probe.transcript.clone() };
+    let mut ro = suite::replay_options();
+    if let Some(pred) = crate::deadline::predict(&case, &opts.profile) {
+        ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
+    }
+    ro.silent_wait = policy.silent_wait;
+    let out = replay(&probe.transcript, link, &ro);
+    let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+    probe.judge(&opts.profile, &out)
 }
 
 /// What of `opts` changed what ran, for the report. The suite's source and `--partial` are

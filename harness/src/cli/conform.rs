@@ -65,6 +65,12 @@ pub struct SuiteArgs {
     /// faults: prompt, line ending, echo, banner, status format).
     #[arg(long)]
     pub no_preflight: bool,
+    /// Run the abort-timing cases (^C landing mid-motion) even on a hand whose motions end at
+    /// once. Without it, a hand outside this process is closed once first; when its motion
+    /// takes under a quarter of the model's time (a simulator in fast time, such as `gcl sim
+    /// --stdio`), those cases are SKIP and one line says why.
+    #[arg(long)]
+    pub assume_real_time: bool,
     /// Refuse cases that need this of the hand (motion, realtime, eeprom, abort-timing;
     /// repeatable): they are reported as SKIP.
     #[arg(long = "no", value_name = "REQUIREMENT")]
@@ -209,6 +215,7 @@ pub fn prepare(
                 ..DeadlinePolicy::for_target(&a.target)
             }),
             preflight: !a.no_preflight,
+            real_time_probe: !a.assume_real_time,
         },
     };
     Ok((opts, cases))
@@ -282,7 +289,9 @@ pub fn summary_text(r: &RunReport) -> String {
     let mut s = String::new();
     s.push_str(&format!("gcl conform: target {}, profile {}, level {}\n", r.target, r.profile, r.level));
     if let Some(p) = &r.preflight {
-        s.push_str(&format!("  {p}\n"));
+        for line in p.lines() {
+            s.push_str(&format!("  {line}\n"));
+        }
     }
     let given = r.options.pairs();
     if !given.is_empty() {

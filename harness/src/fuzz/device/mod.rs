@@ -446,43 +446,82 @@ fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) 
 /// A target whose motion takes under this share of the model's time does not move in real time.
 const REAL_TIME_SHARE: u32 = 4;
 
+/// A hand whose motion from home ended far sooner than the model's: a simulator whose time
+/// follows the wire (`gcl sim --time fast`). ^C cannot land mid-motion on it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NotRealTime {
+    /// The motion command of the probe.
+    pub command: String,
+    /// How long the target took for it, bytes included.
+    pub took_ms: u64,
+    /// How long the model's hand moves for it, bytes aside.
+    pub model_ms: u64,
+}
+
+impl std::fmt::Display for NotRealTime {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the target's motions end at once: `{}` from the home position took {} ms, where the model's hand \
+             takes {} ms (a simulator with `--time fast`?)",
+            self.command, self.took_ms, self.model_ms
+        )
+    }
+}
+
+/// The motion-time probe: the case (the suite's preamble, HI, then the profile's close
+/// command) and what judges its replay. `None` when the profile has no close command.
+pub struct MotionProbe {
+    /// The probe's transcript.
+    pub transcript: Transcript,
+    command: String,
+    model: Vec<deadline::StepPrediction>,
+}
+
+impl MotionProbe {
+    /// The probe for a profile.
+    pub fn new(p: &Arc<Profile>) -> Option<MotionProbe> {
+        let close = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close)?;
+        let command = close.name.clone();
+        let built = build_case(p, &[HostAction::Line(command.clone())], "probe", "real-time probe", true, true).ok()?;
+        let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
+        let model = deadline::predict(&case, p)?;
+        Some(MotionProbe { transcript: built.transcript, command, model })
+    }
+
+    /// Judges a replay of the probe: the target moved in far less time than the model's hand
+    /// (under a quarter of it). A slow or loaded target only takes longer, never shorter; a
+    /// probe that did not pass decides nothing.
+    pub fn judge(&self, p: &Profile, out: &ReplayOutcome) -> Option<NotRealTime> {
+        let sent = format!("{}{}", self.command, p.framing.terminator as char);
+        let done = out.failed_step().unwrap_or(usize::MAX);
+        let e = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes())?;
+        let model = self.model.get(e.step).map_or(Duration::ZERO, |s| s.busy());
+        (model > deadline::BUSY && e.took < model / REAL_TIME_SHARE).then(|| NotRealTime {
+            command: self.command.clone(),
+            took_ms: e.took.as_millis() as u64,
+            model_ms: model.as_millis() as u64,
+        })
+    }
+}
+
 /// Before a campaign that lands ^C mid-motion on a hand outside this process: closes the
-/// hand from its home position once and compares the time the target took with the model's.
-/// A target that took under a quarter of it (a simulator whose motion ends at once) is
-/// refused with [`FuzzError::NotRealTime`]: its answers to ^C mid-motion are right for it
-/// and wrong for the model, so every such case would be a false finding. A slow or loaded
-/// target only takes longer, never shorter. A probe that does not pass decides nothing (the
-/// campaign finds why).
+/// hand from its home position once ([`MotionProbe`]) and refuses a target whose motion took
+/// under a quarter of the model's time with [`FuzzError::NotRealTime`]: its answers to ^C
+/// mid-motion are right for it and wrong for the model, so every such case would be a false
+/// finding. `gcl conform` runs the same probe and skips its abort-timing cases instead.
 pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
     if !(opts.wide() && opts.allowed.motion && opts.allowed.abort_timing) {
         return Ok(());
     }
     let p = &opts.profile;
-    let Some(close) = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close) else {
-        return Ok(());
-    };
-    let line = close.name.clone();
-    let Ok(built) = build_case(p, &[HostAction::Line(line.clone())], "probe", "real-time probe", true, true) else {
-        return Ok(());
-    };
-    let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
-    let Some(pred) = deadline::predict(&case, p) else { return Ok(()) };
+    let Some(probe) = MotionProbe::new(p) else { return Ok(()) };
     let mut hand = Hand { opts, link: None, new: true, dirty: false };
-    let out = hand.run(&built.transcript, true)?;
-    let sent = format!("{line}{}", p.framing.terminator as char);
-    let done = out.failed_step().unwrap_or(usize::MAX);
-    let Some(e) = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes()) else {
-        return Ok(());
-    };
-    let model = pred.get(e.step).map_or(Duration::ZERO, |s| s.busy());
-    if model > deadline::BUSY && e.took < model / REAL_TIME_SHARE {
-        return Err(FuzzError::NotRealTime {
-            command: line,
-            took_ms: e.took.as_millis() as u64,
-            model_ms: model.as_millis() as u64,
-        });
+    let out = hand.run(&probe.transcript, true)?;
+    match probe.judge(p, &out) {
+        Some(n) => Err(FuzzError::NotRealTime { command: n.command, took_ms: n.took_ms, model_ms: n.model_ms }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Runs the fuzzer. `progress` is called from worker threads.
