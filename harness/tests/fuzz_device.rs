@@ -184,6 +184,70 @@ fn a_bug_is_named_by_its_command_and_kind() {
     }
 }
 
+/// Findings relative to a baseline: the first fault's findings (a folder `--out` wrote) are
+/// known when both faults are in the hand; the second fault's finding is new, and only new
+/// findings fail the CLI's run.
+#[test]
+fn a_baseline_keeps_known_findings_apart_from_new_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let mut o = opts(vec![Fault::FgetReversed], 600);
+    o.seed = SEED;
+    o.out = Some(first.clone());
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!s.findings.is_empty());
+    let known_keys: Vec<String> = s.findings.iter().map(|f| f.signature.key()).collect();
+
+    let mut o = opts(vec![Fault::FgetReversed, Fault::TooManyArgsSilent], 600);
+    o.seed = SEED;
+    assert!(o.baseline.add_dir(&first).unwrap() >= 1);
+    let s = run(&o, &|_| {}).unwrap();
+    let new: Vec<String> = s.findings.iter().filter(|f| f.is_new()).map(|f| f.signature.key()).collect();
+    let known: Vec<String> = s.findings.iter().filter(|f| !f.is_new()).map(|f| f.signature.key()).collect();
+    assert!(new.iter().any(|k| k == "status 1024 missing"), "the second fault is new: {new:?} (known {known:?})");
+    assert!(new.iter().all(|k| !known_keys.contains(k)), "a baseline finding reported as new: {new:?}");
+    assert!(known.iter().any(|k| k == "order at FGET"), "the first fault is known: {known:?}");
+
+    // The CLI: exit 0 when every finding is in the baseline, 1 when one is new.
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let base = first.to_str().unwrap();
+    let args = ["fuzz", "device", "--target", "sim", "--seed", "1", "--runs", "300", "-q", "--baseline", base];
+    let out = Command::new(gcl).args(args).args(["--fault", "fget-reversed"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("(0 new, "), "{text}");
+    let out = Command::new(gcl)
+        .args(args)
+        .args(["--fault", "fget-reversed", "--fault", "too-many-args-silent"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("[known: in the baseline]"), "{text}");
+}
+
+/// `--skip-decision` draws no case resting on a decision the hand took differently, and
+/// `--known-failures` entries match findings by id or signature, as in `gcl conform`.
+#[test]
+fn skipped_decisions_and_known_failures_apply_to_the_fuzzer() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let args = ["fuzz", "device", "--target", "sim", "--fault", "empty-line-error", "--seed", "1", "--runs", "300", "-q"];
+    let out = Command::new(gcl).args(args).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "the fault is found: {text}");
+    let out = Command::new(gcl).args(args).args(["--skip-decision", "framing-empty-line"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "no case rests on the skipped decision: {text}");
+    assert!(text.contains("0 distinct findings"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let known = dir.path().join("known.toml");
+    std::fs::write(&known, "[[failure]]\ncase = \"status 32 extra\"\nreason = \"our empty line is an error\"\n").unwrap();
+    let out = Command::new(gcl).args(args).args(["--known-failures", known.to_str().unwrap()]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("[known: known failure: our empty line is an error]"), "{text}");
+}
+
 #[test]
 fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     let dir = tempfile::tempdir().unwrap();

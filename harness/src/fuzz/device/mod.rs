@@ -80,7 +80,54 @@ pub struct FuzzOptions {
     pub minimize_budget: usize,
     /// Start the corpus from the suite's cases of the profile (their host sides).
     pub suite_seeds: bool,
+    /// What the hand is already known to do: findings it explains are *known*, not new.
+    pub baseline: Baseline,
 }
+
+/// Findings a hand is already known to have, and decisions it took differently: a campaign
+/// against it reports what is new (`--baseline`, `--known-failures`, `--skip-decision`).
+#[derive(Debug, Clone, Default)]
+pub struct Baseline {
+    /// Signature keys of earlier findings ([`FindingSignature::key`]).
+    pub keys: BTreeSet<String>,
+    /// Known failures: an entry's glob matches a finding's id (`fuzz-fget-order`) or its key.
+    pub known: crate::conform::KnownFailures,
+}
+
+impl Baseline {
+    /// Adds the findings of a folder an earlier campaign wrote with `--out` (each transcript
+    /// names its signature in its `x-signature` header); returns how many it read.
+    pub fn add_dir(&mut self, dir: &Path) -> Result<usize, FuzzError> {
+        let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
+        let mut n = 0;
+        for e in std::fs::read_dir(dir).map_err(err)? {
+            let path = e.map_err(err)?.path();
+            if path.extension().is_none_or(|x| x != "gcl") {
+                continue;
+            }
+            let text = gcl_host::files::read_input_text(&path)
+                .map_err(|e| FuzzError::Corpus { path: path.clone(), source: std::io::Error::other(e.to_string()) })?;
+            let Ok(t) = gcl_transcript::parse(&text) else { continue };
+            if let Some((_, key)) = t.header.extensions.iter().find(|(k, _)| k == SIGNATURE_KEY) {
+                self.keys.insert(key.clone());
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Why a finding is not new: in the baseline, or a known failure; `None` when it is new.
+    pub fn explains(&self, profile: &str, id: &str, sig: &FindingSignature) -> Option<String> {
+        let key = sig.key();
+        if self.keys.contains(&key) {
+            return Some("in the baseline".to_string());
+        }
+        self.known.lookup(profile, id).or_else(|| self.known.lookup(profile, &key)).map(|k| format!("known failure: {}", k.reason))
+    }
+}
+
+/// The transcript header that names a written finding's signature key.
+pub const SIGNATURE_KEY: &str = "x-signature";
 
 impl FuzzOptions {
     /// Options for `target` with the defaults: 1000 runs, one worker, minimization on, and
@@ -102,6 +149,7 @@ impl FuzzOptions {
             minimize: true,
             minimize_budget: 300,
             suite_seeds: true,
+            baseline: Baseline::default(),
         }
     }
 }
@@ -190,6 +238,16 @@ pub struct Finding {
     pub diff: String,
     /// Where the transcript was written.
     pub path: Option<PathBuf>,
+    /// Why it is not new (in the baseline, a known failure), or `None` for a new finding.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub known: Option<String>,
+}
+
+impl Finding {
+    /// Whether the baseline does not explain it.
+    pub fn is_new(&self) -> bool {
+        self.known.is_none()
+    }
 }
 
 fn ser_ms<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
@@ -437,6 +495,18 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
 /// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
 fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
     let b = build_case(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    // A case resting on a decision the hand took differently judges nothing of it.
+    let rests: Vec<String> = b
+        .transcript
+        .header
+        .extensions
+        .iter()
+        .filter(|(k, _)| k == crate::suite::build::DECISIONS_KEY)
+        .flat_map(|(_, v)| v.split_whitespace().map(str::to_string))
+        .collect();
+    if let Some(d) = opts.baseline.known.skipped_by(&opts.profile.id, &rests) {
+        return Err(NotACase(format!("rests on decision {}, decided differently: {}", d.id, d.reason)));
+    }
     if !opts.allowed.abort_timing && b.transcript.header.requires.contains(&gcl_transcript::Requirement::AbortTiming) {
         return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
     }
@@ -740,9 +810,10 @@ fn report_finding(
     let t0 = Instant::now();
     let (min_actions, min_case) =
         if opts.minimize { minimize(opts, hand, actions, built, &sig)? } else { (actions.to_vec(), built.clone()) };
-    let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+    let id = finding_id(&sig);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-    let final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
+    let mut final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
+    final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
     let diff = hand.run(&final_case.transcript, true)?.render();
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
@@ -754,7 +825,9 @@ fn report_finding(
         }
         None => None,
     };
+    let known = opts.baseline.explains(&opts.profile.id, &id, &sig);
     let finding = Finding {
+        known,
         signature: sig,
         run: run_no,
         found_after,
@@ -835,6 +908,25 @@ fn minimize(
         }
     }
     Ok(best)
+}
+
+/// A finding's id and file name: `fuzz-COMMAND-KIND`, then what else its key holds
+/// (`fuzz-fget-order`, `fuzz-fget-value-after-m`, `fuzz-vers-status-1024-missing`).
+pub fn finding_id(sig: &FindingSignature) -> String {
+    let mut id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+    let key = sig.key();
+    let rest = key
+        .strip_prefix(&format!("{} at {}", sig.kind, sig.command))
+        .or_else(|| key.strip_prefix(&format!("{} ", sig.kind)))
+        .unwrap_or_default();
+    let rest: String =
+        rest.to_ascii_lowercase().chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect();
+    let rest: Vec<&str> = rest.split('-').filter(|w| !w.is_empty()).collect();
+    if !rest.is_empty() {
+        id.push('-');
+        id.push_str(&rest.join("-"));
+    }
+    id
 }
 
 /// A command word as part of a file name: `^C` is `abort`, `RealTime block` is `block`.
