@@ -197,7 +197,9 @@ impl FindingSignature {
                 let extra = parts.iter().find(|d| d.ends_with(" extra"));
                 let missing = parts.iter().find(|d| d.ends_with(" missing"));
                 let unknown = extra.is_some_and(|e| {
-                    e.trim_end_matches(" extra").split('+').any(|b| b == gcl_model::StatusBits::UNKNOWN_COMMAND.bits().to_string())
+                    e.trim_end_matches(" extra")
+                        .split('+')
+                        .any(|b| b == gcl_model::StatusBits::UNKNOWN_COMMAND.bits().to_string())
                 });
                 let pick = if unknown { extra } else { missing.or(extra) };
                 format!("status {}", pick.copied().unwrap_or(self.detail.as_str()))
@@ -303,7 +305,8 @@ pub fn signature(
     let sent_of = |i: usize| t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
     let hex_step = |i: usize| {
         t.steps.get(i).is_some_and(|s| {
-            s.send.as_ref().is_some_and(|h| h.form == Form::Hex) || s.expect.segments.iter().any(|g| g.form == Form::Hex)
+            s.send.as_ref().is_some_and(|h| h.form == Form::Hex)
+                || s.expect.segments.iter().any(|g| g.form == Form::Hex)
         })
     };
     let is_abort = |i: usize| sent_of(i).first() == Some(&fr.abort);
@@ -384,8 +387,11 @@ pub fn signature(
     // answer's start) to the next prompt.
     let unit_start = prompt_ends(&run.stream[..=x], &pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
     let unit_end = prompt_ends(&run.stream[unit_start..], &pe).first().map_or(run.stream.len(), |e| unit_start + e);
-    let echo_len =
-        if fr.echo && unit_start == a && !is_abort(owner) { line.iter().filter(|b| **b != fr.terminator).count() } else { 0 };
+    let echo_len = if fr.echo && unit_start == a && !is_abort(owner) {
+        line.iter().filter(|b| **b != fr.terminator).count()
+    } else {
+        0
+    };
     // A prompt (or a status line) too many at the start of an answer, after which the hand
     // goes on with the model's answer: more than the answer before.
     if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
@@ -483,7 +489,8 @@ fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
 /// A status difference: the bits the model reports and the hand does not (`missing`), and
 /// those the hand reports and the model does not (`extra`).
 fn status_detail(model: u64, hand: u64) -> String {
-    let bits = |v: u64| (0..63).filter(|b| v & (1 << b) != 0).map(|b| (1u64 << b).to_string()).collect::<Vec<_>>().join("+");
+    let bits =
+        |v: u64| (0..63).filter(|b| v & (1 << b) != 0).map(|b| (1u64 << b).to_string()).collect::<Vec<_>>().join("+");
     let mut d = Vec::new();
     if model & !hand != 0 {
         d.push(format!("{} missing", bits(model & !hand)));
@@ -550,7 +557,11 @@ fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str,
 /// The command at step `i` for a link failure: the step's own line.
 fn command_at(p: &Profile, t: &Transcript, i: usize) -> String {
     let sent = t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    crate::triage::command_of(&sent, t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)), p)
+    crate::triage::command_of(
+        &sent,
+        t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)),
+        p,
+    )
 }
 
 /// Among the lines step `owner` sent, the one whose answer holds model position `x`, and where
@@ -652,10 +663,5 @@ fn differing_motors(p: &Profile, line: &[u8], actual: &str, golden: &str) -> Str
     if a.len() != e.len() {
         return String::new();
     }
-    motors
-        .iter()
-        .zip(a.iter().zip(&e))
-        .filter(|(_, (x, tok))| !tok.accepts(x))
-        .map(|(m, _)| m.to_string())
-        .collect()
+    motors.iter().zip(a.iter().zip(&e)).filter(|(_, (x, tok))| !tok.accepts(x)).map(|(m, _)| m.to_string()).collect()
 }

@@ -634,7 +634,8 @@ pub fn run_with_events(
                     Err(e) => {
                         // The link failed and the hand does not come back: the run ends
                         // there, an infrastructure error, not a verdict on any clause.
-                        let message = format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
+                        let message =
+                            format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
                         let r = result_of(case, Verdict::Error, 0.0, Some(e));
                         if let Some(s) = stream.as_deref_mut() {
                             s.push(&r).map_err(ConformError::Results)?;

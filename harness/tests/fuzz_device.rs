@@ -231,7 +231,8 @@ fn a_baseline_keeps_known_findings_apart_from_new_ones() {
 #[test]
 fn skipped_decisions_and_known_failures_apply_to_the_fuzzer() {
     let gcl = env!("CARGO_BIN_EXE_gcl");
-    let args = ["fuzz", "device", "--target", "sim", "--fault", "empty-line-error", "--seed", "1", "--runs", "300", "-q"];
+    let args =
+        ["fuzz", "device", "--target", "sim", "--fault", "empty-line-error", "--seed", "1", "--runs", "300", "-q"];
     let out = Command::new(gcl).args(args).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "the fault is found: {text}");
@@ -241,7 +242,8 @@ fn skipped_decisions_and_known_failures_apply_to_the_fuzzer() {
     assert!(text.contains("0 distinct findings"), "{text}");
     let dir = tempfile::tempdir().unwrap();
     let known = dir.path().join("known.toml");
-    std::fs::write(&known, "[[failure]]\ncase = \"status 32 extra\"\nreason = \"our empty line is an error\"\n").unwrap();
+    std::fs::write(&known, "[[failure]]\ncase = \"status 32 extra\"\nreason = \"our empty line is an error\"\n")
+        .unwrap();
     let out = Command::new(gcl).args(args).args(["--known-failures", known.to_str().unwrap()]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{text}");

@@ -367,7 +367,10 @@ pub fn summary_text(r: &RunReport) -> String {
         }
     }
     if !blocked.is_empty() {
-        s.push_str(&format!("  blocked cases ({}; each fails on another clause's bug, named by its group):\n", blocked.len()));
+        s.push_str(&format!(
+            "  blocked cases ({}; each fails on another clause's bug, named by its group):\n",
+            blocked.len()
+        ));
         for g in r.groups.iter().filter(|g| !g.blocked.is_empty()) {
             let ids: Vec<&str> = g.blocked.iter().take(8).map(String::as_str).collect();
             let more = if g.blocked.len() > 8 { format!(" and {} more", g.blocked.len() - 8) } else { String::new() };

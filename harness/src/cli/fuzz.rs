@@ -155,7 +155,10 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     for id in &a.skip_decision {
         if !o.profile.decisions.iter().any(|d| &d.id == id) {
-            anyhow::bail!("--skip-decision {id}: profile {} has no such decision (`gcl spec` lists them)", o.profile.id);
+            anyhow::bail!(
+                "--skip-decision {id}: profile {} has no such decision (`gcl spec` lists them)",
+                o.profile.id
+            );
         }
         o.baseline.known.skip_decision(id, "--skip-decision");
     }

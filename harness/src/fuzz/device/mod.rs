@@ -122,7 +122,10 @@ impl Baseline {
         if self.keys.contains(&key) {
             return Some("in the baseline".to_string());
         }
-        self.known.lookup(profile, id).or_else(|| self.known.lookup(profile, &key)).map(|k| format!("known failure: {}", k.reason))
+        self.known
+            .lookup(profile, id)
+            .or_else(|| self.known.lookup(profile, &key))
+            .map(|k| format!("known failure: {}", k.reason))
     }
 }
 
@@ -212,8 +215,8 @@ pub enum FuzzError {
     },
 }
 
-pub use crate::align::FindingSignature;
 use crate::align;
+pub use crate::align::FindingSignature;
 
 /// One distinct finding.
 #[derive(Debug, Clone, Serialize)]
