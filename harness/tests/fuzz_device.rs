@@ -359,10 +359,10 @@ fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     o.allowed.abort_timing = false;
     let s = run(&o, &|_| {}).unwrap();
     assert!(s.rejudged > 0, "no case was judged again in {} runs", s.runs);
-    // The extra prompt parts from the model at whatever the host sends next, so one bug can
-    // sign more than one finding; the empty line's own is among them, and each is real.
+    // The extra prompt parts from the model at whatever the host sends next; it is named as
+    // more than the answer to the empty line before, and each finding is real.
     let sigs: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
-    assert!(sigs.contains(&"framing at CR".to_string()), "{sigs:?}");
+    assert!(sigs.contains(&"extra at CR".to_string()), "{sigs:?}");
     for f in &s.findings {
         assert!(!replays_on(&f.transcript, vec![Fault::EmptyLineTwoPrompts]), "{}: fails on the mutant", f.signature);
         assert!(replays_on(&f.transcript, vec![]), "{}: passes on the unmutated sim", f.signature);
