@@ -181,3 +181,28 @@ fn an_unmutated_hand_has_no_groups() {
     let r = run("seed", vec![]);
     assert!(r.passed() && r.groups.is_empty(), "{:?}", r.groups);
 }
+
+/// Blocked cases are shown apart in the console, the JSON report and the HTML page.
+#[test]
+fn blocked_cases_are_shown_apart_in_console_json_and_html() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["conform", "--target", "sim:seed", "--fault", "fget-reversed", "-q", "--report"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("blocked cases ("), "{stdout}");
+    assert!(stdout.contains("by `seed: Command FGET`: "), "{stdout}");
+    let failing = stdout.split("  failing cases:\n").nth(1).unwrap_or_default();
+    let failing = failing.split("  blocked cases").next().unwrap_or_default();
+    assert!(failing.lines().count() < 10, "the failing list holds FGET's own cases only: {failing}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    assert!(json["groups"][0]["blocked"].as_array().is_some_and(|b| b.len() > 100), "{}", json["groups"][0]);
+    assert!(json["clauses"].as_array().unwrap().iter().any(|c| c["blocked"] == true));
+    let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
+    assert!(html.contains("blocked by this group"), "the HTML shows them");
+    assert!(html.contains("(blocked)"), "the clause table marks blocked clauses");
+}
