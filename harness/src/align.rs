@@ -410,8 +410,9 @@ pub fn signature(
     }
     // The first line of a line's answer, right after an input the model took as leaving
     // RealTime mode: a hand that stayed in the loop takes the line for blocks.
-    // (within the echo, or the first byte after the line ending that ends it)
-    let first_line = x <= unit_start + echo_len + fr.line_ending.len();
+    // (within the echo; for a line without one, such as an empty line, up to the first byte
+    // after the line ending that opens its answer)
+    let first_line = if echo_len == 0 { x <= unit_start + fr.line_ending.len() } else { x < unit_start + echo_len };
     let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
     let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
     let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
