@@ -410,9 +410,10 @@ pub fn signature(
     }
     // The first line of a line's answer, right after an input the model took as leaving
     // RealTime mode: a hand that stayed in the loop takes the line for blocks.
-    // (within the echo; for a line without one, such as an empty line, up to the first byte
-    // after the line ending that opens its answer)
-    let first_line = if echo_len == 0 { x <= unit_start + fr.line_ending.len() } else { x < unit_start + echo_len };
+    // (before the first line ending: within the echo. Past it, a status line is the line's
+    // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
+    // empty lines, and only the status tells them apart)
+    let first_line = !run.stream[unit_start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
     let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
     let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
     let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
