@@ -643,7 +643,11 @@ pub fn wire(data: &[u8]) {
     assert!(replay(t, &mut fresh(vec![]), &opts).is_pass(), "wire: the model's own case fails on the unmutated sim");
     let Some(f) = fault else { return };
     let out = replay(t, &mut fresh(vec![f]), &opts);
-    assert_eq!(out.is_pass(), signature(p, t, &out).is_none(), "wire: a verdict and its signature disagree ({f})");
+    assert_eq!(
+        out.is_pass(),
+        signature(p, &built, &out, true).is_none(),
+        "wire: a verdict and its signature disagree ({f})"
+    );
     let text = t.to_text();
     let back = gcl_transcript::parse(&text).unwrap_or_else(|e| panic!("wire: the transcript does not parse back: {e}"));
     let again = replay(&back, &mut fresh(vec![f]), &opts);

@@ -15,7 +15,7 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
 use crate::deadline::DeadlinePolicy;
-use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard};
+use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard, replay};
 use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
@@ -351,11 +351,22 @@ pub struct RunControl {
     pub deadlines: Option<DeadlinePolicy>,
     /// Run the framing pre-flight before the first case.
     pub preflight: bool,
+    /// Before a run with abort-timing cases on a hand outside this process, close the hand
+    /// once and compare the time with the model's ([`crate::fuzz::device::MotionProbe`], the
+    /// fuzzer's probe): a hand whose motions end at once cannot take a ^C mid-motion, so those
+    /// cases are SKIP with that reason (`--assume-real-time` turns the probe off).
+    pub real_time_probe: bool,
 }
 
 impl Default for RunControl {
     fn default() -> RunControl {
-        RunControl { max_failures: None, dead_after: DEFAULT_DEAD_AFTER, deadlines: None, preflight: true }
+        RunControl {
+            max_failures: None,
+            dead_after: DEFAULT_DEAD_AFTER,
+            deadlines: None,
+            preflight: true,
+            real_time_probe: true,
+        }
     }
 }
 
@@ -570,7 +581,8 @@ pub fn firmware_version(
 /// Something a run reports as it goes.
 #[derive(Debug, Clone, Copy)]
 pub enum RunEvent<'a> {
-    /// The framing pre-flight's one line, before the first case.
+    /// A line about the target before the first case: the framing pre-flight's, and the
+    /// motion-time probe's when the hand's motions end at once.
     Preflight(&'a str),
     /// A case ended: its result, how many results so far, and how many there will be.
     Case(&'a CaseResult, usize, usize),
@@ -623,7 +635,7 @@ pub fn run_with_events(
     let now = time::OffsetDateTime::now_utc();
     let started_at = now.replace_nanosecond(0).unwrap_or(now);
     let wall = Instant::now();
-    let (selected, skipped) = select(cases, opts)?;
+    let (mut selected, mut skipped) = select(cases, opts)?;
     let fresh_per_case = matches!(opts.target, Target::Sim { .. });
     let probe_timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5)).max(Duration::from_secs(2));
     let open_link = || open(&opts.target, &opts.open);
@@ -635,17 +647,41 @@ pub fn run_with_events(
 
     let mut shared: Option<Box<dyn Link>> = None;
     let mut preflight = None;
+    let mut framing_clauses: Vec<String> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
     let before = {
         let mut l = open_link()?;
         let found = probe(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(Alive::Silent);
         let ok = found.is_alive();
         if ok && opts.control.preflight {
             if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
+                framing_clauses = p.clauses.clone();
                 let line = p.line();
                 on(RunEvent::Preflight(&line));
                 preflight = Some(line);
             }
             let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+        }
+        if ok
+            && !fresh_per_case
+            && opts.control.real_time_probe
+            && selected.iter().any(|c| c.requires(&Requirement::AbortTiming))
+            && let Some(fast) = motion_time(l.as_mut(), opts, &policy, link_baud)
+        {
+            let line = format!(
+                "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
+                 (as with `--no abort-timing`; `--assume-real-time` runs them)"
+            );
+            on(RunEvent::Preflight(&line));
+            let reason = format!("requires abort-timing, which the target lacks: {fast}");
+            selected.retain(|c| {
+                let timing = c.requires(&Requirement::AbortTiming);
+                if timing {
+                    skipped.push(result_of(c, Verdict::Skip, 0.0, Some(reason.clone())));
+                }
+                !timing
+            });
+            notes.push(line);
         }
         if !fresh_per_case {
             shared = Some(l);
@@ -711,11 +747,18 @@ pub fn run_with_events(
                 None => match reopen(opts, probe_timeout) {
                     Ok(l) => shared.insert(l).as_mut(),
                     Err(e) => {
+                        // The link failed and the hand does not come back: the run ends
+                        // there, an infrastructure error, not a verdict on any clause.
+                        let message =
+                            format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
                         let r = result_of(case, Verdict::Error, 0.0, Some(e));
                         if let Some(s) = stream.as_deref_mut() {
                             s.push(&r).map_err(ConformError::Results)?;
                         }
                         on(RunEvent::Case(&r, results.len() + 1, total));
+                        let st = Stopped { cause: StopCause::DeadHand, case: case.id().to_string(), message };
+                        on(RunEvent::Stopped(&st));
+                        stopped = Some(st);
                         results.push(r);
                         failures += 1;
                         continue;
@@ -783,7 +826,7 @@ pub fn run_with_events(
         if timeouts_in_a_row == 1 {
             first_timeout = case.id().to_string();
         }
-        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile) {
+        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile, fresh_per_case) {
             let step = outcome.failed_step().unwrap_or(0);
             signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
         }
@@ -906,7 +949,7 @@ pub fn run_with_events(
     };
     let actual_ms = wall.elapsed().as_secs_f64() * 1000.0;
     let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
-    let groups = crate::triage::group(cases, &results, &signatures);
+    let groups = crate::triage::group(cases, &results, &signatures, &framing_clauses);
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
         host: None,
@@ -920,7 +963,11 @@ pub fn run_with_events(
         suite_hash: suite::suite_hash(cases),
         liveness: Liveness { before, after },
         options: run_options(cases, opts),
-        preflight,
+        preflight: match (preflight, notes.is_empty()) {
+            (Some(p), false) => Some(format!("{p}\n{}", notes.join("\n"))),
+            (None, false) => Some(notes.join("\n")),
+            (p, true) => p,
+        },
         stopped,
         groups,
         wire,
@@ -930,6 +977,26 @@ pub fn run_with_events(
     };
     report.tally();
     Ok(RunOutput { report, transcripts })
+}
+
+/// Runs the motion-time probe on `link` with the run's deadlines; says how the target's motion
+/// fell short of the model's, or `None` (it moves in real time, or the probe decided nothing).
+fn motion_time(
+    link: &mut dyn Link,
+    opts: &ConformOptions,
+    policy: &DeadlinePolicy,
+    baud: Option<u32>,
+) -> Option<crate::fuzz::device::NotRealTime> {
+    let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+    let case = Case { profile: opts.profile.id.clone(), transcript: probe.transcript.clone() };
+    let mut ro = suite::replay_options();
+    if let Some(pred) = crate::deadline::predict(&case, &opts.profile) {
+        ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
+    }
+    ro.silent_wait = policy.silent_wait;
+    let out = replay(&probe.transcript, link, &ro);
+    let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+    probe.judge(&opts.profile, &out)
 }
 
 /// What of `opts` changed what ran, for the report. The suite's source and `--partial` are

@@ -13,6 +13,7 @@
 // way (`gcl_harness::...`) from either side.
 extern crate self as gcl_harness;
 
+pub mod align;
 pub mod certify;
 pub mod check_host;
 pub mod check_host_serve;

@@ -39,6 +39,9 @@ pub const UNKNOWN: &[u8] = b"ZZQX";
 pub struct Preflight {
     /// Gross framing faults, one phrase each; empty when the framing is as the profile says.
     pub findings: Vec<String>,
+    /// The clauses those faults break, first found first (`decision:framing-line-ending`),
+    /// where the profile states one: failures of framing take them as their clause.
+    pub clauses: Vec<String>,
 }
 
 impl Preflight {
@@ -122,12 +125,22 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             let what = answers.last().map_or("", |(p, _, _)| p.what);
             return Ok(Preflight {
                 findings: vec![format!("no answer to {what}; the hand may have stopped answering")],
+                clauses: Vec::new(),
             });
         }
     }
     let fr = &profile.framing;
     let eol = fr.line_ending.as_bytes();
     let prompt = fr.prompt.as_bytes();
+    let mut clauses = Vec::new();
+    // The profile's decision with this id (or, for a suffix, the first whose id ends so).
+    let decision = |want: &str| -> Option<String> {
+        profile
+            .decisions
+            .iter()
+            .find(|d| d.id == want || want.starts_with('-') && d.id.ends_with(want))
+            .map(|d| format!("decision:{}", d.id))
+    };
 
     // The bare CR's answer: line ending, then prompt.
     let (_, _, cr) = &answers[1];
@@ -137,6 +150,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     } else {
         let hand_prompt = &cr[hand_eol.len()..];
         if hand_eol != eol {
+            clauses.extend(decision("framing-line-ending"));
             findings.push(if hand_eol.is_empty() {
                 format!("the prompt comes without a line ending in front (expected `{}`)", escape(eol))
             } else {
@@ -144,6 +158,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             });
         }
         if hand_prompt != prompt {
+            clauses.extend(decision("framing-prompt"));
             let trimmed = fr.prompt.trim_end().as_bytes();
             findings.push(if hand_prompt == trimmed {
                 format!("the hand's prompt is `{}` without the trailing space", escape(hand_prompt))
@@ -161,8 +176,10 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     let word = &p.send[..p.send.len() - 1];
     let echoes = expected.starts_with(word);
     if echoes && !actual.is_empty() && !actual.starts_with(word) {
+        clauses.extend(decision("framing-echo"));
         findings.push("the hand does not echo what it receives".to_string());
     } else if !echoes && actual.starts_with(word) {
+        clauses.extend(decision("framing-echo"));
         findings.push("the hand echoes what it receives, which the profile does not".to_string());
     }
     let status_line = |answer: &[u8], eol: &[u8]| -> Option<Vec<u8>> {
@@ -181,6 +198,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     let (_, expected, actual) = &answers[3];
     let has = |a: &[u8]| a.windows(BANNER_TEXT.len()).any(|w| w == BANNER_TEXT);
     if has(expected) && !has(actual) {
+        clauses.extend(decision("-banner-text"));
         findings.push(format!("RESET prints no banner (no `{}`)", String::from_utf8_lossy(BANNER_TEXT)));
     }
     for (p, _, actual) in &answers {
@@ -188,7 +206,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             findings.push(format!("no answer to {}", p.what));
         }
     }
-    Ok(Preflight { findings })
+    Ok(Preflight { findings, clauses })
 }
 
 fn split<'a>(s: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {
@@ -285,6 +303,7 @@ mod tests {
         assert_eq!(r.findings, vec!["the hand's prompt is `=>` without the trailing space"], "{r:?}");
         let r = probe(vec![Fault::CrLf]);
         assert_eq!(r.findings, vec!["lines end in `\\r\\n` instead of `\\n\\r`"], "{r:?}");
+        assert_eq!(r.clauses, vec!["decision:framing-line-ending"], "{r:?}");
         let r = probe(vec![Fault::NoEcho]);
         assert_eq!(r.findings, vec!["the hand does not echo what it receives"], "{r:?}");
         let r = probe(vec![Fault::ResetNoBanner]);

@@ -18,6 +18,7 @@
 //! one most likely at fault (the smallest case exercises least besides its own clause).
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use gcl_model::Profile;
 use gcl_model::grammar::{Line, parse_line};
@@ -30,10 +31,16 @@ use gcl_transcript::Form;
 /// Where one failing case parts from its golden.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Signature {
+    /// What groups compare: one bug, one key ([`crate::align::FindingSignature::key`]).
+    pub key: String,
     /// The command being answered.
     pub command: String,
-    /// The kind of difference (see the module documentation).
-    pub kind: &'static str,
+    /// The kind of difference (see [`crate::align`]).
+    pub kind: String,
+    /// What the difference concerns (a parameter, a RealTime field, status bits), if anything.
+    pub detail: String,
+    /// For a value read back: the command before it that decided the value.
+    pub cause: String,
 }
 
 /// One failing case as the grouping sees it.
@@ -51,7 +58,42 @@ pub struct Failure {
 }
 
 /// The signature of a failed replay of `case` and a hint at its clause; `None` for a pass.
-pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Option<(Signature, Option<String>)> {
+///
+/// The difference is named by the input the model was answering there ([`crate::align`]:
+/// the model's own run of the case tags its answers), so a case that sends lines behind a
+/// motion or a ^C is grouped with the command that broke, not the one read after it.
+/// `whole_reads`: the link hands answers over whole (the in-process sim).
+pub fn signature(
+    case: &Case,
+    outcome: &ReplayOutcome,
+    profile: &Arc<Profile>,
+    whole_reads: bool,
+) -> Option<(Signature, Option<String>)> {
+    outcome.failed_step()?;
+    if outcome.is_pass() {
+        return None;
+    }
+    let run = crate::align::model_run(profile, &case.transcript).unwrap_or_default();
+    let f = crate::align::signature(profile, &case.transcript, &run, outcome, whole_reads)?;
+    let hint = match f.kind.as_str() {
+        "status" => {
+            // The bits the key names: the clause of that status holds the number.
+            let key = f.key();
+            let bits = key.strip_prefix("status ").unwrap_or_default();
+            bits.split(' ').next().and_then(|b| b.split('+').next()).map(str::to_string)
+        }
+        _ if f.detail == "echo" => Some("echo".to_string()),
+        _ => None,
+    };
+    let key = f.key();
+    Some((Signature { key, command: f.command, kind: f.kind, detail: f.detail, cause: f.cause }, hint))
+}
+
+/// The signature of a failed replay by the step it failed in, the command that step sent
+/// and the first differing line: what [`crate::align`] falls back on when the model's run of
+/// the case cannot be tagged. Kinds: framing, status, order, value, missing-answer, flood,
+/// link.
+pub fn step_signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Option<(Signature, Option<String>)> {
     let step = outcome.failed_step()?;
     let t = &case.transcript;
     let golden = t.steps.get(step.min(t.steps.len().saturating_sub(1)));
@@ -79,12 +121,13 @@ pub fn signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Opt
             classify(got, m.offset, &m.expected, &m.expected_full, sent, profile)
         }
     };
-    Some((Signature { command, kind }, hint))
+    let key = format!("{kind} at {command}");
+    Some((Signature { key, command, kind: kind.to_string(), detail: String::new(), cause: String::new() }, hint))
 }
 
 /// The command word of a step's first line: `^C`, `CR`, `RealTime block`, or the word itself
 /// without its motor prefix.
-fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
+pub(crate) fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
     let fr = &profile.framing;
     if sent.first() == Some(&fr.abort) {
         return "^C".to_string();
@@ -170,44 +213,90 @@ fn classify(
     (kind, None)
 }
 
-/// Whether `actual` holds the tokens of `expected` in another order (an elision `{...}` in
-/// `expected` stands for any one token).
-fn is_reordering(actual: &str, expected: &str) -> bool {
+/// Whether `actual` holds the tokens of `expected` in another order: the tokens do not match
+/// in place, but each expected token (a literal, or an elision `{int A..B}` with its range,
+/// or any other elision) matches a different actual token. A wrong value that happens to fit
+/// a wide elision elsewhere is still a wrong value unless every token finds a partner.
+pub fn is_reordering(actual: &str, expected: &str) -> bool {
     let a: Vec<&str> = actual.split_whitespace().collect();
-    let e = elisions_as_one(expected);
-    let e: Vec<&str> = e.split_whitespace().collect();
-    if a.len() != e.len() || a.len() < 2 || a == e {
+    let e = expected_tokens(expected);
+    if a.len() != e.len() || a.len() < 2 || a.len() > 64 {
         return false;
     }
-    let mut pool = a.clone();
-    for t in e.iter().filter(|t| !t.starts_with('{')) {
-        match pool.iter().position(|x| x == t) {
-            Some(i) => {
-                pool.swap_remove(i);
-            }
-            None => return false,
-        }
+    if a.iter().zip(&e).all(|(x, t)| t.accepts(x)) {
+        return false;
     }
-    true
+    // A perfect matching of expected tokens to actual ones (Kuhn's augmenting paths).
+    fn augment(i: usize, e: &[Token], a: &[&str], seen: &mut [bool], owner: &mut [Option<usize>]) -> bool {
+        for j in 0..a.len() {
+            if !seen[j] && e[i].accepts(a[j]) {
+                seen[j] = true;
+                if owner[j].is_none_or(|k| augment(k, e, a, seen, owner)) {
+                    owner[j] = Some(i);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+    let mut owner = vec![None; a.len()];
+    (0..e.len()).all(|i| augment(i, &e, &a, &mut vec![false; a.len()], &mut owner))
 }
 
-/// `text` with every elision (`{int 990..1010}`) written `{}`, so that it is one token.
-fn elisions_as_one(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut depth = 0usize;
-    for ch in text.chars() {
-        match ch {
-            '{' => {
-                if depth == 0 {
-                    out.push_str("{}");
-                }
-                depth += 1;
-            }
-            '}' => depth = depth.saturating_sub(1),
-            c if depth == 0 => out.push(c),
-            _ => {}
+/// One expected token of a golden line: a literal, an integer in a range, or anything.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Token {
+    /// These characters exactly.
+    Literal(String),
+    /// A decimal integer within the range (inclusive).
+    Int(i64, i64),
+    /// Any token (an elision without a range).
+    Any,
+}
+
+impl Token {
+    /// Whether an actual token fits.
+    pub fn accepts(&self, actual: &str) -> bool {
+        match self {
+            Token::Literal(l) => l == actual,
+            Token::Int(lo, hi) => actual.parse::<i64>().is_ok_and(|v| (*lo..=*hi).contains(&v)),
+            Token::Any => true,
         }
     }
+}
+
+/// The tokens of a golden line as written (escaped text with elisions): `{int A..B}` keeps its
+/// range, any other elision matches anything.
+pub fn expected_tokens(text: &str) -> Vec<Token> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut elision: Option<String> = None;
+    let flush = |cur: &mut String, out: &mut Vec<Token>| {
+        if !cur.is_empty() {
+            out.push(Token::Literal(std::mem::take(cur)));
+        }
+    };
+    for ch in text.chars() {
+        match (&mut elision, ch) {
+            (None, '{') => {
+                flush(&mut cur, &mut out);
+                elision = Some(String::new());
+            }
+            (Some(body), '}') => {
+                let body = std::mem::take(body);
+                elision = None;
+                let range = body.strip_prefix("int ").and_then(|r| {
+                    let (lo, hi) = r.trim().split_once("..")?;
+                    Some((lo.parse().ok()?, hi.parse().ok()?))
+                });
+                out.push(range.map_or(Token::Any, |(lo, hi)| Token::Int(lo, hi)));
+            }
+            (Some(body), c) => body.push(c),
+            (None, c) if c.is_whitespace() => flush(&mut cur, &mut out),
+            (None, c) => cur.push(c),
+        }
+    }
+    flush(&mut cur, &mut out);
     out
 }
 
@@ -217,7 +306,9 @@ fn phrase(kind: &str) -> &'static str {
         "value" => "a value differs",
         "framing" => "the framing differs (echo, line ending or prompt)",
         "status" => "the status differs",
-        "missing-answer" => "the answer is missing or stops short",
+        "missing-answer" | "missing" => "the answer is missing or stops short",
+        "extra" => "the hand says more than the answer",
+        "restart" => "the hand restarts (a banner nobody asked for)",
         "flood" => "the hand floods the answer",
         _ => "the link failed",
     }
@@ -256,21 +347,33 @@ fn owner<'c>(case: &'c Case, step: usize, all: &'c [Case]) -> (&'c Case, bool) {
 type Member<'a> = (usize, usize, Option<&'a str>);
 
 /// Groups the failing cases, largest group first. `failures` holds one entry per failing
-/// case (cases whose result does not fail the run, such as XFAIL, are left out).
+/// case (cases whose result does not fail the run, such as XFAIL, are left out; so are link
+/// failures: a hand that vanished is the run's end, not a clause's). `framing` holds the
+/// clauses of the framing faults the pre-flight named: a group of framing differences takes
+/// the first of them.
 ///
 /// A group names the clause of the case most likely at fault: among the cases that own the
 /// group's failures (the case itself when the failing step is part of its own check, else
 /// the smallest case whose check holds that exchange), those whose clause holds a failure's
 /// hint first (the status number, `echo`), then those whose clause names the command being
 /// answered, then the smallest golden transcript.
-pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure]) -> Vec<FailureGroup> {
+///
+/// A member case that does not check the group's clause is *blocked* by it (listed in the
+/// group's `blocked`): its failure is that clause's bug met on the way (a read-back with a
+/// broken FGET), not a verdict on its own clause. In a group none of whose cases checks its
+/// clause, the representative is not blocked.
+pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure], framing: &[String]) -> Vec<FailureGroup> {
     let find = |id: &str| cases.iter().find(|c| c.id() == id);
-    let mut by: BTreeMap<&Signature, Vec<Member<'_>>> = BTreeMap::new();
-    for f in failures.iter().filter(|f| results.get(f.result).is_some_and(|r| r.verdict.fails_run())) {
-        by.entry(&f.signature).or_default().push((f.result, f.step, f.hint.as_deref()));
+    let mut by: BTreeMap<&str, (&Signature, Vec<Member<'_>>)> = BTreeMap::new();
+    for f in failures
+        .iter()
+        .filter(|f| f.signature.kind != "link")
+        .filter(|f| results.get(f.result).is_some_and(|r| r.verdict.fails_run()))
+    {
+        by.entry(&f.signature.key).or_insert((&f.signature, Vec::new())).1.push((f.result, f.step, f.hint.as_deref()));
     }
     let mut groups: Vec<FailureGroup> = by
-        .into_iter()
+        .into_values()
         .map(|(sig, idx)| {
             let small = |i: usize| find(&results[i].id).map_or((usize::MAX, usize::MAX), size);
             let rep =
@@ -280,7 +383,7 @@ pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure]) -> Ve
                 clause.split(|c: char| c.is_whitespace() || c == '-' || c == ':').any(|x| x.eq_ignore_ascii_case(w))
             };
             let hints: Vec<&str> = idx.iter().filter_map(|(_, _, h)| *h).collect();
-            let clause = idx
+            let owned = idx
                 .iter()
                 .filter_map(|(i, step, _)| find(&results[*i].id).map(|c| owner(c, *step, cases)))
                 .chain(idx.iter().filter_map(|(i, _, _)| find(&results[*i].id).map(|c| (c, false))))
@@ -291,21 +394,43 @@ pub fn group(cases: &[Case], results: &[CaseResult], failures: &[Failure]) -> Ve
                 })
                 .map(|(clause, _, _)| clause)
                 .unwrap_or_else(|| r.clauses.first().cloned().unwrap_or_default());
+            let clause = match framing.first() {
+                Some(f) if sig.kind == "framing" => f.clone(),
+                _ => owned,
+            };
             let n = idx.len();
+            // (when no member checks the clause, as with the pre-flight's framing clause, the
+            // representative stands for it and is not blocked)
+            let checks = |i: usize| results[i].clauses.iter().any(|c| c == &clause);
+            let any_checks = idx.iter().any(|(i, _, _)| checks(*i));
+            let blocked: Vec<String> = idx
+                .iter()
+                .filter(|(i, _, _)| !checks(*i) && (any_checks || *i != rep))
+                .map(|(i, _, _)| results[*i].id.clone())
+                .collect();
+            let what = match (sig.kind.as_str(), sig.detail.as_str(), sig.cause.as_str()) {
+                ("status", d, _) if !d.is_empty() => format!(" ({d})"),
+                (_, _, c) if !c.is_empty() => format!(" after {c}"),
+                ("order", _, _) => String::new(),
+                (_, d, _) if !d.is_empty() => format!(" ({d})"),
+                _ => String::new(),
+            };
+            let held = if blocked.is_empty() { String::new() } else { format!(", {} of them blocked", blocked.len()) };
             FailureGroup {
                 command: sig.command.clone(),
-                kind: sig.kind.to_string(),
+                kind: sig.kind.clone(),
                 summary: format!(
-                    "{n} case{}: {}: {}; likely clause `{clause}` (e.g. case {})",
+                    "{n} case{}: {}: {}{what}; likely clause `{clause}` (e.g. case {}){held}",
                     if n == 1 { "" } else { "s" },
                     sig.command,
-                    phrase(sig.kind),
+                    phrase(&sig.kind),
                     r.id
                 ),
                 clause,
                 representative: r.id.clone(),
                 diff: r.diff.clone(),
                 cases: idx.iter().map(|(i, _, _)| results[*i].id.clone()).collect(),
+                blocked,
             }
         })
         .collect();
@@ -323,5 +448,8 @@ mod tests {
         assert!(is_reordering("150 1000 1000 1000", "{int 990..1010} 1000 1000 150"));
         assert!(!is_reordering("150 1000 1000 1001", "1000 1000 1000 150"));
         assert!(!is_reordering("1000 1000 1000 150", "1000 1000 1000 150"));
+        // A wrong value is not an order because an elision elsewhere is wide (mcv-ignored).
+        assert!(!is_reordering("793 793", "{int 144..298} {int 765..1744}"));
+        assert!(is_reordering("800 200", "{int 144..298} {int 765..1744}"));
     }
 }

@@ -666,6 +666,7 @@ fn a_banner_flood_is_a_flood_not_a_restart() {
             took: Duration::from_millis(5),
         }],
     }));
-    let sig = gcl_harness::fuzz::device::signature(&p, &t, &out).expect("a failure has a signature");
-    assert_eq!(sig.kind, "flood", "{sig:?}");
+    let model = gcl_harness::align::model_run(&p, &t).expect("the golden passes on the model");
+    let sig = gcl_harness::align::signature(&p, &t, &model, &out, true).expect("a failure has a signature");
+    assert_eq!((sig.kind.as_str(), sig.detail.as_str()), ("extra", "flood"), "{sig:?}");
 }

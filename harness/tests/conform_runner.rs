@@ -131,6 +131,8 @@ fn a_hand_that_stops_answering_ends_the_run_early_with_exit_2() {
         "param-*",
         "--dead-after",
         "2",
+        // (the fast-time sim would have its abort-timing cases SKIP: this test counts runs)
+        "--assume-real-time",
         "--report",
         out.to_str().unwrap(),
     ]);

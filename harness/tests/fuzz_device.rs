@@ -102,6 +102,154 @@ fn every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason() {
     assert!(wrongly_listed.is_empty(), "listed as not found in fuzz_device_unfound.toml but found: {wrongly_listed:?}");
 }
 
+/// Cases per fault in the one-finding sweep (in-process, fast time). The bound holds for
+/// 2000-run campaigns too (`gcl fuzz device --target sim --fault F --seed 1 --runs 2000`, the
+/// figures behind `fuzz_device_findings.toml`); fewer runs keep the debug test short, and
+/// findings only grow with runs, so a bound that holds at 2000 holds here.
+const RUNS_PER_CAMPAIGN: u64 = 300;
+
+#[derive(serde::Deserialize)]
+struct Few {
+    fault: String,
+    most: usize,
+    names: Vec<String>,
+    #[allow(dead_code)]
+    reason: String,
+}
+
+fn few_list() -> BTreeMap<String, Few> {
+    #[derive(serde::Deserialize)]
+    struct List {
+        few: Vec<Few>,
+    }
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_device_findings.toml")).unwrap();
+    let l: List = toml::from_str(&text).unwrap();
+    l.few.into_iter().map(|f| (f.fault.clone(), f)).collect()
+}
+
+#[test]
+fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
+    let few = few_list();
+    for name in few.keys() {
+        assert!(name.parse::<Fault>().is_ok(), "fuzz_device_findings.toml lists `{name}`, which is no fault");
+    }
+    let mut wrong = Vec::new();
+    for f in Fault::ALL {
+        let mut o = opts(vec![*f], RUNS_PER_CAMPAIGN);
+        o.seed = SEED;
+        o.minimize = false;
+        let s = run(&o, &|_| {}).unwrap();
+        let sigs: Vec<String> = s.findings.iter().map(|x| x.signature.to_string()).collect();
+        eprintln!("{:<24} {} finding(s): {}", f.name(), sigs.len(), sigs.join(" | "));
+        let (most, names) = few.get(f.name()).map_or((1, &[][..]), |x| (x.most, x.names.as_slice()));
+        if s.findings.len() > most {
+            wrong.push(format!("{f}: {} findings, at most {most}: {sigs:?}", s.findings.len()));
+        }
+        if s.findings.len() > 1 && !names.is_empty() {
+            for x in &s.findings {
+                let g = &x.signature;
+                if !names.contains(&g.command) && !names.contains(&g.cause) {
+                    wrong.push(format!("{f}: `{g}` names none of {names:?}"));
+                }
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{wrong:#?}");
+}
+
+/// The signatures name the command that broke, not the one read after it: FGET reversed is
+/// one finding (it was six: the command after a queued line or a ^C was blamed), and a wrong
+/// value that fits another elision's range is a value, not an order.
+#[test]
+fn a_bug_is_named_by_its_command_and_kind() {
+    let one = |fault: Fault| {
+        let mut o = opts(vec![fault], 1000);
+        o.seed = SEED;
+        o.minimize = false;
+        run(&o, &|_| {}).unwrap().findings.into_iter().map(|f| f.signature).collect::<Vec<_>>()
+    };
+    let s = one(Fault::FgetReversed);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].command.as_str(), s[0].kind.as_str()), ("FGET", "order"));
+    let s = one(Fault::LittleEndianLfap);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].command.as_str(), s[0].kind.as_str(), s[0].detail.as_str()), ("RealTime block", "value", "LFAP"));
+    let s = one(Fault::TooManyArgsSilent);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].kind.as_str(), s[0].detail.as_str()), ("status", "1024 missing"));
+    for f in one(Fault::McvIgnored) {
+        assert_eq!(f.kind, "value", "{f}");
+        assert!(["C", "M", "TC"].contains(&f.cause.as_str()), "{f}: not named by a closing motion");
+    }
+}
+
+/// Findings relative to a baseline: the first fault's findings (a folder `--out` wrote) are
+/// known when both faults are in the hand; the second fault's finding is new, and only new
+/// findings fail the CLI's run.
+#[test]
+fn a_baseline_keeps_known_findings_apart_from_new_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let mut o = opts(vec![Fault::FgetReversed], 600);
+    o.seed = SEED;
+    o.out = Some(first.clone());
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!s.findings.is_empty());
+    let known_keys: Vec<String> = s.findings.iter().map(|f| f.signature.key()).collect();
+
+    let mut o = opts(vec![Fault::FgetReversed, Fault::TooManyArgsSilent], 600);
+    o.seed = SEED;
+    assert!(o.baseline.add_dir(&first).unwrap() >= 1);
+    let s = run(&o, &|_| {}).unwrap();
+    let new: Vec<String> = s.findings.iter().filter(|f| f.is_new()).map(|f| f.signature.key()).collect();
+    let known: Vec<String> = s.findings.iter().filter(|f| !f.is_new()).map(|f| f.signature.key()).collect();
+    assert!(new.iter().any(|k| k == "status 1024 missing"), "the second fault is new: {new:?} (known {known:?})");
+    assert!(new.iter().all(|k| !known_keys.contains(k)), "a baseline finding reported as new: {new:?}");
+    assert!(known.iter().any(|k| k == "order at FGET"), "the first fault is known: {known:?}");
+
+    // The CLI: exit 0 when every finding is in the baseline, 1 when one is new.
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let base = first.to_str().unwrap();
+    let args = ["fuzz", "device", "--target", "sim", "--seed", "1", "--runs", "300", "-q", "--baseline", base];
+    let out = Command::new(gcl).args(args).args(["--fault", "fget-reversed"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("(0 new, "), "{text}");
+    let out = Command::new(gcl)
+        .args(args)
+        .args(["--fault", "fget-reversed", "--fault", "too-many-args-silent"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("[known: in the baseline]"), "{text}");
+}
+
+/// `--skip-decision` draws no case resting on a decision the hand took differently, and
+/// `--known-failures` entries match findings by id or signature, as in `gcl conform`.
+#[test]
+fn skipped_decisions_and_known_failures_apply_to_the_fuzzer() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let args =
+        ["fuzz", "device", "--target", "sim", "--fault", "empty-line-error", "--seed", "1", "--runs", "300", "-q"];
+    let out = Command::new(gcl).args(args).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "the fault is found: {text}");
+    let out = Command::new(gcl).args(args).args(["--skip-decision", "framing-empty-line"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "no case rests on the skipped decision: {text}");
+    assert!(text.contains("0 distinct findings"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let known = dir.path().join("known.toml");
+    std::fs::write(&known, "[[failure]]\ncase = \"status 32 extra\"\nreason = \"our empty line is an error\"\n")
+        .unwrap();
+    let out = Command::new(gcl).args(args).args(["--known-failures", known.to_str().unwrap()]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("[known: known failure: our empty line is an error]"), "{text}");
+}
+
 #[test]
 fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     let dir = tempfile::tempdir().unwrap();
@@ -211,10 +359,10 @@ fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     o.allowed.abort_timing = false;
     let s = run(&o, &|_| {}).unwrap();
     assert!(s.rejudged > 0, "no case was judged again in {} runs", s.runs);
-    // The extra prompt parts from the model at whatever the host sends next, so one bug can
-    // sign more than one finding; the empty line's own is among them, and each is real.
+    // The extra prompt parts from the model at whatever the host sends next; it is named as
+    // more than the answer to the empty line before, and each finding is real.
     let sigs: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
-    assert!(sigs.contains(&"framing at CR".to_string()), "{sigs:?}");
+    assert!(sigs.contains(&"extra at CR".to_string()), "{sigs:?}");
     for f in &s.findings {
         assert!(!replays_on(&f.transcript, vec![Fault::EmptyLineTwoPrompts]), "{}: fails on the mutant", f.signature);
         assert!(replays_on(&f.transcript, vec![]), "{}: passes on the unmutated sim", f.signature);

@@ -65,6 +65,12 @@ pub struct SuiteArgs {
     /// faults: prompt, line ending, echo, banner, status format).
     #[arg(long)]
     pub no_preflight: bool,
+    /// Run the abort-timing cases (^C landing mid-motion) even on a hand whose motions end at
+    /// once. Without it, a hand outside this process is closed once first; when its motion
+    /// takes under a quarter of the model's time (a simulator in fast time, such as `gcl sim
+    /// --stdio`), those cases are SKIP and one line says why.
+    #[arg(long)]
+    pub assume_real_time: bool,
     /// Refuse cases that need this of the hand (motion, realtime, eeprom, abort-timing;
     /// repeatable): they are reported as SKIP.
     #[arg(long = "no", value_name = "REQUIREMENT")]
@@ -209,6 +215,7 @@ pub fn prepare(
                 ..DeadlinePolicy::for_target(&a.target)
             }),
             preflight: !a.no_preflight,
+            real_time_probe: !a.assume_real_time,
         },
     };
     Ok((opts, cases))
@@ -312,7 +319,7 @@ pub fn summary_text(r: &RunReport) -> String {
     // judged.
     let judged = LevelFilter::from_name(&r.level).unwrap_or(LevelFilter::All);
     let in_scope = |c: &CaseResult| c.level.parse::<Level>().map_or(true, |l| judged.admits(l));
-    let (mut clean, mut failing, mut skipped, mut out_of_scope) = (0, 0, 0, 0);
+    let (mut clean, mut failing, mut skipped, mut out_of_scope) = (0usize, 0usize, 0usize, 0usize);
     let mut levels_out: Vec<Level> = Vec::new();
     for cl in &r.clauses {
         let cases: Vec<&CaseResult> = cl.cases.iter().filter_map(|id| r.cases.iter().find(|c| &c.id == id)).collect();
@@ -329,8 +336,10 @@ pub fn summary_text(r: &RunReport) -> String {
         }
     }
     let covered = r.clauses.len();
+    let blocked_clauses = r.clauses.iter().filter(|c| c.blocked).count();
     s.push_str(&format!(
-        "  clauses: {covered} covered: {clean} with every case passing, {failing} failing, {skipped} not fully judged (a case skipped or a known failure)"
+        "  clauses: {covered} covered: {clean} with every case passing, {} failing, {blocked_clauses} blocked (failing only through another clause's bug), {skipped} not fully judged (a case skipped or a known failure)",
+        failing.saturating_sub(blocked_clauses)
     ));
     if out_of_scope > 0 {
         levels_out.sort();
@@ -342,7 +351,9 @@ pub fn summary_text(r: &RunReport) -> String {
         ));
     }
     s.push('\n');
-    let failing: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
+    let blocked = r.blocked();
+    let failing: Vec<&CaseResult> =
+        r.cases.iter().filter(|c| c.verdict.fails_run() && !blocked.contains(c.id.as_str())).collect();
     if !failing.is_empty() {
         s.push_str("  failing cases:\n");
         for c in failing.iter().take(50) {
@@ -350,6 +361,17 @@ pub fn summary_text(r: &RunReport) -> String {
         }
         if failing.len() > 50 {
             s.push_str(&format!("    ... and {} more\n", failing.len() - 50));
+        }
+    }
+    if !blocked.is_empty() {
+        s.push_str(&format!(
+            "  blocked cases ({}; each fails on another clause's bug, named by its group):\n",
+            blocked.len()
+        ));
+        for g in r.groups.iter().filter(|g| !g.blocked.is_empty()) {
+            let ids: Vec<&str> = g.blocked.iter().take(8).map(String::as_str).collect();
+            let more = if g.blocked.len() > 8 { format!(" and {} more", g.blocked.len() - 8) } else { String::new() };
+            s.push_str(&format!("    by `{}`: {}{more}\n", g.clause, ids.join(", ")));
         }
     }
     if let Some(st) = &r.stopped {
@@ -378,7 +400,16 @@ ratio {:.3}\n",
     if r.ran() == 0 {
         s.push_str("  no case ran\n");
     }
-    s.push_str(&format!("  result: {}\n", if r.passed() { "PASS" } else { "FAIL" }));
+    // A run that ended because the hand stopped answering or vanished has no verdict.
+    let infrastructure = r.stopped.as_ref().is_some_and(|st| st.cause != StopCause::MaxFailures);
+    let result = if infrastructure {
+        "ERROR"
+    } else if r.passed() {
+        "PASS"
+    } else {
+        "FAIL"
+    };
+    s.push_str(&format!("  result: {result}\n"));
     s
 }
 

@@ -252,6 +252,14 @@ pub fn to_html(r: &RunReport) -> String {
             if let Some(d) = &g.diff {
                 body.push_str(&pre(&diff::aligned(d)));
             }
+            if !g.blocked.is_empty() {
+                let blocked: Vec<String> = g.blocked.iter().map(|id| case_link(r, id)).collect();
+                body.push_str(&format!(
+                    "<p class=\"blocked\">{} blocked by this group (they fail on its clause's bug, not their own): {}</p>\n",
+                    g.blocked.len(),
+                    blocked.join(" ")
+                ));
+            }
             let members: Vec<String> = g.cases.iter().map(|id| case_link(r, id)).collect();
             body.push_str(&details(
                 &format!("the {} case(s) of this group", g.cases.len()),
@@ -354,7 +362,7 @@ fn clause_table(r: &RunReport) -> String {
             "<tr class=\"{}\"><td>{}</td><td>{level}</td><td>{}</td>",
             class(c.verdict),
             esc(&c.clause),
-            c.verdict
+            if c.blocked { format!("{} (blocked)", c.verdict) } else { c.verdict.to_string() }
         );
         for v in Verdict::ALL {
             let n = r.cases.iter().filter(|k| k.verdict == v && k.clauses.contains(&c.clause)).count();

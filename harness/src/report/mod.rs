@@ -156,6 +156,9 @@ pub struct FailureGroup {
     pub diff: Option<Diff>,
     /// Every case of the group.
     pub cases: Vec<String>,
+    /// The group's cases that do not check its clause: blocked by it, not failing on their own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub blocked: Vec<String>,
 }
 
 /// The result of one case.
@@ -319,6 +322,10 @@ pub struct ClauseCoverage {
     pub cases: Vec<String>,
     /// The worst verdict among them.
     pub verdict: Verdict,
+    /// Whether it fails only through another clause's bug: no group names it, and every case
+    /// that fails it is in a group that names another clause.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub blocked: bool,
 }
 
 /// A whole conformance run.
@@ -480,23 +487,41 @@ impl RunReport {
         self.cases.iter().filter(|c| c.verdict != Verdict::Skip).count()
     }
 
-    /// Fills `summary` and `clauses` from `cases`.
+    /// The ids of the failing cases another clause's group explains (see
+    /// [`FailureGroup::blocked`]).
+    pub fn blocked(&self) -> std::collections::BTreeSet<&str> {
+        self.groups.iter().flat_map(|g| g.blocked.iter().map(String::as_str)).collect()
+    }
+
+    /// Fills `summary` and `clauses` from `cases` (and `groups`, for blocked cases).
     pub fn tally(&mut self) {
         self.summary = Verdict::ALL.iter().map(|v| (*v, 0)).collect();
         for c in &self.cases {
             *self.summary.entry(c.verdict).or_default() += 1;
         }
-        let mut by_clause: BTreeMap<&str, (Vec<String>, Verdict)> = BTreeMap::new();
+        // (cases, worst verdict, whether it fails on its own): a clause fails on its own when a
+        // group names it, or when a failing case that no group holds checks it; any other
+        // failing clause fails through another clause's bug, named by its group.
+        let grouped: std::collections::BTreeSet<&str> =
+            self.groups.iter().flat_map(|g| g.cases.iter().map(String::as_str)).collect();
+        let named: std::collections::BTreeSet<&str> = self.groups.iter().map(|g| g.clause.as_str()).collect();
+        let mut by_clause: BTreeMap<&str, (Vec<String>, Verdict, bool)> = BTreeMap::new();
         for c in &self.cases {
             for cl in &c.clauses {
-                let e = by_clause.entry(cl.as_str()).or_insert((Vec::new(), Verdict::Pass));
+                let e = by_clause.entry(cl.as_str()).or_insert((Vec::new(), Verdict::Pass, false));
                 e.0.push(c.id.clone());
                 e.1 = worse(e.1, c.verdict);
+                e.2 |= c.verdict.fails_run() && (named.contains(cl.as_str()) || !grouped.contains(c.id.as_str()));
             }
         }
         self.clauses = by_clause
             .into_iter()
-            .map(|(clause, (cases, verdict))| ClauseCoverage { clause: clause.to_string(), cases, verdict })
+            .map(|(clause, (cases, verdict, own))| ClauseCoverage {
+                clause: clause.to_string(),
+                cases,
+                verdict,
+                blocked: verdict.fails_run() && !own,
+            })
             .collect();
     }
 }

@@ -31,6 +31,9 @@ pub struct BuiltCase {
     pub features: BTreeSet<String>,
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
+    /// The unmutated model's run of the transcript, each answer byte tagged with the step it
+    /// answers (see [`crate::align`]).
+    pub model: crate::align::ModelRun,
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -411,12 +414,8 @@ pub fn build_case(
     let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let mut fresh = gcl_host::SimLink::new(p.clone(), DeviceConfig::default());
-    let out = crate::replay::replay(&transcript, &mut fresh, &crate::suite::replay_options());
-    if !out.is_pass() {
-        return Err(NotACase(out.summary()));
-    }
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes })
+    let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model })
 }
 
 /// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with

@@ -86,7 +86,57 @@ pub struct FuzzOptions {
     /// Only this slice of the campaign (`--shard K/N`): worker `w` draws from generator
     /// stream `K-1 + w*N` (see [`crate::fuzz::shard`]).
     pub shard: Option<crate::fuzz::shard::Shard>,
+    /// What the hand is already known to do: findings it explains are *known*, not new.
+    pub baseline: Baseline,
 }
+
+/// Findings a hand is already known to have, and decisions it took differently: a campaign
+/// against it reports what is new (`--baseline`, `--known-failures`, `--skip-decision`).
+#[derive(Debug, Clone, Default)]
+pub struct Baseline {
+    /// Signature keys of earlier findings ([`FindingSignature::key`]).
+    pub keys: BTreeSet<String>,
+    /// Known failures: an entry's glob matches a finding's id (`fuzz-fget-order`) or its key.
+    pub known: crate::conform::KnownFailures,
+}
+
+impl Baseline {
+    /// Adds the findings of a folder an earlier campaign wrote with `--out` (each transcript
+    /// names its signature in its `x-signature` header); returns how many it read.
+    pub fn add_dir(&mut self, dir: &Path) -> Result<usize, FuzzError> {
+        let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
+        let mut n = 0;
+        for e in std::fs::read_dir(dir).map_err(err)? {
+            let path = e.map_err(err)?.path();
+            if path.extension().is_none_or(|x| x != "gcl") {
+                continue;
+            }
+            let text = gcl_host::files::read_input_text(&path)
+                .map_err(|e| FuzzError::Corpus { path: path.clone(), source: std::io::Error::other(e.to_string()) })?;
+            let Ok(t) = gcl_transcript::parse(&text) else { continue };
+            if let Some((_, key)) = t.header.extensions.iter().find(|(k, _)| k == SIGNATURE_KEY) {
+                self.keys.insert(key.clone());
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Why a finding is not new: in the baseline, or a known failure; `None` when it is new.
+    pub fn explains(&self, profile: &str, id: &str, sig: &FindingSignature) -> Option<String> {
+        let key = sig.key();
+        if self.keys.contains(&key) {
+            return Some("in the baseline".to_string());
+        }
+        self.known
+            .lookup(profile, id)
+            .or_else(|| self.known.lookup(profile, &key))
+            .map(|k| format!("known failure: {}", k.reason))
+    }
+}
+
+/// The transcript header that names a written finding's signature key.
+pub const SIGNATURE_KEY: &str = "x-signature";
 
 impl FuzzOptions {
     /// Options for `target` with the defaults: 1000 runs, one worker, minimization on, and
@@ -110,6 +160,7 @@ impl FuzzOptions {
             suite_seeds: true,
             stop: Arc::new(AtomicBool::new(false)),
             shard: None,
+            baseline: Baseline::default(),
         }
     }
 }
@@ -180,22 +231,8 @@ pub enum FuzzError {
     },
 }
 
-/// Where a finding parts from the model: the command being answered and the kind of
-/// difference (`framing`, `status`, `order`, `value`, `missing-answer`, `silence`, `flood`,
-/// `link`, `restart`).
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct FindingSignature {
-    /// The command word (`FGET`, `^C`, `CR`, `RealTime block`).
-    pub command: String,
-    /// The kind of difference.
-    pub kind: String,
-}
-
-impl std::fmt::Display for FindingSignature {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} at {}", self.kind, self.command)
-    }
-}
+use crate::align;
+pub use crate::align::FindingSignature;
 
 /// One distinct finding.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -221,6 +258,16 @@ pub struct Finding {
     pub diff: String,
     /// Where the transcript was written.
     pub path: Option<PathBuf>,
+    /// Why it is not new (in the baseline, a known failure), or `None` for a new finding.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub known: Option<String>,
+}
+
+impl Finding {
+    /// Whether the baseline does not explain it.
+    pub fn is_new(&self) -> bool {
+        self.known.is_none()
+    }
 }
 
 fn ser_ms<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
@@ -306,7 +353,7 @@ struct Shared {
     features: BTreeSet<String>,
     findings: Vec<Finding>,
     /// Signatures seen (found or being minimized).
-    seen: BTreeSet<FindingSignature>,
+    seen: BTreeSet<String>,
     dropped: u64,
     wire_bytes: u64,
     bytes_sent: u64,
@@ -483,33 +530,29 @@ impl Hand<'_> {
     }
 }
 
-/// The signature of a failed replay, `None` for a pass.
-pub fn signature(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
-    // A pass (most cases) has no signature: decided before the transcript is copied into a case.
-    let step = out.failed_step()?;
-    let case = Case { profile: p.id.clone(), transcript: t.clone() };
-    let (sig, _) = crate::triage::signature(&case, out, p)?;
-    let got = out.exchange().last().filter(|e| e.step == step).map(|e| e.received.as_slice()).unwrap_or_default();
-    let banner = crate::record::BANNER_TEXT;
-    let expected_banner = t.steps.get(step).is_some_and(|s| s.expect.to_text().contains("BarrettHand Firmware"));
-    // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
-    let flooded = matches!(out, ReplayOutcome::Flooded(_));
-    let kind = if !flooded && !expected_banner && got.windows(banner.len()).any(|w| w == banner) {
-        "restart".to_string()
-    } else {
-        match out {
-            ReplayOutcome::Timeout(to) if to.offset == 0 => "silence".to_string(),
-            _ => sig.kind.to_string(),
-        }
-    };
-    // A refused line's first word may hold control bytes: shown escaped, as everywhere.
-    Some(FindingSignature { command: gcl_model::escape::escape(sig.command.as_bytes()), kind })
+/// The signature of a failed replay of a built case, `None` for a pass (see [`crate::align`]).
+pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_reads: bool) -> Option<FindingSignature> {
+    // A pass (most cases) has no signature.
+    out.failed_step()?;
+    align::signature(p, &built.transcript, &built.model, out, whole_reads)
 }
 
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
 /// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
 fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
     let b = build_case(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    // A case resting on a decision the hand took differently judges nothing of it.
+    let rests: Vec<String> = b
+        .transcript
+        .header
+        .extensions
+        .iter()
+        .filter(|(k, _)| k == crate::suite::build::DECISIONS_KEY)
+        .flat_map(|(_, v)| v.split_whitespace().map(str::to_string))
+        .collect();
+    if let Some(d) = opts.baseline.known.skipped_by(&opts.profile.id, &rests) {
+        return Err(NotACase(format!("rests on decision {}, decided differently: {}", d.id, d.reason)));
+    }
     if !opts.allowed.abort_timing && b.transcript.header.requires.contains(&gcl_transcript::Requirement::AbortTiming) {
         return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
     }
@@ -519,43 +562,82 @@ fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) 
 /// A target whose motion takes under this share of the model's time does not move in real time.
 const REAL_TIME_SHARE: u32 = 4;
 
+/// A hand whose motion from home ended far sooner than the model's: a simulator whose time
+/// follows the wire (`gcl sim --time fast`). ^C cannot land mid-motion on it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NotRealTime {
+    /// The motion command of the probe.
+    pub command: String,
+    /// How long the target took for it, bytes included.
+    pub took_ms: u64,
+    /// How long the model's hand moves for it, bytes aside.
+    pub model_ms: u64,
+}
+
+impl std::fmt::Display for NotRealTime {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the target's motions end at once: `{}` from the home position took {} ms, where the model's hand \
+             takes {} ms (a simulator with `--time fast`?)",
+            self.command, self.took_ms, self.model_ms
+        )
+    }
+}
+
+/// The motion-time probe: the case (the suite's preamble, HI, then the profile's close
+/// command) and what judges its replay. `None` when the profile has no close command.
+pub struct MotionProbe {
+    /// The probe's transcript.
+    pub transcript: Transcript,
+    command: String,
+    model: Vec<deadline::StepPrediction>,
+}
+
+impl MotionProbe {
+    /// The probe for a profile.
+    pub fn new(p: &Arc<Profile>) -> Option<MotionProbe> {
+        let close = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close)?;
+        let command = close.name.clone();
+        let built = build_case(p, &[HostAction::Line(command.clone())], "probe", "real-time probe", true, true).ok()?;
+        let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
+        let model = deadline::predict(&case, p)?;
+        Some(MotionProbe { transcript: built.transcript, command, model })
+    }
+
+    /// Judges a replay of the probe: the target moved in far less time than the model's hand
+    /// (under a quarter of it). A slow or loaded target only takes longer, never shorter; a
+    /// probe that did not pass decides nothing.
+    pub fn judge(&self, p: &Profile, out: &ReplayOutcome) -> Option<NotRealTime> {
+        let sent = format!("{}{}", self.command, p.framing.terminator as char);
+        let done = out.failed_step().unwrap_or(usize::MAX);
+        let e = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes())?;
+        let model = self.model.get(e.step).map_or(Duration::ZERO, |s| s.busy());
+        (model > deadline::BUSY && e.took < model / REAL_TIME_SHARE).then(|| NotRealTime {
+            command: self.command.clone(),
+            took_ms: e.took.as_millis() as u64,
+            model_ms: model.as_millis() as u64,
+        })
+    }
+}
+
 /// Before a campaign that lands ^C mid-motion on a hand outside this process: closes the
-/// hand from its home position once and compares the time the target took with the model's.
-/// A target that took under a quarter of it (a simulator whose motion ends at once) is
-/// refused with [`FuzzError::NotRealTime`]: its answers to ^C mid-motion are right for it
-/// and wrong for the model, so every such case would be a false finding. A slow or loaded
-/// target only takes longer, never shorter. A probe that does not pass decides nothing (the
-/// campaign finds why).
+/// hand from its home position once ([`MotionProbe`]) and refuses a target whose motion took
+/// under a quarter of the model's time with [`FuzzError::NotRealTime`]: its answers to ^C
+/// mid-motion are right for it and wrong for the model, so every such case would be a false
+/// finding. `gcl conform` runs the same probe and skips its abort-timing cases instead.
 pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
     if !(opts.wide() && opts.allowed.motion && opts.allowed.abort_timing) {
         return Ok(());
     }
     let p = &opts.profile;
-    let Some(close) = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close) else {
-        return Ok(());
-    };
-    let line = close.name.clone();
-    let Ok(built) = build_case(p, &[HostAction::Line(line.clone())], "probe", "real-time probe", true, true) else {
-        return Ok(());
-    };
-    let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
-    let Some(pred) = deadline::predict(&case, p) else { return Ok(()) };
+    let Some(probe) = MotionProbe::new(p) else { return Ok(()) };
     let mut hand = Hand { opts, link: None, new: true, dirty: false };
-    let out = hand.run(&built.transcript, true)?;
-    let sent = format!("{line}{}", p.framing.terminator as char);
-    let done = out.failed_step().unwrap_or(usize::MAX);
-    let Some(e) = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes()) else {
-        return Ok(());
-    };
-    let model = pred.get(e.step).map_or(Duration::ZERO, |s| s.busy());
-    if model > deadline::BUSY && e.took < model / REAL_TIME_SHARE {
-        return Err(FuzzError::NotRealTime {
-            command: line,
-            took_ms: e.took.as_millis() as u64,
-            model_ms: model.as_millis() as u64,
-        });
+    let out = hand.run(&probe.transcript, true)?;
+    match probe.judge(p, &out) {
+        Some(n) => Err(FuzzError::NotRealTime { command: n.command, took_ms: n.took_ms, model_ms: n.model_ms }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Runs the fuzzer. `progress` is called from worker threads.
@@ -723,8 +805,8 @@ fn worker(
         {
             lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
-            if let Some(sig) = signature(&p, &pb.transcript, &out) {
-                let new = lock().seen.insert(sig.clone());
+            if let Some(sig) = signature(&p, &pb, &out, !opts.wide()) {
+                let new = lock().seen.insert(sig.key());
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
@@ -733,11 +815,11 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut sig = signature(&p, &built.transcript, &outcome);
+        let mut sig = signature(&p, &built, &outcome, !opts.wide());
         // A quick run's new failure counts only if a thorough run of the case fails too.
-        if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(s)) {
+        if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(&s.key())) {
             outcome = hand.run(&built.transcript, true)?;
-            sig = signature(&p, &built.transcript, &outcome);
+            sig = signature(&p, &built, &outcome, !opts.wide());
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
@@ -766,20 +848,20 @@ fn worker(
         // 2, as `gcl conform`), keeping the case that met the silence unminimized, since a
         // dead hand cannot minimize it.
         if opts.wide()
-            && sig.kind == "silence"
+            && matches!(&outcome, ReplayOutcome::Timeout(to) if to.offset == 0)
             && let Some(why) = dead_hand(hand.link()?.as_mut(), &p)
         {
             lock().dead_hand.get_or_insert(format!(
                 "the hand stopped answering at run {run_no} (the case met silence, then {why})"
             ));
             stop.store(true, Ordering::SeqCst);
-            if lock().seen.insert(sig.clone()) {
+            if lock().seen.insert(sig.key()) {
                 let o = FuzzOptions { minimize: false, ..opts.clone() };
                 report_finding(&o, &mut hand, shared, start, &actions, &built, sig, run_no, progress)?;
             }
             return Ok(());
         }
-        let new = lock().seen.insert(sig.clone());
+        let new = lock().seen.insert(sig.key());
         if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
             stop.store(true, Ordering::SeqCst);
         }
@@ -812,9 +894,10 @@ fn report_finding(
     } else {
         (actions.to_vec(), built.clone())
     };
-    let id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+    let id = finding_id(&sig);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-    let final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
+    let mut final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
+    final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
     let diff = hand.run(&final_case.transcript, true)?.render();
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
@@ -827,7 +910,9 @@ fn report_finding(
         }
         None => None,
     };
+    let known = opts.baseline.explains(&opts.profile.id, &id, &sig);
     let finding = Finding {
+        known,
         signature: sig,
         run: run_no,
         found_after,
@@ -872,7 +957,7 @@ fn minimize(
             return Ok(None);
         }
         let out = hand.run(&b.transcript, true)?;
-        Ok((signature(&p, &b.transcript, &out).as_ref() == Some(sig)).then_some(b))
+        Ok((signature(&p, &b, &out, !opts.wide()).is_some_and(|s| s.key() == sig.key())).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
     while chunk >= 1 && tries < opts.minimize_budget {
@@ -914,6 +999,25 @@ fn minimize(
         }
     }
     Ok(best)
+}
+
+/// A finding's id and file name: `fuzz-COMMAND-KIND`, then what else its key holds
+/// (`fuzz-fget-order`, `fuzz-fget-value-after-m`, `fuzz-vers-status-1024-missing`).
+pub fn finding_id(sig: &FindingSignature) -> String {
+    let mut id = format!("fuzz-{}-{}", slug(&sig.command), sig.kind);
+    let key = sig.key();
+    let rest = key
+        .strip_prefix(&format!("{} at {}", sig.kind, sig.command))
+        .or_else(|| key.strip_prefix(&format!("{} ", sig.kind)))
+        .unwrap_or_default();
+    let rest: String =
+        rest.to_ascii_lowercase().chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '-' }).collect();
+    let rest: Vec<&str> = rest.split('-').filter(|w| !w.is_empty()).collect();
+    if !rest.is_empty() {
+        id.push('-');
+        id.push_str(&rest.join("-"));
+    }
+    id
 }
 
 /// A command word as part of a file name: `^C` is `abort`, `RealTime block` is `block`.

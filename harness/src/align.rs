@@ -1,0 +1,671 @@
+//! Where a failed case parts from the model, named by the input the model was answering.
+//!
+//! A case's golden splits the hand's answers by when the host reads them, not by what they
+//! answer: after a line sent without waiting, a ^C, or lines queued behind a motion, a step's
+//! expectation holds the end of an earlier answer and its own answer spills into the next
+//! step. Naming a difference by the step it was read in blames the command after the one that
+//! broke.
+//!
+//! So the model's own run of the case ([`model_run`], over the same simulated wire as the
+//! golden's capture) tags every byte it answers with the step whose input came last before the
+//! byte was produced: the input it answers. A failure's parting point is carried from the
+//! hand's stream to the model's by counting prompts (everything between two prompts has the
+//! same shape on both sides), and the tag there names the step; among several lines sent at
+//! once, the echo names the line. The signature is then cut to the bug: the command, the
+//! parameter or RealTime field (and the motors) it concerns, and the kind of difference:
+//!
+//! - `value`, `order`: a value of the answer differs, or the values come in another order;
+//! - `status`: an `ERR` line where none was expected, none where one was, or another one; the
+//!   signature is the status bits missing and extra, not the command, because one bug in
+//!   status handling (a parser that refuses lower case, a status that is never reported)
+//!   shows on every command it touches;
+//! - `framing`: the echo, a line ending, the prompt, a block's header or size;
+//! - `missing`: the answer, or one of its lines, never came;
+//! - `extra`: more than the answer: a line or a prompt too many, bytes after the last answer,
+//!   a flood;
+//! - `restart`: a banner nobody asked for; `link`: the link failed.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::time::Duration;
+
+use gcl_host::SimLink;
+use gcl_host::link::{Link, LinkError};
+use gcl_model::grammar::{Line, parse_line};
+use gcl_model::realtime::RtLayout;
+use gcl_model::spec::CommandKind;
+use gcl_model::{Args, DeviceConfig, MotorSet, Profile};
+use gcl_transcript::{Form, Transcript};
+use serde::{Deserialize, Serialize};
+
+use crate::replay::{ReplayOutcome, replay};
+use crate::triage::{expected_tokens, is_reordering};
+
+/// The model's run of a case: its answers as one stream, each byte tagged with the step whose
+/// input it answers.
+#[derive(Debug, Clone, Default)]
+pub struct ModelRun {
+    /// Every byte the model answered after the first step's input, in order.
+    pub stream: Vec<u8>,
+    /// For each byte of `stream`, the step (0-based) whose input came last before it.
+    pub tags: Vec<u32>,
+    /// The RealTime layouts in force when each step's input went out.
+    pub layouts: Vec<Option<RtLayout>>,
+}
+
+/// Bytes produced before any step's input (the power-up banner the replay drains).
+const BEFORE: u32 = u32::MAX;
+
+/// A [`SimLink`] that tags what the model produces with the step whose input came last.
+struct Tagging {
+    inner: SimLink,
+    queue: VecDeque<u8>,
+    tags: Vec<u32>,
+    step: u32,
+    sends: u32,
+    layouts: Vec<Option<RtLayout>>,
+}
+
+impl Tagging {
+    /// Takes what the model has produced so far, tagged with the present step.
+    fn pull(&mut self) -> Result<(), LinkError> {
+        let mut tmp = Vec::new();
+        self.inner.recv(&mut tmp, Duration::ZERO)?;
+        self.tag(tmp);
+        Ok(())
+    }
+
+    fn tag(&mut self, bytes: Vec<u8>) {
+        if self.step != BEFORE {
+            self.tags.extend(std::iter::repeat_n(self.step, bytes.len()));
+        }
+        self.queue.extend(bytes);
+    }
+}
+
+impl Link for Tagging {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+        self.pull()?;
+        self.layouts.push(self.inner.device().rt_layout().cloned());
+        self.step = self.sends;
+        self.sends += 1;
+        self.inner.send(bytes)?;
+        self.pull()
+    }
+
+    fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+        if self.queue.is_empty() {
+            let mut tmp = Vec::new();
+            self.inner.recv(&mut tmp, timeout)?;
+            self.tag(tmp);
+        }
+        let n = self.queue.len();
+        buf.extend(self.queue.drain(..));
+        Ok(n)
+    }
+
+    fn pause(&mut self, d: Duration) {
+        let _ = self.pull();
+        self.inner.pause(d);
+        let _ = self.pull();
+    }
+
+    fn elapsed(&self) -> Duration {
+        self.inner.elapsed()
+    }
+
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
+}
+
+/// Replays `t` on a fresh unmutated model with the suite's options, tagging its answers. The
+/// replay's outcome is returned as the error when it does not pass (no case, then).
+pub fn model_run(p: &Arc<Profile>, t: &Transcript) -> Result<ModelRun, Box<ReplayOutcome>> {
+    let mut link = Tagging {
+        inner: SimLink::new(p.clone(), DeviceConfig::default()),
+        queue: VecDeque::new(),
+        tags: Vec::new(),
+        step: BEFORE,
+        sends: 0,
+        layouts: Vec::new(),
+    };
+    let out = replay(t, &mut link, &crate::suite::replay_options());
+    let ReplayOutcome::Pass(pass) = out else { return Err(Box::new(out)) };
+    let stream: Vec<u8> = pass.exchange.iter().flat_map(|e| e.received.iter().copied()).collect();
+    // Sends are numbered over the steps that send; map them back to step indices.
+    // (the replayer sends nothing for a step whose bytes are empty).
+    let sending: Vec<u32> = t
+        .steps
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.send.as_ref().is_some_and(|h| !h.bytes.is_empty()))
+        .map(|(i, _)| i as u32)
+        .collect();
+    let tags: Vec<u32> = link.tags.iter().map(|n| sending.get(*n as usize).copied().unwrap_or(*n)).collect();
+    let mut layouts = vec![None; t.steps.len()];
+    for (n, l) in link.layouts.into_iter().enumerate() {
+        if let Some(slot) = sending.get(n).and_then(|i| layouts.get_mut(*i as usize)) {
+            *slot = l;
+        }
+    }
+    if tags.len() != stream.len() {
+        return Ok(ModelRun { stream, tags: Vec::new(), layouts });
+    }
+    Ok(ModelRun { stream, tags, layouts })
+}
+
+/// Where a finding parts from the model, cut to the bug: the command answered, the parameter
+/// or RealTime field, the motors, and the kind of difference (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct FindingSignature {
+    /// The command word answered where the hand parts from the model (`FGET`, `^C`, `CR`,
+    /// `RealTime block`, or the first word of a line the model refuses).
+    pub command: String,
+    /// The kind of difference: value, order, status, framing, missing, extra, restart, link.
+    pub kind: String,
+    /// What the difference concerns: the parameter of a get line (`P`), the RealTime field
+    /// (`LFAP`), the status bits (`1024 missing`, `32 extra`), `echo`, `header`, `flood`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub detail: String,
+    /// The motors whose values differ, where that applies (`123`, `4`).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub motors: String,
+    /// For a value read back: the command before it that decided the value (the last motion
+    /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub cause: String,
+}
+
+impl FindingSignature {
+    /// What deduplication and baselines compare: one bug, one key.
+    ///
+    /// - a status difference is its bits, whatever command shows it: a hand that refuses a
+    ///   line as an unknown command (the bits it adds) whatever else the model says of it, else
+    ///   the bits it leaves out, else those it adds;
+    /// - a value read back is the command read and the command that decided the value
+    ///   (`value at FGET after RESET`), or the parameter when no command before it did;
+    /// - values in another order are the command;
+    /// - anything else is the command, the kind and the detail (a RealTime field, `echo`).
+    ///
+    /// The motors are shown, never compared: which motor shows a bug first is the fuzzer's draw.
+    pub fn key(&self) -> String {
+        let with = |k: String, d: &str| if d.is_empty() { k } else { format!("{k} {d}") };
+        match self.kind.as_str() {
+            "status" => {
+                let parts: Vec<&str> = self.detail.split(", ").collect();
+                let extra = parts.iter().find(|d| d.ends_with(" extra"));
+                let missing = parts.iter().find(|d| d.ends_with(" missing"));
+                let unknown = extra.is_some_and(|e| {
+                    e.trim_end_matches(" extra")
+                        .split('+')
+                        .any(|b| b == gcl_model::StatusBits::UNKNOWN_COMMAND.bits().to_string())
+                });
+                let pick = if unknown { extra } else { missing.or(extra) };
+                format!("status {}", pick.copied().unwrap_or(self.detail.as_str()))
+            }
+            "value" if !self.cause.is_empty() => format!("value at {} after {}", self.command, self.cause),
+            "order" => format!("order at {}", self.command),
+            _ => with(format!("{} at {}", self.kind, self.command), &self.detail),
+        }
+    }
+}
+
+impl std::fmt::Display for FindingSignature {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} at {}", self.kind, self.command)?;
+        if !self.detail.is_empty() {
+            write!(f, " ({})", self.detail)?;
+        }
+        if !self.motors.is_empty() {
+            write!(f, " motors {}", self.motors)?;
+        }
+        if !self.cause.is_empty() {
+            write!(f, " after {}", self.cause)?;
+        }
+        Ok(())
+    }
+}
+
+/// Where the hand's stream parts from the golden: the byte position in the hand's stream of the
+/// case's answers, and the stream up to there with what follows as far as it was read.
+struct Parting {
+    /// The hand's answers, the failing step's as far as it was read.
+    hand: Vec<u8>,
+    /// The parting byte's position in `hand`.
+    at: usize,
+    /// Where the failing step's answer begins in `hand`.
+    step_start: usize,
+}
+
+fn parting(out: &ReplayOutcome) -> Option<Parting> {
+    let step = out.failed_step()?;
+    let ex = out.exchange();
+    let mut hand = Vec::new();
+    let mut start = 0;
+    for e in ex {
+        if e.step == step {
+            start = hand.len();
+        }
+        hand.extend_from_slice(&e.received);
+    }
+    let off = match out {
+        ReplayOutcome::Mismatch(m) => m.offset,
+        ReplayOutcome::Timeout(t) => t.offset,
+        _ => hand.len() - start,
+    };
+    Some(Parting { at: (start + off).min(hand.len()), hand, step_start: start })
+}
+
+/// Positions just past each prompt (line ending then prompt) in `s`.
+fn prompt_ends(s: &[u8], pe: &[u8]) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while !pe.is_empty() && i + pe.len() <= s.len() {
+        if &s[i..i + pe.len()] == pe {
+            i += pe.len();
+            out.push(i);
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The model's position for the hand's `at`: as many prompts in, and as many bytes past the
+/// last one (no further than the model's next prompt).
+fn carry(hand: &[u8], at: usize, model: &[u8], pe: &[u8]) -> Option<usize> {
+    let h = prompt_ends(&hand[..at], pe);
+    let base_h = h.last().copied().unwrap_or(0);
+    let m = prompt_ends(model, pe);
+    let base_m = if h.is_empty() { 0 } else { *m.get(h.len() - 1)? };
+    let next = m.get(h.len()).copied().unwrap_or(model.len());
+    let x = base_m + (at - base_h);
+    Some(x.min(next.saturating_sub(1)).min(model.len().checked_sub(1)?))
+}
+
+/// The command word of a line as the signature shows it: the model's name for a command it
+/// parses, `CR` for an empty line, else the first word without a motor prefix.
+pub fn command_word(p: &Profile, line: &[u8]) -> String {
+    crate::triage::command_of(line, false, p)
+}
+
+/// The signature of a failed replay of a case whose model run is `run`; `None` for a pass.
+/// `whole_reads`: the link hands over an answer whole (the in-process sim), so a RealTime
+/// answer that ends early or late is known to be of another size.
+pub fn signature(
+    p: &Profile,
+    t: &Transcript,
+    run: &ModelRun,
+    out: &ReplayOutcome,
+    whole_reads: bool,
+) -> Option<FindingSignature> {
+    let step = out.failed_step()?;
+    let fr = &p.framing;
+    let sent_of = |i: usize| t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
+    let hex_step = |i: usize| {
+        t.steps.get(i).is_some_and(|s| {
+            s.send.as_ref().is_some_and(|h| h.form == Form::Hex)
+                || s.expect.segments.iter().any(|g| g.form == Form::Hex)
+        })
+    };
+    let is_abort = |i: usize| sent_of(i).first() == Some(&fr.abort);
+    // Without the model's tags (a run whose timing the tagging changed), the step read in.
+    let fallback = || {
+        let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
+        let (s, _) = crate::triage::step_signature(&case, out, p)?;
+        let kind = match s.kind.as_str() {
+            "missing-answer" => "missing",
+            "flood" => "extra",
+            k => k,
+        };
+        Some(sig(s.command.clone(), kind, ""))
+    };
+    if let ReplayOutcome::Disconnected(_) = out {
+        return Some(sig(command_at(p, t, step), "link", ""));
+    }
+    let Some(pt) = parting(out) else { return fallback() };
+    let pe = [fr.line_ending.as_bytes(), fr.prompt.as_bytes()].concat();
+    let Some(x) = (if run.tags.is_empty() { None } else { carry(&pt.hand, pt.at, &run.stream, &pe) }) else {
+        return fallback();
+    };
+    let got = &pt.hand[pt.at..];
+    let banner = crate::record::BANNER_TEXT;
+    // The input a model position answers: its step, the line among the step's lines, where
+    // that line's answer begins, and the command word.
+    let who = |x: usize| -> (usize, Vec<u8>, usize, String) {
+        let owner = run.tags.get(x).map_or(step, |s| *s as usize);
+        let (line, a) = owner_line(p, &sent_of(owner), run, owner, x);
+        let in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
+        let block_answer = in_loop && run.stream.get(a) == Some(&gcl_model::realtime::FEEDBACK_HEADER);
+        let command = if hex_step(owner) || is_abort(owner) && block_answer {
+            "RealTime block".to_string()
+        } else if is_abort(owner) {
+            "^C".to_string()
+        } else {
+            command_word(p, &line)
+        };
+        (owner, line, a, command)
+    };
+    let (owner, line, a, command) = who(x);
+    let model_rest = &run.stream[x..];
+    // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
+    if let ReplayOutcome::Flooded(_) = out {
+        return Some(sig(command, "extra", "flood"));
+    }
+    if !model_rest.windows(banner.len()).any(|w| w == banner) && got.windows(banner.len()).any(|w| w == banner) {
+        return Some(sig(command, "restart", ""));
+    }
+    if let ReplayOutcome::Mismatch(m) = out
+        && m.trailing
+    {
+        let (_, _, _, c) = who(run.stream.len().saturating_sub(1));
+        return Some(sig(c, "extra", ""));
+    }
+    // RealTime: a block's answer, by field.
+    if command == "RealTime block" {
+        let off = x - a;
+        let layout = run.layouts.get(owner).cloned().flatten();
+        let Some(fb) = layout.as_ref().map(|l| l.feedback()) else { return Some(sig(command, "framing", "")) };
+        let hand_start = pt.at - off.min(pt.at);
+        let hand_len = pt.hand.len() - hand_start;
+        if matches!(out, ReplayOutcome::Timeout(_)) {
+            return Some(sig(command, if hand_len == 0 { "missing" } else { "framing" }, "block"));
+        }
+        // A block that does not start where the model's does, or ends elsewhere: the hand
+        // reads or writes blocks of another layout.
+        let model_len = run.tags[a..].iter().take_while(|s| **s as usize == owner).count();
+        if off == 0 || whole_reads && hand_len != model_len && model_len == fb.size() {
+            return Some(sig(command, "framing", "block"));
+        }
+        return Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
+            Some(f) => sig(command, "value", f.name()),
+            None if off >= fb.size() => sig(command, "extra", ""),
+            None => sig(command, "framing", ""),
+        });
+    }
+    // The model's answer unit holding x: from the last prompt before it (or the owner's
+    // answer's start) to the next prompt.
+    let unit_start = prompt_ends(&run.stream[..=x], &pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
+    let unit_end = prompt_ends(&run.stream[unit_start..], &pe).first().map_or(run.stream.len(), |e| unit_start + e);
+    let echo_len = if fr.echo && unit_start == a && !is_abort(owner) {
+        line.iter().filter(|b| **b != fr.terminator).count()
+    } else {
+        0
+    };
+    // A prompt (or a status line) too many at the start of an answer, after which the hand
+    // goes on with the model's answer: more than the answer before.
+    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
+        // (a bare prompt, or one status line and a prompt)
+        let bare = got.starts_with(&pe);
+        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ");
+        if let Some(e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
+            let after = &got[e..];
+            let want = &run.stream[x..unit_end.min(x + 4)];
+            // (what follows may not have been read yet)
+            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+                let (_, _, _, c) = who(x - 1);
+                return Some(sig(c, "extra", ""));
+            }
+        }
+    }
+    // The first line of a line's answer, right after an input the model took as leaving
+    // RealTime mode: a hand that stayed in the loop takes the line for blocks.
+    // (before the first line ending: within the echo. Past it, a status line is the line's
+    // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
+    // empty lines, and only the status tells them apart)
+    let first_line = !run.stream[unit_start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
+    let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
+    let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
+    let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
+    if unit_start == a && first_line && leaves_loop {
+        return Some(sig("RealTime block".into(), "framing", "loop exit"));
+    }
+    if x < unit_start + echo_len {
+        return Some(sig(command, "framing", "echo"));
+    }
+    // The line of the model's answer the parting lies in, and the hand's line there.
+    let eol = fr.line_ending.as_bytes();
+    let unit = &run.stream[unit_start..unit_end];
+    let rel = (x - unit_start).min(unit.len());
+    let line_no = if unit_start == a { count(&unit[..rel], eol) } else { 0 };
+    let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
+    let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
+    let param = param_at(p, &line, line_no);
+    let status_of = |l: &[u8]| -> Option<u64> {
+        let s = String::from_utf8_lossy(l);
+        let mut w = s.split_whitespace();
+        (w.next() == Some("ERR")).then(|| w.next().and_then(|n| n.parse().ok()).unwrap_or(0))
+    };
+    let (ms, hs) = (status_of(m_line), status_of(h_line));
+    if ms.is_some() || hs.is_some() {
+        return Some(sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0))));
+    }
+    let prompt = fr.prompt.as_bytes();
+    let m_rest = &run.stream[x..unit_end];
+    if let ReplayOutcome::Timeout(to) = out {
+        // Stopped short. Only the prompt's tail missing is framing (a prompt without its
+        // space); an answer that stops before its prompt lacks part of itself.
+        let kind = if to.offset > 0 && prompt.ends_with(m_rest) && !m_rest.is_empty() { "framing" } else { "missing" };
+        return Some(sig(command, kind, &param));
+    }
+    let trimmed = prompt.trim_ascii_end();
+    let m_is_prompt = m_line.starts_with(trimmed) && !trimmed.is_empty();
+    let h_is_prompt = h_line.starts_with(trimmed) && !trimmed.is_empty();
+    if m_is_prompt && h_is_prompt {
+        return Some(sig(command, "framing", "prompt"));
+    }
+    if m_is_prompt {
+        return Some(sig(command, "extra", &param));
+    }
+    if h_is_prompt {
+        return Some(sig(command, "missing", &param));
+    }
+    let at_eol = |s: &[u8]| s.first().is_some_and(|b| matches!(b, b'\n' | b'\r'));
+    if at_eol(got) || at_eol(m_rest) {
+        let kind = if at_eol(got) && at_eol(m_rest) { "framing" } else { "value" };
+        if kind == "framing" {
+            return Some(sig(command, kind, "line ending"));
+        }
+    }
+    // Values: the golden line (with its ranges) against the hand's.
+    let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
+    let golden = golden_line(t, step, &pt, eol).unwrap_or_else(|| ts(m_line));
+    let h_text = ts(h_line);
+    if is_reordering(&h_text, &golden) {
+        return Some(sig(command, "order", &param));
+    }
+    let motors = differing_motors(p, &line, &h_text, &golden);
+    let cause = cause_of(p, t, owner, &line, &param, &motors);
+    Some(FindingSignature { motors, cause, ..sig(command, "value", &param) })
+}
+
+fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
+    FindingSignature {
+        command: gcl_model::escape::escape(command.as_bytes()),
+        kind: kind.to_string(),
+        detail: detail.to_string(),
+        motors: String::new(),
+        cause: String::new(),
+    }
+}
+
+/// A status difference: the bits the model reports and the hand does not (`missing`), and
+/// those the hand reports and the model does not (`extra`).
+fn status_detail(model: u64, hand: u64) -> String {
+    let bits =
+        |v: u64| (0..63).filter(|b| v & (1 << b) != 0).map(|b| (1u64 << b).to_string()).collect::<Vec<_>>().join("+");
+    let mut d = Vec::new();
+    if model & !hand != 0 {
+        d.push(format!("{} missing", bits(model & !hand)));
+    }
+    if hand & !model != 0 {
+        d.push(format!("{} extra", bits(hand & !model)));
+    }
+    if d.is_empty() {
+        d.push("format".into());
+    }
+    d.join(", ")
+}
+
+/// The command before the read that decided the value read: for a position, the last line
+/// that moved one of the motors whose values differ (or initialised or reset the hand); for
+/// a stored parameter, the last line that set it by name, restored its defaults, loaded it or
+/// reset the hand. Empty for other live values (strain, temperature: every read shows their
+/// bug, whatever came before) and when no line did.
+fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str, motors: &str) -> String {
+    let Some(id) = p.param_id(param) else { return String::new() };
+    let spec = p.param(id);
+    let position = p.role(gcl_model::spec::Role::Position) == Some(id);
+    if spec.live && !position {
+        return String::new();
+    }
+    let global = spec.scope == gcl_model::spec::Scope::Global;
+    let term = p.framing.terminator;
+    let mut lines: Vec<Vec<u8>> = Vec::new();
+    for s in t.steps.iter().take(owner + 1) {
+        let Some(h) = &s.send else { continue };
+        if h.form == Form::Hex {
+            lines.push(b"LOOP".to_vec());
+            continue;
+        }
+        lines.extend(h.bytes.split(|b| *b == term).map(<[u8]>::to_vec));
+    }
+    // Up to the line answered.
+    if let Some(i) = lines.iter().rposition(|l| l.as_slice() == line) {
+        lines.truncate(i);
+    }
+    let differing = MotorSet::from_motors(motors.bytes().filter_map(|b| b.is_ascii_digit().then_some(b - b'0')));
+    for l in lines.iter().rev() {
+        let Ok(Line::Command(c)) = parse_line(p, l) else { continue };
+        let k = c.kind(p);
+        let decides = if position {
+            let moved = c.prefix.unwrap_or(MotorSet::from_bits(0b1111));
+            let touches = differing.is_empty() || moved.bits() & differing.bits() != 0;
+            matches!(k, CommandKind::Initialize | CommandKind::Loop | CommandKind::Reset) || k.is_motion() && touches
+        } else {
+            let scoped = if global {
+                matches!(k, CommandKind::GlobalDefaults | CommandKind::GlobalLoad)
+            } else {
+                matches!(k, CommandKind::MotorDefaults | CommandKind::MotorLoad)
+            };
+            scoped || k == CommandKind::Reset || matches!(&c.args, Args::Pairs(ps) if ps.iter().any(|(i, _)| *i == id))
+        };
+        if decides {
+            return p.command(c.command).name.clone();
+        }
+    }
+    String::new()
+}
+
+/// The command at step `i` for a link failure: the step's own line.
+fn command_at(p: &Profile, t: &Transcript, i: usize) -> String {
+    let sent = t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
+    crate::triage::command_of(
+        &sent,
+        t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)),
+        p,
+    )
+}
+
+/// Among the lines step `owner` sent, the one whose answer holds model position `x`, and where
+/// that answer begins in the model's stream. A line's answer begins with its echo; several
+/// lines sent at once are answered in order.
+fn owner_line(p: &Profile, sent: &[u8], run: &ModelRun, owner: usize, x: usize) -> (Vec<u8>, usize) {
+    let fr = &p.framing;
+    let first = run.tags.iter().position(|s| *s as usize == owner).unwrap_or(x).min(x);
+    let mut lines: Vec<&[u8]> = sent.split_inclusive(|b| *b == fr.terminator).collect();
+    if lines.is_empty() {
+        return (Vec::new(), first);
+    }
+    if lines.len() == 1 || !fr.echo {
+        return (strip(lines[0], fr.terminator).to_vec(), first);
+    }
+    // The last line whose echo begins at or before x, searched in order from the answer's start.
+    let mut best = (strip(lines[0], fr.terminator).to_vec(), first);
+    let mut from = first;
+    let eol = fr.line_ending.as_bytes();
+    for (k, l) in lines.drain(..).enumerate() {
+        let l = strip(l, fr.terminator);
+        if k == 0 {
+            continue;
+        }
+        let mut needle = l.to_vec();
+        needle.extend_from_slice(eol);
+        let hay = &run.stream[from..=x.min(run.stream.len() - 1)];
+        // The echo starts right after a prompt.
+        let pe = [eol, fr.prompt.as_bytes()].concat();
+        let found = hay.windows(pe.len() + needle.len()).position(|w| w.starts_with(&pe) && w.ends_with(&needle));
+        match found {
+            Some(i) => {
+                let at = from + i + pe.len();
+                best = (l.to_vec(), at);
+                from = at;
+            }
+            None => break,
+        }
+    }
+    best
+}
+
+fn strip(l: &[u8], term: u8) -> &[u8] {
+    l.strip_suffix(&[term]).unwrap_or(l)
+}
+
+fn count(hay: &[u8], needle: &[u8]) -> usize {
+    if needle.is_empty() {
+        return 0;
+    }
+    hay.windows(needle.len()).filter(|w| *w == needle).count()
+}
+
+/// Start of the line holding position `at` (just past the line ending before it).
+fn find_back(s: &[u8], at: usize, eol: &[u8]) -> usize {
+    let at = at.min(s.len());
+    (0..at).rev().find(|&i| s[..=i].ends_with(eol)).map_or(0, |i| i + 1)
+}
+
+/// The line starting at `s`, up to its line ending (or the end).
+fn cut_line<'s>(s: &'s [u8], eol: &[u8]) -> &'s [u8] {
+    let end = s.windows(eol.len().max(1)).position(|w| w == eol).unwrap_or(s.len());
+    &s[..end]
+}
+
+/// The golden's text of the line the parting lies in (escaped, with elisions), read from the
+/// failing step's expectation by the number of line endings the hand sent before it in the step.
+fn golden_line(t: &Transcript, step: usize, pt: &Parting, eol: &[u8]) -> Option<String> {
+    let s = t.steps.get(step)?;
+    let text = s.expect.to_text();
+    let text = text.trim_matches('"');
+    let line_start = find_back(&pt.hand, pt.at, eol).max(pt.step_start);
+    let n = count(&pt.hand[pt.step_start..line_start], eol);
+    let e = gcl_transcript::escape_text(eol);
+    text.split(e.as_str()).nth(n).map(str::to_string)
+}
+
+/// The parameter named on answer line `line_no` (1-based after the echo) of a get line.
+fn param_at(p: &Profile, line: &[u8], line_no: usize) -> String {
+    let Ok(Line::Command(c)) = parse_line(p, line) else { return String::new() };
+    match (c.kind(p), &c.args) {
+        (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => {
+            line_no.checked_sub(1).and_then(|i| ids.get(i)).map(|id| p.param(*id).name.clone()).unwrap_or_default()
+        }
+        _ => String::new(),
+    }
+}
+
+/// The motors whose values differ on a line of a motor command's answer (one value per motor
+/// of its motor set, in order), as digits; empty where that does not apply.
+fn differing_motors(p: &Profile, line: &[u8], actual: &str, golden: &str) -> String {
+    let Ok(Line::Command(c)) = parse_line(p, line) else { return String::new() };
+    if !matches!(c.kind(p), CommandKind::MotorGet) {
+        return String::new();
+    }
+    let motors: MotorSet = c.prefix.unwrap_or(MotorSet::from_bits(0b1111));
+    let a: Vec<&str> = actual.split_whitespace().collect();
+    let e = expected_tokens(golden);
+    if a.len() != e.len() {
+        return String::new();
+    }
+    motors.iter().zip(a.iter().zip(&e)).filter(|(_, (x, tok))| !tok.accepts(x)).map(|(m, _)| m.to_string()).collect()
+}
