@@ -3,6 +3,7 @@
 //! overwritten or left half-written. Every `gcl` here runs under a memory limit (`prlimit
 //! --data`) and a wall-clock bound, on loopback only; hands and hosts are small scripts.
 
+mod deps;
 mod sim_support;
 
 use std::path::Path;
@@ -326,19 +327,12 @@ fn hands() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hands")
 }
 
-fn have_python() -> bool {
-    Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success())
-}
-
 /// Item 6: a hand that answers ^C and a bare CR but no command ends the run early (exit 2,
 /// the dead-hand rule) instead of timing out case after case for minutes.
 #[test]
 fn a_hand_answering_only_the_probe_ends_the_run() {
-    if !have_python() {
-        eprintln!("skipped: no python3");
-        return;
-    }
-    let hand = format!("exec:python3 {}", hands().join("probe_only.py").display());
+    let Some(py) = deps::python_with(&[]) else { return };
+    let hand = format!("exec:{py} {}", hands().join("probe_only.py").display());
     let r = gcl(&["conform", "--target", &hand, "--profile", "seed", "--level", "must"]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("answers ^C and a bare CR, but not a command line"), "{}", r.stderr);
@@ -372,11 +366,8 @@ fn fuzz_device_ends_early_on_a_dead_hand() {
     let r = gcl(&["fuzz", "device", "--target", "exec:sleep 1000", "--profile", "seed", "--duration", "60s", "-q"]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("did not answer the liveness probe"), "{}", r.stderr);
-    if !have_python() {
-        eprintln!("skipped the mid-run hang: no python3");
-        return;
-    }
-    let hand = format!("exec:python3 {} 4 {GCL} sim --stdio --profile seed", hands().join("hangs_after.py").display());
+    let Some(py) = deps::python_with(&[]) else { return };
+    let hand = format!("exec:{py} {} 4 {GCL} sim --stdio --profile seed", hands().join("hangs_after.py").display());
     let r =
         gcl(&["fuzz", "device", "--target", &hand, "--profile", "seed", "--no", "motion", "--duration", "20s", "-q"]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);

@@ -5,6 +5,7 @@
 //! missing) under misbehaviours whose effect does not depend on timing, so that the same
 //! schedule gives the same finding on any machine.
 
+mod deps;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -15,11 +16,7 @@ fn gcl(args: &[&str]) -> std::process::Output {
 }
 
 fn python_ready() -> bool {
-    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("skipped: python3 with pyserial is not available");
-    }
-    ok
+    deps::python_with(&["serial"]).is_some()
 }
 
 fn json(p: &Path) -> Value {
@@ -54,7 +51,8 @@ fn host_campaign(dir: &Path, seed: &str, extra: &[&str]) -> std::process::Output
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    args.extend_from_slice(&["--", "python3", mutant.to_str().unwrap()]);
+    let py = deps::python();
+    args.extend_from_slice(&["--", &py, mutant.to_str().unwrap()]);
     gcl(&args)
 }
 

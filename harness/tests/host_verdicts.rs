@@ -7,6 +7,7 @@
 //! a missing tool skips its test with a line on stderr (a failure under `CI=true`). Hang
 //! signatures by stack need gdb or eu-stack (`.ci/run` installs them).
 
+mod deps;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
@@ -26,19 +27,16 @@ fn hosts() -> PathBuf {
 
 /// A missing tool: a failure under CI, else a visible skip.
 fn missing(what: &str) -> bool {
-    assert!(std::env::var("CI").is_err(), "{what} is missing under CI");
-    eprintln!("SKIPPED: {what} is not available");
+    deps::missing(what, ".ci/run installs it");
     true
 }
 
 fn python_with(module: &str) -> bool {
-    let ok =
-        Command::new("python3").args(["-c", &format!("import {module}")]).output().is_ok_and(|o| o.status.success());
-    ok || !missing(&format!("python3 with {module}"))
+    deps::python_with(&[module]).is_some()
 }
 
 fn python(file: &str, args: &[&str]) -> Vec<String> {
-    let mut v = vec!["python3".to_string(), hosts().join(file).display().to_string()];
+    let mut v = vec![deps::python(), hosts().join(file).display().to_string()];
     v.extend(args.iter().map(|a| a.to_string()));
     v
 }
@@ -122,7 +120,7 @@ fn the_reopen_probe_reads_nothing_under_sim_fuzz_host_and_check_host() {
         .unwrap();
     let mut line = String::new();
     std::io::BufRead::read_line(&mut std::io::BufReader::new(sim.stdout.take().unwrap()), &mut line).unwrap();
-    let o = Command::new("python3").args(&probe[1..]).arg(line.trim()).output().unwrap();
+    let o = Command::new(deps::python()).args(&probe[1..]).arg(line.trim()).output().unwrap();
     let _ = sim.kill();
     let _ = sim.wait();
     let said = String::from_utf8_lossy(&o.stderr);
@@ -218,7 +216,7 @@ fn a_reaction_to_the_hands_misbehaviour_is_a_note_not_a_finding() {
     assert_eq!(judge(&r, &[0, 1]), vec![], "{:?}", r.violations);
     // Unprovoked, leaving in RealTime is still found.
     let mutant = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/py_loop_no_abort.py");
-    let r = run_once(&run(vec!["python3".into(), mutant.display().to_string()]), &Schedule::default()).unwrap();
+    let r = run_once(&run(vec![deps::python(), mutant.display().to_string()]), &Schedule::default()).unwrap();
     assert!(judge(&r, &[0, 1]).iter().any(|v| v.signature.contains("leaves-cleanly")), "{:?}", r.violations);
 }
 

@@ -4,6 +4,7 @@
 //! small, and every JUnit file reads in a real JUnit consumer (Python's `junitparser`, in the
 //! venv `.ci/run` makes under `target/junit-venv`).
 
+mod deps;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -254,11 +255,7 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
 }
 
 fn python_ready() -> bool {
-    let ok = Command::new("python3").args(["-c", "import serial"]).output().is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("skipped: python3 with pyserial is not available");
-    }
-    ok
+    deps::python_with(&["serial"]).is_some()
 }
 
 fn mutant(file: &str) -> String {
@@ -273,7 +270,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     let dir = tempfile::tempdir().unwrap();
     let host = mutant("py_sends_lf.py");
     let rep = dir.path().join("check");
-    let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", "python3", &host, "{port}"]);
+    let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", &deps::python(), &host, "{port}"]);
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
     let html = page(&rep.join("report.html"), "gcl check-host: python3 ");
     let text = html.root_element().text().collect::<String>();
@@ -293,6 +290,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
 
     let rep = dir.path().join("fuzz");
     let bundles = dir.path().join("bundles");
+    let py = deps::python();
     let o = gcl(&[
         "fuzz",
         "host",
@@ -305,14 +303,14 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
         "--report",
         rep.to_str().unwrap(),
         "--",
-        "python3",
+        &py,
         &host,
         "{port}",
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!stderr.contains("] violation: "), "the kind is not said twice: {stderr}");
-    let html = page(&rep.join("report.html"), "gcl fuzz host: python3 ");
+    let html = page(&rep.join("report.html"), &format!("gcl fuzz host: {py} "));
     let facts = html.select(&sel("table")).next().unwrap().text().collect::<String>();
     assert!(facts.contains("runs") && facts.contains("4 (+"), "{facts}");
     let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
