@@ -184,11 +184,15 @@ fn a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run() {
         let len = std::fs::metadata(out.join(f)).unwrap().len();
         assert!(len < 2 << 20, "{f} is {len} bytes");
     }
-    // The flood starts 0.4 s (wall time) after the process does. A case that fails before it
-    // begins (this hand echoes nothing) and then drains quietly does not count toward the
-    // flood, so 2 or 3 cases fail depending on when it begins; never more.
+    // The flood starts 0.4 s (wall time) after the process does, so how many cases fail
+    // before it begins (this hand echoes nothing) depends on the machine's load. What does
+    // not: the run ends at the case that met the flood, and no case runs after it.
+    let ran: Vec<_> =
+        r.cases.iter().filter(|c| !c.message.as_deref().is_some_and(|m| m.starts_with("not run:"))).collect();
+    assert_eq!(ran.last().map(|c| c.id.as_str()), Some(st.case.as_str()), "the run ends at the flood: {:?}", r.summary);
+    assert!(ran.len() < r.cases.len(), "cases after the flood are not run: {:?}", r.summary);
     let failed: Vec<_> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
-    assert!((2..=3).contains(&failed.len()), "{:?}", r.summary);
+    assert!(!failed.is_empty(), "{:?}", r.summary);
     for c in failed {
         let d = c.diff.as_ref().unwrap();
         assert!(d.actual.len() <= gcl_harness::report::MAX_SHOWN + 64, "{}", d.actual.len());

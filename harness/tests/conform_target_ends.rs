@@ -23,13 +23,14 @@ fn a_hand_whose_motions_end_at_once_skips_the_abort_timing_cases_and_says_why() 
     let target = format!("exec:{} sim --stdio --profile seed", env!("CARGO_BIN_EXE_gcl"));
     let (code, out, err) = conform(&target, &[]);
     assert_eq!(code, 0, "{out}\n{err}");
-    assert!(out.contains("motion-time probe: the target's motions end at once"), "{out}");
-    assert_eq!(out.matches("motion-time probe").count(), 1, "one line says it: {out}");
+    // Said once, on stderr with the pre-flight line (the summary on stdout does not repeat it).
+    assert!(err.contains("motion-time probe: the target's motions end at once"), "{err}");
+    assert_eq!(format!("{out}{err}").matches("motion-time probe").count(), 1, "one line says it: {out}{err}");
     assert!(out.contains("result: PASS"), "{out}");
     // The user insists: the abort-timing cases run, and fail on this hand.
-    let (code, out, _) = conform(&target, &["--assume-real-time"]);
+    let (code, out, err) = conform(&target, &["--assume-real-time"]);
     assert_eq!(code, 1, "{out}");
-    assert!(!out.contains("motion-time probe"), "{out}");
+    assert!(!format!("{out}{err}").contains("motion-time probe"), "{out}{err}");
     assert!(out.contains("result: FAIL"), "{out}");
 }
 
@@ -48,6 +49,8 @@ fn a_hand_that_vanishes_mid_run_is_an_error_not_a_clause() {
     let (code, out, err) = conform(&format!("exec:sh {}", sh.display()), &["--assume-real-time"]);
     assert_eq!(code, 2, "{out}\n{err}");
     assert!(out.contains("result: ERROR"), "{out}");
-    assert!(out.contains("ended early: the hand vanished"), "{out}");
+    // The reason is said once, on stderr, as it happens; the summary says where the run ended.
+    assert!(err.contains("the hand vanished"), "{err}");
+    assert!(out.contains("ended early at case"), "{out}");
     assert!(!out.contains("root causes first"), "a dead link is no group: {out}");
 }

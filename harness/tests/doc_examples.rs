@@ -148,7 +148,8 @@ fn plans() -> Vec<(String, Run)> {
             sh_as(leak(format!("gcl check-host --profile bh8-262 --report reports/host-check -- {}", host("bh8-262"))), 0),
         ),
         (
-            "gcl fuzz host --profile bh8-262 --duration 5m --jobs 2 --timeout-hang 3s --report reports/host-fuzz --out reports/host-fuzz/bundles -- python3 ci/host_scenario.py {port}".into(),
+            // (the hang timeout is given so the 3 s run does not spend its time calibrating)
+            "gcl fuzz host --profile bh8-262 --duration 5m --jobs 2 --report reports/host-fuzz --out reports/host-fuzz/bundles -- python3 ci/host_scenario.py {port}".into(),
             sh_as(
                 leak(format!(
                     "gcl fuzz host --profile bh8-262 --duration 3s --jobs 2 --timeout-hang 3s --report reports/host-fuzz --out reports/host-fuzz/bundles -- {}",
@@ -156,6 +157,22 @@ fn plans() -> Vec<(String, Run)> {
                 )),
                 0,
             ),
+        ),
+        (
+            "gcl check-host --serve --profile seed --report reports/host   # grades whoever connects".into(),
+            Run::Not("serves until it is stopped; harness/tests/check_host_serve.rs runs it with hosts that connect"),
+        ),
+        (
+            "gcl fuzz merge shard-1 shard-2 shard-3 shard-4 --out merged".into(),
+            Run::Not("needs four shards' folders; harness/tests/fuzz_merge.rs merges real ones"),
+        ),
+        (
+            "pip install target/wheels/gcl_harness-*.whl".into(),
+            Run::Not("installs into the Python at hand; .ci/run installs the wheel into a fresh venv and tests it there"),
+        ),
+        (
+            "python3 -m venv target/py-build && target/py-build/bin/pip install 'maturin>=1.5,<2' && target/py-build/bin/maturin build --release --out target/wheels".into(),
+            Run::Not("a release build from PyPI's maturin, minutes long; .ci/run builds the wheel exactly so"),
         ),
         ("cargo bench -p gcl-model --bench model".into(), Run::Not(BENCH)),
         ("cargo bench -p gcl-harness --bench transport".into(), Run::Not(BENCH)),

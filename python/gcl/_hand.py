@@ -74,7 +74,7 @@ class Verdict:
         self.fired = fired
         self.exit_code = exit_code
         self.output = output
-        self.failures = [Failure(c) for c in report.get("cases", []) if c.get("verdict") != "PASS"]
+        self.failures = [Failure(c) for c in report.get("cases", []) if c.get("verdict") not in ("PASS", "SKIP", "XFAIL")]
 
     @property
     def passed(self):
