@@ -72,7 +72,12 @@ fn a_served_hand_grades_whoever_connected() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
     assert_eq!(report["target"], "host: good host");
-    assert!(report["cases"].as_array().unwrap().iter().all(|c| c["verdict"] == "PASS"));
+    // Every clause passes, but RealTime's: the host never entered it, so it is not exercised.
+    let cases = report["cases"].as_array().unwrap();
+    assert!(
+        cases.iter().all(|c| c["verdict"] == "PASS" || (c["id"] == "host-realtime-blocks" && c["verdict"] == "SKIP")),
+        "{cases:?}"
+    );
 
     let (child, port, _) = serve(&[]);
     talk(&port, &[b"FGET DP\r\n"]);
