@@ -45,9 +45,11 @@ const fn in_repo(as_run: Option<&'static str>, code: i32) -> Run {
 }
 
 /// A `gcl sim` in the background for the line after it: `with_sim ARGS` sets `$SIM` to what it
-/// printed first (a pty path or an address); `stop_sim` ends it.
+/// printed first (a pty path or an address); `stop_sim` ends it. The old `.sim.out` goes first:
+/// the background job truncates it only when it starts, so the wait could read the previous
+/// example's (dead or reused) pty path, or an empty line.
 const PRELUDE: &str = r#"
-with_sim() { gcl sim "$@" > .sim.out 2>/dev/null & sim=$!; n=0; until [ -s .sim.out ] || [ $n -ge 300 ]; do sleep 0.1; n=$((n+1)); done; SIM=$(head -n 1 .sim.out); }
+with_sim() { rm -f .sim.out; gcl sim "$@" > .sim.out 2>/dev/null & sim=$!; n=0; until [ -s .sim.out ] || [ $n -ge 300 ]; do sleep 0.1; n=$((n+1)); done; SIM=$(head -n 1 .sim.out); }
 stop_sim() { kill $sim 2>/dev/null; wait $sim 2>/dev/null; }
 "#;
 
