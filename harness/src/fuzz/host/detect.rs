@@ -151,6 +151,8 @@ pub fn native_frames(text: &str) -> Option<String> {
                 .iter()
                 .any(|p| func.starts_with(p))
             || func.starts_with("_dl_")
+            // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
+            || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
             || [
                 "read",
                 "poll",
@@ -178,13 +180,14 @@ fn own_first(all: Vec<(String, bool)>) -> Option<String> {
     Some(pick.into_iter().take(TOP_FRAMES).cloned().collect::<Vec<_>>().join(" < "))
 }
 
-/// Samples the stack of a stopped-in-place native process with `eu-stack` or, failing that,
-/// `gdb -batch` (each when installed; each given 10 s). `None` when neither is there, the
+/// Samples the stack of a stopped-in-place native process with `gdb -batch` or, failing that,
+/// `eu-stack` (each when installed; each given 10 s). `None` when neither is there, the
 /// process cannot be traced, or no frame could be read.
 pub fn sample_native(pid: i32) -> Option<HangStack> {
+    // gdb first: it demangles Rust's v0 symbols (`_RNv…`), which eu-stack prints raw.
     let tools: [(&str, Vec<String>); 2] = [
-        ("eu-stack", vec!["-m".into(), "-p".into(), pid.to_string()]),
         ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), "bt".into()]),
+        ("eu-stack", vec!["-m".into(), "-p".into(), pid.to_string()]),
     ];
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
