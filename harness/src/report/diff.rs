@@ -18,7 +18,39 @@ use super::Diff;
 
 /// Whether the diff's step answers in the `hex` form (a RealTime block).
 pub fn is_hex(d: &Diff) -> bool {
-    d.golden.trim_start().starts_with("hex")
+    let g = d.golden.trim_start();
+    g.starts_with("hex") || hex_tokens(g)
+}
+
+/// Whether a golden in the matcher's form (`2A 1E{u16 0..17800} 00 {u16 0..50}`, no `hex`
+/// word) is a binary answer: bytes as two upper-case hex digits or `??`, and elisions.
+fn hex_tokens(g: &str) -> bool {
+    let spaced = g.replace('{', " {").replace('}', "} ");
+    let mut in_brace = false;
+    let mut any = false;
+    for tok in spaced.split_whitespace() {
+        if in_brace || tok.starts_with('{') {
+            in_brace = !tok.ends_with('}');
+            continue;
+        }
+        let byte =
+            tok == "??" || (tok.len() == 2 && tok.bytes().all(|b| b.is_ascii_digit() || (b'A'..=b'F').contains(&b)));
+        if !byte {
+            return false;
+        }
+        any = true;
+    }
+    any && !in_brace
+}
+
+/// A golden of a binary answer as the transcript reader takes it.
+fn hex_expect(golden: &str) -> Option<Expect> {
+    let g = golden.trim_start();
+    if g.starts_with("hex") {
+        parse_expect(g)
+    } else {
+        parse_expect(&format!("hex {}", g.replace('{', " {").replace('}', "} ")))
+    }
 }
 
 /// The escaped line ends of the text form.
@@ -309,8 +341,8 @@ pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<F
     if !is_hex(d) {
         return Vec::new();
     }
-    let Some(golden) = parse_expect(&d.golden) else { return Vec::new() };
     let parsed = transcript.and_then(|t| gcl_transcript::parse(t).ok());
+    let Some(golden) = hex_expect(&d.golden) else { return Vec::new() };
     let actual = parsed
         .as_ref()
         .and_then(|t| t.steps.get(d.step.wrapping_sub(1)))
