@@ -1,0 +1,1 @@
+../../vectors/python/gcl_vectors/files.py
