@@ -206,53 +206,66 @@ pub fn parse_expect(golden: &str) -> Option<Expect> {
 }
 
 /// Walks a golden binary answer against the actual bytes: each field of the golden with its
-/// range, type and the actual bytes at its place. `names` gives the feedback layout's fields
-/// in wire order (after the header), when known; a golden of several blocks repeats it.
+/// range, type and the actual bytes at its place. `names` gives the feedback layout, when
+/// known: a field is named by its byte offset in the block (the header at 0), so a field the
+/// golden writes as literal bytes (`00` for a velocity of 0) takes its place too and shows as
+/// a row whose range is that one value; a golden of several blocks repeats the layout.
+/// Without a layout, fields are named by their type, all in block 1.
 pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -> Vec<FieldRow> {
     let mut rows = Vec::new();
     let mut at = 0usize;
-    let mut block = 0usize;
-    let mut index = 0usize;
-    let fields = names.map(|l| l.feedback().fields());
+    let feedback = names.map(|l| l.feedback()).filter(|f| f.size() > 0);
+    // The block the next byte belongs to (from 1) and its offset in that block.
+    let place = |at: usize| match feedback {
+        Some(f) => (at / f.size() + 1, at % f.size()),
+        None => (1, at),
+    };
+    let field_at = |offset: usize| feedback.and_then(|f| f.fields().iter().find(|x| x.offset() == offset));
+    let row = |at: usize, ty: FieldType, range: (i64, i64)| {
+        let (block, offset) = place(at);
+        let field = field_at(offset).filter(|f| f.ty() == ty);
+        let got = actual.get(at..at + ty.size());
+        FieldRow {
+            block,
+            motor: field.and_then(|f| f.motor()),
+            name: field.map_or_else(|| ty.name().to_string(), |f| f.name().to_string()),
+            ty,
+            range,
+            value: got.map(|b| value(ty, b)),
+            swapped: got.filter(|b| b.len() == 2).map(|b| value(ty, &[b[1], b[0]])),
+            bytes: got.map(gcl_transcript::hex_bytes).unwrap_or_default(),
+        }
+    };
     for (form, piece) in golden.pieces() {
         if form != Form::Hex {
             break;
         }
         match piece {
             Piece::Bytes(b) => {
-                // A header byte starts a block (a golden of several blocks has one per block).
-                if index == 0 || fields.is_some_and(|f| index >= f.len()) {
-                    block += 1;
-                    index = 0;
+                // Literal bytes that make up whole fields of the layout: a field held to one value.
+                let mut i = 0;
+                while i < b.len() {
+                    match field_at(place(at + i).1).filter(|f| i + f.size() <= b.len()) {
+                        Some(f) => {
+                            let v = value(f.ty(), &b[i..i + f.size()]);
+                            rows.push(row(at + i, f.ty(), (v, v)));
+                            i += f.size();
+                        }
+                        None => i += 1,
+                    }
                 }
                 at += b.len();
             }
             Piece::AnyByte => at += 1,
-            Piece::Field { .. } | Piece::Value(Value { kind: ValueKind::Field(_), .. }) => {
+            Piece::Field { ty, min, max } => {
+                rows.push(row(at, *ty, (*min, *max)));
+                at += ty.size();
+            }
+            Piece::Value(Value { kind: ValueKind::Field(ty), range, .. }) => {
                 // A field held to a relation has no fixed range: its type's range stands in.
-                let (ty, min, max) = match piece {
-                    Piece::Field { ty, min, max } => (ty, *min, *max),
-                    Piece::Value(Value { kind: ValueKind::Field(ty), range, .. }) => {
-                        let (lo, hi) = range.unwrap_or_else(|| (*ty.range().start(), *ty.range().end()));
-                        (ty, lo, hi)
-                    }
-                    _ => break,
-                };
-                let n = ty.size();
-                let got = actual.get(at..at + n);
-                let field = fields.and_then(|f| f.get(index));
-                rows.push(FieldRow {
-                    block: block.max(1),
-                    motor: field.and_then(|f| f.motor()),
-                    name: field.map_or_else(|| ty.name().to_string(), |f| f.name().to_string()),
-                    ty: *ty,
-                    range: (min, max),
-                    value: got.map(|b| value(*ty, b)),
-                    swapped: got.filter(|b| b.len() == 2).map(|b| value(*ty, &[b[1], b[0]])),
-                    bytes: got.map(gcl_transcript::hex_bytes).unwrap_or_default(),
-                });
-                at += n;
-                index += 1;
+                let range = range.unwrap_or_else(|| (*ty.range().start(), *ty.range().end()));
+                rows.push(row(at, *ty, range));
+                at += ty.size();
             }
             Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(_) => break,
         }
@@ -395,6 +408,33 @@ mod tests {
             w,
             vec![Window { lo: 16950, hi: 17050, value: Some(0) }, Window { lo: 0, hi: 50, value: Some(17000) }]
         );
+    }
+
+    #[test]
+    fn fields_are_named_by_their_place_in_the_block_even_after_literal_bytes() {
+        // rt-lcpg-zero-gain's feedback is motor 1 LFV LFAP, motor 2 LFV LFAP; its golden writes
+        // each velocity as a literal 00. The u16 after it is motor 1's LFAP, not its LFV.
+        let t = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../vectors/suite/bh8-262-4.4/rt-lcpg-zero-gain.gcl"
+        ))
+        .unwrap();
+        let parsed = gcl_transcript::parse(&t).unwrap();
+        let layouts = layouts("bh8-262-4.4", &parsed).unwrap();
+        let i = parsed.steps.iter().position(|s| s.expect.to_text().starts_with("hex")).unwrap();
+        let rows = decode_blocks(&parsed.steps[i].expect, &[0x2A, 0, 0, 3, 0, 0, 4], layouts[i].as_ref());
+        let named: Vec<(Option<u8>, &str, &str, (i64, i64), Option<i64>)> =
+            rows.iter().map(|r| (r.motor, r.name.as_str(), r.ty.name(), r.range, r.value)).collect();
+        assert_eq!(
+            named,
+            [
+                (Some(1), "LFV", "i8", (0, 0), Some(0)),
+                (Some(1), "LFAP", "u16", (0, 50), Some(3)),
+                (Some(2), "LFV", "i8", (0, 0), Some(0)),
+                (Some(2), "LFAP", "u16", (0, 50), Some(4)),
+            ]
+        );
+        assert!(rows.iter().all(|r| r.block == 1));
     }
 
     #[test]
