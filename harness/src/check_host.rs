@@ -103,6 +103,7 @@ pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTim
                 actual: esc(&got),
                 before: gcl_model::escape::escape(&want[at.saturating_sub(40)..at]),
                 golden: String::new(),
+                form: Some(crate::report::AnswerForm::Text),
             });
             c.transcript = Some(crate::report::truncate_note(&session, crate::report::MAX_SHOWN));
         }

@@ -200,6 +200,40 @@ fn realtime_failures_are_decoded_field_by_field_and_plotted() {
 }
 
 #[test]
+fn every_realtime_case_is_plotted_passing_ones_included() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&["conform", "--target", "sim", "--quiet", "--report", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: PASSED");
+    // Position, velocity and strain, each in a passing case's folded section, the golden's
+    // band behind the values the hand sent.
+    for (case, field) in [
+        ("rt-field-lfap", "LFAP"),
+        ("rt-field-lfv", "LFV"),
+        ("rt-field-lfs", "LFS"),
+        ("rt-lcpg-zero-gain", "LFAP"),
+        ("example-realtime-program", "LFAP"),
+    ] {
+        let section = html
+            .select(&sel(&format!("details[id=\"rt-case-{case}\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("{case} has no RealTime section: {:?}", plots(&html)));
+        let svg = section
+            .select(&sel(&format!("svg[data-plot=\"rt-{case}-{field}\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("{case}: no {field} plot"));
+        assert!(svg.select(&sel("polygon")).next().is_some(), "{case} {field}: the golden's band");
+        assert!(svg.select(&sel("path[stroke-width]")).next().is_some(), "{case} {field}: the actual trace");
+        assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_none(), "{case} passes: nothing marked");
+    }
+    // Both motors of a two-motor case are drawn.
+    let two = html.select(&sel("svg[data-plot=\"rt-rt-lcpg-zero-gain-LFAP\"]")).next().unwrap().html();
+    assert!(two.contains(">motor 1<") && two.contains(">motor 2<"), "{two}");
+    assert!(html.select(&sel("details[id^=\"rt-case-\"]")).count() >= 20);
+}
+
+#[test]
 fn the_certify_and_passing_conform_pages_parse() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cert");
@@ -349,9 +383,17 @@ fn a_motion_effect_failure_shows_the_window_it_missed() {
         gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
-    let fail = html.select(&sel("#fail-param-mcv-effect")).next().unwrap().text().collect::<String>();
+    let fail = html.select(&sel("#fail-param-mcv-effect")).next().unwrap();
+    let text = fail.text().collect::<String>();
     // Motor 2 is held to a relation with motor 1 (issue 19): the summary shows the window the
-    // relation stood for there, and where motor 2 was. Known gap: a window plot is drawn only
-    // for fixed ranges, so this case (a relation since the merge) has none yet.
-    assert!(fail.contains("expected \"2279 {int 13110..14785}\", got \"2279 2279\""), "{fail}");
+    // relation stood for there, and where motor 2 was.
+    assert!(text.contains("expected \"2279 {int 13110..14785}\", got \"2279 2279\""), "{text}");
+    // The plot: each motor's window (motor 2's from the relation with where motor 1 was), a dot
+    // where each motor was, and a mark on motor 2, the one outside its window.
+    let svg = fail.select(&sel("svg[data-plot=\"windows-param-mcv-effect\"]")).next().expect("a window plot");
+    assert_eq!(svg.select(&sel("rect[fill-opacity]")).count(), 2, "a window per motor");
+    assert_eq!(svg.select(&sel("circle")).count(), 2, "where each motor was");
+    let svg_text = svg.text().collect::<String>();
+    assert!(svg_text.contains("14785") || svg_text.contains("16949"), "the axis reaches the windows: {svg_text}");
+    assert!(svg_text.contains("motor 2 misses"), "{svg_text}");
 }

@@ -14,42 +14,30 @@ use gcl_model::realtime::{FieldType, RtLayout};
 use gcl_model::{Device, DeviceConfig, Mode, Profile};
 use gcl_transcript::{Expect, Form, Piece, Transcript, Value, ValueKind};
 
-use super::Diff;
+use super::{AnswerForm, Diff};
 
-/// Whether the diff's step answers in the `hex` form (a RealTime block).
+/// Whether the diff's step answers in the `hex` form (a RealTime block), as the golden says;
+/// a report written before the diff kept its form has the word `hex` in front of its golden.
 pub fn is_hex(d: &Diff) -> bool {
-    let g = d.golden.trim_start();
-    g.starts_with("hex") || hex_tokens(g)
-}
-
-/// Whether a golden in the matcher's form (`2A 1E{u16 0..17800} 00 {u16 0..50}`, no `hex`
-/// word) is a binary answer: bytes as two upper-case hex digits or `??`, and elisions.
-fn hex_tokens(g: &str) -> bool {
-    let spaced = g.replace('{', " {").replace('}', "} ");
-    let mut in_brace = false;
-    let mut any = false;
-    for tok in spaced.split_whitespace() {
-        if in_brace || tok.starts_with('{') {
-            in_brace = !tok.ends_with('}');
-            continue;
-        }
-        let byte =
-            tok == "??" || (tok.len() == 2 && tok.bytes().all(|b| b.is_ascii_digit() || (b'A'..=b'F').contains(&b)));
-        if !byte {
-            return false;
-        }
-        any = true;
+    match d.form {
+        Some(f) => f == AnswerForm::Hex,
+        None => d.golden.trim_start().starts_with("hex"),
     }
-    any && !in_brace
 }
 
-/// A golden of a binary answer as the transcript reader takes it.
-fn hex_expect(golden: &str) -> Option<Expect> {
-    let g = golden.trim_start();
-    if g.starts_with("hex") {
+/// The step's golden as the transcript reader takes it, from the unquoted form of the diff
+/// (`2A 1E{u16 0..17800}`, `12FGET P\n\r{int 51..16949 as p1}`) or the older quoted one.
+pub fn golden_expect(d: &Diff) -> Option<Expect> {
+    let g = d.golden.trim_start();
+    if g.is_empty() {
+        None
+    } else if g.starts_with("hex") || g.starts_with('"') {
         parse_expect(g)
-    } else {
+    } else if is_hex(d) {
         parse_expect(&format!("hex {}", g.replace('{', " {").replace('}', "} ")))
+    } else {
+        // Escaped text holds no bare quote (it is written \x22), so quotes make it a golden.
+        parse_expect(&format!("\"{g}\""))
     }
 }
 
@@ -69,16 +57,14 @@ pub fn command(d: &Diff) -> String {
     if is_hex(d) {
         return "RealTime block".into();
     }
+    // The golden begins with the command's echo (a report before the unquoted form quoted it).
     let g = d.golden.trim();
-    let body = match g.find('"') {
-        Some(i) => &g[i + 1..],
-        None => d.before.as_str(),
-    };
+    let body = if g.is_empty() { d.before.as_str() } else { g.strip_prefix('"').unwrap_or(g) };
     let end = first_break(body).map(|(i, _)| i).unwrap_or(body.len());
     let cmd = body[..end].trim_end_matches('"').trim();
     if cmd.is_empty() {
         // The answer begins with a line break: an empty line, a CR or a ^C.
-        if d.golden.contains("\\x03") || g.starts_with("\"\\n\\r=> ") { "^C".into() } else { "the answer".into() }
+        if d.golden.contains("\\x03") || body.starts_with("\\n\\r=> ") { "^C".into() } else { "the answer".into() }
     } else {
         clip(cmd, 40)
     }
@@ -256,7 +242,13 @@ pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -
                 }
                 at += b.len();
             }
-            Piece::AnyByte => at += 1,
+            Piece::AnyByte => {
+                // `??` over a one-byte field (a strain the golden leaves free): any value of its type.
+                if let Some(f) = field_at(place(at).1).filter(|f| f.size() == 1) {
+                    rows.push(row(at, f.ty(), (f.min(), f.max())));
+                }
+                at += 1;
+            }
             Piece::Field { ty, min, max } => {
                 rows.push(row(at, *ty, (*min, *max)));
                 at += ty.size();
@@ -289,6 +281,7 @@ pub struct Window {
 /// elision of varying length, literal bytes that differ).
 pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
     let mut out = Vec::new();
+    let mut captured: std::collections::BTreeMap<String, i64> = std::collections::BTreeMap::new();
     let mut at = 0usize;
     for (form, piece) in golden.pieces() {
         if form != Form::Text {
@@ -307,7 +300,7 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                     at += b.len();
                 }
             }
-            Piece::Int(range) => {
+            Piece::Int(_) | Piece::Value(Value { kind: ValueKind::Int, .. }) => {
                 let start = at;
                 if actual.get(at) == Some(&b'-') {
                     at += 1;
@@ -315,9 +308,26 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                 while actual.get(at).is_some_and(u8::is_ascii_digit) {
                     at += 1;
                 }
-                let value = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
-                if let Some((lo, hi)) = range {
-                    out.push(Window { lo: *lo, hi: *hi, value });
+                let value: Option<i64> = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
+                // The window: a fixed range, or the band a relation gives around a value this
+                // answer captured before (motor 2 within 6% of motor 1 × 153/25); a relation to
+                // a value captured elsewhere ends the walk.
+                let window = match piece {
+                    Piece::Int(range) => *range,
+                    Piece::Value(v) => match &v.relation {
+                        Some(rel) => match captured.get(&rel.name) {
+                            Some(base) => Some(rel.band(*base)),
+                            None => break,
+                        },
+                        None => v.range,
+                    },
+                    _ => None,
+                };
+                if let (Piece::Value(Value { capture: Some(name), .. }), Some(v)) = (piece, value) {
+                    captured.insert(name.clone(), v);
+                }
+                if let Some((lo, hi)) = window {
+                    out.push(Window { lo, hi, value });
                 }
             }
             _ => break,
@@ -355,7 +365,7 @@ pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<F
         return Vec::new();
     }
     let parsed = transcript.and_then(|t| gcl_transcript::parse(t).ok());
-    let Some(golden) = hex_expect(&d.golden) else { return Vec::new() };
+    let Some(golden) = golden_expect(d) else { return Vec::new() };
     let actual = parsed
         .as_ref()
         .and_then(|t| t.steps.get(d.step.wrapping_sub(1)))
@@ -379,7 +389,8 @@ mod tests {
             expected: "8500 8500 8500 1575\\n\\r=> ".into(),
             actual: "1575 8500 8500 8500\\n\\r=> ".into(),
             before: "FGET DP\\n\\r".into(),
-            golden: "\"FGET DP\\n\\r8500 8500 8500 1575\\n\\r=> \"".into(),
+            golden: "FGET DP\\n\\r8500 8500 8500 1575\\n\\r=> ".into(),
+            form: Some(AnswerForm::Text),
         }
     }
 
@@ -438,6 +449,44 @@ mod tests {
     }
 
     #[test]
+    fn a_relation_gives_its_window_from_the_value_it_captured() {
+        // param-mcv-effect: motor 2 within 6% of motor 1 × 153/25 (issue 19), here ignored.
+        let d = Diff {
+            step: 9,
+            offset: 15,
+            expected: "{int 13110..14785}\\n\\r=> ".into(),
+            actual: "2279\\n\\r=> ".into(),
+            before: "12FGET P\\n\\r2279 ".into(),
+            golden: "12FGET P\\n\\r{int 51..16949 as p1} {int p1*153/25 +-6%}\\n\\r=> ".into(),
+            form: Some(AnswerForm::Text),
+        };
+        let w = int_windows(&golden_expect(&d).unwrap(), b"12FGET P\n\r2279 2279\n\r=> ");
+        assert_eq!(
+            w,
+            vec![Window { lo: 51, hi: 16949, value: Some(2279) }, Window { lo: 13110, hi: 14785, value: Some(2279) }]
+        );
+    }
+
+    #[test]
+    fn the_form_comes_from_the_golden_not_from_how_its_text_looks() {
+        // A text answer of two-digit numbers reads like hex tokens; the form says it is text.
+        let d = Diff {
+            step: 3,
+            offset: 3,
+            expected: "12".into(),
+            actual: "21".into(),
+            before: "10 ".into(),
+            golden: "10 12".into(),
+            form: Some(AnswerForm::Text),
+        };
+        assert!(!is_hex(&d));
+        assert!(one_line(&d).contains("expected \"10 12\", got \"10 21\""), "{}", one_line(&d));
+        let d = Diff { golden: "10 12".into(), form: Some(AnswerForm::Hex), ..d };
+        assert!(is_hex(&d));
+        assert_eq!(command(&d), "RealTime block");
+    }
+
+    #[test]
     fn a_swapped_field_is_decoded_both_ways_and_named_from_the_layout() {
         let d = Diff {
             step: 10,
@@ -445,10 +494,11 @@ mod tests {
             expected: "{u16 4950..5050}".into(),
             actual: "88 13".into(),
             before: "2A".into(),
-            golden: "hex 2A {u16 4950..5050}".into(),
+            golden: "2A {u16 4950..5050}".into(),
+            form: Some(AnswerForm::Hex),
         };
         assert_eq!(one_line(&d), "RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13");
-        let golden = parse_expect(&d.golden).unwrap();
+        let golden = golden_expect(&d).unwrap();
         let rows = decode_blocks(&golden, &[0x2A, 0x88, 0x13], None);
         assert_eq!(rows.len(), 1);
         assert_eq!(rows[0].value, Some(34835));

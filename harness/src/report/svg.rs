@@ -43,6 +43,9 @@ pub struct Plot {
     pub marks: Vec<(f64, String)>,
     /// Windows: at x, a value should lie in `lo..=hi` (drawn as a shaded bar behind the series).
     pub windows: Vec<(f64, f64, f64)>,
+    /// Labels under the x axis at these x (things, not numbers: motors); empty: the axis's
+    /// two ends are numbered.
+    pub x_ticks: Vec<(f64, String)>,
 }
 
 const W: f64 = 640.0;
@@ -76,8 +79,9 @@ impl Plot {
         if !y0.is_finite() {
             (y0, y1) = (0.0, 1.0);
         }
-        if x1 <= x0 {
-            x1 = x0 + 1.0;
+        if x1 - x0 < 4.0 {
+            // A few blocks (or one): half a step of room either side, so no point sits on an axis.
+            (x0, x1) = (x0 - 0.5, x1 + 0.5);
         }
         if y1 <= y0 {
             y1 = y0 + 1.0;
@@ -97,6 +101,19 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
         );
         let _ = write!(s, "<text x=\"{L}\" y=\"16\" font-size=\"13\" font-weight=\"bold\">{}</text>", esc(&self.title));
         for b in &self.bands {
+            if let [(x, lo, hi)] = b.points[..] {
+                // One point has no width to shade: a bar like a window's.
+                let w = ((px(x + 0.5) - px(x - 0.5)) * 0.5).max(4.0);
+                let _ = write!(
+                    s,
+                    "<polygon points=\"{0:.1},{2:.1} {1:.1},{2:.1} {1:.1},{3:.1} {0:.1},{3:.1}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"none\"/>",
+                    px(x) - w / 2.0,
+                    px(x) + w / 2.0,
+                    py(hi),
+                    py(lo).max(py(hi) + 2.0)
+                );
+                continue;
+            }
             if b.points.is_empty() {
                 continue;
             }
@@ -124,7 +141,6 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             s,
             "<path d=\"M{L},{T} V{} H{}\" fill=\"none\" stroke=\"#444\"/>\
 <text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\
-<text x=\"{L}\" y=\"{}\" text-anchor=\"middle\">{}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\
 <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\
 <text x=\"12\" y=\"{}\" transform=\"rotate(-90 12 {})\" text-anchor=\"middle\">{}</text>",
             H - B,
@@ -135,11 +151,6 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             L - 4.0,
             py(lo) + 4.0,
             nice(lo),
-            H - B + 14.0,
-            nice(x0),
-            W - R,
-            H - B + 14.0,
-            nice(x1),
             (L + W - R) / 2.0,
             H - 6.0,
             esc(&self.x_label),
@@ -147,6 +158,25 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             (T + H - B) / 2.0,
             esc(&self.y_label),
         );
+        if self.x_ticks.is_empty() {
+            let _ = write!(
+                s,
+                "<text x=\"{L}\" y=\"{0}\" text-anchor=\"middle\">{1}</text><text x=\"{2}\" y=\"{0}\" text-anchor=\"end\">{3}</text>",
+                H - B + 14.0,
+                nice(x0),
+                W - R,
+                nice(x1)
+            );
+        }
+        for (x, label) in &self.x_ticks {
+            let _ = write!(
+                s,
+                "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+                px(*x),
+                H - B + 14.0,
+                esc(label)
+            );
+        }
         for (i, se) in self.series.iter().enumerate() {
             let c = COLOURS[i % COLOURS.len()];
             let mut d = String::new();
@@ -170,7 +200,13 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             }
             if se.dots || se.points.len() <= 40 {
                 for &(x, y) in &se.points {
-                    let _ = write!(s, "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\" fill=\"{c}\"/>", px(x), py(y));
+                    let _ = write!(
+                        s,
+                        "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"{}\" fill=\"{c}\"/>",
+                        px(x),
+                        py(y),
+                        if se.dots { 4.0 } else { 2.5 }
+                    );
                 }
             }
             let lx = W - R - 150.0;
@@ -229,7 +265,7 @@ mod tests {
             }],
             bands: vec![Band { points: vec![(1.0, 4950.0, 5050.0), (2.0, 4950.0, 5050.0)] }],
             marks: vec![(2.0, "fails".into())],
-            windows: Vec::new(),
+            ..Default::default()
         };
         let svg = p.to_svg("rt-lfap");
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));

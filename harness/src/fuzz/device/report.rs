@@ -223,7 +223,8 @@ pub fn summary_line(f: &Finding) -> String {
             expected: e[common..].trim_start().to_string(),
             actual: a[common..].trim_start().to_string(),
             before: e[..common].trim_end().to_string(),
-            golden: if hex { format!("hex {e}") } else { format!("\"{e}\"") },
+            golden: e.clone(),
+            form: Some(if hex { crate::report::AnswerForm::Hex } else { crate::report::AnswerForm::Text }),
         };
         return crate::report::diff::one_line(&d);
     }
