@@ -47,9 +47,21 @@ fn page(path: &Path, title_starts: &str) -> Html {
     assert_eq!(body[1].value().id(), Some("verdict"), "{}", path.display());
     for a in html.select(&sel("a[href]")) {
         let href = a.value().attr("href").unwrap();
-        let id = href.strip_prefix('#').unwrap_or_else(|| panic!("{}: a link out of the page: {href}", path.display()));
-        let target = Selector::parse(&format!("[id=\"{id}\"]")).unwrap();
-        assert!(html.select(&target).next().is_some(), "{}: link {href} has no target", path.display());
+        match href.strip_prefix('#') {
+            Some(id) => {
+                let target = Selector::parse(&format!("[id=\"{id}\"]")).unwrap();
+                assert!(html.select(&target).next().is_some(), "{}: link {href} has no target", path.display());
+            }
+            // A file beside the page (a certificate bundle's transcripts), never elsewhere.
+            None => {
+                assert!(
+                    !href.contains(':') && !href.starts_with('/') && !href.contains(".."),
+                    "{}: a link out of the page's folder: {href}",
+                    path.display()
+                );
+                assert!(path.parent().unwrap().join(href).is_file(), "{}: {href} is missing", path.display());
+            }
+        }
     }
     assert!(html.select(&sel("script, link, iframe, object, embed, img")).next().is_none(), "{}", path.display());
     if let Some(e) = html.select(&sel("[src], [srcset]")).next() {
@@ -241,6 +253,12 @@ fn the_certify_and_passing_conform_pages_parse() {
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let html = page(&out.join("report.html"), "gcl certify seed on sim:seed: PASSED");
     assert!(html.select(&sel("#levels")).next().is_some());
+    // Every case that ran links to its transcript in the bundle (page() checked the files).
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let ran = report["cases"].as_array().unwrap().iter().filter(|c| c["verdict"] != "SKIP").count();
+    assert!(ran > 50);
+    let linked = html.select(&sel("#cases + details tr a[href^=\"transcripts/\"]")).count();
+    assert_eq!(linked, ran, "a transcript link per case that ran");
     if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
         assert!(cases.iter().all(|c| c.starts_with("gcl certify seed (sim:seed)|gcl.seed.")), "{:?}", &cases[..2]);
     }
@@ -288,6 +306,31 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
     }
 }
 
+/// The `time` of every `<testcase>` of a JUnit file, in seconds, read by an XML parser.
+fn junit_times(path: &Path) -> Vec<(String, f64)> {
+    let xml = std::fs::read_to_string(path).unwrap();
+    let mut reader = quick_xml::Reader::from_str(&xml);
+    let mut out = Vec::new();
+    loop {
+        match reader.read_event().unwrap() {
+            quick_xml::events::Event::Start(e) | quick_xml::events::Event::Empty(e)
+                if e.name().as_ref() == b"testcase" =>
+            {
+                let attr = |n: &[u8]| {
+                    e.attributes()
+                        .flatten()
+                        .find(|a| a.key.as_ref() == n)
+                        .map(|a| a.unescape_value().unwrap().to_string())
+                };
+                out.push((attr(b"name").unwrap(), attr(b"time").unwrap().parse().unwrap()));
+            }
+            quick_xml::events::Event::Eof => break,
+            _ => {}
+        }
+    }
+    out
+}
+
 fn python_ready() -> bool {
     deps::python_with(&["serial"]).is_some()
 }
@@ -311,6 +354,9 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert!(!text.contains("suite hash") && !text.contains("liveness"), "nothing of conform's");
     let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
     assert!(rt.contains("not exercised"), "{rt}");
+    // Every clause has the time of the session it was judged over, not 0.
+    let times = junit_times(&rep.join("junit.xml"));
+    assert!(times.len() >= 5 && times.iter().all(|(_, t)| *t > 0.0), "{times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
         assert!(
             cases
@@ -354,6 +400,8 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert!(row.contains(&format!("gcl fuzz host --replay {}", bundles.display())), "{row}");
     assert!(html.select(&sel("#fired + table")).next().is_some(), "the misbehaviour × state table");
     assert!(plots(&html).contains(&"fuzz-host-findings".to_string()));
+    let times = junit_times(&rep.join("junit.xml"));
+    assert!(!times.is_empty() && times.iter().all(|(_, t)| *t > 0.0), "each finding has a time: {times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
         assert!(cases[0].starts_with(&format!("gcl fuzz host python3 {host} {{port}}|gcl.fuzz-host.")), "{cases:?}");
     }

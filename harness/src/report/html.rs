@@ -424,14 +424,25 @@ fn cases_table(r: &RunReport) -> String {
         h.push_str("</table>\n");
         return h;
     }
-    let mut h = String::from(
-        "<table><tr><th>id</th><th>title</th><th>level</th><th>verdict</th><th>ms</th><th>why</th></tr>\n",
+    // A certificate bundle keeps every case's exchange beside the page, in `transcripts/`.
+    let bundle = r.kind == ReportKind::Certify;
+    let mut h = format!(
+        "<table><tr><th>id</th><th>title</th><th>level</th><th>verdict</th><th>ms</th><th>why</th>{}</tr>\n",
+        if bundle { "<th>transcript</th>" } else { "" }
     );
     for c in &r.cases {
         let id = if failing(c) { case_link(r, &c.id) } else { esc(&c.id) };
+        let transcript = match (bundle, c.verdict) {
+            (false, _) => String::new(),
+            (true, Verdict::Skip) => "<td class=\"muted\">not run</td>".to_string(),
+            (true, _) => {
+                let file = format!("transcripts/{}.gcl", crate::certify::safe_name(&c.id));
+                format!("<td><a href=\"{}\">{}</a></td>", esc(&file), esc(&file))
+            }
+        };
         let _ = writeln!(
             h,
-            "<tr class=\"{}\" id=\"{}\"><td>{id}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"n\">{:.1}</td><td>{}</td></tr>",
+            "<tr class=\"{}\" id=\"{}\"><td>{id}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"n\">{:.1}</td><td>{}</td>{transcript}</tr>",
             class(c.verdict),
             esc(&c.id),
             esc(&c.title),
