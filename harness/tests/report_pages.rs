@@ -304,6 +304,40 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
         assert!(f[3].parse::<f64>().is_ok(), "a time: {cases:?}");
         assert!(f[5].starts_with("FGET") && f[5].contains("expected") && f[5].contains("got"), "{cases:?}");
     }
+
+    // Again with those findings as the baseline: the same bug is known, not new. The page
+    // says so first and lists the findings apart with why; JUnit skips them instead of failing.
+    let rep2 = dir.path().join("rep2");
+    let o = gcl(&[
+        "fuzz",
+        "device",
+        "--target",
+        "sim",
+        "--fault",
+        "fget-reversed",
+        "--runs",
+        "150",
+        "--baseline",
+        found.to_str().unwrap(),
+        "--report",
+        rep2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    let html = page(&rep2.join("fuzz-device.html"), "gcl fuzz device bh8-262-4.4 on sim: NO NEW FINDING");
+    let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
+    assert!(verdict.contains("no new finding") && verdict.contains("known"), "{verdict}");
+    assert!(html.select(&sel("#findings + p")).next().unwrap().text().collect::<String>().contains("None new"));
+    let known = html.select(&sel("#known + table tr.skip")).map(|r| r.text().collect::<String>()).collect::<Vec<_>>();
+    assert!(!known.is_empty() && known.iter().all(|r| r.contains("in the baseline")), "{known:?}");
+    let xml = std::fs::read_to_string(rep2.join("junit.xml")).unwrap();
+    assert!(!xml.contains("<failure"), "a known finding does not fail CI: {xml}");
+    assert_eq!(xml.matches("<skipped message=\"known (in the baseline): ").count(), known.len(), "{xml}");
+    if let Some(cases) = junit_consumer(&rep2.join("junit.xml")) {
+        assert!(
+            cases.iter().all(|c| c.contains("|gcl.fuzz-device.known.") && c.contains("|skipped|known (")),
+            "{cases:?}"
+        );
+    }
 }
 
 /// The `time` of every `<testcase>` of a JUnit file, in seconds, read by an XML parser.
