@@ -479,3 +479,49 @@ fn a_motion_effect_failure_shows_the_window_it_missed() {
     assert!(svg_text.contains("14785") || svg_text.contains("16949"), "the axis reaches the windows: {svg_text}");
     assert!(svg_text.contains("motor 2 misses"), "{svg_text}");
 }
+
+#[test]
+fn the_realtime_example_program_is_plotted_block_by_block_against_the_model() {
+    use gcl_host::client::Hand;
+    use gcl_host::client::programs::{self, Clock};
+    use gcl_host::target::OpenOptions;
+    let run_for = std::time::Duration::from_millis(2500);
+    let program = |target: &str| {
+        let mut hand = Hand::open(&target.parse().unwrap(), &OpenOptions::default()).unwrap();
+        programs::realtime(&mut hand, Clock::Link, run_for, &mut std::io::sink()).unwrap()
+    };
+    let model = program("sim:seed");
+    let run = program("sim:seed");
+    assert!(run.blocks.len() > 150, "hundreds of blocks: {}", run.blocks.len());
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, run: &programs::RealtimeReport| {
+        let path = dir.path().join(name);
+        let page = gcl_harness::report::program::realtime_program_page("sim:seed", "seed", &[], run, &model);
+        std::fs::write(&path, page).unwrap();
+        path
+    };
+    let html = page(&write("agrees.html", &run), "gcl example realtime on sim:seed: AGREES WITH THE MODEL");
+    for m in 1..=3 {
+        let svg = html
+            .select(&sel(&format!("svg[data-plot=\"example-realtime-F{m}-position\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("F{m}: {:?}", plots(&html)));
+        assert!(svg.select(&sel("polygon")).next().is_some(), "F{m}: the model's band");
+        assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_none(), "F{m} stays in its band");
+    }
+    // The fingers move in turn: the velocity plot marks where F2 and F3 start, F2 first.
+    let v = html.select(&sel("svg[data-plot=\"example-realtime-velocity\"]")).next().unwrap();
+    let marks: Vec<String> = v.select(&sel("text[fill]")).map(|t| t.text().collect()).collect();
+    assert_eq!(marks, ["F2 starts", "F3 starts"]);
+
+    // A hand whose F2 slips 1000 counts from block 151 on: the page says it parts, and where.
+    let mut slipped = run.clone();
+    for b in &mut slipped.blocks[150..] {
+        b.positions[1] -= 1000;
+    }
+    let html = page(&write("parts.html", &slipped), "gcl example realtime on sim:seed: PARTS FROM THE MODEL");
+    let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
+    assert!(verdict.contains("F2 left the model's band at block 151"), "{verdict}");
+    let f2 = html.select(&sel("svg[data-plot=\"example-realtime-F2-position\"]")).next().unwrap();
+    assert!(f2.select(&sel("line[stroke-dasharray]")).next().is_some(), "where F2 leaves its band");
+}

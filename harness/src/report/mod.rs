@@ -8,6 +8,7 @@ pub mod diff;
 pub(crate) mod html;
 mod junit;
 pub mod page;
+pub mod program;
 pub mod svg;
 
 use std::collections::BTreeMap;
