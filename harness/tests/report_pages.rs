@@ -478,6 +478,7 @@ fn a_motion_effect_failure_shows_the_window_it_missed() {
     let svg_text = svg.text().collect::<String>();
     assert!(svg_text.contains("14785") || svg_text.contains("16949"), "the axis reaches the windows: {svg_text}");
     assert!(svg_text.contains("motor 2 misses"), "{svg_text}");
+    assert!(svg_text.contains("motor 2: motor 1 × 153/25 ± 6%"), "the relation under its window: {svg_text}");
 }
 
 #[test]

@@ -377,11 +377,17 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             // The campaign's time until the run that found it ended: what finding it took.
             duration_ms: f.found_after_ms as f64,
             message: Some(format!(
-                "{} (run {}, {} hit(s), schedule: {})",
+                "{} (run {}, {} hit(s), {})",
                 f.verdict.message,
                 f.run,
                 f.hits,
-                f.schedule.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(", ")
+                if f.schedule.planned.is_empty() {
+                    "no misbehaviour: the hand behaved".to_string()
+                } else {
+                    let planned: Vec<String> =
+                        f.schedule.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect();
+                    format!("schedule: {}", planned.join(", "))
+                }
             )),
             diff: None,
             transcript: Some(gcl_harness::report::truncate_note(

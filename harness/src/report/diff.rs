@@ -266,7 +266,7 @@ pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -
 }
 
 /// One decimal value of a text answer against its golden window.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Window {
     /// Lowest accepted.
     pub lo: i64,
@@ -274,6 +274,9 @@ pub struct Window {
     pub hi: i64,
     /// What the answer had there (`None` where it had no number).
     pub value: Option<i64>,
+    /// For a window a relation gives: the window (index) whose value it is relative to, and
+    /// the factor and tolerance (`× 153/25 ± 6%`).
+    pub relative_to: Option<(usize, String)>,
 }
 
 /// Walks a golden text answer against the actual bytes and returns each ranged `{int A..B}`
@@ -281,7 +284,8 @@ pub struct Window {
 /// elision of varying length, literal bytes that differ).
 pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
     let mut out = Vec::new();
-    let mut captured: std::collections::BTreeMap<String, i64> = std::collections::BTreeMap::new();
+    // A captured value and the window it was read in.
+    let mut captured: std::collections::BTreeMap<String, (i64, usize)> = std::collections::BTreeMap::new();
     let mut at = 0usize;
     for (form, piece) in golden.pieces() {
         if form != Form::Text {
@@ -312,11 +316,20 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                 // The window: a fixed range, or the band a relation gives around a value this
                 // answer captured before (motor 2 within 6% of motor 1 × 153/25); a relation to
                 // a value captured elsewhere ends the walk.
+                let mut relative_to = None;
                 let window = match piece {
                     Piece::Int(range) => *range,
                     Piece::Value(v) => match &v.relation {
                         Some(rel) => match captured.get(&rel.name) {
-                            Some(base) => Some(rel.band(*base)),
+                            Some((base, from)) => {
+                                let factor = if rel.den == 1 {
+                                    format!("× {}", rel.num)
+                                } else {
+                                    format!("× {}/{}", rel.num, rel.den)
+                                };
+                                relative_to = Some((*from, format!("{factor} ± {}%", rel.tolerance)));
+                                Some(rel.band(*base))
+                            }
                             None => break,
                         },
                         None => v.range,
@@ -324,10 +337,10 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                     _ => None,
                 };
                 if let (Piece::Value(Value { capture: Some(name), .. }), Some(v)) = (piece, value) {
-                    captured.insert(name.clone(), v);
+                    captured.insert(name.clone(), (v, out.len()));
                 }
                 if let Some((lo, hi)) = window {
-                    out.push(Window { lo, hi, value });
+                    out.push(Window { lo, hi, value, relative_to });
                 }
             }
             _ => break,
@@ -417,7 +430,10 @@ mod tests {
         let w = int_windows(&golden, b"FGET P\n\r0 17000 3000\n\r=> ");
         assert_eq!(
             w,
-            vec![Window { lo: 16950, hi: 17050, value: Some(0) }, Window { lo: 0, hi: 50, value: Some(17000) }]
+            vec![
+                Window { lo: 16950, hi: 17050, value: Some(0), relative_to: None },
+                Window { lo: 0, hi: 50, value: Some(17000), relative_to: None }
+            ]
         );
     }
 
@@ -434,7 +450,8 @@ mod tests {
         let layouts = layouts("bh8-262-4.4", &parsed).unwrap();
         let i = parsed.steps.iter().position(|s| s.expect.to_text().starts_with("hex")).unwrap();
         let rows = decode_blocks(&parsed.steps[i].expect, &[0x2A, 0, 0, 3, 0, 0, 4], layouts[i].as_ref());
-        let named: Vec<(Option<u8>, &str, &str, (i64, i64), Option<i64>)> =
+        type Named<'a> = (Option<u8>, &'a str, &'a str, (i64, i64), Option<i64>);
+        let named: Vec<Named> =
             rows.iter().map(|r| (r.motor, r.name.as_str(), r.ty.name(), r.range, r.value)).collect();
         assert_eq!(
             named,
@@ -463,7 +480,10 @@ mod tests {
         let w = int_windows(&golden_expect(&d).unwrap(), b"12FGET P\n\r2279 2279\n\r=> ");
         assert_eq!(
             w,
-            vec![Window { lo: 51, hi: 16949, value: Some(2279) }, Window { lo: 13110, hi: 14785, value: Some(2279) }]
+            vec![
+                Window { lo: 51, hi: 16949, value: Some(2279), relative_to: None },
+                Window { lo: 13110, hi: 14785, value: Some(2279), relative_to: Some((0, "× 153/25 ± 6%".into())) }
+            ]
         );
     }
 

@@ -668,6 +668,11 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
         Some(m) if motors.len() == windows.len() => format!("motor {m}"),
         _ => format!("value {}", i + 1),
     };
+    // A window a relation gives says so under its bar: `motor 2: motor 1 × 153/25 ± 6%`.
+    let tick = |i: usize| match &windows[i].relative_to {
+        Some((from, rule)) => format!("{}: {} {rule}", label(i), label(*from)),
+        None => label(i),
+    };
     let plot = Plot {
         title: format!("{cmd}: each value's golden window and where it was"),
         x_label: if motors.len() == windows.len() { "motor".into() } else { "value in the answer".into() },
@@ -684,7 +689,7 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
         }],
         windows: windows.iter().enumerate().map(|(i, w)| ((i + 1) as f64, w.lo as f64, w.hi as f64)).collect(),
         marks: parting.map(|i| vec![((i + 1) as f64, format!("{} misses", label(i)))]).unwrap_or_default(),
-        x_ticks: (0..windows.len()).map(|i| ((i + 1) as f64, label(i))).collect(),
+        x_ticks: (0..windows.len()).map(|i| ((i + 1) as f64, tick(i))).collect(),
         ..Default::default()
     };
     plot.to_svg(&format!("windows-{}", c.id))

@@ -82,7 +82,7 @@ pub fn realtime_program_page(
     p.options(options);
     p.heading("positions", "Each finger's position per block");
     p.push("<p>The example's feedback carries positions only (LFAP 1; LFV 0 and LFS 0), so the hand sends no velocity or strain to plot: the velocities below are those the program sent.</p>\n");
-    for m in 0..3 {
+    for (m, out) in outside.iter().enumerate() {
         let plot = Plot {
             title: format!("F{} position per block (LFAP, counts)", m + 1),
             x_label: "block".into(),
@@ -100,7 +100,8 @@ pub fn realtime_program_page(
                     .map(|(i, b)| ((i + 1) as f64, (b.positions[m] - tol) as f64, (b.positions[m] + tol) as f64))
                     .collect(),
             }],
-            marks: outside[m].map(|b| vec![(b as f64, "leaves the band".to_string())]).unwrap_or_default(),
+            marks: out.map(|b| vec![(b as f64, "leaves the band".to_string())]).unwrap_or_default(),
+            band_label: Some(format!("the model's run ± {tol}")),
             ..Default::default()
         };
         p.push(&plot.to_svg(&format!("example-realtime-F{}-position", m + 1)));

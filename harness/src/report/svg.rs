@@ -46,18 +46,38 @@ pub struct Plot {
     /// Labels under the x axis at these x (things, not numbers: motors); empty: the axis's
     /// two ends are numbered.
     pub x_ticks: Vec<(f64, String)>,
+    /// What the bands and windows stand for, in the legend (default "golden range").
+    pub band_label: Option<String>,
 }
 
 const W: f64 = 640.0;
-const H: f64 = 220.0;
+const H: f64 = 236.0;
 const L: f64 = 64.0;
 const R: f64 = 16.0;
-const T: f64 = 26.0;
+/// Top margin: the title, then the legend in one row under it, clear of the data and marks.
+const T: f64 = 42.0;
 const B: f64 = 40.0;
 const COLOURS: [&str; 6] = ["#1f5fbf", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#555"];
 
 fn nice(v: f64) -> String {
     if v.abs() >= 1000.0 || v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v:.2}") }
+}
+
+/// Where the legend's `i`th entry goes: one row under the title, left to right, wrapping to
+/// the plot's width (an entry is a 16 px swatch and its name at about 6.5 px a character).
+fn legend_at(names: &[&str], i: usize) -> (f64, f64) {
+    let (mut x, mut y) = (L, 30.0);
+    for (k, n) in names.iter().enumerate() {
+        let w = 28.0 + 6.5 * n.chars().count() as f64;
+        if x + w > W - R && x > L {
+            (x, y) = (L, y + 12.0);
+        }
+        if k == i {
+            break;
+        }
+        x += w;
+    }
+    (x, y)
 }
 
 impl Plot {
@@ -79,8 +99,9 @@ impl Plot {
         if !y0.is_finite() {
             (y0, y1) = (0.0, 1.0);
         }
-        if x1 - x0 < 4.0 {
-            // A few blocks (or one): half a step of room either side, so no point sits on an axis.
+        if x1 - x0 < 4.0 && !self.x_ticks.is_empty() {
+            // A few labelled things (blocks, motors): half a step of room either side, so no
+            // point sits on an axis (numbered axes keep their true ends: no -0.2 s).
             (x0, x1) = (x0 - 0.5, x1 + 0.5);
         }
         if y1 <= y0 {
@@ -106,7 +127,7 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                 let w = ((px(x + 0.5) - px(x - 0.5)) * 0.5).max(4.0);
                 let _ = write!(
                     s,
-                    "<polygon points=\"{0:.1},{2:.1} {1:.1},{2:.1} {1:.1},{3:.1} {0:.1},{3:.1}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"none\"/>",
+                    "<polygon points=\"{0:.1},{2:.1} {1:.1},{2:.1} {1:.1},{3:.1} {0:.1},{3:.1}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"#9fd19f\" stroke-width=\"4\" stroke-linejoin=\"round\"/>",
                     px(x) - w / 2.0,
                     px(x) + w / 2.0,
                     py(hi),
@@ -121,7 +142,7 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             let bottom: Vec<String> = b.points.iter().rev().map(|p| format!("{:.1},{:.1}", px(p.0), py(p.1))).collect();
             let _ = write!(
                 s,
-                "<polygon points=\"{} {}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"none\"/>",
+                "<polygon points=\"{} {}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"#9fd19f\" stroke-width=\"4\" stroke-linejoin=\"round\"/>",
                 top.join(" "),
                 bottom.join(" ")
             );
@@ -177,6 +198,13 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                 esc(label)
             );
         }
+        let band_label = self.band_label.clone().unwrap_or_else(|| "golden range".to_string());
+        let legend_names: Vec<&str> = self
+            .series
+            .iter()
+            .map(|se| se.name.as_str())
+            .chain((!self.bands.is_empty() || !self.windows.is_empty()).then_some(band_label.as_str()))
+            .collect();
         for (i, se) in self.series.iter().enumerate() {
             let c = COLOURS[i % COLOURS.len()];
             let mut d = String::new();
@@ -209,8 +237,7 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
                     );
                 }
             }
-            let lx = W - R - 150.0;
-            let ly = T + 4.0 + 14.0 * i as f64;
+            let (lx, ly) = legend_at(&legend_names, i);
             let _ = write!(
                 s,
                 "<line x1=\"{lx}\" y1=\"{ly}\" x2=\"{}\" y2=\"{ly}\" stroke=\"{c}\" stroke-width=\"2\"/>\
@@ -234,13 +261,14 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             );
         }
         if !self.bands.is_empty() || !self.windows.is_empty() {
+            let (lx, ly) = legend_at(&legend_names, self.series.len());
             let _ = write!(
                 s,
-                "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"8\" fill=\"#9fd19f\"/><text x=\"{}\" y=\"{}\">golden range</text>",
-                W - R - 150.0,
-                T + 2.0 + 14.0 * self.series.len() as f64,
-                W - R - 130.0,
-                T + 10.0 + 14.0 * self.series.len() as f64
+                "<rect x=\"{lx}\" y=\"{}\" width=\"14\" height=\"9\" fill=\"#9fd19f\"/><text x=\"{}\" y=\"{}\">{}</text>",
+                ly - 5.0,
+                lx + 20.0,
+                ly + 4.0,
+                esc(&band_label)
             );
         }
         s.push_str("</svg>\n");

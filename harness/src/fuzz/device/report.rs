@@ -317,13 +317,16 @@ pub fn to_html(r: &FuzzReport) -> String {
             };
             let _ = writeln!(
                 t,
-                "<tr class=\"{}\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td>{why}<td><code>{}</code></td><td><code class=\"cmd\">{}</code></td></tr>",
+                "<tr class=\"{}\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td>{why}<td><code>{}</code></td><td>{}</td></tr>",
                 if known { "skip" } else { "fail" },
                 esc(&f.signature.kind),
                 esc(&f.signature.to_string()),
                 f.run,
                 esc(&f.path.as_ref().map_or("not written (no --out)".into(), |p| p.display().to_string())),
-                esc(&f.path.as_deref().map(|p| r.replay_command(p)).unwrap_or_default()),
+                f.path.as_deref().map_or_else(
+                    || "<span class=\"muted\">write the transcript with --out</span>".to_string(),
+                    |p| format!("<code class=\"cmd\">{}</code>", esc(&r.replay_command(p)))
+                ),
                 n = i + 1,
             );
         }
