@@ -340,15 +340,17 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
         }
         for c in good {
             let (Some(g), Some(t)) = (goldens.get(c.id.as_str()), c.transcript.as_deref()) else { continue };
-            let plots = realtime_plots(r, c, g, t, 0);
+            let (plots, blocks, fields) = realtime_plots(r, c, g, t, 0);
             if plots.is_empty() {
                 continue;
             }
             p.push(&details(
                 &format!(
-                    "<strong>{}</strong> <code>{}</code> <span class=\"muted\">{}</span>",
+                    "<strong>{}</strong> <code>{}</code> {} block(s): {} <span class=\"muted\">{}</span>",
                     verdict_word(r.kind, c.verdict),
                     esc(&c.id),
+                    blocks,
+                    esc(&fields.join(", ")),
                     esc(&c.title)
                 ),
                 &plots,
@@ -504,7 +506,7 @@ fn failure_view(
             body.push_str(&field_table(&rows));
         }
         if let (Some(g), Some(t)) = (golden, c.transcript.as_deref()) {
-            body.push_str(&realtime_plots(r, c, g, t, d.step));
+            body.push_str(&realtime_plots(r, c, g, t, d.step).0);
         }
         if plot_windows {
             body.push_str(&window_plot(c, d));
@@ -558,9 +560,16 @@ fn field_table(rows: &[FieldRow]) -> String {
 }
 
 /// One plot per RealTime field name over the case's blocks: each motor's actual values with
-/// the golden's range behind them, and a mark at the failing block.
-fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_text: &str, fail_step: usize) -> String {
-    let Ok(actual) = gcl_transcript::parse(actual_text) else { return String::new() };
+/// the golden's range behind them, and a mark at the failing block. Also the number of blocks
+/// and the fields plotted, for a line that sums the plots up.
+fn realtime_plots(
+    r: &RunReport,
+    c: &CaseResult,
+    golden: &Transcript,
+    actual_text: &str,
+    fail_step: usize,
+) -> (String, usize, Vec<String>) {
+    let Ok(actual) = gcl_transcript::parse(actual_text) else { return (String::new(), 0, Vec::new()) };
     // The golden's sends are the actual transcript's, and go on past the failing step.
     let layouts = diff::layouts(&r.profile, golden).unwrap_or_default();
     // (field, motor) → series of (block, value) and band (block, lo, hi).
@@ -590,7 +599,7 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
         }
     }
     if block == 0 {
-        return String::new();
+        return (String::new(), 0, Vec::new());
     }
     let mut names: Vec<String> = bands.keys().map(|k| k.0.clone()).collect();
     names.dedup();
@@ -623,7 +632,7 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
         };
         h.push_str(&plot.to_svg(&format!("rt-{}-{}", c.id, name)));
     }
-    h
+    (h, block, names)
 }
 
 /// What a RealTime feedback field is, for a plot's title (facts §4.4, §4.5).
