@@ -531,7 +531,7 @@ fn failure_view(
 
 fn field_table(rows: &[FieldRow]) -> String {
     let mut h = String::from(
-        "<table><tr><th>block</th><th>motor</th><th>field</th><th>type</th><th>golden range</th><th>bytes</th>\
+        "<table><tr><th>block in this answer</th><th>motor</th><th>field</th><th>type</th><th>golden range</th><th>bytes</th>\
 <th>value (high byte first)</th><th>read low byte first</th></tr>\n",
     );
     for f in rows {

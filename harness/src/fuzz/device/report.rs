@@ -265,7 +265,7 @@ pub fn to_html(r: &FuzzReport) -> String {
             "no new finding in {} runs ({secs:.1} s); {k} known (the baseline or known failures explain them)",
             r.runs
         ),
-        (n, 0) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
+        (n, 0) => format!("{n} distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
         (n, k) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s), and {k} known", r.runs),
     };
     let verdict = match (new, known) {
@@ -304,7 +304,7 @@ pub fn to_html(r: &FuzzReport) -> String {
     let index = |known: bool| {
         let rows: Vec<(usize, &Finding)> = r.findings.iter().enumerate().filter(|(_, f)| f.is_new() != known).collect();
         if rows.is_empty() {
-            return format!("<p>None{}.</p>\n", if known { "" } else { " new" });
+            return format!("<p>None{}.</p>\n", if known || r.findings.is_empty() { "" } else { " new" });
         }
         let mut t = format!(
             "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th>{}<th>transcript</th><th>run it again</th></tr>\n",
@@ -333,7 +333,8 @@ pub fn to_html(r: &FuzzReport) -> String {
         t.push_str("</table>\n");
         t
     };
-    p.heading("findings", "New findings");
+    // "New" means something only beside known findings.
+    p.heading("findings", if known > 0 { "New findings" } else { "Findings" });
     p.push(&index(false));
     if known > 0 {
         p.heading("known", "Known findings");
