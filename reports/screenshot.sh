@@ -8,8 +8,11 @@
 # fget-reversed and lfap-little-endian bugs, certify, fuzz device against fget-reversed, fuzz
 # host and check-host with a small Python host that breaks the protocol), and renders each
 # page twice: as it opens (the verdict, options and root causes) and with every <details>
-# open (GCL_SHOT_OPEN=1 forces them open through a print style). Chromium is installed with
-# apt when missing. Environment: GCL_SHOT_HEIGHT (viewport height, default 2200).
+# open (a copy of the page with every <details> open). It also renders the mcv-ignored conform
+# page (a motion effect's window plot), a fuzz device run against the first one's findings as
+# its --baseline (known apart from new), and the RealTime example program's --plot page.
+# Chromium is installed with apt when missing. Environment: GCL_SHOT_HEIGHT (viewport height,
+# default 2200), GCL_SHOT_BUILD (release, the default, or debug: no release build needed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-target/screenshots}"
@@ -28,8 +31,15 @@ if [ -z "$browser" ]; then
     browser=chromium
 fi
 
-cargo build --release -q
-gcl="$PWD/target/release/gcl"
+build="${GCL_SHOT_BUILD:-release}"
+if [ "$build" = release ]; then
+    cargo build --release -q -p gcl-harness --bin gcl --example realtime
+else
+    cargo build -q -p gcl-harness --bin gcl --example realtime
+    build=debug
+fi
+gcl="$PWD/target/$build/gcl"
+example="$PWD/target/$build/examples/realtime"
 work="$out/reports"
 rm -rf "$work"
 mkdir -p "$work"
@@ -57,9 +67,13 @@ set +e
 "$gcl" conform --target sim --fault fget-reversed --quiet --report "$work/conform-fget-reversed" >/dev/null
 "$gcl" conform --target sim --fault lfap-little-endian --quiet --report "$work/conform-lfap-little-endian" >/dev/null
 "$gcl" conform --target sim --quiet --report "$work/conform-pass" >/dev/null
+"$gcl" conform --target sim --fault mcv-ignored --quiet --report "$work/conform-mcv-ignored" >/dev/null
 "$gcl" certify --target sim:seed --out "$work/certify" >/dev/null
 "$gcl" fuzz device --target sim --fault fget-reversed --runs 300 --out "$work/fuzz-device-findings" \
     --report "$work/fuzz-device" >/dev/null 2>&1
+"$gcl" fuzz device --target sim --fault fget-reversed --fault too-many-args-silent --runs 300 \
+    --baseline "$work/fuzz-device-findings" --report "$work/fuzz-device-baseline" >/dev/null 2>&1
+"$example" --target sim:seed --plot "$work/example-realtime/realtime.html" >/dev/null
 "$gcl" fuzz host --runs 30 --timeout-hang 1s --out "$work/fuzz-host-findings" --report "$work/fuzz-host" \
     -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
 "$gcl" check-host --timeout-hang 1s --report "$work/check-host" -- python3 "$work/host.py" '{port}' >/dev/null 2>&1
@@ -87,7 +101,10 @@ shot() { # page.html name
 shot "$work/conform-fget-reversed/report.html" conform-fget-reversed
 shot "$work/conform-lfap-little-endian/report.html" conform-lfap-little-endian
 shot "$work/conform-pass/report.html" conform-pass
+shot "$work/conform-mcv-ignored/report.html" conform-mcv-ignored
 shot "$work/certify/report.html" certify
 shot "$work/fuzz-device/fuzz-device.html" fuzz-device
+shot "$work/fuzz-device-baseline/fuzz-device.html" fuzz-device-baseline
+shot "$work/example-realtime/realtime.html" example-realtime
 shot "$work/fuzz-host/report.html" fuzz-host
 shot "$work/check-host/report.html" check-host

@@ -8,7 +8,12 @@
 //! cargo run --example realtime -- --target serial:/dev/pts/N --profile seed --clock wire
 //! gcl sim --tcp 127.0.0.1:5000 --profile seed --time real
 //! cargo run --example realtime -- --target tcp://127.0.0.1:5000 --profile seed --clock link
+//! cargo run --example realtime -- --target sim:seed --plot realtime.html
 //! ```
+//!
+//! `--plot FILE` writes a page of the run: each finger's position per block over the band the
+//! reference model gives for the same program (its own run in-process, ± 100 counts), and the
+//! velocities sent.
 
 use std::process::ExitCode;
 use std::time::Duration;
@@ -44,6 +49,9 @@ struct Args {
     /// How long to run, seconds.
     #[arg(long, default_value_t = 6.0)]
     seconds: f64,
+    /// Write an HTML page of the run: positions per block against the reference model's band.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<std::path::PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -59,12 +67,46 @@ fn main() -> ExitCode {
     let run_for = Duration::try_from_secs_f64(args.seconds).unwrap_or(Duration::from_secs(6));
     let opts = OpenOptions { profile: args.profile, ..Default::default() };
     let mut out = std::io::stdout();
-    let result =
-        Hand::open(&args.target, &opts).and_then(|mut hand| programs::realtime(&mut hand, clock, run_for, &mut out));
-    match result {
-        Ok(_) => ExitCode::SUCCESS,
+    let result = Hand::open(&args.target, &opts).and_then(|mut hand| {
+        let profile = hand.profile().id.clone();
+        programs::realtime(&mut hand, clock, run_for, &mut out).map(|r| (r, profile))
+    });
+    let (run, profile) = match result {
+        Ok(r) => r,
         Err(e) => {
             eprintln!("\nERROR: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let Some(path) = &args.plot else { return ExitCode::SUCCESS };
+    // The reference: the model runs the same program for the same time on its own clock.
+    let model = format!("sim:{profile}")
+        .parse::<Target>()
+        .map_err(|e| e.to_string())
+        .and_then(|t| Hand::open(&t, &OpenOptions::default()).map_err(|e| e.to_string()))
+        .and_then(|mut h| {
+            programs::realtime(&mut h, Clock::Link, run_for, &mut std::io::sink()).map_err(|e| e.to_string())
+        });
+    let model = match model {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("ERROR: the reference model's run: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let options = vec![
+        ("clock".to_string(), format!("{:?}", args.clock).to_lowercase()),
+        ("seconds".to_string(), args.seconds.to_string()),
+    ];
+    let page =
+        gcl_harness::report::program::realtime_program_page(&args.target.to_string(), &profile, &options, &run, &model);
+    match gcl_harness::report::write_atomic(path, page.as_bytes()) {
+        Ok(()) => {
+            println!("wrote {}", path.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("ERROR: {}: {e}", path.display());
             ExitCode::from(1)
         }
     }

@@ -225,7 +225,8 @@ pub fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-fn safe_name(id: &str) -> String {
+/// The file name a case's transcript has in a bundle's `transcripts/` (without `.gcl`).
+pub(crate) fn safe_name(id: &str) -> String {
     id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
 }
 

@@ -73,6 +73,9 @@ pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTim
             c.message = Some("not exercised: the host never entered RealTime".into());
             c.transcript = None;
         }
+        // Every clause is judged over the whole session (one not exercised found so there):
+        // its time is the session's.
+        c.duration_ms = r.elapsed.as_secs_f64() * 1000.0;
         cases.push(c);
     }
     if let Some(g) = &opts.golden {
@@ -91,6 +94,7 @@ pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTim
             &[],
             &session,
         );
+        c.duration_ms = r.elapsed.as_secs_f64() * 1000.0;
         if want != got {
             let at = want.iter().zip(&got).take_while(|(a, b)| a == b).count();
             let esc = |b: &[u8]| gcl_model::escape::escape(&b[at.min(b.len())..(at + 60).min(b.len())]);
@@ -103,6 +107,7 @@ pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTim
                 actual: esc(&got),
                 before: gcl_model::escape::escape(&want[at.saturating_sub(40)..at]),
                 golden: String::new(),
+                form: Some(crate::report::AnswerForm::Text),
             });
             c.transcript = Some(crate::report::truncate_note(&session, crate::report::MAX_SHOWN));
         }

@@ -843,12 +843,15 @@ pub fn run_with_events(
                 _ => format!("known failure: {}{was}", k.reason),
             });
         }
-        if r.verdict != Verdict::Pass || opts.keep_transcripts {
+        // A RealTime case keeps its exchange even when it passes: the report plots its blocks.
+        let realtime =
+            case.transcript.steps.iter().any(|s| s.expect.segments.first().is_some_and(|g| g.form == Form::Hex));
+        if r.verdict != Verdict::Pass || opts.keep_transcripts || realtime {
             let text = actual_transcript(&case.transcript, outcome.exchange()).to_text();
             if opts.keep_transcripts {
                 transcripts.push((case.id().to_string(), text.clone()));
             }
-            if r.verdict != Verdict::Pass {
+            if r.verdict != Verdict::Pass || realtime {
                 r.transcript = Some(truncate_note(&text, MAX_SHOWN * 4));
             }
         }
@@ -1043,6 +1046,7 @@ fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8],
         actual: truncate_note(actual, MAX_SHOWN),
         before,
         golden: truncate_note(golden, MAX_SHOWN),
+        form: Some(form.into()),
     }
 }
 

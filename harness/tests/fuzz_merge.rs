@@ -69,6 +69,10 @@ fn comparable(r: Value, root: &Path) -> Value {
     // minimization runs) are rebuilt by the merge from the shards' fuzz.json, which does not
     // keep them all; the cases, verdicts and transcripts above are compared in full.
     o.remove("host");
+    // A finding's time is how long its campaign took to find it, which differs by machine.
+    for c in o.get_mut("cases").and_then(Value::as_array_mut).into_iter().flatten() {
+        c.as_object_mut().unwrap().remove("duration_ms");
+    }
     r
 }
 

@@ -19,10 +19,11 @@ fn sel(s: &str) -> Selector {
 }
 
 /// The largest `report.html` `gcl conform` may write against one firmware bug that fails half
-/// the suite (fget-reversed: 176 of 351 cases). The page has a fixed part that grows with the
-/// suite (the clause and case tables, some 150 KB for 351 cases) and about 1.5 KB per failing
-/// case (its one-line summary, aligned diff and own steps; the preamble is shown once for the
-/// page). 512 KiB leaves room for what other changes add per case (blocked cases, relations)
+/// the suite (fget-reversed: 176 of 352 cases). The page has a fixed part that grows with the
+/// suite (the clause and case tables, some 150 KB for 352 cases; the folded plots of the ~30
+/// RealTime cases, some 60 KB) and about 1.5 KB per failing case (its one-line summary,
+/// aligned diff and own steps; the preamble is shown once for the page): 449 KB measured.
+/// 512 KiB leaves room for what other changes add per case (blocked cases, relations)
 /// while a page ten times larger, as before (every transcript in full, each with its
 /// preamble), fails.
 const ONE_BUG_PAGE_LIMIT: usize = 512 * 1024;
@@ -47,9 +48,21 @@ fn page(path: &Path, title_starts: &str) -> Html {
     assert_eq!(body[1].value().id(), Some("verdict"), "{}", path.display());
     for a in html.select(&sel("a[href]")) {
         let href = a.value().attr("href").unwrap();
-        let id = href.strip_prefix('#').unwrap_or_else(|| panic!("{}: a link out of the page: {href}", path.display()));
-        let target = Selector::parse(&format!("[id=\"{id}\"]")).unwrap();
-        assert!(html.select(&target).next().is_some(), "{}: link {href} has no target", path.display());
+        match href.strip_prefix('#') {
+            Some(id) => {
+                let target = Selector::parse(&format!("[id=\"{id}\"]")).unwrap();
+                assert!(html.select(&target).next().is_some(), "{}: link {href} has no target", path.display());
+            }
+            // A file beside the page (a certificate bundle's transcripts), never elsewhere.
+            None => {
+                assert!(
+                    !href.contains(':') && !href.starts_with('/') && !href.contains(".."),
+                    "{}: a link out of the page's folder: {href}",
+                    path.display()
+                );
+                assert!(path.parent().unwrap().join(href).is_file(), "{}: {href} is missing", path.display());
+            }
+        }
     }
     assert!(html.select(&sel("script, link, iframe, object, embed, img")).next().is_none(), "{}", path.display());
     if let Some(e) = html.select(&sel("[src], [srcset]")).next() {
@@ -200,6 +213,42 @@ fn realtime_failures_are_decoded_field_by_field_and_plotted() {
 }
 
 #[test]
+fn every_realtime_case_is_plotted_passing_ones_included() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&["conform", "--target", "sim", "--quiet", "--report", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: PASSED");
+    // Position, velocity and strain, each in a passing case's folded section, the golden's
+    // band behind the values the hand sent.
+    for (case, field) in [
+        ("rt-field-lfap", "LFAP"),
+        ("rt-field-lfv", "LFV"),
+        ("rt-field-lfs", "LFS"),
+        ("rt-lcpg-zero-gain", "LFAP"),
+        ("example-realtime-program", "LFAP"),
+    ] {
+        let section = html
+            .select(&sel(&format!("details[id=\"rt-case-{case}\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("{case} has no RealTime section: {:?}", plots(&html)));
+        let svg = section
+            .select(&sel(&format!("svg[data-plot=\"rt-{case}-{field}\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("{case}: no {field} plot"));
+        assert!(svg.select(&sel("polygon")).next().is_some(), "{case} {field}: the golden's band");
+        assert!(svg.select(&sel("path[stroke-width]")).next().is_some(), "{case} {field}: the actual trace");
+        assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_none(), "{case} passes: nothing marked");
+    }
+    // Both motors of a two-motor case are drawn.
+    let two = html.select(&sel("svg[data-plot=\"rt-rt-lcpg-zero-gain-LFAP\"]")).next().unwrap().html();
+    assert!(two.contains(">motor 1<") && two.contains(">motor 2<"), "{two}");
+    assert!(html.select(&sel("details[id^=\"rt-case-\"]")).count() >= 20);
+    let summary = html.select(&sel("details[id=\"rt-case-rt-lcpg-zero-gain\"] > summary")).next().unwrap();
+    assert!(summary.text().collect::<String>().contains("4 block(s): LFAP, LFV"), "{}", summary.html());
+}
+
+#[test]
 fn the_certify_and_passing_conform_pages_parse() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cert");
@@ -207,6 +256,12 @@ fn the_certify_and_passing_conform_pages_parse() {
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let html = page(&out.join("report.html"), "gcl certify seed on sim:seed: PASSED");
     assert!(html.select(&sel("#levels")).next().is_some());
+    // Every case that ran links to its transcript in the bundle (page() checked the files).
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let ran = report["cases"].as_array().unwrap().iter().filter(|c| c["verdict"] != "SKIP").count();
+    assert!(ran > 50);
+    let linked = html.select(&sel("#cases + details tr a[href^=\"transcripts/\"]")).count();
+    assert_eq!(linked, ran, "a transcript link per case that ran");
     if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
         assert!(cases.iter().all(|c| c.starts_with("gcl certify seed (sim:seed)|gcl.seed.")), "{:?}", &cases[..2]);
     }
@@ -252,6 +307,65 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
         assert!(f[3].parse::<f64>().is_ok(), "a time: {cases:?}");
         assert!(f[5].starts_with("FGET") && f[5].contains("expected") && f[5].contains("got"), "{cases:?}");
     }
+
+    // Again with those findings as the baseline: the same bug is known, not new. The page
+    // says so first and lists the findings apart with why; JUnit skips them instead of failing.
+    let rep2 = dir.path().join("rep2");
+    let o = gcl(&[
+        "fuzz",
+        "device",
+        "--target",
+        "sim",
+        "--fault",
+        "fget-reversed",
+        "--runs",
+        "150",
+        "--baseline",
+        found.to_str().unwrap(),
+        "--report",
+        rep2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
+    let html = page(&rep2.join("fuzz-device.html"), "gcl fuzz device bh8-262-4.4 on sim: NO NEW FINDING");
+    let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
+    assert!(verdict.contains("no new finding") && verdict.contains("known"), "{verdict}");
+    assert!(html.select(&sel("#findings + p")).next().unwrap().text().collect::<String>().contains("None new"));
+    let known = html.select(&sel("#known + table tr.skip")).map(|r| r.text().collect::<String>()).collect::<Vec<_>>();
+    assert!(!known.is_empty() && known.iter().all(|r| r.contains("in the baseline")), "{known:?}");
+    let xml = std::fs::read_to_string(rep2.join("junit.xml")).unwrap();
+    assert!(!xml.contains("<failure"), "a known finding does not fail CI: {xml}");
+    assert_eq!(xml.matches("<skipped message=\"known (in the baseline): ").count(), known.len(), "{xml}");
+    if let Some(cases) = junit_consumer(&rep2.join("junit.xml")) {
+        assert!(
+            cases.iter().all(|c| c.contains("|gcl.fuzz-device.known.") && c.contains("|skipped|known (")),
+            "{cases:?}"
+        );
+    }
+}
+
+/// The `time` of every `<testcase>` of a JUnit file, in seconds, read by an XML parser.
+fn junit_times(path: &Path) -> Vec<(String, f64)> {
+    let xml = std::fs::read_to_string(path).unwrap();
+    let mut reader = quick_xml::Reader::from_str(&xml);
+    let mut out = Vec::new();
+    loop {
+        match reader.read_event().unwrap() {
+            quick_xml::events::Event::Start(e) | quick_xml::events::Event::Empty(e)
+                if e.name().as_ref() == b"testcase" =>
+            {
+                let attr = |n: &[u8]| {
+                    e.attributes()
+                        .flatten()
+                        .find(|a| a.key.as_ref() == n)
+                        .map(|a| a.unescape_value().unwrap().to_string())
+                };
+                out.push((attr(b"name").unwrap(), attr(b"time").unwrap().parse().unwrap()));
+            }
+            quick_xml::events::Event::Eof => break,
+            _ => {}
+        }
+    }
+    out
 }
 
 fn python_ready() -> bool {
@@ -277,6 +391,9 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert!(!text.contains("suite hash") && !text.contains("liveness"), "nothing of conform's");
     let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
     assert!(rt.contains("not exercised"), "{rt}");
+    // Every clause has the time of the session it was judged over, not 0.
+    let times = junit_times(&rep.join("junit.xml"));
+    assert!(times.len() >= 5 && times.iter().all(|(_, t)| *t > 0.0), "{times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
         assert!(
             cases
@@ -320,6 +437,8 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert!(row.contains(&format!("gcl fuzz host --replay {}", bundles.display())), "{row}");
     assert!(html.select(&sel("#fired + table")).next().is_some(), "the misbehaviour × state table");
     assert!(plots(&html).contains(&"fuzz-host-findings".to_string()));
+    let times = junit_times(&rep.join("junit.xml"));
+    assert!(!times.is_empty() && times.iter().all(|(_, t)| *t > 0.0), "each finding has a time: {times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
         assert!(cases[0].starts_with(&format!("gcl fuzz host python3 {host} {{port}}|gcl.fuzz-host.")), "{cases:?}");
     }
@@ -349,9 +468,64 @@ fn a_motion_effect_failure_shows_the_window_it_missed() {
         gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
     let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
-    let fail = html.select(&sel("#fail-param-mcv-effect")).next().unwrap().text().collect::<String>();
+    let fail = html.select(&sel("#fail-param-mcv-effect")).next().unwrap();
+    let text = fail.text().collect::<String>();
     // Motor 2 is held to a relation with motor 1 (issue 19): the summary shows the window the
-    // relation stood for there, and where motor 2 was. Known gap: a window plot is drawn only
-    // for fixed ranges, so this case (a relation since the merge) has none yet.
-    assert!(fail.contains("expected \"2279 {int 13110..14785}\", got \"2279 2279\""), "{fail}");
+    // relation stood for there, and where motor 2 was.
+    assert!(text.contains("expected \"2279 {int 13110..14785}\", got \"2279 2279\""), "{text}");
+    // The plot: each motor's window (motor 2's from the relation with where motor 1 was), a dot
+    // where each motor was, and a mark on motor 2, the one outside its window.
+    let svg = fail.select(&sel("svg[data-plot=\"windows-param-mcv-effect\"]")).next().expect("a window plot");
+    assert_eq!(svg.select(&sel("rect[fill-opacity]")).count(), 2, "a window per motor");
+    assert_eq!(svg.select(&sel("circle")).count(), 2, "where each motor was");
+    let svg_text = svg.text().collect::<String>();
+    assert!(svg_text.contains("14785") || svg_text.contains("16949"), "the axis reaches the windows: {svg_text}");
+    assert!(svg_text.contains("motor 2 misses"), "{svg_text}");
+    assert!(svg_text.contains("motor 2: motor 1 × 153/25 ± 6%"), "the relation under its window: {svg_text}");
+}
+
+#[test]
+fn the_realtime_example_program_is_plotted_block_by_block_against_the_model() {
+    use gcl_host::client::Hand;
+    use gcl_host::client::programs::{self, Clock};
+    use gcl_host::target::OpenOptions;
+    let run_for = std::time::Duration::from_millis(2500);
+    let program = |target: &str| {
+        let mut hand = Hand::open(&target.parse().unwrap(), &OpenOptions::default()).unwrap();
+        programs::realtime(&mut hand, Clock::Link, run_for, &mut std::io::sink()).unwrap()
+    };
+    let model = program("sim:seed");
+    let run = program("sim:seed");
+    assert!(run.blocks.len() > 150, "hundreds of blocks: {}", run.blocks.len());
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, run: &programs::RealtimeReport| {
+        let path = dir.path().join(name);
+        let page = gcl_harness::report::program::realtime_program_page("sim:seed", "seed", &[], run, &model);
+        std::fs::write(&path, page).unwrap();
+        path
+    };
+    let html = page(&write("agrees.html", &run), "gcl example realtime on sim:seed: AGREES WITH THE MODEL");
+    for m in 1..=3 {
+        let svg = html
+            .select(&sel(&format!("svg[data-plot=\"example-realtime-F{m}-position\"]")))
+            .next()
+            .unwrap_or_else(|| panic!("F{m}: {:?}", plots(&html)));
+        assert!(svg.select(&sel("polygon")).next().is_some(), "F{m}: the model's band");
+        assert!(svg.select(&sel("line[stroke-dasharray]")).next().is_none(), "F{m} stays in its band");
+    }
+    // The fingers move in turn: the velocity plot marks where F2 and F3 start, F2 first.
+    let v = html.select(&sel("svg[data-plot=\"example-realtime-velocity\"]")).next().unwrap();
+    let marks: Vec<String> = v.select(&sel("text[fill]")).map(|t| t.text().collect()).collect();
+    assert_eq!(marks, ["F2 starts", "F3 starts"]);
+
+    // A hand whose F2 slips 1000 counts from block 151 on: the page says it parts, and where.
+    let mut slipped = run.clone();
+    for b in &mut slipped.blocks[150..] {
+        b.positions[1] -= 1000;
+    }
+    let html = page(&write("parts.html", &slipped), "gcl example realtime on sim:seed: PARTS FROM THE MODEL");
+    let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
+    assert!(verdict.contains("F2 left the model's band at block 151"), "{verdict}");
+    let f2 = html.select(&sel("svg[data-plot=\"example-realtime-F2-position\"]")).next().unwrap();
+    assert!(f2.select(&sel("line[stroke-dasharray]")).next().is_some(), "where F2 leaves its band");
 }

@@ -374,13 +374,20 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             decisions: Vec::new(),
             level: "MUST".into(),
             verdict: if f.verdict.kind == FindingKind::Hang { Verdict::Timeout } else { Verdict::Fail },
-            duration_ms: 0.0,
+            // The campaign's time until the run that found it ended: what finding it took.
+            duration_ms: f.found_after_ms as f64,
             message: Some(format!(
-                "{} (run {}, {} hit(s), schedule: {})",
+                "{} (run {}, {} hit(s), {})",
                 f.verdict.message,
                 f.run,
                 f.hits,
-                f.schedule.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(", ")
+                if f.schedule.planned.is_empty() {
+                    "no misbehaviour: the hand behaved".to_string()
+                } else {
+                    let planned: Vec<String> =
+                        f.schedule.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect();
+                    format!("schedule: {}", planned.join(", "))
+                }
             )),
             diff: None,
             transcript: Some(gcl_harness::report::truncate_note(
@@ -397,7 +404,8 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             decisions: Vec::new(),
             level: "INFO".into(),
             verdict: Verdict::Pass,
-            duration_ms: 0.0,
+            // Seen across the campaign's runs: the campaign's time.
+            duration_ms: c.elapsed_ms as f64,
             message: Some(format!("a note, no finding: seen in {runs} run(s)")),
             diff: None,
             transcript: None,

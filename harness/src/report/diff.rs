@@ -14,42 +14,30 @@ use gcl_model::realtime::{FieldType, RtLayout};
 use gcl_model::{Device, DeviceConfig, Mode, Profile};
 use gcl_transcript::{Expect, Form, Piece, Transcript, Value, ValueKind};
 
-use super::Diff;
+use super::{AnswerForm, Diff};
 
-/// Whether the diff's step answers in the `hex` form (a RealTime block).
+/// Whether the diff's step answers in the `hex` form (a RealTime block), as the golden says;
+/// a report written before the diff kept its form has the word `hex` in front of its golden.
 pub fn is_hex(d: &Diff) -> bool {
-    let g = d.golden.trim_start();
-    g.starts_with("hex") || hex_tokens(g)
-}
-
-/// Whether a golden in the matcher's form (`2A 1E{u16 0..17800} 00 {u16 0..50}`, no `hex`
-/// word) is a binary answer: bytes as two upper-case hex digits or `??`, and elisions.
-fn hex_tokens(g: &str) -> bool {
-    let spaced = g.replace('{', " {").replace('}', "} ");
-    let mut in_brace = false;
-    let mut any = false;
-    for tok in spaced.split_whitespace() {
-        if in_brace || tok.starts_with('{') {
-            in_brace = !tok.ends_with('}');
-            continue;
-        }
-        let byte =
-            tok == "??" || (tok.len() == 2 && tok.bytes().all(|b| b.is_ascii_digit() || (b'A'..=b'F').contains(&b)));
-        if !byte {
-            return false;
-        }
-        any = true;
+    match d.form {
+        Some(f) => f == AnswerForm::Hex,
+        None => d.golden.trim_start().starts_with("hex"),
     }
-    any && !in_brace
 }
 
-/// A golden of a binary answer as the transcript reader takes it.
-fn hex_expect(golden: &str) -> Option<Expect> {
-    let g = golden.trim_start();
-    if g.starts_with("hex") {
+/// The step's golden as the transcript reader takes it, from the unquoted form of the diff
+/// (`2A 1E{u16 0..17800}`, `12FGET P\n\r{int 51..16949 as p1}`) or the older quoted one.
+pub fn golden_expect(d: &Diff) -> Option<Expect> {
+    let g = d.golden.trim_start();
+    if g.is_empty() {
+        None
+    } else if g.starts_with("hex") || g.starts_with('"') {
         parse_expect(g)
-    } else {
+    } else if is_hex(d) {
         parse_expect(&format!("hex {}", g.replace('{', " {").replace('}', "} ")))
+    } else {
+        // Escaped text holds no bare quote (it is written \x22), so quotes make it a golden.
+        parse_expect(&format!("\"{g}\""))
     }
 }
 
@@ -69,16 +57,14 @@ pub fn command(d: &Diff) -> String {
     if is_hex(d) {
         return "RealTime block".into();
     }
+    // The golden begins with the command's echo (a report before the unquoted form quoted it).
     let g = d.golden.trim();
-    let body = match g.find('"') {
-        Some(i) => &g[i + 1..],
-        None => d.before.as_str(),
-    };
+    let body = if g.is_empty() { d.before.as_str() } else { g.strip_prefix('"').unwrap_or(g) };
     let end = first_break(body).map(|(i, _)| i).unwrap_or(body.len());
     let cmd = body[..end].trim_end_matches('"').trim();
     if cmd.is_empty() {
         // The answer begins with a line break: an empty line, a CR or a ^C.
-        if d.golden.contains("\\x03") || g.starts_with("\"\\n\\r=> ") { "^C".into() } else { "the answer".into() }
+        if d.golden.contains("\\x03") || body.starts_with("\\n\\r=> ") { "^C".into() } else { "the answer".into() }
     } else {
         clip(cmd, 40)
     }
@@ -206,53 +192,72 @@ pub fn parse_expect(golden: &str) -> Option<Expect> {
 }
 
 /// Walks a golden binary answer against the actual bytes: each field of the golden with its
-/// range, type and the actual bytes at its place. `names` gives the feedback layout's fields
-/// in wire order (after the header), when known; a golden of several blocks repeats it.
+/// range, type and the actual bytes at its place. `names` gives the feedback layout, when
+/// known: a field is named by its byte offset in the block (the header at 0), so a field the
+/// golden writes as literal bytes (`00` for a velocity of 0) takes its place too and shows as
+/// a row whose range is that one value; a golden of several blocks repeats the layout.
+/// Without a layout, fields are named by their type, all in block 1.
 pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -> Vec<FieldRow> {
     let mut rows = Vec::new();
     let mut at = 0usize;
-    let mut block = 0usize;
-    let mut index = 0usize;
-    let fields = names.map(|l| l.feedback().fields());
+    let feedback = names.map(|l| l.feedback()).filter(|f| f.size() > 0);
+    // The block the next byte belongs to (from 1) and its offset in that block.
+    let place = |at: usize| match feedback {
+        Some(f) => (at / f.size() + 1, at % f.size()),
+        None => (1, at),
+    };
+    let field_at = |offset: usize| feedback.and_then(|f| f.fields().iter().find(|x| x.offset() == offset));
+    let row = |at: usize, ty: FieldType, range: (i64, i64)| {
+        let (block, offset) = place(at);
+        let field = field_at(offset).filter(|f| f.ty() == ty);
+        let got = actual.get(at..at + ty.size());
+        FieldRow {
+            block,
+            motor: field.and_then(|f| f.motor()),
+            name: field.map_or_else(|| ty.name().to_string(), |f| f.name().to_string()),
+            ty,
+            range,
+            value: got.map(|b| value(ty, b)),
+            swapped: got.filter(|b| b.len() == 2).map(|b| value(ty, &[b[1], b[0]])),
+            bytes: got.map(gcl_transcript::hex_bytes).unwrap_or_default(),
+        }
+    };
     for (form, piece) in golden.pieces() {
         if form != Form::Hex {
             break;
         }
         match piece {
             Piece::Bytes(b) => {
-                // A header byte starts a block (a golden of several blocks has one per block).
-                if index == 0 || fields.is_some_and(|f| index >= f.len()) {
-                    block += 1;
-                    index = 0;
+                // Literal bytes that make up whole fields of the layout: a field held to one value.
+                let mut i = 0;
+                while i < b.len() {
+                    match field_at(place(at + i).1).filter(|f| i + f.size() <= b.len()) {
+                        Some(f) => {
+                            let v = value(f.ty(), &b[i..i + f.size()]);
+                            rows.push(row(at + i, f.ty(), (v, v)));
+                            i += f.size();
+                        }
+                        None => i += 1,
+                    }
                 }
                 at += b.len();
             }
-            Piece::AnyByte => at += 1,
-            Piece::Field { .. } | Piece::Value(Value { kind: ValueKind::Field(_), .. }) => {
+            Piece::AnyByte => {
+                // `??` over a one-byte field (a strain the golden leaves free): any value of its type.
+                if let Some(f) = field_at(place(at).1).filter(|f| f.size() == 1) {
+                    rows.push(row(at, f.ty(), (f.min(), f.max())));
+                }
+                at += 1;
+            }
+            Piece::Field { ty, min, max } => {
+                rows.push(row(at, *ty, (*min, *max)));
+                at += ty.size();
+            }
+            Piece::Value(Value { kind: ValueKind::Field(ty), range, .. }) => {
                 // A field held to a relation has no fixed range: its type's range stands in.
-                let (ty, min, max) = match piece {
-                    Piece::Field { ty, min, max } => (ty, *min, *max),
-                    Piece::Value(Value { kind: ValueKind::Field(ty), range, .. }) => {
-                        let (lo, hi) = range.unwrap_or_else(|| (*ty.range().start(), *ty.range().end()));
-                        (ty, lo, hi)
-                    }
-                    _ => break,
-                };
-                let n = ty.size();
-                let got = actual.get(at..at + n);
-                let field = fields.and_then(|f| f.get(index));
-                rows.push(FieldRow {
-                    block: block.max(1),
-                    motor: field.and_then(|f| f.motor()),
-                    name: field.map_or_else(|| ty.name().to_string(), |f| f.name().to_string()),
-                    ty: *ty,
-                    range: (min, max),
-                    value: got.map(|b| value(*ty, b)),
-                    swapped: got.filter(|b| b.len() == 2).map(|b| value(*ty, &[b[1], b[0]])),
-                    bytes: got.map(gcl_transcript::hex_bytes).unwrap_or_default(),
-                });
-                at += n;
-                index += 1;
+                let range = range.unwrap_or_else(|| (*ty.range().start(), *ty.range().end()));
+                rows.push(row(at, *ty, range));
+                at += ty.size();
             }
             Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(_) => break,
         }
@@ -261,7 +266,7 @@ pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -
 }
 
 /// One decimal value of a text answer against its golden window.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Window {
     /// Lowest accepted.
     pub lo: i64,
@@ -269,6 +274,9 @@ pub struct Window {
     pub hi: i64,
     /// What the answer had there (`None` where it had no number).
     pub value: Option<i64>,
+    /// For a window a relation gives: the window (index) whose value it is relative to, and
+    /// the factor and tolerance (`× 153/25 ± 6%`).
+    pub relative_to: Option<(usize, String)>,
 }
 
 /// Walks a golden text answer against the actual bytes and returns each ranged `{int A..B}`
@@ -276,6 +284,8 @@ pub struct Window {
 /// elision of varying length, literal bytes that differ).
 pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
     let mut out = Vec::new();
+    // A captured value and the window it was read in.
+    let mut captured: std::collections::BTreeMap<String, (i64, usize)> = std::collections::BTreeMap::new();
     let mut at = 0usize;
     for (form, piece) in golden.pieces() {
         if form != Form::Text {
@@ -294,7 +304,7 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                     at += b.len();
                 }
             }
-            Piece::Int(range) => {
+            Piece::Int(_) | Piece::Value(Value { kind: ValueKind::Int, .. }) => {
                 let start = at;
                 if actual.get(at) == Some(&b'-') {
                     at += 1;
@@ -302,9 +312,35 @@ pub fn int_windows(golden: &Expect, actual: &[u8]) -> Vec<Window> {
                 while actual.get(at).is_some_and(u8::is_ascii_digit) {
                     at += 1;
                 }
-                let value = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
-                if let Some((lo, hi)) = range {
-                    out.push(Window { lo: *lo, hi: *hi, value });
+                let value: Option<i64> = std::str::from_utf8(&actual[start..at]).ok().and_then(|t| t.parse().ok());
+                // The window: a fixed range, or the band a relation gives around a value this
+                // answer captured before (motor 2 within 6% of motor 1 × 153/25); a relation to
+                // a value captured elsewhere ends the walk.
+                let mut relative_to = None;
+                let window = match piece {
+                    Piece::Int(range) => *range,
+                    Piece::Value(v) => match &v.relation {
+                        Some(rel) => match captured.get(&rel.name) {
+                            Some((base, from)) => {
+                                let factor = if rel.den == 1 {
+                                    format!("× {}", rel.num)
+                                } else {
+                                    format!("× {}/{}", rel.num, rel.den)
+                                };
+                                relative_to = Some((*from, format!("{factor} ± {}%", rel.tolerance)));
+                                Some(rel.band(*base))
+                            }
+                            None => break,
+                        },
+                        None => v.range,
+                    },
+                    _ => None,
+                };
+                if let (Piece::Value(Value { capture: Some(name), .. }), Some(v)) = (piece, value) {
+                    captured.insert(name.clone(), (v, out.len()));
+                }
+                if let Some((lo, hi)) = window {
+                    out.push(Window { lo, hi, value, relative_to });
                 }
             }
             _ => break,
@@ -342,7 +378,7 @@ pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<F
         return Vec::new();
     }
     let parsed = transcript.and_then(|t| gcl_transcript::parse(t).ok());
-    let Some(golden) = hex_expect(&d.golden) else { return Vec::new() };
+    let Some(golden) = golden_expect(d) else { return Vec::new() };
     let actual = parsed
         .as_ref()
         .and_then(|t| t.steps.get(d.step.wrapping_sub(1)))
@@ -366,7 +402,8 @@ mod tests {
             expected: "8500 8500 8500 1575\\n\\r=> ".into(),
             actual: "1575 8500 8500 8500\\n\\r=> ".into(),
             before: "FGET DP\\n\\r".into(),
-            golden: "\"FGET DP\\n\\r8500 8500 8500 1575\\n\\r=> \"".into(),
+            golden: "FGET DP\\n\\r8500 8500 8500 1575\\n\\r=> ".into(),
+            form: Some(AnswerForm::Text),
         }
     }
 
@@ -393,8 +430,80 @@ mod tests {
         let w = int_windows(&golden, b"FGET P\n\r0 17000 3000\n\r=> ");
         assert_eq!(
             w,
-            vec![Window { lo: 16950, hi: 17050, value: Some(0) }, Window { lo: 0, hi: 50, value: Some(17000) }]
+            vec![
+                Window { lo: 16950, hi: 17050, value: Some(0), relative_to: None },
+                Window { lo: 0, hi: 50, value: Some(17000), relative_to: None }
+            ]
         );
+    }
+
+    #[test]
+    fn fields_are_named_by_their_place_in_the_block_even_after_literal_bytes() {
+        // rt-lcpg-zero-gain's feedback is motor 1 LFV LFAP, motor 2 LFV LFAP; its golden writes
+        // each velocity as a literal 00. The u16 after it is motor 1's LFAP, not its LFV.
+        let t = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../vectors/suite/bh8-262-4.4/rt-lcpg-zero-gain.gcl"
+        ))
+        .unwrap();
+        let parsed = gcl_transcript::parse(&t).unwrap();
+        let layouts = layouts("bh8-262-4.4", &parsed).unwrap();
+        let i = parsed.steps.iter().position(|s| s.expect.to_text().starts_with("hex")).unwrap();
+        let rows = decode_blocks(&parsed.steps[i].expect, &[0x2A, 0, 0, 3, 0, 0, 4], layouts[i].as_ref());
+        type Named<'a> = (Option<u8>, &'a str, &'a str, (i64, i64), Option<i64>);
+        let named: Vec<Named> =
+            rows.iter().map(|r| (r.motor, r.name.as_str(), r.ty.name(), r.range, r.value)).collect();
+        assert_eq!(
+            named,
+            [
+                (Some(1), "LFV", "i8", (0, 0), Some(0)),
+                (Some(1), "LFAP", "u16", (0, 50), Some(3)),
+                (Some(2), "LFV", "i8", (0, 0), Some(0)),
+                (Some(2), "LFAP", "u16", (0, 50), Some(4)),
+            ]
+        );
+        assert!(rows.iter().all(|r| r.block == 1));
+    }
+
+    #[test]
+    fn a_relation_gives_its_window_from_the_value_it_captured() {
+        // param-mcv-effect: motor 2 within 6% of motor 1 × 153/25 (issue 19), here ignored.
+        let d = Diff {
+            step: 9,
+            offset: 15,
+            expected: "{int 13110..14785}\\n\\r=> ".into(),
+            actual: "2279\\n\\r=> ".into(),
+            before: "12FGET P\\n\\r2279 ".into(),
+            golden: "12FGET P\\n\\r{int 51..16949 as p1} {int p1*153/25 +-6%}\\n\\r=> ".into(),
+            form: Some(AnswerForm::Text),
+        };
+        let w = int_windows(&golden_expect(&d).unwrap(), b"12FGET P\n\r2279 2279\n\r=> ");
+        assert_eq!(
+            w,
+            vec![
+                Window { lo: 51, hi: 16949, value: Some(2279), relative_to: None },
+                Window { lo: 13110, hi: 14785, value: Some(2279), relative_to: Some((0, "× 153/25 ± 6%".into())) }
+            ]
+        );
+    }
+
+    #[test]
+    fn the_form_comes_from_the_golden_not_from_how_its_text_looks() {
+        // A text answer of two-digit numbers reads like hex tokens; the form says it is text.
+        let d = Diff {
+            step: 3,
+            offset: 3,
+            expected: "12".into(),
+            actual: "21".into(),
+            before: "10 ".into(),
+            golden: "10 12".into(),
+            form: Some(AnswerForm::Text),
+        };
+        assert!(!is_hex(&d));
+        assert!(one_line(&d).contains("expected \"10 12\", got \"10 21\""), "{}", one_line(&d));
+        let d = Diff { golden: "10 12".into(), form: Some(AnswerForm::Hex), ..d };
+        assert!(is_hex(&d));
+        assert_eq!(command(&d), "RealTime block");
     }
 
     #[test]
@@ -405,10 +514,11 @@ mod tests {
             expected: "{u16 4950..5050}".into(),
             actual: "88 13".into(),
             before: "2A".into(),
-            golden: "hex 2A {u16 4950..5050}".into(),
+            golden: "2A {u16 4950..5050}".into(),
+            form: Some(AnswerForm::Hex),
         };
         assert_eq!(one_line(&d), "RealTime block (step 10): expected 2A {u16 4950..5050}, got 2A 88 13");
-        let golden = parse_expect(&d.golden).unwrap();
+        let golden = golden_expect(&d).unwrap();
         let rows = decode_blocks(&golden, &[0x2A, 0x88, 0x13], None);
         assert_eq!(rows.len(), 1);
         assert_eq!(rows[0].value, Some(34835));

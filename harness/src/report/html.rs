@@ -296,11 +296,11 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
         ));
     }
 
+    let goldens = goldens_for(r);
     let failures: Vec<&CaseResult> = r.cases.iter().filter(|c| failing(c)).collect();
     if !failures.is_empty() {
         let label = if r.kind == ReportKind::FuzzHost { "Findings in detail" } else { "Failures" };
         p.heading("failures", label);
-        let goldens = goldens_for(r, &failures);
         let mut preambles = Vec::new();
         // A window plot for each group's representative and each failure of a small group
         // (or none): the members of a large group part the same way as their representative.
@@ -326,6 +326,38 @@ way at {} baud, as the line is full duplex, and the model's motion time for it; 
                     Some(&format!("preamble-{}", i + 1)),
                 ));
             }
+        }
+    }
+
+    let realtime: Vec<&CaseResult> = r.cases.iter().filter(|c| goldens.contains_key(c.id.as_str())).collect();
+    if !realtime.is_empty() {
+        p.heading("realtime", "RealTime cases, block by block");
+        p.push("<p>Each RealTime case's feedback per block: every motor's position, velocity, strain and the other fields its layout sends, with the golden's accepted range shaded behind the values the hand sent. A failing case's plots are with its failure, marked where it fails.</p>\n");
+        let (bad, good): (Vec<&CaseResult>, Vec<&CaseResult>) = realtime.iter().partition(|c| failing(c));
+        if !bad.is_empty() {
+            let links: Vec<String> = bad.iter().map(|c| case_link(r, &c.id)).collect();
+            p.push(&format!("<p>Failing, plotted with their failures: {}</p>\n", links.join(" ")));
+        }
+        for c in good {
+            let (Some(g), Some(t)) = (goldens.get(c.id.as_str()), c.transcript.as_deref()) else { continue };
+            let (plots, blocks, fields) = realtime_plots(r, c, g, t, 0);
+            if plots.is_empty() {
+                continue;
+            }
+            p.push(&details(
+                &format!(
+                    "<strong>{}</strong> <code>{}</code> {} block(s): {} <span class=\"muted\">{}</span>",
+                    verdict_word(r.kind, c.verdict),
+                    esc(&c.id),
+                    blocks,
+                    esc(&fields.join(", ")),
+                    esc(&c.title)
+                ),
+                &plots,
+                false,
+                "",
+                Some(&format!("rt-case-{}", c.id)),
+            ));
         }
     }
 
@@ -394,14 +426,25 @@ fn cases_table(r: &RunReport) -> String {
         h.push_str("</table>\n");
         return h;
     }
-    let mut h = String::from(
-        "<table><tr><th>id</th><th>title</th><th>level</th><th>verdict</th><th>ms</th><th>why</th></tr>\n",
+    // A certificate bundle keeps every case's exchange beside the page, in `transcripts/`.
+    let bundle = r.kind == ReportKind::Certify;
+    let mut h = format!(
+        "<table><tr><th>id</th><th>title</th><th>level</th><th>verdict</th><th>ms</th><th>why</th>{}</tr>\n",
+        if bundle { "<th>transcript</th>" } else { "" }
     );
     for c in &r.cases {
         let id = if failing(c) { case_link(r, &c.id) } else { esc(&c.id) };
+        let transcript = match (bundle, c.verdict) {
+            (false, _) => String::new(),
+            (true, Verdict::Skip) => "<td class=\"muted\">not run</td>".to_string(),
+            (true, _) => {
+                let file = format!("transcripts/{}.gcl", crate::certify::safe_name(&c.id));
+                format!("<td><a href=\"{}\">{}</a></td>", esc(&file), esc(&file))
+            }
+        };
         let _ = writeln!(
             h,
-            "<tr class=\"{}\" id=\"{}\"><td>{id}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"n\">{:.1}</td><td>{}</td></tr>",
+            "<tr class=\"{}\" id=\"{}\"><td>{id}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"n\">{:.1}</td><td>{}</td>{transcript}</tr>",
             class(c.verdict),
             esc(&c.id),
             esc(&c.title),
@@ -415,24 +458,25 @@ fn cases_table(r: &RunReport) -> String {
     h
 }
 
-/// The goldens of failing cases whose failing step answers a RealTime block, from the suite
-/// the model generates for the report's profile (the plot needs every block's golden, and the
-/// report keeps only the failing step's).
-fn goldens_for<'a>(r: &RunReport, failures: &[&'a CaseResult]) -> BTreeMap<&'a str, Transcript> {
-    let wanted: Vec<&str> =
-        failures.iter().filter(|c| c.diff.as_ref().is_some_and(diff::is_hex)).map(|c| c.id.as_str()).collect();
-    if wanted.is_empty() || r.kind.is_host() {
+/// The goldens of the cases that answer RealTime blocks and kept their exchange (every
+/// RealTime case, passing or failing), from the suite the model generates for the report's
+/// profile: the plots need every block's golden, and the report keeps only the failing step's.
+fn goldens_for(r: &RunReport) -> BTreeMap<&str, Transcript> {
+    if r.kind.is_host() || !r.cases.iter().any(|c| c.transcript.is_some()) {
         return BTreeMap::new();
     }
     let Ok(profile) = gcl_model::Profile::builtin(&r.profile) else { return BTreeMap::new() };
     let Ok(cases) = crate::suite::generate(&profile) else { return BTreeMap::new() };
-    let mut out = BTreeMap::new();
-    for c in cases {
-        if let Some(id) = wanted.iter().find(|w| **w == c.id()) {
-            out.insert(*id, c.transcript);
-        }
-    }
-    out
+    let mut by_id: BTreeMap<String, Transcript> = cases
+        .into_iter()
+        .filter(|c| c.transcript.steps.iter().any(|s| s.expect.segments.first().is_some_and(|g| g.form == Form::Hex)))
+        .map(|c| (c.id().to_string(), c.transcript))
+        .collect();
+    r.cases
+        .iter()
+        .filter(|c| c.transcript.is_some())
+        .filter_map(|c| by_id.remove(&c.id).map(|t| (c.id.as_str(), t)))
+        .collect()
 }
 
 fn failure_view(
@@ -462,7 +506,7 @@ fn failure_view(
             body.push_str(&field_table(&rows));
         }
         if let (Some(g), Some(t)) = (golden, c.transcript.as_deref()) {
-            body.push_str(&realtime_plots(r, c, g, t, d.step));
+            body.push_str(&realtime_plots(r, c, g, t, d.step).0);
         }
         if plot_windows {
             body.push_str(&window_plot(c, d));
@@ -487,7 +531,7 @@ fn failure_view(
 
 fn field_table(rows: &[FieldRow]) -> String {
     let mut h = String::from(
-        "<table><tr><th>block</th><th>motor</th><th>field</th><th>type</th><th>golden range</th><th>bytes</th>\
+        "<table><tr><th>block in this answer</th><th>motor</th><th>field</th><th>type</th><th>golden range</th><th>bytes</th>\
 <th>value (high byte first)</th><th>read low byte first</th></tr>\n",
     );
     for f in rows {
@@ -516,9 +560,16 @@ fn field_table(rows: &[FieldRow]) -> String {
 }
 
 /// One plot per RealTime field name over the case's blocks: each motor's actual values with
-/// the golden's range behind them, and a mark at the failing block.
-fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_text: &str, fail_step: usize) -> String {
-    let Ok(actual) = gcl_transcript::parse(actual_text) else { return String::new() };
+/// the golden's range behind them, and a mark at the failing block. Also the number of blocks
+/// and the fields plotted, for a line that sums the plots up.
+fn realtime_plots(
+    r: &RunReport,
+    c: &CaseResult,
+    golden: &Transcript,
+    actual_text: &str,
+    fail_step: usize,
+) -> (String, usize, Vec<String>) {
+    let Ok(actual) = gcl_transcript::parse(actual_text) else { return (String::new(), 0, Vec::new()) };
     // The golden's sends are the actual transcript's, and go on past the failing step.
     let layouts = diff::layouts(&r.profile, golden).unwrap_or_default();
     // (field, motor) → series of (block, value) and band (block, lo, hi).
@@ -547,20 +598,23 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
             mark = Some((first + 1) as f64);
         }
     }
-    // A plot of one or two blocks says nothing the field table does not.
-    if block < 3 {
-        return String::new();
+    if block == 0 {
+        return (String::new(), 0, Vec::new());
     }
     let mut names: Vec<String> = bands.keys().map(|k| k.0.clone()).collect();
     names.dedup();
-    let mut h = String::from(
-        "<p>Each RealTime field over the case's blocks: the actual values, the golden's range behind them, and where the case fails.</p>\n",
-    );
+    let mut h = if fail_step > 0 {
+        String::from(
+            "<p>Each RealTime field over the case's blocks: the actual values, the golden's range behind them, and where the case fails.</p>\n",
+        )
+    } else {
+        String::new()
+    };
     for name in names.iter().take(8) {
         let keys: Vec<&Key> = bands.keys().filter(|k| &k.0 == name).collect();
         let plot = Plot {
-            title: format!("{name} per block"),
-            x_label: "block".into(),
+            title: format!("{name} per block: {}", field_meaning(name)),
+            x_label: "feedback block".into(),
             y_label: name.clone(),
             series: keys
                 .iter()
@@ -572,11 +626,27 @@ fn realtime_plots(r: &RunReport, c: &CaseResult, golden: &Transcript, actual_tex
                 .collect(),
             bands: keys.iter().map(|k| Band { points: bands[*k].clone() }).collect(),
             marks: mark.map(|x| vec![(x, "fails here".to_string())]).unwrap_or_default(),
-            windows: Vec::new(),
+            // A handful of blocks: each numbered under the axis.
+            x_ticks: if block <= 12 { (1..=block).map(|b| (b as f64, b.to_string())).collect() } else { Vec::new() },
+            ..Default::default()
         };
         h.push_str(&plot.to_svg(&format!("rt-{}-{}", c.id, name)));
     }
-    h
+    (h, block, names)
+}
+
+/// What a RealTime feedback field is, for a plot's title (facts §4.4, §4.5).
+fn field_meaning(name: &str) -> &'static str {
+    match name {
+        "LFAP" => "absolute position, counts",
+        "LFDP" => "delta position, counts since the last block",
+        "LFV" => "velocity",
+        "LFS" => "strain",
+        "LFBP" => "breakaway position, counts",
+        "LFAIN" => "analog input",
+        "LFT" => "temperature",
+        _ => "value by type (layout unknown)",
+    }
 }
 
 /// For a failing answer of decimal values with windows (positions after a motion or a ^C
@@ -586,7 +656,7 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
     if diff::is_hex(d) {
         return String::new();
     }
-    let Some(golden) = diff::parse_expect(&d.golden) else { return String::new() };
+    let Some(golden) = diff::golden_expect(d) else { return String::new() };
     let Some(actual) = c
         .transcript
         .as_deref()
@@ -600,9 +670,21 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
         return String::new();
     }
     let parting = windows.iter().position(|w| w.value.is_none_or(|v| v < w.lo || v > w.hi));
+    // A per-motor get (`12FGET P`) answers one value per motor named in front of it, in order.
+    let cmd = diff::command(d);
+    let motors: Vec<char> = cmd.chars().take_while(char::is_ascii_digit).collect();
+    let label = |i: usize| match motors.get(i) {
+        Some(m) if motors.len() == windows.len() => format!("motor {m}"),
+        _ => format!("value {}", i + 1),
+    };
+    // A window a relation gives says so under its bar: `motor 2: motor 1 × 153/25 ± 6%`.
+    let tick = |i: usize| match &windows[i].relative_to {
+        Some((from, rule)) => format!("{}: {} {rule}", label(i), label(*from)),
+        None => label(i),
+    };
     let plot = Plot {
-        title: format!("{}: each value's window and where it was", diff::command(d)),
-        x_label: "value in the answer (motor order for a per-motor get)".into(),
+        title: format!("{cmd}: each value's golden window and where it was"),
+        x_label: if motors.len() == windows.len() { "motor".into() } else { "value in the answer".into() },
         y_label: "value".into(),
         series: vec![Series {
             name: "actual".into(),
@@ -615,7 +697,8 @@ fn window_plot(c: &CaseResult, d: &super::Diff) -> String {
             steps: false,
         }],
         windows: windows.iter().enumerate().map(|(i, w)| ((i + 1) as f64, w.lo as f64, w.hi as f64)).collect(),
-        marks: parting.map(|i| vec![((i + 1) as f64, "parts here".to_string())]).unwrap_or_default(),
+        marks: parting.map(|i| vec![((i + 1) as f64, format!("{} misses", label(i)))]).unwrap_or_default(),
+        x_ticks: (0..windows.len()).map(|i| ((i + 1) as f64, tick(i))).collect(),
         ..Default::default()
     };
     plot.to_svg(&format!("windows-{}", c.id))
@@ -835,7 +918,8 @@ mod tests {
             expected: "\\n\\r1000".into(),
             actual: "\\r\\n1000".into(),
             before: "FGET DP".into(),
-            golden: "\"FGET DP\\n\\r1000\"".into(),
+            golden: "FGET DP\\n\\r1000".into(),
+            form: Some(crate::report::AnswerForm::Text),
         };
         let mut shared = Vec::new();
         let h = transcript_view(t, Some(&d), "hand said", Some(&mut shared));

@@ -8,6 +8,7 @@ pub mod diff;
 pub(crate) mod html;
 mod junit;
 pub mod page;
+pub mod program;
 pub mod svg;
 
 use std::collections::BTreeMap;
@@ -92,6 +93,29 @@ pub struct Diff {
     /// text or hex tokens, elisions in braces, no quotes).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub golden: String,
+    /// Whether the step's golden answer is text or binary (a RealTime block in hex tokens), as
+    /// the golden says; absent in reports written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<AnswerForm>,
+}
+
+/// The form of a golden answer: text, or binary written as hex tokens.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AnswerForm {
+    /// Text, escaped.
+    Text,
+    /// Binary, as hex tokens (a RealTime block).
+    Hex,
+}
+
+impl From<gcl_transcript::Form> for AnswerForm {
+    fn from(f: gcl_transcript::Form) -> AnswerForm {
+        match f {
+            gcl_transcript::Form::Text => AnswerForm::Text,
+            gcl_transcript::Form::Hex => AnswerForm::Hex,
+        }
+    }
 }
 
 /// Characters of agreed answer kept in [`Diff::before`].
@@ -186,7 +210,8 @@ pub struct CaseResult {
     /// Where the answer parted from the golden one (FAIL, XFAIL).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff: Option<Diff>,
-    /// The exchange as it happened, in transcript text (for failures, and in certificates).
+    /// The exchange as it happened, in transcript text (for failures, for RealTime cases, whose
+    /// blocks the page plots, and in certificates).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transcript: Option<String>,
 }
@@ -635,6 +660,7 @@ pub(crate) mod tests {
                         actual: "\\r\\n1000".into(),
                         before: "FGET DP".into(),
                         golden: "FGET DP\\n\\r1000".into(),
+                        form: Some(AnswerForm::Text),
                     }),
                     transcript: Some("> FGET DP\\r\n< FGET DP\\r\\n1000".into()),
                 },

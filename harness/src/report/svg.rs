@@ -43,18 +43,41 @@ pub struct Plot {
     pub marks: Vec<(f64, String)>,
     /// Windows: at x, a value should lie in `lo..=hi` (drawn as a shaded bar behind the series).
     pub windows: Vec<(f64, f64, f64)>,
+    /// Labels under the x axis at these x (things, not numbers: motors); empty: the axis's
+    /// two ends are numbered.
+    pub x_ticks: Vec<(f64, String)>,
+    /// What the bands and windows stand for, in the legend (default "golden range").
+    pub band_label: Option<String>,
 }
 
 const W: f64 = 640.0;
-const H: f64 = 220.0;
+const H: f64 = 236.0;
 const L: f64 = 64.0;
 const R: f64 = 16.0;
-const T: f64 = 26.0;
+/// Top margin: the title, then the legend in one row under it, clear of the data and marks.
+const T: f64 = 42.0;
 const B: f64 = 40.0;
 const COLOURS: [&str; 6] = ["#1f5fbf", "#c0392b", "#2e8b57", "#8e44ad", "#d35400", "#555"];
 
 fn nice(v: f64) -> String {
     if v.abs() >= 1000.0 || v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v:.2}") }
+}
+
+/// Where the legend's `i`th entry goes: one row under the title, left to right, wrapping to
+/// the plot's width (an entry is a 16 px swatch and its name at about 6.5 px a character).
+fn legend_at(names: &[&str], i: usize) -> (f64, f64) {
+    let (mut x, mut y) = (L, 30.0);
+    for (k, n) in names.iter().enumerate() {
+        let w = 28.0 + 6.5 * n.chars().count() as f64;
+        if x + w > W - R && x > L {
+            (x, y) = (L, y + 12.0);
+        }
+        if k == i {
+            break;
+        }
+        x += w;
+    }
+    (x, y)
 }
 
 impl Plot {
@@ -76,8 +99,10 @@ impl Plot {
         if !y0.is_finite() {
             (y0, y1) = (0.0, 1.0);
         }
-        if x1 <= x0 {
-            x1 = x0 + 1.0;
+        if x1 - x0 < 4.0 && !self.x_ticks.is_empty() {
+            // A few labelled things (blocks, motors): half a step of room either side, so no
+            // point sits on an axis (numbered axes keep their true ends: no -0.2 s).
+            (x0, x1) = (x0 - 0.5, x1 + 0.5);
         }
         if y1 <= y0 {
             y1 = y0 + 1.0;
@@ -97,6 +122,19 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
         );
         let _ = write!(s, "<text x=\"{L}\" y=\"16\" font-size=\"13\" font-weight=\"bold\">{}</text>", esc(&self.title));
         for b in &self.bands {
+            if let [(x, lo, hi)] = b.points[..] {
+                // One point has no width to shade: a bar like a window's.
+                let w = ((px(x + 0.5) - px(x - 0.5)) * 0.5).max(4.0);
+                let _ = write!(
+                    s,
+                    "<polygon points=\"{0:.1},{2:.1} {1:.1},{2:.1} {1:.1},{3:.1} {0:.1},{3:.1}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"#9fd19f\" stroke-width=\"4\" stroke-linejoin=\"round\"/>",
+                    px(x) - w / 2.0,
+                    px(x) + w / 2.0,
+                    py(hi),
+                    py(lo).max(py(hi) + 2.0)
+                );
+                continue;
+            }
             if b.points.is_empty() {
                 continue;
             }
@@ -104,7 +142,7 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             let bottom: Vec<String> = b.points.iter().rev().map(|p| format!("{:.1},{:.1}", px(p.0), py(p.1))).collect();
             let _ = write!(
                 s,
-                "<polygon points=\"{} {}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"none\"/>",
+                "<polygon points=\"{} {}\" fill=\"#9fd19f\" fill-opacity=\"0.45\" stroke=\"#9fd19f\" stroke-width=\"4\" stroke-linejoin=\"round\"/>",
                 top.join(" "),
                 bottom.join(" ")
             );
@@ -124,7 +162,6 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             s,
             "<path d=\"M{L},{T} V{} H{}\" fill=\"none\" stroke=\"#444\"/>\
 <text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\
-<text x=\"{L}\" y=\"{}\" text-anchor=\"middle\">{}</text><text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text>\
 <text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\
 <text x=\"12\" y=\"{}\" transform=\"rotate(-90 12 {})\" text-anchor=\"middle\">{}</text>",
             H - B,
@@ -135,11 +172,6 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             L - 4.0,
             py(lo) + 4.0,
             nice(lo),
-            H - B + 14.0,
-            nice(x0),
-            W - R,
-            H - B + 14.0,
-            nice(x1),
             (L + W - R) / 2.0,
             H - 6.0,
             esc(&self.x_label),
@@ -147,6 +179,32 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             (T + H - B) / 2.0,
             esc(&self.y_label),
         );
+        if self.x_ticks.is_empty() {
+            let _ = write!(
+                s,
+                "<text x=\"{L}\" y=\"{0}\" text-anchor=\"middle\">{1}</text><text x=\"{2}\" y=\"{0}\" text-anchor=\"end\">{3}</text>",
+                H - B + 14.0,
+                nice(x0),
+                W - R,
+                nice(x1)
+            );
+        }
+        for (x, label) in &self.x_ticks {
+            let _ = write!(
+                s,
+                "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+                px(*x),
+                H - B + 14.0,
+                esc(label)
+            );
+        }
+        let band_label = self.band_label.clone().unwrap_or_else(|| "golden range".to_string());
+        let legend_names: Vec<&str> = self
+            .series
+            .iter()
+            .map(|se| se.name.as_str())
+            .chain((!self.bands.is_empty() || !self.windows.is_empty()).then_some(band_label.as_str()))
+            .collect();
         for (i, se) in self.series.iter().enumerate() {
             let c = COLOURS[i % COLOURS.len()];
             let mut d = String::new();
@@ -170,11 +228,16 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             }
             if se.dots || se.points.len() <= 40 {
                 for &(x, y) in &se.points {
-                    let _ = write!(s, "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\" fill=\"{c}\"/>", px(x), py(y));
+                    let _ = write!(
+                        s,
+                        "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"{}\" fill=\"{c}\"/>",
+                        px(x),
+                        py(y),
+                        if se.dots { 4.0 } else { 2.5 }
+                    );
                 }
             }
-            let lx = W - R - 150.0;
-            let ly = T + 4.0 + 14.0 * i as f64;
+            let (lx, ly) = legend_at(&legend_names, i);
             let _ = write!(
                 s,
                 "<line x1=\"{lx}\" y1=\"{ly}\" x2=\"{}\" y2=\"{ly}\" stroke=\"{c}\" stroke-width=\"2\"/>\
@@ -198,13 +261,14 @@ font-family=\"sans-serif\" font-size=\"11\"><title>{}</title>",
             );
         }
         if !self.bands.is_empty() || !self.windows.is_empty() {
+            let (lx, ly) = legend_at(&legend_names, self.series.len());
             let _ = write!(
                 s,
-                "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"8\" fill=\"#9fd19f\"/><text x=\"{}\" y=\"{}\">golden range</text>",
-                W - R - 150.0,
-                T + 2.0 + 14.0 * self.series.len() as f64,
-                W - R - 130.0,
-                T + 10.0 + 14.0 * self.series.len() as f64
+                "<rect x=\"{lx}\" y=\"{}\" width=\"14\" height=\"9\" fill=\"#9fd19f\"/><text x=\"{}\" y=\"{}\">{}</text>",
+                ly - 5.0,
+                lx + 20.0,
+                ly + 4.0,
+                esc(&band_label)
             );
         }
         s.push_str("</svg>\n");
@@ -229,7 +293,7 @@ mod tests {
             }],
             bands: vec![Band { points: vec![(1.0, 4950.0, 5050.0), (2.0, 4950.0, 5050.0)] }],
             marks: vec![(2.0, "fails".into())],
-            windows: Vec::new(),
+            ..Default::default()
         };
         let svg = p.to_svg("rt-lfap");
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));

@@ -74,6 +74,19 @@ pub struct RealtimeReport {
     pub positions: [i64; 3],
     /// `FGET P` of F1, F2, F3 after leaving the loop.
     pub final_positions: Vec<i64>,
+    /// Every block of the loop in order: the velocities it sent and the positions its
+    /// feedback carried (what a plot of the run draws).
+    pub blocks: Vec<RealtimeBlock>,
+}
+
+/// One control block of the RealTime program and the feedback it got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RealtimeBlock {
+    /// The velocities sent to F1, F2, F3.
+    pub velocities: [i64; 3],
+    /// The positions of F1, F2, F3 in the feedback block that answered (LFAP; the hand sends
+    /// the state from before the block's control data).
+    pub positions: [i64; 3],
 }
 
 /// Velocity the fingers close at, and the position that starts the next finger.
@@ -99,6 +112,7 @@ pub fn realtime(
     hand.rt_update()?;
     let mut n = 0u64;
     let mut started = [None, None];
+    let mut blocks = Vec::new();
     let mut elapsed;
     loop {
         elapsed = clock.now(hand).saturating_sub(start);
@@ -118,6 +132,8 @@ pub fn realtime(
         let terminate = elapsed > run_for;
         n += 1;
         hand.rt_update()?;
+        let positions = [1u8, 2, 3].map(|m| hand.rt_get_position((b'0' + m) as char).unwrap_or(0));
+        blocks.push(RealtimeBlock { velocities: [VELOCITY, v2, v3], positions });
         if terminate {
             break;
         }
@@ -128,7 +144,7 @@ pub fn realtime(
     let _ = writeln!(out, "Done without interruption");
     let _ =
         writeln!(out, "{n} blocks in {:.3} s; final positions F1 F2 F3: {final_positions:?}", elapsed.as_secs_f64());
-    Ok(RealtimeReport { iterations: n, elapsed, started, positions, final_positions })
+    Ok(RealtimeReport { iterations: n, elapsed, started, positions, final_positions, blocks })
 }
 
 #[cfg(test)]

@@ -84,9 +84,15 @@ impl FuzzReport {
         format!("gcl replay --target '{target}' {}", shell_word(&path.display().to_string()))
     }
 
-    /// Whether the run found nothing.
+    /// Whether the run found nothing new (what the baseline or the known failures explain was
+    /// known before; the CLI's exit status says the same).
     pub fn passed(&self) -> bool {
-        self.findings.is_empty()
+        self.findings.iter().all(|f| !f.is_new())
+    }
+
+    /// How many findings are new.
+    pub fn new_findings(&self) -> usize {
+        self.findings.iter().filter(|f| f.is_new()).count()
     }
 }
 
@@ -140,13 +146,17 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     w.write_event(Event::Start(BytesStart::new("testsuites")))?;
     let name = format!("gcl fuzz device {}", r.target);
-    let (tests, failures) = (r.findings.len().max(1).to_string(), r.findings.len().to_string());
+    // A new finding fails; one the baseline or the known failures explain is skipped, saying why.
+    let new = r.new_findings();
+    let (tests, failures, skipped) =
+        (r.findings.len().max(1).to_string(), new.to_string(), (r.findings.len() - new).to_string());
     let time = format!("{:.3}", r.duration_ms as f64 / 1000.0);
     let mut suite = BytesStart::new("testsuite");
     suite.push_attribute(("name", name.as_str()));
     suite.push_attribute(("tests", tests.as_str()));
     suite.push_attribute(("failures", failures.as_str()));
     suite.push_attribute(("errors", "0"));
+    suite.push_attribute(("skipped", skipped.as_str()));
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
     if r.findings.is_empty() {
@@ -159,15 +169,18 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     }
     for f in &r.findings {
         let signature = f.signature.to_string();
-        let classname = format!("gcl.fuzz-device.{}", f.signature.kind);
+        let classname = format!("gcl.fuzz-device.{}.{}", if f.is_new() { "new" } else { "known" }, f.signature.kind);
         let t = format!("{:.3}", f.found_after.as_secs_f64());
         let mut tc = BytesStart::new("testcase");
         tc.push_attribute(("classname", classname.as_str()));
         tc.push_attribute(("name", signature.as_str()));
         tc.push_attribute(("time", t.as_str()));
         w.write_event(Event::Start(tc))?;
-        let message = summary_line(f);
-        let mut failure = BytesStart::new("failure");
+        let (element, message) = match &f.known {
+            None => ("failure", summary_line(f)),
+            Some(why) => ("skipped", format!("known ({why}): {}", summary_line(f))),
+        };
+        let mut failure = BytesStart::new(element);
         failure.push_attribute(("message", message.as_str()));
         failure.push_attribute(("type", f.signature.kind.as_str()));
         w.write_event(Event::Start(failure))?;
@@ -175,7 +188,7 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
             f.path.as_deref().map(|p| format!("run it again: {}\n\n", r.replay_command(p))).unwrap_or_default();
         let body = format!("{replay}{}\n\n{}", f.diff, f.transcript_text);
         w.write_event(Event::Text(BytesText::new(&body)))?;
-        w.write_event(Event::End(BytesEnd::new("failure")))?;
+        w.write_event(Event::End(BytesEnd::new(element)))?;
         w.write_event(Event::End(BytesEnd::new("testcase")))?;
     }
     w.write_event(Event::End(BytesEnd::new("testsuite")))?;
@@ -223,7 +236,8 @@ pub fn summary_line(f: &Finding) -> String {
             expected: e[common..].trim_start().to_string(),
             actual: a[common..].trim_start().to_string(),
             before: e[..common].trim_end().to_string(),
-            golden: if hex { format!("hex {e}") } else { format!("\"{e}\"") },
+            golden: e.clone(),
+            form: Some(if hex { crate::report::AnswerForm::Hex } else { crate::report::AnswerForm::Text }),
         };
         return crate::report::diff::one_line(&d);
     }
@@ -242,17 +256,24 @@ fn first_line(diff: &str) -> Option<&str> {
 /// finding's diff and transcript, folded.
 pub fn to_html(r: &FuzzReport) -> String {
     let ok = r.passed();
-    let headline = if ok {
-        format!("no finding in {} runs ({:.1} s)", r.runs, r.duration_ms as f64 / 1000.0)
-    } else {
-        format!("{} distinct finding(s) in {} runs ({:.1} s)", r.findings.len(), r.runs, r.duration_ms as f64 / 1000.0)
+    let new = r.new_findings();
+    let known = r.findings.len() - new;
+    let secs = r.duration_ms as f64 / 1000.0;
+    let headline = match (new, known) {
+        (0, 0) => format!("no finding in {} runs ({secs:.1} s)", r.runs),
+        (0, k) => format!(
+            "no new finding in {} runs ({secs:.1} s); {k} known (the baseline or known failures explain them)",
+            r.runs
+        ),
+        (n, 0) => format!("{n} distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
+        (n, k) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s), and {k} known", r.runs),
     };
-    let mut p = Page::new(
-        &format!("gcl fuzz device {} on {}", r.profile, r.target),
-        ok,
-        if ok { "NO FINDING" } else { "FINDINGS" },
-        &headline,
-    );
+    let verdict = match (new, known) {
+        (0, 0) => "NO FINDING",
+        (0, _) => "NO NEW FINDING",
+        _ => "FINDINGS",
+    };
+    let mut p = Page::new(&format!("gcl fuzz device {} on {}", r.profile, r.target), ok, verdict, &headline);
     p.facts(&[
         ("target".into(), format!("<code>{}</code>", esc(&r.target))),
         ("profile".into(), esc(&r.profile)),
@@ -279,27 +300,45 @@ pub fn to_html(r: &FuzzReport) -> String {
         opts.push(("no".into(), r.refused.join(", ")));
     }
     p.options(&opts);
-    p.heading("findings", "Findings");
-    if r.findings.is_empty() {
-        p.push("<p>None.</p>\n");
-    } else {
-        let mut t = String::from(
-            "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th><th>transcript</th><th>run it again</th></tr>\n",
+    // The findings index: new ones first (they fail the run), then the known ones with why.
+    let index = |known: bool| {
+        let rows: Vec<(usize, &Finding)> = r.findings.iter().enumerate().filter(|(_, f)| f.is_new() != known).collect();
+        if rows.is_empty() {
+            return format!("<p>None{}.</p>\n", if known || r.findings.is_empty() { "" } else { " new" });
+        }
+        let mut t = format!(
+            "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th>{}<th>transcript</th><th>run it again</th></tr>\n",
+            if known { "<th>known because</th>" } else { "" }
         );
-        for (i, f) in r.findings.iter().enumerate() {
+        for (i, f) in rows {
+            let why = match &f.known {
+                Some(w) if known => format!("<td>{}</td>", esc(w)),
+                _ => String::new(),
+            };
             let _ = writeln!(
                 t,
-                "<tr class=\"fail\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td><code>{}</code></td><td><code class=\"cmd\">{}</code></td></tr>",
+                "<tr class=\"{}\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td>{why}<td><code>{}</code></td><td>{}</td></tr>",
+                if known { "skip" } else { "fail" },
                 esc(&f.signature.kind),
                 esc(&f.signature.to_string()),
                 f.run,
                 esc(&f.path.as_ref().map_or("not written (no --out)".into(), |p| p.display().to_string())),
-                esc(&f.path.as_deref().map(|p| r.replay_command(p)).unwrap_or_default()),
+                f.path.as_deref().map_or_else(
+                    || "<span class=\"muted\">write the transcript with --out</span>".to_string(),
+                    |p| format!("<code class=\"cmd\">{}</code>", esc(&r.replay_command(p)))
+                ),
                 n = i + 1,
             );
         }
         t.push_str("</table>\n");
-        p.push(&t);
+        t
+    };
+    // "New" means something only beside known findings.
+    p.heading("findings", if known > 0 { "New findings" } else { "Findings" });
+    p.push(&index(false));
+    if known > 0 {
+        p.heading("known", "Known findings");
+        p.push(&index(true));
     }
     p.heading("coverage", "Coverage");
     if r.coverage_over_time.len() >= 2 {
@@ -354,14 +393,15 @@ pub fn to_html(r: &FuzzReport) -> String {
             ) + &details("the transcript file as written", &pre(&f.transcript_text), false, "", None);
             p.push(&details(
                 &format!(
-                    "<strong>#{}</strong> {} <span class=\"muted\">{}</span>",
+                    "<strong>#{}</strong> {}{} <span class=\"muted\">{}</span>",
                     i + 1,
+                    if f.is_new() { "" } else { "(known) " },
                     esc(&f.signature.to_string()),
                     esc(&summary_line(f))
                 ),
                 &body,
-                i == 0,
-                "case",
+                i == 0 && f.is_new(),
+                if f.is_new() { "case" } else { "" },
                 Some(&format!("finding-{}", i + 1)),
             ));
         }
