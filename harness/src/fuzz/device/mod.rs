@@ -537,6 +537,108 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
     align::signature(p, &built.transcript, &built.model, out, whole_reads)
 }
 
+/// [`signature`], then the motor prefix that explains the failure, if one does (see
+/// [`prefix_explains`]).
+fn judged(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+) -> Option<FindingSignature> {
+    let mut sig = signature(&opts.profile, built, out, !opts.wide())?;
+    if let Some(pre) = prefix_explains(opts, actions, built, out) {
+        sig.prefix = pre;
+    }
+    Some(sig)
+}
+
+/// A motor prefix read by the hand as its motors and one more explains a failure when the model,
+/// given every line with that prefix widened (written out in motor digits), answers what the hand
+/// answered at every step from the first such line up to the failing one (the lines' own echoes
+/// taken as the hand's). A prefix bug (`G` reaching the spread too) shows on whatever the
+/// prefixed lines do and on every read after them, under as many signatures as there are
+/// commands: the prefix is the one thing they share. Returns `123+4` (the model's motors, the
+/// motor added). Not tried through RealTime blocks, whose bytes the layout (and so the prefix of
+/// LOOP) decides: the hand was sent other bytes than the variant's.
+fn prefix_explains(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+) -> Option<String> {
+    use gcl_model::MotorSet;
+    use gcl_model::grammar::{Line, parse_line};
+    let p = &opts.profile;
+    let failed = out.failed_step()?;
+    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let digits = |m: MotorSet| m.iter().map(|x| x.to_string()).collect::<String>();
+    // Each prefixed line: its action, its prefix, and the line without it (the shortest tail
+    // that is the same command, unprefixed).
+    let mut prefixed: Vec<(usize, MotorSet, &str)> = Vec::new();
+    for (i, a) in actions.iter().enumerate() {
+        let line = match a {
+            HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => l,
+            _ => continue,
+        };
+        let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
+        let Some(pre) = c.prefix else { continue };
+        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
+            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
+        });
+        if let Some(t) = tail {
+            prefixed.push((i, pre, t));
+        }
+    }
+    let sets: BTreeSet<u8> = prefixed.iter().map(|(_, s, _)| s.bits()).collect();
+    for pre in sets.into_iter().map(MotorSet::from_bits) {
+        for m in MotorSet::ALL.iter().filter(|m| !pre.contains(*m)) {
+            let wide = MotorSet::from_bits(pre.bits() | MotorSet::single(m)?.bits());
+            let mut v = actions.to_vec();
+            let mut echoes: Vec<(String, String)> = Vec::new();
+            for (i, _, tail) in prefixed.iter().filter(|(_, s, _)| *s == pre) {
+                let new_line = format!("{}{tail}", digits(wide));
+                v[*i] = match &actions[*i] {
+                    HostAction::LineThenAbort { line, after_ms } => {
+                        echoes.push((line.clone(), new_line.clone()));
+                        HostAction::LineThenAbort { line: new_line, after_ms: *after_ms }
+                    }
+                    HostAction::Line(line) => {
+                        echoes.push((line.clone(), new_line.clone()));
+                        HostAction::Line(new_line)
+                    }
+                    a => a.clone(),
+                };
+            }
+            let Ok(b) = build_for(opts, &v, "fuzz", "prefix") else { continue };
+            let (old, new) = (&built.transcript.steps, &b.transcript.steps);
+            if new.len() <= failed || old.len() <= failed {
+                continue;
+            }
+            let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+            let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
+            let explains = (d..=failed).all(|s| {
+                let Some(mut got) = received(s) else { return false };
+                // The hand echoed a widened line as it was sent; the variant echoes the digits.
+                if send(&old[s]) != send(&new[s]) {
+                    for (was, now) in &echoes {
+                        if let Some(at) = got.windows(was.len()).position(|w| w == was.as_bytes()) {
+                            got.splice(at..at + was.len(), now.bytes());
+                            break;
+                        }
+                    }
+                }
+                let mut mt = gcl_transcript::Matcher::new(&new[s].expect);
+                let alive = got.iter().all(|b| mt.feed(*b) != gcl_transcript::Feed::Dead);
+                alive && (mt.is_complete() || s == failed && matches!(out, ReplayOutcome::Mismatch(_)))
+            });
+            if explains {
+                return Some(format!("{}+{m}", digits(pre)));
+            }
+        }
+    }
+    None
+}
+
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
 /// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
 fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
@@ -805,7 +907,7 @@ fn worker(
         {
             lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
-            if let Some(sig) = signature(&p, &pb, &out, !opts.wide()) {
+            if let Some(sig) = judged(opts, &pa, &pb, &out) {
                 let new = lock().seen.insert(sig.key());
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
@@ -815,11 +917,11 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut sig = signature(&p, &built, &outcome, !opts.wide());
+        let mut sig = judged(opts, &actions, &built, &outcome);
         // A quick run's new failure counts only if a thorough run of the case fails too.
         if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(&s.key())) {
             outcome = hand.run(&built.transcript, true)?;
-            sig = signature(&p, &built, &outcome, !opts.wide());
+            sig = judged(opts, &actions, &built, &outcome);
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
@@ -942,7 +1044,6 @@ fn minimize(
     sig: &FindingSignature,
     until: Option<Instant>,
 ) -> Result<(Vec<HostAction>, BuiltCase), FuzzError> {
-    let p = opts.profile.clone();
     let mut tries = 0usize;
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
@@ -957,7 +1058,7 @@ fn minimize(
             return Ok(None);
         }
         let out = hand.run(&b.transcript, true)?;
-        Ok((signature(&p, &b, &out, !opts.wide()).is_some_and(|s| s.key() == sig.key())).then_some(b))
+        Ok((judged(opts, cand, &b, &out).is_some_and(|s| s.key() == sig.key())).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
     while chunk >= 1 && tries < opts.minimize_budget {
