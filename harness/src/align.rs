@@ -175,13 +175,13 @@ pub struct FindingSignature {
     /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub cause: String,
-    /// A motor prefix that explains the difference, as the motors the model reads it as and the
-    /// one the hand adds (`123+4`: `G` read as reaching motor 4 too): the model, given the line
-    /// with the wider prefix, answers what the hand did. Set by the device fuzzer, which can
-    /// rebuild a case (see `fuzz::device`); one bug in prefix handling shows on every command
-    /// that takes a prefix and on every read after it, so the prefix is the key.
+    /// What explains the whole failure as one bug, confirmed on the model: the case rewritten as
+    /// a hand with that bug would take it answers what the hand did (`prefix 123+4`: `G` read
+    /// as reaching motor 4 too; `MCV set without effect`). Set by the device fuzzer, which can
+    /// rebuild a case (see `fuzz::device`); such a bug shows on every command that reads its
+    /// effect back, so the explanation is the key.
     #[serde(default, skip_serializing_if = "String::is_empty")]
-    pub prefix: String,
+    pub explanation: String,
 }
 
 impl FindingSignature {
@@ -194,12 +194,13 @@ impl FindingSignature {
     ///   (`value at FGET after RESET`), or the parameter when no command before it did;
     /// - values in another order are the command;
     /// - anything else is the command, the kind and the detail (a RealTime field, `echo`);
-    /// - a motor prefix read as another motor set is the prefix, whatever shows it.
+    /// - a failure the device fuzzer explains as one bug (a prefix, a set without effect) is the
+    ///   explanation, whatever shows it.
     ///
     /// The motors are shown, never compared: which motor shows a bug first is the fuzzer's draw.
     pub fn key(&self) -> String {
-        if !self.prefix.is_empty() {
-            return format!("prefix {}", self.prefix);
+        if !self.explanation.is_empty() {
+            return self.explanation.clone();
         }
         let with = |k: String, d: &str| if d.is_empty() { k } else { format!("{k} {d}") };
         match self.kind.as_str() {
@@ -234,8 +235,8 @@ impl std::fmt::Display for FindingSignature {
         if !self.cause.is_empty() {
             write!(f, " after {}", self.cause)?;
         }
-        if !self.prefix.is_empty() {
-            write!(f, " via prefix {}", self.prefix)?;
+        if !self.explanation.is_empty() {
+            write!(f, ": {}", self.explanation)?;
         }
         Ok(())
     }
@@ -510,7 +511,7 @@ fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
         detail: detail.to_string(),
         motors: String::new(),
         cause: String::new(),
-        prefix: String::new(),
+        explanation: String::new(),
     }
 }
 

@@ -537,8 +537,7 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
     align::signature(p, &built.transcript, &built.model, out, whole_reads)
 }
 
-/// [`signature`], then the motor prefix that explains the failure, if one does (see
-/// [`prefix_explains`]).
+/// [`signature`], then what explains the whole failure, if something does (see [`explain`]).
 fn judged(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -546,94 +545,181 @@ fn judged(
     out: &ReplayOutcome,
 ) -> Option<FindingSignature> {
     let mut sig = signature(&opts.profile, built, out, !opts.wide())?;
-    if let Some(pre) = prefix_explains(opts, actions, built, out) {
-        sig.prefix = pre;
+    // Only a value read back in an answer line: a status key is already the bits whatever
+    // command shows them (and a set without effect would explain a status never reported as
+    // well as the bug that never reports it); a RealTime block's fields are checked against
+    // bands wide enough to fit another layout by chance; framing, a restart, a flood or a lost
+    // link is no effect read back.
+    let effect = sig.kind == "value" && sig.command != "RealTime block";
+    if effect && let Some(e) = explain(opts, actions, built, out) {
+        sig.explanation = e;
     }
     Some(sig)
 }
 
-/// A motor prefix read by the hand as its motors and one more explains a failure when the model,
-/// given every line with that prefix widened (written out in motor digits), answers what the hand
-/// answered at every step from the first such line up to the failing one (the lines' own echoes
-/// taken as the hand's). A prefix bug (`G` reaching the spread too) shows on whatever the
-/// prefixed lines do and on every read after them, under as many signatures as there are
-/// commands: the prefix is the one thing they share. Returns `123+4` (the model's motors, the
-/// motor added). Not tried through RealTime blocks, whose bytes the layout (and so the prefix of
-/// LOOP) decides: the hand was sent other bytes than the variant's.
-fn prefix_explains(
-    opts: &FuzzOptions,
-    actions: &[HostAction],
-    built: &BuiltCase,
-    out: &ReplayOutcome,
-) -> Option<String> {
+/// One hypothesis about the hand: the case's actions as the hand took them, and what that
+/// says.
+struct Hypothesis {
+    /// What it says (a finding's key when it holds).
+    says: String,
+    /// The actions as the hand would have taken them.
+    actions: Vec<HostAction>,
+    /// Lines rewritten as sent and as the variant sends them: where the hand's echo of the
+    /// first is taken as the second. Steps whose line changed otherwise are not compared.
+    echoes: Vec<(String, String)>,
+    /// A parameter stored as set but without effect: steps that read it back (a get naming
+    /// it, a listing of values) are held to the case's own expectation, not the rewrite's.
+    stored: Option<gcl_model::spec::ParamId>,
+}
+
+/// What explains a failure as one bug, tried on the model: the case's actions rewritten as a
+/// hand with that bug would take them, rebuilt by the model, and held against what the hand
+/// answered at every step from the first rewritten one up to the failing one. A bug whose
+/// first difference shows wherever its effect is read back (a motor prefix that reaches
+/// another motor, a parameter stored but without effect) otherwise gives as many signatures
+/// as there are commands that read it back; the explanation is the one thing they share, and
+/// the finding's key. Tried, in order:
+///
+/// - a motor prefix read as its motors and one more: every line with that prefix widened
+///   (written out in motor digits; `123+4`);
+/// - a set without effect: the parameter's pairs dropped from every set line (`MCV set without
+///   effect`); the set lines' own answers are not compared, and reads of the parameter are
+///   held to the case's own expectation (the hand stores what was set).
+///
+/// Not tried through RealTime blocks whose bytes the rewrite changes (the hand was sent the
+/// original bytes).
+fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &ReplayOutcome) -> Option<String> {
     use gcl_model::MotorSet;
-    use gcl_model::grammar::{Line, parse_line};
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
     let p = &opts.profile;
     let failed = out.failed_step()?;
-    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let line_of = |a: &HostAction| match a {
+        HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => Some(l.clone()),
+        _ => None,
+    };
+    let with_line = |a: &HostAction, l: String| match a {
+        HostAction::LineThenAbort { after_ms, .. } => HostAction::LineThenAbort { line: l, after_ms: *after_ms },
+        _ => HostAction::Line(l),
+    };
     let digits = |m: MotorSet| m.iter().map(|x| x.to_string()).collect::<String>();
-    // Each prefixed line: its action, its prefix, and the line without it (the shortest tail
+    let mut hyps: Vec<Hypothesis> = Vec::new();
+    // Prefixes: each prefixed line, its prefix, and the line without it (the shortest tail
     // that is the same command, unprefixed).
-    let mut prefixed: Vec<(usize, MotorSet, &str)> = Vec::new();
+    let mut prefixed: Vec<(usize, MotorSet, String)> = Vec::new();
     for (i, a) in actions.iter().enumerate() {
-        let line = match a {
-            HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => l,
-            _ => continue,
-        };
+        let Some(line) = line_of(a) else { continue };
         let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
         let Some(pre) = c.prefix else { continue };
         let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
             matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
         });
         if let Some(t) = tail {
-            prefixed.push((i, pre, t));
+            prefixed.push((i, pre, t.to_string()));
         }
     }
     let sets: BTreeSet<u8> = prefixed.iter().map(|(_, s, _)| s.bits()).collect();
     for pre in sets.into_iter().map(MotorSet::from_bits) {
         for m in MotorSet::ALL.iter().filter(|m| !pre.contains(*m)) {
-            let wide = MotorSet::from_bits(pre.bits() | MotorSet::single(m)?.bits());
-            let mut v = actions.to_vec();
-            let mut echoes: Vec<(String, String)> = Vec::new();
+            let wide = MotorSet::from_bits(pre.bits() | MotorSet::single(m).map_or(0, MotorSet::bits));
+            let mut h = Hypothesis {
+                says: format!("prefix {}+{m}", digits(pre)),
+                actions: actions.to_vec(),
+                echoes: Vec::new(),
+                stored: None,
+            };
             for (i, _, tail) in prefixed.iter().filter(|(_, s, _)| *s == pre) {
                 let new_line = format!("{}{tail}", digits(wide));
-                v[*i] = match &actions[*i] {
-                    HostAction::LineThenAbort { line, after_ms } => {
-                        echoes.push((line.clone(), new_line.clone()));
-                        HostAction::LineThenAbort { line: new_line, after_ms: *after_ms }
-                    }
-                    HostAction::Line(line) => {
-                        echoes.push((line.clone(), new_line.clone()));
-                        HostAction::Line(new_line)
-                    }
-                    a => a.clone(),
+                h.echoes.push((line_of(&actions[*i]).unwrap_or_default(), new_line.clone()));
+                h.actions[*i] = with_line(&actions[*i], new_line);
+            }
+            hyps.push(h);
+        }
+    }
+    // Sets without effect: a parameter's pair dropped from every set line (a line left without
+    // pairs becomes a get of the parameter, which changes nothing and keeps the steps in step).
+    let mut by_param: BTreeMap<gcl_model::spec::ParamId, Vec<(usize, String)>> = BTreeMap::new();
+    for (i, a) in actions.iter().enumerate() {
+        let Some(line) = line_of(a) else { continue };
+        let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
+        let (k @ (CommandKind::MotorSet | CommandKind::GlobalSet), Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
+            continue;
+        };
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.len() != 1 + 2 * pairs.len() {
+            continue;
+        }
+        for (n, (id, _)) in pairs.iter().enumerate() {
+            let kept: Vec<&str> =
+                words.iter().enumerate().filter(|(w, _)| *w != 1 + 2 * n && *w != 2 + 2 * n).map(|(_, x)| *x).collect();
+            let rewritten = if kept.len() > 1 {
+                kept.join(" ")
+            } else {
+                let get = if k == CommandKind::MotorSet { CommandKind::MotorGet } else { CommandKind::GlobalGet };
+                let Some(g) = p.command_of_kind(get) else { continue };
+                let prefix = c.prefix.map(digits).unwrap_or_default();
+                format!("{prefix}{} {}", p.command(g).name, p.param(*id).name)
+            };
+            by_param.entry(*id).or_default().push((i, rewritten));
+        }
+    }
+    for (id, lines) in by_param {
+        let mut v = actions.to_vec();
+        for (i, l) in lines {
+            v[i] = with_line(&actions[i], l);
+        }
+        hyps.push(Hypothesis {
+            says: format!("{} set without effect", p.param(id).name),
+            actions: v,
+            echoes: Vec::new(),
+            stored: Some(id),
+        });
+    }
+    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    // Whether a step's line reads parameter `id` back.
+    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| {
+        let line = send(s).unwrap_or_default();
+        let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
+        match parse_line(p, line) {
+            Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
+                (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
+                (k, _) => matches!(
+                    k,
+                    CommandKind::MotorListValues
+                        | CommandKind::MotorListAllValues
+                        | CommandKind::GlobalListValues
+                        | CommandKind::GlobalListAllValues
+                ),
+            },
+            _ => false,
+        }
+    };
+    for h in hyps {
+        let Ok(b) = build_for(opts, &h.actions, "fuzz", "explain") else { continue };
+        let (old, new) = (&built.transcript.steps, &b.transcript.steps);
+        if new.len() <= failed || old.len() <= failed {
+            continue;
+        }
+        let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
+        let holds = (d..=failed).all(|s| {
+            let Some(mut got) = received(s) else { return false };
+            if send(&old[s]) != send(&new[s]) {
+                // The hand echoed the line as it was sent.
+                let Some((was, now)) = h.echoes.iter().find(|(w, _)| got.windows(w.len()).any(|x| x == w.as_bytes()))
+                else {
+                    return s < failed;
                 };
+                let at = got.windows(was.len()).position(|x| x == was.as_bytes()).unwrap_or(0);
+                got.splice(at..at + was.len(), now.bytes());
             }
-            let Ok(b) = build_for(opts, &v, "fuzz", "prefix") else { continue };
-            let (old, new) = (&built.transcript.steps, &b.transcript.steps);
-            if new.len() <= failed || old.len() <= failed {
-                continue;
-            }
-            let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
-            let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
-            let explains = (d..=failed).all(|s| {
-                let Some(mut got) = received(s) else { return false };
-                // The hand echoed a widened line as it was sent; the variant echoes the digits.
-                if send(&old[s]) != send(&new[s]) {
-                    for (was, now) in &echoes {
-                        if let Some(at) = got.windows(was.len()).position(|w| w == was.as_bytes()) {
-                            got.splice(at..at + was.len(), now.bytes());
-                            break;
-                        }
-                    }
-                }
-                let mut mt = gcl_transcript::Matcher::new(&new[s].expect);
-                let alive = got.iter().all(|b| mt.feed(*b) != gcl_transcript::Feed::Dead);
-                alive && (mt.is_complete() || s == failed && matches!(out, ReplayOutcome::Mismatch(_)))
-            });
-            if explains {
-                return Some(format!("{}+{m}", digits(pre)));
-            }
+            let judge = if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] };
+            let mut mt = gcl_transcript::Matcher::new(&judge.expect);
+            let alive = got.iter().all(|b| mt.feed(*b) != gcl_transcript::Feed::Dead);
+            alive && (mt.is_complete() || s == failed && matches!(out, ReplayOutcome::Mismatch(_)))
+        });
+        if holds {
+            return Some(h.says);
         }
     }
     None
