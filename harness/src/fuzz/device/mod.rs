@@ -677,6 +677,33 @@ fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &
     }
     let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
     let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    // A line sent and then aborted whose answer the hand completed before the ^C (the host
+    // waited for it, as the case expected): in a rewrite the ^C comes after the answer too,
+    // wherever the model would have had it land.
+    let pe = [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat();
+    let mut answered = Vec::new();
+    let mut from = 0;
+    for a in actions {
+        let HostAction::LineThenAbort { line, .. } = a else {
+            answered.push(false);
+            continue;
+        };
+        let mut bytes = line.as_bytes().to_vec();
+        bytes.push(p.framing.terminator);
+        let at = (from..built.transcript.steps.len())
+            .find(|s| send(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
+        from = at.map_or(from, |s| s + 1);
+        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe)));
+    }
+    let in_hand_time = |v: Vec<HostAction>| -> Vec<HostAction> {
+        v.into_iter()
+            .zip(&answered)
+            .flat_map(|(a, done)| match a {
+                HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
+                a => vec![a],
+            })
+            .collect()
+    };
     // Whether a step's line reads parameter `id` back.
     let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| {
         let line = send(s).unwrap_or_default();
@@ -696,7 +723,7 @@ fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &
         }
     };
     for h in hyps {
-        let Ok(b) = build_for(opts, &h.actions, "fuzz", "explain") else { continue };
+        let Ok(b) = build_for(opts, &in_hand_time(h.actions), "fuzz", "explain") else { continue };
         let (old, new) = (&built.transcript.steps, &b.transcript.steps);
         if new.len() <= failed || old.len() <= failed {
             continue;
