@@ -379,6 +379,13 @@ pub fn signature(
     }
     // RealTime: a block's answer, by field.
     if command == "RealTime block" {
+        // Past a prompt the model gave to input sent in the loop (a bad header's status), the
+        // model has left the loop: the rest of the step is answered outside it, and a hand
+        // that parts there stayed in.
+        let sent_in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
+        if sent_in_loop && !prompt_ends(&run.stream[a..x], &pe).is_empty() {
+            return Some(sig(command, "framing", "loop exit"));
+        }
         let off = x - a;
         let layout = run.layouts.get(owner).cloned().flatten();
         let Some(fb) = layout.as_ref().map(|l| l.feedback()) else { return Some(sig(command, "framing", "")) };
@@ -408,22 +415,6 @@ pub fn signature(
     } else {
         0
     };
-    // A prompt (or a status line) too many at the start of an answer, after which the hand
-    // goes on with the model's answer: more than the answer before.
-    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
-        // (a bare prompt, or one status line and a prompt)
-        let bare = got.starts_with(&pe);
-        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ");
-        if let Some(e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
-            let after = &got[e..];
-            let want = &run.stream[x..unit_end.min(x + 4)];
-            // (what follows may not have been read yet)
-            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
-                let (_, _, _, c) = who(x - 1);
-                return Some(sig(c, "extra", ""));
-            }
-        }
-    }
     // The first line of a line's answer, right after an input the model took as leaving
     // RealTime mode: a hand that stayed in the loop takes the line for blocks.
     // (before the first line ending: within the echo. Past it, a status line is the line's
@@ -442,7 +433,30 @@ pub fn signature(
         let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
         in_loop(k) && prompt_ends(&run.stream[ks..u], &pe).first() == Some(&(u - ks))
     };
-    if first_line && (unit_start == a && leaves_loop || exits_at(unit_start)) {
+    // A prompt (or a status line) too many at the start of an answer, after which the hand
+    // goes on with the model's answer: more than the answer before.
+    // (not a status line where the model has just left the loop: a hand still in it refuses
+    // the line's first byte as a header)
+    let loop_exit = first_line && (unit_start == a && leaves_loop || exits_at(unit_start));
+    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
+        // (a bare prompt, or one status line and a prompt)
+        let bare = got.starts_with(&pe);
+        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !loop_exit;
+        if let Some(mut e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
+            // (bare prompts may come several: one too many per empty line queued before)
+            while bare && got[e..].starts_with(&pe) {
+                e += pe.len();
+            }
+            let after = &got[e..];
+            let want = &run.stream[x..unit_end.min(x + 4)];
+            // (what follows may not have been read yet)
+            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+                let (_, _, _, c) = who(x - 1);
+                return Some(sig(c, "extra", ""));
+            }
+        }
+    }
+    if loop_exit {
         return Some(sig("RealTime block".into(), "framing", "loop exit"));
     }
     if x < unit_start + echo_len {
