@@ -618,8 +618,12 @@ fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &
             prefixed.push((i, pre, t.to_string()));
         }
     }
-    let sets: BTreeSet<u8> = prefixed.iter().map(|(_, s, _)| s.bits()).collect();
-    for pre in sets.into_iter().map(MotorSet::from_bits) {
+    // (wider prefixes first: where a group's line and a single motor's line both moved the
+    // motor read back, the group's name is the likelier slip)
+    let mut sets: Vec<MotorSet> = prefixed.iter().map(|(_, s, _)| *s).collect();
+    sets.sort_by_key(|s| (std::cmp::Reverse(s.len()), s.bits()));
+    sets.dedup();
+    for pre in sets {
         for m in MotorSet::ALL.iter().filter(|m| !pre.contains(*m)) {
             let wide = MotorSet::from_bits(pre.bits() | MotorSet::single(m).map_or(0, MotorSet::bits));
             let mut h = Hypothesis {
