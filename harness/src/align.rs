@@ -711,7 +711,7 @@ fn reorders_with_captures(t: &Transcript, out: &ReplayOutcome, step: usize, pt: 
             }
             for i in 0..k {
                 permute(k - 1, v, out);
-                let j = if k % 2 == 0 { i } else { 0 };
+                let j = if k.is_multiple_of(2) { i } else { 0 };
                 v.swap(j, k - 1);
             }
         }
