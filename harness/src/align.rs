@@ -175,6 +175,13 @@ pub struct FindingSignature {
     /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub cause: String,
+    /// What explains the whole failure as one bug, confirmed on the model: the case rewritten as
+    /// a hand with that bug would take it answers what the hand did (`prefix 123+4`: `G` read
+    /// as reaching motor 4 too; `MCV set without effect`). Set by the device fuzzer, which can
+    /// rebuild a case (see `fuzz::device`); such a bug shows on every command that reads its
+    /// effect back, so the explanation is the key.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub explanation: String,
 }
 
 impl FindingSignature {
@@ -186,10 +193,15 @@ impl FindingSignature {
     /// - a value read back is the command read and the command that decided the value
     ///   (`value at FGET after RESET`), or the parameter when no command before it did;
     /// - values in another order are the command;
-    /// - anything else is the command, the kind and the detail (a RealTime field, `echo`).
+    /// - anything else is the command, the kind and the detail (a RealTime field, `echo`);
+    /// - a failure the device fuzzer explains as one bug (a prefix, a set without effect) is the
+    ///   explanation, whatever shows it.
     ///
     /// The motors are shown, never compared: which motor shows a bug first is the fuzzer's draw.
     pub fn key(&self) -> String {
+        if !self.explanation.is_empty() {
+            return self.explanation.clone();
+        }
         let with = |k: String, d: &str| if d.is_empty() { k } else { format!("{k} {d}") };
         match self.kind.as_str() {
             "status" => {
@@ -222,6 +234,9 @@ impl std::fmt::Display for FindingSignature {
         }
         if !self.cause.is_empty() {
             write!(f, " after {}", self.cause)?;
+        }
+        if !self.explanation.is_empty() {
+            write!(f, ": {}", self.explanation)?;
         }
         Ok(())
     }
@@ -364,6 +379,13 @@ pub fn signature(
     }
     // RealTime: a block's answer, by field.
     if command == "RealTime block" {
+        // Past a prompt the model gave to input sent in the loop (a bad header's status), the
+        // model has left the loop: the rest of the step is answered outside it, and a hand
+        // that parts there stayed in.
+        let sent_in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
+        if sent_in_loop && !prompt_ends(&run.stream[a..x], &pe).is_empty() {
+            return Some(sig(command, "framing", "loop exit"));
+        }
         let off = x - a;
         let layout = run.layouts.get(owner).cloned().flatten();
         let Some(fb) = layout.as_ref().map(|l| l.feedback()) else { return Some(sig(command, "framing", "")) };
@@ -393,22 +415,6 @@ pub fn signature(
     } else {
         0
     };
-    // A prompt (or a status line) too many at the start of an answer, after which the hand
-    // goes on with the model's answer: more than the answer before.
-    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
-        // (a bare prompt, or one status line and a prompt)
-        let bare = got.starts_with(&pe);
-        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ");
-        if let Some(e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
-            let after = &got[e..];
-            let want = &run.stream[x..unit_end.min(x + 4)];
-            // (what follows may not have been read yet)
-            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
-                let (_, _, _, c) = who(x - 1);
-                return Some(sig(c, "extra", ""));
-            }
-        }
-    }
     // The first line of a line's answer, right after an input the model took as leaving
     // RealTime mode: a hand that stayed in the loop takes the line for blocks.
     // (before the first line ending: within the echo. Past it, a status line is the line's
@@ -418,7 +424,39 @@ pub fn signature(
     let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
     let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
     let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
-    if unit_start == a && first_line && leaves_loop {
+    // Likewise for the first answer after the model left the loop within a step's answer: a
+    // bad header ends the loop with its status and prompt, and the rest of the line (or the
+    // lines sent with it) is answered outside it. Any prompt the model gives to an input sent
+    // in the loop is that exit.
+    let exits_at = |u: usize| -> bool {
+        let Some(k) = u.checked_sub(1).and_then(|i| run.tags.get(i)).map(|k| *k as usize) else { return false };
+        let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
+        in_loop(k) && prompt_ends(&run.stream[ks..u], &pe).first() == Some(&(u - ks))
+    };
+    // A prompt (or a status line) too many at the start of an answer, after which the hand
+    // goes on with the model's answer: more than the answer before.
+    // (not a status line where the model has just left the loop: a hand still in it refuses
+    // the line's first byte as a header)
+    let loop_exit = first_line && (unit_start == a && leaves_loop || exits_at(unit_start));
+    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
+        // (a bare prompt, or one status line and a prompt)
+        let bare = got.starts_with(&pe);
+        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !loop_exit;
+        if let Some(mut e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
+            // (bare prompts may come several: one too many per empty line queued before)
+            while bare && got[e..].starts_with(&pe) {
+                e += pe.len();
+            }
+            let after = &got[e..];
+            let want = &run.stream[x..unit_end.min(x + 4)];
+            // (what follows may not have been read yet)
+            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+                let (_, _, _, c) = who(x - 1);
+                return Some(sig(c, "extra", ""));
+            }
+        }
+    }
+    if loop_exit {
         return Some(sig("RealTime block".into(), "framing", "loop exit"));
     }
     if x < unit_start + echo_len {
@@ -472,7 +510,7 @@ pub fn signature(
     let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
     let golden = golden_line(t, step, &pt, eol).unwrap_or_else(|| ts(m_line));
     let h_text = ts(h_line);
-    if is_reordering(&h_text, &golden) {
+    if is_reordering(&h_text, &golden) || reorders_with_captures(t, out, step, &pt, eol) {
         return Some(sig(command, "order", &param));
     }
     let motors = differing_motors(p, &line, &h_text, &golden);
@@ -487,6 +525,7 @@ fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
         detail: detail.to_string(),
         motors: String::new(),
         cause: String::new(),
+        explanation: String::new(),
     }
 }
 
@@ -629,6 +668,58 @@ fn find_back(s: &[u8], at: usize, eol: &[u8]) -> usize {
 fn cut_line<'s>(s: &'s [u8], eol: &[u8]) -> &'s [u8] {
     let end = s.windows(eol.len().max(1)).position(|w| w == eol).unwrap_or(s.len());
     &s[..end]
+}
+
+/// Whether the hand's line at the parting, its values put in another order, is what the step
+/// expects given the values the steps before it captured. A line that holds a relation between
+/// its values (`{int as p1} {int p1*557/100 +-11%}`) read back in another order captures the
+/// wrong value first, so its golden text, resolved against the hand's values, no longer shows
+/// the order [`is_reordering`] looks for. Tries every order of up to six values, else the
+/// reversed one.
+fn reorders_with_captures(t: &Transcript, out: &ReplayOutcome, step: usize, pt: &Parting, eol: &[u8]) -> bool {
+    let Some(expect) = t.steps.get(step).map(|s| &s.expect) else { return false };
+    if expect.captures().next().is_none() && expect.relations().next().is_none() {
+        return false;
+    }
+    let mut caps = gcl_transcript::Captures::new();
+    for e in out.exchange().iter().filter(|e| e.step < step) {
+        match t.steps.get(e.step).and_then(|s| s.expect.matches_with(&caps, &e.received)) {
+            Some(c) => caps = c,
+            None => return false,
+        }
+    }
+    let got = &pt.hand[pt.step_start..];
+    let ls = find_back(&pt.hand, pt.at, eol).max(pt.step_start) - pt.step_start;
+    let le = ls + cut_line(&got[ls..], eol).len();
+    let line = String::from_utf8_lossy(&got[ls..le]).into_owned();
+    let tokens: Vec<&str> = line.split(' ').collect();
+    if tokens.len() < 2 || tokens.iter().any(|x| x.is_empty()) {
+        return false;
+    }
+    let fits = |order: &[&str]| {
+        let text = order.join(" ");
+        let mut m = gcl_transcript::Matcher::with_captures(expect, &caps);
+        got[..ls].iter().chain(text.as_bytes()).all(|b| m.feed(*b) != gcl_transcript::Feed::Dead)
+    };
+    let mut orders: Vec<Vec<&str>> = Vec::new();
+    if tokens.len() <= 6 {
+        // Heap's algorithm.
+        fn permute<'a>(k: usize, v: &mut Vec<&'a str>, out: &mut Vec<Vec<&'a str>>) {
+            if k <= 1 {
+                out.push(v.clone());
+                return;
+            }
+            for i in 0..k {
+                permute(k - 1, v, out);
+                let j = if k.is_multiple_of(2) { i } else { 0 };
+                v.swap(j, k - 1);
+            }
+        }
+        permute(tokens.len(), &mut tokens.clone(), &mut orders);
+    } else {
+        orders.push(tokens.iter().rev().copied().collect());
+    }
+    orders.iter().filter(|o| **o != tokens).any(|o| fits(o))
 }
 
 /// The golden's text of the line the parting lies in (escaped, with elisions), read from the

@@ -170,18 +170,11 @@ fn fget_reversed_fails_fgets_clause_and_blocks_the_read_backs() {
     let r = run("seed", vec![Fault::FgetReversed]);
     let failing: Vec<&str> =
         r.clauses.iter().filter(|c| c.verdict.fails_run() && !c.blocked).map(|c| c.clause.as_str()).collect();
-    // Known gap: the MCV and MOV effect cases hold motor 2's position as a relation to motor
-    // 1's (issue 19 item 5). Reversed, the capture takes another motor's value, so the
-    // relation fails as a value difference of its own group, not as FGET's order. Until
-    // alignment resolves relations, those two clauses may fail beside FGET's; no other may.
-    let effect = |c: &&str| c.contains("Parameter MCV") || c.contains("Parameter MOV");
-    assert!(failing.iter().filter(|c| !effect(c)).all(|c| c.contains("FGET")), "{failing:?}");
-    assert!(failing.iter().any(|c| c.contains("FGET")), "{failing:?}");
-    assert!(
-        r.groups.len() <= 3,
-        "one bug, one group (and the two relation cases): {:#?}",
-        r.groups.iter().map(|g| &g.summary).collect::<Vec<_>>()
-    );
+    // (the MCV and MOV effect cases hold motor 2's position as a relation to motor 1's:
+    // reversed, the capture takes another motor's value, and the answer is still an order)
+    assert!(failing.iter().all(|c| c.contains("FGET")), "{failing:?}");
+    assert!(!failing.is_empty());
+    assert_eq!(r.groups.len(), 1, "one bug, one group: {:#?}", r.groups.iter().map(|g| &g.summary).collect::<Vec<_>>());
     assert!(r.groups[0].command == "FGET" && r.groups[0].blocked.len() > 100, "{}", r.groups[0].summary);
 }
 

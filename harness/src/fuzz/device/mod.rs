@@ -537,6 +537,225 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
     align::signature(p, &built.transcript, &built.model, out, whole_reads)
 }
 
+/// [`signature`], then what explains the whole failure, if something does (see [`explain`]).
+fn judged(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+) -> Option<FindingSignature> {
+    let mut sig = signature(&opts.profile, built, out, !opts.wide())?;
+    // Only a value read back in an answer line: a status key is already the bits whatever
+    // command shows them (and a set without effect would explain a status never reported as
+    // well as the bug that never reports it); a RealTime block's fields are checked against
+    // bands wide enough to fit another layout by chance; framing, a restart, a flood or a lost
+    // link is no effect read back.
+    let effect = sig.kind == "value" && sig.command != "RealTime block";
+    if effect && let Some(e) = explain(opts, actions, built, out) {
+        sig.explanation = e;
+    }
+    Some(sig)
+}
+
+/// One hypothesis about the hand: the case's actions as the hand took them, and what that
+/// says.
+struct Hypothesis {
+    /// What it says (a finding's key when it holds).
+    says: String,
+    /// The actions as the hand would have taken them.
+    actions: Vec<HostAction>,
+    /// Lines rewritten as sent and as the variant sends them: where the hand's echo of the
+    /// first is taken as the second. Steps whose line changed otherwise are not compared.
+    echoes: Vec<(String, String)>,
+    /// A parameter stored as set but without effect: steps that read it back (a get naming
+    /// it, a listing of values) are held to the case's own expectation, not the rewrite's.
+    stored: Option<gcl_model::spec::ParamId>,
+}
+
+/// What explains a failure as one bug, tried on the model: the case's actions rewritten as a
+/// hand with that bug would take them, rebuilt by the model, and held against what the hand
+/// answered at every step from the first rewritten one up to the failing one. A bug whose
+/// first difference shows wherever its effect is read back (a motor prefix that reaches
+/// another motor, a parameter stored but without effect) otherwise gives as many signatures
+/// as there are commands that read it back; the explanation is the one thing they share, and
+/// the finding's key. Tried, in order:
+///
+/// - a motor prefix read as its motors and one more: every line with that prefix widened
+///   (written out in motor digits; `123+4`);
+/// - a set without effect: the parameter's pairs dropped from every set line (`MCV set without
+///   effect`); the set lines' own answers are not compared, and reads of the parameter are
+///   held to the case's own expectation (the hand stores what was set).
+///
+/// Not tried through RealTime blocks whose bytes the rewrite changes (the hand was sent the
+/// original bytes).
+fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &ReplayOutcome) -> Option<String> {
+    use gcl_model::MotorSet;
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
+    let p = &opts.profile;
+    let failed = out.failed_step()?;
+    let line_of = |a: &HostAction| match a {
+        HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => Some(l.clone()),
+        _ => None,
+    };
+    let with_line = |a: &HostAction, l: String| match a {
+        HostAction::LineThenAbort { after_ms, .. } => HostAction::LineThenAbort { line: l, after_ms: *after_ms },
+        _ => HostAction::Line(l),
+    };
+    let digits = |m: MotorSet| m.iter().map(|x| x.to_string()).collect::<String>();
+    let mut hyps: Vec<Hypothesis> = Vec::new();
+    // Prefixes: each prefixed line, its prefix, and the line without it (the shortest tail
+    // that is the same command, unprefixed).
+    let mut prefixed: Vec<(usize, MotorSet, String)> = Vec::new();
+    for (i, a) in actions.iter().enumerate() {
+        let Some(line) = line_of(a) else { continue };
+        let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
+        let Some(pre) = c.prefix else { continue };
+        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
+            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
+        });
+        if let Some(t) = tail {
+            prefixed.push((i, pre, t.to_string()));
+        }
+    }
+    // (wider prefixes first: where a group's line and a single motor's line both moved the
+    // motor read back, the group's name is the likelier slip)
+    let mut sets: Vec<MotorSet> = prefixed.iter().map(|(_, s, _)| *s).collect();
+    sets.sort_by_key(|s| (std::cmp::Reverse(s.len()), s.bits()));
+    sets.dedup();
+    for pre in sets {
+        for m in MotorSet::ALL.iter().filter(|m| !pre.contains(*m)) {
+            let wide = MotorSet::from_bits(pre.bits() | MotorSet::single(m).map_or(0, MotorSet::bits));
+            let mut h = Hypothesis {
+                says: format!("prefix {}+{m}", digits(pre)),
+                actions: actions.to_vec(),
+                echoes: Vec::new(),
+                stored: None,
+            };
+            for (i, _, tail) in prefixed.iter().filter(|(_, s, _)| *s == pre) {
+                let new_line = format!("{}{tail}", digits(wide));
+                h.echoes.push((line_of(&actions[*i]).unwrap_or_default(), new_line.clone()));
+                h.actions[*i] = with_line(&actions[*i], new_line);
+            }
+            hyps.push(h);
+        }
+    }
+    // Sets without effect: a parameter's pair dropped from every set line (a line left without
+    // pairs becomes a get of the parameter, which changes nothing and keeps the steps in step).
+    let mut by_param: BTreeMap<gcl_model::spec::ParamId, Vec<(usize, String)>> = BTreeMap::new();
+    for (i, a) in actions.iter().enumerate() {
+        let Some(line) = line_of(a) else { continue };
+        let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
+        let (k @ (CommandKind::MotorSet | CommandKind::GlobalSet), Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
+            continue;
+        };
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.len() != 1 + 2 * pairs.len() {
+            continue;
+        }
+        for (n, (id, _)) in pairs.iter().enumerate() {
+            let kept: Vec<&str> =
+                words.iter().enumerate().filter(|(w, _)| *w != 1 + 2 * n && *w != 2 + 2 * n).map(|(_, x)| *x).collect();
+            let rewritten = if kept.len() > 1 {
+                kept.join(" ")
+            } else {
+                let get = if k == CommandKind::MotorSet { CommandKind::MotorGet } else { CommandKind::GlobalGet };
+                let Some(g) = p.command_of_kind(get) else { continue };
+                let prefix = c.prefix.map(digits).unwrap_or_default();
+                format!("{prefix}{} {}", p.command(g).name, p.param(*id).name)
+            };
+            by_param.entry(*id).or_default().push((i, rewritten));
+        }
+    }
+    for (id, lines) in by_param {
+        let mut v = actions.to_vec();
+        for (i, l) in lines {
+            v[i] = with_line(&actions[i], l);
+        }
+        hyps.push(Hypothesis {
+            says: format!("{} set without effect", p.param(id).name),
+            actions: v,
+            echoes: Vec::new(),
+            stored: Some(id),
+        });
+    }
+    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    // A line sent and then aborted whose answer the hand completed before the ^C (the host
+    // waited for it, as the case expected): in a rewrite the ^C comes after the answer too,
+    // wherever the model would have had it land.
+    let pe = [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat();
+    let mut answered = Vec::new();
+    let mut from = 0;
+    for a in actions {
+        let HostAction::LineThenAbort { line, .. } = a else {
+            answered.push(false);
+            continue;
+        };
+        let mut bytes = line.as_bytes().to_vec();
+        bytes.push(p.framing.terminator);
+        let at = (from..built.transcript.steps.len())
+            .find(|s| send(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
+        from = at.map_or(from, |s| s + 1);
+        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe)));
+    }
+    let in_hand_time = |v: Vec<HostAction>| -> Vec<HostAction> {
+        v.into_iter()
+            .zip(&answered)
+            .flat_map(|(a, done)| match a {
+                HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
+                a => vec![a],
+            })
+            .collect()
+    };
+    // Whether a step's line reads parameter `id` back.
+    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| {
+        let line = send(s).unwrap_or_default();
+        let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
+        match parse_line(p, line) {
+            Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
+                (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
+                (k, _) => matches!(
+                    k,
+                    CommandKind::MotorListValues
+                        | CommandKind::MotorListAllValues
+                        | CommandKind::GlobalListValues
+                        | CommandKind::GlobalListAllValues
+                ),
+            },
+            _ => false,
+        }
+    };
+    for h in hyps {
+        let Ok(b) = build_for(opts, &in_hand_time(h.actions), "fuzz", "explain") else { continue };
+        let (old, new) = (&built.transcript.steps, &b.transcript.steps);
+        if new.len() <= failed || old.len() <= failed {
+            continue;
+        }
+        let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
+        let holds = (d..=failed).all(|s| {
+            let Some(mut got) = received(s) else { return false };
+            if send(&old[s]) != send(&new[s]) {
+                // The hand echoed the line as it was sent.
+                let Some((was, now)) = h.echoes.iter().find(|(w, _)| got.windows(w.len()).any(|x| x == w.as_bytes()))
+                else {
+                    return s < failed;
+                };
+                let at = got.windows(was.len()).position(|x| x == was.as_bytes()).unwrap_or(0);
+                got.splice(at..at + was.len(), now.bytes());
+            }
+            let judge = if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] };
+            let mut mt = gcl_transcript::Matcher::new(&judge.expect);
+            let alive = got.iter().all(|b| mt.feed(*b) != gcl_transcript::Feed::Dead);
+            alive && (mt.is_complete() || s == failed && matches!(out, ReplayOutcome::Mismatch(_)))
+        });
+        if holds {
+            return Some(h.says);
+        }
+    }
+    None
+}
+
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
 /// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
 fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
@@ -805,7 +1024,7 @@ fn worker(
         {
             lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
-            if let Some(sig) = signature(&p, &pb, &out, !opts.wide()) {
+            if let Some(sig) = judged(opts, &pa, &pb, &out) {
                 let new = lock().seen.insert(sig.key());
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
@@ -815,11 +1034,11 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut sig = signature(&p, &built, &outcome, !opts.wide());
+        let mut sig = judged(opts, &actions, &built, &outcome);
         // A quick run's new failure counts only if a thorough run of the case fails too.
         if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(&s.key())) {
             outcome = hand.run(&built.transcript, true)?;
-            sig = signature(&p, &built, &outcome, !opts.wide());
+            sig = judged(opts, &actions, &built, &outcome);
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
@@ -942,7 +1161,6 @@ fn minimize(
     sig: &FindingSignature,
     until: Option<Instant>,
 ) -> Result<(Vec<HostAction>, BuiltCase), FuzzError> {
-    let p = opts.profile.clone();
     let mut tries = 0usize;
     let mut best = (actions.to_vec(), built.clone());
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
@@ -957,7 +1175,7 @@ fn minimize(
             return Ok(None);
         }
         let out = hand.run(&b.transcript, true)?;
-        Ok((signature(&p, &b, &out, !opts.wide()).is_some_and(|s| s.key() == sig.key())).then_some(b))
+        Ok((judged(opts, cand, &b, &out).is_some_and(|s| s.key() == sig.key())).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
     while chunk >= 1 && tries < opts.minimize_budget {
