@@ -999,7 +999,21 @@ fn motion_time(
         ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
     }
     ro.silent_wait = policy.silent_wait;
+    // The close is judged as soon as the judgement is made: a hand still moving at a quarter
+    // of the model's time moves in real time, and is stopped there (^C) rather than left to
+    // close, which the first case's homing would then undo at the same cost again.
+    let decided = probe.decided_after(&opts.profile);
+    if let Some((step, after)) = decided
+        && let Some(b) = ro.budgets.get_mut(step)
+    {
+        b.deadline = after;
+    }
     let out = replay(&probe.transcript, link, &ro);
+    if let (ReplayOutcome::Timeout(t), Some((step, _))) = (&out, decided)
+        && t.step == step
+    {
+        let _ = link.send(&[opts.profile.framing.abort]);
+    }
     let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
     probe.judge(&opts.profile, &out)
 }
