@@ -727,6 +727,9 @@ pub fn run_with_events(
     let mut first_timeout = String::new();
     let (mut unquiet_in_a_row, mut first_unquiet) = (0usize, String::new());
     let mut stopped: Option<Stopped> = None;
+    // The first case follows the probes and the pre-flight: the bound starts it from a
+    // freshly powered-up model.
+    let mut hand_carries = false;
     for case in selected {
         if let Some(st) = &stopped {
             let r = result_of(case, Verdict::Skip, 0.0, Some(format!("not run: {}", st.message)));
@@ -738,6 +741,8 @@ pub fn run_with_events(
             continue;
         }
         let t0 = Instant::now();
+        // Whether the hand starts this case where the case before left it (for the bound).
+        let carried = hand_carries && shared.is_some();
         let link: &mut dyn Link = if fresh_per_case {
             shared = Some(open_link()?);
             shared.as_deref_mut().expect("just opened")
@@ -780,17 +785,17 @@ pub fn run_with_events(
         // The wire-time bound counts cases that ran to their end or to a mismatch: a
         // TIMEOUT's wait and an ERROR's reconnect are not line time.
         if matches!(outcome, ReplayOutcome::Pass(_) | ReplayOutcome::Mismatch(_)) {
-            let (s, r) = outcome
-                .exchange()
-                .iter()
-                .fold((0u64, 0u64), |(s, r), e| (s + e.sent.len() as u64, r + e.received.len() as u64));
             wire_cases.push(WireCase {
                 id: case.id().to_string(),
-                sent: s,
-                received: r,
+                steps: outcome.exchange().iter().map(|e| (e.sent.len() as u64, e.received.len() as u64)).collect(),
                 passed: matches!(outcome, ReplayOutcome::Pass(_)),
+                carried,
             });
         }
+        // The next case finds the hand where this one left it only when this one passed on
+        // a link that is kept (a failing case is drained, maybe reopened; a timed-out one
+        // may have left the hand anywhere).
+        hand_carries = !fresh_per_case && outcome.is_pass();
         let mut r = result_of(case, Verdict::Pass, ms, None);
         let mut flooded = false;
         match &outcome {
@@ -951,7 +956,7 @@ pub fn run_with_events(
         },
     };
     let actual_ms = wall.elapsed().as_secs_f64() * 1000.0;
-    let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, baud, actual_ms));
+    let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, ropts.trailing, baud, actual_ms));
     let groups = crate::triage::group(cases, &results, &signatures, &framing_clauses);
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
@@ -997,7 +1002,21 @@ fn motion_time(
         ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
     }
     ro.silent_wait = policy.silent_wait;
+    // The close is judged as soon as the judgement is made: a hand still moving at a quarter
+    // of the model's time moves in real time, and is stopped there (^C) rather than left to
+    // close, which the first case's homing would then undo at the same cost again.
+    let decided = probe.decided_after(&opts.profile);
+    if let Some((step, after)) = decided
+        && let Some(b) = ro.budgets.get_mut(step)
+    {
+        b.deadline = after;
+    }
     let out = replay(&probe.transcript, link, &ro);
+    if let (ReplayOutcome::Timeout(t), Some((step, _))) = (&out, decided)
+        && t.step == step
+    {
+        let _ = link.send(&[opts.profile.framing.abort]);
+    }
     let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
     probe.judge(&opts.profile, &out)
 }
@@ -1053,40 +1072,90 @@ fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8],
 /// What one case exchanged, for the wire-time bound.
 struct WireCase {
     id: String,
-    sent: u64,
-    received: u64,
+    /// Bytes sent and received, step by step.
+    steps: Vec<(u64, u64)>,
     passed: bool,
+    /// Whether the case began where the case before it, a passing one on the same link, left
+    /// the hand (its fingers where that case put them).
+    carried: bool,
 }
 
 /// The wire-time lower bound, by construction: a sum over the cases that ran to their end
-/// or to a mismatch of what each one cannot take less than. A case's bytes cross a
-/// full-duplex line, so it takes at least its larger direction × 10 bits / baud; a passing
-/// case also took at least the motion and pause time the reference model needs for it
-/// (its simulated time less the time of every byte at the model's own BAUD). The larger of
-/// the two counts, never their sum, since a hand may talk while it moves.
-fn wire_time(cases: &[Case], counted: &[WireCase], opts: &ConformOptions, baud: u32, actual_ms: f64) -> WireTime {
+/// or to a mismatch of what each one cannot take less than.
+///
+/// GCL is command-then-answer: a step's command goes out only once the answer before it is
+/// complete (and after the step's pause), so steps never overlap, and a case takes at least
+/// the sum of its pauses and its steps. Within a step the line is full duplex and the hand
+/// echoes each character as it arrives, so the bytes one way overlap those the other way:
+/// a step's answer takes at least its received bytes × 10 bits / baud (never sent +
+/// received), and at least the time the reference model spends on it beyond its bytes
+/// (motion, a reset), the larger of the two, since a hand may talk while it moves. A case
+/// also takes at least its sent bytes (a step's answer may end before all of its bytes
+/// crossed, as when a queue is sent behind a motion, so they are counted over the case).
+///
+/// The model's time is its own run of the case. On a kept link a case begins where the
+/// passing case before it left the hand (a homing step after a close moves the fingers all
+/// the way back), so the model runs those cases in order on one hand; a case after anything
+/// else (the first, one after a failure or a reopened link, every case of a target opened
+/// afresh per case) starts from a freshly powered-up model, which moves no more than any
+/// hand. A failing case counts its bytes only.
+fn wire_time(
+    cases: &[Case],
+    counted: &[WireCase],
+    opts: &ConformOptions,
+    between: Duration,
+    baud: u32,
+    actual_ms: f64,
+) -> WireTime {
     let per_byte_ms = 10.0 / f64::from(baud.max(1)) * 1000.0;
     let (mut motion_ms, mut lower_bound_ms) = (0.0, 0.0);
     let (mut sent, mut received) = (0u64, 0u64);
+    let fresh = || SimLink::new(opts.profile.clone(), Default::default());
+    // The model's hand as the last passing case left it.
+    let mut model: Option<SimLink> = None;
+    // No quiet-time drain: it is the runner's; the trailing wait between cases passes on the
+    // model's clock as on the line.
+    let quiet = ReplayOptions { trailing: between, drain_quiet: Duration::ZERO, ..suite::replay_options() };
     for w in counted {
-        sent += w.sent;
-        received += w.received;
-        let wire_ms = w.sent.max(w.received) as f64 * per_byte_ms;
-        let mut case_motion_ms = 0.0;
-        if w.passed
-            && let Some(case) = cases.iter().find(|c| c.id() == w.id)
-        {
-            let mut link = SimLink::new(opts.profile.clone(), Default::default());
-            // No quiet-time drain and no trailing wait: they are the runner's, not the case's.
-            let quiet =
-                ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
-            let outcome = suite::run_case(case, &mut link, &quiet);
-            let bytes: u64 = outcome.exchange().iter().map(|e| (e.sent.len() + e.received.len()) as u64).sum();
-            let wire_at_sim = byte_time(link.device().baud()) * u32::try_from(bytes).unwrap_or(u32::MAX);
-            case_motion_ms = link.elapsed().saturating_sub(wire_at_sim).as_secs_f64() * 1000.0;
+        let (s, r) = w.steps.iter().fold((0u64, 0u64), |(s, r), &(a, b)| (s + a, r + b));
+        sent += s;
+        received += r;
+        let bytes_ms = s.max(r) as f64 * per_byte_ms;
+        let carried = model.take().filter(|_| w.carried);
+        let case = cases.iter().find(|c| c.id() == w.id).filter(|_| w.passed);
+        let Some(case) = case else {
+            lower_bound_ms += bytes_ms;
+            continue;
+        };
+        let mut link = carried.unwrap_or_else(fresh);
+        let mut rate = link.device().baud();
+        let mut outcome = suite::run_case(case, &mut link, &quiet);
+        if !outcome.is_pass() {
+            // Not from the state the case before left: the suite's cases pass from power-up.
+            link = fresh();
+            rate = link.device().baud();
+            outcome = suite::run_case(case, &mut link, &quiet);
         }
-        motion_ms += case_motion_ms;
-        lower_bound_ms += f64::max(wire_ms, case_motion_ms);
+        let steps = outcome.exchange();
+        if !outcome.is_pass() || steps.len() != w.steps.len() {
+            lower_bound_ms += bytes_ms;
+            continue;
+        }
+        // The model's bytes at its own BAUD; where a case changes it, the slower rate's
+        // longer byte time is taken, so that motion is never overcounted.
+        let model_byte = byte_time(rate.min(link.device().baud()));
+        let (mut pauses_ms, mut busy_ms, mut steps_ms) = (0.0, 0.0, 0.0);
+        for (e, &(_, got)) in steps.iter().zip(&w.steps) {
+            pauses_ms +=
+                case.transcript.steps.get(e.step).and_then(|st| st.pause).unwrap_or_default().as_secs_f64() * 1000.0;
+            let wire_at_model = model_byte * u32::try_from(e.sent.len() + e.received.len()).unwrap_or(u32::MAX);
+            let busy = e.took.saturating_sub(wire_at_model).as_secs_f64() * 1000.0;
+            busy_ms += busy;
+            steps_ms += f64::max(got as f64 * per_byte_ms, busy);
+        }
+        motion_ms += pauses_ms + busy_ms;
+        lower_bound_ms += pauses_ms + f64::max(s as f64 * per_byte_ms, steps_ms);
+        model = Some(link);
     }
     WireTime {
         bytes_sent: sent,
@@ -1115,6 +1184,46 @@ mod tests {
         assert!(k.lookup("bh8-262-4.4", "echo").is_some());
         assert!(KnownFailures::parse("[[failure]]\ncase = \"x\"\n").is_err(), "a reason is required");
         assert!(KnownFailures::parse("[[failure]]\ncase = \"[\"\nreason = \"r\"\n").is_err());
+    }
+
+    /// The wire-time bound of cases run one after the other on the in-process model, each
+    /// marked as carried over from the one before or not.
+    fn bound_of(ids: &[(&str, bool)]) -> WireTime {
+        let p = Profile::builtin("seed").unwrap();
+        let cases = suite::generate(&p).unwrap();
+        let counted: Vec<WireCase> = ids
+            .iter()
+            .map(|&(id, carried)| {
+                let c = cases.iter().find(|c| c.id() == id).unwrap();
+                let out =
+                    suite::run_case(c, &mut SimLink::new(p.clone(), Default::default()), &suite::replay_options());
+                assert!(out.is_pass(), "{id}: {}", out.render());
+                WireCase {
+                    id: id.to_string(),
+                    steps: out.exchange().iter().map(|e| (e.sent.len() as u64, e.received.len() as u64)).collect(),
+                    passed: true,
+                    carried,
+                }
+            })
+            .collect();
+        let opts = ConformOptions::in_process(p, vec![]);
+        wire_time(&cases, &counted, &opts, Duration::from_millis(2), 9600, 1.0)
+    }
+
+    #[test]
+    fn the_wire_bound_counts_the_echo_once_and_where_the_case_before_left_the_fingers() {
+        // No motion: full duplex, the hand echoing as it reads, so a case takes less than its
+        // bytes both ways one after the other, and at least its received bytes.
+        let w = bound_of(&[("cmd-fget", false)]);
+        let byte_ms = 10.0 / 9600.0 * 1000.0;
+        assert!(w.lower_bound_ms < (w.bytes_sent + w.bytes_received) as f64 * byte_ms, "{w:?}");
+        assert!(w.lower_bound_ms >= w.bytes_received as f64 * byte_ms, "{w:?}");
+        // C closes the hand; on a kept link the next case's HI moves the fingers all the way
+        // back, which a freshly powered-up hand need not do.
+        let fresh = bound_of(&[("cmd-c", false), ("cmd-hi", false)]);
+        let kept = bound_of(&[("cmd-c", false), ("cmd-hi", true)]);
+        assert!(kept.lower_bound_ms > fresh.lower_bound_ms + 1000.0, "{fresh:?} {kept:?}");
+        assert!(kept.motion_ms > fresh.motion_ms + 1000.0, "{fresh:?} {kept:?}");
     }
 
     #[test]

@@ -384,9 +384,9 @@ pub fn summary_text(r: &RunReport) -> String {
     s.push_str(&format!("  time: {:.3} s\n", r.duration_ms / 1000.0));
     if let Some(w) = &r.wire {
         s.push_str(&format!(
-            "  wire-time lower bound: {:.3} s over the {} PASS/FAIL cases (per case the larger of its bytes one way at \
-{} baud, full duplex, and the model's motion time; {} bytes sent, {} received, {:.3} s of motion); took {:.3} s; \
-ratio {:.3}\n",
+            "  wire-time lower bound: {:.3} s over the {} PASS/FAIL cases (step after step, the larger of the bytes \
+received at {} baud, full duplex, and the model's motion time; {} bytes sent, {} received, {:.3} s of motion and \
+pauses); took {:.3} s; ratio {:.3}\n",
             w.lower_bound_ms / 1000.0,
             w.counted_cases,
             w.baud,

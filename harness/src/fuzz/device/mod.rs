@@ -824,6 +824,17 @@ impl MotionProbe {
         Some(MotionProbe { transcript: built.transcript, command, model })
     }
 
+    /// The close step (0-based) and how long after its command a hand that moves in real time
+    /// is still moving (a quarter of the model's time for it): a run may stop the probe there
+    /// (^C) with the judgement already made, rather than wait for the hand to close.
+    pub fn decided_after(&self, p: &Profile) -> Option<(usize, Duration)> {
+        let sent = format!("{}{}", self.command, p.framing.terminator as char);
+        let step =
+            self.transcript.steps.iter().position(|s| s.send.as_ref().is_some_and(|h| h.bytes == sent.as_bytes()))?;
+        let model = self.model.get(step)?.busy();
+        (model > deadline::BUSY).then_some((step, model / REAL_TIME_SHARE))
+    }
+
     /// Judges a replay of the probe: the target moved in far less time than the model's hand
     /// (under a quarter of it). A slow or loaded target only takes longer, never shorter; a
     /// probe that did not pass decides nothing.
