@@ -282,8 +282,9 @@ pub fn to_html(r: &RunReport) -> String {
     if let Some(w) = &r.wire {
         p.heading("wire", "Wire time");
         p.push(&format!(
-            "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (per case, the larger of its bytes one \
-way at {} baud, as the line is full duplex, and the model's motion time for it; {} bytes sent, {} received, motion \
+            "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (a passing case: its pauses plus the \
+larger of its bytes sent and, step by step, the larger of the bytes received and the model's motion, at {} baud; a \
+failing case: its bytes one way; {} bytes sent, {} received, motion \
 {:.0} ms); took {:.0} ms, ratio {:.2}.</p>\n",
             w.lower_bound_ms,
             w.counted_cases,

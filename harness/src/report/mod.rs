@@ -227,9 +227,11 @@ pub struct WireTime {
     pub baud: u32,
     /// Simulated motion time the passing cases need, milliseconds.
     pub motion_ms: f64,
-    /// The lower bound, milliseconds: over the cases counted, each case's larger of its
-    /// bytes in either direction × 10 / baud (the line is full duplex) and the motion time
-    /// the model needs for it (passing cases only).
+    /// The lower bound, milliseconds, summed over the cases counted: for a passing case its
+    /// pauses plus the larger of its bytes sent × 10 / baud and the sum over its steps of the
+    /// larger of the step's bytes received × 10 / baud (full duplex, the echo overlapping what
+    /// is sent) and the model's motion time on the step; for a failing case its bytes in one
+    /// direction (`conform::wire_time`).
     pub lower_bound_ms: f64,
     /// How many cases the bound counts: those that ran to their end or to a mismatch (PASS,
     /// FAIL and their known-failure forms); TIMEOUT and ERROR cases are left out.
