@@ -299,6 +299,27 @@ fn a_host_put_out_of_step_by_an_extra_prompt_has_no_second_finding() {
     assert!(n.iter().any(|(sig, _)| sig.contains("waits-for-answer") && sig.contains("out of step")), "{n:?}");
 }
 
+/// A Python host started through a wrapper that stays (a shell that runs it and then does
+/// something else) is still a Python host: its hang is named by its own frames (faulthandler
+/// in the interpreter, not a native sample of the shell waiting for it).
+#[test]
+fn a_python_host_behind_a_shell_is_named_by_its_python_frames() {
+    if !python_with("serial") {
+        return;
+    }
+    let script = hosts().join("py_read_forever.py").display().to_string();
+    let wrapped = vec!["sh".into(), "-c".into(), "\"$0\" \"$1\"; exit $?".into(), deps::python(), script];
+    let mut r = run(wrapped);
+    r.timeout_hang = Duration::from_millis(1500);
+    let cut = Schedule { planned: vec![Planned { answer: 2, op: Operator::NoPrompt, arg: 0 }] };
+    let result = run_once(&r, &cut).unwrap();
+    assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
+    let v = judge(&result, &[0, 1]);
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert!(v[0].signature.starts_with("hang in py_read_forever.py:read_answer"), "{v:?}");
+    assert!(v[0].message.contains("faulthandler"), "{v:?}");
+}
+
 /// AddressSanitizer writes to a log file of the run's own (`log_path`), read back whole,
 /// even when the reporting thread dies before stderr has it all.
 #[test]

@@ -724,14 +724,23 @@ fn take_stack(
     ended: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
     reaped: &mut bool,
 ) -> Option<super::detect::HangStack> {
-    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok()?;
-    let name = exe.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    if name.starts_with("python") {
+    let (target, python) = stack_target(pid);
+    if python {
         let from = errbuf.lock().ok()?.kept.len();
-        nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), nix::sys::signal::Signal::SIGABRT).ok()?;
+        nix::sys::signal::kill(nix::unistd::Pid::from_raw(target), nix::sys::signal::Signal::SIGABRT).ok()?;
         // It dumps, then dies of the signal; its stderr is then at its end, or nearly.
-        *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
-        wait_eof(errbuf, Duration::from_millis(200));
+        if target == pid {
+            *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
+            wait_eof(errbuf, Duration::from_millis(200));
+        } else {
+            // Started through a wrapper (a shell, env), which still holds stderr: the dump is
+            // in once the interpreter is gone.
+            let gone = Instant::now() + Duration::from_secs(2);
+            while running(target) && Instant::now() < gone {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
         let mut b = errbuf.lock().ok()?;
         let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
         // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
@@ -739,7 +748,59 @@ fn take_stack(
         let frames = super::detect::faulthandler_frames(&dump)?;
         return Some(super::detect::HangStack { by: "faulthandler".into(), frames });
     }
-    super::detect::sample_native(pid)
+    super::detect::sample_native(target)
+}
+
+/// Programs that start the host rather than being it: shells and launchers.
+const WRAPPERS: &[&str] =
+    &["sh", "bash", "dash", "zsh", "ksh", "busybox", "env", "timeout", "nice", "stdbuf", "setsid", "uv", "make"];
+
+/// The process whose stack is the host's: the host itself, or, when it is a wrapper that still
+/// runs ([`WRAPPERS`]: `sh -c '...; ...'`, a shell script that starts the real program), the
+/// newest Python interpreter in its process group, else the newest process there with no
+/// child in the group (what the wrapper waits for). With whether it is a Python interpreter.
+fn stack_target(pid: i32) -> (i32, bool) {
+    let is_python = |p: i32| {
+        std::fs::read_link(format!("/proc/{p}/exe"))
+            .ok()
+            .and_then(|e| e.file_name().map(|n| n.to_string_lossy().starts_with("python")))
+            .unwrap_or(false)
+    };
+    if is_python(pid) {
+        return (pid, true);
+    }
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok();
+    let name = exe.as_ref().and_then(|e| e.file_name()).map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    if !WRAPPERS.contains(&name.as_str()) {
+        return (pid, false);
+    }
+    // (pid, parent, start time) of every live process in the host's group.
+    let mut group: Vec<(i32, i32, u64)> = Vec::new();
+    if let Ok(procs) = std::fs::read_dir("/proc") {
+        for p in procs.flatten() {
+            let Some(q) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            let stat = std::fs::read_to_string(p.path().join("stat")).unwrap_or_default();
+            let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+            let field = |i: usize| f.get(i).and_then(|x| x.parse::<i64>().ok());
+            if field(2) == Some(i64::from(pid)) && f.first() != Some(&"Z") {
+                group.push((q, field(1).unwrap_or(0) as i32, field(19).unwrap_or(0) as u64));
+            }
+        }
+    }
+    let newest = |it: &mut dyn Iterator<Item = &(i32, i32, u64)>| it.max_by_key(|(_, _, t)| *t).map(|(p, _, _)| *p);
+    if let Some(p) = newest(&mut group.iter().filter(|(p, _, _)| *p != pid && is_python(*p))) {
+        return (p, true);
+    }
+    let leaf = newest(&mut group.iter().filter(|(p, _, _)| *p != pid && !group.iter().any(|(_, pp, _)| pp == p)));
+    (leaf.unwrap_or(pid), false)
+}
+
+/// Whether a process still runs (not gone, not a zombie).
+fn running(pid: i32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .ok()
+        .and_then(|s| s.rsplit_once(')').map(|(_, r)| r.trim_start().chars().next() != Some('Z')))
+        .unwrap_or(false)
 }
 
 /// A process's start time (clock ticks since boot, field 22 of its stat).
