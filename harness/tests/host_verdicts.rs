@@ -171,6 +171,33 @@ fn a_host_that_pipelines_is_flagged_at_any_speed() {
     }
 }
 
+/// Unpaced, the answer to `1FGET MCV` is there whole before a host that pauses between its
+/// two writes sends `GC`: on a pty the hand sees the host's write come before its read, however
+/// fast it reads afterwards; over TCP it sees the answer still unread in the host's socket
+/// when the G comes (`/proc/net/tcp`), here a host that reads 0.2 s after it wrote. Both were
+/// passed.
+#[test]
+fn a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp() {
+    if !python_with("serial") {
+        return;
+    }
+    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
+    let cases: [(Transport, &str, &str); 3] =
+        [(Transport::Pty, "0.05", "0"), (Transport::Pty, "0.001", "0"), (Transport::Tcp, "0.05", "0.2")];
+    for (transport, pause, read_pause) in cases {
+        let mut r = run(python("py_pipeline_mcv.py", &["{url}", "9600", pause, read_pause]));
+        r.transport = transport;
+        let f = failing(&r);
+        assert!(f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""), "{transport:?} {pause}: {f:?}");
+    }
+    // Correct hosts stay correct over both.
+    for transport in [Transport::Pty, Transport::Tcp] {
+        let mut r = run(python("py_timeout.py", &["1"]));
+        r.transport = transport;
+        assert_eq!(failing(&r), Vec::<String>::new(), "{transport:?}");
+    }
+}
+
 /// The second of the four feedback blocks py_timeout.py reads before its last ^C.
 fn second_feedback() -> u32 {
     let r = run_once(&run(python("py_timeout.py", &["1"])), &Schedule::default()).unwrap();
