@@ -11,9 +11,11 @@
 //! per run (`ASAN_OPTIONS=log_path=`), read back after the run.
 //!
 //! Budgets hold whatever the host leaves behind: once it has ended (or been killed), its
-//! process group is killed, stderr is read for a short grace only, and any process that still
-//! holds the port or the host's stderr (one that left the group with `setsid`) is found
-//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]).
+//! process group is killed, stderr is read for a short grace only, and when the port or the
+//! host's stderr is still held (the transport never heard the port's last close, or stderr
+//! never ended) the process holding it (one that left the group with `setsid`) is found
+//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]). A run whose
+//! host left nothing behind reads no `/proc`.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
 //! the rest is counted and noted, so a host writing without end costs no memory.
@@ -200,6 +202,8 @@ struct Log {
     last_activity: Instant,
     hang_up: Option<StopHandle>,
     hung_up: bool,
+    /// A host has the port open, as the hand's transport last said.
+    port_open: bool,
     reactions: Vec<(String, String, String)>,
     /// Reactions still waiting for the host's next command: (index into reactions, commands seen).
     awaiting: Vec<(usize, usize)>,
@@ -359,6 +363,7 @@ impl LineTap for Tap {
     fn connection(&mut self, _device: &Device, open: bool) {
         if let Ok(mut log) = self.0.lock() {
             log.checker.connection(open);
+            log.port_open = open;
         }
     }
 
@@ -375,6 +380,10 @@ pub const STDERR_CAP: usize = 256 * 1024;
 /// How long stderr is read after the host ended: what a leftover holding it writes later is
 /// not waited for.
 const STDERR_GRACE: Duration = Duration::from_millis(500);
+
+/// How long the port may still count as open after the host ended: the hand's transport hears
+/// of the close and makes sure nobody else holds the port first.
+const PORT_CLOSE_GRACE: Duration = Duration::from_millis(200);
 
 /// What the stderr reader has read so far.
 #[derive(Default)]
@@ -463,6 +472,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         last_activity: started,
         hang_up: Some(hang_up),
         hung_up: false,
+        port_open: false,
         reactions: Vec::new(),
         awaiting: Vec::new(),
     }));
@@ -643,7 +653,17 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         let found = holders(path, err_inode, host_start);
         if path.is_some() && !pty_alive() { holders(None, err_inode, host_start) } else { found }
     };
-    let found = if err_open || pty_path.is_some() { search(err_inode) } else { Vec::new() };
+    // The search reads all of /proc: only when something still holds stderr or the port (the
+    // hand's transport says when the last holder of its port closed it, soon after the host
+    // ended).
+    let port_held = pty_path.is_some() && {
+        let until = Instant::now() + PORT_CLOSE_GRACE;
+        while log.lock().is_ok_and(|l| l.port_open) && Instant::now() < until && pty_alive() {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        log.lock().map_or(true, |l| l.port_open)
+    };
+    let found = if err_open || port_held { search(err_inode) } else { Vec::new() };
     if !found.is_empty() {
         for (p, name) in found {
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
