@@ -181,10 +181,12 @@ pub const OBSERVE: &str = "gcl-observe:";
 /// Most distinct values remembered as sent by the hand.
 const SENT_CAP: usize = 1 << 16;
 
-/// Shared between the tap (in the hand's thread) and the run.
-struct Log {
-    misbehave: Misbehave,
-    checker: HostChecker,
+/// What the tap of a graded hand keeps, shared between the tap (in the hand's thread) and
+/// whoever runs the session: a `gcl fuzz host` or `gcl check-host` run, and the served hand
+/// of `gcl check-host --serve` (which uses the misbehaviours, the checker and the traffic).
+pub(crate) struct Log {
+    pub(crate) misbehave: Misbehave,
+    pub(crate) checker: HostChecker,
     exchanges: Vec<Exchange>,
     /// Bytes kept and bytes cut, host then hand.
     kept: [usize; 2],
@@ -201,7 +203,7 @@ struct Log {
     acted_at: Option<Instant>,
     last_activity: Instant,
     hang_up: Option<StopHandle>,
-    hung_up: bool,
+    pub(crate) hung_up: bool,
     /// A host has the port open, as the hand's transport last said.
     port_open: bool,
     reactions: Vec<(String, String, String)>,
@@ -210,6 +212,41 @@ struct Log {
 }
 
 impl Log {
+    /// A fresh log for a hand that follows `schedule`; `hang_up` ends its transport when a
+    /// `hang-up` misbehaviour fires.
+    pub(crate) fn new(
+        schedule: &Schedule,
+        device: &Device,
+        profile: Arc<gcl_model::Profile>,
+        hang_up: StopHandle,
+    ) -> Log {
+        Log {
+            misbehave: Misbehave::new(schedule.clone(), device),
+            checker: HostChecker::new(profile),
+            exchanges: Vec::new(),
+            kept: [0; 2],
+            cut: [0; 2],
+            sent: std::collections::BTreeSet::new(),
+            observations: 0,
+            wrong_values: Vec::new(),
+            host_reported: false,
+            silenced_at: None,
+            acted_at: None,
+            last_activity: Instant::now(),
+            hang_up: Some(hang_up),
+            hung_up: false,
+            port_open: false,
+            reactions: Vec::new(),
+            awaiting: Vec::new(),
+        }
+    }
+
+    /// The traffic both ways, with a note of what the caps cut, taken out of the log.
+    pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
+        self.note_cuts();
+        std::mem::take(&mut self.exchanges)
+    }
+
     fn push(&mut self, dir: Dir, bytes: &[u8], marks: Vec<String>) {
         let k = usize::from(dir == Dir::Hand);
         let room = KEEP_CAP.saturating_sub(self.kept[k]);
@@ -283,7 +320,9 @@ impl Log {
     }
 }
 
-struct Tap(Arc<Mutex<Log>>);
+/// The tap of a graded hand: it shapes the answers by the log's misbehaviours and feeds both
+/// directions to its checker.
+pub(crate) struct Tap(pub(crate) Arc<Mutex<Log>>);
 
 impl LineTap for Tap {
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
@@ -457,25 +496,9 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut engine = Engine::new(&opts)?;
     let (mut stop, stop_rx) = stop_pair()?;
     let (hang_up, hang_rx) = stop_pair()?;
-    let log = Arc::new(Mutex::new(Log {
-        misbehave: Misbehave::new(schedule.clone(), engine.device()),
-        checker: HostChecker::new(spec.profile.clone()),
-        exchanges: Vec::new(),
-        kept: [0; 2],
-        cut: [0; 2],
-        sent: std::collections::BTreeSet::new(),
-        observations: 0,
-        wrong_values: Vec::new(),
-        host_reported: false,
-        silenced_at: None,
-        acted_at: None,
-        last_activity: started,
-        hang_up: Some(hang_up),
-        hung_up: false,
-        port_open: false,
-        reactions: Vec::new(),
-        awaiting: Vec::new(),
-    }));
+    let mut fresh = Log::new(schedule, engine.device(), spec.profile.clone(), hang_up);
+    fresh.last_activity = started;
+    let log = Arc::new(Mutex::new(fresh));
     engine.set_tap(Box::new(Tap(log.clone())));
     let run_dir = RunDir::new()?;
 
@@ -703,7 +726,6 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
     });
-    log.note_cuts();
     Ok(RunResult {
         end,
         stack,
@@ -712,7 +734,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         stderr,
         observations: log.observations,
         wrong_values: log.wrong_values.clone(),
-        exchanges: std::mem::take(&mut log.exchanges),
+        exchanges: log.take_exchanges(),
         fired: log.misbehave.fired().to_vec(),
         violations,
         commands: log.checker.commands().to_vec(),
