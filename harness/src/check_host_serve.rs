@@ -3,8 +3,9 @@
 //! grades the whole session as `gcl check-host` grades one host command
 //! ([`crate::check_host::grade`]).
 //!
-//! The hand is the `gcl sim` engine on a pty or a loopback TCP port, in this thread; a tap
-//! feeds both directions to the same [`HostChecker`] `gcl check-host` uses, and may shape the
+//! The hand is the `gcl sim` engine on a pty or a loopback TCP port, in this thread; the tap
+//! of `gcl fuzz host` and `gcl check-host` feeds both directions to the same
+//! [`crate::fuzz::host::HostChecker`], and may shape the
 //! answers with a seeded misbehaviour [`Schedule`] (the schedules `gcl fuzz host` draws), so
 //! a test body can be run under misbehaviours. Several connections in one session are one
 //! session to the checker, as a serial line is one line however often it is opened.
@@ -13,10 +14,11 @@ use std::os::fd::{AsFd, BorrowedFd};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use gcl_model::{Device, Fault, Profile};
+use gcl_model::{Fault, Profile};
 
-use crate::fuzz::host::{Dir, Exchange, HostChecker, HostClause, HostEnd, RunError, RunResult, Transport};
-use crate::sim::misbehave::{Fired, LineTap, Misbehave, Schedule, Shaped};
+use crate::fuzz::host::session::{Log, Tap};
+use crate::fuzz::host::{HostClause, HostEnd, RunError, RunResult, Transport};
+use crate::sim::misbehave::Schedule;
 use crate::sim::{Engine, Pace, SimOptions, TimeMode, pty::Pty, stop_pair, tcp::TcpServer};
 
 /// What a served hand is.
@@ -47,86 +49,6 @@ pub struct Served {
     pub url: String,
 }
 
-struct Log {
-    misbehave: Misbehave,
-    checker: HostChecker,
-    exchanges: Vec<Exchange>,
-    hung_up: bool,
-    hang_up: Option<crate::sim::StopHandle>,
-}
-
-impl Log {
-    fn push(&mut self, dir: Dir, bytes: &[u8], marks: Vec<String>) {
-        match self.exchanges.last_mut() {
-            Some(e) if e.dir == dir && marks.is_empty() && e.bytes.len() < 1 << 20 => e.bytes.extend_from_slice(bytes),
-            _ => self.exchanges.push(Exchange { dir, bytes: bytes.to_vec(), marks }),
-        }
-    }
-}
-
-struct Tap(Arc<Mutex<Log>>);
-
-impl LineTap for Tap {
-    fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
-        if let Ok(mut log) = self.0.lock() {
-            log.checker.host_bytes(device, bytes);
-            log.push(Dir::Host, bytes, Vec::new());
-        }
-    }
-
-    fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped {
-        let Ok(mut log) = self.0.lock() else { return Shaped::plain(bytes) };
-        let log = &mut *log;
-        let state = log.checker.answer_state(device);
-        let before = log.misbehave.fired().len();
-        let shaped = log.misbehave.shape(device, bytes, &state);
-        let new: Vec<Fired> = log.misbehave.fired()[before..].to_vec();
-        // Changed in any way (a silence drops every answer after it; a delay holds one), as
-        // `gcl fuzz host` judges it: the host's reaction to it is a note, not a violation.
-        let misbehaved = !new.is_empty() || shaped.bytes != bytes || shaped.hold.is_some() || shaped.hang_up;
-        log.checker.hand_bytes(device, &shaped.bytes, misbehaved);
-        if shaped.restart {
-            log.checker.restarted();
-        }
-        let marks = new
-            .iter()
-            .map(|f| format!("misbehaviour {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what))
-            .collect();
-        log.push(Dir::Hand, &shaped.bytes, marks);
-        if shaped.hang_up {
-            log.hung_up = true;
-            if let Some(mut h) = log.hang_up.take() {
-                h.stop();
-            }
-        }
-        shaped
-    }
-
-    fn delivered(&mut self, _device: &Device) {
-        if let Ok(mut log) = self.0.lock() {
-            log.checker.delivered();
-        }
-    }
-
-    fn discarded(&mut self, _device: &Device) {
-        if let Ok(mut log) = self.0.lock() {
-            log.checker.discarded();
-        }
-    }
-
-    fn connection(&mut self, _device: &Device, open: bool) {
-        if let Ok(mut log) = self.0.lock() {
-            log.checker.connection(open);
-        }
-    }
-
-    fn host_unread(&mut self, unread: bool) {
-        if let Ok(mut log) = self.0.lock() {
-            log.checker.host_unread(unread);
-        }
-    }
-}
-
 /// Serves the hand until one of `stops` becomes readable (or a `hang-up` misbehaviour closes
 /// the line), telling `ready` where it listens first; returns the session as a run that ended
 /// with exit code 0, for [`crate::check_host::grade`].
@@ -143,13 +65,7 @@ pub fn serve(
     sim.faults = opts.faults.clone();
     let mut engine = Engine::new(&sim)?;
     let (hang_up, hang_rx) = stop_pair()?;
-    let log = Arc::new(Mutex::new(Log {
-        misbehave: Misbehave::new(opts.schedule.clone(), engine.device()),
-        checker: HostChecker::new(opts.profile.clone()),
-        exchanges: Vec::new(),
-        hung_up: false,
-        hang_up: Some(hang_up),
-    }));
+    let log = Arc::new(Mutex::new(Log::new(&opts.schedule, engine.device(), opts.profile.clone(), hang_up)));
     engine.set_tap(Box::new(Tap(log.clone())));
     let mut all: Vec<BorrowedFd<'_>> = stops.to_vec();
     all.push(hang_rx.as_fd());
@@ -185,7 +101,7 @@ pub fn serve(
         stderr: String::new(),
         observations: 0,
         wrong_values: Vec::new(),
-        exchanges: std::mem::take(&mut log.exchanges),
+        exchanges: log.take_exchanges(),
         fired: log.misbehave.fired().to_vec(),
         violations,
         commands: log.checker.commands().to_vec(),

@@ -171,6 +171,33 @@ fn a_host_that_pipelines_is_flagged_at_any_speed() {
     }
 }
 
+/// Unpaced, the answer to `1FGET MCV` is there whole before a host that pauses between its
+/// two writes sends `GC`: on a pty the hand sees the host's write come before its read, however
+/// fast it reads afterwards; over TCP it sees the answer still unread in the host's socket
+/// when the G comes (`/proc/net/tcp`), here a host that reads 0.2 s after it wrote. Both were
+/// passed.
+#[test]
+fn a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp() {
+    if !python_with("serial") {
+        return;
+    }
+    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
+    let cases: [(Transport, &str, &str); 3] =
+        [(Transport::Pty, "0.05", "0"), (Transport::Pty, "0.001", "0"), (Transport::Tcp, "0.05", "0.2")];
+    for (transport, pause, read_pause) in cases {
+        let mut r = run(python("py_pipeline_mcv.py", &["{url}", "9600", pause, read_pause]));
+        r.transport = transport;
+        let f = failing(&r);
+        assert!(f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""), "{transport:?} {pause}: {f:?}");
+    }
+    // Correct hosts stay correct over both.
+    for transport in [Transport::Pty, Transport::Tcp] {
+        let mut r = run(python("py_timeout.py", &["1"]));
+        r.transport = transport;
+        assert_eq!(failing(&r), Vec::<String>::new(), "{transport:?}");
+    }
+}
+
 /// The second of the four feedback blocks py_timeout.py reads before its last ^C.
 fn second_feedback() -> u32 {
     let r = run_once(&run(python("py_timeout.py", &["1"])), &Schedule::default()).unwrap();
@@ -282,6 +309,44 @@ fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
     }
 }
 
+/// One bug, one finding: a host whose one bug is a read without a deadline also waits for
+/// each prompt, so when the hand appends a second prompt to an answer it takes it for the
+/// next answer's and sends each later line one answer early. That is the hand's fault, not a
+/// second bug: an INFO note, no finding (it was a `waits-for-answer` finding).
+#[test]
+fn a_host_put_out_of_step_by_an_extra_prompt_has_no_second_finding() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("c_read_forever", dir.path()) else { return };
+    let extra = Schedule { planned: vec![Planned { answer: 3, op: Operator::ExtraBytes, arg: 0 }] };
+    let r = run_once(&run(vec![exe.display().to_string()]), &extra).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert!(r.fired[0].what.contains("=> "), "{:?}", r.fired);
+    assert_eq!(judge(&r, &[0, 1]), vec![], "{:?}", r.violations);
+    let n = notes(&r);
+    assert!(n.iter().any(|(sig, _)| sig.contains("waits-for-answer") && sig.contains("out of step")), "{n:?}");
+}
+
+/// A Python host started through a wrapper that stays (a shell that runs it and then does
+/// something else) is still a Python host: its hang is named by its own frames (faulthandler
+/// in the interpreter, not a native sample of the shell waiting for it).
+#[test]
+fn a_python_host_behind_a_shell_is_named_by_its_python_frames() {
+    if !python_with("serial") {
+        return;
+    }
+    let script = hosts().join("py_read_forever.py").display().to_string();
+    let wrapped = vec!["sh".into(), "-c".into(), "\"$0\" \"$1\"; exit $?".into(), deps::python(), script];
+    let mut r = run(wrapped);
+    r.timeout_hang = Duration::from_millis(1500);
+    let cut = Schedule { planned: vec![Planned { answer: 2, op: Operator::NoPrompt, arg: 0 }] };
+    let result = run_once(&r, &cut).unwrap();
+    assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
+    let v = judge(&result, &[0, 1]);
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert!(v[0].signature.starts_with("hang in py_read_forever.py:read_answer"), "{v:?}");
+    assert!(v[0].message.contains("faulthandler"), "{v:?}");
+}
+
 /// AddressSanitizer writes to a log file of the run's own (`log_path`), read back whole,
 /// even when the reporting thread dies before stderr has it all.
 #[test]
@@ -388,13 +453,19 @@ fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
     let mut trusting = run(python("py_trusts_short_block.py", &[]));
     trusting.timeout_hang = Duration::from_secs(3);
     let c = campaign(trusting.clone(), "rt-block-length", 10, false);
-    let wrong: Vec<&str> = c
-        .findings
-        .iter()
-        .filter(|f| f.verdict.kind == FindingKind::WrongValue)
-        .map(|f| f.verdict.signature.as_str())
-        .collect();
-    assert_eq!(wrong, vec!["silent wrong value: P"], "{:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+    let found: Vec<(FindingKind, &str)> =
+        c.findings.iter().map(|f| (f.verdict.kind, f.verdict.signature.as_str())).collect();
+    assert_eq!(found, vec![(FindingKind::WrongValue, "silent wrong value: P")]);
+    // Its one bug, once: a feedback block held back past its read timeout (and the one queued
+    // behind it) makes it go on without them, and it may take the late block for a later
+    // one's: the hand's fault, no finding (it was a second, `waits-for-answer`, finding).
+    let delay = Schedule { planned: vec![Planned { answer: 8, op: Operator::DelayBelow, arg: 4 }] };
+    let mut bh8 = trusting.clone();
+    bh8.profile = gcl_model::Profile::builtin("bh8-262").unwrap();
+    let r = run_once(&bh8, &delay).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert_eq!(r.fired[0].state, "RealTime feedback");
+    assert!(judge(&r, &[0, 1]).iter().all(|v| v.kind == FindingKind::WrongValue), "{:?}", r.violations);
     // Without the misbehaviour, all it observes is what the hand sent.
     let r = run_once(&trusting, &Schedule::default()).unwrap();
     assert!(r.observations >= 18 && r.wrong_values.is_empty(), "{} {:?}", r.observations, r.wrong_values);

@@ -139,6 +139,11 @@ impl Engine {
         self.tap = Some(tap);
     }
 
+    /// Whether a tap watches the line (what only it needs is then worth a transport's work).
+    pub fn tapped(&self) -> bool {
+        self.tap.is_some()
+    }
+
     /// The model.
     pub fn device(&self) -> &Device {
         self.link.device()

@@ -46,10 +46,19 @@ pub struct Pty {
     mismatch: Option<(u32, u32)>,
     /// Told each new speed mismatch (the CLI prints it on stderr).
     on_mismatch: Option<fn(&str)>,
-    /// Reads of the slave (`IN_ACCESS`), drained only when the host's bytes are judged.
+    /// The host's reads and writes of the slave (`IN_ACCESS`, `IN_MODIFY`), in the order they
+    /// happened.
     reads: Inotify,
     /// Output went to the host since it was last seen reading.
     wrote_since_read: bool,
+    /// Host bytes were read whose write (`IN_MODIFY`) had not been seen: it may come late,
+    /// even after output that answers them.
+    expect_modify: bool,
+    /// A write was seen whose bytes have not been read yet.
+    pending_write: bool,
+    /// The host wrote after output went to it and before it read any of it (a write seen
+    /// before the read): the next bytes judged were sent with that output unread.
+    wrote_before_read: bool,
 }
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
@@ -98,10 +107,15 @@ impl Pty {
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let reads = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
-        reads.add_watch(&path, AddWatchFlags::IN_ACCESS).map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
+        reads
+            .add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY)
+            .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
             reads,
             wrote_since_read: false,
+            expect_modify: false,
+            pending_write: false,
+            wrote_before_read: false,
             master: pair.master,
             slave: pair.slave,
             path,
@@ -213,15 +227,18 @@ impl Pty {
                 };
                 if ended {
                     self.open = false;
-                    self.wrote_since_read = false;
                     self.discard_unread();
+                    self.forget_reads();
                     engine.client_gone(&format!("{} closed", self.path.display()));
                 }
             }
             if m.contains(AddWatchFlags::IN_OPEN) && !self.open {
                 self.open = true;
+                // Output before the open was lost; the new host's writes (seen, perhaps,
+                // before this open) count.
                 self.take_reads();
                 self.wrote_since_read = false;
+                self.wrote_before_read = false;
                 engine.client_connected(&format!("{} opened", self.path.display()));
             }
             i += 1;
@@ -254,31 +271,53 @@ impl Pty {
         let _ = termios::tcflush(&self.slave, FlushArg::TCIFLUSH);
     }
 
-    /// Whether the host left output unread when it wrote the bytes about to be read: output
-    /// went out and the kernel reported no read of the slave since (inotify's `IN_ACCESS`,
-    /// queued by the host's read before it can write again, so a host that read its answer is
-    /// never taken for one that did not), or the slave's input buffer still holds bytes (seen
-    /// through the simulator's own descriptor of the slave, which shares it and only looks).
-    /// A host that writes and then reads fast enough may be missed; it is never invented.
-    /// (The host's writes, `IN_MODIFY`, are not used: one can be queued after the simulator
-    /// already read its bytes, which would make a correct fast host look as if it wrote
-    /// before reading.)
+    /// Whether the host left output unread when it wrote the bytes just read: output went out
+    /// and the kernel reported no read of the slave since (inotify's `IN_ACCESS`, queued by
+    /// the host's read before it can write again, so a host that read its answer is never
+    /// taken for one that did not); or it reported a write of the slave (`IN_MODIFY`, in the
+    /// same queue, so in the order they happened) after that output and before the host's
+    /// first read of it, however fast the host read once it had written; or the slave's input
+    /// buffer still holds bytes (seen through the simulator's own descriptor of the slave,
+    /// which shares it and only looks).
+    ///
+    /// A write's `IN_MODIFY` can be queued after the simulator read its bytes, even after the
+    /// output that answers them: so when bytes are read whose write was not seen, the next
+    /// write seen is taken for that late one, never for a new write (a correct fast host is
+    /// never taken for one that wrote before reading; a host that pipelines may be missed
+    /// then, as when inotify merges that late write with its next).
     fn host_has_unread(&mut self) -> bool {
         self.take_reads();
+        // The bytes just read: their write was seen, or it may come late.
+        self.expect_modify = !std::mem::take(&mut self.pending_write);
         let mut fds = [PollFd::new(self.slave.as_fd(), PollFlags::POLLIN)];
         let buffered = nix::poll::poll(&mut fds, nix::poll::PollTimeout::ZERO).is_ok_and(|n| n > 0)
             && fds[0].revents().is_some_and(|r| r.contains(PollFlags::POLLIN));
-        buffered || self.wrote_since_read
+        let wrote_first = std::mem::take(&mut self.wrote_before_read);
+        buffered || self.wrote_since_read || wrote_first
     }
 
-    /// Takes the host's reads of the slave.
+    /// Takes the host's reads and writes of the slave, in order.
     fn take_reads(&mut self) {
         while let Ok(events) = self.reads.read_events() {
             if events.is_empty() {
                 break;
             }
-            if events.iter().any(|e| e.mask.contains(AddWatchFlags::IN_ACCESS)) {
-                self.wrote_since_read = false;
+            for e in events {
+                if e.mask.contains(AddWatchFlags::IN_MODIFY) {
+                    if std::mem::take(&mut self.expect_modify) {
+                        // The late write of bytes already read.
+                        continue;
+                    }
+                    self.pending_write = true;
+                    if self.wrote_since_read {
+                        self.wrote_before_read = true;
+                    }
+                }
+                if e.mask.contains(AddWatchFlags::IN_ACCESS) {
+                    self.wrote_since_read = false;
+                    // A late write is queued before the writer can read.
+                    self.expect_modify = false;
+                }
             }
         }
     }
@@ -287,6 +326,16 @@ impl Pty {
     fn writing(&mut self) {
         self.take_reads();
         self.wrote_since_read = true;
+    }
+
+    /// The host went: nothing that happened before counts for the next bytes.
+    fn forget_reads(&mut self) {
+        self.wrote_since_read = false;
+        self.expect_modify = false;
+        self.pending_write = false;
+        self.wrote_before_read = false;
+        // What came since (the new host's first write) counts.
+        self.take_reads();
     }
 
     /// Whether a descriptor other than the simulator's own refers to the slave.
@@ -350,14 +399,22 @@ impl Pty {
                 let r = now + WRITE_RETRY;
                 deadline = Some(deadline.map_or(r, |d| d.min(r)));
             }
-            let (master_in, port_events, stop) = {
-                let mut fds = Vec::with_capacity(2 + stops.len());
+            // A tapped line takes the host's reads and writes as they come, so that inotify
+            // never merges a late write with a new one.
+            let tapped = engine.tapped();
+            let (master_in, port_events, host_io, stop) = {
+                let mut fds = Vec::with_capacity(3 + stops.len());
                 fds.push(PollFd::new(self.master.as_fd(), flags));
                 fds.push(PollFd::new(self.watch.as_fd(), IN));
+                fds.push(PollFd::new(self.reads.as_fd(), if tapped { IN } else { PollFlags::empty() }));
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
                 wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the pty", e))?;
-                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), fds[2..].iter().any(|f| ready(f, IN)))
+                let stop = fds[3..].iter().any(|f| ready(f, IN));
+                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), tapped && ready(&fds[2], IN), stop)
             };
+            if host_io {
+                self.take_reads();
+            }
             if stop {
                 break;
             }

@@ -126,7 +126,7 @@ impl TcpServer {
                             } else if s.set_nonblocking(true).is_ok() {
                                 let _ = s.set_nodelay(true);
                                 engine.client_connected(&peer.to_string());
-                                client = Some(Client { stream: s, read_closed: false });
+                                client = Some(Client { stream: s, read_closed: false, wrote: false });
                             }
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -144,7 +144,10 @@ impl TcpServer {
                         break;
                     }
                     match c.stream.write(out) {
-                        Ok(n) => engine.consumed(n),
+                        Ok(n) => {
+                            c.wrote |= n > 0;
+                            engine.consumed(n)
+                        }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
                         Err(e) => {
@@ -179,6 +182,58 @@ struct Client {
     stream: TcpStream,
     /// The client shut down its sending side (or closed): its answers are still delivered.
     read_closed: bool,
+    /// Output went to it that it may not have read yet.
+    wrote: bool,
+}
+
+impl Client {
+    /// Whether the client has not read all the output sent to it (for a tapped line, before
+    /// the bytes it sent next are judged): bytes still in this side's send queue, or in the
+    /// client socket's receive queue (`/proc/net/tcp`: the connection is on this machine).
+    /// A client that writes and then reads within the moment it takes to look may be missed;
+    /// one that read everything is never taken for one that did not.
+    fn has_unread(&mut self) -> bool {
+        if !self.wrote {
+            return false;
+        }
+        let unread = unread_bytes(&self.stream).is_some_and(|n| n > 0);
+        self.wrote = unread;
+        unread
+    }
+}
+
+/// Bytes written to `stream` that the other end has not read: in this side's send queue, and
+/// in the other end's receive queue when it is a socket of this machine (`/proc/net/tcp`, or
+/// `tcp6`: each socket's `tx_queue:rx_queue`).
+fn unread_bytes(stream: &TcpStream) -> Option<u64> {
+    let (ours, theirs) = (stream.local_addr().ok()?, stream.peer_addr().ok()?);
+    let hex = |a: &SocketAddr| -> String {
+        let ip: String = match a.ip() {
+            std::net::IpAddr::V4(v4) => format!("{:08X}", u32::from_ne_bytes(v4.octets())),
+            std::net::IpAddr::V6(v6) => {
+                v6.octets().chunks(4).map(|c| format!("{:08X}", u32::from_ne_bytes([c[0], c[1], c[2], c[3]]))).collect()
+            }
+        };
+        format!("{ip}:{:04X}", a.port())
+    };
+    let (ours, theirs) = (hex(&ours), hex(&theirs));
+    let table = if stream.peer_addr().ok()?.is_ipv4() { "/proc/net/tcp" } else { "/proc/net/tcp6" };
+    let text = std::fs::read_to_string(table).ok()?;
+    let mut found = None;
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        let (Some(local), Some(remote), Some(queues)) = (f.get(1), f.get(2), f.get(4)) else { continue };
+        let Some((tx, rx)) = queues.split_once(':') else { continue };
+        let n = if *local == ours && *remote == theirs {
+            u64::from_str_radix(tx, 16).ok()
+        } else if *local == theirs && *remote == ours {
+            u64::from_str_radix(rx, 16).ok()
+        } else {
+            continue;
+        };
+        found = Some(found.unwrap_or(0) + n.unwrap_or(0));
+    }
+    found
 }
 
 fn end_client(client: &mut Option<Client>, engine: &mut Engine, why: &str) {
@@ -203,7 +258,13 @@ fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8])
                 engine.note("the client finished sending (half-close)");
                 return;
             }
-            Ok(n) => engine.input(&buf[..n]),
+            Ok(n) => {
+                if engine.tapped() {
+                    let unread = c.has_unread();
+                    engine.host_unread(unread);
+                }
+                engine.input(&buf[..n])
+            }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => return,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
             Err(e) => break e.to_string(),

@@ -40,4 +40,9 @@ def main():
     sys.stderr.write("probe read: %r\n" % (got,))
 
 
-main()
+try:
+    main()
+except OSError as e:
+    # The port went away (the hand hung up): a host reports it and exits 1.
+    print("probe: %s" % e, file=sys.stderr)
+    sys.exit(1)

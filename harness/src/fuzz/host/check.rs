@@ -93,6 +93,12 @@ pub struct HostViolation {
     /// note ([`HostViolation::is_note`]).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub after_misbehaviour: bool,
+    /// An early send made after the hand put the host out of step: it had sent a prompt (or
+    /// a feedback block) the host had not asked for, an extra one or a late one the host had
+    /// given up on, which a host waiting for its answer takes for that answer. Each line the
+    /// host sends then comes one answer early through the hand's fault: a note.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub out_of_step: bool,
 }
 
 impl HostViolation {
@@ -102,8 +108,22 @@ impl HostViolation {
     /// a RealTime block or a way of leaving that follows a broken answer, a restart or a
     /// silence is what a host does to get the hand back, or to report it and go.
     pub fn is_note(&self) -> bool {
-        self.after_misbehaviour && self.clause != HostClause::WaitsForAnswer
+        self.after_misbehaviour && (self.clause != HostClause::WaitsForAnswer || self.out_of_step)
     }
+}
+
+/// An answer made but not yet delivered.
+#[derive(Debug, Clone, Copy)]
+struct InFlight {
+    /// It ends the wait (it ends with the prompt, or it is RealTime feedback).
+    ends_wait: bool,
+    /// A misbehaviour made it end more than once (a second prompt; a feedback block with more
+    /// bytes than the layout's).
+    surplus: bool,
+    /// The host sent again, giving up on it, before it was delivered: its prompt comes late.
+    given_up: bool,
+    /// A misbehaviour changed it (a delay holds it, and every answer queued behind it).
+    misbehaved: bool,
 }
 
 /// Longest line kept for grading (longer lines are graded on their start).
@@ -129,9 +149,13 @@ pub struct HostChecker {
     /// A command line was sent and its answer has not ended yet (its last byte has not been
     /// delivered to the line).
     pending: bool,
-    /// Answers made but not yet delivered, oldest first: whether each ends the wait (it ends
-    /// with the prompt, or it is RealTime feedback).
-    in_flight: VecDeque<bool>,
+    /// Answers made but not yet delivered, oldest first.
+    in_flight: VecDeque<InFlight>,
+    /// The hand delivered a prompt or a feedback block the host had not asked for (an extra
+    /// one a misbehaviour added, or one of an answer the host had given up on): from then on
+    /// a host that waits for each answer is one answer ahead of the hand through no fault of
+    /// its own, and its early sends are notes.
+    out_of_step: bool,
     /// The answer still coming was broken by a misbehaviour: the host may give up on it.
     broken: bool,
     /// The command word of the last line sent.
@@ -158,6 +182,7 @@ impl HostChecker {
             misbehaved: false,
             pending: false,
             in_flight: VecDeque::new(),
+            out_of_step: false,
             broken: false,
             last_command: None,
             block_due: 0,
@@ -207,7 +232,35 @@ impl HostChecker {
         // One of each kind per session is enough to grade and to deduplicate.
         if !self.violations.iter().any(|v| v.clause == clause && v.kind == kind) {
             let after_misbehaviour = self.misbehaved;
-            self.violations.push(HostViolation { clause, kind: kind.to_string(), detail, after_misbehaviour });
+            self.violations.push(HostViolation {
+                clause,
+                kind: kind.to_string(),
+                detail,
+                after_misbehaviour,
+                out_of_step: false,
+            });
+        }
+    }
+
+    /// The host sent before the answer it waits for had come ([`HostChecker::sends_early`]):
+    /// pipelining, or, once the hand put it out of step, one answer early through the
+    /// hand's fault (a note, under its own kind).
+    fn early(&mut self, kind: &str, detail: String) {
+        if !self.out_of_step {
+            return self.violate(HostClause::WaitsForAnswer, kind, detail);
+        }
+        let kind = format!("{kind}, out of step");
+        if !self.violations.iter().any(|v| v.clause == HostClause::WaitsForAnswer && v.kind == kind) {
+            self.violations.push(HostViolation {
+                clause: HostClause::WaitsForAnswer,
+                kind,
+                detail: format!(
+                    "{detail}, after the hand sent a prompt or block it had not asked for (an extra one, or a late \
+                     one it had given up on), which it took for this answer"
+                ),
+                after_misbehaviour: true,
+                out_of_step: true,
+            });
         }
     }
 
@@ -222,6 +275,11 @@ impl HostChecker {
     pub fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
         let mut looping = device.mode() == Mode::Loop || self.mode == Mode::Loop;
         for &b in bytes {
+            // Sending while a broken answer is still coming gives up on it: its prompt, if it
+            // comes, comes late.
+            if self.pending && self.broken && self.block_due == 0 {
+                self.in_flight.iter_mut().for_each(|f| f.given_up = true);
+            }
             if looping {
                 self.realtime_byte(device, b, &mut looping);
             } else {
@@ -253,8 +311,7 @@ impl HostChecker {
         }
         if self.sends_early() {
             let cmd = self.last_command.clone().unwrap_or_default();
-            self.violate(
-                HostClause::WaitsForAnswer,
+            self.early(
                 "sent before the prompt",
                 format!("byte \"{}\" sent before the answer to {cmd} had ended", esc(&[b])),
             );
@@ -313,8 +370,7 @@ impl HostChecker {
             return;
         }
         if self.sends_early() && b != self.profile.framing.abort {
-            self.violate(
-                HostClause::WaitsForAnswer,
+            self.early(
                 "block before feedback",
                 format!("header \"{}\" sent before the answer to the last block", esc(&[b])),
             );
@@ -354,22 +410,44 @@ impl HostChecker {
     pub fn hand_bytes(&mut self, device: &Device, bytes: &[u8], misbehaved: bool) {
         self.mode = device.mode();
         if misbehaved {
-            self.broken = true;
             self.misbehaved = true;
+        }
+        // An answer queued behind a misbehaved one still coming (one held back by a delay) is
+        // late through the hand's fault too: the host may give up on it.
+        let behind = self.in_flight.iter().any(|f| f.misbehaved);
+        if misbehaved || behind {
+            self.broken = true;
         }
         if bytes.is_empty() {
             return;
         }
         let prompt = self.profile.framing.prompt.as_bytes();
-        self.in_flight.push_back(self.mode == Mode::Loop || bytes.ends_with(prompt));
+        let looping = self.mode == Mode::Loop;
+        // Only a misbehaviour makes an answer end twice (a host that pipelines gets several
+        // answers at once, each its own).
+        let surplus = misbehaved
+            && if looping {
+                device.rt_layout().is_some_and(|l| bytes.len() > l.feedback().size())
+            } else {
+                !prompt.is_empty() && bytes.windows(prompt.len()).filter(|w| *w == prompt).count() > 1
+            };
+        self.in_flight.push_back(InFlight {
+            ends_wait: looping || bytes.ends_with(prompt),
+            surplus,
+            given_up: false,
+            misbehaved: misbehaved || behind,
+        });
     }
 
     /// The last byte of the oldest answer not yet delivered has been handed to the line (for a
     /// paced line, once its wire time has passed): host bytes read before this are judged as
     /// sent while that answer was still coming, whatever the order the hand made them in.
     pub fn delivered(&mut self) {
-        if self.in_flight.pop_front() == Some(true) {
-            self.pending = false;
+        if let Some(f) = self.in_flight.pop_front() {
+            if f.ends_wait {
+                self.pending = false;
+            }
+            self.out_of_step |= f.surplus || (f.given_up && f.ends_wait);
         }
         self.prev = None;
     }
@@ -378,6 +456,8 @@ impl HostChecker {
     pub fn discarded(&mut self) {
         self.in_flight.clear();
         self.pending = false;
+        // Nothing stale is left for the host to take for an answer.
+        self.out_of_step = false;
     }
 
     /// A host opened the port (`true`) or the last one closed it: a CR that follows is a
@@ -463,6 +543,54 @@ mod tests {
         assert_eq!(run(&[b"FGET DP"]), vec![HostClause::LeavesCleanly]);
         // ^C may interrupt anything.
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+
+    const ANSWER: &[u8] = b"FGET P\n\r0 0 0 0\n\r=> ";
+
+    /// The hand appends a second prompt to an answer: a host that waits for each prompt takes
+    /// it for the next answer's and sends one answer early from then on, through the hand's
+    /// fault (a note). An answer misbehaved otherwise leaves it in step: early is a finding.
+    #[test]
+    fn an_extra_prompt_puts_the_host_out_of_step_without_a_finding() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        for (extra, note) in [(&b"\n\r=> "[..], true), (&b"\n\r"[..], false)] {
+            let mut c = HostChecker::new(p.clone());
+            c.host_bytes(&d, b"FGET P\r");
+            c.hand_bytes(&d, &[ANSWER, extra].concat(), true);
+            c.delivered();
+            c.host_bytes(&d, b"FGET P\r");
+            c.hand_bytes(&d, ANSWER, false);
+            // Sent on the stale prompt, before this answer came.
+            c.host_bytes(&d, b"FGET P\r");
+            let v = c.violations();
+            assert_eq!(v.len(), 1, "{v:?}");
+            assert_eq!((v[0].clause, v[0].is_note()), (HostClause::WaitsForAnswer, note), "{v:?}");
+        }
+    }
+
+    /// The hand holds an answer back past the host's timeout: the host gives up and sends
+    /// again (no violation), the answer queued behind the held one is late too (giving up on
+    /// it is no violation either), and once the late prompt comes the host is out of step.
+    #[test]
+    fn a_late_answer_puts_the_host_out_of_step_without_a_finding() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let mut c = HostChecker::new(p);
+        c.host_bytes(&d, b"FGET P\r");
+        c.hand_bytes(&d, ANSWER, true);
+        c.host_bytes(&d, b"FGET P\r");
+        c.hand_bytes(&d, ANSWER, false);
+        c.host_bytes(&d, b"FGET P\r");
+        assert_eq!(c.violations(), &[], "giving up on a held answer and on the one behind it");
+        c.hand_bytes(&d, ANSWER, false);
+        (0..3).for_each(|_| c.delivered());
+        c.host_bytes(&d, b"FGET P\r");
+        c.hand_bytes(&d, ANSWER, false);
+        // Sent on a late prompt, before this answer came.
+        c.host_bytes(&d, b"FGET P\r");
+        let v = c.violations();
+        assert!(v.len() == 1 && v[0].is_note() && v[0].out_of_step, "{v:?}");
     }
 
     #[test]

@@ -11,9 +11,11 @@
 //! per run (`ASAN_OPTIONS=log_path=`), read back after the run.
 //!
 //! Budgets hold whatever the host leaves behind: once it has ended (or been killed), its
-//! process group is killed, stderr is read for a short grace only, and any process that still
-//! holds the port or the host's stderr (one that left the group with `setsid`) is found
-//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]).
+//! process group is killed, stderr is read for a short grace only, and when the port or the
+//! host's stderr is still held (the transport never heard the port's last close, or stderr
+//! never ended) the process holding it (one that left the group with `setsid`) is found
+//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]). A run whose
+//! host left nothing behind reads no `/proc`.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
 //! the rest is counted and noted, so a host writing without end costs no memory.
@@ -179,10 +181,12 @@ pub const OBSERVE: &str = "gcl-observe:";
 /// Most distinct values remembered as sent by the hand.
 const SENT_CAP: usize = 1 << 16;
 
-/// Shared between the tap (in the hand's thread) and the run.
-struct Log {
-    misbehave: Misbehave,
-    checker: HostChecker,
+/// What the tap of a graded hand keeps, shared between the tap (in the hand's thread) and
+/// whoever runs the session: a `gcl fuzz host` or `gcl check-host` run, and the served hand
+/// of `gcl check-host --serve` (which uses the misbehaviours, the checker and the traffic).
+pub(crate) struct Log {
+    pub(crate) misbehave: Misbehave,
+    pub(crate) checker: HostChecker,
     exchanges: Vec<Exchange>,
     /// Bytes kept and bytes cut, host then hand.
     kept: [usize; 2],
@@ -199,13 +203,50 @@ struct Log {
     acted_at: Option<Instant>,
     last_activity: Instant,
     hang_up: Option<StopHandle>,
-    hung_up: bool,
+    pub(crate) hung_up: bool,
+    /// A host has the port open, as the hand's transport last said.
+    port_open: bool,
     reactions: Vec<(String, String, String)>,
     /// Reactions still waiting for the host's next command: (index into reactions, commands seen).
     awaiting: Vec<(usize, usize)>,
 }
 
 impl Log {
+    /// A fresh log for a hand that follows `schedule`; `hang_up` ends its transport when a
+    /// `hang-up` misbehaviour fires.
+    pub(crate) fn new(
+        schedule: &Schedule,
+        device: &Device,
+        profile: Arc<gcl_model::Profile>,
+        hang_up: StopHandle,
+    ) -> Log {
+        Log {
+            misbehave: Misbehave::new(schedule.clone(), device),
+            checker: HostChecker::new(profile),
+            exchanges: Vec::new(),
+            kept: [0; 2],
+            cut: [0; 2],
+            sent: std::collections::BTreeSet::new(),
+            observations: 0,
+            wrong_values: Vec::new(),
+            host_reported: false,
+            silenced_at: None,
+            acted_at: None,
+            last_activity: Instant::now(),
+            hang_up: Some(hang_up),
+            hung_up: false,
+            port_open: false,
+            reactions: Vec::new(),
+            awaiting: Vec::new(),
+        }
+    }
+
+    /// The traffic both ways, with a note of what the caps cut, taken out of the log.
+    pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
+        self.note_cuts();
+        std::mem::take(&mut self.exchanges)
+    }
+
     fn push(&mut self, dir: Dir, bytes: &[u8], marks: Vec<String>) {
         let k = usize::from(dir == Dir::Hand);
         let room = KEEP_CAP.saturating_sub(self.kept[k]);
@@ -279,7 +320,9 @@ impl Log {
     }
 }
 
-struct Tap(Arc<Mutex<Log>>);
+/// The tap of a graded hand: it shapes the answers by the log's misbehaviours and feeds both
+/// directions to its checker.
+pub(crate) struct Tap(pub(crate) Arc<Mutex<Log>>);
 
 impl LineTap for Tap {
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
@@ -359,6 +402,7 @@ impl LineTap for Tap {
     fn connection(&mut self, _device: &Device, open: bool) {
         if let Ok(mut log) = self.0.lock() {
             log.checker.connection(open);
+            log.port_open = open;
         }
     }
 
@@ -375,6 +419,10 @@ pub const STDERR_CAP: usize = 256 * 1024;
 /// How long stderr is read after the host ended: what a leftover holding it writes later is
 /// not waited for.
 const STDERR_GRACE: Duration = Duration::from_millis(500);
+
+/// How long the port may still count as open after the host ended: the hand's transport hears
+/// of the close and makes sure nobody else holds the port first.
+const PORT_CLOSE_GRACE: Duration = Duration::from_millis(200);
 
 /// What the stderr reader has read so far.
 #[derive(Default)]
@@ -448,24 +496,9 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut engine = Engine::new(&opts)?;
     let (mut stop, stop_rx) = stop_pair()?;
     let (hang_up, hang_rx) = stop_pair()?;
-    let log = Arc::new(Mutex::new(Log {
-        misbehave: Misbehave::new(schedule.clone(), engine.device()),
-        checker: HostChecker::new(spec.profile.clone()),
-        exchanges: Vec::new(),
-        kept: [0; 2],
-        cut: [0; 2],
-        sent: std::collections::BTreeSet::new(),
-        observations: 0,
-        wrong_values: Vec::new(),
-        host_reported: false,
-        silenced_at: None,
-        acted_at: None,
-        last_activity: started,
-        hang_up: Some(hang_up),
-        hung_up: false,
-        reactions: Vec::new(),
-        awaiting: Vec::new(),
-    }));
+    let mut fresh = Log::new(schedule, engine.device(), spec.profile.clone(), hang_up);
+    fresh.last_activity = started;
+    let log = Arc::new(Mutex::new(fresh));
     engine.set_tap(Box::new(Tap(log.clone())));
     let run_dir = RunDir::new()?;
 
@@ -643,7 +676,17 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         let found = holders(path, err_inode, host_start);
         if path.is_some() && !pty_alive() { holders(None, err_inode, host_start) } else { found }
     };
-    let found = if err_open || pty_path.is_some() { search(err_inode) } else { Vec::new() };
+    // The search reads all of /proc: only when something still holds stderr or the port (the
+    // hand's transport says when the last holder of its port closed it, soon after the host
+    // ended).
+    let port_held = pty_path.is_some() && {
+        let until = Instant::now() + PORT_CLOSE_GRACE;
+        while log.lock().is_ok_and(|l| l.port_open) && Instant::now() < until && pty_alive() {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        log.lock().map_or(true, |l| l.port_open)
+    };
+    let found = if err_open || port_held { search(err_inode) } else { Vec::new() };
     if !found.is_empty() {
         for (p, name) in found {
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
@@ -683,7 +726,6 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
     });
-    log.note_cuts();
     Ok(RunResult {
         end,
         stack,
@@ -692,7 +734,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         stderr,
         observations: log.observations,
         wrong_values: log.wrong_values.clone(),
-        exchanges: std::mem::take(&mut log.exchanges),
+        exchanges: log.take_exchanges(),
         fired: log.misbehave.fired().to_vec(),
         violations,
         commands: log.checker.commands().to_vec(),
@@ -724,14 +766,23 @@ fn take_stack(
     ended: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
     reaped: &mut bool,
 ) -> Option<super::detect::HangStack> {
-    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok()?;
-    let name = exe.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    if name.starts_with("python") {
+    let (target, python) = stack_target(pid);
+    if python {
         let from = errbuf.lock().ok()?.kept.len();
-        nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), nix::sys::signal::Signal::SIGABRT).ok()?;
+        nix::sys::signal::kill(nix::unistd::Pid::from_raw(target), nix::sys::signal::Signal::SIGABRT).ok()?;
         // It dumps, then dies of the signal; its stderr is then at its end, or nearly.
-        *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
-        wait_eof(errbuf, Duration::from_millis(200));
+        if target == pid {
+            *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
+            wait_eof(errbuf, Duration::from_millis(200));
+        } else {
+            // Started through a wrapper (a shell, env), which still holds stderr: the dump is
+            // in once the interpreter is gone.
+            let gone = Instant::now() + Duration::from_secs(2);
+            while running(target) && Instant::now() < gone {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
         let mut b = errbuf.lock().ok()?;
         let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
         // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
@@ -739,7 +790,59 @@ fn take_stack(
         let frames = super::detect::faulthandler_frames(&dump)?;
         return Some(super::detect::HangStack { by: "faulthandler".into(), frames });
     }
-    super::detect::sample_native(pid)
+    super::detect::sample_native(target)
+}
+
+/// Programs that start the host rather than being it: shells and launchers.
+const WRAPPERS: &[&str] =
+    &["sh", "bash", "dash", "zsh", "ksh", "busybox", "env", "timeout", "nice", "stdbuf", "setsid", "uv", "make"];
+
+/// The process whose stack is the host's: the host itself, or, when it is a wrapper that still
+/// runs ([`WRAPPERS`]: `sh -c '...; ...'`, a shell script that starts the real program), the
+/// newest Python interpreter in its process group, else the newest process there with no
+/// child in the group (what the wrapper waits for). With whether it is a Python interpreter.
+fn stack_target(pid: i32) -> (i32, bool) {
+    let is_python = |p: i32| {
+        std::fs::read_link(format!("/proc/{p}/exe"))
+            .ok()
+            .and_then(|e| e.file_name().map(|n| n.to_string_lossy().starts_with("python")))
+            .unwrap_or(false)
+    };
+    if is_python(pid) {
+        return (pid, true);
+    }
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok();
+    let name = exe.as_ref().and_then(|e| e.file_name()).map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    if !WRAPPERS.contains(&name.as_str()) {
+        return (pid, false);
+    }
+    // (pid, parent, start time) of every live process in the host's group.
+    let mut group: Vec<(i32, i32, u64)> = Vec::new();
+    if let Ok(procs) = std::fs::read_dir("/proc") {
+        for p in procs.flatten() {
+            let Some(q) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            let stat = std::fs::read_to_string(p.path().join("stat")).unwrap_or_default();
+            let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+            let field = |i: usize| f.get(i).and_then(|x| x.parse::<i64>().ok());
+            if field(2) == Some(i64::from(pid)) && f.first() != Some(&"Z") {
+                group.push((q, field(1).unwrap_or(0) as i32, field(19).unwrap_or(0) as u64));
+            }
+        }
+    }
+    let newest = |it: &mut dyn Iterator<Item = &(i32, i32, u64)>| it.max_by_key(|(_, _, t)| *t).map(|(p, _, _)| *p);
+    if let Some(p) = newest(&mut group.iter().filter(|(p, _, _)| *p != pid && is_python(*p))) {
+        return (p, true);
+    }
+    let leaf = newest(&mut group.iter().filter(|(p, _, _)| *p != pid && !group.iter().any(|(_, pp, _)| pp == p)));
+    (leaf.unwrap_or(pid), false)
+}
+
+/// Whether a process still runs (not gone, not a zombie).
+fn running(pid: i32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .ok()
+        .and_then(|s| s.rsplit_once(')').map(|(_, r)| !r.trim_start().starts_with('Z')))
+        .unwrap_or(false)
 }
 
 /// A process's start time (clock ticks since boot, field 22 of its stat).
