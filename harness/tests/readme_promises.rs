@@ -517,6 +517,66 @@ const PROMISES: &[(&str, &[&str])] = &[
         "findings deduplicated by signature (the first found stands, hits add up), corpus entries by content hash",
         &["harness/tests/fuzz_merge.rs::device_shards_are_disjoint_and_merge_by_signature_and_content_hash"],
     ),
+    // Added after a second reading.
+    (
+        "`bh8-262-4.4` (alias `bh8-262`), or a spec TOML file",
+        &[
+            "harness/tests/readme_promises.rs::the_built_in_profiles_and_the_alias_are_the_ones_named",
+            "harness/tests/hardening.rs::a_profile_file_is_simulated_as_written",
+        ],
+    ),
+    (
+        "replays a transcript and shows where the answer parts from the golden one",
+        &[
+            "harness/tests/transcript_cli.rs::replay_exits_1_and_shows_the_parting_byte_on_a_mismatch",
+            "harness/tests/transcript_mutants.rs::crlf_mismatch_shows_expected_and_actual_at_the_parting_byte",
+        ],
+    ),
+    (
+        "turns a script of host lines and blocks into a golden transcript",
+        &[
+            "harness/tests/transcript_cli.rs::a_recording_of_the_simulator_replays_against_it",
+            "harness/src/record.rs::records_lines_loops_blocks_and_banners",
+        ],
+    ),
+    (
+        "a certificate bundle with a SHA-256 manifest and an Ed25519 signature, its check, and a key pair",
+        &[
+            "harness/tests/conform_mutants.rs::certificates_are_written_and_tampering_is_caught",
+            "harness/tests/hardening.rs::signed_certificates_verify_and_forgeries_do_not",
+            "harness/src/certify.rs::generated_keys_load_back_and_are_never_overwritten",
+        ],
+    ),
+    (
+        "the same hand for whoever connects (a test suite), graded when stopped",
+        &["harness/tests/check_host_serve.rs::a_served_hand_grades_whoever_connected"],
+    ),
+    (
+        "(JSON + schema, JUnit XML, HTML; results.jsonl as cases end)",
+        &[
+            "harness/tests/conform_mutants.rs::the_unmutated_simulator_passes_over_exec_with_reports",
+            "harness/tests/report_schema.rs::reports_with_every_kind_of_verdict_validate_against_the_schema",
+        ],
+    ),
+    (
+        "`certify`, `fuzz device`, `fuzz host` and `check-host` print the same.",
+        &["harness/tests/readme_promises.rs::certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does"],
+    ),
+    (
+        "The hand runs in fast time",
+        &["harness/tests/readme_promises.rs::certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does"],
+    ),
+    (
+        "runs the campaign's run indices K-1, K-1+N, ...",
+        &[
+            "harness/src/fuzz/shard.rs::shards_partition_the_indices",
+            "harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs",
+        ],
+    ),
+    (
+        "A step whose answer has not started by its deadline waits up to 2 s",
+        &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
+    ),
 ];
 
 fn root() -> PathBuf {
@@ -686,5 +746,41 @@ fn there_are_fourteen_host_mutants() {
     assert_eq!(mutants.len(), 14, "{mutants:?}");
     for lang in ["py_", "c_", "rs_"] {
         assert!(mutants.iter().any(|m| m.starts_with(lang)), "no {lang} mutant: {mutants:?}");
+    }
+}
+
+/// "Profiles: `seed`, `bh8-262-4.3`, `bh8-262-4.4` (alias `bh8-262`)".
+#[test]
+fn the_built_in_profiles_and_the_alias_are_the_ones_named() {
+    for id in ["seed", "bh8-262-4.3", "bh8-262-4.4"] {
+        assert_eq!(Profile::builtin(id).unwrap().id, id);
+    }
+    assert_eq!(Profile::builtin("bh8-262").unwrap().id, "bh8-262-4.4");
+}
+
+/// "`certify`, `fuzz device`, `fuzz host` and `check-host` print the same" progress as
+/// `conform` in a CI log (stderr a pipe): a line with done/total as the run starts and one
+/// ending "(done)". `fuzz host`'s first line names the hand it runs: "time fast" by
+/// default.
+#[test]
+fn certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs: [(&str, &[&str]); 4] = [
+        ("gcl certify: ", &["certify", "--target", "sim:seed", "--only", "framing-*", "--partial", "--out", "cert"]),
+        ("gcl fuzz device: ", &["fuzz", "device", "--target", "sim", "--runs", "5"]),
+        ("gcl fuzz host: ", &["fuzz", "host", "--runs", "2", "--timeout-hang", "3s", "--", "true"]),
+        ("gcl check-host: ", &["check-host", "--", "true"]),
+    ];
+    for (prefix, args) in runs {
+        let out = Command::new(GCL).args(args).current_dir(dir.path()).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with(prefix)).collect();
+        let first = lines.iter().find(|l| l.contains("/")).unwrap_or_else(|| panic!("{args:?}: no progress: {err}"));
+        assert!(first.starts_with(&format!("{prefix}1/")) && first.contains(" elapsed"), "{args:?}: {err}");
+        assert!(lines.iter().any(|l| l.ends_with("(done)")), "{args:?}: no last line: {err}");
+        if prefix == "gcl fuzz host: " {
+            assert!(lines[0].contains("time fast"), "fuzz host's hand runs in fast time by default: {err}");
+        }
     }
 }
