@@ -577,6 +577,22 @@ const PROMISES: &[(&str, &[&str])] = &[
         "A step whose answer has not started by its deadline waits up to 2 s",
         &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
     ),
+    (
+        "`--no eeprom`, `--no motion`, `--no realtime` and `--no abort-timing` refuse what a case may do",
+        &["harness/tests/readme_promises.rs::no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them"],
+    ),
+    (
+        "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`, default 60 s)",
+        &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
+    ),
+    (
+        "`--timeout-hang D` sets the hang timeout by hand and skips the measure",
+        &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
+    ),
+    (
+        "(`gcl fuzz host --help` lists them)",
+        &["harness/tests/readme_promises.rs::fuzz_host_help_lists_every_misbehaviour"],
+    ),
 ];
 
 fn root() -> PathBuf {
@@ -782,5 +798,77 @@ fn certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does() {
         if prefix == "gcl fuzz host: " {
             assert!(lines[0].contains("time fast"), "fuzz host's hand runs in fast time by default: {err}");
         }
+    }
+}
+
+/// "`--no eeprom`, `--no motion`, `--no realtime` and `--no abort-timing` refuse what a case may
+/// do": the same campaign reaches motion, RealTime, EEPROM writes and ^C mid-motion with
+/// everything allowed, and none of them with each refused.
+#[test]
+fn no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them() {
+    let moved = |f: &std::collections::BTreeSet<String>| f.contains("mode:Idle->Busy");
+    let looped = |f: &std::collections::BTreeSet<String>| f.contains("mode:Idle->Loop");
+    let all = run(&sim_campaign(300), &|_| {}).unwrap();
+    assert!(moved(&all.features) && looped(&all.features), "{:?}", all.features);
+    assert!(all.features.contains("abort:mid-motion") && all.eeprom_writes > 0, "{:?}", all.features);
+    let mut o = sim_campaign(300);
+    o.allowed.motion = false;
+    o.allowed.realtime = false;
+    o.allowed.eeprom = false;
+    o.write_budget = Some(0);
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!moved(&s.features) && !looped(&s.features), "{:?}", s.features);
+    assert_eq!(s.eeprom_writes, 0);
+    let mut o = sim_campaign(300);
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!s.features.contains("abort:mid-motion"), "{:?}", s.features);
+}
+
+/// "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`,
+/// default 60 s)"; "`--timeout-hang D` sets the hang timeout by hand and skips the measure".
+/// A host that never waits measures no timeout: its hang timeout is the floor, and `fuzz.json`
+/// keeps the calibration; with `--timeout-hang` there is none.
+#[test]
+fn fuzz_host_measures_its_hang_timeout_unless_given_one() {
+    use gcl_harness::fuzz::host::hang_timeout;
+    use std::time::Duration;
+    let (floor, budget) = (Duration::from_secs(3), Duration::from_secs(60));
+    assert_eq!(hang_timeout(Some(Duration::from_secs(10)), floor, budget), Duration::from_secs(22));
+    assert_eq!(hang_timeout(Some(Duration::from_millis(200)), floor, budget), floor);
+    assert_eq!(hang_timeout(Some(Duration::from_secs(40)), floor, budget), budget);
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = |extra: &[&str], report: &str| -> serde_json::Value {
+        let out = Command::new(GCL)
+            .args(["fuzz", "host", "--runs", "1", "--report", report])
+            .args(extra)
+            .args(["--", "true"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap()
+    };
+    let measured = campaign(&[], "measured");
+    let cal = &measured["calibration"];
+    assert!(cal["runs"].as_u64().is_some_and(|n| n > 0), "the measure ran: {cal}");
+    assert_eq!(cal["timeout_hang_ms"], 3000, "at least 3 s: {cal}");
+    let given = campaign(&["--timeout-hang", "5s"], "given");
+    assert!(given.get("calibration").is_none_or(|c| c.is_null()), "no measure with --timeout-hang: {given}");
+}
+
+/// "`--ops delay-above,truncate=5` restricts and weights the misbehaviours (`gcl fuzz host
+/// --help` lists them)": every misbehaviour is in the help, with its default weight.
+#[test]
+fn fuzz_host_help_lists_every_misbehaviour() {
+    use gcl_harness::sim::misbehave::Operator;
+    let out = Command::new(GCL).args(["fuzz", "host", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    for op in Operator::ALL {
+        let listed = help.lines().any(|l| {
+            let mut w = l.split_whitespace();
+            l.starts_with("  ") && w.next() == Some(op.name()) && w.next() == Some(&op.default_weight().to_string())
+        });
+        assert!(listed, "`gcl fuzz host --help` does not list {} (weight {})", op.name(), op.default_weight());
     }
 }
