@@ -593,6 +593,13 @@ const PROMISES: &[(&str, &[&str])] = &[
         "(`gcl fuzz host --help` lists them)",
         &["harness/tests/readme_promises.rs::fuzz_host_help_lists_every_misbehaviour"],
     ),
+    (
+        "after `--dead-after N` (default 5) timeouts in a row the hand is probed",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_stops_answering_ends_the_run_early_with_exit_2",
+            "harness/tests/readme_promises.rs::conform_dead_after_defaults_to_5",
+        ],
+    ),
 ];
 
 fn root() -> PathBuf {
@@ -871,4 +878,18 @@ fn fuzz_host_help_lists_every_misbehaviour() {
         });
         assert!(listed, "`gcl fuzz host --help` does not list {} (weight {})", op.name(), op.default_weight());
     }
+}
+
+/// "after `--dead-after N` (default 5) timeouts in a row the hand is probed": the mechanism is
+/// `conform_runner.rs`'s (with N = 2, to stay quick); the default is what `gcl conform --help`
+/// gives the option (a run that waits out five timeouts costs some 16 s).
+#[test]
+fn conform_dead_after_defaults_to_5() {
+    let out = Command::new(GCL).args(["conform", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    let option = help.split("--dead-after <N>").nth(1).expect("conform --help has --dead-after");
+    // Its own lines only: up to the next option.
+    let default =
+        option.lines().skip(1).map(str::trim).take_while(|l| !l.starts_with('-')).find(|l| l.starts_with("[default: "));
+    assert_eq!(default, Some("[default: 5]"), "{option}");
 }
