@@ -600,6 +600,18 @@ const PROMISES: &[(&str, &[&str])] = &[
             "harness/tests/readme_promises.rs::conform_dead_after_defaults_to_5",
         ],
     ),
+    (
+        "The in-process `sim` target keeps simulated time on both sides and runs them.",
+        &["harness/tests/conform_mutants.rs::the_unmutated_simulator_passes_every_case_of_every_profile"],
+    ),
+    (
+        "a re-signed or unsigned forgery verifies the same",
+        &["harness/tests/hardening.rs::signed_certificates_verify_and_forgeries_do_not"],
+    ),
+    (
+        "`harness/tests/hosts/py_trusts_short_block.py` is a host that trusts a block two bytes short",
+        &["harness/tests/host_verdicts.rs::a_host_that_trusts_a_short_block_gives_a_silent_wrong_value"],
+    ),
 ];
 
 fn root() -> PathBuf {
