@@ -612,6 +612,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         "`harness/tests/hosts/py_trusts_short_block.py` is a host that trusts a block two bytes short",
         &["harness/tests/host_verdicts.rs::a_host_that_trusts_a_short_block_gives_a_silent_wrong_value"],
     ),
+    (
+        "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are killed), bundles and reports still written",
+        &["harness/tests/readme_promises.rs::sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports"],
+    ),
 ];
 
 fn root() -> PathBuf {
@@ -904,4 +908,50 @@ fn conform_dead_after_defaults_to_5() {
     let default =
         option.lines().skip(1).map(str::trim).take_while(|l| !l.starts_with('-')).find(|l| l.starts_with("[default: "));
     assert_eq!(default, Some("[default: 5]"), "{option}");
+}
+
+/// "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are
+/// killed), bundles and reports still written": the host sleeps for ten minutes; the campaign
+/// ends without waiting for it, the host is gone and the reports are there. (The one minute
+/// allowed is a guard against a hang, not a measure.)
+#[test]
+fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
+    use nix::sys::signal::{Signal, kill};
+    use nix::unistd::Pid;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(GCL)
+        .args(["fuzz", "host", "--duration", "1h", "--timeout-hang", "3s", "--report", "rep", "--out", "out"])
+        .args(["--", "sh", "-c", "echo $$ >> pids; exec sleep 600"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let pids = dir.path().join("pids");
+    let start = Instant::now();
+    while std::fs::read_to_string(&pids).map_or(true, |p| p.trim().is_empty()) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no host started");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    kill(Pid::from_raw(child.id() as i32), Signal::SIGTERM).unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("gcl fuzz host did not end on SIGTERM: it waits for its host");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(status.code(), Some(0), "no finding yet: {status}");
+    for pid in std::fs::read_to_string(&pids).unwrap().split_whitespace() {
+        let pid = Pid::from_raw(pid.parse().unwrap());
+        assert!(kill(pid, None).is_err(), "host {pid} left running");
+    }
+    for f in ["fuzz.json", "junit.xml", "report.json", "report.html"] {
+        assert!(dir.path().join("rep").join(f).is_file(), "{f} not written");
+    }
 }
