@@ -477,7 +477,10 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "When the test body ends the hand grades everything the host code sent",
-        &["python/tests/test_wheel.py::test_a_hand_grades_its_session"],
+        &[
+            "python/tests/test_wheel.py::test_a_hand_grades_its_session",
+            "python/tests/test_wheel.py::test_the_lf_bug_fails_every_test_naming_the_clause",
+        ],
     ),
     (
         "`gcl_misbehaving_hand` runs the test once per seeded misbehaviour schedule",
@@ -616,6 +619,11 @@ const PROMISES: &[(&str, &[&str])] = &[
         "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are killed), bundles and reports still written",
         &["harness/tests/readme_promises.rs::sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports"],
     ),
+    (
+        "is the same hand as a context manager (`hand.verdict` after it)",
+        &["python/tests/test_wheel.py::test_a_hand_grades_its_session"],
+    ),
+    ("Options come from a marker", &["python/tests/test_wheel.py::test_marker_options_reach_the_hand"]),
 ];
 
 fn root() -> PathBuf {
