@@ -177,6 +177,12 @@ mod tests {
         let serial = DeadlinePolicy::for_target(&"serial:/dev/null".parse().unwrap());
         assert_eq!(serial.deadline(Duration::from_millis(10)), Duration::from_millis(500));
         assert_eq!(serial.deadline(Duration::from_secs(3)), Duration::from_millis(6050));
+        let tcp = DeadlinePolicy::for_target(&"tcp://127.0.0.1:1".parse().unwrap());
+        assert_eq!(tcp.deadline(Duration::from_millis(10)), Duration::from_millis(200));
+        // README: a step whose answer has not started by its deadline waits up to 2 s.
+        for p in [&exec, &serial, &tcp] {
+            assert_eq!(p.silent_wait, Duration::from_secs(2));
+        }
     }
 
     #[test]

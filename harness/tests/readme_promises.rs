@@ -1,0 +1,965 @@
+//! Every sentence of README.md that promises something a user can observe (an exit code, a
+//! message, a file written, a default, a limit) is held by a test (issue 21 item 2: "Sentences
+//! that promise behaviour get a test too"). `PROMISES` pairs a verbatim fragment of each such
+//! sentence with the tests that hold it; `every_promise_is_quoted_as_written_and_held_by_a_test`
+//! fails when a sentence is reworded (its fragment is no longer in README.md) or a test is
+//! renamed or deleted, so the table cannot drift from either. The README's example command
+//! lines are `doc_examples.rs`'s; descriptions that promise nothing checkable are not listed.
+//! The other tests here hold the promises no test held before.
+
+mod sim_support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use gcl_harness::fuzz::device::{Budget, FuzzError, FuzzOptions, check_real_time, run};
+use gcl_host::target::Target;
+use gcl_model::Profile;
+use sim_support::{GCL, SimProcess, Transport};
+
+const SELF: &str = "harness/tests/readme_promises.rs";
+
+/// A README fragment (whitespace as in the README or collapsed: lines wrap) and the tests that
+/// hold it, each `FILE::NAME` from the repository root.
+const PROMISES: &[(&str, &[&str])] = &[
+    // The two commands.
+    (
+        "they use `GCL_PYTHON`, else a virtual environment at `target/pyvenv`, else",
+        &["harness/tests/deps_check.rs::python_is_found_the_same_way_by_every_test"],
+    ),
+    (
+        "they skip with a `SKIPPED <test>: ...` line that `cargo test` shows",
+        &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
+    ),
+    (
+        "under `CI=true` a missing tool fails the test instead",
+        &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
+    ),
+    // Who it is for.
+    ("`--fault NAME` makes the hand misbehave on purpose", &["harness/tests/sim_cli.rs::faults_reach_the_hand"]),
+    (
+        "real time, every byte paced at the hand's BAUD (9600 at the factory) in both directions",
+        &[
+            "harness/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
+            "harness/src/sim/engine.rs::host_bytes_reach_the_model_at_their_wire_time",
+            "harness/src/sim/engine.rs::real_time_waits_for_the_clock",
+        ],
+    ),
+    (
+        "`PSET BAUD`/`FSET BAUD` changing the pace after their answer",
+        &[
+            "harness/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
+            "harness/tests/host_compat.rs::a_library_that_changes_the_baud_rate_reopens_to_one_fresh_prompt",
+        ],
+    ),
+    (
+        "what the host left unread is discarded on close",
+        &[
+            "harness/tests/sim_port.rs::an_answer_left_unread_is_gone_after_a_close_and_reopen",
+            "harness/src/sim/engine.rs::output_without_a_listener_is_lost_and_unread_output_is_discarded",
+        ],
+    ),
+    (
+        "a late host sees no power-up banner",
+        &["harness/tests/sim_port.rs::a_host_that_opens_the_pty_after_start_up_sees_no_banner_but_sees_a_reset"],
+    ),
+    (
+        "Nothing is dropped while a host reads slowly: the simulator stops reading it instead.",
+        &[
+            "harness/src/sim/engine.rs::a_host_that_does_not_read_is_not_read_and_loses_nothing",
+            "harness/tests/sim_port.rs::ten_thousand_pipelined_commands_lose_no_byte_over_the_pty_and_tcp",
+        ],
+    ),
+    (
+        "without the harness's suite, reports or CLI",
+        &["harness/tests/tidy.rs::the_host_library_needs_nothing_of_the_harness"],
+    ),
+    ("reads, prints and matches transcripts with no I/O", &["harness/tests/tidy.rs::pure_crates_do_no_io"]),
+    // A tour of the CLI.
+    (
+        "`check` says when either is stale",
+        &[
+            "harness/tests/suite_fresh.rs::check_reports_stale_missing_and_extra_files_and_regenerate_fixes_them",
+            "harness/tests/vectors_fresh.rs::check_reports_stale_missing_and_extra_files_and_regenerate_fixes_them",
+        ],
+    ),
+    (
+        "`gcl suite list` shows the catalogue built into `gcl` from any directory",
+        &[
+            "harness/tests/hardening.rs::suite_commands_outside_the_repository_read_the_built_in_catalogue_or_say_what_is_missing",
+        ],
+    ),
+    (
+        "(found in the current directory or above it, or given with `--dir`)",
+        &[
+            "harness/tests/hardening.rs::suite_commands_outside_the_repository_read_the_built_in_catalogue_or_say_what_is_missing",
+        ],
+    ),
+    (
+        "with known failures kept as data (XFAIL; XPASS when they start passing)",
+        &["harness/tests/conform_mutants.rs::known_failures_turn_into_xfail_and_stale_entries_into_xpass"],
+    ),
+    (
+        "a one-line probe says so and the abort-timing",
+        &[
+            "harness/tests/conform_target_ends.rs::a_hand_whose_motions_end_at_once_skips_the_abort_timing_cases_and_says_why",
+        ],
+    ),
+    (
+        "drop exactly the cases resting on it",
+        &["harness/tests/conform_mutants.rs::skip_decision_drops_exactly_the_cases_resting_on_it"],
+    ),
+    (
+        "(each case lists its decisions in index.json and the reports",
+        &["harness/tests/suite_decisions.rs::index_json_lists_every_case_decisions"],
+    ),
+    (
+        "`gcl sim --pty` and `--tcp` run in real time by default",
+        &["harness/tests/readme_promises.rs::pty_and_tcp_sims_run_in_real_time_and_stdio_in_fast_time_by_default"],
+    ),
+    (
+        "(the default of `--stdio`, and an opt-in speed-up elsewhere)",
+        &["harness/tests/readme_promises.rs::pty_and_tcp_sims_run_in_real_time_and_stdio_in_fast_time_by_default"],
+    ),
+    (
+        "it counts only the cases that ran to their end or to a mismatch",
+        &["harness/tests/hardening.rs::absurd_bauds_are_refused_and_the_bound_counts_only_pass_and_fail"],
+    ),
+    (
+        "a case that homes the fingers after one that closed them counts the move back",
+        &["harness/src/conform.rs::the_wire_bound_counts_the_echo_once_and_where_the_case_before_left_the_fingers"],
+    ),
+    // Certificates, inputs, outputs.
+    (
+        "`gcl certify` refuses `--skip`, `--only`, `--fault` and `--suite` unless given `--partial`",
+        &["harness/tests/hardening.rs::certify_refuses_selections_unless_partial_and_says_partial"],
+    ),
+    (
+        "`--known-failures` also needs `--partial`",
+        &["harness/tests/adversarial.rs::known_failures_narrow_a_certificate_and_verify_needs_a_key"],
+    ),
+    (
+        "and the certificate lists the excused cases",
+        &["harness/tests/adversarial.rs::known_failures_narrow_a_certificate_and_verify_needs_a_key"],
+    ),
+    (
+        "A run where nothing ran is never a PASS.",
+        &["harness/tests/hardening.rs::only_matching_nothing_is_a_usage_error_and_a_run_of_nothing_is_no_pass"],
+    ),
+    (
+        "says `AUTHENTICITY NOT CHECKED`",
+        &["harness/tests/adversarial.rs::known_failures_narrow_a_certificate_and_verify_needs_a_key"],
+    ),
+    (
+        "exits 1 unless `--allow-unverified` is given",
+        &["harness/tests/adversarial.rs::known_failures_narrow_a_certificate_and_verify_needs_a_key"],
+    ),
+    (
+        "Every option that changed what ran is in the certificate and in every report.",
+        &["harness/tests/hardening.rs::certify_refuses_selections_unless_partial_and_says_partial"],
+    ),
+    (
+        "`--only` matching no case is a usage error",
+        &["harness/tests/hardening.rs::only_matching_nothing_is_a_usage_error_and_a_run_of_nothing_is_no_pass"],
+    ),
+    (
+        "a known-failures entry matching no case is warned about and recorded",
+        &["harness/tests/hardening.rs::a_known_failure_that_matches_nothing_is_reported_and_recorded"],
+    ),
+    (
+        "a port another run holds is an error (exit 2)",
+        &["harness/tests/hardening.rs::a_busy_serial_port_is_one_clear_line_and_exit_2"],
+    ),
+    (
+        "a FIFO or `/dev/zero` is refused at once",
+        &[
+            "harness/tests/hardening.rs::no_file_input_is_read_whole_or_waited_on",
+            "host/src/files.rs::refuses_what_is_not_a_regular_file_without_blocking",
+            "harness/tests/adversarial.rs::checks_refuse_fifos_devices_and_huge_files",
+        ],
+    ),
+    (
+        "(4 MiB; 64 KiB for keys)",
+        &["harness/tests/readme_promises.rs::inputs_are_refused_one_byte_past_4_mib_and_keys_one_byte_past_64_kib"],
+    ),
+    (
+        "A profile expands to at most 256 files and 16 MiB of text",
+        &["harness/tests/adversarial.rs::an_include_bomb_is_refused_within_the_memory_limit"],
+    ),
+    (
+        "a symbolic link at an output's name is replaced, never written through",
+        &[
+            "harness/tests/adversarial.rs::regenerate_never_writes_through_a_symlink",
+            "harness/tests/adversarial.rs::outputs_never_write_through_or_remove_a_users_link",
+            "harness/src/outputs.rs::writes_replace_files_and_links_never_their_targets",
+        ],
+    ),
+    (
+        "Output files are always new files renamed into place",
+        &["harness/tests/hardening.rs::record_replaces_its_output_atomically"],
+    ),
+    (
+        "a write that fails (a full disk) leaves no temporary and names its file",
+        &["harness/tests/adversarial.rs::a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid"],
+    ),
+    (
+        "a second run there is refused (exit 2)",
+        &["harness/tests/adversarial.rs::fuzz_device_holds_its_folders_and_reports_on_sigterm"],
+    ),
+    ("(`NAME-2.gcl` instead)", &["harness/tests/adversarial.rs::a_finding_is_never_replaced_by_another_bugs"]),
+    ("Every duration argument is bounded", &["harness/tests/adversarial.rs::absurd_durations_are_refused_at_once"]),
+    // How conform reaches a verdict.
+    (
+        "name gross framing faults in one line on stderr as the run starts and at the top of every report",
+        &[
+            "harness/tests/conform_runner.rs::the_pre_flight_names_a_broken_prompt_first_in_the_console_and_in_every_report",
+        ],
+    ),
+    (
+        "× 2 + 50 ms (`--margin MS`), at least 500 ms on serial and 200 ms on TCP targets",
+        &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
+    ),
+    (
+        "reads or writes its EEPROM, keeps at least its golden `within`",
+        &["harness/src/deadline.rs::eeprom_steps_keep_their_golden_deadline"],
+    ),
+    (
+        "one that stopped short (a prompt without its space) is judged at once",
+        &["harness/src/replay.rs::a_short_answer_times_out_at_the_step_deadline"],
+    ),
+    (
+        "fails the case as a flood",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run",
+            "harness/src/replay.rs::a_hand_that_floods_an_open_elision_fails_with_a_bounded_prefix",
+        ],
+    ),
+    (
+        "`--fail-fast` and `--max-failures N` stop the run (exit 1)",
+        &["harness/tests/conform_runner.rs::fail_fast_and_max_failures_stop_the_run_and_list_the_rest_as_not_run"],
+    ),
+    (
+        "the rest of the cases are not run and the run exits 2",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_stops_answering_ends_the_run_early_with_exit_2",
+            "harness/tests/conform_mutants.rs::a_silent_hand_is_an_infrastructure_error_not_a_hang",
+        ],
+    ),
+    (
+        "a hand that answers only the first is not alive",
+        &["harness/tests/adversarial.rs::a_hand_answering_only_the_probe_ends_the_run"],
+    ),
+    (
+        "(\"the hand floods\")",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run",
+            "harness/tests/adversarial.rs::the_liveness_message_says_what_happened",
+        ],
+    ),
+    (
+        "Cases that did not run are SKIP, \"not run: ...\"",
+        &["harness/tests/conform_runner.rs::fail_fast_and_max_failures_stop_the_run_and_list_the_rest_as_not_run"],
+    ),
+    (
+        "lead with the failures grouped by where they part from their goldens",
+        &[
+            "harness/tests/conform_triage.rs::fget_reversed_leads_with_one_group_of_reordered_fget_answers",
+            "harness/tests/conform_triage.rs::the_largest_group_of_failures_names_the_clause_each_fault_breaks",
+        ],
+    ),
+    (
+        "A target that vanishes is reopened, drained and probed before the next case",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_restarts_is_drained_and_probed_before_the_next_case",
+            "harness/tests/conform_target_ends.rs::a_hand_that_vanishes_mid_run_is_an_error_not_a_clause",
+        ],
+    ),
+    (
+        "a line as the run starts, one every 10 s",
+        &["harness/tests/report_pages.rs::a_ci_log_gets_progress_lines_with_counts_and_the_end"],
+    ),
+    // Reading a report.
+    (
+        "is one self-contained file, no script, no network",
+        &[
+            "harness/tests/report_pages.rs::the_certify_and_passing_conform_pages_parse",
+            "harness/tests/report_pages.rs::host_pages_have_their_own_titles_tables_and_replay_commands",
+        ],
+    ),
+    (
+        "the exact command that runs it again",
+        &[
+            "harness/tests/report_pages.rs::the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage",
+            "harness/tests/report_pages.rs::host_pages_have_their_own_titles_tables_and_replay_commands",
+        ],
+    ),
+    (
+        "`5000: in range, the bytes are swapped`",
+        &["harness/tests/report_pages.rs::realtime_failures_are_decoded_field_by_field_and_plotted"],
+    ),
+    (
+        "Every RealTime case, passing or failing, is plotted block by block",
+        &["harness/tests/report_pages.rs::every_realtime_case_is_plotted_passing_ones_included"],
+    ),
+    (
+        "shows each motor's window against where it was",
+        &["harness/tests/report_pages.rs::a_motion_effect_failure_shows_the_window_it_missed"],
+    ),
+    (
+        "plots the seed's RealTime example program",
+        &["harness/tests/report_pages.rs::the_realtime_example_program_is_plotted_block_by_block_against_the_model"],
+    ),
+    (
+        "from new ones (JUnit skips them)",
+        &["harness/tests/fuzz_device.rs::a_baseline_keeps_known_findings_apart_from_new_ones"],
+    ),
+    (
+        "a `certify` page links every case to its transcript in the bundle",
+        &["harness/tests/report_pages.rs::the_certify_and_passing_conform_pages_parse"],
+    ),
+    (
+        "A JUnit failure's message is the one-line diff",
+        &["harness/tests/conform_runner.rs::a_failures_diff_numbers_its_step_as_its_message_does"],
+    ),
+    (
+        "Exit codes: 0 success, 1 conformance failures or mismatches, 2 usage or infrastructure",
+        &[
+            "harness/tests/transcript_cli.rs::replay_exits_0_on_a_match",
+            "harness/tests/transcript_cli.rs::replay_exits_1_and_shows_the_parting_byte_on_a_mismatch",
+            "harness/tests/transcript_cli.rs::replay_exits_2_on_a_file_that_does_not_parse",
+            "harness/tests/conform_mutants.rs::every_mutant_fails_gcl_conform_over_exec",
+        ],
+    ),
+    (
+        "a hand that does not answer the liveness probe is one",
+        &["harness/tests/conform_mutants.rs::a_silent_hand_is_an_infrastructure_error_not_a_hang"],
+    ),
+    // Fuzzing a hand.
+    (
+        "minimized by dropping and simplifying actions while the signature holds",
+        &["harness/tests/fuzz_device.rs::every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason"],
+    ),
+    (
+        "`prefix 123+4`, or a parameter set without effect, `MCV set without effect`",
+        &["harness/tests/fuzz_device.rs::a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation"],
+    ),
+    (
+        "corpora of several workers, machines or runs merge by copying",
+        &["harness/tests/fuzz_device.rs::the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus"],
+    ),
+    (
+        "`junit.xml` (one testcase per distinct finding) and `fuzz-device.html`",
+        &["harness/tests/fuzz_device.rs::the_report_validates_against_its_schema_with_one_junit_testcase_per_finding"],
+    ),
+    (
+        "`conform`: 0 no finding, 1 findings, 2 usage or infrastructure",
+        &["harness/tests/fuzz_device.rs::the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target"],
+    ),
+    (
+        "one that does not answer ends the campaign at once (exit 2)",
+        &["harness/tests/adversarial.rs::fuzz_device_ends_early_on_a_dead_hand"],
+    ),
+    (
+        "end the campaign with its findings and reports written",
+        &["harness/tests/adversarial.rs::fuzz_device_holds_its_folders_and_reports_on_sigterm"],
+    ),
+    (
+        "`--write-budget N` caps EEPROM writes (restores included) over the whole run",
+        &["harness/tests/readme_promises.rs::the_write_budget_caps_a_campaigns_eeprom_writes"],
+    ),
+    (
+        "no FSAVE or PSAVE at all unless `--write-budget N` allows N writes",
+        &["harness/tests/readme_promises.rs::serial_targets_are_fuzzed_without_eeprom_writes_and_by_one_worker"],
+    ),
+    (
+        "a target that took under a quarter of it is refused at once (exit 2, naming `--no abort-timing`)",
+        &[
+            "harness/tests/fuzz_device.rs::a_sim_in_fast_time_is_refused_unless_abort_timing_is_off",
+            "harness/tests/fuzz_device.rs::a_sim_in_real_time_passes_the_real_time_check",
+        ],
+    ),
+    (
+        "are judged again by a replay with the full quiet drain",
+        &[
+            "harness/tests/fuzz_device.rs::bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it",
+            "harness/tests/fuzz_device.rs::a_faulty_sim_over_a_pty_is_found_and_the_transcript_replays",
+        ],
+    ),
+    // Fuzzing a host library in CI.
+    (
+        "schema `reports/fuzz-host.schema.json`",
+        &["harness/tests/report_schema.rs::fuzz_host_campaigns_validate_against_their_schema"],
+    ),
+    (
+        "exit 0 with no finding, 1 with findings, 2 on a usage or infrastructure error",
+        &[
+            "harness/tests/fuzz_host.rs::the_cli_writes_minimized_bundles_that_replay_and_junit_reports",
+            "harness/tests/fuzz_host.rs::check_host_cli_compares_with_a_golden_and_exits_like_conform",
+        ],
+    ),
+    ("`--ok-exit-codes`, default `0,1`", &["harness/tests/adversarial.rs::ok_exit_codes_are_exit_codes"]),
+    (
+        "is a JUnit failure and a bundle folder",
+        &["harness/tests/fuzz_host.rs::the_cli_writes_minimized_bundles_that_replay_and_junit_reports"],
+    ),
+    (
+        "`gcl fuzz host --replay BUNDLE -- COMMAND` runs one again",
+        &["harness/tests/fuzz_host.rs::the_cli_writes_minimized_bundles_that_replay_and_junit_reports"],
+    ),
+    (
+        "fails the `host-golden` case when the host's bytes change",
+        &["harness/tests/fuzz_host.rs::check_host_cli_compares_with_a_golden_and_exits_like_conform"],
+    ),
+    (
+        "so a library that gives up after 10 or 15 s has no hang finding",
+        &["harness/tests/host_verdicts.rs::a_host_that_waits_out_its_own_timeout_is_not_hung"],
+    ),
+    (
+        "`hang in host.py:read_prompt`",
+        &["harness/tests/host_verdicts.rs::one_wait_without_a_deadline_is_one_hang_named_by_its_code"],
+    ),
+    (
+        "Sanitizers write their reports to a file of the run's own",
+        &["harness/tests/host_verdicts.rs::sanitizer_reports_are_read_from_a_log_file_per_run"],
+    ),
+    (
+        "named in a `leftover` finding (`check-host` fails `host-exits-cleanly`)",
+        &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
+    ),
+    (
+        "What the host writes is kept up to 1 MiB each way",
+        &["harness/tests/host_verdicts.rs::what_a_flooding_host_writes_is_capped"],
+    ),
+    (
+        "is an INFO note in the report and in `fuzz.json`'s `notes`",
+        &["harness/tests/host_verdicts.rs::a_reaction_to_the_hands_misbehaviour_is_a_note_not_a_finding"],
+    ),
+    (
+        "`restart` puts the hand back in supervisory mode, and the checker follows",
+        &["harness/tests/host_verdicts.rs::the_checker_follows_the_hand_through_a_restart"],
+    ),
+    (
+        "is a resync, never \"CR CR\"",
+        &["harness/tests/host_verdicts.rs::a_host_that_reconnects_and_resyncs_with_one_cr_passes"],
+    ),
+    (
+        "is flagged on a paced line at any speed",
+        &[
+            "harness/tests/host_verdicts.rs::a_host_that_pipelines_is_flagged_at_any_speed",
+            "harness/tests/fuzz_host.rs::waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered",
+        ],
+    ),
+    (
+        "is a `silent-wrong-value` finding",
+        &["harness/tests/host_verdicts.rs::a_host_that_trusts_a_short_block_gives_a_silent_wrong_value"],
+    ),
+    (
+        "is a hang for a host that waits without a deadline",
+        &["harness/tests/fuzz_host.rs::silence_hangs_a_host_without_a_deadline_only"],
+    ),
+    (
+        "A campaign is reproducible run for run for the same `--seed` and `--jobs`",
+        &["harness/tests/fuzz_host.rs::parallel_campaigns_are_reproducible_run_for_run"],
+    ),
+    (
+        "has fourteen small buggy hosts",
+        &[
+            "harness/tests/readme_promises.rs::there_are_fourteen_host_mutants",
+            "harness/tests/fuzz_host.rs::python_mutants_are_found_with_the_right_kind",
+            "harness/tests/fuzz_host.rs::c_mutants_are_found_with_the_right_kind",
+            "harness/tests/fuzz_host.rs::a_rust_mutant_panic_is_found",
+        ],
+    ),
+    // Host libraries in Python, C++ and CI.
+    (
+        "name, version and metadata from `harness/Cargo.toml`",
+        &["python/tests/test_wheel.py::test_name_version_and_metadata_come_from_cargo_toml"],
+    ),
+    (
+        "When the test body ends the hand grades everything the host code sent",
+        &[
+            "python/tests/test_wheel.py::test_a_hand_grades_its_session",
+            "python/tests/test_wheel.py::test_the_lf_bug_fails_every_test_naming_the_clause",
+        ],
+    ),
+    (
+        "`gcl_misbehaving_hand` runs the test once per seeded misbehaviour schedule",
+        &[
+            "python/tests/test_wheel.py::test_a_misbehaving_hand_plays_the_fuzzers_schedule",
+            "harness/tests/check_host_serve.rs::a_served_hand_plays_a_schedule_of_the_fuzzer",
+        ],
+    ),
+    (
+        "`cd examples/python-host && pytest` passes",
+        &["python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite"],
+    ),
+    (
+        "fails every test with `the host code broke GCL",
+        &["python/tests/test_wheel.py::test_the_lf_bug_fails_every_test_naming_the_clause"],
+    ),
+    (
+        "`misbehaviours that fired: truncate at answer 7",
+        &["python/tests/test_wheel.py::test_the_short_block_bug_fails_under_misbehaviour_with_what_fired"],
+    ),
+    (
+        "a test holds the recipes to them",
+        &["python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run"],
+    ),
+    (
+        "over a 4-way matrix",
+        &[
+            "python/tests/test_ci_recipes.py::test_github_runs_a_four_way_matrix_merged_with_junit_bundles_and_a_cached_corpus",
+            "python/tests/test_ci_recipes.py::test_gitlab_runs_a_four_way_matrix_merged_with_junit_bundles_and_a_cached_corpus",
+        ],
+    ),
+    (
+        "For `gcl fuzz host` the merged report equals that of one machine running the same runs",
+        &["harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs"],
+    ),
+    (
+        "findings deduplicated by signature (the first found stands, hits add up), corpus entries by content hash",
+        &["harness/tests/fuzz_merge.rs::device_shards_are_disjoint_and_merge_by_signature_and_content_hash"],
+    ),
+    // Added after a second reading.
+    (
+        "`bh8-262-4.4` (alias `bh8-262`), or a spec TOML file",
+        &[
+            "harness/tests/readme_promises.rs::the_built_in_profiles_and_the_alias_are_the_ones_named",
+            "harness/tests/hardening.rs::a_profile_file_is_simulated_as_written",
+        ],
+    ),
+    (
+        "replays a transcript and shows where the answer parts from the golden one",
+        &[
+            "harness/tests/transcript_cli.rs::replay_exits_1_and_shows_the_parting_byte_on_a_mismatch",
+            "harness/tests/transcript_mutants.rs::crlf_mismatch_shows_expected_and_actual_at_the_parting_byte",
+        ],
+    ),
+    (
+        "turns a script of host lines and blocks into a golden transcript",
+        &[
+            "harness/tests/transcript_cli.rs::a_recording_of_the_simulator_replays_against_it",
+            "harness/src/record.rs::records_lines_loops_blocks_and_banners",
+        ],
+    ),
+    (
+        "a certificate bundle with a SHA-256 manifest and an Ed25519 signature, its check, and a key pair",
+        &[
+            "harness/tests/conform_mutants.rs::certificates_are_written_and_tampering_is_caught",
+            "harness/tests/hardening.rs::signed_certificates_verify_and_forgeries_do_not",
+            "harness/src/certify.rs::generated_keys_load_back_and_are_never_overwritten",
+        ],
+    ),
+    (
+        "the same hand for whoever connects (a test suite), graded when stopped",
+        &["harness/tests/check_host_serve.rs::a_served_hand_grades_whoever_connected"],
+    ),
+    (
+        "(JSON + schema, JUnit XML, HTML; results.jsonl as cases end)",
+        &[
+            "harness/tests/conform_mutants.rs::the_unmutated_simulator_passes_over_exec_with_reports",
+            "harness/tests/report_schema.rs::reports_with_every_kind_of_verdict_validate_against_the_schema",
+        ],
+    ),
+    (
+        "`certify`, `fuzz device`, `fuzz host` and `check-host` print the same.",
+        &["harness/tests/readme_promises.rs::certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does"],
+    ),
+    (
+        "The hand runs in fast time",
+        &["harness/tests/readme_promises.rs::certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does"],
+    ),
+    (
+        "runs the campaign's run indices K-1, K-1+N, ...",
+        &[
+            "harness/src/fuzz/shard.rs::shards_partition_the_indices",
+            "harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs",
+        ],
+    ),
+    (
+        "A step whose answer has not started by its deadline waits up to 2 s",
+        &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
+    ),
+    (
+        "`--no eeprom`, `--no motion`, `--no realtime` and `--no abort-timing` refuse what a case may do",
+        &["harness/tests/readme_promises.rs::no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them"],
+    ),
+    (
+        "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`, default 60 s)",
+        &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
+    ),
+    (
+        "`--timeout-hang D` sets the hang timeout by hand and skips the measure",
+        &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
+    ),
+    (
+        "(`gcl fuzz host --help` lists them)",
+        &["harness/tests/readme_promises.rs::fuzz_host_help_lists_every_misbehaviour"],
+    ),
+    (
+        "after `--dead-after N` (default 5) timeouts in a row the hand is probed",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_that_stops_answering_ends_the_run_early_with_exit_2",
+            "harness/tests/readme_promises.rs::conform_dead_after_defaults_to_5",
+        ],
+    ),
+    (
+        "The in-process `sim` target keeps simulated time on both sides and runs them.",
+        &["harness/tests/conform_mutants.rs::the_unmutated_simulator_passes_every_case_of_every_profile"],
+    ),
+    (
+        "a re-signed or unsigned forgery verifies the same",
+        &["harness/tests/hardening.rs::signed_certificates_verify_and_forgeries_do_not"],
+    ),
+    (
+        "`harness/tests/hosts/py_trusts_short_block.py` is a host that trusts a block two bytes short",
+        &["harness/tests/host_verdicts.rs::a_host_that_trusts_a_short_block_gives_a_silent_wrong_value"],
+    ),
+    (
+        "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are killed), bundles and reports still written",
+        &["harness/tests/readme_promises.rs::sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports"],
+    ),
+    (
+        "is the same hand as a context manager (`hand.verdict` after it)",
+        &["python/tests/test_wheel.py::test_a_hand_grades_its_session"],
+    ),
+    ("Options come from a marker", &["python/tests/test_wheel.py::test_marker_options_reach_the_hand"]),
+];
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn collapse(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Whether `file` (a path from the repository root) holds a test function `name`: a Rust `fn`
+/// under `#[test]`, or a Python `def test_...`.
+fn has_test(file: &str, name: &str) -> Result<(), String> {
+    let text = std::fs::read_to_string(root().join(file)).map_err(|e| format!("{file}: {e}"))?;
+    if file.ends_with(".py") {
+        let def = format!("def {name}(");
+        return if name.starts_with("test_") && text.lines().any(|l| l.trim_start().starts_with(&def)) {
+            Ok(())
+        } else {
+            Err(format!("{file} has no test `{name}`"))
+        };
+    }
+    let lines: Vec<&str> = text.lines().collect();
+    let fun = format!("fn {name}(");
+    let at = lines.iter().position(|l| l.trim_start().starts_with(&fun)).ok_or(format!("{file} has no `fn {name}`"))?;
+    // The attributes and doc comments above it include `#[test]`.
+    let above = lines[..at].iter().rev().map(|l| l.trim()).take_while(|l| l.starts_with("#[") || l.starts_with("//"));
+    if above.clone().any(|l| l == "#[test]") { Ok(()) } else { Err(format!("{file}: `{name}` is not a #[test]")) }
+}
+
+#[test]
+fn every_promise_is_quoted_as_written_and_held_by_a_test() {
+    let readme = collapse(&std::fs::read_to_string(root().join("README.md")).unwrap());
+    let mut wrong = Vec::new();
+    for (fragment, tests) in PROMISES {
+        if !readme.contains(&collapse(fragment)) {
+            wrong.push(format!("README.md no longer says {fragment:?}"));
+        }
+        if tests.is_empty() {
+            wrong.push(format!("{fragment:?} names no test"));
+        }
+        for t in *tests {
+            let Some((file, name)) = t.split_once("::") else {
+                wrong.push(format!("{t}: not FILE::NAME"));
+                continue;
+            };
+            if let Err(e) = has_test(file, name) {
+                wrong.push(format!("{fragment:?}: {e}"));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// The checker itself fails on what it must catch: a reworded promise, a test that is gone, a
+/// helper that is not a test.
+#[test]
+fn the_table_check_catches_a_missing_test_and_a_non_test() {
+    assert!(has_test(SELF, "every_promise_is_quoted_as_written_and_held_by_a_test").is_ok());
+    assert!(has_test(SELF, "no_such_test").is_err());
+    assert!(has_test(SELF, "has_test").is_err(), "a helper is not a test");
+    assert!(has_test("python/tests/test_wheel.py", "test_no_such_test").is_err());
+}
+
+/// "`gcl sim --pty` and `--tcp` run in real time by default"; `--time fast` is "the default of
+/// `--stdio`". Judged by the fuzzer's own real-time check (a close from home, timed against
+/// the model): it passes the pty and TCP sims started without `--time` and refuses the stdio one.
+#[test]
+fn pty_and_tcp_sims_run_in_real_time_and_stdio_in_fast_time_by_default() {
+    let profile = Profile::builtin("bh8-262").unwrap();
+    for transport in [Transport::Pty, Transport::Tcp] {
+        let sim = SimProcess::start_exact(transport, &[]);
+        let o = FuzzOptions::new(sim.target().parse().unwrap(), profile.clone());
+        assert!(o.allowed.motion && o.allowed.abort_timing);
+        if let Err(e) = check_real_time(&o) {
+            panic!("gcl sim {transport:?} without --time is not in real time: {e}");
+        }
+    }
+    let stdio: Target = format!("exec:{GCL} sim --stdio").parse().unwrap();
+    let o = FuzzOptions::new(stdio, profile);
+    let r = check_real_time(&o);
+    assert!(matches!(r, Err(FuzzError::NotRealTime { .. })), "gcl sim --stdio without --time: {r:?}");
+}
+
+/// "never past their size limit (4 MiB; 64 KiB for keys)": one byte past the limit is refused
+/// as too large, a file at the limit is read (and then refused for what it holds).
+#[test]
+fn inputs_are_refused_one_byte_past_4_mib_and_keys_one_byte_past_64_kib() {
+    let dir = tempfile::tempdir().unwrap();
+    let sized = |name: &str, len: u64| {
+        let p = dir.path().join(name);
+        std::fs::File::create(&p).unwrap().set_len(len).unwrap();
+        p
+    };
+    let gcl = |args: &[&std::ffi::OsStr]| {
+        let out = Command::new(GCL).args(args).current_dir(dir.path()).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let too_large = "larger than the limit";
+    let os = |s: &'static str| std::ffi::OsStr::new(s);
+    for (len, refused) in [(4 << 20, false), ((4 << 20) + 1, true)] {
+        let p = sized(&format!("t{len}.gcl"), len);
+        let (code, err) = gcl(&[os("replay"), p.as_os_str(), os("--target"), os("sim")]);
+        assert_eq!(code, Some(2), "{err}");
+        assert_eq!(err.contains(too_large), refused, "a transcript of {len} bytes: {err}");
+    }
+    std::fs::create_dir(dir.path().join("cert")).unwrap();
+    for (len, refused) in [(64 << 10, false), ((64 << 10) + 1, true)] {
+        let p = sized(&format!("k{len}.pub"), len);
+        let (code, err) = gcl(&[os("certify"), os("--verify"), os("cert"), os("--pubkey"), p.as_os_str()]);
+        assert_eq!(code, Some(2), "{err}");
+        assert_eq!(err.contains(too_large), refused, "a key of {len} bytes: {err}");
+    }
+}
+
+fn sim_campaign(runs: u64) -> FuzzOptions {
+    let mut o = FuzzOptions::new(Target::Sim { profile: None }, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(runs);
+    o.seed = 1;
+    o
+}
+
+/// "`--write-budget N` caps EEPROM writes (restores included) over the whole run": the same
+/// campaign writes more than N times without a budget, and at most N with one.
+#[test]
+fn the_write_budget_caps_a_campaigns_eeprom_writes() {
+    let free = run(&sim_campaign(300), &|_| {}).unwrap();
+    assert!(free.eeprom_writes > 3, "the campaign must write for the cap to show: {}", free.eeprom_writes);
+    let mut o = sim_campaign(300);
+    o.write_budget = Some(3);
+    let capped = run(&o, &|_| {}).unwrap();
+    assert!(capped.eeprom_writes <= 3, "{} writes under --write-budget 3", capped.eeprom_writes);
+}
+
+/// "`serial:` targets are fuzzed conservatively by default: no FSAVE or PSAVE at all unless
+/// `--write-budget N` allows N writes ..., and one worker": a campaign over a pty (a `serial:`
+/// target) with the defaults writes nothing, and `--jobs 2` on a serial port is refused.
+#[test]
+fn serial_targets_are_fuzzed_without_eeprom_writes_and_by_one_worker() {
+    let sim = SimProcess::start(Transport::Pty, &["--unpaced"]);
+    let mut o = FuzzOptions::new(sim.target().parse().unwrap(), Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(40);
+    o.seed = 1;
+    o.allowed.abort_timing = false; // the sim is in fast time
+    let s = run(&o, &|_| {}).unwrap();
+    assert_eq!(s.eeprom_writes, 0, "a serial: campaign wrote the EEPROM by default");
+    let out = Command::new(GCL)
+        .args(["fuzz", "device", "--target", &sim.target(), "--jobs", "2", "--runs", "1", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("one worker"), "{err}");
+}
+
+/// "`harness/tests/host_mutants/` has fourteen small buggy hosts (Python with pyserial, C with
+/// AddressSanitizer, Rust)".
+#[test]
+fn there_are_fourteen_host_mutants() {
+    let dir = root().join("harness/tests/host_mutants");
+    let mut mutants: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| ["py_", "c_", "rs_"].iter().any(|p| n.starts_with(p)))
+        .collect();
+    mutants.sort();
+    assert_eq!(mutants.len(), 14, "{mutants:?}");
+    for lang in ["py_", "c_", "rs_"] {
+        assert!(mutants.iter().any(|m| m.starts_with(lang)), "no {lang} mutant: {mutants:?}");
+    }
+}
+
+/// "Profiles: `seed`, `bh8-262-4.3`, `bh8-262-4.4` (alias `bh8-262`)".
+#[test]
+fn the_built_in_profiles_and_the_alias_are_the_ones_named() {
+    for id in ["seed", "bh8-262-4.3", "bh8-262-4.4"] {
+        assert_eq!(Profile::builtin(id).unwrap().id, id);
+    }
+    assert_eq!(Profile::builtin("bh8-262").unwrap().id, "bh8-262-4.4");
+}
+
+/// "`certify`, `fuzz device`, `fuzz host` and `check-host` print the same" progress as
+/// `conform` in a CI log (stderr a pipe): a line with done/total as the run starts and one
+/// ending "(done)". `fuzz host`'s first line names the hand it runs: "time fast" by
+/// default.
+#[test]
+fn certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs: [(&str, &[&str]); 4] = [
+        ("gcl certify: ", &["certify", "--target", "sim:seed", "--only", "framing-*", "--partial", "--out", "cert"]),
+        ("gcl fuzz device: ", &["fuzz", "device", "--target", "sim", "--runs", "5"]),
+        ("gcl fuzz host: ", &["fuzz", "host", "--runs", "2", "--timeout-hang", "3s", "--", "true"]),
+        ("gcl check-host: ", &["check-host", "--", "true"]),
+    ];
+    for (prefix, args) in runs {
+        let out = Command::new(GCL).args(args).current_dir(dir.path()).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with(prefix)).collect();
+        let first = lines.iter().find(|l| l.contains("/")).unwrap_or_else(|| panic!("{args:?}: no progress: {err}"));
+        assert!(first.starts_with(&format!("{prefix}1/")) && first.contains(" elapsed"), "{args:?}: {err}");
+        assert!(lines.iter().any(|l| l.ends_with("(done)")), "{args:?}: no last line: {err}");
+        if prefix == "gcl fuzz host: " {
+            assert!(lines[0].contains("time fast"), "fuzz host's hand runs in fast time by default: {err}");
+        }
+    }
+}
+
+/// "`--no eeprom`, `--no motion`, `--no realtime` and `--no abort-timing` refuse what a case may
+/// do": the same campaign reaches motion, RealTime, EEPROM writes and ^C mid-motion with
+/// everything allowed, and none of them with each refused.
+#[test]
+fn no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them() {
+    let moved = |f: &std::collections::BTreeSet<String>| f.contains("mode:Idle->Busy");
+    let looped = |f: &std::collections::BTreeSet<String>| f.contains("mode:Idle->Loop");
+    let all = run(&sim_campaign(300), &|_| {}).unwrap();
+    assert!(moved(&all.features) && looped(&all.features), "{:?}", all.features);
+    assert!(all.features.contains("abort:mid-motion") && all.eeprom_writes > 0, "{:?}", all.features);
+    let mut o = sim_campaign(300);
+    o.allowed.motion = false;
+    o.allowed.realtime = false;
+    o.allowed.eeprom = false;
+    o.write_budget = Some(0);
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!moved(&s.features) && !looped(&s.features), "{:?}", s.features);
+    assert_eq!(s.eeprom_writes, 0);
+    let mut o = sim_campaign(300);
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(!s.features.contains("abort:mid-motion"), "{:?}", s.features);
+}
+
+/// "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`,
+/// default 60 s)"; "`--timeout-hang D` sets the hang timeout by hand and skips the measure".
+/// A host that never waits measures no timeout: its hang timeout is the floor, and `fuzz.json`
+/// keeps the calibration; with `--timeout-hang` there is none.
+#[test]
+fn fuzz_host_measures_its_hang_timeout_unless_given_one() {
+    use gcl_harness::fuzz::host::hang_timeout;
+    use std::time::Duration;
+    let (floor, budget) = (Duration::from_secs(3), Duration::from_secs(60));
+    assert_eq!(hang_timeout(Some(Duration::from_secs(10)), floor, budget), Duration::from_secs(22));
+    assert_eq!(hang_timeout(Some(Duration::from_millis(200)), floor, budget), floor);
+    assert_eq!(hang_timeout(Some(Duration::from_secs(40)), floor, budget), budget);
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = |extra: &[&str], report: &str| -> serde_json::Value {
+        let out = Command::new(GCL)
+            .args(["fuzz", "host", "--runs", "1", "--report", report])
+            .args(extra)
+            .args(["--", "true"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap()
+    };
+    let measured = campaign(&[], "measured");
+    let cal = &measured["calibration"];
+    assert!(cal["runs"].as_u64().is_some_and(|n| n > 0), "the measure ran: {cal}");
+    assert_eq!(cal["timeout_hang_ms"], 3000, "at least 3 s: {cal}");
+    let given = campaign(&["--timeout-hang", "5s"], "given");
+    assert!(given.get("calibration").is_none_or(|c| c.is_null()), "no measure with --timeout-hang: {given}");
+}
+
+/// "`--ops delay-above,truncate=5` restricts and weights the misbehaviours (`gcl fuzz host
+/// --help` lists them)": every misbehaviour is in the help, with its default weight.
+#[test]
+fn fuzz_host_help_lists_every_misbehaviour() {
+    use gcl_harness::sim::misbehave::Operator;
+    let out = Command::new(GCL).args(["fuzz", "host", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    for op in Operator::ALL {
+        let listed = help.lines().any(|l| {
+            let mut w = l.split_whitespace();
+            l.starts_with("  ") && w.next() == Some(op.name()) && w.next() == Some(&op.default_weight().to_string())
+        });
+        assert!(listed, "`gcl fuzz host --help` does not list {} (weight {})", op.name(), op.default_weight());
+    }
+}
+
+/// "after `--dead-after N` (default 5) timeouts in a row the hand is probed": the mechanism is
+/// `conform_runner.rs`'s (with N = 2, to stay quick); the default is what `gcl conform --help`
+/// gives the option (a run that waits out five timeouts costs some 16 s).
+#[test]
+fn conform_dead_after_defaults_to_5() {
+    let out = Command::new(GCL).args(["conform", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    let option = help.split("--dead-after <N>").nth(1).expect("conform --help has --dead-after");
+    // Its own lines only: up to the next option.
+    let default =
+        option.lines().skip(1).map(str::trim).take_while(|l| !l.starts_with('-')).find(|l| l.starts_with("[default: "));
+    assert_eq!(default, Some("[default: 5]"), "{option}");
+}
+
+/// "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are
+/// killed), bundles and reports still written": the host sleeps for ten minutes; the campaign
+/// ends without waiting for it, the host is gone and the reports are there. (The one minute
+/// allowed is a guard against a hang, not a measure.)
+#[test]
+fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
+    use nix::sys::signal::{Signal, kill};
+    use nix::unistd::Pid;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let mut child = Command::new(GCL)
+        .args(["fuzz", "host", "--duration", "1h", "--timeout-hang", "3s", "--report", "rep", "--out", "out"])
+        .args(["--", "sh", "-c", "echo $$ >> pids; exec sleep 600"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let pids = dir.path().join("pids");
+    let start = Instant::now();
+    while std::fs::read_to_string(&pids).map_or(true, |p| p.trim().is_empty()) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no host started");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    kill(Pid::from_raw(child.id() as i32), Signal::SIGTERM).unwrap();
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("gcl fuzz host did not end on SIGTERM: it waits for its host");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(status.code(), Some(0), "no finding yet: {status}");
+    for pid in std::fs::read_to_string(&pids).unwrap().split_whitespace() {
+        let pid = Pid::from_raw(pid.parse().unwrap());
+        assert!(kill(pid, None).is_err(), "host {pid} left running");
+    }
+    for f in ["fuzz.json", "junit.xml", "report.json", "report.html"] {
+        assert!(dir.path().join("rep").join(f).is_file(), "{f} not written");
+    }
+}
