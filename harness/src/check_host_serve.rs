@@ -17,7 +17,7 @@ use std::time::Instant;
 use gcl_model::{Fault, Profile};
 
 use crate::fuzz::host::session::{Log, Tap};
-use crate::fuzz::host::{HostClause, HostEnd, RunError, RunResult, Transport};
+use crate::fuzz::host::{HostEnd, RunError, RunResult, Transport};
 use crate::sim::misbehave::Schedule;
 use crate::sim::{Engine, Pace, SimOptions, TimeMode, pty::Pty, stop_pair, tcp::TcpServer};
 
@@ -85,14 +85,11 @@ pub fn serve(
         }
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's tap panicked"))?;
-    if !log.hung_up {
-        log.checker.finish();
-    }
-    let mut violations = log.checker.violations().to_vec();
     // After a hang-up the host cannot leave cleanly.
-    if log.hung_up {
-        violations.retain(|v| v.clause != HostClause::LeavesCleanly);
+    if !log.hung_up {
+        log.checker.finish(true);
     }
+    let violations = log.checker.violations().to_vec();
     Ok(RunResult {
         end: HostEnd::Exit(0),
         stack: None,

@@ -434,7 +434,7 @@ fn what_a_flooding_host_writes_is_capped() {
     };
     let mut err = String::new();
     let _ = std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err);
-    // 1: the host's never-ended line fails host-leaves-cleanly; no abort, no signal.
+    // 1: the host's never-ended line fails host-line-ending; no abort, no signal.
     assert_eq!(status.code(), Some(1), "{err}");
     let text = std::fs::read_to_string(&session).unwrap();
     assert!(text.len() < 3 << 20, "{} bytes kept", text.len());

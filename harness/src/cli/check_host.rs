@@ -18,11 +18,11 @@ pub(super) const CHECK_HANG_DEFAULT: std::time::Duration = std::time::Duration::
 /// Arguments of `gcl check-host`.
 #[derive(Debug, clap::Args)]
 #[command(after_long_help = "\
-Clauses: host-line-ending (lines end in a single CR, never LF), host-valid-commands (command
+Clauses: host-line-ending (lines, the last one too, end in a single CR, never LF), host-valid-commands (command
 words, prefixes and values valid for the profile), host-waits-for-answer (nothing sent while an
 answer is still coming, except ^C), host-realtime-blocks (control blocks of the layout's size
-with a valid header), host-leaves-cleanly (the loop left and the last line ended before the
-host goes), host-exits-cleanly (no crash, no hang, an accepted exit code); with --golden,
+with a valid header), host-leaves-cleanly (the RealTime loop left before the host
+goes), host-exits-cleanly (no crash, no hang, an accepted exit code); with --golden,
 host-golden (the host sends exactly the golden transcript's `send` bytes).
 
 Exit codes: 0 every clause passes, 1 a clause fails, 2 usage or infrastructure.

@@ -25,7 +25,7 @@ pub enum HostClause {
     WaitsForAnswer,
     /// RealTime blocks have the size the layout demands and a valid header.
     RealtimeBlocks,
-    /// The host leaves the RealTime loop (and its last line) cleanly before it goes.
+    /// The host leaves the RealTime loop before it goes.
     LeavesCleanly,
     /// The host program ends by itself with an accepted exit code, without crashing.
     ExitsCleanly,
@@ -61,7 +61,7 @@ impl HostClause {
             HostClause::ValidCommands => "command words, prefixes and values are valid for the profile",
             HostClause::WaitsForAnswer => "nothing is sent while an answer is still coming, except ^C",
             HostClause::RealtimeBlocks => "RealTime control blocks have the layout's size and a valid header",
-            HostClause::LeavesCleanly => "the host leaves the RealTime loop and ends its last line before it goes",
+            HostClause::LeavesCleanly => "the host leaves the RealTime loop before it goes",
             HostClause::ExitsCleanly => "the host exits by itself with an accepted code, without a crash",
         }
     }
@@ -164,6 +164,18 @@ pub struct HostChecker {
     block_due: usize,
     /// In RealTime: the size of that block.
     block_size: usize,
+    /// In RealTime: how many bytes of the block under way came in the host's earlier writes
+    /// (`Some` once the block spans a write boundary), and, once it is complete, of the last
+    /// block: a host that waits for feedback after a block too short for the layout completes
+    /// it with the start of its next block.
+    block_split: Option<usize>,
+    /// A block that spanned a write boundary was completed by the write being judged now.
+    split_completed_now: bool,
+    /// The host broke the RealTime block framing (reported once, as its cause): the hand and
+    /// the host no longer agree where blocks begin, and what the host sends until the port is
+    /// reopened or the hand restarts is judged no further (its later "early" blocks and bad
+    /// headers are that one bug's echoes, not new ones).
+    desynced: bool,
     /// The mode the hand was in after its last answer.
     mode: Mode,
     /// Command words the host sent, in order.
@@ -187,6 +199,9 @@ impl HostChecker {
             last_command: None,
             block_due: 0,
             block_size: 0,
+            block_split: None,
+            split_completed_now: false,
+            desynced: false,
             mode: Mode::Idle,
             commands: Vec::new(),
             violations: Vec::new(),
@@ -246,6 +261,10 @@ impl HostChecker {
     /// pipelining, or, once the hand put it out of step, one answer early through the
     /// hand's fault (a note, under its own kind).
     fn early(&mut self, kind: &str, detail: String) {
+        if self.desynced {
+            // The host's own broken framing, reported once, put it out of step.
+            return;
+        }
         if !self.out_of_step {
             return self.violate(HostClause::WaitsForAnswer, kind, detail);
         }
@@ -274,6 +293,7 @@ impl HostChecker {
     /// Host bytes as the hand reads them.
     pub fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
         let mut looping = device.mode() == Mode::Loop || self.mode == Mode::Loop;
+        self.split_completed_now = false;
         for &b in bytes {
             // Sending while a broken answer is still coming gives up on it: its prompt, if it
             // comes, comes late.
@@ -288,6 +308,9 @@ impl HostChecker {
             self.prev = Some(b);
             // Only the first byte after the look: later ones follow it.
             self.unread = false;
+        }
+        if looping && self.block_due > 0 && self.block_split.is_none() {
+            self.block_split = Some(self.block_size - self.block_due);
         }
     }
 
@@ -367,9 +390,10 @@ impl HostChecker {
     fn realtime_byte(&mut self, device: &Device, b: u8, looping: &mut bool) {
         if self.block_due > 0 {
             self.block_due -= 1;
+            self.split_completed_now = self.block_due == 0 && self.block_split.is_some();
             return;
         }
-        if self.sends_early() && b != self.profile.framing.abort {
+        if self.sends_early() && b != self.profile.framing.abort && !self.desynced && !self.short_block() {
             self.early(
                 "block before feedback",
                 format!("header \"{}\" sent before the answer to the last block", esc(&[b])),
@@ -385,6 +409,7 @@ impl HostChecker {
             }
             Some(h) => {
                 let size = device.rt_layout().map_or(1, |l| l.control().size());
+                self.block_split = None;
                 if h.has_data() {
                     self.block_due = size.saturating_sub(1);
                     self.block_size = size;
@@ -392,16 +417,47 @@ impl HostChecker {
                 self.pending = true;
                 self.broken = false;
             }
-            None => self.violate(
-                HostClause::RealtimeBlocks,
-                "bad header",
-                format!(
-                    "byte \"{}\" where a control block header was due (the block before had {} bytes)",
-                    esc(&[b]),
-                    self.block_size
-                ),
-            ),
+            None if self.desynced => {}
+            None => {
+                if !self.short_block() {
+                    self.violate(
+                        HostClause::RealtimeBlocks,
+                        "bad header",
+                        format!(
+                            "byte \"{}\" where a control block header was due (the block before had {} bytes)",
+                            esc(&[b]),
+                            self.block_size
+                        ),
+                    );
+                }
+                self.desynced = true;
+            }
         }
+    }
+
+    /// When the last block was completed by the start of the write being judged, which goes
+    /// on, and the framing now breaks in it (an early block, a bad header), the host waited
+    /// for feedback after a block too short for the layout and then sent its next block: that
+    /// is the one violation, and the framing is lost from here on. (A host that writes a block
+    /// in two parts and then pipelines the next block in a third write is not taken for it:
+    /// the break is not in the write that completed the block.) Whether it was so (and
+    /// reported).
+    fn short_block(&mut self) -> bool {
+        let Some(got) = self.block_split.filter(|_| self.split_completed_now) else {
+            return false;
+        };
+        self.violate(
+            HostClause::RealtimeBlocks,
+            "short block",
+            format!(
+                "a write of the host ended {got} bytes into a control block of {} (the layout's size), and its next \
+                 write completed that block and went on: the host took {got} bytes for a whole block and waited for \
+                 feedback that does not come until the block is whole",
+                self.block_size
+            ),
+        );
+        self.desynced = true;
+        true
     }
 
     /// The hand's answer as it is queued for the line (after any misbehaviour); `misbehaved`
@@ -464,6 +520,7 @@ impl HostChecker {
     /// fresh start, not the second of two.
     pub fn connection(&mut self, _open: bool) {
         self.prev = None;
+        self.desynced = false;
     }
 
     /// The hand restarted while answering (the answer just queued ends with its power-up
@@ -473,20 +530,18 @@ impl HostChecker {
         self.mode = Mode::Idle;
         self.block_due = 0;
         self.block_size = 0;
+        self.block_split = None;
+        self.desynced = false;
         self.line.clear();
         self.misbehaved = true;
         self.broken = true;
     }
 
-    /// The host went away: grades how it left.
-    pub fn finish(&mut self) {
-        if self.mode == Mode::Loop {
-            self.violate(
-                HostClause::LeavesCleanly,
-                "left in RealTime",
-                "the host went away with the hand in its RealTime loop".into(),
-            );
-        }
+    /// The host is gone: grades how it left when it `left` by itself (a host killed for
+    /// hanging did not leave, and a line or loop it was in the middle of says nothing of
+    /// how it leaves). A control block it left short is graded either way: a host that
+    /// waits for feedback after a short block waits for ever.
+    pub fn finish(&mut self, left: bool) {
         if self.block_due > 0 {
             self.violate(
                 HostClause::RealtimeBlocks,
@@ -494,9 +549,20 @@ impl HostChecker {
                 format!("the last control block lacks {} of its {} bytes", self.block_due, self.block_size),
             );
         }
-        if !self.line.is_empty() {
+        if !left {
+            return;
+        }
+        if self.mode == Mode::Loop {
             self.violate(
                 HostClause::LeavesCleanly,
+                "left in RealTime",
+                "the host went away with the hand in its RealTime loop".into(),
+            );
+        }
+        if !self.line.is_empty() {
+            // A line must end in CR: the last one too (framing, not RealTime).
+            self.violate(
+                HostClause::LineEnding,
                 "unterminated line",
                 format!("\"{}\" never ended with CR", esc(&self.line)),
             );
@@ -525,7 +591,7 @@ mod tests {
             c.hand_bytes(&d, &out, false);
             c.delivered();
         }
-        c.finish();
+        c.finish(true);
         c.violations().iter().map(|v| v.clause).collect()
     }
 
@@ -536,13 +602,50 @@ mod tests {
 
     #[test]
     fn each_clause_is_caught() {
-        assert_eq!(run(&[b"FGET DP\n"]), vec![HostClause::LineEnding, HostClause::LeavesCleanly]);
+        assert_eq!(run(&[b"FGET DP\n"]), vec![HostClause::LineEnding, HostClause::LineEnding]);
         assert_eq!(run(&[b"FGET DP\r\n"]), vec![HostClause::LineEnding]);
         assert_eq!(run(&[b"FGET QQ\r"]), vec![HostClause::ValidCommands]);
         assert_eq!(run(&[b"FGET DP\rFGET DP\r"]), vec![HostClause::WaitsForAnswer]);
-        assert_eq!(run(&[b"FGET DP"]), vec![HostClause::LeavesCleanly]);
+        assert_eq!(run(&[b"FGET DP"]), vec![HostClause::LineEnding]);
+        assert_eq!(run(&[b"HI\r", b"1LOOP\r"]), vec![HostClause::LeavesCleanly]);
         // ^C may interrupt anything.
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+
+    /// RealTime over motors 1-3 of seed after HI, with velocity control: a control block is a header
+    /// and three velocity bytes.
+    const RT: &[&[u8]] = &[b"HI\r", b"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\r", b"123LOOP\r"];
+
+    fn kinds(host: &[&[u8]]) -> Vec<String> {
+        let p = Profile::builtin("seed").unwrap();
+        let mut d = Device::with_profile(p.clone());
+        d.take_output();
+        let mut c = HostChecker::new(p);
+        for chunk in RT.iter().chain(host) {
+            c.host_bytes(&d, chunk);
+            d.handle_input(d.now(), chunk);
+            d.run_until_idle(std::time::Duration::from_secs(100));
+            let out = d.take_output();
+            c.hand_bytes(&d, &out, false);
+            c.delivered();
+        }
+        c.finish(true);
+        c.violations().iter().map(|v| format!("{}: {}", v.clause.id(), v.kind)).collect()
+    }
+
+    #[test]
+    fn a_block_one_byte_short_is_one_violation_named_for_it() {
+        let short: &[u8] = b"C\x14\x14";
+        assert_eq!(kinds(&[short, short, short, short, b"\x03"]), vec!["realtime-blocks: short block"]);
+        // The layout's size is no violation, and pipelining whole blocks stays what it is.
+        let whole: &[u8] = b"C\x14\x14\x14";
+        assert_eq!(kinds(&[whole, whole, whole, b"\x03"]), Vec::<String>::new());
+        assert_eq!(kinds(&[b"C\x14\x14\x14C\x14\x14\x14", b"\x03"]), vec!["waits-for-answer: block before feedback"]);
+        // A block written in two parts, then the next one pipelined in a write of its own.
+        assert_eq!(
+            kinds(&[b"C\x14", b"\x14\x14", b"C\x14\x14\x14C\x14\x14\x14", b"\x03"]),
+            vec!["waits-for-answer: block before feedback"]
+        );
     }
 
     const ANSWER: &[u8] = b"FGET P\n\r0 0 0 0\n\r=> ";

@@ -714,14 +714,11 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         return Err(RunError::Cancelled);
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
+    // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave.
     if !log.hung_up {
-        log.checker.finish();
+        log.checker.finish(!matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
     }
-    let mut violations = log.checker.violations().to_vec();
-    // After a hang-up the host cannot leave cleanly; and a host killed for hanging did not leave.
-    if log.hung_up || matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)) {
-        violations.retain(|v| v.clause != super::check::HostClause::LeavesCleanly);
-    }
+    let violations = log.checker.violations().to_vec();
     let gave_up_after = log.silenced_at.and_then(|s| {
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
