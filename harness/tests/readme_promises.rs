@@ -443,9 +443,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::a_host_that_reconnects_and_resyncs_with_one_cr_passes"],
     ),
     (
-        "is flagged on a paced line at any speed",
+        "is flagged at any speed, paced or not, fast or real time",
         &[
             "harness/tests/host_verdicts.rs::a_host_that_pipelines_is_flagged_at_any_speed",
+            "harness/tests/host_verdicts.rs::a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp",
             "harness/tests/fuzz_host.rs::waiting_for_the_answer_is_judged_when_its_last_byte_is_delivered",
         ],
     ),
