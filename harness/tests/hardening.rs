@@ -128,6 +128,44 @@ fn only_matching_nothing_is_a_usage_error_and_a_run_of_nothing_is_no_pass() {
     assert!(r.stdout.contains("no case ran") && r.stdout.contains("result: FAIL"), "{}", r.stdout);
 }
 
+/// A firmware team's hand already differs: `--write-known-failures` keeps today's failures as
+/// the baseline, with which the same hand passes, a hand with one more bug fails on that bug
+/// alone, and a hand where a listed failure went away fails as XPASS (the list cannot go
+/// stale).
+#[test]
+fn a_run_writes_the_known_failures_its_next_run_takes() {
+    let dir = tempfile::tempdir().unwrap();
+    let known = dir.path().join("known.toml");
+    let conform = |faults: &[&str], extra: &[&str]| {
+        let mut a = vec!["conform", "--target", "sim:seed", "--quiet"];
+        for f in faults {
+            a.extend(["--fault", f]);
+        }
+        a.extend(extra);
+        gcl(&a)
+    };
+    let r = conform(&["fget-reversed"], &["--write-known-failures", s(&known)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    let text = std::fs::read_to_string(&known).unwrap();
+    let listed = text.matches("[[failure]]").count();
+    assert!(listed > 100, "{listed} failures listed");
+    assert!(r.stdout.contains(&format!("({listed} known failures)")), "{}", r.stdout);
+    assert!(text.contains("case = \"framing-echo\"") && text.contains("profile = \"seed\""), "{text}");
+    // The same hand: every failure is known.
+    let r = conform(&["fget-reversed"], &["--known-failures", s(&known)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    // One more bug: the run fails, and only on cases that were passing.
+    let r = conform(&["fget-reversed", "lfap-little-endian"], &["--known-failures", s(&known)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    let failing: Vec<&str> = r.stdout.lines().filter(|l| l.trim_start().starts_with("FAIL ")).collect();
+    assert!(!failing.is_empty() && failing.iter().all(|l| l.contains("rt-")), "{}", r.stdout);
+    assert!(r.stdout.contains("(LFAP)"), "{}", r.stdout);
+    // The listed bug fixed: the listed cases pass and fail the run as XPASS.
+    let r = conform(&[], &["--known-failures", s(&known)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("XPASS"), "{}", r.stdout);
+}
+
 #[test]
 fn a_known_failure_that_matches_nothing_is_reported_and_recorded() {
     let dir = tempfile::tempdir().unwrap();

@@ -443,6 +443,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::a_host_that_reconnects_and_resyncs_with_one_cr_passes"],
     ),
     (
+        "writes the run's failing cases as such a list",
+        &["harness/tests/hardening.rs::a_run_writes_the_known_failures_its_next_run_takes"],
+    ),
+    (
         "is flagged at any speed, paced or not, fast or real time",
         &[
             "harness/tests/host_verdicts.rs::a_host_that_pipelines_is_flagged_at_any_speed",

@@ -111,6 +111,12 @@ pub struct Args {
     /// Print only the summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write every case that failed, timed out or errored (and every XFAIL) to FILE as a
+    /// known-failures list, each with its message as the reason: a baseline of a hand that
+    /// already differs, for `--known-failures FILE` on its next build, where only what is new
+    /// fails the run (and a listed case that now passes fails it as XPASS).
+    #[arg(long, value_name = "FILE")]
+    pub write_known_failures: Option<PathBuf>,
 }
 
 /// `--level`: the command line's names for a [`LevelFilter`].
@@ -413,6 +419,34 @@ pauses); took {:.3} s; ratio {:.3}\n",
     s
 }
 
+/// A known-failures file (the `--known-failures` format) listing every case of `report` that
+/// failed, timed out, errored or was a known failure, by exact id and profile, with its
+/// message as the reason; and how many it lists.
+fn known_failures_text(report: &RunReport) -> (String, usize) {
+    let q = |s: &str| toml::Value::String(s.to_string()).to_string();
+    let mut text = format!(
+        "# Known failures of {} (profile {}), written by `gcl conform --write-known-failures` on {}.\n\
+         # Pass it as --known-failures: these cases are XFAIL, and one that passes again is XPASS.\n",
+        report.target, report.profile, report.started
+    );
+    let mut n = 0;
+    for c in &report.cases {
+        if !matches!(c.verdict, Verdict::Fail | Verdict::Timeout | Verdict::Error | Verdict::Xfail) {
+            continue;
+        }
+        let why = c.message.as_deref().and_then(|m| m.lines().next()).unwrap_or("failed");
+        let why = why.strip_prefix("known failure: ").unwrap_or(why);
+        text.push_str(&format!(
+            "\n[[failure]]\ncase = {}\nprofile = {}\nreason = {}\n",
+            q(&c.id),
+            q(&report.profile),
+            q(&format!("{}: {why}", if c.verdict == Verdict::Xfail { "FAIL" } else { c.verdict.as_str() }))
+        ));
+        n += 1;
+    }
+    (text, n)
+}
+
 /// Runs `gcl conform`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(&args.suite, args.level.into(), false)?;
@@ -428,6 +462,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         for f in files {
             writeln!(w, "  wrote {}", f.display())?;
         }
+    }
+    if let Some(path) = &args.write_known_failures {
+        let (text, n) = known_failures_text(&out.report);
+        gcl_harness::outputs::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        writeln!(w, "  wrote {} ({n} known failure{})", path.display(), if n == 1 { "" } else { "s" })?;
     }
     if let Some(st) = &out.report.stopped
         && st.cause != StopCause::MaxFailures
