@@ -578,7 +578,9 @@ fn esc(b: &[u8]) -> String {
 mod tests {
     use super::*;
 
-    fn run(host: &[&[u8]]) -> Vec<HostClause> {
+    /// A seed hand's checker after the host wrote these chunks, each answered and delivered
+    /// before the next, and left by itself.
+    fn checked<'a>(host: impl IntoIterator<Item = &'a &'a [u8]>) -> HostChecker {
         let p = Profile::builtin("seed").unwrap();
         let mut d = Device::with_profile(p.clone());
         d.take_output();
@@ -592,7 +594,11 @@ mod tests {
             c.delivered();
         }
         c.finish(true);
-        c.violations().iter().map(|v| v.clause).collect()
+        c
+    }
+
+    fn run(host: &[&[u8]]) -> Vec<HostClause> {
+        checked(host).violations().iter().map(|v| v.clause).collect()
     }
 
     #[test]
@@ -617,20 +623,7 @@ mod tests {
     const RT: &[&[u8]] = &[b"HI\r", b"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\r", b"123LOOP\r"];
 
     fn kinds(host: &[&[u8]]) -> Vec<String> {
-        let p = Profile::builtin("seed").unwrap();
-        let mut d = Device::with_profile(p.clone());
-        d.take_output();
-        let mut c = HostChecker::new(p);
-        for chunk in RT.iter().chain(host) {
-            c.host_bytes(&d, chunk);
-            d.handle_input(d.now(), chunk);
-            d.run_until_idle(std::time::Duration::from_secs(100));
-            let out = d.take_output();
-            c.hand_bytes(&d, &out, false);
-            c.delivered();
-        }
-        c.finish(true);
-        c.violations().iter().map(|v| format!("{}: {}", v.clause.id(), v.kind)).collect()
+        checked(RT.iter().chain(host)).violations().iter().map(|v| format!("{}: {}", v.clause.id(), v.kind)).collect()
     }
 
     #[test]
