@@ -480,3 +480,15 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
     assert_eq!(gcl(&["fuzz", "host", "--ops", "nonsense", "--", "true"]).0, 2);
     assert_eq!(gcl(&["fuzz", "host", "--", "/nonexistent/host"]).0, 2);
 }
+
+/// A host that never talks to the hand (it could not open the port it was given, and exits
+/// with an accepted code) has no finding, but the campaign says it tried little or nothing
+/// instead of printing host timeouts it never measured; a host that talks gets its timeouts.
+#[test]
+fn a_host_that_never_takes_an_answer_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, _, err) = gcl(&["fuzz", "host", "--runs", "2", "--out", dir.path().to_str().unwrap(), "--", "true"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("warning: host timeouts not measured: the host took no answer"), "{err}");
+    assert!(!err.contains("host timeouts (silence at"), "{err}");
+}

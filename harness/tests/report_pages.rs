@@ -272,20 +272,12 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
     let dir = tempfile::tempdir().unwrap();
     let rep = dir.path().join("rep");
     let found = dir.path().join("found");
-    let o = gcl(&[
-        "fuzz",
-        "device",
-        "--target",
-        "sim",
-        "--fault",
-        "fget-reversed",
-        "--runs",
-        "150",
-        "--out",
-        found.to_str().unwrap(),
-        "--report",
-        rep.to_str().unwrap(),
-    ]);
+    let fuzz = |more: &[&str]| {
+        let mut a = vec!["fuzz", "device", "--target", "sim", "--fault", "fget-reversed", "--runs", "150"];
+        a.extend(more);
+        gcl(&a)
+    };
+    let o = fuzz(&["--out", found.to_str().unwrap(), "--report", rep.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
     let html = page(&rep.join("fuzz-device.html"), "gcl fuzz device bh8-262-4.4 on sim: FINDINGS");
     let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
@@ -311,20 +303,7 @@ fn the_fuzz_device_page_indexes_findings_with_replay_commands_and_plots_coverage
     // Again with those findings as the baseline: the same bug is known, not new. The page
     // says so first and lists the findings apart with why; JUnit skips them instead of failing.
     let rep2 = dir.path().join("rep2");
-    let o = gcl(&[
-        "fuzz",
-        "device",
-        "--target",
-        "sim",
-        "--fault",
-        "fget-reversed",
-        "--runs",
-        "150",
-        "--baseline",
-        found.to_str().unwrap(),
-        "--report",
-        rep2.to_str().unwrap(),
-    ]);
+    let o = fuzz(&["--baseline", found.to_str().unwrap(), "--report", rep2.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
     let html = page(&rep2.join("fuzz-device.html"), "gcl fuzz device bh8-262-4.4 on sim: NO NEW FINDING");
     let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();

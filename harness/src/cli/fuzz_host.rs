@@ -298,13 +298,23 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 None => format!("answer {a}: waited past {} s", CALIBRATION_CAP.as_secs()),
             })
             .collect();
-        eprintln!(
-            "host timeouts (silence at {}): {}; hang timeout {:.1} s ({} calibration runs)",
-            points.join(", "),
-            c.host_timeout_ms.map_or("none seen".to_string(), |ms| format!("{:.1} s", ms as f64 / 1000.0)),
-            c.timeout_hang_ms as f64 / 1000.0,
-            c.runs
-        );
+        if points.is_empty() {
+            // No silence fired: the host took no answer at all, even from a perfect hand.
+            eprintln!(
+                "warning: host timeouts not measured: the host took no answer from the hand in its run without \
+                 misbehaviour (did it open the port it was given as {{port}} or {{url}}?), so this campaign tried \
+                 little or nothing; hang timeout {:.1} s",
+                c.timeout_hang_ms as f64 / 1000.0
+            );
+        } else {
+            eprintln!(
+                "host timeouts (silence at {}): {}; hang timeout {:.1} s ({} calibration runs)",
+                points.join(", "),
+                c.host_timeout_ms.map_or("none seen".to_string(), |ms| format!("{:.1} s", ms as f64 / 1000.0)),
+                c.timeout_hang_ms as f64 / 1000.0,
+                c.runs
+            );
+        }
     }
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
