@@ -6,6 +6,8 @@
 #   GCL_FUZZ_TARGETS    space-separated targets (default: grammar device realtime spec wire transcript client)
 #   GCL_FUZZ_SANITIZER  address (default) or none (faster; the model is forbid(unsafe_code),
 #                       so ASan mostly watches its dependencies)
+#   --build-only        install cargo-fuzz when missing and build every target, run none
+#                       (.ci/run builds while the tests run, and fuzzes after them)
 #
 # Dictionaries come from fuzz/seeds/dicts/<target>.dict when there is one.
 # Reproducers of crashes land in fuzz/artifacts/<target>/; replay one on stable with
@@ -29,6 +31,10 @@ export RUSTC_BOOTSTRAP=1
 
 # One build for every target; each `cargo fuzz run` below then finds it up to date.
 cargo fuzz build --sanitizer "$sanitizer"
+if [[ "${1:-}" == --build-only ]]; then
+    echo "run-ci: built ${targets}"
+    exit 0
+fi
 
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT

@@ -142,37 +142,56 @@ fn report(dir: &Path) -> RunReport {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// One mutant through `gcl conform` over exec: the run fails and names each case named for it.
+fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    // ^C during motion needs the hand to still be moving when it arrives: real time.
+    let p = Profile::builtin(profile).unwrap();
+    let timed =
+        cases(&p).iter().any(|c| catchers.contains(&c.id()) && c.requires(&gcl_transcript::Requirement::AbortTiming));
+    let time = if timed { "real" } else { "fast" };
+    let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
+    let mut args =
+        vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
+    for c in catchers {
+        args.extend(["--only", c]);
+    }
+    let rep = dir.path().to_str().unwrap().to_string();
+    args.extend(["--report", &rep]);
+    let out = gcl(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "mutant {name} must fail the run:\n{stdout}");
+    let r = report(dir.path());
+    for c in catchers {
+        let case = r.cases.iter().find(|x| x.id == *c).unwrap_or_else(|| panic!("{name}: {c} did not run"));
+        // A mismatch is FAIL; an answer that never completes (a prompt missing its space)
+        // is TIMEOUT. Either way the case fails the run, with its diff and transcript.
+        assert!(matches!(case.verdict, Verdict::Fail | Verdict::Timeout), "mutant {name}: {c}: {:?}", case.verdict);
+        assert!(case.diff.is_some() && case.transcript.is_some(), "a failure carries its diff and transcript");
+        assert!(stdout.contains(c), "the summary names {c}:\n{stdout}");
+    }
+}
+
 #[test]
 fn every_mutant_fails_gcl_conform_over_exec() {
-    for (name, profile, catchers) in MUTANTS {
-        let dir = tempfile::tempdir().unwrap();
-        // ^C during motion needs the hand to still be moving when it arrives: real time.
-        let p = Profile::builtin(profile).unwrap();
-        let timed = cases(&p)
-            .iter()
-            .any(|c| catchers.contains(&c.id()) && c.requires(&gcl_transcript::Requirement::AbortTiming));
-        let time = if timed { "real" } else { "fast" };
-        let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
-        let mut args =
-            vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
-        for c in *catchers {
-            args.extend(["--only", c]);
+    // Four workers: the real-time mutants spend their time waiting for motion, not on a core.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        let workers: Vec<_> = (0..4)
+            .map(|_| {
+                s.spawn(|| {
+                    while let Some((name, profile, catchers)) =
+                        MUTANTS.get(next.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+                    {
+                        mutant_fails_over_exec(name, profile, catchers);
+                    }
+                })
+            })
+            .collect();
+        for w in workers {
+            w.join().unwrap();
         }
-        let rep = dir.path().to_str().unwrap().to_string();
-        args.extend(["--report", &rep]);
-        let out = gcl(&args);
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert_eq!(out.status.code(), Some(1), "mutant {name} must fail the run:\n{stdout}");
-        let r = report(dir.path());
-        for c in *catchers {
-            let case = r.cases.iter().find(|x| x.id == *c).unwrap_or_else(|| panic!("{name}: {c} did not run"));
-            // A mismatch is FAIL; an answer that never completes (a prompt missing its space)
-            // is TIMEOUT. Either way the case fails the run, with its diff and transcript.
-            assert!(matches!(case.verdict, Verdict::Fail | Verdict::Timeout), "mutant {name}: {c}: {:?}", case.verdict);
-            assert!(case.diff.is_some() && case.transcript.is_some(), "a failure carries its diff and transcript");
-            assert!(stdout.contains(c), "the summary names {c}:\n{stdout}");
-        }
-    }
+    });
 }
 
 #[test]
