@@ -213,6 +213,28 @@ fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
     assert!(values.len() <= G_INCLUDES_SPREAD_VALUES, "{values:#?}");
 }
 
+/// A RealTime block whose layout differs is explained on the model too (a flag set without
+/// effect gives the block the hand sent, to the byte, over the whole case), and a failure of
+/// another kind that a known explanation covers joins it. Explaining never merges two bugs:
+/// two flags ignored in one hand are two explained findings.
+#[test]
+fn a_block_layout_bug_is_named_by_its_flag_and_two_such_bugs_stay_two() {
+    let keys = |faults: Vec<Fault>| {
+        let mut o = opts(faults, RUNS_PER_CAMPAIGN);
+        o.seed = SEED;
+        o.minimize = false;
+        run(&o, &|_| {}).unwrap().findings.into_iter().map(|f| f.signature.key()).collect::<Vec<_>>()
+    };
+    let lfv = keys(vec![Fault::LfvIgnored]);
+    assert!(lfv.iter().any(|k| k == "LFV set without effect"), "{lfv:?}");
+    let lfs = keys(vec![Fault::LfsIgnored]);
+    assert_eq!(lfs, ["LFS set without effect"]);
+    let both = keys(vec![Fault::LfvIgnored, Fault::LfsIgnored]);
+    for k in ["LFV set without effect", "LFS set without effect"] {
+        assert!(both.iter().any(|x| x == k), "{k} missing from {both:?}");
+    }
+}
+
 /// Values read back that g-includes-spread still gives apart from its explained finding, where
 /// the rewrite cannot follow the hand's timing (see `fuzz_device_findings.toml`).
 const G_INCLUDES_SPREAD_VALUES: usize = 3;
