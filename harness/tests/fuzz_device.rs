@@ -235,6 +235,31 @@ fn a_block_layout_bug_is_named_by_its_flag_and_two_such_bugs_stay_two() {
     }
 }
 
+/// A finding met before the explanation that covers it joins the explanation when it is found:
+/// dp-ignored's move status (16 missing, where M stops short of a DP the hand ignores) came
+/// before a position read back explained the bug, and stayed a second finding. Its transcript
+/// leaves `--out` with it. A status the explanation does not cover stays (mpe-ignored's, with
+/// the same bits, in the same hand).
+#[test]
+fn a_finding_met_before_its_explanation_joins_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut o = opts(vec![Fault::DpIgnored], RUNS_PER_CAMPAIGN);
+    o.seed = SEED;
+    o.minimize = false;
+    o.out = Some(dir.path().to_path_buf());
+    let s = run(&o, &|_| {}).unwrap();
+    let keys: Vec<String> = s.findings.iter().map(|f| f.signature.key()).collect();
+    assert_eq!(keys, ["DP set without effect"]);
+    let files = std::fs::read_dir(dir.path()).unwrap().count();
+    assert_eq!(files, 1, "one transcript for one finding");
+    let mut o = opts(vec![Fault::DpIgnored, Fault::MpeIgnored], RUNS_PER_CAMPAIGN);
+    o.seed = SEED;
+    o.minimize = false;
+    let keys: Vec<String> = run(&o, &|_| {}).unwrap().findings.iter().map(|f| f.signature.key()).collect();
+    assert!(keys.iter().any(|k| k == "DP set without effect"), "{keys:?}");
+    assert!(keys.iter().any(|k| k == "status 16 missing"), "mpe-ignored lost: {keys:?}");
+}
+
 /// Values read back that g-includes-spread still gives apart from its explained finding, where
 /// the rewrite cannot follow the hand's timing (see `fuzz_device_findings.toml`).
 const G_INCLUDES_SPREAD_VALUES: usize = 3;

@@ -346,6 +346,14 @@ pub enum Progress<'a> {
     },
     /// A new distinct finding, minimized.
     Finding(&'a Finding),
+    /// A finding reported earlier that an explanation found since covers: it is that bug, and
+    /// no longer a finding of its own (its transcript is removed).
+    Joined {
+        /// The earlier finding.
+        finding: &'a Finding,
+        /// The explanation that covers it.
+        explanation: &'a str,
+    },
 }
 
 struct Shared {
@@ -549,8 +557,10 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
 /// - a value read back in an answer line;
 /// - a RealTime block's answer on a link that hands over answers whole (the in-process sim),
 ///   where a rewrite must give the block's exact size and every field within the model's
-///   tight bands. On a hand outside this process the block fields' bands are wide enough to
-///   fit another layout by chance, so there a block failure only joins a known explanation.
+///   tight bands, and still another layout of the same size can fit by chance: such a new
+///   explanation holds only if the hand, replayed the whole case, answers as the rewrite does.
+///   On a hand outside this process the block fields' bands are wide enough to fit another
+///   layout by chance, so there a block failure only joins a known explanation.
 ///
 /// Not from a status: its key is already its bits, whatever command shows them, and a set
 /// without effect would explain a status never reported as well as the bug that never reports
@@ -613,8 +623,10 @@ struct Hypothesis {
 ///   effect`); the set lines' own answers are not compared, and reads of the parameter are
 ///   held to the case's own expectation (the hand stores what was set).
 ///
-/// Not tried through RealTime blocks whose bytes the rewrite changes (the hand was sent the
-/// original bytes).
+/// The rewrite's blocks send the bytes the hand was sent where its layout gives them the same
+/// size; a block the rewrite must encode anew (another control layout) sends other bytes, and
+/// its answer is not compared, as for any other line the rewrite changed. `known` explanations
+/// are tried first; the others only when `fresh`.
 fn explain(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -1283,10 +1295,44 @@ fn report_finding(
     progress(Progress::Finding(&finding));
     let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
     sh.minimizing += t0.elapsed();
-    if !finding.signature.explanation.is_empty() {
-        sh.explained.push(finding.signature.explanation.clone());
+    let fresh = Some(finding.signature.explanation.clone()).filter(|e| !e.is_empty() && !sh.explained.contains(e));
+    if let Some(e) = &fresh {
+        sh.explained.push(e.clone());
     }
     sh.findings.push(finding);
+    // Findings met before this explanation that it covers (a status, a ^C or a block that
+    // showed the bug before a value read back explained it) are this bug: each unexplained
+    // finding's case is run again and tried against this explanation alone. One it covers is
+    // dropped, and its key freed, so a later failure under that key that the explanation does
+    // not cover (another bug with the same status bits) is still found.
+    let Some(e) = fresh else { return Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m)) };
+    let earlier: Vec<(String, Vec<HostAction>)> = sh
+        .findings
+        .iter()
+        .filter(|f| f.signature.explanation.is_empty() && !matches!(f.signature.kind.as_str(), "link" | "restart"))
+        .map(|f| (f.signature.key(), f.actions.clone()))
+        .collect();
+    drop(sh);
+    let mut joined = Vec::new();
+    for (key, actions) in earlier {
+        let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
+        let out = hand.run(&b.transcript, true)?;
+        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false).is_some() {
+            joined.push(key);
+        }
+    }
+    let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
+    let (gone, kept): (Vec<Finding>, Vec<Finding>) = std::mem::take(&mut sh.findings)
+        .into_iter()
+        .partition(|f| f.signature.explanation.is_empty() && joined.contains(&f.signature.key()));
+    sh.findings = kept;
+    for f in &gone {
+        sh.seen.remove(&f.signature.key());
+        if let Some(path) = &f.path {
+            let _ = std::fs::remove_file(path);
+        }
+        progress(Progress::Joined { finding: f, explanation: &e });
+    }
     Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
 }
 
