@@ -626,7 +626,9 @@ struct Hypothesis {
 /// The rewrite's blocks send the bytes the hand was sent where its layout gives them the same
 /// size; a block the rewrite must encode anew (another control layout) sends other bytes, and
 /// its answer is not compared, as for any other line the rewrite changed. `known` explanations
-/// are tried first; the others only when `fresh`.
+/// are tried first; the others only when `fresh`, and a new one holds only if no other new one
+/// does (a case that two bugs explain alike tells neither: lcvc-ignored's blocks were once
+/// explained as `prefix 2+1`).
 fn explain(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -778,6 +780,7 @@ fn explain(
         return None;
     }
     hyps.sort_by_key(|h| !known.contains(&h.says));
+    let mut found: Option<Explained> = None;
     for h in hyps {
         // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
         let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions), "fuzz", "explain", &built.block_bytes) else {
@@ -832,11 +835,17 @@ fn explain(
                 }
                 t
             });
-            let fresh = !known.contains(&h.says);
-            return Some(Explained { says: h.says, whole: whole.filter(|_| fresh) });
+            if known.contains(&h.says) {
+                return Some(Explained { says: h.says, whole: None });
+            }
+            // (a new one: another bug that explains the case as well leaves it unexplained)
+            if found.is_some() {
+                return None;
+            }
+            found = Some(Explained { says: h.says, whole });
         }
     }
-    None
+    found
 }
 
 /// What [`explain`] found: the explanation, and for one no finding had yet, the whole case as
