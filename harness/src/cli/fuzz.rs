@@ -205,6 +205,12 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
                 f.actions.len()
             ));
         }
+        Progress::Joined { finding, explanation } if !a.quiet => {
+            progress.println(&format!(
+                "joined: {} is `{explanation}` (found since; its transcript removed)",
+                finding.signature
+            ));
+        }
         _ => {}
     };
     // Held for the campaign: a second campaign on the same folders is refused, so neither

@@ -34,6 +34,9 @@ pub struct BuiltCase {
     /// The unmutated model's run of the transcript, each answer byte tagged with the step it
     /// answers (see [`crate::align`]).
     pub model: crate::align::ModelRun,
+    /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
+    /// (`None` for a block outside the loop, which sends nothing).
+    pub block_bytes: Vec<Option<Vec<u8>>>,
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -166,6 +169,23 @@ pub fn build_case(
     wide: bool,
     home: bool,
 ) -> Result<BuiltCase, NotACase> {
+    build_case_sending(p, actions, id, title, wide, home, &[])
+}
+
+/// [`build_case`], with the n-th block sending `blocks[n]` where that is given and of the size
+/// the layout the model has then encodes, instead of its values encoded with that layout: a
+/// case rewritten as a hand with another layout would take it is still sent the bytes the hand
+/// was sent. (A rewrite whose control blocks have another size sends blocks encoded anew; the
+/// explanation then does not compare their answers.)
+pub fn build_case_sending(
+    p: &Arc<Profile>,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+    blocks: &[Option<Vec<u8>>],
+) -> Result<BuiltCase, NotACase> {
     let term = p.framing.terminator;
     let parsed = |l: &str| match parse_line(p, l.as_bytes()) {
         Ok(Line::Command(c)) => Some(c),
@@ -193,6 +213,7 @@ pub fn build_case(
     walk.features.clear();
     let mut eeprom = false;
     let mut kinds: Vec<(usize, ShapeKind)> = Vec::new();
+    let mut block_bytes: Vec<Option<Vec<u8>>> = Vec::new();
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
         match a {
@@ -304,7 +325,11 @@ pub fn build_case(
                 k = k.abort();
             }
             HostAction::Block { header, values, extra } => {
-                let Some(layout) = walk.shadow.rt_layout().cloned().filter(|_| in_loop) else { continue };
+                let given = blocks.get(block_bytes.len()).cloned().flatten();
+                let Some(layout) = walk.shadow.rt_layout().cloned().filter(|_| in_loop) else {
+                    block_bytes.push(None);
+                    continue;
+                };
                 let h = ControlHeader::from_byte(*header);
                 walk.features.insert(format!(
                     "rt-header:{}",
@@ -323,6 +348,12 @@ pub fn build_case(
                 } else if *extra < 0 && bytes.len() > 1 {
                     bytes.pop();
                 }
+                // (bytes given for a block of another size are no block of this layout: the
+                // model would wait for the rest, which is no case; the block is encoded anew)
+                if let Some(b) = given.filter(|b| b.len() == bytes.len()) {
+                    bytes = b;
+                }
+                block_bytes.push(Some(bytes.clone()));
                 let short = *extra < 0;
                 let step = ScriptStep::new(if short {
                     gcl_transcript::script::Action::Partial(bytes.clone())
@@ -415,7 +446,7 @@ pub fn build_case(
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model })
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes })
 }
 
 /// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with

@@ -346,6 +346,14 @@ pub enum Progress<'a> {
     },
     /// A new distinct finding, minimized.
     Finding(&'a Finding),
+    /// A finding reported earlier that an explanation found since covers: it is that bug, and
+    /// no longer a finding of its own (its transcript is removed).
+    Joined {
+        /// The earlier finding.
+        finding: &'a Finding,
+        /// The explanation that covers it.
+        explanation: &'a str,
+    },
 }
 
 struct Shared {
@@ -354,6 +362,8 @@ struct Shared {
     findings: Vec<Finding>,
     /// Signatures seen (found or being minimized).
     seen: BTreeSet<String>,
+    /// What explains a finding so far (see [`judged`]).
+    explained: Vec<String>,
     dropped: u64,
     wire_bytes: u64,
     bytes_sent: u64,
@@ -538,23 +548,50 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
 }
 
 /// [`signature`], then what explains the whole failure, if something does (see [`explain`]).
+///
+/// `known`: what already explains a finding of this campaign. A failure of any kind that one
+/// of them explains is that bug showing again (a move's status, a RealTime block read after
+/// the wrong motor moved, a ^C that lands elsewhere), so it takes its key. A new explanation
+/// is looked for only where the evidence is exact enough not to fit by chance:
+///
+/// - a value read back in an answer line;
+/// - a RealTime block's answer on a link that hands over answers whole (the in-process sim),
+///   where a rewrite must give the block's exact size and every field within the model's
+///   tight bands, and still another layout of the same size can fit by chance: such a new
+///   explanation holds only if the hand, replayed the whole case, answers as the rewrite does.
+///   On a hand outside this process the block fields' bands are wide enough to fit another
+///   layout by chance, so there a block failure only joins a known explanation.
+///
+/// Not from a status: its key is already its bits, whatever command shows them, and a set
+/// without effect would explain a status never reported as well as the bug that never reports
+/// it (mpe-ignored gave six findings when statuses were explained afresh). Nor from framing
+/// outside blocks, a restart, a flood or a lost link: no effect read back.
 fn judged(
     opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
     actions: &[HostAction],
     built: &BuiltCase,
     out: &ReplayOutcome,
-) -> Option<FindingSignature> {
-    let mut sig = signature(&opts.profile, built, out, !opts.wide())?;
-    // Only a value read back in an answer line: a status key is already the bits whatever
-    // command shows them (and a set without effect would explain a status never reported as
-    // well as the bug that never reports it); a RealTime block's fields are checked against
-    // bands wide enough to fit another layout by chance; framing, a restart, a flood or a lost
-    // link is no effect read back.
-    let effect = sig.kind == "value" && sig.command != "RealTime block";
-    if effect && let Some(e) = explain(opts, actions, built, out) {
-        sig.explanation = e;
+    known: &[String],
+) -> Result<Option<FindingSignature>, FuzzError> {
+    let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
+    let block = sig.command == "RealTime block";
+    let fresh = sig.kind == "value" && !block || block && !opts.wide();
+    let link = matches!(sig.kind.as_str(), "link" | "restart");
+    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh) {
+        // A block's answer that a rewrite fits up to where the hand parted may fit by chance
+        // (another layout of the same size, values within the bands): a new explanation from
+        // one holds only if the hand answers the whole case as the rewrite does.
+        let confirmed = match (&e.whole, block && !known.contains(&e.says)) {
+            (_, false) => true,
+            (Some(t), true) => hand.run(t, true)?.is_pass(),
+            (None, true) => false,
+        };
+        if confirmed {
+            sig.explanation = e.says;
+        }
     }
-    Some(sig)
+    Ok(Some(sig))
 }
 
 /// One hypothesis about the hand: the case's actions as the hand took them, and what that
@@ -586,9 +623,20 @@ struct Hypothesis {
 ///   effect`); the set lines' own answers are not compared, and reads of the parameter are
 ///   held to the case's own expectation (the hand stores what was set).
 ///
-/// Not tried through RealTime blocks whose bytes the rewrite changes (the hand was sent the
-/// original bytes).
-fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &ReplayOutcome) -> Option<String> {
+/// The rewrite's blocks send the bytes the hand was sent where its layout gives them the same
+/// size; a block the rewrite must encode anew (another control layout) sends other bytes, and
+/// its answer is not compared, as for any other line the rewrite changed. `known` explanations
+/// are tried first; the others only when `fresh`, and a new one holds only if no other new one
+/// does (a case that two bugs explain alike tells neither: lcvc-ignored's blocks were once
+/// explained as `prefix 2+1`).
+fn explain(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    known: &[String],
+    fresh: bool,
+) -> Option<Explained> {
     use gcl_model::MotorSet;
     use gcl_model::grammar::{Args, Line, parse_line};
     use gcl_model::spec::CommandKind;
@@ -726,40 +774,137 @@ fn explain(opts: &FuzzOptions, actions: &[HostAction], built: &BuiltCase, out: &
             _ => false,
         }
     };
+    // What already explains a finding first, then (when `fresh`) the rest.
+    hyps.retain(|h| fresh || known.contains(&h.says));
+    if hyps.is_empty() {
+        return None;
+    }
+    hyps.sort_by_key(|h| !known.contains(&h.says));
+    let mut found: Option<Explained> = None;
     for h in hyps {
-        let Ok(b) = build_for(opts, &in_hand_time(h.actions), "fuzz", "explain") else { continue };
+        // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
+        let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions), "fuzz", "explain", &built.block_bytes) else {
+            continue;
+        };
         let (old, new) = (&built.transcript.steps, &b.transcript.steps);
         if new.len() <= failed || old.len() <= failed {
             continue;
         }
         let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
-        let holds = (d..=failed).all(|s| {
-            let Some(mut got) = received(s) else { return false };
+        // The hand's answers from step d on, as one stream: a rewrite that changes a block's
+        // size moves where one step's answer ends and the next begins (the replay read each
+        // step as long as the original case expected), so the rewrite's expectations are
+        // matched in turn along the stream, each ending where the next byte would break it.
+        let mut stream: Vec<u8> = Vec::new();
+        let mut judges: Vec<&gcl_transcript::Step> = Vec::new();
+        let mut complete = true;
+        for s in d..=failed {
+            let Some(mut got) = received(s) else {
+                complete = false;
+                break;
+            };
             if send(&old[s]) != send(&new[s]) {
                 // The hand echoed the line as it was sent.
                 let Some((was, now)) = h.echoes.iter().find(|(w, _)| got.windows(w.len()).any(|x| x == w.as_bytes()))
                 else {
-                    return s < failed;
+                    // (a line the rewrite changed otherwise: its answer is not compared)
+                    complete = s < failed;
+                    if complete {
+                        continue;
+                    }
+                    break;
                 };
                 let at = got.windows(was.len()).position(|x| x == was.as_bytes()).unwrap_or(0);
                 got.splice(at..at + was.len(), now.bytes());
             }
-            let judge = if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] };
-            let mut mt = gcl_transcript::Matcher::new(&judge.expect);
-            let alive = got.iter().all(|b| mt.feed(*b) != gcl_transcript::Feed::Dead);
-            alive && (mt.is_complete() || s == failed && matches!(out, ReplayOutcome::Mismatch(_)))
-        });
+            stream.extend_from_slice(&got);
+            judges.push(if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] });
+        }
+        let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
+        let holds = complete && follows(&judges, &stream, mismatch);
         if holds {
-            return Some(h.says);
+            // The whole case as the hand meets it under the explanation: the rewrite's steps,
+            // with the lines it rewrote sent as they were (their answers are echo and prompt,
+            // or held to the case's own expectation).
+            let whole = (old.len() == new.len()).then(|| {
+                let mut t = b.transcript.clone();
+                for (i, st) in t.steps.iter_mut().enumerate() {
+                    if send(&old[i]) != send(st) {
+                        *st = old[i].clone();
+                    }
+                }
+                t
+            });
+            if known.contains(&h.says) {
+                return Some(Explained { says: h.says, whole: None });
+            }
+            // (a new one: another bug that explains the case as well leaves it unexplained)
+            if found.is_some() {
+                return None;
+            }
+            found = Some(Explained { says: h.says, whole });
         }
     }
-    None
+    found
+}
+
+/// What [`explain`] found: the explanation, and for one no finding had yet, the whole case as
+/// the hand would meet it under the explanation (`None` when the rewrite changed the number of
+/// steps), for [`judged`] to replay where a chance fit is possible.
+struct Explained {
+    says: String,
+    whole: Option<Transcript>,
+}
+
+/// Whether `stream` is the answers `judges` expect, one after another, each ending as soon as
+/// it is whole and the next one takes the byte that follows (as the replay reads an answer
+/// until it is whole: an answer ending in `{any}` takes nothing of the next). With `short` (the
+/// hand parted from the case with a wrong byte, and the replay read no further) the stream may
+/// end anywhere: every byte up to the parting one, that one included, is what the rewrite
+/// expects.
+fn follows(judges: &[&gcl_transcript::Step], stream: &[u8], short: bool) -> bool {
+    use gcl_transcript::{Feed, Matcher};
+    let Some(first) = judges.first() else { return false };
+    let mut k = 0;
+    let mut mt = Matcher::new(&first.expect);
+    for b in stream {
+        // (a whole answer ends here when the next one begins with this byte)
+        while mt.is_complete() && k + 1 < judges.len() {
+            let next = Matcher::new(&judges[k + 1].expect);
+            if next.is_complete() {
+                // (the next answer is empty: it ends here too)
+                k += 1;
+                mt = next;
+                continue;
+            }
+            if next.clone().feed(*b) != Feed::Dead {
+                k += 1;
+                mt = next;
+            }
+            break;
+        }
+        if mt.feed(*b) == Feed::Dead {
+            return false;
+        }
+    }
+    short || k + 1 == judges.len() && mt.is_complete()
 }
 
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
 /// needs what the run does not allow: a ^C that lands mid-motion under `--no abort-timing`.
 fn build_for(opts: &FuzzOptions, actions: &[HostAction], id: &str, title: &str) -> Result<BuiltCase, NotACase> {
-    let b = build_case(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    build_for_sending(opts, actions, id, title, &[])
+}
+
+/// [`build_for`] with blocks sending given bytes (see [`case::build_case_sending`]).
+fn build_for_sending(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    blocks: &[Option<Vec<u8>>],
+) -> Result<BuiltCase, NotACase> {
+    let b = case::build_case_sending(&opts.profile, actions, id, title, opts.wide(), opts.home(), blocks)?;
     // A case resting on a decision the hand took differently judges nothing of it.
     let rests: Vec<String> = b
         .transcript
@@ -897,6 +1042,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         features: BTreeSet::new(),
         findings: Vec::new(),
         seen: BTreeSet::new(),
+        explained: Vec::new(),
         dropped: 0,
         wire_bytes: 0,
         bytes_sent: 0,
@@ -1035,7 +1181,8 @@ fn worker(
         {
             lock().rejudged += 1;
             let out = hand.run(&pb.transcript, true)?;
-            if let Some(sig) = judged(opts, &pa, &pb, &out) {
+            let known = lock().explained.clone();
+            if let Some(sig) = judged(opts, &mut hand, &pa, &pb, &out, &known)? {
                 let new = lock().seen.insert(sig.key());
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
@@ -1045,11 +1192,12 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
-        let mut sig = judged(opts, &actions, &built, &outcome);
+        let known = if outcome.is_pass() { Vec::new() } else { lock().explained.clone() };
+        let mut sig = judged(opts, &mut hand, &actions, &built, &outcome, &known)?;
         // A quick run's new failure counts only if a thorough run of the case fails too.
         if opts.wide() && sig.as_ref().is_some_and(|s| !lock().seen.contains(&s.key())) {
             outcome = hand.run(&built.transcript, true)?;
-            sig = judged(opts, &actions, &built, &outcome);
+            sig = judged(opts, &mut hand, &actions, &built, &outcome, &known)?;
         }
         let (new_cov, nfeat, nfind) = {
             let mut sh = lock();
@@ -1156,7 +1304,44 @@ fn report_finding(
     progress(Progress::Finding(&finding));
     let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
     sh.minimizing += t0.elapsed();
+    let fresh = Some(finding.signature.explanation.clone()).filter(|e| !e.is_empty() && !sh.explained.contains(e));
+    if let Some(e) = &fresh {
+        sh.explained.push(e.clone());
+    }
     sh.findings.push(finding);
+    // Findings met before this explanation that it covers (a status, a ^C or a block that
+    // showed the bug before a value read back explained it) are this bug: each unexplained
+    // finding's case is run again and tried against this explanation alone. One it covers is
+    // dropped, and its key freed, so a later failure under that key that the explanation does
+    // not cover (another bug with the same status bits) is still found.
+    let Some(e) = fresh else { return Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m)) };
+    let earlier: Vec<(String, Vec<HostAction>)> = sh
+        .findings
+        .iter()
+        .filter(|f| f.signature.explanation.is_empty() && !matches!(f.signature.kind.as_str(), "link" | "restart"))
+        .map(|f| (f.signature.key(), f.actions.clone()))
+        .collect();
+    drop(sh);
+    let mut joined = Vec::new();
+    for (key, actions) in earlier {
+        let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
+        let out = hand.run(&b.transcript, true)?;
+        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false).is_some() {
+            joined.push(key);
+        }
+    }
+    let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
+    let (gone, kept): (Vec<Finding>, Vec<Finding>) = std::mem::take(&mut sh.findings)
+        .into_iter()
+        .partition(|f| f.signature.explanation.is_empty() && joined.contains(&f.signature.key()));
+    sh.findings = kept;
+    for f in &gone {
+        sh.seen.remove(&f.signature.key());
+        if let Some(path) = &f.path {
+            let _ = std::fs::remove_file(path);
+        }
+        progress(Progress::Joined { finding: f, explanation: &e });
+    }
     Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
 }
 
@@ -1174,6 +1359,8 @@ fn minimize(
 ) -> Result<(Vec<HostAction>, BuiltCase), FuzzError> {
     let mut tries = 0usize;
     let mut best = (actions.to_vec(), built.clone());
+    // (the finding's own explanation, if it has one: the smaller case must keep it)
+    let known: Vec<String> = [sig.explanation.clone()].into_iter().filter(|e| !e.is_empty()).collect();
     let mut check = |cand: &[HostAction], tries: &mut usize| -> Result<Option<BuiltCase>, FuzzError> {
         if opts.stop.load(Ordering::SeqCst) || until.is_some_and(|u| Instant::now() >= u) {
             // Out of time: every loop below ends at the budget of tries.
@@ -1186,7 +1373,7 @@ fn minimize(
             return Ok(None);
         }
         let out = hand.run(&b.transcript, true)?;
-        Ok((judged(opts, cand, &b, &out).is_some_and(|s| s.key() == sig.key())).then_some(b))
+        Ok((judged(opts, hand, cand, &b, &out, &known)?.is_some_and(|s| s.key() == sig.key())).then_some(b))
     };
     let mut chunk = best.0.len().div_ceil(2).max(1);
     while chunk >= 1 && tries < opts.minimize_budget {
