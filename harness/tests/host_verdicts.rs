@@ -268,6 +268,27 @@ fn a_host_that_waits_out_its_own_timeout_is_not_hung() {
     assert_eq!(found, Vec::<&str>::new());
 }
 
+/// A host that writes on while the hand holds an answer back blocks in its write once the
+/// hand stops taking input (the output queued behind the held answer is at its cap): it is
+/// waiting for the hand, not hung, even when the answer is held longer than the hang timeout
+/// (it was called hung 3 s after it blocked, the hold's 4.5 s forgotten).
+#[test]
+fn a_host_blocked_in_its_write_while_the_hand_holds_an_answer_is_not_hung() {
+    if !python_with("threading") {
+        return;
+    }
+    let mut flood = run(python("py_flood.py", &["5"]));
+    flood.timeout_hang = Duration::from_secs(3);
+    // The third answer (an echo) held back 4.5 s: 5 s less a tenth.
+    let delay = Schedule { planned: vec![Planned { answer: 3, op: Operator::DelayBelow, arg: 5 }] };
+    let r = run_once(&flood, &delay).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert_eq!(r.end, HostEnd::Exit(0), "{}", r.stderr);
+    let hangs: Vec<String> =
+        judge(&r, &[0, 1]).into_iter().filter(|v| v.kind == FindingKind::Hang).map(|v| v.signature).collect();
+    assert_eq!(hangs, Vec::<String>::new());
+}
+
 /// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,
 /// one finding, named by the host's own code (its stack), in C, Python and Rust.
 #[test]

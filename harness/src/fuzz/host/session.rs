@@ -201,6 +201,8 @@ pub(crate) struct Log {
     /// When a `silence` fired, and when the host first sent after it.
     silenced_at: Option<Instant>,
     acted_at: Option<Instant>,
+    /// Where the hang clock starts: when the host last sent, or when the hand's last answer
+    /// went out or is due to (an answer held back), whichever is later.
     last_activity: Instant,
     hang_up: Option<StopHandle>,
     pub(crate) hung_up: bool,
@@ -328,9 +330,14 @@ impl LineTap for Tap {
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
         let Ok(mut log) = self.0.lock() else { return };
         let log = &mut *log;
-        log.last_activity = Instant::now();
+        let now = Instant::now();
+        // Never before an answer still held back: a host that writes on while its answer is
+        // held soon blocks in its write (the hand takes no more input while the output it
+        // queued behind the held answer is at its cap), and is waiting for the hand, not
+        // hung, until that answer is out.
+        log.last_activity = log.last_activity.max(now);
         if log.silenced_at.is_some() && log.acted_at.is_none() {
-            log.acted_at = Some(log.last_activity);
+            log.acted_at = Some(now);
         }
         log.checker.host_bytes(device, bytes);
         // A reaction is the first command sent after its misbehaviour.
