@@ -408,11 +408,17 @@ fn a_process_left_behind_is_killed_and_named_within_the_budget() {
     let (result, failed) = rx.recv_timeout(Duration::from_secs(60)).expect("the run kept its budget");
     let result = result.unwrap();
     assert_eq!(result.leftovers.len(), 1, "{:?}", result.leftovers);
-    let pid: i32 = result.leftovers[0].split_whitespace().nth(1).unwrap().parse().unwrap();
+    let pid = result.leftovers[0].pid;
     std::thread::sleep(Duration::from_millis(200));
     let alive = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "));
     assert!(!alive, "the leftover {pid} still runs");
-    assert!(judge(&result, &[0, 1]).iter().any(|v| v.kind == FindingKind::Leftover));
+    // Named by what was left: its command line, the same from run to run; where it waited
+    // (its Python frames, dumped into the stderr it held) in the message.
+    let left: Vec<_> = judge(&result, &[0, 1]).into_iter().filter(|v| v.kind == FindingKind::Leftover).collect();
+    assert_eq!(left.len(), 1, "{left:?}");
+    let program = Path::new(&deps::python()).file_name().unwrap().to_string_lossy().into_owned();
+    assert_eq!(left[0].signature, format!("leftover: {program} -c import time; time.sleep(60)"));
+    assert!(left[0].message.contains("in <string>:<module> (faulthandler)"), "{}", left[0].message);
     let exits = format!("host-{}", HostClause::ExitsCleanly.id());
     assert!(failed.iter().any(|f| f.starts_with(&exits) && f.contains("behind")), "{failed:?}");
 }

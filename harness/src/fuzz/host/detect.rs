@@ -273,7 +273,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn asan_reports_keep_the_top_frames_without_addresses() {
+    fn asan_reports_are_signed_by_the_hosts_frame_nearest_the_bad_access() {
         let s = "noise\n=================================================================\n==123==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffd at pc 0x55 bp 0x7f sp 0x7f\nWRITE of size 1 at 0x7ffd thread T0\n    #0 0x55d in read_line /tmp/host.c:20\n    #1 0x55e in main /tmp/host.c:40\n    #2 0x7f1 in __libc_start_main\n";
         let r = crash_report(s).unwrap();
         assert_eq!(r.signature, "asan stack-buffer-overflow in read_line");
