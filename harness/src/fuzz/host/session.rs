@@ -14,7 +14,8 @@
 //! process group is killed, stderr is read for a short grace only, and when the port or the
 //! host's stderr is still held (the transport never heard the port's last close, or stderr
 //! never ended) the process holding it (one that left the group with `setsid`) is found
-//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]). A run whose
+//! through `/proc`, its command line and stack taken, killed and named in the result
+//! ([`RunResult::leftovers`]). A run whose
 //! host left nothing behind reads no `/proc`.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
