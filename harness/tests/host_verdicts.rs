@@ -268,6 +268,27 @@ fn a_host_that_waits_out_its_own_timeout_is_not_hung() {
     assert_eq!(found, Vec::<&str>::new());
 }
 
+/// A host that writes on while the hand holds an answer back blocks in its write once the
+/// hand stops taking input (the output queued behind the held answer is at its cap): it is
+/// waiting for the hand, not hung, even when the answer is held longer than the hang timeout
+/// (it was called hung 3 s after it blocked, the hold's 4.5 s forgotten).
+#[test]
+fn a_host_blocked_in_its_write_while_the_hand_holds_an_answer_is_not_hung() {
+    if !python_with("threading") {
+        return;
+    }
+    let mut flood = run(python("py_flood.py", &["5"]));
+    flood.timeout_hang = Duration::from_secs(3);
+    // The third answer (an echo) held back 4.5 s: 5 s less a tenth.
+    let delay = Schedule { planned: vec![Planned { answer: 3, op: Operator::DelayBelow, arg: 5 }] };
+    let r = run_once(&flood, &delay).unwrap();
+    assert_eq!(r.fired.len(), 1, "{:?}", r.fired);
+    assert_eq!(r.end, HostEnd::Exit(0), "{}", r.stderr);
+    let hangs: Vec<String> =
+        judge(&r, &[0, 1]).into_iter().filter(|v| v.kind == FindingKind::Hang).map(|v| v.signature).collect();
+    assert_eq!(hangs, Vec::<String>::new());
+}
+
 /// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,
 /// one finding, named by the host's own code (its stack), in C, Python and Rust.
 #[test]
@@ -387,11 +408,17 @@ fn a_process_left_behind_is_killed_and_named_within_the_budget() {
     let (result, failed) = rx.recv_timeout(Duration::from_secs(60)).expect("the run kept its budget");
     let result = result.unwrap();
     assert_eq!(result.leftovers.len(), 1, "{:?}", result.leftovers);
-    let pid: i32 = result.leftovers[0].split_whitespace().nth(1).unwrap().parse().unwrap();
+    let pid = result.leftovers[0].pid;
     std::thread::sleep(Duration::from_millis(200));
     let alive = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "));
     assert!(!alive, "the leftover {pid} still runs");
-    assert!(judge(&result, &[0, 1]).iter().any(|v| v.kind == FindingKind::Leftover));
+    // Named by what was left: its command line, the same from run to run; where it waited
+    // (its Python frames, dumped into the stderr it held) in the message.
+    let left: Vec<_> = judge(&result, &[0, 1]).into_iter().filter(|v| v.kind == FindingKind::Leftover).collect();
+    assert_eq!(left.len(), 1, "{left:?}");
+    let program = Path::new(&deps::python()).file_name().unwrap().to_string_lossy().into_owned();
+    assert_eq!(left[0].signature, format!("leftover: {program} -c import time; time.sleep(60)"));
+    assert!(left[0].message.contains("in <string>:<module> (faulthandler)"), "{}", left[0].message);
     let exits = format!("host-{}", HostClause::ExitsCleanly.id());
     assert!(failed.iter().any(|f| f.starts_with(&exits) && f.contains("behind")), "{failed:?}");
 }

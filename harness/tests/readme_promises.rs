@@ -423,8 +423,19 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::sanitizer_reports_are_read_from_a_log_file_per_run"],
     ),
     (
-        "named in a `leftover` finding (`check-host` fails `host-exits-cleanly`)",
+        "named in a `leftover` finding, signed by its command line",
         &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
+    ),
+    (
+        "A crash's signature is its kind and where it was raised, never the callers that led there",
+        &[
+            "harness/src/fuzz/host/detect.rs::one_exception_from_one_place_is_one_signature_whatever_the_caller",
+            "harness/src/fuzz/host/detect.rs::asan_reports_are_signed_by_the_hosts_frame_nearest_the_bad_access",
+        ],
+    ),
+    (
+        "A host blocked in its write while the hand holds an answer back waits for the hand",
+        &["harness/tests/host_verdicts.rs::a_host_blocked_in_its_write_while_the_hand_holds_an_answer_is_not_hung"],
     ),
     (
         "What the host writes is kept up to 1 MiB each way",

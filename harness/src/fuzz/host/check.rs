@@ -158,6 +158,10 @@ pub struct HostChecker {
     out_of_step: bool,
     /// The answer still coming was broken by a misbehaviour: the host may give up on it.
     broken: bool,
+    /// The hand restarted while the host's line was under way: the rest of that line reaches
+    /// the new hand as a line of its own, whose prompt the host never asked for (it took the
+    /// power-up prompt for its answer).
+    cut_line: bool,
     /// The command word of the last line sent.
     last_command: Option<String>,
     /// In RealTime: data bytes still due for the block being sent.
@@ -196,6 +200,7 @@ impl HostChecker {
             in_flight: VecDeque::new(),
             out_of_step: false,
             broken: false,
+            cut_line: false,
             last_command: None,
             block_due: 0,
             block_size: 0,
@@ -347,6 +352,11 @@ impl HostChecker {
     }
 
     fn end_line(&mut self) {
+        if std::mem::take(&mut self.cut_line) {
+            // The tail of a line the hand's restart cut: its answer is a prompt the host did
+            // not ask for, which puts it one answer ahead.
+            self.out_of_step = true;
+        }
         // LF never enters the line (`host_bytes` grades it apart).
         let text = std::mem::take(&mut self.line);
         if text.iter().all(|c| c.is_ascii_whitespace()) {
@@ -521,12 +531,14 @@ impl HostChecker {
     pub fn connection(&mut self, _open: bool) {
         self.prev = None;
         self.desynced = false;
+        self.cut_line = false;
     }
 
     /// The hand restarted while answering (the answer just queued ends with its power-up
     /// output): it is in supervisory mode, at the prompt once that output is delivered, with
     /// no line or block under way, whatever mode it was in.
     pub fn restarted(&mut self) {
+        self.cut_line = !self.line.is_empty();
         self.mode = Mode::Idle;
         self.block_due = 0;
         self.block_size = 0;
@@ -687,6 +699,41 @@ mod tests {
         c.host_bytes(&d, b"FGET P\r");
         let v = c.violations();
         assert!(v.len() == 1 && v[0].is_note() && v[0].out_of_step, "{v:?}");
+    }
+
+    /// The hand restarts while the host's line is under way (its CR still to come, as from a
+    /// host that writes a command and its CR apart): the rest of the line reaches the new hand
+    /// as a line of its own, and the prompt that answers it is one the host never asked for
+    /// (it took the power-up prompt for its line's answer), so its next line goes out one
+    /// answer early through the hand's fault: a note. A restart between lines leaves the host
+    /// in step.
+    #[test]
+    fn a_restart_that_cuts_the_hosts_line_puts_it_out_of_step_without_a_finding() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let power_up: &[u8] = b"FGET \n\rBarrettHand Firmware\n\r=> ";
+        let mut c = HostChecker::new(p.clone());
+        c.host_bytes(&d, b"FGET DP");
+        c.hand_bytes(&d, power_up, true);
+        c.restarted();
+        c.delivered();
+        c.host_bytes(&d, b"\r");
+        c.hand_bytes(&d, b"\n\r=> ", false);
+        c.host_unread(true);
+        c.host_bytes(&d, b"1M 5000\r");
+        let v = c.violations();
+        assert!(v.len() == 1 && v[0].is_note() && v[0].out_of_step, "{v:?}");
+        // The restart came after the whole line: its power-up prompt is the line's answer.
+        let mut c = HostChecker::new(p);
+        c.host_bytes(&d, b"FGET DP\r");
+        c.hand_bytes(&d, power_up, true);
+        c.restarted();
+        c.delivered();
+        c.host_bytes(&d, b"1M 5000\r");
+        c.hand_bytes(&d, b"1M 5000\n\r=> ", false);
+        c.host_bytes(&d, b"FGET P\r");
+        let v = c.violations();
+        assert!(v.len() == 1 && !v[0].is_note(), "pipelining after a restart stays a finding: {v:?}");
     }
 
     #[test]

@@ -1,18 +1,21 @@
 //! Crash reports on a host's stderr: AddressSanitizer, Rust panics, Python tracebacks, each
-//! turned into a stable signature (kind plus top frames) for deduplication.
+//! turned into a stable signature for deduplication: its kind and the place that raised it
+//! (the innermost frame; the callers that led there are not part of it, so one habit reached
+//! from two call sites is one finding).
 
 /// A crash report found on stderr.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CrashReport {
     /// `asan`, `panic` or `python`.
     pub kind: &'static str,
-    /// Stable across runs of the same bug: the report's kind and its top frames, no addresses.
+    /// Stable across runs of the same bug: the report's kind and where it was raised (the
+    /// innermost frame, no address or line), never the callers that led there.
     pub signature: String,
     /// The report's first line, for people.
     pub headline: String,
 }
 
-/// How many frames a signature keeps.
+/// How many frames a hang's stack keeps (for people; its signature is the first).
 const TOP_FRAMES: usize = 3;
 
 /// Finds the first crash report on `stderr`.
@@ -30,18 +33,34 @@ fn asan(s: &str) -> Option<CrashReport> {
         .next()
         .unwrap_or("unknown")
         .to_string();
-    let frames: Vec<String> = rest
+    // Frames of the first stack only (the access's, not the allocation's), the sanitizer's
+    // own left out, with whether each is a shared library's (`(/lib/…/libc.so.6+0x…)`): the
+    // innermost of the host's own is where it made the bad access (a `strcpy` intercepted in
+    // the sanitizer's library was given a bad buffer by its caller).
+    let frames: Vec<(String, bool)> = rest
         .lines()
+        .skip(1)
+        .map(str::trim_start)
+        .skip_while(|l| !l.starts_with('#'))
+        .take_while(|l| l.starts_with('#'))
         .filter_map(|l| {
-            let l = l.trim_start();
-            l.strip_prefix('#')?;
-            let f = l.split(" in ").nth(1)?.split_whitespace().next()?;
-            Some(f.to_string())
+            let mut words = l.split(" in ").nth(1)?.split_whitespace();
+            let func = words.next()?.to_string();
+            let library = words.next().is_some_and(|w| w.contains(".so"));
+            Some((func, library))
         })
-        .filter(|f| !f.starts_with("__asan") && !f.starts_with("__interceptor") && !f.starts_with("__interception"))
-        .take(TOP_FRAMES)
+        .filter(|(f, _)| {
+            !f.starts_with("__asan") && !f.starts_with("__interceptor") && !f.starts_with("__interception")
+        })
         .collect();
-    Some(CrashReport { kind: "asan", signature: format!("asan {what} in {}", frames.join(" < ")), headline })
+    let own = frames.iter().position(|(_, lib)| !lib).unwrap_or(0);
+    let frames: Vec<String> = frames.into_iter().skip(own).map(|(f, _)| f).collect();
+    let site = frames.first().map_or("?", String::as_str);
+    let headline = match frames.get(1) {
+        Some(caller) => format!("{headline} (in {site}, called from {caller})"),
+        None => headline,
+    };
+    Some(CrashReport { kind: "asan", signature: format!("asan {what} in {site}"), headline })
 }
 
 fn panic(s: &str) -> Option<CrashReport> {
@@ -57,6 +76,7 @@ fn panic(s: &str) -> Option<CrashReport> {
 fn python(s: &str) -> Option<CrashReport> {
     let start = s.rfind("Traceback (most recent call last):")?;
     let tb = &s[start..];
+    // Outermost first, as a traceback lists them.
     let mut frames = Vec::new();
     let mut exception = None;
     for l in tb.lines().skip(1) {
@@ -65,7 +85,7 @@ fn python(s: &str) -> Option<CrashReport> {
             let file = f.split('"').next().unwrap_or_default();
             let base = file.rsplit('/').next().unwrap_or(file);
             let func = t.rsplit(", in ").next().unwrap_or("?");
-            frames.push(format!("{base}:{func}"));
+            frames.push((format!("{base}:{func}"), python_library(file)));
         } else if !l.starts_with(' ') && !t.is_empty() {
             exception = Some(t.to_string());
             break;
@@ -73,8 +93,23 @@ fn python(s: &str) -> Option<CrashReport> {
     }
     let exception = exception.unwrap_or_else(|| "unknown exception".into());
     let ty = exception.split(':').next().unwrap_or_default().to_string();
-    let top: Vec<String> = frames.iter().rev().take(TOP_FRAMES).cloned().collect();
-    Some(CrashReport { kind: "python", signature: format!("python {ty} in {}", top.join(" < ")), headline: exception })
+    // Where it was raised: in the host's own code, the bug is there; in a library (pyserial's
+    // read when the port went away), the host's bug is that it does not handle what the
+    // library raises, one habit however many of its call sites it escapes from.
+    let site = frames.last().map_or("?", |(f, _)| f.as_str());
+    let mut headline = exception.clone();
+    if frames.last().is_some_and(|(_, lib)| *lib)
+        && let Some((own, _)) = frames.iter().rev().find(|(_, lib)| !lib)
+    {
+        headline = format!("{exception} (raised in {site}, called from {own})");
+    }
+    Some(CrashReport { kind: "python", signature: format!("python {ty} in {site}"), headline })
+}
+
+/// Whether a Python frame's file is the interpreter's or an installed package's, not the
+/// host's own code.
+fn python_library(file: &str) -> bool {
+    file.contains("/lib/python") || file.contains("-packages/") || file.starts_with('<')
 }
 
 /// Where a hung host was stuck: its innermost frames, its own code first.
@@ -107,8 +142,7 @@ pub fn faulthandler_frames(dump: &str) -> Option<String> {
         let file = f.split('"').next().unwrap_or_default();
         let func = t.rsplit(" in ").next().unwrap_or("?").trim();
         let base = file.rsplit('/').next().unwrap_or(file);
-        let library = file.contains("/lib/python") || file.contains("-packages/") || file.starts_with('<');
-        all.push((format!("{base}:{func}"), library));
+        all.push((format!("{base}:{func}"), python_library(file)));
     }
     own_first(all)
 }
@@ -239,10 +273,50 @@ mod tests {
     use super::*;
 
     #[test]
-    fn asan_reports_keep_the_top_frames_without_addresses() {
+    fn asan_reports_are_signed_by_the_hosts_frame_nearest_the_bad_access() {
         let s = "noise\n=================================================================\n==123==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffd at pc 0x55 bp 0x7f sp 0x7f\nWRITE of size 1 at 0x7ffd thread T0\n    #0 0x55d in read_line /tmp/host.c:20\n    #1 0x55e in main /tmp/host.c:40\n    #2 0x7f1 in __libc_start_main\n";
         let r = crash_report(s).unwrap();
-        assert_eq!(r.signature, "asan stack-buffer-overflow in read_line < main < __libc_start_main");
+        assert_eq!(r.signature, "asan stack-buffer-overflow in read_line");
+        // The same bad access reached from another caller is the same finding.
+        let other = s.replace("main /tmp/host.c:40", "parse_answer /tmp/host.c:60");
+        assert_eq!(crash_report(&other).unwrap().signature, r.signature);
+        assert!(crash_report(&other).unwrap().headline.ends_with("(in read_line, called from parse_answer)"));
+        // A libc function the sanitizer intercepts was handed the bad buffer by the host's
+        // code: that is where it is signed. The allocation's stack is not read.
+        let strcpy = "==9==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffd\nWRITE of size 9 at 0x7ffd thread T0\n    #0 0x7f1 in strcpy (/lib/x86_64-linux-gnu/libasan.so.8+0x5e)\n    #1 0x55d in copy_name /tmp/host.c:12\n    #2 0x55e in main /tmp/host.c:40\n\n0x7ffd is located in stack of thread T0\n    #0 0x55f in other_place /tmp/host.c:3\n";
+        assert_eq!(crash_report(strcpy).unwrap().signature, "asan stack-buffer-overflow in copy_name");
+    }
+
+    /// A Python exception is signed by its type and where it was raised, not by the callers:
+    /// pyserial's `SerialException` on a hang-up is one finding whether the host's helper or
+    /// its main loop was reading; two types, or two raising places, stay two.
+    #[test]
+    fn one_exception_from_one_place_is_one_signature_whatever_the_caller() {
+        let tb = |caller: &str| {
+            format!(
+                "Traceback (most recent call last):\n  File \"/h/host.py\", line 40, in <module>\n    main()\n{caller}  File \"/usr/lib/python3/site-packages/serial/serialposix.py\", line 595, in read\n    raise SerialException(\nserial.serialutil.SerialException: device reports readiness to read but returned no data\n"
+            )
+        };
+        let helper =
+            crash_report(&tb("  File \"/h/gclhost.py\", line 31, in read_until\n    buf += port.read(1)\n")).unwrap();
+        let direct =
+            crash_report(&tb("  File \"/h/host.py\", line 19, in scenario\n    block = port.read(10)\n")).unwrap();
+        assert_eq!(helper.signature, "python serial.serialutil.SerialException in serialposix.py:read");
+        assert_eq!(direct.signature, helper.signature);
+        assert!(
+            helper.headline.ends_with("(raised in serialposix.py:read, called from gclhost.py:read_until)"),
+            "{}",
+            helper.headline
+        );
+        let raised_here = |func: &str, ty: &str| {
+            format!(
+                "Traceback (most recent call last):\n  File \"/h/host.py\", line 40, in <module>\n    main()\n  File \"/h/host.py\", line 9, in {func}\n    x = t[k]\n{ty}: 3\n"
+            )
+        };
+        let a = crash_report(&raised_here("decode", "IndexError")).unwrap();
+        assert_eq!(a.signature, "python IndexError in host.py:decode");
+        assert_ne!(crash_report(&raised_here("decode", "KeyError")).unwrap().signature, a.signature);
+        assert_ne!(crash_report(&raised_here("parse", "IndexError")).unwrap().signature, a.signature);
     }
 
     #[test]
@@ -251,7 +325,7 @@ mod tests {
         assert_eq!(crash_report(p).unwrap().signature, "panic at src/main.rs:10");
         let t = "Traceback (most recent call last):\n  File \"/x/host.py\", line 30, in <module>\n    main()\n  File \"/x/host.py\", line 12, in parse\n    return int(x)\nValueError: invalid literal for int()\n";
         let r = crash_report(t).unwrap();
-        assert_eq!(r.signature, "python ValueError in host.py:parse < host.py:<module>");
+        assert_eq!(r.signature, "python ValueError in host.py:parse");
         assert_eq!(crash_report("all fine\n"), None);
         assert_eq!(signal_name(11), "SIGSEGV");
     }

@@ -30,7 +30,9 @@ use serde::{Deserialize, Serialize};
 pub const SCHEMA: &str = include_str!("../../../../reports/fuzz-host.schema.json");
 
 pub use check::{HostChecker, HostClause, HostViolation};
-pub use session::{Dir, Exchange, HostEnd, HostRun, RunError, RunResult, Transport, run_once, run_once_until};
+pub use session::{
+    Dir, Exchange, HostEnd, HostRun, Leftover, RunError, RunResult, Transport, run_once, run_once_until,
+};
 
 use crate::sim::misbehave::{Operator, Planned, Schedule};
 
@@ -145,12 +147,18 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
         (HostEnd::Exit(_), _) => {}
     }
     if !r.leftovers.is_empty() {
+        // Named by what was left (its command line, the same from run to run); where it was
+        // (its stack, which may differ) goes into the message.
+        let mut commands: Vec<&str> = r.leftovers.iter().map(|l| l.command.as_str()).collect();
+        commands.sort_unstable();
+        commands.dedup();
+        let left: Vec<String> = r.leftovers.iter().map(ToString::to_string).collect();
         v.push(Verdict {
             kind: FindingKind::Leftover,
-            signature: "leftover: a process held the port or stderr after the host ended".into(),
+            signature: format!("leftover: {}", commands.join(" + ")),
             message: format!(
                 "the host left {} behind holding the port or its stderr after it ended; killed",
-                r.leftovers.join(", ")
+                left.join("; ")
             ),
         });
     }

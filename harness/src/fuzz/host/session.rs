@@ -14,7 +14,8 @@
 //! process group is killed, stderr is read for a short grace only, and when the port or the
 //! host's stderr is still held (the transport never heard the port's last close, or stderr
 //! never ended) the process holding it (one that left the group with `setsid`) is found
-//! through `/proc`, killed and named in the result ([`RunResult::leftovers`]). A run whose
+//! through `/proc`, its command line and stack taken, killed and named in the result
+//! ([`RunResult::leftovers`]). A run whose
 //! host left nothing behind reads no `/proc`.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
@@ -111,9 +112,8 @@ pub struct RunResult {
     pub end: HostEnd,
     /// Where a hung host was stuck, when its stack could be taken.
     pub stack: Option<super::detect::HangStack>,
-    /// Processes the host left behind holding the port or its stderr, killed after it ended
-    /// (`pid N (name)`).
-    pub leftovers: Vec<String>,
+    /// Processes the host left behind holding the port or its stderr, killed after it ended.
+    pub leftovers: Vec<Leftover>,
     /// How long the host took to send or exit once the hand went silent (a `silence` that
     /// fired), or `None` (no silence, or the host did neither before the run ended).
     pub gave_up_after: Option<Duration>,
@@ -140,6 +140,49 @@ pub struct RunResult {
     pub answers: u32,
     /// Wall time of the run.
     pub elapsed: Duration,
+}
+
+/// A process the host left behind (it left the host's process group and still held the port
+/// or the host's stderr after the host ended), as found before it was killed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Leftover {
+    /// Its process id.
+    pub pid: i32,
+    /// Its name (`comm`).
+    pub name: String,
+    /// Its command line: the program's file name and its arguments, the port written
+    /// `{port}` (the same from run to run), at most [`LEFTOVER_COMMAND_CAP`] characters.
+    pub command: String,
+    /// Where it was, when its stack could be taken (as for a hung host).
+    pub stack: Option<super::detect::HangStack>,
+}
+
+impl std::fmt::Display for Leftover {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "pid {} ({}): {}", self.pid, self.name, self.command)?;
+        if let Some(st) = &self.stack {
+            write!(f, ", in {} ({})", st.frames, st.by)?;
+        }
+        Ok(())
+    }
+}
+
+/// Longest command line kept of a leftover process.
+pub const LEFTOVER_COMMAND_CAP: usize = 120;
+
+/// A process's command line as a leftover's signature shows it: `argv[0]`'s file name and the
+/// arguments, `port` replaced by `{port}`, cut at [`LEFTOVER_COMMAND_CAP`] characters.
+fn command_line(pid: i32, port: &str) -> String {
+    let raw = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let mut words = raw.split(|b| *b == 0).filter(|w| !w.is_empty()).map(|w| String::from_utf8_lossy(w).into_owned());
+    let Some(first) = words.next() else { return String::new() };
+    let program = first.rsplit('/').next().unwrap_or(&first).to_string();
+    let line = std::iter::once(program).chain(words).collect::<Vec<_>>().join(" ");
+    let line = if port.is_empty() { line } else { line.replace(port, "{port}") };
+    match line.char_indices().nth(LEFTOVER_COMMAND_CAP) {
+        Some((i, _)) => format!("{}…", &line[..i]),
+        None => line,
+    }
 }
 
 /// Why a run could not be made (not a finding: infrastructure).
@@ -201,6 +244,8 @@ pub(crate) struct Log {
     /// When a `silence` fired, and when the host first sent after it.
     silenced_at: Option<Instant>,
     acted_at: Option<Instant>,
+    /// Where the hang clock starts: when the host last sent, or when the hand's last answer
+    /// went out or is due to (an answer held back), whichever is later.
     last_activity: Instant,
     hang_up: Option<StopHandle>,
     pub(crate) hung_up: bool,
@@ -328,9 +373,14 @@ impl LineTap for Tap {
     fn host_bytes(&mut self, device: &Device, bytes: &[u8]) {
         let Ok(mut log) = self.0.lock() else { return };
         let log = &mut *log;
-        log.last_activity = Instant::now();
+        let now = Instant::now();
+        // Never before an answer still held back: a host that writes on while its answer is
+        // held soon blocks in its write (the hand takes no more input while the output it
+        // queued behind the held answer is at its cap), and is waiting for the hand, not
+        // hung, until that answer is out.
+        log.last_activity = log.last_activity.max(now);
         if log.silenced_at.is_some() && log.acted_at.is_none() {
-            log.acted_at = Some(log.last_activity);
+            log.acted_at = Some(now);
         }
         log.checker.host_bytes(device, bytes);
         // A reaction is the first command sent after its misbehaviour.
@@ -647,7 +697,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         if let Some(v) = verdict {
             let mut reaped = false;
             if !cancelled {
-                stack = take_stack(pid.as_raw(), &errbuf, &rx, &mut reaped);
+                stack = take_stack(pid.as_raw(), &errbuf, Some(&rx), &mut reaped);
             }
             let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
             if !reaped {
@@ -689,9 +739,12 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let found = if err_open || port_held { search(err_inode) } else { Vec::new() };
     if !found.is_empty() {
         for (p, name) in found {
+            // What it is and where it is, before it goes: the signature names it.
+            let command = command_line(p, &port);
+            let stack = take_stack(p, &errbuf, None, &mut false);
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
-            leftovers.push(format!("pid {p} ({name})"));
+            leftovers.push(Leftover { pid: p, name, command, stack });
         }
         wait_eof(&errbuf, STDERR_GRACE);
     }
@@ -755,12 +808,14 @@ fn wait_eof(errbuf: &Mutex<ErrBuf>, limit: Duration) -> bool {
     }
 }
 
-/// The stack of the hung host, taken before it is killed: a Python interpreter dumps its
-/// frames (`faulthandler`, on SIGABRT) on stderr; a native program is sampled.
+/// The stack of a hung host (`ended` hears of its end) or of a process it left behind
+/// (`None`), taken before it is killed: a Python interpreter dumps its frames
+/// (`faulthandler`, on SIGABRT) on stderr (a leftover's only when it still holds the host's
+/// stderr); a native program is sampled.
 fn take_stack(
     pid: i32,
     errbuf: &Mutex<ErrBuf>,
-    ended: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
+    ended: Option<&mpsc::Receiver<std::io::Result<std::process::ExitStatus>>>,
     reaped: &mut bool,
 ) -> Option<super::detect::HangStack> {
     let (target, python) = stack_target(pid);
@@ -768,12 +823,12 @@ fn take_stack(
         let from = errbuf.lock().ok()?.kept.len();
         nix::sys::signal::kill(nix::unistd::Pid::from_raw(target), nix::sys::signal::Signal::SIGABRT).ok()?;
         // It dumps, then dies of the signal; its stderr is then at its end, or nearly.
-        if target == pid {
+        if let Some(ended) = ended.filter(|_| target == pid) {
             *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
             wait_eof(errbuf, Duration::from_millis(200));
         } else {
-            // Started through a wrapper (a shell, env), which still holds stderr: the dump is
-            // in once the interpreter is gone.
+            // Started through a wrapper (a shell, env), which still holds stderr, or not a
+            // child of ours: the dump is in once the interpreter is gone.
             let gone = Instant::now() + Duration::from_secs(2);
             while running(target) && Instant::now() < gone {
                 std::thread::sleep(Duration::from_millis(10));
