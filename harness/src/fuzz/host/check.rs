@@ -527,6 +527,10 @@ impl HostChecker {
     /// output): it is in supervisory mode, at the prompt once that output is delivered, with
     /// no line or block under way, whatever mode it was in.
     pub fn restarted(&mut self) {
+        // A restart that cut in while the host's line was only part-sent gives that line the
+        // power-up prompt for an answer; the rest of the line then reaches a fresh hand and
+        // gets a prompt of its own, one the host did not ask for: it is out of step.
+        self.out_of_step |= !self.line.is_empty();
         self.mode = Mode::Idle;
         self.block_due = 0;
         self.block_size = 0;
@@ -662,6 +666,36 @@ mod tests {
             let v = c.violations();
             assert_eq!(v.len(), 1, "{v:?}");
             assert_eq!((v[0].clause, v[0].is_note()), (HostClause::WaitsForAnswer, note), "{v:?}");
+        }
+    }
+
+    /// The hand restarts while the host's line is half-sent: the power-up prompt answers it,
+    /// the rest of the line gets a prompt of its own, and a host that waits for each prompt
+    /// goes on one answer early through the hand's fault (a note). A restart after the whole
+    /// line leaves it in step: early is a finding.
+    #[test]
+    fn a_restart_inside_the_hosts_line_puts_it_out_of_step_without_a_finding() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let power_up = b"\n\rBarrettHand Firmware\n\r=> ";
+        for (first, rest, note) in [(&b"HI"[..], &b"\r"[..], true), (b"HI\r", b"", false)] {
+            let mut c = HostChecker::new(p.clone());
+            c.host_bytes(&d, first);
+            c.hand_bytes(&d, power_up, true);
+            c.restarted();
+            c.delivered();
+            if !rest.is_empty() {
+                c.host_bytes(&d, rest);
+                c.hand_bytes(&d, b"\n\r=> ", false);
+            }
+            c.host_bytes(&d, b"FGET P\r");
+            c.hand_bytes(&d, ANSWER, false);
+            // Sent on the stale prompt, before this answer came.
+            c.host_bytes(&d, b"FGET P\r");
+            let v = c.violations();
+            let early: Vec<_> = v.iter().filter(|x| x.clause == HostClause::WaitsForAnswer).collect();
+            assert_eq!(early.len(), 1, "{v:?}");
+            assert_eq!(early[0].is_note(), note, "{v:?}");
         }
     }
 
