@@ -560,20 +560,22 @@ impl PassEntry {
 
 /// The systematic pass of a campaign whose run without misbehaviour gave these kinds of
 /// answer: every operator of `weights` (weight above 0) at every kind it applies to, one per
-/// run, in rounds: each round gives every operator with a kind left to visit one run, at the
-/// kind left to it that has had the fewest runs so far (a round spreads over the kinds), so
-/// the first round tries every misbehaviour once. With `unpaced`, and `line-rate` among
+/// run, in rounds: each round gives every operator with a kind left to visit one run (the
+/// heavier operators first), at the kind left to it that has had the fewest runs so far (a
+/// round spreads over the kinds), so the first round tries every misbehaviour once. With `unpaced`, and `line-rate` among
 /// `weights` (at any weight), it opens with a run at the hand's line rate.
 fn systematic_pass(kinds: &[AnswerKindSeen], weights: &Weights, unpaced: bool) -> Vec<PassEntry> {
     let mut pass = Vec::new();
     if unpaced && weights.0.iter().any(|(op, _)| *op == Operator::LineRate) {
         pass.push(PassEntry { op: Operator::LineRate, answer: 1, visit: 0 });
     }
-    // Each operator with the kinds (their first answers) it has still to visit.
-    let mut left: Vec<(Operator, Vec<u32>)> = weights
-        .0
-        .iter()
-        .filter(|(op, w)| *w > 0 && *op != Operator::LineRate)
+    // Each operator with the kinds (their first answers) it has still to visit, the heavier
+    // first within a round (by default the slow ones, delays, hang-up and silence, come last).
+    let mut by_weight: Vec<&(Operator, u32)> =
+        weights.0.iter().filter(|(op, w)| *w > 0 && *op != Operator::LineRate).collect();
+    by_weight.sort_by_key(|(_, w)| std::cmp::Reverse(*w));
+    let mut left: Vec<(Operator, Vec<u32>)> = by_weight
+        .into_iter()
         .map(|(op, _)| (*op, kinds.iter().filter(|k| k.ops.contains(op)).map(|k| k.answer).collect::<Vec<_>>()))
         .filter(|(_, a)| !a.is_empty())
         .collect();
@@ -871,9 +873,11 @@ mod tests {
         assert_eq!(pairs.len(), n, "no pair twice: {rest:?}");
         let applicable: usize = kinds.iter().map(|k| k.ops.len()).sum();
         assert_eq!(n, applicable);
-        // The first round tries each of the seven operators once.
+        // The first round tries each of the seven operators once, the heaviest first (silence,
+        // weight 1, last).
         let first: BTreeSet<Operator> = rest[..7].iter().map(|e| e.op).collect();
         assert_eq!(first.len(), 7, "{:?}", &rest[..7]);
+        assert_eq!(rest[6].op, Silence, "{:?}", &rest[..7]);
         assert!(rest[..7].iter().all(|e| e.visit == 0));
         // A round spreads over the kinds: the first reaches all four.
         let reached: BTreeSet<u32> = rest[..7].iter().map(|e| e.answer).collect();
