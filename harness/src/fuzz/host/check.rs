@@ -481,11 +481,16 @@ impl HostChecker {
         let looping = self.mode == Mode::Loop;
         // Only a misbehaviour makes an answer end twice (a host that pipelines gets several
         // answers at once, each its own).
+        // A prompt the host did not ask for: a second one in an answer, or one that comes while
+        // the host's line is half-sent (appended to its echo, or a restart's power-up prompt):
+        // the rest of its line then gets a prompt of its own.
         let surplus = misbehaved
             && if looping {
                 device.rt_layout().is_some_and(|l| bytes.len() > l.feedback().size())
             } else {
-                !prompt.is_empty() && bytes.windows(prompt.len()).filter(|w| *w == prompt).count() > 1
+                let prompts =
+                    if prompt.is_empty() { 0 } else { bytes.windows(prompt.len()).filter(|w| *w == prompt).count() };
+                prompts > 1 || (prompts == 1 && !self.line.is_empty())
             };
         self.in_flight.push_back(InFlight {
             ends_wait: looping || bytes.ends_with(prompt),
@@ -527,10 +532,6 @@ impl HostChecker {
     /// output): it is in supervisory mode, at the prompt once that output is delivered, with
     /// no line or block under way, whatever mode it was in.
     pub fn restarted(&mut self) {
-        // A restart that cut in while the host's line was only part-sent gives that line the
-        // power-up prompt for an answer; the rest of the line then reaches a fresh hand and
-        // gets a prompt of its own, one the host did not ask for: it is out of step.
-        self.out_of_step |= !self.line.is_empty();
         self.mode = Mode::Idle;
         self.block_due = 0;
         self.block_size = 0;
@@ -669,20 +670,27 @@ mod tests {
         }
     }
 
-    /// The hand restarts while the host's line is half-sent: the power-up prompt answers it,
-    /// the rest of the line gets a prompt of its own, and a host that waits for each prompt
-    /// goes on one answer early through the hand's fault (a note). A restart after the whole
-    /// line leaves it in step: early is a finding.
+    /// The hand sends a prompt while the host's line is half-sent (a restart's power-up
+    /// prompt, or one appended to the echo): it answers the half line, the rest of the line
+    /// gets a prompt of its own, and a host that waits for each prompt goes on one answer
+    /// early through the hand's fault (a note). A restart after the whole line leaves it in
+    /// step: early is a finding.
     #[test]
-    fn a_restart_inside_the_hosts_line_puts_it_out_of_step_without_a_finding() {
+    fn a_prompt_inside_the_hosts_line_puts_it_out_of_step_without_a_finding() {
         let p = Profile::builtin("seed").unwrap();
         let d = Device::with_profile(p.clone());
-        let power_up = b"\n\rBarrettHand Firmware\n\r=> ";
-        for (first, rest, note) in [(&b"HI"[..], &b"\r"[..], true), (b"HI\r", b"", false)] {
+        let power_up = &b"\n\rBarrettHand Firmware\n\r=> "[..];
+        for (first, answer, restart, rest, note) in [
+            (&b"HI"[..], power_up, true, &b"\r"[..], true),
+            (b"HI", b"HI\n\r=> ", false, b"\r", true),
+            (b"HI\r", power_up, true, b"", false),
+        ] {
             let mut c = HostChecker::new(p.clone());
             c.host_bytes(&d, first);
-            c.hand_bytes(&d, power_up, true);
-            c.restarted();
+            c.hand_bytes(&d, answer, true);
+            if restart {
+                c.restarted();
+            }
             c.delivered();
             if !rest.is_empty() {
                 c.host_bytes(&d, rest);
