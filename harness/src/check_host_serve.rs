@@ -104,6 +104,7 @@ pub fn serve(
         commands: log.checker.commands().to_vec(),
         reactions: Vec::new(),
         answers: log.misbehave.answers(),
+        answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
     })
 }

@@ -99,10 +99,15 @@ fn first_finding(
         calibrate: false,
         shard: None,
     };
+    first_finding_of(&opts, kind, needle)
+}
+
+/// [`first_finding`] of a campaign with these options.
+fn first_finding_of(opts: &FuzzOptions, kind: FindingKind, needle: &str) -> Option<(String, Duration)> {
     let stop = AtomicBool::new(false);
     let found = Mutex::new(None);
     let started = Instant::now();
-    fuzz(&opts, &stop, &|e| {
+    fuzz(opts, &stop, &|e| {
         if let Event::Found(f) = e
             && f.verdict.kind == kind
             && f.verdict.signature.contains(needle)
@@ -133,6 +138,43 @@ const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
     ("py_loop_no_abort.py", "truncate", FindingKind::Violation, "leaves-cleanly"),
     ("py_rt_short_block.py", "truncate", FindingKind::Violation, "realtime-blocks"),
 ];
+
+/// A default campaign, no misbehaviour steered (`gcl fuzz host -- HOST`: every misbehaviour at
+/// its default weight, one job, seed 0), finds the bugs that need one misbehaviour at one
+/// kind of answer, or the timing of a real line, early: its systematic pass puts each
+/// misbehaviour at each kind of answer before any random draw, and makes one run at the
+/// hand's line rate. py_banner_version needs a banner variant after RESET (the one answer with
+/// a banner); py_echo_is_ack sends on once the echo has come, which only a line that takes
+/// time to carry the rest of the answer shows. 60 random runs found neither.
+#[test]
+fn a_default_campaign_finds_what_needs_one_misbehaviour_at_one_kind_of_answer() {
+    if !python_ready() {
+        return;
+    }
+    let default = |file: &str, runs: u64| FuzzOptions {
+        run: host_run(python(file)),
+        seed: 0,
+        runs: Some(runs),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 1,
+        weights: Weights::default(),
+        max_planned: 3,
+        minimize: false,
+        guided: true,
+        calibrate: false,
+        shard: None,
+    };
+    // Run 1 is the line-rate run.
+    let (sig, _) = first_finding_of(&default("py_echo_is_ack.py", 2), FindingKind::Violation, "waits-for-answer")
+        .expect("py_echo_is_ack: no waits-for-answer violation in the first 2 runs of a default campaign");
+    println!("py_echo_is_ack.py: {sig}");
+    // banner-variant is the tenth misbehaviour of the first round here (the nine of weight 3
+    // that apply to a supervisory host go first); after the line-rate run, run 11.
+    let (sig, _) = first_finding_of(&default("py_banner_version.py", 12), FindingKind::Crash, "python ValueError")
+        .expect("py_banner_version: no ValueError in the first 12 runs of a default campaign");
+    println!("py_banner_version.py: {sig}");
+}
 
 #[test]
 fn python_mutants_are_found_with_the_right_kind() {

@@ -482,7 +482,14 @@ fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
     let c = campaign(trusting.clone(), "rt-block-length", 10, false);
     let found: Vec<(FindingKind, &str)> =
         c.findings.iter().map(|f| (f.verdict.kind, f.verdict.signature.as_str())).collect();
-    assert_eq!(found, vec![(FindingKind::WrongValue, "silent wrong value: P")]);
+    // Named by the code the host said formed the belief (`gcl-observe: P 1 5120 WHERE`).
+    assert_eq!(found, vec![(FindingKind::WrongValue, "silent wrong value: P at py_trusts_short_block.py:scenario")]);
+    let f = &c.findings[0];
+    assert!(
+        f.verdict.message.contains("in RealTime feedback") && f.verdict.message.contains("after rt-block-length"),
+        "{}",
+        f.verdict.message
+    );
     // Its one bug, once: a feedback block held back past its read timeout (and the one queued
     // behind it) makes it go on without them, and it may take the late block for a later
     // one's: the hand's fault, no finding (it was a second, `waits-for-answer`, finding).

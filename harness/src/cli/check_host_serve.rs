@@ -33,8 +33,9 @@ pub struct ServeArgs {
     /// With --serve: a deliberate firmware bug of the hand (repeatable; see `gcl sim --help`).
     #[arg(long, value_name = "NAME", requires = "serve")]
     fault: Vec<Fault>,
-    /// With --serve: misbehave by the schedule an unguided `gcl fuzz host --seed SEED` campaign
-    /// draws for its run I (SEED:I, I >= 1), planned within the session's first 10 answers.
+    /// With --serve: misbehave by the random schedule an unguided `gcl fuzz host --seed SEED`
+    /// campaign draws for its run I past its systematic pass (SEED:I, I >= 1), planned within
+    /// the session's first 10 answers.
     #[arg(long, value_name = "SEED:I", requires = "serve", value_parser = seed_run)]
     misbehave: Option<(u64, u64)>,
     /// With --misbehave: only these misbehaviours, optionally weighted (as `gcl fuzz host --ops`).

@@ -131,11 +131,16 @@ takes to send or exit is its timeout; a hang is then silence for twice as long p
 protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
 is unsafe (a crash, a hang, an exit code, sending before an answer the hand sent whole);
 otherwise it is an INFO note in the report. A host may say what it believes with
-`gcl-observe: NAME MOTOR VALUE` lines on stderr or on the descriptor GCL_OBSERVE_FD names
-(`gcl-observe: error TEXT` when it saw the hand misbehave): a value the hand never sent,
-before such an error, is a silent-wrong-value finding. Run 0 has no misbehaviour; later runs follow a schedule drawn from --seed,
-or a mutation of a schedule that made the host take a new path. Each distinct finding is
-minimized and written to --out as a bundle; --replay BUNDLE runs it again.
+`gcl-observe: NAME MOTOR VALUE [WHERE]` lines on stderr or on the descriptor GCL_OBSERVE_FD
+names (WHERE: the host's code that formed the belief; `gcl-observe: error TEXT` when it saw
+the hand misbehave): a value the hand never sent, before such an error, is a
+silent-wrong-value finding, named by WHERE or else by the answer it came from. Run 0 has no
+misbehaviour. Then a systematic pass puts every misbehaviour at every kind of answer run 0
+showed (echo and values, prompt only, banner, feedback block...), one per run, the first
+round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
+line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
+schedule that made the host take a new path. Each distinct finding is minimized and written
+to --out as a bundle; --replay BUNDLE runs it again.
 
 Misbehaviours (--ops NAME[,NAME=WEIGHT...]; default weight shown):
 {}
@@ -289,6 +294,14 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         campaign.paths,
         campaign.corpus
     );
+    if campaign.pass_runs > 0 {
+        let kinds: Vec<&str> = campaign.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
+        eprintln!(
+            "systematic pass: {} runs, every misbehaviour at every kind of answer ({})",
+            campaign.pass_runs,
+            kinds.join("; ")
+        );
+    }
     if let Some(c) = &campaign.calibration {
         let points: Vec<String> = c
             .points

@@ -128,6 +128,11 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
         merged.elapsed_ms = merged.elapsed_ms.max(c.elapsed_ms);
         merged.corpus += c.corpus;
         merged.paths += c.paths;
+        // Every shard learns the same kinds of answer and pass from its own run 0.
+        if merged.answer_kinds.is_empty() {
+            merged.answer_kinds = c.answer_kinds;
+            merged.pass_runs = c.pass_runs;
+        }
         for (op, states) in c.fired_at {
             let m = merged.fired_at.entry(op).or_default();
             for (st, n) in states {

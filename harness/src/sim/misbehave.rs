@@ -58,9 +58,8 @@ impl Shaped {
 
 macro_rules! operators {
     ($($(#[doc = $doc:literal])* $v:ident => $name:literal, $weight:literal;)*) => {
-        /// A named misbehaviour.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-        #[serde(rename_all = "kebab-case")]
+        /// A named misbehaviour (serialized by its name).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Operator {
             $($(#[doc = $doc])* $v,)*
         }
@@ -126,6 +125,31 @@ operators! {
     HangUp => "hang-up", 1;
     /// Goes silent part-way through an answer, the port left open (a pulled cable, a hand powered off): nothing more is sent in the session.
     Silence => "silence", 1;
+    /// No misbehaviour: the whole session at the hand's line rate (its BAUD), as on a real serial line, where the rest of an answer is still crossing when its echo has come (an unpaced campaign's systematic pass makes one such run; weight 0: never drawn at random).
+    LineRate => "line-rate", 0;
+}
+
+impl Operator {
+    /// Whether it changes what the hand says or when (every operator but `line-rate`, the
+    /// timing of a real line): a host may give up on an answer it changed.
+    pub fn misbehaves(self) -> bool {
+        self != Operator::LineRate
+    }
+}
+
+impl Serialize for Operator {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Operator {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Operator, D::Error> {
+        let name = String::deserialize(d)?;
+        // Schedules written before operators were serialized by name spelled crlf `cr-lf`.
+        let name = if name == "cr-lf" { "crlf" } else { name.as_str() };
+        name.parse().map_err(serde::de::Error::custom)
+    }
 }
 
 impl std::fmt::Display for Operator {
@@ -194,6 +218,24 @@ pub struct Fired {
     pub what: String,
 }
 
+/// A kind of answer a session gave, as the systematic pass of `gcl fuzz host` covers them:
+/// answers of one kind have the same shape (echo, value lines, `ERR n`, banner, prompt, or a
+/// RealTime block), so the same misbehaviours apply to them.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AnswerKindSeen {
+    /// The kind: `echo, values, prompt`, `banner, prompt`, `feedback block`...
+    pub kind: String,
+    /// The first answer of this kind (1-based).
+    pub answer: u32,
+    /// The protocol state of that answer (`answer to FGET`).
+    pub state: String,
+    /// The operators that apply to it.
+    pub ops: Vec<Operator>,
+}
+
+/// Most kinds of answer recorded per session.
+const KINDS_CAP: usize = 32;
+
 /// What kind of answer a chunk of output is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum AnswerKind {
@@ -213,6 +255,8 @@ pub struct Misbehave {
     fired: Vec<Fired>,
     /// The `silence` operator fired: every answer from then on is dropped.
     silent: bool,
+    /// The kinds of answer seen, in order of first appearance.
+    kinds: Vec<AnswerKindSeen>,
 }
 
 impl Misbehave {
@@ -221,7 +265,7 @@ impl Misbehave {
         let mut fresh = Device::with_profile(device.profile().clone());
         let power_up = fresh.take_output();
         let done = vec![false; schedule.planned.len()];
-        Misbehave { schedule, done, answers: 0, power_up, fired: Vec::new(), silent: false }
+        Misbehave { schedule, done, answers: 0, power_up, fired: Vec::new(), silent: false, kinds: Vec::new() }
     }
 
     /// What fired so far.
@@ -234,6 +278,29 @@ impl Misbehave {
         self.answers
     }
 
+    /// The kinds of answer the hand gave so far (as made, before any misbehaviour), each with
+    /// its first answer and the operators that apply to it.
+    pub fn kinds(&self) -> &[AnswerKindSeen] {
+        &self.kinds
+    }
+
+    /// Records the kind of this answer when it is a new one.
+    fn note_kind(&mut self, device: &Device, bytes: &[u8], kind: AnswerKind, state: &str) {
+        if self.kinds.len() >= KINDS_CAP {
+            return;
+        }
+        let name = kind_name(device, bytes, kind);
+        if self.kinds.iter().any(|k| k.kind == name) {
+            return;
+        }
+        let ops = Operator::ALL
+            .iter()
+            .copied()
+            .filter(|&op| apply(op, 0, kind, device, &self.power_up, &mut Shaped::plain(bytes)).is_some())
+            .collect();
+        self.kinds.push(AnswerKindSeen { kind: name, answer: self.answers, state: state.to_string(), ops });
+    }
+
     /// Shapes one answer; `state` names the protocol state it answers (for [`Fired`]).
     pub fn shape(&mut self, device: &Device, bytes: &[u8], state: &str) -> Shaped {
         self.answers += 1;
@@ -242,6 +309,9 @@ impl Misbehave {
         } else {
             AnswerKind::Supervisory
         };
+        if !bytes.is_empty() {
+            self.note_kind(device, bytes, kind, state);
+        }
         if self.silent {
             return Shaped::plain(&[]);
         }
@@ -259,6 +329,52 @@ impl Misbehave {
         }
         out
     }
+}
+
+/// The shape of an answer: `feedback block`, or the parts of a supervisory one in order
+/// (`echo`, `banner`, `values`, `ERR`, `prompt`; a piece of an answer has only some).
+fn kind_name(device: &Device, bytes: &[u8], kind: AnswerKind) -> String {
+    if kind == AnswerKind::Feedback {
+        return "feedback block".into();
+    }
+    let framing = &device.profile().framing;
+    let (eol, prompt) = (framing.line_ending.as_bytes(), framing.prompt.as_bytes());
+    let banner = device.profile().banner.first().map(|b| b.as_bytes().to_vec()).unwrap_or_default();
+    let mut parts: Vec<&str> = Vec::new();
+    let body = bytes.strip_suffix(prompt).filter(|_| !prompt.is_empty());
+    let text = body.unwrap_or(bytes);
+    let mut lines: Vec<&[u8]> = if eol.is_empty() { vec![text] } else { split(text, eol) };
+    // The first line is the echo when the answer starts with one (an answer to ^C or a timer
+    // starts with the line ending).
+    if lines.len() > 1 && !lines[0].is_empty() {
+        parts.push("echo");
+    }
+    if lines.len() > 1 {
+        lines.remove(0);
+    }
+    if find(bytes, &banner).is_some() {
+        parts.push("banner");
+    } else if lines.iter().any(|l| l.starts_with(b"ERR")) {
+        parts.push("ERR");
+    } else if lines.iter().any(|l| !l.is_empty()) {
+        parts.push("values");
+    }
+    if body.is_some() {
+        parts.push("prompt");
+    }
+    if parts.is_empty() { "other".into() } else { parts.join(", ") }
+}
+
+/// `hay` split at every `sep` (non-empty).
+fn split<'a>(hay: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {
+    let mut out = Vec::new();
+    let mut rest = hay;
+    while let Some(i) = find(rest, sep) {
+        out.push(&rest[..i]);
+        rest = &rest[i + sep.len()..];
+    }
+    out.push(rest);
+    out
 }
 
 /// Where `needle` first occurs in `hay` (an empty needle, as a loaded profile's framing may
@@ -519,6 +635,8 @@ fn apply(
             out.hang_up = true;
             Some(format!("line hung up after {at} bytes of the answer"))
         }
+        // The pace is the session's (the transport's owner reads the schedule); nothing changes.
+        Operator::LineRate => Some("the session at the hand's line rate (its BAUD)".into()),
     }
 }
 
@@ -542,9 +660,13 @@ mod tests {
     fn names_round_trip_and_every_operator_has_a_description() {
         for op in Operator::ALL {
             assert_eq!(op.name().parse::<Operator>().unwrap(), *op);
+            // JSON (schedules, fuzz.json) spells it by its name too.
+            assert_eq!(serde_json::to_value(op).unwrap(), serde_json::Value::from(op.name()));
+            assert_eq!(serde_json::from_value::<Operator>(op.name().into()).unwrap(), *op);
             assert!(!op.description().is_empty(), "{op}");
         }
         assert!("nope".parse::<Operator>().unwrap_err().to_string().contains("truncate"));
+        assert_eq!(serde_json::from_value::<Operator>("cr-lf".into()).unwrap(), Operator::CrLf);
     }
 
     #[test]

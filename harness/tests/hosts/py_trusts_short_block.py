@@ -1,10 +1,11 @@
 """BUG (Barrett's API accepted a RealTime block two bytes short and returned success): in
 RealTime, reads a feedback block with a timeout and decodes whatever arrived, a short block
 padded with zeros, and publishes the positions it decoded. It says what it believes with the
-observation protocol: `gcl-observe: P MOTOR VALUE` lines on the descriptor GCL_OBSERVE_FD.
+observation protocol: `gcl-observe: P MOTOR VALUE WHERE` lines on the descriptor
+GCL_OBSERVE_FD, WHERE naming the code that decoded the value.
 
-Expected: `gcl fuzz host` reports a silent wrong value (a position the hand never sent); no
-crash, no hang, exit 0.
+Expected: `gcl fuzz host` reports a silent wrong value (a position the hand never sent),
+`silent wrong value: P at py_trusts_short_block.py:scenario`; no crash, no hang, exit 0.
 """
 import os
 import sys
@@ -32,7 +33,8 @@ def scenario(port):
         port.write(b"C\x14\x14\x14")
         block = port.read(FEEDBACK).ljust(FEEDBACK, b"\0")  # trusts a short block
         for m in range(3):
-            observe("P %d %d" % (m + 1, block[3 * m + 2] * 256 + block[3 * m + 3]))
+            # WHERE (optional): the code that formed the belief, named in the finding.
+            observe("P %d %d py_trusts_short_block.py:scenario" % (m + 1, block[3 * m + 2] * 256 + block[3 * m + 3]))
     port.write(b"\x03")
     port.read(100)
 

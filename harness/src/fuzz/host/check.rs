@@ -158,10 +158,6 @@ pub struct HostChecker {
     out_of_step: bool,
     /// The answer still coming was broken by a misbehaviour: the host may give up on it.
     broken: bool,
-    /// The hand restarted while the host's line was under way: the rest of that line reaches
-    /// the new hand as a line of its own, whose prompt the host never asked for (it took the
-    /// power-up prompt for its answer).
-    cut_line: bool,
     /// The command word of the last line sent.
     last_command: Option<String>,
     /// In RealTime: data bytes still due for the block being sent.
@@ -200,7 +196,6 @@ impl HostChecker {
             in_flight: VecDeque::new(),
             out_of_step: false,
             broken: false,
-            cut_line: false,
             last_command: None,
             block_due: 0,
             block_size: 0,
@@ -352,11 +347,6 @@ impl HostChecker {
     }
 
     fn end_line(&mut self) {
-        if std::mem::take(&mut self.cut_line) {
-            // The tail of a line the hand's restart cut: its answer is a prompt the host did
-            // not ask for, which puts it one answer ahead.
-            self.out_of_step = true;
-        }
         // LF never enters the line (`host_bytes` grades it apart).
         let text = std::mem::take(&mut self.line);
         if text.iter().all(|c| c.is_ascii_whitespace()) {
@@ -491,11 +481,16 @@ impl HostChecker {
         let looping = self.mode == Mode::Loop;
         // Only a misbehaviour makes an answer end twice (a host that pipelines gets several
         // answers at once, each its own).
+        // A prompt the host did not ask for: a second one in an answer, or one that comes while
+        // the host's line is half-sent (appended to its echo, or a restart's power-up prompt):
+        // the rest of its line then gets a prompt of its own.
         let surplus = misbehaved
             && if looping {
                 device.rt_layout().is_some_and(|l| bytes.len() > l.feedback().size())
             } else {
-                !prompt.is_empty() && bytes.windows(prompt.len()).filter(|w| *w == prompt).count() > 1
+                let prompts =
+                    if prompt.is_empty() { 0 } else { bytes.windows(prompt.len()).filter(|w| *w == prompt).count() };
+                prompts > 1 || (prompts == 1 && !self.line.is_empty())
             };
         self.in_flight.push_back(InFlight {
             ends_wait: looping || bytes.ends_with(prompt),
@@ -531,14 +526,12 @@ impl HostChecker {
     pub fn connection(&mut self, _open: bool) {
         self.prev = None;
         self.desynced = false;
-        self.cut_line = false;
     }
 
     /// The hand restarted while answering (the answer just queued ends with its power-up
     /// output): it is in supervisory mode, at the prompt once that output is delivered, with
     /// no line or block under way, whatever mode it was in.
     pub fn restarted(&mut self) {
-        self.cut_line = !self.line.is_empty();
         self.mode = Mode::Idle;
         self.block_due = 0;
         self.block_size = 0;
@@ -674,6 +667,43 @@ mod tests {
             let v = c.violations();
             assert_eq!(v.len(), 1, "{v:?}");
             assert_eq!((v[0].clause, v[0].is_note()), (HostClause::WaitsForAnswer, note), "{v:?}");
+        }
+    }
+
+    /// The hand sends a prompt while the host's line is half-sent (a restart's power-up
+    /// prompt, or one appended to the echo): it answers the half line, the rest of the line
+    /// gets a prompt of its own, and a host that waits for each prompt goes on one answer
+    /// early through the hand's fault (a note). A restart after the whole line leaves it in
+    /// step: early is a finding.
+    #[test]
+    fn a_prompt_inside_the_hosts_line_puts_it_out_of_step_without_a_finding() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let power_up = &b"\n\rBarrettHand Firmware\n\r=> "[..];
+        for (first, answer, restart, rest, note) in [
+            (&b"HI"[..], power_up, true, &b"\r"[..], true),
+            (b"HI", b"HI\n\r=> ", false, b"\r", true),
+            (b"HI\r", power_up, true, b"", false),
+        ] {
+            let mut c = HostChecker::new(p.clone());
+            c.host_bytes(&d, first);
+            c.hand_bytes(&d, answer, true);
+            if restart {
+                c.restarted();
+            }
+            c.delivered();
+            if !rest.is_empty() {
+                c.host_bytes(&d, rest);
+                c.hand_bytes(&d, b"\n\r=> ", false);
+            }
+            c.host_bytes(&d, b"FGET P\r");
+            c.hand_bytes(&d, ANSWER, false);
+            // Sent on the stale prompt, before this answer came.
+            c.host_bytes(&d, b"FGET P\r");
+            let v = c.violations();
+            let early: Vec<_> = v.iter().filter(|x| x.clause == HostClause::WaitsForAnswer).collect();
+            assert_eq!(early.len(), 1, "{v:?}");
+            assert_eq!(early[0].is_note(), note, "{v:?}");
         }
     }
 

@@ -6,9 +6,12 @@
 //! traceback), a hang, an unexpected exit code, or a protocol violation ([`check`]). Findings
 //! are deduplicated by signature; each distinct one is minimized (the fewest misbehaviours
 //! that still give the same signature) and written as a bundle ([`bundle`]) that `--replay`
-//! runs again. Guidance keeps the schedules whose runs made the host take a new path after a
-//! misbehaviour (an operator at a protocol state followed by a command not seen there before,
-//! or a new command sequence) and mutates them.
+//! runs again. Before any random draw, a systematic pass (`systematic_pass`) puts every
+//! misbehaviour, one per run, at every kind of answer the run without misbehaviour showed
+//! (and makes one run at the hand's line rate when the campaign is unpaced). Guidance keeps
+//! the schedules whose runs made the host take a new path after a misbehaviour (an operator
+//! at a protocol state followed by a command not seen there before, or a new command
+//! sequence) and mutates them.
 //!
 //! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
 
@@ -31,10 +34,11 @@ pub const SCHEMA: &str = include_str!("../../../../reports/fuzz-host.schema.json
 
 pub use check::{HostChecker, HostClause, HostViolation};
 pub use session::{
-    Dir, Exchange, HostEnd, HostRun, Leftover, RunError, RunResult, Transport, run_once, run_once_until,
+    Dir, Exchange, HostEnd, HostRun, Leftover, RunError, RunResult, Transport, WrongValue, run_once, run_once_until,
 };
 
-use crate::sim::misbehave::{Operator, Planned, Schedule};
+use crate::sim::Pace;
+use crate::sim::misbehave::{AnswerKindSeen, Operator, Planned, Schedule};
 
 /// What kind of finding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -163,13 +167,14 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
         });
     }
     if let Some(first) = r.wrong_values.first() {
-        let name = first.split_whitespace().next().unwrap_or_default();
+        let seen: Vec<&str> = r.wrong_values.iter().map(|w| w.observed.as_str()).collect();
         v.push(Verdict {
             kind: FindingKind::WrongValue,
-            signature: format!("silent wrong value: {name}"),
+            signature: format!("silent wrong value: {} {}", first.name(), first.site()),
             message: format!(
-                "the host observed {} that the hand never sent, and reported nothing wrong",
-                r.wrong_values.join(", ")
+                "the host observed {} that the hand never sent ({}), and reported nothing wrong",
+                seen.join(", "),
+                first.context()
             ),
         });
     }
@@ -390,6 +395,13 @@ pub struct Campaign {
     /// number of runs that showed each.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub notes: BTreeMap<String, u64>,
+    /// The kinds of answer the run without misbehaviour showed, which the systematic pass
+    /// covers (the module's notes).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub answer_kinds: Vec<AnswerKindSeen>,
+    /// Runs of the systematic pass (made or not: a short campaign may end inside it).
+    #[serde(default)]
+    pub pass_runs: u64,
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -404,6 +416,9 @@ struct Shared {
     fired_at: BTreeMap<String, BTreeMap<String, u64>>,
     /// Answers in the run without misbehaviour (run 0), once taken.
     answers: Option<u32>,
+    /// The kinds of answer of run 0, and the systematic pass made of them, once taken.
+    answer_kinds: Vec<AnswerKindSeen>,
+    pass: Vec<PassEntry>,
     notes: BTreeMap<String, u64>,
     minimize_runs: u64,
     error: Option<String>,
@@ -414,11 +429,18 @@ struct Shared {
 }
 
 impl Shared {
+    /// Learns from the run without misbehaviour: the span of fresh schedules and the pass.
+    fn learn(&mut self, r: &RunResult, opts: &FuzzOptions) {
+        self.answers = Some(r.answers.max(1));
+        self.pass = systematic_pass(&r.answer_kinds, &opts.weights, opts.run.pace == Pace::Unpaced);
+        self.answer_kinds.clone_from(&r.answer_kinds);
+    }
+
     /// Takes in run `i`: counts its operators, keeps its schedule when it took a new path,
     /// records its findings; returns the indices of new findings.
     fn take(&mut self, i: u64, schedule: Schedule, r: RunResult, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
         if i == 0 {
-            self.answers = Some(r.answers.max(1));
+            self.learn(&r, opts);
         }
         for f in &r.fired {
             *self.fired_at.entry(f.op.name().to_string()).or_default().entry(f.state.clone()).or_default() += 1;
@@ -522,13 +544,73 @@ fn planned(rng: &mut Pcg64Mcg, weights: &Weights, answers: u32) -> Planned {
     Planned { answer: 1 + (rng.next_u64() % u64::from(span)) as u32, op: weights.pick(rng), arg: rng.next_u64() as u32 }
 }
 
+/// One run of the systematic pass: one misbehaviour at the first answer of one kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct PassEntry {
+    op: Operator,
+    answer: u32,
+    /// How many times the pass put `op` in before this one: its variant.
+    visit: u32,
+}
+
+impl PassEntry {
+    /// Its schedule. The variant a misbehaviour takes from its `arg` (which delay, which
+    /// prompt, which bytes, short or long) is mostly `arg` modulo 2, 3, 4 or 6: an `arg` that
+    /// is `visit` modulo 12 takes each op through its variants in turn, the first one at its
+    /// first visit, while the rest of `arg` (where to cut, which bit) is drawn.
+    fn schedule(self, rng: &mut Pcg64Mcg) -> Schedule {
+        let arg = (rng.next_u32() >> 4) * 12 + self.visit % 12;
+        Schedule { planned: vec![Planned { answer: self.answer, op: self.op, arg }] }
+    }
+}
+
+/// The systematic pass of a campaign whose run without misbehaviour gave these kinds of
+/// answer: every operator of `weights` (weight above 0) at every kind it applies to, one per
+/// run, in rounds: each round gives every operator with a kind left to visit one run (the
+/// heavier operators first), at the kind left to it that has had the fewest runs so far (a
+/// round spreads over the kinds), so the first round tries every misbehaviour once. With `unpaced`, and `line-rate` among
+/// `weights` (at any weight), it opens with a run at the hand's line rate.
+fn systematic_pass(kinds: &[AnswerKindSeen], weights: &Weights, unpaced: bool) -> Vec<PassEntry> {
+    let mut pass = Vec::new();
+    if unpaced && weights.0.iter().any(|(op, _)| *op == Operator::LineRate) {
+        pass.push(PassEntry { op: Operator::LineRate, answer: 1, visit: 0 });
+    }
+    // Each operator with the kinds (their first answers) it has still to visit, the heavier
+    // first within a round (by default the slow ones, delays, hang-up and silence, come last).
+    let mut by_weight: Vec<&(Operator, u32)> =
+        weights.0.iter().filter(|(op, w)| *w > 0 && *op != Operator::LineRate).collect();
+    by_weight.sort_by_key(|(_, w)| std::cmp::Reverse(*w));
+    let mut left: Vec<(Operator, Vec<u32>)> = by_weight
+        .into_iter()
+        .map(|(op, _)| (*op, kinds.iter().filter(|k| k.ops.contains(op)).map(|k| k.answer).collect::<Vec<_>>()))
+        .filter(|(_, a)| !a.is_empty())
+        .collect();
+    // Runs given to each kind so far: an operator goes to the kind it has not visited that
+    // has had the fewest.
+    let mut load: BTreeMap<u32, u32> = BTreeMap::new();
+    let mut visit = 0;
+    while left.iter().any(|(_, a)| !a.is_empty()) {
+        for (op, answers) in &mut left {
+            let Some(i) = (0..answers.len()).min_by_key(|&i| (load.get(&answers[i]).copied().unwrap_or(0), i)) else {
+                continue;
+            };
+            let answer = answers.remove(i);
+            *load.entry(answer).or_default() += 1;
+            pass.push(PassEntry { op: *op, answer, visit });
+        }
+        visit += 1;
+    }
+    pass
+}
+
 /// The generator of run `i` of a campaign with this seed.
 fn run_rng(seed: u64, i: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
-/// The schedule an unguided campaign of this seed gives run `i` (`i` >= 1) when run 0 saw
-/// `answers` answers (`gcl check-host --serve --misbehave SEED:I` plays it for 8).
+/// The random schedule an unguided campaign of this seed gives run `i` (`i` >= 1) past its
+/// systematic pass, when run 0 saw `answers` answers (`gcl check-host --serve --misbehave
+/// SEED:I` plays it for 8; the pass depends on the host's answers, which it cannot know).
 pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, answers: u32) -> Schedule {
     fresh_from(&mut run_rng(seed, i), weights, max_planned, answers)
 }
@@ -606,6 +688,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         by_sig: BTreeMap::new(),
         fired_at: BTreeMap::new(),
         answers: None,
+        answer_kinds: Vec::new(),
+        pass: Vec::new(),
         notes: BTreeMap::new(),
         minimize_runs: 0,
         error: None,
@@ -628,7 +712,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     {
         let r = run_once_until(&opts.run, &Schedule::default(), stop)?;
         if let Ok(mut sh) = shared.lock() {
-            sh.answers = Some(r.answers.max(1));
+            sh.learn(&r, opts);
         }
     }
     let announce = |new: Vec<usize>, shrink: bool| {
@@ -675,8 +759,12 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                     };
                 }
                 let Some(answers) = sh.answers else { break };
+                let pass = sh.pass.get(i as usize - 1).copied();
                 drop(sh);
-                fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers)
+                match pass {
+                    Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
+                    None => fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers),
+                }
             } else {
                 // Guidance sees runs 0..visible, whatever else has ended by now.
                 let visible = (t + 1).saturating_sub(jobs);
@@ -693,8 +781,13 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
                 let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
                 let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
+                // The pass starts with the first run that sees run 0.
+                let pass = i.checked_sub(jobs).and_then(|k| sh.pass.get(k as usize)).copied();
                 drop(sh);
-                next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers)
+                match pass {
+                    Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
+                    None => next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers),
+                }
             };
             let r = match run_once_until(&opts.run, &schedule, stop) {
                 Ok(r) => r,
@@ -752,12 +845,99 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         paths: sh.paths.len(),
         calibration,
         notes: sh.notes,
+        pass_runs: sh.pass.len() as u64,
+        answer_kinds: sh.answer_kinds,
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn kind(kind: &str, answer: u32, ops: &[Operator]) -> AnswerKindSeen {
+        AnswerKindSeen { kind: kind.into(), answer, state: format!("state of {answer}"), ops: ops.to_vec() }
+    }
+
+    #[test]
+    fn the_systematic_pass_puts_every_misbehaviour_at_every_kind_of_answer_each_once_first_round_first() {
+        use Operator::*;
+        let kinds = vec![
+            kind("prompt", 1, &[Truncate, Garbage, NoPrompt, Silence]),
+            kind("echo, values, prompt", 2, &[Truncate, Garbage, NoPrompt, WrongEcho, Silence]),
+            kind("banner, prompt", 4, &[Truncate, BannerVariant, Silence]),
+            kind("feedback block", 9, &[Truncate, RtErr, Silence]),
+        ];
+        let pass = systematic_pass(&kinds, &Weights::default(), true);
+        // An unpaced campaign first meets the timing of a real line.
+        assert_eq!((pass[0].op, pass[0].answer), (LineRate, 1));
+        let rest = &pass[1..];
+        // Every operator at every kind it applies to, once.
+        let mut pairs: Vec<(Operator, u32)> = rest.iter().map(|e| (e.op, e.answer)).collect();
+        let n = pairs.len();
+        pairs.sort();
+        pairs.dedup();
+        assert_eq!(pairs.len(), n, "no pair twice: {rest:?}");
+        let applicable: usize = kinds.iter().map(|k| k.ops.len()).sum();
+        assert_eq!(n, applicable);
+        // The first round tries each of the seven operators once, the heaviest first (silence,
+        // weight 1, last).
+        let first: BTreeSet<Operator> = rest[..7].iter().map(|e| e.op).collect();
+        assert_eq!(first.len(), 7, "{:?}", &rest[..7]);
+        assert_eq!(rest[6].op, Silence, "{:?}", &rest[..7]);
+        assert!(rest[..7].iter().all(|e| e.visit == 0));
+        // A round spreads over the kinds: the first reaches all four.
+        let reached: BTreeSet<u32> = rest[..7].iter().map(|e| e.answer).collect();
+        assert_eq!(reached.len(), 4, "{:?}", &rest[..7]);
+        // Each visit of an operator takes its next variant: banner-variant's first is the
+        // version suffix (arg 0 modulo 4), rt-err's three `ERR n` in turn.
+        let mut rng = run_rng(1, 5);
+        let banner = rest.iter().find(|e| e.op == BannerVariant).unwrap();
+        assert_eq!(banner.schedule(&mut rng).planned[0].arg % 4, 0);
+        let errs: Vec<u32> = rest
+            .iter()
+            .filter(|e| e.op == RtErr || e.op == Truncate)
+            .map(|e| e.schedule(&mut rng).planned[0].arg % 4)
+            .collect();
+        assert_eq!(errs.len(), 5);
+        // Only the operators of `--ops`, none at weight 0, and no line-rate run unless listed
+        // and the campaign is unpaced.
+        let only = systematic_pass(&kinds, &Weights::parse("truncate,garbage=0,line-rate,rt-err=2").unwrap(), true);
+        let ops: BTreeSet<Operator> = only.iter().map(|e| e.op).collect();
+        assert_eq!(ops, [LineRate, Truncate, RtErr].into_iter().collect());
+        assert!(systematic_pass(&kinds, &Weights::default(), false).iter().all(|e| e.op != LineRate));
+        assert!(systematic_pass(&[], &Weights::parse("truncate").unwrap(), true).is_empty());
+    }
+
+    #[test]
+    fn a_silent_wrong_value_is_named_by_the_hosts_code_else_by_the_answer_it_came_from() {
+        let mut r = RunResult {
+            end: HostEnd::Exit(0),
+            stack: None,
+            leftovers: Vec::new(),
+            gave_up_after: None,
+            stderr: String::new(),
+            observations: 3,
+            wrong_values: vec![WrongValue {
+                observed: "P 1 5120".into(),
+                place: None,
+                answer: "RealTime feedback".into(),
+                after: Some("rt-block-length at answer 5".into()),
+            }],
+            exchanges: Vec::new(),
+            fired: Vec::new(),
+            violations: Vec::new(),
+            commands: Vec::new(),
+            reactions: Vec::new(),
+            answers: 9,
+            answer_kinds: Vec::new(),
+            elapsed: Duration::ZERO,
+        };
+        let v = judge(&r, &[0]);
+        assert_eq!(v[0].signature, "silent wrong value: P in RealTime feedback");
+        assert!(v[0].message.contains("P 1 5120") && v[0].message.contains("after rt-block-length at answer 5"));
+        r.wrong_values[0].place = Some("hostlib.py:212".into());
+        assert_eq!(judge(&r, &[0])[0].signature, "silent wrong value: P at hostlib.py:212");
+    }
 
     #[test]
     fn weights_parse_names_and_pairs() {

@@ -33,7 +33,7 @@ use gcl_model::{Device, Profile};
 use serde::{Deserialize, Serialize};
 
 use super::check::{HostChecker, HostViolation};
-use crate::sim::misbehave::{Fired, LineTap, Misbehave, Schedule, Shaped};
+use crate::sim::misbehave::{AnswerKindSeen, Fired, LineTap, Misbehave, Operator, Schedule, Shaped};
 use crate::sim::{Engine, Pace, SimError, SimOptions, StopHandle, TimeMode, pty::Pty, stop_pair, tcp::TcpServer};
 
 /// How the host reaches the hand.
@@ -122,8 +122,8 @@ pub struct RunResult {
     /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
     pub observations: u64,
     /// Observations of values the hand never sent, before the host reported a problem: silent
-    /// wrong values (`P 1 5000`, the first few).
-    pub wrong_values: Vec<String>,
+    /// wrong values (the first few).
+    pub wrong_values: Vec<WrongValue>,
     /// Bytes both ways.
     pub exchanges: Vec<Exchange>,
     /// The misbehaviours that fired.
@@ -138,6 +138,9 @@ pub struct RunResult {
     pub reactions: Vec<(String, String, String)>,
     /// Answers the hand gave.
     pub answers: u32,
+    /// The kinds of answer the hand gave (as made, before any misbehaviour): what the
+    /// systematic pass of a campaign covers.
+    pub answer_kinds: Vec<AnswerKindSeen>,
     /// Wall time of the run.
     pub elapsed: Duration,
 }
@@ -215,11 +218,94 @@ pub enum RunError {
 pub const KEEP_CAP: usize = 1 << 20;
 
 /// The start of an observation line (on the host's stderr, or on its stdout, which
-/// `GCL_OBSERVE_FD=1` names): `gcl-observe: NAME MOTOR VALUE` says what the host believes
-/// the hand reported (`gcl-observe: P 1 5000`: motor 1's position is 5000);
-/// `gcl-observe: error TEXT` says it saw the hand misbehave, after which its observations are
-/// not judged. An observation of a value the hand never sent is a silent wrong value.
+/// `GCL_OBSERVE_FD=1` names): `gcl-observe: NAME MOTOR VALUE [WHERE]` says what the host
+/// believes the hand reported (`gcl-observe: P 1 5000`: motor 1's position is 5000), and,
+/// optionally, where in the host that belief was formed (the rest of the line: a function,
+/// `file:line`); `gcl-observe: error TEXT` says it saw the hand misbehave, after which its
+/// observations are not judged. An observation of a value the hand never sent is a silent
+/// wrong value.
 pub const OBSERVE: &str = "gcl-observe:";
+
+/// Longest `WHERE` of an observation kept.
+const WHERE_CAP: usize = 100;
+
+/// An observation line ([`OBSERVE`]), parsed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Observation {
+    /// The host saw the hand misbehave.
+    Error,
+    /// A value the host believes the hand reported.
+    Value {
+        /// `NAME MOTOR VALUE` as written.
+        what: String,
+        /// The value.
+        value: i64,
+        /// Where in the host, when it said.
+        place: Option<String>,
+    },
+}
+
+impl Observation {
+    /// The observation a line makes, if any (other lines, malformed ones included, make none).
+    fn parse(line: &str) -> Option<Observation> {
+        let rest = line.trim().strip_prefix(OBSERVE)?.trim_start();
+        let mut words = rest.split_whitespace();
+        let (name, motor, value) = (words.next()?, words.next()?, words.next()?);
+        if name == "error" {
+            return Some(Observation::Error);
+        }
+        let (Ok(_), Ok(v)) = (motor.parse::<u8>(), value.parse::<i64>()) else { return None };
+        let place = words.collect::<Vec<_>>().join(" ");
+        let place = (!place.is_empty()).then(|| place.chars().take(WHERE_CAP).collect());
+        Some(Observation::Value { what: format!("{name} {motor} {value}"), value: v, place })
+    }
+}
+
+/// A value the host observed that the hand never sent, before the host reported a problem.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WrongValue {
+    /// `NAME MOTOR VALUE` as the host wrote it (`P 1 5000`).
+    pub observed: String,
+    /// Where in the host, as the observation line said (`WHERE`), if it did.
+    pub place: Option<String>,
+    /// The protocol state of the hand's last answer before the observation (`RealTime
+    /// feedback`, `answer to FGET`): the answer the value came from, as near as the order of
+    /// the two streams tells.
+    pub answer: String,
+    /// The last misbehaviour that fired before it (`rt-block-length at answer 9`), if any.
+    pub after: Option<String>,
+}
+
+impl WrongValue {
+    /// The quantity's name (`P`).
+    pub fn name(&self) -> &str {
+        self.observed.split_whitespace().next().unwrap_or_default()
+    }
+
+    /// Where it happened, for a signature: the host's own `WHERE` when it gave one (its code),
+    /// else the answer it came from.
+    pub fn site(&self) -> String {
+        match &self.place {
+            Some(p) => format!("at {p}"),
+            None => format!("in {}", self.answer),
+        }
+    }
+}
+
+impl WrongValue {
+    /// Where and after what, for people: `in RealTime feedback, at read_block, after
+    /// rt-block-length at answer 5`.
+    pub fn context(&self) -> String {
+        let mut c = format!("in {}", self.answer);
+        if let Some(p) = &self.place {
+            c += &format!(", at {p}");
+        }
+        if let Some(a) = &self.after {
+            c += &format!(", after {a}");
+        }
+        c
+    }
+}
 
 /// Most distinct values remembered as sent by the hand.
 const SENT_CAP: usize = 1 << 16;
@@ -238,7 +324,9 @@ pub(crate) struct Log {
     /// misbehaviour: the numbers of its supervisory answers, the fields of its feedback).
     sent: std::collections::BTreeSet<i64>,
     observations: u64,
-    wrong_values: Vec<String>,
+    wrong_values: Vec<WrongValue>,
+    /// The protocol state of the hand's last answer.
+    last_answer: String,
     /// The host said it saw the hand misbehave (`gcl-observe: error`).
     host_reported: bool,
     /// When a `silence` fired, and when the host first sent after it.
@@ -274,6 +362,7 @@ impl Log {
             sent: std::collections::BTreeSet::new(),
             observations: 0,
             wrong_values: Vec::new(),
+            last_answer: "no answer yet".into(),
             host_reported: false,
             silenced_at: None,
             acted_at: None,
@@ -336,18 +425,21 @@ impl Log {
 
     /// One `gcl-observe:` line of the host.
     fn observe(&mut self, line: &str) {
-        let Some(rest) = line.trim().strip_prefix(OBSERVE) else { return };
-        let words: Vec<&str> = rest.split_whitespace().collect();
-        match words.as_slice() {
-            ["error", ..] => self.host_reported = true,
-            [name, motor, value] => {
-                let (Ok(_), Ok(v)) = (motor.parse::<u8>(), value.parse::<i64>()) else { return };
+        match Observation::parse(line) {
+            Some(Observation::Error) => self.host_reported = true,
+            Some(Observation::Value { what, value, place }) => {
                 self.observations += 1;
-                if !self.host_reported && !self.sent.contains(&v) && self.wrong_values.len() < 8 {
-                    self.wrong_values.push(format!("{name} {motor} {value}"));
+                if !self.host_reported && !self.sent.contains(&value) && self.wrong_values.len() < 8 {
+                    let after = self.misbehave.fired().last().map(|f| format!("{} at answer {}", f.op, f.answer));
+                    self.wrong_values.push(WrongValue {
+                        observed: what,
+                        place,
+                        answer: self.last_answer.clone(),
+                        after,
+                    });
                 }
             }
-            _ => {}
+            None => {}
         }
     }
 
@@ -399,13 +491,15 @@ impl LineTap for Tap {
         let Ok(mut log) = self.0.lock() else { return Shaped::plain(bytes) };
         let log = &mut *log;
         let state = log.checker.answer_state(device);
+        log.last_answer.clone_from(&state);
         let before = log.misbehave.fired().len();
         let shaped = log.misbehave.shape(device, bytes, &state);
         let new: Vec<Fired> = log.misbehave.fired()[before..].to_vec();
         log.values_sent(device, bytes, false);
         log.values_sent(device, &shaped.bytes, true);
         // Changed in any way (a silence drops every answer after it; a delay holds one).
-        let misbehaved = !new.is_empty() || shaped.bytes != bytes || shaped.hold.is_some() || shaped.hang_up;
+        let misbehaved =
+            new.iter().any(|f| f.op.misbehaves()) || shaped.bytes != bytes || shaped.hold.is_some() || shaped.hang_up;
         log.checker.hand_bytes(device, &shaped.bytes, misbehaved);
         if shaped.restart {
             log.checker.restarted();
@@ -543,6 +637,13 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     opts.seed = spec.hand_seed;
     opts.time = spec.time;
     opts.pace = spec.pace;
+    // `line-rate`: an unpaced campaign's run at the hand's own line rate. It is about time
+    // alone: the speed the host set on its port, judged in no unpaced run, is not in this one
+    // either (no garbling).
+    let line_rate = spec.pace == Pace::Unpaced && schedule.planned.iter().any(|p| p.op == Operator::LineRate);
+    if line_rate {
+        opts.pace = Pace::Hand;
+    }
     let mut engine = Engine::new(&opts)?;
     let (mut stop, stop_rx) = stop_pair()?;
     let (hang_up, hang_rx) = stop_pair()?;
@@ -557,6 +658,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         Transport::Pty => {
             let mut pty = Pty::open(None)?;
             pty.match_speed(&engine)?;
+            pty.set_speed_check(!line_rate);
             let path = pty.path().display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
             (path.clone(), path, h)
@@ -790,6 +892,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         commands: log.checker.commands().to_vec(),
         reactions: log.reactions.clone(),
         answers: log.misbehave.answers(),
+        answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
     })
 }
@@ -966,5 +1069,32 @@ impl LineSplitter {
                 self.overlong = true;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_observation_may_say_where_in_the_host_it_was_made() {
+        let value = |what: &str, value, place: Option<&str>| Observation::Value {
+            what: what.into(),
+            value,
+            place: place.map(String::from),
+        };
+        assert_eq!(Observation::parse("gcl-observe: P 1 5000"), Some(value("P 1 5000", 5000, None)));
+        assert_eq!(
+            Observation::parse("  gcl-observe: P 2 -7 hostlib.py:212 read_block\n"),
+            Some(value("P 2 -7", -7, Some("hostlib.py:212 read_block")))
+        );
+        assert_eq!(Observation::parse("gcl-observe: error short block"), Some(Observation::Error));
+        for not in ["gcl-observe: P x 5", "gcl-observe: P 1", "gcl-observe: P 1 five", "P 1 5000", "gcl-observe:"] {
+            assert_eq!(Observation::parse(not), None, "{not}");
+        }
+        let long = format!("gcl-observe: P 1 5 {}", "x".repeat(500));
+        assert!(
+            matches!(Observation::parse(&long), Some(Observation::Value { place: Some(p), .. }) if p.len() == WHERE_CAP)
+        );
     }
 }
