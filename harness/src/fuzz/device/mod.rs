@@ -824,6 +824,24 @@ impl MotionProbe {
         Some(MotionProbe { transcript: built.transcript, command, model })
     }
 
+    /// The probe for a hand that has just answered RESET at an idle prompt (a runner's
+    /// pre-flight ends so): the preamble's ^C and RESET are left out, FDEF, HI and the close
+    /// kept. `None` when the probe does not start with them.
+    pub fn after_reset(&self, p: &Arc<Profile>) -> Option<MotionProbe> {
+        let mut transcript = self.transcript.clone();
+        let sends = |i: usize, bytes: &[u8]| {
+            transcript.steps.get(i).and_then(|s| s.send.as_ref()).is_some_and(|h| h.bytes == bytes)
+        };
+        let reset = [b"RESET".as_slice(), &[p.framing.terminator]].concat();
+        if !(sends(0, &[p.framing.abort]) && sends(1, &reset)) {
+            return None;
+        }
+        transcript.steps.drain(..2);
+        let case = Case { profile: p.id.clone(), transcript: transcript.clone() };
+        let model = deadline::predict(&case, p)?;
+        Some(MotionProbe { transcript, command: self.command.clone(), model })
+    }
+
     /// The close step (0-based) and how long after its command a hand that moves in real time
     /// is still moving (a quarter of the model's time for it): a run may stop the probe there
     /// (^C) with the judgement already made, rather than wait for the hand to close.
