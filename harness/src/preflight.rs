@@ -42,7 +42,7 @@ pub struct Preflight {
     /// The clauses those faults break, first found first (`decision:framing-line-ending`),
     /// where the profile states one: failures of framing take them as their clause.
     pub clauses: Vec<String>,
-    /// Whether the last answer ended in a prompt followed by [`QUIET`] of silence: the line is
+    /// Whether the last answer ended in a prompt followed by 60 ms of silence: the line is
     /// then already drained, and a runner need not wait for quiet again.
     pub settled: bool,
 }
