@@ -653,20 +653,26 @@ pub fn run_with_events(
         let mut l = open_link()?;
         let found = probe(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(Alive::Silent);
         let ok = found.is_alive();
+        // Whether the pre-flight left the hand after RESET at a quiet prompt.
+        let mut settled = false;
         if ok && opts.control.preflight {
             if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
                 framing_clauses = p.clauses.clone();
                 let line = p.line();
                 on(RunEvent::Preflight(&line));
                 preflight = Some(line);
+                settled = p.settled;
             }
-            let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+            // Its last answer may not have ended quietly (a flood, a missing prompt): drain.
+            if !settled {
+                let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+            }
         }
         if ok
             && !fresh_per_case
             && opts.control.real_time_probe
             && selected.iter().any(|c| c.requires(&Requirement::AbortTiming))
-            && let Some(fast) = motion_time(l.as_mut(), opts, &policy, link_baud)
+            && let Some(fast) = motion_time(l.as_mut(), opts, &policy, link_baud, settled)
         {
             let line = format!(
                 "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
@@ -989,19 +995,29 @@ pub fn run_with_events(
 
 /// Runs the motion-time probe on `link` with the run's deadlines; says how the target's motion
 /// fell short of the model's, or `None` (it moves in real time, or the probe decided nothing).
+/// `after_reset`: the hand has just answered RESET at a quiet prompt (the pre-flight's last
+/// probe), so the probe's own ^C and RESET are left out.
 fn motion_time(
     link: &mut dyn Link,
     opts: &ConformOptions,
     policy: &DeadlinePolicy,
     baud: Option<u32>,
+    after_reset: bool,
 ) -> Option<crate::fuzz::device::NotRealTime> {
     let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+    let probe = match after_reset {
+        true => probe.after_reset(&opts.profile).unwrap_or(probe),
+        false => probe,
+    };
     let case = Case { profile: opts.profile.id.clone(), transcript: probe.transcript.clone() };
     let mut ro = suite::replay_options();
     if let Some(pred) = crate::deadline::predict(&case, &opts.profile) {
         ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
     }
     ro.silent_wait = policy.silent_wait;
+    // The line was found quiet just before (the liveness probe's settling, the pre-flight's
+    // quiet after its last prompt, or its drain): what is pending is taken, without a wait.
+    ro.drain_quiet = Duration::ZERO;
     // The close is judged as soon as the judgement is made: a hand still moving at a quarter
     // of the model's time moves in real time, and is stopped there (^C) rather than left to
     // close, which the first case's homing would then undo at the same cost again.
@@ -1088,7 +1104,9 @@ struct WireCase {
 /// the sum of its pauses and its steps. Within a step the line is full duplex and the hand
 /// echoes each character as it arrives, so the bytes one way overlap those the other way:
 /// a step's answer takes at least its received bytes × 10 bits / baud (never sent +
-/// received), and at least the time the reference model spends on it beyond its bytes
+/// received), plus one byte's time when the step sent bytes (the hand cannot answer, nor
+/// echo, a byte before it has crossed), and at least the time the reference model spends on
+/// it beyond its bytes
 /// (motion, a reset), the larger of the two, since a hand may talk while it moves. A case
 /// also takes at least its sent bytes (a step's answer may end before all of its bytes
 /// crossed, as when a queue is sent behind a motion, so they are counted over the case).
@@ -1145,13 +1163,15 @@ fn wire_time(
         // longer byte time is taken, so that motion is never overcounted.
         let model_byte = byte_time(rate.min(link.device().baud()));
         let (mut pauses_ms, mut busy_ms, mut steps_ms) = (0.0, 0.0, 0.0);
-        for (e, &(_, got)) in steps.iter().zip(&w.steps) {
+        for (e, &(put, got)) in steps.iter().zip(&w.steps) {
             pauses_ms +=
                 case.transcript.steps.get(e.step).and_then(|st| st.pause).unwrap_or_default().as_secs_f64() * 1000.0;
             let wire_at_model = model_byte * u32::try_from(e.sent.len() + e.received.len()).unwrap_or(u32::MAX);
             let busy = e.took.saturating_sub(wire_at_model).as_secs_f64() * 1000.0;
             busy_ms += busy;
-            steps_ms += f64::max(got as f64 * per_byte_ms, busy);
+            // An answer to bytes sent starts once the first of them has crossed.
+            let first = u64::from(put > 0 && got > 0);
+            steps_ms += f64::max((got + first) as f64 * per_byte_ms, busy);
         }
         motion_ms += pauses_ms + busy_ms;
         lower_bound_ms += pauses_ms + f64::max(s as f64 * per_byte_ms, steps_ms);
@@ -1217,7 +1237,14 @@ mod tests {
         let w = bound_of(&[("cmd-fget", false)]);
         let byte_ms = 10.0 / 9600.0 * 1000.0;
         assert!(w.lower_bound_ms < (w.bytes_sent + w.bytes_received) as f64 * byte_ms, "{w:?}");
-        assert!(w.lower_bound_ms >= w.bytes_received as f64 * byte_ms, "{w:?}");
+        // ... and for each step that sent bytes, the first of them before any answer.
+        let p = Profile::builtin("seed").unwrap();
+        let cases = suite::generate(&p).unwrap();
+        let fget = cases.iter().find(|c| c.id() == "cmd-fget").unwrap();
+        let out = suite::run_case(fget, &mut SimLink::new(p.clone(), Default::default()), &suite::replay_options());
+        let answered = out.exchange().iter().filter(|e| !e.sent.is_empty() && !e.received.is_empty()).count() as u64;
+        assert!(answered > 1, "{}", out.render());
+        assert!(w.lower_bound_ms + 1e-6 >= (w.bytes_received + answered) as f64 * byte_ms, "{w:?}");
         // C closes the hand; on a kept link the next case's HI moves the fingers all the way
         // back, which a freshly powered-up hand need not do.
         let fresh = bound_of(&[("cmd-c", false), ("cmd-hi", false)]);

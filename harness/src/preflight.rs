@@ -42,6 +42,9 @@ pub struct Preflight {
     /// The clauses those faults break, first found first (`decision:framing-line-ending`),
     /// where the profile states one: failures of framing take them as their clause.
     pub clauses: Vec<String>,
+    /// Whether the last answer ended in a prompt followed by 60 ms of silence: the line is
+    /// then already drained, and a runner need not wait for quiet again.
+    pub settled: bool,
 }
 
 impl Preflight {
@@ -72,29 +75,33 @@ fn probes(profile: &Profile) -> Vec<Probe> {
 
 /// Reads until the link has been quiet for [`QUIET`] after something prompt-like (ending in
 /// `prompt`), or quiet after at least `min` has passed (`None`: only after a prompt), or until
-/// `deadline`, keeping at most [`MAX_ANSWER`] bytes.
+/// `deadline`, keeping at most [`MAX_ANSWER`] bytes. Also says whether it ended on a prompt
+/// and a whole [`QUIET`] of silence after it.
 fn collect(
     link: &mut dyn Link,
     min: Option<Duration>,
     deadline: Duration,
     prompt: &[u8],
-) -> Result<Vec<u8>, LinkError> {
+) -> Result<(Vec<u8>, bool), LinkError> {
     let start = link.elapsed();
     let mut got = Vec::new();
+    let mut settled = false;
     loop {
         let spent = link.elapsed().saturating_sub(start);
         if spent >= deadline || got.len() >= MAX_ANSWER {
             break;
         }
-        let n = link.recv(&mut got, QUIET.min(deadline - spent))?;
+        let wait = QUIET.min(deadline - spent);
+        let n = link.recv(&mut got, wait)?;
         let spent = link.elapsed().saturating_sub(start);
         let prompt_like = !prompt.is_empty() && got.trim_ascii_end().ends_with(prompt);
         if n == 0 && !got.is_empty() && (prompt_like || min.is_some_and(|m| spent >= m)) {
+            settled = prompt_like && wait == QUIET;
             break;
         }
     }
     got.truncate(MAX_ANSWER);
-    Ok(got)
+    Ok((got, settled))
 }
 
 /// Runs the probe on `link` (at an idle prompt) and compares with the model. The hand is left
@@ -105,13 +112,15 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     let mut findings = Vec::new();
     let mut answers = Vec::new();
     let trimmed = profile.framing.prompt.trim_end().as_bytes();
+    let mut settled = false;
     for p in probes(profile) {
         let t0 = model.elapsed();
         model.send(&p.send)?;
-        let expected = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"")?;
+        let (expected, _) = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"")?;
         let predicted = model.elapsed().saturating_sub(t0);
         link.send(&p.send)?;
-        let actual = if p.what == "RESET" {
+        let actual;
+        (actual, settled) = if p.what == "RESET" {
             // A power cycle: a real hand may take seconds before its banner; wait for a prompt.
             collect(link, None, RESET_WAIT, trimmed)?
         } else {
@@ -126,6 +135,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             return Ok(Preflight {
                 findings: vec![format!("no answer to {what}; the hand may have stopped answering")],
                 clauses: Vec::new(),
+                settled: false,
             });
         }
     }
@@ -206,7 +216,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             findings.push(format!("no answer to {}", p.what));
         }
     }
-    Ok(Preflight { findings, clauses })
+    Ok(Preflight { findings, clauses, settled })
 }
 
 fn split<'a>(s: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {

@@ -20,7 +20,9 @@ use sim_support::{GCL, SimProcess, Transport};
 const SELF: &str = "harness/tests/readme_promises.rs";
 
 /// A README fragment (whitespace as in the README or collapsed: lines wrap) and the tests that
-/// hold it, each `FILE::NAME` from the repository root.
+/// hold it, each `FILE::NAME` from the repository root (`.ci/run::LINE` for a check of
+/// `.ci/run`, named by the line it prints when it holds, where no `cargo test` can: the C++
+/// example needs CMake and a C++ compiler).
 const PROMISES: &[(&str, &[&str])] = &[
     // The two commands.
     (
@@ -276,7 +278,10 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "a line as the run starts, one every 10 s",
-        &["harness/tests/report_pages.rs::a_ci_log_gets_progress_lines_with_counts_and_the_end"],
+        &[
+            "harness/tests/report_pages.rs::a_ci_log_gets_progress_lines_with_counts_and_the_end",
+            "harness/src/cli/progress.rs::a_plain_line_is_due_every_10_s",
+        ],
     ),
     // Reading a report.
     (
@@ -364,6 +369,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/adversarial.rs::fuzz_device_holds_its_folders_and_reports_on_sigterm"],
     ),
     (
+        "minimization stops at `--duration`",
+        &["harness/src/fuzz/device/mod.rs::minimization_stops_at_the_campaigns_duration"],
+    ),
+    (
         "`--write-budget N` caps EEPROM writes (restores included) over the whole run",
         &["harness/tests/readme_promises.rs::the_write_budget_caps_a_campaigns_eeprom_writes"],
     ),
@@ -383,6 +392,12 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[
             "harness/tests/fuzz_device.rs::bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it",
             "harness/tests/fuzz_device.rs::a_faulty_sim_over_a_pty_is_found_and_the_transcript_replays",
+        ],
+    ),
+    (
+        "mid-motion are judged only by their ranges (the hand's clock and the model's part there)",
+        &[
+            "harness/tests/readme_promises.rs::positions_read_after_a_mid_motion_abort_are_judged_by_their_range_outside_this_process",
         ],
     ),
     // Fuzzing a host library in CI.
@@ -413,6 +428,14 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "so a library that gives up after 10 or 15 s has no hang finding",
         &["harness/tests/host_verdicts.rs::a_host_that_waits_out_its_own_timeout_is_not_hung"],
+    ),
+    (
+        "A host that never gives up in 30 s is measured as having no timeout",
+        &["harness/tests/readme_promises.rs::a_host_that_never_gives_up_is_measured_as_having_no_timeout"],
+    ),
+    (
+        "`gcl check-host`, whose hand never goes silent, calls a hang after 20 s by default",
+        &["harness/tests/readme_promises.rs::check_host_calls_a_hang_after_20_s_unless_told_otherwise"],
     ),
     (
         "`hang in host.py:read_prompt`",
@@ -486,6 +509,14 @@ const PROMISES: &[(&str, &[&str])] = &[
             "harness/tests/fuzz_host.rs::a_rust_mutant_panic_is_found",
         ],
     ),
+    (
+        "The hand runs in fast time, unpaced, by default; `--time real` gives a hand paced at its BAUD",
+        &[
+            "harness/tests/readme_promises.rs::the_host_fuzzers_hand_is_unpaced_by_default_and_paced_at_its_baud_in_real_time",
+            "harness/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
+            "harness/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
+        ],
+    ),
     // Host libraries in Python, C++ and CI.
     (
         "name, version and metadata from `harness/Cargo.toml`",
@@ -516,6 +547,12 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "`misbehaviours that fired: truncate at answer 7",
         &["python/tests/test_wheel.py::test_the_short_block_bug_fails_under_misbehaviour_with_what_fired"],
+    ),
+    // Checked by `.ci/run`, which builds the C++ example with CMake (a check there is named
+    // by the line it prints: `.ci/run::LINE`).
+    (
+        "`-DBH8HOST_PLANTED_LF=ON` plants a CR LF bug that fails the check-host test",
+        &[".ci/run::the planted CR LF bug fails gcl check-host, as it should"],
     ),
     (
         "a test holds the recipes to them",
@@ -651,16 +688,30 @@ fn collapse(s: &str) -> String {
 }
 
 /// Whether `file` (a path from the repository root) holds a test function `name`: a Rust `fn`
-/// under `#[test]`, or a Python `def test_...`.
+/// under `#[test]`, a Python `def test_...` (in code, not inside a string), or for `.ci/run`
+/// a check that prints the line `name` when it holds.
 fn has_test(file: &str, name: &str) -> Result<(), String> {
     let text = std::fs::read_to_string(root().join(file)).map_err(|e| format!("{file}: {e}"))?;
-    if file.ends_with(".py") {
-        let def = format!("def {name}(");
-        return if name.starts_with("test_") && text.lines().any(|l| l.trim_start().starts_with(&def)) {
+    test_in(file, &text, name)
+}
+
+/// [`has_test`] over `text`, the contents of `file`.
+fn test_in(file: &str, text: &str, name: &str) -> Result<(), String> {
+    if file == ".ci/run" {
+        let echo = format!("echo \"{name}\"");
+        return if text.lines().any(|l| l.trim_start() == echo) {
             Ok(())
         } else {
-            Err(format!("{file} has no test `{name}`"))
+            Err(format!("{file} prints no line {name:?}"))
         };
+    }
+    if file.ends_with(".py") {
+        let def = format!("def {name}(");
+        let defined = python_code_lines(text).any(|l| {
+            let l = l.trim_start();
+            l.strip_prefix("async ").unwrap_or(l).starts_with(&def)
+        });
+        return if name.starts_with("test_") && defined { Ok(()) } else { Err(format!("{file} has no test `{name}`")) };
     }
     let lines: Vec<&str> = text.lines().collect();
     let fun = format!("fn {name}(");
@@ -668,6 +719,45 @@ fn has_test(file: &str, name: &str) -> Result<(), String> {
     // The attributes and doc comments above it include `#[test]`.
     let above = lines[..at].iter().rev().map(|l| l.trim()).take_while(|l| l.starts_with("#[") || l.starts_with("//"));
     if above.clone().any(|l| l == "#[test]") { Ok(()) } else { Err(format!("{file}: `{name}` is not a #[test]")) }
+}
+
+/// The lines of a Python source that begin in code, not inside a string (a `def` in a
+/// triple-quoted string is text): strings, their escapes and comments are followed.
+fn python_code_lines(text: &str) -> impl Iterator<Item = &str> {
+    // The quote of the string open at the start of each line, and whether it is triple.
+    let mut open: Option<(char, bool)> = None;
+    text.lines().filter(move |line| {
+        let starts_in_code = open.is_none();
+        let chars: Vec<char> = line.chars().collect();
+        let mut i = 0;
+        while i < chars.len() {
+            let c = chars[i];
+            match open {
+                None if c == '#' => break,
+                None if c == '"' || c == '\'' => {
+                    let triple = chars.get(i + 1) == Some(&c) && chars.get(i + 2) == Some(&c);
+                    open = Some((c, triple));
+                    i += if triple { 3 } else { 1 };
+                    continue;
+                }
+                None => {}
+                Some(_) if c == '\\' => i += 1,
+                Some((q, true)) if c == q && chars.get(i + 1) == Some(&q) && chars.get(i + 2) == Some(&q) => {
+                    open = None;
+                    i += 3;
+                    continue;
+                }
+                Some((q, false)) if c == q => open = None,
+                Some(_) => {}
+            }
+            i += 1;
+        }
+        // A one-quote string ends with its line (an unterminated one is a syntax error).
+        if matches!(open, Some((_, false))) && !line.ends_with('\\') {
+            open = None;
+        }
+        starts_in_code
+    })
 }
 
 #[test]
@@ -702,6 +792,14 @@ fn the_table_check_catches_a_missing_test_and_a_non_test() {
     assert!(has_test(SELF, "no_such_test").is_err());
     assert!(has_test(SELF, "has_test").is_err(), "a helper is not a test");
     assert!(has_test("python/tests/test_wheel.py", "test_no_such_test").is_err());
+    // A `def test_...` inside a string is no test, wherever the string opened.
+    let py = "X = '''\ndef test_in_a_string():\n    pass\n'''\ndef test_real():\n    s = \"it's \\\" def test_x():\"  # '''\n\n    t = \"\"\"a\n    def test_in_a_docstring():\n    \"\"\"\nasync def test_after():\n    pass\n";
+    assert!(test_in("t.py", py, "test_real").is_ok(), "{py}");
+    assert!(test_in("t.py", py, "test_after").is_ok(), "{py}");
+    assert!(test_in("t.py", py, "test_in_a_string").is_err(), "{py}");
+    assert!(test_in("t.py", py, "test_in_a_docstring").is_err(), "{py}");
+    assert!(has_test(".ci/run", "the planted CR LF bug fails gcl check-host, as it should").is_ok());
+    assert!(has_test(".ci/run", "the planted CR LF bug passes").is_err());
 }
 
 /// "`gcl sim --pty` and `--tcp` run in real time by default"; `--time fast` is "the default of
@@ -978,4 +1076,117 @@ fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
     for f in ["fuzz.json", "junit.xml", "report.json", "report.html"] {
         assert!(dir.path().join("rep").join(f).is_file(), "{f} not written");
     }
+}
+
+/// The facts a host report (`report.json`'s `host.facts`) lists, by name.
+fn host_facts(report: &Path) -> std::collections::BTreeMap<String, String> {
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    let facts = r["host"]["facts"].as_array().unwrap_or_else(|| panic!("no host facts: {r}"));
+    facts.iter().map(|f| (f[0].as_str().unwrap().to_string(), f[1].as_str().unwrap().to_string())).collect()
+}
+
+/// "`gcl check-host`, whose hand never goes silent, calls a hang after 20 s by default": the
+/// run's hang timeout, as its report states it, is 20 s without `--timeout-hang` and what
+/// `--timeout-hang` says with it (a host that exits at once: nothing is waited for).
+#[test]
+fn check_host_calls_a_hang_after_20_s_unless_told_otherwise() {
+    let dir = tempfile::tempdir().unwrap();
+    for (extra, want) in [(&[][..], "20 s (the default)"), (&["--timeout-hang", "7s"][..], "7 s (--timeout-hang)")] {
+        let out = Command::new(GCL)
+            .args(["check-host", "--report", "rep"])
+            .args(extra)
+            .args(["--", "true"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+        let facts = host_facts(&dir.path().join("rep/report.json"));
+        assert_eq!(facts.get("hang timeout").map(String::as_str), Some(want), "{extra:?}: {facts:?}");
+    }
+}
+
+/// "The hand runs in fast time, unpaced, by default; `--time real` gives a hand paced at its
+/// BAUD": what the campaign's hand was given, in the console's first line and the report's
+/// facts; `--baud` paces it at a fixed rate. (That a paced hand offers each byte at its wire
+/// time is the engine's tests'.)
+#[test]
+fn the_host_fuzzers_hand_is_unpaced_by_default_and_paced_at_its_baud_in_real_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs: [(&[&str], &str, &str, &str); 3] = [
+        (&[], "fast", "unpaced", "time fast, unpaced,"),
+        (&["--time", "real"], "real", "the hand's BAUD", "time real, paced at the hand's BAUD,"),
+        (&["--baud", "1200"], "fast", "1200 baud", "time fast, paced at 1200 baud,"),
+    ];
+    for (extra, time, pace, line) in runs {
+        let out = Command::new(GCL)
+            .args(["fuzz", "host", "--runs", "1", "--timeout-hang", "3s", "--report", "rep"])
+            .args(extra)
+            .args(["--", "true"])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{extra:?}: {err}");
+        let first = err.lines().find(|l| l.starts_with("gcl fuzz host: seed")).unwrap_or_default();
+        assert!(first.contains(line), "{extra:?}: {err}");
+        let facts = host_facts(&dir.path().join("rep/report.json"));
+        assert_eq!(facts.get("time").map(String::as_str), Some(time), "{extra:?}: {facts:?}");
+        assert_eq!(facts.get("pace").map(String::as_str), Some(pace), "{extra:?}: {facts:?}");
+    }
+}
+
+/// "A host that never gives up in 30 s is measured as having no timeout": calibration waits
+/// at most [`CALIBRATION_CAP`] (30 s), or the run budget when that is shorter, for a host the
+/// hand fell silent on; a host that sends one line and reads for ever is measured with no
+/// timeout at all (its hang timeout is then the floor). The run budget of 1 s stands in for
+/// the 30 s here.
+#[test]
+fn a_host_that_never_gives_up_is_measured_as_having_no_timeout() {
+    use gcl_harness::fuzz::host::{CALIBRATION_CAP, HostRun, Transport as HostTransport, calibrate};
+    use gcl_harness::sim::{Pace, TimeMode};
+    use std::time::Duration;
+    assert_eq!(CALIBRATION_CAP, Duration::from_secs(30));
+    let run = HostRun {
+        command: ["sh", "-c", "exec 3<>\"$GCL_PORT\"; printf '\\r' >&3; exec cat <&3 >/dev/null"]
+            .map(String::from)
+            .to_vec(),
+        transport: HostTransport::Pty,
+        profile: Profile::builtin("seed").unwrap(),
+        time: TimeMode::Fast,
+        pace: Pace::Unpaced,
+        hand_seed: 0,
+        timeout_hang: Duration::from_millis(500),
+        budget: Duration::from_secs(1),
+    };
+    let c = calibrate(&run, &std::sync::atomic::AtomicBool::new(false)).unwrap();
+    assert!(!c.points.is_empty(), "the hand never fell silent on the host: {c:?}");
+    assert!(c.points.iter().all(|(_, waited)| waited.is_none()), "{c:?}");
+    assert_eq!(c.host_timeout_ms, None, "{c:?}");
+    assert_eq!(c.timeout_hang_ms, 500, "no timeout measured: the floor: {c:?}");
+}
+
+/// "Against hands outside this process, positions ... read after RealTime motion or a ^C
+/// mid-motion are judged only by their ranges": the same case (a close stopped by ^C, then
+/// FGET P) expects the finger positions anywhere in P's range on a hand outside this process,
+/// and near the model's own in-process; after a close that ran to its end they are near the
+/// model's on both.
+#[test]
+fn positions_read_after_a_mid_motion_abort_are_judged_by_their_range_outside_this_process() {
+    use gcl_harness::fuzz::device::action::HostAction;
+    use gcl_harness::fuzz::device::case::build_case;
+    let p = Profile::builtin("seed").unwrap();
+    let full = format!("{}..{}", p.param(p.param_id("P").unwrap()).min, p.param(p.param_id("P").unwrap()).max);
+    let read = |first: HostAction, wide: bool| -> String {
+        let built = build_case(&p, &[first, HostAction::Line("FGET P".into())], "t", "t", wide, true).unwrap();
+        let step =
+            built.transcript.steps.iter().rev().find(|s| s.send.as_ref().is_some_and(|h| h.bytes == b"FGET P\r"));
+        step.expect("the FGET P step").expect.to_text()
+    };
+    let abort = || HostAction::LineThenAbort { line: "C".into(), after_ms: 300 };
+    let outside = read(abort(), true);
+    assert!(outside.matches(&full).count() >= 3, "the whole range {full} for each finger: {outside}");
+    let inside = read(abort(), false);
+    assert!(!inside.contains(&full), "in-process, near the model's: {inside}");
+    let ended = read(HostAction::Line("C".into()), true);
+    assert!(!ended.contains(&full), "after a motion that ended, near the model's: {ended}");
 }

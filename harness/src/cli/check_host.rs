@@ -80,6 +80,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         HostEnd::OverBudget(at) => format!("over the run budget ({at}); killed"),
     };
     let mut facts = vec![("the host".to_string(), end)];
+    facts.extend(super::fuzz_host::hand_facts(&opts.run));
+    let hang = opts.run.timeout_hang.as_secs_f64();
+    let given = if args.host.timeout_hang_given() { "--timeout-hang" } else { "the default" };
+    facts.push(("hang timeout".into(), format!("{hang} s ({given})")));
     if let Some(g) = &args.golden {
         facts.push(("golden".into(), g.display().to_string()));
     }

@@ -107,6 +107,16 @@ impl HostArgs {
     }
 }
 
+/// The hand a host run meets, as a report's facts: the line, the time mode and the pace (the
+/// pace is what `--time` and `--baud` made of it, so a reader sees an unpaced line as one).
+pub(super) fn hand_facts(run: &HostRun) -> Vec<(String, String)> {
+    vec![
+        ("line".into(), if run.transport == Transport::Tcp { "tcp" } else { "pty" }.into()),
+        ("time".into(), run.time.name().to_string()),
+        ("pace".into(), run.pace.to_string()),
+    ]
+}
+
 /// The least hang timeout of `gcl fuzz host` (calibration raises it to the host's own).
 pub const FUZZ_HANG_FLOOR: Duration = Duration::from_secs(3);
 
@@ -222,11 +232,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         shard: args.shard,
     };
     eprintln!(
-        "gcl fuzz host: seed {}, profile {}, {} line, time {}, {} job(s), bundles in {}",
+        "gcl fuzz host: seed {}, profile {}, {} line, time {}, {}, {} job(s), bundles in {}",
         opts.seed,
         opts.run.profile.id,
         if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" },
         opts.run.time.name(),
+        match opts.run.pace {
+            Pace::Unpaced => "unpaced".to_string(),
+            p => format!("paced at {p}"),
+        },
         opts.jobs,
         args.out.display()
     );
@@ -476,12 +490,13 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
             Vec::new()
         },
         fired_at: c.fired_at.clone(),
-        facts: vec![
-            ("line".into(), if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" }.into()),
-            ("time".into(), opts.run.time.name().to_string()),
-            ("jobs".into(), opts.jobs.to_string()),
-            ("paths seen".into(), format!("{} ({} schedules kept)", c.paths, c.corpus)),
-        ],
+        facts: hand_facts(&opts.run)
+            .into_iter()
+            .chain([
+                ("jobs".into(), opts.jobs.to_string()),
+                ("paths seen".into(), format!("{} ({} schedules kept)", c.paths, c.corpus)),
+            ])
+            .collect(),
         findings: c
             .findings
             .iter()

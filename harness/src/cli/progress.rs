@@ -17,6 +17,11 @@ use std::time::{Duration, Instant};
 /// least every 30 s).
 pub const INTERVAL: Duration = Duration::from_secs(10);
 
+/// Whether the next plain line is due at `now`, the last one having come at `last`.
+fn due(last: Instant, now: Instant) -> bool {
+    now.saturating_duration_since(last) >= INTERVAL
+}
+
 /// What the total counts.
 #[derive(Debug, Clone, Copy)]
 pub enum Total {
@@ -116,7 +121,7 @@ impl Progress {
                 while !st.finished.load(Ordering::Relaxed) {
                     std::thread::sleep(Duration::from_millis(250));
                     let mut last = st.last_line.lock().unwrap_or_else(|e| e.into_inner());
-                    if !st.finished.load(Ordering::Relaxed) && last.elapsed() >= INTERVAL {
+                    if !st.finished.load(Ordering::Relaxed) && due(*last, Instant::now()) {
                         *last = Instant::now();
                         eprintln!("{}", st.line());
                     }
@@ -173,5 +178,21 @@ impl Progress {
 impl Drop for Progress {
     fn drop(&mut self) {
         self.state.finished.store(true, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// README: in a CI log, "one every 10 s" between the first line and the last (those two
+    /// are `readme_promises.rs`'s); the ticker wakes every 250 ms and prints when this says.
+    #[test]
+    fn a_plain_line_is_due_every_10_s() {
+        let last = Instant::now();
+        assert!(!due(last, last));
+        assert!(!due(last, last + Duration::from_millis(9_999)));
+        assert!(due(last, last + Duration::from_secs(10)));
+        assert!(due(last, last + Duration::from_secs(29)));
     }
 }

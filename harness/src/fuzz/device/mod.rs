@@ -969,6 +969,24 @@ impl MotionProbe {
         Some(MotionProbe { transcript: built.transcript, command, model })
     }
 
+    /// The probe for a hand that has just answered RESET at an idle prompt (a runner's
+    /// pre-flight ends so): the preamble's ^C and RESET are left out, FDEF, HI and the close
+    /// kept. `None` when the probe does not start with them.
+    pub fn after_reset(&self, p: &Arc<Profile>) -> Option<MotionProbe> {
+        let mut transcript = self.transcript.clone();
+        let sends = |i: usize, bytes: &[u8]| {
+            transcript.steps.get(i).and_then(|s| s.send.as_ref()).is_some_and(|h| h.bytes == bytes)
+        };
+        let reset = [b"RESET".as_slice(), &[p.framing.terminator]].concat();
+        if !(sends(0, &[p.framing.abort]) && sends(1, &reset)) {
+            return None;
+        }
+        transcript.steps.drain(..2);
+        let case = Case { profile: p.id.clone(), transcript: transcript.clone() };
+        let model = deadline::predict(&case, p)?;
+        Some(MotionProbe { transcript, command: self.command.clone(), model })
+    }
+
     /// The close step (0-based) and how long after its command a hand that moves in real time
     /// is still moving (a quarter of the model's time for it): a run may stop the probe there
     /// (^C) with the judgement already made, rather than wait for the hand to close.
@@ -1262,13 +1280,8 @@ fn report_finding(
 ) -> Result<bool, FuzzError> {
     let found_after = start.elapsed();
     let t0 = Instant::now();
-    // Minimization ends with the campaign's time budget or a signal, keeping the best so far.
-    let until = match opts.budget {
-        Budget::Time(t) => Some(start + t),
-        Budget::Runs(_) => None,
-    };
     let (min_actions, min_case) = if opts.minimize {
-        minimize(opts, hand, actions, built, &sig, until)?
+        minimize(opts, hand, actions, built, &sig, minimizing_ends(opts.budget, start))?
     } else {
         (actions.to_vec(), built.clone())
     };
@@ -1343,6 +1356,16 @@ fn report_finding(
         progress(Progress::Joined { finding: f, explanation: &e });
     }
     Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
+}
+
+/// When minimization ends (it also ends on a signal), keeping the best so far: with the
+/// campaign's time budget (`--duration`), counted from the campaign's `start`; never under a
+/// budget of runs.
+fn minimizing_ends(budget: Budget, start: Instant) -> Option<Instant> {
+    match budget {
+        Budget::Time(t) => Some(start + t),
+        Budget::Runs(_) => None,
+    }
 }
 
 /// Delta debugging over the action list: drop chunks (halves, quarters, ... single
@@ -1454,4 +1477,36 @@ pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
         *m.entry(f.signature.kind.clone()).or_insert(0) += 1;
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// README: "minimization stops at `--duration`". A case of four actions fails on a hand
+    /// that rejects lower-case commands at its one lower-case line: with runs to spend it is
+    /// minimized to that line; found once a `--duration` has passed, it is kept as found,
+    /// without one more replay.
+    #[test]
+    fn minimization_stops_at_the_campaigns_duration() {
+        let p = Profile::builtin("seed").unwrap();
+        let mut opts = FuzzOptions::new(Target::Sim { profile: None }, p);
+        opts.open.faults = vec![gcl_model::Fault::LowercaseRejected];
+        let actions: Vec<HostAction> =
+            ["FGET MCV", "vers", "FGET DP", "FGET MOV"].iter().map(|l| HostAction::Line(l.to_string())).collect();
+        let built = build_for(&opts, &actions, "t", "t").unwrap();
+        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let out = hand.run(&built.transcript, true).unwrap();
+        let sig = judged(&opts, &actions, &built, &out).expect("the lower-case line fails");
+        let start = Instant::now();
+        let (shrunk, _) =
+            minimize(&opts, &mut hand, &actions, &built, &sig, minimizing_ends(Budget::Runs(5), start)).unwrap();
+        assert_eq!(shrunk, vec![HostAction::Line("vers".into())]);
+        // A campaign of 30 s that started 31 s ago.
+        let long_ago = start.checked_sub(Duration::from_secs(31)).expect("a monotonic clock 31 s on");
+        let until = minimizing_ends(Budget::Time(Duration::from_secs(30)), long_ago);
+        assert_eq!(until, Some(long_ago + Duration::from_secs(30)));
+        let (kept, _) = minimize(&opts, &mut hand, &actions, &built, &sig, until).unwrap();
+        assert_eq!(kept, actions, "minimized past the campaign's duration");
+    }
 }
