@@ -579,29 +579,45 @@ impl<'p> Generator<'p> {
     }
 
     /// A RealTime session that holds one control velocity: some RealTime flags set (mostly on),
-    /// the coefficients of the velocity, of its feedback and of LFDP (by their roles) set to
-    /// small values for one motor prefix at a time (so the motors' coefficients differ), LOOP,
+    /// one of the coefficients of the velocity, of its feedback and of LFDP (by their roles)
+    /// set to 2..4 for one motor, its flag on (so the motors' coefficients differ: the clause
+    /// the feedback's relations check), the others now and then, LOOP (mostly every motor),
     /// then 3 to 6 well-formed blocks, each after a pause, whose data are one set of small values.
     fn held_session(&self, d: &mut Dice, out: &mut Vec<HostAction>) {
         for s in self.params_by(|s| s.rt.is_some() && !s.read_only) {
-            if d.chance(30)
+            if d.chance(20)
                 && let Some(id) = self.p.param_id(&s.name)
             {
                 let v = if d.chance(70) { s.max.min(s.min.max(0) + 1) } else { s.min.max(0) };
                 out.push(HostAction::Line(format!("{} {} {v}", self.p.setter(id), s.name)));
             }
         }
-        for role in [Role::VelocityCoefficient, Role::FeedbackVelocityCoefficient, Role::DeltaCoefficient] {
-            if let Some(id) = self.p.role(role)
-                && d.chance(60)
-            {
-                let s = self.p.param(id);
+        // The clause the session checks: one coefficient set apart for one motor (the flag it
+        // scales on), the others now and then.
+        let roles = [Role::VelocityCoefficient, Role::FeedbackVelocityCoefficient, Role::DeltaCoefficient];
+        let chosen = d.below(roles.len());
+        let single: Vec<char> = self.p.prefixes.iter().filter(|px| px.motors.len() == 1).map(|px| px.char).collect();
+        for (i, role) in roles.into_iter().enumerate() {
+            let Some(id) = self.p.role(role) else { continue };
+            let s = self.p.param(id);
+            if i == chosen {
+                if let gcl_model::spec::Absence::RequiredWith(flag) = role.absence()
+                    && let Some(f) = self.p.param_id(flag.name())
+                {
+                    let on = self.p.param(f).max.min(1);
+                    out.push(HostAction::Line(format!("{} {} {on}", self.p.setter(f), flag.name())));
+                }
+                let px = d.pick(&single).map(char::to_string).unwrap_or_default();
+                let v = d.between(s.min.max(2), s.max.min(4));
+                out.push(HostAction::Line(format!("{px}{} {} {v}", self.p.setter(id), s.name)));
+            } else if d.chance(30) {
                 let v = d.between(s.min.max(1), s.max.min(4));
                 out.push(HostAction::Line(format!("{}{} {} {v}", self.prefix(d), self.p.setter(id), s.name)));
             }
         }
         let Some(lp) = self.commands(|c| c.kind == CommandKind::Loop).first().map(|c| c.name.clone()) else { return };
-        let prefix = if d.chance(50) { self.prefix(d) } else { String::new() };
+        // (mostly every motor: a ratio between motors needs two of them)
+        let prefix = if d.chance(20) { self.prefix(d) } else { String::new() };
         out.push(HostAction::Line(format!("{prefix}{lp}")));
         // (mostly closing: after the preamble's HI the fingers are open, at the end an opening
         // velocity stops at)
