@@ -314,7 +314,7 @@ fn relation(name: &str, ratio: f64, pairs: &[(i64, i64)]) -> Option<Relation> {
         (num, den) = (num / g, den / g);
     }
     let fitted = fit_tolerance(name, num, den, pairs, 2)?;
-    (fitted.tolerance <= MOTION_TOLERANCE).then(|| Relation { tolerance: MOTION_TOLERANCE, ..fitted })
+    (fitted.tolerance <= MOTION_TOLERANCE).then_some(Relation { tolerance: MOTION_TOLERANCE, ..fitted })
 }
 
 #[cfg(test)]
