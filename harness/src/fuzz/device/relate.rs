@@ -20,7 +20,8 @@
 //!   inside the tolerance, and room under the signed byte's end);
 //! - LFDP: neither motor's datum changed since the block before the previous feedback, so both
 //!   ran at one velocity over the whole interval; the anchor (the first such motor on the wire)
-//!   reads 8..=40 in the model (room for a faster hand under the signed byte's end), and only
+//!   reads 8..=24 in the model (room for a faster hand or a longer interval under the signed
+//!   byte's end), and only
 //!   motors after it that move no more than it are held to it.
 //!
 //! The factor is the model's ratio (a fraction over 1000); the tolerance is the 25 % the suite
@@ -42,11 +43,12 @@ const MOTION_TOLERANCE: u32 = 25;
 /// LFV readings beyond this are too near the signed byte's end for a ratio (a hand whose units
 /// are a little larger clips).
 const MOST_LFV: i64 = 100;
-/// LFDP readings of the moving motor beyond this are not related: LFDP counts the movement
-/// over the hand's real interval at the hand's own speed (the seed leaves motion speed open;
-/// the independent seed hand moves 2.5 times the model's), so a reading must leave room for a
-/// hand three times as fast before the signed byte clips it.
-const MOST_LFDP: i64 = 40;
+/// LFDP readings of the anchor beyond this are not related: LFDP counts the movement over the
+/// hand's real interval at the hand's own speed (the seed leaves motion speed open; the
+/// independent seed hand moves 2.5 times the model's), and a host stalled under load
+/// stretches the interval, so a reading must leave room for five times the model's before the
+/// signed byte clips it (a clipped anchor breaks the ratio: seen at 40 on a loaded machine).
+const MOST_LFDP: i64 = 24;
 /// The least LFV reading related: from 4 on, truncation stays inside the tolerance.
 const LEAST_LFV: i64 = 4;
 /// The least LFDP reading of the moving motor: half of it is still [`LEAST_LFV`].
@@ -239,7 +241,7 @@ impl Relations {
             moving.push((m, c, control_velocity(note.datum[i], lcvc, h.lcv_fraction_bits) / c as f64, got));
         }
         // The anchor: the first motor on the wire (a capture is read before what relates to
-        // it) the model reads 8..=40; the motors after it that move no more are held to it
+        // it) the model reads 8..=24; the motors after it that move no more are held to it
         // (a hand whose interval is short reads small values, where truncation is a whole
         // unit: held to a larger anchor, a smaller reading stays within the band's rounding).
         let Some(&(am, ac, arate, agot)) = moving.iter().find(|x| (LEAST_LFDP..=MOST_LFDP).contains(&x.3.abs())) else {
