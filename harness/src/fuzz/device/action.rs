@@ -39,7 +39,7 @@ pub enum HostAction {
         /// Bytes added (positive) or cut (negative) after encoding.
         extra: i8,
         /// A pause before the block, in ms (the motors run meanwhile: movements large enough
-        /// for the ratios of [`super::relate`] to show).
+        /// for the relations of `fuzz::device::relate` to show).
         #[serde(default, skip_serializing_if = "is_zero")]
         pause_ms: u64,
     },
@@ -125,7 +125,7 @@ impl<'p> Generator<'p> {
 
     /// With `held`, half the RealTime sessions hold one control velocity (small values, the
     /// coefficients set per motor, pauses before the blocks): the sessions whose feedback the
-    /// relations of [`super::relate`] judge on a hand outside this process. Without it the
+    /// relations (`fuzz::device::relate`) judge on a hand outside this process. Without it the
     /// draws are as they always were.
     pub fn holding_velocities(mut self, held: bool) -> Generator<'p> {
         self.held = held;
