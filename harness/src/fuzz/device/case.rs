@@ -154,7 +154,8 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
 /// `wide` is for hands outside this process: there the model's clock and the hand's part as
 /// soon as motors move under RealTime control or a ^C lands mid-motion (a wait advances the
 /// in-process model's clock, not a child's or a real hand's), so what follows reads
-/// positions, velocities and position changes in their whole range; in-process the model is
+/// positions, velocities and position changes in their whole range, except where their
+/// clauses are ratios that hold on any clock (see [`super::relate`]); in-process the model is
 /// its own clock and only MPE bands apply.
 ///
 /// `home` starts every case with HI (a hand outside this process keeps its positions across
