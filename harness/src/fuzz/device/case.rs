@@ -253,10 +253,16 @@ pub fn build_case(
                     match c.kind(p) {
                         CommandKind::MotorSave | CommandKind::GlobalSave => eeprom = true,
                         CommandKind::Loop => k = k.requires(Requirement::Realtime),
-                        // A motion that leaves a motor out (a prefix, EN) leaves its position as
-                        // uncertain as it was: on a hand outside this process a RealTime
-                        // session after a pause moves it by the hand's speed and clock.
-                        kd if kd.is_motion() && !refused && (!wide || moves_all(p, c, &walk.shadow)) => {
+                        // A motion that leaves a motor out (a prefix, EN), or a step from where
+                        // the motor is (IC, IO), leaves positions as uncertain as they were: on a
+                        // hand outside this process a RealTime session after a pause moves
+                        // motors by the hand's speed and clock.
+                        kd if kd.is_motion()
+                            && !refused
+                            && (!wide
+                                || !matches!(kd, CommandKind::IncrementalClose | CommandKind::IncrementalOpen)
+                                    && moves_all(p, c, &walk.shadow)) =>
+                        {
                             walk.positions_uncertain = false
                         }
                         _ => {}
@@ -545,6 +551,28 @@ mod tests {
         let text = b.transcript.to_text();
         let answer = text.lines().skip_while(|l| *l != "send hex 63 0A 0A 0A 0A").nth(1).unwrap_or_default();
         assert!(answer.starts_with("expect ") && answer.ends_with(" hex 2A"), "{text}");
+    }
+
+    #[test]
+    fn a_step_from_an_uncertain_position_leaves_it_uncertain() {
+        // IC steps from where the motors are: after a RealTime session that is the hand's
+        // clock's position, not the model's (the unmutated sim in fast time, over exec, read
+        // 160 where the model's band was 165..215).
+        let b = wide_case(&[
+            HostAction::Line("LOOP".into()),
+            block(b'C', 0),
+            block(b'A', 30),
+            HostAction::Abort,
+            HostAction::Line("IC".into()),
+            HostAction::Line("FGET P".into()),
+        ])
+        .expect("a case");
+        let text = b.transcript.to_text();
+        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default();
+        let p = Profile::builtin("seed").unwrap();
+        let spec = p.param(p.param_id("P").unwrap());
+        let whole = format!("{{int {}..{}}}", spec.min, spec.max);
+        assert_eq!(read.matches(&whole).count(), 4, "{read}");
     }
 
     #[test]
