@@ -629,7 +629,9 @@ impl<'p> Generator<'p> {
                 header,
                 values: values.clone(),
                 extra: 0,
-                pause_ms: d.between(10, 40) as u64,
+                // (a pause moves the motors only on a hand whose motions take time: the same
+                // requirement as a ^C landing mid-motion)
+                pause_ms: if self.allowed.abort_timing { d.between(10, 40) as u64 } else { 0 },
             });
         }
         out.push(HostAction::Abort);

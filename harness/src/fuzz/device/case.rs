@@ -359,7 +359,10 @@ pub fn build_case(
                 };
                 walk.feed(&step, term);
                 if *pause_ms > 0 {
-                    k = k.pause_ms(*pause_ms);
+                    // Motors run over the pause only on a hand whose motions take time (as
+                    // the suite's rt-lfdpc-scaling): a hand whose motions end at once would
+                    // leave the model's positions behind.
+                    k = k.pause_ms(*pause_ms).requires(Requirement::AbortTiming);
                 }
                 if short {
                     walk.features.insert("abort:mid-block".into());
