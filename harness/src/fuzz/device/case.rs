@@ -155,7 +155,7 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
 /// soon as motors move under RealTime control or a ^C lands mid-motion (a wait advances the
 /// in-process model's clock, not a child's or a real hand's), so what follows reads
 /// positions, velocities and position changes in their whole range, except where their
-/// clauses are ratios that hold on any clock (see [`super::relate`]); in-process the model is
+/// clauses are ratios that hold on any clock (see `fuzz::device::relate`); in-process the model is
 /// its own clock and only MPE bands apply.
 ///
 /// `home` starts every case with HI (a hand outside this process keeps its positions across
