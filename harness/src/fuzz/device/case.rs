@@ -229,7 +229,7 @@ pub fn build_case(
                 }
                 let answer = walk.feed(&step, term);
                 if walk.shadow.mode() == Mode::Loop {
-                    track = Some(LoopTrack::enter(p, &walk.shadow));
+                    track = Some(LoopTrack::enter(p, &walk.shadow, k.def.plans.len()));
                 }
                 let refused = answer.windows(3).any(|w| w == b"ERR");
                 let shape = match &cmd {
@@ -427,10 +427,12 @@ pub fn build_case(
     let mut relations = Relations::default();
     for (i, kind) in kinds {
         let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
-        if let (ShapeKind::Block(true), true) = (&kind, wide)
-            && let Some((_, note)) = notes.iter().find(|(at, _)| *at == i)
-        {
-            plan.binds = relations.binds(p, i, note, c);
+        if wide && let Some((_, note)) = notes.iter().find(|(at, _)| *at == i) {
+            let uncertain = matches!(kind, ShapeKind::Block(true));
+            let binds = relations.binds(p, i, note, c, uncertain);
+            if uncertain {
+                plan.binds = binds;
+            }
         }
         plan.shape = match kind {
             ShapeKind::Fixed(s) => s,

@@ -22,7 +22,9 @@
 //!   ran at one velocity over the whole interval; the anchor (the first such motor on the wire)
 //!   reads 8..=24 in the model (room for a faster hand or a longer interval under the signed
 //!   byte's end), and only
-//!   motors after it that move no more than it are held to it.
+//!   motors after it that move no more than it are held to it; every earlier reading of both
+//!   in the loop was at most 24 in the model too (a clipped reading carries its rest into the
+//!   next).
 //!
 //! The factor is the model's ratio (a fraction over 1000); the tolerance is the 25 % the suite
 //! allows velocities in motion, and a reading is related only where that holds every truncation
@@ -70,11 +72,15 @@ pub(super) struct LoopTrack {
     changed: [Option<u32>; 4],
     blocks: u32,
     last_feedback: Option<u32>,
+    /// Which loop of the case (the step it was entered at).
+    id: usize,
 }
 
 /// What a feedback block may be related on: per motor (index 0 is motor 1).
 #[derive(Debug, Clone)]
 pub(super) struct BlockNote {
+    /// The loop's id.
+    loop_id: usize,
     coeff: [Coefficients; 4],
     datum: [i64; 4],
     /// The block leaves the motor's velocity as it was.
@@ -84,8 +90,8 @@ pub(super) struct BlockNote {
 }
 
 impl LoopTrack {
-    /// The loop the shadow has just entered.
-    pub(super) fn enter(p: &Profile, shadow: &Device) -> LoopTrack {
+    /// The loop the shadow has just entered, at step `id`.
+    pub(super) fn enter(p: &Profile, shadow: &Device, id: usize) -> LoopTrack {
         let read = |role: Role, m: u8| -> Option<i64> {
             match p.role(role) {
                 Some(id) => Some(shadow.params().get(p, id, m)),
@@ -97,7 +103,7 @@ impl LoopTrack {
             lfvc: read(Role::FeedbackVelocityCoefficient, m),
             lfdpc: read(Role::DeltaCoefficient, m),
         });
-        LoopTrack { coeff, datum: [0; 4], changed: [None; 4], blocks: 0, last_feedback: None }
+        LoopTrack { coeff, datum: [0; 4], changed: [None; 4], blocks: 0, last_feedback: None, id }
     }
 
     /// A whole block the host sent in the loop (`bytes`: header and data as encoded); its note
@@ -115,7 +121,8 @@ impl LoopTrack {
             }
         }
         let has = |m: u8, name: &str| layout.control().position(Some(m), name).is_some();
-        let mut note = BlockNote { coeff: self.coeff, datum: self.datum, lfv: [false; 4], lfdp: [false; 4] };
+        let mut note =
+            BlockNote { loop_id: self.id, coeff: self.coeff, datum: self.datum, lfv: [false; 4], lfdp: [false; 4] };
         for m in 1..=4u8 {
             let i = usize::from(m - 1);
             if before[i] != self.datum[i] {
@@ -148,6 +155,12 @@ struct Anchor {
 #[derive(Default)]
 pub(super) struct Relations {
     anchor: Option<Anchor>,
+    /// The loop whose LFDP readings `lfdp_bounded` follows.
+    lfdp_loop: Option<usize>,
+    /// Per motor: every LFDP reading of the loop so far was at most [`MOST_LFDP`] in the
+    /// model, so no hand clipped one and carried the rest into the next (a reading carries
+    /// what the byte could not hold: seen as 125 where the relation wanted about 45).
+    lfdp_bounded: [bool; 4],
     /// Coverage features of the relations made (a relation between different coefficients
     /// checks their clause).
     pub features: Vec<String>,
@@ -156,13 +169,28 @@ pub(super) struct Relations {
 impl Relations {
     /// The captures and relations for the answer `c` of step `step`, a feedback block with
     /// `note`, each holding the model's own answer.
-    pub(super) fn binds(&mut self, p: &Profile, step: usize, note: &BlockNote, c: &Captured) -> Vec<Bind> {
+    /// Every feedback block of a tracked loop comes here in order; `bind` is false where the
+    /// block's fields are judged exactly (its readings still count for what follows).
+    pub(super) fn binds(&mut self, p: &Profile, step: usize, note: &BlockNote, c: &Captured, bind: bool) -> Vec<Bind> {
         let Some(layout) = &c.layout else { return Vec::new() };
         let fb = layout.feedback();
         let Ok((_, values)) = fb.decode(&c.output) else { return Vec::new() };
         let model = |m: u8, name: &str| fb.value_of(&values, Some(m), name);
+        if self.lfdp_loop != Some(note.loop_id) {
+            self.lfdp_loop = Some(note.loop_id);
+            self.lfdp_bounded = [true; 4];
+        }
+        let bounded = self.lfdp_bounded;
+        for (m, b) in (1..=4u8).zip(self.lfdp_bounded.iter_mut()) {
+            if model(m, "LFDP").is_some_and(|v| v.abs() > MOST_LFDP) {
+                *b = false;
+            }
+        }
+        if !bind {
+            return Vec::new();
+        }
         let mut binds = self.lfv(p, step, note, &model);
-        binds.extend(self.lfdp(p, step, note, &model));
+        binds.extend(self.lfdp(p, step, note, bounded, &model));
         binds
     }
 
@@ -226,6 +254,7 @@ impl Relations {
         p: &Profile,
         step: usize,
         note: &BlockNote,
+        bounded: [bool; 4],
         model: &dyn Fn(u8, &str) -> Option<i64>,
     ) -> Vec<Bind> {
         let h = &p.hand;
@@ -233,7 +262,8 @@ impl Relations {
         let mut moving: Vec<(u8, i64, f64, i64)> = Vec::new();
         for m in 1..=4u8 {
             let i = usize::from(m - 1);
-            let (Some(lcvc), Some(lfdpc), true) = (note.coeff[i].lcvc, note.coeff[i].lfdpc, note.lfdp[i]) else {
+            let (Some(lcvc), Some(lfdpc), true) = (note.coeff[i].lcvc, note.coeff[i].lfdpc, note.lfdp[i] && bounded[i])
+            else {
                 continue;
             };
             let Some(got) = model(m, "LFDP") else { continue };
@@ -354,7 +384,7 @@ mod tests {
     fn a_held_velocity_relates_each_motors_feedback_by_its_coefficients() {
         let t = session(
             &["12FSET LCV 1 LCPG 0 LFV 1 LFDP 1", "1FSET LCVC 3 LFDPC 2", "12LOOP"],
-            vec![block(b'C', &[5, 5], 0), block(b'C', &[5, 5], 0), block(b'A', &[], 20), block(b'A', &[], 20)],
+            vec![block(b'C', &[5, 5], 0), block(b'C', &[5, 5], 0), block(b'A', &[], 10), block(b'A', &[], 10)],
         );
         let rel = relations(&t);
         // LFV: motor 2 (LCVC 1) reads a third of motor 1 (LCVC 3), on every block after the
@@ -364,6 +394,19 @@ mod tests {
         assert!(rel.iter().any(|r| r.ends_with("*667/1000 +-25%") && r.starts_with('d')), "{rel:?}");
         let text = t.to_text();
         assert!(text.contains("note: relation `v"), "the evidence is stated:\n{text}");
+    }
+
+    #[test]
+    fn lfdp_after_a_reading_a_hand_may_have_clipped_is_not_related() {
+        // The first feedback counts the movement since LOOP, 100 ms of it: on a faster hand the
+        // byte clips and the rest is carried into the next reading (the clean seed hand read
+        // 125 where the relation wanted about 45).
+        let t = session(
+            &["12FSET LCV 1 LCPG 0 LFV 1 LFDP 1", "1FSET LCVC 3 LFDPC 2", "12LOOP"],
+            vec![block(b'c', &[5, 5], 0), block(b'A', &[], 100), block(b'C', &[5, 5], 10), block(b'A', &[], 10)],
+        );
+        let rel = relations(&t);
+        assert!(!rel.iter().any(|r| r.starts_with('d')), "{rel:?}");
     }
 
     #[test]
