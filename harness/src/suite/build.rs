@@ -139,7 +139,17 @@ pub(crate) fn fit_tolerance(name: &str, num: i64, den: i64, pairs: &[(i64, i64)]
     Some(Relation::new(name, num, den, (tolerance + margin).min(gcl_transcript::MAX_TOLERANCE)))
 }
 
-fn gcd(a: i64, b: i64) -> i64 {
+/// The feedback velocity (LFV, before truncation) of a motor running at the control velocity
+/// of an LCV `datum` with `lcvc`, reported with `lfvc` (0 acts as 1): the model's arithmetic
+/// (the datum × LCVC in the profile's fixed point, in counts per ms, read in LFV's units).
+pub(crate) fn lfv_exact(p: &Profile, datum: i64, lcvc: i64, lfvc: i64) -> f64 {
+    let h = &p.hand;
+    gcl_model::realtime::control_velocity(datum, lcvc, h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms
+        / h.lfv_counts_per_ms
+        / lfvc.max(1) as f64
+}
+
+pub(crate) fn gcd(a: i64, b: i64) -> i64 {
     if b == 0 { a } else { gcd(b, a % b) }
 }
 
@@ -705,7 +715,11 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
             }) {
                 return Err(fail(format!("step {i}: relation {piece} does not hold the model's pair {x} -> {y}")));
             }
-            notes.push(format!("relation `{}`: {}", r.text(), b.evidence));
+            // (a relation held on several answers is stated once)
+            let note = format!("relation `{}`: {}", r.text(), b.evidence);
+            if !notes.contains(&note) {
+                notes.push(note);
+            }
         }
         if let Some((_, why)) = &plan.earliest {
             notes.push(format!("timing window: {why}"));

@@ -8,7 +8,7 @@
 //! the layout the shadow model is in when the block goes out.
 
 use gcl_model::Profile;
-use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule};
+use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, Role};
 use rand_core::RngCore;
 use serde::{Deserialize, Serialize};
 
@@ -38,9 +38,17 @@ pub enum HostAction {
         values: Vec<i64>,
         /// Bytes added (positive) or cut (negative) after encoding.
         extra: i8,
+        /// A pause before the block, in ms (the motors run meanwhile: movements large enough
+        /// for the relations of `fuzz::device::relate` to show).
+        #[serde(default, skip_serializing_if = "is_zero")]
+        pause_ms: u64,
     },
     /// ^C alone.
     Abort,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// What the operator allows the fuzzer to do to the hand.
@@ -106,12 +114,22 @@ impl Dice {
 pub struct Generator<'p> {
     p: &'p Profile,
     allowed: Allowed,
+    held: bool,
 }
 
 impl<'p> Generator<'p> {
     /// A generator for `p` within what is `allowed`.
     pub fn new(p: &'p Profile, allowed: Allowed) -> Generator<'p> {
-        Generator { p, allowed }
+        Generator { p, allowed, held: false }
+    }
+
+    /// With `held`, half the RealTime sessions hold one control velocity (small values, the
+    /// coefficients set per motor, pauses before the blocks): the sessions whose feedback the
+    /// relations (`fuzz::device::relate`) judge on a hand outside this process. Without it the
+    /// draws are as they always were.
+    pub fn holding_velocities(mut self, held: bool) -> Generator<'p> {
+        self.held = held;
+        self
     }
 
     fn command_allowed(&self, c: &CommandSpec) -> bool {
@@ -515,6 +533,9 @@ impl<'p> Generator<'p> {
 
     /// A RealTime session: flags, LOOP, blocks with edge values and headers, ^C.
     fn realtime(&self, d: &mut Dice, out: &mut Vec<HostAction>) {
+        if self.held && d.chance(50) {
+            return self.held_session(d, out);
+        }
         let flags = self.params_by(|s| s.rt.is_some() || (s.effect.is_some() && s.name.starts_with('L')));
         for _ in 0..d.below(4) {
             if let Some(s) = d.pick(&flags)
@@ -549,10 +570,69 @@ impl<'p> Generator<'p> {
                 1 => 1,
                 _ => 0,
             };
-            out.push(HostAction::Block { header, values, extra });
+            out.push(HostAction::Block { header, values, extra, pause_ms: 0 });
             if extra < 0 {
                 break;
             }
+        }
+        out.push(HostAction::Abort);
+    }
+
+    /// A RealTime session that holds one control velocity: some RealTime flags set (mostly on),
+    /// one of the coefficients of the velocity, of its feedback and of LFDP (by their roles)
+    /// set to 2..4 for one motor, its flag on (so the motors' coefficients differ: the clause
+    /// the feedback's relations check), the others now and then, LOOP (mostly every motor),
+    /// then 3 to 6 well-formed blocks, each after a pause, whose data are one set of small values.
+    fn held_session(&self, d: &mut Dice, out: &mut Vec<HostAction>) {
+        for s in self.params_by(|s| s.rt.is_some() && !s.read_only) {
+            if d.chance(20)
+                && let Some(id) = self.p.param_id(&s.name)
+            {
+                let v = if d.chance(70) { s.max.min(s.min.max(0) + 1) } else { s.min.max(0) };
+                out.push(HostAction::Line(format!("{} {} {v}", self.p.setter(id), s.name)));
+            }
+        }
+        // The clause the session checks: one coefficient set apart for one motor (the flag it
+        // scales on), the others now and then.
+        let roles = [Role::VelocityCoefficient, Role::FeedbackVelocityCoefficient, Role::DeltaCoefficient];
+        let chosen = d.below(roles.len());
+        let single: Vec<char> = self.p.prefixes.iter().filter(|px| px.motors.len() == 1).map(|px| px.char).collect();
+        for (i, role) in roles.into_iter().enumerate() {
+            let Some(id) = self.p.role(role) else { continue };
+            let s = self.p.param(id);
+            if i == chosen {
+                if let gcl_model::spec::Absence::RequiredWith(flag) = role.absence()
+                    && let Some(f) = self.p.param_id(flag.name())
+                {
+                    let on = self.p.param(f).max.min(1);
+                    out.push(HostAction::Line(format!("{} {} {on}", self.p.setter(f), flag.name())));
+                }
+                let px = d.pick(&single).map(char::to_string).unwrap_or_default();
+                let v = d.between(s.min.max(2), s.max.min(4));
+                out.push(HostAction::Line(format!("{px}{} {} {v}", self.p.setter(id), s.name)));
+            } else if d.chance(30) {
+                let v = d.between(s.min.max(1), s.max.min(4));
+                out.push(HostAction::Line(format!("{}{} {} {v}", self.prefix(d), self.p.setter(id), s.name)));
+            }
+        }
+        let Some(lp) = self.commands(|c| c.kind == CommandKind::Loop).first().map(|c| c.name.clone()) else { return };
+        // (mostly every motor: a ratio between motors needs two of them)
+        let prefix = if d.chance(20) { self.prefix(d) } else { String::new() };
+        out.push(HostAction::Line(format!("{prefix}{lp}")));
+        // (mostly closing: after the preamble's HI the fingers are open, at the end an opening
+        // velocity stops at)
+        let sign = if d.chance(80) { 1 } else { -1 };
+        let values: Vec<i64> = (0..8).map(|_| sign * d.between(2, 12)).collect();
+        for _ in 0..3 + d.below(4) {
+            let header = *d.pick(b"CCAca").unwrap_or(&b'C');
+            out.push(HostAction::Block {
+                header,
+                values: values.clone(),
+                extra: 0,
+                // (a pause moves the motors only on a hand whose motions take time: the same
+                // requirement as a ^C landing mid-motion)
+                pause_ms: if self.allowed.abort_timing { d.between(10, 40) as u64 } else { 0 },
+            });
         }
         out.push(HostAction::Abort);
     }
@@ -609,13 +689,22 @@ pub fn simpler(a: &HostAction) -> Vec<HostAction> {
         HostAction::LineThenAbort { line, after_ms } if *after_ms > 0 => {
             vec![HostAction::LineThenAbort { line: line.clone(), after_ms: 0 }, HostAction::Line(line.clone())]
         }
-        HostAction::Block { header, values, extra } => {
+        HostAction::Block { header, values, extra, pause_ms } => {
             let mut out = Vec::new();
+            let block = |values: Vec<i64>, extra: i8, pause_ms: u64| HostAction::Block {
+                header: *header,
+                values,
+                extra,
+                pause_ms,
+            };
             if values.iter().any(|v| *v != 0) {
-                out.push(HostAction::Block { header: *header, values: vec![0; values.len()], extra: *extra });
+                out.push(block(vec![0; values.len()], *extra, *pause_ms));
             }
             if *extra != 0 {
-                out.push(HostAction::Block { header: *header, values: values.clone(), extra: 0 });
+                out.push(block(values.clone(), 0, *pause_ms));
+            }
+            if *pause_ms != 0 {
+                out.push(block(values.clone(), *extra, 0));
             }
             out
         }

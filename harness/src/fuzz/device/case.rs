@@ -17,6 +17,7 @@ use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
 
 use super::action::HostAction;
+use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
 use crate::suite::build::{CaseB, FieldRule, Range, Shape, build_from, capture_plan, value_range};
 use gcl_transcript::script::ScriptStep;
@@ -156,7 +157,8 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
 /// `wide` is for hands outside this process: there the model's clock and the hand's part as
 /// soon as motors move under RealTime control or a ^C lands mid-motion (a wait advances the
 /// in-process model's clock, not a child's or a real hand's), so what follows reads
-/// positions, velocities and position changes in their whole range; in-process the model is
+/// positions, velocities and position changes in their whole range, except where their
+/// clauses are ratios that hold on any clock (see `fuzz::device::relate`); in-process the model is
 /// its own clock and only MPE bands apply.
 ///
 /// `home` starts every case with HI (a hand outside this process keeps its positions across
@@ -214,8 +216,16 @@ pub fn build_case_sending(
     let mut eeprom = false;
     let mut kinds: Vec<(usize, ShapeKind)> = Vec::new();
     let mut block_bytes: Vec<Option<Vec<u8>>> = Vec::new();
+    // The loop the shadow is in as the host drove it, and what each feedback block of it may
+    // be related on (see [`super::relate`]).
+    let mut track: Option<LoopTrack> = None;
+    let mut notes: Vec<(usize, BlockNote)> = Vec::new();
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
+        if !in_loop || !matches!(a, HostAction::Block { .. } | HostAction::Line(_)) {
+            // (anything else sent in the loop drives it as the track does not follow)
+            track = None;
+        }
         match a {
             HostAction::Line(l) => {
                 if in_loop {
@@ -239,6 +249,9 @@ pub fn build_case_sending(
                     ));
                 }
                 let answer = walk.feed(&step, term);
+                if walk.shadow.mode() == Mode::Loop {
+                    track = Some(LoopTrack::enter(p, &walk.shadow, k.def.plans.len()));
+                }
                 let refused = answer.windows(3).any(|w| w == b"ERR");
                 let shape = match &cmd {
                     Some(c) if !refused => match (c.kind(p), &c.args) {
@@ -261,7 +274,18 @@ pub fn build_case_sending(
                     match c.kind(p) {
                         CommandKind::MotorSave | CommandKind::GlobalSave => eeprom = true,
                         CommandKind::Loop => k = k.requires(Requirement::Realtime),
-                        kd if kd.is_motion() && !refused => walk.positions_uncertain = false,
+                        // A motion that leaves a motor out (a prefix, EN), or a step from where
+                        // the motor is (IC, IO), leaves positions as uncertain as they were: on a
+                        // hand outside this process a RealTime session after a pause moves
+                        // motors by the hand's speed and clock.
+                        kd if kd.is_motion()
+                            && !refused
+                            && (!wide
+                                || !matches!(kd, CommandKind::IncrementalClose | CommandKind::IncrementalOpen)
+                                    && moves_all(p, c, &walk.shadow)) =>
+                        {
+                            walk.positions_uncertain = false
+                        }
                         _ => {}
                     }
                 }
@@ -324,7 +348,7 @@ pub fn build_case_sending(
                 walk.feed(&ScriptStep::new(gcl_transcript::script::Action::abort()), term);
                 k = k.abort();
             }
-            HostAction::Block { header, values, extra } => {
+            HostAction::Block { header, values, extra, pause_ms } => {
                 let given = blocks.get(block_bytes.len()).cloned().flatten();
                 let Some(layout) = walk.shadow.rt_layout().cloned().filter(|_| in_loop) else {
                     block_bytes.push(None);
@@ -355,17 +379,35 @@ pub fn build_case_sending(
                 }
                 block_bytes.push(Some(bytes.clone()));
                 let short = *extra < 0;
-                let step = ScriptStep::new(if short {
-                    gcl_transcript::script::Action::Partial(bytes.clone())
-                } else {
-                    gcl_transcript::script::Action::Bytes { bytes: bytes.clone(), form: gcl_transcript::Form::Hex }
-                });
+                let pause = (*pause_ms > 0).then(|| Duration::from_millis(*pause_ms));
+                let step = ScriptStep {
+                    pause,
+                    ..ScriptStep::new(if short {
+                        gcl_transcript::script::Action::Partial(bytes.clone())
+                    } else {
+                        gcl_transcript::script::Action::Bytes { bytes: bytes.clone(), form: gcl_transcript::Form::Hex }
+                    })
+                };
                 walk.feed(&step, term);
+                if *pause_ms > 0 {
+                    // Motors run over the pause only on a hand whose motions take time (as
+                    // the suite's rt-lfdpc-scaling): a hand whose motions end at once would
+                    // leave the model's positions behind.
+                    k = k.pause_ms(*pause_ms).requires(Requirement::AbortTiming);
+                }
                 if short {
                     walk.features.insert("abort:mid-block".into());
                     walk.feed(&ScriptStep::new(gcl_transcript::script::Action::abort()), term);
                     k = k.step(gcl_transcript::script::Action::Partial(bytes.clone())).abort();
                     continue;
+                }
+                match track.as_mut() {
+                    Some(t) if *extra == 0 => {
+                        if let Some(n) = t.block(&layout, &bytes) {
+                            notes.push((k.def.plans.len(), n));
+                        }
+                    }
+                    _ => track = None,
                 }
                 kinds.push((k.def.plans.len(), ShapeKind::Block(walk.positions_uncertain)));
                 // Motors that move under RealTime control leave the model's clock and the
@@ -413,16 +455,27 @@ pub fn build_case_sending(
             }
         }
     }
+    let mut relations = Relations::default();
     for (i, kind) in kinds {
         let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
+        if wide && let Some((_, note)) = notes.iter().find(|(at, _)| *at == i) {
+            let uncertain = matches!(kind, ShapeKind::Block(true));
+            let binds = relations.binds(p, i, note, c, uncertain);
+            if uncertain {
+                plan.binds = binds;
+            }
+        }
         plan.shape = match kind {
             ShapeKind::Fixed(s) => s,
             ShapeKind::Get(_, _) if c.output.windows(3).any(|w| w == b"ERR") => Shape::Exact,
             ShapeKind::Get(ids, uncertain) => get_shape(p, &ids, &c.output, uncertain || !homed, wide),
             ShapeKind::Block(uncertain) => {
                 let size = c.layout.as_ref().map(|l| l.feedback().size());
+                // (a bare `*`, the acknowledgement of a block that asks for no feedback, holds
+                // no value: judged exactly, it is what tells a hand that sends feedback for `c`)
                 if wide
                     && c.output.first() == Some(&gcl_model::realtime::FEEDBACK_HEADER)
+                    && c.output.len() > 1
                     && size != Some(c.output.len())
                 {
                     return Err(NotACase("a block answer that is not a feedback block".into()));
@@ -442,6 +495,7 @@ pub fn build_case_sending(
             _ => false,
         })
         .count();
+    walk.features.extend(relations.features);
     let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
@@ -476,6 +530,14 @@ fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<Fi
         .collect()
 }
 
+/// Whether a command addresses every motor: its prefix, else the motors EN selects.
+fn moves_all(p: &Profile, c: &gcl_model::Command, shadow: &Device) -> bool {
+    match c.prefix {
+        Some(set) => (1..=4u8).all(|m| set.contains(m)),
+        None => p.role(Role::Enabled).is_none_or(|id| (1..=4u8).all(|m| shadow.params().get(p, id, m) != 0)),
+    }
+}
+
 /// Coverage features of a line as the model's grammar reads it.
 fn note_line(p: &Profile, line: &str, f: &mut BTreeSet<String>) {
     match parse_line(p, line.as_bytes()) {
@@ -502,5 +564,73 @@ fn note_line(p: &Profile, line: &str, f: &mut BTreeSet<String>) {
             }
             f.insert(format!("refused:{}", r.status.code()));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wide_case(actions: &[HostAction]) -> Result<BuiltCase, NotACase> {
+        build_case(&Profile::builtin("seed").unwrap(), actions, "t", "t", true, true)
+    }
+
+    fn block(header: u8, pause_ms: u64) -> HostAction {
+        HostAction::Block { header, values: vec![10, 10, 10, 10], extra: 0, pause_ms }
+    }
+
+    #[test]
+    fn a_block_that_asks_for_no_feedback_is_judged_on_a_hand_outside_this_process() {
+        // The bare `*` holds no value: a hand that sends feedback for `c` must meet it.
+        let b = wide_case(&[HostAction::Line("LOOP".into()), block(b'c', 0), block(b'A', 20), HostAction::Abort])
+            .expect("a case with a `c` block");
+        let text = b.transcript.to_text();
+        let answer = text.lines().skip_while(|l| *l != "send hex 63 0A 0A 0A 0A").nth(1).unwrap_or_default();
+        assert!(answer.starts_with("expect ") && answer.ends_with(" hex 2A"), "{text}");
+    }
+
+    #[test]
+    fn a_step_from_an_uncertain_position_leaves_it_uncertain() {
+        // IC steps from where the motors are: after a RealTime session that is the hand's
+        // clock's position, not the model's (the unmutated sim in fast time, over exec, read
+        // 160 where the model's band was 165..215).
+        let b = wide_case(&[
+            HostAction::Line("LOOP".into()),
+            block(b'C', 0),
+            block(b'A', 30),
+            HostAction::Abort,
+            HostAction::Line("IC".into()),
+            HostAction::Line("FGET P".into()),
+        ])
+        .expect("a case");
+        let text = b.transcript.to_text();
+        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default();
+        let p = Profile::builtin("seed").unwrap();
+        let spec = p.param(p.param_id("P").unwrap());
+        let whole = format!("{{int {}..{}}}", spec.min, spec.max);
+        assert_eq!(read.matches(&whole).count(), 4, "{read}");
+    }
+
+    #[test]
+    fn a_motion_of_some_motors_leaves_the_others_positions_uncertain() {
+        // After a RealTime session the hand's positions are its clock's; a motion of motor 2
+        // alone brings back motor 2's, not the others'.
+        let b = wide_case(&[
+            HostAction::Line("LOOP".into()),
+            block(b'C', 0),
+            block(b'A', 30),
+            HostAction::Abort,
+            HostAction::Line("2IC".into()),
+            HostAction::Line("FGET P".into()),
+        ])
+        .expect("a case");
+        let text = b.transcript.to_text();
+        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default();
+        let p = Profile::builtin("seed").unwrap();
+        let spec = p.param(p.param_id("P").unwrap());
+        let whole = format!("{{int {}..{}}}", spec.min, spec.max);
+        // (motor 1 did not move since the session: a band around the model's position would
+        // fail a hand whose clock ran otherwise)
+        assert!(read.find('{').is_some_and(|at| read[at..].starts_with(&whole)), "{read}");
     }
 }

@@ -20,6 +20,7 @@
 pub mod action;
 pub mod case;
 pub mod coverage;
+mod relate;
 pub mod report;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -1053,7 +1054,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         corpus.extend(suite_seeds(&opts.profile).iter().cloned());
     }
     // Entries from other runs or the suite may do what this run refuses.
-    let generator = Generator::new(&opts.profile, opts.allowed);
+    let generator = Generator::new(&opts.profile, opts.allowed).holding_velocities(opts.wide());
     corpus.retain(|a| generator.permits(a));
     let shared = Mutex::new(Shared {
         corpus,
@@ -1137,9 +1138,9 @@ fn worker(
     let p = opts.profile.clone();
     let lock = || shared.lock().unwrap_or_else(|e| e.into_inner());
     let mut allowed = opts.allowed;
-    let gen_all = Generator::new(&p, allowed);
+    let gen_all = Generator::new(&p, allowed).holding_velocities(opts.wide());
     allowed.eeprom = false;
-    let gen_no_eeprom = Generator::new(&p, allowed);
+    let gen_no_eeprom = Generator::new(&p, allowed).holding_velocities(opts.wide());
     let stream = opts.shard.map_or(w as u64, |s| s.global(w as u64));
     let mut dice = Dice::new(opts.seed.wrapping_add(stream));
     let mut hand = Hand { opts, link: None, new: true, dirty: false };

@@ -180,10 +180,7 @@ impl Gen {
     /// The LFV a motor reads while it runs at the control velocity of an LCV `datum` with
     /// `lcvc` (no gain field), reported with `lfvc` (0 acts as 1).
     pub(super) fn lfv_at(&self, datum: i64, lcvc: i64, lfvc: i64) -> i64 {
-        let h = &self.p.hand;
-        let raw = datum as f64 * lcvc as f64 / f64::from(1u32 << h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms
-            / h.lfv_counts_per_ms;
-        (raw / lfvc.max(1) as f64).trunc() as i64
+        super::super::build::lfv_exact(&self.p, datum, lcvc, lfvc).trunc() as i64
     }
 
     /// `datum` and `lcvc`, halved (LCVC first) until the LFV of `factor` × `lcvc` with `lfvc`,
