@@ -1498,7 +1498,7 @@ mod tests {
         let built = build_for(&opts, &actions, "t", "t").unwrap();
         let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
         let out = hand.run(&built.transcript, true).unwrap();
-        let sig = judged(&opts, &actions, &built, &out).expect("the lower-case line fails");
+        let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the lower-case line fails");
         let start = Instant::now();
         let (shrunk, _) =
             minimize(&opts, &mut hand, &actions, &built, &sig, minimizing_ends(Budget::Runs(5), start)).unwrap();
