@@ -76,6 +76,25 @@ fn python(file: &str) -> Vec<String> {
     vec![deps::python(), mutants().join(file).display().to_string()]
 }
 
+/// A campaign of `runs` runs against `command` with the test's usual options: exit codes 0
+/// and 1 accepted, up to 3 misbehaviours a run, guided, no minimization, no calibration.
+fn options(command: Vec<String>, seed: u64, runs: u64, jobs: usize) -> FuzzOptions {
+    FuzzOptions {
+        run: host_run(command),
+        seed,
+        runs: Some(runs),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs,
+        weights: Weights::default(),
+        max_planned: 3,
+        minimize: false,
+        guided: true,
+        calibrate: false,
+        shard: None,
+    }
+}
+
 /// Fuzzes until a finding of `kind` whose signature holds `needle` (or `runs` runs); returns
 /// its signature and the time to it.
 fn first_finding(
@@ -85,20 +104,7 @@ fn first_finding(
     needle: &str,
     runs: u64,
 ) -> Option<(String, Duration)> {
-    let opts = FuzzOptions {
-        run: host_run(command),
-        seed: 7,
-        runs: Some(runs),
-        duration: None,
-        ok_exit_codes: vec![0, 1],
-        jobs: 2,
-        weights: Weights::parse(ops).unwrap(),
-        max_planned: 3,
-        minimize: false,
-        guided: true,
-        calibrate: false,
-        shard: None,
-    };
+    let opts = FuzzOptions { weights: Weights::parse(ops).unwrap(), ..options(command, 7, runs, 2) };
     first_finding_of(&opts, kind, needle)
 }
 
@@ -151,20 +157,7 @@ fn a_default_campaign_finds_what_needs_one_misbehaviour_at_one_kind_of_answer() 
     if !python_ready() {
         return;
     }
-    let default = |file: &str, runs: u64| FuzzOptions {
-        run: host_run(python(file)),
-        seed: 0,
-        runs: Some(runs),
-        duration: None,
-        ok_exit_codes: vec![0, 1],
-        jobs: 1,
-        weights: Weights::default(),
-        max_planned: 3,
-        minimize: false,
-        guided: true,
-        calibrate: false,
-        shard: None,
-    };
+    let default = |file: &str, runs: u64| options(python(file), 0, runs, 1);
     // Run 1 is the line-rate run.
     let (sig, _) = first_finding_of(&default("py_echo_is_ack.py", 2), FindingKind::Violation, "waits-for-answer")
         .expect("py_echo_is_ack: no waits-for-answer violation in the first 2 runs of a default campaign");
@@ -314,18 +307,9 @@ fn parallel_campaigns_are_reproducible_run_for_run() {
     }
     let campaign = || {
         let opts = FuzzOptions {
-            run: host_run(python("py_parse_values.py")),
-            seed: 11,
-            runs: Some(24),
-            duration: None,
-            ok_exit_codes: vec![0, 1],
-            jobs: 3,
             weights: Weights::parse("crlf,garbage,err-bits,wrong-echo,extra-bytes").unwrap(),
-            max_planned: 3,
             minimize: true,
-            guided: true,
-            calibrate: false,
-            shard: None,
+            ..options(python("py_parse_values.py"), 11, 24, 3)
         };
         let mut c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 24);
@@ -360,20 +344,7 @@ fn correct_hosts_have_no_finding_in_a_longer_run() {
         hosts.push(python("gclhost.py"));
     }
     for command in hosts {
-        let opts = FuzzOptions {
-            run: host_run(command.clone()),
-            seed: 3,
-            runs: Some(80),
-            duration: None,
-            ok_exit_codes: vec![0, 1],
-            jobs: 2,
-            weights: Weights::default(),
-            max_planned: 3,
-            minimize: false,
-            guided: true,
-            calibrate: false,
-            shard: None,
-        };
+        let opts = options(command.clone(), 3, 80, 2);
         let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
         assert_eq!(c.runs, 80);
         assert!(c.fired_at.len() > 5, "misbehaviours fired: {:?}", c.fired_at);

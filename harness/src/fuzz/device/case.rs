@@ -589,25 +589,31 @@ mod tests {
         assert!(answer.starts_with("expect ") && answer.ends_with(" hex 2A"), "{text}");
     }
 
-    #[test]
-    fn a_step_from_an_uncertain_position_leaves_it_uncertain() {
-        // IC steps from where the motors are: after a RealTime session that is the hand's
-        // clock's position, not the model's (the unmutated sim in fast time, over exec, read
-        // 160 where the model's band was 165..215).
+    /// The `FGET P` answer of a wide case that runs a RealTime session, then `motion`, then
+    /// reads P; and P's whole range as the answer writes it.
+    fn p_read_after_a_session_and(motion: &str) -> (String, String) {
         let b = wide_case(&[
             HostAction::Line("LOOP".into()),
             block(b'C', 0),
             block(b'A', 30),
             HostAction::Abort,
-            HostAction::Line("IC".into()),
+            HostAction::Line(motion.into()),
             HostAction::Line("FGET P".into()),
         ])
         .expect("a case");
         let text = b.transcript.to_text();
-        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default();
+        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default().to_string();
         let p = Profile::builtin("seed").unwrap();
         let spec = p.param(p.param_id("P").unwrap());
-        let whole = format!("{{int {}..{}}}", spec.min, spec.max);
+        (read, format!("{{int {}..{}}}", spec.min, spec.max))
+    }
+
+    #[test]
+    fn a_step_from_an_uncertain_position_leaves_it_uncertain() {
+        // IC steps from where the motors are: after a RealTime session that is the hand's
+        // clock's position, not the model's (the unmutated sim in fast time, over exec, read
+        // 160 where the model's band was 165..215).
+        let (read, whole) = p_read_after_a_session_and("IC");
         assert_eq!(read.matches(&whole).count(), 4, "{read}");
     }
 
@@ -615,20 +621,7 @@ mod tests {
     fn a_motion_of_some_motors_leaves_the_others_positions_uncertain() {
         // After a RealTime session the hand's positions are its clock's; a motion of motor 2
         // alone brings back motor 2's, not the others'.
-        let b = wide_case(&[
-            HostAction::Line("LOOP".into()),
-            block(b'C', 0),
-            block(b'A', 30),
-            HostAction::Abort,
-            HostAction::Line("2IC".into()),
-            HostAction::Line("FGET P".into()),
-        ])
-        .expect("a case");
-        let text = b.transcript.to_text();
-        let read = text.lines().skip_while(|l| *l != "send \"FGET P\\r\"").nth(1).unwrap_or_default();
-        let p = Profile::builtin("seed").unwrap();
-        let spec = p.param(p.param_id("P").unwrap());
-        let whole = format!("{{int {}..{}}}", spec.min, spec.max);
+        let (read, whole) = p_read_after_a_session_and("2IC");
         // (motor 1 did not move since the session: a band around the model's position would
         // fail a hand whose clock ran otherwise)
         assert!(read.find('{').is_some_and(|at| read[at..].starts_with(&whole)), "{read}");

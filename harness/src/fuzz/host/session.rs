@@ -290,9 +290,7 @@ impl WrongValue {
             None => format!("in {}", self.answer),
         }
     }
-}
 
-impl WrongValue {
     /// Where and after what, for people: `in RealTime feedback, at read_block, after
     /// rt-block-length at answer 5`.
     pub fn context(&self) -> String {
