@@ -373,6 +373,16 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/src/fuzz/device/mod.rs::minimization_stops_at_the_campaigns_duration"],
     ),
     (
+        "Against such a hand the strain at rest and what VERS says are the hand's own",
+        &[
+            "harness/src/fuzz/device/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",
+        ],
+    ),
+    (
+        "A case rests on the model's joint stops when the model answers it otherwise with the stops taken away",
+        &["harness/src/fuzz/device/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision"],
+    ),
+    (
         "`--write-budget N` caps EEPROM writes (restores included) over the whole run",
         &["harness/tests/readme_promises.rs::the_write_budget_caps_a_campaigns_eeprom_writes"],
     ),

@@ -256,8 +256,9 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     for f in &s.findings {
         writeln!(
             out,
-            "  {}{} ({} actions){}",
+            "  {}{}{} ({} actions){}",
             f.signature,
+            fd::report::binding_note(f),
             f.known.as_ref().map_or(String::new(), |k| format!(" [known: {k}]")),
             f.actions.len(),
             f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display()))

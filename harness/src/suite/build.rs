@@ -177,6 +177,18 @@ pub(crate) struct CaseDef {
     pub plans: Vec<Plan>,
 }
 
+impl CaseDef {
+    /// Names a decision of `p` the case rests on, when `p` has it (see [`CaseB::decision`]).
+    pub fn decision(&mut self, p: &Profile, id: &str) {
+        if p.decisions.iter().any(|d| d.id == id) {
+            let c = format!("{DECISION_CLAUSE}{id}");
+            if !self.clauses.contains(&c) {
+                self.clauses.push(c);
+            }
+        }
+    }
+}
+
 /// A case under construction, with the profile it is for.
 pub(crate) struct CaseB {
     pub p: Arc<Profile>,
@@ -215,12 +227,7 @@ impl CaseB {
     /// A decision of the profile the case checks, when the profile has it: `decision:<id>`.
     /// The case's level is the weakest among every decision it rests on (see [`build`]).
     pub fn decision(mut self, id: &str) -> CaseB {
-        if self.p.decisions.iter().any(|d| d.id == id) {
-            let c = format!("{DECISION_CLAUSE}{id}");
-            if !self.def.clauses.contains(&c) {
-                self.def.clauses.push(c);
-            }
-        }
+        self.def.decision(&self.p, id);
         self
     }
 

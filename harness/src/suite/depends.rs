@@ -161,7 +161,11 @@ fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], 
     if line.len() > p.framing.max_line.min(SAFE_LINE) {
         topic(p, &["framing-max-line"], found);
     }
-    if line.iter().any(|b| matches!(b, 8 | 127)) {
+    // Backspace, DEL and every other control byte but the separators (tab, LF), the
+    // terminator and ^C.
+    if line.iter().any(|b| {
+        *b == 127 || *b < 0x20 && !matches!(b, b'\t' | b'\n') && *b != p.framing.abort && *b != p.framing.terminator
+    }) {
         topic(p, &["framing-backspace"], found);
     }
     let cmd = command_of(p, line);
@@ -191,6 +195,12 @@ fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], 
             if let Some((motors, kind, _)) = &cmd {
                 if partly_valid(p, &text, *kind) {
                     topic(p, &["framing-line-atomic", "bh8-partial-errors"], found);
+                }
+                // ERR's range of codes is the ERR decision's.
+                if *kind == CommandKind::ErrorText
+                    && r.problems.iter().any(|x| matches!(x, grammar::Problem::InvalidValue(_)))
+                {
+                    topic(p, &["seed-err-command", "bh8-err-format"], found);
                 }
                 if r.problems.iter().any(|x| matches!(x, grammar::Problem::InvalidValue(v) if v.contains("required")))
                     || matches!(kind, CommandKind::MotorSet | CommandKind::GlobalSet)

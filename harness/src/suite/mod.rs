@@ -52,6 +52,23 @@ pub struct Case {
     pub transcript: Transcript,
 }
 
+/// Every decision a case's header names: its `decision:` clauses, then its `x-decisions`,
+/// without repeats.
+pub fn decisions_of_header(h: &Header) -> Vec<String> {
+    let mut out: Vec<String> =
+        h.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
+    for (k, v) in &h.extensions {
+        if k == DECISIONS_KEY {
+            for d in v.split_ascii_whitespace() {
+                if !out.iter().any(|x| x == d) {
+                    out.push(d.to_string());
+                }
+            }
+        }
+    }
+    out
+}
+
 impl Case {
     /// The case's stable id.
     pub fn id(&self) -> &str {
@@ -91,17 +108,7 @@ impl Case {
     /// Every decision the case rests on: those it checks and those its framing, preamble,
     /// read-backs and teardown touch (the `x-decisions` header), without repeats.
     pub fn decisions(&self) -> Vec<String> {
-        let mut out = self.checked_decisions();
-        for (k, v) in &self.header().extensions {
-            if k == DECISIONS_KEY {
-                for d in v.split_ascii_whitespace() {
-                    if !out.iter().any(|x| x == d) {
-                        out.push(d.to_string());
-                    }
-                }
-            }
-        }
-        out
+        decisions_of_header(self.header())
     }
 }
 

@@ -19,7 +19,7 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 use super::action::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
-use crate::suite::build::{CaseB, FieldRule, Range, Shape, build_from, capture_plan, value_range};
+use crate::suite::build::{CaseB, FieldRule, Plan, Range, Shape, build_from, capture_plan, value_range};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
 
@@ -138,7 +138,10 @@ fn get_shape(p: &Profile, names: &[gcl_model::spec::ParamId], answer: &[u8], unc
                     "P" if uncertain && wide => Some(spec.max - spec.min),
                     "P" if uncertain => Some(3 * mpe(p, motor)),
                     "P" => Some(mpe(p, motor)),
-                    "SG" => Some(p.hand.free_strain.max(1)),
+                    // (a hand outside this process reads its own strain at rest: the model's
+                    // free strain is a constant of the model's hand, as the suite's FGET SG
+                    // case has it)
+                    "SG" if !wide => Some(p.hand.free_strain.max(1)),
                     _ => None,
                 };
                 if let (Some(band), Ok(v)) = (band, tok.parse::<i64>()) {
@@ -266,6 +269,9 @@ pub fn build_case_sending(
                             _,
                         ) => ShapeKind::Fixed(Shape::ListValues),
                         (CommandKind::Reset, _) => ShapeKind::Fixed(Shape::Banner),
+                        // What VERS says on a hand outside this process is its own version
+                        // and contact text, as the suite's cmd-vers case has it.
+                        (CommandKind::Version, _) if wide => ShapeKind::Fixed(Shape::AnyLines),
                         _ => ShapeKind::Fixed(Shape::Exact),
                     },
                     _ => ShapeKind::Fixed(Shape::Exact),
@@ -427,6 +433,14 @@ pub fn build_case_sending(
     // The model's answers as the wire meets them, then the shapes from them (and the
     // transcript from the same answers).
     let caps = capture_plan(p, &def.plans).map_err(|e| NotACase(e.to_string()))?;
+    // A case whose answers change when the model's joint stops are taken away rests on where
+    // the model puts them (the `[hand]` limits, which the seed does not fix): it is judged at
+    // that decision's level, and `--skip-decision` drops it.
+    if moves && rests_on_stops(p, &def.plans, &caps) {
+        for id in ["seed-motion-model", "bh8-position-bounds"] {
+            def.decision(p, id);
+        }
+    }
     // A ^C the model answers with the abort status landed while a command ran (queued lines
     // and RealTime exits can start a motion no action named): only a hand moving in real
     // time answers it so.
@@ -501,6 +515,16 @@ pub fn build_case_sending(
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
     Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes })
+}
+
+/// Whether the model answers `plans` otherwise once its joint stops lie at the end of P's
+/// range: then the case's answers rest on where the stops are.
+fn rests_on_stops(p: &Arc<Profile>, plans: &[Plan], caps: &[Captured]) -> bool {
+    let mut free = (**p).clone();
+    let far = p.param_id("P").map_or(free.hand.finger_limit, |id| p.param(id).max);
+    free.hand.finger_limit = free.hand.finger_limit.max(far);
+    free.hand.spread_limit = free.hand.spread_limit.max(far);
+    capture_plan(&Arc::new(free), plans).map_or(true, |other| other.iter().zip(caps).any(|(a, b)| a.output != b.output))
 }
 
 /// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with
@@ -625,5 +649,57 @@ mod tests {
         // (motor 1 did not move since the session: a band around the model's position would
         // fail a hand whose clock ran otherwise)
         assert!(read.find('{').is_some_and(|at| read[at..].starts_with(&whole)), "{read}");
+    }
+
+    /// The answer line after `send "LINE\r"` in a case's transcript.
+    fn answer_to(b: &BuiltCase, line: &str) -> String {
+        let text = b.transcript.to_text();
+        let sent = format!("send \"{line}\\r\"");
+        text.lines().skip_while(|l| *l != sent).nth(1).unwrap_or_default().to_string()
+    }
+
+    fn decisions(b: &BuiltCase) -> Vec<String> {
+        crate::suite::decisions_of_header(&b.transcript.header)
+    }
+
+    #[test]
+    fn a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest() {
+        // The seed hand of harness/tests/hands said "GCL seed hand 0.1" to VERS and 0 for the
+        // spread's strain at rest: neither is fixed by the seed, and the suite's cmd-vers and
+        // FGET SG cases accept any. In this process the model is the hand, so both stay exact.
+        let actions = [HostAction::Line("VERS".into()), HostAction::Line("FGET SG".into())];
+        let wide = wide_case(&actions).expect("a case");
+        assert!(answer_to(&wide, "VERS").contains("{any}"), "{}", answer_to(&wide, "VERS"));
+        assert_eq!(answer_to(&wide, "FGET SG").matches("{int 0..255}").count(), 4, "{}", answer_to(&wide, "FGET SG"));
+        let here = build_case(&Profile::builtin("seed").unwrap(), &actions, "t", "t", false, true).expect("a case");
+        assert!(!answer_to(&here, "VERS").contains('{'), "{}", answer_to(&here, "VERS"));
+        assert!(!answer_to(&here, "FGET SG").contains("0..255"), "{}", answer_to(&here, "FGET SG"));
+    }
+
+    #[test]
+    fn a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision() {
+        // After C, IC drives the fingers past the model's joint stop (17800): where the stop is
+        // is the model's hand constant, so the case rests on seed-motion-model (INFO) and a
+        // hand with its stop elsewhere is no MUST finding. C alone stops short of the stop.
+        let past = wide_case(&[HostAction::Line("C".into()), HostAction::Line("IC".into())]).expect("a case");
+        assert!(decisions(&past).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&past));
+        // A finding of it says so: `[INFO: rests on seed-motion-model]`.
+        let p = Profile::builtin("seed").unwrap();
+        let (level, rests_on) = super::super::Finding::binding(&p, &past.transcript);
+        assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
+        let short = wide_case(&[HostAction::Line("C".into()), HostAction::Line("FGET P".into())]).expect("a case");
+        assert!(!decisions(&short).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&short));
+    }
+
+    #[test]
+    fn a_control_byte_and_an_err_code_out_of_range_rest_on_their_open_decisions() {
+        // The seed hand dropped a form feed before IO and printed nothing for ERR 65536: the
+        // first is framing-backspace's (no line editing), the second the ERR decision's range.
+        let ff = wide_case(&[HostAction::Line("\x0cIO".into())]).expect("a case");
+        assert!(decisions(&ff).iter().any(|d| d == "framing-backspace"), "{:?}", decisions(&ff));
+        let err = wide_case(&[HostAction::Line("ERR 65536".into())]).expect("a case");
+        assert!(decisions(&err).iter().any(|d| d == "seed-err-command"), "{:?}", decisions(&err));
+        let io = wide_case(&[HostAction::Line("IO".into())]).expect("a case");
+        assert!(!decisions(&io).iter().any(|d| d == "framing-backspace"), "{:?}", decisions(&io));
     }
 }

@@ -262,9 +262,28 @@ pub struct Finding {
     /// Why it is not new (in the baseline, a known failure), or `None` for a new finding.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known: Option<String>,
+    /// How strongly its case binds the hand: the weakest level among the decisions the case
+    /// rests on (MUST when it rests on none below).
+    #[serde(default)]
+    pub level: gcl_model::Level,
+    /// Below MUST, the decisions at that level the case rests on: the open points a hand may
+    /// have decided otherwise (`--skip-decision` drops cases that rest on one).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rests_on: Vec<String>,
 }
 
 impl Finding {
+    /// The level of the case `t` and, below MUST, the decisions of `p` at that level it rests
+    /// on (its `decision:` clauses and its `x-decisions`).
+    pub fn binding(p: &Profile, t: &Transcript) -> (gcl_model::Level, Vec<String>) {
+        let level = t.header.level;
+        let mut rests_on = crate::suite::decisions_of_header(&t.header);
+        rests_on.retain(|id| {
+            level != gcl_model::Level::Must && p.decisions.iter().any(|d| &d.id == id && d.level == level)
+        });
+        (level, rests_on)
+    }
+
     /// Whether the baseline does not explain it.
     pub fn is_new(&self) -> bool {
         self.known.is_none()
@@ -1303,8 +1322,11 @@ fn report_finding(
         None => None,
     };
     let known = opts.baseline.explains(&opts.profile.id, &id, &sig);
+    let (level, rests_on) = Finding::binding(&opts.profile, &final_case.transcript);
     let finding = Finding {
         known,
+        level,
+        rests_on,
         signature: sig,
         run: run_no,
         found_after,

@@ -198,6 +198,27 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     Ok(out)
 }
 
+/// ` [INFO: rests on seed-motion-model]` for a finding whose case binds below MUST: the hand
+/// may have decided that open point otherwise. Empty at MUST.
+pub fn binding_note(f: &Finding) -> String {
+    if f.level == gcl_model::Level::Must {
+        return String::new();
+    }
+    match f.rests_on.as_slice() {
+        [] => format!(" [{}]", f.level.as_str()),
+        ids => format!(" [{}: rests on {}]", f.level.as_str(), ids.join(", ")),
+    }
+}
+
+/// `INFO (seed-motion-model)`: the level and what it rests on, for the findings index.
+fn level_cell(f: &Finding) -> String {
+    if f.rests_on.is_empty() {
+        f.level.as_str().to_string()
+    } else {
+        format!("{} ({})", f.level.as_str(), f.rests_on.join(", "))
+    }
+}
+
 /// A finding's one-line summary: the command, then expected against actual as its diff shows
 /// them (`FGET DP: expected "…", got "…"`), or the diff's first line when it has no such pair.
 pub fn summary_line(f: &Finding) -> String {
@@ -307,7 +328,7 @@ pub fn to_html(r: &FuzzReport) -> String {
             return format!("<p>None{}.</p>\n", if known || r.findings.is_empty() { "" } else { " new" });
         }
         let mut t = format!(
-            "<table><tr><th>#</th><th>kind</th><th>signature</th><th>first run</th>{}<th>transcript</th><th>run it again</th></tr>\n",
+            "<table><tr><th>#</th><th>kind</th><th>signature</th><th>level</th><th>first run</th>{}<th>transcript</th><th>run it again</th></tr>\n",
             if known { "<th>known because</th>" } else { "" }
         );
         for (i, f) in rows {
@@ -317,10 +338,11 @@ pub fn to_html(r: &FuzzReport) -> String {
             };
             let _ = writeln!(
                 t,
-                "<tr class=\"{}\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td class=\"n\">{}</td>{why}<td><code>{}</code></td><td>{}</td></tr>",
+                "<tr class=\"{}\"><td><a href=\"#finding-{n}\">{n}</a></td><td>{}</td><td>{}</td><td>{}</td><td class=\"n\">{}</td>{why}<td><code>{}</code></td><td>{}</td></tr>",
                 if known { "skip" } else { "fail" },
                 esc(&f.signature.kind),
                 esc(&f.signature.to_string()),
+                esc(&level_cell(f)),
                 f.run,
                 esc(&f.path.as_ref().map_or("not written (no --out)".into(), |p| p.display().to_string())),
                 f.path.as_deref().map_or_else(
@@ -393,10 +415,11 @@ pub fn to_html(r: &FuzzReport) -> String {
             ) + &details("the transcript file as written", &pre(&f.transcript_text), false, "", None);
             p.push(&details(
                 &format!(
-                    "<strong>#{}</strong> {}{} <span class=\"muted\">{}</span>",
+                    "<strong>#{}</strong> {}{}{} <span class=\"muted\">{}</span>",
                     i + 1,
                     if f.is_new() { "" } else { "(known) " },
                     esc(&f.signature.to_string()),
+                    esc(&binding_note(f)),
                     esc(&summary_line(f))
                 ),
                 &body,
