@@ -194,6 +194,7 @@ fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String]
         duration_ms: 0.0,
         message: failed.then(|| crate::report::truncate_note(&broken.join("; "), 1000)),
         diff: None,
+        failure: None,
         transcript: failed.then(|| crate::report::truncate_note(session, crate::report::MAX_SHOWN)),
     }
 }

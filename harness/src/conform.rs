@@ -148,6 +148,11 @@ pub struct KnownFailure {
     pub profile: Option<String>,
     /// Why it fails (a ticket, a firmware version): shown in reports.
     pub reason: String,
+    /// How it fails, as the run's root-cause grouping names it (`step 6: order at FGET (P)`,
+    /// the case result's `failure`): when given, the case is excused only while it fails
+    /// that way, so a new bug that breaks a listed case earlier, or otherwise, is a FAIL.
+    #[serde(default)]
+    pub how: Option<String>,
 }
 
 /// One decision an implementer took differently: every case resting on it is SKIP, with the
@@ -190,6 +195,7 @@ impl KnownFailures {
     /// case = "rt-lft-*"
     /// profile = "bh8-262-4.4"   # optional
     /// reason = "firmware 4.4.1 sends LFT unsigned"
+    /// how = "step 9: value at RealTime block (LFT)"   # optional: excused only while so
     ///
     /// [[skip-decision]]
     /// id = "framing-max-line"
@@ -424,6 +430,7 @@ fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<Strin
         duration_ms,
         message,
         diff: None,
+        failure: None,
         transcript: None,
     }
 }
@@ -839,9 +846,19 @@ pub fn run_with_events(
         }
         if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile, fresh_per_case) {
             let step = outcome.failed_step().unwrap_or(0);
+            r.failure = Some(format!("step {}: {}", step + 1, signature.key));
             signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
         }
-        if let Some(k) = opts.known.lookup(&case.profile, case.id()) {
+        let known = opts.known.lookup(&case.profile, case.id());
+        if let Some(k) = known.filter(|k| r.verdict != Verdict::Pass && k.how.is_some() && k.how != r.failure) {
+            // Listed, but failing otherwise than listed: what is new is a failure.
+            let now = r.failure.as_deref().unwrap_or(r.verdict.as_str());
+            let was = r.message.take().map(|m| format!(" ({m})")).unwrap_or_default();
+            r.message = Some(format!(
+                "fails otherwise than its known failure: known `{}`, now `{now}`{was}",
+                k.how.as_deref().unwrap_or_default()
+            ));
+        } else if let Some(k) = known {
             r.verdict = match r.verdict {
                 Verdict::Pass => Verdict::Xpass,
                 _ => Verdict::Xfail,

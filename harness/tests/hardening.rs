@@ -130,7 +130,7 @@ fn only_matching_nothing_is_a_usage_error_and_a_run_of_nothing_is_no_pass() {
 
 /// A firmware team's hand already differs: `--write-known-failures` keeps today's failures as
 /// the baseline, with which the same hand passes, a hand with one more bug fails on that bug
-/// alone, and a hand where a listed failure went away fails as XPASS (the list cannot go
+/// alone (in a listed case too, when it fails that case otherwise), and a hand where a listed failure went away fails as XPASS (the list cannot go
 /// stale).
 #[test]
 fn a_run_writes_the_known_failures_its_next_run_takes() {
@@ -160,6 +160,12 @@ fn a_run_writes_the_known_failures_its_next_run_takes() {
     let failing: Vec<&str> = r.stdout.lines().filter(|l| l.trim_start().starts_with("FAIL ")).collect();
     assert!(!failing.is_empty() && failing.iter().all(|l| l.contains("rt-")), "{}", r.stdout);
     assert!(r.stdout.contains("(LFAP)"), "{}", r.stdout);
+    // Each entry names how its case fails; a bug that breaks listed cases otherwise (here
+    // earlier: a prefixed command no longer refused) fails the run instead of hiding there.
+    assert!(text.contains("how = \"step 4: order at FGET\""), "{text}");
+    let r = conform(&["fget-reversed", "prefix-not-refused"], &["--known-failures", s(&known)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("fails otherwise than its known failure: known `step"), "{}", r.stdout);
     // The listed bug fixed: the listed cases pass and fail the run as XPASS.
     let r = conform(&[], &["--known-failures", s(&known)]);
     assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);

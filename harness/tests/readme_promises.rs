@@ -373,6 +373,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/src/fuzz/device/mod.rs::minimization_stops_at_the_campaigns_duration"],
     ),
     (
+        "a listed case that fails otherwise is a FAIL, `fails otherwise than its known failure`",
+        &["harness/tests/hardening.rs::a_run_writes_the_known_failures_its_next_run_takes"],
+    ),
+    (
         "Against such a hand the strain at rest and what VERS says are the hand's own",
         &[
             "harness/src/fuzz/device/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",

@@ -89,6 +89,7 @@ fn sample_case() -> report::CaseResult {
         duration_ms: 0.1,
         message: None,
         diff: None,
+        failure: None,
         transcript: None,
     }
 }

@@ -442,6 +442,9 @@ fn known_failures_text(report: &RunReport) -> (String, usize) {
             q(&report.profile),
             q(&format!("{}: {why}", if c.verdict == Verdict::Xfail { "FAIL" } else { c.verdict.as_str() }))
         ));
+        if let Some(how) = &c.failure {
+            text.push_str(&format!("how = {}\n", q(how)));
+        }
         n += 1;
     }
     (text, n)

@@ -427,6 +427,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
                 }
             )),
             diff: None,
+            failure: None,
             transcript: Some(gcl_harness::report::truncate_note(
                 &bundle::transcript(&info(opts, f), &f.exchanges),
                 gcl_harness::report::MAX_SHOWN,
@@ -445,6 +446,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             duration_ms: c.elapsed_ms as f64,
             message: Some(format!("a note, no finding: seen in {runs} run(s)")),
             diff: None,
+            failure: None,
             transcript: None,
         });
     }
@@ -459,6 +461,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             duration_ms: c.elapsed_ms as f64,
             message: None,
             diff: None,
+            failure: None,
             transcript: None,
         });
     }

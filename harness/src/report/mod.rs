@@ -210,6 +210,10 @@ pub struct CaseResult {
     /// Where the answer parted from the golden one (FAIL, XFAIL).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff: Option<Diff>,
+    /// How it failed, as the root-cause grouping names it: the step (from 1) and the
+    /// difference's key (`step 6: order at FGET (P)`). A known-failures entry's `how`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
     /// The exchange as it happened, in transcript text (for failures, for RealTime cases, whose
     /// blocks the page plots, and in certificates).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -644,6 +648,7 @@ pub(crate) mod tests {
                     duration_ms: 0.3,
                     message: None,
                     diff: None,
+                    failure: None,
                     transcript: None,
                 },
                 CaseResult {
@@ -664,6 +669,7 @@ pub(crate) mod tests {
                         golden: "FGET DP\\n\\r1000".into(),
                         form: Some(AnswerForm::Text),
                     }),
+                    failure: Some("step 2: framing at FGET".into()),
                     transcript: Some("> FGET DP\\r\n< FGET DP\\r\\n1000".into()),
                 },
             ],
