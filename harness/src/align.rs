@@ -182,6 +182,13 @@ pub struct FindingSignature {
     /// effect back, so the explanation is the key.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub explanation: String,
+    /// Where a status difference's bits stand against a `--baseline` that already has them on
+    /// some command: `at FGET` where it had them on this command, `elsewhere` on any other
+    /// (so they are told apart from the known ones, and stay one finding however many
+    /// commands show them); empty without such a baseline. Set by the device fuzzer (see
+    /// `fuzz::device::Baseline::qualify`).
+    #[serde(skip)]
+    pub scope: String,
 }
 
 impl FindingSignature {
@@ -214,7 +221,8 @@ impl FindingSignature {
                         .any(|b| b == gcl_model::StatusBits::UNKNOWN_COMMAND.bits().to_string())
                 });
                 let pick = if unknown { extra } else { missing.or(extra) };
-                format!("status {}", pick.copied().unwrap_or(self.detail.as_str()))
+                let bits = pick.copied().unwrap_or(self.detail.as_str());
+                if self.scope.is_empty() { format!("status {bits}") } else { format!("status {bits} {}", self.scope) }
             }
             "value" if !self.cause.is_empty() => format!("value at {} after {}", self.command, self.cause),
             "order" => format!("order at {}", self.command),
@@ -526,6 +534,7 @@ fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
         motors: String::new(),
         cause: String::new(),
         explanation: String::new(),
+        scope: String::new(),
     }
 }
 

@@ -377,6 +377,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/hardening.rs::a_run_writes_the_known_failures_its_next_run_takes"],
     ),
     (
+        "there they are known only on the command the baseline had them on",
+        &["harness/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
+    ),
+    (
         "Against such a hand the strain at rest and what VERS says are the hand's own",
         &[
             "harness/src/fuzz/device/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",

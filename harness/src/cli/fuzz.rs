@@ -89,7 +89,8 @@ pub struct DeviceArgs {
     #[arg(long)]
     pub no_minimize: bool,
     /// A folder of earlier findings (what `--out` wrote): a finding with the signature of one
-    /// of them is known, not new (repeatable).
+    /// of them is known, not new (repeatable). Status bits the baseline has are known only on
+    /// the command it had them on.
     #[arg(long, value_name = "DIR")]
     pub baseline: Vec<PathBuf>,
     /// Known failures, as for `gcl conform`: an entry's `case` glob matches a finding's id

@@ -62,7 +62,8 @@ fn command_of(p: &Profile, line: &[u8]) -> Option<(Vec<u8>, CommandKind, String)
     Some((motors, p.command(id).kind, p.command(id).name.clone()))
 }
 
-fn status_in(output: &[u8]) -> Option<u32> {
+/// The status an answer reports (`ERR n`), if any.
+pub(crate) fn status_in(output: &[u8]) -> Option<u32> {
     let text = String::from_utf8_lossy(output);
     let at = text.find("ERR ")?;
     text[at + 4..].chars().take_while(char::is_ascii_digit).collect::<String>().parse().ok()

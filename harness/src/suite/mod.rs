@@ -17,7 +17,7 @@
 
 pub(crate) mod build;
 mod cases;
-mod depends;
+pub(crate) mod depends;
 
 pub use build::{DECISION_CLAUSE, DECISIONS_KEY};
 pub use depends::FRAMING;

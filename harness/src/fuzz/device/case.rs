@@ -223,6 +223,7 @@ pub fn build_case_sending(
     // be related on (see [`super::relate`]).
     let mut track: Option<LoopTrack> = None;
     let mut notes: Vec<(usize, BlockNote)> = Vec::new();
+    let mut stalls = false;
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
         if !in_loop || !matches!(a, HostAction::Block { .. } | HostAction::Line(_)) {
@@ -252,6 +253,11 @@ pub fn build_case_sending(
                     ));
                 }
                 let answer = walk.feed(&step, term);
+                // A motion the model stalls at a stop or short of its goal (16) rests on where
+                // the model's motion ends, the stops at 0 included.
+                stalls |= cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
+                    && crate::suite::depends::status_in(&answer)
+                        .is_some_and(|s| s & StatusBits::MISSED_POSITION.bits() != 0);
                 if walk.shadow.mode() == Mode::Loop {
                     track = Some(LoopTrack::enter(p, &walk.shadow, k.def.plans.len()));
                 }
@@ -436,7 +442,7 @@ pub fn build_case_sending(
     // A case whose answers change when the model's joint stops are taken away rests on where
     // the model puts them (the `[hand]` limits, which the seed does not fix): it is judged at
     // that decision's level, and `--skip-decision` drops it.
-    if moves && rests_on_stops(p, &def.plans, &caps) {
+    if moves && (stalls || rests_on_stops(p, &def.plans, &caps)) {
         for id in ["seed-motion-model", "bh8-position-bounds"] {
             def.decision(p, id);
         }
@@ -687,6 +693,9 @@ mod tests {
         let p = Profile::builtin("seed").unwrap();
         let (level, rests_on) = super::super::Finding::binding(&p, &past.transcript);
         assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
+        // IO from the open stop ends short of its goal: the model's 16 is the same decision's.
+        let open = wide_case(&[HostAction::Line("2IO".into())]).expect("a case");
+        assert!(decisions(&open).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&open));
         let short = wide_case(&[HostAction::Line("C".into()), HostAction::Line("FGET P".into())]).expect("a case");
         assert!(!decisions(&short).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&short));
     }

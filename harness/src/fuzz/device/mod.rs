@@ -97,6 +97,10 @@ pub struct FuzzOptions {
 pub struct Baseline {
     /// Signature keys of earlier findings ([`FindingSignature::key`]).
     pub keys: BTreeSet<String>,
+    /// The status keys among them with the command each was seen on (as the finding's id
+    /// names it: `fuzz-fget-status-1024-missing` is FGET's): a status key is only its bits,
+    /// so without this the same bits on another command would pass for known.
+    pub status_at: BTreeSet<(String, String)>,
     /// Known failures: an entry's glob matches a finding's id (`fuzz-fget-order`) or its key.
     pub known: crate::conform::KnownFailures,
 }
@@ -116,6 +120,12 @@ impl Baseline {
                 .map_err(|e| FuzzError::Corpus { path: path.clone(), source: std::io::Error::other(e.to_string()) })?;
             let Ok(t) = gcl_transcript::parse(&text) else { continue };
             if let Some((_, key)) = t.header.extensions.iter().find(|(k, _)| k == SIGNATURE_KEY) {
+                let at = t.header.id.strip_prefix("fuzz-").and_then(|r| r.split_once("-status")).map(|(c, _)| c);
+                if let (true, Some(at)) = (key.starts_with("status "), at) {
+                    // (a baseline written against a baseline scopes its statuses already)
+                    let bare = key.split(" at ").next().unwrap_or(key).trim_end_matches(" elsewhere");
+                    self.status_at.insert((bare.to_string(), at.to_string()));
+                }
                 self.keys.insert(key.clone());
                 n += 1;
             }
@@ -123,10 +133,26 @@ impl Baseline {
         Ok(n)
     }
 
+    /// Scopes a status difference whose bits the baseline already has (on some command):
+    /// `at CMD` on a command it had them on (known), `elsewhere` on any other (new, and one
+    /// finding however many commands show it).
+    pub fn qualify(&self, sig: &mut FindingSignature) {
+        sig.scope.clear();
+        if sig.kind == "status" && sig.explanation.is_empty() {
+            let key = sig.key();
+            let here = (key.clone(), slug(&sig.command));
+            if self.status_at.contains(&here) {
+                sig.scope = format!("at {}", sig.command);
+            } else if self.status_at.iter().any(|(k, _)| *k == key) {
+                sig.scope = "elsewhere".into();
+            }
+        }
+    }
+
     /// Why a finding is not new: in the baseline, or a known failure; `None` when it is new.
     pub fn explains(&self, profile: &str, id: &str, sig: &FindingSignature) -> Option<String> {
         let key = sig.key();
-        if self.keys.contains(&key) {
+        if self.keys.contains(&key) || sig.scope.starts_with("at ") {
             return Some("in the baseline".to_string());
         }
         self.known
@@ -611,6 +637,7 @@ fn judged(
             sig.explanation = e.says;
         }
     }
+    opts.baseline.qualify(&mut sig);
     Ok(Some(sig))
 }
 
@@ -1531,5 +1558,56 @@ mod tests {
         assert_eq!(until, Some(long_ago + Duration::from_secs(30)));
         let (kept, _) = minimize(&opts, &mut hand, &actions, &built, &sig, until).unwrap();
         assert_eq!(kept, actions, "minimized past the campaign's duration");
+    }
+
+    /// A status key is only its bits; against a baseline that has those bits on FGET, the same
+    /// bits on another command are new (the independent seed hand's extra-args-ignored, `C 5`
+    /// run instead of refused, hid behind its clean baseline's `FGET` with 26 names this way),
+    /// one finding for all such commands; on FGET they stay known; other bits are new as before.
+    #[test]
+    fn a_status_the_baseline_has_on_another_command_is_new() {
+        let dir = tempfile::tempdir().unwrap();
+        let finding = |id: &str, key: &str| {
+            format!(
+                "gcl-transcript 1\nid: {id}\ntitle: t\nclause: seed: Supervisory mode\nlevel: MUST\nprofile: seed\nx-signature: {key}\n\nsend \"FGET\\r\"\nexpect \"FGET\\n\\rERR 1024\\n\\r=> \"\n"
+            )
+        };
+        std::fs::write(dir.path().join("a.gcl"), finding("fuzz-fget-status-1024-missing", "status 1024 missing"))
+            .unwrap();
+        let mut b = Baseline::default();
+        assert_eq!(b.add_dir(dir.path()).unwrap(), 1);
+        let status = |command: &str, detail: &str| {
+            let mut s = FindingSignature {
+                command: command.into(),
+                kind: "status".into(),
+                detail: detail.into(),
+                motors: String::new(),
+                cause: String::new(),
+                explanation: String::new(),
+                scope: String::new(),
+            };
+            b.qualify(&mut s);
+            s
+        };
+        let known = |s: &FindingSignature| b.explains("seed", &finding_id(s), s).is_some();
+        let (fget, c, o) = (status("FGET", "1024 missing"), status("C", "1024 missing"), status("O", "1024 missing"));
+        assert!(known(&fget), "{}", fget.key());
+        // New, and one finding for every other command that shows them (one bug, `C 5` and
+        // `O 5` both run).
+        assert!(!known(&c) && c.key() == "status 1024 missing elsewhere", "{}", c.key());
+        assert_eq!(c.key(), o.key());
+        let other = status("C", "64 missing");
+        assert!(!known(&other) && other.key() == "status 64 missing", "{}", other.key());
+        // A baseline written by a campaign against a baseline keys its statuses by command.
+        std::fs::write(
+            dir.path().join("a.gcl"),
+            finding("fuzz-fget-status-1024-missing-at-fget", "status 1024 missing at FGET"),
+        )
+        .unwrap();
+        let mut b2 = Baseline::default();
+        b2.add_dir(dir.path()).unwrap();
+        let mut again = status("FGET", "1024 missing");
+        b2.qualify(&mut again);
+        assert!(b2.explains("seed", &finding_id(&again), &again).is_some(), "{}", again.key());
     }
 }
