@@ -128,12 +128,12 @@ fn first_finding_of(opts: &FuzzOptions, kind: FindingKind, needle: &str) -> Opti
 
 /// (file, operators it is fuzzed with, the kind of finding it must give, what its signature names).
 const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
-    // A hang is named by the host's stack (faulthandler): the frame of its code that waits.
+    // A hang is named by the host's stack (faulthandler): blocked in pyserial, by the call.
     (
         "py_prompt_forever.py",
         "no-prompt,truncate,bad-prompt,silence",
         FindingKind::Hang,
-        "hang in py_prompt_forever.py:",
+        "hang in py_prompt_forever.py, blocked in serialposix.py:read",
     ),
     ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
     ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
