@@ -162,11 +162,14 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             v.push(Verdict {
                 kind: FindingKind::ExitCode,
                 signature: exit_code_signature(&r.ended_in),
-                message: format!(
-                    "the host exited with {c} ({}): {}",
-                    r.ended_in,
-                    crate::report::truncate_note(last.trim(), 200)
-                ),
+                message: match last.trim() {
+                    "" => format!("the host exited with {c} ({})", r.ended_in),
+                    last => format!(
+                        "the host exited with {c} ({}): {}",
+                        r.ended_in,
+                        crate::report::truncate_note(last, 200)
+                    ),
+                },
             });
         }
         (HostEnd::Exit(_), _) => {}
