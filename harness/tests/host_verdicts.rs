@@ -381,6 +381,31 @@ fn one_port_without_a_timeout_is_one_hang_whichever_function_reads_it() {
     assert!(command.message.contains("py_prompt_forever.py:command"), "{command:?}");
 }
 
+/// A loop without a deadline of its own, on a port that has a timeout, wakes at every timeout:
+/// it is not blocked in pyserial, and its hang is named by its own frame, the loop's (not
+/// merged with a port without a timeout, which is mended elsewhere).
+#[test]
+fn a_loop_without_a_deadline_on_a_port_with_a_timeout_is_named_by_the_loop() {
+    if !python_with("serial") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("py_spins.py");
+    std::fs::write(
+        &script,
+        "import os, serial\n\ndef wait_prompt(port):\n    buf = b''\n    while not buf.endswith(b'=> '):\n        buf += port.read(1)  # 50 ms timeout, no deadline: loops for ever\n\nport = serial.serial_for_url(os.environ['GCL_PORT_URL'], timeout=0.05)\nfor line in [b'\\x03', b'HI\\r', b'FGET P\\r']:\n    port.write(line)\n    wait_prompt(port)\n",
+    )
+    .unwrap();
+    let mut r = run(vec![deps::python(), script.display().to_string()]);
+    r.timeout_hang = Duration::from_millis(1500);
+    let cut = Schedule { planned: vec![Planned { answer: 1, op: Operator::NoPrompt, arg: 0 }] };
+    let result = run_once(&r, &cut).unwrap();
+    assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
+    let v = judge(&result, &[0, 1]);
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert_eq!(v[0].signature, "hang in py_spins.py:wait_prompt", "{v:?}");
+}
+
 /// A host whose exit code is the last status it read exits with a different code for each
 /// status the hand gives (255 for ERR 65535; another for the error a restarted hand gives
 /// the next command): one bug, one finding, the code in its message.
