@@ -85,6 +85,7 @@ pub fn serve(
         }
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's tap panicked"))?;
+    let ended_in = log.checker.state();
     // After a hang-up the host cannot leave cleanly.
     if !log.hung_up {
         log.checker.finish(true);
@@ -103,6 +104,7 @@ pub fn serve(
         violations,
         commands: log.checker.commands().to_vec(),
         reactions: Vec::new(),
+        ended_in,
         answers: log.misbehave.answers(),
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),

@@ -128,12 +128,12 @@ fn first_finding_of(opts: &FuzzOptions, kind: FindingKind, needle: &str) -> Opti
 
 /// (file, operators it is fuzzed with, the kind of finding it must give, what its signature names).
 const PYTHON_MUTANTS: [(&str, &str, FindingKind, &str); 9] = [
-    // A hang is named by the host's stack (faulthandler): the frame of its code that waits.
+    // A hang is named by the host's stack (faulthandler): blocked in pyserial, by the call.
     (
         "py_prompt_forever.py",
         "no-prompt,truncate,bad-prompt,silence",
         FindingKind::Hang,
-        "hang in py_prompt_forever.py:",
+        "hang in py_prompt_forever.py, blocked in serialposix.py:read",
     ),
     ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),
     ("py_sends_lf.py", "truncate", FindingKind::Violation, "line-ending"),
@@ -187,7 +187,7 @@ fn c_mutants_are_found_with_the_right_kind() {
     for (name, ops, kind, needle) in [
         ("c_line_buffer", "overlong-line,truncate", FindingKind::Crash, "asan stack-buffer-overflow in read_line"),
         ("c_err_bits", "err-bits", FindingKind::Crash, "asan global-buffer-overflow in main"),
-        ("c_status_exit", "err-bits", FindingKind::ExitCode, "exit-code: 255"),
+        ("c_status_exit", "err-bits", FindingKind::ExitCode, "exit-code: not an accepted code, in supervisory mode"),
     ] {
         let Some(exe) = compile_c(name, dir.path()) else { return };
         let (sig, t) = first_finding(vec![exe.display().to_string(), "{port}".into()], ops, kind, needle, 60)

@@ -40,12 +40,18 @@ fn python(file: &str, args: &[&str]) -> Vec<String> {
     v
 }
 
+/// Builds `hosts/NAME.c`, or `NAME` as a path from this crate (`tests/host_mutants/x.c`).
 fn build_c(name: &str, dir: &Path) -> Option<PathBuf> {
-    let out = dir.join(name);
+    let src = if name.ends_with(".c") {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
+    } else {
+        hosts().join(format!("{name}.c"))
+    };
+    let out = dir.join(src.file_stem().unwrap());
     let ok = Command::new("cc")
         .args(["-g", "-O0", "-fno-omit-frame-pointer", "-o"])
         .arg(&out)
-        .arg(hosts().join(format!("{name}.c")))
+        .arg(&src)
         .output()
         .is_ok_and(|o| o.status.success());
     if ok || !missing("a C compiler") { ok.then_some(out) } else { None }
@@ -312,7 +318,7 @@ fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
         cases.push((vec![rs.display().to_string()], "hang in rs_read_forever::wait_for_prompt"));
     }
     if python_with("serial") {
-        cases.push((python("py_read_forever.py", &[]), "hang in py_read_forever.py:read_answer"));
+        cases.push((python("py_read_forever.py", &[]), "hang in py_read_forever.py, blocked in serialposix.py:read"));
     }
     for (command, needle) in cases {
         let mut r = run(command.clone());
@@ -347,6 +353,103 @@ fn a_host_put_out_of_step_by_an_extra_prompt_has_no_second_finding() {
     assert!(n.iter().any(|(sig, _)| sig.contains("waits-for-answer") && sig.contains("out of step")), "{n:?}");
 }
 
+/// One port without a timeout, reached through two call paths, is one hang: py_prompt_forever
+/// sets `port.timeout = None`, and then blocks for ever in its own loop (`command`) or in the
+/// shared helper whose deadline it never gets to check (`gclhost.read_until`, at the ^C's
+/// prompt). The stacks differ; the finding, named by the blocking call in the host's
+/// program, is one, and each message names the host's own frame.
+#[test]
+fn one_port_without_a_timeout_is_one_hang_whichever_function_reads_it() {
+    if !python_with("serial") {
+        return;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/py_prompt_forever.py");
+    let mut r = run(vec![deps::python(), script.display().to_string()]);
+    r.timeout_hang = Duration::from_millis(1500);
+    let hang_at = |answer: u32| {
+        let cut = Schedule { planned: vec![Planned { answer, op: Operator::NoPrompt, arg: 0 }] };
+        let result = run_once(&r, &cut).unwrap();
+        assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
+        let v = judge(&result, &[0, 1]);
+        assert_eq!(v.len(), 1, "{v:?}");
+        v.into_iter().next().unwrap()
+    };
+    let (sync, command) = (hang_at(0), hang_at(3));
+    assert_eq!(sync.signature, "hang in py_prompt_forever.py, blocked in serialposix.py:read");
+    assert_eq!(command.signature, sync.signature);
+    assert!(sync.message.contains("gclhost.py:read_until"), "{sync:?}");
+    assert!(command.message.contains("py_prompt_forever.py:command"), "{command:?}");
+}
+
+/// A loop without a deadline of its own, on a port that has a timeout, wakes at every timeout:
+/// it is not blocked in pyserial, and its hang is named by its own frame, the loop's (not
+/// merged with a port without a timeout, which is mended elsewhere).
+#[test]
+fn a_loop_without_a_deadline_on_a_port_with_a_timeout_is_named_by_the_loop() {
+    if !python_with("serial") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("py_spins.py");
+    std::fs::write(
+        &script,
+        "import os, serial\n\ndef wait_prompt(port):\n    buf = b''\n    while not buf.endswith(b'=> '):\n        buf += port.read(1)  # 50 ms timeout, no deadline: loops for ever\n\nport = serial.serial_for_url(os.environ['GCL_PORT_URL'], timeout=0.05)\nfor line in [b'\\x03', b'HI\\r', b'FGET P\\r']:\n    port.write(line)\n    wait_prompt(port)\n",
+    )
+    .unwrap();
+    let mut r = run(vec![deps::python(), script.display().to_string()]);
+    r.timeout_hang = Duration::from_millis(1500);
+    let cut = Schedule { planned: vec![Planned { answer: 1, op: Operator::NoPrompt, arg: 0 }] };
+    let result = run_once(&r, &cut).unwrap();
+    assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
+    let v = judge(&result, &[0, 1]);
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert_eq!(v[0].signature, "hang in py_spins.py:wait_prompt", "{v:?}");
+}
+
+/// A host whose exit code is the last status it read exits with a different code for each
+/// status the hand gives (255 for ERR 65535; another for the error a restarted hand gives
+/// the next command): one bug, one finding, the code in its message.
+#[test]
+fn one_exit_habit_is_one_finding_whatever_the_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("tests/host_mutants/c_status_exit.c", dir.path()) else { return };
+    let r = run(vec![exe.display().to_string(), "{port}".into()]);
+    let exit = |op: Operator, answer: u32, arg: u32| {
+        let result = run_once(&r, &Schedule { planned: vec![Planned { answer, op, arg }] }).unwrap();
+        let HostEnd::Exit(code) = result.end else { panic!("{:?} {}", result.end, result.stderr) };
+        let v = judge(&result, &[0, 1]);
+        assert_eq!(v.len(), 1, "{op} at {answer}: exit {code}: {v:?}");
+        (code, v.into_iter().next().unwrap())
+    };
+    let (a, bits) = exit(Operator::ErrBits, 2, 1);
+    let (b, restart) = exit(Operator::Restart, 2, 0);
+    assert_ne!(a, b, "{bits:?} {restart:?}");
+    assert_eq!(bits.kind, FindingKind::ExitCode);
+    assert_eq!(bits.signature, "exit-code: not an accepted code, in supervisory mode");
+    assert_eq!(restart.signature, bits.signature);
+    assert!(
+        bits.message.contains(&format!("exited with {a}")) && restart.message.contains(&format!("exited with {b}"))
+    );
+}
+
+/// A host that has not opened the port yet is not waiting for the hand: one whose start takes
+/// longer than the hang timeout (a slow interpreter on a loaded machine; here a shell that
+/// sleeps first) is not hung, and a correct one has no finding. (Killed at that moment, a
+/// Python interpreter shows no frame of the host's code: a "hang" with no stack.)
+#[test]
+fn a_host_slow_to_open_its_port_is_not_hung() {
+    if !python_with("serial") {
+        return;
+    }
+    let script = hosts().join("py_timeout.py").display().to_string();
+    let slow = vec!["sh".into(), "-c".into(), "sleep 2; exec \"$0\" \"$1\" 2".into(), deps::python(), script];
+    let mut r = run(slow);
+    r.timeout_hang = Duration::from_millis(1500);
+    let result = run_once(&r, &Schedule::default()).unwrap();
+    assert_eq!(result.end, HostEnd::Exit(0), "{}", result.stderr);
+    assert_eq!(judge(&result, &[0, 1]), Vec::new());
+}
+
 /// A Python host started through a wrapper that stays (a shell that runs it and then does
 /// something else) is still a Python host: its hang is named by its own frames (faulthandler
 /// in the interpreter, not a native sample of the shell waiting for it).
@@ -364,7 +467,8 @@ fn a_python_host_behind_a_shell_is_named_by_its_python_frames() {
     assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
     let v = judge(&result, &[0, 1]);
     assert_eq!(v.len(), 1, "{v:?}");
-    assert!(v[0].signature.starts_with("hang in py_read_forever.py:read_answer"), "{v:?}");
+    assert_eq!(v[0].signature, "hang in py_read_forever.py, blocked in serialposix.py:read", "{v:?}");
+    assert!(v[0].message.contains("py_read_forever.py:read_answer"), "{v:?}");
     assert!(v[0].message.contains("faulthandler"), "{v:?}");
 }
 

@@ -457,7 +457,29 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "`hang in host.py:read_prompt`",
-        &["harness/tests/host_verdicts.rs::one_wait_without_a_deadline_is_one_hang_named_by_its_code"],
+        &[
+            "harness/tests/host_verdicts.rs::one_wait_without_a_deadline_is_one_hang_named_by_its_code",
+            "harness/src/fuzz/host/detect.rs::a_python_host_blocked_in_pyserial_is_signed_by_the_call_in_its_program",
+        ],
+    ),
+    (
+        "so a port without one is one finding whichever of the host's functions reads from it",
+        &["harness/tests/host_verdicts.rs::one_port_without_a_timeout_is_one_hang_whichever_function_reads_it"],
+    ),
+    (
+        "The hang clock runs only while the host holds the port open",
+        &["harness/tests/host_verdicts.rs::a_host_slow_to_open_its_port_is_not_hung"],
+    ),
+    (
+        "`python port hang-up (pyserial) not handled`",
+        &["harness/src/fuzz/host/detect.rs::a_hang_up_is_one_signature_whatever_pyserial_raised_it_as"],
+    ),
+    (
+        "`exit-code: not an accepted code, in supervisory mode`",
+        &[
+            "harness/tests/host_verdicts.rs::one_exit_habit_is_one_finding_whatever_the_code",
+            "harness/src/fuzz/host/mod.rs::an_unexpected_exit_is_signed_by_its_class_and_mode_not_its_code",
+        ],
     ),
     (
         "Sanitizers write their reports to a file of the run's own",

@@ -79,6 +79,8 @@ fn python(s: &str) -> Option<CrashReport> {
     // Outermost first, as a traceback lists them.
     let mut frames = Vec::new();
     let mut exception = None;
+    // Whether the innermost frame is pyserial's.
+    let mut raised_in_pyserial = false;
     for l in tb.lines().skip(1) {
         let t = l.trim_start();
         if let Some(f) = t.strip_prefix("File \"") {
@@ -86,6 +88,7 @@ fn python(s: &str) -> Option<CrashReport> {
             let base = file.rsplit('/').next().unwrap_or(file);
             let func = t.rsplit(", in ").next().unwrap_or("?");
             frames.push((format!("{base}:{func}"), python_library(file)));
+            raised_in_pyserial = file.contains("/serial/");
         } else if !l.starts_with(' ') && !t.is_empty() {
             exception = Some(t.to_string());
             break;
@@ -103,7 +106,39 @@ fn python(s: &str) -> Option<CrashReport> {
     {
         headline = format!("{exception} (raised in {site}, called from {own})");
     }
+    if raised_in_pyserial && hang_up(&exception) {
+        // One event, the port going away, which pyserial raises as a `SerialException` from
+        // `read`, an `OSError` from `in_waiting`, or a failed `write`, depending on which call
+        // the host was in when it came. The host's bug is the same whichever: it does not
+        // handle a port that went away.
+        return Some(CrashReport {
+            kind: "python",
+            signature: "python port hang-up (pyserial) not handled".into(),
+            headline: format!("the port went away: {headline}"),
+        });
+    }
     Some(CrashReport { kind: "python", signature: format!("python {ty} in {site}"), headline })
+}
+
+/// Whether an exception pyserial raised says the port went away (the other end hung up, the
+/// device is gone): EIO, a read of nothing where select said there was data, a closed or
+/// reset socket, a broken pipe. Not a port the host closed itself (`PortNotOpenError`), a
+/// timeout, or a bad setting.
+fn hang_up(exception: &str) -> bool {
+    [
+        "[Errno 5]",
+        "Input/output error",
+        "returned no data",
+        "device disconnected",
+        "socket disconnected",
+        "[Errno 32]",
+        "Broken pipe",
+        "[Errno 104]",
+        "Connection reset",
+        "device reports error (poll)",
+    ]
+    .iter()
+    .any(|m| exception.contains(m))
 }
 
 /// Whether a Python frame's file is the interpreter's or an installed package's, not the
@@ -120,30 +155,81 @@ pub struct HangStack {
     /// The top frames, no addresses or line numbers (`read_line < main`,
     /// `host.py:read_prompt < host.py:main`).
     pub frames: String,
+    /// A Python host blocked for ever inside one pyserial call (it did not wake while it was
+    /// watched): that call (`serialposix.py:read`) and the host's program (`host.py`, the file
+    /// of its outermost own frame). See [`HangStack::site`].
+    #[serde(default)]
+    pub blocked_in: Option<PortCall>,
+}
+
+/// A pyserial call a Python host was blocked in, and the host's program.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PortCall {
+    /// The call, `serialposix.py:read`.
+    pub call: String,
+    /// The file of the host's outermost own frame, `host.py`.
+    pub program: String,
 }
 
 impl HangStack {
-    /// Where it waits: the innermost frame of the host's own code. The signature of a hang,
-    /// so that one wait without a deadline is one finding whatever the path that led to it.
-    pub fn site(&self) -> &str {
-        self.frames.split(" < ").next().unwrap_or(&self.frames)
+    /// Where it waits, the signature of a hang:
+    /// - a Python host blocked for ever in a pyserial call: that call, in the host's program
+    ///   (`host.py, blocked in serialposix.py:read`). pyserial's calls take no deadline of
+    ///   their own; their deadline is the port's (`timeout`, `write_timeout`), set once for
+    ///   every call on it. So a port without a timeout is one bug however many of the host's
+    ///   functions (its own loop, a helper with a deadline the blocking read never lets it
+    ///   check) read from it, and it is mended in one place;
+    /// - else the innermost frame of the host's own code: a native `read(2)`, a loop that
+    ///   polls a port with a timeout but has no deadline of its own, take their deadline (or
+    ///   lack of one) from that code, so one wait without a deadline is one finding whatever
+    ///   the path that led to it.
+    pub fn site(&self) -> String {
+        match &self.blocked_in {
+            Some(b) => format!("{}, blocked in {}", b.program, b.call),
+            None => self.frames.split(" < ").next().unwrap_or(&self.frames).to_string(),
+        }
     }
+}
+
+/// The pyserial call a Python `faulthandler` dump is in, when its innermost frame is
+/// pyserial's, with the host's program (see [`HangStack::site`]).
+pub fn faulthandler_port_call(dump: &str) -> Option<PortCall> {
+    let frames = python_dump_frames(dump)?;
+    let (file, func) = frames.first()?;
+    if !file.contains("/serial/") {
+        return None;
+    }
+    let base = |f: &str| f.rsplit('/').next().unwrap_or(f).to_string();
+    let program = frames.iter().rev().find(|(f, _)| !python_library(f)).map(|(f, _)| base(f))?;
+    Some(PortCall { call: format!("{}:{func}", base(file)), program })
+}
+
+/// The (file, function) frames of a `faulthandler` dump, innermost first, of the thread that
+/// was current, or of the first thread listed.
+fn python_dump_frames(dump: &str) -> Option<Vec<(String, String)>> {
+    let start = dump.find("Current thread").or_else(|| dump.find("Thread 0x")).or_else(|| dump.find("Stack ("))?;
+    let mut all = Vec::new();
+    for l in dump[start..].lines().skip(1) {
+        let t = l.trim_start();
+        let Some(f) = t.strip_prefix("File \"") else { break };
+        let file = f.split('"').next().unwrap_or_default().to_string();
+        let func = t.rsplit(" in ").next().unwrap_or("?").trim().to_string();
+        all.push((file, func));
+    }
+    Some(all)
 }
 
 /// Frames of a Python `faulthandler` dump (`File "x.py", line 12 in read_prompt`, most recent
 /// first) of the thread that was current, or of the first thread listed; the host's own
 /// files before the standard library and installed packages (where a read blocks).
 pub fn faulthandler_frames(dump: &str) -> Option<String> {
-    let start = dump.find("Current thread").or_else(|| dump.find("Thread 0x")).or_else(|| dump.find("Stack ("))?;
-    let mut all = Vec::new();
-    for l in dump[start..].lines().skip(1) {
-        let t = l.trim_start();
-        let Some(f) = t.strip_prefix("File \"") else { break };
-        let file = f.split('"').next().unwrap_or_default();
-        let func = t.rsplit(" in ").next().unwrap_or("?").trim();
-        let base = file.rsplit('/').next().unwrap_or(file);
-        all.push((format!("{base}:{func}"), python_library(file)));
-    }
+    let all = python_dump_frames(dump)?
+        .into_iter()
+        .map(|(file, func)| {
+            let base = file.rsplit('/').next().unwrap_or(&file).to_string();
+            (format!("{base}:{func}"), python_library(&file))
+        })
+        .collect();
     own_first(all)
 }
 
@@ -226,7 +312,7 @@ pub fn sample_native(pid: i32) -> Option<HangStack> {
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
         if let Some(frames) = native_frames(&out) {
-            return Some(HangStack { by: tool.to_string(), frames });
+            return Some(HangStack { by: tool.to_string(), frames, blocked_in: None });
         }
     }
     None
@@ -288,20 +374,14 @@ mod tests {
     }
 
     /// A Python exception is signed by its type and where it was raised, not by the callers:
-    /// pyserial's `SerialException` on a hang-up is one finding whether the host's helper or
-    /// its main loop was reading; two types, or two raising places, stay two.
+    /// pyserial's `PortNotOpenError` is one finding whether the host's helper or its main loop
+    /// was reading; two types, or two raising places, stay two.
     #[test]
     fn one_exception_from_one_place_is_one_signature_whatever_the_caller() {
-        let tb = |caller: &str| {
-            format!(
-                "Traceback (most recent call last):\n  File \"/h/host.py\", line 40, in <module>\n    main()\n{caller}  File \"/usr/lib/python3/site-packages/serial/serialposix.py\", line 595, in read\n    raise SerialException(\nserial.serialutil.SerialException: device reports readiness to read but returned no data\n"
-            )
-        };
-        let helper =
-            crash_report(&tb("  File \"/h/gclhost.py\", line 31, in read_until\n    buf += port.read(1)\n")).unwrap();
-        let direct =
-            crash_report(&tb("  File \"/h/host.py\", line 19, in scenario\n    block = port.read(10)\n")).unwrap();
-        assert_eq!(helper.signature, "python serial.serialutil.SerialException in serialposix.py:read");
+        let not_open = "serial.serialutil.PortNotOpenError: Attempting to use a port that is not open";
+        let helper = crash_report(&pyserial_tb("gclhost.py\", line 31, in read_until", "read", not_open)).unwrap();
+        let direct = crash_report(&pyserial_tb("host.py\", line 19, in scenario", "read", not_open)).unwrap();
+        assert_eq!(helper.signature, "python serial.serialutil.PortNotOpenError in serialposix.py:read");
         assert_eq!(direct.signature, helper.signature);
         assert!(
             helper.headline.ends_with("(raised in serialposix.py:read, called from gclhost.py:read_until)"),
@@ -317,6 +397,55 @@ mod tests {
         assert_eq!(a.signature, "python IndexError in host.py:decode");
         assert_ne!(crash_report(&raised_here("decode", "KeyError")).unwrap().signature, a.signature);
         assert_ne!(crash_report(&raised_here("parse", "IndexError")).unwrap().signature, a.signature);
+    }
+
+    /// A traceback of an exception raised in pyserial's `serialposix.py` function `func`,
+    /// called from the host's frame `caller` (`file", line N, in function`).
+    fn pyserial_tb(caller: &str, func: &str, exception: &str) -> String {
+        format!(
+            "Traceback (most recent call last):\n  File \"/h/host.py\", line 40, in <module>\n    main()\n  File \"/h/{caller}\n    buf += port.read(1)\n  File \"/usr/lib/python3/site-packages/serial/serialposix.py\", line 595, in {func}\n    raise X\n{exception}\n"
+        )
+    }
+
+    /// A port that went away is one event, which pyserial raises as a `SerialException` from
+    /// `read` or an `OSError` from `in_waiting` (or a failed `write`) depending on the call
+    /// the host was in: one finding. An exception of the host's own, or another of pyserial's,
+    /// is not merged with it.
+    #[test]
+    fn a_hang_up_is_one_signature_whatever_pyserial_raised_it_as() {
+        let read = crash_report(&pyserial_tb(
+            "host.py\", line 19, in scenario",
+            "read",
+            "serial.serialutil.SerialException: device reports readiness to read but returned no data (device disconnected or multiple access on port?)",
+        ))
+        .unwrap();
+        let waiting = crash_report(&pyserial_tb(
+            "gclhost.py\", line 31, in read_until",
+            "in_waiting",
+            "OSError: [Errno 5] Input/output error",
+        ))
+        .unwrap();
+        let write = crash_report(&pyserial_tb(
+            "host.py\", line 12, in send",
+            "write",
+            "serial.serialutil.SerialException: write failed: [Errno 5] Input/output error",
+        ))
+        .unwrap();
+        assert_eq!(read.signature, "python port hang-up (pyserial) not handled");
+        assert_eq!(waiting.signature, read.signature);
+        assert_eq!(write.signature, read.signature);
+        assert!(waiting.headline.contains("OSError") && waiting.headline.contains("gclhost.py:read_until"));
+        let index = "Traceback (most recent call last):\n  File \"/h/host.py\", line 9, in decode\n    x = t[k]\nIndexError: list index out of range\n";
+        assert_eq!(crash_report(index).unwrap().signature, "python IndexError in host.py:decode");
+        let not_open = "serial.serialutil.PortNotOpenError: Attempting to use a port that is not open";
+        assert_ne!(
+            crash_report(&pyserial_tb("host.py\", line 19, in scenario", "read", not_open)).unwrap().signature,
+            read.signature
+        );
+        // An EIO the host's own code met (its own `os.read`) is its own raise site, not
+        // pyserial's hang-up.
+        let own = "Traceback (most recent call last):\n  File \"/h/host.py\", line 9, in pump\n    os.read(fd, 1)\nOSError: [Errno 5] Input/output error\n";
+        assert_eq!(crash_report(own).unwrap().signature, "python OSError in host.py:pump");
     }
 
     #[test]
@@ -339,5 +468,33 @@ mod tests {
         let gdb = "0x00007f in __GI___libc_read (fd=3, buf=0x7ff, nbytes=1) at ../sysdeps/unix/sysv/linux/read.c:26\n#0  0x00007f in __GI___libc_read (fd=3) at ../sysdeps/read.c:26\n#1  0x000055 in read_line (fd=3, buf=0x7ff \"\") at host.c:20\n#2  0x000055 in main () at host.c:40\n";
         assert_eq!(native_frames(gdb).unwrap(), "read_line < main");
         assert_eq!(native_frames("no frames here"), None);
+    }
+
+    /// A Python host blocked for ever in pyserial's read, reached from its own loop or from a
+    /// helper whose deadline the blocking read never lets it check, is one hang: its port has
+    /// no timeout. One that was not blocked in a pyserial call is signed by its own frame.
+    #[test]
+    fn a_python_host_blocked_in_pyserial_is_signed_by_the_call_in_its_program() {
+        let dump = |own: &str| {
+            format!(
+                "Fatal Python error: Aborted\n\nCurrent thread 0x00007f (most recent call first):\n  File \"/usr/lib/python3/site-packages/serial/serialposix.py\", line 565 in read\n{own}  File \"/t/prompt_forever.py\", line 20 in scenario\n  File \"/t/gclhost.py\", line 70 in main\n  File \"/t/prompt_forever.py\", line 24 in <module>\n\n"
+            )
+        };
+        let stack = |d: &str| HangStack {
+            by: "faulthandler".into(),
+            frames: faulthandler_frames(d).unwrap(),
+            blocked_in: faulthandler_port_call(d),
+        };
+        let own_loop = stack(&dump("  File \"/t/prompt_forever.py\", line 12 in command\n"));
+        let helper = stack(&dump("  File \"/t/gclhost.py\", line 31 in read_until\n"));
+        assert_eq!(own_loop.site(), "prompt_forever.py, blocked in serialposix.py:read");
+        assert_eq!(helper.site(), own_loop.site());
+        assert!(helper.frames.starts_with("gclhost.py:read_until"), "{}", helper.frames);
+        // Not blocked (the port has a timeout; its loop has no deadline): its own frame.
+        let looping = HangStack { blocked_in: None, ..own_loop.clone() };
+        assert_eq!(looping.site(), "prompt_forever.py:command");
+        // Not in pyserial: no port call.
+        let sleeping = "Current thread 0x1 (most recent call first):\n  File \"/t/host.py\", line 3 in wait\n  File \"/t/host.py\", line 9 in <module>\n\n";
+        assert_eq!(faulthandler_port_call(sleeping), None);
     }
 }

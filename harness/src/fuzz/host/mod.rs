@@ -94,7 +94,13 @@ fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
         Some(st) => Verdict {
             kind: FindingKind::Hang,
             signature: format!("hang in {}", st.site()),
-            message: format!("{what} ({state}), stuck in {} ({})", st.frames, st.by),
+            message: match &st.blocked_in {
+                Some(b) => format!(
+                    "{what} ({state}), blocked in {} called from {} ({}; a pyserial port's deadline is its timeout)",
+                    b.call, st.frames, st.by
+                ),
+                None => format!("{what} ({state}), stuck in {} ({})", st.frames, st.by),
+            },
         },
         None => {
             let coarse = state.split(" after ").next().unwrap_or(state);
@@ -106,6 +112,17 @@ fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
             }
         }
     }
+}
+
+/// An unexpected exit code's signature: the class of the exit and the hand's mode when the
+/// host left, not the code. A host whose code says what went wrong (the last status it read,
+/// an errno) exits with a different code for every cause the hand gives it, and one habit
+/// (exiting non-zero where it must not) is one finding; the code is in the message. A host
+/// that leaves non-zero in RealTime and also in supervisory mode does so from two places in
+/// its code: two findings.
+fn exit_code_signature(ended_in: &str) -> String {
+    let mode = if ended_in.starts_with("RealTime") { "in RealTime" } else { "in supervisory mode" };
+    format!("exit-code: not an accepted code, {mode}")
 }
 
 /// The INFO notes of a run: how the host reacted to the hand's own misbehaviour where that
@@ -144,8 +161,15 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
             v.push(Verdict {
                 kind: FindingKind::ExitCode,
-                signature: format!("exit-code: {c}"),
-                message: format!("the host exited with {c}: {}", crate::report::truncate_note(last.trim(), 200)),
+                signature: exit_code_signature(&r.ended_in),
+                message: match last.trim() {
+                    "" => format!("the host exited with {c} ({})", r.ended_in),
+                    last => format!(
+                        "the host exited with {c} ({}): {}",
+                        r.ended_in,
+                        crate::report::truncate_note(last, 200)
+                    ),
+                },
             });
         }
         (HostEnd::Exit(_), _) => {}
@@ -908,14 +932,51 @@ mod tests {
         assert!(systematic_pass(&[], &Weights::parse("truncate").unwrap(), true).is_empty());
     }
 
-    #[test]
-    fn a_silent_wrong_value_is_named_by_the_hosts_code_else_by_the_answer_it_came_from() {
-        let mut r = RunResult {
-            end: HostEnd::Exit(0),
+    /// A run that ended so, with nothing else to judge.
+    fn ended(end: HostEnd, ended_in: &str) -> RunResult {
+        RunResult {
+            end,
             stack: None,
             leftovers: Vec::new(),
             gave_up_after: None,
             stderr: String::new(),
+            observations: 0,
+            wrong_values: Vec::new(),
+            exchanges: Vec::new(),
+            fired: Vec::new(),
+            violations: Vec::new(),
+            commands: Vec::new(),
+            reactions: Vec::new(),
+            ended_in: ended_in.into(),
+            answers: 9,
+            answer_kinds: Vec::new(),
+            elapsed: Duration::ZERO,
+        }
+    }
+
+    /// A host whose exit code is the last status it read exits with another code for every
+    /// status the hand gives: one habit, one finding, the code in the message. Leaving in
+    /// RealTime is another place in its code; an accepted code is no finding.
+    #[test]
+    fn an_unexpected_exit_is_signed_by_its_class_and_mode_not_its_code() {
+        let exit = |code: i32, state: &str| {
+            let mut r = ended(HostEnd::Exit(code), state);
+            r.stderr = format!("host: ERR {code}\n");
+            judge(&r, &[0, 1])
+        };
+        let (a, b) = (exit(255, "at the prompt after FGET"), exit(16, "at the prompt after HI"));
+        assert_eq!((a.len(), b.len()), (1, 1));
+        assert_eq!(a[0].kind, FindingKind::ExitCode);
+        assert_eq!(a[0].signature, "exit-code: not an accepted code, in supervisory mode");
+        assert_eq!(b[0].signature, a[0].signature);
+        assert!(a[0].message.contains("255") && b[0].message.contains("16"), "{:?} {:?}", a[0], b[0]);
+        assert_ne!(exit(3, "RealTime loop after LOOP")[0].signature, a[0].signature);
+        assert_eq!(exit(1, "at the prompt after HI"), Vec::new());
+    }
+
+    #[test]
+    fn a_silent_wrong_value_is_named_by_the_hosts_code_else_by_the_answer_it_came_from() {
+        let mut r = RunResult {
             observations: 3,
             wrong_values: vec![WrongValue {
                 observed: "P 1 5120".into(),
@@ -923,14 +984,7 @@ mod tests {
                 answer: "RealTime feedback".into(),
                 after: Some("rt-block-length at answer 5".into()),
             }],
-            exchanges: Vec::new(),
-            fired: Vec::new(),
-            violations: Vec::new(),
-            commands: Vec::new(),
-            reactions: Vec::new(),
-            answers: 9,
-            answer_kinds: Vec::new(),
-            elapsed: Duration::ZERO,
+            ..ended(HostEnd::Exit(0), "")
         };
         let v = judge(&r, &[0]);
         assert_eq!(v[0].signature, "silent wrong value: P in RealTime feedback");

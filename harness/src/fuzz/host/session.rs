@@ -3,10 +3,11 @@
 //!
 //! The hand is the `gcl sim` engine and transport, in threads of this process; the host is a
 //! child process in its own process group (so a hang is ended with the whole group). A hang
-//! is the host neither sending nor exiting for the hang timeout after the hand's last answer
-//! (held-back output counts as an answer still coming), or the run outliving its budget.
-//! Before a hung host is killed its stack is taken: a Python host (run with
-//! `PYTHONFAULTHANDLER=1`) is sent SIGABRT and dumps its frames on stderr; a native one is
+//! is the host, with the port open, neither sending nor exiting for the hang timeout after
+//! the hand's last answer or its own (re)open (held-back output counts as an answer still
+//! coming), or the run outliving its budget. Before a hung host is killed its stack is taken:
+//! a Python host (run with `PYTHONFAULTHANDLER=1`) is watched for 300 ms (blocked in one call,
+//! or waking) and sent SIGABRT, and its whole dump is read from stderr; a native one is
 //! sampled with `eu-stack` or `gdb` when installed. Sanitizers write their reports to a file
 //! per run (`ASAN_OPTIONS=log_path=`), read back after the run.
 //!
@@ -136,6 +137,8 @@ pub struct RunResult {
     /// Each fired misbehaviour with the command the host sent next (`-` if none): the paths
     /// guidance looks for.
     pub reactions: Vec<(String, String, String)>,
+    /// The protocol state the host ended in ([`super::check::HostChecker::state`]).
+    pub ended_in: String,
     /// Answers the hand gave.
     pub answers: u32,
     /// The kinds of answer the hand gave (as made, before any misbehaviour): what the
@@ -763,6 +766,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut cancelled = false;
     let mut stack = None;
     let mut ended_at = None;
+    let mut closed_until = started;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
             Ok(Ok(status)) => {
@@ -783,7 +787,16 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             Err(mpsc::RecvTimeoutError::Timeout) => {}
         }
         let now = Instant::now();
-        let quiet_since = log.lock().map(|l| l.last_activity).unwrap_or(started);
+        let (last_activity, holds_port) = log.lock().map(|l| (l.last_activity, l.port_open)).unwrap_or((started, true));
+        // A host without the port open is not waiting for the hand: it is starting, between a
+        // close and a reopen, or ending. Its quiet counts from when it (re)opened; only the
+        // run budget ends it meanwhile. (On a loaded machine an interpreter can take longer
+        // than the hang timeout to start or to finish: killed then, it showed no frame of the
+        // host's code, a "hang" with no stack that no host can avoid.)
+        if !holds_port {
+            closed_until = now;
+        }
+        let quiet_since = last_activity.max(closed_until);
         cancelled = cancel.load(Ordering::Relaxed);
         let verdict = if cancelled {
             Some(HostEnd::Exit(-1))
@@ -867,6 +880,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         return Err(RunError::Cancelled);
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
+    let ended_in = log.checker.state();
     // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave.
     if !log.hung_up {
         log.checker.finish(!matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
@@ -889,6 +903,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         violations,
         commands: log.checker.commands().to_vec(),
         reactions: log.reactions.clone(),
+        ended_in,
         answers: log.misbehave.answers(),
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
@@ -921,29 +936,74 @@ fn take_stack(
 ) -> Option<super::detect::HangStack> {
     let (target, python) = stack_target(pid);
     if python {
+        // Whether it is blocked in one call (it does not wake while watched) or cycles (a
+        // loop that polls a port with a timeout): only the first is signed by the call.
+        let blocked = blocked_in_one_call(target);
         let from = errbuf.lock().ok()?.kept.len();
         nix::sys::signal::kill(nix::unistd::Pid::from_raw(target), nix::sys::signal::Signal::SIGABRT).ok()?;
-        // It dumps, then dies of the signal; its stderr is then at its end, or nearly.
+        // It dumps, then dies of the signal; the dump is read once it is whole: the host's
+        // stderr at its end, else (a wrapper or a process it left behind still holds it) the
+        // dump's frames followed by the blank line that ends them. On a loaded machine either
+        // can take a while (a dump cut short, read too early, left the hang with no stack).
         if let Some(ended) = ended.filter(|_| target == pid) {
-            *reaped = ended.recv_timeout(Duration::from_secs(2)).is_ok();
-            wait_eof(errbuf, Duration::from_millis(200));
+            *reaped = ended.recv_timeout(DUMP_GRACE).is_ok();
         } else {
-            // Started through a wrapper (a shell, env), which still holds stderr, or not a
-            // child of ours: the dump is in once the interpreter is gone.
-            let gone = Instant::now() + Duration::from_secs(2);
+            let gone = Instant::now() + DUMP_GRACE;
             while running(target) && Instant::now() < gone {
                 std::thread::sleep(Duration::from_millis(10));
             }
-            std::thread::sleep(Duration::from_millis(100));
+        }
+        let whole = Instant::now() + DUMP_GRACE;
+        loop {
+            let done = errbuf.lock().map_or(true, |b| {
+                b.eof || b.kept.get(from..).is_some_and(|d| dump_is_whole(&String::from_utf8_lossy(d)))
+            });
+            if done || Instant::now() >= whole {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
         }
         let mut b = errbuf.lock().ok()?;
         let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
         // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
         b.kept.truncate(from);
         let frames = super::detect::faulthandler_frames(&dump)?;
-        return Some(super::detect::HangStack { by: "faulthandler".into(), frames });
+        let blocked_in = if blocked { super::detect::faulthandler_port_call(&dump) } else { None };
+        return Some(super::detect::HangStack { by: "faulthandler".into(), frames, blocked_in });
     }
     super::detect::sample_native(target)
+}
+
+/// How long a Python host's `faulthandler` dump is waited for (its death, then the whole
+/// dump on stderr).
+const DUMP_GRACE: Duration = Duration::from_secs(5);
+
+/// Whether a `faulthandler` dump is whole: its frames, then the blank line after them.
+fn dump_is_whole(dump: &str) -> bool {
+    let Some(start) = dump.find("(most recent call first):") else { return false };
+    let mut frames = 0;
+    for l in dump[start..].lines().skip(1) {
+        if l.trim_start().starts_with("File \"") {
+            frames += 1;
+        } else {
+            return frames > 0 && dump[start..].contains(&format!("{l}\n"));
+        }
+    }
+    false
+}
+
+/// Whether a process stays asleep in one call while it is watched (300 ms): its context
+/// switches do not move. A loop that polls a port with a timeout wakes at every timeout.
+fn blocked_in_one_call(pid: i32) -> bool {
+    let switches = || {
+        let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+        let field =
+            |name: &str| status.lines().find_map(|l| l.strip_prefix(name)).and_then(|v| v.trim().parse::<u64>().ok());
+        Some(field("voluntary_ctxt_switches:")? + field("nonvoluntary_ctxt_switches:")?)
+    };
+    let Some(before) = switches() else { return false };
+    std::thread::sleep(Duration::from_millis(300));
+    switches() == Some(before)
 }
 
 /// Programs that start the host rather than being it: shells and launchers.
