@@ -26,10 +26,11 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::net::SocketAddr;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use nix::libc;
+
+use super::wait::{StopHandle, StopSignal, stop_pair};
 
 /// The offsets, in a host connection's stream, of bytes written while output was unread.
 #[derive(Debug, Clone, Default)]
@@ -39,6 +40,9 @@ pub struct Marks(Arc<Mutex<MarksInner>>);
 struct MarksInner {
     /// A listener arrived: every write of the host is seen.
     watched: bool,
+    /// A write to a socket could not be looked into (a host that forbade it): the marks are
+    /// not the whole truth.
+    blind: bool,
     /// By the host's local port (one connection each).
     by_port: BTreeMap<u16, BTreeSet<u64>>,
     /// By the host's local port: the count of [`bytes_written`] at the connection's first
@@ -50,7 +54,7 @@ impl Marks {
     /// Whether the host's writes are seen (the filter is in place): the marks are then the
     /// whole truth, and no mark means the host had read everything.
     pub fn watched(&self) -> bool {
-        self.0.lock().is_ok_and(|m| m.watched)
+        self.0.lock().is_ok_and(|m| m.watched && !m.blind)
     }
 
     /// Takes the marked offsets in `from..to` of the connection from the host's `port`, in
@@ -76,6 +80,12 @@ impl Marks {
         }
     }
 
+    fn set_blind(&self) {
+        if let Ok(mut m) = self.0.lock() {
+            m.blind = true;
+        }
+    }
+
     fn set_watched(&self) {
         if let Ok(mut m) = self.0.lock() {
             m.watched = true;
@@ -93,7 +103,7 @@ pub struct WriteWatch {
     /// number so that the host is unlikely to reuse it for a descriptor of its own: writes to
     /// that number are not stopped).
     child_end: Option<OwnedFd>,
-    stop: Arc<AtomicBool>,
+    stop: StopHandle,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
@@ -125,16 +135,16 @@ impl WriteWatch {
         // SAFETY: `high` is a new descriptor that nothing else owns.
         let child_end = unsafe { OwnedFd::from_raw_fd(high) };
         let marks = Marks::default();
-        let stop = Arc::new(AtomicBool::new(false));
+        let (stop, stopped) = stop_pair().ok()?;
         let thread = {
-            let (marks, stop) = (marks.clone(), stop.clone());
+            let marks = marks.clone();
             std::thread::Builder::new()
                 .name("host-writes".into())
                 .spawn(move || {
                     if let Some(listener) = receive_listener(&ours) {
                         drop(ours);
                         marks.set_watched();
-                        serve(&listener, hand, &marks, &stop);
+                        serve(&listener, hand, &marks, &stopped);
                     }
                 })
                 .ok()?
@@ -173,7 +183,7 @@ impl WriteWatch {
 impl Drop for WriteWatch {
     fn drop(&mut self) {
         self.child_end = None;
-        self.stop.store(true, Ordering::Relaxed);
+        self.stop.stop();
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
@@ -289,16 +299,18 @@ fn receive_listener(ours: &OwnedFd) -> Option<OwnedFd> {
 
 /// Answers the host's write calls until no process uses the filter any more, or the watch
 /// is dropped.
-fn serve(listener: &OwnedFd, hand: SocketAddr, marks: &Marks, stop: &AtomicBool) {
+fn serve(listener: &OwnedFd, hand: SocketAddr, marks: &Marks, stop: &StopSignal) {
     use nix::poll::{PollFd, PollFlags, PollTimeout};
     use std::os::fd::AsFd;
-    while !stop.load(Ordering::Relaxed) {
-        let mut fds = [PollFd::new(listener.as_fd(), PollFlags::POLLIN)];
-        match nix::poll::poll(&mut fds, PollTimeout::from(50u8)) {
-            Ok(0) => continue,
+    loop {
+        let mut fds = [PollFd::new(listener.as_fd(), PollFlags::POLLIN), PollFd::new(stop.as_fd(), PollFlags::POLLIN)];
+        match nix::poll::poll(&mut fds, PollTimeout::NONE) {
             Ok(_) => {}
             Err(nix::errno::Errno::EINTR) => continue,
             Err(_) => return,
+        }
+        if fds[1].any().unwrap_or(true) {
+            return;
         }
         let revents = fds[0].revents().unwrap_or(PollFlags::empty());
         if !revents.contains(PollFlags::POLLIN) {
@@ -337,7 +349,10 @@ fn look(notif: &libc::seccomp_notif, hand: SocketAddr, marks: &Marks) {
     if !link.as_os_str().as_encoded_bytes().starts_with(b"socket:") {
         return;
     }
-    let Some(sock) = their_descriptor(tid, fd) else { return };
+    let Some(sock) = their_descriptor(tid, fd) else {
+        marks.set_blind();
+        return;
+    };
     if address(&sock, libc::getpeername) != Some(hand) {
         return;
     }
