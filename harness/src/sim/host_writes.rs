@@ -94,7 +94,7 @@ impl Marks {
 }
 
 /// Watches the writes of one host to the hand at `hand` (its TCP address), from before it
-/// starts: [`WriteWatch::child_hook`] goes into the child's `pre_exec`, and
+/// starts: [`WriteWatch::prepare`] readies the command, and
 /// [`WriteWatch::spawned`] is called once the spawn has returned, whatever it returned.
 #[derive(Debug)]
 pub struct WriteWatch {
@@ -206,12 +206,7 @@ fn filter(skip: RawFd) -> Vec<libc::sock_filter> {
     let n = writes.len() as u8;
     // 0: arch; 1: other arch -> allow; 2: nr; 3: x32 -> allow; 4..4+n: writes -> check;
     // 4+n: allow; 5+n: args[0]; 6+n: skip -> allow; 7+n: notify; 8+n: allow.
-    let mut p = vec![
-        op(LD, 0, 0, 4),
-        op(JEQ, 0, 2 + n, arch),
-        op(LD, 0, 0, 0),
-        op(JGE, n, 0, 0x4000_0000),
-    ];
+    let mut p = vec![op(LD, 0, 0, 4), op(JEQ, 0, 2 + n, arch), op(LD, 0, 0, 0), op(JGE, n, 0, 0x4000_0000)];
     for (i, nr) in writes.iter().enumerate() {
         p.push(op(JEQ, n - i as u8, 0, *nr as u32));
     }

@@ -208,8 +208,9 @@ struct Client {
 }
 
 impl Client {
-    /// Whether the client has not read all the output sent to it (for a tapped line, before
-    /// the bytes it sent next are judged): bytes still in this side's send queue, or in the
+    /// Whether the client has not read all the output sent to it (for a tapped line whose
+    /// client's writes are not watched as they are made, [`super::host_writes`], before the
+    /// bytes it sent next are judged): bytes still in this side's send queue, or in the
     /// client socket's receive queue (`/proc/net/tcp`: the connection is on this machine).
     /// A client that writes and then reads within the moment it takes to look may be missed;
     /// one that read everything is never taken for one that did not.

@@ -35,7 +35,8 @@ use serde::{Deserialize, Serialize};
 use super::check::{HostChecker, HostViolation};
 use crate::sim::misbehave::{AnswerKindSeen, Fired, LineTap, Misbehave, Operator, Schedule, Shaped};
 use crate::sim::{
-    Engine, Pace, SimError, SimOptions, StopHandle, TimeMode, host_writes::WriteWatch, pty::Pty, stop_pair, tcp::TcpServer,
+    Engine, Pace, SimError, SimOptions, StopHandle, TimeMode, host_writes::WriteWatch, pty::Pty, stop_pair,
+    tcp::TcpServer,
 };
 
 /// How the host reaches the hand.
