@@ -45,9 +45,10 @@ struct MarksInner {
     blind: bool,
     /// By the host's local port (one connection each).
     by_port: BTreeMap<u16, BTreeSet<u64>>,
-    /// By the host's local port: the count of [`bytes_written`] at the connection's first
-    /// write (where its stream begins; the kernel's count may include the SYN).
-    origin: BTreeMap<u16, u64>,
+    /// By the host's local port: the connection's socket (its inode: a port may serve a
+    /// later connection too), and the count of [`bytes_written`] at its first write (where
+    /// its stream begins; the kernel's count may include the SYN).
+    origin: BTreeMap<u16, (String, u64)>,
 }
 
 impl Marks {
@@ -69,11 +70,16 @@ impl Marks {
         found
     }
 
-    /// A write on the connection from `port` that begins after `written` bytes (by the
-    /// kernel's count), made while output was unread (`unread`).
-    fn write(&self, port: u16, written: u64, unread: bool) {
+    /// A write on the connection from `port` (its socket `socket`) that begins after
+    /// `written` bytes (by the kernel's count), made while output was unread (`unread`).
+    fn write(&self, port: u16, socket: &str, written: u64, unread: bool) {
         if let Ok(mut m) = self.0.lock() {
-            let origin = *m.origin.entry(port).or_insert(written);
+            if m.origin.get(&port).is_none_or(|(s, _)| s != socket) {
+                // A new connection: its stream begins here.
+                m.origin.insert(port, (socket.to_string(), written));
+                m.by_port.remove(&port);
+            }
+            let origin = m.origin[&port].1;
             if unread {
                 m.by_port.entry(port).or_default().insert(written.saturating_sub(origin));
             }
@@ -340,21 +346,24 @@ fn look(notif: &libc::seccomp_notif, hand: SocketAddr, marks: &Marks) {
     let tid = notif.pid as i32;
     let fd = notif.data.args[0] as i32;
     // Most writes are to files and pipes: a look at the link is enough for them.
-    let Ok(link) = std::fs::read_link(format!("/proc/{tid}/fd/{fd}")) else { return };
+    let link = match std::fs::read_link(format!("/proc/{tid}/fd/{fd}")) {
+        Ok(l) => l,
+        // A host that may not be looked into.
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => return marks.set_blind(),
+        // Not a descriptor (the call fails by itself), or a caller gone.
+        Err(_) => return,
+    };
     if !link.as_os_str().as_encoded_bytes().starts_with(b"socket:") {
         return;
     }
-    let Some(sock) = their_descriptor(tid, fd) else {
-        marks.set_blind();
-        return;
-    };
+    let Some(sock) = their_descriptor(tid, fd) else { return marks.set_blind() };
     if address(&sock, libc::getpeername) != Some(hand) {
         return;
     }
-    let Some(port) = address(&sock, libc::getsockname).map(|a| a.port()) else { return };
-    let Some(unread) = queue(&sock, libc::FIONREAD) else { return };
-    if let Some(written) = bytes_written(&sock) {
-        marks.write(port, written, unread > 0);
+    let port = address(&sock, libc::getsockname).map(|a| a.port());
+    match (port, queue(&sock, libc::FIONREAD), bytes_written(&sock)) {
+        (Some(port), Some(unread), Some(written)) => marks.write(port, &link.to_string_lossy(), written, unread > 0),
+        _ => marks.set_blind(),
     }
 }
 
@@ -435,5 +444,29 @@ fn bytes_acked(sock: &OwnedFd) -> Option<u64> {
         );
         let end = std::mem::offset_of!(libc::tcp_info, tcpi_bytes_acked) + 8;
         (r == 0 && len as usize >= end).then_some(info.tcpi_bytes_acked)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Offsets count from the connection's first write, whatever the kernel's count began
+    /// at, and a new connection on the same port begins anew.
+    #[test]
+    fn marks_are_offsets_in_each_connections_own_stream() {
+        let m = Marks::default();
+        // A client's count includes its SYN: its first write begins after "1".
+        m.write(40000, "socket:[7]", 1, false);
+        m.write(40000, "socket:[7]", 11, true);
+        assert_eq!(m.take(40000, 0, 10), Vec::<u64>::new());
+        assert_eq!(m.take(40000, 10, 13), vec![10]);
+        // Taken once.
+        assert_eq!(m.take(40000, 10, 13), Vec::<u64>::new());
+        // A mark not yet taken goes with its connection.
+        m.write(40000, "socket:[7]", 14, true);
+        m.write(40000, "socket:[8]", 0, true);
+        assert_eq!(m.take(40000, 0, 20), vec![0]);
+        assert_eq!(m.take(40001, 0, 20), Vec::<u64>::new());
     }
 }
