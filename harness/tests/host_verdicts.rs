@@ -141,33 +141,36 @@ fn a_host_that_reconnects_and_resyncs_with_one_cr_passes() {
 }
 
 /// `1FGET MCV` then `GC` without reading the answer: on a serial line the G arrives while
-/// the answer is still coming. Flagged at every line speed, in fast and in real time.
-/// (Unpaced, where the answer is there at once, it is flagged when the G reaches the hand
-/// before the host reads anything, as when it comes with the command or the host is slow to
-/// read; a host that writes and then reads within microseconds can still be missed there.)
+/// the answer is still coming. Flagged at every line speed, in fast and in real time, over a
+/// pty and over TCP (where, unpaced, the hand may take the G only after it sent the answer:
+/// the host had read none of it when it wrote).
 #[test]
 fn a_host_that_pipelines_is_flagged_at_any_speed() {
     if !python_with("serial") {
         return;
     }
     let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
-    let cases: [(Pace, TimeMode, &str); 5] = [
+    let cases: [(Pace, TimeMode, &str); 6] = [
+        (Pace::Unpaced, TimeMode::Fast, "9600"),
         (Pace::Fixed(9600), TimeMode::Fast, "9600"),
         (Pace::Fixed(1200), TimeMode::Fast, "1200"),
         (Pace::Fixed(9600), TimeMode::Real, "9600"),
         (Pace::Fixed(1200), TimeMode::Real, "1200"),
         (Pace::Fixed(115_200), TimeMode::Real, "115200"),
     ];
-    for (pace, time, baud) in cases {
-        let mut r = run(python("py_pipeline_mcv.py", &["{port}", baud]));
-        r.pace = pace;
-        r.time = time;
-        let f = failing(&r);
-        assert!(
-            f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
-            "{pace} {} at {baud}: {f:?}",
-            time.name()
-        );
+    for transport in [Transport::Pty, Transport::Tcp] {
+        for (pace, time, baud) in cases {
+            let mut r = run(python("py_pipeline_mcv.py", &["{url}", baud]));
+            r.transport = transport;
+            r.pace = pace;
+            r.time = time;
+            let f = failing(&r);
+            assert!(
+                f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
+                "{transport:?} {pace} {} at {baud}: {f:?}",
+                time.name()
+            );
+        }
     }
 }
 

@@ -23,7 +23,7 @@
 //! privileges).
 #![allow(unsafe_code)]
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::net::SocketAddr;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd, RawFd};
 use std::sync::{Arc, Mutex};
@@ -32,7 +32,8 @@ use nix::libc;
 
 use super::wait::{StopHandle, StopSignal, stop_pair};
 
-/// The offsets, in a host connection's stream, of bytes written while output was unread.
+/// For each write of a host to its connection: where in the stream its bytes begin, and how
+/// much of the hand's output the host had read when it made it.
 #[derive(Debug, Clone, Default)]
 pub struct Marks(Arc<Mutex<MarksInner>>);
 
@@ -43,46 +44,46 @@ struct MarksInner {
     /// A write to a socket could not be looked into (a host that forbade it): the marks are
     /// not the whole truth.
     blind: bool,
-    /// By the host's local port (one connection each).
-    by_port: BTreeMap<u16, BTreeSet<u64>>,
+    /// By the host's local port (one connection each): the writes not yet taken, as the
+    /// offset of their first byte and the bytes of output the host had read then.
+    by_port: BTreeMap<u16, BTreeMap<u64, u64>>,
     /// By the host's local port: the connection's socket (its inode: a port may serve a
-    /// later connection too), and the count of [`bytes_written`] at its first write (where
-    /// its stream begins; the kernel's count may include the SYN).
+    /// later connection too), and the count of bytes written at its first write (where its
+    /// stream begins; the kernel's count may include the SYN).
     origin: BTreeMap<u16, (String, u64)>,
 }
 
 impl Marks {
     /// Whether the host's writes are seen (the filter is in place): the marks are then the
-    /// whole truth, and no mark means the host had read everything.
+    /// whole truth about its writes.
     pub fn watched(&self) -> bool {
         self.0.lock().is_ok_and(|m| m.watched && !m.blind)
     }
 
-    /// Takes the marked offsets in `from..to` of the connection from the host's `port`, in
-    /// order.
-    pub fn take(&self, port: u16, from: u64, to: u64) -> Vec<u64> {
+    /// Takes the writes that begin in `from..to` of the connection from the host's `port`,
+    /// in order: each one's offset and how many bytes of output the host had read when it
+    /// made it.
+    pub fn take(&self, port: u16, from: u64, to: u64) -> Vec<(u64, u64)> {
         let Ok(mut m) = self.0.lock() else { return Vec::new() };
-        let Some(set) = m.by_port.get_mut(&port) else { return Vec::new() };
-        let found: Vec<u64> = set.range(from..to).copied().collect();
-        for o in &found {
-            set.remove(o);
+        let Some(writes) = m.by_port.get_mut(&port) else { return Vec::new() };
+        let found: Vec<(u64, u64)> = writes.range(from..to).map(|(o, r)| (*o, *r)).collect();
+        for (o, _) in &found {
+            writes.remove(o);
         }
         found
     }
 
     /// A write on the connection from `port` (its socket `socket`) that begins after
-    /// `written` bytes (by the kernel's count), made while output was unread (`unread`).
-    fn write(&self, port: u16, socket: &str, written: u64, unread: bool) {
+    /// `written` bytes (by the kernel's count), made when the host had read `read` bytes.
+    fn write(&self, port: u16, socket: &str, written: u64, read: u64) {
         if let Ok(mut m) = self.0.lock() {
             if m.origin.get(&port).is_none_or(|(s, _)| s != socket) {
                 // A new connection: its stream begins here.
                 m.origin.insert(port, (socket.to_string(), written));
                 m.by_port.remove(&port);
             }
-            let origin = m.origin[&port].1;
-            if unread {
-                m.by_port.entry(port).or_default().insert(written.saturating_sub(origin));
-            }
+            let offset = written.saturating_sub(m.origin[&port].1);
+            m.by_port.entry(port).or_default().insert(offset, read);
         }
     }
 
@@ -341,7 +342,8 @@ fn serve(listener: &OwnedFd, hand: SocketAddr, marks: &Marks, stop: &StopSignal)
 }
 
 /// One stopped write call: if it goes to the connection to `hand`, notes where in the stream
-/// its bytes begin, and marks that place if bytes wait unread in that socket.
+/// its bytes begin and how much output the host had read (received, less what waits unread
+/// in its socket).
 fn look(notif: &libc::seccomp_notif, hand: SocketAddr, marks: &Marks) {
     let tid = notif.pid as i32;
     let fd = notif.data.args[0] as i32;
@@ -361,8 +363,11 @@ fn look(notif: &libc::seccomp_notif, hand: SocketAddr, marks: &Marks) {
         return;
     }
     let port = address(&sock, libc::getsockname).map(|a| a.port());
-    match (port, queue(&sock, libc::FIONREAD), bytes_written(&sock)) {
-        (Some(port), Some(unread), Some(written)) => marks.write(port, &link.to_string_lossy(), written, unread > 0),
+    let counts = tcp_info(&sock).map(|i| (i.tcpi_bytes_acked, i.tcpi_bytes_received));
+    match (port, queue(&sock, libc::FIONREAD), queue(&sock, libc::TIOCOUTQ), counts) {
+        (Some(port), Some(unread), Some(unacked), Some((acked, received))) => {
+            marks.write(port, &link.to_string_lossy(), acked + unacked, received.saturating_sub(unread))
+        }
         _ => marks.set_blind(),
     }
 }
@@ -422,15 +427,11 @@ fn address(
     }
 }
 
-/// The bytes written to the socket so far: those the other end acknowledged
-/// (`TCP_INFO`'s `tcpi_bytes_acked`, which may count the SYN) and those not yet acknowledged
-/// or not yet sent (`TIOCOUTQ`).
-fn bytes_written(sock: &OwnedFd) -> Option<u64> {
-    Some(bytes_acked(sock)? + queue(sock, libc::TIOCOUTQ)?)
-}
-
-/// The bytes of the stream the other end has acknowledged (`TCP_INFO`'s `tcpi_bytes_acked`).
-fn bytes_acked(sock: &OwnedFd) -> Option<u64> {
+/// The socket's `TCP_INFO`, if the kernel gives it as far as `tcpi_bytes_received` (Linux
+/// 4.1): the bytes of the stream the other end acknowledged (`tcpi_bytes_acked`, which may
+/// count the SYN; with `TIOCOUTQ`, what is not acknowledged yet or not sent, all that was
+/// written) and those received (`tcpi_bytes_received`, read or not).
+fn tcp_info(sock: &OwnedFd) -> Option<libc::tcp_info> {
     // SAFETY: a zeroed tcp_info is valid, and the kernel writes at most `len` bytes of it.
     unsafe {
         let mut info: libc::tcp_info = std::mem::zeroed();
@@ -442,8 +443,8 @@ fn bytes_acked(sock: &OwnedFd) -> Option<u64> {
             (&mut info as *mut libc::tcp_info).cast(),
             &mut len,
         );
-        let end = std::mem::offset_of!(libc::tcp_info, tcpi_bytes_acked) + 8;
-        (r == 0 && len as usize >= end).then_some(info.tcpi_bytes_acked)
+        let end = std::mem::offset_of!(libc::tcp_info, tcpi_bytes_received) + 8;
+        (r == 0 && len as usize >= end).then_some(info)
     }
 }
 
@@ -454,19 +455,19 @@ mod tests {
     /// Offsets count from the connection's first write, whatever the kernel's count began
     /// at, and a new connection on the same port begins anew.
     #[test]
-    fn marks_are_offsets_in_each_connections_own_stream() {
+    fn writes_are_placed_in_each_connections_own_stream() {
         let m = Marks::default();
         // A client's count includes its SYN: its first write begins after "1".
-        m.write(40000, "socket:[7]", 1, false);
-        m.write(40000, "socket:[7]", 11, true);
-        assert_eq!(m.take(40000, 0, 10), Vec::<u64>::new());
-        assert_eq!(m.take(40000, 10, 13), vec![10]);
+        m.write(40000, "socket:[7]", 1, 0);
+        m.write(40000, "socket:[7]", 11, 5);
+        assert_eq!(m.take(40000, 0, 10), vec![(0, 0)]);
+        assert_eq!(m.take(40000, 10, 13), vec![(10, 5)]);
         // Taken once.
-        assert_eq!(m.take(40000, 10, 13), Vec::<u64>::new());
-        // A mark not yet taken goes with its connection.
-        m.write(40000, "socket:[7]", 14, true);
-        m.write(40000, "socket:[8]", 0, true);
-        assert_eq!(m.take(40000, 0, 20), vec![0]);
-        assert_eq!(m.take(40001, 0, 20), Vec::<u64>::new());
+        assert_eq!(m.take(40000, 10, 13), Vec::<(u64, u64)>::new());
+        // A write not yet taken goes with its connection.
+        m.write(40000, "socket:[7]", 14, 9);
+        m.write(40000, "socket:[8]", 0, 0);
+        assert_eq!(m.take(40000, 0, 20), vec![(0, 0)]);
+        assert_eq!(m.take(40001, 0, 20), Vec::<(u64, u64)>::new());
     }
 }

@@ -142,6 +142,7 @@ impl TcpServer {
                                     read_closed: false,
                                     wrote: false,
                                     received: 0,
+                                    sent: 0,
                                     port: peer.port(),
                                 });
                             }
@@ -163,6 +164,7 @@ impl TcpServer {
                     match c.stream.write(out) {
                         Ok(n) => {
                             c.wrote |= n > 0;
+                            c.sent += n as u64;
                             engine.consumed(n)
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -203,6 +205,8 @@ struct Client {
     wrote: bool,
     /// Bytes read from it so far (where the next one is in its stream).
     received: u64,
+    /// Bytes written to it so far.
+    sent: u64,
     /// Its port (which connection of the host's it is).
     port: u16,
 }
@@ -284,18 +288,21 @@ fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8],
                 let from = c.received;
                 c.received += n as u64;
                 match marks.filter(|m| engine.tapped() && m.watched()) {
-                    // Each write made with output unread begins a part of its own.
+                    // Each write begins a part of its own, judged by what the host had read
+                    // when it made it against all the output sent to it before its bytes
+                    // are taken (what it had not even received, it had not read either).
                     Some(m) => {
                         let mut at = 0;
                         let mut unread = false;
-                        for cut in m.take(c.port, from, from + n as u64) {
+                        for (cut, read) in m.take(c.port, from, from + n as u64) {
                             let cut = (cut - from) as usize;
                             if cut > at {
                                 engine.host_unread(unread);
                                 engine.input(&buf[at..cut]);
                                 at = cut;
                             }
-                            unread = true;
+                            // Output had gone to it that it had not read when it wrote.
+                            unread = c.sent > read;
                         }
                         engine.host_unread(unread);
                         engine.input(&buf[at..n])
