@@ -489,7 +489,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "A write made with output unread there is flagged however fast the host reads afterwards, at any speed, fast or real time; a host that had read everything is never flagged",
+        "A write made before the host had read all the output sent to it is flagged however fast the host reads afterwards, at any speed, fast or real time; a host that had read everything is never flagged",
         &["harness/tests/host_verdicts.rs::a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp"],
     ),
     (

@@ -1,26 +1,29 @@
-//! Which bytes a host started by us wrote to its TCP connection while output it had not read
-//! waited in its socket: over TCP, the order of the host's own read and write is what tells a
+//! How much of the hand's output a host started by us had read when it made each write to
+//! its TCP connection: over TCP, the order of the host's own read and write is what tells a
 //! host that waits for its answer from one that pipelines, and only the moment of the write
 //! can tell it.
 //!
 //! Looking later cannot: a host that writes `GC` with the answer to `1FGET MCV` unread in its
 //! socket and reads it a few microseconds later has an empty receive queue by the time the
 //! hand's side has woken up and read the `G` (`/proc/net/tcp`, the look [`super::tcp`] falls
-//! back on). So the host's write calls are stopped on their way into the kernel (a seccomp
-//! filter installed in the child before it runs the host, answered through a user
-//! notification listener): while the host waits there, its socket's receive queue is read
-//! (through a copy of its descriptor, `pidfd_getfd`), the stream offset of the first byte the
-//! write will send is noted if the queue is not empty, and the call goes on unchanged. The
-//! hand's side then meets those offsets in the stream in order, so the verdict does not depend
-//! on who runs first. The host sees nothing but a pause of a few microseconds per write; a
-//! host that read its answer (its queue empty when it writes) is never marked.
+//! back on, itself takes milliseconds on a machine with a large connection table). So the
+//! host's write calls are stopped on their way into the kernel (a seccomp filter installed in
+//! the child before it runs the host, answered through a user notification listener): while
+//! the host waits there, its socket is looked at through a copy of its descriptor
+//! (`pidfd_getfd`), and the stream offset of the first byte the write will send is noted with
+//! the bytes of output the host had read (those its socket received, less those waiting
+//! unread in it); then the call goes on unchanged. The hand's side meets those offsets in the
+//! stream in order and compares with all the output it had sent by then, so the verdict does
+//! not depend on who runs first. The host sees nothing but a pause of a few microseconds per
+//! write; a host that had read all the output sent to it is never taken for one that had not.
 //!
 //! Only where the kernel allows it (Linux 5.6 or later, x86-64 or aarch64, seccomp and pidfds
 //! not disabled, and the right to look into the child): otherwise no listener arrives,
 //! [`Marks::watched`] stays false and the TCP transport looks as before. What bypasses
 //! `write`, `writev`, `sendto`, `sendmsg` and `sendmmsg` (io_uring, `sendfile`, `splice`) is
 //! not seen. The host runs with `no_new_privs` (a set-uid program it starts does not gain
-//! privileges).
+//! privileges), and a signal that reaches it during one of those pauses interrupts the call
+//! as it would a blocked write.
 #![allow(unsafe_code)]
 
 use std::collections::BTreeMap;
@@ -262,7 +265,9 @@ fn install(fd: RawFd, filter: &[libc::sock_filter]) {
             libc::sendmsg(fd, &msg, libc::MSG_NOSIGNAL);
         }
         // Our copy goes: the watch holds the listener, and a host that outlives it gets an
-        // error from its writes rather than waiting for ever.
+        // error (ENOSYS) from its writes rather than waiting for ever. (So would one whose
+        // listener could not be sent: a one-byte message on a local pair whose other end
+        // waits for it.)
         libc::close(listener);
     }
 }
