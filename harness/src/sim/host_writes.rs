@@ -63,6 +63,12 @@ impl Marks {
         self.0.lock().is_ok_and(|m| m.watched && !m.blind)
     }
 
+    /// Whether a write on the connection from the host's `port` was seen (one from a process
+    /// outside the watch, a program the host asked to talk to the hand, is not).
+    pub fn seen(&self, port: u16) -> bool {
+        self.0.lock().is_ok_and(|m| m.origin.contains_key(&port))
+    }
+
     /// Takes the writes that begin in `from..to` of the connection from the host's `port`,
     /// in order: each one's offset and how many bytes of output the host had read when it
     /// made it.
@@ -474,5 +480,7 @@ mod tests {
         m.write(40000, "socket:[8]", 0, 0);
         assert_eq!(m.take(40000, 0, 20), vec![(0, 0)]);
         assert_eq!(m.take(40001, 0, 20), Vec::<(u64, u64)>::new());
+        // A connection no write was seen on is not judged by the marks.
+        assert!(m.seen(40000) && !m.seen(40001));
     }
 }

@@ -287,7 +287,7 @@ fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8],
             Ok(n) => {
                 let from = c.received;
                 c.received += n as u64;
-                match marks.filter(|m| engine.tapped() && m.watched()) {
+                match marks.filter(|m| engine.tapped() && m.watched() && m.seen(c.port)) {
                     // Each write begins a part of its own, judged by what the host had read
                     // when it made it against all the output sent to it before its bytes
                     // are taken (what it had not even received, it had not read either).
