@@ -529,6 +529,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "A write made before the host had read all the output sent to it is flagged however fast the host reads afterwards, at any speed, fast or real time; a host that had read everything is never flagged",
+        &["harness/tests/host_verdicts.rs::a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp"],
+    ),
+    (
         "is a `silent-wrong-value` finding",
         &["harness/tests/host_verdicts.rs::a_host_that_trusts_a_short_block_gives_a_silent_wrong_value"],
     ),

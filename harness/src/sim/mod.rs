@@ -12,6 +12,7 @@
 
 mod eeprom;
 mod engine;
+pub mod host_writes;
 pub mod misbehave;
 pub mod pty;
 mod scenario;

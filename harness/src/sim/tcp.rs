@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use nix::poll::{PollFd, PollFlags};
 
+use super::host_writes::Marks;
 use super::wait::{IN, precise_timers, ready, wait};
 use super::{Engine, SimError};
 
@@ -28,6 +29,8 @@ const RECONNECT_GRACE: std::time::Duration = std::time::Duration::from_millis(10
 pub struct TcpServer {
     listener: TcpListener,
     addr: SocketAddr,
+    /// Where the host's writes are seen as it makes them ([`super::host_writes`]).
+    marks: Option<Marks>,
 }
 
 impl TcpServer {
@@ -51,7 +54,7 @@ impl TcpServer {
         let listener = TcpListener::bind(&addrs[..]).map_err(|e| bad(e.to_string()))?;
         listener.set_nonblocking(true).map_err(|e| bad(e.to_string()))?;
         let addr = listener.local_addr().map_err(|e| bad(e.to_string()))?;
-        Ok(TcpServer { listener, addr })
+        Ok(TcpServer { listener, addr, marks: None })
     }
 
     /// The address actually bound.
@@ -59,9 +62,17 @@ impl TcpServer {
         self.addr
     }
 
+    /// Takes, for a tapped line, which of the client's bytes it wrote with output unread
+    /// from `marks` (seen at its writes) rather than by looking when they arrive.
+    pub fn watch_host_writes(&mut self, marks: Marks) {
+        self.marks = Some(marks);
+    }
+
     /// Serves clients one at a time until one of `stops` becomes readable.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
         precise_timers();
+        let marks = self.marks.clone();
+        let marks = marks.as_ref();
         engine.client_gone("listening, no client yet");
         let mut client: Option<Client> = None;
         let mut buf = vec![0u8; 8192];
@@ -99,7 +110,7 @@ impl TcpServer {
             }
             // The active client first, so that its end is seen before a new connection.
             if client_in || listen_in {
-                read_client(&mut client, engine, &mut buf);
+                read_client(&mut client, engine, &mut buf, marks);
             }
             if listen_in {
                 loop {
@@ -108,13 +119,13 @@ impl TcpServer {
                             // A client accepted in this same round may already have ended, and
                             // one that closed just before this connection may not have been
                             // seen to end yet (a busy machine): give its end a moment to land.
-                            read_client(&mut client, engine, &mut buf);
+                            read_client(&mut client, engine, &mut buf, marks);
                             if let Some(c) = &client
                                 && !c.read_closed
                             {
                                 let mut fds = [PollFd::new(c.stream.as_fd(), IN)];
                                 let _ = wait(&mut fds, Some(Instant::now() + RECONNECT_GRACE));
-                                read_client(&mut client, engine, &mut buf);
+                                read_client(&mut client, engine, &mut buf, marks);
                             }
                             // A client that has finished sending (half-closed) gives way.
                             if client.as_ref().is_some_and(|c| c.read_closed) {
@@ -126,7 +137,14 @@ impl TcpServer {
                             } else if s.set_nonblocking(true).is_ok() {
                                 let _ = s.set_nodelay(true);
                                 engine.client_connected(&peer.to_string());
-                                client = Some(Client { stream: s, read_closed: false, wrote: false });
+                                client = Some(Client {
+                                    stream: s,
+                                    read_closed: false,
+                                    wrote: false,
+                                    received: 0,
+                                    sent: 0,
+                                    port: peer.port(),
+                                });
                             }
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -146,6 +164,7 @@ impl TcpServer {
                     match c.stream.write(out) {
                         Ok(n) => {
                             c.wrote |= n > 0;
+                            c.sent += n as u64;
                             engine.consumed(n)
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -184,11 +203,18 @@ struct Client {
     read_closed: bool,
     /// Output went to it that it may not have read yet.
     wrote: bool,
+    /// Bytes read from it so far (where the next one is in its stream).
+    received: u64,
+    /// Bytes written to it so far.
+    sent: u64,
+    /// Its port (which connection of the host's it is).
+    port: u16,
 }
 
 impl Client {
-    /// Whether the client has not read all the output sent to it (for a tapped line, before
-    /// the bytes it sent next are judged): bytes still in this side's send queue, or in the
+    /// Whether the client has not read all the output sent to it (for a tapped line whose
+    /// client's writes are not watched as they are made, [`super::host_writes`], before the
+    /// bytes it sent next are judged): bytes still in this side's send queue, or in the
     /// client socket's receive queue (`/proc/net/tcp`: the connection is on this machine).
     /// A client that writes and then reads within the moment it takes to look may be missed;
     /// one that read everything is never taken for one that did not.
@@ -243,7 +269,7 @@ fn end_client(client: &mut Option<Client>, engine: &mut Engine, why: &str) {
 
 /// Reads the active client until it has nothing more (or the engine wants no more for now).
 /// End of stream only marks it half-closed; an error ends it.
-fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8]) {
+fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8], marks: Option<&Marks>) {
     let Some(c) = client else { return };
     if c.read_closed {
         return;
@@ -259,11 +285,36 @@ fn read_client(client: &mut Option<Client>, engine: &mut Engine, buf: &mut [u8])
                 return;
             }
             Ok(n) => {
-                if engine.tapped() {
-                    let unread = c.has_unread();
-                    engine.host_unread(unread);
+                let from = c.received;
+                c.received += n as u64;
+                match marks.filter(|m| engine.tapped() && m.watched() && m.seen(c.port)) {
+                    // Each write begins a part of its own, judged by what the host had read
+                    // when it made it against all the output sent to it before its bytes
+                    // are taken (what it had not even received, it had not read either).
+                    Some(m) => {
+                        let mut at = 0;
+                        let mut unread = false;
+                        for (cut, read) in m.take(c.port, from, from + n as u64) {
+                            let cut = (cut - from) as usize;
+                            if cut > at {
+                                engine.host_unread(unread);
+                                engine.input(&buf[at..cut]);
+                                at = cut;
+                            }
+                            // Output had gone to it that it had not read when it wrote.
+                            unread = c.sent > read;
+                        }
+                        engine.host_unread(unread);
+                        engine.input(&buf[at..n])
+                    }
+                    None => {
+                        if engine.tapped() {
+                            let unread = c.has_unread();
+                            engine.host_unread(unread);
+                        }
+                        engine.input(&buf[..n])
+                    }
                 }
-                engine.input(&buf[..n])
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => return,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,

@@ -35,7 +35,10 @@ use serde::{Deserialize, Serialize};
 
 use super::check::{HostChecker, HostViolation};
 use crate::sim::misbehave::{AnswerKindSeen, Fired, LineTap, Misbehave, Operator, Schedule, Shaped};
-use crate::sim::{Engine, Pace, SimError, SimOptions, StopHandle, TimeMode, pty::Pty, stop_pair, tcp::TcpServer};
+use crate::sim::{
+    Engine, Pace, SimError, SimOptions, StopHandle, TimeMode, host_writes::WriteWatch, pty::Pty, stop_pair,
+    tcp::TcpServer,
+};
 
 /// How the host reaches the hand.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -655,6 +658,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let run_dir = RunDir::new()?;
 
     // The hand: its transport in a thread; the line closes (hangs up) when the thread ends.
+    // Over TCP, the host's writes are seen as it makes them (`host_writes`).
+    let mut watch = None;
     let (port, url, hand) = match spec.transport {
         Transport::Pty => {
             let mut pty = Pty::open(None)?;
@@ -666,6 +671,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         }
         Transport::Tcp => {
             let mut server = TcpServer::bind("127.0.0.1:0", false)?;
+            watch = WriteWatch::new(server.local_addr());
+            if let Some(w) = &watch {
+                server.watch_host_writes(w.marks());
+            }
             let addr = server.local_addr().to_string();
             let h = std::thread::spawn(move || server.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
             (addr.clone(), format!("socket://{addr}"), h)
@@ -674,7 +683,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 
     let args: Vec<String> =
         spec.command[1..].iter().map(|a| a.replace("{port}", &port).replace("{url}", &url)).collect();
-    let spawned = Command::new(program)
+    let mut command = Command::new(program);
+    command
         .args(&args)
         .env("GCL_PORT", &port)
         .env("GCL_PORT_URL", &url)
@@ -685,8 +695,14 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .process_group(0)
-        .spawn();
+        .process_group(0);
+    if let Some(w) = &watch {
+        w.prepare(&mut command);
+    }
+    let spawned = command.spawn();
+    if let Some(w) = &mut watch {
+        w.spawned();
+    }
     let mut child = match spawned {
         Ok(c) => c,
         Err(source) => {
