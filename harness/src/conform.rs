@@ -304,6 +304,10 @@ pub struct ConformOptions {
     pub step_timeout: Option<Duration>,
     /// Requirements the operator refuses (`--no motion`): such cases are SKIP.
     pub refuse: Vec<Requirement>,
+    /// Fixtures the operator declares in place (`--fixture object`): a case whose `setup:` the
+    /// runner cannot make on this target runs only when its fixture is declared; the in-process
+    /// `sim` makes every setup itself.
+    pub fixtures: Vec<Requirement>,
     /// The line rate to compute the wire-time lower bound at (serial targets give their own).
     pub baud: Option<u32>,
     /// Keep the transcript of every case in the results, not only of failures (certificates).
@@ -326,6 +330,7 @@ impl ConformOptions {
             known: KnownFailures::default(),
             step_timeout: None,
             refuse: vec![],
+            fixtures: vec![],
             baud: None,
             keep_transcripts: false,
             control: RunControl::default(),
@@ -401,8 +406,10 @@ pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<(Vec<&'c C
             Some("skipped by --skip".to_string())
         } else if let Some(s) = opts.known.skipped_by(profile, &c.decisions()) {
             Some(format!("rests on decision {}, decided differently: {}", s.id, s.reason))
+        } else if let Some(r) = opts.refuse.iter().find(|r| c.requires(r)) {
+            Some(format!("requires {r}, which was refused"))
         } else {
-            opts.refuse.iter().find(|r| c.requires(r)).map(|r| format!("requires {r}, which was refused"))
+            missing_fixture(c, opts)
         };
         match reason {
             Some(message) => skipped.push(result_of(c, Verdict::Skip, 0.0, Some(message))),
@@ -410,6 +417,41 @@ pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<(Vec<&'c C
         }
     }
     Ok((run, skipped))
+}
+
+/// Whether `target` makes a case's `setup:` itself: the in-process model takes the case's
+/// objects; any other hand needs them put in place by hand.
+pub fn places_setup(target: &Target) -> bool {
+    matches!(target, Target::Sim { .. })
+}
+
+/// Why a case cannot run for want of its set-up, or `None`: a case with a `setup:` runs on a
+/// target that makes it ([`places_setup`]) or when the operator declares it in place.
+fn missing_fixture(c: &Case, opts: &ConformOptions) -> Option<String> {
+    let h = c.header();
+    if h.setup.is_empty() || places_setup(&opts.target) || opts.fixtures.contains(&Requirement::Object) {
+        return None;
+    }
+    let what: Vec<String> = h.setup.iter().map(|s| format!("`{s}`")).collect();
+    Some(format!(
+        "needs {} in place, which gcl cannot place on {}: put it there and pass `--fixture object` (with `--only {}`: \
+         the object stays in the way of every other case), or run it on `sim`",
+        what.join(" and "),
+        opts.target,
+        c.id()
+    ))
+}
+
+/// The options to open the target with for `case`: on the in-process model, its objects.
+fn open_options_for(opts: &ConformOptions, case: &Case) -> gcl_host::target::OpenOptions {
+    let mut o = opts.open.clone();
+    let objects = case.header().objects();
+    if places_setup(&opts.target) && objects.iter().any(Option::is_some) {
+        let mut scenario = o.scenario.take().unwrap_or_default();
+        scenario.objects = objects;
+        o.scenario = Some(scenario);
+    }
+    o
 }
 
 fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<String>) -> CaseResult {
@@ -750,7 +792,7 @@ pub fn run_with_events(
         // Whether the hand starts this case where the case before left it (for the bound).
         let carried = hand_carries && shared.is_some();
         let link: &mut dyn Link = if fresh_per_case {
-            shared = Some(open_link()?);
+            shared = Some(open(&opts.target, &open_options_for(opts, case))?);
             shared.as_deref_mut().expect("just opened")
         } else {
             match shared.as_deref_mut() {

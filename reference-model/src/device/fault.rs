@@ -87,6 +87,9 @@ faults! {
     HsgIgnored => "hsg-ignored",
     /// LSG is stored but ignored.
     LsgIgnored => "lsg-ignored",
+    /// HOLD is stored but ignored: a motor is held (or let go) after a move as its factory
+    /// HOLD says.
+    HoldIgnored => "hold-ignored",
     /// EN is stored but ignored: commands without a prefix act on every motor.
     EnIgnored => "en-ignored",
     /// SGFLIP is stored but ignored: the strain is never turned over.
@@ -186,6 +189,7 @@ impl Fault {
             Fault::TstopIgnored => &["TSTOP"],
             Fault::HsgIgnored => &["HSG", "MSG"],
             Fault::LsgIgnored => &["LSG"],
+            Fault::HoldIgnored => &["HOLD"],
             Fault::EnIgnored => &["EN"],
             Fault::SgflipIgnored => &["SGFLIP"],
             Fault::OtempIgnored => &["OTEMP"],
