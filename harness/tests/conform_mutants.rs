@@ -42,6 +42,7 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("tstop-ignored", B44, &["param-tstop-effect"]),
     ("hsg-ignored", B44, &["motion-strain-limit"]),
     ("lsg-ignored", B44, &["param-lsg-effect"]),
+    ("hold-ignored", B44, &["param-hold-effect"]),
     ("en-ignored", B44, &["param-en-narrows-motion", "rt-loop-en-motors"]),
     ("sgflip-ignored", B44, &["param-sgflip-effect", "rt-lfs-sgflip"]),
     ("otemp-ignored", B44, &["status-8192-overtemperature", "cmd-m-overtemp"]),
@@ -150,9 +151,23 @@ fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
     let timed =
         cases(&p).iter().any(|c| catchers.contains(&c.id()) && c.requires(&gcl_transcript::Requirement::AbortTiming));
     let time = if timed { "real" } else { "fast" };
-    let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
+    // A case that needs an object: the sim is started with it (a scenario file) and the run
+    // declares the fixture in place, as an operator would with a real hand.
+    let objects: Vec<String> = cases(&p)
+        .iter()
+        .filter(|c| catchers.contains(&c.id()))
+        .flat_map(|c| c.header().setup.clone())
+        .map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}"))
+        .collect();
+    let scenario = dir.path().join("scenario.toml");
+    std::fs::write(&scenario, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
+    let with = if objects.is_empty() { String::new() } else { format!(" --scenario {}", scenario.display()) };
+    let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}{with}");
     let mut args =
         vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
+    if !objects.is_empty() {
+        args.extend(["--fixture", "object"]);
+    }
     for c in catchers {
         args.extend(["--only", c]);
     }
@@ -226,6 +241,49 @@ fn the_unmutated_simulator_passes_over_exec_with_reports() {
     assert!(html.contains("Clause coverage"));
     let jsonl = std::fs::read_to_string(dir.path().join("results.jsonl")).unwrap();
     assert_eq!(jsonl.lines().count(), r.cases.len(), "every case was streamed as it ended");
+}
+
+/// A case whose `setup:` places an object runs on the in-process sim, which places it (the
+/// unmutated-sim test above); on a hand gcl cannot set up it is SKIP with a reason that says
+/// how to run it; with the object in place and `--fixture object` it runs and passes.
+#[test]
+fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_elsewhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = Profile::builtin(B44).unwrap();
+    let case = cases(&p).into_iter().find(|c| c.id() == "param-hold-effect").unwrap();
+    let objects: Vec<String> = case
+        .header()
+        .setup
+        .iter()
+        .map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}"))
+        .collect();
+    assert!(!objects.is_empty() && case.requires(&gcl_transcript::Requirement::Object));
+    let bare = format!("exec:{GCL} sim --stdio --profile {B44}");
+    let run = |target: &str, extra: &[&str], sub: &str| {
+        let rep = dir.path().join(sub);
+        let rep = rep.to_str().unwrap();
+        let mut args = vec!["conform", "--target", target, "--profile", B44, "-q", "--suite", SUITE];
+        args.extend(["--only", "param-hold-effect", "--report", rep]);
+        args.extend(extra);
+        let out = gcl(&args);
+        let r = report(Path::new(rep));
+        (out, r.cases.into_iter().find(|c| c.id == "param-hold-effect").unwrap())
+    };
+    let (_, c) = run(&bare, &[], "bare");
+    assert_eq!(c.verdict, Verdict::Skip);
+    let why = c.message.unwrap_or_default();
+    assert!(why.contains("object 1 ") && why.contains("--fixture object"), "{why}");
+
+    let scenario = dir.path().join("scenario.toml");
+    std::fs::write(&scenario, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
+    let placed = format!("{bare} --scenario {}", scenario.display());
+    let (out, c) = run(&placed, &["--fixture", "object"], "placed");
+    assert_eq!(c.verdict, Verdict::Pass, "{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(out.status.code(), Some(0));
+    // Declared but not there: the finger closes freely and the strains are alike.
+    let (out, c) = run(&bare, &["--fixture", "object"], "absent");
+    assert_eq!(c.verdict, Verdict::Fail);
+    assert_eq!(out.status.code(), Some(1));
 }
 
 #[test]

@@ -257,11 +257,12 @@ struct IndexEntry<'a> {
     clauses: &'a [String],
     decisions: Vec<String>,
     requires: Vec<&'a str>,
+    setup: Vec<String>,
 }
 
 /// The text of `index.json`: every case's profile, id, path, title, level, clauses,
-/// decisions (every decision id it rests on) and requirements, for tools that do not parse
-/// transcripts.
+/// decisions (every decision id it rests on), requirements and set-up (`object 1 8500`), for
+/// tools that do not parse transcripts.
 pub fn index_text(cases: &[Case]) -> String {
     let entries: Vec<IndexEntry> = cases
         .iter()
@@ -274,6 +275,7 @@ pub fn index_text(cases: &[Case]) -> String {
             clauses: &c.header().clauses,
             decisions: c.decisions(),
             requires: c.header().requires.iter().map(Requirement::as_str).collect(),
+            setup: c.header().setup.iter().map(|s| s.to_string()).collect(),
         })
         .collect();
     let mut s = serde_json::to_string_pretty(&serde_json::json!({
