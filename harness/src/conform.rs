@@ -1170,7 +1170,7 @@ fn wire_time(
     let per_byte_ms = 10.0 / f64::from(baud.max(1)) * 1000.0;
     let (mut motion_ms, mut lower_bound_ms) = (0.0, 0.0);
     let (mut sent, mut received) = (0u64, 0u64);
-    let fresh = || SimLink::new(opts.profile.clone(), Default::default());
+    let fresh = |c: &Case| SimLink::new(opts.profile.clone(), suite::model_config(c.header()));
     // The model's hand as the last passing case left it.
     let mut model: Option<SimLink> = None;
     // No quiet-time drain: it is the runner's; the trailing wait between cases passes on the
@@ -1187,12 +1187,15 @@ fn wire_time(
             lower_bound_ms += bytes_ms;
             continue;
         };
-        let mut link = carried.unwrap_or_else(fresh);
+        // A case with a setup starts from a fresh model with its objects (the one before had
+        // none).
+        let carried = carried.filter(|_| case.header().setup.is_empty());
+        let mut link = carried.unwrap_or_else(|| fresh(case));
         let mut rate = link.device().baud();
         let mut outcome = suite::run_case(case, &mut link, &quiet);
         if !outcome.is_pass() {
             // Not from the state the case before left: the suite's cases pass from power-up.
-            link = fresh();
+            link = fresh(case);
             rate = link.device().baud();
             outcome = suite::run_case(case, &mut link, &quiet);
         }

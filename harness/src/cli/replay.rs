@@ -50,7 +50,7 @@ pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Res
 }
 
 /// [`open_target`] with objects where each motor meets one when closing (`sim` only).
-fn open_target_with(
+pub(crate) fn open_target_with(
     target: &Target,
     profile: Option<&str>,
     objects: [Option<i64>; 4],

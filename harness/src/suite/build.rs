@@ -6,9 +6,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use gcl_model::Profile;
 use gcl_model::realtime::{ControlHeader, Field, RtFlag};
 use gcl_model::spec::{CommandKind, ParamSpec, Scope};
-use gcl_model::{DeviceConfig, Profile};
 
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_host::SimLink;
@@ -700,9 +700,8 @@ pub(crate) fn capture_plan_with(
     plans: &[Plan],
     setup: &[Setup],
 ) -> Result<Vec<Captured>, LinkError> {
-    let mut config = DeviceConfig::default();
-    config.scenario.objects = Setup::objects(setup);
-    let mut link = SimLink::new(profile.clone(), config);
+    let header = Header { setup: setup.to_vec(), ..Header::default() };
+    let mut link = SimLink::new(profile.clone(), super::model_config(&header));
     let mut opts = RecordOptions::new(profile.clone());
     opts.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();

@@ -227,6 +227,15 @@ pub fn replay_options() -> ReplayOptions {
     ReplayOptions::default()
 }
 
+/// The in-process model's configuration for a transcript: the objects its `setup:` lines
+/// place, nothing else changed. Every fresh model a transcript runs on (the goldens' builder,
+/// deadlines, alignment, the wire-time bound, `sim` targets) starts from this.
+pub fn model_config(header: &Header) -> gcl_model::DeviceConfig {
+    let mut config = gcl_model::DeviceConfig::default();
+    config.scenario.objects = header.objects();
+    config
+}
+
 /// Runs one case over `link`. The link should be at an idle prompt or freshly opened; the
 /// case's own preamble (^C, RESET, FDEF...) brings the hand to a known state.
 pub fn run_case(case: &Case, link: &mut dyn Link, opts: &ReplayOptions) -> ReplayOutcome {
