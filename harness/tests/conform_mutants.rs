@@ -43,6 +43,7 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("hsg-ignored", B44, &["motion-strain-limit"]),
     ("lsg-ignored", B44, &["param-lsg-effect"]),
     ("hold-ignored", B44, &["param-hold-effect"]),
+    ("bs-ignored", B44, &["param-bs-effect"]),
     ("en-ignored", B44, &["param-en-narrows-motion", "rt-loop-en-motors"]),
     ("sgflip-ignored", B44, &["param-sgflip-effect", "rt-lfs-sgflip"]),
     ("otemp-ignored", B44, &["status-8192-overtemperature", "cmd-m-overtemp"]),

@@ -90,6 +90,9 @@ faults! {
     /// HOLD is stored but ignored: a motor is held (or let go) after a move as its factory
     /// HOLD says.
     HoldIgnored => "hold-ignored",
+    /// BS is stored but ignored: a finger whose breakaway is detected closes on as with the
+    /// factory BS 0.
+    BsIgnored => "bs-ignored",
     /// EN is stored but ignored: commands without a prefix act on every motor.
     EnIgnored => "en-ignored",
     /// SGFLIP is stored but ignored: the strain is never turned over.
@@ -190,6 +193,7 @@ impl Fault {
             Fault::HsgIgnored => &["HSG", "MSG"],
             Fault::LsgIgnored => &["LSG"],
             Fault::HoldIgnored => &["HOLD"],
+            Fault::BsIgnored => &["BS"],
             Fault::EnIgnored => &["EN"],
             Fault::SgflipIgnored => &["SGFLIP"],
             Fault::OtempIgnored => &["OTEMP"],

@@ -38,6 +38,48 @@ impl Gen {
 
         self.timed_effects();
         self.hold_effect();
+        self.breakaway_stop_effect();
+    }
+
+    /// BS: with BS 1 a finger stops where its breakaway is detected, and BD and BP say so.
+    /// The case places an object half-way along motor 1's close (`setup: object`): with the
+    /// factory BS 0 the finger closes on past the object, with BS 1 it stops there, BD reads 1
+    /// and BP where it stopped.
+    fn breakaway_stop_effect(&mut self) {
+        if !self.has_param("BS") || !self.has_param("BD") || !self.has_param("BP") || self.default("BS", 1) != 0 {
+            return;
+        }
+        let at = self.close_target(1) / 2;
+        let mpe = self.mpe(1);
+        let limit = self.limit(1);
+        let pos = |r: Range| Some([r, (0, 0), (0, 0), (0, 0)]);
+        let k = self
+            .case(
+                "param-bs-effect",
+                "BS 1 stops a finger where its breakaway is detected: it stops at the object, BD reads 1 and BP where it stopped; with BS 0 it closes on past the object",
+            )
+            .src("Parameter BS")
+            .src("Parameter BD")
+            .src("Parameter BP")
+            .decision("bh8-breakaway")
+            .object(1, at)
+            .note(format!(
+                "The object is where motor 1 meets it when closing, {at}: with BS 0 the finger goes on past it (the \
+                 TorqueSwitch lets the fingertip close while the inner link rests on the object: more than MPE {mpe} \
+                 beyond), with BS 1 it stops within MPE of it, and BP is its position there"
+            ))
+            .preamble(true)
+            .line("1C")
+            .get("1", &["P"], pos((at + mpe + 1, limit)))
+            .line("1O")
+            .line("1FSET BS 1")
+            .line("1C")
+            .get("1", &["P"], pos((at - mpe, at + mpe)))
+            .get("1", &["BD", "BP"], None);
+        // BP is a determined value (written exactly); the hand's is where it stopped, near the
+        // object: a band, as P's.
+        let k = k.shape_last(Shape::Values(vec![vec![None], vec![Some((at - mpe, at + mpe))]]));
+        self.add(k);
     }
 
     /// HOLD: what a motor does once its move ends. Seen only where something pushes back: a
