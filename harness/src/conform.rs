@@ -432,11 +432,10 @@ fn missing_fixture(c: &Case, opts: &ConformOptions) -> Option<String> {
     if h.setup.is_empty() || places_setup(&opts.target) || opts.fixtures.contains(&Requirement::Object) {
         return None;
     }
-    let what: Vec<String> = h.setup.iter().map(|s| format!("`{s}`")).collect();
     Some(format!(
         "needs {} in place, which gcl cannot place on {}: put it there and pass `--fixture object` (with `--only {}`: \
          the object stays in the way of every other case), or run it on `sim`",
-        what.join(" and "),
+        gcl_transcript::Setup::list(&h.setup),
         opts.target,
         c.id()
     ))

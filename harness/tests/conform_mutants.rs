@@ -144,6 +144,18 @@ fn report(dir: &Path) -> RunReport {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// A `gcl sim --scenario` file in `dir` placing the objects of `setup`, or `None` without one.
+fn scenario_of(setup: &[gcl_transcript::Setup], dir: &Path) -> Option<std::path::PathBuf> {
+    if setup.is_empty() {
+        return None;
+    }
+    let objects: Vec<String> =
+        setup.iter().map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}")).collect();
+    let f = dir.join("scenario.toml");
+    std::fs::write(&f, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
+    Some(f)
+}
+
 /// One mutant through `gcl conform` over exec: the run fails and names each case named for it.
 fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
@@ -154,19 +166,13 @@ fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
     let time = if timed { "real" } else { "fast" };
     // A case that needs an object: the sim is started with it (a scenario file) and the run
     // declares the fixture in place, as an operator would with a real hand.
-    let objects: Vec<String> = cases(&p)
-        .iter()
-        .filter(|c| catchers.contains(&c.id()))
-        .flat_map(|c| c.header().setup.clone())
-        .map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}"))
-        .collect();
-    let scenario = dir.path().join("scenario.toml");
-    std::fs::write(&scenario, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
-    let with = if objects.is_empty() { String::new() } else { format!(" --scenario {}", scenario.display()) };
+    let setup: Vec<gcl_transcript::Setup> =
+        cases(&p).iter().filter(|c| catchers.contains(&c.id())).flat_map(|c| c.header().setup.clone()).collect();
+    let with = scenario_of(&setup, dir.path()).map_or(String::new(), |f| format!(" --scenario {}", f.display()));
     let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}{with}");
     let mut args =
         vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
-    if !objects.is_empty() {
+    if !setup.is_empty() {
         args.extend(["--fixture", "object"]);
     }
     for c in catchers {
@@ -252,13 +258,8 @@ fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_e
     let dir = tempfile::tempdir().unwrap();
     let p = Profile::builtin(B44).unwrap();
     let case = cases(&p).into_iter().find(|c| c.id() == "param-hold-effect").unwrap();
-    let objects: Vec<String> = case
-        .header()
-        .setup
-        .iter()
-        .map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}"))
-        .collect();
-    assert!(!objects.is_empty() && case.requires(&gcl_transcript::Requirement::Object));
+    let scenario = scenario_of(&case.header().setup, dir.path()).expect("the case has a setup");
+    assert!(case.requires(&gcl_transcript::Requirement::Object));
     let bare = format!("exec:{GCL} sim --stdio --profile {B44}");
     let run = |target: &str, extra: &[&str], sub: &str| {
         let rep = dir.path().join(sub);
@@ -275,8 +276,6 @@ fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_e
     let why = c.message.unwrap_or_default();
     assert!(why.contains("object 1 ") && why.contains("--fixture object"), "{why}");
 
-    let scenario = dir.path().join("scenario.toml");
-    std::fs::write(&scenario, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
     let placed = format!("{bare} --scenario {}", scenario.display());
     let (out, c) = run(&placed, &["--fixture", "object"], "placed");
     assert_eq!(c.verdict, Verdict::Pass, "{}", String::from_utf8_lossy(&out.stdout));

@@ -196,6 +196,11 @@ impl Setup {
         }
     }
 
+    /// A list of set-ups for people: `object 1 8500 and object 3 0`.
+    pub fn list(setup: &[Setup]) -> String {
+        setup.iter().map(Setup::text).collect::<Vec<_>>().join(" and ")
+    }
+
     /// Where each motor 1..=4 meets an object when closing, as `setup` places them.
     pub fn objects(setup: &[Setup]) -> [Option<i64>; 4] {
         let mut o = [None; 4];

@@ -106,10 +106,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     // A script's `setup:` lines: `sim` places the objects; any other hand is recorded as it is,
     // with the objects the operator put there.
     if !header.setup.is_empty() && !gcl_harness::conform::places_setup(&target) {
-        let what: Vec<String> = header.setup.iter().map(|s| s.to_string()).collect();
         eprintln!(
             "gcl record: note: the script needs {} in place; gcl cannot place it on {target}, so it records the hand as it is",
-            what.join(" and ")
+            gcl_transcript::Setup::list(&header.setup)
         );
     }
     let mut link = super::replay::open_target_with(&target, Some(&profile.id), header.objects())?;

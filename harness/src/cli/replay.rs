@@ -104,12 +104,11 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
     for (f, t) in &transcripts {
         let sim = gcl_harness::conform::places_setup(&target);
         if !t.header.setup.is_empty() && !sim && args.fixture.is_empty() {
-            let what: Vec<String> = t.header.setup.iter().map(|s| s.to_string()).collect();
             writeln!(
                 w,
                 "SKIP {}: needs {} in place, which gcl cannot place on {target}; put it there and pass --fixture object",
                 f.display(),
-                what.join(" and ")
+                gcl_transcript::Setup::list(&t.header.setup)
             )?;
             continue;
         }
