@@ -730,6 +730,21 @@ pub fn run_with_events(
             });
             notes.push(line);
         }
+        // One line for the cases whose object gcl cannot place here (each SKIP says so too).
+        let unplaced: Vec<&str> = cases
+            .iter()
+            .filter(|c| missing_fixture(c, opts).is_some() && skipped.iter().any(|r| r.id == c.id()))
+            .map(|c| c.id())
+            .collect();
+        if !unplaced.is_empty() {
+            let line = format!(
+                "objects: {} need an object in the fingers' way, which gcl cannot place on this target, so they are \
+                 SKIP (`--fixture object` runs them with the object in place: one at a time, with `--only`)",
+                unplaced.join(", ")
+            );
+            on(RunEvent::Preflight(&line));
+            notes.push(line);
+        }
         if !fresh_per_case {
             shared = Some(l);
         }

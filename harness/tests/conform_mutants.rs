@@ -271,8 +271,11 @@ fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_e
         let r = report(Path::new(rep));
         (out, r.cases.into_iter().find(|c| c.id == "param-hold-effect").unwrap())
     };
-    let (_, c) = run(&bare, &[], "bare");
+    let (out, c) = run(&bare, &[], "bare");
     assert_eq!(c.verdict, Verdict::Skip);
+    // One line says so as the run starts.
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(said.contains("objects: param-hold-effect need an object"), "{said}");
     let why = c.message.unwrap_or_default();
     assert!(why.contains("object 1 ") && why.contains("--fixture object"), "{why}");
 
