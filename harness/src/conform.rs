@@ -1100,6 +1100,7 @@ pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
         only: opts.only.clone(),
         skip: opts.skip.clone(),
         refused: opts.refuse.iter().map(|r| r.as_str().to_string()).collect(),
+        fixtures: opts.fixtures.iter().map(|r| r.as_str().to_string()).collect(),
         faults: opts.open.faults.iter().map(|f| f.to_string()).collect(),
         seed: matches!(opts.target, Target::Sim { .. }).then_some(opts.open.seed),
         suite_dir: None,

@@ -283,6 +283,9 @@ fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_e
     let (out, c) = run(&placed, &["--fixture", "object"], "placed");
     assert_eq!(c.verdict, Verdict::Pass, "{}", String::from_utf8_lossy(&out.stdout));
     assert_eq!(out.status.code(), Some(0));
+    // The report says the object was declared in place, as it says what was refused.
+    assert_eq!(report(&dir.path().join("placed")).options.fixtures, ["object"]);
+    assert!(report(&dir.path().join("bare")).options.fixtures.is_empty());
     // Declared but not there: the finger closes freely and the strains are alike.
     let (out, c) = run(&bare, &["--fixture", "object"], "absent");
     assert_eq!(c.verdict, Verdict::Fail);
