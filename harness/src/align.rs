@@ -34,7 +34,7 @@ use gcl_host::link::{Link, LinkError};
 use gcl_model::grammar::{Line, parse_line};
 use gcl_model::realtime::RtLayout;
 use gcl_model::spec::CommandKind;
-use gcl_model::{Args, DeviceConfig, MotorSet, Profile};
+use gcl_model::{Args, MotorSet, Profile};
 use gcl_transcript::{Form, Transcript};
 use serde::{Deserialize, Serialize};
 
@@ -123,7 +123,7 @@ impl Link for Tagging {
 /// replay's outcome is returned as the error when it does not pass (no case, then).
 pub fn model_run(p: &Arc<Profile>, t: &Transcript) -> Result<ModelRun, Box<ReplayOutcome>> {
     let mut link = Tagging {
-        inner: SimLink::new(p.clone(), DeviceConfig::default()),
+        inner: SimLink::new(p.clone(), crate::suite::model_config(&t.header)),
         queue: VecDeque::new(),
         tags: Vec::new(),
         step: BEFORE,

@@ -310,6 +310,10 @@ pub struct ConformOptions {
     pub step_timeout: Option<Duration>,
     /// Requirements the operator refuses (`--no motion`): such cases are SKIP.
     pub refuse: Vec<Requirement>,
+    /// Fixtures the operator declares in place (`--fixture object`): a case whose `setup:` the
+    /// runner cannot make on this target runs only when its fixture is declared; the in-process
+    /// `sim` makes every setup itself.
+    pub fixtures: Vec<Requirement>,
     /// The line rate to compute the wire-time lower bound at (serial targets give their own).
     pub baud: Option<u32>,
     /// Keep the transcript of every case in the results, not only of failures (certificates).
@@ -332,6 +336,7 @@ impl ConformOptions {
             known: KnownFailures::default(),
             step_timeout: None,
             refuse: vec![],
+            fixtures: vec![],
             baud: None,
             keep_transcripts: false,
             control: RunControl::default(),
@@ -407,8 +412,10 @@ pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<(Vec<&'c C
             Some("skipped by --skip".to_string())
         } else if let Some(s) = opts.known.skipped_by(profile, &c.decisions()) {
             Some(format!("rests on decision {}, decided differently: {}", s.id, s.reason))
+        } else if let Some(r) = opts.refuse.iter().find(|r| c.requires(r)) {
+            Some(format!("requires {r}, which was refused"))
         } else {
-            opts.refuse.iter().find(|r| c.requires(r)).map(|r| format!("requires {r}, which was refused"))
+            missing_fixture(c, opts)
         };
         match reason {
             Some(message) => skipped.push(result_of(c, Verdict::Skip, 0.0, Some(message))),
@@ -416,6 +423,40 @@ pub fn select<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<(Vec<&'c C
         }
     }
     Ok((run, skipped))
+}
+
+/// Whether `target` makes a case's `setup:` itself: the in-process model takes the case's
+/// objects; any other hand needs them put in place by hand.
+pub fn places_setup(target: &Target) -> bool {
+    matches!(target, Target::Sim { .. })
+}
+
+/// Why a case cannot run for want of its set-up, or `None`: a case with a `setup:` runs on a
+/// target that makes it ([`places_setup`]) or when the operator declares it in place.
+fn missing_fixture(c: &Case, opts: &ConformOptions) -> Option<String> {
+    let h = c.header();
+    if h.setup.is_empty() || places_setup(&opts.target) || opts.fixtures.contains(&Requirement::Object) {
+        return None;
+    }
+    Some(format!(
+        "needs {} in place, which gcl cannot place on {}: put it there and pass `--fixture object` (with `--only {}`: \
+         the object stays in the way of every other case), or run it on `sim`",
+        gcl_transcript::Setup::list(&h.setup),
+        opts.target,
+        c.id()
+    ))
+}
+
+/// The options to open the target with for `case`: on the in-process model, its objects.
+fn open_options_for(opts: &ConformOptions, case: &Case) -> gcl_host::target::OpenOptions {
+    let mut o = opts.open.clone();
+    let objects = case.header().objects();
+    if places_setup(&opts.target) && objects.iter().any(Option::is_some) {
+        let mut scenario = o.scenario.take().unwrap_or_default();
+        scenario.objects = objects;
+        o.scenario = Some(scenario);
+    }
+    o
 }
 
 fn result_of(c: &Case, verdict: Verdict, duration_ms: f64, message: Option<String>) -> CaseResult {
@@ -696,6 +737,21 @@ pub fn run_with_events(
             });
             notes.push(line);
         }
+        // One line for the cases whose object gcl cannot place here (each SKIP says so too).
+        let unplaced: Vec<&str> = cases
+            .iter()
+            .filter(|c| missing_fixture(c, opts).is_some() && skipped.iter().any(|r| r.id == c.id()))
+            .map(|c| c.id())
+            .collect();
+        if !unplaced.is_empty() {
+            let line = format!(
+                "objects: {} need an object in the fingers' way, which gcl cannot place on this target, so they are \
+                 SKIP (`--fixture object` runs them with the object in place: one at a time, with `--only`)",
+                unplaced.join(", ")
+            );
+            on(RunEvent::Preflight(&line));
+            notes.push(line);
+        }
         if !fresh_per_case {
             shared = Some(l);
         }
@@ -757,7 +813,7 @@ pub fn run_with_events(
         // Whether the hand starts this case where the case before left it (for the bound).
         let carried = hand_carries && shared.is_some();
         let link: &mut dyn Link = if fresh_per_case {
-            shared = Some(open_link()?);
+            shared = Some(open(&opts.target, &open_options_for(opts, case))?);
             shared.as_deref_mut().expect("just opened")
         } else {
             match shared.as_deref_mut() {
@@ -1061,6 +1117,7 @@ pub fn run_options(cases: &[Case], opts: &ConformOptions) -> RunOptions {
         only: opts.only.clone(),
         skip: opts.skip.clone(),
         refused: opts.refuse.iter().map(|r| r.as_str().to_string()).collect(),
+        fixtures: opts.fixtures.iter().map(|r| r.as_str().to_string()).collect(),
         faults: opts.open.faults.iter().map(|f| f.to_string()).collect(),
         seed: matches!(opts.target, Target::Sim { .. }).then_some(opts.open.seed),
         suite_dir: None,
@@ -1145,7 +1202,7 @@ fn wire_time(
     let per_byte_ms = 10.0 / f64::from(baud.max(1)) * 1000.0;
     let (mut motion_ms, mut lower_bound_ms) = (0.0, 0.0);
     let (mut sent, mut received) = (0u64, 0u64);
-    let fresh = || SimLink::new(opts.profile.clone(), Default::default());
+    let fresh = |c: &Case| SimLink::new(opts.profile.clone(), suite::model_config(c.header()));
     // The model's hand as the last passing case left it.
     let mut model: Option<SimLink> = None;
     // No quiet-time drain: it is the runner's; the trailing wait between cases passes on the
@@ -1162,12 +1219,15 @@ fn wire_time(
             lower_bound_ms += bytes_ms;
             continue;
         };
-        let mut link = carried.unwrap_or_else(fresh);
+        // A case with a setup starts from a fresh model with its objects (the one before had
+        // none).
+        let carried = carried.filter(|_| case.header().setup.is_empty());
+        let mut link = carried.unwrap_or_else(|| fresh(case));
         let mut rate = link.device().baud();
         let mut outcome = suite::run_case(case, &mut link, &quiet);
         if !outcome.is_pass() {
             // Not from the state the case before left: the suite's cases pass from power-up.
-            link = fresh();
+            link = fresh(case);
             rate = link.device().baud();
             outcome = suite::run_case(case, &mut link, &quiet);
         }

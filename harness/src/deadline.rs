@@ -24,7 +24,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use gcl_model::{DeviceConfig, Profile};
+use gcl_model::Profile;
 
 use crate::replay::{ReplayOptions, StepBudget, ceiling_for};
 use crate::suite::{self, Case};
@@ -96,7 +96,8 @@ impl StepPrediction {
 /// The model's run of one case: one prediction per step. `None` when the case does not pass
 /// on the model (a stale suite file): such a case keeps its goldens' `within`.
 pub fn predict(case: &Case, profile: &Arc<Profile>) -> Option<Vec<StepPrediction>> {
-    let mut link = SimLink::new(profile.clone(), DeviceConfig::default());
+    // With the case's objects in place, as the hand it predicts has them.
+    let mut link = SimLink::new(profile.clone(), suite::model_config(case.header()));
     let opts = ReplayOptions { trailing: Duration::ZERO, drain_quiet: Duration::ZERO, ..suite::replay_options() };
     let baud = link.device().baud();
     let out = suite::run_case(case, &mut link, &opts);
@@ -219,5 +220,9 @@ mod tests {
         assert_eq!(Some(b[i].deadline), hi.transcript.steps[i].within);
         let j = pred.iter().position(|s| s.busy() <= BUSY).unwrap();
         assert!(b[j].deadline < Duration::from_secs(1), "{:?}", b[j]);
+        // A case whose setup places an object is predicted with the object there: it passes on
+        // the model, so its steps get the model's deadlines like any other.
+        let hold = cases.iter().find(|c| !c.header().setup.is_empty()).expect("a case with a setup");
+        assert!(predict(hold, &p).is_some(), "{} does not pass on the model with its objects", hold.id());
     }
 }

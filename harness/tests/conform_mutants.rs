@@ -42,6 +42,8 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("tstop-ignored", B44, &["param-tstop-effect"]),
     ("hsg-ignored", B44, &["motion-strain-limit"]),
     ("lsg-ignored", B44, &["param-lsg-effect"]),
+    ("hold-ignored", B44, &["param-hold-effect"]),
+    ("bs-ignored", B44, &["param-bs-effect"]),
     ("en-ignored", B44, &["param-en-narrows-motion", "rt-loop-en-motors"]),
     ("sgflip-ignored", B44, &["param-sgflip-effect", "rt-lfs-sgflip"]),
     ("otemp-ignored", B44, &["status-8192-overtemperature", "cmd-m-overtemp"]),
@@ -142,6 +144,18 @@ fn report(dir: &Path) -> RunReport {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// A `gcl sim --scenario` file in `dir` placing the objects of `setup`, or `None` without one.
+fn scenario_of(setup: &[gcl_transcript::Setup], dir: &Path) -> Option<std::path::PathBuf> {
+    if setup.is_empty() {
+        return None;
+    }
+    let objects: Vec<String> =
+        setup.iter().map(|gcl_transcript::Setup::Object { motor, at }| format!("{motor} = {at}")).collect();
+    let f = dir.join("scenario.toml");
+    std::fs::write(&f, format!("objects = {{ {} }}\n", objects.join(", "))).unwrap();
+    Some(f)
+}
+
 /// One mutant through `gcl conform` over exec: the run fails and names each case named for it.
 fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
@@ -150,9 +164,17 @@ fn mutant_fails_over_exec(name: &str, profile: &str, catchers: &[&str]) {
     let timed =
         cases(&p).iter().any(|c| catchers.contains(&c.id()) && c.requires(&gcl_transcript::Requirement::AbortTiming));
     let time = if timed { "real" } else { "fast" };
-    let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}");
+    // A case that needs an object: the sim is started with it (a scenario file) and the run
+    // declares the fixture in place, as an operator would with a real hand.
+    let setup: Vec<gcl_transcript::Setup> =
+        cases(&p).iter().filter(|c| catchers.contains(&c.id())).flat_map(|c| c.header().setup.clone()).collect();
+    let with = scenario_of(&setup, dir.path()).map_or(String::new(), |f| format!(" --scenario {}", f.display()));
+    let target = format!("exec:{GCL} sim --stdio --profile {profile} --time {time} --fault {name}{with}");
     let mut args =
         vec!["conform", "--target", &target, "--profile", profile, "-q", "--timeout", "1000", "--suite", SUITE];
+    if !setup.is_empty() {
+        args.extend(["--fixture", "object"]);
+    }
     for c in catchers {
         args.extend(["--only", c]);
     }
@@ -226,6 +248,48 @@ fn the_unmutated_simulator_passes_over_exec_with_reports() {
     assert!(html.contains("Clause coverage"));
     let jsonl = std::fs::read_to_string(dir.path().join("results.jsonl")).unwrap();
     assert_eq!(jsonl.lines().count(), r.cases.len(), "every case was streamed as it ended");
+}
+
+/// A case whose `setup:` places an object runs on the in-process sim, which places it (the
+/// unmutated-sim test above); on a hand gcl cannot set up it is SKIP with a reason that says
+/// how to run it; with the object in place and `--fixture object` it runs and passes.
+#[test]
+fn a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_elsewhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = Profile::builtin(B44).unwrap();
+    let case = cases(&p).into_iter().find(|c| c.id() == "param-hold-effect").unwrap();
+    let scenario = scenario_of(&case.header().setup, dir.path()).expect("the case has a setup");
+    assert!(case.requires(&gcl_transcript::Requirement::Object));
+    let bare = format!("exec:{GCL} sim --stdio --profile {B44}");
+    let run = |target: &str, extra: &[&str], sub: &str| {
+        let rep = dir.path().join(sub);
+        let rep = rep.to_str().unwrap();
+        let mut args = vec!["conform", "--target", target, "--profile", B44, "-q", "--suite", SUITE];
+        args.extend(["--only", "param-hold-effect", "--report", rep]);
+        args.extend(extra);
+        let out = gcl(&args);
+        let r = report(Path::new(rep));
+        (out, r.cases.into_iter().find(|c| c.id == "param-hold-effect").unwrap())
+    };
+    let (out, c) = run(&bare, &[], "bare");
+    assert_eq!(c.verdict, Verdict::Skip);
+    // One line says so as the run starts.
+    let said = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(said.contains("objects: param-hold-effect need an object"), "{said}");
+    let why = c.message.unwrap_or_default();
+    assert!(why.contains("object 1 ") && why.contains("--fixture object"), "{why}");
+
+    let placed = format!("{bare} --scenario {}", scenario.display());
+    let (out, c) = run(&placed, &["--fixture", "object"], "placed");
+    assert_eq!(c.verdict, Verdict::Pass, "{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(out.status.code(), Some(0));
+    // The report says the object was declared in place, as it says what was refused.
+    assert_eq!(report(&dir.path().join("placed")).options.fixtures, ["object"]);
+    assert!(report(&dir.path().join("bare")).options.fixtures.is_empty());
+    // Declared but not there: the finger closes freely and the strains are alike.
+    let (out, c) = run(&bare, &["--fixture", "object"], "absent");
+    assert_eq!(c.verdict, Verdict::Fail);
+    assert_eq!(out.status.code(), Some(1));
 }
 
 #[test]

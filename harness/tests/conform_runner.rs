@@ -151,7 +151,10 @@ fn a_hand_that_stops_answering_ends_the_run_early_with_exit_2() {
     let passed = r.cases.iter().filter(|c| c.verdict == Verdict::Pass).count();
     assert!(passed > 3, "the hand answered at first: {:?}", r.summary);
     let not_run = r.cases.iter().filter(|c| c.message.as_deref().is_some_and(|m| m.starts_with("not run:"))).count();
-    assert_eq!(passed + timeouts + not_run, r.cases.len(), "{:?}", r.summary);
+    // The cases that need an object gcl cannot place on this hand are SKIP before the run.
+    let unplaced =
+        r.cases.iter().filter(|c| c.message.as_deref().is_some_and(|m| m.contains("--fixture object"))).count();
+    assert_eq!(passed + timeouts + not_run + unplaced, r.cases.len(), "{:?}", r.summary);
     assert!(not_run > 20, "{:?}", r.summary);
     assert!(!r.liveness.after && !r.passed());
 }

@@ -52,6 +52,8 @@ const FAULT_CLAUSES: &[(&str, &[&str])] = &[
     // MSG is HSG's alias in the seed's words.
     ("hsg-ignored", &["Parameter HSG", "Parameter MSG"]),
     ("lsg-ignored", &["Parameter LSG"]),
+    ("hold-ignored", &["Parameter HOLD"]),
+    ("bs-ignored", &["Parameter BS"]),
     ("en-ignored", &["Parameter EN"]),
     ("sgflip-ignored", &["Parameter SGFLIP"]),
     ("otemp-ignored", &["Parameter OTEMP", "Status codes 8192"]),

@@ -37,6 +37,27 @@ const PROMISES: &[(&str, &[&str])] = &[
         "under `CI=true` a missing tool fails the test instead",
         &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
     ),
+    // Objects in the fingers' way.
+    (
+        "runs on the in-process `sim`, which places the object for that case alone. On any other hand it is SKIP, with a reason that says how to run it",
+        &[
+            "harness/tests/conform_mutants.rs::a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_elsewhere",
+        ],
+    ),
+    (
+        "`gcl replay` and the Python runner take `--fixture object` too",
+        &[
+            "harness/tests/transcript_cli.rs::a_setup_is_recorded_and_replayed_with_its_object",
+            "vectors/python/tests/test_runner.py::test_a_setup_is_skip_unless_declared_in_place",
+        ],
+    ),
+    (
+        "Declared but missing, the case fails.",
+        &[
+            "harness/tests/conform_mutants.rs::a_case_that_needs_an_object_runs_where_it_is_placed_or_declared_and_is_skip_elsewhere",
+            "harness/tests/transcript_cli.rs::a_setup_is_recorded_and_replayed_with_its_object",
+        ],
+    ),
     // Who it is for.
     ("`--fault NAME` makes the hand misbehave on purpose", &["harness/tests/sim_cli.rs::faults_reach_the_hand"]),
     (

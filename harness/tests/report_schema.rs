@@ -28,6 +28,7 @@ fn reports_with_every_kind_of_verdict_validate_against_the_schema() {
         known: KnownFailures::parse("[[failure]]\ncase = \"cmd-fget\"\nreason = \"r\"\n").unwrap(),
         step_timeout: None,
         refuse: vec![],
+        fixtures: vec![],
         baud: Some(38400),
         keep_transcripts: false,
         control: Default::default(),

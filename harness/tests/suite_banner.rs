@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use gcl_harness::suite::{self, Case};
 use gcl_host::SimLink;
-use gcl_model::{DeviceConfig, Profile};
+use gcl_model::Profile;
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
 
@@ -23,7 +23,7 @@ fn with_banner(p: &Arc<Profile>, lines: &[&str]) -> Arc<Profile> {
 }
 
 fn passes(case: &Case, profile: &Arc<Profile>) -> bool {
-    let mut link = SimLink::new(profile.clone(), DeviceConfig::default());
+    let mut link = SimLink::new(profile.clone(), suite::model_config(case.header()));
     suite::run_case(case, &mut link, &suite::replay_options()).is_pass()
 }
 

@@ -17,7 +17,7 @@ use gcl_harness::conform::{self, ConformOptions};
 use gcl_harness::report::Verdict;
 use gcl_harness::suite::{self, Case};
 use gcl_host::SimLink;
-use gcl_model::{DeviceConfig, Fault, Profile};
+use gcl_model::{Fault, Profile};
 use gcl_transcript::Piece;
 
 const SUITE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite");
@@ -66,7 +66,7 @@ fn a_hand_whose_motors_run_at_another_speed_passes_the_speed_effect_cases() {
         let hand = seed_patched(&[("counts_per_ms_per_velocity_unit = 0.1\n", &to)]);
         for id in ["param-mcv-effect", "param-mov-effect", "param-accel-effect", "param-tstop-effect"] {
             let c = cases.iter().find(|c| c.id() == id).unwrap_or_else(|| panic!("no case {id}"));
-            let mut link = SimLink::new(hand.clone(), DeviceConfig::default());
+            let mut link = SimLink::new(hand.clone(), suite::model_config(c.header()));
             let out = suite::run_case(c, &mut link, &suite::replay_options());
             if !out.is_pass() {
                 failed.push(format!("{unit}: {id}: {}", out.render()));
@@ -86,7 +86,7 @@ fn a_hand_with_other_velocity_units_fails_only_the_unit_cases() {
     let cases = seed_cases();
     let mut failed = Vec::new();
     for c in &cases {
-        let mut link = SimLink::new(hand.clone(), DeviceConfig::default());
+        let mut link = SimLink::new(hand.clone(), suite::model_config(c.header()));
         let out = suite::run_case(c, &mut link, &suite::replay_options());
         if !out.is_pass() {
             failed.push(c.id().to_string());
@@ -173,7 +173,7 @@ fn every_relation_states_its_evidence_and_holds_on_the_model() {
             }
             if has {
                 // The model's own answers satisfy every relation and window of the case.
-                let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+                let mut link = SimLink::new(p.clone(), suite::model_config(c.header()));
                 let out = suite::run_case(&c, &mut link, &suite::replay_options());
                 assert!(out.is_pass(), "{}/{}: {}", p.id, c.id(), out.render());
             }

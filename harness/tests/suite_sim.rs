@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use gcl_harness::suite::{self, Case};
 use gcl_host::SimLink;
-use gcl_model::{DeviceConfig, Profile};
+use gcl_model::Profile;
 use gcl_transcript::{Level, Requirement};
 
 fn suite_dir() -> PathBuf {
@@ -24,7 +24,7 @@ fn the_simulator_passes_every_committed_case() {
     let cases = committed();
     for case in &cases {
         let profile = Profile::builtin(&case.profile).unwrap();
-        let mut link = SimLink::new(profile, DeviceConfig::default());
+        let mut link = SimLink::new(profile, suite::model_config(case.header()));
         let out = suite::run_case(case, &mut link, &suite::replay_options());
         if !out.is_pass() {
             failures.push(format!("{}: {}", case.rel_path().display(), out.render()));
@@ -70,7 +70,7 @@ fn every_profile_has_a_suite_with_every_level_it_needs() {
         }
         // A case that writes the EEPROM leaves the factory values in it.
         for c in mine.iter().filter(|c| c.requires(&Requirement::Eeprom)) {
-            let mut link = SimLink::new(p.clone(), DeviceConfig::default());
+            let mut link = SimLink::new(p.clone(), suite::model_config(c.header()));
             assert!(suite::run_case(c, &mut link, &suite::replay_options()).is_pass());
             let nv = link.device().nv();
             assert!(nv.writes > 0, "{name}/{}: requires eeprom but never writes it", c.id());

@@ -80,7 +80,7 @@ fn is_framing(id: &str) -> bool {
 
 /// Whether `case` passes against the model of `profile` with `faults`.
 fn passes(case: &Case, profile: &Arc<Profile>, faults: &[Fault]) -> bool {
-    let config = DeviceConfig { faults: faults.to_vec(), ..DeviceConfig::default() };
+    let config = DeviceConfig { faults: faults.to_vec(), ..suite::model_config(case.header()) };
     let mut link = SimLink::new(profile.clone(), config);
     suite::run_case(case, &mut link, &suite::replay_options()).is_pass()
 }

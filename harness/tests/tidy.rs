@@ -329,6 +329,14 @@ mod abnf {
             && s.bytes().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == b'_')
     }
 
+    /// `setup-value = "object" 1*WSP motor 1*WSP position`, `motor = %x31-34`,
+    /// `position = "0" / (%x31-39 *6DIGIT)`
+    fn setup_value(s: &str) -> bool {
+        let w: Vec<&str> = s.split([' ', '\t']).filter(|w| !w.is_empty()).collect();
+        matches!(w.as_slice(), ["object", m, p]
+            if matches!(*m, "1" | "2" | "3" | "4") && (*p == "0" || factor(p)))
+    }
+
     /// `factor = %x31-39 *6DIGIT`
     fn factor(s: &str) -> bool {
         digits(s, 7) && !s.starts_with('0')
@@ -487,17 +495,20 @@ mod abnf {
                 continue;
             }
             let header = t.split_once(':').filter(|(k, _)| {
-                matches!(*k, "id" | "title" | "clause" | "level" | "profile" | "requires" | "note")
+                matches!(*k, "id" | "title" | "clause" | "level" | "profile" | "requires" | "setup" | "note")
                     || k.strip_prefix("x-").is_some_and(|x| {
                         !x.is_empty() && x.bytes().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == b'-')
                     })
             });
             match header {
                 // header-line = *WSP key ":" *WSP value *WSP eol, before any body line
-                Some((_, v)) if !in_body => {
+                Some((k, v)) if !in_body => {
                     let v = v.trim_matches([' ', '\t']);
                     if v.is_empty() || v.chars().any(|c| c.is_control() && c != '\t') {
                         return Err(at(format!("bad header value `{v}`")));
+                    }
+                    if k == "setup" && !setup_value(v) {
+                        return Err(at(format!("bad setup `{v}`")));
                     }
                 }
                 _ => {
@@ -527,6 +538,7 @@ fn goldens_match_the_abnf_grammar() {
         "duration",
         "value",
         "relation",
+        "setup-value",
     ] {
         assert!(grammar.lines().any(|l| l.starts_with(&format!("{rule} "))), "rule `{rule}` left the grammar");
     }
@@ -552,6 +564,8 @@ fn goldens_match_the_abnf_grammar() {
         "gcl-transcript 1\nexpect \"{int p*2 5%}\"\n",
         "gcl-transcript 1\nexpect \"{line as p}\"\n",
         "gcl-transcript 1\nexpect within 1s.. \"x\"\n",
+        "gcl-transcript 1\nsetup: object 5 100\n",
+        "gcl-transcript 1\nsetup: object 1 0100\n",
     ] {
         assert!(abnf::check(wrong).is_err(), "the checker took {wrong:?}");
     }

@@ -100,6 +100,46 @@ fn a_recording_of_the_simulator_replays_against_it() {
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
 }
 
+/// A script's `setup:` places an object on `sim` as it records, the transcript keeps it, and
+/// replaying it places the object again on `sim`; on another hand it is SKIP unless the
+/// object is declared in place.
+#[test]
+fn a_setup_is_recorded_and_replayed_with_its_object() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("press.script");
+    std::fs::write(&script, "id: press\nrequires: motion, object\nsetup: object 1 8500\nRESET\nHI\n1C\n1FGET SG\n")
+        .unwrap();
+    let out_file = dir.path().join("press.gcl");
+    let out = gcl()
+        .args(["record", "--target", "sim:seed", "--script"])
+        .arg(&script)
+        .arg("--out")
+        .arg(&out_file)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&out_file).unwrap();
+    assert!(text.contains("requires: motion, object\nsetup: object 1 8500\n"), "{text}");
+    // Pressed into the object, the finger reads more than a free one's strain.
+    let t = gcl_transcript::parse(&text).unwrap();
+    let sg = String::from_utf8_lossy(&t.steps.last().unwrap().expect.exact_bytes().unwrap()).into_owned();
+    let strain: i64 = sg.split("\n\r").nth(1).unwrap().parse().unwrap();
+    assert!(strain > 40, "{sg}");
+    let out = gcl().args(["replay", "--target", "sim"]).arg(&out_file).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let target = format!("exec:{} sim --stdio --profile seed", env!("CARGO_BIN_EXE_gcl"));
+    let out = gcl().args(["replay", "--target", &target]).arg(&out_file).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.starts_with("SKIP ") && stdout.contains("object 1 8500") && stdout.contains("--fixture object"),
+        "{stdout}"
+    );
+    // Declared in place, but not there: the strain is a free finger's, and the replay fails.
+    let out = gcl().args(["replay", "--target", &target, "--fixture", "object"]).arg(&out_file).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stdout));
+}
+
 #[test]
 fn suite_check_passes_on_the_committed_suite() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite");

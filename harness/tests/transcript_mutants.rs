@@ -21,7 +21,8 @@ fn every_fault_is_caught_by_some_case() {
     for &fault in Fault::ALL {
         let caught = cases.iter().find_map(|case| {
             let profile = Profile::builtin(&case.profile).unwrap();
-            let mut link = SimLink::new(profile, DeviceConfig { faults: vec![fault], ..Default::default() });
+            let config = DeviceConfig { faults: vec![fault], ..suite::model_config(case.header()) };
+            let mut link = SimLink::new(profile, config);
             let out = suite::run_case(case, &mut link, &suite::replay_options());
             (!out.is_pass()).then(|| (case.rel_path(), out))
         });

@@ -99,7 +99,17 @@ fn the_python_runner_passes_the_seed_suite_against_the_simulator() {
     args.extend(files.iter().map(String::as_str));
     let r = run(&python_dir(), &py, &args, Duration::from_secs(600));
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
-    assert_eq!(r.stdout.lines().filter(|l| l.starts_with("PASS ")).count(), files.len(), "{}", r.stdout);
+    // A case whose setup places an object cannot run on this runner's hand without the object
+    // declared in place: it is SKIP, and every other case passes.
+    let placed: Vec<&String> = files
+        .iter()
+        .filter(|f| std::fs::read_to_string(python_dir().join(f)).unwrap().contains("\nsetup: object "))
+        .collect();
+    assert!(!placed.is_empty(), "the seed suite has a case with a setup (param-hold-effect)");
+    let skipped: Vec<&str> = r.stdout.lines().filter(|l| l.starts_with("SKIP ")).collect();
+    assert_eq!(skipped.len(), placed.len(), "{}", r.stdout);
+    assert!(placed.iter().all(|f| skipped.iter().any(|l| l.contains(f.as_str()))), "{}", r.stdout);
+    assert_eq!(r.stdout.lines().filter(|l| l.starts_with("PASS ")).count(), files.len() - placed.len(), "{}", r.stdout);
 }
 
 /// Cases named for each fault (as in `conform_mutants`), and others that must still pass.

@@ -83,6 +83,9 @@ pub enum Requirement {
     Eeprom,
     /// Depends on a pause before ^C landing while motors still move.
     AbortTiming,
+    /// Needs an object in the fingers' way, as its [`Setup`] lines place it: a runner places it
+    /// (a simulator) or the operator declares it in place.
+    Object,
     /// Any other requirement, by its slug.
     Other(String),
 }
@@ -95,6 +98,7 @@ impl Requirement {
             Requirement::Realtime => "realtime",
             Requirement::Eeprom => "eeprom",
             Requirement::AbortTiming => "abort-timing",
+            Requirement::Object => "object",
             Requirement::Other(s) => s,
         }
     }
@@ -106,6 +110,7 @@ impl Requirement {
             "realtime" => Requirement::Realtime,
             "eeprom" => Requirement::Eeprom,
             "abort-timing" => Requirement::AbortTiming,
+            "object" => Requirement::Object,
             _ if is_slug(s) => Requirement::Other(s.to_string()),
             _ => return None,
         })
@@ -144,6 +149,9 @@ pub struct Header {
     pub profiles: Vec<String>,
     /// What the case needs from its target.
     pub requires: Vec<Requirement>,
+    /// The physical set-up the case needs before its first step, one entry per `setup:` line.
+    /// A case with a setup requires [`Requirement::Object`].
+    pub setup: Vec<Setup>,
     /// Free text for people, one entry per `note:` line.
     pub notes: Vec<String>,
     /// `x-*` keys and their values, kept in order for tools that add their own.
@@ -154,6 +162,82 @@ impl Header {
     /// Whether the case needs `r`.
     pub fn requires(&self, r: &Requirement) -> bool {
         self.requires.contains(r)
+    }
+
+    /// Where each motor 1..=4 meets an object when closing, as the setup places them.
+    pub fn objects(&self) -> [Option<i64>; 4] {
+        Setup::objects(&self.setup)
+    }
+}
+
+/// The farthest position a [`Setup::Object`] may name, in encoder counts.
+pub const MAX_OBJECT_POSITION: i64 = 1_000_000;
+
+/// Something in or around the hand that a case needs before its first step and that no
+/// command can make: a runner that can (a simulator) makes it, and on a real hand the operator
+/// puts it in place and says so. Written `setup: object M AT`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Setup {
+    /// An object that motor `motor` (1..=4) meets at position `at` (encoder counts, 0 at the
+    /// open stop) when closing: from there on it presses into the object.
+    Object {
+        /// The motor, 1..=4.
+        motor: u8,
+        /// Where it meets the object, 0..=[`MAX_OBJECT_POSITION`].
+        at: i64,
+    },
+}
+
+impl Setup {
+    /// The value of its `setup:` line: `object 1 6000`.
+    pub fn text(&self) -> String {
+        match self {
+            Setup::Object { motor, at } => format!("object {motor} {at}"),
+        }
+    }
+
+    /// A list of set-ups for people: `object 1 8500 and object 3 0`.
+    pub fn list(setup: &[Setup]) -> String {
+        setup.iter().map(Setup::text).collect::<Vec<_>>().join(" and ")
+    }
+
+    /// Where each motor 1..=4 meets an object when closing, as `setup` places them.
+    pub fn objects(setup: &[Setup]) -> [Option<i64>; 4] {
+        let mut o = [None; 4];
+        for s in setup {
+            let Setup::Object { motor, at } = *s;
+            if let Some(slot) = o.get_mut(usize::from(motor).wrapping_sub(1)) {
+                *slot = Some(at);
+            }
+        }
+        o
+    }
+
+    /// Reads the value of a `setup:` line.
+    pub fn parse(s: &str) -> Result<Setup, String> {
+        let words: Vec<&str> = s.split_whitespace().collect();
+        match words.as_slice() {
+            ["object", m, at] => {
+                let motor = match m.as_bytes() {
+                    [d @ b'1'..=b'4'] => d - b'0',
+                    _ => return Err(format!("`{m}` is not a motor 1..4")),
+                };
+                let at = at
+                    .parse::<i64>()
+                    .ok()
+                    .filter(|a| (0..=MAX_OBJECT_POSITION).contains(a) && a.to_string() == *at)
+                    .ok_or_else(|| format!("`{at}` is not a position 0..{MAX_OBJECT_POSITION}"))?;
+                Ok(Setup::Object { motor, at })
+            }
+            [kind, ..] if *kind != "object" => Err(format!("unknown setup `{kind}` (known: object)")),
+            _ => Err("expected `object MOTOR POSITION`".into()),
+        }
+    }
+}
+
+impl fmt::Display for Setup {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.text())
     }
 }
 
@@ -588,6 +672,9 @@ impl Transcript {
         if !h.requires.is_empty() {
             let r: Vec<&str> = h.requires.iter().map(Requirement::as_str).collect();
             let _ = writeln!(s, "requires: {}", r.join(", "));
+        }
+        for x in &h.setup {
+            let _ = writeln!(s, "setup: {x}");
         }
         for n in &h.notes {
             let _ = writeln!(s, "note: {n}");

@@ -7,8 +7,8 @@ use std::time::Duration;
 use gcl_model::escape::{UnescapeError, unescape_into};
 
 use super::{
-    Expect, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Relation, Requirement, Step,
-    Transcript, Value, ValueKind, is_capture_name, is_slug,
+    Expect, Form, Header, HostBytes, Level, MAGIC, MAX_DURATION, MAX_FILE_BYTES, Piece, Relation, Requirement, Setup,
+    Step, Transcript, Value, ValueKind, is_capture_name, is_slug,
 };
 
 /// Why transcript (or script) text does not parse.
@@ -152,6 +152,8 @@ pub struct HeaderFields {
     pub profiles: Vec<String>,
     /// `requires:`, split.
     pub requires: Vec<Requirement>,
+    /// Every `setup:`.
+    pub setup: Vec<Setup>,
     /// Every `note:`.
     pub notes: Vec<String>,
     /// `x-...` keys with their values, in file order.
@@ -230,6 +232,14 @@ impl HeaderFields {
                     }
                 }
             }
+            "setup" => {
+                let x = Setup::parse(value).map_err(bad)?;
+                let Setup::Object { motor, .. } = x;
+                if self.setup.iter().any(|Setup::Object { motor: m, .. }| *m == motor) {
+                    return Err(bad(format!("motor {motor} already has an object")));
+                }
+                self.setup.push(x);
+            }
             "note" => self.notes.push(value.to_string()),
             k if k.starts_with("x-") && k.len() > 2 => self.extensions.push((k.to_string(), value.to_string())),
             k => return Err(ParseError::new(line, ParseErrorKind::UnknownKey(k.to_string()))),
@@ -247,6 +257,7 @@ impl HeaderFields {
             clauses: self.clauses,
             profiles: self.profiles,
             requires: self.requires,
+            setup: self.setup,
             notes: self.notes,
             extensions: self.extensions,
         };
@@ -255,6 +266,15 @@ impl HeaderFields {
         }
         if header.profiles.is_empty() {
             return Err(missing("profile"));
+        }
+        if !header.setup.is_empty() && !header.requires(&Requirement::Object) {
+            return Err(ParseError::new(
+                line,
+                ParseErrorKind::BadValue {
+                    key: "setup".into(),
+                    reason: "a case with a setup requires `object` (add it to `requires:`)".into(),
+                },
+            ));
         }
         Ok(header)
     }

@@ -181,6 +181,36 @@ expect within 5s..30s "SM 4000\n\rERR 16\n\r=> "
 "#;
 
 #[test]
+fn a_setup_places_objects_and_needs_the_object_requirement() {
+    let t = parse(&format!("{HEAD}requires: motion, object\nsetup: object 1 6000\nsetup:  object 3 0 \nsend \"x\"\n"))
+        .unwrap();
+    assert_eq!(t.header.setup, vec![Setup::Object { motor: 1, at: 6000 }, Setup::Object { motor: 3, at: 0 }]);
+    assert_eq!(t.header.objects(), [Some(6000), None, Some(0), None]);
+    assert!(t.to_text().contains("requires: motion, object\nsetup: object 1 6000\nsetup: object 3 0\n"));
+    assert_eq!(parse(&t.to_text()).unwrap().without_lines(), t.without_lines());
+    let bad = |line: &str| match err(&format!("{HEAD}requires: object\nsetup: {line}\n")).kind {
+        ParseErrorKind::BadValue { key, reason } => {
+            assert_eq!(key, "setup");
+            reason
+        }
+        k => panic!("{line}: {k:?}"),
+    };
+    assert!(bad("object 5 100").contains("motor 1..4"));
+    assert!(bad("object 01 100").contains("motor 1..4"));
+    assert!(bad("object 1 -1").contains("position"));
+    assert!(bad("object 1 +5").contains("position"));
+    assert!(bad("object 1 1000001").contains("position"));
+    assert!(bad("object 1").contains("expected"));
+    assert!(bad("wall 1 100").contains("unknown setup"));
+    let e = err(&format!("{HEAD}requires: object\nsetup: object 2 1\nsetup: object 2 5\n"));
+    assert_eq!(e.line, 9);
+    // Without `requires: object`, a runner that knows nothing of setups would run the case on
+    // a hand with nothing in its way; a runner that knows the requirement skips it.
+    let e = err(&format!("{HEAD}setup: object 2 1\nsend \"x\"\n"));
+    assert!(e.to_string().contains("requires `object`"), "{e}");
+}
+
+#[test]
 fn relations_capture_and_bound_later_values() {
     let t = parse(RELATIONS).unwrap();
     let e0 = &t.steps[0].expect;
@@ -372,15 +402,23 @@ fn arb_transcript() -> impl Strategy<Value = Transcript> {
         proptest::collection::btree_set(arb_requirement(), 0..3),
         proptest::collection::vec(arb_text(), 0..2),
         proptest::collection::vec(arb_step(), 1..6),
+        proptest::collection::btree_map(1u8..=4, 0..=MAX_OBJECT_POSITION, 0..3),
     )
-        .prop_map(|(id, title, clauses, level, profiles, requires, notes, steps)| Transcript {
+        .prop_map(|(id, title, clauses, level, profiles, requires, notes, steps, objects)| Transcript {
             header: Header {
                 id,
                 title,
                 clauses,
                 level,
                 profiles,
-                requires: requires.into_iter().collect(),
+                requires: {
+                    let mut r: Vec<Requirement> = requires.into_iter().collect();
+                    if !objects.is_empty() && !r.contains(&Requirement::Object) {
+                        r.push(Requirement::Object);
+                    }
+                    r
+                },
+                setup: objects.into_iter().map(|(motor, at)| Setup::Object { motor, at }).collect(),
                 notes,
                 extensions: vec![("x-seed".into(), "42".into())],
             },

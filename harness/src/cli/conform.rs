@@ -71,10 +71,17 @@ pub struct SuiteArgs {
     /// --stdio`), those cases are SKIP and one line says why.
     #[arg(long)]
     pub assume_real_time: bool,
-    /// Refuse cases that need this of the hand (motion, realtime, eeprom, abort-timing;
-    /// repeatable): they are reported as SKIP.
+    /// Refuse cases that need this of the hand (motion, realtime, eeprom, abort-timing,
+    /// object; repeatable): they are reported as SKIP.
     #[arg(long = "no", value_name = "REQUIREMENT")]
     pub refuse: Vec<String>,
+    /// Declare a case's physical set-up in place (only `object`: the objects its `setup:`
+    /// lines name, e.g. `setup: object 1 8500`, where that motor meets them when closing).
+    /// The in-process `sim` places them itself; on any other target such cases are SKIP
+    /// without this flag. An object stays in the way of every case of the run, so run those
+    /// cases alone: `--only param-hold-effect --fixture object`.
+    #[arg(long = "fixture", value_name = "FIXTURE", value_parser = ["object"])]
+    pub fixture: Vec<String>,
     /// Run the committed golden transcripts in DIR (e.g. vectors/suite) instead of the suite
     /// the built-in model generates (they are the same when the goldens are fresh).
     #[arg(long, value_name = "DIR")]
@@ -187,7 +194,7 @@ pub fn prepare(
         .iter()
         .map(|r| match Requirement::from_slug(r) {
             Some(Requirement::Other(s)) => {
-                anyhow::bail!("unknown requirement `{s}` (motion, realtime, eeprom, abort-timing)")
+                anyhow::bail!("unknown requirement `{s}` (motion, realtime, eeprom, abort-timing, object)")
             }
             Some(r) => Ok(r),
             None => anyhow::bail!("bad requirement `{r}`"),
@@ -211,6 +218,7 @@ pub fn prepare(
         known,
         step_timeout: a.timeout.map(Duration::from_millis),
         refuse,
+        fixtures: if a.fixture.is_empty() { vec![] } else { vec![Requirement::Object] },
         baud: a.baud,
         keep_transcripts,
         control: RunControl {

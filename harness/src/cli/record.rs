@@ -18,7 +18,7 @@ use gcl_transcript::{Level, is_slug};
 #[derive(Debug, clap::Args)]
 #[command(after_help = "Script lines: a host line (sent with a CR), `line: ESCAPED`, `nowait: LINE`, \
 `raw: ESCAPED`, `partial: ESCAPED`, `block: 43 14 FB`, `abort`, `wait`, `pause: 200ms`, `timeout: 30s`, `# comment`, \
-and transcript header keys (`id:`, `title:`, `clause:`, `level:`, `profile:`, `requires:`, `note:`).\n\n\
+and transcript header keys (`id:`, `title:`, `clause:`, `level:`, `profile:`, `requires:`, `setup:` (`sim` places its objects), `note:`).\n\n\
 Example:\n  gcl record --target sim:seed --script my-case.script --out my-case.gcl")]
 pub struct Args {
     /// The hand: `sim`, `sim:PROFILE`, `serial:PATH?baud=N`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
@@ -103,7 +103,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         fields.apply("requires", r, 0)?;
     }
     let header = fields.finish(0)?;
-    let mut link = super::replay::open_target(&target, Some(&profile.id))?;
+    // A script's `setup:` lines: `sim` places the objects; any other hand is recorded as it is,
+    // with the objects the operator put there.
+    if !header.setup.is_empty() && !gcl_harness::conform::places_setup(&target) {
+        eprintln!(
+            "gcl record: note: the script needs {} in place; gcl cannot place it on {target}, so it records the hand as it is",
+            gcl_transcript::Setup::list(&header.setup)
+        );
+    }
+    let mut link = super::replay::open_target_with(&target, Some(&profile.id), header.objects())?;
     let mut opts = RecordOptions::new(profile);
     opts.timeout = Duration::from_millis(args.timeout);
     opts.quiet = Duration::from_millis(args.quiet);

@@ -16,7 +16,11 @@ use gcl_transcript::parse_bytes;
 
 /// Arguments of `gcl replay`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Example:\n  gcl replay vectors/suite/seed/framing-echo.gcl --target sim:seed")]
+#[command(
+    after_help = "A transcript with `setup:` lines (an object in the fingers' way) runs on `sim`, which places the \
+objects; on any other target it is SKIP unless --fixture object says they are in place.\n\n\
+Example:\n  gcl replay vectors/suite/seed/framing-echo.gcl --target sim:seed"
+)]
 pub struct Args {
     /// Transcript files to replay, in order.
     #[arg(required = true, value_name = "FILE")]
@@ -34,11 +38,25 @@ pub struct Args {
     /// Print only failures.
     #[arg(long, short)]
     quiet: bool,
+    /// Declare a transcript's set-up in place (only `object`: the objects its `setup:` lines
+    /// name). `sim` places them itself; elsewhere such transcripts are SKIP without this.
+    #[arg(long = "fixture", value_name = "FIXTURE", value_parser = ["object"])]
+    fixture: Vec<String>,
 }
 
 /// Opens a target for a transcript of `profile` (used when the target is a bare `sim`).
 pub(crate) fn open_target(target: &Target, profile: Option<&str>) -> anyhow::Result<Box<dyn gcl_host::Link>> {
-    let opts = gcl_host::target::OpenOptions { profile: profile.map(str::to_string), ..Default::default() };
+    open_target_with(target, profile, [None; 4])
+}
+
+/// [`open_target`] with objects where each motor meets one when closing (`sim` only).
+pub(crate) fn open_target_with(
+    target: &Target,
+    profile: Option<&str>,
+    objects: [Option<i64>; 4],
+) -> anyhow::Result<Box<dyn gcl_host::Link>> {
+    let scenario = objects.iter().any(Option::is_some).then(|| gcl_model::Scenario { objects, ..Default::default() });
+    let opts = gcl_host::target::OpenOptions { profile: profile.map(str::to_string), scenario, ..Default::default() };
     let mut link = gcl_host::target::open(target, &opts).with_context(|| format!("opening {target}"))?;
     if matches!(target, Target::Exec { .. }) {
         // A freshly started process prints its power-up banner when it is ready, which may be
@@ -84,10 +102,21 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
     let mut shared: Option<Box<dyn gcl_host::Link>> = None;
     let mut w = std::io::stdout().lock();
     for (f, t) in &transcripts {
-        // Each transcript gets a fresh simulated hand; a real hand is opened once.
+        let sim = gcl_harness::conform::places_setup(&target);
+        if !t.header.setup.is_empty() && !sim && args.fixture.is_empty() {
+            writeln!(
+                w,
+                "SKIP {}: needs {} in place, which gcl cannot place on {target}; put it there and pass --fixture object",
+                f.display(),
+                gcl_transcript::Setup::list(&t.header.setup)
+            )?;
+            continue;
+        }
+        // Each transcript gets a fresh simulated hand (with its objects); a real hand is
+        // opened once.
         let mut fresh;
-        let link: &mut dyn gcl_host::Link = if matches!(target, Target::Sim { .. }) {
-            fresh = open_target(&target, t.header.profiles.first().map(String::as_str))?;
+        let link: &mut dyn gcl_host::Link = if sim {
+            fresh = open_target_with(&target, t.header.profiles.first().map(String::as_str), t.header.objects())?;
             fresh.as_mut()
         } else {
             if shared.is_none() {

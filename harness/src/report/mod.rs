@@ -260,6 +260,10 @@ pub struct RunOptions {
     /// `--no` requirements the operator refused: cases needing them are SKIP.
     #[serde(default)]
     pub refused: Vec<String>,
+    /// `--fixture` set-ups the operator declared in place: cases needing them ran on a hand
+    /// `gcl` cannot set up.
+    #[serde(default)]
+    pub fixtures: Vec<String>,
     /// `--fault`s given to a simulated hand.
     #[serde(default)]
     pub faults: Vec<String>,
@@ -312,6 +316,9 @@ impl RunOptions {
         }
         if !self.refused.is_empty() {
             v.push(("no", list(&self.refused)));
+        }
+        if !self.fixtures.is_empty() {
+            v.push(("fixture", list(&self.fixtures)));
         }
         if !self.faults.is_empty() {
             v.push(("fault", list(&self.faults)));

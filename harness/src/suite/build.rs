@@ -6,9 +6,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use gcl_model::Profile;
 use gcl_model::realtime::{ControlHeader, Field, RtFlag};
 use gcl_model::spec::{CommandKind, ParamSpec, Scope};
-use gcl_model::{DeviceConfig, Profile};
 
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_host::SimLink;
@@ -16,7 +16,7 @@ use gcl_host::link::LinkError;
 use gcl_transcript::matcher::Captures;
 use gcl_transcript::script::{Action, ScriptStep};
 use gcl_transcript::{
-    Expect, Form, Header, HostBytes, Level, Piece, Relation, Requirement, Step, Transcript, Value, ValueKind,
+    Expect, Form, Header, HostBytes, Level, Piece, Relation, Requirement, Setup, Step, Transcript, Value, ValueKind,
     elision_text,
 };
 
@@ -173,6 +173,8 @@ pub(crate) struct CaseDef {
     pub clauses: Vec<String>,
     pub level: Option<Level>,
     pub requires: Vec<Requirement>,
+    /// What must be in place before the first step (objects), which the model is given too.
+    pub setup: Vec<Setup>,
     pub notes: Vec<String>,
     pub plans: Vec<Plan>,
 }
@@ -207,6 +209,7 @@ impl CaseB {
                 clauses: Vec::new(),
                 level: None,
                 requires: Vec::new(),
+                setup: Vec::new(),
                 notes: Vec::new(),
                 plans: Vec::new(),
             },
@@ -242,6 +245,13 @@ impl CaseB {
             self.def.requires.push(r);
         }
         self
+    }
+
+    /// An object that motor `motor` meets at `at` when closing, there before the first step:
+    /// the golden says so (`setup:`), requires `object`, and the model runs with it.
+    pub fn object(mut self, motor: u8, at: i64) -> CaseB {
+        self.def.setup.push(Setup::Object { motor, at });
+        self.requires(Requirement::Object)
     }
 
     pub fn note(mut self, n: impl Into<String>) -> CaseB {
@@ -681,13 +691,24 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape, binds: &[Bi
 
 /// Runs a plan against a fresh simulated hand of `profile` and writes the golden transcript.
 pub(crate) fn build(profile: &Arc<Profile>, def: &CaseDef) -> Result<Transcript, String> {
-    let caps = capture_plan(profile, &def.plans).map_err(|e| format!("case {} ({}): {e}", def.id, profile.id))?;
+    let caps = capture_plan_with(profile, &def.plans, &def.setup)
+        .map_err(|e| format!("case {} ({}): {e}", def.id, profile.id))?;
     build_from(profile, def, &caps)
 }
 
 /// What a fresh simulated hand of `profile` answers to the plans' steps (shapes aside).
 pub(crate) fn capture_plan(profile: &Arc<Profile>, plans: &[Plan]) -> Result<Vec<Captured>, LinkError> {
-    let mut link = SimLink::new(profile.clone(), DeviceConfig::default());
+    capture_plan_with(profile, plans, &[])
+}
+
+/// [`capture_plan`] with `setup` in place around the hand.
+pub(crate) fn capture_plan_with(
+    profile: &Arc<Profile>,
+    plans: &[Plan],
+    setup: &[Setup],
+) -> Result<Vec<Captured>, LinkError> {
+    let header = Header { setup: setup.to_vec(), ..Header::default() };
+    let mut link = SimLink::new(profile.clone(), super::model_config(&header));
     let mut opts = RecordOptions::new(profile.clone());
     opts.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();
@@ -795,6 +816,7 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
         level,
         profiles: vec![profile.id.clone()],
         requires,
+        setup: def.setup.clone(),
         notes,
         extensions,
     };

@@ -234,6 +234,15 @@ pub fn replay_options() -> ReplayOptions {
     ReplayOptions::default()
 }
 
+/// The in-process model's configuration for a transcript: the objects its `setup:` lines
+/// place, nothing else changed. Every fresh model a transcript runs on (the goldens' builder,
+/// deadlines, alignment, the wire-time bound, `sim` targets) starts from this.
+pub fn model_config(header: &Header) -> gcl_model::DeviceConfig {
+    let mut config = gcl_model::DeviceConfig::default();
+    config.scenario.objects = header.objects();
+    config
+}
+
 /// Runs one case over `link`. The link should be at an idle prompt or freshly opened; the
 /// case's own preamble (^C, RESET, FDEF...) brings the hand to a known state.
 pub fn run_case(case: &Case, link: &mut dyn Link, opts: &ReplayOptions) -> ReplayOutcome {
@@ -264,11 +273,12 @@ struct IndexEntry<'a> {
     clauses: &'a [String],
     decisions: Vec<String>,
     requires: Vec<&'a str>,
+    setup: Vec<String>,
 }
 
 /// The text of `index.json`: every case's profile, id, path, title, level, clauses,
-/// decisions (every decision id it rests on) and requirements, for tools that do not parse
-/// transcripts.
+/// decisions (every decision id it rests on), requirements and set-up (`object 1 8500`), for
+/// tools that do not parse transcripts.
 pub fn index_text(cases: &[Case]) -> String {
     let entries: Vec<IndexEntry> = cases
         .iter()
@@ -281,6 +291,7 @@ pub fn index_text(cases: &[Case]) -> String {
             clauses: &c.header().clauses,
             decisions: c.decisions(),
             requires: c.header().requires.iter().map(Requirement::as_str).collect(),
+            setup: c.header().setup.iter().map(|s| s.to_string()).collect(),
         })
         .collect();
     let mut s = serde_json::to_string_pretty(&serde_json::json!({

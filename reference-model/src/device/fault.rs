@@ -87,6 +87,12 @@ faults! {
     HsgIgnored => "hsg-ignored",
     /// LSG is stored but ignored.
     LsgIgnored => "lsg-ignored",
+    /// HOLD is stored but ignored: a motor is held (or let go) after a move as its factory
+    /// HOLD says.
+    HoldIgnored => "hold-ignored",
+    /// BS is stored but ignored: a finger whose breakaway is detected closes on as with the
+    /// factory BS 0.
+    BsIgnored => "bs-ignored",
     /// EN is stored but ignored: commands without a prefix act on every motor.
     EnIgnored => "en-ignored",
     /// SGFLIP is stored but ignored: the strain is never turned over.
@@ -186,6 +192,8 @@ impl Fault {
             Fault::TstopIgnored => &["TSTOP"],
             Fault::HsgIgnored => &["HSG", "MSG"],
             Fault::LsgIgnored => &["LSG"],
+            Fault::HoldIgnored => &["HOLD"],
+            Fault::BsIgnored => &["BS"],
             Fault::EnIgnored => &["EN"],
             Fault::SgflipIgnored => &["SGFLIP"],
             Fault::OtempIgnored => &["OTEMP"],

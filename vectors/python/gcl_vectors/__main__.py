@@ -39,6 +39,11 @@ def cmd_replay(args):
         if spec[0] == "exec":
             wait_banner(link)
         for f, t in transcripts:
+            if t.setup and "object" not in args.fixture:
+                # This runner drives no simulator of its own: it cannot place an object.
+                what = " and ".join("object %d %d" % (m, at) for _, m, at in t.setup)
+                print("SKIP %s: needs %s in place, which this runner cannot place; put it there and pass --fixture object" % (f, what))
+                continue
             out = replay(t, link, default_timeout=args.timeout / 1000.0, resync=args.resync)
             if out.verdict == "PASS":
                 if not args.quiet:
@@ -81,6 +86,13 @@ def main(argv=None):
     r.add_argument("--timeout", type=int, default=2000, metavar="MS", help="wait of a step without `within`")
     r.add_argument("--resync", action="store_true", help="send ^C and drain before each transcript")
     r.add_argument("-q", "--quiet", action="store_true", help="print only failures")
+    r.add_argument(
+        "--fixture",
+        action="append",
+        default=[],
+        choices=["object"],
+        help="declare a transcript's set-up in place (the objects its `setup:` lines name); without it such transcripts are SKIP",
+    )
     c = sub.add_parser("check", help="load JSON vector files with their schema check")
     c.add_argument("files", nargs="*", metavar="FILE")
     c.add_argument("-q", "--quiet", action="store_true")

@@ -83,6 +83,21 @@ class Transcript:
     def requires(self):
         return [p.strip() for v in self.header.get("requires", []) for p in v.split(",") if p.strip()]
 
+    @property
+    def setup(self):
+        """The `setup:` lines as (kind, motor, position): ("object", 1, 8500)."""
+        return [("object", int(v.split()[1]), int(v.split()[2])) for v in self.header.get("setup", [])]
+
+
+MAX_OBJECT_POSITION = 1000000
+
+
+def _check_setup(value, lineno):
+    m = re.fullmatch(r"object[ \t]+([1-4])[ \t]+(0|[1-9][0-9]{0,6})", value)
+    if not m or int(m.group(2)) > MAX_OBJECT_POSITION:
+        raise TranscriptError(lineno, "bad setup `%s` (object MOTOR POSITION: motor 1..4, position 0..%d)" % (value, MAX_OBJECT_POSITION))
+    return int(m.group(1))
+
 
 def parse_duration(text, lineno):
     m = re.fullmatch(r"(\d+)(ms|s)", text)
@@ -283,10 +298,14 @@ def parse(data):
             if not m:
                 raise TranscriptError(lineno, "expected a header line `key: value` or a step")
             key, value = m.group(1), m.group(2).strip()
-            if key not in ("id", "title", "clause", "level", "profile", "requires", "note") and not key.startswith("x-"):
+            if key not in ("id", "title", "clause", "level", "profile", "requires", "setup", "note") and not key.startswith("x-"):
                 raise TranscriptError(lineno, "unknown header key `%s`" % key)
             if not value or any(ord(c) < 0x20 or ord(c) == 0x7F for c in value):
                 raise TranscriptError(lineno, "empty value or control characters in `%s`" % key)
+            if key == "setup":
+                motor = _check_setup(value, lineno)
+                if any(m == motor for _, m, _ in t.setup):
+                    raise TranscriptError(lineno, "motor %d already has an object" % motor)
             t.header.setdefault(key, []).append(value)
             continue
         in_header = False
@@ -351,4 +370,6 @@ def parse(data):
         raise TranscriptError(0, "bad id `%s`" % t.id)
     if t.header["level"][0].upper() not in LEVELS:
         raise TranscriptError(0, "bad level `%s`" % t.header["level"][0])
+    if t.setup and "object" not in t.requires:
+        raise TranscriptError(0, "a case with a setup requires `object` (add it to `requires:`)")
     return t

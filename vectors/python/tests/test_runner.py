@@ -153,6 +153,20 @@ class Runner(unittest.TestCase):
         self.assertEqual(code, 1, out)
         self.assertIn("sooner than its window", out)
 
+    def test_a_setup_is_skip_unless_declared_in_place(self):
+        placed = TRANSCRIPT.replace(b"profile: seed\n", b"profile: seed\nrequires: object\nsetup: object 1 8500\n")
+        self.write(placed)
+        code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)])
+        self.assertEqual(code, 0, out)
+        self.assertTrue(out.startswith("SKIP ") and "object 1 8500" in out and "--fixture object" in out, out)
+        code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)], extra=("--fixture", "object"))
+        self.assertEqual(code, 0, out)
+        self.assertTrue(out.startswith("PASS "), out)
+        # A setup without the requirement does not parse (exit 2).
+        self.write(TRANSCRIPT.replace(b"profile: seed\n", b"profile: seed\nsetup: object 1 8500\n"))
+        code, _ = self.run_against([])
+        self.assertEqual(code, 2)
+
 
 if __name__ == "__main__":
     unittest.main()

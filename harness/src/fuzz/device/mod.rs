@@ -437,8 +437,14 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
     c.entry(p.id.clone())
         .or_insert_with(|| {
             let cases = crate::suite::generate(p).unwrap_or_default();
+            // A case whose setup places an object needs it: the fuzzer's hands have none.
             Arc::new(
-                cases.iter().map(|c| action::from_transcript(p, &c.transcript)).filter(|a| !a.is_empty()).collect(),
+                cases
+                    .iter()
+                    .filter(|c| c.header().setup.is_empty())
+                    .map(|c| action::from_transcript(p, &c.transcript))
+                    .filter(|a| !a.is_empty())
+                    .collect(),
             )
         })
         .clone()

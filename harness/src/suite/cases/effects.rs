@@ -37,6 +37,110 @@ impl Gen {
         self.add(k);
 
         self.timed_effects();
+        self.hold_effect();
+        self.breakaway_stop_effect();
+    }
+
+    /// BS: with BS 1 a finger stops where its breakaway is detected, and BD and BP say so.
+    /// The case places an object half-way along motor 1's close (`setup: object`): with the
+    /// factory BS 0 the finger closes on past the object, with BS 1 it stops there, BD reads 1
+    /// and BP where it stopped.
+    fn breakaway_stop_effect(&mut self) {
+        if !self.has_param("BS") || !self.has_param("BD") || !self.has_param("BP") || self.default("BS", 1) != 0 {
+            return;
+        }
+        let at = self.close_target(1) / 2;
+        let mpe = self.mpe(1);
+        let limit = self.limit(1);
+        let pos = |r: Range| Some([r, (0, 0), (0, 0), (0, 0)]);
+        let k = self
+            .case(
+                "param-bs-effect",
+                "BS 1 stops a finger where its breakaway is detected: it stops at the object, BD reads 1 and BP where it stopped; with BS 0 it closes on past the object",
+            )
+            .src("Parameter BS")
+            .src("Parameter BD")
+            .src("Parameter BP")
+            .decision("bh8-breakaway")
+            .object(1, at)
+            .note(format!(
+                "The object is where motor 1 meets it when closing, {at}: with BS 0 the finger goes on past it (the \
+                 TorqueSwitch lets the fingertip close while the inner link rests on the object: more than MPE {mpe} \
+                 beyond), with BS 1 it stops within MPE of it, and BP is its position there"
+            ))
+            .preamble(true)
+            .line("1C")
+            .get("1", &["P"], pos((at + mpe + 1, limit)))
+            .line("1O")
+            .line("1FSET BS 1")
+            .line("1C")
+            .get("1", &["P"], pos((at - mpe, at + mpe)))
+            .get("1", &["BD", "BP"], None);
+        // BP is a determined value (written exactly); the hand's is where it stopped, near the
+        // object: a band, as P's.
+        let k = k.shape_last(Shape::Values(vec![vec![None], vec![Some((at - mpe, at + mpe))]]));
+        self.add(k);
+    }
+
+    /// HOLD: what a motor does once its move ends. Seen only where something pushes back: a
+    /// finger closed onto an object keeps pressing while it is held, and is let go with HOLD 0.
+    /// The case places an object half-way along motor 1's close (`setup: object`), closes onto
+    /// it with the factory HOLD 0 and captures the strain, then opens, sets HOLD 1 and closes
+    /// again: the held finger reads more strain than the released one.
+    fn hold_effect(&mut self) {
+        if !self.has_param("HOLD") || self.default("HOLD", 1) != 0 {
+            return;
+        }
+        let at = self.close_target(1) / 2;
+        let k = self
+            .case(
+                "param-hold-effect",
+                "HOLD 1 keeps a finger pressing on an object after its close ends: it reads more strain than with HOLD 0, which lets the motor go",
+            )
+            .src("Parameter HOLD")
+            .src("Command C")
+            .decision("seed-hold")
+            .decision("bh8-hold")
+            .object(1, at)
+            .preamble(true)
+            .line("1C")
+            .get("1", &["SG"], None)
+            .capture(Target::Value { line: 0, token: 0 }, "s0")
+            .line("1O")
+            .line("1FSET HOLD 1")
+            .line("1C")
+            .get("1", &["SG"], None);
+        // The model's two readings, from the plan as it stands (the relation is the last bind).
+        let caps = match super::super::build::capture_plan_with(&self.p, &k.def.plans, &k.def.setup) {
+            Ok(c) => c,
+            Err(_) => return,
+        };
+        let eol = self.p.framing.line_ending.clone();
+        let strain = |i: usize| -> Option<i64> {
+            let out = String::from_utf8_lossy(&caps.get(i)?.output).into_owned();
+            out.split(eol.as_str()).nth(1)?.trim().parse().ok()
+        };
+        let n = caps.len();
+        let (Some(released), Some(held)) = (strain(n - 5), strain(n - 1)) else { return };
+        // The clause is an order, not the model's factor: held above released. The relation is
+        // twice the released strain with the widest tolerance whose band still starts above
+        // 1.1 times it (so a hand that holds both alike, or lets both go, is refused), and it
+        // must hold the model's pair.
+        let rel = Relation::new("s0", 2, 1, 45);
+        let (lo, hi) = rel.band(released);
+        if !(lo..=hi).contains(&held) || lo <= released {
+            return;
+        }
+        let evidence = format!(
+            "D3000 (termination cases): when a motion ends, with HOLD 0 the motor is turned off, with HOLD 1 it is \
+             servoed to keep the position where it ended; a finger closed onto an object (motor 1 meets it at {at}) \
+             keeps pressing while held, so its strain reads above the released one. The model reads {released} with \
+             HOLD 0 and {held} with HOLD 1 (it halves what pressing adds once the motor is off); the case checks the \
+             order only: 2 x the released strain +-45 %, a band from 1.1 to 2.9 times it, which refuses a hand whose \
+             HOLD changes nothing (both alike)"
+        );
+        let k = k.relate(Target::Value { line: 0, token: 0 }, rel, evidence, vec![(released, held)]);
+        self.add(k);
     }
 
     /// Where a motor is `ticks` ms after a position move from `from` to `target` starts, with
