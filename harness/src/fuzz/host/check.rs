@@ -142,7 +142,9 @@ pub struct HostChecker {
     /// last opened (for CR CR: a lone CR after an answer or a reopen is a resync).
     prev: Option<u8>,
     /// The host's side of the line still held answer bytes it had not read when it sent the
-    /// bytes it sends next (only a pty can tell).
+    /// bytes it sends next: told by the transport (a pty watches the host's reads and writes
+    /// in order; TCP sees each write of a host it started as it is made, see
+    /// `sim::host_writes`, and otherwise looks at the socket queues when the bytes arrive).
     unread: bool,
     /// The hand has misbehaved in this session.
     misbehaved: bool,
