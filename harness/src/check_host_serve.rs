@@ -108,5 +108,6 @@ pub fn serve(
         answers: log.misbehave.answers(),
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
+        talking_at_end: false,
     })
 }

@@ -313,6 +313,31 @@ fn a_host_blocked_in_its_write_while_the_hand_holds_an_answer_is_not_hung() {
     assert_eq!(hangs, Vec::<String>::new());
 }
 
+/// A host that floods one line that never ends is one finding whether it gets to the end of
+/// its flood or the run budget stops it mid-flood: stopped while still sending, it was acting,
+/// not hung (it was called both `hang in py_flood.py:<module>` and `unterminated line`).
+#[test]
+fn a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it() {
+    if !python_with("threading") {
+        return;
+    }
+    let signatures = |r: &gcl_harness::fuzz::host::RunResult| -> Vec<String> {
+        judge(r, &[0, 1]).into_iter().map(|v| v.signature).collect()
+    };
+    let ended = run_once(&run(python("py_flood.py", &["1"])), &Schedule::default()).unwrap();
+    assert_eq!(ended.end, HostEnd::Exit(0), "{}", ended.stderr);
+    // At 1200 baud 5 MB would take 12 hours: the 2 s budget stops it while it sends.
+    let mut slow = run(python("py_flood.py", &["5"]));
+    slow.pace = Pace::Fixed(1200);
+    slow.budget = Duration::from_secs(2);
+    let stopped = run_once(&slow, &Schedule::default()).unwrap();
+    // (blocked in its write most of that time: the hand takes no more while its paced echo
+    // is queued, which is why a flood counts as talking while its line runs on)
+    assert!(matches!(stopped.end, HostEnd::OverBudget(_)) && stopped.talking_at_end, "{:?}", stopped.end);
+    assert_eq!(signatures(&ended), vec!["violation: line-ending: unterminated line".to_string()]);
+    assert_eq!(signatures(&stopped), signatures(&ended));
+}
+
 /// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,
 /// one finding, named by the host's own code (its stack), in C, Python and Rust.
 #[test]
@@ -607,11 +632,10 @@ fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
     // Named by the code the host said formed the belief (`gcl-observe: P 1 5120 WHERE`).
     assert_eq!(found, vec![(FindingKind::WrongValue, "silent wrong value: P at py_trusts_short_block.py:scenario")]);
     let f = &c.findings[0];
-    assert!(
-        f.verdict.message.contains("in RealTime feedback") && f.verdict.message.contains("after rt-block-length"),
-        "{}",
-        f.verdict.message
-    );
+    // (which answer it names as the context is the last the hand sent before the observation
+    // line was read from stderr: under load that can be the ^C after the block, so only the
+    // misbehaviour is held here)
+    assert!(f.verdict.message.contains("after rt-block-length"), "{}", f.verdict.message);
     // Its one bug, once: a feedback block held back past its read timeout (and the one queued
     // behind it) makes it go on without them, and it may take the late block for a later
     // one's: the hand's fault, no finding (it was a second, `waits-for-answer`, finding).

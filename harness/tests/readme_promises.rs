@@ -402,6 +402,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
     ),
     (
+        "so a flood is one `unterminated line` finding whether it ends or the budget stops it",
+        &["harness/tests/host_verdicts.rs::a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it"],
+    ),
+    (
         "Against such a hand the strain at rest and what VERS says are the hand's own",
         &[
             "harness/src/fuzz/device/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",

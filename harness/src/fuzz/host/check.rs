@@ -577,6 +577,31 @@ impl HostChecker {
     }
 }
 
+impl HostChecker {
+    /// The host is in the middle of a line already longer than any the hand takes: it is
+    /// sending (a flood), even while it is blocked in a write the hand's line rate holds up.
+    pub fn overlong_pending(&self) -> bool {
+        self.line.len() > self.profile.framing.max_line
+    }
+
+    /// The host was stopped while it still sent (at the run budget): a line it was sending
+    /// that already runs past the longest line the hand takes is graded as a line that never
+    /// ends, as when such a host leaves by itself ([`HostChecker::finish`]); a shorter one may
+    /// have been about to end.
+    pub fn cut_off(&mut self) {
+        if self.overlong_pending() {
+            self.violate(
+                HostClause::LineEnding,
+                "unterminated line",
+                format!(
+                    "\"{}\" ran past the hand's longest line and had not ended when the run budget stopped the host",
+                    esc(&self.line)
+                ),
+            );
+        }
+    }
+}
+
 fn esc(b: &[u8]) -> String {
     gcl_model::escape::escape(b)
 }

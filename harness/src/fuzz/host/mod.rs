@@ -156,6 +156,9 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             message: c.headline.clone(),
         }),
         (HostEnd::Hung(state), _) => v.push(hang_verdict(r, state, false)),
+        // Still sending when the budget stopped it: acting, not hung (its pending line is
+        // judged as it stood).
+        (HostEnd::OverBudget(_), _) if r.talking_at_end => {}
         (HostEnd::OverBudget(state), _) => v.push(hang_verdict(r, state, true)),
         (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
@@ -951,6 +954,7 @@ mod tests {
             answers: 9,
             answer_kinds: Vec::new(),
             elapsed: Duration::ZERO,
+            talking_at_end: false,
         }
     }
 

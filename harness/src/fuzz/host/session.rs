@@ -149,7 +149,15 @@ pub struct RunResult {
     pub answer_kinds: Vec<AnswerKindSeen>,
     /// Wall time of the run.
     pub elapsed: Duration,
+    /// Killed at the run budget while it was still sending (its last bytes came less than
+    /// [`TALKING`] before, or it was in the middle of a line longer than any the hand takes,
+    /// held up by the hand's line rate): it was acting, not hung, and its pending line is
+    /// judged as it stood ([`super::check::HostChecker::cut_off`]).
+    pub talking_at_end: bool,
 }
+
+/// A host whose last bytes came this recently is still talking.
+pub const TALKING: Duration = Duration::from_millis(500);
 
 /// A process the host left behind (it left the host's process group and still held the port
 /// or the host's stderr after the host ended), as found before it was killed.
@@ -339,6 +347,8 @@ pub(crate) struct Log {
     /// Where the hang clock starts: when the host last sent, or when the hand's last answer
     /// went out or is due to (an answer held back), whichever is later.
     last_activity: Instant,
+    /// When the host last sent.
+    last_sent: Option<Instant>,
     hang_up: Option<StopHandle>,
     pub(crate) hung_up: bool,
     /// A host has the port open, as the hand's transport last said.
@@ -371,6 +381,7 @@ impl Log {
             silenced_at: None,
             acted_at: None,
             last_activity: Instant::now(),
+            last_sent: None,
             hang_up: Some(hang_up),
             hung_up: false,
             port_open: false,
@@ -475,6 +486,7 @@ impl LineTap for Tap {
         // queued behind the held answer is at its cap), and is waiting for the hand, not
         // hung, until that answer is out.
         log.last_activity = log.last_activity.max(now);
+        log.last_sent = Some(now);
         if log.silenced_at.is_some() && log.acted_at.is_none() {
             log.acted_at = Some(now);
         }
@@ -783,6 +795,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut stack = None;
     let mut ended_at = None;
     let mut closed_until = started;
+    let mut talking_at_end = false;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
             Ok(Ok(status)) => {
@@ -803,7 +816,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             Err(mpsc::RecvTimeoutError::Timeout) => {}
         }
         let now = Instant::now();
-        let (last_activity, holds_port) = log.lock().map(|l| (l.last_activity, l.port_open)).unwrap_or((started, true));
+        let (last_activity, holds_port, last_sent, flooding) = log
+            .lock()
+            .map(|l| (l.last_activity, l.port_open, l.last_sent, l.checker.overlong_pending()))
+            .unwrap_or((started, true, None, false));
         // A host without the port open is not waiting for the hand: it is starting, between a
         // close and a reopen, or ending. Its quiet counts from when it (re)opened; only the
         // run budget ends it meanwhile. (On a loaded machine an interpreter can take longer
@@ -817,6 +833,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         let verdict = if cancelled {
             Some(HostEnd::Exit(-1))
         } else if now.duration_since(started) > spec.budget {
+            talking_at_end = flooding || last_sent.is_some_and(|t| now.saturating_duration_since(t) < TALKING);
             Some(HostEnd::OverBudget(state(&log)))
         } else if now > quiet_since && now.duration_since(quiet_since) > spec.timeout_hang {
             Some(HostEnd::Hung(state(&log)))
@@ -900,6 +917,9 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave.
     if !log.hung_up {
         log.checker.finish(!matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
+        if talking_at_end {
+            log.checker.cut_off();
+        }
     }
     let violations = log.checker.violations().to_vec();
     let gave_up_after = log.silenced_at.and_then(|s| {
@@ -923,6 +943,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         answers: log.misbehave.answers(),
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
+        talking_at_end,
     })
 }
 
