@@ -578,8 +578,8 @@ fn judged(
     let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
     let block = sig.command == "RealTime block";
     let fresh = sig.kind == "value" && !block || block && !opts.wide();
-    let link = matches!(sig.kind.as_str(), "link" | "restart");
-    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh) {
+    let link = sig.kind == "link";
+    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh, &sig.command) {
         // A block's answer that a rewrite fits up to where the hand parted may fit by chance
         // (another layout of the same size, values within the bands): a new explanation from
         // one holds only if the hand answers the whole case as the rewrite does.
@@ -608,6 +608,11 @@ struct Hypothesis {
     /// A parameter stored as set but without effect: steps that read it back (a get naming
     /// it, a listing of values) are held to the case's own expectation, not the rewrite's.
     stored: Option<gcl_model::spec::ParamId>,
+    /// The commands at which it may explain a failure of any kind afresh, a status included:
+    /// those of the lines it rewrites, where the model refuses them and the hand did not (see
+    /// [`explain`]). Elsewhere it explains only once known: a rewrite that changes the state
+    /// can loosen a later step's expectation enough to fit a failure of another bug.
+    any_kind: Vec<String>,
 }
 
 /// What explains a failure as one bug, tried on the model: the case's actions rewritten as a
@@ -637,6 +642,7 @@ fn explain(
     out: &ReplayOutcome,
     known: &[String],
     fresh: bool,
+    at: &str,
 ) -> Option<Explained> {
     use gcl_model::MotorSet;
     use gcl_model::grammar::{Args, Line, parse_line};
@@ -680,6 +686,7 @@ fn explain(
                 actions: actions.to_vec(),
                 echoes: Vec::new(),
                 stored: None,
+                any_kind: Vec::new(),
             };
             for (i, _, tail) in prefixed.iter().filter(|(_, s, _)| *s == pre) {
                 let new_line = format!("{}{tail}", digits(wide));
@@ -723,7 +730,39 @@ fn explain(
             actions: v,
             echoes,
             stored: Some(id),
+            any_kind: Vec::new(),
         });
+    }
+    // A prefix accepted where the command takes none: every line the model refuses for its
+    // prefix alone, sent without it (the shortest tail that is the same command unprefixed).
+    // The hand's echo is of the line as sent. A hand that ignores the prefix answers as the
+    // command does, where the model answers 4096; one that refuses it otherwise does not.
+    let mut accepted = Hypothesis {
+        says: "prefix accepted on a command that takes none".to_string(),
+        actions: actions.to_vec(),
+        echoes: Vec::new(),
+        stored: None,
+        any_kind: Vec::new(),
+    };
+    for (i, a) in actions.iter().enumerate() {
+        let Some(line) = line_of(a) else { continue };
+        let Err(r) = parse_line(p, line.as_bytes()) else { continue };
+        if r.problems != [gcl_model::grammar::Problem::PrefixNotAllowed] {
+            continue;
+        }
+        let lenient = gcl_model::grammar::ParseOptions { ignore_forbidden_prefix: true, ..Default::default() };
+        let Ok(Line::Command(c)) = gcl_model::grammar::parse_line_with(p, line.as_bytes(), lenient) else { continue };
+        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
+            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
+        });
+        if let Some(t) = tail {
+            accepted.echoes.push((line.clone(), t.to_string()));
+            accepted.any_kind.push(p.command(c.command).name.clone());
+            accepted.actions[i] = with_line(a, t.to_string());
+        }
+    }
+    if !accepted.echoes.is_empty() {
+        hyps.push(accepted);
     }
     let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
     let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
@@ -776,7 +815,7 @@ fn explain(
         }
     };
     // What already explains a finding first, then (when `fresh`) the rest.
-    hyps.retain(|h| fresh || known.contains(&h.says));
+    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
     if hyps.is_empty() {
         return None;
     }
@@ -1403,7 +1442,7 @@ fn report_finding(
     for (key, actions) in earlier {
         let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
         let out = hand.run(&b.transcript, true)?;
-        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false).is_some() {
+        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false, "").is_some_and(|x| x.says == e) {
             joined.push(key);
         }
     }
