@@ -469,7 +469,7 @@ pub fn signature(
     let line_no = if unit_start == a { count(&unit[..rel], eol) } else { 0 };
     let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
     let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
-    let param = param_at(p, &line, line_no);
+    let param = param_at(p, &line, line_no, m_line);
     let status_of = |l: &[u8]| -> Option<u64> {
         let s = String::from_utf8_lossy(l);
         let mut w = s.split_whitespace();
@@ -734,12 +734,24 @@ fn golden_line(t: &Transcript, step: usize, pt: &Parting, eol: &[u8]) -> Option<
     text.split(e.as_str()).nth(n).map(str::to_string)
 }
 
-/// The parameter named on answer line `line_no` (1-based after the echo) of a get line.
-fn param_at(p: &Profile, line: &[u8], line_no: usize) -> String {
+/// The parameter named on answer line `line_no` (1-based after the echo) of a get line, or
+/// on the model's answer line `m_line` of a listing of values (`NAME value ...`).
+fn param_at(p: &Profile, line: &[u8], line_no: usize, m_line: &[u8]) -> String {
     let Ok(Line::Command(c)) = parse_line(p, line) else { return String::new() };
     match (c.kind(p), &c.args) {
         (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => {
             line_no.checked_sub(1).and_then(|i| ids.get(i)).map(|id| p.param(*id).name.clone()).unwrap_or_default()
+        }
+        (
+            CommandKind::MotorListValues
+            | CommandKind::GlobalListValues
+            | CommandKind::MotorListAllValues
+            | CommandKind::GlobalListAllValues,
+            _,
+        ) => {
+            let first = m_line.split(|b| *b == b' ').next().unwrap_or_default();
+            let name = String::from_utf8_lossy(first);
+            p.param_id(&name).map(|id| p.param(id).name.clone()).unwrap_or_default()
         }
         _ => String::new(),
     }
