@@ -477,7 +477,10 @@ pub fn signature(
     };
     let (ms, hs) = (status_of(m_line), status_of(h_line));
     if ms.is_some() || hs.is_some() {
-        return Some(sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0))));
+        let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
+        // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
+        let cause = if is_abort(owner) { stopped_by_abort(p, t, owner) } else { String::new() };
+        return Some(FindingSignature { cause, ..s });
     }
     let prompt = fr.prompt.as_bytes();
     let m_rest = &run.stream[x..unit_end];
@@ -592,6 +595,27 @@ fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str,
         };
         if decides {
             return p.command(c.command).name.clone();
+        }
+    }
+    String::new()
+}
+
+/// The motion or LOOP line last sent before step `owner` (a ^C): what it stopped, or was sent
+/// to stop; empty when there is none.
+fn stopped_by_abort(p: &Profile, t: &Transcript, owner: usize) -> String {
+    let term = p.framing.terminator;
+    for s in t.steps.iter().take(owner).rev() {
+        let Some(h) = &s.send else { continue };
+        if h.form == Form::Hex {
+            continue;
+        }
+        for l in h.bytes.split(|b| *b == term).rev() {
+            if let Ok(Line::Command(c)) = parse_line(p, l) {
+                let k = c.kind(p);
+                if k.is_motion() || k == CommandKind::Loop {
+                    return p.command(c.command).name.clone();
+                }
+            }
         }
     }
     String::new()
