@@ -227,6 +227,33 @@ fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
     assert!(values.len() <= G_INCLUDES_SPREAD_VALUES, "{values:#?}");
 }
 
+/// A bug that shows as a status names its command: a prefix a command takes none of, accepted
+/// (where the model answers 4096), is explained on the model by the line sent without it, at
+/// the refused command itself (the status, and the restart of a prefixed RESET or VERS, were
+/// three findings that named no cause); a ^C sent to stop a step that ended already is named by
+/// the step (ds-ignored: IC and IO step by the factory DS).
+#[test]
+fn a_status_finding_names_the_command_it_concerns() {
+    let all = |fault: Fault| {
+        let mut o = opts(vec![fault], 2000);
+        o.seed = SEED;
+        o.minimize = false;
+        run(&o, &|_| {}).unwrap().findings.into_iter().map(|f| f.signature).collect::<Vec<_>>()
+    };
+    let s = all(Fault::PrefixNotRefused);
+    assert!(
+        s.iter().any(|x| x.kind == "status" && x.explanation == "prefix accepted on a command that takes none"),
+        "{s:#?}"
+    );
+    assert!(s.iter().all(|x| x.kind != "restart"), "{s:#?}");
+    let s = all(Fault::DsIgnored);
+    let aborts: Vec<_> = s.iter().filter(|x| x.command == "^C").collect();
+    assert!(!aborts.is_empty(), "{s:#?}");
+    for x in aborts {
+        assert!(["IC", "IO"].contains(&x.cause.as_str()), "{x}: not named by the step it was to stop");
+    }
+}
+
 /// A RealTime block whose layout differs is explained on the model too (a flag set without
 /// effect gives the block the hand sent, to the byte, over the whole case), and a failure of
 /// another kind that a known explanation covers joins it. Explaining never merges two bugs:
