@@ -164,15 +164,17 @@ pub struct FindingSignature {
     pub command: String,
     /// The kind of difference: value, order, status, framing, missing, extra, restart, link.
     pub kind: String,
-    /// What the difference concerns: the parameter of a get line (`P`), the RealTime field
-    /// (`LFAP`), the status bits (`1024 missing`, `32 extra`), `echo`, `header`, `flood`.
+    /// What the difference concerns: the parameter of a get line or a listing's line (`P`), the
+    /// RealTime field (`LFAP`), the status bits (`1024 missing`, `32 extra`), `echo`, `header`,
+    /// `flood`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub detail: String,
     /// The motors whose values differ, where that applies (`123`, `4`).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub motors: String,
     /// For a value read back: the command before it that decided the value (the last motion
-    /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter).
+    /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter). For a ^C's
+    /// status: the motion or loop it stopped, or was sent to stop (shown, not part of the key).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub cause: String,
     /// What explains the whole failure as one bug, confirmed on the model: the case rewritten as
