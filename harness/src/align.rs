@@ -164,15 +164,17 @@ pub struct FindingSignature {
     pub command: String,
     /// The kind of difference: value, order, status, framing, missing, extra, restart, link.
     pub kind: String,
-    /// What the difference concerns: the parameter of a get line (`P`), the RealTime field
-    /// (`LFAP`), the status bits (`1024 missing`, `32 extra`), `echo`, `header`, `flood`.
+    /// What the difference concerns: the parameter of a get line or a listing's line (`P`), the
+    /// RealTime field (`LFAP`), the status bits (`1024 missing`, `32 extra`), `echo`, `header`,
+    /// `flood`.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub detail: String,
     /// The motors whose values differ, where that applies (`123`, `4`).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub motors: String,
     /// For a value read back: the command before it that decided the value (the last motion
-    /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter).
+    /// for a position, the last set, FDEF, FLOAD or RESET for a stored parameter). For a ^C's
+    /// status: the motion or loop it stopped, or was sent to stop (shown, not part of the key).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub cause: String,
     /// What explains the whole failure as one bug, confirmed on the model: the case rewritten as
@@ -477,7 +479,7 @@ pub fn signature(
     let line_no = if unit_start == a { count(&unit[..rel], eol) } else { 0 };
     let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
     let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
-    let param = param_at(p, &line, line_no);
+    let param = param_at(p, &line, line_no, m_line);
     let status_of = |l: &[u8]| -> Option<u64> {
         let s = String::from_utf8_lossy(l);
         let mut w = s.split_whitespace();
@@ -485,7 +487,10 @@ pub fn signature(
     };
     let (ms, hs) = (status_of(m_line), status_of(h_line));
     if ms.is_some() || hs.is_some() {
-        return Some(sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0))));
+        let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
+        // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
+        let cause = if is_abort(owner) { stopped_by_abort(p, t, owner) } else { String::new() };
+        return Some(FindingSignature { cause, ..s });
     }
     let prompt = fr.prompt.as_bytes();
     let m_rest = &run.stream[x..unit_end];
@@ -601,6 +606,27 @@ fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str,
         };
         if decides {
             return p.command(c.command).name.clone();
+        }
+    }
+    String::new()
+}
+
+/// The motion or LOOP line last sent before step `owner` (a ^C): what it stopped, or was sent
+/// to stop; empty when there is none.
+fn stopped_by_abort(p: &Profile, t: &Transcript, owner: usize) -> String {
+    let term = p.framing.terminator;
+    for s in t.steps.iter().take(owner).rev() {
+        let Some(h) = &s.send else { continue };
+        if h.form == Form::Hex {
+            continue;
+        }
+        for l in h.bytes.split(|b| *b == term).rev() {
+            if let Ok(Line::Command(c)) = parse_line(p, l) {
+                let k = c.kind(p);
+                if k.is_motion() || k == CommandKind::Loop {
+                    return p.command(c.command).name.clone();
+                }
+            }
         }
     }
     String::new()
@@ -743,12 +769,24 @@ fn golden_line(t: &Transcript, step: usize, pt: &Parting, eol: &[u8]) -> Option<
     text.split(e.as_str()).nth(n).map(str::to_string)
 }
 
-/// The parameter named on answer line `line_no` (1-based after the echo) of a get line.
-fn param_at(p: &Profile, line: &[u8], line_no: usize) -> String {
+/// The parameter named on answer line `line_no` (1-based after the echo) of a get line, or
+/// on the model's answer line `m_line` of a listing of values (`NAME value ...`).
+fn param_at(p: &Profile, line: &[u8], line_no: usize, m_line: &[u8]) -> String {
     let Ok(Line::Command(c)) = parse_line(p, line) else { return String::new() };
     match (c.kind(p), &c.args) {
         (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => {
             line_no.checked_sub(1).and_then(|i| ids.get(i)).map(|id| p.param(*id).name.clone()).unwrap_or_default()
+        }
+        (
+            CommandKind::MotorListValues
+            | CommandKind::GlobalListValues
+            | CommandKind::MotorListAllValues
+            | CommandKind::GlobalListAllValues,
+            _,
+        ) => {
+            let first = m_line.split(|b| *b == b' ').next().unwrap_or_default();
+            let name = String::from_utf8_lossy(first);
+            p.param_id(&name).map(|id| p.param(id).name.clone()).unwrap_or_default()
         }
         _ => String::new(),
     }

@@ -113,6 +113,10 @@ struct Few {
     fault: String,
     most: usize,
     names: Vec<String>,
+    /// Keys of findings that still name neither the faulty command nor its parameter (the
+    /// motion where the bug shows): documented, and allowed only as listed.
+    #[serde(default)]
+    unnamed: Vec<String>,
     #[allow(dead_code)]
     reason: String,
 }
@@ -142,7 +146,8 @@ fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
         let s = run(&o, &|_| {}).unwrap();
         let sigs: Vec<String> = s.findings.iter().map(|x| x.signature.to_string()).collect();
         eprintln!("{:<24} {} finding(s): {}", f.name(), sigs.len(), sigs.join(" | "));
-        let (most, names) = few.get(f.name()).map_or((1, &[][..]), |x| (x.most, x.names.as_slice()));
+        let (most, names, unnamed) =
+            few.get(f.name()).map_or((1, &[][..], &[][..]), |x| (x.most, x.names.as_slice(), x.unnamed.as_slice()));
         if s.findings.len() > most {
             wrong.push(format!("{f}: {} findings, at most {most}: {sigs:?}", s.findings.len()));
         }
@@ -151,7 +156,11 @@ fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
                 let g = &x.signature;
                 // (an explanation names the parameter set without effect, or `prefix`)
                 let explained = g.explanation.split_whitespace().next().unwrap_or_default().to_string();
-                if !names.contains(&g.command) && !names.contains(&g.cause) && !names.contains(&explained) {
+                if !names.contains(&g.command)
+                    && !names.contains(&g.cause)
+                    && !names.contains(&explained)
+                    && !unnamed.contains(&g.key())
+                {
                     wrong.push(format!("{f}: `{g}` names none of {names:?}"));
                 }
             }
@@ -216,6 +225,33 @@ fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
         s.iter().filter(|x| x.kind == "value" && x.command != "RealTime block").map(|x| x.to_string()).collect();
     assert!(s.iter().any(|x| x.explanation == "prefix 123+4"), "{values:?}");
     assert!(values.len() <= G_INCLUDES_SPREAD_VALUES, "{values:#?}");
+}
+
+/// A bug that shows as a status names its command: a prefix a command takes none of, accepted
+/// (where the model answers 4096), is explained on the model by the line sent without it, at
+/// the refused command itself (the status, and the restart of a prefixed RESET or VERS, were
+/// three findings that named no cause); a ^C sent to stop a step that ended already is named by
+/// the step (ds-ignored: IC and IO step by the factory DS).
+#[test]
+fn a_status_finding_names_the_command_it_concerns() {
+    let all = |fault: Fault| {
+        let mut o = opts(vec![fault], 2000);
+        o.seed = SEED;
+        o.minimize = false;
+        run(&o, &|_| {}).unwrap().findings.into_iter().map(|f| f.signature).collect::<Vec<_>>()
+    };
+    let s = all(Fault::PrefixNotRefused);
+    assert!(
+        s.iter().any(|x| x.kind == "status" && x.explanation == "prefix accepted on a command that takes none"),
+        "{s:#?}"
+    );
+    assert!(s.iter().all(|x| x.kind != "restart"), "{s:#?}");
+    let s = all(Fault::DsIgnored);
+    let aborts: Vec<_> = s.iter().filter(|x| x.command == "^C").collect();
+    assert!(!aborts.is_empty(), "{s:#?}");
+    for x in aborts {
+        assert!(["IC", "IO"].contains(&x.cause.as_str()), "{x}: not named by the step it was to stop");
+    }
 }
 
 /// A RealTime block whose layout differs is explained on the model too (a flag set without

@@ -629,8 +629,8 @@ fn judged(
     let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
     let block = sig.command == "RealTime block";
     let fresh = sig.kind == "value" && !block || block && !opts.wide();
-    let link = matches!(sig.kind.as_str(), "link" | "restart");
-    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh) {
+    let link = sig.kind == "link";
+    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh, &sig.command) {
         // A block's answer that a rewrite fits up to where the hand parted may fit by chance
         // (another layout of the same size, values within the bands): a new explanation from
         // one holds only if the hand answers the whole case as the rewrite does.
@@ -660,6 +660,11 @@ struct Hypothesis {
     /// A parameter stored as set but without effect: steps that read it back (a get naming
     /// it, a listing of values) are held to the case's own expectation, not the rewrite's.
     stored: Option<gcl_model::spec::ParamId>,
+    /// The commands at which it may explain a failure of any kind afresh, a status included:
+    /// those of the lines it rewrites, where the model refuses them and the hand did not (see
+    /// [`explain`]). Elsewhere it explains only once known: a rewrite that changes the state
+    /// can loosen a later step's expectation enough to fit a failure of another bug.
+    any_kind: Vec<String>,
 }
 
 /// What explains a failure as one bug, tried on the model: the case's actions rewritten as a
@@ -689,6 +694,7 @@ fn explain(
     out: &ReplayOutcome,
     known: &[String],
     fresh: bool,
+    at: &str,
 ) -> Option<Explained> {
     use gcl_model::MotorSet;
     use gcl_model::grammar::{Args, Line, parse_line};
@@ -732,6 +738,7 @@ fn explain(
                 actions: actions.to_vec(),
                 echoes: Vec::new(),
                 stored: None,
+                any_kind: Vec::new(),
             };
             for (i, _, tail) in prefixed.iter().filter(|(_, s, _)| *s == pre) {
                 let new_line = format!("{}{tail}", digits(wide));
@@ -742,12 +749,14 @@ fn explain(
         }
     }
     // Sets without effect: a parameter's pair dropped from every set line (a line left without
-    // pairs becomes a get of the parameter, which changes nothing and keeps the steps in step).
+    // pairs becomes an empty line, which changes nothing, keeps the steps in step and is
+    // answered as the set was, but for the echo: the hand's echo of the line as sent is taken
+    // as the rewrite's line).
     let mut by_param: BTreeMap<gcl_model::spec::ParamId, Vec<(usize, String)>> = BTreeMap::new();
     for (i, a) in actions.iter().enumerate() {
         let Some(line) = line_of(a) else { continue };
         let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
-        let (k @ (CommandKind::MotorSet | CommandKind::GlobalSet), Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
+        let (CommandKind::MotorSet | CommandKind::GlobalSet, Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
             continue;
         };
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -757,28 +766,55 @@ fn explain(
         for (n, (id, _)) in pairs.iter().enumerate() {
             let kept: Vec<&str> =
                 words.iter().enumerate().filter(|(w, _)| *w != 1 + 2 * n && *w != 2 + 2 * n).map(|(_, x)| *x).collect();
-            let rewritten = if kept.len() > 1 {
-                kept.join(" ")
-            } else {
-                let get = if k == CommandKind::MotorSet { CommandKind::MotorGet } else { CommandKind::GlobalGet };
-                let Some(g) = p.command_of_kind(get) else { continue };
-                let prefix = c.prefix.map(digits).unwrap_or_default();
-                format!("{prefix}{} {}", p.command(g).name, p.param(*id).name)
-            };
+            let rewritten = if kept.len() > 1 { kept.join(" ") } else { String::new() };
             by_param.entry(*id).or_default().push((i, rewritten));
         }
     }
     for (id, lines) in by_param {
         let mut v = actions.to_vec();
+        let mut echoes = Vec::new();
         for (i, l) in lines {
+            echoes.push((line_of(&actions[i]).unwrap_or_default(), l.clone()));
             v[i] = with_line(&actions[i], l);
         }
         hyps.push(Hypothesis {
             says: format!("{} set without effect", p.param(id).name),
             actions: v,
-            echoes: Vec::new(),
+            echoes,
             stored: Some(id),
+            any_kind: Vec::new(),
         });
+    }
+    // A prefix accepted where the command takes none: every line the model refuses for its
+    // prefix alone, sent without it (the shortest tail that is the same command unprefixed).
+    // The hand's echo is of the line as sent. A hand that ignores the prefix answers as the
+    // command does, where the model answers 4096; one that refuses it otherwise does not.
+    let mut accepted = Hypothesis {
+        says: "prefix accepted on a command that takes none".to_string(),
+        actions: actions.to_vec(),
+        echoes: Vec::new(),
+        stored: None,
+        any_kind: Vec::new(),
+    };
+    for (i, a) in actions.iter().enumerate() {
+        let Some(line) = line_of(a) else { continue };
+        let Err(r) = parse_line(p, line.as_bytes()) else { continue };
+        if r.problems != [gcl_model::grammar::Problem::PrefixNotAllowed] {
+            continue;
+        }
+        let lenient = gcl_model::grammar::ParseOptions { ignore_forbidden_prefix: true, ..Default::default() };
+        let Ok(Line::Command(c)) = gcl_model::grammar::parse_line_with(p, line.as_bytes(), lenient) else { continue };
+        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
+            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
+        });
+        if let Some(t) = tail {
+            accepted.echoes.push((line.clone(), t.to_string()));
+            accepted.any_kind.push(p.command(c.command).name.clone());
+            accepted.actions[i] = with_line(a, t.to_string());
+        }
+    }
+    if !accepted.echoes.is_empty() {
+        hyps.push(accepted);
     }
     let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
     let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
@@ -798,7 +834,10 @@ fn explain(
         let at = (from..built.transcript.steps.len())
             .find(|s| send(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
         from = at.map_or(from, |s| s + 1);
-        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe)));
+        // (the step's answer ends at a prompt after the line's echo: not at the answer before
+        // it, which ends a step whose line is answered in the next one)
+        let echoed = |r: &[u8]| !p.framing.echo || r.windows(line.len()).any(|w| w == line.as_bytes());
+        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe) && echoed(&r)));
     }
     let in_hand_time = |v: Vec<HostAction>| -> Vec<HostAction> {
         v.into_iter()
@@ -828,7 +867,7 @@ fn explain(
         }
     };
     // What already explains a finding first, then (when `fresh`) the rest.
-    hyps.retain(|h| fresh || known.contains(&h.says));
+    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
     if hyps.is_empty() {
         return None;
     }
@@ -836,7 +875,8 @@ fn explain(
     let mut found: Option<Explained> = None;
     for h in hyps {
         // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
-        let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions), "fuzz", "explain", &built.block_bytes) else {
+        let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions.clone()), "fuzz", "explain", &built.block_bytes)
+        else {
             continue;
         };
         let (old, new) = (&built.transcript.steps, &b.transcript.steps);
@@ -848,33 +888,10 @@ fn explain(
         // size moves where one step's answer ends and the next begins (the replay read each
         // step as long as the original case expected), so the rewrite's expectations are
         // matched in turn along the stream, each ending where the next byte would break it.
-        let mut stream: Vec<u8> = Vec::new();
-        let mut judges: Vec<&gcl_transcript::Step> = Vec::new();
-        let mut complete = true;
-        for s in d..=failed {
-            let Some(mut got) = received(s) else {
-                complete = false;
-                break;
-            };
-            if send(&old[s]) != send(&new[s]) {
-                // The hand echoed the line as it was sent.
-                let Some((was, now)) = h.echoes.iter().find(|(w, _)| got.windows(w.len()).any(|x| x == w.as_bytes()))
-                else {
-                    // (a line the rewrite changed otherwise: its answer is not compared)
-                    complete = s < failed;
-                    if complete {
-                        continue;
-                    }
-                    break;
-                };
-                let at = got.windows(was.len()).position(|x| x == was.as_bytes()).unwrap_or(0);
-                got.splice(at..at + was.len(), now.bytes());
-            }
-            stream.extend_from_slice(&got);
-            judges.push(if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] });
-        }
+        let Some(gots) = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>() else { continue };
+        let (stream, judges, need, complete) = rewritten_stream(p, &h, &gots, d, failed, old, new, &reads, &send);
         let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
-        let holds = complete && follows(&judges, &stream, mismatch);
+        let holds = complete && follows(&judges, &stream, need, mismatch);
         if holds {
             // The whole case as the hand meets it under the explanation: the rewrite's steps,
             // with the lines it rewrote sent as they were (their answers are echo and prompt,
@@ -901,6 +918,91 @@ fn explain(
     found
 }
 
+/// The hand's answers to steps `d..=failed` (`gots`, one per step) as one stream, as the
+/// hypothesis `h` would have the hand answer them, with the step each part is judged by.
+///
+/// Where the rewrite changed a step's line and the hand echoed the line as it was sent, the
+/// echo is taken as the rewrite's line, wherever it comes: in the step's own answer or, for a
+/// line sent without waiting (after a ^C, or queued behind a motion), in a later step's. A line
+/// the rewrite changed otherwise (no echo of it is found) is not compared: its step's answer
+/// and judge are left out. Returns the stream, the judges, and whether the failing step is
+/// among them (a stream that ends before the parting judges nothing of it).
+#[allow(clippy::too_many_arguments)]
+fn rewritten_stream<'t>(
+    p: &Profile,
+    h: &Hypothesis,
+    gots: &[Vec<u8>],
+    d: usize,
+    failed: usize,
+    old: &'t [gcl_transcript::Step],
+    new: &'t [gcl_transcript::Step],
+    reads: &dyn Fn(&gcl_transcript::Step, gcl_model::spec::ParamId) -> bool,
+    send: &dyn Fn(&gcl_transcript::Step) -> Option<Vec<u8>>,
+) -> (Vec<u8>, Vec<&'t gcl_transcript::Step>, usize, bool) {
+    let term = p.framing.terminator;
+    let raw: Vec<u8> = gots.concat();
+    let mut starts = Vec::with_capacity(gots.len() + 1);
+    let mut at = 0;
+    for g in gots {
+        starts.push(at);
+        at += g.len();
+    }
+    starts.push(at);
+    // Echo substitutions, in the raw stream's positions: (where, length, the rewrite's line).
+    let mut subs: Vec<(usize, usize, &str)> = Vec::new();
+    let mut skipped = vec![false; gots.len()];
+    let mut cursor = 0;
+    for s in d..=failed {
+        let k = s - d;
+        if send(&old[s]) == send(&new[s]) {
+            continue;
+        }
+        let sent = send(&old[s]).unwrap_or_default();
+        let line = sent.strip_suffix(&[term]).unwrap_or(&sent);
+        let pair = h.echoes.iter().find(|(w, _)| w.as_bytes() == line);
+        let from = starts[k].max(cursor);
+        let found = pair.and_then(|(was, now)| {
+            let w = was.as_bytes();
+            let i = raw.get(from..)?.windows(w.len().max(1)).position(|x| x == w)? + from;
+            // (an echo split between two steps' reads is not taken)
+            let end = starts.iter().copied().find(|e| *e > i).unwrap_or(raw.len());
+            (i + w.len() <= end).then_some((i, w.len(), now.as_str()))
+        });
+        match found {
+            Some(sub) => {
+                cursor = sub.0 + sub.1;
+                subs.push(sub);
+            }
+            None => skipped[k] = true,
+        }
+    }
+    let mut stream = Vec::with_capacity(raw.len());
+    let mut judges = Vec::new();
+    for s in d..=failed {
+        let k = s - d;
+        if skipped[k] {
+            continue;
+        }
+        let (a, b) = (starts[k], starts[k + 1]);
+        let mut i = a;
+        for (pos, len, now) in subs.iter().filter(|(pos, _, _)| (a..b).contains(pos)) {
+            stream.extend_from_slice(&raw[i..*pos]);
+            stream.extend_from_slice(now.as_bytes());
+            i = pos + len;
+        }
+        stream.extend_from_slice(&raw[i..b]);
+        judges.push(if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] });
+    }
+    let complete = !skipped[failed - d];
+    // (the rewrite may answer later than the case did: where answers run a step behind their
+    // lines, an answer the case expected in the failing step may be the rewrite's next step's)
+    let need = judges.len();
+    for s in failed + 1..new.len().min(old.len()) {
+        judges.push(if h.stored.is_some_and(|id| reads(&old[s], id)) { &old[s] } else { &new[s] });
+    }
+    (stream, judges, need, complete)
+}
+
 /// What [`explain`] found: the explanation, and for one no finding had yet, the whole case as
 /// the hand would meet it under the explanation (`None` when the rewrite changed the number of
 /// steps), for [`judged`] to replay where a chance fit is possible.
@@ -914,8 +1016,8 @@ struct Explained {
 /// until it is whole: an answer ending in `{any}` takes nothing of the next). With `short` (the
 /// hand parted from the case with a wrong byte, and the replay read no further) the stream may
 /// end anywhere: every byte up to the parting one, that one included, is what the rewrite
-/// expects.
-fn follows(judges: &[&gcl_transcript::Step], stream: &[u8], short: bool) -> bool {
+/// expects. Without it the stream ends where the first `need` answers end.
+fn follows(judges: &[&gcl_transcript::Step], stream: &[u8], need: usize, short: bool) -> bool {
     use gcl_transcript::{Feed, Matcher};
     let Some(first) = judges.first() else { return false };
     let mut k = 0;
@@ -940,7 +1042,7 @@ fn follows(judges: &[&gcl_transcript::Step], stream: &[u8], short: bool) -> bool
             return false;
         }
     }
-    short || k + 1 == judges.len() && mt.is_complete()
+    short || k + 1 == need && mt.is_complete()
 }
 
 /// [`build_case`] with the run's bands, refusing (as a case the model cannot make) one that
@@ -1395,7 +1497,7 @@ fn report_finding(
     for (key, actions) in earlier {
         let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
         let out = hand.run(&b.transcript, true)?;
-        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false).is_some() {
+        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false, "").is_some_and(|x| x.says == e) {
             joined.push(key);
         }
     }
