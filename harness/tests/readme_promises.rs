@@ -366,7 +366,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/fuzz_device.rs::every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason"],
     ),
     (
-        "`prefix 123+4`, or a parameter set without effect, `MCV set without effect`",
+        "`prefix 123+4`, a parameter set without effect, `MCV set without effect`",
         &["harness/tests/fuzz_device.rs::a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation"],
     ),
     (
