@@ -347,6 +347,36 @@ fn a_baseline_keeps_known_findings_apart_from_new_ones() {
     assert!(text.contains("[known: in the baseline]"), "{text}");
 }
 
+/// A status key is its bits, so one finding stands for every command those bits showed on;
+/// its transcript names them all (`x-status-at`), so the same hand, drawn the same cases,
+/// against its own findings as a baseline has nothing new (scoped by command against a
+/// baseline, the bits on the commands the finding did not name were "new elsewhere").
+#[test]
+fn a_hand_against_its_own_findings_has_nothing_new() {
+    let dir = tempfile::tempdir().unwrap();
+    let first = dir.path().join("first");
+    let mut o = opts(vec![Fault::TooManyArgsSilent], 300);
+    o.seed = SEED;
+    o.out = Some(first.clone());
+    let s = run(&o, &|_| {}).unwrap();
+    let status = s.findings.iter().find(|f| f.signature.kind == "status").expect("a status finding");
+    let named = status
+        .transcript
+        .header
+        .extensions
+        .iter()
+        .find(|(k, _)| k == gcl_harness::fuzz::device::STATUS_AT_KEY)
+        .map(|(_, v)| v.split_ascii_whitespace().count());
+    assert!(named.is_some_and(|n| n > 1), "{}", status.transcript_text);
+    // (the same draws: bits on a command the baseline's campaign never reached are new)
+    let mut o = opts(vec![Fault::TooManyArgsSilent], 300);
+    o.seed = SEED;
+    assert!(o.baseline.add_dir(&first).unwrap() >= 1);
+    let s = run(&o, &|_| {}).unwrap();
+    let new: Vec<String> = s.findings.iter().filter(|f| f.is_new()).map(|f| f.signature.to_string()).collect();
+    assert_eq!(new, Vec::<String>::new());
+}
+
 /// `--skip-decision` draws no case resting on a decision the hand took differently, and
 /// `--known-failures` entries match findings by id or signature, as in `gcl conform`.
 #[test]

@@ -398,6 +398,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/hardening.rs::a_run_writes_the_known_failures_its_next_run_takes"],
     ),
     (
+        "A status finding's transcript names every command its bits showed on in its campaign",
+        &["harness/tests/fuzz_device.rs::a_hand_against_its_own_findings_has_nothing_new"],
+    ),
+    (
         "there they are known only on the command the baseline had them on",
         &["harness/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
     ),

@@ -125,6 +125,12 @@ impl Baseline {
                     // (a baseline written against a baseline scopes its statuses already)
                     let bare = key.split(" at ").next().unwrap_or(key).trim_end_matches(" elsewhere");
                     self.status_at.insert((bare.to_string(), at.to_string()));
+                    // Every other command its bits showed on in that campaign.
+                    for (_, v) in t.header.extensions.iter().filter(|(k, _)| k == STATUS_AT_KEY) {
+                        for c in v.split_ascii_whitespace() {
+                            self.status_at.insert((bare.to_string(), c.to_string()));
+                        }
+                    }
                 }
                 self.keys.insert(key.clone());
                 n += 1;
@@ -408,6 +414,10 @@ struct Shared {
     findings: Vec<Finding>,
     /// Signatures seen (found or being minimized).
     seen: BTreeSet<String>,
+    /// Every command each status key (its bits, unscoped) showed on: a finding keeps one, the
+    /// first, and its transcript names them all (`x-status-at`) so that a `--baseline` made of
+    /// it knows them all.
+    status_at: BTreeMap<String, BTreeSet<String>>,
     /// What explains a finding so far (see [`judged`]).
     explained: Vec<String>,
     dropped: u64,
@@ -1215,6 +1225,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         features: BTreeSet::new(),
         findings: Vec::new(),
         seen: BTreeSet::new(),
+        status_at: BTreeMap::new(),
         explained: Vec::new(),
         dropped: 0,
         wire_bytes: 0,
@@ -1244,10 +1255,11 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
             });
         }
     });
-    let sh = shared.into_inner().unwrap_or_else(|e| e.into_inner());
+    let mut sh = shared.into_inner().unwrap_or_else(|e| e.into_inner());
     if let Some(e) = sh.error {
         return Err(e);
     }
+    name_status_commands(&mut sh.findings, &sh.status_at);
     Ok(FuzzSummary {
         runs: runs.load(Ordering::SeqCst),
         dropped: sh.dropped,
@@ -1266,6 +1278,39 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         minimizing: sh.minimizing,
     })
 }
+
+impl Shared {
+    /// Notes a failure's signature: whether it is new (not seen before), and for a status
+    /// difference the command it showed on.
+    fn saw(&mut self, sig: &FindingSignature) -> bool {
+        if sig.kind == "status" && sig.explanation.is_empty() {
+            let bare = FindingSignature { scope: String::new(), ..sig.clone() }.key();
+            self.status_at.entry(bare).or_default().insert(slug(&sig.command));
+        }
+        self.seen.insert(sig.key())
+    }
+}
+
+/// Names in each status finding's transcript (and rewrites its file) every command its bits
+/// showed on in the campaign (`x-status-at`, see [`Baseline::add_dir`]).
+fn name_status_commands(findings: &mut [Finding], status_at: &BTreeMap<String, BTreeSet<String>>) {
+    for f in findings.iter_mut().filter(|f| f.signature.kind == "status" && f.signature.explanation.is_empty()) {
+        let bare = FindingSignature { scope: String::new(), ..f.signature.clone() }.key();
+        let Some(at) = status_at.get(&bare).filter(|at| at.len() > 1) else { continue };
+        let ext = &mut f.transcript.header.extensions;
+        ext.retain(|(k, _)| k != STATUS_AT_KEY);
+        ext.push((STATUS_AT_KEY.to_string(), at.iter().cloned().collect::<Vec<_>>().join(" ")));
+        f.transcript_text = f.transcript.to_text();
+        if let Some(path) = &f.path {
+            // (a file that cannot be rewritten keeps its first command, as before)
+            let _ = crate::report::write_atomic(path, f.transcript_text.as_bytes());
+        }
+    }
+}
+
+/// The transcript header of a status finding that names every command (as file-name words:
+/// `fget io`) its status bits showed on in the campaign.
+pub const STATUS_AT_KEY: &str = "x-status-at";
 
 /// The run's counters, shared by the workers.
 #[derive(Clone, Copy)]
@@ -1356,7 +1401,7 @@ fn worker(
             let out = hand.run(&pb.transcript, true)?;
             let known = lock().explained.clone();
             if let Some(sig) = judged(opts, &mut hand, &pa, &pb, &out, &known)? {
-                let new = lock().seen.insert(sig.key());
+                let new = lock().saw(&sig);
                 if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
@@ -1406,13 +1451,13 @@ fn worker(
                 "the hand stopped answering at run {run_no} (the case met silence, then {why})"
             ));
             stop.store(true, Ordering::SeqCst);
-            if lock().seen.insert(sig.key()) {
+            if lock().saw(&sig) {
                 let o = FuzzOptions { minimize: false, ..opts.clone() };
                 report_finding(&o, &mut hand, shared, start, &actions, &built, sig, run_no, progress)?;
             }
             return Ok(());
         }
-        let new = lock().seen.insert(sig.key());
+        let new = lock().saw(&sig);
         if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
             stop.store(true, Ordering::SeqCst);
         }
@@ -1717,5 +1762,18 @@ mod tests {
         let mut again = status("FGET", "1024 missing");
         b2.qualify(&mut again);
         assert!(b2.explains("seed", &finding_id(&again), &again).is_some(), "{}", again.key());
+        // A finding names every command its bits showed on in its campaign (`x-status-at`):
+        // those are known too.
+        let text = finding("fuzz-fget-status-1024-missing", "status 1024 missing")
+            .replace("x-signature:", "x-status-at: fget io\nx-signature:");
+        std::fs::write(dir.path().join("a.gcl"), text).unwrap();
+        let mut b3 = Baseline::default();
+        b3.add_dir(dir.path()).unwrap();
+        let known3 = |command: &str| {
+            let mut s = status(command, "1024 missing");
+            b3.qualify(&mut s);
+            b3.explains("seed", &finding_id(&s), &s).is_some()
+        };
+        assert!(known3("IO") && known3("FGET") && !known3("C"));
     }
 }
