@@ -475,6 +475,15 @@ fn one_exit_habit_is_one_finding_whatever_the_code() {
     );
 }
 
+/// A Python host of `harness/tests/hosts` run by `sh -c SHELL` (`$0` the interpreter, `$1` the
+/// script), with a 1.5 s hang timeout.
+fn behind_a_shell(shell: &str, host: &str) -> HostRun {
+    let script = hosts().join(host).display().to_string();
+    let mut r = run(vec!["sh".into(), "-c".into(), shell.into(), deps::python(), script]);
+    r.timeout_hang = Duration::from_millis(1500);
+    r
+}
+
 /// A host that has not opened the port yet is not waiting for the hand: one whose start takes
 /// longer than the hang timeout (a slow interpreter on a loaded machine; here a shell that
 /// sleeps first) is not hung, and a correct one has no finding. (Killed at that moment, a
@@ -484,10 +493,7 @@ fn a_host_slow_to_open_its_port_is_not_hung() {
     if !python_with("serial") {
         return;
     }
-    let script = hosts().join("py_timeout.py").display().to_string();
-    let slow = vec!["sh".into(), "-c".into(), "sleep 2; exec \"$0\" \"$1\" 2".into(), deps::python(), script];
-    let mut r = run(slow);
-    r.timeout_hang = Duration::from_millis(1500);
+    let r = behind_a_shell("sleep 2; exec \"$0\" \"$1\" 2", "py_timeout.py");
     let result = run_once(&r, &Schedule::default()).unwrap();
     assert_eq!(result.end, HostEnd::Exit(0), "{}", result.stderr);
     assert_eq!(judge(&result, &[0, 1]), Vec::new());
@@ -501,10 +507,7 @@ fn a_python_host_behind_a_shell_is_named_by_its_python_frames() {
     if !python_with("serial") {
         return;
     }
-    let script = hosts().join("py_read_forever.py").display().to_string();
-    let wrapped = vec!["sh".into(), "-c".into(), "\"$0\" \"$1\"; exit $?".into(), deps::python(), script];
-    let mut r = run(wrapped);
-    r.timeout_hang = Duration::from_millis(1500);
+    let r = behind_a_shell("\"$0\" \"$1\"; exit $?", "py_read_forever.py");
     let cut = Schedule { planned: vec![Planned { answer: 2, op: Operator::NoPrompt, arg: 0 }] };
     let result = run_once(&r, &cut).unwrap();
     assert!(matches!(result.end, HostEnd::Hung(_)), "{:?} {}", result.end, result.stderr);
