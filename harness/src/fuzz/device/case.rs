@@ -441,8 +441,10 @@ pub fn build_case_sending(
     let caps = capture_plan(p, &def.plans).map_err(|e| NotACase(e.to_string()))?;
     // A case whose answers change when the model's joint stops are taken away rests on where
     // the model puts them (the `[hand]` limits, which the seed does not fix): it is judged at
-    // that decision's level, and `--skip-decision` drops it.
-    if moves && (stalls || rests_on_stops(p, &def.plans, &caps)) {
+    // that decision's level, and `--skip-decision` drops it. Asked only of a hand outside
+    // this process (in process the stops are the model's, and the second capture cost a fifth
+    // of the in-process campaign's speed).
+    if moves && (stalls || wide && rests_on_stops(p, &def.plans, &caps)) {
         for id in ["seed-motion-model", "bh8-position-bounds"] {
             def.decision(p, id);
         }
