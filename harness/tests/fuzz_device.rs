@@ -246,12 +246,22 @@ fn a_status_finding_names_the_command_it_concerns() {
         "{s:#?}"
     );
     assert!(s.iter().all(|x| x.kind != "restart"), "{s:#?}");
-    let s = all(Fault::DsIgnored);
+    // A ^C's status names the motion it was to stop.
+    let s = all(Fault::AbortSilent);
     let aborts: Vec<_> = s.iter().filter(|x| x.command == "^C").collect();
     assert!(!aborts.is_empty(), "{s:#?}");
     for x in aborts {
-        assert!(["IC", "IO"].contains(&x.cause.as_str()), "{x}: not named by the step it was to stop");
+        assert!(
+            ["C", "O", "M", "IC", "IO", "TC", "TO", "HOME"].contains(&x.cause.as_str()),
+            "{x}: not named by a motion"
+        );
     }
+    // A ^C meant to stop a step that DS (ignored) had already ended is DS's bug, not the step's:
+    // the model with DS without effect answers that case as the hand did (it was a second
+    // finding, `status at ^C after IC`).
+    let s = all(Fault::DsIgnored);
+    assert_eq!(s.len(), 1, "{s:#?}");
+    assert_eq!(s[0].explanation, "DS set without effect", "{s:#?}");
 }
 
 /// A RealTime block whose layout differs is explained on the model too (a flag set without
@@ -631,4 +641,28 @@ fn the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// Bugs whose cases a rewrite of the actions cannot follow (a ^C it would land elsewhere,
+/// answers recorded a step behind, control blocks of another layout, a refused line that
+/// answers as refused and still acts) are named all the same: the failing transcript replayed
+/// on a model that has the bug answers as the hand did, byte for byte. Each is one finding
+/// named by its cause (they were two to four, under the motion or block where they showed).
+#[test]
+fn a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it() {
+    for (fault, says) in [
+        (Fault::PartialSetApplied, "FSET refused but applied in part"),
+        (Fault::ResetKeepsRam, "RESET keeps the values set"),
+        (Fault::LsgIgnored, "LSG set without effect"),
+        (Fault::LctIgnored, "LCT set without effect"),
+        (Fault::LcvIgnored, "LCV set without effect"),
+    ] {
+        let mut o = opts(vec![fault], 2000);
+        o.seed = SEED;
+        o.minimize = false;
+        let s = run(&o, &|_| {}).unwrap();
+        let got: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
+        assert_eq!(s.findings.len(), 1, "{fault}: {got:?}");
+        assert_eq!(s.findings[0].signature.explanation, says, "{fault}: {got:?}");
+    }
 }

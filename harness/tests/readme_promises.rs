@@ -370,6 +370,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/fuzz_device.rs::a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation"],
     ),
     (
+        "a refused set applied in part or RESET keeping the values set; in process, a model holding the hypothesis must answer the failing case byte for byte as the hand did",
+        &["harness/tests/fuzz_device.rs::a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it"],
+    ),
+    (
         "corpora of several workers, machines or runs merge by copying",
         &["harness/tests/fuzz_device.rs::the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus"],
     ),

@@ -206,6 +206,7 @@ pub fn open(target: &Target, opts: &OpenOptions) -> Result<Box<dyn Link>, LinkEr
                 scenario: opts.scenario.clone().unwrap_or_default(),
                 nv: opts.nv.clone().unwrap_or_default(),
                 faults: opts.faults.clone(),
+                ..DeviceConfig::default()
             };
             Ok(Box::new(SimLink::new(profile, config)))
         }

@@ -103,7 +103,13 @@ impl Engine {
             opts.faults.iter().map(|f| f.name()).collect::<Vec<_>>().join(", ")
         );
         let trace = opts.trace.as_deref().map(|p| Trace::create(p, &header)).transpose()?;
-        let config = DeviceConfig { seed: opts.seed, scenario: opts.scenario.clone(), nv, faults: opts.faults.clone() };
+        let config = DeviceConfig {
+            seed: opts.seed,
+            scenario: opts.scenario.clone(),
+            nv,
+            faults: opts.faults.clone(),
+            ..Default::default()
+        };
         let link = SimLink::new(opts.profile.clone(), config.clone());
         let now = Instant::now();
         let mut e = Engine {

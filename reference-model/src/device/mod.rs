@@ -83,6 +83,11 @@ pub struct DeviceConfig {
     pub nv: NvMemory,
     /// Deliberate bugs.
     pub faults: Vec<Fault>,
+    /// Parameters stored as set but without effect on the hand's behaviour, which reads their
+    /// factory values instead: not a bug of this model but a hypothesis about another hand (the
+    /// device fuzzer replays a failing case on a model built so, to name the parameter whose
+    /// setting the hand ignored). Empty for the hand the profile describes.
+    pub without_effect: Vec<ParamId>,
 }
 
 /// What the hand is doing.
@@ -163,6 +168,8 @@ const TICK_NS: u64 = 1_000_000;
 pub struct Device {
     profile: Arc<Profile>,
     faults: FaultSet,
+    /// See [`DeviceConfig::without_effect`].
+    without_effect: Vec<ParamId>,
     scenario: Scenario,
     rng: rand_pcg::Pcg32,
     nv: NvMemory,
@@ -208,6 +215,7 @@ impl Device {
         let motors = PerMotor(config.scenario.initial_positions.map(|p| Joint::new(p as f64)));
         let mut d = Device {
             faults,
+            without_effect: config.without_effect,
             rng: rand_pcg::Pcg32::seed_from_u64(config.seed),
             scenario: config.scenario,
             nv,

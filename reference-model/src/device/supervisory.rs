@@ -86,6 +86,9 @@ impl Device {
     }
 
     pub(super) fn ignores(&self, id: ParamId) -> bool {
+        if self.without_effect.contains(&id) {
+            return true;
+        }
         if self.faults.is_empty() {
             return false;
         }
@@ -95,7 +98,7 @@ impl Device {
 
     /// The parameters as the hand's behaviour sees them (see [`Device::get`]).
     pub(super) fn behaviour_store(&self) -> std::borrow::Cow<'_, ParamStore> {
-        if self.faults.iter().all(|f| f.ignored_params().is_empty()) {
+        if self.without_effect.is_empty() && self.faults.iter().all(|f| f.ignored_params().is_empty()) {
             return std::borrow::Cow::Borrowed(&self.params);
         }
         let mut store = self.params.clone();

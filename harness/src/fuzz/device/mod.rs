@@ -22,6 +22,7 @@ pub mod case;
 pub mod coverage;
 mod relate;
 pub mod report;
+mod variant;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -638,19 +639,24 @@ fn judged(
 ) -> Result<Option<FindingSignature>, FuzzError> {
     let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
     let block = sig.command == "RealTime block";
-    let fresh = sig.kind == "value" && !block || block && !opts.wide();
+    let rewrite = sig.kind == "value" && !block || block && !opts.wide();
+    let fresh = Fresh { rewrite, exact: rewrite || sig.kind == "missing" };
     let link = sig.kind == "link";
     if !link && let Some(e) = explain(opts, actions, built, out, known, fresh, &sig.command) {
         // A block's answer that a rewrite fits up to where the hand parted may fit by chance
         // (another layout of the same size, values within the bands): a new explanation from
         // one holds only if the hand answers the whole case as the rewrite does.
-        let confirmed = match (&e.whole, block && !known.contains(&e.says)) {
+        let confirmed = match (&e.whole, block && !known.contains(&e.says) && !e.exact) {
             (_, false) => true,
             (Some(t), true) => hand.run(t, true)?.is_pass(),
             (None, true) => false,
         };
         if confirmed {
             sig.explanation = e.says;
+        } else if let Some(says) = variant::explains(opts, built, out, known, fresh.exact) {
+            // (a rewrite's chance fit, unconfirmed, leaves the case to a model that answers
+            // it byte for byte)
+            sig.explanation = says;
         }
     }
     opts.baseline.qualify(&mut sig);
@@ -698,6 +704,34 @@ struct Hypothesis {
 /// does (a case that two bugs explain alike tells neither: lcvc-ignored's blocks were once
 /// explained as `prefix 2+1`).
 fn explain(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    known: &[String],
+    fresh: Fresh,
+    at: &str,
+) -> Option<Explained> {
+    explain_by_rewrite(opts, actions, built, out, known, fresh.rewrite, at).or_else(|| {
+        variant::explains(opts, built, out, known, fresh.exact).map(|says| Explained { says, whole: None, exact: true })
+    })
+}
+
+/// Where [`explain`] may find an explanation no finding has yet: by a rewrite (a value read
+/// back; a block in process), and by a model answering byte for byte (also an answer cut
+/// short: the hand said part of it, then nothing; see [`variant::explains`]).
+#[derive(Clone, Copy)]
+struct Fresh {
+    rewrite: bool,
+    exact: bool,
+}
+
+impl Fresh {
+    const NONE: Fresh = Fresh { rewrite: false, exact: false };
+}
+
+/// [`explain`]'s rewrites (see there); what they cannot follow, [`variant`] may still name.
+fn explain_by_rewrite(
     opts: &FuzzOptions,
     actions: &[HostAction],
     built: &BuiltCase,
@@ -916,13 +950,13 @@ fn explain(
                 t
             });
             if known.contains(&h.says) {
-                return Some(Explained { says: h.says, whole: None });
+                return Some(Explained { says: h.says, whole: None, exact: false });
             }
             // (a new one: another bug that explains the case as well leaves it unexplained)
             if found.is_some() {
                 return None;
             }
-            found = Some(Explained { says: h.says, whole });
+            found = Some(Explained { says: h.says, whole, exact: false });
         }
     }
     found
@@ -1019,6 +1053,9 @@ fn rewritten_stream<'t>(
 struct Explained {
     says: String,
     whole: Option<Transcript>,
+    /// Shown by a model with the bug answering the case byte for byte as the hand did
+    /// ([`variant`]): no chance fit, nothing to confirm.
+    exact: bool,
 }
 
 /// Whether `stream` is the answers `judges` expect, one after another, each ending as soon as
@@ -1542,7 +1579,7 @@ fn report_finding(
     for (key, actions) in earlier {
         let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
         let out = hand.run(&b.transcript, true)?;
-        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), false, "").is_some_and(|x| x.says == e) {
+        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), Fresh::NONE, "").is_some_and(|x| x.says == e) {
             joined.push(key);
         }
     }

@@ -1,0 +1,196 @@
+//! Naming a bug by a model that has it: a failing case replayed on models that each hold one
+//! hypothesis about the hand, the one that answers as the hand did naming the bug.
+//!
+//! [`super::explain`] rewrites a case's *actions* as a hand with a bug would take them and
+//! rebuilds it on the model. A rewrite that changes when a motion ends cannot be followed
+//! through the case (a ^C it would land elsewhere, answers recorded a step behind their lines
+//! after a motion ended in the pause before its ^C), and a rewrite cannot say "the hand's
+//! blocks have another layout" at all, so such bugs showed under the motion or block where
+//! they surfaced (`value at FGET (P) after TO`, `status at ^C (2048 extra)`) rather than under
+//! their cause. Here the case is not rewritten: the very transcript the hand failed is
+//! replayed, with the same waits, on a model unlike the profile's in one way (see
+//! [`variants`]: a parameter stored but without effect, a letter prefix naming one motor more,
+//! the other side of a decision the model takes on line atomicity, prefixes or RESET). Where
+//! that model answers every step up to the failing one byte for byte as the hand did, and
+//! fails where the hand failed, it names the bug; the key is the one [`super::explain`]'s
+//! rewrite gives the same bug, so both ways join one finding.
+//!
+//! Byte for byte: only where the hand's answers are exact (the in-process sim, whose noise and
+//! clock are the model's). A hand outside this process answers with its own noise and timing,
+//! so there this proves nothing and is not tried; the rewrites still are.
+
+use std::sync::Arc;
+
+use gcl_model::Profile;
+use gcl_model::grammar::{Args, Line, parse_line};
+use gcl_model::spec::{CommandKind, ParamId};
+use gcl_transcript::Form;
+
+use super::FuzzOptions;
+use super::case::BuiltCase;
+use crate::replay::{ReplayOutcome, replay};
+
+/// Parameters set by name in the case's lines up to step `upto`, in the order first set.
+fn set_params(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<ParamId> {
+    let p = &opts.profile;
+    let mut out: Vec<ParamId> = Vec::new();
+    for s in built.transcript.steps.iter().take(upto + 1) {
+        let Some(h) = &s.send else { continue };
+        if h.form == Form::Hex {
+            continue;
+        }
+        for l in h.bytes.split(|b| *b == p.framing.terminator) {
+            let Ok(Line::Command(c)) = parse_line(p, l) else { continue };
+            let (CommandKind::MotorSet | CommandKind::GlobalSet, Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
+                continue;
+            };
+            for (id, _) in pairs {
+                if !out.contains(id) {
+                    out.push(*id);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// One hypothesis: what it says, and the model that holds it (the profile, or a patch of it,
+/// and the device's configuration).
+struct Variant {
+    says: String,
+    profile: Arc<Profile>,
+    config: gcl_model::DeviceConfig,
+}
+
+/// The hypotheses a case allows, each a model unlike the profile's in one way:
+/// - a parameter the case sets, stored but without effect (`LSG set without effect`);
+/// - a letter prefix the case sends, naming one motor more (`prefix 123+4`, the key
+///   [`super::explain`]'s prefix rewrite gives the same bug);
+/// - the other side of a decision the model takes, where the case meets it: a set the model
+///   refuses applied in its valid pairs (`FSET refused but applied in part`; decision
+///   framing-line-atomic), a prefix on a command that takes none ignored (`prefix accepted on
+///   a command that takes none`, the rewrite's key; seed-prefix-rules), RESET keeping the
+///   values in RAM (`RESET keeps the values set`; bh8-reset). The model plays each as it plays
+///   the fault of that name.
+fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> {
+    let p = &opts.profile;
+    // (the in-process hand's world: its noise seed, scenario and EEPROM, without its faults)
+    let base = gcl_model::DeviceConfig {
+        seed: opts.open.seed,
+        scenario: opts.open.scenario.clone().unwrap_or_default(),
+        nv: opts.open.nv.clone().unwrap_or_default(),
+        ..crate::suite::model_config(&built.transcript.header)
+    };
+    let mut out: Vec<Variant> = set_params(opts, built, upto)
+        .into_iter()
+        .map(|id| Variant {
+            says: format!("{} set without effect", p.param(id).name),
+            profile: p.clone(),
+            config: gcl_model::DeviceConfig { without_effect: vec![id], ..base.clone() },
+        })
+        .collect();
+    let lines = sent_lines(opts, built, upto);
+    for (k, pre) in p.prefixes.iter().enumerate() {
+        // (a prefix is a run of prefix characters before the command word: `2gLOOP`)
+        let used = lines.iter().any(|l| {
+            let head = l.iter().map(|b| char::from(*b)).take_while(|c| c.is_ascii() && p.prefix_motors(*c).is_some());
+            head.clone().any(|c| c.eq_ignore_ascii_case(&pre.char))
+                && matches!(parse_line(p, l), Ok(Line::Command(c)) if c.prefix.is_some())
+        });
+        if !used {
+            continue;
+        }
+        for m in 1..=4u8 {
+            if pre.motors.contains(&m) {
+                continue;
+            }
+            let mut patched = (**p).clone();
+            patched.prefixes[k].motors.push(m);
+            patched.prefixes[k].motors.sort_unstable();
+            let digits: String = pre.motors.iter().map(u8::to_string).collect();
+            out.push(Variant {
+                says: format!("prefix {digits}+{m}"),
+                profile: Arc::new(patched),
+                config: base.clone(),
+            });
+        }
+    }
+    let refused_set = lines.iter().find_map(|l| match parse_line(p, l) {
+        Err(r) => r.partial.filter(|c| matches!(c.args, Args::Pairs(_))).map(|c| p.command(c.command).name.clone()),
+        _ => None,
+    });
+    let mut other_side = |says: String, fault: gcl_model::Fault| {
+        out.push(Variant {
+            says,
+            profile: p.clone(),
+            config: gcl_model::DeviceConfig { faults: vec![fault], ..base.clone() },
+        });
+    };
+    let parsed: Vec<_> = lines.iter().map(|l| parse_line(p, l)).collect();
+    if parsed.iter().any(|r| matches!(r, Err(r) if r.problems == [gcl_model::grammar::Problem::PrefixNotAllowed])) {
+        other_side("prefix accepted on a command that takes none".into(), gcl_model::Fault::PrefixNotRefused);
+    }
+    if parsed.iter().any(|r| matches!(r, Ok(Line::Command(c)) if c.kind(p) == CommandKind::Reset)) {
+        other_side("RESET keeps the values set".into(), gcl_model::Fault::ResetKeepsRam);
+    }
+    if let Some(name) = refused_set {
+        other_side(format!("{name} refused but applied in part"), gcl_model::Fault::PartialSetApplied);
+    }
+    out
+}
+
+/// The command lines the case sends up to step `upto` (not RealTime blocks).
+fn sent_lines(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Vec<u8>> {
+    let term = opts.profile.framing.terminator;
+    built
+        .transcript
+        .steps
+        .iter()
+        .take(upto + 1)
+        .filter_map(|s| s.send.as_ref().filter(|h| h.form != Form::Hex))
+        .flat_map(|h| h.bytes.split(|b| *b == term).filter(|l| !l.is_empty()).map(<[u8]>::to_vec).collect::<Vec<_>>())
+        .collect()
+}
+
+/// What the hand is shown to do by a model that holds one hypothesis (see [`variants`]) and
+/// answers as the hand did (see the module documentation): `None` where none or more than one
+/// does. `known`: explanations this campaign already holds, tried first (one of them that fits
+/// is taken whatever else does); others only when `fresh`, and only from a wrong answer: a
+/// silence (a timeout) many models reproduce alike, whatever the bug.
+pub(super) fn explains(
+    opts: &FuzzOptions,
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    known: &[String],
+    fresh: bool,
+) -> Option<String> {
+    if opts.wide() {
+        return None;
+    }
+    let failed = out.failed_step()?;
+    let said = out.exchange().iter().find(|e| e.step == failed).is_some_and(|e| !e.received.is_empty());
+    let fresh = fresh && (matches!(out, ReplayOutcome::Mismatch(_)) || said);
+    let mut candidates: Vec<Variant> =
+        variants(opts, built, failed).into_iter().filter(|v| fresh || known.contains(&v.says)).collect();
+    candidates.sort_by_key(|v| !known.contains(&v.says));
+    let hand = out.exchange();
+    let got = |x: &[crate::replay::Exchanged], s: usize| x.iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let mut found = None;
+    for v in candidates {
+        let mut link = gcl_host::SimLink::new(v.profile, v.config);
+        let r = replay(&built.transcript, &mut link, &crate::suite::replay_options());
+        let same = r.failed_step() == Some(failed) && (0..=failed).all(|s| got(r.exchange(), s) == got(hand, s));
+        if !same {
+            continue;
+        }
+        if known.contains(&v.says) {
+            return Some(v.says);
+        }
+        // (two hypotheses that explain the case alike tell neither)
+        if found.is_some() {
+            return None;
+        }
+        found = Some(v.says);
+    }
+    found
+}
