@@ -38,6 +38,38 @@ pub struct BuiltCase {
     /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
     /// (`None` for a block outside the loop, which sends nothing).
     pub block_bytes: Vec<Option<Vec<u8>>>,
+    /// The decisions each step of the transcript rests on (`suite::depends::decisions_by_step`,
+    /// the analysis behind `x-decisions`, which is their union with the `decision:` clauses).
+    pub step_decisions: Vec<Vec<String>>,
+}
+
+impl BuiltCase {
+    /// The decisions a failure of this case at the steps `failing` rests on: the case's own
+    /// `decision:` clauses (where the model's joint stops are: a state decision), every
+    /// decision of the failing steps, and the state decisions of the steps before them (not
+    /// those that concern only an earlier answer's text, which passed; the list and the rule
+    /// are `suite::depends::ANSWER_ONLY`'s). `None` (no failing step known): every decision
+    /// of every step.
+    pub fn rests_on(&self, failing: Option<std::ops::RangeInclusive<usize>>) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .transcript
+            .header
+            .clauses
+            .iter()
+            .filter_map(|c| c.strip_prefix(crate::suite::build::DECISION_CLAUSE))
+            .map(str::to_string)
+            .collect();
+        let last = failing.as_ref().map_or(usize::MAX, |r| *r.end());
+        for (i, step) in self.step_decisions.iter().enumerate().take_while(|(i, _)| *i <= last) {
+            let at_failure = failing.as_ref().is_none_or(|r| r.contains(&i));
+            for d in step {
+                if (at_failure || !crate::suite::depends::answer_only(d)) && !out.contains(d) {
+                    out.push(d.clone());
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -519,10 +551,11 @@ pub fn build_case_sending(
         .count();
     walk.features.extend(relations.features);
     let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
+    let step_decisions = crate::suite::depends::decisions_by_step(p, &def.plans, &caps);
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes })
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes, step_decisions })
 }
 
 /// Whether the model answers `plans` otherwise once its joint stops lie at the end of P's
@@ -693,7 +726,7 @@ mod tests {
         assert!(decisions(&past).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&past));
         // A finding of it says so: `[INFO: rests on seed-motion-model]`.
         let p = Profile::builtin("seed").unwrap();
-        let (level, rests_on) = super::super::Finding::binding(&p, &past.transcript);
+        let (level, rests_on) = super::super::Finding::binding(&p, &past.rests_on(None));
         assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
         // IO from the open stop ends short of its goal: the model's 16 is the same decision's.
         let open = wide_case(&[HostAction::Line("2IO".into())]).expect("a case");
