@@ -1768,6 +1768,22 @@ mod tests {
         assert_eq!((f.level, f.rests_on), (gcl_model::Level::Info, vec!["bh8-coefficient-range".to_string()]));
     }
 
+    /// Where the model's joint stops are counts from the first step whose answer rests on
+    /// them: a bug that shows before a motion stalls at a stop does not rest on them; one
+    /// read after it does.
+    #[test]
+    fn the_joint_stops_count_from_the_step_that_stalls_at_one() {
+        let stall = "1M 20000";
+        let (built, f) =
+            unminimized_finding("bh8-262", gcl_model::Fault::FgetReversed, &["1FSET MCV 50", "FGET MCV", stall]);
+        let whole = crate::suite::decisions_of_header(&built.transcript.header);
+        assert!(whole.iter().any(|d| d == "bh8-position-bounds"), "{whole:?}");
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Must, vec![]));
+        let (_, f) =
+            unminimized_finding("bh8-262", gcl_model::Fault::FgetReversed, &[stall, "1FSET MCV 50", "FGET MCV"]);
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Info, vec!["bh8-position-bounds".to_string()]));
+    }
+
     /// A status key is only its bits; against a baseline that has those bits on FGET, the same
     /// bits on another command are new (the independent seed hand's extra-args-ignored, `C 5`
     /// run instead of refused, hid behind its clean baseline's `FGET` with 26 names this way),
