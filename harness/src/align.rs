@@ -26,6 +26,7 @@
 //! - `restart`: a banner nobody asked for; `link`: the link failed.
 
 use std::collections::VecDeque;
+use std::ops::RangeInclusive;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -280,6 +281,27 @@ fn parting(out: &ReplayOutcome) -> Option<Parting> {
         _ => hand.len() - start,
     };
     Some(Parting { at: (start + off).min(hand.len()), hand, step_start: start })
+}
+
+/// The steps of `t` a failed replay's difference concerns (`None` for a pass): from the
+/// replay's failing step to the step whose input the model's answer at the parting byte
+/// followed (the same step, but where a golden records an answer a step behind its line,
+/// after a ^C mid-motion or a queued line). The model's run `run` is of `t`.
+pub fn failing_steps(
+    p: &Profile,
+    t: &Transcript,
+    run: &ModelRun,
+    out: &ReplayOutcome,
+) -> Option<RangeInclusive<usize>> {
+    let step = out.failed_step()?;
+    let pe = [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat();
+    let owner = parting(out)
+        .and_then(|pt| carry(&pt.hand, pt.at, &run.stream, &pe))
+        .and_then(|x| run.tags.get(x))
+        .map(|s| *s as usize)
+        .filter(|s| *s < t.steps.len())
+        .unwrap_or(step);
+    Some(step.min(owner)..=step.max(owner))
 }
 
 /// Positions just past each prompt (line ending then prompt) in `s`.

@@ -56,6 +56,14 @@ fn a_planted_bug_in_a_hand_that_already_differs_is_the_only_new_finding() {
         .map(|f| f.signature.to_string())
         .collect();
     assert!(rt.is_empty(), "no RealTime finding on a hand that scales right: {rt:?}");
+    // Where it differs it decided an open point otherwise, and each finding names it.
+    let must: Vec<String> = clean
+        .findings
+        .iter()
+        .filter(|f| f.level == gcl_model::Level::Must || f.rests_on.is_empty())
+        .map(|f| format!("{} [{:?}: {:?}]", f.signature, f.level, f.rests_on))
+        .collect();
+    assert!(must.is_empty(), "a finding of the clean hand names no open decision: {must:?}");
 
     // FGET reversed; the LCV datum divided by LCVC (another velocity ratio between motors with
     // other LCVCs); LFDPC ignored (another LFDP ratio between motors with other LFDPCs).

@@ -420,6 +420,13 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "not on how an earlier answer that passed is written",
+        &[
+            "harness/src/fuzz/device/mod.rs::a_bug_after_an_answer_resting_on_an_open_format_is_must",
+            "harness/src/fuzz/device/mod.rs::a_finding_rests_on_its_failing_steps_decisions_and_earlier_state_decisions",
+        ],
+    ),
+    (
         "A case rests on the model's joint stops when the model answers it otherwise with the stops taken away",
         &["harness/src/fuzz/device/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision"],
     ),

@@ -78,17 +78,92 @@ struct State {
     in_loop: bool,
     /// The last motion was a C that ended without a status.
     closed: bool,
-    /// The decisions found so far.
+    /// The decisions the step being read rests on.
     found: Vec<String>,
 }
 
+/// The decisions every step rests on: its echo, line ending and prompt.
+const EVERY_STEP: &[&str] = &["framing-echo", "framing-line-ending", "framing-prompt"];
+
+/// Decisions that concern only the answer of the step that rests on them, never what the
+/// hand does afterwards: the text of the answer (a line format: FGET/PGET values, listings,
+/// help, ERR's lines, the version and banner text; what a read of S says; the echo, the line
+/// ending and the prompt) or whether the step's line is accepted at all, which its answer
+/// shows (a refused line gets a status and changes nothing, an accepted one never gets the
+/// refusal's status: the case of words, separators, how values are written, the line's
+/// length, control bytes, the status of a missing value and how a refusal's bits combine).
+///
+/// The rule (`fuzz::device`'s findings apply it): a failure rests on every decision of its
+/// failing step, and on an earlier step's decisions only where they can change the hand's
+/// state, which a later answer reads. An earlier step's decisions in this list do not: its
+/// answer passed (the case got past it), so the hand decided them as the model did. Every
+/// other decision is a state decision: what a line does beyond its answer (RESET, ^C, LOOP's
+/// motors, where motion stops, whether a refused line changes anything, what a line that
+/// fails to parse still runs, lines typed while busy, a coefficient of 0). Listed by id from
+/// the profiles' decision tables (`spec/`): an id not listed, or added later, is a state
+/// decision until it is.
+pub(crate) const ANSWER_ONLY: &[&str] = &[
+    "framing-echo",
+    "framing-line-ending",
+    "framing-prompt",
+    "framing-empty-line",
+    "framing-case",
+    "framing-whitespace",
+    "framing-numbers",
+    "framing-max-line",
+    "framing-backspace",
+    "framing-missing-value",
+    "framing-errors-combine",
+    "seed-err-command",
+    "bh8-err-format",
+    "seed-fget-format",
+    "bh8-fget-format",
+    "seed-flista",
+    "bh8-list-names-format",
+    "bh8-list-values-format",
+    "bh8-listing-order",
+    "bh8-44-listing-order",
+    "seed-help",
+    "bh8-help-format",
+    "bh8-vers-text",
+    "seed-banner-text",
+    "bh8-banner-text",
+    "seed-s-values",
+    "bh8-s-before-hi",
+];
+
+/// Whether decision `id` concerns only the answer text of the step that rests on it (see
+/// [`ANSWER_ONLY`]).
+pub(crate) fn answer_only(id: &str) -> bool {
+    ANSWER_ONLY.contains(&id)
+}
+
 /// Every decision a case's steps rest on, in the profile's order, given the plan and what the
-/// model answered to each step.
+/// model answered to each step: the union of [`decisions_by_step`].
 pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<String> {
+    let mut found = Vec::new();
+    topic(p, EVERY_STEP, &mut found);
+    for step in decisions_by_step(p, plans, caps) {
+        for d in step {
+            if !found.contains(&d) {
+                found.push(d);
+            }
+        }
+    }
+    let order = |id: &String| p.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
+    found.sort_by_key(order);
+    found
+}
+
+/// The decisions each step of a case rests on (one list per plan, in the order found), given
+/// the plan and what the model answered to each step: [`EVERY_STEP`]'s, then those of what
+/// the step sends, read with what earlier steps did (a motion before HI, a read of P after C).
+pub(crate) fn decisions_by_step(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<Vec<String>> {
     let mut st = State::default();
-    topic(p, &["framing-echo", "framing-line-ending", "framing-prompt"], &mut st.found);
+    let mut steps = Vec::with_capacity(plans.len());
     let mut busy = false;
     for (plan, c) in plans.iter().zip(caps) {
+        topic(p, EVERY_STEP, &mut st.found);
         let status = status_in(&c.output);
         match &plan.step.action {
             Action::Bytes { bytes, .. } if bytes.as_slice() == [p.framing.abort] => {
@@ -127,11 +202,9 @@ pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Ve
             }
             Action::Partial(_) | Action::Wait => {}
         }
+        steps.push(std::mem::take(&mut st.found));
     }
-    let mut found = st.found;
-    let order = |id: &String| p.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
-    found.sort_by_key(order);
-    found
+    steps
 }
 
 fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], st: &mut State) {
@@ -316,4 +389,20 @@ fn partly_valid(p: &Profile, text: &str, kind: CommandKind) -> bool {
         && items
             .iter()
             .any(|i| matches!(grammar::parse_line(p, format!("{word} {i}").as_bytes()), Ok(Line::Command(_))))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every listed answer-only decision is one a profile has (a misspelt id would silently
+    /// make its decision a state decision).
+    #[test]
+    fn every_answer_only_decision_is_a_profiles() {
+        let profiles: Vec<std::sync::Arc<Profile>> =
+            ["seed", "bh8-262-4.3", "bh8-262-4.4"].iter().map(|id| Profile::builtin(id).unwrap()).collect();
+        for id in ANSWER_ONLY {
+            assert!(profiles.iter().any(|p| p.decisions.iter().any(|d| d.id == *id)), "{id} is no profile's decision");
+        }
+    }
 }

@@ -38,6 +38,40 @@ pub struct BuiltCase {
     /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
     /// (`None` for a block outside the loop, which sends nothing).
     pub block_bytes: Vec<Option<Vec<u8>>>,
+    /// The decisions each step of the transcript rests on (`suite::depends::decisions_by_step`,
+    /// the analysis behind `x-decisions`, which is their union with the `decision:` clauses).
+    pub step_decisions: Vec<Vec<String>>,
+}
+
+impl BuiltCase {
+    /// The decisions a failure of this case at the steps `failing` rests on: every decision
+    /// of the failing steps, and the state decisions of the steps before them (not those that
+    /// concern only an earlier answer, which passed; the list and the rule are
+    /// `suite::depends::ANSWER_ONLY`'s). Where the model's joint stops are (a state decision)
+    /// counts from the first step whose answer rests on them; any other `decision:` clause of
+    /// the case counts whatever the step. `None` (no failing step known): every decision of
+    /// every step.
+    pub fn rests_on(&self, failing: Option<std::ops::RangeInclusive<usize>>) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .transcript
+            .header
+            .clauses
+            .iter()
+            .filter_map(|c| c.strip_prefix(crate::suite::build::DECISION_CLAUSE))
+            .filter(|d| !self.step_decisions.iter().any(|s| s.iter().any(|x| x == d)))
+            .map(str::to_string)
+            .collect();
+        let last = failing.as_ref().map_or(usize::MAX, |r| *r.end());
+        for (i, step) in self.step_decisions.iter().enumerate().take_while(|(i, _)| *i <= last) {
+            let at_failure = failing.as_ref().is_none_or(|r| r.contains(&i));
+            for d in step {
+                if (at_failure || !crate::suite::depends::answer_only(d)) && !out.contains(d) {
+                    out.push(d.clone());
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -223,7 +257,8 @@ pub fn build_case_sending(
     // be related on (see [`super::relate`]).
     let mut track: Option<LoopTrack> = None;
     let mut notes: Vec<(usize, BlockNote)> = Vec::new();
-    let mut stalls = false;
+    // The first step whose motion the model stalls at a stop or short of its goal.
+    let mut stalls_at: Option<usize> = None;
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
         if !in_loop || !matches!(a, HostAction::Block { .. } | HostAction::Line(_)) {
@@ -255,9 +290,12 @@ pub fn build_case_sending(
                 let answer = walk.feed(&step, term);
                 // A motion the model stalls at a stop or short of its goal (16) rests on where
                 // the model's motion ends, the stops at 0 included.
-                stalls |= cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
+                if cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
                     && crate::suite::depends::status_in(&answer)
-                        .is_some_and(|s| s & StatusBits::MISSED_POSITION.bits() != 0);
+                        .is_some_and(|s| s & StatusBits::MISSED_POSITION.bits() != 0)
+                {
+                    stalls_at.get_or_insert(k.def.plans.len());
+                }
                 if walk.shadow.mode() == Mode::Loop {
                     track = Some(LoopTrack::enter(p, &walk.shadow, k.def.plans.len()));
                 }
@@ -444,8 +482,15 @@ pub fn build_case_sending(
     // that decision's level, and `--skip-decision` drops it. Asked only of a hand outside
     // this process (in process the stops are the model's, and the second capture cost a fifth
     // of the in-process campaign's speed).
-    if moves && (stalls || wide && rests_on_stops(p, &def.plans, &caps)) {
-        for id in ["seed-motion-model", "bh8-position-bounds"] {
+    // The first step whose answer rests on the stops, where the finding's decisions place
+    // them (see [`BuiltCase::rests_on`]).
+    let stops_at = if !moves {
+        None
+    } else {
+        stalls_at.or_else(|| if wide { rests_on_stops(p, &def.plans, &caps) } else { None })
+    };
+    if stops_at.is_some() {
+        for id in STOP_DECISIONS {
             def.decision(p, id);
         }
     }
@@ -519,20 +564,33 @@ pub fn build_case_sending(
         .count();
     walk.features.extend(relations.features);
     let transcript = build_from(p, &def, &caps).map_err(NotACase)?;
+    let mut step_decisions = crate::suite::depends::decisions_by_step(p, &def.plans, &caps);
+    if let Some(at) = stops_at.and_then(|at| step_decisions.len().checked_sub(1).map(|last| at.min(last))) {
+        for id in STOP_DECISIONS.iter().filter(|id| p.decisions.iter().any(|d| d.id == **id)) {
+            if !step_decisions[at].iter().any(|d| d == id) {
+                step_decisions[at].push(id.to_string());
+            }
+        }
+    }
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes })
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes, step_decisions })
 }
 
-/// Whether the model answers `plans` otherwise once its joint stops lie at the end of P's
-/// range: then the case's answers rest on where the stops are.
-fn rests_on_stops(p: &Arc<Profile>, plans: &[Plan], caps: &[Captured]) -> bool {
+/// The decisions of where the model's motion ends: its joint stops (`[hand]` constants the
+/// seed does not fix). State decisions: a later answer reads where a motion ended.
+const STOP_DECISIONS: [&str; 2] = ["seed-motion-model", "bh8-position-bounds"];
+
+/// The first step the model answers otherwise once its joint stops lie at the end of P's
+/// range, if any: from there on the case's answers rest on where the stops are.
+fn rests_on_stops(p: &Arc<Profile>, plans: &[Plan], caps: &[Captured]) -> Option<usize> {
     let mut free = (**p).clone();
     let far = p.param_id("P").map_or(free.hand.finger_limit, |id| p.param(id).max);
     free.hand.finger_limit = free.hand.finger_limit.max(far);
     free.hand.spread_limit = free.hand.spread_limit.max(far);
-    capture_plan(&Arc::new(free), plans).map_or(true, |other| other.iter().zip(caps).any(|(a, b)| a.output != b.output))
+    capture_plan(&Arc::new(free), plans)
+        .map_or(Some(0), |other| other.iter().zip(caps).position(|(a, b)| a.output != b.output))
 }
 
 /// LFAP of a feedback block within MPE (3 × MPE after ^C mid-motion) of the model's; with
@@ -693,7 +751,7 @@ mod tests {
         assert!(decisions(&past).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&past));
         // A finding of it says so: `[INFO: rests on seed-motion-model]`.
         let p = Profile::builtin("seed").unwrap();
-        let (level, rests_on) = super::super::Finding::binding(&p, &past.transcript);
+        let (level, rests_on) = super::super::Finding::binding(&p, &past.rests_on(None));
         assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
         // IO from the open stop ends short of its goal: the model's 16 is the same decision's.
         let open = wide_case(&[HostAction::Line("2IO".into())]).expect("a case");

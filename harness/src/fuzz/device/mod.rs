@@ -295,25 +295,27 @@ pub struct Finding {
     /// Why it is not new (in the baseline, a known failure), or `None` for a new finding.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known: Option<String>,
-    /// How strongly its case binds the hand: the weakest level among the decisions the case
-    /// rests on (MUST when it rests on none below).
+    /// How strongly the failure binds the hand: the weakest level among the decisions it
+    /// rests on (MUST when it rests on none below). A failure rests on the decisions of its
+    /// failing step and the state decisions of the steps before it, not on the whole case's
+    /// (see [`BuiltCase::rests_on`]).
     #[serde(default)]
     pub level: gcl_model::Level,
-    /// Below MUST, the decisions at that level the case rests on: the open points a hand may
-    /// have decided otherwise (`--skip-decision` drops cases that rest on one).
+    /// Below MUST, the decisions at that level the failure rests on: the open points a hand
+    /// may have decided otherwise (`--skip-decision` drops cases that rest on one).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub rests_on: Vec<String>,
 }
 
 impl Finding {
-    /// The level of the case `t` and, below MUST, the decisions of `p` at that level it rests
-    /// on (its `decision:` clauses and its `x-decisions`).
-    pub fn binding(p: &Profile, t: &Transcript) -> (gcl_model::Level, Vec<String>) {
-        let level = t.header.level;
-        let mut rests_on = crate::suite::decisions_of_header(&t.header);
-        rests_on.retain(|id| {
-            level != gcl_model::Level::Must && p.decisions.iter().any(|d| &d.id == id && d.level == level)
-        });
+    /// The level of a failure that rests on `decisions` (ids of `p`): the weakest of theirs,
+    /// MUST when none is below; and, below MUST, those of `decisions` at that level, in the
+    /// profile's order.
+    pub fn binding(p: &Profile, decisions: &[String]) -> (gcl_model::Level, Vec<String>) {
+        let ours = || p.decisions.iter().filter(|d| decisions.contains(&d.id));
+        let level = ours().map(|d| d.level).max().unwrap_or_default();
+        let rests_on =
+            ours().filter(|d| level != gcl_model::Level::Must && d.level == level).map(|d| d.id.clone()).collect();
         (level, rests_on)
     }
 
@@ -409,6 +411,7 @@ pub enum Progress<'a> {
     },
 }
 
+#[derive(Default)]
 struct Shared {
     corpus: Vec<Vec<HostAction>>,
     features: BTreeSet<String>,
@@ -1526,7 +1529,11 @@ fn report_finding(
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
     let mut final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
     final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
-    let diff = hand.run(&final_case.transcript, true)?.render();
+    let out = hand.run(&final_case.transcript, true)?;
+    let diff = out.render();
+    // The steps of this (the final) transcript's run where it fails: what the finding rests on.
+    let failing = crate::align::failing_steps(&opts.profile, &final_case.transcript, &final_case.model, &out);
+    let (level, rests_on) = Finding::binding(&opts.profile, &final_case.rests_on(failing));
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
         Some(dir) => {
@@ -1539,7 +1546,6 @@ fn report_finding(
         None => None,
     };
     let known = opts.baseline.explains(&opts.profile.id, &id, &sig);
-    let (level, rests_on) = Finding::binding(&opts.profile, &final_case.transcript);
     let finding = Finding {
         known,
         level,
@@ -1748,6 +1754,71 @@ mod tests {
         assert_eq!(until, Some(long_ago + Duration::from_secs(30)));
         let (kept, _) = minimize(&opts, &mut hand, &actions, &built, &sig, until).unwrap();
         assert_eq!(kept, actions, "minimized past the campaign's duration");
+    }
+
+    /// The finding a case of `lines` makes on a sim of profile `p` with `fault`, through the
+    /// campaign's own judging and reporting, kept unminimized (minimizing would drop the lines
+    /// that do not fail, and what they rest on with them).
+    fn unminimized_finding(p: &str, fault: gcl_model::Fault, lines: &[&str]) -> (BuiltCase, Finding) {
+        let mut opts = FuzzOptions::new(Target::Sim { profile: None }, Profile::builtin(p).unwrap());
+        opts.open.faults = vec![fault];
+        opts.minimize = false;
+        let actions: Vec<HostAction> = lines.iter().map(|l| HostAction::Line(l.to_string())).collect();
+        let built = build_for(&opts, &actions, "t", "t").unwrap();
+        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let out = hand.run(&built.transcript, true).unwrap();
+        let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the fault shows");
+        let shared = Mutex::new(Shared::default());
+        report_finding(&opts, &mut hand, &shared, Instant::now(), &actions, &built, sig, 1, &|_| {}).unwrap();
+        let mut findings = shared.into_inner().unwrap().findings;
+        assert_eq!(findings.len(), 1, "{findings:?}");
+        (built, findings.remove(0))
+    }
+
+    /// `value at RealTime block (LFDP) [INFO: rests on bh8-err-format]` was lcv-unsigned's:
+    /// an ERR line that passed, early in the case, made a MUST bug an open point. A finding
+    /// rests on its failing step's decisions and the earlier steps' state decisions, not on
+    /// how an earlier answer that passed is written.
+    #[test]
+    fn a_bug_after_an_answer_resting_on_an_open_format_is_must() {
+        let (built, f) =
+            unminimized_finding("bh8-262", gcl_model::Fault::FgetReversed, &["ERR 15907", "1FSET MCV 50", "FGET MCV"]);
+        // (the case as a whole rests on the INFO format of ERR's lines)
+        let whole = crate::suite::decisions_of_header(&built.transcript.header);
+        assert!(whole.iter().any(|d| d == "bh8-err-format"), "{whole:?}");
+        assert_eq!(f.signature.command, "FGET", "{}", f.signature);
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Must, vec![]));
+    }
+
+    /// A failing step that rests on an open decision still says so; an earlier step's state
+    /// decision (what a set of 0 does) counts too, an earlier answer's format does not.
+    #[test]
+    fn a_finding_rests_on_its_failing_steps_decisions_and_earlier_state_decisions() {
+        let (_, f) = unminimized_finding("bh8-262", gcl_model::Fault::LowercaseRejected, &["ERR 3", "fget mcv"]);
+        assert_eq!(f.signature.command, "FGET", "{}", f.signature);
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Should, vec!["framing-case".to_string()]));
+        let (_, f) = unminimized_finding(
+            "bh8-262",
+            gcl_model::Fault::FgetReversed,
+            &["FSET LCVC 0", "ERR 15907", "1FSET MCV 50", "FGET MCV"],
+        );
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Info, vec!["bh8-coefficient-range".to_string()]));
+    }
+
+    /// Where the model's joint stops are counts from the first step whose answer rests on
+    /// them: a bug that shows before a motion stalls at a stop does not rest on them; one
+    /// read after it does.
+    #[test]
+    fn the_joint_stops_count_from_the_step_that_stalls_at_one() {
+        let stall = "1M 20000";
+        let (built, f) =
+            unminimized_finding("bh8-262", gcl_model::Fault::FgetReversed, &["1FSET MCV 50", "FGET MCV", stall]);
+        let whole = crate::suite::decisions_of_header(&built.transcript.header);
+        assert!(whole.iter().any(|d| d == "bh8-position-bounds"), "{whole:?}");
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Must, vec![]));
+        let (_, f) =
+            unminimized_finding("bh8-262", gcl_model::Fault::FgetReversed, &[stall, "1FSET MCV 50", "FGET MCV"]);
+        assert_eq!((f.level, f.rests_on), (gcl_model::Level::Info, vec!["bh8-position-bounds".to_string()]));
     }
 
     /// A status key is only its bits; against a baseline that has those bits on FGET, the same

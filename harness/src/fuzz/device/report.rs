@@ -198,7 +198,7 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     Ok(out)
 }
 
-/// ` [INFO: rests on seed-motion-model]` for a finding whose case binds below MUST: the hand
+/// ` [INFO: rests on seed-motion-model]` for a finding that binds below MUST: the hand
 /// may have decided that open point otherwise. Empty at MUST.
 pub fn binding_note(f: &Finding) -> String {
     if f.level == gcl_model::Level::Must {
