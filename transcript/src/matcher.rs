@@ -200,9 +200,15 @@ impl Matcher {
         }
     }
 
-    /// The state that has matched the most pieces (the most progress inside its piece).
+    /// The state that has matched the most pieces (the most progress inside its piece). A
+    /// state inside a `{text}` ranks above every state of the piece after it: where a text
+    /// parts, what was wanted is the text (the way out of it parts at the same byte).
     fn furthest(&self) -> Option<State> {
-        self.states.iter().max_by_key(|s| (s.piece, s.k)).cloned()
+        let rank = |s: &State| match self.pieces.get(s.piece) {
+            Some((_, Piece::Text)) => (s.piece + 1, u32::MAX),
+            _ => (s.piece, s.k),
+        };
+        self.states.iter().max_by_key(|s| rank(s)).cloned()
     }
 
     /// What numeric piece `i` reads for state `s`; `None` for a piece that is not numeric or
@@ -556,6 +562,12 @@ mod tests {
         assert_eq!(match_prefix(&e, b"VERS\n\r=> "), Outcome::Partial);
         assert!(!e.matches(b"VERS\n\r\n\r\n\r=> "));
         assert!(e.matches(b"VERS\n\r\n\rx\n\r=> "));
+        // Where it parts, the text is what was wanted.
+        let mut m = Matcher::new(&e);
+        for &c in b"VERS\n\rERR" {
+            m.feed(c);
+        }
+        assert_eq!(m.expected_at_parting(), "{text}\\n\\r=> ");
     }
 
     #[test]
