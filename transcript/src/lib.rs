@@ -4,7 +4,8 @@
 //! profiles it applies to, what it requires of the target) and a list of [`Step`]s. Each step
 //! may pause, may send bytes to the hand, and then expects an answer: an [`Expect`] made of
 //! exact bytes and *elisions* for values that legitimately vary (an integer in a range, any
-//! line, any byte of a RealTime block, a two-byte field in a range). The same file is a golden
+//! line, lines of text that are not a status, any byte of a RealTime block, a two-byte field in
+//! a range). The same file is a golden
 //! vector, a fuzz seed and a regression case. `vectors/README.md` is the normative description
 //! of the text; this crate owns its typed form, [`parse`] (untrusted text to [`Transcript`],
 //! errors with line numbers), printing ([`Transcript::to_text`], canonical, so that
