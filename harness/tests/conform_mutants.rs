@@ -77,6 +77,7 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("empty-line-error", B44, &["framing-empty-line"]),
     ("overlong-line-runs", B44, &["framing-max-line"]),
     ("empty-line-two-prompts", B44, &["framing-empty-line"]),
+    ("vers-unknown", B44, &["cmd-vers"]),
 ];
 
 const B44: &str = "bh8-262-4.4";

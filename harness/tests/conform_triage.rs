@@ -90,6 +90,8 @@ const FAULT_CLAUSES: &[(&str, &[&str])] = &[
     ("empty-line-error", &["decision:framing-empty-line"]),
     ("overlong-line-runs", &["decision:framing-max-line"]),
     ("empty-line-two-prompts", &["decision:framing-empty-line"]),
+    // VERS answered with a status: the command's clause, or its text decision.
+    ("vers-unknown", &["Command VERS", "decision:seed-vers-text", "decision:bh8-vers-text"]),
 ];
 
 fn matches(clause: &str, want: &str) -> bool {

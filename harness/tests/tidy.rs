@@ -351,7 +351,7 @@ mod abnf {
         name(n) && factor(num) && factor(den) && pct.is_some_and(|p| p == "0" || (digits(p, 3) && !p.starts_with('0')))
     }
 
-    /// `elision = "{" ("int" [SP range] / "line" / "any" / "byte" / type SP range / value) "}"`
+    /// `elision = "{" ("int" [SP range] / "line" / "any" / "text" / "byte" / type SP range / value) "}"`
     /// and `value = type [SP (range / relation)] [SP "as" SP name]`, given what is between the
     /// braces.
     fn elision(inner: &str) -> bool {
@@ -367,7 +367,7 @@ mod abnf {
                 };
         }
         match words.as_slice() {
-            [w] => matches!(*w, "int" | "line" | "any" | "byte"),
+            [w] => matches!(*w, "int" | "line" | "any" | "text" | "byte"),
             [t, r] => matches!(*t, "int" | "u8" | "i8" | "u16" | "i16") && range(r),
             [t, a, b] => matches!(*t, "int" | "u8" | "i8" | "u16" | "i16") && relation(a, b),
             _ => false,
@@ -563,6 +563,8 @@ fn goldens_match_the_abnf_grammar() {
         "gcl-transcript 1\nexpect \"{int 2*p +-5%}\"\n",
         "gcl-transcript 1\nexpect \"{int p*2 5%}\"\n",
         "gcl-transcript 1\nexpect \"{line as p}\"\n",
+        "gcl-transcript 1\nexpect \"{text as p}\"\n",
+        "gcl-transcript 1\nexpect \"{texts}\"\n",
         "gcl-transcript 1\nexpect within 1s.. \"x\"\n",
         "gcl-transcript 1\nsetup: object 5 100\n",
         "gcl-transcript 1\nsetup: object 1 0100\n",
@@ -573,6 +575,7 @@ fn goldens_match_the_abnf_grammar() {
         "gcl-transcript 1\nid: a\n\nsend hex 43 00\nexpect within 2s \"C\" hex {u16 0..9} ?? 2A \"{int}\\n\\r\"\n",
     )
     .unwrap();
+    abnf::check("gcl-transcript 1\nexpect \"VERS\\n\\r{text}\\n\\r=> \"\n").unwrap();
     abnf::check("gcl-transcript 1\nexpect within 1s..2s \"{int 1..9 as p} {int p*2/3 +-25%}\" hex {i8 p +-0% as q}\n")
         .unwrap();
 }

@@ -120,6 +120,8 @@ const FAULTS: &[(&str, &[&str])] = &[
     // Relations: the Python runner carries captures from value to value.
     ("lcvc-ignored", &["rt-lcvc-scaling"]),
     ("lfvc-ignored", &["rt-lfvc-scaling"]),
+    // {text}: VERS answered with a status line is no version text.
+    ("vers-unknown", &["cmd-vers"]),
 ];
 const BYSTANDERS: &[&str] = &["framing-empty-line", "cmd-fget", "param-dp-default", "status-32-unknown-command"];
 

@@ -4,7 +4,8 @@
 //! profiles it applies to, what it requires of the target) and a list of [`Step`]s. Each step
 //! may pause, may send bytes to the hand, and then expects an answer: an [`Expect`] made of
 //! exact bytes and *elisions* for values that legitimately vary (an integer in a range, any
-//! line, any byte of a RealTime block, a two-byte field in a range). The same file is a golden
+//! line, lines of text that are not a status, any byte of a RealTime block, a two-byte field in
+//! a range). The same file is a golden
 //! vector, a fuzz seed and a regression case. `vectors/README.md` is the normative description
 //! of the text; this crate owns its typed form, [`parse`] (untrusted text to [`Transcript`],
 //! errors with line numbers), printing ([`Transcript::to_text`], canonical, so that
@@ -284,6 +285,12 @@ pub enum Piece {
     Line,
     /// `{any}`: zero or more bytes of any value (as few as the rest of the answer needs).
     Any,
+    /// `{text}`: one or more whole lines of text that are not a status answer. Its bytes hold
+    /// at least one byte other than LF and CR, and no line among them (a run of bytes between
+    /// LF or CR bytes) begins with `ERR`, the way a hand answers a refused line (`ERR 64`). It
+    /// sits between line breaks: the byte before it (if any) and the byte after it are LF or
+    /// CR ([`Expect::check`]).
+    Text,
     /// `{byte}`, or `??` in hex: exactly one byte of any value.
     AnyByte,
     /// `{u8 A..B}`, `{i8 A..B}`, `{u16 A..B}`, `{i16 A..B}`: a binary field of a RealTime
@@ -307,7 +314,10 @@ impl Piece {
     /// Whether the piece can match a varying number of bytes (an expectation must not end
     /// with one: the match would be cut at its shortest).
     pub fn is_variable(&self) -> bool {
-        matches!(self, Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(Value { kind: ValueKind::Int, .. }))
+        matches!(
+            self,
+            Piece::Int(_) | Piece::Line | Piece::Any | Piece::Text | Piece::Value(Value { kind: ValueKind::Int, .. })
+        )
     }
 }
 
@@ -550,8 +560,26 @@ impl Expect {
     }
 
     /// Checks the rules the parser enforces: ranges ordered and representable, no variable
-    /// elision at the end.
+    /// elision at the end, `{text}` between line breaks.
     pub fn check(&self) -> Result<(), String> {
+        let pieces: Vec<&Piece> = self.pieces().map(|(_, p)| p).collect();
+        let is_break = |b: Option<&u8>| matches!(b, Some(b'\n' | b'\r'));
+        for (i, p) in pieces.iter().enumerate() {
+            if !matches!(p, Piece::Text) {
+                continue;
+            }
+            let before = i.checked_sub(1).map(|j| pieces[j]);
+            let after = pieces.get(i + 1);
+            let ok_before = match before {
+                None => true,
+                Some(Piece::Bytes(b)) => is_break(b.last()),
+                Some(_) => false,
+            };
+            let ok_after = matches!(after, Some(Piece::Bytes(b)) if is_break(b.first()));
+            if !ok_before || !ok_after {
+                return Err("{text} must stand between line breaks (LF or CR before it, unless it begins the expectation, and after it)".into());
+            }
+        }
         for (_, p) in self.pieces() {
             match p {
                 Piece::Int(Some((a, b))) if a > b => return Err(format!("{{int {a}..{b}}}: empty range")),
@@ -567,7 +595,7 @@ impl Expect {
             }
         }
         if self.pieces().last().is_some_and(|(_, p)| p.is_variable()) {
-            return Err("an expectation must not end with {int}, {line} or {any}".into());
+            return Err("an expectation must not end with {int}, {line}, {any} or {text}".into());
         }
         Ok(())
     }
@@ -813,6 +841,7 @@ pub fn elision_text(p: &Piece) -> String {
         Piece::Int(Some((a, b))) => format!("{{int {a}..{b}}}"),
         Piece::Line => "{line}".into(),
         Piece::Any => "{any}".into(),
+        Piece::Text => "{text}".into(),
         Piece::AnyByte => "{byte}".into(),
         Piece::Field { ty, min, max } => format!("{{{ty} {min}..{max}}}"),
         Piece::Value(v) => {

@@ -200,9 +200,15 @@ impl Matcher {
         }
     }
 
-    /// The state that has matched the most pieces (the most progress inside its piece).
+    /// The state that has matched the most pieces (the most progress inside its piece). A
+    /// state inside a `{text}` ranks above every state of the piece after it: where a text
+    /// parts, what was wanted is the text (the way out of it parts at the same byte).
     fn furthest(&self) -> Option<State> {
-        self.states.iter().max_by_key(|s| (s.piece, s.k)).cloned()
+        let rank = |s: &State| match self.pieces.get(s.piece) {
+            Some((_, Piece::Text)) => (s.piece + 1, u32::MAX),
+            _ => (s.piece, s.k),
+        };
+        self.states.iter().max_by_key(|s| rank(s)).cloned()
     }
 
     /// What numeric piece `i` reads for state `s`; `None` for a piece that is not numeric or
@@ -250,6 +256,7 @@ impl Matcher {
             None | Some(Piece::AnyByte) => None,
             Some(Piece::Bytes(b)) => (s.k as usize >= b.len()).then(|| s.next(None)),
             Some(Piece::Line | Piece::Any) => Some(s.next(None)),
+            Some(Piece::Text) => (s.k & TEXT_SEEN != 0).then(|| s.next(None)),
             Some(_) => {
                 let capturing = self.slots.get(s.piece).is_some_and(|sl| sl.capture.is_some());
                 match self.reads(s.piece, &s) {
@@ -280,6 +287,7 @@ impl Matcher {
             Piece::Bytes(lit) => (lit.get(s.k as usize) == Some(&b)).then_some(State { k: s.k + 1, ..s }),
             Piece::Line => (b != b'\n' && b != b'\r').then_some(s),
             Piece::Any => Some(s),
+            Piece::Text => step_text(s, b),
             Piece::AnyByte => Some(s.next(None)),
             _ => match self.reads(s.piece, &s)? {
                 Reads::Int(r) => step_int(s, b, r),
@@ -360,6 +368,28 @@ pub fn show(bytes: &[u8], form: Form) -> String {
         Form::Text => super::escape_text(bytes),
         Form::Hex => hex_bytes(bytes),
     }
+}
+
+/// In a `{text}` state's `k`: a byte other than LF and CR has been taken.
+const TEXT_SEEN: u32 = 8;
+/// In a `{text}` state's `k` (low bits): how far the present line is known to be from a
+/// status. 0 to 2: it is so far the first 0 to 2 bytes of `ERR`; [`TEXT_FREE`]: it is not.
+const TEXT_FREE: u32 = 3;
+const TEXT_LINE: u32 = 7;
+
+/// A `{text}`'s next byte: a line break starts a new line; a line that begins with `ERR` (a
+/// status answer) is where the text parts.
+fn step_text(s: State, b: u8) -> Option<State> {
+    if b == b'\n' || b == b'\r' {
+        return Some(State { k: s.k & TEXT_SEEN, ..s });
+    }
+    let line = match (s.k & TEXT_LINE, b) {
+        (0, b'E') => 1,
+        (1, b'R') => 2,
+        (2, b'R') => return None,
+        _ => TEXT_FREE,
+    };
+    Some(State { k: TEXT_SEEN | line, ..s })
 }
 
 /// An integer's next character.
@@ -514,6 +544,30 @@ mod tests {
         assert!(l.matches(b"V\n\r\n\r=> "));
         assert!(l.matches(b"V\n\rversion 1\n\r=> "));
         assert!(!l.matches(b"V\n\rtwo\n\rlines\n\r=> "));
+    }
+
+    #[test]
+    fn text_is_lines_that_are_not_a_status() {
+        let e = text(&[b("VERS\n\r"), Piece::Text, b("\n\r=> ")]);
+        assert!(e.matches(b"VERS\n\rGCL seed hand 0.1\n\r=> "));
+        assert!(e.matches(b"VERS\n\rFirmware 4.4x\n\rBarrett Technology\n\r=> "));
+        // A line that is `ERR` and a status parts the answer at its second R, first or last.
+        assert_eq!(match_prefix(&e, b"VERS\n\rERR 64\n\r=> "), Outcome::Parted(8));
+        assert_eq!(match_prefix(&e, b"VERS\n\rv1\n\rERR 64\n\r=> "), Outcome::Parted(12));
+        assert!(!e.matches(b"VERS\n\rERR\n\r=> "));
+        // ERR elsewhere on a line, and lines that begin like it, are text.
+        assert!(e.matches(b"VERS\n\rno ERR here\n\r=> "));
+        assert!(e.matches(b"VERS\n\rER\n\rEEROR\n\r=> "));
+        // At least one byte that is not a line break: no answer, or empty lines, is not text.
+        assert_eq!(match_prefix(&e, b"VERS\n\r=> "), Outcome::Partial);
+        assert!(!e.matches(b"VERS\n\r\n\r\n\r=> "));
+        assert!(e.matches(b"VERS\n\r\n\rx\n\r=> "));
+        // Where it parts, the text is what was wanted.
+        let mut m = Matcher::new(&e);
+        for &c in b"VERS\n\rERR" {
+            m.feed(c);
+        }
+        assert_eq!(m.expected_at_parting(), "{text}\\n\\r=> ");
     }
 
     #[test]

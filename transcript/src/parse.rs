@@ -468,6 +468,7 @@ fn elision(inner: &str) -> Option<Piece> {
     match (kind, rest, &capture) {
         ("line", [], None) => return Some(Piece::Line),
         ("any", [], None) => return Some(Piece::Any),
+        ("text", [], None) => return Some(Piece::Text),
         ("byte", [], None) => return Some(Piece::AnyByte),
         _ => {}
     }

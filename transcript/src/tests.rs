@@ -153,6 +153,13 @@ fn errors_are_typed_with_line_numbers() {
     assert!(matches!(e.kind, ParseErrorKind::BadElision(_)));
     let e = err(&format!("{HEAD}expect \"x{{int}}\"\n"));
     assert!(matches!(e.kind, ParseErrorKind::BadExpect(_)));
+    // {text} stands for whole lines: a line break on either side, and never at the end.
+    for bad in ["x{text}\\n", "\\n{text}x", "\\n{text}", "{int}{text}\\n", "\\n{text}{int}\\n", "{text as a}\\n"] {
+        let e = err(&format!("{HEAD}expect \"{bad}\"\n"));
+        assert!(matches!(e.kind, ParseErrorKind::BadExpect(_) | ParseErrorKind::BadElision(_)), "{bad}: {e}");
+    }
+    let t = parse(&format!("{HEAD}expect \"{{text}}\\r\" hex 0A {{text}} 0D\n")).unwrap();
+    assert_eq!(t.steps[0].expect.to_text(), "\"{text}\\r\" hex 0A {text} 0D");
     let e = err(&format!("{HEAD}expect \"x\" trailing\n"));
     assert_eq!(e.kind, ParseErrorKind::Unexpected("trailing".into()));
     let e = err(HEAD);
@@ -336,6 +343,7 @@ fn arb_piece() -> impl Strategy<Value = Piece> {
         1 => (-1_000_000i64..1_000_000, 0i64..1_000_000).prop_map(|(a, d)| Piece::Int(Some((a, a + d)))),
         1 => Just(Piece::Line),
         1 => Just(Piece::Any),
+        1 => Just(Piece::Text),
         1 => Just(Piece::AnyByte),
         1 => arb_field(),
     ]
@@ -345,7 +353,16 @@ fn arb_expect() -> impl Strategy<Value = Expect> {
     proptest::collection::vec((any::<bool>(), arb_piece()), 0..8).prop_map(|ps| {
         let mut e = Expect::default();
         for (hex, p) in ps {
-            e.push(if hex { Form::Hex } else { Form::Text }, p);
+            let form = if hex { Form::Hex } else { Form::Text };
+            // The format puts {text} between line breaks.
+            let text = p == Piece::Text;
+            if text {
+                e.push_bytes(form, b"\n");
+            }
+            e.push(form, p);
+            if text {
+                e.push_bytes(form, b"\r");
+            }
         }
         // The format forbids a variable elision at the end.
         if e.pieces().last().is_some_and(|(_, p)| p.is_variable()) {

@@ -259,7 +259,7 @@ pub fn decode_blocks(golden: &Expect, actual: &[u8], names: Option<&RtLayout>) -
                 rows.push(row(at, *ty, range));
                 at += ty.size();
             }
-            Piece::Int(_) | Piece::Line | Piece::Any | Piece::Value(_) => break,
+            Piece::Int(_) | Piece::Line | Piece::Any | Piece::Text | Piece::Value(_) => break,
         }
     }
     rows

@@ -54,7 +54,8 @@ pub(crate) enum Shape {
     Values(Vec<Vec<Option<Range>>>),
     /// List lines `NAME value...`: values of live parameters elided to their ranges.
     ListValues,
-    /// The echo, then any lines (text the project chose: only their presence is checked).
+    /// The echo, then `{text}`: one or more lines of text, none of them a status answer (text
+    /// the project chose: only that there is some, and that it is not `ERR n`, is checked).
     AnyLines,
     /// A RealTime answer: a feedback block with per-field rules (see [`FieldRule`]).
     Block(Vec<FieldRule>),
@@ -652,7 +653,7 @@ pub(crate) fn shape_answer(p: &Profile, c: &Captured, shape: &Shape, binds: &[Bi
             let mut e = Expect::default();
             e.push_bytes(Form::Text, echo);
             e.push_bytes(Form::Text, eol);
-            e.push(Form::Text, Piece::Any);
+            e.push(Form::Text, Piece::Text);
             e.push_bytes(Form::Text, &ep);
             e
         }

@@ -324,7 +324,7 @@ fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], 
                 | CommandKind::GlobalListAllValues => topic(p, &["seed-flista", "bh8-list-values-format"], found),
                 CommandKind::ErrorText => topic(p, &["seed-err-command", "bh8-err-format"], found),
                 CommandKind::Help | CommandKind::HelpAll => topic(p, &["seed-help", "bh8-help-format"], found),
-                CommandKind::Version => topic(p, &["bh8-vers-text"], found),
+                CommandKind::Version => topic(p, &["seed-vers-text", "bh8-vers-text"], found),
                 CommandKind::Initialize if status.is_none() => {
                     for m in &motors {
                         initialized[*m as usize - 1] = true;

@@ -161,6 +161,9 @@ faults! {
     /// the second comes after the answer a host expects, so a host that stops reading at the
     /// first prompt meets it before its next answer.
     EmptyLineTwoPrompts => "empty-line-two-prompts",
+    /// VERS is not implemented: it is an unknown command (its status, 32) instead of the
+    /// version lines, so a host that reads the version at connect reads an error line.
+    VersUnknown => "vers-unknown",
 }
 
 impl Fault {

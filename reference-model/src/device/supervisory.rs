@@ -290,6 +290,7 @@ impl Device {
                 }
                 self.end_line(StatusBits::empty());
             }
+            CommandKind::Version if self.has(Fault::VersUnknown) => self.end_line(StatusBits::UNKNOWN_COMMAND),
             CommandKind::Version => {
                 for l in &profile.version {
                     self.print_line(l);

@@ -116,6 +116,9 @@ class Matcher:
             nxt = None
             if p in (("line",), ("any",)):
                 nxt = (i + 1, None, caps)
+            elif p == ("text",):
+                if (aux or 0) & _TEXT_SEEN:
+                    nxt = (i + 1, None, caps)
             elif isinstance(p, tuple) and p[0] in ("int", "value", "bin"):
                 r = self._reads(i, caps)
                 if r is not None and r[0] == "int" and aux is not None and _int_complete(aux, r[1], r[2]):
@@ -157,6 +160,10 @@ class Matcher:
             elif p == ("line",):
                 if b not in (10, 13):
                     new.add((i, None, caps))
+            elif p == ("text",):
+                t = _text_step(aux or 0, b)
+                if t is not None:
+                    new.add((i, t, caps))
             else:
                 r = self._reads(i, caps)
                 if r is None or isinstance(aux, tuple):
@@ -186,6 +193,29 @@ class Matcher:
         if not self.states:
             return DEAD
         return COMPLETE if self.is_complete() else ALIVE
+
+
+# A {text} state in `aux`: _TEXT_SEEN once a byte other than LF and CR came; in the low bits,
+# 0 to 2 while the present line is so far the start of `ERR`, _TEXT_FREE once it is not.
+_TEXT_SEEN = 8
+_TEXT_FREE = 3
+
+
+def _text_step(aux, b):
+    """A {text}'s next byte: a line break starts a new line; a line that begins with `ERR` (a
+    status answer) is where the text parts (None)."""
+    if b in (10, 13):
+        return aux & _TEXT_SEEN
+    line = aux & 7
+    if line == 0 and b == 0x45:
+        line = 1
+    elif line == 1 and b == 0x52:
+        line = 2
+    elif line == 2 and b == 0x52:
+        return None
+    else:
+        line = _TEXT_FREE
+    return _TEXT_SEEN | line
 
 
 def match_prefix(pieces, data, known=None):

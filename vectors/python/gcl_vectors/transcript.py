@@ -23,6 +23,9 @@ class TranscriptError(Exception):
 BYTE = ("byte",)
 LINE = ("line",)
 ANY = ("any",)
+# One or more whole lines of text, none a status answer (README 1.5): at least one byte
+# other than LF and CR, and no line among its bytes begins with `ERR`.
+TEXT = ("text",)
 
 
 def int_piece(lo=-INT_LIMIT, hi=INT_LIMIT):
@@ -144,8 +147,8 @@ def parse_elision(body, lineno):
         capture = words[-1]
         words = words[:-2]
     name, rest = words[0], words[1:]
-    if name in ("line", "any", "byte") and not rest and capture is None:
-        return {"line": LINE, "any": ANY, "byte": BYTE}[name]
+    if name in ("line", "any", "text", "byte") and not rest and capture is None:
+        return {"line": LINE, "any": ANY, "text": TEXT, "byte": BYTE}[name]
     relation = None
     if len(rest) == 2:
         relation = _parse_relation(rest[0], rest[1], lineno)
@@ -339,8 +342,15 @@ def parse(data):
                     step.within = parse_duration(window, lineno)
                 rest = m.group(2)
             step.expect = parse_segments(rest, lineno, allow_elisions=True)
-            if step.expect and (step.expect[-1] in (LINE, ANY) or _is_int(step.expect[-1])):
-                raise TranscriptError(lineno, "an expect must not end with {int}, {line} or {any}")
+            if step.expect and (step.expect[-1] in (LINE, ANY, TEXT) or _is_int(step.expect[-1])):
+                raise TranscriptError(lineno, "an expect must not end with {int}, {line}, {any} or {text}")
+            for k, piece in enumerate(step.expect):
+                # {text} stands for whole lines: a line break before it (unless it begins the
+                # expectation) and after it.
+                if piece == TEXT and not (
+                    (k == 0 or step.expect[k - 1] in (10, 13)) and k + 1 < len(step.expect) and step.expect[k + 1] in (10, 13)
+                ):
+                    raise TranscriptError(lineno, "{text} must stand between line breaks")
             for piece in step.expect:
                 if isinstance(piece, tuple) and piece[0] == "value":
                     _, _, relation, capture = piece

@@ -92,6 +92,26 @@ class Transcripts(unittest.TestCase):
         self.assertEqual(match_prefix(expect('""'), b"x"), (COMPLETE, 0))
         self.assertEqual(match_prefix(expect('"ab"'), b"a"), (ALIVE, 1))
 
+    def test_text_is_lines_that_are_not_a_status(self):
+        e = expect('"VERS\\n\\r{text}\\n\\r=> "')
+        for ok in (b"GCL seed hand 0.1", b"Firmware 4.4x\n\rBarrett", b"no ERR here", b"ER\n\rEEROR", b"\n\rx"):
+            data = b"VERS\n\r" + ok + b"\n\r=> "
+            self.assertEqual(match_prefix(e, data), (COMPLETE, len(data)), ok)
+        # A line that begins with ERR parts the answer at its second R, first line or later.
+        self.assertEqual(match_prefix(e, b"VERS\n\rERR 64\n\r=> "), (DEAD, 8))
+        self.assertEqual(match_prefix(e, b"VERS\n\rv1\n\rERR 64\n\r=> "), (DEAD, 12))
+        # No text at all, or only line breaks, never completes.
+        self.assertEqual(match_prefix(e, b"VERS\n\r=> "), (ALIVE, 9))
+        self.assertEqual(match_prefix(e, b"VERS\n\r\n\r\n\r=> ")[0], ALIVE)
+
+    def test_text_stands_between_line_breaks(self):
+        def with_expect(e):
+            return parse(GOOD + b'\nsend "VERS\\r"\nexpect ' + e.encode() + b"\n")
+
+        self.assertEqual(with_expect('"VERS\\n\\r{text}\\n\\r=> "').steps[-1].expect[6], ("text",))
+        for bad in ('"x{text}\\n"', '"\\n{text}x"', '"\\n{text}"', '"{int}{text}\\n"', '"{text as a}\\n"'):
+            with self.assertRaises(TranscriptError, msg=bad):
+                with_expect(bad)
 
 if __name__ == "__main__":
     unittest.main()

@@ -735,7 +735,12 @@ mod tests {
         // FGET SG cases accept any. In this process the model is the hand, so both stay exact.
         let actions = [HostAction::Line("VERS".into()), HostAction::Line("FGET SG".into())];
         let wide = wide_case(&actions).expect("a case");
-        assert!(answer_to(&wide, "VERS").contains("{any}"), "{}", answer_to(&wide, "VERS"));
+        assert!(answer_to(&wide, "VERS").contains("{text}"), "{}", answer_to(&wide, "VERS"));
+        // Its own text, but text: a hand that answers VERS with a status does not have it.
+        let vers = wide.transcript.steps.iter().find(|s| s.send.as_ref().is_some_and(|h| h.bytes == b"VERS\r"));
+        let vers = &vers.expect("a VERS step").expect;
+        assert!(vers.matches(b"VERS\n\rGCL seed hand 0.1\n\r=> "));
+        assert!(!vers.matches(b"VERS\n\rERR 64\n\r=> "));
         assert_eq!(answer_to(&wide, "FGET SG").matches("{int 0..255}").count(), 4, "{}", answer_to(&wide, "FGET SG"));
         let here = build_case(&Profile::builtin("seed").unwrap(), &actions, "t", "t", false, true).expect("a case");
         assert!(!answer_to(&here, "VERS").contains('{'), "{}", answer_to(&here, "VERS"));

@@ -403,9 +403,8 @@ impl Gen {
                 k.preamble(false).line(&format!("{n} 3")).line(&format!("{n} 4160")).line(&n)
             }
             CommandKind::Version => {
-                // What VERS says is checked where the profile decides it; elsewhere it is INFO.
-                let k =
-                    if self.has_decision("bh8-vers-text") { k.decision("bh8-vers-text") } else { k.level(Level::Info) };
+                // What VERS says is the profile's text decision: some lines, none a status.
+                let k = k.decision("seed-vers-text").decision("bh8-vers-text");
                 k.preamble(false).line_shaped(&n, Shape::AnyLines)
             }
             CommandKind::Help => {

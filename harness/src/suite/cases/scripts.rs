@@ -43,7 +43,7 @@
 //! ```text
 //! expect: banner          a RESET banner: `{any}BarrettHand Firmware{any}`
 //! expect: banner-lines    a banner checked for the line endings hosts rely on
-//! expect: any-lines       the echo, then any lines (only their presence is checked)
+//! expect: any-lines       the echo, then `{text}`: lines that are not a status
 //! expect: list-values     `NAME value...` lines, live values elided to their ranges
 //! expect: values          a get line's values (`[motors]FGET|PGET NAME...`), each live value
 //!                         elided to its parameter's range, as the generators' `get` does
