@@ -38,6 +38,11 @@ pub struct BuiltCase {
     /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
     /// (`None` for a block outside the loop, which sends nothing).
     pub block_bytes: Vec<Option<Vec<u8>>>,
+    /// For each action, the transcript step its steps begin at, and whether the model was
+    /// outside RealTime mode there (every action ends answered, so a line inserted before
+    /// one that begins outside the loop is sent at a quiescent point; one inside it would be
+    /// blocks, and the builder drops it).
+    pub action_steps: Vec<(usize, bool)>,
 }
 
 /// Why actions did not make a case: the model itself gave no complete answer, or an answer
@@ -113,7 +118,7 @@ enum ShapeKind {
     Block(bool),
 }
 
-fn mpe(p: &Profile, motor: u8) -> i64 {
+pub(super) fn mpe(p: &Profile, motor: u8) -> i64 {
     p.param_id("MPE").map_or(0, |id| p.default_for(id, motor))
 }
 
@@ -224,8 +229,10 @@ pub fn build_case_sending(
     let mut track: Option<LoopTrack> = None;
     let mut notes: Vec<(usize, BlockNote)> = Vec::new();
     let mut stalls = false;
+    let mut action_steps = Vec::with_capacity(actions.len());
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
+        action_steps.push((k.def.plans.len(), !in_loop));
         if !in_loop || !matches!(a, HostAction::Block { .. } | HostAction::Line(_)) {
             // (anything else sent in the loop drives it as the track does not follow)
             track = None;
@@ -522,7 +529,7 @@ pub fn build_case_sending(
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes })
+    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes, action_steps })
 }
 
 /// Whether the model answers `plans` otherwise once its joint stops lie at the end of P's
