@@ -146,3 +146,85 @@ fn within_mpe(p: &Profile, b: &BuiltCase, at: usize) -> Option<Expect> {
     }
     (motor == values.len()).then_some(e)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::{FuzzOptions, Hand, build_for, signature};
+    use super::*;
+    use gcl_host::target::Target;
+
+    /// The signature of `actions` on a sim with `fault`, and what asking the hand makes of it.
+    fn asked(fault: gcl_model::Fault, actions: &[HostAction]) -> (FindingSignature, Option<FindingSignature>) {
+        let p = gcl_model::Profile::builtin("bh8-262").unwrap();
+        let mut opts = FuzzOptions::new(Target::Sim { profile: None }, p);
+        opts.open.faults = vec![fault];
+        let built = build_for(&opts, actions, "t", "t").unwrap();
+        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let out = hand.run(&built.transcript, true).unwrap();
+        let sig = signature(&opts.profile, &built, &out, true).expect("the case fails");
+        let named = named(&opts, &mut hand, actions, &built, &out, &sig).unwrap();
+        (sig, named)
+    }
+
+    /// stay-in-loop's finding of seed 1 (2000 runs): a loop with a bad header the hand stays
+    /// in, ^C, M and HOME cut short by ^C, then FGET P. Motor 4 reads wrong after HOME, but it
+    /// was wrong before HOME (read there: wrong, after M) and before M (wrong, after the
+    /// loop's block), and right before the loop: the loop is named, as in the finding the
+    /// fault gives without the later motions (`value at FGET after LOOP`), which it joins.
+    #[test]
+    fn a_position_wrong_before_the_motion_named_is_named_by_where_the_hand_parted() {
+        let actions = vec![
+            HostAction::Line("4LOOP".into()),
+            HostAction::Block {
+                header: b'C',
+                values: vec![i64::MAX, 79, -10, i64::MIN, 60, 108, i64::MAX, i64::MIN],
+                extra: 1,
+                pause_ms: 0,
+            },
+            HostAction::Abort,
+            HostAction::LineThenAbort { line: "M 16789".into(), after_ms: 266 },
+            HostAction::LineThenAbort { line: "44HOME".into(), after_ms: 0 },
+            HostAction::Line("FGET P".into()),
+        ];
+        let (sig, named) = asked(gcl_model::Fault::StayInLoop, &actions);
+        assert_eq!(sig.key(), "value at FGET after HOME");
+        let named = named.expect("the hand had the position wrong before HOME");
+        assert_eq!(named.key(), "value at FGET after LOOP");
+        assert_eq!(named.motors, sig.motors, "the finding still shows where it showed");
+    }
+
+    /// lcv-unsigned's finding of seed 1: a block with a negative velocity (read unsigned by
+    /// the hand), then `IC` sent in the loop (the model leaves it on `I` and closes on `C`),
+    /// cut short by ^C. The loop ended by ^C at that line instead already reads motor 3
+    /// wrong, by more than MPE though within the band ^C-timing widens reads to: the session
+    /// is named (and the read before its LOOP is right).
+    #[test]
+    fn a_position_a_loop_left_wrong_is_named_by_the_loop_not_the_line_sent_in_it() {
+        let actions = vec![
+            HostAction::Line("G1LOOP".into()),
+            HostAction::Block {
+                header: b'c',
+                values: vec![62, i64::MIN, -95, 0, -24, 99, i64::MAX, -26],
+                extra: 0,
+                pause_ms: 0,
+            },
+            HostAction::LineThenAbort { line: "IC".into(), after_ms: 0 },
+            HostAction::Line("1O".into()),
+            HostAction::Line("FGET P".into()),
+        ];
+        let (sig, named) = asked(gcl_model::Fault::LcvUnsigned, &actions);
+        assert_eq!(sig.key(), "value at FGET after IC");
+        assert_eq!(named.map(|s| s.key()).as_deref(), Some("value at FGET after LOOP"));
+    }
+
+    /// A position the motion named gets wrong (M to a DP the hand ignores) is right when read
+    /// just before it: the cause stays.
+    #[test]
+    fn a_position_right_before_the_motion_named_keeps_its_cause() {
+        let actions: Vec<HostAction> =
+            ["FSET DP 3000", "M", "FGET P"].iter().map(|l| HostAction::Line(l.to_string())).collect();
+        let (sig, named) = asked(gcl_model::Fault::DpIgnored, &actions);
+        assert_eq!(sig.key(), "value at FGET after M");
+        assert_eq!(named, None);
+    }
+}
