@@ -58,22 +58,23 @@ pub(super) fn named(
         let Some(step) = cause.1 else { break };
         // The action that sent the cause (none: the preamble's), and where the read goes.
         let Some(i) = built.action_steps.iter().rposition(|(s, _)| *s <= step) else { break };
-        let variant = if built.action_steps[i].1 {
+        let read_line = HostAction::Line(read.clone());
+        // (the variant, and the read's place in it)
+        let (variant, j) = if built.action_steps[i].1 {
             // (before the cause, which starts at a quiescent point)
-            [&actions[..i], &[HostAction::Line(read.clone())], &actions[i..]].concat()
+            ([&actions[..i], &[read_line], &actions[i..]].concat(), i)
         } else if matches!(actions[i], HostAction::Block { .. }) {
             // (a block: the session is the cause, read before its LOOP)
             let Some(j) = built.action_steps[..i].iter().rposition(|(_, quiet)| *quiet) else { break };
             if let Some(name) = session_opener(p, &actions[j]) {
                 cause = (name, Some(built.action_steps[j].0));
             }
-            [&actions[..j], &[HostAction::Line(read.clone())], &actions[j..]].concat()
+            ([&actions[..j], &[read_line], &actions[j..]].concat(), j)
         } else {
             // (a line sent in the loop, that the model leaves it on and runs the rest of: the
             // session ended there by ^C instead, then read; what the session did shows there)
-            [&actions[..i], &[HostAction::Abort, HostAction::Line(read.clone())]].concat()
+            ([&actions[..i], &[HostAction::Abort, read_line]].concat(), i + 1)
         };
-        let Some(j) = variant.iter().position(|a| *a == HostAction::Line(read.clone())) else { break };
         let Ok(mut b) = build_for_sending(opts, &variant, "fuzz", "probe", &built.block_bytes) else { break };
         let Some(&(at, true)) = b.action_steps.get(j) else { break };
         let sends_read = b
