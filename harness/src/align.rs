@@ -178,6 +178,12 @@ pub struct FindingSignature {
     /// status: the motion or loop it stopped, or was sent to stop (shown, not part of the key).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub cause: String,
+    /// The transcript step that sent [`cause`](Self::cause) for a value read back, where the
+    /// case sent it (not the preamble's own lines alone: any step). Not part of the key, not
+    /// saved: the device fuzzer reads the value back just before it to ask the hand whether
+    /// the value was already wrong there (see `fuzz::device::probe`).
+    #[serde(skip)]
+    pub cause_step: Option<usize>,
     /// What explains the whole failure as one bug, confirmed on the model: the case rewritten as
     /// a hand with that bug would take it answers what the hand did (`prefix 123+4`: `G` read
     /// as reaching motor 4 too; `MCV set without effect`). Set by the device fuzzer, which can
@@ -549,8 +555,8 @@ pub fn signature(
         return Some(sig(command, "order", &param));
     }
     let motors = differing_motors(p, &line, &h_text, &golden);
-    let cause = cause_of(p, t, owner, &line, &param, &motors);
-    Some(FindingSignature { motors, cause, ..sig(command, "value", &param) })
+    let (cause, cause_step) = cause_of(p, t, owner, &line, &param, &motors).unzip();
+    Some(FindingSignature { motors, cause: cause.unwrap_or_default(), cause_step, ..sig(command, "value", &param) })
 }
 
 fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
@@ -560,6 +566,7 @@ fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
         detail: detail.to_string(),
         motors: String::new(),
         cause: String::new(),
+        cause_step: None,
         explanation: String::new(),
         scope: String::new(),
     }
@@ -586,32 +593,40 @@ fn status_detail(model: u64, hand: u64) -> String {
 /// The command before the read that decided the value read: for a position, the last line
 /// that moved one of the motors whose values differ (or initialised or reset the hand); for
 /// a stored parameter, the last line that set it by name, restored its defaults, loaded it or
-/// reset the hand. Empty for other live values (strain, temperature: every read shows their
-/// bug, whatever came before) and when no line did.
-fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str, motors: &str) -> String {
-    let Some(id) = p.param_id(param) else { return String::new() };
+/// reset the hand. `None` for other live values (strain, temperature: every read shows their
+/// bug, whatever came before) and when no line did; else the command's name and the step that
+/// sent it.
+fn cause_of(
+    p: &Profile,
+    t: &Transcript,
+    owner: usize,
+    line: &[u8],
+    param: &str,
+    motors: &str,
+) -> Option<(String, usize)> {
+    let id = p.param_id(param)?;
     let spec = p.param(id);
     let position = p.role(gcl_model::spec::Role::Position) == Some(id);
     if spec.live && !position {
-        return String::new();
+        return None;
     }
     let global = spec.scope == gcl_model::spec::Scope::Global;
     let term = p.framing.terminator;
-    let mut lines: Vec<Vec<u8>> = Vec::new();
-    for s in t.steps.iter().take(owner + 1) {
+    let mut lines: Vec<(usize, Vec<u8>)> = Vec::new();
+    for (i, s) in t.steps.iter().enumerate().take(owner + 1) {
         let Some(h) = &s.send else { continue };
         if h.form == Form::Hex {
-            lines.push(b"LOOP".to_vec());
+            lines.push((i, b"LOOP".to_vec()));
             continue;
         }
-        lines.extend(h.bytes.split(|b| *b == term).map(<[u8]>::to_vec));
+        lines.extend(h.bytes.split(|b| *b == term).map(|l| (i, l.to_vec())));
     }
     // Up to the line answered.
-    if let Some(i) = lines.iter().rposition(|l| l.as_slice() == line) {
+    if let Some(i) = lines.iter().rposition(|(_, l)| l.as_slice() == line) {
         lines.truncate(i);
     }
     let differing = MotorSet::from_motors(motors.bytes().filter_map(|b| b.is_ascii_digit().then_some(b - b'0')));
-    for l in lines.iter().rev() {
+    for (step, l) in lines.iter().rev() {
         let Ok(Line::Command(c)) = parse_line(p, l) else { continue };
         let k = c.kind(p);
         let decides = if position {
@@ -627,10 +642,10 @@ fn cause_of(p: &Profile, t: &Transcript, owner: usize, line: &[u8], param: &str,
             scoped || k == CommandKind::Reset || matches!(&c.args, Args::Pairs(ps) if ps.iter().any(|(i, _)| *i == id))
         };
         if decides {
-            return p.command(c.command).name.clone();
+            return Some((p.command(c.command).name.clone(), *step));
         }
     }
-    String::new()
+    None
 }
 
 /// The motion or LOOP line last sent before step `owner` (a ^C): what it stopped, or was sent

@@ -41,6 +41,11 @@ pub struct BuiltCase {
     /// The decisions each step of the transcript rests on (`suite::depends::decisions_by_step`,
     /// the analysis behind `x-decisions`, which is their union with the `decision:` clauses).
     pub step_decisions: Vec<Vec<String>>,
+    /// For each action, the transcript step its steps begin at, and whether the model was
+    /// outside RealTime mode there (every action ends answered, so a line inserted before
+    /// one that begins outside the loop is sent at a quiescent point; one inside it would be
+    /// blocks, and the builder drops it).
+    pub action_steps: Vec<(usize, bool)>,
 }
 
 impl BuiltCase {
@@ -147,7 +152,7 @@ enum ShapeKind {
     Block(bool),
 }
 
-fn mpe(p: &Profile, motor: u8) -> i64 {
+pub(super) fn mpe(p: &Profile, motor: u8) -> i64 {
     p.param_id("MPE").map_or(0, |id| p.default_for(id, motor))
 }
 
@@ -259,8 +264,10 @@ pub fn build_case_sending(
     let mut notes: Vec<(usize, BlockNote)> = Vec::new();
     // The first step whose motion the model stalls at a stop or short of its goal.
     let mut stalls_at: Option<usize> = None;
+    let mut action_steps = Vec::with_capacity(actions.len());
     for a in actions {
         let in_loop = walk.shadow.mode() == Mode::Loop;
+        action_steps.push((k.def.plans.len(), !in_loop));
         if !in_loop || !matches!(a, HostAction::Block { .. } | HostAction::Line(_)) {
             // (anything else sent in the loop drives it as the track does not follow)
             track = None;
@@ -575,7 +582,15 @@ pub fn build_case_sending(
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
     let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
-    Ok(BuiltCase { transcript, features: walk.features, eeprom_writes, model, block_bytes, step_decisions })
+    Ok(BuiltCase {
+        transcript,
+        features: walk.features,
+        eeprom_writes,
+        model,
+        block_bytes,
+        step_decisions,
+        action_steps,
+    })
 }
 
 /// The decisions of where the model's motion ends: its joint stops (`[hand]` constants the

@@ -20,6 +20,7 @@
 pub mod action;
 pub mod case;
 pub mod coverage;
+mod probe;
 mod relate;
 pub mod report;
 mod variant;
@@ -1525,11 +1526,24 @@ fn report_finding(
     } else {
         (actions.to_vec(), built.clone())
     };
+    let mut final_case = build_for(opts, &min_actions, "fuzz", "a finding").unwrap_or(min_case);
+    let out = hand.run(&final_case.transcript, true)?;
+    let mut sig = sig;
+    // A position wrong before the motion named: the hand is asked where it began (a dead
+    // hand is not). Named so, it may be a finding already reported.
+    let alive = shared.lock().unwrap_or_else(|e| e.into_inner()).dead_hand.is_none();
+    if alive && let Some(s) = probe::named(opts, hand, &min_actions, &final_case, &out, &sig)? {
+        sig = s;
+        let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
+        if !sh.seen.insert(sig.key()) {
+            sh.minimizing += t0.elapsed();
+            return Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m));
+        }
+    }
     let id = finding_id(&sig);
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
-    let mut final_case = build_for(opts, &min_actions, &id, &title).unwrap_or(min_case);
+    (final_case.transcript.header.id, final_case.transcript.header.title) = (id.clone(), title);
     final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
-    let out = hand.run(&final_case.transcript, true)?;
     let diff = out.render();
     // The steps of this (the final) transcript's run where it fails: what the finding rests on.
     let failing = crate::align::failing_steps(&opts.profile, &final_case.transcript, &final_case.model, &out);
@@ -1844,6 +1858,7 @@ mod tests {
                 detail: detail.into(),
                 motors: String::new(),
                 cause: String::new(),
+                cause_step: None,
                 explanation: String::new(),
                 scope: String::new(),
             };
