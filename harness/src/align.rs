@@ -123,8 +123,18 @@ impl Link for Tagging {
 /// Replays `t` on a fresh unmutated model with the suite's options, tagging its answers. The
 /// replay's outcome is returned as the error when it does not pass (no case, then).
 pub fn model_run(p: &Arc<Profile>, t: &Transcript) -> Result<ModelRun, Box<ReplayOutcome>> {
+    model_run_on(p, crate::suite::model_config(&t.header), t)
+}
+
+/// [`model_run`] on a model built from `config` (a hypothesis about another hand: see
+/// `fuzz::device::variant`).
+pub fn model_run_on(
+    p: &Arc<Profile>,
+    config: gcl_model::DeviceConfig,
+    t: &Transcript,
+) -> Result<ModelRun, Box<ReplayOutcome>> {
     let mut link = Tagging {
-        inner: SimLink::new(p.clone(), crate::suite::model_config(&t.header)),
+        inner: SimLink::new(p.clone(), config),
         queue: VecDeque::new(),
         tags: Vec::new(),
         step: BEFORE,

@@ -80,3 +80,18 @@ fn a_planted_bug_in_a_hand_that_already_differs_is_the_only_new_finding() {
         assert_eq!(got, want, "{bug}: {new:?}");
     }
 }
+
+/// A hand outside this process answers with its own noise and timing, so a hypothesis about it
+/// is tried as a case built anew on a model that holds it, shaped for such a hand: the
+/// independent hand applies the valid pairs of a set it refuses (its own choice on the open
+/// decision framing-line-atomic), and the position read back after M is named so, not `after M`.
+#[test]
+fn a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does() {
+    let Some(py) = deps::python_with(&[]) else { return };
+    let argv = vec![py, hand().display().to_string()];
+    let o = FuzzOptions::new(Target::Exec { argv }, Profile::builtin("seed").unwrap());
+    let line = |l: &str| gcl_harness::fuzz::device::action::HostAction::Line(l.to_string());
+    let actions = [line("FSET DP 1000 MCV"), line("M"), line("FGET P")];
+    let sig = gcl_harness::fuzz::device::judge_once(&o, &actions).unwrap().unwrap().expect("the hand moves to 1000");
+    assert_eq!(sig.explanation, "FSET refused but applied in part", "{sig}");
+}

@@ -374,6 +374,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/fuzz_device.rs::a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it"],
     ),
     (
+        "outside it the case built anew on that model must expect what the hand answered",
+        &["harness/tests/fuzz_device_baseline_hand.rs::a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does"],
+    ),
+    (
         "corpora of several workers, machines or runs merge by copying",
         &["harness/tests/fuzz_device.rs::the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus"],
     ),

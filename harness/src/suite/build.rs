@@ -709,7 +709,17 @@ pub(crate) fn capture_plan_with(
     setup: &[Setup],
 ) -> Result<Vec<Captured>, LinkError> {
     let header = Header { setup: setup.to_vec(), ..Header::default() };
-    let mut link = SimLink::new(profile.clone(), super::model_config(&header));
+    capture_plan_on(profile, plans, super::model_config(&header))
+}
+
+/// [`capture_plan`] on a hand built from `config` (a hypothesis about another hand: see
+/// `fuzz::device::variant`).
+pub(crate) fn capture_plan_on(
+    profile: &Arc<Profile>,
+    plans: &[Plan],
+    config: gcl_model::DeviceConfig,
+) -> Result<Vec<Captured>, LinkError> {
+    let mut link = SimLink::new(profile.clone(), config);
     let mut opts = RecordOptions::new(profile.clone());
     opts.timeout = Duration::from_secs(120);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();

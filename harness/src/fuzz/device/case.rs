@@ -19,7 +19,9 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 use super::action::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
-use crate::suite::build::{CaseB, FieldRule, Plan, Range, Shape, build_from, capture_plan, value_range};
+use crate::suite::build::{
+    CaseB, FieldRule, Plan, Range, Shape, build_from, capture_plan, capture_plan_on, value_range,
+};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
 
@@ -230,6 +232,22 @@ pub fn build_case_sending(
     home: bool,
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
+    build_case_on(p, &DeviceConfig::default(), actions, id, title, wide, home, blocks)
+}
+
+/// [`build_case_sending`] with a model built from `config`, not the profile's own hand: what a
+/// hand with that difference would answer, shaped as any case (see `variant`).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build_case_on(
+    p: &Arc<Profile>,
+    config: &DeviceConfig,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+    blocks: &[Option<Vec<u8>>],
+) -> Result<BuiltCase, NotACase> {
     let term = p.framing.terminator;
     let parsed = |l: &str| match parse_line(p, l.as_bytes()) {
         Ok(Line::Command(c)) => Some(c),
@@ -245,11 +263,8 @@ pub fn build_case_sending(
     });
     let mut k = CaseB::new(p, id, title).src("Supervisory mode").preamble(moves || home);
     let homed = moves || home;
-    let mut walk = Walk {
-        shadow: Device::new(p.clone(), DeviceConfig::default()),
-        features: BTreeSet::new(),
-        positions_uncertain: false,
-    };
+    let mut walk =
+        Walk { shadow: Device::new(p.clone(), config.clone()), features: BTreeSet::new(), positions_uncertain: false };
     walk.shadow.clear_output();
     for plan in &k.def.plans {
         walk.feed(&plan.step.clone(), term);
@@ -483,7 +498,7 @@ pub fn build_case_sending(
     let mut def = k.finish();
     // The model's answers as the wire meets them, then the shapes from them (and the
     // transcript from the same answers).
-    let caps = capture_plan(p, &def.plans).map_err(|e| NotACase(e.to_string()))?;
+    let caps = capture_plan_on(p, &def.plans, config.clone()).map_err(|e| NotACase(e.to_string()))?;
     // A case whose answers change when the model's joint stops are taken away rests on where
     // the model puts them (the `[hand]` limits, which the seed does not fix): it is judged at
     // that decision's level, and `--skip-decision` drops it. Asked only of a hand outside
@@ -581,7 +596,9 @@ pub fn build_case_sending(
     }
     // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
     // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let model = crate::align::model_run(p, &transcript).map_err(|out| NotACase(out.summary()))?;
+    let mut run_config = config.clone();
+    run_config.scenario.objects = transcript.header.objects();
+    let model = crate::align::model_run_on(p, run_config, &transcript).map_err(|out| NotACase(out.summary()))?;
     Ok(BuiltCase {
         transcript,
         features: walk.features,

@@ -657,7 +657,7 @@ fn judged(
         };
         if confirmed {
             sig.explanation = e.says;
-        } else if let Some(says) = variant::explains(opts, built, out, known, fresh.exact) {
+        } else if let Some(says) = variant::explains(opts, actions, built, out, known, fresh) {
             // (a rewrite's chance fit, unconfirmed, leaves the case to a model that answers
             // it byte for byte)
             sig.explanation = says;
@@ -717,7 +717,11 @@ fn explain(
     at: &str,
 ) -> Option<Explained> {
     explain_by_rewrite(opts, actions, built, out, known, fresh.rewrite, at).or_else(|| {
-        variant::explains(opts, built, out, known, fresh.exact).map(|says| Explained { says, whole: None, exact: true })
+        variant::explains(opts, actions, built, out, known, fresh).map(|says| Explained {
+            says,
+            whole: None,
+            exact: !opts.wide(),
+        })
     })
 }
 
@@ -1239,6 +1243,22 @@ pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
     }
 }
 
+/// One case as a campaign judges it: `actions` built into a case, run thoroughly on the
+/// target, and signed and explained with no explanation known yet (`None` when the case
+/// passes). The inner error: the model makes no case of the actions.
+pub fn judge_once(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+) -> Result<Result<Option<FindingSignature>, NotACase>, FuzzError> {
+    let built = match build_for(opts, actions, "fuzz", "a case") {
+        Ok(b) => b,
+        Err(e) => return Ok(Err(e)),
+    };
+    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let out = hand.run(&built.transcript, true)?;
+    judged(opts, &mut hand, actions, &built, &out, &[]).map(Ok)
+}
+
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
     if opts.wide() {
@@ -1548,6 +1568,9 @@ fn report_finding(
     // The steps of this (the final) transcript's run where it fails: what the finding rests on.
     let failing = crate::align::failing_steps(&opts.profile, &final_case.transcript, &final_case.model, &out);
     let (level, rests_on) = Finding::binding(&opts.profile, &final_case.rests_on(failing));
+    // (the transcript written says the finding's level: `gcl conform --level` and a baseline
+    // read it from there, and the case's own level is its weakest step's, not its failure's)
+    final_case.transcript.header.level = level;
     let text = final_case.transcript.to_text();
     let path = match &opts.out {
         Some(dir) => {
@@ -1801,6 +1824,9 @@ mod tests {
         let whole = crate::suite::decisions_of_header(&built.transcript.header);
         assert!(whole.iter().any(|d| d == "bh8-err-format"), "{whole:?}");
         assert_eq!(f.signature.command, "FGET", "{}", f.signature);
+        // (and the transcript written says so: `gcl conform --level must` keeps it)
+        assert_eq!(f.transcript.header.level, gcl_model::Level::Must);
+        assert!(f.transcript_text.contains("\nlevel: MUST\n"), "{}", f.transcript_text);
         assert_eq!((f.level, f.rests_on), (gcl_model::Level::Must, vec![]));
     }
 

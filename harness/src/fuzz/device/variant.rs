@@ -15,9 +15,12 @@
 //! fails where the hand failed, it names the bug; the key is the one [`super::explain`]'s
 //! rewrite gives the same bug, so both ways join one finding.
 //!
-//! Byte for byte: only where the hand's answers are exact (the in-process sim, whose noise and
-//! clock are the model's). A hand outside this process answers with its own noise and timing,
-//! so there this proves nothing and is not tried; the rewrites still are.
+//! Byte for byte only where the hand's answers are exact (the in-process sim, whose noise and
+//! clock are the model's). A hand outside this process answers with its own noise and timing:
+//! there the case is built anew from the same actions on the model holding the hypothesis,
+//! shaped as any case for such a hand (positions within their bands), and the hand's answers
+//! up to the failing step must be what that case expects, the failing step's otherwise than
+//! the case did (`fits_within`). Afresh there only from a value read back, as the rewrites.
 
 use std::sync::Arc;
 
@@ -26,8 +29,9 @@ use gcl_model::grammar::{Args, Line, parse_line};
 use gcl_model::spec::{CommandKind, ParamId};
 use gcl_transcript::Form;
 
-use super::FuzzOptions;
+use super::action::HostAction;
 use super::case::BuiltCase;
+use super::{Fresh, FuzzOptions};
 use crate::replay::{ReplayOutcome, replay};
 
 /// Parameters set by name in the case's lines up to step `upto`, in the order first set.
@@ -75,11 +79,15 @@ struct Variant {
 fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> {
     let p = &opts.profile;
     // (the in-process hand's world: its noise seed, scenario and EEPROM, without its faults)
-    let base = gcl_model::DeviceConfig {
-        seed: opts.open.seed,
-        scenario: opts.open.scenario.clone().unwrap_or_default(),
-        nv: opts.open.nv.clone().unwrap_or_default(),
-        ..crate::suite::model_config(&built.transcript.header)
+    let base = if opts.wide() {
+        crate::suite::model_config(&built.transcript.header)
+    } else {
+        gcl_model::DeviceConfig {
+            seed: opts.open.seed,
+            scenario: opts.open.scenario.clone().unwrap_or_default(),
+            nv: opts.open.nv.clone().unwrap_or_default(),
+            ..crate::suite::model_config(&built.transcript.header)
+        }
     };
     let mut out: Vec<Variant> = set_params(opts, built, upto)
         .into_iter()
@@ -159,28 +167,28 @@ fn sent_lines(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Vec<u8>
 /// silence (a timeout) many models reproduce alike, whatever the bug.
 pub(super) fn explains(
     opts: &FuzzOptions,
+    actions: &[HostAction],
     built: &BuiltCase,
     out: &ReplayOutcome,
     known: &[String],
-    fresh: bool,
+    fresh: Fresh,
 ) -> Option<String> {
-    if opts.wide() {
-        return None;
-    }
     let failed = out.failed_step()?;
     let said = out.exchange().iter().find(|e| e.step == failed).is_some_and(|e| !e.received.is_empty());
-    let fresh = fresh && (matches!(out, ReplayOutcome::Mismatch(_)) || said);
+    // (outside this process, afresh only where a rewrite would look: a value read back)
+    let fresh =
+        if opts.wide() { fresh.rewrite } else { fresh.exact && (matches!(out, ReplayOutcome::Mismatch(_)) || said) };
     let mut candidates: Vec<Variant> =
         variants(opts, built, failed).into_iter().filter(|v| fresh || known.contains(&v.says)).collect();
     candidates.sort_by_key(|v| !known.contains(&v.says));
-    let hand = out.exchange();
-    let got = |x: &[crate::replay::Exchanged], s: usize| x.iter().find(|e| e.step == s).map(|e| e.received.clone());
     let mut found = None;
     for v in candidates {
-        let mut link = gcl_host::SimLink::new(v.profile, v.config);
-        let r = replay(&built.transcript, &mut link, &crate::suite::replay_options());
-        let same = r.failed_step() == Some(failed) && (0..=failed).all(|s| got(r.exchange(), s) == got(hand, s));
-        if !same {
+        let fits = if opts.wide() {
+            fits_within(opts, actions, built, out, v.profile, &v.config)
+        } else {
+            answers_alike(built, out, v.profile, v.config)
+        };
+        if !fits {
             continue;
         }
         if known.contains(&v.says) {
@@ -193,4 +201,56 @@ pub(super) fn explains(
         found = Some(v.says);
     }
     found
+}
+
+/// In process: the model built from `config` answers every step of the failing transcript up
+/// to the failing one byte for byte as the hand did, and fails where it failed.
+fn answers_alike(
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    profile: Arc<Profile>,
+    config: gcl_model::DeviceConfig,
+) -> bool {
+    let failed = out.failed_step();
+    let got = |x: &[crate::replay::Exchanged], s: usize| x.iter().find(|e| e.step == s).map(|e| e.received.clone());
+    let mut link = gcl_host::SimLink::new(profile, config);
+    let r = replay(&built.transcript, &mut link, &crate::suite::replay_options());
+    r.failed_step() == failed && (0..=failed.unwrap_or(0)).all(|s| got(r.exchange(), s) == got(out.exchange(), s))
+}
+
+/// Outside this process: the case built anew from the same actions on the model from
+/// `config`, shaped as any case for such a hand (its bands for noise and timing), expects what
+/// the hand answered at every step up to the failing one, and there expects otherwise than the
+/// case did. The hand's answers are matched as one stream (the variant's answers may end a
+/// step earlier or later than the case's did).
+fn fits_within(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    profile: Arc<Profile>,
+    config: &gcl_model::DeviceConfig,
+) -> bool {
+    let Some(failed) = out.failed_step() else { return false };
+    let Ok(v) =
+        super::case::build_case_on(&profile, config, actions, "fuzz", "variant", true, opts.home(), &built.block_bytes)
+    else {
+        return false;
+    };
+    let (old, new) = (&built.transcript.steps, &v.transcript.steps);
+    let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    if new.len() != old.len()
+        || (0..=failed).any(|s| send(&old[s]) != send(&new[s]))
+        || new[failed].expect == old[failed].expect
+    {
+        return false;
+    }
+    let Some(stream) = (0..=failed)
+        .map(|s| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone()))
+        .collect::<Option<Vec<Vec<u8>>>>()
+    else {
+        return false;
+    };
+    let judges: Vec<&gcl_transcript::Step> = new.iter().collect();
+    super::follows(&judges, &stream.concat(), failed + 1, matches!(out, ReplayOutcome::Mismatch(_)))
 }
