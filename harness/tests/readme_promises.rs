@@ -375,7 +375,9 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "outside it the case built anew on that model must expect what the hand answered",
-        &["harness/tests/fuzz_device_baseline_hand.rs::a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does"],
+        &[
+            "harness/tests/fuzz_device_baseline_hand.rs::a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does",
+        ],
     ),
     (
         "corpora of several workers, machines or runs merge by copying",
