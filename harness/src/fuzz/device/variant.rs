@@ -163,8 +163,9 @@ fn sent_lines(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Vec<u8>
 /// What the hand is shown to do by a model that holds one hypothesis (see [`variants`]) and
 /// answers as the hand did (see the module documentation): `None` where none or more than one
 /// does. `known`: explanations this campaign already holds, tried first (one of them that fits
-/// is taken whatever else does); others only when `fresh`, and only from a wrong answer: a
-/// silence (a timeout) many models reproduce alike, whatever the bug.
+/// is taken whatever else does); others only as `fresh` allows: in process from a wrong or
+/// cut-short answer (a silence, a timeout with nothing said, many models reproduce alike,
+/// whatever the bug), outside it only from a value read back (`Fresh::rewrite`).
 pub(super) fn explains(
     opts: &FuzzOptions,
     actions: &[HostAction],
