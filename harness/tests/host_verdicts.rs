@@ -155,7 +155,6 @@ fn a_host_that_pipelines_is_flagged_at_any_speed() {
     if !python_with("serial") {
         return;
     }
-    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
     let cases: [(Pace, TimeMode, &str); 6] = [
         (Pace::Unpaced, TimeMode::Fast, "9600"),
         (Pace::Fixed(9600), TimeMode::Fast, "9600"),
@@ -166,18 +165,25 @@ fn a_host_that_pipelines_is_flagged_at_any_speed() {
     ];
     for transport in [Transport::Pty, Transport::Tcp] {
         for (pace, time, baud) in cases {
-            let mut r = run(python("py_pipeline_mcv.py", &["{url}", baud]));
-            r.transport = transport;
-            r.pace = pace;
-            r.time = time;
-            let f = failing(&r);
-            assert!(
-                f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
-                "{transport:?} {pace} {} at {baud}: {f:?}",
-                time.name()
-            );
+            assert_pipelines_once(&["{url}", baud], transport, pace, time);
         }
     }
+}
+
+/// `py_pipeline_mcv.py ARGS` run over `transport` at `pace` and `time` fails exactly one
+/// clause, waits-for-answer, at the `GC` it sent before the prompt.
+fn assert_pipelines_once(args: &[&str], transport: Transport, pace: Pace, time: TimeMode) {
+    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
+    let mut r = run(python("py_pipeline_mcv.py", args));
+    r.transport = transport;
+    r.pace = pace;
+    r.time = time;
+    let f = failing(&r);
+    assert!(
+        f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
+        "{transport:?} {pace} {} {args:?}: {f:?}",
+        time.name()
+    );
 }
 
 /// The answer to `1FGET MCV` is there whole before a host that pauses between its two writes
@@ -191,7 +197,6 @@ fn a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp() {
     if !python_with("serial") {
         return;
     }
-    let waits = format!("host-{}", HostClause::WaitsForAnswer.id());
     let cases: [(Transport, Pace, TimeMode, &str, &str); 6] = [
         (Transport::Pty, Pace::Unpaced, TimeMode::Fast, "0.05", "0"),
         (Transport::Pty, Pace::Unpaced, TimeMode::Fast, "0.001", "0"),
@@ -201,16 +206,7 @@ fn a_host_that_pipelines_after_the_answer_came_is_flagged_over_pty_and_tcp() {
         (Transport::Tcp, Pace::Unpaced, TimeMode::Real, "0.05", "0"),
     ];
     for (transport, pace, time, pause, read_pause) in cases {
-        let mut r = run(python("py_pipeline_mcv.py", &["{url}", "9600", pause, read_pause]));
-        r.transport = transport;
-        r.pace = pace;
-        r.time = time;
-        let f = failing(&r);
-        assert!(
-            f.len() == 1 && f[0].starts_with(&waits) && f[0].contains("\"G\""),
-            "{transport:?} {pace} {} {pause} {read_pause}: {f:?}",
-            time.name()
-        );
+        assert_pipelines_once(&["{url}", "9600", pause, read_pause], transport, pace, time);
     }
     // Correct hosts stay correct over both (one that reconnects with an answer unread, too).
     for transport in [Transport::Pty, Transport::Tcp] {

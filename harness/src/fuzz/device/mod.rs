@@ -725,6 +725,10 @@ fn explain(
     })
 }
 
+/// The explanation of a prefix the hand accepts on a command that takes none (a rewrite's and
+/// a [`variant`]'s: one key for the bug whichever finds it).
+const PREFIX_ACCEPTED: &str = "prefix accepted on a command that takes none";
+
 /// Where [`explain`] may find an explanation no finding has yet: by a rewrite (a value read
 /// back; a block in process), and by a model answering byte for byte (also an answer cut
 /// short: the hand said part of it, then nothing; see [`variant::explains`]).
@@ -842,7 +846,7 @@ fn explain_by_rewrite(
     // The hand's echo is of the line as sent. A hand that ignores the prefix answers as the
     // command does, where the model answers 4096; one that refuses it otherwise does not.
     let mut accepted = Hypothesis {
-        says: "prefix accepted on a command that takes none".to_string(),
+        says: PREFIX_ACCEPTED.to_string(),
         actions: actions.to_vec(),
         echoes: Vec::new(),
         stored: None,

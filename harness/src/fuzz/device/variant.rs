@@ -34,30 +34,6 @@ use super::case::BuiltCase;
 use super::{Fresh, FuzzOptions};
 use crate::replay::{ReplayOutcome, replay};
 
-/// Parameters set by name in the case's lines up to step `upto`, in the order first set.
-fn set_params(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<ParamId> {
-    let p = &opts.profile;
-    let mut out: Vec<ParamId> = Vec::new();
-    for s in built.transcript.steps.iter().take(upto + 1) {
-        let Some(h) = &s.send else { continue };
-        if h.form == Form::Hex {
-            continue;
-        }
-        for l in h.bytes.split(|b| *b == p.framing.terminator) {
-            let Ok(Line::Command(c)) = parse_line(p, l) else { continue };
-            let (CommandKind::MotorSet | CommandKind::GlobalSet, Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
-                continue;
-            };
-            for (id, _) in pairs {
-                if !out.contains(id) {
-                    out.push(*id);
-                }
-            }
-        }
-    }
-    out
-}
-
 /// One hypothesis: what it says, and the model that holds it (the profile, or a patch of it,
 /// and the device's configuration).
 struct Variant {
@@ -89,7 +65,22 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             ..crate::suite::model_config(&built.transcript.header)
         }
     };
-    let mut out: Vec<Variant> = set_params(opts, built, upto)
+    let lines = sent_lines(opts, built, upto);
+    let parsed: Vec<_> = lines.iter().map(|l| parse_line(p, l)).collect();
+    // Parameters set by name, in the order first set.
+    let mut set: Vec<ParamId> = Vec::new();
+    for r in &parsed {
+        let Ok(Line::Command(c)) = r else { continue };
+        let (CommandKind::MotorSet | CommandKind::GlobalSet, Args::Pairs(pairs)) = (c.kind(p), &c.args) else {
+            continue;
+        };
+        for (id, _) in pairs {
+            if !set.contains(id) {
+                set.push(*id);
+            }
+        }
+    }
+    let mut out: Vec<Variant> = set
         .into_iter()
         .map(|id| Variant {
             says: format!("{} set without effect", p.param(id).name),
@@ -97,13 +88,12 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             config: gcl_model::DeviceConfig { without_effect: vec![id], ..base.clone() },
         })
         .collect();
-    let lines = sent_lines(opts, built, upto);
     for (k, pre) in p.prefixes.iter().enumerate() {
         // (a prefix is a run of prefix characters before the command word: `2gLOOP`)
-        let used = lines.iter().any(|l| {
-            let head = l.iter().map(|b| char::from(*b)).take_while(|c| c.is_ascii() && p.prefix_motors(*c).is_some());
-            head.clone().any(|c| c.eq_ignore_ascii_case(&pre.char))
-                && matches!(parse_line(p, l), Ok(Line::Command(c)) if c.prefix.is_some())
+        let used = lines.iter().zip(&parsed).any(|(l, r)| {
+            let mut head =
+                l.iter().map(|b| char::from(*b)).take_while(|c| c.is_ascii() && p.prefix_motors(*c).is_some());
+            matches!(r, Ok(Line::Command(c)) if c.prefix.is_some()) && head.any(|c| c.eq_ignore_ascii_case(&pre.char))
         });
         if !used {
             continue;
@@ -123,8 +113,10 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             });
         }
     }
-    let refused_set = lines.iter().find_map(|l| match parse_line(p, l) {
-        Err(r) => r.partial.filter(|c| matches!(c.args, Args::Pairs(_))).map(|c| p.command(c.command).name.clone()),
+    let refused_set = parsed.iter().find_map(|r| match r {
+        Err(r) => {
+            r.partial.as_ref().filter(|c| matches!(c.args, Args::Pairs(_))).map(|c| p.command(c.command).name.clone())
+        }
         _ => None,
     });
     let mut other_side = |says: String, fault: gcl_model::Fault| {
@@ -134,9 +126,8 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             config: gcl_model::DeviceConfig { faults: vec![fault], ..base.clone() },
         });
     };
-    let parsed: Vec<_> = lines.iter().map(|l| parse_line(p, l)).collect();
     if parsed.iter().any(|r| matches!(r, Err(r) if r.problems == [gcl_model::grammar::Problem::PrefixNotAllowed])) {
-        other_side("prefix accepted on a command that takes none".into(), gcl_model::Fault::PrefixNotRefused);
+        other_side(super::PREFIX_ACCEPTED.into(), gcl_model::Fault::PrefixNotRefused);
     }
     if parsed.iter().any(|r| matches!(r, Ok(Line::Command(c)) if c.kind(p) == CommandKind::Reset)) {
         other_side("RESET keeps the values set".into(), gcl_model::Fault::ResetKeepsRam);
