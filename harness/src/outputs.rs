@@ -173,6 +173,26 @@ impl OutLock {
     }
 }
 
+/// Whether a running command holds `dir` (an [`OutLock`] on it), and which, without taking or
+/// creating anything: for a folder another command is still writing (a campaign's `--out`)
+/// that this one is about to replace or read.
+pub fn held_by(dir: &Path) -> Option<String> {
+    let path = dir.join(LOCK_FILE);
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(nix::libc::O_NOFOLLOW | nix::libc::O_NONBLOCK)
+        .open(&path)
+        .ok()?;
+    match nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockSharedNonblock) {
+        // Free: a lock file a finished (or killed) command left.
+        Ok(_free) => None,
+        Err(_) => {
+            let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            Some(holder.lines().next().unwrap_or("another gcl").chars().take(200).collect())
+        }
+    }
+}
+
 impl Drop for OutLock {
     fn drop(&mut self) {
         // Only our own lock file (another run may have made a new one since ours was removed).
@@ -261,6 +281,13 @@ mod tests {
         let made = dir.path().join("reports");
         drop(OutLock::acquire(&made, "conform --report").unwrap());
         assert!(!made.exists());
+        // Seen from outside without taking it: held while held, free after.
+        let looked = dir.path().join("looked");
+        assert_eq!(held_by(&looked), None);
+        let held = OutLock::acquire(&looked, "fuzz host --out").unwrap();
+        assert!(held_by(&looked).is_some_and(|h| h.starts_with("gcl fuzz host --out (pid")), "{:?}", held_by(&looked));
+        drop(held);
+        assert_eq!(held_by(&looked), None);
         let kept = dir.path().join("kept");
         let held = OutLock::acquire(&kept, "conform --report").unwrap();
         std::fs::write(kept.join("report.json"), b"{}").unwrap();

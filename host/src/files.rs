@@ -1,6 +1,8 @@
 //! Reading input files without trusting them: every file `gcl` and this crate read
 //! (transcripts, scripts, suite files, known-failures lists, scenarios, EEPROM images, profile
-//! TOML, keys, certificate bundles) goes through [`read_limited`] or [`open_regular`].
+//! TOML, keys, certificate bundles) goes through [`read_limited`] or [`open_regular`]; what
+//! comes from somewhere untrusted whose links must not be followed (the shards `gcl fuzz merge`
+//! folds) through [`read_limited_no_follow`].
 //!
 //! - Only regular files are accepted. A FIFO is opened without blocking and refused, so a
 //!   named pipe called `x.gcl` in a suite directory cannot hang a run; `/dev/zero`, a
@@ -53,9 +55,41 @@ pub fn open_regular(path: &Path) -> io::Result<File> {
     Ok(file)
 }
 
+/// [`open_regular`] for a file from somewhere untrusted (a CI artifact, a shard's folder): a
+/// symbolic link at `path` is refused, never followed, so a link planted in place of a file
+/// (to `/etc/shadow`, to a 3 GB file) is never read.
+pub fn open_regular_no_follow(path: &Path) -> io::Result<File> {
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY | nix::libc::O_NOFOLLOW)
+        .open(path)
+        // O_NOFOLLOW refuses a link at the last component with ELOOP.
+        .map_err(|e| if e.raw_os_error() == Some(nix::libc::ELOOP) { not_followed() } else { e })?;
+    let ft = file.metadata()?.file_type();
+    if !ft.is_file() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("not a regular file ({}); expected a file", kind_of(&ft)),
+        ));
+    }
+    Ok(file)
+}
+
+fn not_followed() -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, "a symbolic link, not followed; expected a file")
+}
+
 /// Reads a whole regular file of at most `limit` bytes, counting while it reads.
 pub fn read_limited(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
-    let file = open_regular(path)?;
+    read_whole(open_regular(path)?, limit)
+}
+
+/// [`read_limited`] through [`open_regular_no_follow`]: a symbolic link is refused.
+pub fn read_limited_no_follow(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    read_whole(open_regular_no_follow(path)?, limit)
+}
+
+fn read_whole(file: File, limit: u64) -> io::Result<Vec<u8>> {
     let hint = file.metadata().map(|m| m.len().min(limit)).unwrap_or(0);
     let mut bytes = Vec::with_capacity(usize::try_from(hint).unwrap_or(0));
     file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
@@ -118,5 +152,25 @@ mod tests {
         let e = read_input(Path::new("/dev/zero")).unwrap_err();
         assert!(e.to_string().contains("character device"), "{e}");
         assert!(read_input(dir.path()).unwrap_err().to_string().contains("directory"));
+    }
+
+    #[test]
+    fn the_no_follow_reader_refuses_links_and_reads_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let secret = dir.path().join("secret");
+        std::fs::write(&secret, b"root:x").unwrap();
+        let link = dir.path().join("stderr.txt");
+        std::os::unix::fs::symlink(&secret, &link).unwrap();
+        let e = read_limited_no_follow(&link, 100).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
+        assert!(e.to_string().contains("symbolic link"), "{e}");
+        assert_eq!(read_limited(&link, 100).unwrap(), b"root:x", "the following reader follows");
+        assert_eq!(read_limited_no_follow(&secret, 100).unwrap(), b"root:x");
+        let fifo = dir.path().join("fifo");
+        nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+        assert!(read_limited_no_follow(&fifo, 100).unwrap_err().to_string().contains("named pipe"));
+        let big = dir.path().join("big");
+        File::create(&big).unwrap().set_len(1 << 30).unwrap();
+        assert_eq!(read_limited_no_follow(&big, 100).unwrap_err().kind(), io::ErrorKind::FileTooLarge);
     }
 }
