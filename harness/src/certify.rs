@@ -25,7 +25,7 @@ use ed25519_dalek::{Signature, Signer, SigningKey, Verifier, VerifyingKey};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::report::{RunOptions, RunReport, Verdict, write_all, write_atomic};
+use crate::report::{ProfileOrigin, ProfileSpec, RunOptions, RunReport, Verdict, write_all, write_atomic};
 use gcl_host::files::{MAX_INPUT_BYTES, open_regular, read_limited, read_text_limited, too_large};
 
 /// The size limit of a key file.
@@ -58,8 +58,14 @@ pub const MAX_BUNDLE_FILE_BYTES: u64 = 256 << 20;
 pub struct Certificate {
     /// What the device answered to `VERS` (its lines).
     pub firmware_version: Vec<String>,
-    /// The profile certified against.
+    /// The profile certified against: a built-in profile's id only when the spec that ran is
+    /// that built-in's spec, else the file it came from, the id it declares and its hash (see
+    /// [`ProfileSpec::label`]).
     pub profile: String,
+    /// Where that spec came from and its hash; `--verify` checks that a built-in one is this
+    /// gcl's built-in spec of that id, and that the suite hash is that spec's suite's.
+    #[serde(default)]
+    pub profile_spec: Option<ProfileSpec>,
     /// The target as given.
     pub target: String,
     /// The suite version: SHA-256 over every golden transcript.
@@ -74,7 +80,8 @@ pub struct Certificate {
     /// `PARTIAL: R of T cases` when only R of the T cases ran (or `--partial` was given) and
     /// those passed, `FAIL (PARTIAL: R of T cases)` when not. A known failure (XFAIL) narrows
     /// the certificate as a skip does: `PARTIAL: P of T cases passed, K known failures
-    /// excused`. See [`verdict_text`].
+    /// excused`; `ERROR (PARTIAL: ...)` when the hand stopped answering. The verdict line of the
+    /// run's every output: [`RunReport::outcome`].
     pub verdict: String,
     /// Whether the certificate covers only part of the suite.
     pub partial: bool,
@@ -103,48 +110,33 @@ pub struct ClauseVerdict {
     pub cases: usize,
 }
 
-/// The certificate's verdict for a run: see [`Certificate::verdict`]. `excused` is the
-/// number of known failures (XFAIL) among the `cases_run`; any makes the verdict partial.
-pub fn verdict_text(passed: bool, partial: bool, cases_run: usize, cases_total: usize, excused: usize) -> String {
-    let covered = if excused > 0 {
-        format!("{} of {cases_total} cases passed, {excused} known failures excused", cases_run.saturating_sub(excused))
-    } else {
-        format!("{cases_run} of {cases_total} cases")
-    };
-    match (partial || excused > 0, passed) {
-        (false, true) => "PASS".to_string(),
-        (false, false) => "FAIL".to_string(),
-        (true, true) => format!("PARTIAL: {covered}"),
-        (true, false) => format!("FAIL (PARTIAL: {covered})"),
-    }
-}
-
 /// The cases of a report whose failure a known-failures list excused (XFAIL).
 pub fn excused_cases(report: &RunReport) -> Vec<String> {
     report.cases.iter().filter(|c| c.verdict == Verdict::Xfail).map(|c| c.id.clone()).collect()
 }
 
 impl Certificate {
-    /// The certificate of a run: `cases_total` is the number of cases of the certified
-    /// levels in the whole suite, `partial` whether the operator asked for part of it.
-    pub fn of_run(report: &RunReport, firmware_version: Vec<String>, cases_total: usize, partial: bool) -> Certificate {
-        let cases_run = report.ran();
-        let excused = excused_cases(report);
-        let partial = partial || cases_run < cases_total || !excused.is_empty();
+    /// The certificate of a run whose report says what only certify knows
+    /// ([`RunReport::certificate`]: the suite's size at the certified levels, the firmware's
+    /// VERS) and whether the operator asked for part of the suite (`options.partial`).
+    pub fn of_run(report: &RunReport) -> Certificate {
+        let o = report.outcome();
+        let facts = report.certificate.clone().unwrap_or_default();
         Certificate {
-            firmware_version,
-            profile: report.profile.clone(),
+            firmware_version: facts.firmware_version,
+            profile: report.profile_spec.as_ref().map_or_else(|| report.profile.clone(), ProfileSpec::label),
+            profile_spec: report.profile_spec.clone(),
             target: report.target.clone(),
             suite_hash: report.suite_hash.clone(),
             harness_version: report.tool.clone(),
             date: report.started.clone(),
             levels: vec!["MUST".into(), "SHOULD".into()],
-            verdict: verdict_text(report.passed(), partial, cases_run, cases_total, excused.len()),
-            partial,
-            cases_run,
-            cases_total,
-            options: RunOptions { partial, ..report.options.clone() },
-            excused,
+            verdict: o.verdict,
+            partial: o.partial,
+            cases_run: o.cases_run,
+            cases_total: o.cases_total,
+            options: RunOptions { partial: o.partial, ..report.options.clone() },
+            excused: excused_cases(report),
             clauses: clause_verdicts(report),
         }
     }
@@ -163,25 +155,41 @@ fn clause_verdicts(report: &RunReport) -> Vec<ClauseVerdict> {
         .collect()
 }
 
-/// Where the certificate disagrees with the report it was made from; empty when it agrees.
+/// Where the certificate disagrees with the report it was made from, or names a built-in
+/// profile whose spec did not run; empty when it agrees.
 pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
     let mut out = Vec::new();
-    let mut same = |what: &str, c: String, r: String| {
+    let same = |out: &mut Vec<String>, what: &str, c: String, r: String| {
         if c != r {
             out.push(format!("the certificate's {what} `{c}` is not the report's `{r}`"));
         }
     };
-    same("profile", cert.profile.clone(), report.profile.clone());
-    same("target", cert.target.clone(), report.target.clone());
-    same("suite hash", cert.suite_hash.clone(), report.suite_hash.clone());
-    same("date", cert.date.clone(), report.started.clone());
-    same("count of cases run", cert.cases_run.to_string(), report.ran().to_string());
+    let o = report.outcome();
+    let facts = report.certificate.clone().unwrap_or_default();
+    let label = report.profile_spec.as_ref().map_or_else(|| report.profile.clone(), ProfileSpec::label);
+    same(&mut out, "profile", cert.profile.clone(), label);
+    same(&mut out, "target", cert.target.clone(), report.target.clone());
+    same(&mut out, "suite hash", cert.suite_hash.clone(), report.suite_hash.clone());
+    same(&mut out, "date", cert.date.clone(), report.started.clone());
+    same(&mut out, "count of cases run", cert.cases_run.to_string(), o.cases_run.to_string());
+    same(&mut out, "count of cases", cert.cases_total.to_string(), o.cases_total.to_string());
+    same(&mut out, "firmware version", cert.firmware_version.join(" / "), facts.firmware_version.join(" / "));
+    same(&mut out, "verdict", cert.verdict.clone(), o.verdict.clone());
+    if !report.verdict.is_empty() {
+        same(&mut out, "verdict (as report.json states it)", cert.verdict.clone(), report.verdict.clone());
+    }
+    same(&mut out, "partial", cert.partial.to_string(), o.partial.to_string());
     let excused = excused_cases(report);
-    let expected = verdict_text(report.passed(), cert.partial, report.ran(), cert.cases_total, excused.len());
-    same("verdict", cert.verdict.clone(), expected);
+    if cert.profile_spec != report.profile_spec {
+        out.push("the certificate's profile spec is not the report's".to_string());
+    }
+    out.extend(builtin_disagreements(cert));
+    if report.certificate.is_none() {
+        out.push("report.json is not a certificate's report (it has no `certificate`)".to_string());
+    }
     if !cert.partial {
         let certified = report.cases.iter().filter(|c| c.level == "MUST" || c.level == "SHOULD").count();
-        same("count of cases", cert.cases_total.to_string(), certified.to_string());
+        same(&mut out, "count of cases", cert.cases_total.to_string(), certified.to_string());
         if cert.cases_run < cert.cases_total {
             out.push("a certificate that is not partial says cases did not run".to_string());
         }
@@ -211,6 +219,41 @@ pub fn disagreements(cert: &Certificate, report: &RunReport) -> Vec<String> {
     recount.tally();
     if recount.summary != report.summary || recount.clauses != report.clauses {
         out.push("report.json's summary or clauses do not follow from its cases".to_string());
+    }
+    out
+}
+
+/// A certificate that names a built-in profile must have run that built-in's spec, and its
+/// suite hash must be that spec's suite's: checked when this gcl is the one that made the
+/// certificate (another version's built-in profiles and suite may differ). A certificate
+/// that names no spec at all is refused: nothing says what it certifies.
+fn builtin_disagreements(cert: &Certificate) -> Vec<String> {
+    let Some(spec) = &cert.profile_spec else {
+        return vec!["the certificate does not say which profile spec ran (no `profile_spec`)".to_string()];
+    };
+    if spec.origin != ProfileOrigin::Builtin || cert.harness_version != format!("gcl {}", env!("CARGO_PKG_VERSION")) {
+        return Vec::new();
+    }
+    let Ok(builtin) = gcl_model::Profile::builtin(&spec.name) else {
+        return vec![format!("the certificate names a built-in profile `{}` that this gcl does not have", spec.name)];
+    };
+    let mut out = Vec::new();
+    let ours = ProfileSpec::digest(&builtin);
+    if spec.sha256 != ours || spec.id != builtin.id {
+        out.push(format!(
+            "the certificate names the built-in profile {}, but the spec that ran (sha256 {}) is not it (sha256 {ours})",
+            spec.name, spec.sha256
+        ));
+    } else if cert.options.suite_dir.is_none()
+        && let Ok(cases) = crate::suite::generate(&builtin)
+    {
+        let hash = crate::suite::suite_hash(&cases);
+        if cert.suite_hash != hash {
+            out.push(format!(
+                "the certificate's suite hash {} is not that of the built-in profile {}'s suite ({hash})",
+                cert.suite_hash, spec.name
+            ));
+        }
     }
     out
 }
@@ -602,7 +645,20 @@ pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> Result<Result<Verif
         (Ok(c), Ok(r)) => (c, r),
         (c, r) => return Ok(Err(c.err().into_iter().chain(r.err()).collect())),
     };
-    let differ = disagreements(&certificate, &report);
+    let mut differ = disagreements(&certificate, &report);
+    // The page says who signed the bundle: it must be the key of MANIFEST.sig.
+    let key = match &signed {
+        Signed::Unsigned => None,
+        Signed::ByTrustedKey(k) | Signed::ByUncheckedKey(k) => Some(fingerprint(k)),
+    };
+    let said = report.certificate.as_ref().and_then(|c| c.signed_by.clone());
+    if said != key {
+        differ.push(format!(
+            "report.json says the bundle is signed by {}, but it is signed by {}",
+            said.as_deref().unwrap_or("nobody"),
+            key.as_deref().unwrap_or("nobody")
+        ));
+    }
     if !differ.is_empty() {
         return Ok(Err(differ.into_iter().map(Tamper::Disagrees).collect()));
     }
@@ -613,10 +669,29 @@ pub fn verify(dir: &Path, trusted: Option<&VerifyingKey>) -> Result<Result<Verif
 mod tests {
     use super::*;
 
+    /// The sample report as certify leaves it: the built-in seed spec, its suite's hash, the
+    /// certificate's facts.
+    fn certified(mut report: RunReport, firmware: &[&str], total: usize) -> RunReport {
+        let seed = gcl_model::Profile::builtin("seed").unwrap();
+        report.kind = crate::report::ReportKind::Certify;
+        report.level = "should".into();
+        report.profile_spec = Some(ProfileSpec::of("seed", &seed));
+        report.suite_hash = crate::suite::suite_hash(&crate::suite::generate(&seed).unwrap());
+        report.certificate = Some(crate::report::CertificateFacts {
+            cases_total: total,
+            firmware_version: firmware.iter().map(|s| s.to_string()).collect(),
+            signed_by: None,
+        });
+        report
+    }
+
     fn bundle(key: Option<&SigningKey>) -> (tempfile::TempDir, Certificate) {
         let dir = tempfile::tempdir().unwrap();
-        let report = crate::report::tests::sample();
-        let cert = Certificate::of_run(&report, vec!["BarrettHand Firmware test".into()], 2, false);
+        let mut report = certified(crate::report::tests::sample(), &["BarrettHand Firmware test"], 2);
+        if let (Some(k), Some(c)) = (key, report.certificate.as_mut()) {
+            c.signed_by = Some(fingerprint(&k.verifying_key()));
+        }
+        let cert = Certificate::of_run(&report);
         write_bundle(dir.path(), &cert, &report, &[("framing-echo".into(), "> HI\\r\n< HI\\n\\r=> \n".into())], key)
             .unwrap();
         (dir, cert)
@@ -714,9 +789,11 @@ mod tests {
             }
         }
         r.tally();
+        let n = r.cases.len();
+        let r = certified(r, &[], n);
         let xfail: Vec<String> = r.cases.iter().filter(|c| c.verdict == Verdict::Xfail).map(|c| c.id.clone()).collect();
         assert!(!xfail.is_empty() && r.passed());
-        let cert = Certificate::of_run(&r, vec![], r.cases.len(), false);
+        let cert = Certificate::of_run(&r);
         assert!(cert.partial && !cert.is_pass(), "{}", cert.verdict);
         assert!(cert.verdict.contains("known failures excused"), "{}", cert.verdict);
         assert_eq!(cert.excused, xfail);
@@ -749,11 +826,13 @@ mod tests {
 
     #[test]
     fn partial_verdicts_say_so() {
-        assert_eq!(verdict_text(true, false, 336, 336, 0), "PASS");
-        assert_eq!(verdict_text(true, true, 12, 336, 0), "PARTIAL: 12 of 336 cases");
-        assert_eq!(verdict_text(false, true, 12, 336, 0), "FAIL (PARTIAL: 12 of 336 cases)");
+        use crate::report::verdict_line;
+        assert_eq!(verdict_line(true, false, false, 336, 336, 0), "PASS");
+        assert_eq!(verdict_line(true, false, true, 12, 336, 0), "PARTIAL: 12 of 336 cases");
+        assert_eq!(verdict_line(false, false, true, 12, 336, 0), "FAIL (PARTIAL: 12 of 336 cases)");
+        assert_eq!(verdict_line(false, true, true, 12, 336, 0), "ERROR (PARTIAL: 12 of 336 cases)");
         assert_eq!(
-            verdict_text(true, false, 216, 216, 125),
+            verdict_line(true, false, false, 216, 216, 125),
             "PARTIAL: 91 of 216 cases passed, 125 known failures excused"
         );
         let mut r = crate::report::tests::sample();
@@ -761,7 +840,8 @@ mod tests {
             c.verdict = Verdict::Skip;
         }
         r.tally();
-        let c = Certificate::of_run(&r, vec![], 2, false);
+        let r = certified(r, &[], 2);
+        let c = Certificate::of_run(&r);
         assert!(c.partial && !c.is_pass(), "nothing ran: not a PASS");
         assert_eq!(c.verdict, "FAIL (PARTIAL: 0 of 2 cases)");
     }

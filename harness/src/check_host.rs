@@ -140,6 +140,9 @@ pub fn host_report(
     let mut report = RunReport {
         kind: if fuzz { crate::report::ReportKind::FuzzHost } else { crate::report::ReportKind::CheckHost },
         host: None,
+        verdict: String::new(),
+        profile_spec: None,
+        certificate: None,
         format: crate::report::REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
         target: format!("host: {}", command.join(" ")),

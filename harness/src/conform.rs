@@ -1040,6 +1040,9 @@ pub fn run_with_events(
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
         host: None,
+        verdict: String::new(),
+        profile_spec: None,
+        certificate: None,
         format: REPORT_FORMAT,
         tool: format!("gcl {}", env!("CARGO_PKG_VERSION")),
         target: opts.target.to_string(),

@@ -136,12 +136,12 @@ fn the_conform_page_for_one_bug_is_small_and_leads_with_its_root_cause() {
     let size = std::fs::metadata(&path).unwrap().len() as usize;
     println!("fget-reversed page: {size} bytes (limit {ONE_BUG_PAGE_LIMIT})");
     assert!(size < ONE_BUG_PAGE_LIMIT, "{size} bytes");
-    let html = page(&path, "gcl conform bh8-262-4.4 on sim: FAILED");
+    let html = page(&path, "gcl conform bh8-262-4.4 on sim: FAIL");
     let shown = visible_text(&html);
     println!("fget-reversed page: {shown} characters of text shown when it opens (limit {ONE_BUG_SHOWN_LIMIT})");
     assert!(shown < ONE_BUG_SHOWN_LIMIT, "{shown}");
     let verdict = html.select(&sel("#verdict")).next().unwrap().text().collect::<String>();
-    assert!(verdict.contains("176 of 354 cases fail (MUST 125"), "{verdict}");
+    assert!(verdict.contains("176 of the 354 cases that ran fail (MUST 125"), "{verdict}");
     // The MUST/SHOULD/MAY/INFO table, and a level column in the clause table.
     let levels: Vec<String> = html.select(&sel("#levels tr th:first-child")).map(|t| t.text().collect()).collect();
     assert_eq!(levels, ["level", "MUST", "SHOULD", "MAY", "INFO"]);
@@ -183,7 +183,7 @@ fn realtime_failures_are_decoded_field_by_field_and_plotted() {
         out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(1));
-    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAIL");
     let fail = html.select(&sel("#fail-rt-lfap-byte-order")).next().unwrap();
     let row =
         fail.select(&sel("table tr.fail")).next().expect("the out-of-range field").text().collect::<Vec<_>>().join("|");
@@ -222,7 +222,7 @@ fn every_realtime_case_is_plotted_passing_ones_included() {
     let out = dir.path().join("r");
     let o = gcl(&["conform", "--target", "sim", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stdout));
-    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: PASSED");
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: PASS");
     // Position, velocity and strain, each in a passing case's folded section, the golden's
     // band behind the values the hand sent.
     for (case, field) in [
@@ -258,7 +258,7 @@ fn the_certify_and_passing_conform_pages_parse() {
     let out = dir.path().join("cert");
     let o = gcl(&["certify", "--target", "sim:seed", "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
-    let html = page(&out.join("report.html"), "gcl certify seed on sim:seed: PASSED");
+    let html = page(&out.join("report.html"), "gcl certify: the certificate of seed on sim:seed: PASS");
     assert!(html.select(&sel("#levels")).next().is_some());
     // Every case that ran links to its transcript in the bundle (page() checked the files).
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
@@ -268,6 +268,113 @@ fn the_certify_and_passing_conform_pages_parse() {
     assert_eq!(linked, ran, "a transcript link per case that ran");
     if let Some(cases) = junit_consumer(&out.join("junit.xml")) {
         assert!(cases.iter().all(|c| c.starts_with("gcl certify seed (sim:seed)|gcl.seed.")), "{:?}", &cases[..2]);
+    }
+}
+
+/// The `gcl.verdict` property of a JUnit file.
+fn junit_verdict(path: &Path) -> String {
+    let xml = std::fs::read_to_string(path).unwrap();
+    let key = "<property name=\"gcl.verdict\" value=\"";
+    let at = xml.find(key).expect("a gcl.verdict property") + key.len();
+    xml[at..at + xml[at..].find('"').unwrap()].to_string()
+}
+
+/// The verdict block of a page: its class (pass, partial, fail), its word and its text.
+fn verdict_block(html: &Html) -> (String, String, String) {
+    let v = html.select(&sel("#verdict")).next().unwrap();
+    let class = v.value().attr("class").unwrap().trim_start_matches("verdict ").to_string();
+    let word = v.select(&sel("strong")).next().unwrap().text().collect::<String>();
+    (class, word, v.text().collect())
+}
+
+/// Issue 29 item 5: a run whose failures were excused as known failures is PARTIAL where a
+/// person looks (the page's headline, not "PASSED: every one of the cases that ran passed")
+/// and the console, report.json and JUnit say the same line.
+#[test]
+fn a_conform_run_with_known_failures_is_partial_on_its_page_and_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let kf = dir.path().join("known.toml");
+    let out = dir.path().join("r");
+    let args = ["conform", "--target", "sim", "--fault", "fget-reversed", "--quiet"];
+    let o = gcl(&[&args[..], &["--write-known-failures", kf.to_str().unwrap()]].concat());
+    assert_eq!(o.status.code(), Some(1));
+    let o = gcl(&[&args[..], &["--known-failures", kf.to_str().unwrap(), "--report", out.to_str().unwrap()]].concat());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "known failures do not fail the run: {stdout}");
+    let line = "PARTIAL: 178 of 354 cases passed, 176 known failures excused";
+    assert!(stdout.contains(&format!("result: {line}\n")), "{stdout}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["verdict"], line);
+    assert_eq!(junit_verdict(&out.join("junit.xml")), line);
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: PARTIAL");
+    let (class, word, text) = verdict_block(&html);
+    assert_eq!((class.as_str(), word.as_str()), ("partial", "PARTIAL"));
+    assert!(text.starts_with(line), "{text}");
+    assert!(!text.contains("every one") && !text.contains("PASS"), "{text}");
+}
+
+/// Issue 29 item 5: a partial certificate's page says PARTIAL with the certificate's own
+/// verdict and counts (the cases that ran, not the suite's), that it is a certificate, the
+/// firmware's VERS and the signing key's fingerprint; console, report.json, JUnit and
+/// certificate.json say the same line.
+#[test]
+fn a_partial_certificate_page_says_partial_the_firmware_and_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let key = dir.path().join("lab.pem");
+    assert_eq!(gcl(&["certify", "--keygen", key.to_str().unwrap()]).status.code(), Some(0));
+    for (name, extra, code, word) in
+        [("partial", &[][..], 0, "PARTIAL"), ("failing", &["--fault", "fget-reversed"][..], 1, "FAIL")]
+    {
+        let out = dir.path().join(name);
+        let mut args =
+            vec!["certify", "--target", "sim:seed", "--partial", "--skip", "rt-*", "--key", key.to_str().unwrap()];
+        args.extend(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = gcl(&args);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(o.status.code(), Some(code), "{name}: {stdout}");
+        let cert: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("certificate.json")).unwrap()).unwrap();
+        let verdict = cert["verdict"].as_str().unwrap().to_string();
+        let (ran, total) = (cert["cases_run"].as_u64().unwrap(), cert["cases_total"].as_u64().unwrap());
+        assert!(ran < total, "{name}: --skip rt-* leaves cases out: {cert}");
+        assert!(verdict.contains(&format!("PARTIAL: {ran} of {total} cases")), "{name}: {verdict}");
+        assert!(stdout.contains(&format!("result: {verdict}\n")), "{name}: {stdout}");
+        assert!(stdout.contains(&format!("certificate verdict: {verdict}\n")), "{name}: {stdout}");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+        assert_eq!(report["verdict"].as_str().unwrap(), verdict, "{name}");
+        assert_eq!(junit_verdict(&out.join("junit.xml")), verdict, "{name}");
+        let html = page(&out.join("report.html"), &format!("gcl certify: the certificate of seed on sim:seed: {word}"));
+        let (class, w, text) = verdict_block(&html);
+        assert_eq!(w, word, "{name}: {text}");
+        assert_eq!(class, if code == 0 { "partial" } else { "fail" }, "{name}");
+        assert!(text.contains(&format!("PARTIAL: {ran} of {total} cases")), "{name}: {text}");
+        if code == 1 {
+            // Counted against the cases that ran, not the suite's cases (of every level).
+            let failed = report["cases"].as_array().unwrap().iter().filter(|c| c["verdict"] == "FAIL").count();
+            assert!(text.contains(&format!("{failed} of the {ran} cases that ran fail")), "{name}: {text}");
+        }
+        let facts: Vec<(String, String)> = html
+            .select(&sel("h1 + #verdict + table tr"))
+            .map(|tr| {
+                let cell = |s: &str| tr.select(&sel(s)).next().unwrap().text().collect::<String>();
+                (cell("th"), cell("td"))
+            })
+            .collect();
+        let fact = |k: &str| {
+            facts.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone()).unwrap_or_else(|| panic!("{k}: {facts:?}"))
+        };
+        assert!(
+            fact("certificate").contains("certificate bundle") && fact("certificate").contains(&verdict),
+            "{facts:?}"
+        );
+        let vers: Vec<&str> =
+            cert["firmware_version"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+        assert!(!vers.is_empty());
+        assert_eq!(fact("firmware (VERS)"), vers.join(" / "));
+        let printed = stdout.split("signed by key ").nth(1).unwrap().split(' ').next().unwrap();
+        assert!(fact("signed by").contains(printed), "{facts:?}");
     }
 }
 
@@ -450,7 +557,7 @@ fn a_motion_effect_failure_shows_the_window_it_missed() {
     let o =
         gcl(&["conform", "--target", "sim", "--fault", "mcv-ignored", "--quiet", "--report", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAILED");
+    let html = page(&out.join("report.html"), "gcl conform bh8-262-4.4 on sim: FAIL");
     let fail = html.select(&sel("#fail-param-mcv-effect")).next().unwrap();
     let text = fail.text().collect::<String>();
     // Motor 2 is held to a relation with motor 1 (issue 19): the summary shows the window the

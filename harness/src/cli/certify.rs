@@ -187,11 +187,16 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
     let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
     let mut out = run_with_progress(&opts, &cases, Some(&args.out), false, "gcl certify")?;
-    record_options(&mut out.report, suite_args);
+    record_options(&mut out.report, suite_args, &opts.profile);
     out.report.options.partial = args.partial;
     out.report.kind = gcl_harness::report::ReportKind::Certify;
+    out.report.certificate = Some(gcl_harness::report::CertificateFacts {
+        cases_total,
+        firmware_version: vers,
+        signed_by: key.as_ref().map(|k| fingerprint(&k.verifying_key())),
+    });
     let report = &out.report;
-    let cert = Certificate::of_run(report, vers, cases_total, args.partial);
+    let cert = Certificate::of_run(report);
     // The streamed results are part of the run's record, but the bundle is the final word.
     let _ = std::fs::remove_file(args.out.join("results.jsonl"));
     // The lock file is ours and no part of the bundle; the lock itself holds until the bundle

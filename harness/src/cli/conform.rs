@@ -235,9 +235,12 @@ pub fn prepare(
     Ok((opts, cases))
 }
 
-/// Adds to a report the options only the command line knows (the suite's source).
-pub fn record_options(report: &mut RunReport, a: &SuiteArgs) {
+/// Adds to a report what only the command line knows: the suite's source, and where the
+/// profile that ran (`profile`) came from.
+pub fn record_options(report: &mut RunReport, a: &SuiteArgs, profile: &gcl_model::Profile) {
     report.options.suite_dir = a.suite.as_ref().map(|d| d.display().to_string());
+    let given = a.target.model_profile(a.profile.as_deref());
+    report.profile_spec = Some(gcl_harness::report::ProfileSpec::of(given, profile));
 }
 
 /// Runs the suite with the shared progress (a bar with an ETA on a terminal, a line every
@@ -284,7 +287,8 @@ pub fn run_with_progress(
 /// The summary table printed at the end of a run.
 pub fn summary_text(r: &RunReport) -> String {
     let mut s = String::new();
-    s.push_str(&format!("gcl conform: target {}, profile {}, level {}\n", r.target, r.profile, r.level));
+    let profile = r.profile_spec.as_ref().map_or_else(|| r.profile.clone(), |p| p.label());
+    s.push_str(&format!("gcl conform: target {}, profile {profile}, level {}\n", r.target, r.level));
     let given = r.options.pairs();
     if !given.is_empty() {
         let text: Vec<String> = given.iter().map(|(k, v)| format!("--{k} {v}")).collect();
@@ -414,16 +418,9 @@ pauses); took {:.3} s; ratio {:.3}\n",
     if r.ran() == 0 {
         s.push_str("  no case ran\n");
     }
-    // A run that ended because the hand stopped answering or vanished has no verdict.
-    let infrastructure = r.stopped.as_ref().is_some_and(|st| st.cause != StopCause::MaxFailures);
-    let result = if infrastructure {
-        "ERROR"
-    } else if r.passed() {
-        "PASS"
-    } else {
-        "FAIL"
-    };
-    s.push_str(&format!("  result: {result}\n"));
+    // The one verdict line every output of the run shows (PARTIAL when cases did not run or
+    // known failures were excused; ERROR when the hand stopped answering or vanished).
+    s.push_str(&format!("  result: {}\n", r.outcome().verdict));
     s
 }
 
@@ -465,7 +462,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let _held =
         args.report.as_deref().map(|d| gcl_harness::outputs::OutLock::acquire(d, "conform --report")).transpose()?;
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet, "gcl conform")?;
-    record_options(&mut out.report, &args.suite);
+    record_options(&mut out.report, &args.suite, &opts.profile);
     let mut w = std::io::stdout().lock();
     write!(w, "{}", summary_text(&out.report))?;
     if let Some(dir) = &args.report {

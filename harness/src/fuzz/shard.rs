@@ -6,8 +6,11 @@
 //! `gcl fuzz device` slices generator streams: its worker w draws from stream K-1+w·N, the
 //! stream worker K-1+w·N of a one-machine campaign with N times the workers would draw from.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 use std::str::FromStr;
+
+use serde::{Deserialize, Serialize};
 
 /// Shard `index` (1-based) of `count`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -55,6 +58,208 @@ impl FromStr for Shard {
     }
 }
 
+/// What makes a shard part of a campaign, as `fuzz.json` (`gcl fuzz host`) and
+/// `fuzz-device.json` record it: its slice, the seed and every option that changed what ran.
+/// `gcl fuzz merge` folds only shards of one campaign (the same seed and options), each slice
+/// once, and says which slices it folded.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// `--shard K/N`; absent for the whole campaign (not sharded, or merged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// The seed.
+    pub seed: u64,
+    /// Every option that changed what ran or how it was judged, by its flag without the dashes
+    /// (`ops`, `runs`, `duration`, `profile`, `skip-decision`, `baseline`...), as its effective
+    /// value (a default included), so two shards of one campaign have the same map.
+    pub options: BTreeMap<String, String>,
+    /// Set on a merged folder: the slices it holds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged: Option<Merged>,
+}
+
+/// The slices a merged folder holds.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Merged {
+    /// N: the campaign's number of shards.
+    pub count: u64,
+    /// The K of every shard folded, ascending.
+    pub shards: Vec<u64>,
+}
+
+impl Merged {
+    /// The shards of the campaign not folded.
+    pub fn missing(&self) -> Vec<u64> {
+        (1..=self.count).filter(|k| !self.shards.contains(k)).collect()
+    }
+
+    /// Whether every shard of the campaign was folded.
+    pub fn complete(&self) -> bool {
+        self.missing().is_empty()
+    }
+
+    /// `shards 1–4 of 4`, or `shards 1, 3 of 4 (INCOMPLETE: 2 and 4 missing)`.
+    pub fn describe(&self) -> String {
+        let missing = self.missing();
+        let mut s = format!(
+            "shard{} {} of {}",
+            if self.shards.len() == 1 { "" } else { "s" },
+            ranges(&self.shards),
+            self.count
+        );
+        if !missing.is_empty() {
+            s.push_str(&format!(
+                " (INCOMPLETE: {} missing, {} runs are not in it)",
+                ranges(&missing),
+                if missing.len() == 1 { "its" } else { "their" }
+            ));
+        }
+        s
+    }
+}
+
+/// `1–4`, `1, 3`, `1–2, 5`: ascending numbers, runs of three or more as ranges.
+fn ranges(ks: &[u64]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < ks.len() {
+        let mut j = i;
+        while j + 1 < ks.len() && ks[j + 1] == ks[j] + 1 {
+            j += 1;
+        }
+        match j - i {
+            0 => parts.push(ks[i].to_string()),
+            1 => parts.extend([ks[i].to_string(), ks[j].to_string()]),
+            _ => parts.push(format!("{}–{}", ks[i], ks[j])),
+        }
+        i = j + 1;
+    }
+    parts.join(", ")
+}
+
+impl Provenance {
+    /// N and the slices this folder holds: its shard, a merged folder's shards, or the whole
+    /// campaign (1 of 1).
+    pub fn covers(&self) -> (u64, Vec<u64>) {
+        match (&self.merged, self.shard) {
+            (Some(m), _) => (m.count, m.shards.clone()),
+            (None, Some(s)) => (s.count, vec![s.index]),
+            (None, None) => (1, vec![1]),
+        }
+    }
+
+    /// How `other` differs from this one as a campaign (the seed and the options; not the
+    /// slice): one entry per difference, the other's value first, `--ops: err-bits=1 against
+    /// every operator`.
+    pub fn differences(&self, other: &Provenance) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.seed != other.seed {
+            out.push(format!("--seed: {} against {}", other.seed, self.seed));
+        }
+        let keys: BTreeSet<&String> = self.options.keys().chain(other.options.keys()).collect();
+        for k in keys {
+            let (mine, theirs) = (self.options.get(k), other.options.get(k));
+            if mine != theirs {
+                let show = |v: Option<&String>| v.map_or("not recorded".to_string(), String::clone);
+                out.push(format!("--{k}: {} against {}", show(theirs), show(mine)));
+            }
+        }
+        out
+    }
+}
+
+/// Why a set of folders is not the shards of one campaign.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ShardSetError {
+    /// A folder records no shard (written before shards were recorded).
+    #[error(
+        "{0}: its report records no shard, seed or options (written by an older gcl?), so nothing says which campaign it belongs to"
+    )]
+    Unrecorded(String),
+    /// Two folders are of different campaigns.
+    #[error("not shards of one campaign: {folder} differs from {first} ({folder}'s against {first}'s): {}", differences.join("; "))]
+    Mixed {
+        /// The folder that differs.
+        folder: String,
+        /// The first folder.
+        first: String,
+        /// What differs.
+        differences: Vec<String>,
+    },
+    /// Two folders slice the campaign differently.
+    #[error("not shards of one campaign: {folder} is one of {theirs} shards, {first} one of {ours}")]
+    Count {
+        /// The folder that differs.
+        folder: String,
+        /// Its N.
+        theirs: u64,
+        /// The first folder.
+        first: String,
+        /// The first folder's N.
+        ours: u64,
+    },
+    /// A slice is in two folders.
+    #[error(
+        "shard {index}/{count} is given twice: in {first} and in {second}; merging it twice would count its runs twice"
+    )]
+    Duplicate {
+        /// K.
+        index: u64,
+        /// N.
+        count: u64,
+        /// The first folder that holds it.
+        first: String,
+        /// The second.
+        second: String,
+    },
+}
+
+/// Checks that `folders` (a name for messages, and what each records) are shards of one
+/// campaign, each slice at most once; returns the slices they hold together. Missing slices
+/// are no error here: [`Merged::missing`] names them.
+pub fn plan(folders: &[(String, Option<Provenance>)]) -> Result<(Provenance, Merged), ShardSetError> {
+    let mut first: Option<(&str, &Provenance)> = None;
+    let mut seen: BTreeMap<u64, &str> = BTreeMap::new();
+    let mut count = 0;
+    for (name, p) in folders {
+        let p = p.as_ref().ok_or_else(|| ShardSetError::Unrecorded(name.clone()))?;
+        let (n, ks) = p.covers();
+        match first {
+            None => {
+                first = Some((name, p));
+                count = n;
+            }
+            Some((fname, f)) => {
+                let differences = f.differences(p);
+                if !differences.is_empty() {
+                    return Err(ShardSetError::Mixed { folder: name.clone(), first: fname.to_string(), differences });
+                }
+                if n != count {
+                    return Err(ShardSetError::Count {
+                        folder: name.clone(),
+                        theirs: n,
+                        first: fname.to_string(),
+                        ours: count,
+                    });
+                }
+            }
+        }
+        for k in ks {
+            if let Some(other) = seen.insert(k, name) {
+                return Err(ShardSetError::Duplicate {
+                    index: k,
+                    count,
+                    first: other.to_string(),
+                    second: name.clone(),
+                });
+            }
+        }
+    }
+    let (_, f) = first.ok_or_else(|| ShardSetError::Unrecorded("(no folder given)".into()))?;
+    let merged = Merged { count, shards: seen.into_keys().collect() };
+    Ok((Provenance { shard: None, merged: Some(merged.clone()), ..f.clone() }, merged))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,6 +277,42 @@ mod tests {
             assert_eq!(s.share(10), (0..10).filter(|&i| s.owns(i)).count() as u64);
         }
         assert_eq!(shards.iter().map(|s| s.share(10)).sum::<u64>(), 10);
+    }
+
+    fn shard(k: u64, n: u64, seed: u64, ops: &str) -> (String, Option<Provenance>) {
+        let options = [("ops".to_string(), ops.to_string())].into();
+        (
+            format!("shard-{k}"),
+            Some(Provenance { shard: Some(Shard { index: k, count: n }), seed, options, merged: None }),
+        )
+    }
+
+    #[test]
+    fn a_shard_set_is_one_campaign_each_slice_once() {
+        let all: Vec<_> = (1..=4).map(|k| shard(k, 4, 5, "every operator")).collect();
+        let (p, m) = plan(&all).unwrap();
+        assert_eq!(m.describe(), "shards 1–4 of 4");
+        assert!(m.complete() && p.shard.is_none() && p.seed == 5);
+        // A merged folder holds its slices: merged again with the rest it makes the whole.
+        let half = plan(&all[..2]).unwrap().0;
+        let (_, again) = plan(&[("half".into(), Some(half)), all[2].clone(), all[3].clone()]).unwrap();
+        assert_eq!(again, m);
+        // One missing: no error here, but said.
+        let (_, m) = plan(&[all[0].clone(), all[2].clone()]).unwrap();
+        assert_eq!(m.missing(), vec![2, 4]);
+        assert_eq!(m.describe(), "shards 1, 3 of 4 (INCOMPLETE: 2, 4 missing, their runs are not in it)");
+        // The same slice twice, another campaign, another slicing, an unrecorded folder.
+        let e = plan(&[all[0].clone(), all[0].clone()]).unwrap_err();
+        assert!(matches!(e, ShardSetError::Duplicate { index: 1, count: 4, .. }), "{e}");
+        let e = plan(&[all[0].clone(), shard(2, 4, 6, "every operator")]).unwrap_err().to_string();
+        assert!(e.contains("shard-2 differs from shard-1 (shard-2's against shard-1's): --seed: 6 against 5"), "{e}");
+        let e = plan(&[all[0].clone(), shard(2, 4, 5, "truncate=1")]).unwrap_err().to_string();
+        assert!(e.contains("--ops: truncate=1 against every operator"), "{e}");
+        let e = plan(&[all[0].clone(), shard(2, 3, 5, "every operator")]).unwrap_err().to_string();
+        assert!(e.contains("one of 3 shards") && e.contains("one of 4"), "{e}");
+        let e = plan(&[all[0].clone(), ("old".into(), None)]).unwrap_err().to_string();
+        assert!(e.contains("old: its report records no shard"), "{e}");
+        assert_eq!(ranges(&[1, 2, 5, 7, 8, 9]), "1, 2, 5, 7–9");
     }
 
     #[test]

@@ -56,7 +56,26 @@ fn failing(c: &CaseResult) -> bool {
     c.verdict.fails_run() || c.verdict == Verdict::Xfail
 }
 
-/// The one line under the title.
+/// The verdict of a hand's run as its page shows it: the word, the tone and the line under
+/// the title, all from [`RunReport::outcome`], the one verdict every output shows.
+fn hand_verdict(r: &RunReport) -> (&'static str, &'static str, String) {
+    let o = r.outcome();
+    let rest = o.verdict.strip_prefix(o.word).unwrap_or_default().trim_start_matches(':').trim();
+    let rest = rest.strip_prefix('(').and_then(|x| x.strip_suffix(')')).unwrap_or(rest);
+    let headline = match (o.word, rest.is_empty()) {
+        (_, true) => o.detail.clone(),
+        ("PARTIAL", false) => format!("{rest}; {}", o.detail),
+        (_, false) => format!("{}; {rest}", o.detail),
+    };
+    let tone = match o.word {
+        "PASS" => "pass",
+        "PARTIAL" => "partial",
+        _ => "fail",
+    };
+    (o.word, tone, headline)
+}
+
+/// The one line under the title of a host report.
 fn headline(r: &RunReport) -> String {
     let bad: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
     let what = if r.kind == ReportKind::CheckHost { "clauses" } else { "cases" };
@@ -64,11 +83,15 @@ fn headline(r: &RunReport) -> String {
         (ReportKind::FuzzHost, _) => {
             let runs = r.host.as_ref().map_or(0, |h| h.runs);
             let n = r.host.as_ref().map_or(bad.len(), |h| h.findings.len());
-            if n == 0 {
+            let mut s = if n == 0 {
                 format!("no finding in {runs} runs against a misbehaving hand")
             } else {
                 format!("{n} distinct finding(s) in {runs} runs")
+            };
+            if let Some(m) = r.host.as_ref().and_then(|h| h.merged.as_ref()) {
+                s.push_str(&format!("; merged from {}", m.describe()));
             }
+            s
         }
         (_, 0) if r.ran() == 0 => "nothing ran".to_string(),
         (_, 0) => format!("every one of the {} {what} that ran passed", r.ran()),
@@ -108,8 +131,14 @@ fn title(r: &RunReport) -> String {
     match (r.kind, &r.host) {
         (k, Some(h)) if k.is_host() => format!("{}: {}", k.command(), diff::clip(&h.command.join(" "), 80)),
         (k, _) if k.is_host() => format!("{}: {}", k.command(), r.target.trim_start_matches("host: ")),
-        (k, _) => format!("{} {} on {}", k.command(), r.profile, r.target),
+        (ReportKind::Certify, _) => format!("gcl certify: the certificate of {} on {}", profile_name(r), r.target),
+        (k, _) => format!("{} {} on {}", k.command(), profile_name(r), r.target),
     }
+}
+
+/// The profile as a hand's page names it: a built-in's id, or the file it came from.
+fn profile_name(r: &RunReport) -> String {
+    r.profile_spec.as_ref().map_or_else(|| r.profile.clone(), |p| p.name.clone())
 }
 
 fn facts(r: &RunReport) -> Vec<(String, String)> {
@@ -130,8 +159,36 @@ fn facts(r: &RunReport) -> Vec<(String, String)> {
             }
         }
     } else {
+        if let Some(c) = &r.certificate {
+            v.push((
+                "certificate".into(),
+                format!(
+                    "this page is the report of a certificate bundle (<code>certificate.json</code>, the transcripts, \
+<code>MANIFEST.sha256</code>); the certificate's verdict: <strong>{}</strong>",
+                    esc(&r.outcome().verdict)
+                ),
+            ));
+            v.push(("firmware (VERS)".into(), format!("<code>{}</code>", esc(&c.firmware_version.join(" / ")))));
+            v.push((
+                "signed by".into(),
+                match &c.signed_by {
+                    Some(k) => format!("the key with fingerprint <code>{}</code> (<code>MANIFEST.sig</code>)", esc(k)),
+                    None => "nobody: the bundle is unsigned, so nothing says who made it".into(),
+                },
+            ));
+        }
         v.push(("target".into(), format!("<code>{}</code>", esc(&r.target))));
-        v.push(("profile".into(), esc(&r.profile)));
+        v.push((
+            "profile".into(),
+            match &r.profile_spec {
+                Some(p) => format!(
+                    "{} <span class=\"muted\">(spec sha256 <code>{}</code>)</span>",
+                    esc(&p.label()),
+                    esc(&p.sha256)
+                ),
+                None => esc(&r.profile),
+            },
+        ));
         v.push(("levels run".into(), esc(&r.level)));
         if let Some(p) = &r.preflight {
             v.push(("pre-flight".into(), esc(p.trim_start_matches("pre-flight: "))));
@@ -221,13 +278,21 @@ fn case_link(r: &RunReport, id: &str) -> String {
 /// Renders the run as one HTML page.
 pub fn to_html(r: &RunReport) -> String {
     let ok = r.passed();
-    let verdict = match (r.kind, ok) {
-        (ReportKind::FuzzHost, true) => "NO FINDING",
-        (ReportKind::FuzzHost, false) => "FINDINGS",
-        (_, true) => "PASSED",
-        (_, false) => "FAILED",
+    let mut p = if r.kind.is_host() {
+        // A merge that lacks shards judged only part of the campaign: never NO FINDING.
+        let incomplete = r.host.as_ref().and_then(|h| h.merged.as_ref()).is_some_and(|m| !m.complete());
+        let verdict = match (r.kind, ok) {
+            (ReportKind::FuzzHost, _) if incomplete => "INCOMPLETE",
+            (ReportKind::FuzzHost, true) => "NO FINDING",
+            (ReportKind::FuzzHost, false) => "FINDINGS",
+            (_, true) => "PASSED",
+            (_, false) => "FAILED",
+        };
+        Page::new(&title(r), ok, verdict, &headline(r))
+    } else {
+        let (word, tone, headline) = hand_verdict(r);
+        Page::toned(&title(r), tone, word, &headline)
     };
-    let mut p = Page::new(&title(r), ok, verdict, &headline(r));
     p.facts(&facts(r));
     p.options(&options(r));
 
@@ -893,7 +958,7 @@ mod tests {
         assert!(page.contains("\n                ^ byte 7 of step 2"), "the caret sits under the parting byte: {page}");
         assert!(page.contains("<th>pre-flight</th><td>framing as the profile says"), "{page}");
         assert!(page.contains("<h1>gcl conform seed on sim</h1>"), "{page}");
-        assert!(page.contains("<strong>FAILED</strong>: 1 of 2 cases fail (MUST 1)"), "{page}");
+        assert!(page.contains("<strong>FAIL</strong>: 1 of the 2 cases that ran fail (MUST 1)"), "{page}");
         assert!(page.contains("decision:framing-echo"));
         assert!(!page.contains("<script"), "self-contained and inert");
     }

@@ -415,6 +415,142 @@ pub struct RunReport {
     /// A host report's campaign (fuzz host, check-host).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub host: Option<HostDetails>,
+    /// A hand's run: the verdict line every output of the run shows ([`RunReport::outcome`]);
+    /// filled when the report is written.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub verdict: String,
+    /// Which spec the profile came from: a built-in one, or a file (with the hash of what ran).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile_spec: Option<ProfileSpec>,
+    /// A run that made a certificate (`gcl certify`): what the certificate adds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub certificate: Option<CertificateFacts>,
+}
+
+/// Where a run's profile came from. A report or a certificate names a built-in profile only
+/// when the spec that ran is that built-in's spec (the same hash); a file that declares a
+/// built-in's id with other contents is named as the file it is.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ProfileSpec {
+    /// `builtin` or `file`.
+    pub origin: ProfileOrigin,
+    /// The built-in profile's id, or the file as given.
+    pub name: String,
+    /// The id the spec declares.
+    pub id: String,
+    /// SHA-256 of the spec as loaded (every include resolved), as JSON: [`ProfileSpec::digest`].
+    pub sha256: String,
+}
+
+/// Whether a spec is a built-in profile's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProfileOrigin {
+    /// The spec is exactly the built-in profile's of its id.
+    Builtin,
+    /// A file, whatever id it declares.
+    File,
+}
+
+impl ProfileSpec {
+    /// The spec of `profile`, loaded from `given` (a built-in name or a file).
+    pub fn of(given: &str, profile: &gcl_model::Profile) -> ProfileSpec {
+        let sha256 = ProfileSpec::digest(profile);
+        let builtin = gcl_model::Profile::builtin(&profile.id).is_ok_and(|b| ProfileSpec::digest(&b) == sha256);
+        ProfileSpec {
+            origin: if builtin { ProfileOrigin::Builtin } else { ProfileOrigin::File },
+            name: if builtin { profile.id.clone() } else { given.to_string() },
+            id: profile.id.clone(),
+            sha256,
+        }
+    }
+
+    /// SHA-256 of a loaded profile: of its JSON form, every include resolved, so two files
+    /// that load to the same profile have the same hash.
+    pub fn digest(profile: &gcl_model::Profile) -> String {
+        crate::certify::sha256_hex(&serde_json::to_vec(profile).unwrap_or_default())
+    }
+
+    /// How people see it: `bh8-262-4.3` for a built-in; for a file, the file, the id it
+    /// declares and the start of its hash, saying it is not the built-in of that id.
+    pub fn label(&self) -> String {
+        match self.origin {
+            ProfileOrigin::Builtin => self.name.clone(),
+            ProfileOrigin::File => {
+                let builtin = gcl_model::Profile::builtin(&self.id).is_ok();
+                format!(
+                    "{} (a profile file declaring id {}{}; sha256 {})",
+                    self.name,
+                    self.id,
+                    if builtin { ", not that built-in profile" } else { "" },
+                    &self.sha256[..self.sha256.len().min(16)]
+                )
+            }
+        }
+    }
+}
+
+/// What a certificate adds to its run's report, so that the bundle's page says what it is.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CertificateFacts {
+    /// Cases of the certified levels in the whole suite (`--only` aside): a certificate is
+    /// partial when fewer ran.
+    pub cases_total: usize,
+    /// What the hand answered to `VERS`.
+    pub firmware_version: Vec<String>,
+    /// The fingerprint of the key that signs the bundle, or `None` for an unsigned bundle.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signed_by: Option<String>,
+}
+
+/// What a hand's run amounts to, computed by [`RunReport::outcome`] alone: the console's
+/// `result:` line, `report.json`'s `verdict`, JUnit's `gcl.verdict` property, the page's
+/// verdict and a certificate's `verdict` all show it, so they never disagree on the verdict,
+/// the counts or what was excused.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Outcome {
+    /// `PASS`, `PARTIAL`, `FAIL` or `ERROR`: the verdict's first word.
+    pub word: &'static str,
+    /// The verdict line: `PASS`, `FAIL`, `ERROR`, `PARTIAL: 12 of 336 cases`, `PARTIAL: 91 of
+    /// 216 cases passed, 125 known failures excused`, `FAIL (PARTIAL: 297 of 354 cases)`.
+    pub verdict: String,
+    /// The counts behind it, for people: `148 of 297 cases that ran fail (MUST 100, SHOULD
+    /// 48); 3 likely root cause(s)`.
+    pub detail: String,
+    /// Whether the run covers only part of what it judges: cases not run, known failures
+    /// excused, or `certify --partial`.
+    pub partial: bool,
+    /// Cases that ran (every verdict but SKIP).
+    pub cases_run: usize,
+    /// Cases judged: those of the levels run (for a certificate, of the whole suite).
+    pub cases_total: usize,
+    /// Known failures excused (XFAIL).
+    pub excused: usize,
+}
+
+/// A verdict line: see [`Outcome::verdict`]. `excused` is the number of known failures (XFAIL)
+/// among the `cases_run`; any makes the verdict partial. `error`: the run ended on the hand
+/// (it stopped answering), not on a verdict.
+pub fn verdict_line(
+    passed: bool,
+    error: bool,
+    partial: bool,
+    cases_run: usize,
+    cases_total: usize,
+    excused: usize,
+) -> String {
+    let covered = if excused > 0 {
+        format!("{} of {cases_total} cases passed, {excused} known failures excused", cases_run.saturating_sub(excused))
+    } else {
+        format!("{cases_run} of {cases_total} cases")
+    };
+    let bad = if error { "ERROR" } else { "FAIL" };
+    match (partial || excused > 0, passed && !error) {
+        (false, true) => "PASS".to_string(),
+        (false, false) => bad.to_string(),
+        (true, true) => format!("PARTIAL: {covered}"),
+        (true, false) => format!("{bad} (PARTIAL: {covered})"),
+    }
 }
 
 /// Which command wrote a report: each has its own page title and leaves out what means nothing
@@ -477,6 +613,9 @@ pub struct HostDetails {
     /// Each distinct finding.
     #[serde(default)]
     pub findings: Vec<HostFinding>,
+    /// A report `gcl fuzz merge` folded from shards: which it holds, of how many.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub merged: Option<crate::fuzz::shard::Merged>,
 }
 
 /// One finding of `gcl fuzz host`, with what a person needs to run it again.
@@ -523,6 +662,58 @@ impl RunReport {
     /// How many cases ran (every verdict but SKIP).
     pub fn ran(&self) -> usize {
         self.cases.iter().filter(|c| c.verdict != Verdict::Skip).count()
+    }
+
+    /// What a hand's run amounts to (see [`Outcome`]). The cases judged are those of the
+    /// levels run (a case of a level not selected is out of scope, not missing), or for a
+    /// certificate the suite's cases of the certified levels; the run is partial when some of
+    /// them did not run, when known failures were excused, or when `certify --partial` asked.
+    pub fn outcome(&self) -> Outcome {
+        let judged = crate::conform::LevelFilter::from_name(&self.level).unwrap_or(crate::conform::LevelFilter::All);
+        let in_scope = |c: &&CaseResult| c.level.parse::<gcl_transcript::Level>().map_or(true, |l| judged.admits(l));
+        let scoped = self.cases.iter().filter(in_scope).count();
+        let cases_total = self.certificate.as_ref().map_or(scoped, |c| c.cases_total);
+        let cases_run = self.ran();
+        let excused = self.cases.iter().filter(|c| c.verdict == Verdict::Xfail).count();
+        let partial = self.options.partial || cases_run < cases_total || excused > 0;
+        let error = self.stopped.as_ref().is_some_and(|st| st.cause != StopCause::MaxFailures);
+        let verdict = verdict_line(self.passed(), error, partial, cases_run, cases_total, excused);
+        let word = ["PASS", "PARTIAL", "FAIL", "ERROR"].into_iter().find(|w| verdict.starts_with(w)).unwrap_or("FAIL");
+        let bad: Vec<&CaseResult> = self.cases.iter().filter(|c| c.verdict.fails_run()).collect();
+        let mut parts: Vec<String> = Vec::new();
+        if cases_run == 0 {
+            parts.push(format!("nothing ran of {cases_total} cases"));
+        } else if !bad.is_empty() {
+            let mut by_level: BTreeMap<gcl_transcript::Level, usize> = BTreeMap::new();
+            for c in &bad {
+                *by_level.entry(c.level.parse().unwrap_or(gcl_transcript::Level::Info)).or_default() += 1;
+            }
+            let levels: Vec<String> = by_level.iter().map(|(l, n)| format!("{l} {n}")).collect();
+            parts.push(format!("{} of the {cases_run} cases that ran fail ({})", bad.len(), levels.join(", ")));
+            if !self.groups.is_empty() {
+                parts.push(format!("{} likely root cause(s)", self.groups.len()));
+            }
+        } else if partial {
+            parts.push(format!("none of the {cases_run} cases that ran failed"));
+        } else {
+            parts.push(format!("every one of the {cases_total} cases passed"));
+        }
+        if cases_total > cases_run && cases_run > 0 {
+            parts.push(format!("{} of the {cases_total} cases did not run", cases_total - cases_run));
+        }
+        if excused > 0 {
+            parts.push(format!("{excused} known failure(s) excused: they count as not covered, not as passed"));
+        }
+        if self.options.partial {
+            parts.push("certify --partial: not meant to cover the whole suite".to_string());
+        }
+        if let Some(st) = &self.stopped {
+            parts.push(format!("ended early: {}", st.message));
+        }
+        if !self.liveness.before || !self.liveness.after {
+            parts.push("the hand did not answer the liveness probe".to_string());
+        }
+        Outcome { word, verdict, detail: parts.join("; "), partial, cases_run, cases_total, excused }
     }
 
     /// The ids of the failing cases another clause's group explains (see
@@ -606,10 +797,16 @@ impl ResultStream {
 
 pub use crate::outputs::write_atomic;
 
-/// Writes `report.json`, `junit.xml` and `report.html` into `dir`.
+/// Writes `report.json`, `junit.xml` and `report.html` into `dir`; a hand's `report.json`
+/// with its verdict line ([`RunReport::outcome`]).
 pub fn write_all(dir: &Path, report: &RunReport) -> std::io::Result<Vec<PathBuf>> {
     let json = dir.join("report.json");
-    write_atomic(&json, &serde_json::to_vec_pretty(report)?)?;
+    let verdict = if report.kind.is_host() { String::new() } else { report.outcome().verdict };
+    if report.verdict == verdict {
+        write_atomic(&json, &serde_json::to_vec_pretty(report)?)?;
+    } else {
+        write_atomic(&json, &serde_json::to_vec_pretty(&RunReport { verdict, ..report.clone() })?)?;
+    }
     let junit = dir.join("junit.xml");
     write_atomic(&junit, to_junit(report)?.as_bytes())?;
     let html = dir.join("report.html");
@@ -629,6 +826,9 @@ pub(crate) mod tests {
             format: REPORT_FORMAT,
             kind: ReportKind::Conform,
             host: None,
+            verdict: String::new(),
+            profile_spec: None,
+            certificate: None,
             tool: "gcl 0.1.0".into(),
             target: "sim".into(),
             profile: "seed".into(),

@@ -18,6 +18,7 @@ th{background:#f3f3f3}td.n{text-align:right;font-variant-numeric:tabular-nums}\
 .pass{background:#e6f4e6}.fail{background:#fbe3e3}.skip{background:#f3f3f3}\
 .verdict{font-size:1.2em;padding:.5em .8em;border-radius:4px;margin:.6em 0}\
 .verdict.pass{border:1px solid #7b7}.verdict.fail{border:1px solid #d77}\
+.verdict.partial{border:1px solid #cb4;background:#fdf5d8}\
 pre{background:#f7f7f7;padding:.5em .7em;white-space:pre-wrap;overflow-wrap:anywhere;margin:.4em 0}\
 code,pre{font-family:ui-monospace,monospace;font-size:90%}\
 details{margin:.3em 0}details>summary{cursor:pointer}details.case{border-left:3px solid #d77;padding-left:.6em}\
@@ -35,6 +36,12 @@ impl Page {
     /// A page titled `title` whose first line says the verdict (`ok`: green, else red) and
     /// `headline`, one sentence of what it means.
     pub fn new(title: &str, ok: bool, verdict: &str, headline: &str) -> Page {
+        Page::toned(title, if ok { "pass" } else { "fail" }, verdict, headline)
+    }
+
+    /// [`Page::new`] in a tone of its own: `pass` (green), `fail` (red) or `partial` (amber:
+    /// nothing failed, but not everything was judged).
+    pub fn toned(title: &str, tone: &str, verdict: &str, headline: &str) -> Page {
         let mut html = String::with_capacity(64 * 1024);
         let _ = write!(
             html,
@@ -43,7 +50,7 @@ impl Page {
 <h1>{t}</h1>\n<div class=\"verdict {c}\" id=\"verdict\"><strong>{v}</strong>: {h}</div>\n",
             t = esc(title),
             v = esc(verdict),
-            c = if ok { "pass" } else { "fail" },
+            c = esc(tone),
             h = esc(headline),
         );
         Page { html }
