@@ -151,6 +151,93 @@ fn merged_host_shards_equal_one_machine_running_the_same_runs() {
         }
     }
 
+    // Each shard's fuzz.json says what makes it part of the campaign (issue 29 item 4), and
+    // the merged page says what it was merged from.
+    for (k, dir) in shards.iter().enumerate() {
+        let p = &json(&dir.join("report/fuzz.json"))["provenance"];
+        assert_eq!(p["shard"], serde_json::json!({"index": k + 1, "count": 4}), "{p}");
+        assert_eq!(p["seed"], 5);
+        assert_eq!(p["options"]["ops"], "err-bits=3,wrong-echo=3,garbage=3", "{p}");
+        assert_eq!(p["options"]["runs"], "16");
+        assert!(
+            std::fs::read_to_string(dir.join("report/report.html")).unwrap().contains(&format!("--shard {}/4", k + 1))
+        );
+    }
+    assert_eq!(
+        json(&merged.join("report/fuzz.json"))["provenance"]["merged"],
+        serde_json::json!({"count": 4, "shards": [1, 2, 3, 4]})
+    );
+    let page = std::fs::read_to_string(merged.join("report/report.html")).unwrap();
+    assert!(page.contains("merged from shards 1–4 of 4"), "{page}");
+
+    // A shard missing: merged and said, never green; the same shard twice: refused.
+    let part = tmp.path().join("part");
+    let o = gcl(&[
+        "fuzz",
+        "merge",
+        shards[0].to_str().unwrap(),
+        shards[2].to_str().unwrap(),
+        "--out",
+        part.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("shard(s) 2, 4 of 4 missing"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let page = std::fs::read_to_string(part.join("report/report.html")).unwrap();
+    assert!(page.contains("<strong>INCOMPLETE</strong>"), "{page}");
+    assert!(page.contains("merged from shards 1, 3 of 4 (INCOMPLETE: 2, 4 missing"), "{page}");
+    let junit = std::fs::read_to_string(part.join("report/junit.xml")).unwrap();
+    assert!(junit.contains("fuzz-merge-incomplete") && junit.contains("<error"), "{junit}");
+    let twice = tmp.path().join("twice");
+    let o = gcl(&[
+        "fuzz",
+        "merge",
+        shards[1].to_str().unwrap(),
+        shards[1].to_str().unwrap(),
+        "--out",
+        twice.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("shard 2/4 is given twice"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!twice.exists(), "nothing written");
+
+    // A shard's bundle is data from anywhere: a link to a secret and a FIFO in it are named and
+    // left behind, never followed, copied or waited on (issue 32 item 4).
+    let secret = tmp.path().join("secret");
+    std::fs::write(&secret, "root:$6$secretsalt$hash\n").unwrap();
+    for dir in &shards {
+        for b in std::fs::read_dir(dir.join("bundles")).unwrap() {
+            let b = b.unwrap().path();
+            std::os::unix::fs::symlink(&secret, b.join("evil.txt")).unwrap();
+            nix::unistd::mkfifo(&b.join("pipe.gcl"), nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+        }
+    }
+    let hostile = tmp.path().join("hostile");
+    let mut args = vec!["fuzz", "merge"];
+    args.extend(shards.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--out", hostile.to_str().unwrap()]);
+    let o = gcl(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("evil.txt: a symbolic link, not copied") && err.contains("pipe.gcl: a named pipe, not copied"),
+        "{err}"
+    );
+    for b in std::fs::read_dir(hostile.join("bundles")).unwrap() {
+        let b = b.unwrap().path();
+        assert!(!b.join("evil.txt").exists() && !b.join("pipe.gcl").exists(), "{}", b.display());
+        for f in std::fs::read_dir(&b).unwrap() {
+            assert!(!std::fs::read_to_string(f.unwrap().path()).unwrap().contains("secretsalt"));
+        }
+    }
+
     // Folders of another campaign are refused, and the same shard twice is caught.
     let other = tmp.path().join("other");
     host_campaign(&other, "6", &["--shard", "2/4"]);
@@ -215,7 +302,8 @@ fn device_shards_are_disjoint_and_merge_by_signature_and_content_hash() {
     };
     assert_eq!(signatures(&ra), signatures(&ra2));
     assert_ne!(files(&a.join("corpus")), files(&b.join("corpus")));
-    let merged = tmp.path().join("merged");
+    // The same shard twice is refused: its runs would count twice (issue 29 item 4).
+    let twice = tmp.path().join("twice");
     let o = gcl(&[
         "fuzz",
         "merge",
@@ -223,11 +311,27 @@ fn device_shards_are_disjoint_and_merge_by_signature_and_content_hash() {
         b.to_str().unwrap(),
         a2.to_str().unwrap(),
         "--out",
-        merged.to_str().unwrap(),
+        twice.to_str().unwrap(),
     ]);
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("shard 1/2 is given twice"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!twice.exists());
+    let merged = tmp.path().join("merged");
+    let o = gcl(&["fuzz", "merge", a.to_str().unwrap(), b.to_str().unwrap(), "--out", merged.to_str().unwrap()]);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", String::from_utf8_lossy(&o.stderr));
     let m = json(&merged.join("report/fuzz-device.json"));
-    // Corpus: the union by content hash (a-again adds nothing new).
+    // Each shard ran one job: the merged report says so, not the sum (issue 33 item 5).
+    assert_eq!(m["jobs"], 1);
+    assert_eq!(m["provenance"]["merged"], serde_json::json!({"count": 2, "shards": [1, 2]}));
+    assert_eq!(ra["provenance"]["shard"], serde_json::json!({"index": 1, "count": 2}));
+    assert_eq!(ra["provenance"]["options"]["runs"], "60", "the campaign's --runs, not the shard's share");
+    let page = std::fs::read_to_string(merged.join("report/fuzz-device.html")).unwrap();
+    assert!(page.contains("merged from shards 1, 2 of 2") && !page.contains("<code>--jobs</code>"), "{page}");
+    // Corpus: the union by content hash.
     let union: std::collections::BTreeSet<String> =
         files(&a.join("corpus")).union(&files(&b.join("corpus"))).cloned().collect();
     assert_eq!(files(&merged.join("corpus")), union);
@@ -246,4 +350,305 @@ fn device_shards_are_disjoint_and_merge_by_signature_and_content_hash() {
         assert!(p.is_file(), "{}", p.display());
     }
     assert!(merged.join("report/junit.xml").is_file());
+}
+
+/// A `gcl fuzz device` shard of a short campaign over `sim:seed` (`extra` added), in the
+/// layout the recipes write; its exit code.
+fn device_shard(dir: &Path, shard: &str, extra: &[&str]) -> i32 {
+    let (report, out, corpus) = (dir.join("report"), dir.join("findings"), dir.join("corpus"));
+    let mut args = vec![
+        "fuzz",
+        "device",
+        "--target",
+        "sim:seed",
+        "--shard",
+        shard,
+        "--quiet",
+        "--report",
+        report.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--corpus",
+        corpus.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    // Seed 1 and 12 runs unless `extra` says otherwise.
+    for (flag, default) in [("--seed", "1"), ("--runs", "12")] {
+        if !extra.contains(&flag) {
+            args.extend([flag, default]);
+        }
+    }
+    let o = gcl(&args);
+    let code = o.status.code().unwrap_or(-1);
+    assert!(matches!(code, 0 | 1), "{}", String::from_utf8_lossy(&o.stderr));
+    code
+}
+
+/// `gcl fuzz merge DIRS --out OUT`: exit code and stderr.
+fn merge(dirs: &[&Path], out: &Path) -> (i32, String) {
+    let mut args: Vec<&str> = vec!["fuzz", "merge"];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+    args.extend(["--out", out.to_str().unwrap()]);
+    let o = gcl(&args);
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// Issue 29 item 4: a merge of the same shard twice, of some of the shards, or of shards of
+/// different campaigns is never a green NO FINDING. Every campaign here finds nothing (a
+/// correct simulated hand), so only the shard record can tell the sets apart.
+#[test]
+fn a_duplicated_missing_or_mismatched_shard_set_is_never_green() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let s: Vec<PathBuf> = (1..=3).map(|k| t.join(format!("s{k}"))).collect();
+    for (k, dir) in s.iter().enumerate() {
+        assert_eq!(device_shard(dir, &format!("{}/3", k + 1), &[]), 0);
+    }
+    // The same shard twice: refused, nothing written.
+    let (code, err) = merge(&[&s[0], &s[0]], &t.join("twice"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("shard 1/3 is given twice"), "{err}");
+    assert!(!t.join("twice").exists());
+    // One shard of three: merged, but INCOMPLETE in every report, and exit 2.
+    let one = t.join("one");
+    let (code, err) = merge(&[&s[0]], &one);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("shard(s) 2, 3 of 3 missing"), "{err}");
+    let r = json(&one.join("report/fuzz-device.json"));
+    assert_eq!(r["provenance"]["merged"], serde_json::json!({"count": 3, "shards": [1]}));
+    let page = std::fs::read_to_string(one.join("report/fuzz-device.html")).unwrap();
+    assert!(page.contains("<strong>INCOMPLETE</strong>") && !page.contains("NO FINDING"), "{page}");
+    assert!(page.contains("merged from shard 1 of 3 (INCOMPLETE: 2, 3 missing, their runs are not in it)"), "{page}");
+    let junit = std::fs::read_to_string(one.join("report/junit.xml")).unwrap();
+    assert!(junit.contains("errors=\"1\"") && junit.contains("name=\"fuzz-merge-incomplete\""), "{junit}");
+    // Shards of other campaigns: another seed, --runs, --skip-decision, or another N.
+    for (name, shard, extra, says) in [
+        ("seed", "2/3", &["--seed", "9"][..], "--seed: 9 against 1"),
+        ("runs", "2/3", &["--runs", "24"][..], "--runs: 24 against 12"),
+        ("skip", "2/3", &["--skip-decision", "seed-fget-format"][..], "--skip-decision: seed-fget-format against none"),
+        ("count", "2/2", &[][..], "is one of 2 shards"),
+    ] {
+        let other = t.join(name);
+        device_shard(&other, shard, extra);
+        let (code, err) = merge(&[&s[0], &other, &s[2]], &t.join(format!("m-{name}")));
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains("not shards of one campaign") && err.contains(says), "{name}: {err}");
+        assert!(!t.join(format!("m-{name}")).exists());
+    }
+    // All three, in any order: green, and the page says what it holds.
+    let all = t.join("all");
+    let (code, err) = merge(&[&s[2], &s[0], &s[1]], &all);
+    assert_eq!(code, 0, "{err}");
+    let page = std::fs::read_to_string(all.join("report/fuzz-device.html")).unwrap();
+    assert!(page.contains("<strong>NO FINDING</strong>") && page.contains("merged from shards 1–3 of 3"), "{page}");
+    assert_eq!(json(&all.join("report/fuzz-device.json"))["runs"], 12);
+    // A merged folder merges again with the rest.
+    let (code, _) = merge(&[&s[0], &s[1]], &t.join("first-two"));
+    assert_eq!(code, 2);
+    let (code, err) = merge(&[&t.join("first-two"), &s[2]], &t.join("again"));
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        json(&t.join("again/report/fuzz-device.json"))["provenance"]["merged"]["shards"],
+        serde_json::json!([1, 2, 3])
+    );
+}
+
+/// Issue 32 item 4: files of a shard are read as they are, within the input limit: a link to a
+/// secret is not followed, a FIFO is not waited on, a 3 GB sparse file is refused by name and
+/// never read whole (the merge runs under a memory limit).
+#[test]
+fn a_merge_copies_no_link_or_fifo_and_reads_no_huge_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let (a, b) = (t.join("a"), t.join("b"));
+    device_shard(&a, "1/2", &["--fault", "fget-reversed", "--runs", "80"]);
+    device_shard(&b, "2/2", &["--fault", "fget-reversed", "--runs", "80"]);
+    let secret = t.join("secret");
+    std::fs::write(&secret, "root:$6$secretsalt$hash\n").unwrap();
+    // Each finding's transcript replaced by a link to the secret.
+    let findings: Vec<PathBuf> = std::fs::read_dir(a.join("findings")).unwrap().map(|e| e.unwrap().path()).collect();
+    assert!(!findings.is_empty(), "fget-reversed is found in 40 runs");
+    for f in &findings {
+        std::fs::remove_file(f).unwrap();
+        std::os::unix::fs::symlink(&secret, f).unwrap();
+    }
+    let fifo = |p: &Path| nix::unistd::mkfifo(p, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+    fifo(&a.join("corpus/0000-pipe.json"));
+    std::os::unix::fs::symlink(&secret, a.join("corpus/0001-link.json")).unwrap();
+    // Under 384 MiB of data (as the adversarial tests run gcl): a 3 GB file read whole dies.
+    let limited = |dirs: &[&Path], out: &Path| {
+        let o = Command::new("prlimit")
+            .args(["--data=402653184", "--", env!("CARGO_BIN_EXE_gcl"), "fuzz", "merge"])
+            .args(dirs)
+            .arg("--out")
+            .arg(out)
+            .env("MALLOC_ARENA_MAX", "2")
+            .output()
+            .expect("prlimit (util-linux) runs gcl");
+        (o.status.code(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let out = t.join("out");
+    let (code, err) = limited(&[&a, &b], &out);
+    assert!(matches!(code, Some(0 | 1)), "{err}");
+    for f in &findings {
+        assert!(err.contains(&format!("{}: a symbolic link, not copied", f.display())), "{err}");
+    }
+    assert!(err.contains("0000-pipe.json: a named pipe, not copied"), "{err}");
+    assert!(err.contains("0001-link.json: a symbolic link, not copied"), "{err}");
+    let mut copied = 0;
+    for sub in ["findings", "corpus", "report"] {
+        for e in std::fs::read_dir(out.join(sub)).into_iter().flatten() {
+            let p = e.unwrap().path();
+            assert!(!std::fs::symlink_metadata(&p).unwrap().file_type().is_symlink(), "{}", p.display());
+            assert!(!std::fs::read_to_string(&p).unwrap().contains("secretsalt"), "{}", p.display());
+            copied += 1;
+        }
+    }
+    assert!(copied > 3);
+    // A 3 GB sparse file where a finding's transcript should be: refused by name.
+    let big =
+        b.join("findings").join(std::fs::read_dir(b.join("findings")).unwrap().next().unwrap().unwrap().file_name());
+    std::fs::remove_file(&big).unwrap();
+    std::fs::File::create(&big).unwrap().set_len(3 << 30).unwrap();
+    let (code, err) = limited(&[&a, &b], &t.join("out2"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains(&format!("{}: larger than the limit of 4194304 bytes", big.display())), "{err}");
+    std::fs::remove_file(&big).unwrap();
+}
+
+/// Issue 32 item 4: a merge into a folder a running campaign (or merge) holds is refused; a
+/// re-merge leaves nothing of the merge before it; merges into one folder at once never mix
+/// one's report with another's findings.
+#[test]
+fn merges_hold_their_folder_and_replace_what_a_merge_wrote() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let (f1, f2, c1, c2) = (t.join("f1"), t.join("f2"), t.join("c1"), t.join("c2"));
+    device_shard(&f1, "1/2", &["--fault", "fget-reversed", "--runs", "80"]);
+    device_shard(&f2, "2/2", &["--fault", "fget-reversed", "--runs", "80"]);
+    device_shard(&c1, "1/2", &[]);
+    device_shard(&c2, "2/2", &[]);
+    let out = t.join("out");
+    // Held by a campaign (its --out is out/findings), then by another merge.
+    for (held, what) in [(out.join("findings"), "fuzz device --out"), (out.clone(), "fuzz merge --out")] {
+        let lock = gcl_harness::outputs::OutLock::acquire(&held, what).unwrap();
+        let (code, err) = merge(&[&f1, &f2], &out);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(&format!("is in use by gcl {what} (pid {})", std::process::id())), "{err}");
+        drop(lock);
+    }
+    // A folder with files no merge wrote (a shard's own folder) is refused, untouched.
+    let (code, err) = merge(&[&c1, &c2], &f1);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("holds files that no `gcl fuzz merge` wrote"), "{err}");
+    assert!(f1.join("report/fuzz-device.json").is_file());
+    // A merge with findings, then a merge without into the same folder: nothing stale.
+    assert_eq!(merge(&[&f1, &f2], &out).0, 1);
+    assert!(std::fs::read_dir(out.join("findings")).unwrap().count() > 0);
+    assert_eq!(merge(&[&c1, &c2], &out).0, 0);
+    assert!(!out.join("findings").exists(), "a finding of the earlier merge outlived it");
+    assert_eq!(json(&out.join("report/fuzz-device.json"))["findings"], serde_json::json!([]));
+    // Merges at once into one folder: each runs whole or is refused, and what is left is one
+    // merge's report with exactly its findings.
+    let names = |d: &Path| -> std::collections::BTreeSet<PathBuf> {
+        std::fs::read_dir(d).map_or_else(|_| Default::default(), |r| r.map(|e| e.unwrap().path()).collect())
+    };
+    for round in 0..4 {
+        let both: Vec<std::process::Child> = (0..4)
+            .map(|i| {
+                let (x, y) = if (round + i) % 2 == 0 { (&f1, &f2) } else { (&c1, &c2) };
+                Command::new(env!("CARGO_BIN_EXE_gcl"))
+                    .args(["fuzz", "merge"])
+                    .args([x, y])
+                    .arg("--out")
+                    .arg(&out)
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for c in both {
+            let o = c.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            match o.status.code() {
+                Some(0 | 1) => {}
+                Some(2) => assert!(err.contains("is in use by gcl fuzz merge --out"), "{err}"),
+                other => panic!("{other:?}: {err}"),
+            }
+        }
+        let r = json(&out.join("report/fuzz-device.json"));
+        let listed: std::collections::BTreeSet<PathBuf> =
+            r["findings"].as_array().unwrap().iter().map(|f| PathBuf::from(f["path"].as_str().unwrap())).collect();
+        assert_eq!(listed, names(&out.join("findings")), "round {round}: the report and the findings disagree");
+    }
+}
+
+/// Issue 32 item 4: figures of a shard's report beyond what a campaign can hold are refused
+/// by name (`elapsed_ms` = 2^63-1 panicked; `runs` = u64::MAX twice wrapped to a small number).
+#[test]
+fn out_of_range_figures_of_a_shard_are_refused_by_name() {
+    use gcl_harness::fuzz::host::Campaign;
+    use gcl_harness::fuzz::shard::{Provenance, Shard};
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    // Host shards as gcl fuzz host writes them, with the figures set.
+    let host_shard = |name: &str, k: u64, runs: u64, elapsed_ms: u64| {
+        let dir = t.join(name);
+        let report = gcl_harness::check_host::host_report(
+            &["./host".to_string()],
+            "seed",
+            time::OffsetDateTime::UNIX_EPOCH,
+            1.0,
+            3,
+            true,
+            Vec::new(),
+        );
+        let campaign = Campaign {
+            runs,
+            elapsed_ms,
+            provenance: Some(Provenance {
+                shard: Some(Shard { index: k, count: 2 }),
+                seed: 3,
+                options: Default::default(),
+                merged: None,
+            }),
+            ..Default::default()
+        };
+        std::fs::create_dir_all(dir.join("report")).unwrap();
+        std::fs::write(dir.join("report/report.json"), serde_json::to_vec(&report).unwrap()).unwrap();
+        std::fs::write(dir.join("report/fuzz.json"), serde_json::to_vec(&campaign).unwrap()).unwrap();
+        dir
+    };
+    let (a, b) = (host_shard("a", 1, 10, 1000), host_shard("b", 2, 10, 2000));
+    let (code, err) = merge(&[&a, &b], &t.join("sane"));
+    assert_eq!(code, 0, "the shards are sound: {err}");
+    assert_eq!(json(&t.join("sane/report/fuzz.json"))["runs"], 20);
+    let huge = host_shard("huge", 2, 10, (1 << 63) - 1);
+    let (code, err) = merge(&[&a, &huge], &t.join("x1"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("huge/report/fuzz.json: `elapsed_ms` 9223372036854775807 is out of range"), "{err}");
+    let (m1, m2) = (host_shard("m1", 1, u64::MAX, 1), host_shard("m2", 2, u64::MAX, 1));
+    let (code, err) = merge(&[&m1, &m2], &t.join("x2"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("`runs` 18446744073709551615 is out of range"), "{err}");
+    // Each within range, their sum beyond it.
+    let (h1, h2) = (host_shard("h1", 1, 1 << 52, 1), host_shard("h2", 2, 1 << 52, 1));
+    let (code, err) = merge(&[&h1, &h2], &t.join("x3"));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("`runs (summed over the shards)` 4503599627370496 + 4503599627370496 is out of range"),
+        "{err}"
+    );
+    // The same of a device shard.
+    let d = t.join("d1");
+    device_shard(&d, "1/2", &[]);
+    let e = t.join("d2");
+    device_shard(&e, "2/2", &[]);
+    let p = e.join("report/fuzz-device.json");
+    let mut r = json(&p);
+    r["duration_ms"] = serde_json::json!(u64::MAX);
+    std::fs::write(&p, serde_json::to_vec(&r).unwrap()).unwrap();
+    let (code, err) = merge(&[&d, &e], &t.join("x4"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("`duration_ms` 18446744073709551615 is out of range"), "{err}");
 }

@@ -314,6 +314,116 @@ fn signed_certificates_verify_and_forgeries_do_not() {
     assert!(r.stdout.contains("gcl certify --verify DIR [--pubkey FILE]"), "{}", r.stdout);
 }
 
+/// Issue 32 item 5: a profile file that declares a built-in profile's id (the seed spec with
+/// `id = "bh8-262-4.3"`) is certified as the file it is, with its hash; a certificate
+/// rewritten and re-signed to claim the built-in is caught by `--verify`, whose own built-in
+/// spec and suite do not match what ran.
+#[test]
+fn a_profile_file_claiming_a_built_in_id_is_certified_as_the_file_it_is() {
+    use gcl_harness::certify::{Certificate, load_signing_key, write_bundle};
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("fake.toml");
+    let seed = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec/seed.toml")).unwrap();
+    assert!(seed.contains("\nid = \"seed\"\n"));
+    std::fs::write(&fake, seed.replacen("\nid = \"seed\"\n", "\nid = \"bh8-262-4.3\"\n", 1)).unwrap();
+    let key = dir.path().join("lab.pem");
+    assert_eq!(gcl(&["certify", "--keygen", s(&key)]).code, Some(0));
+    let public = dir.path().join("lab.pem.pub");
+    let cert = dir.path().join("cert");
+    let r = gcl(&["certify", "--target", "sim", "--profile", s(&fake), "--key", s(&key), "--out", s(&cert)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let c: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cert.join("certificate.json")).unwrap()).unwrap();
+    let profile = c["profile"].as_str().unwrap();
+    assert!(
+        profile.starts_with(&format!(
+            "{} (a profile file declaring id bh8-262-4.3, not that built-in profile; sha256 ",
+            fake.display()
+        )),
+        "{profile}"
+    );
+    assert_eq!(c["profile_spec"]["origin"], "file");
+    assert_eq!(c["profile_spec"]["id"], "bh8-262-4.3");
+    let r = gcl(&["certify", "--verify", s(&cert), "--pubkey", s(&public)]);
+    assert_eq!(r.code, Some(0), "{}", r.stdout);
+    assert!(r.stdout.contains(&format!("profile {profile},")), "{}", r.stdout);
+    assert!(!r.stdout.contains("profile bh8-262-4.3,"), "{}", r.stdout);
+    let page = std::fs::read_to_string(cert.join("report.html")).unwrap();
+    assert!(page.contains("fake.toml (a profile file declaring id bh8-262-4.3, not that built-in profile"), "{page}");
+    // The same spec from a file that is the built-in's (spec/seed.toml) is that built-in.
+    let same = dir.path().join("same");
+    let seed_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec/seed.toml");
+    let r = gcl(&["certify", "--target", "sim", "--profile", s(&seed_file), "--out", s(&same)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let c2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(same.join("certificate.json")).unwrap()).unwrap();
+    assert_eq!((c2["profile"].as_str(), c2["profile_spec"]["origin"].as_str()), (Some("seed"), Some("builtin")));
+
+    // A forger with the key claims the built-in: first keeping the fake spec's hash, then with
+    // the built-in's hash (the suite hash still is the fake's).
+    let builtin = gcl_model::Profile::builtin("bh8-262-4.3").unwrap();
+    let builtin_hash = gcl_harness::report::ProfileSpec::digest(&builtin);
+    let signing = load_signing_key(&key).unwrap();
+    let transcripts: Vec<(String, String)> = std::fs::read_dir(cert.join("transcripts"))
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            (p.file_stem().unwrap().to_string_lossy().into_owned(), std::fs::read_to_string(&p).unwrap())
+        })
+        .collect();
+    for (name, hash, says) in [
+        ("forged-spec", None, "but the spec that ran"),
+        ("forged-hash", Some(builtin_hash.clone()), "is not that of the built-in profile bh8-262-4.3's suite"),
+    ] {
+        let mut report = report(&cert);
+        let spec = report.profile_spec.as_mut().unwrap();
+        spec.origin = gcl_harness::report::ProfileOrigin::Builtin;
+        spec.name = "bh8-262-4.3".into();
+        if let Some(h) = &hash {
+            spec.sha256 = h.clone();
+        }
+        let forged = Certificate::of_run(&report);
+        assert_eq!(forged.profile, "bh8-262-4.3");
+        let out = dir.path().join(name);
+        write_bundle(&out, &forged, &report, &transcripts, Some(&signing)).unwrap();
+        let r = gcl(&["certify", "--verify", s(&out), "--pubkey", s(&public)]);
+        assert_eq!(r.code, Some(1), "{name}: {}", r.stdout);
+        assert!(r.stdout.contains("TAMPERED") && r.stdout.contains(says), "{name}: {}", r.stdout);
+    }
+}
+
+/// Issue 32 item 5: a `--baseline` recorded under one profile explains nothing under another:
+/// it is refused, naming both; a baseline that is used is named in the reports.
+#[test]
+fn a_baseline_of_another_profile_is_refused_and_a_baseline_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let found = dir.path().join("found");
+    let fuzz = |target: &str, more: &[&str]| {
+        let mut a = vec!["fuzz", "device", "--target", target, "--fault", "fget-reversed", "--runs", "60", "--quiet"];
+        a.extend(more);
+        gcl(&a)
+    };
+    let r = fuzz("sim:seed", &["--out", s(&found)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    let r = fuzz("sim:bh8-262-4.3", &["--baseline", s(&found)]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stderr.contains("was recorded on profile seed, and this campaign's profile is bh8-262-4.3"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("known"), "{}", r.stdout);
+    let rep = dir.path().join("rep");
+    let r = fuzz("sim:seed", &["--baseline", s(&found), "--report", s(&rep)]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    let named = j["provenance"]["options"]["baseline"].as_str().unwrap();
+    assert!(named.starts_with(&format!("{} (", found.display())) && named.contains("profile seed"), "{named}");
+    let page = std::fs::read_to_string(rep.join("fuzz-device.html")).unwrap();
+    assert!(page.contains("<code>--baseline</code>") && page.contains(&found.display().to_string()), "{page}");
+}
+
 /// Replaces the value of the top-level `"verdict"` of a pretty-printed certificate.
 fn regex_free_replace_verdict(text: &str, to: &str) -> String {
     text.lines()

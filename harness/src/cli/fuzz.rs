@@ -173,8 +173,26 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         }
         o.baseline.known.skip_decision(id, "--skip-decision");
     }
+    let mut baselines = Vec::new();
     for dir in &a.baseline {
-        o.baseline.add_dir(dir).with_context(|| format!("--baseline {}", dir.display()))?;
+        let before = o.baseline.recorded_on.len();
+        let n = o.baseline.add_dir(dir).with_context(|| format!("--baseline {}", dir.display()))?;
+        // A finding is known only under the profile it was found under.
+        if let Some((file, profiles)) = o.baseline.recorded_elsewhere(&o.profile.id).first() {
+            anyhow::bail!(
+                "--baseline {}: {} was recorded on profile {}, and this campaign's profile is {}: a baseline says what                  is known of a hand under its own profile only (record a baseline with --profile {}, or fuzz with the                  baseline's profile)",
+                dir.display(),
+                file.display(),
+                profiles.join(" "),
+                o.profile.id,
+                o.profile.id
+            );
+        }
+        baselines.push(format!(
+            "{} ({n} finding(s) of profile {})",
+            dir.display(),
+            if o.baseline.recorded_on.len() > before { o.profile.id.as_str() } else { "none: empty" }
+        ));
     }
     let total = match o.budget {
         Budget::Runs(n) => super::progress::Total::Units(n),
@@ -236,6 +254,7 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     let mut report = fd::report::FuzzReport::new(&o, &s);
     report.coverage_over_time = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
+    report.provenance = Some(provenance(&a, &o, &baselines));
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -279,4 +298,50 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     // Only new findings fail the run: what the baseline explains was known before.
     Ok(if s.findings.iter().any(|f| f.is_new()) { EXIT_FAIL } else { EXIT_OK })
+}
+
+/// What makes this campaign's folder a shard of its campaign (see
+/// [`gcl_harness::fuzz::shard::Provenance`]): its `--shard`, seed, and every option that
+/// changed what ran or how it was judged (`--baseline`, `--skip-decision` among them), as its
+/// effective value; `--runs` is the whole campaign's, not the shard's share.
+fn provenance(
+    a: &DeviceArgs,
+    o: &gcl_harness::fuzz::device::FuzzOptions,
+    baselines: &[String],
+) -> gcl_harness::fuzz::shard::Provenance {
+    let list = |v: Vec<String>| if v.is_empty() { "none".to_string() } else { v.join(", ") };
+    let given = a.target.model_profile(a.profile.as_deref());
+    let allowed = o.allowed;
+    let refused: Vec<String> = [
+        ("motion", allowed.motion),
+        ("realtime", allowed.realtime),
+        ("eeprom", allowed.eeprom),
+        ("abort-timing", allowed.abort_timing),
+    ]
+    .iter()
+    .filter(|(_, ok)| !ok)
+    .map(|(n, _)| n.to_string())
+    .collect();
+    let mut options: std::collections::BTreeMap<String, String> = [
+        ("target", a.target.to_string()),
+        ("profile", gcl_harness::report::ProfileSpec::of(given, &o.profile).label()),
+        ("fault", list(a.fault.iter().map(|f| f.name().to_string()).collect())),
+        ("no", list(refused)),
+        ("write-budget", o.write_budget.map_or("unlimited".to_string(), |b| b.to_string())),
+        ("max-findings", o.max_findings.map_or("none".to_string(), |n| n.to_string())),
+        ("jobs", o.jobs.to_string()),
+        ("minimize", if o.minimize { "yes" } else { "no (--no-minimize)" }.to_string()),
+        ("baseline", list(baselines.to_vec())),
+        ("known-failures", a.known_failures.as_ref().map_or("none".to_string(), |f| f.display().to_string())),
+        ("skip-decision", list(a.skip_decision.clone())),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    match (a.runs, a.duration) {
+        (Some(n), _) => options.insert("runs".into(), n.to_string()),
+        (None, d) => options
+            .insert("duration".into(), humantime::format_duration(d.unwrap_or(Duration::from_secs(60))).to_string()),
+    };
+    gcl_harness::fuzz::shard::Provenance { shard: o.shard, seed: o.seed, options, merged: None }
 }

@@ -283,7 +283,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             ));
         }
     };
-    let campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    let mut campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
+    campaign.provenance = Some(provenance(&args, &opts));
     progress.finish();
     if stop.load(Ordering::Relaxed) {
         eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
@@ -371,6 +372,47 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
 }
 
+/// What makes this campaign's folder a shard of its campaign (see
+/// [`gcl_harness::fuzz::shard::Provenance`]): its `--shard`, seed, and every option that
+/// changed what ran or how it was judged, as its effective value.
+fn provenance(args: &Args, opts: &FuzzOptions) -> gcl_harness::fuzz::shard::Provenance {
+    let ms = |d: Duration| humantime::format_duration(d).to_string();
+    let profile = gcl_harness::report::ProfileSpec::of(&args.host.profile, &opts.run.profile);
+    let mut options: std::collections::BTreeMap<String, String> = [
+        ("profile", profile.label()),
+        ("command", serde_json::to_string(&opts.run.command).unwrap_or_default()),
+        ("line", if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" }.to_string()),
+        ("time", opts.run.time.name().to_string()),
+        ("pace", opts.run.pace.to_string()),
+        (
+            "ops",
+            if args.ops.is_some() {
+                opts.weights.0.iter().map(|(o, w)| format!("{}={w}", o.name())).collect::<Vec<_>>().join(",")
+            } else {
+                "every operator".to_string()
+            },
+        ),
+        ("max-misbehaviours", opts.max_planned.to_string()),
+        ("minimize", if opts.minimize { "yes" } else { "no (--no-minimize)" }.to_string()),
+        // A sharded campaign is unguided whatever the flag says.
+        ("guidance", if opts.guided && opts.shard.is_none() { "on" } else { "off" }.to_string()),
+        (
+            "timeout-hang",
+            if args.host.timeout_hang_given() { ms(opts.run.timeout_hang) } else { "measured".to_string() },
+        ),
+        ("run-budget", ms(opts.run.budget)),
+        ("ok-exit-codes", opts.ok_exit_codes.iter().map(i32::to_string).collect::<Vec<_>>().join(",")),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    match (opts.runs, opts.duration) {
+        (_, Some(d)) => options.insert("duration".into(), ms(d)),
+        (n, None) => options.insert("runs".into(), n.unwrap_or(1000).to_string()),
+    };
+    gcl_harness::fuzz::shard::Provenance { shard: opts.shard, seed: opts.seed, options, merged: None }
+}
+
 /// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign: the runs in flight
 /// are called off (their hosts killed) and bundles and reports are still written; a second
 /// signal exits at once.
@@ -400,7 +442,10 @@ fn info(opts: &FuzzOptions, f: &Finding) -> BundleInfo {
 
 /// A report with one case per distinct finding (or one passing case when there is none).
 pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> RunReport {
-    let started = time::OffsetDateTime::now_utc() - time::Duration::milliseconds(c.elapsed_ms as i64);
+    // Checked: a shard's fuzz.json is data from anywhere, and its elapsed_ms may be anything.
+    let now = time::OffsetDateTime::now_utc();
+    let started =
+        now.checked_sub(time::Duration::milliseconds(i64::try_from(c.elapsed_ms).unwrap_or(i64::MAX))).unwrap_or(now);
     let mut cases: Vec<CaseResult> = c
         .findings
         .iter()
@@ -499,7 +544,21 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
                 ("jobs".into(), opts.jobs.to_string()),
                 ("paths seen".into(), format!("{} ({} schedules kept)", c.paths, c.corpus)),
             ])
+            .chain(c.provenance.as_ref().and_then(|p| p.shard).map(|s| {
+                (
+                    "shard".into(),
+                    format!(
+                        "{} of {} (--shard {s}): run indices {}, {}, ...",
+                        s.index,
+                        s.count,
+                        s.global(0),
+                        s.global(1)
+                    ),
+                )
+            }))
+            .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
             .collect(),
+        merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),
         findings: c
             .findings
             .iter()

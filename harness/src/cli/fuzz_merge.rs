@@ -5,10 +5,12 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use gcl_harness::fuzz::host::{FuzzOptions, HostRun, Transport, Weights};
-use gcl_harness::fuzz::merge::{self, Kind};
+use gcl_harness::fuzz::merge::{self, Kind, NotCopied};
+use gcl_harness::fuzz::shard::Merged;
+use gcl_harness::report::{CaseResult, Verdict};
 use gcl_harness::sim::{Pace, TimeMode};
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
 /// Arguments of `gcl fuzz merge`.
 #[derive(Debug, clap::Args)]
@@ -21,8 +23,20 @@ Each DIR is one shard's folder, as the CI recipes in ci/ write it:
 The merged folder has the same layout. Findings are deduplicated by signature (the first
 found stands, hits add up), corpus entries by content hash.
 
-Exit codes: 0 no finding, 1 findings, 2 usage or infrastructure (folders of different
-campaigns, unreadable files).
+Only shards of one campaign merge: each report records its --shard K/N, its seed and every
+option that changed what ran, and a folder of another campaign (another seed, --ops, --runs,
+profile...), of another N, or the same shard twice is refused. A merged folder may be merged
+again with the remaining shards. Missing shards are merged and said: the reports say
+\"merged from shards 1, 3 of 4 (INCOMPLETE: 2, 4 missing)\" and the exit code is 2.
+
+Files are read as they are: a symbolic link, a FIFO or a device in a shard's folder is never
+followed or copied (each is named), and a file over 4 MiB is refused. --out is held for the
+merge (a campaign or another merge using it is refused); it must be new, empty or an earlier
+merge's output, which the merge replaces whole.
+
+Exit codes: 0 every shard merged, no new finding; 1 every shard merged, findings; 2 usage or
+infrastructure (shards missing, folders of different campaigns or the same shard twice,
+unreadable or out-of-range files, --out in use).
 
 Example:
   gcl fuzz merge shard-1 shard-2 shard-3 shard-4 --out merged")]
@@ -47,29 +61,58 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
     }
     match kinds[0] {
         Kind::Host => host(&a),
-        Kind::Device => {
-            let (entries, dups) = merge::merge_corpora(&a.dirs, &a.out.join("corpus"))?;
-            let r = merge::merge_device(&a.dirs, &a.out, Some(entries))?;
-            eprintln!(
-                "gcl fuzz merge: {} shard(s), {} runs, {} distinct finding(s), corpus {} entries ({} duplicate(s) dropped) -> {}",
-                a.dirs.len(),
-                r.runs,
-                r.findings.len(),
-                entries,
-                dups,
-                a.out.display()
-            );
-            Ok(if r.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
-        }
+        Kind::Device => device(&a),
     }
+}
+
+/// Names what was left behind, and says whether every shard was merged.
+fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
+    for n in not_copied {
+        eprintln!("gcl fuzz merge: warning: {n}");
+    }
+    if !merged.complete() {
+        eprintln!(
+            "gcl fuzz merge: shard(s) {} of {} missing: the merged reports say INCOMPLETE, and the exit code is 2",
+            merged.missing().iter().map(u64::to_string).collect::<Vec<_>>().join(", "),
+            merged.count
+        );
+    }
+    merged.complete()
+}
+
+fn device(a: &Args) -> anyhow::Result<u8> {
+    // Everything is read and checked before --out is touched.
+    let m = merge::merge_device(&a.dirs)?;
+    let _held = merge::take_out(&a.out)?;
+    let (entries, dups, mut not_copied) = merge::merge_corpora(&a.dirs, &a.out.join("corpus"))?;
+    let (r, more) = merge::write_device(&m, &a.out, Some(entries))?;
+    not_copied.extend(more);
+    eprintln!(
+        "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s) ({} new), corpus {} entries ({} duplicate(s) dropped) -> {}",
+        m.merged.describe(),
+        r.runs,
+        r.findings.len(),
+        r.new_findings(),
+        entries,
+        dups,
+        a.out.display()
+    );
+    if !finish(&m.merged, &not_copied) {
+        return Ok(EXIT_ERROR);
+    }
+    Ok(if r.new_findings() == 0 { EXIT_OK } else { EXIT_FAIL })
 }
 
 fn host(a: &Args) -> anyhow::Result<u8> {
     let m = merge::merge_host(&a.dirs)?;
-    let bundles = merge::write_host_bundles(&m, &a.out.join("bundles"))?;
     let profile = load_profile(a.profile.as_deref().unwrap_or(&m.report.profile))
         .context("the shards' profile (give --profile FILE for a profile from a file)")?;
+    let _held = merge::take_out(&a.out)?;
+    let (bundles, not_copied) = merge::write_host_bundles(&m, &a.out.join("bundles"))?;
     let command = vec![m.report.target.strip_prefix("host: ").unwrap_or(&m.report.target).to_string()];
+    let recorded = m.campaign.provenance.as_ref().map(|p| &p.options);
+    // The misbehaviours the shards drew from, as they recorded them.
+    let weights = recorded.and_then(|o| o.get("ops")).and_then(|ops| Weights::parse(ops).ok());
     // The campaign's options as far as its report shows them; the rest does not reach it.
     let opts = FuzzOptions {
         run: HostRun {
@@ -87,30 +130,54 @@ fn host(a: &Args) -> anyhow::Result<u8> {
         duration: None,
         ok_exit_codes: Vec::new(),
         jobs: 1,
-        weights: Weights::default(),
+        weights: weights.clone().unwrap_or_default(),
         max_planned: 1,
         minimize: false,
         guided: false,
         calibrate: false,
         shard: None,
     };
-    let mut report = super::fuzz_host::campaign_report(&opts, &m.campaign, &a.out.join("bundles"), false);
+    let mut report = super::fuzz_host::campaign_report(&opts, &m.campaign, &a.out.join("bundles"), weights.is_some());
     // Each case's transcript is its finding's bundle transcript, as in a shard's report.
     for (case, f) in report.cases.iter_mut().zip(&m.campaign.findings) {
         if let Some(t) = m.transcripts.get(&f.verdict.signature) {
             case.transcript = Some(gcl_harness::report::truncate_note(t, gcl_harness::report::MAX_SHOWN));
         }
     }
+    if !m.merged.complete() {
+        // The runs of the missing shards were never judged here: no green for them.
+        report.cases.push(CaseResult {
+            id: "fuzz-merge-incomplete".into(),
+            title: format!("merged from {}", m.merged.describe()),
+            clauses: vec!["host: fuzz".into()],
+            decisions: Vec::new(),
+            level: "MUST".into(),
+            verdict: Verdict::Error,
+            duration_ms: 0.0,
+            message: Some(format!(
+                "shard(s) {} of {} missing: their runs are not in this report",
+                m.merged.missing().iter().map(u64::to_string).collect::<Vec<_>>().join(", "),
+                m.merged.count
+            )),
+            diff: None,
+            failure: None,
+            transcript: None,
+        });
+        report.tally();
+    }
     let dir = a.out.join("report");
     gcl_harness::report::write_all(&dir, &report)?;
     gcl_harness::report::write_atomic(&dir.join("fuzz.json"), &serde_json::to_vec_pretty(&m.campaign)?)?;
     eprintln!(
-        "gcl fuzz merge: {} shard(s), {} runs, {} distinct finding(s), {} bundle(s) -> {}",
-        a.dirs.len(),
+        "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s), {} bundle(s) -> {}",
+        m.merged.describe(),
         m.campaign.runs,
         m.campaign.findings.len(),
         bundles.len(),
         a.out.display()
     );
+    if !finish(&m.merged, &not_copied) {
+        return Ok(EXIT_ERROR);
+    }
     Ok(if m.campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
 }

@@ -11,32 +11,56 @@
 //! DIR/corpus/   gcl fuzz device --corpus: one file per entry, named by its content hash
 //! ```
 //!
+//! Only shards of one campaign fold: each report records its slice, seed and options
+//! ([`super::shard::Provenance`]), and [`super::shard::plan`] refuses another campaign's
+//! folder, another slicing, or the same slice twice. A slice that is missing is no error
+//! here: the merged report says which are missing, and the CLI exits 2.
+//!
 //! Findings are deduplicated by signature: the one first found (the lowest run index of the
 //! campaign, for the host fuzzer, whose run indices are the campaign's) stands, with the hits
 //! of every shard added up; bundles and transcripts come from the shard whose finding stands.
 //! Corpus entries are deduplicated by content hash (an entry whose name is not its hash is
-//! stored under its hash). Counts add up; wall times are the longest shard's.
+//! stored under its hash). Counts add up, checked: a figure beyond [`MAX_COUNT`] (or a time
+//! beyond [`MAX_ELAPSED_MS`]) is refused by name. Wall times are the longest shard's.
+//!
+//! A shard's folder is data from anywhere (a CI artifact): every file is read through the
+//! bounded reader of `gcl_host::files` without following a symbolic link, and only regular
+//! files are copied (a link, a FIFO or a device in a bundle is named and left behind). The
+//! merged folder is held ([`take_out`]) for the whole merge, and a merge replaces what an
+//! earlier merge wrote there, so no bundle outlives the report that lists it.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use super::device::action::HostAction;
+use super::device::corpus_name;
 use super::device::report::FuzzReport;
-use super::device::{corpus_name, load_corpus};
 use super::host::bundle::{BundleInfo, dir_name};
 use super::host::{Campaign, Finding};
+use super::shard::{Merged, Provenance, ShardSetError};
 use crate::report::RunReport;
+use gcl_host::files::{MAX_INPUT_BYTES, read_limited_no_follow};
+
+/// The largest count a shard's report may hold (runs, hits, bytes...): 2^53 - 1, the largest
+/// integer every JSON reader keeps exactly. Beyond it a figure is not a campaign's.
+pub const MAX_COUNT: u64 = (1 << 53) - 1;
+
+/// The longest wall time a shard's report may hold: 100 years, in milliseconds.
+pub const MAX_ELAPSED_MS: u64 = 100 * 366 * 24 * 3600 * 1000;
+
+/// The largest corpus entry merged (as `gcl fuzz device` reads its corpus).
+const MAX_CORPUS_ENTRY: u64 = 1 << 20;
 
 /// Why shards cannot be merged.
 #[derive(Debug, thiserror::Error)]
 pub enum MergeError {
     /// A file or folder cannot be read or written.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// Why.
-        #[source]
-        source: std::io::Error,
+        /// Why (in the message, not a `source`, so that a chain prints it once).
+        error: std::io::Error,
     },
     /// A file is not what a shard writes.
     #[error("{path}: {reason}")]
@@ -46,21 +70,101 @@ pub enum MergeError {
         /// Why.
         reason: String,
     },
-    /// The folders are not shards of one campaign.
+    /// A figure of a shard's report is out of range, or the shards' figures add up beyond it.
+    #[error("{path}: `{field}` {value} is out of range (at most {limit}); refused rather than folded")]
+    OutOfRange {
+        /// The report.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// Its value (or the sum).
+        value: String,
+        /// The limit.
+        limit: u64,
+    },
+    /// The folders are not shards of one campaign, each once.
+    #[error(transparent)]
+    Shards(#[from] ShardSetError),
+    /// The folders mix the two fuzzers, or none was given.
     #[error("not shards of one campaign: {0}")]
     Mixed(String),
     /// A folder holds neither a host nor a device campaign's report.
     #[error("{0}: no report/fuzz.json (gcl fuzz host) or report/fuzz-device.json (gcl fuzz device) in it")]
     NotAShard(PathBuf),
+    /// The output folder is held by another command (a campaign, another merge).
+    #[error("{0}")]
+    Busy(String),
+    /// The output folder holds files no merge wrote.
+    #[error(
+        "{0} holds files that no `gcl fuzz merge` wrote (a shard's folder, or another command's); give a new or empty --out"
+    )]
+    NotOurs(PathBuf),
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> MergeError + '_ {
-    move |source| MergeError::Io { path: path.to_path_buf(), source }
+    move |error| MergeError::Io { path: path.to_path_buf(), error }
+}
+
+/// A file of a shard, read whole through the bounded reader, refusing a symbolic link.
+fn read(path: &Path, limit: u64) -> Result<Vec<u8>, MergeError> {
+    read_limited_no_follow(path, limit).map_err(io(path))
+}
+
+fn read_text(path: &Path) -> Result<String, MergeError> {
+    String::from_utf8(read(path, MAX_INPUT_BYTES)?)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: format!("not UTF-8 text: {e}") })
 }
 
 fn load<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, MergeError> {
-    let text = gcl_host::files::read_input_text(path).map_err(io(path))?;
-    serde_json::from_str(&text).map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: e.to_string() })
+    serde_json::from_str(&read_text(path)?)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: e.to_string() })
+}
+
+/// Whether `path` is a folder of its own: `Ok(false)` when absent, an error when it is a
+/// symbolic link (never followed) or a file.
+fn real_dir(path: &Path) -> Result<bool, MergeError> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(e) => Err(MergeError::Io { path: path.to_path_buf(), error: e }),
+        Ok(m) if m.is_dir() => Ok(true),
+        Ok(m) => Err(MergeError::Invalid {
+            path: path.to_path_buf(),
+            reason: format!(
+                "{}, not a folder; not followed",
+                if m.file_type().is_symlink() { "a symbolic link" } else { "a file" }
+            ),
+        }),
+    }
+}
+
+/// A shard's figure, checked against its limit.
+fn figure(path: &Path, field: &str, value: u64, limit: u64) -> Result<u64, MergeError> {
+    if value > limit {
+        return Err(MergeError::OutOfRange {
+            path: path.to_path_buf(),
+            field: field.into(),
+            value: value.to_string(),
+            limit,
+        });
+    }
+    Ok(value)
+}
+
+/// A count of a shard, added to the merged count: each and the sum at most [`MAX_COUNT`].
+fn add(path: &Path, field: &str, sum: u64, value: u64) -> Result<u64, MergeError> {
+    figure(path, field, value, MAX_COUNT)?;
+    let total = sum.checked_add(value).filter(|t| *t <= MAX_COUNT).ok_or_else(|| MergeError::OutOfRange {
+        path: path.to_path_buf(),
+        field: format!("{field} (summed over the shards)"),
+        value: format!("{sum} + {value}"),
+        limit: MAX_COUNT,
+    })?;
+    Ok(total)
+}
+
+/// [`add`] for a `usize` count.
+fn add_usize(path: &Path, field: &str, sum: usize, value: usize) -> Result<usize, MergeError> {
+    Ok(add(path, field, sum as u64, value as u64)? as usize)
 }
 
 /// Which fuzzer a shard's folder comes from.
@@ -72,23 +176,35 @@ pub enum Kind {
     Device,
 }
 
-/// Which fuzzer wrote `dir`.
+/// Which fuzzer wrote `dir` (its `report` folder and report file taken as they are, never
+/// through a symbolic link).
 pub fn kind_of(dir: &Path) -> Result<Kind, MergeError> {
-    if dir.join("report/fuzz.json").is_file() {
+    let report = dir.join("report");
+    let file = |name: &str| std::fs::symlink_metadata(report.join(name)).is_ok_and(|m| m.is_file());
+    if !real_dir(&report)? {
+        Err(MergeError::NotAShard(dir.to_path_buf()))
+    } else if file("fuzz.json") {
         Ok(Kind::Host)
-    } else if dir.join("report/fuzz-device.json").is_file() {
+    } else if file("fuzz-device.json") {
         Ok(Kind::Device)
     } else {
         Err(MergeError::NotAShard(dir.to_path_buf()))
     }
 }
 
+/// What a merge left behind: files of a shard it did not copy, and why (a symbolic link, a
+/// FIFO, a device).
+pub type NotCopied = Vec<String>;
+
 /// The shards of a host campaign, folded.
 #[derive(Debug, Clone)]
 pub struct HostMerge {
     /// The campaign as one machine would have made it (see the module's notes; `paths` and
-    /// `corpus` are sums over the shards: a path two shards took counts twice).
+    /// `corpus` are sums over the shards: a path two shards took counts twice). Its
+    /// provenance names the shards folded.
     pub campaign: Campaign,
+    /// The slices folded.
+    pub merged: Merged,
     /// The first shard's report (its target, profile and seed are every shard's).
     pub report: RunReport,
     /// Each finding's transcript (its bundle's `transcript.gcl`), by signature.
@@ -97,15 +213,47 @@ pub struct HostMerge {
     pub bundles: BTreeMap<String, PathBuf>,
 }
 
-/// Folds the `report/fuzz.json`, `report/report.json` and `bundles/` of host shards.
+/// A host shard's `fuzz.json` with every figure checked.
+fn load_campaign(path: &Path) -> Result<Campaign, MergeError> {
+    let c: Campaign = load(path)?;
+    for (field, v) in [("runs", c.runs), ("minimize_runs", c.minimize_runs), ("pass_runs", c.pass_runs)] {
+        figure(path, field, v, MAX_COUNT)?;
+    }
+    figure(path, "elapsed_ms", c.elapsed_ms, MAX_ELAPSED_MS)?;
+    figure(path, "corpus", c.corpus as u64, MAX_COUNT)?;
+    figure(path, "paths", c.paths as u64, MAX_COUNT)?;
+    for f in &c.findings {
+        figure(path, "findings[].run", f.run, MAX_COUNT)?;
+        figure(path, "findings[].hits", f.hits, MAX_COUNT)?;
+        figure(path, "findings[].found_after_ms", f.found_after_ms, MAX_ELAPSED_MS)?;
+        figure(path, "findings[].timeout_hang_ms", f.timeout_hang_ms, MAX_ELAPSED_MS)?;
+    }
+    for states in c.fired_at.values() {
+        for n in states.values() {
+            figure(path, "fired_at", *n, MAX_COUNT)?;
+        }
+    }
+    Ok(c)
+}
+
+/// Folds the `report/fuzz.json`, `report/report.json` and `bundles/` of host shards. Reads
+/// only: nothing is written until the shards are known to be one campaign.
 pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
-    let mut merged = Campaign::default();
+    let mut shards = Vec::new();
+    for dir in dirs {
+        let path = dir.join("report/fuzz.json");
+        let c = load_campaign(&path)?;
+        let r: RunReport = load(&dir.join("report/report.json"))?;
+        shards.push((dir, path, c, r));
+    }
+    let recorded: Vec<(String, Option<Provenance>)> =
+        shards.iter().map(|(d, _, c, _)| (d.display().to_string(), c.provenance.clone())).collect();
+    let (provenance, merged_from) = super::shard::plan(&recorded)?;
+    let mut merged = Campaign { provenance: Some(provenance), ..Campaign::default() };
     let mut first: Option<RunReport> = None;
     // Signature -> (finding, position in its shard, bundle folder).
     let mut by_sig: BTreeMap<String, (Finding, usize, PathBuf)> = BTreeMap::new();
-    for dir in dirs {
-        let c: Campaign = load(&dir.join("report/fuzz.json"))?;
-        let r: RunReport = load(&dir.join("report/report.json"))?;
+    for (dir, path, c, r) in shards {
         match &first {
             None => first = Some(r),
             Some(f) => {
@@ -123,11 +271,11 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
                 }
             }
         }
-        merged.runs += c.runs;
-        merged.minimize_runs += c.minimize_runs;
+        merged.runs = add(&path, "runs", merged.runs, c.runs)?;
+        merged.minimize_runs = add(&path, "minimize_runs", merged.minimize_runs, c.minimize_runs)?;
         merged.elapsed_ms = merged.elapsed_ms.max(c.elapsed_ms);
-        merged.corpus += c.corpus;
-        merged.paths += c.paths;
+        merged.corpus = add_usize(&path, "corpus", merged.corpus, c.corpus)?;
+        merged.paths = add_usize(&path, "paths", merged.paths, c.paths)?;
         // Every shard learns the same kinds of answer and pass from its own run 0.
         if merged.answer_kinds.is_empty() {
             merged.answer_kinds = c.answer_kinds;
@@ -136,7 +284,8 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
         for (op, states) in c.fired_at {
             let m = merged.fired_at.entry(op).or_default();
             for (st, n) in states {
-                *m.entry(st).or_default() += n;
+                let e = m.entry(st).or_default();
+                *e = add(&path, "fired_at", *e, n)?;
             }
         }
         for (pos, f) in c.findings.into_iter().enumerate() {
@@ -153,7 +302,7 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
                     )));
                 }
                 Some((have, have_pos, have_bundle)) => {
-                    let hits = have.hits + f.hits;
+                    let hits = add(&path, "findings[].hits", have.hits, f.hits)?;
                     if f.run < have.run {
                         *have = f;
                         *have_pos = pos;
@@ -171,59 +320,139 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
     let mut transcripts = BTreeMap::new();
     let mut bundles = BTreeMap::new();
     for (f, _, bundle) in &mut findings {
-        let t = bundle.join("transcript.gcl");
-        transcripts.insert(f.verdict.signature.clone(), gcl_host::files::read_input_text(&t).map_err(io(&t))?);
-        let e = bundle.join("stderr.txt");
-        f.stderr = gcl_host::files::read_input_text(&e).map_err(io(&e))?;
+        if let Some(parent) = bundle.parent() {
+            real_dir(parent)?;
+        }
+        if !real_dir(bundle)? {
+            return Err(MergeError::Invalid { path: bundle.clone(), reason: "the finding's bundle is missing".into() });
+        }
+        transcripts.insert(f.verdict.signature.clone(), read_text(&bundle.join("transcript.gcl"))?);
+        f.stderr = read_text(&bundle.join("stderr.txt"))?;
         bundles.insert(f.verdict.signature.clone(), bundle.clone());
     }
     merged.findings = findings.into_iter().map(|(f, _, _)| f).collect();
-    Ok(HostMerge { campaign: merged, report, transcripts, bundles })
+    Ok(HostMerge { campaign: merged, merged: merged_from, report, transcripts, bundles })
 }
 
 /// Copies each finding's bundle into `out/<name>`, its `finding.json` with the merged hit
-/// count; returns the folders.
-pub fn write_host_bundles(m: &HostMerge, out: &Path) -> Result<Vec<PathBuf>, MergeError> {
+/// count; returns the folders, and the files not copied (anything but a regular file).
+pub fn write_host_bundles(m: &HostMerge, out: &Path) -> Result<(Vec<PathBuf>, NotCopied), MergeError> {
     let mut written = Vec::new();
+    let mut skipped = Vec::new();
     for f in &m.campaign.findings {
         let Some(src) = m.bundles.get(&f.verdict.signature) else { continue };
         let dst = out.join(dir_name(f.verdict.kind, &f.verdict.signature));
         std::fs::create_dir_all(&dst).map_err(io(&dst))?;
-        for entry in std::fs::read_dir(src).map_err(io(src))? {
-            let p = entry.map_err(io(src))?.path();
-            let Some(name) = p.file_name() else { continue };
-            if !p.is_file() {
+        let mut entries: Vec<std::fs::DirEntry> =
+            std::fs::read_dir(src).map_err(io(src))?.collect::<Result<_, _>>().map_err(io(src))?;
+        entries.sort_by_key(std::fs::DirEntry::file_name);
+        for entry in entries {
+            let p = entry.path();
+            // The entry as it is: a link is a link, never what it points to.
+            let ty = entry.file_type().map_err(io(&p))?;
+            if !ty.is_file() {
+                skipped.push(format!("{}: {}", p.display(), kind_name(&ty)));
                 continue;
             }
-            let bytes = if name == "finding.json" {
+            let bytes = if entry.file_name() == "finding.json" {
                 let mut info: BundleInfo = load(&p)?;
                 info.hits = f.hits;
                 let mut b = serde_json::to_vec_pretty(&info).unwrap_or_default();
                 b.push(b'\n');
                 b
             } else {
-                std::fs::read(&p).map_err(io(&p))?
+                read(&p, MAX_INPUT_BYTES)?
             };
-            let to = dst.join(name);
+            let to = dst.join(entry.file_name());
             crate::report::write_atomic(&to, &bytes).map_err(io(&to))?;
         }
         written.push(dst);
     }
-    Ok(written)
+    Ok((written, skipped))
 }
 
-/// Folds the `report/fuzz-device.json` and `findings/` of device shards; writes the merged
-/// reports into `out/report` and the findings' transcripts into `out/findings`. `corpus` is
-/// the merged corpus's size when the corpora were merged (else the shards' sizes add up).
-pub fn merge_device(dirs: &[PathBuf], out: &Path, corpus: Option<usize>) -> Result<FuzzReport, MergeError> {
-    let mut merged: Option<FuzzReport> = None;
-    let mut seen = BTreeSet::new();
-    let findings_out = out.join("findings");
+/// What a folder entry that is not a regular file is, for the list of what was not copied.
+fn kind_name(ty: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if ty.is_symlink() {
+        "a symbolic link, not copied"
+    } else if ty.is_dir() {
+        "a folder, not copied"
+    } else if ty.is_fifo() {
+        "a named pipe, not copied"
+    } else if ty.is_char_device() || ty.is_block_device() {
+        "a device, not copied"
+    } else {
+        "not a regular file, not copied"
+    }
+}
+
+/// A device shard's `fuzz-device.json` with every figure checked.
+fn load_device_report(path: &Path) -> Result<FuzzReport, MergeError> {
+    let r: FuzzReport = load(path)?;
+    for (field, v) in [
+        ("runs", r.runs),
+        ("dropped", r.dropped),
+        ("eeprom_writes", r.eeprom_writes),
+        ("wire_bytes", r.wire_bytes),
+        ("corpus", r.corpus as u64),
+        ("jobs", r.jobs as u64),
+    ] {
+        figure(path, field, v, MAX_COUNT)?;
+    }
+    figure(path, "duration_ms", r.duration_ms, MAX_ELAPSED_MS)?;
+    if !r.cases_per_second.is_finite() || !(0.0..=MAX_COUNT as f64).contains(&r.cases_per_second) {
+        return Err(MergeError::OutOfRange {
+            path: path.to_path_buf(),
+            field: "cases_per_second".into(),
+            value: r.cases_per_second.to_string(),
+            limit: MAX_COUNT,
+        });
+    }
+    for f in &r.findings {
+        figure(path, "findings[].run", f.run, MAX_COUNT)?;
+        figure(
+            path,
+            "findings[].found_after_ms",
+            f.found_after.as_millis().min(u128::from(u64::MAX)) as u64,
+            MAX_ELAPSED_MS,
+        )?;
+    }
+    for row in &r.coverage {
+        figure(path, "coverage[].reached", row.reached as u64, MAX_COUNT)?;
+    }
+    Ok(r)
+}
+
+/// The shards of a device campaign, checked and folded in memory: write them with
+/// [`write_device`].
+#[derive(Debug, Clone)]
+pub struct DeviceMerge {
+    /// The merged report (its provenance names the shards folded; its findings' paths are
+    /// still the shards' files).
+    pub report: FuzzReport,
+    /// The slices folded.
+    pub merged: Merged,
+}
+
+/// Folds the `report/fuzz-device.json` of device shards. Reads only.
+pub fn merge_device(dirs: &[PathBuf]) -> Result<DeviceMerge, MergeError> {
+    let mut shards = Vec::new();
     for dir in dirs {
         let path = dir.join("report/fuzz-device.json");
-        let r: FuzzReport = load(&path)?;
+        let r = load_device_report(&path)?;
+        shards.push((dir, path, r));
+    }
+    let recorded: Vec<(String, Option<Provenance>)> =
+        shards.iter().map(|(d, _, r)| (d.display().to_string(), r.provenance.clone())).collect();
+    let (provenance, merged_from) = super::shard::plan(&recorded)?;
+    let mut merged: Option<FuzzReport> = None;
+    let mut seen = BTreeSet::new();
+    for (dir, path, r) in shards {
         let m = match &mut merged {
-            None => merged.insert(FuzzReport { findings: Vec::new(), ..r.clone() }),
+            None => {
+                merged.insert(FuzzReport { findings: Vec::new(), provenance: Some(provenance.clone()), ..r.clone() })
+            }
             Some(m) => {
                 if (&m.target, &m.profile, &m.faults, m.seed, &m.refused)
                     != (&r.target, &r.profile, &r.faults, r.seed, &r.refused)
@@ -239,14 +468,15 @@ pub fn merge_device(dirs: &[PathBuf], out: &Path, corpus: Option<usize>) -> Resu
                         m.seed
                     )));
                 }
-                m.jobs += r.jobs;
+                // `jobs` is each shard's (the same for every shard of a campaign), not a sum:
+                // nobody ran the campaign with their total.
                 m.duration_ms = m.duration_ms.max(r.duration_ms);
-                m.runs += r.runs;
-                m.dropped += r.dropped;
+                m.runs = add(&path, "runs", m.runs, r.runs)?;
+                m.dropped = add(&path, "dropped", m.dropped, r.dropped)?;
                 m.cases_per_second += r.cases_per_second;
-                m.eeprom_writes += r.eeprom_writes;
-                m.wire_bytes += r.wire_bytes;
-                m.corpus += r.corpus;
+                m.eeprom_writes = add(&path, "eeprom_writes", m.eeprom_writes, r.eeprom_writes)?;
+                m.wire_bytes = add(&path, "wire_bytes", m.wire_bytes, r.wire_bytes)?;
+                m.corpus = add_usize(&path, "corpus", m.corpus, r.corpus)?;
                 for row in &mut m.coverage {
                     let Some(other) = r.coverage.iter().find(|o| o.category == row.category) else { continue };
                     let theirs: BTreeSet<&String> = other.missing.iter().collect();
@@ -265,19 +495,47 @@ pub fn merge_device(dirs: &[PathBuf], out: &Path, corpus: Option<usize>) -> Resu
             if !seen.insert(f.signature.clone()) {
                 continue;
             }
+            // The shard's own file (a plain name inside its findings/), whatever the path says.
             if let Some(src) = &f.path {
                 let name = src.file_name().map(PathBuf::from).unwrap_or_else(|| PathBuf::from("finding.gcl"));
-                let from = dir.join("findings").join(&name);
-                let to = findings_out.join(&name);
-                std::fs::create_dir_all(&findings_out).map_err(io(&findings_out))?;
-                let text = gcl_host::files::read_input_text(&from).map_err(io(&from))?;
-                crate::report::write_atomic(&to, text.as_bytes()).map_err(io(&to))?;
-                f.path = Some(to);
+                f.path = Some(dir.join("findings").join(name));
             }
             m.findings.push(f);
         }
     }
-    let mut report = merged.ok_or_else(|| MergeError::Mixed("no folder given".into()))?;
+    let report = merged.ok_or_else(|| MergeError::Mixed("no folder given".into()))?;
+    Ok(DeviceMerge { report, merged: merged_from })
+}
+
+/// Writes a device merge into `out`: each finding's transcript into `out/findings` (its path
+/// in the report then names the copy), then the reports into `out/report`. `corpus` is the
+/// merged corpus's size when the corpora were merged (else the shards' sizes add up).
+/// Returns the report as written and the files not copied.
+pub fn write_device(m: &DeviceMerge, out: &Path, corpus: Option<usize>) -> Result<(FuzzReport, NotCopied), MergeError> {
+    let mut report = m.report.clone();
+    let mut skipped = Vec::new();
+    let findings_out = out.join("findings");
+    for f in &mut report.findings {
+        let Some(from) = f.path.clone() else { continue };
+        if let Some(parent) = from.parent() {
+            real_dir(parent)?;
+        }
+        match std::fs::symlink_metadata(&from) {
+            Ok(meta) if !meta.is_file() => {
+                skipped.push(format!("{}: {}", from.display(), kind_name(&meta.file_type())));
+                f.path = None;
+                continue;
+            }
+            _ => {}
+        }
+        let text = read_text(&from)?;
+        // Two shards name their own findings alike (`fuzz-fget-order.gcl` for two orders):
+        // each keeps a file of its own, never written over by the other.
+        let stem = from.file_stem().and_then(|s| s.to_str()).unwrap_or("finding");
+        let to =
+            crate::outputs::write_unique(&findings_out, stem, "gcl", text.as_bytes()).map_err(io(&findings_out))?;
+        f.path = Some(to);
+    }
     if let Some(n) = corpus {
         report.corpus = n;
     }
@@ -285,33 +543,120 @@ pub fn merge_device(dirs: &[PathBuf], out: &Path, corpus: Option<usize>) -> Resu
     std::fs::create_dir_all(&dir).map_err(io(&dir))?;
     super::device::report::write_all(&dir, &report)
         .map_err(|e| MergeError::Invalid { path: dir.clone(), reason: e.to_string() })?;
-    Ok(report)
+    Ok((report, skipped))
 }
 
 /// Copies the corpus entries of every `DIR/corpus` into `out`, each under its content hash;
-/// returns how many entries the merged corpus has and how many copies were dropped as
-/// duplicates.
-pub fn merge_corpora(dirs: &[PathBuf], out: &Path) -> Result<(usize, usize), MergeError> {
+/// returns how many entries the merged corpus has, how many copies were dropped as
+/// duplicates, and the files not taken (not a regular file, or not a corpus entry).
+pub fn merge_corpora(dirs: &[PathBuf], out: &Path) -> Result<(usize, usize, NotCopied), MergeError> {
     let mut names = BTreeSet::new();
     let mut dups = 0;
+    let mut skipped = Vec::new();
     for dir in dirs {
         let from = dir.join("corpus");
-        if !from.is_dir() {
+        if !real_dir(&from)? {
             continue;
         }
-        let (entries, _bad) =
-            load_corpus(&from).map_err(|e| MergeError::Invalid { path: from.clone(), reason: e.to_string() })?;
-        for actions in entries {
+        let mut entries: Vec<std::fs::DirEntry> =
+            std::fs::read_dir(&from).map_err(io(&from))?.collect::<Result<_, _>>().map_err(io(&from))?;
+        entries.sort_by_key(std::fs::DirEntry::file_name);
+        for entry in entries {
+            let p = entry.path();
+            if p.extension().is_none_or(|x| x != "json") {
+                continue;
+            }
+            let ty = entry.file_type().map_err(io(&p))?;
+            if !ty.is_file() {
+                skipped.push(format!("{}: {}", p.display(), kind_name(&ty)));
+                continue;
+            }
+            let parsed = read(&p, MAX_CORPUS_ENTRY).and_then(|b| {
+                serde_json::from_slice::<Vec<HostAction>>(&b)
+                    .map_err(|e| MergeError::Invalid { path: p.clone(), reason: e.to_string() })
+            });
+            let actions = match parsed {
+                Ok(a) => a,
+                Err(e) => {
+                    skipped.push(format!("{e}: not a corpus entry, not copied"));
+                    continue;
+                }
+            };
             let name = corpus_name(&actions);
             if !names.insert(name.clone()) {
                 dups += 1;
                 continue;
             }
-            std::fs::create_dir_all(out).map_err(io(out))?;
             let to = out.join(&name);
             let json = serde_json::to_vec_pretty(&actions).unwrap_or_default();
             crate::report::write_atomic(&to, &json).map_err(io(&to))?;
         }
     }
-    Ok((names.len(), dups))
+    Ok((names.len(), dups, skipped))
+}
+
+/// The folders of a merged `--out` that a merge writes (and a re-merge replaces).
+pub const MERGED_PARTS: [&str; 4] = ["report", "bundles", "findings", "corpus"];
+
+/// The file that marks a folder as a merge's output, so a later merge may replace it.
+pub const MERGE_MARK: &str = ".gcl-merge";
+
+/// Takes `out` for a merge: holds it for as long as the lock lives (a second merge, or a
+/// campaign holding `out` or one of its parts, is refused), and empties what an earlier merge
+/// wrote there, the report first, so that no bundle, finding or corpus entry of an earlier
+/// merge outlives it. A folder with files no merge wrote is refused, not emptied.
+pub fn take_out(out: &Path) -> Result<crate::outputs::OutLock, MergeError> {
+    let lock = crate::outputs::OutLock::acquire(out, "fuzz merge --out").map_err(|e| {
+        if e.kind() == std::io::ErrorKind::ResourceBusy { MergeError::Busy(e.to_string()) } else { io(out)(e) }
+    })?;
+    for part in MERGED_PARTS {
+        let p = out.join(part);
+        if let Some(holder) = crate::outputs::held_by(&p) {
+            return Err(MergeError::Busy(format!(
+                "{} is in use by {holder}; wait for it to end or choose another --out",
+                p.display()
+            )));
+        }
+    }
+    let ours = std::fs::symlink_metadata(out.join(MERGE_MARK)).is_ok_and(|m| m.is_file());
+    let others = std::fs::read_dir(out)
+        .map_err(io(out))?
+        .filter_map(Result::ok)
+        .any(|e| e.file_name() != crate::outputs::LOCK_FILE && e.file_name() != MERGE_MARK);
+    if others && !ours {
+        return Err(MergeError::NotOurs(out.to_path_buf()));
+    }
+    let mark = out.join(MERGE_MARK);
+    crate::report::write_atomic(
+        &mark,
+        b"written by gcl fuzz merge: a merge into this folder replaces report/, bundles/, findings/ and corpus/\n",
+    )
+    .map_err(io(&mark))?;
+    for part in MERGED_PARTS {
+        let p = out.join(part);
+        match std::fs::symlink_metadata(&p) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            // A link is removed, never what it points to.
+            Ok(m) if !m.is_dir() => std::fs::remove_file(&p).map_err(io(&p))?,
+            _ => std::fs::remove_dir_all(&p).map_err(io(&p))?,
+        }
+    }
+    Ok(lock)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_add_up_checked_and_refuse_by_name() {
+        let p = Path::new("shard-2/report/fuzz.json");
+        assert_eq!(add(p, "runs", 15, 15).unwrap(), 30);
+        let e = add(p, "runs", MAX_COUNT, 1).unwrap_err().to_string();
+        assert!(e.contains("`runs (summed over the shards)`") && e.contains("shard-2/report/fuzz.json"), "{e}");
+        let e = add(p, "runs", 0, u64::MAX).unwrap_err().to_string();
+        assert!(e.contains("`runs` 18446744073709551615 is out of range"), "{e}");
+        let e = figure(p, "elapsed_ms", (1 << 63) - 1, MAX_ELAPSED_MS).unwrap_err().to_string();
+        assert!(e.contains("`elapsed_ms` 9223372036854775807"), "{e}");
+    }
 }

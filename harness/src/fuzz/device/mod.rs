@@ -105,6 +105,10 @@ pub struct Baseline {
     pub status_at: BTreeSet<(String, String)>,
     /// Known failures: an entry's glob matches a finding's id (`fuzz-fget-order`) or its key.
     pub known: crate::conform::KnownFailures,
+    /// The profiles each earlier finding was recorded on (its transcript's `profile:`), by
+    /// file: a finding is known only on a profile it was found on
+    /// ([`Baseline::recorded_elsewhere`]).
+    pub recorded_on: BTreeMap<PathBuf, Vec<String>>,
 }
 
 impl Baseline {
@@ -135,10 +139,22 @@ impl Baseline {
                     }
                 }
                 self.keys.insert(key.clone());
+                self.recorded_on.insert(path.clone(), t.header.profiles.clone());
                 n += 1;
             }
         }
         Ok(n)
+    }
+
+    /// The findings of the baseline recorded on profiles other than `profile`, with those
+    /// profiles. A baseline says what is known of a hand under one profile: a signature found
+    /// under `seed` is no knowledge of `bh8-262-4.3`, so the CLI refuses such a baseline.
+    pub fn recorded_elsewhere(&self, profile: &str) -> Vec<(&Path, &[String])> {
+        self.recorded_on
+            .iter()
+            .filter(|(_, ps)| !ps.iter().any(|p| p == profile))
+            .map(|(f, ps)| (f.as_path(), ps.as_slice()))
+            .collect()
     }
 
     /// Scopes a status difference whose bits the baseline already has (on some command):

@@ -57,6 +57,11 @@ pub struct FuzzReport {
     /// report's plot; the caller that watches progress fills it.
     #[serde(default)]
     pub coverage_over_time: Vec<CoveragePoint>,
+    /// What makes it (a shard of) a campaign: its `--shard`, seed and every option that
+    /// changed what ran (`--baseline` and `--skip-decision` among them), and for a merged
+    /// folder the shards it holds. Set by the CLI, which knows the options as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<crate::fuzz::shard::Provenance>,
 }
 
 /// Coverage reached by a time in the run.
@@ -85,9 +90,15 @@ impl FuzzReport {
     }
 
     /// Whether the run found nothing new (what the baseline or the known failures explain was
-    /// known before; the CLI's exit status says the same).
+    /// known before; the CLI's exit status says the same), and, for a merged report, holds
+    /// every shard of its campaign.
     pub fn passed(&self) -> bool {
-        self.findings.iter().all(|f| !f.is_new())
+        self.findings.iter().all(|f| !f.is_new()) && self.merged().is_none_or(|m| m.complete())
+    }
+
+    /// The shards a merged report holds (`None`: not a merge).
+    pub fn merged(&self) -> Option<&crate::fuzz::shard::Merged> {
+        self.provenance.as_ref().and_then(|p| p.merged.as_ref())
     }
 
     /// How many findings are new.
@@ -134,6 +145,7 @@ impl FuzzReport {
             coverage: table(&opts.profile, &s.features),
             findings: s.findings.clone(),
             coverage_over_time: Vec::new(),
+            provenance: None,
         }
     }
 }
@@ -148,17 +160,33 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     let name = format!("gcl fuzz device {}", r.target);
     // A new finding fails; one the baseline or the known failures explain is skipped, saying why.
     let new = r.new_findings();
+    let errors = usize::from(r.merged().is_some_and(|m| !m.complete()));
     let (tests, failures, skipped) =
-        (r.findings.len().max(1).to_string(), new.to_string(), (r.findings.len() - new).to_string());
+        ((r.findings.len().max(1) + errors).to_string(), new.to_string(), (r.findings.len() - new).to_string());
+    let errors = errors.to_string();
     let time = format!("{:.3}", r.duration_ms as f64 / 1000.0);
     let mut suite = BytesStart::new("testsuite");
     suite.push_attribute(("name", name.as_str()));
     suite.push_attribute(("tests", tests.as_str()));
     suite.push_attribute(("failures", failures.as_str()));
-    suite.push_attribute(("errors", "0"));
+    suite.push_attribute(("errors", errors.as_str()));
     suite.push_attribute(("skipped", skipped.as_str()));
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
+    // A merge that lacks shards: an error CI shows, whatever was found in the rest.
+    if let Some(m) = r.merged().filter(|m| !m.complete()) {
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("classname", "gcl.fuzz-device.merge"));
+        tc.push_attribute(("name", "fuzz-merge-incomplete"));
+        tc.push_attribute(("time", "0.000"));
+        w.write_event(Event::Start(tc))?;
+        let message = format!("merged from {}", m.describe());
+        let mut e = BytesStart::new("error");
+        e.push_attribute(("message", message.as_str()));
+        e.push_attribute(("type", "incomplete"));
+        w.write_event(Event::Empty(e))?;
+        w.write_event(Event::End(BytesEnd::new("testcase")))?;
+    }
     if r.findings.is_empty() {
         let passed = format!("no finding in {} runs", r.runs);
         let mut tc = BytesStart::new("testcase");
@@ -289,10 +317,17 @@ pub fn to_html(r: &FuzzReport) -> String {
         (n, 0) => format!("{n} distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
         (n, k) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s), and {k} known", r.runs),
     };
+    let incomplete = r.merged().is_some_and(|m| !m.complete());
     let verdict = match (new, known) {
+        // A merge that lacks shards judged only part of the campaign.
+        _ if incomplete => "INCOMPLETE",
         (0, 0) => "NO FINDING",
         (0, _) => "NO NEW FINDING",
         _ => "FINDINGS",
+    };
+    let headline = match r.merged() {
+        Some(m) => format!("{headline}; merged from {}", m.describe()),
+        None => headline,
     };
     let mut p = Page::new(&format!("gcl fuzz device {} on {}", r.profile, r.target), ok, verdict, &headline);
     p.facts(&[
@@ -319,6 +354,17 @@ pub fn to_html(r: &FuzzReport) -> String {
     }
     if !r.refused.is_empty() {
         opts.push(("no".into(), r.refused.join(", ")));
+    }
+    if let Some(p) = &r.provenance {
+        if let Some(s) = p.shard {
+            opts.push(("shard".into(), format!("{s} (shard {} of {})", s.index, s.count)));
+        }
+        // What else changed what ran or how it was judged, as the campaign recorded it.
+        for k in ["baseline", "known-failures", "skip-decision", "runs", "duration", "write-budget", "max-findings"] {
+            if let Some(v) = p.options.get(k).filter(|v| *v != "none") {
+                opts.push((k.into(), v.clone()));
+            }
+        }
     }
     p.options(&opts);
     // The findings index: new ones first (they fail the run), then the known ones with why.

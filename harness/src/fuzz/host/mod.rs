@@ -429,6 +429,10 @@ pub struct Campaign {
     /// Runs of the systematic pass (made or not: a short campaign may end inside it).
     #[serde(default)]
     pub pass_runs: u64,
+    /// What makes it (a shard of) a campaign: its `--shard`, seed and options, and for a
+    /// merged folder the shards it holds. Set by the CLI, which knows the options as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<crate::fuzz::shard::Provenance>,
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -874,6 +878,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         notes: sh.notes,
         pass_runs: sh.pass.len() as u64,
         answer_kinds: sh.answer_kinds,
+        provenance: None,
     })
 }
 
