@@ -23,6 +23,15 @@ fn json(p: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
 }
 
+/// `p` read and checked against `schema` (a shard's or a merged folder's report).
+fn valid(p: &Path, schema: &str) -> Value {
+    let v = jsonschema::validator_for(&serde_json::from_str(schema).unwrap()).unwrap();
+    let j = json(p);
+    let errors: Vec<String> = v.iter_errors(&j).map(|e| format!("{e} at {}", e.instance_path())).collect();
+    assert!(errors.is_empty(), "{}: {errors:#?}", p.display());
+    j
+}
+
 /// `gcl fuzz host` over the err-table mutant, `extra` added; its folder's layout is the one
 /// `gcl fuzz merge` reads (report/, bundles/).
 fn host_campaign(dir: &Path, seed: &str, extra: &[&str]) -> std::process::Output {
@@ -163,8 +172,10 @@ fn merged_host_shards_equal_one_machine_running_the_same_runs() {
             std::fs::read_to_string(dir.join("report/report.html")).unwrap().contains(&format!("--shard {}/4", k + 1))
         );
     }
+    valid(&shards[0].join("report/fuzz.json"), gcl_harness::fuzz::host::SCHEMA);
+    valid(&merged.join("report/report.json"), gcl_harness::report::SCHEMA);
     assert_eq!(
-        json(&merged.join("report/fuzz.json"))["provenance"]["merged"],
+        valid(&merged.join("report/fuzz.json"), gcl_harness::fuzz::host::SCHEMA)["provenance"]["merged"],
         serde_json::json!({"count": 4, "shards": [1, 2, 3, 4]})
     );
     let page = std::fs::read_to_string(merged.join("report/report.html")).unwrap();
@@ -172,40 +183,18 @@ fn merged_host_shards_equal_one_machine_running_the_same_runs() {
 
     // A shard missing: merged and said, never green; the same shard twice: refused.
     let part = tmp.path().join("part");
-    let o = gcl(&[
-        "fuzz",
-        "merge",
-        shards[0].to_str().unwrap(),
-        shards[2].to_str().unwrap(),
-        "--out",
-        part.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("shard(s) 2, 4 of 4 missing"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let (code, err) = merge(&[&shards[0], &shards[2]], &part);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("shard(s) 2, 4 of 4 missing"), "{err}");
     let page = std::fs::read_to_string(part.join("report/report.html")).unwrap();
     assert!(page.contains("<strong>INCOMPLETE</strong>"), "{page}");
     assert!(page.contains("merged from shards 1, 3 of 4 (INCOMPLETE: 2, 4 missing"), "{page}");
     let junit = std::fs::read_to_string(part.join("report/junit.xml")).unwrap();
     assert!(junit.contains("fuzz-merge-incomplete") && junit.contains("<error"), "{junit}");
     let twice = tmp.path().join("twice");
-    let o = gcl(&[
-        "fuzz",
-        "merge",
-        shards[1].to_str().unwrap(),
-        shards[1].to_str().unwrap(),
-        "--out",
-        twice.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("shard 2/4 is given twice"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let (code, err) = merge(&[&shards[1], &shards[1]], &twice);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("shard 2/4 is given twice"), "{err}");
     assert!(!twice.exists(), "nothing written");
 
     // A shard's bundle is data from anywhere: a link to a secret and a FIFO in it are named and
@@ -238,6 +227,30 @@ fn merged_host_shards_equal_one_machine_running_the_same_runs() {
         }
     }
 
+    // A 3 GB sparse file in a bundle: refused by name, never read whole (it was: RSS 3.1 GB),
+    // under the memory limit the adversarial tests give gcl.
+    let bigs: Vec<PathBuf> = shards
+        .iter()
+        .flat_map(|d| std::fs::read_dir(d.join("bundles")).unwrap().map(|b| b.unwrap().path().join("core")))
+        .collect();
+    for big in &bigs {
+        std::fs::File::create(big).unwrap().set_len(3 << 30).unwrap();
+    }
+    let o = Command::new("prlimit")
+        .args(["--data=402653184", "--", env!("CARGO_BIN_EXE_gcl"), "fuzz", "merge"])
+        .args(&shards)
+        .arg("--out")
+        .arg(tmp.path().join("big"))
+        .env("MALLOC_ARENA_MAX", "2")
+        .output()
+        .expect("prlimit (util-linux) runs gcl");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("/core: larger than the limit of 4194304 bytes"), "{err}");
+    for big in &bigs {
+        std::fs::remove_file(big).unwrap();
+    }
+
     // Folders of another campaign are refused, and the same shard twice is caught.
     let other = tmp.path().join("other");
     host_campaign(&other, "6", &["--shard", "2/4"]);
@@ -261,30 +274,8 @@ fn merged_host_shards_equal_one_machine_running_the_same_runs() {
 fn device_shards_are_disjoint_and_merge_by_signature_and_content_hash() {
     let tmp = tempfile::tempdir().unwrap();
     let campaign = |dir: &Path, shard: &str| {
-        let (report, out, corpus) = (dir.join("report"), dir.join("findings"), dir.join("corpus"));
-        let o = gcl(&[
-            "fuzz",
-            "device",
-            "--target",
-            "sim:seed",
-            "--fault",
-            "fget-reversed",
-            "--seed",
-            "1",
-            "--runs",
-            "60",
-            "--shard",
-            shard,
-            "--quiet",
-            "--report",
-            report.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--corpus",
-            corpus.to_str().unwrap(),
-        ]);
-        assert!(matches!(o.status.code(), Some(0 | 1)), "{}", String::from_utf8_lossy(&o.stderr));
-        json(&report.join("fuzz-device.json"))
+        device_shard(dir, shard, &["--fault", "fget-reversed", "--runs", "60"]);
+        json(&dir.join("report/fuzz-device.json"))
     };
     let files = |d: &Path| -> std::collections::BTreeSet<String> {
         std::fs::read_dir(d).map_or_else(
@@ -414,7 +405,8 @@ fn a_duplicated_missing_or_mismatched_shard_set_is_never_green() {
     let (code, err) = merge(&[&s[0]], &one);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("shard(s) 2, 3 of 3 missing"), "{err}");
-    let r = json(&one.join("report/fuzz-device.json"));
+    let r = valid(&one.join("report/fuzz-device.json"), gcl_harness::fuzz::device::report::SCHEMA);
+    valid(&s[0].join("report/fuzz-device.json"), gcl_harness::fuzz::device::report::SCHEMA);
     assert_eq!(r["provenance"]["merged"], serde_json::json!({"count": 3, "shards": [1]}));
     let page = std::fs::read_to_string(one.join("report/fuzz-device.html")).unwrap();
     assert!(page.contains("<strong>INCOMPLETE</strong>") && !page.contains("NO FINDING"), "{page}");

@@ -663,6 +663,55 @@ const PROMISES: &[(&str, &[&str])] = &[
         "findings deduplicated by signature (the first found stands, hits add up), corpus entries by content hash",
         &["harness/tests/fuzz_merge.rs::device_shards_are_disjoint_and_merge_by_signature_and_content_hash"],
     ),
+    // Issue 29 items 4 and 5, issue 32 items 4 and 5.
+    (
+        "That verdict line is computed once and is the same in the console's `result:` line",
+        &[
+            "harness/tests/report_pages.rs::a_partial_certificate_page_says_partial_the_firmware_and_the_key",
+            "harness/tests/report_pages.rs::a_conform_run_with_known_failures_is_partial_on_its_page_and_every_output",
+        ],
+    ),
+    (
+        "`gcl conform` too says PARTIAL when cases of its levels were skipped or known failures excused (it still exits 0)",
+        &[
+            "harness/tests/report_pages.rs::a_conform_run_with_known_failures_is_partial_on_its_page_and_every_output",
+            "harness/tests/conform_target_ends.rs::a_hand_whose_motions_end_at_once_skips_the_abort_timing_cases_and_says_why",
+        ],
+    ),
+    (
+        "The bundle's page says it is a certificate and shows the firmware's VERS and the signing key's fingerprint",
+        &["harness/tests/report_pages.rs::a_partial_certificate_page_says_partial_the_firmware_and_the_key"],
+    ),
+    (
+        "A certificate names a built-in profile only when the spec that ran is that built-in's",
+        &["harness/tests/hardening.rs::a_profile_file_claiming_a_built_in_id_is_certified_as_the_file_it_is"],
+    ),
+    (
+        "A baseline recorded under another profile is refused, and the baseline used is named in the report",
+        &["harness/tests/hardening.rs::a_baseline_of_another_profile_is_refused_and_a_baseline_is_named"],
+    ),
+    (
+        "records its `--shard K/N`, seed and every option that changed what ran (`provenance`)",
+        &[
+            "harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs",
+            "harness/tests/fuzz_merge.rs::device_shards_are_disjoint_and_merge_by_signature_and_content_hash",
+        ],
+    ),
+    (
+        "The merge refuses the same shard twice, another campaign's folder or another N; missing shards are merged but every report says INCOMPLETE and it exits 2",
+        &["harness/tests/fuzz_merge.rs::a_duplicated_missing_or_mismatched_shard_set_is_never_green"],
+    ),
+    (
+        "It reads shard files without following links, copies no link, FIFO or device, refuses a file over 4 MiB",
+        &[
+            "harness/tests/fuzz_merge.rs::a_merge_copies_no_link_or_fifo_and_reads_no_huge_file",
+            "harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs",
+        ],
+    ),
+    (
+        "holds `--out` against campaigns and other merges, and replaces what an earlier merge wrote there",
+        &["harness/tests/fuzz_merge.rs::merges_hold_their_folder_and_replace_what_a_merge_wrote"],
+    ),
     // Added after a second reading.
     (
         "`bh8-262-4.4` (alias `bh8-262`), or a spec TOML file",

@@ -46,6 +46,18 @@ fn reports_with_every_kind_of_verdict_validate_against_the_schema() {
         assert!(errors.is_empty(), "{errors:#?}");
     };
     check(&r);
+    // A certificate's report: its verdict line, where its profile came from, what it adds.
+    let mut c = r.clone();
+    c.kind = report::ReportKind::Certify;
+    c.verdict = c.outcome().verdict;
+    assert!(c.verdict.starts_with("FAIL (PARTIAL: "), "{}", c.verdict);
+    c.profile_spec = Some(report::ProfileSpec::of("bh8-262-4.4", &Profile::builtin("bh8-262-4.4").unwrap()));
+    c.certificate = Some(report::CertificateFacts {
+        cases_total: 300,
+        firmware_version: vec!["BarrettHand".into()],
+        signed_by: Some("0123456789abcdef".into()),
+    });
+    check(&c);
     // A run that ends early says so, and still validates.
     let opts = ConformOptions { control: conform::RunControl { max_failures: Some(2), ..Default::default() }, ..opts };
     let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;

@@ -24,7 +24,8 @@ use std::path::Path;
 /// `gcl-harness` asserts the two agree at compile time).
 pub const MAX_INPUT_BYTES: u64 = 4 << 20;
 
-fn kind_of(ft: &std::fs::FileType) -> &'static str {
+/// What a file that is not a regular file is, for people: `a directory`, `a named pipe`...
+pub fn kind_of(ft: &std::fs::FileType) -> &'static str {
     if ft.is_dir() {
         "a directory"
     } else if ft.is_fifo() {
@@ -43,28 +44,24 @@ fn kind_of(ft: &std::fs::FileType) -> &'static str {
 /// Opens `path` for reading if it is a regular file (after following symbolic links).
 /// Never blocks on a FIFO, and never makes a terminal the controlling one.
 pub fn open_regular(path: &Path) -> io::Result<File> {
-    let file =
-        std::fs::OpenOptions::new().read(true).custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY).open(path)?;
-    let ft = file.metadata()?.file_type();
-    if !ft.is_file() {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("not a regular file ({}); expected a file", kind_of(&ft)),
-        ));
-    }
-    Ok(file)
+    open_with(path, 0)
 }
 
 /// [`open_regular`] for a file from somewhere untrusted (a CI artifact, a shard's folder): a
 /// symbolic link at `path` is refused, never followed, so a link planted in place of a file
 /// (to `/etc/shadow`, to a 3 GB file) is never read.
 pub fn open_regular_no_follow(path: &Path) -> io::Result<File> {
+    // O_NOFOLLOW refuses a link at the last component with ELOOP.
+    open_with(path, nix::libc::O_NOFOLLOW)
+        .map_err(|e| if e.raw_os_error() == Some(nix::libc::ELOOP) { not_followed() } else { e })
+}
+
+/// Opens a regular file without blocking or taking a terminal, with `flags` added.
+fn open_with(path: &Path, flags: i32) -> io::Result<File> {
     let file = std::fs::OpenOptions::new()
         .read(true)
-        .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY | nix::libc::O_NOFOLLOW)
-        .open(path)
-        // O_NOFOLLOW refuses a link at the last component with ELOOP.
-        .map_err(|e| if e.raw_os_error() == Some(nix::libc::ELOOP) { not_followed() } else { e })?;
+        .custom_flags(nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY | flags)
+        .open(path)?;
     let ft = file.metadata()?.file_type();
     if !ft.is_file() {
         return Err(io::Error::new(

@@ -100,7 +100,10 @@ pub struct SuiteArgs {
 
 /// Arguments of `gcl conform`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Exit codes: 0 every case passed (SKIP and XFAIL allowed); 1 a case failed, timed out, \
+#[command(after_help = "Verdict (the `result:` line, report.json's `verdict`, JUnit's gcl.verdict, the page): PASS \
+when every case of the levels run passed; PARTIAL: R of T cases when some did not run (skipped, refused, \
+decided otherwise) or P of T cases passed, K known failures excused; FAIL; ERROR when the hand stopped \
+answering.\n\nExit codes: 0 no case failed (PASS or PARTIAL: SKIP and XFAIL allowed); 1 a case failed, timed out, \
 errored or passed while listed as a known failure; 2 usage or infrastructure error (including a hand that \
 does not answer the liveness probe).\n\nExamples:\n  gcl conform --target sim\n  gcl conform --target \
 sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0 --profile bh8-262-4.3 \

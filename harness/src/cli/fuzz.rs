@@ -90,7 +90,8 @@ pub struct DeviceArgs {
     pub no_minimize: bool,
     /// A folder of earlier findings (what `--out` wrote): a finding with the signature of one
     /// of them is known, not new (repeatable). Status bits the baseline has are known only on
-    /// the command it had them on.
+    /// the command it had them on. A baseline recorded under another profile is refused; the
+    /// baseline is named in the report.
     #[arg(long, value_name = "DIR")]
     pub baseline: Vec<PathBuf>,
     /// Known failures, as for `gcl conform`: an entry's `case` glob matches a finding's id
@@ -106,7 +107,8 @@ pub struct DeviceArgs {
     pub quiet: bool,
     /// Run only shard K of N (for a CI matrix): its worker w draws from the generator stream
     /// K-1+w*N (seed + that), and --runs is the whole campaign's, of which it runs its share;
-    /// `gcl fuzz merge` folds the shards' folders into one.
+    /// `gcl fuzz merge` folds the shards' folders into one. The report records the shard, the
+    /// seed and every option that changed what ran, so that only one campaign's shards merge.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<gcl_harness::fuzz::shard::Shard>,
 }

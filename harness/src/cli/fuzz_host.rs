@@ -206,7 +206,8 @@ pub struct Args {
     #[arg(long)]
     no_guidance: bool,
     /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
-    /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one.
+    /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one
+    /// (fuzz.json records the shard, the seed and every option that changed what ran).
     #[arg(long, value_name = "K/N")]
     shard: Option<gcl_harness::fuzz::shard::Shard>,
 }

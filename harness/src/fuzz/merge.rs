@@ -372,19 +372,9 @@ pub fn write_host_bundles(m: &HostMerge, out: &Path) -> Result<(Vec<PathBuf>, No
 }
 
 /// What a folder entry that is not a regular file is, for the list of what was not copied.
-fn kind_name(ty: &std::fs::FileType) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    if ty.is_symlink() {
-        "a symbolic link, not copied"
-    } else if ty.is_dir() {
-        "a folder, not copied"
-    } else if ty.is_fifo() {
-        "a named pipe, not copied"
-    } else if ty.is_char_device() || ty.is_block_device() {
-        "a device, not copied"
-    } else {
-        "not a regular file, not copied"
-    }
+fn kind_name(ty: &std::fs::FileType) -> String {
+    let what = if ty.is_symlink() { "a symbolic link" } else { gcl_host::files::kind_of(ty) };
+    format!("{what}, not copied")
 }
 
 /// A device shard's `fuzz-device.json` with every figure checked.
