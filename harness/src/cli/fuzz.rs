@@ -177,7 +177,6 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     let mut baselines = Vec::new();
     for dir in &a.baseline {
-        let before = o.baseline.recorded_on.len();
         let n = o.baseline.add_dir(dir).with_context(|| format!("--baseline {}", dir.display()))?;
         // A finding is known only under the profile it was found under.
         if let Some((file, profiles)) = o.baseline.recorded_elsewhere(&o.profile.id).first() {
@@ -190,11 +189,10 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
                 o.profile.id
             );
         }
-        baselines.push(format!(
-            "{} ({n} finding(s) of profile {})",
-            dir.display(),
-            if o.baseline.recorded_on.len() > before { o.profile.id.as_str() } else { "none: empty" }
-        ));
+        baselines.push(match n {
+            0 => format!("{} (no finding in it)", dir.display()),
+            n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
+        });
     }
     let total = match o.budget {
         Budget::Runs(n) => super::progress::Total::Units(n),
