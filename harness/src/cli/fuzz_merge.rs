@@ -69,7 +69,11 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     let bundles = merge::write_host_bundles(&m, &a.out.join("bundles"))?;
     let profile = load_profile(a.profile.as_deref().unwrap_or(&m.report.profile))
         .context("the shards' profile (give --profile FILE for a profile from a file)")?;
-    let command = vec![m.report.target.strip_prefix("host: ").unwrap_or(&m.report.target).to_string()];
+    // The shards' host command, word for word (its replay lines quote each word), else the
+    // target line as one word.
+    let target = m.report.target.strip_prefix("host: ").unwrap_or(&m.report.target);
+    let command = m.report.host.as_ref().map(|h| h.command.clone()).filter(|c| !c.is_empty());
+    let command = command.unwrap_or_else(|| vec![target.to_string()]);
     // The campaign's options as far as its report shows them; the rest does not reach it.
     let opts = FuzzOptions {
         run: HostRun {
