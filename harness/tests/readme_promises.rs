@@ -536,6 +536,14 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
     ),
     (
+        "is found by the `GCL_HOST_RUN` mark in its environment, killed and named the same way",
+        &["harness/tests/host_verdicts.rs::a_daemon_left_under_the_write_watch_is_killed_and_named"],
+    ),
+    (
+        "a host that installs a seccomp listener of its own gets EBUSY",
+        &["harness/tests/host_verdicts.rs::a_hosts_own_seccomp_listener_is_refused_over_tcp_only"],
+    ),
+    (
         "A crash's signature is its kind and where it was raised, never the callers that led there",
         &[
             "harness/src/fuzz/host/detect.rs::one_exception_from_one_place_is_one_signature_whatever_the_caller",
