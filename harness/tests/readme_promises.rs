@@ -635,6 +635,26 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "`schedules` below 1 or a `timeout` of 0 or less is an error naming it",
+        &["python/tests/test_plugin_limits.py::test_values_out_of_range_are_refused_by_name"],
+    ),
+    (
+        "a timer already running (`pytest-timeout`'s) keeps its deadline and handler",
+        &["python/tests/test_plugin_limits.py::test_a_users_pytest_timeout_is_kept_under_a_misbehaving_hand"],
+    ),
+    (
+        "A `gcl` whose `--version` is not this kit's is refused at once",
+        &["python/tests/test_plugin_limits.py::test_another_program_named_gcl_is_refused_at_once"],
+    ),
+    (
+        "a hand that cannot start or writes no report raises `gcl.HandError`",
+        &[
+            "python/tests/test_plugin_limits.py::test_a_missing_binary_is_a_hand_error_and_leaves_no_folder",
+            "python/tests/test_plugin_limits.py::test_a_hand_that_fails_to_start_leaves_no_folder",
+            "python/tests/test_plugin_limits.py::test_a_hand_that_writes_no_report_is_a_hand_error_and_leaves_no_folder",
+        ],
+    ),
+    (
         "`cd examples/python-host && pytest` passes",
         &["python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite"],
     ),
