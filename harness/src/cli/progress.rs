@@ -154,7 +154,7 @@ impl Progress {
     }
 
     /// A line that is not progress (a failure, a finding), above the bar; what a hand, a host
-    /// or a file put in it is shown escaped ([`printable`]).
+    /// or a file put in it is shown escaped ([`gcl_model::escape::printable`]).
     pub fn println(&self, line: &str) {
         let line = &*gcl_model::escape::printable(line);
         match &self.bar {
