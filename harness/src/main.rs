@@ -70,7 +70,8 @@ fn main() -> ExitCode {
             }) {
                 return ExitCode::from(cli::EXIT_OK);
             }
-            let _ = writeln!(std::io::stderr(), "gcl: error: {e:#}");
+            // What a hand, a host or a file put in an error is shown escaped, never obeyed.
+            let _ = writeln!(std::io::stderr(), "gcl: error: {}", gcl_model::escape::printable(&format!("{e:#}")));
             ExitCode::from(cli::EXIT_ERROR)
         }
     }

@@ -3,6 +3,7 @@
 //! overwritten or left half-written. Every `gcl` here runs under a memory limit (`prlimit
 //! --data`) and a wall-clock bound, on loopback only; hands and hosts are small scripts.
 
+mod bounded;
 mod deps;
 mod sim_support;
 
@@ -10,66 +11,8 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use bounded::{MEMORY, Run, gcl_bounded};
 use sim_support::GCL;
-
-/// What a bounded run of `gcl` gave.
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-/// The memory a `gcl` of these tests may take (private writable mappings, heap included):
-/// a flood read whole, an include bomb or a `/dev/zero` read whole goes past it at once.
-const MEMORY: &str = "--data=402653184";
-
-/// Runs `gcl ARGS` in `cwd` under [`MEMORY`], killing it if it has not ended within `limit`.
-fn gcl_bounded(cwd: Option<&Path>, args: &[&str], limit: Duration) -> Run {
-    let mut cmd = Command::new("prlimit");
-    cmd.arg(MEMORY).arg("--").arg(GCL).args(args);
-    // Few malloc arenas, so the limit measures what the program keeps, not address space.
-    cmd.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
-    if let Some(d) = cwd {
-        cmd.current_dir(d);
-    }
-    let mut child = cmd.spawn().expect("prlimit (util-linux) runs gcl");
-    let out_pipe = child.stdout.take().unwrap();
-    let err_pipe = child.stderr.take().unwrap();
-    let read = |mut p: Box<dyn std::io::Read + Send>| {
-        std::thread::spawn(move || {
-            // Keep at most 1 MiB of what gcl prints: a flood echoed into a message is a finding,
-            // not a reason for the test itself to run out of memory.
-            let mut kept = Vec::new();
-            let mut buf = [0u8; 65536];
-            loop {
-                match p.read(&mut buf) {
-                    Ok(0) | Err(_) => break,
-                    Ok(n) => {
-                        if kept.len() < 1 << 20 {
-                            kept.extend_from_slice(&buf[..n]);
-                        }
-                    }
-                }
-            }
-            String::from_utf8_lossy(&kept).into_owned()
-        })
-    };
-    let out = read(Box::new(out_pipe));
-    let err = read(Box::new(err_pipe));
-    let end = Instant::now() + limit;
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if Instant::now() > end {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("gcl {args:?} did not end within {limit:?}");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Run { code: status.code(), stdout: out.join().unwrap(), stderr: err.join().unwrap() }
-}
 
 fn gcl(args: &[&str]) -> Run {
     gcl_bounded(None, args, Duration::from_secs(120))

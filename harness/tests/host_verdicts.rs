@@ -7,6 +7,7 @@
 //! a missing tool skips its test with a line on stderr (a failure under `CI=true`). Hang
 //! signatures by stack need gdb or eu-stack (`.ci/run` installs them).
 
+mod bounded;
 mod deps;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -567,6 +568,63 @@ fn a_process_left_behind_is_killed_and_named_within_the_budget() {
     assert!(left[0].message.contains("in <string>:<module> (faulthandler)"), "{}", left[0].message);
     let exits = format!("host-{}", HostClause::ExitsCleanly.id());
     assert!(failed.iter().any(|f| f.starts_with(&exits) && f.contains("behind")), "{failed:?}");
+}
+
+/// Issue 32 item 7: over TCP, a host that starts a daemon holding neither the port nor its
+/// stderr leaves it under the write watch (a seccomp filter no process can leave), whose
+/// writes would fail with ENOSYS once `gcl` stops answering: `gcl check-host --tcp` (under a
+/// memory limit and a wall-clock bound) kills it after the host ended and names it, and the
+/// daemon never sees a write fail.
+#[test]
+fn a_daemon_left_under_the_write_watch_is_killed_and_named() {
+    if deps::python_with(&[]).is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("daemon.log");
+    let host = python("py_leaves_daemon.py", &[log.to_str().unwrap()]);
+    let mut args = vec!["check-host", "--tcp", "--profile", "seed", "--"];
+    args.extend(host.iter().map(String::as_str));
+    let r = bounded::gcl_bounded(None, &args, Duration::from_secs(120));
+    let pid: i32 = std::fs::read_to_string(dir.path().join("daemon.log.pid")).unwrap().trim().parse().unwrap();
+    // Time for a daemon still running to try a few writes.
+    std::thread::sleep(Duration::from_millis(300));
+    let errors: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".errno-"))
+        .collect();
+    let alive = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| !s.contains(") Z "));
+    if alive {
+        // Gone with the test, whatever it found.
+        let _ = Command::new("kill").arg(pid.to_string()).status();
+    }
+    assert!(errors.is_empty(), "the daemon's writes failed after the run: {errors:?}");
+    assert!(!alive, "the daemon {pid} still runs");
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let exits = format!("FAIL    host-{}", HostClause::ExitsCleanly.id());
+    assert!(r.stdout.contains(&exits) && r.stdout.contains("under the write watch"), "{}", r.stdout);
+    let program = Path::new(&deps::python()).file_name().unwrap().to_string_lossy().into_owned();
+    assert!(r.stdout.contains(&format!("pid {pid} (")) && r.stdout.contains(&format!("{program} -c")), "{}", r.stdout);
+}
+
+/// Issue 32 item 7: a host that installs a seccomp listener of its own gets EBUSY under
+/// `--tcp`, where `gcl` watches its writes with one (README says so); over a pty it gets it.
+#[test]
+fn a_hosts_own_seccomp_listener_is_refused_over_tcp_only() {
+    if deps::python_with(&["ctypes"]).is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (line, errno) in [("--tcp", "16"), ("--pty", "0")] {
+        let out = dir.path().join(line);
+        let host = python("py_own_seccomp_listener.py", &[out.to_str().unwrap()]);
+        let mut args = vec!["check-host", line, "--profile", "seed", "--"];
+        args.extend(host.iter().map(String::as_str));
+        let r = bounded::gcl_bounded(None, &args, Duration::from_secs(120));
+        assert_eq!(std::fs::read_to_string(&out).ok().as_deref(), Some(errno), "{line}: {}\n{}", r.stdout, r.stderr);
+    }
 }
 
 /// A host that writes 100 MB: `gcl check-host` stays within 512 MiB of address space and

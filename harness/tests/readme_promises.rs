@@ -536,6 +536,14 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
     ),
     (
+        "is found by the `GCL_HOST_RUN` mark in its environment, killed and named the same way",
+        &["harness/tests/host_verdicts.rs::a_daemon_left_under_the_write_watch_is_killed_and_named"],
+    ),
+    (
+        "a host that installs a seccomp listener of its own gets EBUSY",
+        &["harness/tests/host_verdicts.rs::a_hosts_own_seccomp_listener_is_refused_over_tcp_only"],
+    ),
+    (
         "A crash's signature is its kind and where it was raised, never the callers that led there",
         &[
             "harness/src/fuzz/host/detect.rs::one_exception_from_one_place_is_one_signature_whatever_the_caller",
@@ -624,6 +632,26 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[
             "python/tests/test_wheel.py::test_a_misbehaving_hand_plays_the_fuzzers_schedule",
             "harness/tests/check_host_serve.rs::a_served_hand_plays_a_schedule_of_the_fuzzer",
+        ],
+    ),
+    (
+        "`schedules` below 1 or a `timeout` of 0 or less is an error naming it",
+        &["python/tests/test_plugin_limits.py::test_values_out_of_range_are_refused_by_name"],
+    ),
+    (
+        "a timer already running (`pytest-timeout`'s) keeps its deadline and handler",
+        &["python/tests/test_plugin_limits.py::test_a_users_pytest_timeout_is_kept_under_a_misbehaving_hand"],
+    ),
+    (
+        "A `gcl` whose `--version` is not this kit's is refused at once",
+        &["python/tests/test_plugin_limits.py::test_another_program_named_gcl_is_refused_at_once"],
+    ),
+    (
+        "a hand that cannot start or writes no report raises `gcl.HandError`",
+        &[
+            "python/tests/test_plugin_limits.py::test_a_missing_binary_is_a_hand_error_and_leaves_no_folder",
+            "python/tests/test_plugin_limits.py::test_a_hand_that_fails_to_start_leaves_no_folder",
+            "python/tests/test_plugin_limits.py::test_a_hand_that_writes_no_report_is_a_hand_error_and_leaves_no_folder",
         ],
     ),
     (

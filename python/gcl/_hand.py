@@ -3,6 +3,7 @@
 import contextlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sysconfig
@@ -15,6 +16,8 @@ __all__ = ["Failure", "Hand", "HandError", "Verdict", "binary"]
 START_TIMEOUT = 30.0
 #: How long a stopped hand may take to grade and exit, seconds.
 STOP_TIMEOUT = 30.0
+#: How long ``gcl --version`` may take, seconds.
+VERSION_TIMEOUT = 10.0
 
 
 class HandError(RuntimeError):
@@ -40,6 +43,32 @@ def binary():
     if found:
         return found
     raise HandError("no gcl binary: install the gcl wheel (pip install gcl-harness) or set GCL_BIN")
+
+
+_checked = {}
+
+
+def check_binary(path):
+    """``path`` if it is this kit's ``gcl`` (its ``--version`` says ``gcl X.Y.Z``), else
+    :class:`HandError` at once: a missing file, one that cannot run, or another program named
+    ``gcl`` is not waited for. Asked once per path."""
+    if path in _checked:
+        return _checked[path]
+    try:
+        out = subprocess.run([path, "--version"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, timeout=VERSION_TIMEOUT, universal_newlines=True,
+                             errors="replace").stdout
+    except subprocess.TimeoutExpired:
+        raise HandError("{} --version did not answer within {:.0f} s: it is not the gcl of gcl-harness "
+                        "(install the wheel, or set GCL_BIN to its gcl)".format(path, VERSION_TIMEOUT)) from None
+    except OSError as e:
+        raise HandError("cannot run gcl at {}: {} (install the wheel, or set GCL_BIN to its gcl)".format(
+            path, e.strerror or e)) from None
+    if not re.match(r"gcl \d+\.\d+\.\d+\s*$", out):
+        raise HandError("{} is not the gcl of gcl-harness: its --version says {!r} (install the wheel, or set "
+                        "GCL_BIN to its gcl)".format(path, out.strip()[:200]))
+    _checked[path] = path
+    return path
 
 
 class Failure:
@@ -142,7 +171,7 @@ class Hand:
 
     def command(self):
         """The ``gcl check-host --serve`` command line this hand runs."""
-        cmd = [binary(), "check-host", "--serve", "--stop-on-eof", "--profile", str(self.profile),
+        cmd = [check_binary(binary()), "check-host", "--serve", "--stop-on-eof", "--profile", str(self.profile),
                "--seed", str(self.seed), "--report", self._report_dir or "REPORT"]
         cmd.append("--tcp" if self.tcp else "--pty")
         if self.baud is not None:
@@ -163,11 +192,18 @@ class Hand:
         """Starts the hand; returns once it listens (``port`` and ``url`` are set)."""
         if self._proc is not None:
             raise HandError("the hand is already running")
+        # A binary that is not ours is refused before anything is made.
+        check_binary(binary())
         if self._report_dir is None:
             self._tmp = tempfile.mkdtemp(prefix="gcl-hand-")
             self._report_dir = self._tmp
-        self._proc = subprocess.Popen(self.command(), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                      stderr=subprocess.PIPE, universal_newlines=True)
+        command = self.command()
+        try:
+            self._proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                          stderr=subprocess.PIPE, universal_newlines=True, errors="replace")
+        except OSError as e:
+            self._remove_tmp()
+            raise HandError("cannot run {}: {}".format(command[0], e.strerror or e)) from None
         # The first lines: port, url, planned misbehaviours, ready (read by a thread, so that
         # a hand that never gets there cannot hold the caller past START_TIMEOUT).
         lines = []
@@ -182,12 +218,13 @@ class Hand:
         reader.start()
         reader.join(START_TIMEOUT)
         if reader.is_alive() or not lines or lines[-1] != "ready":
-            err = ""
-            if self._proc.poll() is not None:
-                err = ": " + self._proc.stderr.read().strip()
+            code = self._proc.poll()
+            why = "did not say where it listens within {:.0f} s".format(START_TIMEOUT)
+            if code is not None:
+                why = "ended ({}) before it said where it listens: {}".format(code, self._proc.stderr.read().strip())
             self._kill()
-            raise HandError("gcl check-host --serve did not say where it listens within {:.0f} s{}".format(
-                START_TIMEOUT, err))
+            self._remove_tmp()
+            raise HandError("gcl check-host --serve " + why)
         for line in lines:
             key, _, value = line.partition(" ")
             if key == "port":
@@ -204,23 +241,33 @@ class Hand:
             return self.verdict
         proc, self._proc = self._proc, None
         try:
-            out, err = proc.communicate(input="", timeout=STOP_TIMEOUT)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.communicate()
-            raise HandError("gcl check-host --serve did not stop within {:.0f} s".format(STOP_TIMEOUT))
-        if proc.returncode not in (0, 1):
-            raise HandError("gcl check-host --serve failed ({}): {}".format(proc.returncode, err.strip()))
-        path = os.path.join(self._report_dir, "report.json")
-        with open(path, encoding="utf-8") as f:
-            report = json.load(f)
-        fired = [line[len("fired "):] for line in out.splitlines() if line.startswith("fired ")]
-        self.verdict = Verdict(report, fired, proc.returncode, out)
+            try:
+                out, err = proc.communicate(input="", timeout=STOP_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.communicate()
+                raise HandError("gcl check-host --serve did not stop within {:.0f} s".format(STOP_TIMEOUT)) from None
+            if proc.returncode not in (0, 1):
+                raise HandError("gcl check-host --serve failed ({}): {}".format(proc.returncode, err.strip()))
+            path = os.path.join(self._report_dir, "report.json")
+            try:
+                with open(path, encoding="utf-8") as f:
+                    report = json.load(f)
+            except (OSError, ValueError) as e:
+                raise HandError("gcl check-host --serve ended ({}) without a readable {}: {}".format(
+                    proc.returncode, path, e)) from None
+            fired = [line[len("fired "):] for line in out.splitlines() if line.startswith("fired ")]
+            self.verdict = Verdict(report, fired, proc.returncode, out)
+            return self.verdict
+        finally:
+            self._remove_tmp()
+
+    def _remove_tmp(self):
+        """The temporary report folder goes, whatever became of the hand."""
         if self._tmp:
             shutil.rmtree(self._tmp, ignore_errors=True)
             self._tmp = None
             self._report_dir = None
-        return self.verdict
 
     def _kill(self):
         if self._proc is not None:

@@ -17,14 +17,24 @@ that fired.
 Options, per test with ``@pytest.mark.gcl(...)`` or for the run on the command line:
 ``profile`` (``--gcl-profile``, default bh8-262), ``baud``, ``time`` ("fast" or "real"),
 ``fault`` (a deliberate firmware bug, or a list), ``tcp``, ``seed`` (``--gcl-seed``),
-``schedules`` (``--gcl-schedules``), ``ops`` (which misbehaviours, as ``gcl fuzz host
---ops``), ``timeout`` (seconds, default 20, misbehaving hands only), ``allow`` (clause ids
-a test breaks on purpose, such as ``["host-valid-commands"]`` for a test that sends an
-unknown command to see it refused).
+``schedules`` (``--gcl-schedules``, a whole number, at least 1), ``ops`` (which
+misbehaviours, as ``gcl fuzz host --ops``), ``timeout`` (seconds, more than 0, default 20,
+misbehaving hands only), ``allow`` (clause ids a test breaks on purpose, such as
+``["host-valid-commands"]`` for a test that sends an unknown command to see it refused). A
+value out of range fails the test at collection (``schedules``, ``timeout``) or at setup,
+naming it; it is never taken as "no schedule" or "no timer".
+
+The hang timer is SIGALRM's real-time timer, shared: a timer already running when the test
+body starts (``pytest-timeout``'s, or your own) keeps its deadline and its handler, which
+runs when that deadline comes first; the timer is re-armed for what is left of it when the
+body ends.
 """
 
+import math
+import os
 import signal
 import threading
+import time
 
 import pytest
 
@@ -38,12 +48,42 @@ class HostHang(Exception):
     """The host code neither returned nor failed within the test's timeout."""
 
 
+def _schedules(value):
+    """``schedules``: a whole number of at least 1 (0 would run the test under no schedule)."""
+    if isinstance(value, bool) or not isinstance(value, (int, str)) or not str(value).strip().isdigit() \
+            or int(value) < 1:
+        raise ValueError("schedules={!r}: give a whole number of schedules, at least 1".format(value))
+    return int(value)
+
+
+def _timeout(value):
+    """``timeout``: seconds, more than 0 (0 would turn the hang timer off)."""
+    try:
+        seconds = float(value)
+    except (TypeError, ValueError):
+        seconds = float("nan")
+    if isinstance(value, bool) or not (seconds > 0) or math.isinf(seconds):
+        raise ValueError("timeout={!r}: give the hang timeout in seconds, more than 0".format(value))
+    return seconds
+
+
+def _option_type(check):
+    def parse(text):
+        try:
+            return check(text)
+        except ValueError as e:
+            import argparse
+            raise argparse.ArgumentTypeError(str(e)) from None
+    parse.__name__ = check.__name__.strip("_")
+    return parse
+
+
 def pytest_addoption(parser):
     group = parser.getgroup("gcl", "gcl simulated hands")
     group.addoption("--gcl-profile", default=None, help="profile of gcl_hand (default bh8-262)")
     group.addoption("--gcl-seed", type=int, default=None, help="seed of the misbehaviour schedules (default 0)")
-    group.addoption("--gcl-schedules", type=int, default=None,
-                    help="schedules each gcl_misbehaving_hand test runs under (default 3)")
+    group.addoption("--gcl-schedules", type=_option_type(_schedules), default=None,
+                    help="schedules each gcl_misbehaving_hand test runs under (default 3, at least 1)")
 
 
 def pytest_configure(config):
@@ -69,7 +109,14 @@ def pytest_generate_tests(metafunc):
     if "gcl_misbehaving_hand" not in metafunc.fixturenames:
         return
     marker = _marker(metafunc.definition)
-    n = int(_setting(metafunc.config, marker, "schedules", 3))
+    refused = None
+    try:
+        n = _schedules(_setting(metafunc.config, marker, "schedules", 3))
+        _timeout(marker.get("timeout", 20))
+    except ValueError as e:
+        refused = "gcl: {}: {}".format(metafunc.definition.nodeid, e)
+    if refused:
+        pytest.fail(refused, pytrace=False)
     seed = int(_setting(metafunc.config, marker, "seed", 0))
     metafunc.parametrize("gcl_misbehaving_hand", [(seed, i) for i in range(1, n + 1)], indirect=True,
                          ids=["schedule-{}:{}".format(seed, i) for i in range(1, n + 1)])
@@ -82,8 +129,14 @@ def _hand(request, misbehave=None):
     if misbehave is not None:
         options["misbehave"] = misbehave
         options["ops"] = marker.get("ops")
+    try:
+        timeout, refused = _timeout(marker.get("timeout", 20)), None
+    except ValueError as e:
+        refused = "gcl: {}".format(e)
+    if refused:
+        pytest.fail(refused, pytrace=False)
     hand = Hand(name=request.node.nodeid, **options)
-    hand.timeout = float(marker.get("timeout", 20))
+    hand.timeout = timeout
     hand.start()
     return hand
 
@@ -121,8 +174,48 @@ def _verdict(item, hand):
     return verdict
 
 
-def _on_alarm(signum, frame):
-    raise HostHang()
+class _HangTimer:
+    """The hang timer on SIGALRM's real-time timer, sharing it with whoever had it: the timer
+    goes off at the earlier of the two deadlines; at the host's, :class:`HostHang` is raised; at
+    the other, the handler that was there runs (``pytest-timeout`` fails the test) and the
+    hang timer goes on. When the body ends the handler is put back, and a timer that was
+    running is re-armed for what is left of it."""
+
+    def __init__(self, seconds):
+        self.previous = signal.getsignal(signal.SIGALRM)
+        remaining, self.interval = signal.getitimer(signal.ITIMER_REAL)
+        now = time.monotonic()
+        self.deadline = now + seconds
+        self.theirs = now + remaining if remaining > 0 else None
+        signal.signal(signal.SIGALRM, self._on_alarm)
+        self._arm(now)
+
+    def _arm(self, now):
+        left = [d - now for d in (self.deadline, self.theirs) if d is not None]
+        signal.setitimer(signal.ITIMER_REAL, max(min(left), 1e-6))
+
+    def _on_alarm(self, signum, frame):
+        now = time.monotonic()
+        if now >= self.deadline:
+            raise HostHang()
+        if self.theirs is not None and now >= self.theirs:
+            # Theirs came first: their handler runs, as if nothing stood between.
+            self.theirs = None
+            self._arm(now)
+            if callable(self.previous):
+                self.previous(signum, frame)
+            elif self.previous == signal.SIG_DFL:
+                self.restore()
+                os.kill(os.getpid(), signal.SIGALRM)
+            return
+        self._arm(now)
+
+    def restore(self):
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, self.previous)
+        if self.theirs is not None:
+            signal.setitimer(signal.ITIMER_REAL, max(self.theirs - time.monotonic(), 1e-6), self.interval)
+            self.theirs = None
 
 
 @pytest.hookimpl(wrapper=True)
@@ -132,10 +225,9 @@ def pytest_runtest_call(item):
     hand = _graded_hand(item)
     if hand is None:
         return (yield)
-    timer = hand.misbehave is not None and threading.current_thread() is threading.main_thread()
-    if timer:
-        previous = signal.signal(signal.SIGALRM, _on_alarm)
-        signal.setitimer(signal.ITIMER_REAL, hand.timeout)
+    timer = None
+    if hand.misbehave is not None and threading.current_thread() is threading.main_thread():
+        timer = _HangTimer(hand.timeout)
     try:
         result = yield
     except HostHang:
@@ -154,8 +246,7 @@ def pytest_runtest_call(item):
         raise
     finally:
         if timer:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
+            timer.restore()
     verdict = _verdict(item, hand)
     if verdict.failures:
         pytest.fail("the host code broke GCL ({}):\n{}".format(

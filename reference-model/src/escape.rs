@@ -1,6 +1,8 @@
 //! One escaping of wire bytes for people, shared by `gcl explain`, traces, transcripts and
 //! mismatch reports: printable ASCII stays, `\n` `\r` `\t` `\\` are escaped by letter, every
-//! other byte is `\xHH`. [`unescape`] inverts it exactly.
+//! other byte is `\xHH`. [`unescape`] inverts it exactly. [`printable`] does the same for
+//! text that is already a string (a message quoting a host's command word, a signature, a
+//! field of a file) before it reaches a terminal or an XML file.
 
 /// Escapes bytes so that every byte is visible and the text is one line.
 pub fn escape(bytes: &[u8]) -> String {
@@ -23,6 +25,31 @@ pub fn escape_also(bytes: &[u8], also: &[u8]) -> String {
         }
     }
     s
+}
+
+/// Text with every control character written out, so that what a hand, a host or a file
+/// put in it is shown, never obeyed: a terminal meets no escape sequence (`ESC]0;` retitling
+/// the window, `ESC[2J` clearing it), no carriage return overwriting the line, and an XML
+/// 1.0 file no character it forbids. Newline and tab stay (multi-line text keeps its lines);
+/// `\r` is written `\r`, the other C0 controls and DEL `\xHH` as [`escape`] writes those bytes,
+/// the C1 controls and the non-characters U+FFFE and U+FFFF `\u{HHHH}`. A backslash stays as
+/// it is: text already escaped (`"A\x00"`) is not escaped twice, so this is for people, not
+/// to be inverted. Text without such characters is returned as it is, unallocated.
+pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    let shown = |c: char| matches!(c, '\n' | '\t') || !(c.is_control() || matches!(c, '\u{FFFE}' | '\u{FFFF}'));
+    if text.chars().all(shown) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut s = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            _ if shown(c) => s.push(c),
+            '\r' => s.push_str("\\r"),
+            '\0'..='\x7f' => s.push_str(&format!("\\x{:02X}", c as u32)),
+            _ => s.push_str(&format!("\\u{{{:04X}}}", c as u32)),
+        }
+    }
+    std::borrow::Cow::Owned(s)
 }
 
 /// Why escaped text does not decode.
@@ -94,5 +121,18 @@ mod tests {
         assert!(unescape("\\x4").is_err());
         assert!(unescape("\\x+F").is_err());
         assert_eq!(escape_also(b"a\"{\n", b"\"{"), "a\\x22\\x7B\\n");
+    }
+
+    #[test]
+    fn printable_text_has_no_control_character_but_newline_and_tab() {
+        assert_eq!(printable("A\0\x1b[2J\r\x1b]0;t\x07"), "A\\x00\\x1B[2J\\r\\x1B]0;t\\x07");
+        assert_eq!(printable("a\tb\nc \\x00 \u{e9}"), "a\tb\nc \\x00 \u{e9}");
+        assert!(matches!(printable("plain"), std::borrow::Cow::Borrowed(_)));
+        assert_eq!(printable("\u{9b}2J\u{7f}\u{fffe}\u{ffff}"), "\\u{009B}2J\\x7F\\u{FFFE}\\u{FFFF}");
+        let every: String = (0..=0x10FFFFu32).filter_map(char::from_u32).collect();
+        assert!(printable(&every).chars().all(|c| matches!(c, '\n' | '\t')
+            || (' '..='\u{7e}').contains(&c)
+            || c > '\u{9f}' && c < '\u{fffe}'
+            || c > '\u{ffff}'));
     }
 }

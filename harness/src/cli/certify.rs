@@ -15,6 +15,7 @@ use gcl_harness::certify::{
 };
 use gcl_harness::conform::{LevelFilter, firmware_version};
 use gcl_host::target::open;
+use gcl_model::escape::printable;
 
 /// Arguments of `gcl certify`.
 #[derive(Debug, clap::Args)]
@@ -98,14 +99,14 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                     w,
                     "intact, {signed}: {} ({}), profile {}, suite {}, {} clauses, verdict {}",
                     dir.display(),
-                    cert.date,
-                    cert.profile,
-                    cert.suite_hash,
+                    printable(&cert.date),
+                    printable(&cert.profile),
+                    printable(&cert.suite_hash),
                     cert.clauses.len(),
-                    cert.verdict
+                    printable(&cert.verdict)
                 )?;
                 if !cert.excused.is_empty() {
-                    writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
+                    writeln!(w, "  known failures excused (not covered): {}", printable(&cert.excused.join(", ")))?;
                 }
                 if matches!(v.signed, Signed::ByTrustedKey(_)) {
                     return Ok(EXIT_OK);
@@ -124,7 +125,7 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
             Err(problems) => {
                 writeln!(w, "TAMPERED: {}", dir.display())?;
                 for p in problems {
-                    writeln!(w, "  {p}")?;
+                    writeln!(w, "  {}", printable(&p.to_string()))?;
                 }
                 Ok(EXIT_FAIL)
             }
@@ -204,8 +205,8 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     let _ = std::fs::remove_file(&lock_file);
     write_bundle(&args.out, &cert, report, &out.transcripts, key.as_ref())?;
     drop(held);
-    write!(w, "{}", summary_text(report))?;
-    writeln!(w, "  firmware: {}", cert.firmware_version.join(" / "))?;
+    write!(w, "{}", printable(&summary_text(report)))?;
+    writeln!(w, "  firmware: {}", printable(&cert.firmware_version.join(" / ")))?;
     writeln!(w, "  certificate verdict: {}", cert.verdict)?;
     if !cert.excused.is_empty() {
         writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
@@ -216,9 +217,9 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     };
     writeln!(
         w,
-        "  certificate bundle: {}, {how} (check it with `gcl certify --verify {}`)",
+        "  certificate bundle: {}, {how} (check it with `{}`)",
         args.out.display(),
-        args.out.display()
+        gcl_harness::report::shell_command(&["gcl", "certify", "--verify", &args.out.display().to_string()])
     )?;
     Ok(if cert.is_pass() || (cert.partial && report.passed()) { EXIT_OK } else { EXIT_FAIL })
 }

@@ -103,7 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let verdict = if c.verdict == Verdict::Skip { "not exercised" } else { c.verdict.as_str() };
         println!("{verdict:<7} {:<24} {}", c.id, c.title);
         if let Some(m) = &c.message {
-            println!("        {m}");
+            println!("        {}", gcl_model::escape::printable(m));
         }
     }
     let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();

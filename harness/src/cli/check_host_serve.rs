@@ -12,6 +12,7 @@ use gcl_harness::fuzz::host::{Weights, fresh_schedule};
 use gcl_harness::report::Verdict;
 use gcl_harness::sim::misbehave::Schedule;
 use gcl_model::Fault;
+use gcl_model::escape::printable;
 use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
 
@@ -123,12 +124,12 @@ pub fn run(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&s
     let report = outcome.report;
     let mut out = std::io::stdout().lock();
     for f in &outcome.run.fired {
-        writeln!(out, "fired {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what)?;
+        writeln!(out, "fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what))?;
     }
     for c in &report.cases {
         writeln!(out, "{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title)?;
         if let Some(m) = &c.message {
-            writeln!(out, "        {m}")?;
+            writeln!(out, "        {}", printable(m))?;
         }
     }
     // As `gcl check-host`: a clause the host never exercised (no RealTime) is not a failure.

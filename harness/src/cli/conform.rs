@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_model::Fault;
+use gcl_model::escape::printable;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 use gcl_harness::conform::{self, ConformOptions, KnownFailures, LevelFilter, RunControl, RunEvent, RunOutput};
@@ -184,9 +185,9 @@ pub fn prepare(
     for k in known.entries_for(&profile.id, &cases).iter().filter(|k| !k.matched) {
         eprintln!(
             "gcl: warning: known failure `{}` in {} matches no case of profile {}; it is stale or a typo",
-            k.case,
+            printable(&k.case),
             known.source().unwrap_or("the known-failures list"),
-            profile.id
+            printable(&profile.id)
         );
     }
     for id in &a.skip_decision {
@@ -467,7 +468,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet, "gcl conform")?;
     record_options(&mut out.report, &args.suite, &opts.profile);
     let mut w = std::io::stdout().lock();
-    write!(w, "{}", summary_text(&out.report))?;
+    write!(w, "{}", printable(&summary_text(&out.report)))?;
     if let Some(dir) = &args.report {
         let files = write_all(dir, &out.report)?;
         for f in files {

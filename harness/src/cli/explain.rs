@@ -221,15 +221,15 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             writeln!(w, "{}", serde_json::to_string(&r.to_json(&profile))?)?;
             continue;
         }
-        writeln!(w, "> {}", r.line)?;
-        writeln!(w, "  parsed:   {}", parsed_text(&r.parsed))?;
+        writeln!(w, "> {}", gcl_model::escape::printable(&r.line))?;
+        writeln!(w, "  parsed:   {}", gcl_model::escape::printable(&parsed_text(&r.parsed)))?;
         writeln!(w, "  response: \"{}\"", escape(&r.response))?;
         let texts = r.status.describe(&profile).join("; ");
         writeln!(
             w,
             "  status:   {}{}",
             r.status.code(),
-            if texts.is_empty() { String::new() } else { format!(" ({texts})") }
+            if texts.is_empty() { String::new() } else { format!(" ({})", gcl_model::escape::printable(&texts)) }
         )?;
         if let Some(l) = &r.layout {
             writeln!(w, "  mode:     RealTime, motors {}", l.motors())?;

@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_model::Fault;
+use gcl_model::escape::printable;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, fuzz_host, load_profile};
 
@@ -247,7 +248,7 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     let s = fd::run(&o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
     for (p, why) in &s.malformed_corpus {
-        eprintln!("gcl fuzz device: warning: corpus file {} skipped: {why}", p.display());
+        eprintln!("gcl fuzz device: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
     }
     if s.interrupted {
         eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
@@ -277,9 +278,9 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         writeln!(
             out,
             "  {}{}{} ({} actions){}",
-            f.signature,
+            printable(&f.signature.to_string()),
             fd::report::binding_note(f),
-            f.known.as_ref().map_or(String::new(), |k| format!(" [known: {k}]")),
+            printable(&f.known.as_ref().map_or(String::new(), |k| format!(" [known: {k}]"))),
             f.actions.len(),
             f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display()))
         )?;
@@ -293,7 +294,7 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         }
     }
     if let Some(why) = &s.dead_hand {
-        eprintln!("gcl fuzz device: {why}");
+        eprintln!("gcl fuzz device: {}", printable(why));
         return Ok(EXIT_ERROR);
     }
     // Only new findings fail the run: what the baseline explains was known before.

@@ -14,6 +14,7 @@ use gcl_harness::fuzz::host::{
 use gcl_harness::report::{CaseResult, HostDetails, HostFinding, RunReport, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
+use gcl_model::escape::printable;
 
 use super::{EXIT_FAIL, EXIT_OK, load_profile};
 
@@ -235,7 +236,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {}, {} job(s), bundles in {}",
         opts.seed,
-        opts.run.profile.id,
+        printable(&opts.run.profile.id),
         if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" },
         opts.run.time.name(),
         match opts.run.pace {
@@ -315,7 +316,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         eprintln!(
             "systematic pass: {} runs, every misbehaviour at every kind of answer ({})",
             campaign.pass_runs,
-            kinds.join("; ")
+            printable(&kinds.join("; "))
         );
     }
     if let Some(c) = &campaign.calibration {
@@ -348,13 +349,13 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
         for (n, runs) in &campaign.notes {
-            eprintln!("  {n} (x{runs})");
+            eprintln!("  {} (x{runs})", printable(n));
         }
     }
     if !campaign.fired_at.is_empty() {
         eprintln!("misbehaviours fired, by protocol state:");
         for (op, states) in &campaign.fired_at {
-            let list: Vec<String> = states.iter().map(|(s, n)| format!("{s} x{n}")).collect();
+            let list: Vec<String> = states.iter().map(|(s, n)| format!("{} x{n}", printable(s))).collect();
             eprintln!("  {op:<16} {}", list.join(", "));
         }
     }
@@ -527,7 +528,10 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
 /// The campaign as the report's pages show it: runs, seed, ops, what fired where, and each
 /// finding's bundle with the command that replays it.
 fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_given: bool) -> HostDetails {
-    let command = opts.run.command.join(" ");
+    let replay = |dir: &std::path::Path| {
+        let head = ["gcl", "fuzz", "host", "--replay", &dir.display().to_string(), "--"].map(String::from);
+        gcl_harness::report::shell_command(&[head.as_slice(), &opts.run.command].concat())
+    };
     HostDetails {
         command: opts.run.command.clone(),
         runs: c.runs,
@@ -571,7 +575,7 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
                     signature: f.verdict.signature.clone(),
                     run: f.run,
                     bundle: Some(dir.display().to_string()),
-                    replay: Some(format!("gcl fuzz host --replay {} -- {command}", dir.display())),
+                    replay: Some(replay(&dir)),
                     stderr: f.stderr.clone(),
                 }
             })
@@ -594,15 +598,15 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     let r = run_once(&run, &schedule)?;
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {
-        eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what);
+        eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what));
     }
     if verdicts.iter().any(|v| v.signature == info.signature) {
-        eprintln!("gcl fuzz host: reproduced: {}", info.signature);
+        eprintln!("gcl fuzz host: reproduced: {}", printable(&info.signature));
         Ok(EXIT_FAIL)
     } else {
-        eprintln!("gcl fuzz host: NOT reproduced: {}", info.signature);
+        eprintln!("gcl fuzz host: NOT reproduced: {}", printable(&info.signature));
         for v in &verdicts {
-            eprintln!("  instead: {}", v.signature);
+            eprintln!("  instead: {}", printable(&v.signature));
         }
         Ok(if verdicts.is_empty() { EXIT_OK } else { EXIT_FAIL })
     }

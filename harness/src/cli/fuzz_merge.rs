@@ -109,10 +109,14 @@ fn host(a: &Args) -> anyhow::Result<u8> {
         .context("the shards' profile (give --profile FILE for a profile from a file)")?;
     let _held = merge::take_out(&a.out)?;
     let (bundles, not_copied) = merge::write_host_bundles(&m, &a.out.join("bundles"))?;
-    let command = vec![m.report.target.strip_prefix("host: ").unwrap_or(&m.report.target).to_string()];
     let recorded = m.campaign.provenance.as_ref().map(|p| &p.options);
     // The misbehaviours the shards drew from, as they recorded them.
     let weights = recorded.and_then(|o| o.get("ops")).and_then(|ops| Weights::parse(ops).ok());
+    // The shards' host command, word for word (its replay lines quote each word), else the
+    // target line as one word.
+    let target = m.report.target.strip_prefix("host: ").unwrap_or(&m.report.target);
+    let command = m.report.host.as_ref().map(|h| h.command.clone()).filter(|c| !c.is_empty());
+    let command = command.unwrap_or_else(|| vec![target.to_string()]);
     // The campaign's options as far as its report shows them; the rest does not reach it.
     let opts = FuzzOptions {
         run: HostRun {

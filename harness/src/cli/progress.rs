@@ -145,7 +145,7 @@ impl Progress {
         self.state.failures.store(failures, Ordering::Relaxed);
         if let Some(b) = &self.bar {
             b.set_position(done);
-            b.set_message(msg.to_string());
+            b.set_message(gcl_model::escape::printable(msg).into_owned());
         }
         if self.plain && !self.state.started_line.swap(true, Ordering::Relaxed) {
             *self.state.last_line.lock().unwrap_or_else(|e| e.into_inner()) = Instant::now();
@@ -153,8 +153,10 @@ impl Progress {
         }
     }
 
-    /// A line that is not progress (a failure, a finding), above the bar.
+    /// A line that is not progress (a failure, a finding), above the bar; what a hand, a host
+    /// or a file put in it is shown escaped ([`gcl_model::escape::printable`]).
     pub fn println(&self, line: &str) {
+        let line = &*gcl_model::escape::printable(line);
         match &self.bar {
             Some(b) => b.println(line),
             None => eprintln!("{line}"),

@@ -108,7 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if !header.setup.is_empty() && !gcl_harness::conform::places_setup(&target) {
         eprintln!(
             "gcl record: note: the script needs {} in place; gcl cannot place it on {target}, so it records the hand as it is",
-            gcl_transcript::Setup::list(&header.setup)
+            gcl_model::escape::printable(&gcl_transcript::Setup::list(&header.setup))
         );
     }
     let mut link = super::replay::open_target_with(&target, Some(&profile.id), header.objects())?;

@@ -12,6 +12,7 @@ use anyhow::Context;
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
 use gcl_harness::replay::{ReplayOptions, ReplayOutcome, replay};
 use gcl_host::target::Target;
+use gcl_model::escape::printable;
 use gcl_transcript::parse_bytes;
 
 /// Arguments of `gcl replay`.
@@ -92,8 +93,8 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                     "gcl replay: warning: {} is written for profile {}, but the target simulates {simulated}; \
 differences may come from the profile, not a bug (use --target sim:{} or sim to match)",
                     f.display(),
-                    t.header.profiles.join(", "),
-                    t.header.profiles[0]
+                    printable(&t.header.profiles.join(", ")),
+                    printable(&t.header.profiles[0])
                 );
             }
         }
@@ -108,7 +109,7 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
                 w,
                 "SKIP {}: needs {} in place, which gcl cannot place on {target}; put it there and pass --fixture object",
                 f.display(),
-                gcl_transcript::Setup::list(&t.header.setup)
+                printable(&gcl_transcript::Setup::list(&t.header.setup))
             )?;
             continue;
         }
@@ -136,11 +137,11 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
             }
             ReplayOutcome::Mismatch(_) | ReplayOutcome::Timeout(_) | ReplayOutcome::Flooded(_) => {
                 let verdict = if matches!(out, ReplayOutcome::Timeout(_)) { "TIMEOUT" } else { "FAIL" };
-                writeln!(w, "{verdict} {}: {}", f.display(), out.render().trim_end())?;
+                writeln!(w, "{verdict} {}: {}", f.display(), printable(out.render().trim_end()))?;
                 code = code.max(EXIT_FAIL);
             }
             ReplayOutcome::Disconnected(_) => {
-                writeln!(w, "ERROR {}: {}", f.display(), out.summary())?;
+                writeln!(w, "ERROR {}: {}", f.display(), printable(&out.summary()))?;
                 code = EXIT_ERROR;
             }
         }

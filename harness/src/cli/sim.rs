@@ -209,7 +209,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         announce(&pty.path().display().to_string())?;
         eprintln!(
             "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",
-            opts.profile.id,
+            gcl_model::escape::printable(&opts.profile.id),
             pty.path().display(),
             pty.link().map(|l| format!(" (link {})", l.display())).unwrap_or_default(),
             opts.time.name(),
@@ -222,7 +222,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         announce(&server.local_addr().to_string())?;
         eprintln!(
             "gcl sim: profile {} on tcp {} (time {}, paced at {}); stop with ^C",
-            opts.profile.id,
+            gcl_model::escape::printable(&opts.profile.id),
             server.local_addr(),
             opts.time.name(),
             opts.pace

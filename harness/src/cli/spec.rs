@@ -26,6 +26,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         writeln!(w)?;
         return Ok(EXIT_OK);
     }
+    // A profile may be a file from anywhere: its text is shown escaped, never obeyed.
+    let mut text = Vec::new();
+    let w = &mut text;
     let esc = gcl_model::escape::escape;
     writeln!(w, "profile {}: {}", p.id, p.title)?;
     if !p.aliases.is_empty() {
@@ -107,5 +110,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     for d in &p.decisions {
         writeln!(w, "  [{}] {} {} ({})\n      {}", d.level, d.id, d.evidence, d.clause, d.resolution)?;
     }
+    std::io::stdout().lock().write_all(gcl_model::escape::printable(&String::from_utf8_lossy(&text)).as_bytes())?;
     Ok(EXIT_OK)
 }

@@ -117,7 +117,7 @@ inside an existing folder)",
             let cases = suite::generate_all()?;
             let before = suite::regenerate(&dir, &cases)?;
             for l in before.lines() {
-                writeln!(w, "{l}")?;
+                writeln!(w, "{}", gcl_model::escape::printable(&l))?;
             }
             writeln!(
                 w,
@@ -144,7 +144,7 @@ inside an existing folder)",
                 return Ok(if vectors_fresh { EXIT_OK } else { EXIT_FAIL });
             }
             for l in r.lines() {
-                writeln!(w, "{l}")?;
+                writeln!(w, "{}", gcl_model::escape::printable(&l))?;
             }
             writeln!(w, "the committed suite is stale; run `gcl suite regenerate --dir {}`", dir.display())?;
             Ok(EXIT_FAIL)

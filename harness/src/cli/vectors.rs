@@ -38,7 +38,7 @@ pub(crate) fn regenerate(w: &mut dyn Write, dir: &Path, cases: &[suite::Case]) -
     let want = vectors::expected_files(cases)?;
     let before = vectors::regenerate(dir, &want)?;
     for l in before.lines() {
-        writeln!(w, "{l}")?;
+        writeln!(w, "{}", gcl_model::escape::printable(&l))?;
     }
     writeln!(
         w,
@@ -60,7 +60,7 @@ pub(crate) fn check(w: &mut dyn Write, dir: &Path, cases: &[suite::Case]) -> any
         return Ok(true);
     }
     for l in r.lines() {
-        writeln!(w, "{l}")?;
+        writeln!(w, "{}", gcl_model::escape::printable(&l))?;
     }
     writeln!(w, "the committed vectors are stale; run `gcl suite regenerate` (goldens and vectors)")?;
     Ok(false)

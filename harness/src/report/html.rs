@@ -129,7 +129,9 @@ fn headline(r: &RunReport) -> String {
 /// The title: the command and what it judged.
 fn title(r: &RunReport) -> String {
     match (r.kind, &r.host) {
-        (k, Some(h)) if k.is_host() => format!("{}: {}", k.command(), diff::clip(&h.command.join(" "), 80)),
+        (k, Some(h)) if k.is_host() => {
+            format!("{}: {}", k.command(), diff::clip(&super::shell_command(&h.command), 80))
+        }
         (k, _) if k.is_host() => format!("{}: {}", k.command(), r.target.trim_start_matches("host: ")),
         (ReportKind::Certify, _) => format!("gcl certify: the certificate of {} on {}", profile_name(r), r.target),
         (k, _) => format!("{} {} on {}", k.command(), profile_name(r), r.target),
@@ -145,7 +147,7 @@ fn facts(r: &RunReport) -> Vec<(String, String)> {
     let mut v: Vec<(String, String)> = Vec::new();
     if r.kind.is_host() {
         if let Some(h) = &r.host {
-            v.push(("host command".into(), format!("<code>{}</code>", esc(&h.command.join(" ")))));
+            v.push(("host command".into(), format!("<code>{}</code>", esc(&super::shell_command(&h.command)))));
         } else {
             v.push(("host command".into(), format!("<code>{}</code>", esc(r.target.trim_start_matches("host: ")))));
         }

@@ -19,7 +19,7 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
         (r.cases.len().to_string(), failures.to_string(), errors.to_string(), skipped.to_string());
     // A host suite is named for the host command; a hand's for the profile and target.
     let name = match (&r.host, r.kind.is_host()) {
-        (Some(h), true) => format!("{} {}", r.kind.command(), h.command.join(" ")),
+        (Some(h), true) => format!("{} {}", r.kind.command(), super::shell_command(&h.command)),
         (None, true) => format!("{} {}", r.kind.command(), r.target.trim_start_matches("host: ")),
         _ => format!("{} {} ({})", r.kind.command(), r.profile, r.target),
     };
@@ -130,7 +130,18 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
     w.write_event(Event::End(BytesEnd::new("testsuite")))?;
     w.write_event(Event::End(BytesEnd::new("testsuites")))?;
     // Every piece written is a Rust string, so the bytes are UTF-8.
-    String::from_utf8(w.into_inner()).map_err(std::io::Error::other)
+    String::from_utf8(w.into_inner()).map(xml_chars).map_err(std::io::Error::other)
+}
+
+/// A JUnit file as written, with every character XML 1.0 forbids even as a reference (the
+/// control bytes a host or a hand put in a command word, a message, a transcript) written out
+/// as text by [`gcl_model::escape::printable`] (`\x00`, `\x1B`): whatever the bytes, a strict
+/// XML parser reads the file. The markup itself is printable ASCII, so only text changes.
+pub(crate) fn xml_chars(xml: String) -> String {
+    match gcl_model::escape::printable(&xml) {
+        std::borrow::Cow::Borrowed(_) => xml,
+        std::borrow::Cow::Owned(s) => s,
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 
 pub mod diff;
 pub(crate) mod html;
-mod junit;
+pub(crate) mod junit;
 pub mod page;
 pub mod program;
 pub mod svg;
@@ -124,6 +124,19 @@ pub const CONTEXT_CHARS: usize = 40;
 /// The longest text a report keeps of an actual answer or a transcript; longer ones are cut
 /// with a note saying how much was left out.
 pub const MAX_SHOWN: usize = 8192;
+
+/// Words as one command line for a POSIX shell, each quoted as it needs by the `shlex` crate:
+/// pasted into `sh`, the line runs exactly these words as its argv (`-- sh -c 'sleep 0.1; exit
+/// 3'`, a target holding `'; touch X; echo '`), never a command of its own. Every command a
+/// report or the console offers to run again is written by it. A word holding a NUL byte,
+/// which no argv can hold, has it written `\x00` (that word cannot be run as it was given).
+pub fn shell_command<S: AsRef<str>>(words: &[S]) -> String {
+    let word = |w: &S| {
+        let w = w.as_ref().replace('\0', "\\x00");
+        shlex::try_quote(&w).map(|q| q.into_owned()).unwrap_or(w)
+    };
+    words.iter().map(word).collect::<Vec<_>>().join(" ")
+}
 
 /// `s` cut to at most `max` bytes (on a character boundary) with a note of what was left out.
 pub fn truncate_note(s: &str, max: usize) -> String {

@@ -24,6 +24,14 @@
 //! not seen. The host runs with `no_new_privs` (a set-uid program it starts does not gain
 //! privileges), and a signal that reaches it during one of those pauses interrupts the call
 //! as it would a blocked write.
+//!
+//! The filter stays on every process the host starts, for its whole life, and its writes are
+//! answered only while the watch lasts: a process the host leaves behind (a daemon holding
+//! neither the port nor stderr) would get ENOSYS from every write after the run. So when some
+//! process still uses the filter after the host ended ([`WriteWatch::outlived`]), the run
+//! finds it by the `GCL_HOST_RUN` mark in its environment, kills it and names it, as it does
+//! a process left holding the port. A host that installs a seccomp listener of its own gets
+//! EBUSY (a process tree has one listener at most; `--pty` watches without one).
 #![allow(unsafe_code)]
 
 use std::collections::BTreeMap;
@@ -193,6 +201,25 @@ impl WriteWatch {
     /// stream when the child sent none, reaches the watch's thread).
     pub fn spawned(&mut self) {
         self.child_end = None;
+    }
+
+    /// Whether some process still uses the filter `grace` after the host ended: one the host
+    /// left behind (a daemon that holds neither the port nor stderr). It cannot outlive the
+    /// watch unharmed (once the listener goes, its every write fails with ENOSYS), so the run
+    /// looks for it, kills it and names it. The listener says when the last process using
+    /// the filter is gone (the watch's thread then ends).
+    pub fn outlived(&self, grace: std::time::Duration) -> bool {
+        let Some(thread) = self.thread.as_ref().filter(|_| self.marks.0.lock().is_ok_and(|m| m.watched)) else {
+            return false;
+        };
+        let until = std::time::Instant::now() + grace;
+        while !thread.is_finished() {
+            if std::time::Instant::now() >= until {
+                return true;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        false
     }
 }
 

@@ -86,7 +86,7 @@ impl FuzzReport {
         } else {
             self.target.clone()
         };
-        format!("gcl replay --target '{target}' {}", shell_word(&path.display().to_string()))
+        crate::report::shell_command(&["gcl", "replay", "--target", &target, &path.display().to_string()])
     }
 
     /// Whether the run found nothing new (what the baseline or the known failures explain was
@@ -104,15 +104,6 @@ impl FuzzReport {
     /// How many findings are new.
     pub fn new_findings(&self) -> usize {
         self.findings.iter().filter(|f| f.is_new()).count()
-    }
-}
-
-/// `s` as one shell word: as is when it needs no quoting, else in single quotes.
-fn shell_word(s: &str) -> String {
-    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || "-_./:=+,@".contains(c)) {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', "'\\''"))
     }
 }
 
@@ -221,7 +212,7 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     }
     w.write_event(Event::End(BytesEnd::new("testsuite")))?;
     w.write_event(Event::End(BytesEnd::new("testsuites")))?;
-    let mut out = String::from_utf8_lossy(&w.into_inner()).into_owned();
+    let mut out = crate::report::junit::xml_chars(String::from_utf8_lossy(&w.into_inner()).into_owned());
     out.push('\n');
     Ok(out)
 }

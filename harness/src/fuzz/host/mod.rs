@@ -188,7 +188,7 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             kind: FindingKind::Leftover,
             signature: format!("leftover: {}", commands.join(" + ")),
             message: format!(
-                "the host left {} behind holding the port or its stderr after it ended; killed",
+                "the host left {} behind holding the port or its stderr (or, over TCP, under the write watch) after it ended; killed",
                 left.join("; ")
             ),
         });

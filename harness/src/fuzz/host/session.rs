@@ -116,7 +116,8 @@ pub struct RunResult {
     pub end: HostEnd,
     /// Where a hung host was stuck, when its stack could be taken.
     pub stack: Option<super::detect::HangStack>,
-    /// Processes the host left behind holding the port or its stderr, killed after it ended.
+    /// Processes the host left behind holding the port or its stderr, or under the write watch
+    /// (`--tcp`), killed after it ended.
     pub leftovers: Vec<Leftover>,
     /// How long the host took to send or exit once the hand went silent (a `silence` that
     /// fired), or `None` (no silence, or the host did neither before the run ended).
@@ -580,6 +581,14 @@ pub const STDERR_CAP: usize = 256 * 1024;
 /// not waited for.
 const STDERR_GRACE: Duration = Duration::from_millis(500);
 
+/// The environment variable that marks the host's processes with their run: a process left
+/// behind under the write watch (`--tcp`) is found by it.
+pub const RUN_MARK: &str = "GCL_HOST_RUN";
+
+/// How long the processes of the host's group may take to be gone from the write watch after
+/// the host ended (killed, then reaped by whoever their parent is).
+const WATCH_GRACE: Duration = Duration::from_millis(300);
+
 /// How long the port may still count as open after the host ended: the hand's transport hears
 /// of the close and makes sure nobody else holds the port first.
 const PORT_CLOSE_GRACE: Duration = Duration::from_millis(200);
@@ -607,6 +616,12 @@ impl RunDir {
         let _ = std::fs::remove_dir_all(&p);
         std::fs::create_dir(&p)?;
         Ok(RunDir(p))
+    }
+
+    /// The run's own name, which its host and what that starts carry in their environment as
+    /// [`RUN_MARK`] (unique among runs at the same time).
+    fn mark(&self) -> String {
+        self.0.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
     }
 
     /// The sanitizer logs written into it (`asan.PID`, ...), each under a heading.
@@ -702,6 +717,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .env("GCL_PORT_URL", &url)
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
+        .env(RUN_MARK, run_dir.mark())
         .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan"))
         .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan"))
         .stdin(Stdio::null())
@@ -867,10 +883,14 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     // The pipe's inode names it only while it is open (a closed pipe's number is reused).
     let err_open = !wait_eof(&errbuf, STDERR_GRACE);
     let err_inode = err_inode.filter(|_| err_open);
+    // Over TCP, a process still under the write watch (the host's daemon, holding nothing of
+    // the run's) is found by the run's mark in its environment.
+    let watched_left = watch.as_ref().is_some_and(|w| w.outlived(WATCH_GRACE));
+    let mark = watched_left.then(|| format!("{RUN_MARK}={}", run_dir.mark()));
     let search = |err_inode: Option<u64>| {
         let path = pty_path.as_deref().filter(|_| pty_alive());
-        let found = holders(path, err_inode, host_start);
-        if path.is_some() && !pty_alive() { holders(None, err_inode, host_start) } else { found }
+        let found = holders(path, err_inode, mark.as_deref(), host_start);
+        if path.is_some() && !pty_alive() { holders(None, err_inode, mark.as_deref(), host_start) } else { found }
     };
     // The search reads all of /proc: only when something still holds stderr or the port (the
     // hand's transport says when the last holder of its port closed it, soon after the host
@@ -882,7 +902,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         }
         log.lock().map_or(true, |l| l.port_open)
     };
-    let found = if err_open || port_held { search(err_inode) } else { Vec::new() };
+    let found = if err_open || port_held || watched_left { search(err_inode) } else { Vec::new() };
     if !found.is_empty() {
         for (p, name) in found {
             // What it is and where it is, before it goes: the signature names it.
@@ -1101,18 +1121,23 @@ fn start_time(pid: i32) -> Option<u64> {
     stat.rsplit_once(')')?.1.split_whitespace().nth(19)?.parse().ok()
 }
 
-/// Processes holding `path` (the pty's slave) or the pipe `pipe_inode` open, with their
-/// names, that started no earlier than the host (`host_start`): what the host can have left
-/// behind. Not this process, nor its children: a child of ours is a host of another run, or
+/// Processes holding `path` (the pty's slave) or the pipe `pipe_inode` open, or with `mark`
+/// (`NAME=VALUE`) in their environment, with their names, that started no earlier than the
+/// host (`host_start`): what the host can have left behind. Not this process, nor its children: a child of ours is a host of another run, or
 /// one being started (between fork and exec it holds copies of all our descriptors), never
 /// what this run's host left behind (that was reparented away from us when the host died).
 /// With no start time for the host, nothing is found: no process is killed on a guess.
-fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>, host_start: Option<u64>) -> Vec<(i32, String)> {
+fn holders(
+    path: Option<&std::path::Path>,
+    pipe_inode: Option<u64>,
+    mark: Option<&str>,
+    host_start: Option<u64>,
+) -> Vec<(i32, String)> {
     let me = std::process::id() as i32;
     let pipe = pipe_inode.map(|i| format!("pipe:[{i}]"));
     let mut found = Vec::new();
     let Some(host_start) = host_start else { return found };
-    if path.is_none() && pipe.is_none() {
+    if path.is_none() && pipe.is_none() && mark.is_none() {
         return found;
     }
     let Ok(procs) = std::fs::read_dir("/proc") else { return found };
@@ -1129,11 +1154,15 @@ fn holders(path: Option<&std::path::Path>, pipe_inode: Option<u64>, host_start: 
         if ppid == Some(me) || started.is_none_or(|t| t < host_start) {
             continue;
         }
-        let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
-        let holds = fds.flatten().any(|fd| {
-            std::fs::read_link(fd.path())
-                .is_ok_and(|t| path.is_some_and(|p| t == p) || pipe.as_deref().is_some_and(|x| t.as_os_str() == x))
+        let marked = mark.is_some_and(|m| {
+            std::fs::read(p.path().join("environ")).is_ok_and(|env| env.split(|b| *b == 0).any(|v| v == m.as_bytes()))
         });
+        let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+        let holds = marked
+            || fds.flatten().any(|fd| {
+                std::fs::read_link(fd.path())
+                    .is_ok_and(|t| path.is_some_and(|p| t == p) || pipe.as_deref().is_some_and(|x| t.as_os_str() == x))
+            });
         if holds {
             let name = std::fs::read_to_string(p.path().join("comm")).unwrap_or_default().trim().to_string();
             found.push((pid, name));
