@@ -340,8 +340,11 @@ fn certify_shows_a_hostile_hands_and_a_forged_bundles_text_escaped() {
         })
         .collect();
     std::fs::write(&manifest, lines.join("\n") + "\n").unwrap();
+    // The report's spec no longer backs the forged name, so the bundle is found tampered; the
+    // forged name is still shown, escaped.
     let r = gcl(&["certify", "--verify", s(&out), "--allow-unverified"]);
-    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("TAMPERED") && r.stdout.contains("PWNED"), "{}", r.stdout);
     assert_shown_escaped("certify --verify", &r);
     // A file the manifest does not list, named to clear the screen.
     std::fs::write(out.join(format!("x{HOSTILE}")), "").unwrap();
