@@ -58,8 +58,8 @@ pub struct DeviceArgs {
     /// How long to fuzz, e.g. `30s`, `5m` (default 60s unless --runs is given).
     #[arg(long, value_parser = super::duration, conflicts_with = "runs")]
     pub duration: Option<Duration>,
-    /// How many cases to run.
-    #[arg(long, value_name = "N")]
+    /// How many cases to run, at least 1.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub runs: Option<u64>,
     /// Stop after N distinct findings.
     #[arg(long, value_name = "N")]
@@ -109,6 +109,17 @@ pub struct DeviceArgs {
     /// `gcl fuzz merge` folds the shards' folders into one.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<gcl_harness::fuzz::shard::Shard>,
+}
+
+/// Refuses `--runs N` that leaves `--shard K/N` no run at all: such a shard would test
+/// nothing and still report.
+pub(super) fn refuse_empty_shard(runs: Option<u64>, shard: Option<gcl_harness::fuzz::shard::Shard>) -> anyhow::Result<()> {
+    if let (Some(n), Some(s)) = (runs, shard)
+        && s.share(n) == 0
+    {
+        anyhow::bail!("--runs {n} leaves shard {s} no run (it would test nothing): give at least {} runs", s.index);
+    }
+    Ok(())
 }
 
 /// Runs `gcl fuzz`.
@@ -176,6 +187,10 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     for dir in &a.baseline {
         o.baseline.add_dir(dir).with_context(|| format!("--baseline {}", dir.display()))?;
     }
+    refuse_empty_shard(a.runs, a.shard)?;
+    // A CI time limit (SIGTERM) ends the campaign with its reports written. Before any thread
+    // starts: a thread started earlier would keep the signals unblocked.
+    o.stop = super::stop_on_signals("fuzz device")?;
     let total = match o.budget {
         Budget::Runs(n) => super::progress::Total::Units(n),
         Budget::Time(d) => super::progress::Total::Time(d),
@@ -224,17 +239,23 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
         }
     }
-    // A CI time limit (SIGTERM) ends the campaign with its reports written.
-    o.stop = super::stop_on_signals("fuzz device")?;
     let s = fd::run(&o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
     for (p, why) in &s.malformed_corpus {
         eprintln!("gcl fuzz device: warning: corpus file {} skipped: {why}", p.display());
     }
-    if s.interrupted {
-        eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
-    }
     let mut report = fd::report::FuzzReport::new(&o, &s);
+    if let Some(by) = super::stopped_by().filter(|_| s.interrupted) {
+        let of = match o.budget {
+            Budget::Runs(n) => format!(" of {n} runs"),
+            Budget::Time(d) => {
+                format!(" runs, {:.1} s of {}", s.elapsed.as_secs_f64(), humantime::format_duration(d))
+            }
+        };
+        let st = format!("stopped by {by} after {}{of}", s.runs);
+        eprintln!("gcl fuzz device: {st}; the report covers the runs made");
+        report.stopped = Some(st);
+    }
     report.coverage_over_time = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -277,6 +298,15 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         eprintln!("gcl fuzz device: {why}");
         return Ok(EXIT_ERROR);
     }
-    // Only new findings fail the run: what the baseline explains was known before.
-    Ok(if s.findings.iter().any(|f| f.is_new()) { EXIT_FAIL } else { EXIT_OK })
+    if let Some(why) = &s.no_cases {
+        eprintln!("gcl fuzz device: nothing left to test: {why}");
+        return Ok(EXIT_ERROR);
+    }
+    // Only new findings fail the run: what the baseline explains was known before. A
+    // campaign stopped before its budget without one has no verdict.
+    Ok(match (s.findings.iter().any(|f| f.is_new()), &report.stopped) {
+        (true, _) => EXIT_FAIL,
+        (false, Some(_)) => EXIT_ERROR,
+        (false, None) => EXIT_OK,
+    })
 }

@@ -8,7 +8,7 @@ use gcl_harness::fuzz::host::{FuzzOptions, HostRun, Transport, Weights};
 use gcl_harness::fuzz::merge::{self, Kind};
 use gcl_harness::sim::{Pace, TimeMode};
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
 /// Arguments of `gcl fuzz merge`.
 #[derive(Debug, clap::Args)]
@@ -59,7 +59,12 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
                 dups,
                 a.out.display()
             );
-            Ok(if r.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+            // Shards that ended early without a new finding make no verdict (as each shard's).
+            Ok(match (!r.findings.is_empty(), &r.stopped) {
+                (true, _) => EXIT_FAIL,
+                (false, Some(_)) => EXIT_ERROR,
+                (false, None) => EXIT_OK,
+            })
         }
     }
 }
@@ -112,5 +117,10 @@ fn host(a: &Args) -> anyhow::Result<u8> {
         bundles.len(),
         a.out.display()
     );
-    Ok(if m.campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+    Ok(match (m.campaign.findings.is_empty(), m.campaign.unreached.is_some() || m.campaign.stopped.is_some()) {
+        (false, _) => EXIT_FAIL,
+        // A shard that could not test or was stopped: no verdict (as each shard's).
+        (true, true) => EXIT_ERROR,
+        (true, false) => EXIT_OK,
+    })
 }

@@ -124,6 +124,14 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
             }
         }
         merged.runs += c.runs;
+        merged.reached += c.reached;
+        // A shard that could not test, or was stopped, leaves the whole campaign so.
+        if merged.unreached.is_none() {
+            merged.unreached = c.unreached.map(|w| format!("{}: {w}", dir.display()));
+        }
+        if merged.stopped.is_none() {
+            merged.stopped = c.stopped.map(|w| format!("{}: {w}", dir.display()));
+        }
         merged.minimize_runs += c.minimize_runs;
         merged.elapsed_ms = merged.elapsed_ms.max(c.elapsed_ms);
         merged.corpus += c.corpus;
@@ -243,6 +251,10 @@ pub fn merge_device(dirs: &[PathBuf], out: &Path, corpus: Option<usize>) -> Resu
                 m.duration_ms = m.duration_ms.max(r.duration_ms);
                 m.runs += r.runs;
                 m.dropped += r.dropped;
+                // A shard that ended early leaves the whole campaign so (the first says why).
+                if m.stopped.is_none() {
+                    m.stopped = r.stopped.clone();
+                }
                 m.cases_per_second += r.cases_per_second;
                 m.eeprom_writes += r.eeprom_writes;
                 m.wire_bytes += r.wire_bytes;

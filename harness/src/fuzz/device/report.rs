@@ -57,6 +57,11 @@ pub struct FuzzReport {
     /// report's plot; the caller that watches progress fills it.
     #[serde(default)]
     pub coverage_over_time: Vec<CoveragePoint>,
+    /// Why the campaign ended before its budget: a signal (`stopped by SIGTERM after 40 of
+    /// 1000 runs`; the caller that heard it fills it), a hand that stopped answering, or
+    /// drawn cases all dropped. A campaign that ended so without a new finding has no verdict.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 /// Coverage reached by a time in the run.
@@ -85,9 +90,18 @@ impl FuzzReport {
     }
 
     /// Whether the run found nothing new (what the baseline or the known failures explain was
-    /// known before; the CLI's exit status says the same).
+    /// known before) and ran to the end of its budget; the CLI's exit status says the same.
     pub fn passed(&self) -> bool {
-        self.findings.iter().all(|f| !f.is_new())
+        self.findings.iter().all(|f| !f.is_new()) && self.stopped.is_none()
+    }
+
+    /// How much the campaign judged, for people: `1200 cases run, 31 drawn cases dropped`.
+    pub fn judged(&self) -> String {
+        format!(
+            "{} cases run, {} drawn cases dropped (the model made no case of them, a skipped decision, or the EEPROM \
+             write budget)",
+            self.runs, self.dropped
+        )
     }
 
     /// How many findings are new.
@@ -134,6 +148,7 @@ impl FuzzReport {
             coverage: table(&opts.profile, &s.features),
             findings: s.findings.clone(),
             coverage_over_time: Vec::new(),
+            stopped: s.dead_hand.clone().or_else(|| s.no_cases.clone()),
         }
     }
 }
@@ -148,6 +163,8 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     let name = format!("gcl fuzz device {}", r.target);
     // A new finding fails; one the baseline or the known failures explain is skipped, saying why.
     let new = r.new_findings();
+    // A campaign that ended early without a new finding is an error: it has no verdict.
+    let unjudged = new == 0 && r.stopped.is_some();
     let (tests, failures, skipped) =
         (r.findings.len().max(1).to_string(), new.to_string(), (r.findings.len() - new).to_string());
     let time = format!("{:.3}", r.duration_ms as f64 / 1000.0);
@@ -155,12 +172,39 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     suite.push_attribute(("name", name.as_str()));
     suite.push_attribute(("tests", tests.as_str()));
     suite.push_attribute(("failures", failures.as_str()));
-    suite.push_attribute(("errors", "0"));
+    suite.push_attribute(("errors", if unjudged { "1" } else { "0" }));
     suite.push_attribute(("skipped", skipped.as_str()));
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
-    if r.findings.is_empty() {
-        let passed = format!("no finding in {} runs", r.runs);
+    w.write_event(Event::Start(BytesStart::new("properties")))?;
+    let mut props = vec![("judged", r.judged())];
+    if let Some(st) = &r.stopped {
+        props.push(("stopped", st.clone()));
+    }
+    for (k, v) in &props {
+        let mut e = BytesStart::new("property");
+        e.push_attribute(("name", *k));
+        e.push_attribute(("value", v.as_str()));
+        w.write_event(Event::Empty(e))?;
+    }
+    w.write_event(Event::End(BytesEnd::new("properties")))?;
+    if unjudged {
+        let name = format!("no verdict after {} runs ({} dropped)", r.runs, r.dropped);
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("classname", "gcl.fuzz-device"));
+        tc.push_attribute(("name", name.as_str()));
+        tc.push_attribute(("time", time.as_str()));
+        w.write_event(Event::Start(tc))?;
+        let message = r.stopped.clone().unwrap_or_default();
+        let mut e = BytesStart::new("error");
+        e.push_attribute(("message", message.as_str()));
+        e.push_attribute(("type", "stopped"));
+        w.write_event(Event::Start(e))?;
+        w.write_event(Event::Text(BytesText::new(&format!("{message}\n{}\n", r.judged()))))?;
+        w.write_event(Event::End(BytesEnd::new("error")))?;
+        w.write_event(Event::End(BytesEnd::new("testcase")))?;
+    } else if r.findings.is_empty() {
+        let passed = format!("no finding in {} runs ({} drawn cases dropped)", r.runs, r.dropped);
         let mut tc = BytesStart::new("testcase");
         tc.push_attribute(("classname", "gcl.fuzz-device"));
         tc.push_attribute(("name", passed.as_str()));
@@ -280,7 +324,7 @@ pub fn to_html(r: &FuzzReport) -> String {
     let new = r.new_findings();
     let known = r.findings.len() - new;
     let secs = r.duration_ms as f64 / 1000.0;
-    let headline = match (new, known) {
+    let mut headline = match (new, known) {
         (0, 0) => format!("no finding in {} runs ({secs:.1} s)", r.runs),
         (0, k) => format!(
             "no new finding in {} runs ({secs:.1} s); {k} known (the baseline or known failures explain them)",
@@ -289,22 +333,21 @@ pub fn to_html(r: &FuzzReport) -> String {
         (n, 0) => format!("{n} distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
         (n, k) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s), and {k} known", r.runs),
     };
-    let verdict = match (new, known) {
-        (0, 0) => "NO FINDING",
-        (0, _) => "NO NEW FINDING",
+    if let Some(st) = &r.stopped {
+        headline.push_str(&format!("; ended early: {st}"));
+    }
+    let verdict = match (new, known, &r.stopped) {
+        (0, _, Some(st)) if st.starts_with("stopped by") => "STOPPED",
+        (0, _, Some(_)) => "NO VERDICT",
+        (0, 0, None) => "NO FINDING",
+        (0, _, None) => "NO NEW FINDING",
         _ => "FINDINGS",
     };
     let mut p = Page::new(&format!("gcl fuzz device {} on {}", r.profile, r.target), ok, verdict, &headline);
     p.facts(&[
         ("target".into(), format!("<code>{}</code>", esc(&r.target))),
         ("profile".into(), esc(&r.profile)),
-        (
-            "runs".into(),
-            format!(
-                "{} ({:.1} cases/s); {} drawn cases dropped (the model made no case of them, or the EEPROM write budget was spent)",
-                r.runs, r.cases_per_second, r.dropped
-            ),
-        ),
+        ("judged".into(), format!("{} ({:.1} cases/s)", esc(&r.judged()), r.cases_per_second)),
         ("corpus".into(), format!("{} entries", r.corpus)),
         ("wire".into(), format!("{} bytes; {} EEPROM writes", r.wire_bytes, r.eeprom_writes)),
         ("tool".into(), esc(&r.tool)),
