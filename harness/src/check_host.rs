@@ -115,7 +115,10 @@ fn not_exercised(clause: HostClause, r: &RunResult) -> Option<&'static str> {
         .iter()
         .skip_while(|e| e.dir != crate::fuzz::host::Dir::Hand || e.bytes.is_empty())
         .any(|e| e.dir == crate::fuzz::host::Dir::Host && !e.bytes.is_empty());
+    // ^C is no line: a host that sent nothing else has ended no line.
+    let lines = r.exchanges.iter().any(|e| e.dir == crate::fuzz::host::Dir::Host && e.bytes.iter().any(|&b| b != 0x03));
     match clause {
+        HostClause::LineEnding if !lines => Some("the host sent nothing but ^C"),
         HostClause::ValidCommands if r.commands.is_empty() => Some("the host sent no command"),
         HostClause::WaitsForAnswer if !after_answer => Some("the host sent nothing after an answer began"),
         HostClause::RealtimeBlocks | HostClause::LeavesCleanly if !rt => Some("the host never entered RealTime"),

@@ -28,9 +28,11 @@ host-golden (the host sends exactly the golden transcript's `send` bytes).
 
 Exit codes: 0 every clause the host exercised passes (a clause it never exercised, such as
 RealTime's for a host that never enters it, is \"not exercised\", never PASS); 1 a clause
-fails; 2 nothing judged or usage/infrastructure: the host never opened the port, or opened it
-and sent nothing (an ERROR naming the command, its exit code and the last lines of its
-stderr), or a signal stopped the check (its host stopped, the reports say so).
+fails; 2 nothing judged, or a usage or infrastructure error: the host never opened the port,
+or opened it and sent nothing (an ERROR naming the command, how it ended and the last lines
+of its stderr; with --serve: nobody opened the port, or nobody sent a byte, before the stop),
+or a signal (SIGINT, SIGTERM, SIGHUP) stopped the check (the host's process group is
+stopped, its run folder removed, and the reports say so).
 
 Example:
   gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}

@@ -36,8 +36,13 @@ pub enum FuzzCommand {
 
 /// Arguments of `gcl fuzz device`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Exit codes: 0 no new finding; 1 new findings (each written as a minimized transcript \
-with --out; a finding --baseline or --known-failures explains is known, not new); 2 usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
+#[command(after_help = "Exit codes: 0 no new finding in the cases run (the reports say how many ran and how many \
+drawn cases were dropped); 1 new findings (each written as a minimized transcript \
+with --out; a finding --baseline or --known-failures explains is known, not new); 2 nothing to test or no verdict: \
+options that leave no case are refused at the start (--runs 0, a --skip-decision of a decision every case rests on, \
+such as framing-line-ending), 5000 drawn cases dropped in a row end the campaign, a hand that stops answering ends \
+it, and a signal (SIGINT, SIGTERM, SIGHUP) that stops it before a new finding leaves no verdict (every report says \
+`stopped by SIGTERM after N of M runs`); also a usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
 writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
 --target sim --fault fget-reversed --seed 1 --runs 500 --out findings\n  gcl fuzz device --target 'exec:gcl sim \
 --stdio' --no abort-timing --duration 30s --jobs 2\n  gcl fuzz device --target serial:/dev/ttyUSB0 \
@@ -113,7 +118,10 @@ pub struct DeviceArgs {
 
 /// Refuses `--runs N` that leaves `--shard K/N` no run at all: such a shard would test
 /// nothing and still report.
-pub(super) fn refuse_empty_shard(runs: Option<u64>, shard: Option<gcl_harness::fuzz::shard::Shard>) -> anyhow::Result<()> {
+pub(super) fn refuse_empty_shard(
+    runs: Option<u64>,
+    shard: Option<gcl_harness::fuzz::shard::Shard>,
+) -> anyhow::Result<()> {
     if let (Some(n), Some(s)) = (runs, shard)
         && s.share(n) == 0
     {

@@ -155,7 +155,13 @@ to --out as a bundle; --replay BUNDLE runs it again.
 Misbehaviours (--ops NAME[,NAME=WEIGHT...]; default weight shown):
 {}
 
-Exit codes: 0 no finding, 1 findings, 2 usage or infrastructure.
+Exit codes: 0 no finding, in runs that reached the host (the reports say how many: runs in
+which it opened the port and sent the hand a byte); 1 findings; 2 nothing tested or no verdict:
+the host never opened the port, or opened it and sent nothing, in the run without misbehaviour
+(the campaign ends there, naming the command, how it ended and the last lines of its stderr),
+the budget ran out before the first run, or a signal (SIGINT, SIGTERM, SIGHUP) stopped the
+campaign without a finding (every report says `stopped by SIGTERM after N of M runs`); also a
+usage or infrastructure error. --runs 0 is refused.
 
 Examples:
   gcl fuzz host --duration 5m --report reports/host -- python3 my_host.py {{port}}
@@ -328,7 +334,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 None => format!("answer {a}: waited past {} s", CALIBRATION_CAP.as_secs()),
             })
             .collect();
-        if campaign.unreached.is_some() {
+        if campaign.untested.is_some() {
             // Said once, below, as what ended the campaign.
         } else if points.is_empty() {
             // No silence fired: the host took no answer at all, even from a perfect hand.
@@ -373,7 +379,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(e) = unwritten {
         return Err(e.into());
     }
-    if let Some(why) = &campaign.unreached {
+    if let Some(why) = &campaign.untested {
         eprintln!("gcl fuzz host: nothing tested: {why}");
         return Ok(EXIT_ERROR);
     }
@@ -480,7 +486,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
     // Without a finding, one case says what the campaign judged: a pass only when it ran to
     // its end with runs that reached the host.
     if c.findings.is_empty() {
-        let (verdict, message) = match (&c.unreached, &c.stopped) {
+        let (verdict, message) = match (&c.untested, &c.stopped) {
             (Some(why), _) => (Verdict::Error, Some(format!("nothing tested: {why}"))),
             (None, Some(st)) => (Verdict::Error, Some(format!("{st}, without a finding: no verdict on the host"))),
             (None, None) => (Verdict::Pass, None),
@@ -512,7 +518,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
         cases,
     );
     report.host = Some(host_details(opts, c, out, ops_given));
-    report.stopped = match (&c.unreached, &c.stopped) {
+    report.stopped = match (&c.untested, &c.stopped) {
         (Some(why), _) => Some(Stopped {
             cause: StopCause::CannotTest,
             case: "fuzz-host-campaign".into(),

@@ -117,7 +117,7 @@ fn host(a: &Args) -> anyhow::Result<u8> {
         bundles.len(),
         a.out.display()
     );
-    Ok(match (m.campaign.findings.is_empty(), m.campaign.unreached.is_some() || m.campaign.stopped.is_some()) {
+    Ok(match (m.campaign.findings.is_empty(), m.campaign.untested.is_some() || m.campaign.stopped.is_some()) {
         (false, _) => EXIT_FAIL,
         // A shard that could not test or was stopped: no verdict (as each shard's).
         (true, true) => EXIT_ERROR,

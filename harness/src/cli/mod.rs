@@ -89,9 +89,12 @@ pub fn stop_on_signals(what: &'static str) -> anyhow::Result<std::sync::Arc<std:
             }
             let name = nix::sys::signal::Signal::try_from(info.ssi_signo as i32).map_or("a signal", |s| s.as_str());
             let pid = info.ssi_pid as i32;
+            // A host's group leader has its group's number; another member is looked up.
+            let host_group = gcl_harness::fuzz::host::session::is_host_group;
             let from_host = pid > 0
-                && nix::unistd::getpgid(Some(nix::unistd::Pid::from_raw(pid)))
-                    .is_ok_and(|g| gcl_harness::fuzz::host::session::is_host_group(g.as_raw()));
+                && (host_group(pid)
+                    || nix::unistd::getpgid(Some(nix::unistd::Pid::from_raw(pid)))
+                        .is_ok_and(|g| host_group(g.as_raw())));
             let by = if from_host { format!("{name} from the host under test (pid {pid})") } else { name.to_string() };
             *STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()) = Some(by);
             flag.store(true, Ordering::Relaxed);

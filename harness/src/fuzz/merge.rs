@@ -126,8 +126,8 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
         merged.runs += c.runs;
         merged.reached += c.reached;
         // A shard that could not test, or was stopped, leaves the whole campaign so.
-        if merged.unreached.is_none() {
-            merged.unreached = c.unreached.map(|w| format!("{}: {w}", dir.display()));
+        if merged.untested.is_none() {
+            merged.untested = c.untested.map(|w| format!("{}: {w}", dir.display()));
         }
         if merged.stopped.is_none() {
             merged.stopped = c.stopped.map(|w| format!("{}: {w}", dir.display()));

@@ -482,7 +482,7 @@ pub fn refuse_what_leaves_no_case(opts: &FuzzOptions) -> Result<(), FuzzError> {
     };
     match skipped_decision(opts, &b) {
         Some(why) => Err(FuzzError::NothingToTest(format!(
-            "every case starts with the suite's preamble, which {why} (`gcl spec` lists each decision's clause)"
+            "every case starts with the suite's preamble, which {why}: no case would run"
         ))),
         None => Ok(()),
     }

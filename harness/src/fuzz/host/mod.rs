@@ -359,9 +359,9 @@ pub struct Calibration {
     /// Runs it took.
     pub runs: u64,
     /// Why nothing could be measured: the run without misbehaviour did not reach the host
-    /// ([`unreached`]); the campaign ends there (its [`Campaign::unreached`]).
+    /// ([`unreached`]); the campaign ends there (its [`Campaign::untested`]).
     #[serde(skip)]
-    pub unreached: Option<String>,
+    pub untested: Option<String>,
 }
 
 /// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
@@ -385,7 +385,7 @@ pub fn calibrate(run: &HostRun, stop: &AtomicBool) -> Result<Calibration, RunErr
     let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
     if let Some(why) = unreached(&clean, &run.command) {
         let timeout_hang_ms = run.timeout_hang.as_millis() as u64;
-        return Ok(Calibration { runs: 1, unreached: Some(why), timeout_hang_ms, ..Default::default() });
+        return Ok(Calibration { runs: 1, untested: Some(why), timeout_hang_ms, ..Default::default() });
     }
     let n = clean.answers.max(1);
     let mut at = vec![1, n.div_ceil(2), n];
@@ -489,7 +489,7 @@ pub struct Campaign {
     /// Why the campaign could not test: its run without misbehaviour (calibration's, or run
     /// 0) did not reach the host ([`unreached`]), and it ended there.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub unreached: Option<String>,
+    pub untested: Option<String>,
     /// How a signal stopped the campaign (`stopped by SIGTERM after 3 of 1000 runs`), set by
     /// the caller that heard it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -515,7 +515,7 @@ struct Shared {
     minimize_runs: u64,
     error: Option<String>,
     /// Why the run without misbehaviour judged nothing of the host (see [`unreached`]).
-    unreached: Option<String>,
+    untested: Option<String>,
     /// Runs 0..taken have been taken in.
     taken: u64,
     /// Runs that ended but wait for an earlier one to be taken in first.
@@ -762,11 +762,11 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     } else {
         None
     };
-    if let Some(why) = calibration.as_ref().and_then(|c| c.unreached.clone()) {
+    if let Some(why) = calibration.as_ref().and_then(|c| c.untested.clone()) {
         return Ok(Campaign {
             elapsed_ms: started.elapsed().as_millis() as u64,
             calibration,
-            unreached: Some(why),
+            untested: Some(why),
             ..Default::default()
         });
     }
@@ -796,7 +796,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         notes: BTreeMap::new(),
         minimize_runs: 0,
         error: None,
-        unreached: None,
+        untested: None,
         taken: 0,
         ended: BTreeMap::new(),
     });
@@ -823,7 +823,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         if let Some(why) = unreached(&r, &opts.run.command) {
             return Ok(Campaign {
                 elapsed_ms: started.elapsed().as_millis() as u64,
-                unreached: Some(why),
+                untested: Some(why),
                 ..Default::default()
             });
         }
@@ -928,7 +928,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 && let Some(why) = missed
             {
                 if let Ok(mut sh) = shared.lock() {
-                    sh.unreached.get_or_insert(why);
+                    sh.untested.get_or_insert(why);
                 }
                 stop.store(true, Ordering::Relaxed);
                 turn.notify_all();
@@ -953,7 +953,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     // Runs that ended after one before them was called off: taken in (in order), unminimized.
     // (None after an unreached run 0: a campaign that could not test reports no finding.)
     let left = match shared.lock() {
-        Ok(mut sh) if sh.unreached.is_some() => {
+        Ok(mut sh) if sh.untested.is_some() => {
             sh.ended.clear();
             Vec::new()
         }
@@ -972,8 +972,20 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     if let Some(e) = sh.error {
         return Err(RunError::Io(std::io::Error::other(e)));
     }
+    let runs = completed.load(Ordering::Relaxed);
+    // No run at all, and nobody stopped it: the budget went before the first run.
+    let untested = sh.untested.or_else(|| {
+        (runs == 0 && !stop.load(Ordering::Relaxed)).then(|| {
+            let calibrating = calibration.as_ref().map_or(String::new(), |_| {
+                " (measuring the host's timeouts took it; a longer --duration, or --timeout-hang to skip the \
+                 measure)"
+                    .to_string()
+            });
+            format!("the budget ran out before the first run{calibrating}")
+        })
+    });
     Ok(Campaign {
-        runs: completed.load(Ordering::Relaxed),
+        runs,
         minimize_runs: sh.minimize_runs,
         elapsed_ms: started.elapsed().as_millis() as u64,
         findings: sh.findings,
@@ -985,7 +997,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         pass_runs: sh.pass.len() as u64,
         answer_kinds: sh.answer_kinds,
         reached: reached.load(Ordering::Relaxed),
-        unreached: sh.unreached,
+        untested,
         stopped: None,
     })
 }
