@@ -121,6 +121,15 @@ def _verdict(item, hand):
     return verdict
 
 
+def _what_failed(verdict):
+    """How a failing verdict begins: the clauses the host code broke, or, for a session in
+    which nobody talked to the hand (its ``host-session`` ERROR), that nothing was judged."""
+    ids = [f.id for f in verdict.failures]
+    if ids == ["host-session"]:
+        return "nothing of the host code was judged: it never talked to the hand (host-session)"
+    return "the host code broke GCL ({})".format(", ".join(ids))
+
+
 def _on_alarm(signum, frame):
     raise HostHang()
 
@@ -146,9 +155,8 @@ def pytest_runtest_call(item):
         verdict = _verdict(item, hand)
         if verdict is not None and verdict.failures:
             # The broken clause is the root cause; what the test raised followed from it.
-            raise pytest.fail.Exception("the host code broke GCL ({}); the test then failed with {}: {}\n{}".format(
-                ", ".join(f.id for f in verdict.failures), type(e).__name__, e, verdict.explain()),
-                pytrace=False) from None
+            raise pytest.fail.Exception("{}; the test then failed with {}: {}\n{}".format(
+                _what_failed(verdict), type(e).__name__, e, verdict.explain()), pytrace=False) from None
         if verdict is not None and verdict.fired:
             item.add_report_section("call", "gcl hand", verdict.explain())
         raise
@@ -158,6 +166,5 @@ def pytest_runtest_call(item):
             signal.signal(signal.SIGALRM, previous)
     verdict = _verdict(item, hand)
     if verdict.failures:
-        pytest.fail("the host code broke GCL ({}):\n{}".format(
-            ", ".join(f.id for f in verdict.failures), verdict.explain()), pytrace=False)
+        pytest.fail("{}:\n{}".format(_what_failed(verdict), verdict.explain()), pytrace=False)
     return result

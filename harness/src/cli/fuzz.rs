@@ -310,6 +310,12 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         eprintln!("gcl fuzz device: nothing left to test: {why}");
         return Ok(EXIT_ERROR);
     }
+    if s.runs == 0
+        && !s.interrupted
+        && let Some(why) = &report.stopped
+    {
+        eprintln!("gcl fuzz device: nothing tested: {why}");
+    }
     // Only new findings fail the run: what the baseline explains was known before. A
     // campaign stopped before its budget without one has no verdict.
     Ok(match (s.findings.iter().any(|f| f.is_new()), &report.stopped) {

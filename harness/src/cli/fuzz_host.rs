@@ -585,6 +585,11 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
         run.timeout_hang = std::time::Duration::from_millis(ms);
     }
     let r = run_once(&run, &schedule)?;
+    // A host that never talked to the hand reproduces nothing, and refutes nothing either.
+    if let Some(why) = gcl_harness::fuzz::host::unreached(&r, &run.command) {
+        eprintln!("gcl fuzz host: nothing tested: {why}");
+        return Ok(EXIT_ERROR);
+    }
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {
         eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, f.state, f.what);

@@ -1841,6 +1841,24 @@ pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
 mod tests {
     use super::*;
 
+    /// Issue 29 item 2: a campaign that draws only cases it drops ends after [`DROP_LIMIT`] of
+    /// them in a row, saying why; a case run in between starts the count again.
+    #[test]
+    fn a_campaign_that_drops_every_case_it_draws_ends() {
+        let mut sh = Shared::default();
+        for _ in 0..DROP_LIMIT - 1 {
+            assert!(!sh.dropped("rests on decision x"));
+        }
+        sh.dropped_in_a_row = 0;
+        for _ in 0..DROP_LIMIT - 1 {
+            assert!(!sh.dropped("rests on decision x"));
+        }
+        assert!(sh.dropped("needs EEPROM writes past the write budget"));
+        let why = sh.no_cases.unwrap();
+        assert!(why.contains("5000 drawn cases") && why.contains("the write budget"), "{why}");
+        assert_eq!(sh.dropped, 2 * DROP_LIMIT - 1);
+    }
+
     /// README: "minimization stops at `--duration`". A case of four actions fails on a hand
     /// that rejects lower-case commands at its one lower-case line: with runs to spend it is
     /// minimized to that line; found once a `--duration` has passed, it is kept as found,

@@ -148,7 +148,9 @@ impl FuzzReport {
             coverage: table(&opts.profile, &s.features),
             findings: s.findings.clone(),
             coverage_over_time: Vec::new(),
-            stopped: s.dead_hand.clone().or_else(|| s.no_cases.clone()),
+            stopped: s.dead_hand.clone().or_else(|| s.no_cases.clone()).or_else(|| {
+                (s.runs == 0 && !s.interrupted).then(|| "the budget ran out before the first case ran".to_string())
+            }),
         }
     }
 }
