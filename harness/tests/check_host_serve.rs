@@ -117,8 +117,6 @@ fn a_served_hand_nobody_talks_to_judges_nothing() {
 
     let (child, port, _) = serve(&[]);
     drop(std::fs::OpenOptions::new().read(true).write(true).open(&port).unwrap());
-    // (time for the hand to hear of the open before it is stopped)
-    std::thread::sleep(Duration::from_millis(300));
     let (code, out) = stop(child);
     assert_eq!(code, 2, "{out}");
     assert!(out.contains("the port was opened, but nothing was sent to the hand"), "{out}");

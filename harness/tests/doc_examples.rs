@@ -237,7 +237,9 @@ fn plans() -> Vec<(String, Run)> {
         // gcl fuzz host --help
         (
             "gcl fuzz host --duration 5m --report reports/host -- python3 my_host.py {port}".into(),
-            sh_as(leak(format!("gcl fuzz host --duration 3s --report reports/host -- {}", host("bh8-262"))), 0),
+            // (the hang timeout is given: measuring it would take the 3 s, and a campaign
+            // whose budget runs out before its first run tested nothing, exit 2)
+            sh_as(leak(format!("gcl fuzz host --duration 3s --timeout-hang 3s --report reports/host -- {}", host("bh8-262"))), 0),
         ),
         (
             "gcl fuzz host --ops delay-above,truncate --runs 200 -- ./host_c --port {port}".into(),

@@ -136,10 +136,15 @@ pub(super) fn print_clauses(report: &gcl_harness::report::RunReport) {
             println!("        {m}");
         }
     }
-    let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();
+    let session = report.cases.iter().any(|c| c.id == SESSION_CASE);
+    let failed = report.cases.iter().filter(|c| c.verdict.fails_run() && c.id != SESSION_CASE).count();
     let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
     let judged = report.judged().unwrap_or_default();
-    println!("{} case(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
+    if session {
+        println!("nothing judged: {idle} clause(s) not exercised ({judged})");
+    } else {
+        println!("{} clause(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
+    }
 }
 
 /// 0 every clause exercised passes, 1 a clause fails, 2 nothing judged (the host never
