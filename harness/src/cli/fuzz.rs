@@ -268,7 +268,7 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} drawn cases dropped: the model made no case of them, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
+        "{} runs ({} drawn cases dropped: the model made no case of them, they rest on a skipped decision, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),
