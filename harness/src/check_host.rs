@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use crate::fuzz::host::bundle::session_transcript;
-use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once};
+use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once_until};
 use crate::report::{CaseResult, Diff, Liveness, RunOptions, RunReport, Verdict};
 use crate::sim::misbehave::Schedule;
 use gcl_transcript::Transcript;
@@ -36,15 +36,103 @@ pub struct CheckHostOutcome {
 
 /// Runs the host once against a perfect hand and grades it.
 pub fn check_host(opts: &CheckHostOptions) -> Result<CheckHostOutcome, RunError> {
+    check_host_until(opts, &std::sync::atomic::AtomicBool::new(false))
+}
+
+/// [`check_host`], called off once `stop` is set ([`RunError::Cancelled`]: the host's
+/// process group stopped, its run folder removed).
+pub fn check_host_until(
+    opts: &CheckHostOptions,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<CheckHostOutcome, RunError> {
     let started = time::OffsetDateTime::now_utc();
     let t0 = Instant::now();
-    let r = run_once(&opts.run, &Schedule::default())?;
+    let r = run_once_until(&opts.run, &Schedule::default(), stop)?;
     Ok(grade(opts, r, started, t0))
 }
 
+/// The report of a check stopped before the host ended (`why`: `stopped by SIGTERM`): an
+/// ERROR that says so, and no clause judged.
+pub fn stopped_report(opts: &CheckHostOptions, why: &str, started: time::OffsetDateTime, t0: Instant) -> RunReport {
+    let elapsed = t0.elapsed().as_secs_f64() * 1000.0;
+    let message = format!("{why} before the host ended: nothing judged");
+    let mut cases = vec![case(SESSION_CASE, "the host talks to the hand", "host: process", Verdict::Error, &[], "")];
+    cases[0].message = Some(message.clone());
+    cases[0].transcript = None;
+    for clause in HostClause::ALL {
+        let mut c =
+            case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), Verdict::Skip, &[], "");
+        c.message = Some("not exercised: the check was stopped".into());
+        c.transcript = None;
+        cases.push(c);
+    }
+    for c in &mut cases {
+        c.duration_ms = elapsed;
+    }
+    let mut report =
+        host_report(&opts.run.command, &opts.run.profile.id, started, elapsed, opts.run.hand_seed, false, cases);
+    report.stopped =
+        Some(crate::report::Stopped { cause: crate::report::StopCause::Signal, case: SESSION_CASE.into(), message });
+    report
+}
+
 /// Grades a run (the host's traffic clause by clause, how it ended, the golden): the body of
-/// [`check_host`], also used by `gcl check-host --serve` for a served session.
+/// [`check_host`].
 pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTime, t0: Instant) -> CheckHostOutcome {
+    let unreached = crate::fuzz::host::unreached(&r, &opts.run.command);
+    grade_as(opts, r, started, t0, unreached)
+}
+
+/// [`grade`] for a session `gcl check-host --serve` served until it was stopped: one nobody
+/// opened, or in which nobody sent a byte, judged nothing.
+pub fn grade_served(
+    opts: &CheckHostOptions,
+    r: RunResult,
+    started: time::OffsetDateTime,
+    t0: Instant,
+) -> CheckHostOutcome {
+    let sent = r.exchanges.iter().any(|e| e.dir == crate::fuzz::host::Dir::Host && !e.bytes.is_empty());
+    let unreached = match (r.port_opened, sent) {
+        (_, true) => None,
+        (false, _) => Some("nobody opened the port before the hand was stopped".to_string()),
+        (true, false) => {
+            Some("the port was opened, but nothing was sent to the hand before it was stopped".to_string())
+        }
+    };
+    grade_as(opts, r, started, t0, unreached)
+}
+
+/// The id of the case that says a session judged nothing ([`grade`]) or was stopped.
+pub const SESSION_CASE: &str = "host-session";
+
+/// Whether a clause was exercised by the host's traffic, and if not, why: a clause that no
+/// byte of the host exercised is "not exercised", never PASS.
+fn not_exercised(clause: HostClause, r: &RunResult) -> Option<&'static str> {
+    let rt = r.commands.iter().any(|c| c.ends_with("LOOP"));
+    // Host bytes after the hand's: it sent again once an answer had come (or was coming).
+    let after_answer = r
+        .exchanges
+        .iter()
+        .skip_while(|e| e.dir != crate::fuzz::host::Dir::Hand || e.bytes.is_empty())
+        .any(|e| e.dir == crate::fuzz::host::Dir::Host && !e.bytes.is_empty());
+    // ^C is no line: a host that sent nothing else has ended no line.
+    let lines = r.exchanges.iter().any(|e| e.dir == crate::fuzz::host::Dir::Host && e.bytes.iter().any(|&b| b != 0x03));
+    match clause {
+        HostClause::LineEnding if !lines => Some("the host sent nothing but ^C"),
+        HostClause::ValidCommands if r.commands.is_empty() => Some("the host sent no command"),
+        HostClause::WaitsForAnswer if !after_answer => Some("the host sent nothing after an answer began"),
+        HostClause::RealtimeBlocks | HostClause::LeavesCleanly if !rt => Some("the host never entered RealTime"),
+        _ => None,
+    }
+}
+
+fn grade_as(
+    opts: &CheckHostOptions,
+    r: RunResult,
+    started: time::OffsetDateTime,
+    t0: Instant,
+    unreached: Option<String>,
+) -> CheckHostOutcome {
     let verdicts = judge(&r, &opts.ok_exit_codes);
     let header = format!(
         "id: check-host-session\ntitle: {}\nclause: host: gcl check-host\nlevel: INFO\nprofile: {}\n",
@@ -53,24 +141,37 @@ pub fn grade(opts: &CheckHostOptions, r: RunResult, started: time::OffsetDateTim
     );
     let session = session_transcript(&header, &r.exchanges);
     let mut cases = Vec::new();
+    if let Some(why) = &unreached {
+        // Nothing to judge: one ERROR that says why, and no clause judged.
+        let mut c = case(SESSION_CASE, "the host talks to the hand", "host: process", Verdict::Error, &[], &session);
+        c.message = Some(format!("nothing judged: {why}"));
+        c.transcript = None;
+        c.duration_ms = r.elapsed.as_secs_f64() * 1000.0;
+        cases.push(c);
+    }
     for clause in HostClause::ALL {
         let broken: Vec<String> = if clause == HostClause::ExitsCleanly {
             verdicts.iter().filter(|v| v.kind != FindingKind::Violation).map(|v| v.message.clone()).collect()
         } else {
             r.violations.iter().filter(|v| v.clause == clause).map(|v| format!("{}: {}", v.kind, v.detail)).collect()
         };
-        // A host that never entered RealTime sent no block: that clause did not apply.
-        let idle = clause == HostClause::RealtimeBlocks && !r.commands.iter().any(|c| c.ends_with("LOOP"));
+        let idle = if unreached.is_some() {
+            Some("the host never talked to the hand")
+        } else if broken.is_empty() {
+            not_exercised(clause, &r)
+        } else {
+            None
+        };
         let verdict = match (&r.end, clause, broken.is_empty()) {
-            (_, _, true) if idle => Verdict::Skip,
+            _ if idle.is_some() => Verdict::Skip,
             (_, _, true) => Verdict::Pass,
             (HostEnd::Hung(_) | HostEnd::OverBudget(_), HostClause::ExitsCleanly, _) => Verdict::Timeout,
             _ => Verdict::Fail,
         };
         let mut c =
             case(&format!("host-{}", clause.id()), clause.title(), clause.spec_clause(), verdict, &broken, &session);
-        if verdict == Verdict::Skip {
-            c.message = Some("not exercised: the host never entered RealTime".into());
+        if let Some(why) = idle {
+            c.message = Some(format!("not exercised: {why}"));
             c.transcript = None;
         }
         // Every clause is judged over the whole session (one not exercised found so there):

@@ -109,5 +109,6 @@ pub fn serve(
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
         talking_at_end: false,
+        port_opened: log.opened,
     })
 }

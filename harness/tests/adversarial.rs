@@ -382,7 +382,7 @@ fn fuzz_device_holds_its_folders_and_reports_on_sigterm() {
     let done = wait_bounded(first.0.take().unwrap(), Duration::from_secs(120));
     let err = String::from_utf8_lossy(&done.stderr);
     assert_eq!(done.status.code(), Some(1), "findings expected under fget-reversed: {err}");
-    assert!(err.contains("stopped by a signal"), "{err}");
+    assert!(err.contains("stopped by SIGTERM after "), "{err}");
     for f in ["fuzz-device.json", "junit.xml"] {
         assert!(rep.join(f).is_file(), "{f} was not written");
     }
@@ -450,7 +450,9 @@ fn an_include_bomb_is_refused_within_the_memory_limit() {
 fn a_bundle_cannot_name_a_file_outside_it_as_its_profile() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("found");
-    let r = gcl(&["fuzz", "host", "--runs", "2", "--out", s(&out), "--", "sh", "-c", "kill -SEGV $$"]);
+    // It talks to the hand (a ^C), then crashes: a finding (a host that never talks is none).
+    let host = "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; kill -SEGV $$";
+    let r = gcl(&["fuzz", "host", "--runs", "2", "--out", s(&out), "--", "sh", "-c", host]);
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     let bundle = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).find(|p| p.is_dir()).unwrap();
     let secret = dir.path().join("shadow");
@@ -552,7 +554,7 @@ fn a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid() {
     std::fs::remove_file(disk.at.join("filler")).unwrap();
     disk.fill_but(24 << 10);
     let out = disk.at.join("found");
-    let host = "head -c 65536 /dev/zero | tr '\\0' x >&2; kill -SEGV $$";
+    let host = "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; head -c 65536 /dev/zero | tr '\\0' x >&2; kill -SEGV $$";
     let r = gcl(&["fuzz", "host", "--runs", "1", "--out", s(&out), "--", "sh", "-c", host]);
     assert_eq!(r.code, Some(2), "{}", r.stderr);
     assert!(r.stderr.contains("No space left") && r.stderr.contains("stderr.txt"), "{}", r.stderr);
@@ -604,4 +606,276 @@ fn a_banner_flood_is_a_flood_not_a_restart() {
     let model = gcl_harness::align::model_run(&p, &t).expect("the golden passes on the model");
     let sig = gcl_harness::align::signature(&p, &t, &model, &out, true).expect("a failure has a signature");
     assert_eq!((sig.kind.as_str(), sig.detail.as_str()), ("extra", "flood"), "{sig:?}");
+}
+
+// --- Issue 29 (no green without evidence) and issue 32 item 6 ------------------------------
+
+/// A host report's three files in `dir`: `report.json` parsed, `junit.xml` and `report.html`.
+fn host_reports(dir: &Path) -> (serde_json::Value, String, String) {
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+    (serde_json::from_str(&read("report.json")).unwrap(), read("junit.xml"), read("report.html"))
+}
+
+/// Issue 29 item 1: a host that never ran, never opened the port, or opened it and sent
+/// nothing exercised no clause. `check-host` says so in every writer (an ERROR naming the
+/// command, how it ended and the end of its stderr; every clause "not exercised"; nothing
+/// PASS) and exits 2, where it gave "PASSED", four PASS rows and exit 0.
+#[test]
+fn check_host_passes_no_clause_of_a_host_that_never_talked() {
+    let dir = tempfile::tempdir().unwrap();
+    let py = deps::python();
+    let hosts: [(&[&str], &str, &str); 5] = [
+        (&["true"], "the host never opened the port: `true` exited with code 0", "wrote nothing on stderr"),
+        (&["false"], "the host never opened the port: `false` exited with code 1", "wrote nothing on stderr"),
+        (&[&py, "no_such.py", "{port}"], "the host never opened the port", "no_such.py"),
+        (&["sh", "-c", "echo going >&2; exit 3"], "exited with code 3", "the last lines of its stderr: going"),
+        (
+            &["sh", "-c", "exec 3<>\"$GCL_PORT\"; sleep 0.2; echo opened >&2"],
+            "the host opened the port but sent nothing",
+            "opened",
+        ),
+    ];
+    for (i, (host, said, stderr)) in hosts.iter().enumerate() {
+        let rep = dir.path().join(format!("r{i}"));
+        let mut args = vec!["check-host", "--profile", "seed", "--report", s(&rep), "--"];
+        args.extend_from_slice(host);
+        let r = gcl_bounded(Some(dir.path()), &args, Duration::from_secs(60));
+        assert_eq!(r.code, Some(2), "{host:?}: {}{}", r.stdout, r.stderr);
+        assert!(r.stdout.lines().any(|l| l.starts_with("ERROR") && l.contains("host-session")), "{}", r.stdout);
+        assert!(r.stdout.contains(said) && r.stdout.contains(stderr), "{host:?}: {}", r.stdout);
+        assert!(!r.stdout.lines().any(|l| l.starts_with("PASS")), "{host:?}: {}", r.stdout);
+        let (json, junit, html) = host_reports(&rep);
+        let cases = json["cases"].as_array().unwrap();
+        assert_eq!(cases.len(), 7, "{json}");
+        for c in cases {
+            let want = if c["id"] == "host-session" { "ERROR" } else { "SKIP" };
+            assert_eq!(c["verdict"], want, "{host:?}: {c}");
+        }
+        assert!(json["cases"][0]["message"].as_str().unwrap().contains(said), "{json}");
+        assert_eq!(json["host"]["reached"], 0, "{json}");
+        assert!(junit.contains(r#"errors="1""#) && junit.contains(r#"value="0 of 6 clauses exercised""#), "{junit}");
+        assert!(html.contains("<strong>NOT TESTED</strong>") && !html.contains("PASSED"), "{html}");
+    }
+}
+
+/// Issue 29 item 1: a host that talked is judged on what it exercised, and every writer says
+/// how much: a host that never entered RealTime has not shown it leaves it cleanly either.
+#[test]
+fn check_host_says_how_many_clauses_the_host_exercised() {
+    let Some(py) = deps::python_with(&["serial"]) else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("rep");
+    let host = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/gclhost.py");
+    let r = gcl(&["check-host", "--profile", "seed", "--report", s(&rep), "--", &py, s(&host), "{port}"]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("(4 of 6 clauses exercised)"), "{}", r.stdout);
+    let (json, junit, html) = host_reports(&rep);
+    let verdict =
+        |id: &str| json["cases"].as_array().unwrap().iter().find(|c| c["id"] == id).unwrap()["verdict"].clone();
+    assert_eq!(verdict("host-leaves-cleanly"), "SKIP", "{json}");
+    assert_eq!(verdict("host-realtime-blocks"), "SKIP", "{json}");
+    assert_eq!(verdict("host-valid-commands"), "PASS", "{json}");
+    assert_eq!(json["host"]["reached"], 1, "{json}");
+    assert!(junit.contains(r#"value="4 of 6 clauses exercised""#), "{junit}");
+    assert!(html.contains("4 of 6 clauses exercised"), "{html}");
+}
+
+/// Issue 29 item 2: a campaign whose host never talks to the hand stops after its first run
+/// and exits 2 with the reason in every report, where it ran its whole budget and said NO
+/// FINDING. With --jobs 2 and no calibration too, and none of the runs in flight is a finding.
+#[test]
+fn fuzz_host_stops_at_once_when_no_run_reaches_the_host() {
+    let dir = tempfile::tempdir().unwrap();
+    let py = deps::python();
+    let hosts: [(&[&str], &[&str], &str); 3] = [
+        (&[], &[&py, "no_such.py", "{port}"], "the host never opened the port"),
+        // It never opens the port: each run lasts its budget.
+        (&["--run-budget", "2s", "--timeout-hang", "1s", "--jobs", "2"], &["sleep", "30"], "never opened the port"),
+        (
+            &["--timeout-hang", "1s"],
+            &["sh", "-c", "exec 3<>\"$GCL_PORT\"; sleep 0.2"],
+            "opened the port but sent nothing",
+        ),
+    ];
+    for (i, (opts, host, said)) in hosts.iter().enumerate() {
+        let (rep, out) = (dir.path().join(format!("r{i}")), dir.path().join(format!("o{i}")));
+        let mut args =
+            vec!["fuzz", "host", "--profile", "seed", "--duration", "10m", "--report", s(&rep), "--out", s(&out)];
+        args.extend_from_slice(opts);
+        args.push("--");
+        args.extend_from_slice(host);
+        let r = gcl_bounded(Some(dir.path()), &args, Duration::from_secs(90));
+        assert_eq!(r.code, Some(2), "{host:?}: {}", r.stderr);
+        assert!(r.stderr.contains("nothing tested: ") && r.stderr.contains(said), "{host:?}: {}", r.stderr);
+        let (json, junit, html) = host_reports(&rep);
+        assert_eq!(json["stopped"]["cause"], "cannot-test", "{json}");
+        assert_eq!(json["summary"]["ERROR"], 1, "{json}");
+        assert_eq!(json["host"]["findings"].as_array().map_or(0, Vec::len), 0, "{host:?}: {json}");
+        assert!(junit.contains(r#"errors="1""#) && junit.contains("nothing tested"), "{junit}");
+        assert!(html.contains("<strong>NOT TESTED</strong>") && !html.contains("NO FINDING"), "{html}");
+        let fuzz: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(rep.join("fuzz.json")).unwrap()).unwrap();
+        assert!(fuzz["untested"].as_str().is_some_and(|u| u.contains(said)), "{fuzz}");
+        assert_eq!(fuzz["reached"], 0, "{fuzz}");
+    }
+}
+
+/// Issue 29 item 2: what can be known at the start is refused there: `--runs 0`, and a
+/// `--skip-decision` every case rests on (the suite's preamble does), where the campaign
+/// dropped every case it drew, for ever, and then said NO FINDING.
+#[test]
+fn campaigns_that_would_test_nothing_are_refused_at_the_start() {
+    for args in [
+        &["fuzz", "device", "--target", "sim:seed", "--runs", "0", "-q"][..],
+        &["fuzz", "host", "--runs", "0", "--", "true"],
+        &["fuzz", "device", "--target", "sim:seed", "--runs", "3", "--shard", "4/4", "-q"],
+        &["fuzz", "host", "--runs", "2", "--shard", "3/4", "--", "true"],
+    ] {
+        let r = gcl_bounded(None, args, Duration::from_secs(30));
+        assert_eq!(r.code, Some(2), "{args:?}: {}{}", r.stdout, r.stderr);
+        assert!(r.stderr.contains("--runs"), "{args:?}: {}", r.stderr);
+    }
+    let r = gcl_bounded(
+        None,
+        &["fuzz", "device", "--target", "sim", "--skip-decision", "framing-line-ending", "--runs", "40"],
+        Duration::from_secs(60),
+    );
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("nothing to test") && r.stderr.contains("framing-line-ending"), "{}", r.stderr);
+}
+
+/// Waits until `file` has at least `n` lines (or fails after a minute).
+fn wait_for_lines(file: &Path, n: usize) {
+    let end = Instant::now() + Duration::from_secs(60);
+    while std::fs::read_to_string(file).map_or(0, |t| t.lines().count()) < n {
+        assert!(Instant::now() < end, "{} never had {n} lines", file.display());
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Starts `gcl ARGS` in `cwd` in a process group of its own (so what a host sends to gcl's
+/// group misses the test), under [`MEMORY`].
+fn spawn_gcl(cwd: &Path, args: &[&str]) -> std::process::Child {
+    use std::os::unix::process::CommandExt;
+    let mut c = Command::new("prlimit");
+    c.arg(MEMORY).arg("--").arg(GCL).args(args).current_dir(cwd).process_group(0);
+    c.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    c.spawn().unwrap()
+}
+
+/// Issue 29 item 3: SIGTERM on `fuzz device`, with and without `--quiet`: reports written,
+/// each saying "stopped by SIGTERM after N runs", and exit 2 without a finding. Without
+/// `--quiet` it died of the signal (143) with no report: the progress ticker, started before
+/// the signals were blocked, took it.
+#[test]
+fn a_stopped_device_campaign_says_so_and_has_no_verdict() {
+    for quiet in [true, false] {
+        let dir = tempfile::tempdir().unwrap();
+        let rep = dir.path().join("rep");
+        let mut args = vec!["fuzz", "device", "--target", "sim:seed", "--duration", "10m", "--report", s(&rep)];
+        if quiet {
+            args.push("-q");
+        }
+        let child = spawn_gcl(dir.path(), &args);
+        let lock = rep.join(".gcl.lock");
+        let end = Instant::now() + Duration::from_secs(60);
+        while !std::fs::read_to_string(&lock).is_ok_and(|t| t.contains("pid")) {
+            assert!(Instant::now() < end, "the campaign never took its folder");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        std::thread::sleep(Duration::from_secs(1));
+        terminate(&child);
+        let done = wait_bounded(child, Duration::from_secs(120));
+        let err = String::from_utf8_lossy(&done.stderr);
+        assert_eq!(done.status.code(), Some(2), "quiet {quiet}: {} {err}", done.status);
+        assert!(err.contains("stopped by SIGTERM after "), "{err}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(rep.join("fuzz-device.json")).unwrap()).unwrap();
+        assert!(json["stopped"].as_str().is_some_and(|st| st.starts_with("stopped by SIGTERM after ")), "{json}");
+        let junit = std::fs::read_to_string(rep.join("junit.xml")).unwrap();
+        assert!(junit.contains(r#"errors="1""#) && junit.contains("stopped by SIGTERM"), "{junit}");
+        let html = std::fs::read_to_string(rep.join("fuzz-device.html")).unwrap();
+        assert!(html.contains("<strong>STOPPED</strong>") && !html.contains("NO FINDING"), "{html}");
+    }
+}
+
+/// Issue 29 item 3: SIGTERM on `fuzz host` a few runs in: every report says it was stopped
+/// after how many runs, and it exits 2 without a finding, where it said NO FINDING, exit 0.
+#[test]
+fn a_stopped_host_campaign_says_so_and_has_no_verdict() {
+    let dir = tempfile::tempdir().unwrap();
+    let host = "echo run >> runs; exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 0.1";
+    let args = ["fuzz", "host", "--profile", "seed", "--duration", "1h", "--timeout-hang", "3s"];
+    let child =
+        spawn_gcl(dir.path(), &[&args[..], &["--report", "rep", "--out", "out", "--", "sh", "-c", host]].concat());
+    wait_for_lines(&dir.path().join("runs"), 3);
+    terminate(&child);
+    let done = wait_bounded(child, Duration::from_secs(60));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{} {err}", done.status);
+    let (json, junit, html) = host_reports(&dir.path().join("rep"));
+    let st = json["stopped"]["message"].as_str().unwrap_or_default();
+    assert!(st.starts_with("stopped by SIGTERM after ") && st.contains(" runs"), "{json}");
+    assert_eq!(json["stopped"]["cause"], "signal", "{json}");
+    assert!(json["host"]["reached"].as_u64().is_some_and(|n| n >= 2), "{json}");
+    assert!(junit.contains(r#"errors="1""#) && junit.contains("stopped by SIGTERM"), "{junit}");
+    assert!(html.contains("<strong>STOPPED</strong>") && !html.contains("NO FINDING"), "{html}");
+    let fuzz = std::fs::read_to_string(dir.path().join("rep/fuzz.json")).unwrap();
+    assert!(fuzz.contains("\"stopped\": \"stopped by SIGTERM after "), "{fuzz}");
+}
+
+/// Issue 29 item 3: a host that sends SIGTERM to gcl's own process group stops the campaign,
+/// and the report names who sent it, where it said "NO FINDING: no finding in 0 runs", exit 0.
+#[test]
+fn a_host_that_terminates_gcl_stops_the_campaign_without_a_verdict() {
+    let dir = tempfile::tempdir().unwrap();
+    let py = deps::python();
+    let host = "import os, signal, time; os.killpg(os.getpgid(os.getppid()), signal.SIGTERM); time.sleep(5)";
+    let args = ["fuzz", "host", "--profile", "seed", "--runs", "20", "--report", "rep", "--out", "out"];
+    let child = spawn_gcl(dir.path(), &[&args[..], &["--", &py, "-c", host]].concat());
+    let done = wait_bounded(child, Duration::from_secs(90));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{} {err}", done.status);
+    let (json, _, html) = host_reports(&dir.path().join("rep"));
+    let st = json["stopped"]["message"].as_str().unwrap_or_default();
+    assert!(st.starts_with("stopped by SIGTERM from the host under test (pid "), "{json}");
+    assert!(!html.contains("NO FINDING"), "{html}");
+}
+
+/// Issue 32 item 6: SIGTERM on `check-host` stops the host's process group (a host that
+/// ignores SIGTERM is killed after a grace) and removes the run's `gcl-host-run-*` folder;
+/// the reports say the check was stopped, and it exits 2. It died of the signal and left both.
+#[test]
+fn a_stopped_check_leaves_no_host_and_no_run_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path().join("tmp");
+    std::fs::create_dir(&tmp).unwrap();
+    let host = "trap '' TERM; echo $$ >> pids; exec sleep 600";
+    let mut c = Command::new(GCL);
+    c.args(["check-host", "--profile", "seed", "--report", "rep", "--", "sh", "-c", host]);
+    c.current_dir(dir.path()).env("TMPDIR", &tmp).stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    let child = c.spawn().unwrap();
+    wait_for_lines(&dir.path().join("pids"), 1);
+    let runs = || {
+        std::fs::read_dir(&tmp)
+            .unwrap()
+            .filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with("gcl-host-run-"))
+            .count()
+    };
+    assert_eq!(runs(), 1, "the run's folder is where TMPDIR says");
+    terminate(&child);
+    let done = wait_bounded(child, Duration::from_secs(60));
+    let out = String::from_utf8_lossy(&done.stdout);
+    assert_eq!(done.status.code(), Some(2), "{} {out}", done.status);
+    assert!(out.contains("stopped by SIGTERM before the host ended: nothing judged"), "{out}");
+    let pid: i32 = std::fs::read_to_string(dir.path().join("pids")).unwrap().trim().parse().unwrap();
+    // The host was gcl's child: once gcl is gone it is reaped by init, so a pid still there is
+    // a host still running (or a zombie nobody waits for).
+    let alive = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|st| !st.contains(") Z "));
+    assert!(!alive, "host {pid} left running");
+    assert_eq!(runs(), 0, "the run's folder was left behind");
+    let (json, junit, html) = host_reports(&dir.path().join("rep"));
+    assert_eq!(json["stopped"]["cause"], "signal", "{json}");
+    assert!(junit.contains(r#"errors="1""#), "{junit}");
+    assert!(html.contains("<strong>STOPPED</strong>"), "{html}");
 }

@@ -72,12 +72,11 @@ fn a_served_hand_grades_whoever_connected() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
     assert_eq!(report["target"], "host: good host");
-    // Every clause passes, but RealTime's: the host never entered it, so it is not exercised.
+    // Every clause passes, but RealTime's two: the host never entered it, so they are not
+    // exercised.
     let cases = report["cases"].as_array().unwrap();
-    assert!(
-        cases.iter().all(|c| c["verdict"] == "PASS" || (c["id"] == "host-realtime-blocks" && c["verdict"] == "SKIP")),
-        "{cases:?}"
-    );
+    let realtime = |c: &serde_json::Value| c["id"] == "host-realtime-blocks" || c["id"] == "host-leaves-cleanly";
+    assert!(cases.iter().all(|c| c["verdict"] == if realtime(c) { "SKIP" } else { "PASS" }), "{cases:?}");
 
     let (child, port, _) = serve(&[]);
     talk(&port, &[b"FGET DP\r\n"]);
@@ -98,4 +97,27 @@ fn a_served_hand_plays_a_schedule_of_the_fuzzer() {
     // A command line without --serve still needs its host command.
     let o = Command::new(env!("CARGO_BIN_EXE_gcl")).args(["check-host", "--profile", "seed"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// Issue 29 item 1: a session nobody opened, or opened without sending a byte, judged
+/// nothing: an ERROR that says so and exit 2 (it was "PASS" on every clause and exit 0).
+#[test]
+fn a_served_hand_nobody_talks_to_judges_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (child, _, _) = serve(&["--report", dir.path().to_str().unwrap()]);
+    let (code, out) = stop(child);
+    assert_eq!(code, 2, "{out}");
+    assert!(out.lines().any(|l| l.starts_with("ERROR") && l.contains("host-session")), "{out}");
+    assert!(out.contains("nobody opened the port before the hand was stopped"), "{out}");
+    assert!(!out.lines().any(|l| l.starts_with("PASS")), "{out}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["summary"]["ERROR"], 1, "{report}");
+    assert_eq!(report["summary"]["PASS"], 0, "{report}");
+
+    let (child, port, _) = serve(&[]);
+    drop(std::fs::OpenOptions::new().read(true).write(true).open(&port).unwrap());
+    let (code, out) = stop(child);
+    assert_eq!(code, 2, "{out}");
+    assert!(out.contains("the port was opened, but nothing was sent to the hand"), "{out}");
 }

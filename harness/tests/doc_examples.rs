@@ -237,17 +237,19 @@ fn plans() -> Vec<(String, Run)> {
         // gcl fuzz host --help
         (
             "gcl fuzz host --duration 5m --report reports/host -- python3 my_host.py {port}".into(),
-            sh_as(leak(format!("gcl fuzz host --duration 3s --report reports/host -- {}", host("bh8-262"))), 0),
+            // (the hang timeout is given: measuring it would take the 3 s, and a campaign
+            // whose budget runs out before its first run tested nothing, exit 2)
+            sh_as(leak(format!("gcl fuzz host --duration 3s --timeout-hang 3s --report reports/host -- {}", host("bh8-262"))), 0),
         ),
         (
             "gcl fuzz host --ops delay-above,truncate --runs 200 -- ./host_c --port {port}".into(),
             sh_as(leak(format!("gcl fuzz host --ops delay-above,truncate --runs 10 -- {}", host("bh8-262"))), 0),
         ),
-        // A bundle the line needs: a campaign against a host that exits 3 writes one.
+        // A bundle the line needs: a campaign against a host that talks (a ^C) and exits 3 writes one.
         (
             "gcl fuzz host --replay fuzz-host-findings/hang-1a2b3c4d -- python3 my_host.py {port}".into(),
             sh_as(
-                "gcl fuzz host --runs 2 --out fuzz-host-findings -- sh -c 'exit 3'; gcl fuzz host --replay fuzz-host-findings/exit-code-* -- sh -c 'exit 3'",
+                r#"h='exec 3<>"$GCL_PORT"; printf "\003" >&3; exit 3'; gcl fuzz host --runs 2 --out fuzz-host-findings -- sh -c "$h"; gcl fuzz host --replay fuzz-host-findings/exit-code-* -- sh -c "$h""#,
                 1,
             ),
         ),

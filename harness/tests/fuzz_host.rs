@@ -495,13 +495,19 @@ fn check_host_cli_compares_with_a_golden_and_exits_like_conform() {
 }
 
 /// A host that never talks to the hand (it could not open the port it was given, and exits
-/// with an accepted code) has no finding, but the campaign says it tried little or nothing
-/// instead of printing host timeouts it never measured; a host that talks gets its timeouts.
+/// with an accepted code) tests nothing: the campaign ends after its first run and says so,
+/// exit 2, instead of printing host timeouts it never measured. One that talks but takes no
+/// answer (it sends a ^C and leaves) is warned about: it tried little.
 #[test]
 fn a_host_that_never_takes_an_answer_is_warned_about() {
     let dir = tempfile::tempdir().unwrap();
     let (code, _, err) = gcl(&["fuzz", "host", "--runs", "2", "--out", dir.path().to_str().unwrap(), "--", "true"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("nothing tested: the host never opened the port: `true` exited with code 0"), "{err}");
+    assert!(!err.contains("host timeouts (silence at"), "{err}");
+    let host = "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3";
+    let (code, _, err) =
+        gcl(&["fuzz", "host", "--runs", "2", "--out", dir.path().to_str().unwrap(), "--", "sh", "-c", host]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning: host timeouts not measured: the host took no answer"), "{err}");
-    assert!(!err.contains("host timeouts (silence at"), "{err}");
 }

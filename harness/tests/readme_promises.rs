@@ -840,6 +840,39 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/readme_promises.rs::sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports"],
     ),
     (
+        "stopped campaign says `stopped by SIGTERM after N of M runs`: without a new finding it exits 2 (no verdict)",
+        &["harness/tests/adversarial.rs::a_stopped_device_campaign_says_so_and_has_no_verdict"],
+    ),
+    (
+        "Options that leave no case are refused at the start (`--runs 0`; a `--skip-decision` that every case's preamble rests on, such as `framing-line-ending`)",
+        &["harness/tests/adversarial.rs::campaigns_that_would_test_nothing_are_refused_at_the_start"],
+    ),
+    (
+        "is an ERROR in `check-host` (the command, how it ended and the last lines of its stderr; every clause \"not exercised\") and ends a `fuzz host` campaign after its first run: exit 2 either way",
+        &[
+            "harness/tests/adversarial.rs::check_host_passes_no_clause_of_a_host_that_never_talked",
+            "harness/tests/adversarial.rs::fuzz_host_stops_at_once_when_no_run_reaches_the_host",
+        ],
+    ),
+    (
+        "every report says how much it judged (`4 of 6 clauses exercised`, `12 of 12 runs reached the host`)",
+        &[
+            "harness/tests/adversarial.rs::check_host_says_how_many_clauses_the_host_exercised",
+            "harness/tests/adversarial.rs::a_stopped_host_campaign_says_so_and_has_no_verdict",
+        ],
+    ),
+    (
+        "A campaign a signal stopped says `stopped by SIGTERM after N of M runs` in every report and exits 2 without a finding.",
+        &[
+            "harness/tests/adversarial.rs::a_stopped_host_campaign_says_so_and_has_no_verdict",
+            "harness/tests/adversarial.rs::a_host_that_terminates_gcl_stops_the_campaign_without_a_verdict",
+        ],
+    ),
+    (
+        "Ctrl-C or SIGTERM on `check-host` stops the host's process group (SIGTERM, then SIGKILL half a second later) and removes its run folder.",
+        &["harness/tests/adversarial.rs::a_stopped_check_leaves_no_host_and_no_run_folder"],
+    ),
+    (
         "is the same hand as a context manager (`hand.verdict` after it)",
         &["python/tests/test_wheel.py::test_a_hand_grades_its_session"],
     ),
@@ -1096,8 +1129,8 @@ fn certify_and_the_fuzzers_and_check_host_print_progress_as_conform_does() {
     let runs: [(&str, &[&str]); 4] = [
         ("gcl certify: ", &["certify", "--target", "sim:seed", "--only", "framing-*", "--partial", "--out", "cert"]),
         ("gcl fuzz device: ", &["fuzz", "device", "--target", "sim", "--runs", "5"]),
-        ("gcl fuzz host: ", &["fuzz", "host", "--runs", "2", "--timeout-hang", "3s", "--", "true"]),
-        ("gcl check-host: ", &["check-host", "--", "true"]),
+        ("gcl fuzz host: ", &["fuzz", "host", "--runs", "2", "--timeout-hang", "3s", "--", "sh", "-c", TALKS]),
+        ("gcl check-host: ", &["check-host", "--", "sh", "-c", TALKS]),
     ];
     for (prefix, args) in runs {
         let out = Command::new(GCL).args(args).current_dir(dir.path()).output().unwrap();
@@ -1154,7 +1187,7 @@ fn fuzz_host_measures_its_hang_timeout_unless_given_one() {
         let out = Command::new(GCL)
             .args(["fuzz", "host", "--runs", "1", "--report", report])
             .args(extra)
-            .args(["--", "true"])
+            .args(["--", "sh", "-c", TALKS])
             .current_dir(dir.path())
             .output()
             .unwrap();
@@ -1201,7 +1234,8 @@ fn conform_dead_after_defaults_to_5() {
 
 /// "a SIGTERM (a CI job's time limit) ends the campaign at once (the hosts in flight are
 /// killed), bundles and reports still written": the host sleeps for ten minutes; the campaign
-/// ends without waiting for it, the host is gone and the reports are there. (The one minute
+/// ends without waiting for it, the host is gone and the reports are there, saying it was
+/// stopped ("exits 2 ... when a signal stopped it without a finding"). (The one minute
 /// allowed is a guard against a hang, not a measure.)
 #[test]
 fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
@@ -1235,7 +1269,7 @@ fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
         }
         std::thread::sleep(Duration::from_millis(50));
     };
-    assert_eq!(status.code(), Some(0), "no finding yet: {status}");
+    assert_eq!(status.code(), Some(2), "stopped without a finding: no verdict: {status}");
     for pid in std::fs::read_to_string(&pids).unwrap().split_whitespace() {
         let pid = Pid::from_raw(pid.parse().unwrap());
         assert!(kill(pid, None).is_err(), "host {pid} left running");
@@ -1243,7 +1277,13 @@ fn sigterm_ends_a_host_campaign_killing_its_hosts_and_writing_its_reports() {
     for f in ["fuzz.json", "junit.xml", "report.json", "report.html"] {
         assert!(dir.path().join("rep").join(f).is_file(), "{f} not written");
     }
+    let report = std::fs::read_to_string(dir.path().join("rep/report.json")).unwrap();
+    assert!(report.contains("stopped by SIGTERM after 0"), "{report}");
 }
+
+/// A host that talks to the hand (it opens the port and sends one ^C) and exits: the least a
+/// host does for a run to judge anything of it (one that never talks is no test at all).
+const TALKS: &str = "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3";
 
 /// The facts a host report (`report.json`'s `host.facts`) lists, by name.
 fn host_facts(report: &Path) -> std::collections::BTreeMap<String, String> {
@@ -1262,7 +1302,7 @@ fn check_host_calls_a_hang_after_20_s_unless_told_otherwise() {
         let out = Command::new(GCL)
             .args(["check-host", "--report", "rep"])
             .args(extra)
-            .args(["--", "true"])
+            .args(["--", "sh", "-c", TALKS])
             .current_dir(dir.path())
             .output()
             .unwrap();
@@ -1288,7 +1328,7 @@ fn the_host_fuzzers_hand_is_unpaced_by_default_and_paced_at_its_baud_in_real_tim
         let out = Command::new(GCL)
             .args(["fuzz", "host", "--runs", "1", "--timeout-hang", "3s", "--report", "rep"])
             .args(extra)
-            .args(["--", "true"])
+            .args(["--", "sh", "-c", TALKS])
             .current_dir(dir.path())
             .output()
             .unwrap();

@@ -96,7 +96,8 @@ class Failure:
 
 class Verdict:
     """What ``gcl check-host --serve`` said of a session: its report (``report.json``), the
-    misbehaviours that fired, and its exit code (0 pass, 1 a clause failed)."""
+    misbehaviours that fired, and its exit code (0 pass, 1 a clause failed, 2 nothing judged:
+    nobody opened the port, or nobody sent the hand a byte; its ``host-session`` case says so)."""
 
     def __init__(self, report, fired, exit_code, output):
         self.report = report
@@ -247,7 +248,10 @@ class Hand:
                 proc.kill()
                 proc.communicate()
                 raise HandError("gcl check-host --serve did not stop within {:.0f} s".format(STOP_TIMEOUT)) from None
-            if proc.returncode not in (0, 1):
+            # 2 is also a session that judged nothing: a verdict (its ERROR case), not a failure to run.
+            judged_nothing = proc.returncode == 2 and any(
+                line.startswith("ERROR") and " host-session " in line for line in out.splitlines())
+            if proc.returncode not in (0, 1) and not judged_nothing:
                 raise HandError("gcl check-host --serve failed ({}): {}".format(proc.returncode, err.strip()))
             path = os.path.join(self._report_dir, "report.json")
             try:

@@ -218,6 +218,15 @@ class _HangTimer:
             self.theirs = None
 
 
+def _what_failed(verdict):
+    """How a failing verdict begins: the clauses the host code broke, or, for a session in
+    which nobody talked to the hand (its ``host-session`` ERROR), that nothing was judged."""
+    ids = [f.id for f in verdict.failures]
+    if ids == ["host-session"]:
+        return "nothing of the host code was judged: it never talked to the hand (host-session)"
+    return "the host code broke GCL ({})".format(", ".join(ids))
+
+
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_call(item):
     """Runs the test body (under a hang timer for a misbehaving hand), then stops its hand and
@@ -238,9 +247,8 @@ def pytest_runtest_call(item):
         verdict = _verdict(item, hand)
         if verdict is not None and verdict.failures:
             # The broken clause is the root cause; what the test raised followed from it.
-            raise pytest.fail.Exception("the host code broke GCL ({}); the test then failed with {}: {}\n{}".format(
-                ", ".join(f.id for f in verdict.failures), type(e).__name__, e, verdict.explain()),
-                pytrace=False) from None
+            raise pytest.fail.Exception("{}; the test then failed with {}: {}\n{}".format(
+                _what_failed(verdict), type(e).__name__, e, verdict.explain()), pytrace=False) from None
         if verdict is not None and verdict.fired:
             item.add_report_section("call", "gcl hand", verdict.explain())
         raise
@@ -249,6 +257,5 @@ def pytest_runtest_call(item):
             timer.restore()
     verdict = _verdict(item, hand)
     if verdict.failures:
-        pytest.fail("the host code broke GCL ({}):\n{}".format(
-            ", ".join(f.id for f in verdict.failures), verdict.explain()), pytrace=False)
+        pytest.fail("{}:\n{}".format(_what_failed(verdict), verdict.explain()), pytrace=False)
     return result

@@ -106,6 +106,17 @@ def test_a_hand_grades_its_session(tcp):
     assert 'send "FGET DP\\r\\n"' in bad.verdict.explain()
 
 
+def test_a_hand_nobody_talks_to_judges_nothing():
+    from gcl import Hand
+
+    with Hand(profile="seed") as idle:
+        pass
+    assert not idle.verdict.passed
+    assert idle.verdict.exit_code == 2
+    assert [f.id for f in idle.verdict.failures] == ["host-session"]
+    assert "nobody opened the port" in idle.verdict.failures[0].message
+
+
 def test_a_misbehaving_hand_plays_the_fuzzers_schedule():
     from gcl import Hand
 
@@ -192,6 +203,8 @@ def test_fault(gcl_hand):
 @pytest.mark.gcl(profile="seed", schedules=2, seed=9)
 def test_schedules(gcl_misbehaving_hand):
     assert gcl_misbehaving_hand.planned
+    # A session nobody talks in judges nothing (an ERROR); a ^C is talking.
+    serial.serial_for_url(gcl_misbehaving_hand.url).write(b"\\x03")
 '''
 
 

@@ -4,11 +4,12 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use gcl_harness::check_host::{CheckHostOptions, check_host};
+use gcl_harness::check_host::{CheckHostOptions, SESSION_CASE, check_host_until, stopped_report};
+use gcl_harness::fuzz::host::{RunError, unreached};
 use gcl_harness::report::Verdict;
 
 use super::fuzz_host::HostArgs;
-use super::{EXIT_FAIL, EXIT_OK};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
 
 /// `gcl check-host`'s hang timeout when `--timeout-hang` is not given: a perfect hand never
 /// goes silent, so a host silent this long waits for nothing it will get; above the 5 to 15 s
@@ -25,7 +26,13 @@ with a valid header), host-leaves-cleanly (the RealTime loop left before the hos
 goes), host-exits-cleanly (no crash, no hang, an accepted exit code); with --golden,
 host-golden (the host sends exactly the golden transcript's `send` bytes).
 
-Exit codes: 0 every clause passes, 1 a clause fails, 2 usage or infrastructure.
+Exit codes: 0 every clause the host exercised passes (a clause it never exercised, such as
+RealTime's for a host that never enters it, is \"not exercised\", never PASS); 1 a clause
+fails; 2 nothing judged, or a usage or infrastructure error: the host never opened the port,
+or opened it and sent nothing (an ERROR naming the command, how it ended and the last lines
+of its stderr; with --serve: nobody opened the port, or nobody sent a byte, before the stop),
+or a signal (SIGINT, SIGTERM, SIGHUP) stopped the check (the host's process group is
+stopped, its run folder removed, and the reports say so).
 
 Example:
   gcl check-host --profile seed --report reports/host -- python3 my_host.py {port}
@@ -65,21 +72,35 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         ok_exit_codes: args.host.ok_exit_codes(),
         golden,
     };
+    // Ctrl-C or SIGTERM stops the host's process group and removes its run folder, and the
+    // reports say the check was stopped. Before any thread starts.
+    let stop = super::stop_on_signals("check-host")?;
     let progress =
         super::progress::Progress::new("gcl check-host", "runs", "failing", super::progress::Total::Units(1), false);
-    let outcome = check_host(&opts).context("running the host");
+    let started = time::OffsetDateTime::now_utc();
+    let t0 = std::time::Instant::now();
+    let outcome = check_host_until(&opts, &stop);
     progress.update(1, 0, "");
     progress.finish();
-    let outcome = outcome?;
-    let mut report = outcome.report;
-    use gcl_harness::fuzz::host::HostEnd;
-    let end = match &outcome.run.end {
-        HostEnd::Exit(c) => format!("exited with code {c}"),
-        HostEnd::Signal(s) => format!("killed by signal {s}"),
-        HostEnd::Hung(at) => format!("hung ({at}); killed"),
-        HostEnd::OverBudget(at) => format!("over the run budget ({at}); killed"),
+    let (mut report, run) = match outcome {
+        Ok(o) => {
+            if let Some(p) = &args.save_session {
+                gcl_harness::report::write_atomic(p, o.session.as_bytes())
+                    .with_context(|| format!("writing {}", p.display()))?;
+                eprintln!("wrote {}", p.display());
+            }
+            (o.report, Some(o.run))
+        }
+        Err(RunError::Cancelled) => {
+            let by = super::stopped_by().unwrap_or_else(|| "a signal".into());
+            (stopped_report(&opts, &format!("stopped by {by}"), started, t0), None)
+        }
+        Err(e) => return Err(anyhow::Error::new(e).context("running the host")),
     };
-    let mut facts = vec![("the host".to_string(), end)];
+    let mut facts = Vec::new();
+    if let Some(r) = &run {
+        facts.push(("the host".to_string(), r.end.to_string()));
+    }
     facts.extend(super::fuzz_host::hand_facts(&opts.run));
     let hang = opts.run.timeout_hang.as_secs_f64();
     let given = if args.host.timeout_hang_given() { "--timeout-hang" } else { "the default" };
@@ -87,18 +108,27 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(g) = &args.golden {
         facts.push(("golden".into(), g.display().to_string()));
     }
+    let reached = run.as_ref().is_some_and(|r| unreached(r, &opts.run.command).is_none());
     report.host = Some(gcl_harness::report::HostDetails {
         command: opts.run.command.clone(),
-        runs: 1,
+        runs: u64::from(run.is_some()),
+        reached: Some(u64::from(reached)),
         seed: args.seed,
         facts,
         ..Default::default()
     });
-    if let Some(p) = &args.save_session {
-        gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
-            .with_context(|| format!("writing {}", p.display()))?;
-        eprintln!("wrote {}", p.display());
+    print_clauses(&report);
+    if let Some(dir) = args.host.report_dir() {
+        for p in gcl_harness::report::write_all(dir, &report)? {
+            eprintln!("wrote {}", p.display());
+        }
     }
+    Ok(exit_code(&report))
+}
+
+/// The console's table: one row per clause (and the session's ERROR when nothing was
+/// judged), then the count and how much was judged.
+pub(super) fn print_clauses(report: &gcl_harness::report::RunReport) {
     for c in &report.cases {
         let verdict = if c.verdict == Verdict::Skip { "not exercised" } else { c.verdict.as_str() };
         println!("{verdict:<7} {:<24} {}", c.id, c.title);
@@ -106,13 +136,25 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             println!("        {}", gcl_model::escape::printable(m));
         }
     }
-    let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();
+    let session = report.cases.iter().any(|c| c.id == SESSION_CASE);
+    let failed = report.cases.iter().filter(|c| c.verdict.fails_run() && c.id != SESSION_CASE).count();
     let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
-    println!("{} clause(s), {failed} failing, {idle} not exercised", report.cases.len());
-    if let Some(dir) = args.host.report_dir() {
-        for p in gcl_harness::report::write_all(dir, &report)? {
-            eprintln!("wrote {}", p.display());
-        }
+    let judged = report.judged().unwrap_or_default();
+    if session {
+        println!("nothing judged: {idle} clause(s) not exercised ({judged})");
+    } else {
+        println!("{} clause(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
     }
-    Ok(if failed == 0 { EXIT_OK } else { EXIT_FAIL })
+}
+
+/// 0 every clause exercised passes, 1 a clause fails, 2 nothing judged (the host never
+/// talked to the hand, or the check was stopped).
+pub(super) fn exit_code(report: &gcl_harness::report::RunReport) -> u8 {
+    let session = report.cases.iter().any(|c| c.id == SESSION_CASE && c.verdict == Verdict::Error);
+    let failed = report.cases.iter().any(|c| c.verdict.fails_run() && c.id != SESSION_CASE);
+    match (session, failed) {
+        (true, _) => EXIT_ERROR,
+        (false, true) => EXIT_FAIL,
+        (false, false) => EXIT_OK,
+    }
 }

@@ -6,10 +6,9 @@ use std::io::{Read, Write};
 use std::os::fd::AsFd;
 
 use anyhow::Context;
-use gcl_harness::check_host::{CheckHostOptions, grade};
+use gcl_harness::check_host::{CheckHostOptions, grade_served};
 use gcl_harness::check_host_serve::{ServeOptions, Served, serve};
 use gcl_harness::fuzz::host::{Weights, fresh_schedule};
-use gcl_harness::report::Verdict;
 use gcl_harness::sim::misbehave::Schedule;
 use gcl_model::Fault;
 use gcl_model::escape::printable;
@@ -17,7 +16,6 @@ use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
 
 use super::fuzz_host::HostArgs;
-use super::{EXIT_FAIL, EXIT_OK};
 
 /// The options `--serve` adds to `gcl check-host`.
 #[derive(Debug, clap::Args)]
@@ -116,30 +114,25 @@ pub fn run(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&s
     let result = serve(&opts, &[signals.as_fd(), eof_signal.as_fd()], &mut announce).context("serving the hand")?;
     run.command = vec![args.name.clone().unwrap_or_else(|| "(served)".into())];
     let check = CheckHostOptions { run, ok_exit_codes: vec![0], golden: None };
-    let outcome = grade(&check, result, started, t0);
+    let outcome = grade_served(&check, result, started, t0);
     if let Some(p) = save_session {
         gcl_harness::report::write_atomic(p, outcome.session.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
     let report = outcome.report;
-    let mut out = std::io::stdout().lock();
-    for f in &outcome.run.fired {
-        writeln!(out, "fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what))?;
-    }
-    for c in &report.cases {
-        writeln!(out, "{:<7} {:<24} {}", c.verdict.as_str(), c.id, c.title)?;
-        if let Some(m) = &c.message {
-            writeln!(out, "        {}", printable(m))?;
+    {
+        let mut out = std::io::stdout().lock();
+        for f in &outcome.run.fired {
+            writeln!(out, "fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what))?;
         }
     }
-    // As `gcl check-host`: a clause the host never exercised (no RealTime) is not a failure.
-    let failed = report.cases.iter().filter(|c| c.verdict.fails_run()).count();
-    let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
-    writeln!(out, "{} clause(s), {failed} failing, {idle} not exercised", report.cases.len())?;
+    // As `gcl check-host`: a clause the host never exercised (no RealTime) is not a failure,
+    // and a session nobody talked in judged nothing (exit 2).
+    super::check_host::print_clauses(&report);
     if let Some(dir) = host.report_dir() {
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());
         }
     }
-    Ok(if failed == 0 { EXIT_OK } else { EXIT_FAIL })
+    Ok(super::check_host::exit_code(&report))
 }

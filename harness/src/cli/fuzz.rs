@@ -37,8 +37,13 @@ pub enum FuzzCommand {
 
 /// Arguments of `gcl fuzz device`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Exit codes: 0 no new finding; 1 new findings (each written as a minimized transcript \
-with --out; a finding --baseline or --known-failures explains is known, not new); 2 usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
+#[command(after_help = "Exit codes: 0 no new finding in the cases run (the reports say how many ran and how many \
+drawn cases were dropped); 1 new findings (each written as a minimized transcript \
+with --out; a finding --baseline or --known-failures explains is known, not new); 2 nothing to test or no verdict: \
+options that leave no case are refused at the start (--runs 0, a --skip-decision of a decision every case rests on, \
+such as framing-line-ending), 5000 drawn cases dropped in a row end the campaign, a hand that stops answering ends \
+it, and a signal (SIGINT, SIGTERM, SIGHUP) that stops it before a new finding leaves no verdict (every report says \
+`stopped by SIGTERM after N of M runs`); also a usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
 writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
 --target sim --fault fget-reversed --seed 1 --runs 500 --out findings\n  gcl fuzz device --target 'exec:gcl sim \
 --stdio' --no abort-timing --duration 30s --jobs 2\n  gcl fuzz device --target serial:/dev/ttyUSB0 \
@@ -59,8 +64,8 @@ pub struct DeviceArgs {
     /// How long to fuzz, e.g. `30s`, `5m` (default 60s unless --runs is given).
     #[arg(long, value_parser = super::duration, conflicts_with = "runs")]
     pub duration: Option<Duration>,
-    /// How many cases to run.
-    #[arg(long, value_name = "N")]
+    /// How many cases to run, at least 1.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub runs: Option<u64>,
     /// Stop after N distinct findings.
     #[arg(long, value_name = "N")]
@@ -112,6 +117,20 @@ pub struct DeviceArgs {
     /// seed and every option that changed what ran, so that only one campaign's shards merge.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<gcl_harness::fuzz::shard::Shard>,
+}
+
+/// Refuses `--runs N` that leaves `--shard K/N` no run at all: such a shard would test
+/// nothing and still report.
+pub(super) fn refuse_empty_shard(
+    runs: Option<u64>,
+    shard: Option<gcl_harness::fuzz::shard::Shard>,
+) -> anyhow::Result<()> {
+    if let (Some(n), Some(s)) = (runs, shard)
+        && s.share(n) == 0
+    {
+        anyhow::bail!("--runs {n} leaves shard {s} no run (it would test nothing): give at least {} runs", s.index);
+    }
+    Ok(())
 }
 
 /// Runs `gcl fuzz`.
@@ -195,6 +214,10 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
         });
     }
+    refuse_empty_shard(a.runs, a.shard)?;
+    // A CI time limit (SIGTERM) ends the campaign with its reports written. Before any thread
+    // starts: a thread started earlier would keep the signals unblocked.
+    o.stop = super::stop_on_signals("fuzz device")?;
     let total = match o.budget {
         Budget::Runs(n) => super::progress::Total::Units(n),
         Budget::Time(d) => super::progress::Total::Time(d),
@@ -243,23 +266,29 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
         }
     }
-    // A CI time limit (SIGTERM) ends the campaign with its reports written.
-    o.stop = super::stop_on_signals("fuzz device")?;
     let s = fd::run(&o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
     for (p, why) in &s.malformed_corpus {
         eprintln!("gcl fuzz device: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
     }
-    if s.interrupted {
-        eprintln!("gcl fuzz device: stopped by a signal; the report covers the runs made");
-    }
     let mut report = fd::report::FuzzReport::new(&o, &s);
+    if let Some(by) = super::stopped_by().filter(|_| s.interrupted) {
+        let of = match o.budget {
+            Budget::Runs(n) => format!(" of {n} runs"),
+            Budget::Time(d) => {
+                format!(" runs, {:.1} s of {}", s.elapsed.as_secs_f64(), humantime::format_duration(d))
+            }
+        };
+        let st = format!("stopped by {by} after {}{of}", s.runs);
+        eprintln!("gcl fuzz device: {st}; the report covers the runs made");
+        report.stopped = Some(st);
+    }
     report.coverage_over_time = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
     report.provenance = Some(provenance(&a, &o, &baselines));
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} drawn cases dropped: the model made no case of them, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
+        "{} runs ({} drawn cases dropped: the model made no case of them, they rest on a skipped decision, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),
@@ -297,8 +326,23 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         eprintln!("gcl fuzz device: {}", printable(why));
         return Ok(EXIT_ERROR);
     }
-    // Only new findings fail the run: what the baseline explains was known before.
-    Ok(if s.findings.iter().any(|f| f.is_new()) { EXIT_FAIL } else { EXIT_OK })
+    if let Some(why) = &s.no_cases {
+        eprintln!("gcl fuzz device: nothing left to test: {why}");
+        return Ok(EXIT_ERROR);
+    }
+    if s.runs == 0
+        && !s.interrupted
+        && let Some(why) = &report.stopped
+    {
+        eprintln!("gcl fuzz device: nothing tested: {why}");
+    }
+    // Only new findings fail the run: what the baseline explains was known before. A
+    // campaign stopped before its budget without one has no verdict.
+    Ok(match (s.findings.iter().any(|f| f.is_new()), &report.stopped) {
+        (true, _) => EXIT_FAIL,
+        (false, Some(_)) => EXIT_ERROR,
+        (false, None) => EXIT_OK,
+    })
 }
 
 /// What makes this campaign's folder a shard of its campaign (see

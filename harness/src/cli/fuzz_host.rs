@@ -11,12 +11,12 @@ use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
 use gcl_harness::fuzz::host::{
     CALIBRATION_CAP, Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
 };
-use gcl_harness::report::{CaseResult, HostDetails, HostFinding, RunReport, Verdict};
+use gcl_harness::report::{CaseResult, HostDetails, HostFinding, RunReport, StopCause, Stopped, Verdict};
 use gcl_harness::sim::misbehave::Operator;
 use gcl_harness::sim::{Pace, TimeMode};
 use gcl_model::escape::printable;
 
-use super::{EXIT_FAIL, EXIT_OK, load_profile};
+use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
 fn duration(s: &str) -> Result<Duration, String> {
     super::duration(s)
@@ -156,7 +156,13 @@ to --out as a bundle; --replay BUNDLE runs it again.
 Misbehaviours (--ops NAME[,NAME=WEIGHT...]; default weight shown):
 {}
 
-Exit codes: 0 no finding, 1 findings, 2 usage or infrastructure.
+Exit codes: 0 no finding, in runs that reached the host (the reports say how many: runs in
+which it opened the port and sent the hand a byte); 1 findings; 2 nothing tested or no verdict:
+the host never opened the port, or opened it and sent nothing, in the run without misbehaviour
+(the campaign ends there, naming the command, how it ended and the last lines of its stderr),
+the budget ran out before the first run, or a signal (SIGINT, SIGTERM, SIGHUP) stopped the
+campaign without a finding (every report says `stopped by SIGTERM after N of M runs`); also a
+usage or infrastructure error. --runs 0 is refused.
 
 Examples:
   gcl fuzz host --duration 5m --report reports/host -- python3 my_host.py {{port}}
@@ -175,8 +181,8 @@ pub struct Args {
     /// Seed of the schedules (and of the hand's noise).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stop after N runs (default: 1000 when --duration is not given either).
-    #[arg(long, value_name = "N", conflicts_with = "duration")]
+    /// Stop after N runs, at least 1 (default: 1000 when --duration is not given either).
+    #[arg(long, value_name = "N", conflicts_with = "duration", value_parser = clap::value_parser!(u64).range(1..))]
     runs: Option<u64>,
     /// Stop after this long (30s, 5m).
     #[arg(long, value_name = "D", value_parser = duration)]
@@ -219,6 +225,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
+    super::fuzz::refuse_empty_shard(args.runs, args.shard)?;
     let opts = FuzzOptions {
         run,
         seed: args.seed,
@@ -288,8 +295,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
     campaign.provenance = Some(provenance(&args, &opts));
     progress.finish();
-    if stop.load(Ordering::Relaxed) {
-        eprintln!("gcl fuzz host: stopped by a signal; the report covers the runs made");
+    campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, &opts, &campaign));
+    if let Some(st) = &campaign.stopped {
+        eprintln!("gcl fuzz host: {st}; the report covers the runs made");
     }
     // Once more with the final hit counts. A bundle that cannot be written (a full disk) is
     // an infrastructure error: it is marked incomplete, and the run exits 2 naming the file.
@@ -302,8 +310,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     }
     let secs = campaign.elapsed_ms as f64 / 1000.0;
     eprintln!(
-        "gcl fuzz host: {} runs (+{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
+        "gcl fuzz host: {} runs ({} reached the host; +{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
         campaign.runs,
+        campaign.reached,
         campaign.minimize_runs,
         secs,
         campaign.runs as f64 / secs.max(1e-3),
@@ -328,7 +337,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 None => format!("answer {a}: waited past {} s", CALIBRATION_CAP.as_secs()),
             })
             .collect();
-        if points.is_empty() {
+        if campaign.untested.is_some() {
+            // Said once, below, as what ended the campaign.
+        } else if points.is_empty() {
             // No silence fired: the host took no answer at all, even from a perfect hand.
             eprintln!(
                 "warning: host timeouts not measured: the host took no answer from the hand in its run without \
@@ -371,7 +382,29 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(e) = unwritten {
         return Err(e.into());
     }
-    Ok(if campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+    if let Some(why) = &campaign.untested {
+        eprintln!("gcl fuzz host: nothing tested: {why}");
+        return Ok(EXIT_ERROR);
+    }
+    Ok(match (campaign.findings.is_empty(), &campaign.stopped) {
+        (false, _) => EXIT_FAIL,
+        // Stopped before its budget with no finding: no verdict on the host.
+        (true, Some(_)) => EXIT_ERROR,
+        (true, None) => EXIT_OK,
+    })
+}
+
+/// `stopped by SIGTERM after 3 of 1000 runs` (or `after 3 runs, 4.2 s of 5m`).
+fn stopped_after(by: &str, opts: &FuzzOptions, c: &Campaign) -> String {
+    let of = match (opts.runs, opts.duration) {
+        (Some(n), _) => format!(" of {}", opts.shard.map_or(n, |s| s.share(n))),
+        (None, Some(d)) => {
+            format!(" runs, {:.1} s of {}", c.elapsed_ms as f64 / 1000.0, humantime::format_duration(d))
+        }
+        (None, None) => " of 1000".to_string(),
+    };
+    let runs = if of.starts_with(" runs") { "" } else { " runs" };
+    format!("stopped by {by} after {}{of}{runs}", c.runs)
 }
 
 /// What makes this campaign's folder a shard of its campaign (see
@@ -497,16 +530,26 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             transcript: None,
         });
     }
+    // Without a finding, one case says what the campaign judged: a pass only when it ran to
+    // its end with runs that reached the host.
     if c.findings.is_empty() {
+        let (verdict, message) = match (&c.untested, &c.stopped) {
+            (Some(why), _) => (Verdict::Error, Some(format!("nothing tested: {why}"))),
+            (None, Some(st)) => (Verdict::Error, Some(format!("{st}, without a finding: no verdict on the host"))),
+            (None, None) => (Verdict::Pass, None),
+        };
         cases.push(CaseResult {
             id: "fuzz-host-campaign".into(),
-            title: format!("{} runs against a misbehaving hand without a finding", c.runs),
+            title: format!(
+                "{} runs against a misbehaving hand ({} reached the host) without a finding",
+                c.runs, c.reached
+            ),
             clauses: vec!["host: fuzz".into()],
             decisions: Vec::new(),
             level: "MUST".into(),
-            verdict: Verdict::Pass,
+            verdict,
             duration_ms: c.elapsed_ms as f64,
-            message: None,
+            message,
             diff: None,
             failure: None,
             transcript: None,
@@ -522,6 +565,15 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
         cases,
     );
     report.host = Some(host_details(opts, c, out, ops_given));
+    report.stopped = match (&c.untested, &c.stopped) {
+        (Some(why), _) => Some(Stopped {
+            cause: StopCause::CannotTest,
+            case: "fuzz-host-campaign".into(),
+            message: format!("nothing tested: {why}"),
+        }),
+        (None, Some(st)) => Some(Stopped { cause: StopCause::Signal, case: String::new(), message: st.clone() }),
+        (None, None) => None,
+    };
     report
 }
 
@@ -535,6 +587,7 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
     HostDetails {
         command: opts.run.command.clone(),
         runs: c.runs,
+        reached: Some(c.reached),
         minimize_runs: c.minimize_runs,
         seed: opts.seed,
         ops: if ops_given {
@@ -596,6 +649,11 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
         run.timeout_hang = std::time::Duration::from_millis(ms);
     }
     let r = run_once(&run, &schedule)?;
+    // A host that never talked to the hand reproduces nothing, and refutes nothing either.
+    if let Some(why) = gcl_harness::fuzz::host::unreached(&r, &run.command) {
+        eprintln!("gcl fuzz host: nothing tested: {why}");
+        return Ok(EXIT_ERROR);
+    }
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {
         eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what));

@@ -100,7 +100,12 @@ fn device(a: &Args) -> anyhow::Result<u8> {
     if !finish(&m.merged, &not_copied) {
         return Ok(EXIT_ERROR);
     }
-    Ok(if r.new_findings() == 0 { EXIT_OK } else { EXIT_FAIL })
+    // Shards that ended early without a new finding make no verdict (as each shard's).
+    Ok(match (r.new_findings() != 0, &r.stopped) {
+        (true, _) => EXIT_FAIL,
+        (false, Some(_)) => EXIT_ERROR,
+        (false, None) => EXIT_OK,
+    })
 }
 
 fn host(a: &Args) -> anyhow::Result<u8> {
@@ -183,5 +188,10 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     if !finish(&m.merged, &not_copied) {
         return Ok(EXIT_ERROR);
     }
-    Ok(if m.campaign.findings.is_empty() { EXIT_OK } else { EXIT_FAIL })
+    Ok(match (m.campaign.findings.is_empty(), m.campaign.untested.is_some() || m.campaign.stopped.is_some()) {
+        (false, _) => EXIT_FAIL,
+        // A shard that could not test or was stopped: no verdict (as each shard's).
+        (true, true) => EXIT_ERROR,
+        (true, false) => EXIT_OK,
+    })
 }

@@ -60,30 +60,79 @@ pub fn duration(s: &str) -> Result<std::time::Duration, String> {
     Ok(d)
 }
 
-/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end a campaign (`gcl fuzz host`, `gcl
-/// fuzz device`): the returned flag is set, the work in flight is called off, and the findings
-/// and reports are still written; a second signal exits at once (exit 2). `what` names the
-/// command in the message printed at the first signal.
+/// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end a campaign or a check (`gcl fuzz
+/// host`, `gcl fuzz device`, `gcl check-host`): the returned flag is set, the work in flight
+/// is called off (hosts stopped), and the findings and reports are still written, saying
+/// that the run was stopped ([`stopped_by`]); a second signal exits at once (exit 2), after
+/// killing the hosts in flight and removing their run folders. `what` names the command in
+/// the message printed at the first signal.
+///
+/// Call it before any thread starts (the progress ticker included): a thread started before
+/// keeps these signals unblocked, and a signal delivered to it kills the process.
 pub fn stop_on_signals(what: &'static str) -> anyhow::Result<std::sync::Arc<std::sync::atomic::AtomicBool>> {
     use anyhow::Context;
-    use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
+    use nix::sys::signal::{SigmaskHow, pthread_sigmask};
     use std::sync::atomic::{AtomicBool, Ordering};
-    let mut mask = SigSet::empty();
-    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
-        mask.add(s);
-    }
+    let mask = stop_signals();
     // Threads started from here on inherit the mask; child processes do not (std resets it).
     pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&mask), None).context("blocking signals")?;
     let signals = nix::sys::signalfd::SignalFd::new(&mask).context("signalfd")?;
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     std::thread::spawn(move || {
-        while let Ok(Some(_)) = signals.read_signal() {
-            if flag.swap(true, Ordering::Relaxed) {
+        let mut heard = 0;
+        while let Ok(Some(info)) = signals.read_signal() {
+            heard += 1;
+            if heard > 1 {
+                gcl_harness::fuzz::host::session::end_all();
                 std::process::exit(i32::from(EXIT_ERROR));
             }
+            let name = nix::sys::signal::Signal::try_from(info.ssi_signo as i32).map_or("a signal", |s| s.as_str());
+            let pid = info.ssi_pid as i32;
+            // A host's group leader has its group's number; another member is looked up.
+            let host_group = gcl_harness::fuzz::host::session::is_host_group;
+            let from_host = pid > 0
+                && (host_group(pid)
+                    || nix::unistd::getpgid(Some(nix::unistd::Pid::from_raw(pid)))
+                        .is_ok_and(|g| host_group(g.as_raw())));
+            let by = if from_host { format!("{name} from the host under test (pid {pid})") } else { name.to_string() };
+            *STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()) = Some(by);
+            flag.store(true, Ordering::Relaxed);
             eprintln!("gcl {what}: stopping: the work in flight is called off (again to exit now)");
         }
     });
     Ok(stop)
+}
+
+/// The signals that stop a campaign or a check.
+fn stop_signals() -> nix::sys::signal::SigSet {
+    use nix::sys::signal::{SigSet, Signal};
+    let mut mask = SigSet::empty();
+    for s in [Signal::SIGINT, Signal::SIGTERM, Signal::SIGHUP] {
+        mask.add(s);
+    }
+    mask
+}
+
+/// Runs `f` with the signals that stop a campaign blocked in this thread, then restores the
+/// mask: a thread `f` starts (the progress ticker, a bar's tick) inherits the block from its
+/// creation, so it never takes such a signal (one delivered to a thread that does not block
+/// it kills the process before the command's handler hears it), whenever it was started.
+pub fn without_stop_signals<T>(f: impl FnOnce() -> T) -> T {
+    use nix::sys::signal::{SigSet, SigmaskHow, pthread_sigmask};
+    let mut old = SigSet::empty();
+    let blocked = pthread_sigmask(SigmaskHow::SIG_BLOCK, Some(&stop_signals()), Some(&mut old)).is_ok();
+    let out = f();
+    if blocked {
+        let _ = pthread_sigmask(SigmaskHow::SIG_SETMASK, Some(&old), None);
+    }
+    out
+}
+
+static STOPPED_BY: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// The signal that stopped the command (`SIGTERM`, or `SIGTERM from the host under test (pid
+/// N)`), once [`stop_on_signals`] heard one.
+pub fn stopped_by() -> Option<String> {
+    STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }

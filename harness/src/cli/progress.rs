@@ -108,7 +108,7 @@ impl Progress {
                     .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
                     .progress_chars("=> "),
             );
-            b.enable_steady_tick(Duration::from_millis(200));
+            super::without_stop_signals(|| b.enable_steady_tick(Duration::from_millis(200)));
             b
         });
         let plain = !tty && !quiet;
@@ -117,15 +117,18 @@ impl Progress {
             // The first line comes with the first unit done (so a line the command prints
             // before it starts, such as the pre-flight, leads), then one every INTERVAL.
             let st = p.state.clone();
-            std::thread::spawn(move || {
-                while !st.finished.load(Ordering::Relaxed) {
-                    std::thread::sleep(Duration::from_millis(250));
-                    let mut last = st.last_line.lock().unwrap_or_else(|e| e.into_inner());
-                    if !st.finished.load(Ordering::Relaxed) && due(*last, Instant::now()) {
-                        *last = Instant::now();
-                        eprintln!("{}", st.line());
+            // A signal that stops the command is never this thread's to take.
+            super::without_stop_signals(|| {
+                std::thread::spawn(move || {
+                    while !st.finished.load(Ordering::Relaxed) {
+                        std::thread::sleep(Duration::from_millis(250));
+                        let mut last = st.last_line.lock().unwrap_or_else(|e| e.into_inner());
+                        if !st.finished.load(Ordering::Relaxed) && due(*last, Instant::now()) {
+                            *last = Instant::now();
+                            eprintln!("{}", st.line());
+                        }
                     }
-                }
+                })
             });
         }
         p

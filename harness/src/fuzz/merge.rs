@@ -272,6 +272,14 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
             }
         }
         merged.runs = add(&path, "runs", merged.runs, c.runs)?;
+        merged.reached = add(&path, "reached", merged.reached, c.reached)?;
+        // A shard that could not test, or was stopped, leaves the whole campaign so.
+        if merged.untested.is_none() {
+            merged.untested = c.untested.map(|w| format!("{}: {w}", dir.display()));
+        }
+        if merged.stopped.is_none() {
+            merged.stopped = c.stopped.map(|w| format!("{}: {w}", dir.display()));
+        }
         merged.minimize_runs = add(&path, "minimize_runs", merged.minimize_runs, c.minimize_runs)?;
         merged.elapsed_ms = merged.elapsed_ms.max(c.elapsed_ms);
         merged.corpus = add_usize(&path, "corpus", merged.corpus, c.corpus)?;
@@ -463,6 +471,10 @@ pub fn merge_device(dirs: &[PathBuf]) -> Result<DeviceMerge, MergeError> {
                 m.duration_ms = m.duration_ms.max(r.duration_ms);
                 m.runs = add(&path, "runs", m.runs, r.runs)?;
                 m.dropped = add(&path, "dropped", m.dropped, r.dropped)?;
+                // A shard that ended early leaves the whole campaign so (the first says why).
+                if m.stopped.is_none() {
+                    m.stopped = r.stopped.clone();
+                }
                 m.cases_per_second += r.cases_per_second;
                 m.eeprom_writes = add(&path, "eeprom_writes", m.eeprom_writes, r.eeprom_writes)?;
                 m.wire_bytes = add(&path, "wire_bytes", m.wire_bytes, r.wire_bytes)?;

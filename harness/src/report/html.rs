@@ -79,14 +79,24 @@ fn hand_verdict(r: &RunReport) -> (&'static str, &'static str, String) {
 fn headline(r: &RunReport) -> String {
     let bad: Vec<&CaseResult> = r.cases.iter().filter(|c| c.verdict.fails_run()).collect();
     let what = if r.kind == ReportKind::CheckHost { "clauses" } else { "cases" };
+    let cannot_test =
+        r.stopped.as_ref().filter(|st| st.cause == crate::report::StopCause::CannotTest).map(|st| st.message.as_str());
+    // A host session that judged nothing says why, first.
+    let session = r.cases.iter().find(|c| c.id == crate::check_host::SESSION_CASE && c.verdict == Verdict::Error);
     let mut s = match (r.kind, bad.len()) {
+        (ReportKind::CheckHost, _) if session.is_some() => {
+            session.and_then(|c| c.message.clone()).unwrap_or_else(|| "nothing judged".into())
+        }
+        // A campaign that could not test says why, and only that.
+        (ReportKind::FuzzHost, _) if cannot_test.is_some() => cannot_test.unwrap_or_default().to_string(),
         (ReportKind::FuzzHost, _) => {
             let runs = r.host.as_ref().map_or(0, |h| h.runs);
             let n = r.host.as_ref().map_or(bad.len(), |h| h.findings.len());
+            let judged = r.judged().unwrap_or_default();
             let mut s = if n == 0 {
-                format!("no finding in {runs} runs against a misbehaving hand")
+                format!("no finding in {runs} runs against a misbehaving hand ({judged})")
             } else {
-                format!("{n} distinct finding(s) in {runs} runs")
+                format!("{n} distinct finding(s) in {runs} runs ({judged})")
             };
             if let Some(m) = r.host.as_ref().and_then(|h| h.merged.as_ref()) {
                 s.push_str(&format!("; merged from {}", m.describe()));
@@ -111,19 +121,31 @@ fn headline(r: &RunReport) -> String {
             s
         }
     };
-    if r.kind == ReportKind::CheckHost {
-        let n = r.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
-        if n > 0 {
-            s.push_str(&format!("; {n} not exercised"));
-        }
+    if r.kind == ReportKind::CheckHost
+        && let Some(j) = r.judged()
+    {
+        s.push_str(&format!("; {j}"));
     }
-    if let Some(st) = &r.stopped {
+    if let Some(st) = r.stopped.as_ref().filter(|_| cannot_test.is_none()) {
         s.push_str(&format!("; ended early: {}", st.message));
     }
     if !r.kind.is_host() && (!r.liveness.before || !r.liveness.after) {
         s.push_str("; the hand did not answer the liveness probe");
     }
     s
+}
+
+/// The verdict of a host report that failed nothing it judged but did not pass either:
+/// `STOPPED` (a signal ended it) or `NOT TESTED` (the host never talked to the hand).
+fn host_unjudged(r: &RunReport) -> Option<&'static str> {
+    let failing = r.cases.iter().any(|c| matches!(c.verdict, Verdict::Fail | Verdict::Timeout | Verdict::Xpass));
+    let errors = r.cases.iter().any(|c| c.verdict == Verdict::Error);
+    match r.stopped.as_ref().map(|s| s.cause) {
+        _ if failing => None,
+        Some(crate::report::StopCause::Signal) => Some("STOPPED"),
+        _ if errors => Some("NOT TESTED"),
+        _ => None,
+    }
 }
 
 /// The title: the command and what it judged.
@@ -155,6 +177,9 @@ fn facts(r: &RunReport) -> Vec<(String, String)> {
         if let Some(h) = &r.host {
             if r.kind == ReportKind::FuzzHost {
                 v.push(("runs".into(), format!("{} (+{} to minimize)", h.runs, h.minimize_runs)));
+            }
+            if let Some(j) = r.judged() {
+                v.push(("judged".into(), esc(&j)));
             }
             for (k, val) in &h.facts {
                 v.push((k.clone(), esc(val)));
@@ -286,6 +311,7 @@ pub fn to_html(r: &RunReport) -> String {
         let verdict = match (r.kind, ok) {
             (ReportKind::FuzzHost, _) if incomplete => "INCOMPLETE",
             (ReportKind::FuzzHost, true) => "NO FINDING",
+            (_, false) if host_unjudged(r).is_some() => host_unjudged(r).unwrap_or_default(),
             (ReportKind::FuzzHost, false) => "FINDINGS",
             (_, true) => "PASSED",
             (_, false) => "FAILED",

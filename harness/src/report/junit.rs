@@ -54,6 +54,9 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
     if let Some(st) = &r.stopped {
         props.push(("stopped".into(), st.message.clone()));
     }
+    if let Some(j) = r.judged() {
+        props.push(("judged".into(), j));
+    }
     for (i, g) in r.groups.iter().enumerate() {
         props.push((format!("root-cause-{}", i + 1), g.summary.clone()));
     }

@@ -160,6 +160,10 @@ pub enum StopCause {
     DeadHand,
     /// The hand floods: after consecutive failing cases it did not stop sending.
     Flooding,
+    /// A signal (SIGINT, SIGTERM, SIGHUP: a CI job's time limit, Ctrl-C) stopped the run.
+    Signal,
+    /// The run could not test: the host never opened the port or sent nothing.
+    CannotTest,
 }
 
 /// A run that ended early: the remaining cases are SKIP, "not run".
@@ -609,6 +613,10 @@ pub struct HostDetails {
     pub command: Vec<String>,
     /// Runs made (fuzz host; 1 for check-host).
     pub runs: u64,
+    /// Runs in which the host opened the port and sent the hand at least one byte: the runs
+    /// that judged anything of it (absent in reports written before it was counted).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reached: Option<u64>,
     /// Runs made to minimize findings.
     #[serde(default)]
     pub minimize_runs: u64,
@@ -727,6 +735,29 @@ impl RunReport {
             parts.push("the hand did not answer the liveness probe".to_string());
         }
         Outcome { word, verdict, detail: parts.join("; "), partial, cases_run, cases_total, excused }
+    }
+
+    /// How much a host report judged, in one line for people, or `None` for a report of a
+    /// hand: `4 of 6 clauses exercised` (check-host), `12 of 12 runs reached the host` (fuzz
+    /// host). Every writer shows it, so a green one says what it rests on.
+    pub fn judged(&self) -> Option<String> {
+        let h = self.host.as_ref();
+        match self.kind {
+            ReportKind::CheckHost => {
+                let clauses = self.cases.iter().filter(|c| c.id != crate::check_host::SESSION_CASE);
+                let (n, exercised) =
+                    clauses.fold((0, 0), |(n, e), c| (n + 1, e + usize::from(c.verdict != Verdict::Skip)));
+                Some(format!("{exercised} of {n} clauses exercised"))
+            }
+            ReportKind::FuzzHost => {
+                let runs = h.map_or(0, |h| h.runs);
+                Some(match h.and_then(|h| h.reached) {
+                    Some(r) => format!("{r} of {runs} runs reached the host"),
+                    None => format!("{runs} runs"),
+                })
+            }
+            _ => None,
+        }
     }
 
     /// The ids of the failing cases another clause's group explains (see

@@ -415,9 +415,6 @@ impl Pty {
             if host_io {
                 self.take_reads();
             }
-            if stop {
-                break;
-            }
             // Opens and closes before the host's bytes: they happened before any byte the host
             // wrote after them. (Only when inotify has something: a wake-up per paced byte
             // should not cost a read of an empty queue.)
@@ -448,6 +445,11 @@ impl Pty {
                         }
                     }
                 }
+            }
+            // Stopped: after what the host did before the stop (its open, its bytes) is taken
+            // in, so that a host that opened the port, wrote and went just before it counts.
+            if stop {
+                break;
             }
             engine.wake();
             write_blocked = false;

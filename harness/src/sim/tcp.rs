@@ -101,9 +101,6 @@ impl TcpServer {
                 let client_err = client.is_some() && ready(&fds[1], PollFlags::POLLHUP | PollFlags::POLLERR);
                 (client_in, client_err, ready(&fds[0], IN), fds[first_stop..].iter().any(|f| ready(f, IN)))
             };
-            if stop {
-                break;
-            }
             // A half-closed client whose connection broke cannot take its answers any more.
             if client_err && client.as_ref().is_some_and(|c| c.read_closed) {
                 end_client(&mut client, engine, "the half-closed client's connection ended");
@@ -152,6 +149,11 @@ impl TcpServer {
                         Err(_) => break,
                     }
                 }
+            }
+            // Stopped: after what the host did before the stop (its connection, its bytes) is
+            // taken in, so that a host that connected, wrote and went just before it counts.
+            if stop {
+                break;
             }
             engine.wake();
             if let Some(c) = &mut client {

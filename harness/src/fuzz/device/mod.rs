@@ -280,6 +280,10 @@ pub enum FuzzError {
         /// How long the model's hand moves for it, bytes aside.
         model_ms: u64,
     },
+    /// No case the fuzzer can draw would be run (every one rests on a skipped decision):
+    /// known before the campaign, so it is refused instead of dropping every case it draws.
+    #[error("nothing to test: {0}")]
+    NothingToTest(String),
 }
 
 use crate::align;
@@ -385,6 +389,9 @@ pub struct FuzzSummary {
     pub dead_hand: Option<String>,
     /// Whether [`FuzzOptions::stop`] ended the campaign (a signal).
     pub interrupted: bool,
+    /// Why the campaign ended because it could not make cases: [`DROP_LIMIT`] drawn cases in
+    /// a row were dropped (an infrastructure end, exit 2, as [`FuzzSummary::dead_hand`]).
+    pub no_cases: Option<String>,
     /// Corpus files that did not read or parse, with why: skipped, and worth a warning.
     pub malformed_corpus: Malformed,
 }
@@ -450,6 +457,65 @@ struct Shared {
     error: Option<FuzzError>,
     /// Why the hand was found dead mid-campaign (see [`FuzzSummary::dead_hand`]).
     dead_hand: Option<String>,
+    /// Drawn cases dropped since the last case ran, and why the last one was.
+    dropped_in_a_row: u64,
+    last_drop: String,
+    /// See [`FuzzSummary::no_cases`].
+    no_cases: Option<String>,
+}
+
+/// Drawn cases dropped in a row after which a campaign ends, having nothing to run: a few
+/// seconds of drawing, where a campaign whose options leave it cases drops a few in a row.
+pub const DROP_LIMIT: u64 = 5000;
+
+impl Shared {
+    /// Counts a drawn case dropped (`why`); past [`DROP_LIMIT`] in a row the campaign ends
+    /// (`true`).
+    fn dropped(&mut self, why: &str) -> bool {
+        self.dropped += 1;
+        self.dropped_in_a_row += 1;
+        if self.last_drop != why {
+            why.clone_into(&mut self.last_drop);
+        }
+        if self.dropped_in_a_row >= DROP_LIMIT && self.no_cases.is_none() {
+            self.no_cases = Some(format!(
+                "the last {DROP_LIMIT} drawn cases were all dropped (the last one: {}): the options leave (next to) \
+                 nothing to test",
+                self.last_drop
+            ));
+        }
+        self.no_cases.is_some()
+    }
+}
+
+/// Refuses, before a campaign, options under which no case would run: when the case of no
+/// action at all (the preamble every case starts with) rests on a skipped decision, every
+/// case does.
+pub fn refuse_what_leaves_no_case(opts: &FuzzOptions) -> Result<(), FuzzError> {
+    let Ok(b) = case::build_case_sending(&opts.profile, &[], "fuzz", "the preamble", opts.wide(), opts.home(), &[])
+    else {
+        return Ok(());
+    };
+    match skipped_decision(opts, &b) {
+        Some(why) => Err(FuzzError::NothingToTest(format!(
+            "every case starts with the suite's preamble, which {why}: no case would run"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Why a built case is not run for a decision the hand took differently, if it is not.
+fn skipped_decision(opts: &FuzzOptions, b: &BuiltCase) -> Option<String> {
+    let rests: Vec<String> = b
+        .transcript
+        .header
+        .extensions
+        .iter()
+        .filter(|(k, _)| k == crate::suite::build::DECISIONS_KEY)
+        .flat_map(|(_, v)| v.split_whitespace().map(str::to_string))
+        .collect();
+    let d = opts.baseline.known.skipped_by(&opts.profile.id, &rests)?;
+    Some(format!("rests on decision {}, decided differently: {}", d.id, d.reason))
 }
 
 /// The wait of the dead-hand probe (as `gcl conform`'s).
@@ -1136,16 +1202,8 @@ fn build_for_sending(
 ) -> Result<BuiltCase, NotACase> {
     let b = case::build_case_sending(&opts.profile, actions, id, title, opts.wide(), opts.home(), blocks)?;
     // A case resting on a decision the hand took differently judges nothing of it.
-    let rests: Vec<String> = b
-        .transcript
-        .header
-        .extensions
-        .iter()
-        .filter(|(k, _)| k == crate::suite::build::DECISIONS_KEY)
-        .flat_map(|(_, v)| v.split_whitespace().map(str::to_string))
-        .collect();
-    if let Some(d) = opts.baseline.known.skipped_by(&opts.profile.id, &rests) {
-        return Err(NotACase(format!("rests on decision {}, decided differently: {}", d.id, d.reason)));
+    if let Some(why) = skipped_decision(opts, &b) {
+        return Err(NotACase(why));
     }
     if !opts.allowed.abort_timing && b.transcript.header.requires.contains(&gcl_transcript::Requirement::AbortTiming) {
         return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
@@ -1281,6 +1339,7 @@ pub fn judge_once(
 
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
+    refuse_what_leaves_no_case(opts)?;
     if opts.wide() {
         // As `gcl conform`: a hand that answers nothing is an infrastructure problem (exit 2),
         // not a campaign of "silence" findings.
@@ -1316,6 +1375,9 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         minimizing: Duration::ZERO,
         error: None,
         dead_hand: None,
+        dropped_in_a_row: 0,
+        last_drop: String::new(),
+        no_cases: None,
     });
     let runs = AtomicU64::new(0);
     let tickets = AtomicU64::new(0);
@@ -1355,6 +1417,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         elapsed: start.elapsed(),
         dead_hand: sh.dead_hand,
         interrupted: opts.stop.load(Ordering::SeqCst),
+        no_cases: sh.no_cases,
         malformed_corpus: malformed,
         minimizing: sh.minimizing,
     })
@@ -1454,15 +1517,22 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let Ok(built) = build_for(opts, &actions, "fuzz", "a generated case") else {
-            lock().dropped += 1;
-            continue;
+        let built = match build_for(opts, &actions, "fuzz", "a generated case") {
+            Ok(b) => b,
+            Err(NotACase(why)) => {
+                if lock().dropped(&why) {
+                    stop.store(true, Ordering::SeqCst);
+                }
+                continue;
+            }
         };
         if let Some(b) = opts.write_budget {
             let w = built.eeprom_writes as u64;
             if w > 0 && writes.fetch_add(w, Ordering::SeqCst) + w > b {
                 writes.fetch_sub(w, Ordering::SeqCst);
-                lock().dropped += 1;
+                if lock().dropped("needs EEPROM writes past the write budget") {
+                    stop.store(true, Ordering::SeqCst);
+                }
                 continue;
             }
         } else {
@@ -1491,6 +1561,7 @@ fn worker(
         }
         let mut outcome = hand.run(&built.transcript, false)?;
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
+        lock().dropped_in_a_row = 0;
         let known = if outcome.is_pass() { Vec::new() } else { lock().explained.clone() };
         let mut sig = judged(opts, &mut hand, &actions, &built, &outcome, &known)?;
         // A quick run's new failure counts only if a thorough run of the case fails too.
@@ -1785,6 +1856,24 @@ pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 29 item 2: a campaign that draws only cases it drops ends after [`DROP_LIMIT`] of
+    /// them in a row, saying why; a case run in between starts the count again.
+    #[test]
+    fn a_campaign_that_drops_every_case_it_draws_ends() {
+        let mut sh = Shared::default();
+        for _ in 0..DROP_LIMIT - 1 {
+            assert!(!sh.dropped("rests on decision x"));
+        }
+        sh.dropped_in_a_row = 0;
+        for _ in 0..DROP_LIMIT - 1 {
+            assert!(!sh.dropped("rests on decision x"));
+        }
+        assert!(sh.dropped("needs EEPROM writes past the write budget"));
+        let why = sh.no_cases.unwrap();
+        assert!(why.contains("5000 drawn cases") && why.contains("the write budget"), "{why}");
+        assert_eq!(sh.dropped, 2 * DROP_LIMIT - 1);
+    }
 
     /// README: "minimization stops at `--duration`". A case of four actions fails on a hand
     /// that rejects lower-case commands at its one lower-case line: with runs to spend it is

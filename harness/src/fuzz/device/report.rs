@@ -62,6 +62,11 @@ pub struct FuzzReport {
     /// folder the shards it holds. Set by the CLI, which knows the options as given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<crate::fuzz::shard::Provenance>,
+    /// Why the campaign ended before its budget: a signal (`stopped by SIGTERM after 40 of
+    /// 1000 runs`; the caller that heard it fills it), a hand that stopped answering, or
+    /// drawn cases all dropped. A campaign that ended so without a new finding has no verdict.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 /// Coverage reached by a time in the run.
@@ -90,15 +95,26 @@ impl FuzzReport {
     }
 
     /// Whether the run found nothing new (what the baseline or the known failures explain was
-    /// known before; the CLI's exit status says the same), and, for a merged report, holds
-    /// every shard of its campaign.
+    /// known before; the CLI's exit status says the same), ran to the end of its budget, and,
+    /// for a merged report, holds every shard of its campaign.
     pub fn passed(&self) -> bool {
-        self.findings.iter().all(|f| !f.is_new()) && self.merged().is_none_or(|m| m.complete())
+        self.findings.iter().all(|f| !f.is_new())
+            && self.stopped.is_none()
+            && self.merged().is_none_or(|m| m.complete())
     }
 
     /// The shards a merged report holds (`None`: not a merge).
     pub fn merged(&self) -> Option<&crate::fuzz::shard::Merged> {
         self.provenance.as_ref().and_then(|p| p.merged.as_ref())
+    }
+
+    /// How much the campaign judged, for people: `1200 cases run, 31 drawn cases dropped`.
+    pub fn judged(&self) -> String {
+        format!(
+            "{} cases run, {} drawn cases dropped (the model made no case of them, a skipped decision, or the EEPROM \
+             write budget)",
+            self.runs, self.dropped
+        )
     }
 
     /// How many findings are new.
@@ -137,6 +153,9 @@ impl FuzzReport {
             findings: s.findings.clone(),
             coverage_over_time: Vec::new(),
             provenance: None,
+            stopped: s.dead_hand.clone().or_else(|| s.no_cases.clone()).or_else(|| {
+                (s.runs == 0 && !s.interrupted).then(|| "the budget ran out before the first case ran".to_string())
+            }),
         }
     }
 }
@@ -151,7 +170,9 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     let name = format!("gcl fuzz device {}", r.target);
     // A new finding fails; one the baseline or the known failures explain is skipped, saying why.
     let new = r.new_findings();
-    let errors = usize::from(r.merged().is_some_and(|m| !m.complete()));
+    // A campaign that ended early without a new finding is an error: it has no verdict.
+    let unjudged = new == 0 && r.stopped.is_some();
+    let errors = usize::from(r.merged().is_some_and(|m| !m.complete())) + usize::from(unjudged);
     let (tests, failures, skipped) =
         ((r.findings.len().max(1) + errors).to_string(), new.to_string(), (r.findings.len() - new).to_string());
     let errors = errors.to_string();
@@ -164,6 +185,18 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     suite.push_attribute(("skipped", skipped.as_str()));
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
+    w.write_event(Event::Start(BytesStart::new("properties")))?;
+    let mut props = vec![("judged", r.judged())];
+    if let Some(st) = &r.stopped {
+        props.push(("stopped", st.clone()));
+    }
+    for (k, v) in &props {
+        let mut e = BytesStart::new("property");
+        e.push_attribute(("name", *k));
+        e.push_attribute(("value", v.as_str()));
+        w.write_event(Event::Empty(e))?;
+    }
+    w.write_event(Event::End(BytesEnd::new("properties")))?;
     // A merge that lacks shards: an error CI shows, whatever was found in the rest.
     if let Some(m) = r.merged().filter(|m| !m.complete()) {
         let mut tc = BytesStart::new("testcase");
@@ -178,8 +211,23 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
         w.write_event(Event::Empty(e))?;
         w.write_event(Event::End(BytesEnd::new("testcase")))?;
     }
-    if r.findings.is_empty() {
-        let passed = format!("no finding in {} runs", r.runs);
+    if unjudged {
+        let name = format!("no verdict after {} runs ({} dropped)", r.runs, r.dropped);
+        let mut tc = BytesStart::new("testcase");
+        tc.push_attribute(("classname", "gcl.fuzz-device"));
+        tc.push_attribute(("name", name.as_str()));
+        tc.push_attribute(("time", time.as_str()));
+        w.write_event(Event::Start(tc))?;
+        let message = r.stopped.clone().unwrap_or_default();
+        let mut e = BytesStart::new("error");
+        e.push_attribute(("message", message.as_str()));
+        e.push_attribute(("type", "stopped"));
+        w.write_event(Event::Start(e))?;
+        w.write_event(Event::Text(BytesText::new(&format!("{message}\n{}\n", r.judged()))))?;
+        w.write_event(Event::End(BytesEnd::new("error")))?;
+        w.write_event(Event::End(BytesEnd::new("testcase")))?;
+    } else if r.findings.is_empty() {
+        let passed = format!("no finding in {} runs ({} drawn cases dropped)", r.runs, r.dropped);
         let mut tc = BytesStart::new("testcase");
         tc.push_attribute(("classname", "gcl.fuzz-device"));
         tc.push_attribute(("name", passed.as_str()));
@@ -299,7 +347,7 @@ pub fn to_html(r: &FuzzReport) -> String {
     let new = r.new_findings();
     let known = r.findings.len() - new;
     let secs = r.duration_ms as f64 / 1000.0;
-    let headline = match (new, known) {
+    let mut headline = match (new, known) {
         (0, 0) => format!("no finding in {} runs ({secs:.1} s)", r.runs),
         (0, k) => format!(
             "no new finding in {} runs ({secs:.1} s); {k} known (the baseline or known failures explain them)",
@@ -308,12 +356,17 @@ pub fn to_html(r: &FuzzReport) -> String {
         (n, 0) => format!("{n} distinct finding(s) in {} runs ({secs:.1} s)", r.runs),
         (n, k) => format!("{n} new distinct finding(s) in {} runs ({secs:.1} s), and {k} known", r.runs),
     };
+    if let Some(st) = &r.stopped {
+        headline.push_str(&format!("; ended early: {st}"));
+    }
     let incomplete = r.merged().is_some_and(|m| !m.complete());
-    let verdict = match (new, known) {
+    let verdict = match (new, known, &r.stopped) {
         // A merge that lacks shards judged only part of the campaign.
         _ if incomplete => "INCOMPLETE",
-        (0, 0) => "NO FINDING",
-        (0, _) => "NO NEW FINDING",
+        (0, _, Some(st)) if st.starts_with("stopped by") => "STOPPED",
+        (0, _, Some(_)) => "NO VERDICT",
+        (0, 0, None) => "NO FINDING",
+        (0, _, None) => "NO NEW FINDING",
         _ => "FINDINGS",
     };
     let headline = match r.merged() {
@@ -324,13 +377,7 @@ pub fn to_html(r: &FuzzReport) -> String {
     p.facts(&[
         ("target".into(), format!("<code>{}</code>", esc(&r.target))),
         ("profile".into(), esc(&r.profile)),
-        (
-            "runs".into(),
-            format!(
-                "{} ({:.1} cases/s); {} drawn cases dropped (the model made no case of them, or the EEPROM write budget was spent)",
-                r.runs, r.cases_per_second, r.dropped
-            ),
-        ),
+        ("judged".into(), format!("{} ({:.1} cases/s)", esc(&r.judged()), r.cases_per_second)),
         ("corpus".into(), format!("{} entries", r.corpus)),
         ("wire".into(), format!("{} bytes; {} EEPROM writes", r.wire_bytes, r.eeprom_writes)),
         ("tool".into(), esc(&r.tool)),

@@ -215,6 +215,51 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
     v
 }
 
+impl std::fmt::Display for HostEnd {
+    /// How the host ended, for people: `exited with code 2`, `killed by signal 9`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HostEnd::Exit(c) => write!(f, "exited with code {c}"),
+            HostEnd::Signal(s) => write!(f, "was killed by signal {s}"),
+            HostEnd::Hung(at) => write!(f, "hung ({at}) and was killed"),
+            HostEnd::OverBudget(at) => write!(f, "ran over the run budget ({at}) and was killed"),
+        }
+    }
+}
+
+/// Lines of the host's stderr an [`unreached`] message quotes, from its end.
+const STDERR_TAIL_LINES: usize = 3;
+
+/// Why a run judged nothing of the host, or `None` when the host opened the port and sent
+/// the hand at least one byte. A host that never opened the port (a script that does not
+/// exist, a command that ignores `{port}`), or opened it and sent nothing, exercised no
+/// clause: what such a run shows is no verdict on the host. The message names `command`,
+/// how it ended, and the last lines of its stderr (escaped: they are the host's bytes).
+pub fn unreached(r: &RunResult, command: &[String]) -> Option<String> {
+    let sent = r.exchanges.iter().any(|e| e.dir == Dir::Host && !e.bytes.is_empty());
+    let what = match (r.port_opened, sent) {
+        (_, true) => return None,
+        (false, _) => "the host never opened the port",
+        (true, false) => "the host opened the port but sent nothing",
+    };
+    let tail: Vec<String> = r
+        .stderr
+        .lines()
+        .rev()
+        .filter(|l| !l.trim().is_empty())
+        .take(STDERR_TAIL_LINES)
+        .map(|l| crate::report::truncate_note(&gcl_model::escape::escape(l.trim_end().as_bytes()), 200))
+        .collect();
+    let stderr = if tail.is_empty() {
+        "it wrote nothing on stderr".to_string()
+    } else {
+        let tail: Vec<String> = tail.into_iter().rev().collect();
+        format!("the last lines of its stderr: {}", tail.join(" | "))
+    };
+    let command = crate::report::truncate_note(&command.join(" "), 200);
+    Some(format!("{what}: `{command}` {}; {stderr}", r.end))
+}
+
 /// Operators and their weights.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Weights(pub Vec<(Operator, u32)>);
@@ -313,6 +358,10 @@ pub struct Calibration {
     pub timeout_hang_ms: u64,
     /// Runs it took.
     pub runs: u64,
+    /// Why nothing could be measured: the run without misbehaviour did not reach the host
+    /// ([`unreached`]); the campaign ends there (its [`Campaign::untested`]).
+    #[serde(skip)]
+    pub untested: Option<String>,
 }
 
 /// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
@@ -334,6 +383,10 @@ pub fn calibrate(run: &HostRun, stop: &AtomicBool) -> Result<Calibration, RunErr
     let mut quiet = run.clone();
     quiet.timeout_hang = cap;
     let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
+    if let Some(why) = unreached(&clean, &run.command) {
+        let timeout_hang_ms = run.timeout_hang.as_millis() as u64;
+        return Ok(Calibration { runs: 1, untested: Some(why), timeout_hang_ms, ..Default::default() });
+    }
     let n = clean.answers.max(1);
     let mut at = vec![1, n.div_ceil(2), n];
     at.dedup();
@@ -433,6 +486,18 @@ pub struct Campaign {
     /// merged folder the shards it holds. Set by the CLI, which knows the options as given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<crate::fuzz::shard::Provenance>,
+    /// Runs in which the host opened the port and sent the hand at least one byte: the runs
+    /// that judged anything of it.
+    #[serde(default)]
+    pub reached: u64,
+    /// Why the campaign could not test: its run without misbehaviour (calibration's, or run
+    /// 0) did not reach the host ([`unreached`]), and it ended there.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub untested: Option<String>,
+    /// How a signal stopped the campaign (`stopped by SIGTERM after 3 of 1000 runs`), set by
+    /// the caller that heard it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -453,6 +518,8 @@ struct Shared {
     notes: BTreeMap<String, u64>,
     minimize_runs: u64,
     error: Option<String>,
+    /// Why the run without misbehaviour judged nothing of the host (see [`unreached`]).
+    untested: Option<String>,
     /// Runs 0..taken have been taken in.
     taken: u64,
     /// Runs that ended but wait for an earlier one to be taken in first.
@@ -699,6 +766,14 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     } else {
         None
     };
+    if let Some(why) = calibration.as_ref().and_then(|c| c.untested.clone()) {
+        return Ok(Campaign {
+            elapsed_ms: started.elapsed().as_millis() as u64,
+            calibration,
+            untested: Some(why),
+            ..Default::default()
+        });
+    }
     let calibrated;
     let opts = match &calibration {
         Some(c) => {
@@ -711,6 +786,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     };
     let next = AtomicU64::new(0);
     let completed = AtomicU64::new(0);
+    let reached = AtomicU64::new(0);
     let jobs = opts.jobs.max(1) as u64;
     let shared = Mutex::new(Shared {
         corpus: Vec::new(),
@@ -724,6 +800,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         notes: BTreeMap::new(),
         minimize_runs: 0,
         error: None,
+        untested: None,
         taken: 0,
         ended: BTreeMap::new(),
     });
@@ -741,7 +818,19 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         && !s.owns(0)
         && !done(0)
     {
-        let r = run_once_until(&opts.run, &Schedule::default(), stop)?;
+        let r = match run_once_until(&opts.run, &Schedule::default(), stop) {
+            Err(RunError::Cancelled) => {
+                return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
+            }
+            r => r?,
+        };
+        if let Some(why) = unreached(&r, &opts.run.command) {
+            return Ok(Campaign {
+                elapsed_ms: started.elapsed().as_millis() as u64,
+                untested: Some(why),
+                ..Default::default()
+            });
+        }
         if let Ok(mut sh) = shared.lock() {
             sh.learn(&r, opts);
         }
@@ -833,6 +922,22 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             };
             completed.fetch_add(1, Ordering::Relaxed);
             on_event(Event::Run { index: i, elapsed: r.elapsed });
+            let missed = unreached(&r, &opts.run.command);
+            if missed.is_none() {
+                reached.fetch_add(1, Ordering::Relaxed);
+            }
+            // A host the hand without misbehaviour did not reach judges nothing in any run:
+            // the campaign ends (its run taken in as no finding of the host's).
+            if i == 0
+                && let Some(why) = missed
+            {
+                if let Ok(mut sh) = shared.lock() {
+                    sh.untested.get_or_insert(why);
+                }
+                stop.store(true, Ordering::Relaxed);
+                turn.notify_all();
+                break;
+            }
             let new = match shared.lock() {
                 Ok(mut sh) => {
                     sh.ended.insert(t, (schedule, r));
@@ -850,7 +955,12 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         }
     });
     // Runs that ended after one before them was called off: taken in (in order), unminimized.
+    // (None after an unreached run 0: a campaign that could not test reports no finding.)
     let left = match shared.lock() {
+        Ok(mut sh) if sh.untested.is_some() => {
+            sh.ended.clear();
+            Vec::new()
+        }
         Ok(mut sh) => {
             let ended = std::mem::take(&mut sh.ended);
             let mut new = Vec::new();
@@ -866,8 +976,20 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     if let Some(e) = sh.error {
         return Err(RunError::Io(std::io::Error::other(e)));
     }
+    let runs = completed.load(Ordering::Relaxed);
+    // No run at all, and nobody stopped it: the budget went before the first run.
+    let untested = sh.untested.or_else(|| {
+        (runs == 0 && !stop.load(Ordering::Relaxed)).then(|| {
+            let calibrating = calibration.as_ref().map_or(String::new(), |_| {
+                " (measuring the host's timeouts took it; a longer --duration, or --timeout-hang to skip the \
+                 measure)"
+                    .to_string()
+            });
+            format!("the budget ran out before the first run{calibrating}")
+        })
+    });
     Ok(Campaign {
-        runs: completed.load(Ordering::Relaxed),
+        runs,
         minimize_runs: sh.minimize_runs,
         elapsed_ms: started.elapsed().as_millis() as u64,
         findings: sh.findings,
@@ -879,6 +1001,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         pass_runs: sh.pass.len() as u64,
         answer_kinds: sh.answer_kinds,
         provenance: None,
+        reached: reached.load(Ordering::Relaxed),
+        untested,
+        stopped: None,
     })
 }
 
@@ -960,6 +1085,7 @@ mod tests {
             answer_kinds: Vec::new(),
             elapsed: Duration::ZERO,
             talking_at_end: false,
+            port_opened: true,
         }
     }
 

@@ -155,6 +155,9 @@ pub struct RunResult {
     /// held up by the hand's line rate): it was acting, not hung, and its pending line is
     /// judged as it stood ([`super::check::HostChecker::cut_off`]).
     pub talking_at_end: bool,
+    /// Whether a host opened the port (or connected) at all: a run in which none did, or in
+    /// which the host sent nothing, judged nothing of it ([`super::unreached`]).
+    pub port_opened: bool,
 }
 
 /// A host whose last bytes came this recently is still talking.
@@ -354,6 +357,8 @@ pub(crate) struct Log {
     pub(crate) hung_up: bool,
     /// A host has the port open, as the hand's transport last said.
     port_open: bool,
+    /// A host opened the port at some time in the session.
+    pub(crate) opened: bool,
     reactions: Vec<(String, String, String)>,
     /// Reactions still waiting for the host's next command: (index into reactions, commands seen).
     awaiting: Vec<(usize, usize)>,
@@ -386,6 +391,7 @@ impl Log {
             hang_up: Some(hang_up),
             hung_up: false,
             port_open: false,
+            opened: false,
             reactions: Vec::new(),
             awaiting: Vec::new(),
         }
@@ -564,6 +570,7 @@ impl LineTap for Tap {
         if let Ok(mut log) = self.0.lock() {
             log.checker.connection(open);
             log.port_open = open;
+            log.opened |= open;
         }
     }
 
@@ -615,6 +622,7 @@ impl RunDir {
         let p = std::env::temp_dir().join(format!("gcl-host-run-{}-{n}", std::process::id()));
         let _ = std::fs::remove_dir_all(&p);
         std::fs::create_dir(&p)?;
+        live().dirs.insert(p.clone());
         Ok(RunDir(p))
     }
 
@@ -644,8 +652,44 @@ impl RunDir {
 impl Drop for RunDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
+        live().dirs.remove(&self.0);
     }
 }
+
+/// The hosts' process groups and run folders of this process's runs in flight.
+#[derive(Default)]
+struct Live {
+    groups: std::collections::BTreeSet<i32>,
+    dirs: std::collections::BTreeSet<std::path::PathBuf>,
+}
+
+fn live() -> std::sync::MutexGuard<'static, Live> {
+    static LIVE: Mutex<Live> =
+        Mutex::new(Live { groups: std::collections::BTreeSet::new(), dirs: std::collections::BTreeSet::new() });
+    LIVE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Kills the process group of every host running now and removes every run folder: for a
+/// process about to exit without waiting for its runs to end (a second signal), so that it
+/// leaves no host running and no `gcl-host-run-*` folder behind.
+pub fn end_all() {
+    let mut l = live();
+    for g in std::mem::take(&mut l.groups) {
+        let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(g), nix::sys::signal::Signal::SIGKILL);
+    }
+    for d in std::mem::take(&mut l.dirs) {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+/// Whether `pgid` is the process group of a host running now.
+pub fn is_host_group(pgid: i32) -> bool {
+    live().groups.contains(&pgid)
+}
+
+/// How long a host whose run is called off has to end after SIGTERM before its group is
+/// killed: time for its own clean-up, not for more work.
+const CANCEL_GRACE: Duration = Duration::from_millis(500);
 
 /// The host's sanitizer options with a log file per process in `dir` (the user's own
 /// options kept; a `log_path` of theirs is replaced).
@@ -740,6 +784,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         }
     };
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    live().groups.insert(pid.as_raw());
     // When the host started (clock ticks since boot): what it leaves behind started later.
     let host_start = start_time(pid.as_raw());
     let err_pipe = child.stderr.take();
@@ -824,6 +869,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             }
             Ok(Err(e)) => {
                 let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
+                live().groups.remove(&pid.as_raw());
                 stop.stop();
                 let _ = hand.join();
                 return Err(RunError::Io(e));
@@ -858,7 +904,12 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         };
         if let Some(v) = verdict {
             let mut reaped = false;
-            if !cancelled {
+            if cancelled {
+                // Called off (the campaign or check is stopping): SIGTERM to the host's group,
+                // a short grace to end by itself, then the whole group is killed.
+                let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGTERM);
+                reaped = rx.recv_timeout(CANCEL_GRACE).is_ok();
+            } else {
                 stack = take_stack(pid.as_raw(), &errbuf, Some(&rx), &mut reaped);
             }
             let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
@@ -871,6 +922,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     // Whatever the host left behind in its group goes with it.
     let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
     let _ = waiter.join();
+    live().groups.remove(&pid.as_raw());
     // Stderr for a short grace; then whatever still holds the port or stderr (it left the
     // group) is found and killed, and named.
     // A pty's number is ours only while its master is open, i.e. while the hand's thread
@@ -964,6 +1016,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         answer_kinds: log.misbehave.kinds().to_vec(),
         elapsed: started.elapsed(),
         talking_at_end,
+        port_opened: log.opened,
     })
 }
 
