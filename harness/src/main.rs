@@ -70,7 +70,7 @@ fn main() -> ExitCode {
             }) {
                 return ExitCode::from(cli::EXIT_OK);
             }
-            let _ = writeln!(std::io::stderr(), "gcl: error: {e:#}");
+            let _ = writeln!(std::io::stderr(), "gcl: error: {}", cli::error_line(&e));
             ExitCode::from(cli::EXIT_ERROR)
         }
     }

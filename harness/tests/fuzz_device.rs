@@ -442,6 +442,27 @@ fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     assert!(s2.corpus >= s.corpus);
 }
 
+/// The corpus figure a campaign prints is what its folder holds: the suite's seeds it takes
+/// into memory are not counted, nor are entries counted twice across runs.
+#[test]
+fn the_corpus_count_is_the_folders_entries() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = || std::fs::read_dir(dir.path()).unwrap().count();
+    let mut o = opts(vec![], 60);
+    o.corpus = Some(dir.path().to_path_buf());
+    assert!(o.suite_seeds, "the default seeds the corpus with the suite's cases");
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.corpus > 0);
+    assert_eq!(s.corpus, files());
+    o.seed = 2;
+    let s2 = run(&o, &|_| {}).unwrap();
+    assert_eq!(s2.corpus, files());
+    // Without a folder: the cases this run kept, the suite's seeds aside.
+    o.corpus = None;
+    let s3 = run(&o, &|_| {}).unwrap();
+    assert!(s3.corpus <= 60, "{} entries from 60 runs", s3.corpus);
+}
+
 #[test]
 fn the_unmutated_sim_over_exec_yields_no_findings() {
     let p = Profile::builtin("bh8-262").unwrap();

@@ -205,15 +205,27 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     if !cert.excused.is_empty() {
         writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
     }
-    let how = match &key {
-        Some(k) => format!("signed by key {}", fingerprint(&k.verifying_key())),
-        None => "unsigned (give --key to sign it)".to_string(),
+    // The check to run is one that can pass: a signed bundle against its public key (the
+    // `--keygen` pair's FILE.pub when it is there); an unsigned one only for agreeing with
+    // itself, which --verify refuses to call a pass without --allow-unverified.
+    let (how, check) = match (&key, &args.key) {
+        (Some(k), Some(path)) => {
+            let public = public_key_path(path);
+            let pubkey = if public.is_file() {
+                public.display().to_string()
+            } else {
+                format!("PUBLIC-KEY-FILE (the public key of {})", fingerprint(&k.verifying_key()))
+            };
+            (
+                format!("signed by key {}", fingerprint(&k.verifying_key())),
+                format!("gcl certify --verify {} --pubkey {pubkey}", args.out.display()),
+            )
+        }
+        _ => (
+            "unsigned (give --key to sign it)".to_string(),
+            format!("gcl certify --verify {} --allow-unverified", args.out.display()),
+        ),
     };
-    writeln!(
-        w,
-        "  certificate bundle: {}, {how} (check it with `gcl certify --verify {}`)",
-        args.out.display(),
-        args.out.display()
-    )?;
+    writeln!(w, "  certificate bundle: {}, {how} (check it with `{check}`)", args.out.display())?;
     Ok(if cert.is_pass() || (cert.partial && report.passed()) { EXIT_OK } else { EXIT_FAIL })
 }

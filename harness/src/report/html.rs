@@ -279,7 +279,10 @@ pub fn to_html(r: &RunReport) -> String {
         }
     }
 
-    if let Some(w) = &r.wire {
+    if let Some(w) = r.wire.as_ref().filter(|w| w.refuted()) {
+        p.heading("wire", "Wire time");
+        p.push(&format!("<p>{}.</p>\n", esc(&w.refuted_text())));
+    } else if let Some(w) = &r.wire {
         p.heading("wire", "Wire time");
         p.push(&format!(
             "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (a passing case: its pauses plus the \
