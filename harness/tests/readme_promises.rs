@@ -645,6 +645,14 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[".ci/run::the planted CR LF bug fails gcl check-host, as it should"],
     ),
     (
+        "build the wheel in their first job (`gcl-wheel`: gcl is not on PyPI, so maturin builds it once from gcl's source",
+        &[
+            "python/tests/test_ci_recipes.py::test_github_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_gitlab_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run",
+        ],
+    ),
+    (
         "a test holds the recipes to them",
         &["python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run"],
     ),
