@@ -430,8 +430,19 @@ fn a_wire_bound_the_run_beats_is_not_printed_as_a_bound() {
     // a second.
     let target = format!("exec:{GCL} sim --stdio --profile seed");
     let r = gcl(&[
-        "conform", "--target", &target, "--profile", "seed", "--only", "framing-*", "--no", "abort-timing",
-        "--baud", "50", "--report", s(dir.path()),
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--only",
+        "framing-*",
+        "--no",
+        "abort-timing",
+        "--baud",
+        "50",
+        "--report",
+        s(dir.path()),
     ]);
     assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
     let w = report(dir.path()).wire.unwrap();
@@ -490,7 +501,12 @@ fn an_error_says_its_cause_once() {
     for args in [
         &["fuzz", "device", "--target", &target, "--runs", "3"][..],
         &["conform", "--target", &target],
-        &["replay", concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite/seed/framing-echo.gcl"), "--target", &target],
+        &[
+            "replay",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../vectors/suite/seed/framing-echo.gcl"),
+            "--target",
+            &target,
+        ],
         &["fuzz", "host", "--replay", s(&bundle), "--", "true"],
     ] {
         let r = gcl(args);

@@ -653,6 +653,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "The cases a root cause blocks (they fail on its clause's bug, not their own) are folded under one line for it, apart from the cases that fail on their own; in JUnit their message starts `blocked by root-cause-N (CLAUSE): `.",
+        &["harness/tests/report_pages.rs::the_cases_a_bug_blocks_are_folded_under_its_root_cause"],
+    ),
+    (
         "a test holds the recipes to them",
         &["python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run"],
     ),

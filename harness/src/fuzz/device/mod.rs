@@ -499,9 +499,8 @@ pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Malformed), Fuzz
 
 /// How many entries (`.json` files) the corpus folder holds.
 fn corpus_files(dir: &Path) -> usize {
-    std::fs::read_dir(dir).map_or(0, |d| {
-        d.filter_map(Result::ok).filter(|e| e.path().extension().is_some_and(|x| x == "json")).count()
-    })
+    std::fs::read_dir(dir)
+        .map_or(0, |d| d.filter_map(Result::ok).filter(|e| e.path().extension().is_some_and(|x| x == "json")).count())
 }
 
 fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
