@@ -583,14 +583,17 @@ impl Drop for SmallDisk {
 
 /// Item 17: on a full disk, a write fails naming its file, leaves no temporary, and a fuzz
 /// host bundle cut short is marked incomplete (and `--replay` refuses it) instead of looking
-/// valid. Needs root for the tmpfs; skipped, saying so, without it.
+/// valid. Needs root for the tmpfs; a skip `deps` reports without it (a failure under CI).
 #[test]
 fn a_full_disk_leaves_no_temporaries_and_no_bundle_that_looks_valid() {
     let dir = tempfile::tempdir().unwrap();
     let disk = match SmallDisk::mount(&dir.path().join("disk")) {
         Ok(d) => d,
         Err(why) => {
-            eprintln!("skipped: cannot mount a 1 MiB tmpfs here ({why})");
+            deps::missing(
+                &format!("a 1 MiB tmpfs ({})", why.trim()),
+                "run the tests as root, where `mount -t tmpfs` works",
+            );
             return;
         }
     };

@@ -34,6 +34,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
     ),
     (
+        "after each test binary's result a line says how many of its tests did not run though libtest counts them as passed, with the run's total so far and the command that fixes it",
+        &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
+    ),
+    (
         "under `CI=true` a missing tool fails the test instead",
         &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
     ),

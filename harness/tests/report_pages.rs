@@ -2,12 +2,13 @@
 //! without an error, every in-page link has its target, nothing is loaded from elsewhere, the
 //! verdict comes first, plots are where the pages promise them, the page for one bug stays
 //! small, and every JUnit file reads in a real JUnit consumer (Python's `junitparser`, in the
-//! venv `.ci/run` makes under `target/junit-venv`).
+//! tests' venv, `target/pyvenv`: `deps`).
 
 mod deps;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use gcl_harness::report::diff::clip;
 use scraper::{ElementRef, Html, Selector};
 
 fn gcl(args: &[&str]) -> Output {
@@ -102,13 +103,10 @@ fn plots(html: &Html) -> Vec<String> {
 }
 
 /// Runs `junitparser` over a file and returns what it read: one line per test case
-/// (`suite|classname|name|time|result|message`). `None` when the venv is missing (outside CI).
+/// (`suite|classname|name|time|result|message`). `None` (a skip `deps` reports) when no
+/// Python with junitparser is at hand.
 fn junit_consumer(path: &Path) -> Option<Vec<String>> {
-    let py = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/junit-venv/bin/python");
-    if !py.exists() {
-        eprintln!("skipped the JUnit consumer: {} is missing (.ci/run makes it)", py.display());
-        return None;
-    }
+    let py = deps::python_with(&["junitparser"])?;
     let script = r#"
 import sys
 from junitparser import JUnitXml, TestSuite
@@ -427,9 +425,13 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     let dir = tempfile::tempdir().unwrap();
     let host = mutant("py_sends_lf.py");
     let rep = dir.path().join("check");
-    let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", &deps::python(), &host, "{port}"]);
+    let py = deps::python();
+    // The page's title is the command, the host's as given (its interpreter is whichever
+    // `deps` found: `python3`, or the venv's path), clipped to 80 characters.
+    let command = format!("{py} {host} {{port}}");
+    let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", &py, &host, "{port}"]);
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
-    let html = page(&rep.join("report.html"), "gcl check-host: python3 ");
+    let html = page(&rep.join("report.html"), &format!("gcl check-host: {}", clip(&command, 80)));
     let text = html.root_element().text().collect::<String>();
     assert!(!text.contains("suite hash") && !text.contains("liveness"), "nothing of conform's");
     let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
@@ -439,9 +441,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert!(times.len() >= 5 && times.iter().all(|(_, t)| *t > 0.0), "{times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
         assert!(
-            cases
-                .iter()
-                .all(|c| c.starts_with(&format!("gcl check-host python3 {host} {{port}}|gcl.check-host.clause|"))),
+            cases.iter().all(|c| c.starts_with(&format!("gcl check-host {command}|gcl.check-host.clause|"))),
             "{cases:?}"
         );
         let lf = cases.iter().find(|c| c.contains("|host-line-ending|")).unwrap();
@@ -450,7 +450,6 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
 
     let rep = dir.path().join("fuzz");
     let bundles = dir.path().join("bundles");
-    let py = deps::python();
     let o = gcl(&[
         "fuzz",
         "host",
@@ -470,7 +469,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!stderr.contains("] violation: "), "the kind is not said twice: {stderr}");
-    let html = page(&rep.join("report.html"), &format!("gcl fuzz host: {py} "));
+    let html = page(&rep.join("report.html"), &format!("gcl fuzz host: {}", clip(&command, 80)));
     let facts = html.select(&sel("table")).next().unwrap().text().collect::<String>();
     assert!(facts.contains("runs") && facts.contains("4 (+"), "{facts}");
     let opts = html.select(&sel("#options + table")).next().unwrap().text().collect::<String>();
@@ -483,7 +482,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     let times = junit_times(&rep.join("junit.xml"));
     assert!(!times.is_empty() && times.iter().all(|(_, t)| *t > 0.0), "each finding has a time: {times:?}");
     if let Some(cases) = junit_consumer(&rep.join("junit.xml")) {
-        assert!(cases[0].starts_with(&format!("gcl fuzz host python3 {host} {{port}}|gcl.fuzz-host.")), "{cases:?}");
+        assert!(cases[0].starts_with(&format!("gcl fuzz host {command}|gcl.fuzz-host.")), "{cases:?}");
     }
 }
 
