@@ -151,10 +151,12 @@ fn plans() -> Vec<(String, Run)> {
             sh_as("gcl check-host --profile bh8-262 --report reports/host-check -- {python} {repo}/ci/host_scenario.py {port}", 0),
         ),
         (
-            // (the hang timeout is given so the 3 s run does not spend its time calibrating)
+            // (the hang timeout is given so the 3 s run does not spend its time calibrating: the
+            // scenario gives up on a motion after 10 s, so twice that and 2 s, as calibration
+            // would find)
             "gcl fuzz host --profile bh8-262 --duration 5m --jobs 2 --report reports/host-fuzz --out reports/host-fuzz/bundles -- python3 ci/host_scenario.py {port}".into(),
             sh_as(
-                "gcl fuzz host --profile bh8-262 --duration 3s --jobs 2 --timeout-hang 3s --report reports/host-fuzz --out reports/host-fuzz/bundles -- {python} {repo}/ci/host_scenario.py {port}",
+                "gcl fuzz host --profile bh8-262 --duration 3s --jobs 2 --timeout-hang 22s --report reports/host-fuzz --out reports/host-fuzz/bundles -- {python} {repo}/ci/host_scenario.py {port}",
                 0,
             ),
         ),
@@ -468,6 +470,7 @@ fn serve(dir: &Path, command: &str, path: &str) -> Result<String, String> {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn every_example_in_the_readme_and_the_help_runs_as_written() {
     let plans = plans();
     let listed: BTreeSet<&str> = plans.iter().map(|(e, _)| e.as_str()).collect();

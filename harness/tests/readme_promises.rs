@@ -26,6 +26,10 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 const PROMISES: &[(&str, &[&str])] = &[
     // The two commands.
     (
+        "`.ci/run` runs them (`-- --ignored`) beside the default run.",
+        &["harness/tests/tidy.rs::every_test_left_out_of_the_default_run_is_run_by_ci"],
+    ),
+    (
         "they use `GCL_PYTHON`, else a virtual environment at `target/pyvenv`, else",
         &["harness/tests/deps_check.rs::python_is_found_the_same_way_by_every_test"],
     ),

@@ -579,3 +579,42 @@ fn goldens_match_the_abnf_grammar() {
     abnf::check("gcl-transcript 1\nexpect within 1s..2s \"{int 1..9 as p} {int p*2/3 +-25%}\" hex {i8 p +-0% as q}\n")
         .unwrap();
 }
+
+/// What `cargo test --workspace` leaves out, CI still runs (issue 33 item 4): every ignored
+/// test is in the slow group, `#[ignore = "slow: ..."]`, which `.ci/run` runs with
+/// `--ignored` beside the default run, or is a report that is no gate and that `.ci/run`
+/// skips by name.
+#[test]
+fn every_test_left_out_of_the_default_run_is_run_by_ci() {
+    const SLOW: &str = "#[ignore = \"slow: .ci/run runs it (cargo test --workspace -- --include-ignored)\"]";
+    const REPORTS: &[&str] = &["necessity_report"];
+    let ci = std::fs::read_to_string(Path::new(ROOT).join(".ci/run")).unwrap();
+    let skips: String = REPORTS.iter().map(|r| format!(" --skip {r}")).collect();
+    let slow = format!("cargo test --workspace -- --ignored{skips} ");
+    assert!(ci.lines().any(|l| l.starts_with(&slow)), ".ci/run does not run `{slow}`");
+    assert!(ci.lines().any(|l| l.trim_start().starts_with("cargo test --workspace ||")), ".ci/run: the default run");
+    let mut files = Vec::new();
+    for dir in ["harness", "reference-model", "host", "transcript", "fuzz/src"] {
+        files.extend(files_with_ext(dir, "rs"));
+    }
+    let (mut slow, mut bad) = (0, Vec::new());
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, l) in lines.iter().enumerate() {
+            let l = l.trim();
+            if !l.starts_with("#[ignore") {
+                continue;
+            }
+            let name = lines[i + 1..].iter().find_map(|n| n.trim().strip_prefix("fn ")).unwrap_or("");
+            let name = name.split('(').next().unwrap_or("");
+            if l == SLOW {
+                slow += 1;
+            } else if !REPORTS.contains(&name) {
+                bad.push(format!("{}:{}: {l} (fn {name})", rel(f), i + 1));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "ignored tests that CI would not run (use `{SLOW}`):\n{}", bad.join("\n"));
+    assert!(slow > 0);
+}
