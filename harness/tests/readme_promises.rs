@@ -26,7 +26,7 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 const PROMISES: &[(&str, &[&str])] = &[
     // The two commands.
     (
-        "`.ci/run` runs them (`-- --ignored`) beside the default run.",
+        "`cargo test --workspace -- --include-ignored` runs them too, as `.ci/run` does.",
         &["harness/tests/tidy.rs::every_test_left_out_of_the_default_run_is_run_by_ci"],
     ),
     (
