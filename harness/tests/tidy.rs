@@ -582,13 +582,25 @@ fn goldens_match_the_abnf_grammar() {
 
 /// What `cargo test --workspace` leaves out, CI still runs (issue 33 item 4): every ignored
 /// test is in the slow group, `#[ignore = "slow: ..."]`, which `.ci/run` runs with
-/// `--include-ignored`, or is a report that is no gate and that `.ci/run` skips by name.
+/// `--include-ignored`, or is a report that is no gate and that `.ci/run` skips by name. The
+/// test step also skips one slow test whose commands another step of `.ci/run` runs as they are.
 #[test]
 fn every_test_left_out_of_the_default_run_is_run_by_ci() {
     const SLOW: &str = "#[ignore = \"slow: .ci/run runs it (cargo test --workspace -- --include-ignored)\"]";
     const REPORTS: &[&str] = &["necessity_report"];
+    // (test, what `.ci/run` runs instead: the same commands)
+    const ELSEWHERE: &[(&str, &[&str])] = &[(
+        "the_python_package_tests_pass",
+        &["python3 -m unittest discover -s tests -t .", "python3 -m gcl_vectors check -q"],
+    )];
     let ci = std::fs::read_to_string(Path::new(ROOT).join(".ci/run")).unwrap();
-    let skips: String = REPORTS.iter().map(|r| format!(" --skip {r}")).collect();
+    for (test, commands) in ELSEWHERE {
+        for c in *commands {
+            assert!(ci.contains(c), ".ci/run skips {test} but does not run `{c}`");
+        }
+    }
+    let skips: String =
+        REPORTS.iter().chain(ELSEWHERE.iter().map(|(t, _)| t)).map(|r| format!(" --skip {r}")).collect();
     let line = format!("cargo test --workspace -- --include-ignored{skips}");
     assert!(ci.lines().any(|l| l.trim_end().ends_with(&line)), ".ci/run does not run `{line}`");
     let mut files = Vec::new();
