@@ -57,6 +57,7 @@ fn replays_on(t: &gcl_transcript::Transcript, faults: Vec<Fault>) -> bool {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason() {
     let listed = unfound_list();
     for name in listed.keys() {
@@ -133,6 +134,7 @@ fn few_list() -> BTreeMap<String, Few> {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
     let few = few_list();
     for name in few.keys() {
@@ -173,6 +175,7 @@ fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
 /// one finding (it was six: the command after a queued line or a ^C was blamed), and a wrong
 /// value that fits another elision's range is a value, not an order.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_is_named_by_its_command_and_kind() {
     let one = |fault: Fault| {
         let mut o = opts(vec![fault], 1000);
@@ -200,6 +203,7 @@ fn a_bug_is_named_by_its_command_and_kind() {
 /// finding per command that read the effect back (mcv-ignored and mov-ignored two each,
 /// g-includes-spread 25). 2000 runs, as the figures in `fuzz_device_findings.toml`.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
     let all = |fault: Fault| {
         let mut o = opts(vec![fault], 2000);
@@ -233,6 +237,7 @@ fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
 /// three findings that named no cause); a ^C sent to stop a step that ended already is named by
 /// the step (ds-ignored: IC and IO step by the factory DS).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_status_finding_names_the_command_it_concerns() {
     let all = |fault: Fault| {
         let mut o = opts(vec![fault], 2000);
@@ -442,6 +447,27 @@ fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     assert!(s2.corpus >= s.corpus);
 }
 
+/// The corpus figure a campaign prints is what its folder holds: the suite's seeds it takes
+/// into memory are not counted, nor are entries counted twice across runs.
+#[test]
+fn the_corpus_count_is_the_folders_entries() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = || std::fs::read_dir(dir.path()).unwrap().count();
+    let mut o = opts(vec![], 60);
+    o.corpus = Some(dir.path().to_path_buf());
+    assert!(o.suite_seeds, "the default seeds the corpus with the suite's cases");
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.corpus > 0);
+    assert_eq!(s.corpus, files());
+    o.seed = 2;
+    let s2 = run(&o, &|_| {}).unwrap();
+    assert_eq!(s2.corpus, files());
+    // Without a folder: the cases this run kept, the suite's seeds aside.
+    o.corpus = None;
+    let s3 = run(&o, &|_| {}).unwrap();
+    assert!(s3.corpus <= 60, "{} entries from 60 runs", s3.corpus);
+}
+
 #[test]
 fn the_unmutated_sim_over_exec_yields_no_findings() {
     let p = Profile::builtin("bh8-262").unwrap();
@@ -512,6 +538,7 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
 /// case before is judged again thoroughly and reported; its minimized transcript fails on
 /// the mutant and passes on the unmutated sim.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     let (_sim, t) = PtySim::start(&["empty-line-two-prompts"]);
     let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
@@ -649,6 +676,7 @@ fn the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target() {
 /// on a model that has the bug answers as the hand did, byte for byte. Each is one finding
 /// named by its cause (they were two to four, under the motion or block where they showed).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it() {
     for (fault, says) in [
         (Fault::PartialSetApplied, "FSET refused but applied in part"),

@@ -40,6 +40,7 @@ fn campaign(py: &str, bug: Option<&str>, baseline: Option<&Path>, out: &Path) ->
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_planted_bug_in_a_hand_that_already_differs_is_the_only_new_finding() {
     let Some(py) = deps::python_with(&[]) else { return };
     let dir = tempfile::tempdir().unwrap();

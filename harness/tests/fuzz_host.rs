@@ -329,6 +329,7 @@ fn example(name: &str) -> Option<PathBuf> {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn correct_hosts_have_no_finding_in_a_longer_run() {
     let mut hosts = Vec::new();
     if let Some(p) = example("host_scenario") {

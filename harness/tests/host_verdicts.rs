@@ -272,6 +272,7 @@ fn a_reaction_to_the_hands_misbehaviour_is_a_note_not_a_finding() {
 /// fuzzer measures that wait first and calls a hang only well past it. (A fixed 3 s, the
 /// old default, calls it a hang.)
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_host_that_waits_out_its_own_timeout_is_not_hung() {
     if !python_with("serial") {
         return;
@@ -338,6 +339,7 @@ fn a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it() {
 /// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,
 /// one finding, named by the host's own code (its stack), in C, Python and Rust.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
     let dir = tempfile::tempdir().unwrap();
     let mut cases: Vec<(Vec<String>, &str)> = Vec::new();
@@ -630,6 +632,7 @@ fn a_hosts_own_seccomp_listener_is_refused_over_tcp_only() {
 /// A host that writes 100 MB: `gcl check-host` stays within 512 MiB of address space and
 /// keeps only the first MiB each way, noting what it cut.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn what_a_flooding_host_writes_is_capped() {
     if !python_with("threading") {
         return;

@@ -26,11 +26,19 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 const PROMISES: &[(&str, &[&str])] = &[
     // The two commands.
     (
+        "`cargo test --workspace -- --include-ignored` runs them too, as `.ci/run` does.",
+        &["harness/tests/tidy.rs::every_test_left_out_of_the_default_run_is_run_by_ci"],
+    ),
+    (
         "they use `GCL_PYTHON`, else a virtual environment at `target/pyvenv`, else",
         &["harness/tests/deps_check.rs::python_is_found_the_same_way_by_every_test"],
     ),
     (
         "they skip with a `SKIPPED <test>: ...` line that `cargo test` shows",
+        &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
+    ),
+    (
+        "after each test binary's result a line says how many of its tests did not run though libtest counts them as passed, with the run's total so far and the command that fixes it",
         &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
     ),
     (
@@ -671,6 +679,18 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "`-DBH8HOST_PLANTED_LF=ON` plants a CR LF bug that fails the check-host test",
         &[".ci/run::the planted CR LF bug fails gcl check-host, as it should"],
+    ),
+    (
+        "build the wheel in their first job (`gcl-wheel`: gcl is not on PyPI, so maturin builds it once from gcl's source",
+        &[
+            "python/tests/test_ci_recipes.py::test_github_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_gitlab_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run",
+        ],
+    ),
+    (
+        "The cases a root cause blocks (they fail on its clause's bug, not their own) are folded under one line for it, apart from the cases that fail on their own; in JUnit their message starts `blocked by root-cause-N (CLAUSE): `.",
+        &["harness/tests/report_pages.rs::the_cases_a_bug_blocks_are_folded_under_its_root_cause"],
     ),
     (
         "a test holds the recipes to them",

@@ -246,10 +246,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         printable(&opts.run.profile.id),
         if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" },
         opts.run.time.name(),
-        match opts.run.pace {
-            Pace::Unpaced => "unpaced".to_string(),
-            p => format!("paced at {p}"),
-        },
+        opts.run.pace.phrase(),
         opts.jobs,
         args.out.display()
     );

@@ -208,12 +208,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         pty.on_speed_mismatch(|line| eprintln!("gcl sim: {line}"));
         announce(&pty.path().display().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",
+            "gcl sim: profile {} on {}{} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             pty.path().display(),
             pty.link().map(|l| format!(" (link {})", l.display())).unwrap_or_default(),
             opts.time.name(),
-            opts.pace
+            opts.pace.phrase()
         );
         pty.serve(&mut engine, &stops)?;
     } else if let Some(addr) = &args.tcp {
@@ -221,11 +221,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         announce(&server.local_addr().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on tcp {} (time {}, paced at {}); stop with ^C",
+            "gcl sim: profile {} on tcp {} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             server.local_addr(),
             opts.time.name(),
-            opts.pace
+            opts.pace.phrase()
         );
         server.serve(&mut engine, &stops)?;
     } else {

@@ -365,7 +365,8 @@ pub struct FuzzSummary {
     pub findings: Vec<Finding>,
     /// Every coverage feature reached.
     pub features: BTreeSet<String>,
-    /// Corpus entries at the end (loaded and new).
+    /// Corpus entries at the end: the files of the `--corpus` folder, or without one the
+    /// cases this run kept for new coverage (the suite's seeds are not counted).
     pub corpus: usize,
     /// EEPROM writes made.
     pub eeprom_writes: u64,
@@ -576,6 +577,12 @@ pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Malformed), Fuzz
         }
     }
     Ok((out, bad))
+}
+
+/// How many entries (`.json` files) the corpus folder holds.
+fn corpus_files(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .map_or(0, |d| d.filter_map(Result::ok).filter(|e| e.path().extension().is_some_and(|x| x == "json")).count())
 }
 
 fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
@@ -1354,12 +1361,20 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     if let Some(dir) = &opts.corpus {
         (corpus, malformed) = load_corpus(dir)?;
     }
+    let loaded = corpus.len();
     if opts.suite_seeds {
         corpus.extend(suite_seeds(&opts.profile).iter().cloned());
     }
     // Entries from other runs or the suite may do what this run refuses.
     let generator = Generator::new(&opts.profile, opts.allowed).holding_velocities(opts.wide());
-    corpus.retain(|a| generator.permits(a));
+    let mut i = 0;
+    let mut seeds = 0;
+    corpus.retain(|a| {
+        let keep = generator.permits(a);
+        seeds += usize::from(keep && i >= loaded);
+        i += 1;
+        keep
+    });
     let shared = Mutex::new(Shared {
         corpus,
         features: BTreeSet::new(),
@@ -1408,7 +1423,12 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         dropped: sh.dropped,
         findings: sh.findings,
         features: sh.features,
-        corpus: sh.corpus.len(),
+        // What a user can count: the corpus folder's entries, or without one, the cases this
+        // run kept (the suite's seeds, taken into memory, are the suite's, not the corpus's).
+        corpus: match &opts.corpus {
+            Some(dir) => corpus_files(dir),
+            None => sh.corpus.len() - seeds,
+        },
         eeprom_writes: writes.load(Ordering::SeqCst),
         wire_bytes: sh.wire_bytes,
         bytes_sent: sh.bytes_sent,
