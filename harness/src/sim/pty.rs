@@ -3,7 +3,9 @@
 //!
 //! The slave side is set raw (`cfmakeraw`): no echo by the line discipline, no CR/NL
 //! translation, no signals from ^C, so every byte reaches the hand as sent. The pty is created
-//! at the hand's line rate, so a host that never sets a speed talks at the hand's rate.
+//! at the hand's line rate, so a host that never sets a speed talks at the hand's rate; that is
+//! the only time the simulator sets the port's speed (before its path is known to anyone): from
+//! then on the speed is the host's, and the simulator only reads it, at each crossing.
 //!
 //! The port opens and closes like a serial port. The simulator keeps its own descriptor of the
 //! slave, so a host closing the port never hangs up the master and the hand keeps its state
@@ -66,10 +68,17 @@ fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
 }
 
 impl Pty {
-    /// Creates a raw pty; with `link`, also a symbolic link to its slave at that path (an
-    /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
-    /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
-    pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
+    /// Creates a raw pty at `rate` bit/s (the hand's line rate, [`Engine::line_baud`]: a host
+    /// that sets no speed talks at it; `None`, an unpaced line, leaves the pty's default); with
+    /// `link`, also a symbolic link to its slave at that path (an existing symbolic link there
+    /// is replaced unless it points at a pty that exists, i.e. whose master is held open, as by
+    /// another simulator; any other file is an error). The link is removed when the `Pty` is
+    /// dropped.
+    ///
+    /// The speed is set here, before the path or the link exists for anyone to open, and never
+    /// again: a host that opens the port as soon as it is announced and sets its speed keeps
+    /// that speed.
+    pub fn open(link: Option<&Path>, rate: Option<u32>) -> Result<Pty, SimError> {
         // Both ends close-on-exec from the moment they exist (not set afterwards: a child
         // another thread starts in between would keep them). A host holding the simulator's
         // own slave would keep the port "open" after it closed it, so what it left unread would
@@ -90,6 +99,9 @@ impl Pty {
             .into();
         let mut t = termios::tcgetattr(&slave).map_err(|e| pty_err("tcgetattr", e))?;
         termios::cfmakeraw(&mut t);
+        if let Some(rate) = rate {
+            termios::cfsetspeed(&mut t, speed_for(rate)).map_err(|e| pty_err("cfsetspeed", e))?;
+        }
         termios::tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
         fcntl(master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| pty_err("cannot make the master non-blocking", e))?;
@@ -145,7 +157,9 @@ impl Pty {
 
     /// Turns the speed check on (the default) or off: while on, and the line is paced, bytes
     /// cross garbled in both directions whenever the speed the host set on the port differs
-    /// from the hand's rate, as through a UART at the wrong rate.
+    /// from the hand's rate, as through a UART at the wrong rate. Each byte is judged at the
+    /// speed set when it crosses: a host byte when the simulator takes it from the line, a
+    /// hand byte when its wire time has come and it is written to the host's side.
     pub fn set_speed_check(&mut self, on: bool) {
         self.speed_check = on;
     }
@@ -157,15 +171,12 @@ impl Pty {
     }
 
     /// The speed the host set on the port (the slave's termios, shared by every descriptor of
-    /// it), in bit/s.
-    /// `None` when it is not one of the standard speeds (a host that set an arbitrary rate
-    /// through `termios2`/`BOTHER`, as the serialport crate does): the check then stands aside.
+    /// it), in bit/s, read at each crossing. Read with `TCGETS2`, so an
+    /// arbitrary rate (`BOTHER`, as the serialport crate sets every rate) is judged like a
+    /// standard one. `None` for speed 0 (hang up: a UART keeps its rate) or a port that cannot
+    /// be read: the check then stands aside.
     fn host_speed(&self) -> Option<u32> {
-        let t = termios::tcgetattr(&self.slave).ok()?;
-        // Read the speed bits directly: nix's cfgetospeed panics on a speed it has no name for.
-        let mask = nix::libc::CBAUD | nix::libc::CBAUDEX;
-        let bits = t.control_flags.bits() & mask;
-        SPEEDS.iter().find(|(_, b)| *b as nix::libc::tcflag_t == bits).map(|(r, _)| *r)
+        rustix::termios::tcgetattr(&self.slave).ok().map(|t| t.output_speed()).filter(|&s| s > 0)
     }
 
     /// Whether bytes at `hand` bit/s arrive garbled at the host's speed (and the reverse);
@@ -173,7 +184,7 @@ impl Pty {
     fn garbled(&mut self, engine: &mut Engine, hand: Option<u32>) -> bool {
         let (Some(hand), true) = (hand, self.speed_check) else { return false };
         let Some(host) = self.host_speed() else { return false };
-        if host == uart_rate(hand) {
+        if same_rate(host, uart_rate(hand)) {
             self.mismatch = None;
             return false;
         }
@@ -190,15 +201,6 @@ impl Pty {
             }
         }
         true
-    }
-
-    /// Sets the slave's speed to the hand's line rate (a host that opens the port without
-    /// setting a speed then talks at the hand's rate). Unpaced: left as it is.
-    pub fn match_speed(&self, engine: &Engine) -> Result<(), SimError> {
-        let Some(baud) = engine.line_baud() else { return Ok(()) };
-        let mut t = termios::tcgetattr(&self.slave).map_err(|e| pty_err("tcgetattr", e))?;
-        termios::cfsetspeed(&mut t, speed_for(baud)).map_err(|e| pty_err("cfsetspeed", e))?;
-        termios::tcsetattr(&self.slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))
     }
 
     /// Tells the engine when a host opened the port and when the last one closed it; on
@@ -362,7 +364,6 @@ impl Pty {
     /// Serves the hand until one of `stops` becomes readable. Returns an error only for a
     /// failure of the pty itself, never for anything a client does.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
-        let _ = self.match_speed(engine);
         precise_timers();
         // Nobody has the port open yet (a host that opened it already is seen next).
         if self.open {
@@ -528,6 +529,16 @@ fn uart_rate(baud: u32) -> u32 {
         .unwrap_or(baud)
 }
 
+/// Whether a host at `host` bit/s and a UART at `uart` bit/s understand each other: within 2 %.
+/// A UART samples each bit in its middle, timed from the start bit, so over a 10-bit frame the
+/// two clocks may drift apart by less than half a bit: about 4.5 % at most, and 2 % is what
+/// UART datasheets recommend for 8-bit frames (Microchip's USART operational-range tables),
+/// since the other side's clock has its own error. Standard rates are more than 10 % apart,
+/// so this only forgives a host's arbitrary rate near the hand's.
+fn same_rate(host: u32, uart: u32) -> bool {
+    u64::from(host.abs_diff(uart)) * 100 <= 2 * u64::from(uart)
+}
+
 /// The termios speed of the UART rate for `baud` (a UART runs at one of these).
 fn speed_for(baud: u32) -> BaudRate {
     let rate = uart_rate(baud);
@@ -609,5 +620,16 @@ mod tests {
         // A rate between standard ones runs at the next one up.
         assert_eq!(uart_rate(10_000), 19200);
         assert_eq!(uart_rate(1_000_000), 1_000_000);
+    }
+
+    /// A host's arbitrary rate near the hand's is understood; a neighbouring standard rate
+    /// never is.
+    #[test]
+    fn a_rate_within_two_percent_is_the_same_rate() {
+        assert!(same_rate(115_000, 115_200));
+        assert!(same_rate(9_500, 9_600) && !same_rate(9_400, 9_600));
+        for pair in SPEEDS.windows(2) {
+            assert!(!same_rate(pair[0].0, pair[1].0) && !same_rate(pair[1].0, pair[0].0), "{pair:?}");
+        }
     }
 }
