@@ -44,13 +44,17 @@ pub struct Pty {
     open: bool,
     /// Whether bytes are garbled while the host's speed differs from the hand's.
     speed_check: bool,
+    /// The speed the host has set, read once in this turn of the serving loop (`None`: not
+    /// read yet): every byte that crosses in one turn crosses at the same moment.
+    speed_now: Option<Option<u32>>,
     /// The last mismatch noted in the trace (host rate, hand rate).
     mismatch: Option<(u32, u32)>,
     /// Told each new speed mismatch (the CLI prints it on stderr).
     on_mismatch: Option<fn(&str)>,
     /// The host's reads and writes of the slave (`IN_ACCESS`, `IN_MODIFY`), in the order they
-    /// happened.
-    reads: Inotify,
+    /// happened. Only a tapped line uses them: on any other the watch is removed when serving
+    /// starts, so neither the host's reads and writes nor the simulator's pay for it.
+    reads: Option<Inotify>,
     /// Output went to the host since it was last seen reading.
     wrote_since_read: bool,
     /// Host bytes were read whose write (`IN_MODIFY`) had not been seen: it may come late,
@@ -123,7 +127,7 @@ impl Pty {
             .add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
-            reads,
+            reads: Some(reads),
             wrote_since_read: false,
             expect_modify: false,
             pending_write: false,
@@ -135,6 +139,7 @@ impl Pty {
             watch,
             open: true,
             speed_check: true,
+            speed_now: None,
             mismatch: None,
             on_mismatch: None,
         };
@@ -171,12 +176,15 @@ impl Pty {
     }
 
     /// The speed the host set on the port (the slave's termios, shared by every descriptor of
-    /// it), in bit/s, read at each crossing. Read with `TCGETS2`, so an
+    /// it), in bit/s, read once per turn of the serving loop. Read with `TCGETS2`, so an
     /// arbitrary rate (`BOTHER`, as the serialport crate sets every rate) is judged like a
     /// standard one. `None` for speed 0 (hang up: a UART keeps its rate) or a port that cannot
     /// be read: the check then stands aside.
-    fn host_speed(&self) -> Option<u32> {
-        rustix::termios::tcgetattr(&self.slave).ok().map(|t| t.output_speed()).filter(|&s| s > 0)
+    fn host_speed(&mut self) -> Option<u32> {
+        let slave = &self.slave;
+        *self
+            .speed_now
+            .get_or_insert_with(|| rustix::termios::tcgetattr(slave).ok().map(|t| t.output_speed()).filter(|&s| s > 0))
     }
 
     /// Whether bytes at `hand` bit/s arrive garbled at the host's speed (and the reverse);
@@ -300,7 +308,8 @@ impl Pty {
 
     /// Takes the host's reads and writes of the slave, in order.
     fn take_reads(&mut self) {
-        while let Ok(events) = self.reads.read_events() {
+        let Some(reads) = &self.reads else { return };
+        while let Ok(events) = reads.read_events() {
             if events.is_empty() {
                 break;
             }
@@ -365,6 +374,12 @@ impl Pty {
     /// failure of the pty itself, never for anything a client does.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
         precise_timers();
+        // A tapped line takes the host's reads and writes as they come, so that inotify
+        // never merges a late write with a new one; no other line needs them.
+        let tapped = engine.tapped();
+        if !tapped {
+            self.reads = None;
+        }
         // Nobody has the port open yet (a host that opened it already is seen next).
         if self.open {
             self.open = false;
@@ -400,19 +415,21 @@ impl Pty {
                 let r = now + WRITE_RETRY;
                 deadline = Some(deadline.map_or(r, |d| d.min(r)));
             }
-            // A tapped line takes the host's reads and writes as they come, so that inotify
-            // never merges a late write with a new one.
-            let tapped = engine.tapped();
             let (master_in, port_events, host_io, stop) = {
                 let mut fds = Vec::with_capacity(3 + stops.len());
                 fds.push(PollFd::new(self.master.as_fd(), flags));
                 fds.push(PollFd::new(self.watch.as_fd(), IN));
-                fds.push(PollFd::new(self.reads.as_fd(), if tapped { IN } else { PollFlags::empty() }));
+                if let Some(reads) = &self.reads {
+                    fds.push(PollFd::new(reads.as_fd(), IN));
+                }
+                let own = fds.len();
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
                 wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the pty", e))?;
-                let stop = fds[3..].iter().any(|f| ready(f, IN));
-                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), tapped && ready(&fds[2], IN), stop)
+                let stop = fds[own..].iter().any(|f| ready(f, IN));
+                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), own == 3 && ready(&fds[2], IN), stop)
             };
+            // What crosses from here on crosses now, at the speed the host has set now.
+            self.speed_now = None;
             if host_io {
                 self.take_reads();
             }
@@ -433,7 +450,9 @@ impl Pty {
                             break;
                         }
                         Ok(n) => {
-                            engine.host_unread(self.host_has_unread());
+                            if tapped {
+                                engine.host_unread(self.host_has_unread());
+                            }
                             if self.garbled(engine, engine.line_baud()) {
                                 buf[..n].iter_mut().for_each(|b| *b = garble(*b));
                             }
@@ -453,13 +472,15 @@ impl Pty {
             engine.wake();
             write_blocked = false;
             loop {
-                let (run, rate) = engine.head_run().unwrap_or((0, None));
-                let garble_out = self.garbled(engine, rate);
-                let out = engine.ready_output(Instant::now());
-                if out.is_empty() {
+                let now = Instant::now();
+                let ready_now = engine.ready_output(now).len();
+                if ready_now == 0 {
                     break;
                 }
-                let n = out.len().min(run.max(1));
+                let (run, rate) = engine.head_run().unwrap_or((0, None));
+                let n = ready_now.min(run.max(1));
+                let garble_out = self.garbled(engine, rate);
+                let out = engine.ready_output(now);
                 self.writing();
                 let written = if garble_out {
                     let g: Vec<u8> = out[..n].iter().map(|b| garble(*b)).collect();
