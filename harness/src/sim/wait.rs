@@ -107,3 +107,24 @@ pub(crate) const IN: PollFlags = PollFlags::POLLIN.union(PollFlags::POLLHUP).uni
 /// A short pause used when a descriptor keeps reporting a condition the loop cannot clear
 /// (a pty whose last client just closed), so that the loop does not spin.
 pub(crate) const BACKOFF: Duration = Duration::from_millis(20);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Waking ahead of a deadline never makes a paced byte early: the wait ends at the
+    /// deadline or after it, however far ahead the thread has learned to wake.
+    #[test]
+    fn a_precise_wait_never_ends_before_its_deadline() {
+        std::thread::spawn(|| {
+            precise_timers();
+            for _ in 0..200 {
+                let deadline = Instant::now() + Duration::from_micros(300);
+                wait(&mut [], Some(deadline)).unwrap();
+                assert!(Instant::now() >= deadline);
+            }
+        })
+        .join()
+        .unwrap();
+    }
+}
