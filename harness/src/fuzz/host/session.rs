@@ -733,8 +733,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut watch = None;
     let (port, url, hand) = match spec.transport {
         Transport::Pty => {
-            let mut pty = Pty::open(None)?;
-            pty.match_speed(&engine)?;
+            let mut pty = Pty::open(None, engine.line_baud())?;
             pty.set_speed_check(!line_rate);
             let path = pty.path().display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
