@@ -65,10 +65,17 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         ok_exit_codes: args.host.ok_exit_codes(),
         golden,
     };
-    let progress =
-        super::progress::Progress::new("gcl check-host", "runs", "failing", super::progress::Total::Units(1), false);
+    let progress = super::progress::Progress::new(
+        "gcl check-host",
+        "runs",
+        "failing clause(s)",
+        super::progress::Total::Units(1),
+        false,
+    );
     let outcome = check_host(&opts).context("running the host");
-    progress.update(1, 0, "");
+    // The run's failing clauses, as the verdict below counts them.
+    let failing = outcome.as_ref().map_or(0, |o| o.report.cases.iter().filter(|c| c.verdict.fails_run()).count());
+    progress.update(1, failing as u64, "");
     progress.finish();
     let outcome = outcome?;
     let mut report = outcome.report;

@@ -391,6 +391,63 @@ pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<F
     decode_blocks(&golden, &actual, layout.as_ref())
 }
 
+/// One RealTime block of a host's session ([`session_blocks`]), decoded.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SessionBlock {
+    /// The transcript step it is in (1-based).
+    pub step: usize,
+    /// The host sent it (a control block); else the hand did (a feedback block).
+    pub from_host: bool,
+    /// Its header byte (`*`, `C`, `c`...).
+    pub header: u8,
+    /// Each field: its motor (`None` for a hand-wide one), its name (`LFAP`) and its value.
+    pub fields: Vec<(Option<u8>, &'static str, i64)>,
+}
+
+/// The RealTime blocks of a host's session transcript (as `gcl fuzz host` and `gcl
+/// check-host` keep it), decoded field by field with the layout in force at each step (the
+/// host's sends fed to a fresh model of `profile`): the hand's feedback blocks, each where a
+/// `*` begins a whole block, and the host's control blocks, a send of whole blocks. Bytes that
+/// make no whole block (one a misbehaviour cut or garbled) are left as the transcript has them.
+/// Empty for a profile the model does not have built in.
+pub fn session_blocks(profile: &str, t: &Transcript) -> Vec<SessionBlock> {
+    let Some(layouts) = layouts(profile, t) else { return Vec::new() };
+    let mut out = Vec::new();
+    let named = |l: &gcl_model::realtime::BlockLayout, values: Vec<i64>| {
+        l.fields().iter().zip(values).map(|(f, v)| (f.motor(), f.name(), v)).collect::<Vec<_>>()
+    };
+    for (i, s) in t.steps.iter().enumerate() {
+        let Some(layout) = layouts.get(i).and_then(|l| l.as_ref()) else { continue };
+        // The layout in force when the host sent: the previous step's (a send that starts the
+        // loop has none).
+        let sent_in = i.checked_sub(1).and_then(|j| layouts.get(j)).and_then(|l| l.as_ref());
+        if let (Some(send), Some(l)) = (&s.send, sent_in) {
+            let c = l.control();
+            let blocks: Vec<&[u8]> = send.bytes.chunks(c.size().max(1)).collect();
+            if c.size() > 0 && send.bytes.len() % c.size() == 0 && blocks.iter().all(|b| c.decode(b).is_ok()) {
+                for b in blocks {
+                    if let Ok((header, values)) = c.decode(b) {
+                        out.push(SessionBlock { step: i + 1, from_host: true, header, fields: named(c, values) });
+                    }
+                }
+            }
+        }
+        let f = layout.feedback();
+        let Some(bytes) = s.expect.exact_bytes() else { continue };
+        let mut at = 0;
+        while f.size() > 0 && at + f.size() <= bytes.len() {
+            match f.decode(&bytes[at..at + f.size()]) {
+                Ok((header, values)) => {
+                    out.push(SessionBlock { step: i + 1, from_host: false, header, fields: named(f, values) });
+                    at += f.size();
+                }
+                Err(_) => at += 1,
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

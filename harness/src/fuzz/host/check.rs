@@ -138,6 +138,8 @@ const COMMANDS_CAP: usize = 1000;
 pub struct HostChecker {
     profile: Arc<Profile>,
     line: Vec<u8>,
+    /// The last line the host ended (with CR), for a message about what followed it.
+    last_line: Option<Vec<u8>>,
     /// The last byte the host sent since the hand's last answer reached it or the port was
     /// last opened (for CR CR: a lone CR after an answer or a reopen is a resync).
     prev: Option<u8>,
@@ -191,6 +193,7 @@ impl HostChecker {
         HostChecker {
             profile,
             line: Vec::new(),
+            last_line: None,
             prev: None,
             unread: false,
             misbehaved: false,
@@ -331,7 +334,16 @@ impl HostChecker {
             return;
         }
         if b == b'\n' {
-            self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
+            // Which line it followed: the one being typed, else the one a CR just ended.
+            let detail = match (&self.line[..], &self.last_line, self.prev) {
+                ([], Some(l), Some(p)) if p == self.profile.framing.terminator => {
+                    format!("LF after \"{}\" and its CR", esc(l))
+                }
+                ([], Some(l), _) => format!("LF after \"{}\"", esc(l)),
+                ([], None, _) => "LF before any line".to_string(),
+                (line, _, _) => format!("LF after \"{}\"", esc(line)),
+            };
+            self.violate(HostClause::LineEnding, "LF sent", detail);
             return;
         }
         if self.sends_early() {
@@ -351,6 +363,7 @@ impl HostChecker {
     fn end_line(&mut self) {
         // LF never enters the line (`host_bytes` grades it apart).
         let text = std::mem::take(&mut self.line);
+        self.last_line = Some(text.clone());
         if text.iter().all(|c| c.is_ascii_whitespace()) {
             if self.prev == Some(self.profile.framing.terminator) {
                 self.violate(HostClause::LineEnding, "CR CR", "an empty line (two CRs in a row)".into());

@@ -6,7 +6,7 @@
 /// A crash report found on stderr.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CrashReport {
-    /// `asan`, `panic` or `python`.
+    /// `c++` (an exception nobody caught), `asan`, `panic` or `python`.
     pub kind: &'static str,
     /// Stable across runs of the same bug: the report's kind and where it was raised (the
     /// innermost frame, no address or line), never the callers that led there.
@@ -18,9 +18,233 @@ pub struct CrashReport {
 /// How many frames a hang's stack keeps (for people; its signature is the first).
 const TOP_FRAMES: usize = 3;
 
-/// Finds the first crash report on `stderr`.
+/// Finds the first crash report on `stderr`: a C++ runtime's message about an exception nobody
+/// caught (with where it was thrown when a sanitizer printed the stack), an AddressSanitizer
+/// report, a Rust panic, a Python traceback.
 pub fn crash_report(stderr: &str) -> Option<CrashReport> {
-    asan(stderr).or_else(|| panic(stderr)).or_else(|| python(stderr))
+    uncaught(stderr).or_else(|| asan(stderr)).or_else(|| panic(stderr)).or_else(|| python(stderr))
+}
+
+/// One frame of a native stack as a sanitizer, gdb or eu-stack prints it: the function (its
+/// parameters left out) and where it lives (a source file, or a module).
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct NativeFrame {
+    func: String,
+    place: String,
+}
+
+impl NativeFrame {
+    /// Whether it is the code of the system rather than the host's own: the C library and the
+    /// loader, the C++ and Rust runtimes, the sanitizers' runtime and interceptors, and the
+    /// libraries a host is built on (Boost, Poco, ROS), by their module, their source file
+    /// (`../sysdeps/...`, a header under `/usr/include`), or their namespace. A host's own
+    /// shared library (`libbarrett.so`) is the host's.
+    fn system(&self) -> bool {
+        system_frame(&self.func, &self.place)
+    }
+}
+
+/// See [`NativeFrame::system`].
+fn system_frame(func: &str, place: &str) -> bool {
+    const PLACES: &[&str] = &[
+        "libsanitizer",
+        "sanitizer_common",
+        "compiler-rt",
+        "sysdeps/",
+        "csu/",
+        "nptl/",
+        "stdlib/abort",
+        "/usr/include/",
+        "/include/c++/",
+        "/boost/",
+        "/Poco/",
+        "/opt/ros/",
+        "<unknown module>",
+    ];
+    const MODULES: &[&str] = &[
+        "libc.so",
+        "libc-",
+        "libstdc++",
+        "libc++",
+        "libgcc_s",
+        "libm.so",
+        "libm-",
+        "libpthread",
+        "ld-linux",
+        "libdl",
+        "librt",
+        "libasan",
+        "libubsan",
+        "liblsan",
+        "libtsan",
+        "libhwasan",
+        "libclang_rt",
+        "libunwind",
+        "libboost_",
+        "libPoco",
+    ];
+    const NAMESPACES: &[&str] = &[
+        "std::",
+        "<std::",
+        "__gnu_cxx::",
+        "__cxxabiv1::",
+        "boost::",
+        "<boost::",
+        "void boost::",
+        "Poco::",
+        "asio::",
+        "ros::",
+        "rclcpp::",
+        "core::",
+        "<core::",
+        "alloc::",
+        "<alloc::",
+        "<&",
+    ];
+    // Functions of the C library and of the sanitizers' runtime, for a stack that says no
+    // more than their names.
+    const NAMES: &[&str] = &[
+        "read",
+        "write",
+        "poll",
+        "ppoll",
+        "select",
+        "pselect",
+        "nanosleep",
+        "clock_nanosleep",
+        "epoll_wait",
+        "epoll_pwait",
+        "sleep",
+        "usleep",
+        "syscall",
+        "recv",
+        "recvfrom",
+        "recvmsg",
+        "accept",
+        "accept4",
+        "connect",
+        "fgets",
+        "fgetc",
+        "getc",
+        "fread",
+        "getline",
+        "getdelim",
+        "waitpid",
+        "raise",
+        "abort",
+        "pthread_cond_wait",
+        "pthread_join",
+        "sem_wait",
+        "scanf_common",
+        "printf_common",
+        "_start",
+        "??",
+    ];
+    let module = place.trim_start_matches('(').rsplit('/').next().unwrap_or_default();
+    PLACES.iter().any(|p| place.contains(p))
+        || MODULES.iter().any(|m| module.starts_with(m))
+        || NAMESPACES.iter().any(|n| func.starts_with(n))
+        || NAMES.contains(&func)
+        || func.starts_with("__")
+        || func.starts_with("_dl_")
+        || func.starts_with("_IO_")
+        // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
+        || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
+}
+
+/// A function as a stack prints it, without its parameter list and ABI tag
+/// (`Port::check(int, char const*)` → `Port::check`, `Port::read[abi:cxx11]()` → `Port::read`).
+fn function_name(func: &str) -> String {
+    let mut f = func.trim();
+    if let Some(cut) = f.strip_suffix(" const") {
+        f = cut.trim_end();
+    }
+    if f.ends_with(')')
+        && let Some(open) = matching_open(f)
+        && open > 0
+    {
+        f = f[..open].trim_end();
+    }
+    let f = f.split("[abi:").next().unwrap_or(f);
+    f.to_string()
+}
+
+/// The index of the `(` that opens the parenthesised group `s` ends with.
+fn matching_open(s: &str) -> Option<usize> {
+    let mut depth = 0usize;
+    for (i, c) in s.char_indices().rev() {
+        match c {
+            ')' => depth += 1,
+            '(' => {
+                depth = depth.checked_sub(1)?;
+                if depth == 0 {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// A sanitizer's frame line (`#3 0x55 in hand_get /src/host.c:39`, `#5 0x7f in std::terminate()
+/// (/lib/x86_64-linux-gnu/libstdc++.so.6+0xa8e84)`); `None` for a frame without a function.
+fn sanitizer_frame(line: &str) -> Option<NativeFrame> {
+    let rest = line.trim_start().strip_prefix('#')?;
+    let (_, after) = rest.split_once(" in ")?;
+    let after = after.trim();
+    // The place is the last word: a source path with its line, or a module in parentheses.
+    let (func, place) = match after.rsplit_once(' ') {
+        Some((f, p)) if p.contains('/') || p.starts_with('(') => (f, p),
+        _ => (after, ""),
+    };
+    let func = function_name(func);
+    (!func.is_empty()).then(|| NativeFrame { func, place: place.to_string() })
+}
+
+/// The frames of the first stack of a sanitizer report that starts at `report` (the bad
+/// access's, not the allocation's), innermost first.
+fn sanitizer_stack(report: &str) -> Vec<NativeFrame> {
+    report
+        .lines()
+        .skip(1)
+        .map(str::trim_start)
+        .skip_while(|l| !l.starts_with('#'))
+        .take_while(|l| l.starts_with('#'))
+        .filter_map(sanitizer_frame)
+        .collect()
+}
+
+/// Where a sanitizer report's bad access was made in the host's own code: the innermost frame
+/// of its first stack that is not the system's (a `strcpy` or `sscanf` the sanitizer
+/// intercepts was handed the bad buffer by its caller), with the system frames it went
+/// through (`scanf_common < __interceptor___isoc99_sscanf`) and its caller. A stack overflow
+/// through a libc call smashes the frames above the buffer, so the stack may end in the
+/// interceptor: then the frame that owns the overflowed variable (`is located in stack of
+/// thread T0 ... in frame #0 ... in hand_pget`) is the host's.
+fn own_site(report: &str) -> Option<(String, Option<String>, Option<String>)> {
+    let frames = sanitizer_stack(report);
+    let own = frames.iter().position(|f| !f.system());
+    let through = |upto: usize| {
+        let sys: Vec<&str> = frames[..upto].iter().map(|f| f.func.as_str()).collect();
+        (!sys.is_empty()).then(|| sys.join(" < "))
+    };
+    match own {
+        Some(i) => {
+            let caller = frames[i + 1..].iter().find(|f| !f.system()).map(|f| f.func.clone());
+            Some((frames[i].func.clone(), through(i), caller))
+        }
+        None => {
+            let owner = report
+                .find("is located in stack of thread")
+                .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+                .filter(|f| !f.system());
+            match owner {
+                Some(f) => Some((f.func, through(frames.len()), None)),
+                None => frames.first().map(|f| (f.func.clone(), None, None)),
+            }
+        }
+    }
 }
 
 fn asan(s: &str) -> Option<CrashReport> {
@@ -33,34 +257,71 @@ fn asan(s: &str) -> Option<CrashReport> {
         .next()
         .unwrap_or("unknown")
         .to_string();
-    // Frames of the first stack only (the access's, not the allocation's), the sanitizer's
-    // own left out, with whether each is a shared library's (`(/lib/…/libc.so.6+0x…)`): the
-    // innermost of the host's own is where it made the bad access (a `strcpy` intercepted in
-    // the sanitizer's library was given a bad buffer by its caller).
-    let frames: Vec<(String, bool)> = rest
-        .lines()
-        .skip(1)
-        .map(str::trim_start)
-        .skip_while(|l| !l.starts_with('#'))
-        .take_while(|l| l.starts_with('#'))
-        .filter_map(|l| {
-            let mut words = l.split(" in ").nth(1)?.split_whitespace();
-            let func = words.next()?.to_string();
-            let library = words.next().is_some_and(|w| w.contains(".so"));
-            Some((func, library))
-        })
-        .filter(|(f, _)| {
-            !f.starts_with("__asan") && !f.starts_with("__interceptor") && !f.starts_with("__interception")
-        })
-        .collect();
-    let own = frames.iter().position(|(_, lib)| !lib).unwrap_or(0);
-    let frames: Vec<String> = frames.into_iter().skip(own).map(|(f, _)| f).collect();
-    let site = frames.first().map_or("?", String::as_str);
-    let headline = match frames.get(1) {
-        Some(caller) => format!("{headline} (in {site}, called from {caller})"),
-        None => headline,
+    let (site, through, caller) = own_site(rest).unwrap_or_else(|| ("?".into(), None, None));
+    let mut context = Vec::new();
+    if let Some(t) = through {
+        context.push(format!("through {t}"));
+    }
+    if let Some(c) = caller {
+        context.push(format!("called from {c}"));
+    }
+    let headline = if site == "?" {
+        format!("{headline} (the sanitizer printed no frame)")
+    } else if context.is_empty() {
+        format!("{headline} (in {site})")
+    } else {
+        format!("{headline} (in {site}, {})", context.join(", "))
     };
     Some(CrashReport { kind: "asan", signature: format!("asan {what} in {site}"), headline })
+}
+
+/// A C++ runtime's last words about an exception nobody caught: libstdc++'s `terminate called
+/// after throwing an instance of 'T'` and `what(): ...`, or libc++abi's `terminating due to
+/// uncaught exception of type T: ...`. Signed by what was thrown and, when a sanitizer printed
+/// the stack at the abort that follows (AddressSanitizer's SIGABRT handler, which
+/// `gcl fuzz host` turns on), the host's own frame that threw: one unhandled error from one
+/// place is one finding. What `what()` said (an errno's text, which varies) is in the message.
+fn uncaught(s: &str) -> Option<CrashReport> {
+    const GNU: &str = "terminate called after throwing an instance of '";
+    const LLVM: &str = "terminating due to uncaught exception of type ";
+    let (ty, what) = if let Some(at) = s.find(GNU) {
+        let rest = &s[at + GNU.len()..];
+        let ty = rest.split('\'').next().unwrap_or_default().to_string();
+        let what = rest
+            .lines()
+            .nth(1)
+            .and_then(|l| l.trim().strip_prefix("what():"))
+            .map(|w| w.trim().to_string());
+        (ty, what)
+    } else if let Some(at) = s.find(LLVM) {
+        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
+        match line.split_once(": ") {
+            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
+            None => (line.trim().to_string(), None),
+        }
+    } else if s.contains("terminate called without an active exception") {
+        ("(no exception: std::terminate called directly)".to_string(), None)
+    } else {
+        return None;
+    };
+    let site = s.find("ERROR: AddressSanitizer:").and_then(|at| own_site(&s[at..]));
+    let mut signature = format!("uncaught C++ exception {ty}");
+    let mut headline = format!("an exception nobody caught: {ty}");
+    if let Some(w) = &what {
+        headline += &format!(", what(): {}", crate::report::truncate_note(w, 200));
+    }
+    match &site {
+        Some((f, _, caller)) => {
+            signature += &format!(" in {f}");
+            headline += &format!(" (thrown in {f}");
+            if let Some(c) = caller {
+                headline += &format!(", called from {c}");
+            }
+            headline.push(')');
+        }
+        None => headline += " (where it was thrown: no stack; a build with -fsanitize=address prints it)",
+    }
+    Some(CrashReport { kind: "c++", signature, headline })
 }
 
 fn panic(s: &str) -> Option<CrashReport> {
@@ -155,6 +416,10 @@ pub struct HangStack {
     /// The top frames, no addresses or line numbers (`read_line < main`,
     /// `host.py:read_prompt < host.py:main`).
     pub frames: String,
+    /// The system's frames it waits in, above its own (`syscall < poll_read`, `read`), for
+    /// people: a hang is signed by the host's own code ([`HangStack::site`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waits_in: Option<String>,
     /// A Python host blocked for ever inside one pyserial call (it did not wake while it was
     /// watched): that call (`serialposix.py:read`) and the host's program (`host.py`, the file
     /// of its outermost own frame). See [`HangStack::site`].
@@ -222,7 +487,7 @@ fn python_dump_frames(dump: &str) -> Option<Vec<(String, String)>> {
 /// Frames of a Python `faulthandler` dump (`File "x.py", line 12 in read_prompt`, most recent
 /// first) of the thread that was current, or of the first thread listed; the host's own
 /// files before the standard library and installed packages (where a read blocks).
-pub fn faulthandler_frames(dump: &str) -> Option<String> {
+pub fn faulthandler_frames(dump: &str) -> Option<(String, Option<String>)> {
     let all = python_dump_frames(dump)?
         .into_iter()
         .map(|(file, func)| {
@@ -235,9 +500,10 @@ pub fn faulthandler_frames(dump: &str) -> Option<String> {
 
 /// Frames of a native stack as `eu-stack -m` (`#1 0x… read_line - /path/exe`) or `gdb -batch
 /// -ex bt` (`#1  0x… in read_line (fd=3) at host.c:20`, `from /lib/…` for a library) print
-/// them, for the first thread listed; the program's own frames before those of shared
-/// libraries (libc's `read`, the sanitizer's interceptors).
-pub fn native_frames(text: &str) -> Option<String> {
+/// them, for the first thread listed: the host's own frames first, with the system frames it
+/// waits in ([`NativeFrame::system`]: libc's `read`, `syscall`, Boost.Asio's `poll_read`, the
+/// sanitizer's interceptors; see [`own_first`]).
+pub fn native_frames(text: &str) -> Option<(String, Option<String>)> {
     let mut all = Vec::new();
     let mut seen_thread = false;
     for l in text.lines() {
@@ -251,53 +517,53 @@ pub fn native_frames(text: &str) -> Option<String> {
         }
         let Some(rest) = t.strip_prefix('#') else { continue };
         // Skip the frame number and the address.
-        let mut words = rest.split_whitespace().skip(1).peekable();
-        if words.peek().is_some_and(|w| w.starts_with("0x")) {
-            words.next();
-        }
-        if words.peek() == Some(&"in") {
-            words.next();
-        }
-        let Some(func) = words.next() else { continue };
-        let func = func.split('(').next().unwrap_or(func).to_string();
+        let rest = rest.trim_start().split_once(char::is_whitespace).map_or("", |(_, r)| r).trim_start();
+        let rest = match rest.split_once(char::is_whitespace) {
+            Some((addr, r)) if addr.starts_with("0x") => r.trim_start(),
+            _ if rest.starts_with("0x") => "",
+            _ => rest,
+        };
+        let rest = rest.strip_prefix("in ").unwrap_or(rest);
+        // gdb: `FUNC (ARGS) at FILE:LINE` or `FUNC (ARGS) from MODULE`; eu-stack: `FUNC - MODULE`.
+        let (func, place) = if let Some((f, m)) = rest.rsplit_once(" - ") {
+            (function_name(f), m.trim().to_string())
+        } else {
+            let (f, p) = rest
+                .rsplit_once(" at ")
+                .or_else(|| rest.rsplit_once(" from "))
+                .map_or((rest, ""), |(f, p)| (f, p.trim()));
+            let f = f.trim();
+            // The arguments gdb prints after the function (`(fd=3, buf=0x7ff "")`).
+            let f = match matching_open(f) {
+                Some(open) if f.ends_with(')') && open > 0 => &f[..open],
+                _ => f,
+            };
+            (function_name(f), p.to_string())
+        };
         if func.is_empty() || func == "??" {
             continue;
         }
-        let tail: Vec<&str> = words.collect();
-        let module = tail.windows(2).find(|w| w[0] == "-" || w[0] == "from").map(|w| w[1]).unwrap_or_default();
-        let library = module.contains(".so")
-            || func.starts_with("__")
-            || ["std::", "<std::", "core::", "<core::", "alloc::", "<alloc::", "<&"]
-                .iter()
-                .any(|p| func.starts_with(p))
-            || func.starts_with("_dl_")
-            // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
-            || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
-            || [
-                "read",
-                "poll",
-                "select",
-                "pselect",
-                "ppoll",
-                "nanosleep",
-                "clock_nanosleep",
-                "epoll_wait",
-                "sleep",
-                "usleep",
-            ]
-            .contains(&func.as_str());
-        all.push((func, library));
+        let system = system_frame(&func, &place);
+        all.push((func, system));
     }
     own_first(all)
 }
 
-fn own_first(all: Vec<(String, bool)>) -> Option<String> {
+/// The host's own frames (the innermost [`TOP_FRAMES`], `read_line < main`), or every frame
+/// when none is its own; with the system frames innermost before its first own frame, where
+/// it waits (the [`TOP_FRAMES`] nearest the host's code, `syscall < poll_read`).
+fn own_first(all: Vec<(String, bool)>) -> Option<(String, Option<String>)> {
     if all.is_empty() {
         return None;
     }
-    let own: Vec<&String> = all.iter().filter(|(_, lib)| !lib).map(|(f, _)| f).collect();
-    let pick: Vec<&String> = if own.is_empty() { all.iter().map(|(f, _)| f).collect() } else { own };
-    Some(pick.into_iter().take(TOP_FRAMES).cloned().collect::<Vec<_>>().join(" < "))
+    let Some(first_own) = all.iter().position(|(_, lib)| !lib) else {
+        let frames = all.iter().take(TOP_FRAMES).map(|(f, _)| f.as_str()).collect::<Vec<_>>().join(" < ");
+        return Some((frames, None));
+    };
+    let waits: Vec<&str> = all[..first_own].iter().map(|(f, _)| f.as_str()).collect();
+    let waits_in = (!waits.is_empty()).then(|| waits[waits.len().saturating_sub(TOP_FRAMES)..].join(" < "));
+    let own: Vec<&str> = all.iter().filter(|(_, lib)| !lib).map(|(f, _)| f.as_str()).take(TOP_FRAMES).collect();
+    Some((own.join(" < "), waits_in))
 }
 
 /// Samples the stack of a stopped-in-place native process with `gdb -batch` or, failing that,
@@ -311,8 +577,8 @@ pub fn sample_native(pid: i32) -> Option<HangStack> {
     ];
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
-        if let Some(frames) = native_frames(&out) {
-            return Some(HangStack { by: tool.to_string(), frames, blocked_in: None });
+        if let Some((frames, waits_in)) = native_frames(&out) {
+            return Some(HangStack { by: tool.to_string(), frames, waits_in, blocked_in: None });
         }
     }
     None
@@ -462,11 +728,14 @@ mod tests {
     #[test]
     fn hang_stacks_name_the_hosts_own_code() {
         let py = "Fatal Python error: Aborted\n\nCurrent thread 0x00007f (most recent call first):\n  File \"/usr/lib/python3/dist-packages/serial/serialposix.py\", line 565 in read\n  File \"/t/hosts/py_host.py\", line 20 in read_prompt\n  File \"/t/hosts/py_host.py\", line 40 in main\n  File \"/t/hosts/py_host.py\", line 44 in <module>\n\nExtension modules: x\n";
-        assert_eq!(faulthandler_frames(py).unwrap(), "py_host.py:read_prompt < py_host.py:main < py_host.py:<module>");
+        assert_eq!(
+            faulthandler_frames(py).unwrap(),
+            ("py_host.py:read_prompt < py_host.py:main < py_host.py:<module>".into(), Some("serialposix.py:read".into()))
+        );
         let eu = "PID 12 - process\nTID 12:\n#0  0x00007f3 __GI___libc_read - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x0000555 read_line - /tmp/c_host\n#2  0x0000556 main - /tmp/c_host\n#3  0x00007f4 __libc_start_call_main - /usr/lib/x86_64-linux-gnu/libc.so.6\n";
-        assert_eq!(native_frames(eu).unwrap(), "read_line < main");
+        assert_eq!(native_frames(eu).unwrap(), ("read_line < main".into(), Some("__GI___libc_read".into())));
         let gdb = "0x00007f in __GI___libc_read (fd=3, buf=0x7ff, nbytes=1) at ../sysdeps/unix/sysv/linux/read.c:26\n#0  0x00007f in __GI___libc_read (fd=3) at ../sysdeps/read.c:26\n#1  0x000055 in read_line (fd=3, buf=0x7ff \"\") at host.c:20\n#2  0x000055 in main () at host.c:40\n";
-        assert_eq!(native_frames(gdb).unwrap(), "read_line < main");
+        assert_eq!(native_frames(gdb).unwrap().0, "read_line < main");
         assert_eq!(native_frames("no frames here"), None);
     }
 
@@ -482,7 +751,8 @@ mod tests {
         };
         let stack = |d: &str| HangStack {
             by: "faulthandler".into(),
-            frames: faulthandler_frames(d).unwrap(),
+            frames: faulthandler_frames(d).unwrap().0,
+            waits_in: None,
             blocked_in: faulthandler_port_call(d),
         };
         let own_loop = stack(&dump("  File \"/t/prompt_forever.py\", line 12 in command\n"));

@@ -121,6 +121,10 @@ pub struct RunResult {
     /// How long the host took to send or exit once the hand went silent (a `silence` that
     /// fired), or `None` (no silence, or the host did neither before the run ended).
     pub gave_up_after: Option<Duration>,
+    /// The host's long waits ([`Wait`]): each time it neither sent nor exited for more than
+    /// [`LONG_WAIT`] with the port open, and, when it was killed (a hang, the budget), the
+    /// wait it was in then. What confirms a hang or shows a host that acts late.
+    pub waits: Vec<Wait>,
     /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
     pub stderr: String,
     /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
@@ -158,6 +162,24 @@ pub struct RunResult {
 
 /// A host whose last bytes came this recently is still talking.
 pub const TALKING: Duration = Duration::from_millis(500);
+
+/// A wait of the host longer than this is kept in [`RunResult::waits`].
+pub const LONG_WAIT: Duration = Duration::from_secs(1);
+
+/// Most long waits kept of a run.
+const WAITS_CAP: usize = 32;
+
+/// A long wait of the host: it neither sent nor exited, with the port open, after the hand's
+/// last answer (or its own last bytes, or its (re)open).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Wait {
+    /// How long.
+    pub waited: Duration,
+    /// The protocol state it waited in (`awaiting the answer after RESET`).
+    pub state: String,
+    /// It ended the wait by sending or exiting (`false`: it was killed still waiting).
+    pub acted: bool,
+}
 
 /// A process the host left behind (it left the host's process group and still held the port
 /// or the host's stderr after the host ended), as found before it was killed.
@@ -353,6 +375,13 @@ pub(crate) struct Log {
     pub(crate) hung_up: bool,
     /// A host has the port open, as the hand's transport last said.
     port_open: bool,
+    /// When the port was last opened or closed (a host's wait counts from then at the
+    /// earliest).
+    port_changed: Instant,
+    /// The host's long waits that it ended by sending, closing the port or exiting.
+    waits: Vec<Wait>,
+    /// The host was killed (hung, over budget, called off): the port's close is not its act.
+    killed: bool,
     reactions: Vec<(String, String, String)>,
     /// Reactions still waiting for the host's next command: (index into reactions, commands seen).
     awaiting: Vec<(usize, usize)>,
@@ -385,6 +414,9 @@ impl Log {
             hang_up: Some(hang_up),
             hung_up: false,
             port_open: false,
+            port_changed: Instant::now(),
+            waits: Vec::new(),
+            killed: false,
             reactions: Vec::new(),
             awaiting: Vec::new(),
         }
@@ -485,6 +517,12 @@ impl LineTap for Tap {
         // held soon blocks in its write (the hand takes no more input while the output it
         // queued behind the held answer is at its cap), and is waiting for the hand, not
         // hung, until that answer is out.
+        // A long wait ends here (measured as the hang clock measures it).
+        let waited = now.saturating_duration_since(log.last_activity.max(log.port_changed));
+        if waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+            let state = log.checker.state();
+            log.waits.push(Wait { waited, state, acted: true });
+        }
         log.last_activity = log.last_activity.max(now);
         log.last_sent = Some(now);
         if log.silenced_at.is_some() && log.acted_at.is_none() {
@@ -561,8 +599,16 @@ impl LineTap for Tap {
 
     fn connection(&mut self, _device: &Device, open: bool) {
         if let Ok(mut log) = self.0.lock() {
+            let now = Instant::now();
+            // Closing the port after a long wait ends the wait: the host gave up.
+            let waited = now.saturating_duration_since(log.last_activity.max(log.port_changed));
+            if !open && log.port_open && !log.killed && waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+                let state = log.checker.state();
+                log.waits.push(Wait { waited, state, acted: true });
+            }
             log.checker.connection(open);
             log.port_open = open;
+            log.port_changed = now;
         }
     }
 
@@ -633,17 +679,29 @@ impl Drop for RunDir {
 }
 
 /// The host's sanitizer options with a log file per process in `dir` (the user's own
-/// options kept; a `log_path` of theirs is replaced).
-fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str) -> String {
+/// options kept; a `log_path` of theirs is replaced), and `defaults` where the user set none
+/// of the same name.
+fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str, defaults: &[&str]) -> String {
     let mine = format!("log_path={}", dir.join(name).display());
-    match std::env::var(var) {
-        Ok(v) if !v.trim().is_empty() => {
-            let kept: Vec<&str> = v.split(':').filter(|o| !o.starts_with("log_path=") && !o.is_empty()).collect();
-            format!("{}:{mine}", kept.join(":"))
-        }
-        _ => mine,
-    }
+    let theirs = std::env::var(var).unwrap_or_default();
+    let kept: Vec<&str> = theirs.split(':').filter(|o| !o.starts_with("log_path=") && !o.trim().is_empty()).collect();
+    let key = |o: &str| o.split('=').next().unwrap_or_default().to_string();
+    let mut all: Vec<String> = defaults
+        .iter()
+        .filter(|d| !kept.iter().any(|k| key(k) == key(d)))
+        .map(|d| d.to_string())
+        .chain(kept.iter().map(|k| k.to_string()))
+        .collect();
+    all.push(mine);
+    all.join(":")
 }
+
+/// AddressSanitizer options `gcl` sets unless the host's environment sets them:
+/// `fast_unwind_on_fatal=1`, since the slow unwinder crashes on a stack a `sscanf` or
+/// `strcpy` overflowed (the report then has no frame at all: `nested bug in the same
+/// thread`), and `handle_abort=1`, so that a host that dies of SIGABRT (an exception nobody
+/// caught) has its stack printed, and the place it threw is known.
+const ASAN_DEFAULTS: &[&str] = &["fast_unwind_on_fatal=1", "handle_abort=1"];
 
 /// [`run_once`], called off ([`RunError::Cancelled`], the host killed) once `cancel` is set.
 pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
@@ -702,8 +760,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .env("GCL_PORT_URL", &url)
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
-        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan"))
-        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan"))
+        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan", ASAN_DEFAULTS))
+        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan", &[]))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -795,6 +853,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut stack = None;
     let mut ended_at = None;
     let mut closed_until = started;
+    let mut quiet_since = started;
     let mut talking_at_end = false;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
@@ -828,7 +887,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         if !holds_port {
             closed_until = now;
         }
-        let quiet_since = last_activity.max(closed_until);
+        quiet_since = last_activity.max(closed_until);
         cancelled = cancel.load(Ordering::Relaxed);
         let verdict = if cancelled {
             Some(HostEnd::Exit(-1))
@@ -841,6 +900,13 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             None
         };
         if let Some(v) = verdict {
+            if let Ok(mut l) = log.lock() {
+                l.killed = true;
+                if !cancelled {
+                    let state = l.checker.state();
+                    l.waits.push(Wait { waited: now.saturating_duration_since(quiet_since), state, acted: false });
+                }
+            }
             let mut reaped = false;
             if !cancelled {
                 stack = take_stack(pid.as_raw(), &errbuf, Some(&rx), &mut reaped);
@@ -914,14 +980,23 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
     let ended_in = log.checker.state();
-    // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave.
+    // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave,
+    // nor did one that crashed (its crash is the finding, not the loop or line it was in).
     if !log.hung_up {
-        log.checker.finish(!matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
+        let crashed = matches!(end, HostEnd::Signal(_)) || super::detect::crash_report(&stderr).is_some();
+        log.checker.finish(!crashed && !matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
         if talking_at_end {
             log.checker.cut_off();
         }
     }
     let violations = log.checker.violations().to_vec();
+    // A host that exited (or died) with the port still open after a long wait ended it so.
+    if let Some(at) = ended_at.filter(|_| log.port_open && !log.killed) {
+        let waited = at.saturating_duration_since(quiet_since);
+        if waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+            log.waits.push(Wait { waited, state: ended_in.clone(), acted: true });
+        }
+    }
     let gave_up_after = log.silenced_at.and_then(|s| {
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
@@ -931,6 +1006,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         stack,
         leftovers,
         gave_up_after,
+        waits: log.waits.clone(),
         stderr,
         observations: log.observations,
         wrong_values: log.wrong_values.clone(),
@@ -1004,9 +1080,9 @@ fn take_stack(
         let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
         // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
         b.kept.truncate(from);
-        let frames = super::detect::faulthandler_frames(&dump)?;
+        let (frames, waits_in) = super::detect::faulthandler_frames(&dump)?;
         let blocked_in = if blocked { super::detect::faulthandler_port_call(&dump) } else { None };
-        return Some(super::detect::HangStack { by: "faulthandler".into(), frames, blocked_in });
+        return Some(super::detect::HangStack { by: "faulthandler".into(), frames, waits_in, blocked_in });
     }
     super::detect::sample_native(target)
 }
