@@ -449,7 +449,7 @@ pub fn session_blocks(profile: &str, t: &Transcript) -> Vec<SessionBlock> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn fget() -> Diff {
@@ -561,6 +561,46 @@ mod tests {
         let d = Diff { golden: "10 12".into(), form: Some(AnswerForm::Hex), ..d };
         assert!(is_hex(&d));
         assert_eq!(command(&d), "RealTime block");
+    }
+
+    /// A host's session in RealTime on seed, as `gcl fuzz host` keeps it: two control blocks,
+    /// the second one's feedback cut short.
+    pub(crate) const SESSION: &str = "gcl-transcript 1\nid: s\ntitle: s\nclause: host\nlevel: INFO\nprofile: seed\n\n\
+send \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"HI\\r\"\nexpect \"HI\\n\\r=> \"\n\n\
+send \"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\\r\"\n\
+expect \"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\\n\\r=> \"\n\n\
+send \"123LOOP\\r\"\nexpect \"123LOOP*\"\n\n\
+send \"C\\x14\\x14\\x14\"\nexpect \"*\\x14\\x00\\x1C\\x14\\x04\\x04\\x14\\x00\\x1C\"\n\n\
+send \"C\\x14\\x14\\x14\"\nexpect \"*\\x14\\x00:\\x14\\x04\"\n\n\
+send \"\\x03\"\nexpect \"\\n\\r=> \"\n";
+
+    /// A host's session (as `gcl fuzz host` keeps it) has its RealTime blocks decoded field by
+    /// field with the layout its own FSET set: its control blocks and the hand's feedback; a
+    /// block a misbehaviour cut short stays bytes.
+    #[test]
+    fn a_host_sessions_realtime_blocks_are_decoded_field_by_field() {
+        let t = gcl_transcript::parse(SESSION).unwrap();
+        let blocks = session_blocks("seed", &t);
+        let host: Vec<&SessionBlock> = blocks.iter().filter(|b| b.from_host).collect();
+        let hand: Vec<&SessionBlock> = blocks.iter().filter(|b| !b.from_host).collect();
+        assert_eq!(host.len(), 2, "{blocks:?}");
+        assert_eq!((host[0].step, host[0].header), (5, b'C'));
+        assert_eq!(host[0].fields, vec![(Some(1), "LCV", 20), (Some(2), "LCV", 20), (Some(3), "LCV", 20)]);
+        // The second feedback block was cut short: only the first is decoded.
+        assert_eq!(hand.len(), 1, "{blocks:?}");
+        assert_eq!((hand[0].step, hand[0].header), (5, b'*'));
+        assert_eq!(
+            hand[0].fields,
+            vec![
+                (Some(1), "LFV", 20),
+                (Some(1), "LFAP", 28),
+                (Some(2), "LFV", 20),
+                (Some(2), "LFAP", 1028),
+                (Some(3), "LFV", 20),
+                (Some(3), "LFAP", 28)
+            ]
+        );
+        assert!(session_blocks("no-such-profile", &t).is_empty());
     }
 
     #[test]

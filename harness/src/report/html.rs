@@ -944,6 +944,23 @@ mod tests {
         assert!(!page.contains("<script"), "self-contained and inert");
     }
 
+    /// A host page shows a finding's RealTime blocks decoded field by field (they were escaped
+    /// text: `"*\x14\x00..."`), the host's control blocks and the hand's feedback apart.
+    #[test]
+    fn a_host_page_decodes_the_sessions_realtime_blocks() {
+        let mut r = crate::report::tests::sample();
+        r.kind = ReportKind::FuzzHost;
+        r.host = Some(crate::report::HostDetails { command: vec!["host".into()], runs: 1, ..Default::default() });
+        r.cases[1].diff = None;
+        r.cases[1].transcript = Some(diff::tests::SESSION.into());
+        let page = to_html(&r);
+        assert!(page.contains("RealTime: the host's control blocks, decoded field by field"), "{page}");
+        assert!(page.contains("RealTime: the hand's feedback blocks, decoded field by field"), "{page}");
+        assert!(page.contains("<th>motor 2 LFAP</th>"), "{page}");
+        assert!(page.contains("<td class=\"n\">1028</td>"), "{page}");
+        assert!(page.contains("<th>motor 1 LCV</th>"), "{page}");
+    }
+
     #[test]
     fn the_level_table_counts_each_level_and_the_clause_table_has_a_level_column() {
         let page = to_html(&crate::report::tests::sample());

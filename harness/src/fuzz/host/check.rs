@@ -663,6 +663,19 @@ mod tests {
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
     }
 
+    /// An LF says which line it followed: the one a CR just ended (`"1FGET P" and its CR`), the
+    /// one being typed, or none yet.
+    #[test]
+    fn an_lf_names_the_line_it_followed() {
+        let detail = |host: &[&[u8]]| {
+            let c = checked(host);
+            c.violations().iter().find(|v| v.kind == "LF sent").map(|v| v.detail.clone()).unwrap_or_default()
+        };
+        assert_eq!(detail(&[b"HI\r", b"1FGET P\r\n"]), "LF after \"1FGET P\" and its CR");
+        assert_eq!(detail(&[b"FGET D\nP\r"]), "LF after \"FGET D\"");
+        assert_eq!(detail(&[b"\n"]), "LF before any line");
+    }
+
     /// RealTime over motors 1-3 of seed after HI, with velocity control: a control block is a header
     /// and three velocity bytes.
     const RT: &[&[u8]] = &[b"HI\r", b"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\r", b"123LOOP\r"];

@@ -221,24 +221,30 @@ fn sanitizer_stack(report: &str) -> Vec<NativeFrame> {
 /// through (`scanf_common < __interceptor___isoc99_sscanf`) and its caller. A stack overflow
 /// through a libc call smashes the frames above the buffer, so the stack may end in the
 /// interceptor: then the frame that owns the overflowed variable (`is located in stack of
-/// thread T0 ... in frame #0 ... in hand_pget`) is the host's.
-fn own_site(report: &str) -> Option<(String, Option<String>, Option<String>)> {
+/// thread T0 ... in frame #0 ... in hand_pget`) is the host's. So it is, first, in a report
+/// taken with the fast unwinder (`owner_first`), which skips the frame that called an
+/// interceptor (frame pointers link the frames only of code built with them).
+fn own_site(report: &str, owner_first: bool) -> Option<(String, Option<String>, Option<String>)> {
     let frames = sanitizer_stack(report);
+    let owner = report
+        .find("is located in stack of thread")
+        .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+        .filter(|f| !f.system());
     let own = frames.iter().position(|f| !f.system());
     let through = |upto: usize| {
         let sys: Vec<&str> = frames[..upto].iter().map(|f| f.func.as_str()).collect();
         (!sys.is_empty()).then(|| sys.join(" < "))
     };
+    if owner_first && let Some(f) = &owner {
+        let upto = own.unwrap_or(frames.len());
+        return Some((f.func.clone(), through(upto), None));
+    }
     match own {
         Some(i) => {
             let caller = frames[i + 1..].iter().find(|f| !f.system()).map(|f| f.func.clone());
             Some((frames[i].func.clone(), through(i), caller))
         }
         None => {
-            let owner = report
-                .find("is located in stack of thread")
-                .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
-                .filter(|f| !f.system());
             match owner {
                 Some(f) => Some((f.func, through(frames.len()), None)),
                 None => frames.first().map(|f| (f.func.clone(), None, None)),
@@ -247,17 +253,48 @@ fn own_site(report: &str) -> Option<(String, Option<String>, Option<String>)> {
     }
 }
 
+/// The heading under which a run's stderr gets the AddressSanitizer report of a second run of
+/// the same schedule with the fast unwinder, when the first report had no frame.
+pub const ASAN_SECOND_RUN: &str =
+    "--- AddressSanitizer's report in a second run of the same schedule, with its fast unwinder ---";
+
+/// The kind of an AddressSanitizer report (`stack-buffer-overflow`), from its first line.
+pub fn asan_kind(report: &str) -> String {
+    let line = report.lines().next().unwrap_or_default();
+    let after = line.split("AddressSanitizer:").nth(1).unwrap_or_default();
+    after.split_whitespace().next().unwrap_or("unknown").to_string()
+}
+
+/// The kind of stderr's AddressSanitizer report when its stack has no frame (its unwinder
+/// crashed on a smashed stack: `nested bug in the same thread`) and no second run completed
+/// it yet.
+pub fn asan_without_frames(s: &str) -> Option<String> {
+    let at = s.find("ERROR: AddressSanitizer:")?;
+    if s.contains(ASAN_SECOND_RUN) {
+        return None;
+    }
+    sanitizer_stack(&s[at..]).is_empty().then(|| asan_kind(&s[at..]))
+}
+
 fn asan(s: &str) -> Option<CrashReport> {
     let start = s.find("ERROR: AddressSanitizer:")?;
-    let rest = &s[start..];
+    // The first report, up to a second run's if there is one.
+    let mut rest = &s[start..];
+    if let Some(cut) = rest.find(ASAN_SECOND_RUN) {
+        rest = &rest[..cut];
+    }
+    // A report without frames, completed by a second run's (see `asan_without_frames`).
+    let mut second = false;
+    if sanitizer_stack(rest).is_empty()
+        && let Some(at) = s.find(ASAN_SECOND_RUN)
+        && let Some(r) = s[at..].find("ERROR: AddressSanitizer:")
+    {
+        rest = &s[at + r..];
+        second = true;
+    }
     let headline = rest.lines().next().unwrap_or_default().trim().to_string();
-    let what = headline
-        .trim_start_matches("ERROR: AddressSanitizer:")
-        .split_whitespace()
-        .next()
-        .unwrap_or("unknown")
-        .to_string();
-    let (site, through, caller) = own_site(rest).unwrap_or_else(|| ("?".into(), None, None));
+    let what = asan_kind(rest);
+    let (site, through, caller) = own_site(rest, second).unwrap_or_else(|| ("?".into(), None, None));
     let mut context = Vec::new();
     if let Some(t) = through {
         context.push(format!("through {t}"));
@@ -275,12 +312,21 @@ fn asan(s: &str) -> Option<CrashReport> {
     Some(CrashReport { kind: "asan", signature: format!("asan {what} in {site}"), headline })
 }
 
+/// The heading under which a run's stderr gets the host's stack at SIGABRT, taken by gdb in a
+/// second run of the same schedule.
+pub const ABORT_STACK: &str = "--- the host's stack at SIGABRT (gdb, in a second run of the same schedule) ---";
+
+/// Whether stderr has a C++ runtime's message about an exception nobody caught.
+pub fn uncaught_exception(stderr: &str) -> bool {
+    uncaught(stderr).is_some()
+}
+
 /// A C++ runtime's last words about an exception nobody caught: libstdc++'s `terminate called
 /// after throwing an instance of 'T'` and `what(): ...`, or libc++abi's `terminating due to
-/// uncaught exception of type T: ...`. Signed by what was thrown and, when a sanitizer printed
-/// the stack at the abort that follows (AddressSanitizer's SIGABRT handler, which
-/// `gcl fuzz host` turns on), the host's own frame that threw: one unhandled error from one
-/// place is one finding. What `what()` said (an errno's text, which varies) is in the message.
+/// uncaught exception of type T: ...`. Signed by what was thrown and, when the stack at the
+/// abort that follows is known ([`ABORT_STACK`], or a sanitizer's report of the SIGABRT), the
+/// host's own frame that threw: one unhandled error from one place is one finding. What
+/// `what()` said (an errno's text, which varies) is in the message.
 fn uncaught(s: &str) -> Option<CrashReport> {
     const GNU: &str = "terminate called after throwing an instance of '";
     const LLVM: &str = "terminating due to uncaught exception of type ";
@@ -304,7 +350,18 @@ fn uncaught(s: &str) -> Option<CrashReport> {
     } else {
         return None;
     };
-    let site = s.find("ERROR: AddressSanitizer:").and_then(|at| own_site(&s[at..]));
+    // Where it was thrown: the stack gdb took at the abort (a second run of the same
+    // schedule), else a sanitizer's at its SIGABRT handler.
+    let site = s
+        .find(ABORT_STACK)
+        .and_then(|at| native_frames(&s[at + ABORT_STACK.len()..]))
+        .and_then(|(own, _)| {
+            let mut frames = own.split(" < ").map(String::from);
+            let first = frames.next()?;
+            Some((first, None, frames.next()))
+        })
+        .or_else(|| s.find("ERROR: AddressSanitizer:").and_then(|at| own_site(&s[at..], false)))
+        .filter(|(f, _, _)| !system_frame(f, ""));
     let mut signature = format!("uncaught C++ exception {ty}");
     let mut headline = format!("an exception nobody caught: {ty}");
     if let Some(w) = &what {
@@ -319,7 +376,7 @@ fn uncaught(s: &str) -> Option<CrashReport> {
             }
             headline.push(')');
         }
-        None => headline += " (where it was thrown: no stack; a build with -fsanitize=address prints it)",
+        None => headline += " (where it was thrown: no stack, gdb took none)",
     }
     Some(CrashReport { kind: "c++", signature, headline })
 }
@@ -723,6 +780,102 @@ mod tests {
         assert_eq!(r.signature, "python ValueError in host.py:parse");
         assert_eq!(crash_report("all fine\n"), None);
         assert_eq!(signal_name(11), "SIGSEGV");
+    }
+
+    /// What AddressSanitizer (gcc 12's) printed for `host_mutants/c_sscanf_two.c`: a heap word
+    /// overflowed through `sscanf`, the report's first frames the sanitizer's interceptor.
+    const SSCANF_HEAP: &str = "==20480==ERROR: AddressSanitizer: heap-buffer-overflow on address 0x602000000018 at pc 0x7fc748c716c5 bp 0x7fff5152bdc0 sp 0x7fff5152b570\nWRITE of size 257 at 0x602000000018 thread T0\n    #0 0x7fc748c716c4 in scanf_common ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors_format.inc:342\n    #1 0x7fc748c7230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n    #2 0x7fc748c723fe in __interceptor___isoc99_sscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1554\n    #3 0x558dee848ad6 in hand_get /work/harness/tests/host_mutants/c_sscanf_two.c:39\n    #4 0x558dee848c14 in main /work/harness/tests/host_mutants/c_sscanf_two.c:50\n    #5 0x7fc748a45249 in __libc_start_call_main ../sysdeps/nptl/libc_start_call_main.h:58\n    #6 0x7fc748a45304 in __libc_start_main_impl ../csu/libc-start.c:360\n    #7 0x558dee848240 in _start (/tmp/h30/c_sscanf_two+0x2240)\n\n0x602000000018 is located 0 bytes to the right of 8-byte region [0x602000000010,0x602000000018)\nallocated by thread T0 here:\n    #0 0x7fc748cb89cf in __interceptor_malloc ../../../../src/libsanitizer/asan/asan_malloc_linux.cpp:69\n    #1 0x558dee848a97 in hand_get /work/harness/tests/host_mutants/c_sscanf_two.c:37\n";
+
+    /// A stack word overflowed through `sscanf`: the default (slow) unwinder crashed on the
+    /// smashed stack, and the report has no frame.
+    const SSCANF_STACK_NO_FRAMES: &str = "AddressSanitizer:DEADLYSIGNAL\nAddressSanitizer: nested bug in the same thread, aborting.\n\n--- sanitizer log asan.20561 ---\n=================================================================\n==20561==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffeb3e60ed8 at pc 0x7f4d428716c5 bp 0x7ffeb3e60d40 sp 0x7ffeb3e604f0\nWRITE of size 1025 at 0x7ffeb3e60ed8 thread T0\n";
+
+    /// The same schedule run again with the fast unwinder: the frame that called `sscanf` is
+    /// skipped (the interceptor keeps no frame pointer), and the report goes on to name the
+    /// function whose variable overflowed.
+    const SSCANF_STACK_FAST: &str = "==12669==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffc11994e18 at pc 0x7f9f12a716c5 bp 0x7ffc11994c80 sp 0x7ffc11994430\nWRITE of size 9 at 0x7ffc11994e18 thread T0\n    #0 0x7f9f12a716c4 in scanf_common ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors_format.inc:342\n    #1 0x7f9f12a7230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n    #2 0x55f4e8e78bac in main /work/harness/tests/host_mutants/c_sscanf_word.c:35\n    #3 0x7f9f12845249 in __libc_start_call_main ../sysdeps/nptl/libc_start_call_main.h:58\n\nAddress 0x7ffc11994e18 is located in stack of thread T0 at offset 40 in frame\n    #0 0x55f4e8e788e2 in first_word /work/harness/tests/host_mutants/c_sscanf_word.c:21\n\n  This frame has 1 object(s):\n    [32, 40) 'word' (line 22) <== Memory access at offset 40 overflows this variable\n";
+
+    /// An overflow through `sscanf` is signed by the host's function that called it (the
+    /// interceptor, `scanf_common`, in the message), never by the interceptor; a report whose
+    /// unwinder crashed has its site from a second run's report (by the function whose
+    /// variable overflowed), else `?`, and says it printed no frame.
+    #[test]
+    fn an_overflow_through_sscanf_is_signed_by_the_hosts_function() {
+        let heap = crash_report(SSCANF_HEAP).unwrap();
+        assert_eq!(heap.signature, "asan heap-buffer-overflow in hand_get");
+        assert!(
+            heap.headline.ends_with(
+                "(in hand_get, through scanf_common < __interceptor___isoc99_vsscanf < __interceptor___isoc99_sscanf, called from main)"
+            ),
+            "{}",
+            heap.headline
+        );
+        // Another function overflowing through the same sscanf is another finding.
+        let other = SSCANF_HEAP.replace("in hand_get /work", "in hand_pget /work");
+        assert_eq!(crash_report(&other).unwrap().signature, "asan heap-buffer-overflow in hand_pget");
+        assert_eq!(asan_without_frames(SSCANF_HEAP), None);
+        assert_eq!(asan_without_frames(SSCANF_STACK_NO_FRAMES).as_deref(), Some("stack-buffer-overflow"));
+        let alone = crash_report(SSCANF_STACK_NO_FRAMES).unwrap();
+        assert_eq!(alone.signature, "asan stack-buffer-overflow in ?");
+        assert!(alone.headline.ends_with("(the sanitizer printed no frame)"), "{}", alone.headline);
+        let completed = format!("{SSCANF_STACK_NO_FRAMES}\n{ASAN_SECOND_RUN}\n{SSCANF_STACK_FAST}");
+        assert_eq!(asan_without_frames(&completed), None, "completed once");
+        let r = crash_report(&completed).unwrap();
+        assert_eq!(r.signature, "asan stack-buffer-overflow in first_word");
+        assert!(r.headline.contains("through scanf_common < __interceptor___isoc99_vsscanf"), "{}", r.headline);
+        // A report of the first run with its frames (the slow unwinder did not crash) is signed
+        // by its first own frame, as ever.
+        assert_eq!(crash_report(SSCANF_STACK_FAST).unwrap().signature, "asan stack-buffer-overflow in main");
+    }
+
+    /// gdb's stack of `host_mutants/cpp_uncaught_hangup.cpp` at its SIGABRT (a second run).
+    const TERMINATE_GDB: &str = "Program received signal SIGABRT, Aborted.\n#0  __pthread_kill_implementation (threadid=<optimized out>, signo=signo@entry=6, no_tid=no_tid@entry=0) at ./nptl/pthread_kill.c:44\n#1  0x00007ffff7aa8f4f in __pthread_kill_internal (signo=6, threadid=<optimized out>) at ./nptl/pthread_kill.c:78\n#2  0x00007ffff7a59fb2 in __GI_raise (sig=sig@entry=6) at ../sysdeps/posix/raise.c:26\n#3  0x00007ffff7a44472 in __GI_abort () at ./stdlib/abort.c:79\n#4  0x00007ffff7c9d919 in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#5  0x00007ffff7ca8e1a in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#6  0x00007ffff7ca8e85 in std::terminate() () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#7  0x00007ffff7ca90d8 in __cxa_throw () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#8  0x0000555555555215 in Port::check (r=-1, what=0x55555555a004 \"read\") at cpp_uncaught_hangup.cpp:60\n#9  0x0000555555555243 in Port::read_answer[abi:cxx11]() (this=0x7fffffffe3d0) at cpp_uncaught_hangup.cpp:51\n#10 0x000055555555524f in main (argc=2, argv=0x7fffffffe4f8) at cpp_uncaught_hangup.cpp:75\n";
+
+    /// libstdc++'s words about an exception nobody caught are read into the signature: what
+    /// was thrown and, with the stack at the abort, the host's frame that threw (`what()`,
+    /// whose text varies, in the message); libc++'s words too.
+    #[test]
+    fn an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where() {
+        let said = "terminate called after throwing an instance of 'boost::wrapexcept<boost::system::system_error>'\n  what():  write: Input/output error\n";
+        let alone = crash_report(said).unwrap();
+        assert_eq!(alone.kind, "c++");
+        assert_eq!(alone.signature, "uncaught C++ exception boost::wrapexcept<boost::system::system_error>");
+        assert!(alone.headline.contains("what(): write: Input/output error"), "{}", alone.headline);
+        let with_stack = format!("{said}\n{ABORT_STACK}\n{TERMINATE_GDB}");
+        let r = crash_report(&with_stack).unwrap();
+        assert_eq!(r.signature, "uncaught C++ exception boost::wrapexcept<boost::system::system_error> in Port::check");
+        assert!(r.headline.ends_with("(thrown in Port::check, called from Port::read_answer)"), "{}", r.headline);
+        let llvm = "libc++abi: terminating due to uncaught exception of type std::runtime_error: no prompt\n";
+        assert_eq!(crash_report(llvm).unwrap().signature, "uncaught C++ exception std::runtime_error");
+        assert!(uncaught_exception(said) && !uncaught_exception("all fine\n"));
+    }
+
+    /// A hang is named by the innermost frame of the host's own code: the system's frames it
+    /// waits in (libc's `syscall` as gdb prints it with libc's sources, Boost.Asio's header
+    /// code, libstdc++'s) go in the message, whichever tool took the stack.
+    #[test]
+    fn a_hang_under_system_libraries_is_named_by_the_hosts_frame() {
+        let gdb = "#0  syscall () at ../sysdeps/unix/sysv/linux/x86_64/syscall.S:38\n#1  0x000055 in boost::asio::detail::descriptor_ops::poll_read (d=3, state=0 '\\000', msec=-1, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:450\n#2  0x000055 in boost::asio::detail::descriptor_ops::sync_read (d=3, state=0 '\\000', bufs=0x7ff, count=1, all_empty=false, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:160\n#3  0x000055 in BarrettHand::initialize (this=0x7ffd) at src/hand.cpp:88\n#4  0x000055 in main () at src/main.cpp:12\n";
+        let (frames, waits) = native_frames(gdb).unwrap();
+        assert_eq!(frames, "BarrettHand::initialize < main");
+        assert_eq!(
+            waits.as_deref(),
+            Some(
+                "syscall < boost::asio::detail::descriptor_ops::poll_read < boost::asio::detail::descriptor_ops::sync_read"
+            )
+        );
+        let ros = "TID 9:\n#0  0x00007f poll - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x00007f boost::asio::detail::descriptor_ops::poll_read(int, unsigned char, int, boost::system::error_code&) - /opt/ros/noetic/lib/libserial.so\n#2  0x000055 BhandNode::read_reply(std::string&) - /ws/devel/lib/bhand/bhand_node\n#3  0x000055 main - /ws/devel/lib/bhand/bhand_node\n";
+        let stack = HangStack {
+            by: "eu-stack".into(),
+            frames: native_frames(ros).unwrap().0,
+            waits_in: native_frames(ros).unwrap().1,
+            blocked_in: None,
+        };
+        assert_eq!(stack.site(), "BhandNode::read_reply");
+        assert_eq!(stack.waits_in.as_deref(), Some("poll < boost::asio::detail::descriptor_ops::poll_read"));
+        // A host's own shared library is the host's (not the system's).
+        let own_lib = "#0 0x7f in read () from /lib/x86_64-linux-gnu/libc.so.6\n#1 0x7f in HandGet () from /usr/local/lib/libbarrett.so\n";
+        assert_eq!(native_frames(own_lib).unwrap().0, "HandGet");
     }
 
     #[test]

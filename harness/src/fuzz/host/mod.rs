@@ -305,6 +305,12 @@ pub struct FuzzOptions {
 }
 
 impl FuzzOptions {
+    /// How long the campaign may run: `duration`, or without `runs` either, a time budget
+    /// ([`DEFAULT_DURATION`]); `None` with `runs` alone.
+    pub fn campaign_duration(&self) -> Option<Duration> {
+        self.duration.or(self.runs.is_none().then_some(DEFAULT_DURATION))
+    }
+
     /// The campaign's run index of this campaign's `t`-th run (its shard's).
     fn run_index(&self, t: u64) -> u64 {
         self.shard.map_or(t, |s| s.global(t))
@@ -1008,8 +1014,7 @@ pub fn confirm(
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
-    // Without --runs or --duration: a time budget ([`DEFAULT_DURATION`]).
-    let duration = opts.duration.or(opts.runs.is_none().then_some(DEFAULT_DURATION));
+    let duration = opts.campaign_duration();
     let calibration = if opts.calibrate {
         match calibrate(&opts.run, duration.map(|d| d / CALIBRATION_SHARE), opts.jobs, stop) {
             Ok(c) => Some(c),
@@ -1427,6 +1432,57 @@ mod tests {
         assert!(v[0].message.contains("P 1 5120") && v[0].message.contains("after rt-block-length at answer 5"));
         r.wrong_values[0].place = Some("hostlib.py:212".into());
         assert_eq!(judge(&r, &[0])[0].signature, "silent wrong value: P at hostlib.py:212");
+    }
+
+    /// An exception nobody caught is one crash named by what was thrown (and where), not
+    /// `crash: SIGABRT`; a host that died of another signal keeps that name.
+    #[test]
+    fn an_uncaught_exception_is_named_by_what_was_thrown_not_by_sigabrt() {
+        let mut r = ended(HostEnd::Signal(6), "awaiting the answer after FGET");
+        r.stderr = "terminate called after throwing an instance of 'std::system_error'\n  what():  read: Input/output error\n".into();
+        let v = judge(&r, &[0, 1]);
+        assert_eq!(v.len(), 1, "{v:?}");
+        assert_eq!(v[0].signature, "crash: uncaught C++ exception std::system_error");
+        assert!(v[0].message.starts_with("the host died of SIGABRT: ") && v[0].message.contains("Input/output error"));
+        r.stderr.clear();
+        assert_eq!(judge(&r, &[0, 1])[0].signature, "crash: SIGABRT");
+    }
+
+    /// A default campaign (neither --runs nor --duration) is a time budget that, with its
+    /// calibration inside it and a run budget's overrun, ends within 10 minutes whatever the
+    /// host's speed (1000 runs of a host that takes 9 s a run took 2 h 30 min); --runs alone
+    /// has no time budget.
+    #[test]
+    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
+        let mut o = FuzzOptions {
+            run: HostRun {
+                command: vec!["true".into()],
+                transport: Transport::Pty,
+                profile: gcl_model::Profile::builtin("seed").unwrap(),
+                time: crate::sim::TimeMode::Fast,
+                pace: Pace::Unpaced,
+                hand_seed: 0,
+                timeout_hang: Duration::from_secs(3),
+                budget: Duration::from_secs(60),
+            },
+            seed: 0,
+            runs: None,
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs: 1,
+            weights: Weights::default(),
+            max_planned: 3,
+            minimize: true,
+            guided: true,
+            calibrate: true,
+            shard: None,
+        };
+        let d = o.campaign_duration().expect("a time budget");
+        assert!(d + o.run.budget * 2 <= Duration::from_secs(600), "{d:?}");
+        o.runs = Some(1000);
+        assert_eq!(o.campaign_duration(), None);
+        o.duration = Some(Duration::from_secs(3600));
+        assert_eq!(o.campaign_duration(), Some(Duration::from_secs(3600)));
     }
 
     #[test]

@@ -679,32 +679,125 @@ impl Drop for RunDir {
 }
 
 /// The host's sanitizer options with a log file per process in `dir` (the user's own
-/// options kept; a `log_path` of theirs is replaced), and `defaults` where the user set none
-/// of the same name.
-fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str, defaults: &[&str]) -> String {
+/// options kept; a `log_path` of theirs is replaced), then `forced` (which override theirs).
+fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str, forced: &[&str]) -> String {
     let mine = format!("log_path={}", dir.join(name).display());
     let theirs = std::env::var(var).unwrap_or_default();
-    let kept: Vec<&str> = theirs.split(':').filter(|o| !o.starts_with("log_path=") && !o.trim().is_empty()).collect();
-    let key = |o: &str| o.split('=').next().unwrap_or_default().to_string();
-    let mut all: Vec<String> = defaults
-        .iter()
-        .filter(|d| !kept.iter().any(|k| key(k) == key(d)))
-        .map(|d| d.to_string())
-        .chain(kept.iter().map(|k| k.to_string()))
-        .collect();
-    all.push(mine);
+    let mut all: Vec<&str> =
+        theirs.split(':').filter(|o| !o.starts_with("log_path=") && !o.trim().is_empty()).collect();
+    all.extend(forced);
+    all.push(&mine);
     all.join(":")
 }
 
-/// AddressSanitizer options `gcl` sets unless the host's environment sets them:
-/// `fast_unwind_on_fatal=1`, since the slow unwinder crashes on a stack a `sscanf` or
-/// `strcpy` overflowed (the report then has no frame at all: `nested bug in the same
-/// thread`), and `handle_abort=1`, so that a host that dies of SIGABRT (an exception nobody
-/// caught) has its stack printed, and the place it threw is known.
-const ASAN_DEFAULTS: &[&str] = &["fast_unwind_on_fatal=1", "handle_abort=1"];
+/// How a run is made: as it is, or again to learn more of a crash.
+#[derive(Debug, Clone, Copy)]
+enum How<'a> {
+    /// The host as given.
+    Plain,
+    /// Under `gdb`, which writes the stack at a SIGABRT into this file.
+    UnderGdb(&'a std::path::Path),
+    /// With AddressSanitizer's fast unwinder (`fast_unwind_on_fatal=1`).
+    FastUnwind,
+}
 
 /// [`run_once`], called off ([`RunError::Cancelled`], the host killed) once `cancel` is set.
+///
+/// A native host that died of SIGABRT after its C++ runtime said an exception went uncaught
+/// (`terminate called after throwing...`) has its stack taken as a hung host's is: the same
+/// schedule is run once more under `gdb` (when installed), which stops at the signal and
+/// prints the stack, and that stack is appended to the run's stderr (under
+/// [`detect::ABORT_STACK`](super::detect::ABORT_STACK)), where the crash's signature finds the
+/// frame that threw.
+///
+/// An AddressSanitizer report without a single frame (the default, slow, unwinder crashed on a
+/// stack that a `sscanf` or `strcpy` smashed: `nested bug in the same thread`) is completed the
+/// same way: a second run with the fast unwinder, which stops where the frames are smashed and
+/// goes on to name the function whose variable overflowed; its report is appended under
+/// [`detect::ASAN_SECOND_RUN`](super::detect::ASAN_SECOND_RUN).
 pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
+    let mut r = run_inner(spec, schedule, cancel, How::Plain)?;
+    if let Some(kind) = super::detect::asan_without_frames(&r.stderr) {
+        // The same report, with frames; a host that answers the same bytes differently may
+        // need another try.
+        for _ in 0..SECOND_RUNS {
+            let Ok(second) = run_inner(spec, schedule, cancel, How::FastUnwind) else { break };
+            let report = second.stderr.find("ERROR: AddressSanitizer:").map(|at| &second.stderr[at..]);
+            if let Some(report) = report.filter(|rep| super::detect::asan_kind(rep) == kind) {
+                r.stderr.push_str(&format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
+                break;
+            }
+        }
+    }
+    let aborted = r.end == HostEnd::Signal(nix::sys::signal::Signal::SIGABRT as i32)
+        || r.stderr.contains("AddressSanitizer: ABRT");
+    if aborted
+        && super::detect::uncaught_exception(&r.stderr)
+        && let Some(stack) = abort_stack(spec, schedule, cancel)
+    {
+        r.stderr.push_str(&format!("\n{}\n{stack}", super::detect::ABORT_STACK));
+    }
+    Ok(r)
+}
+
+/// Most second runs made to learn more of one crash (a host that answers the same bytes
+/// differently may not crash the same way every time).
+const SECOND_RUNS: usize = 2;
+
+/// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
+/// as gdb prints it, or `None` (no gdb, or no second run aborted).
+fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Option<String> {
+    Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().ok()?;
+    let dir = RunDir::new().ok()?;
+    let log = dir.0.join("gdb.txt");
+    for _ in 0..SECOND_RUNS {
+        let _ = std::fs::remove_file(&log);
+        run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
+        if let Ok(text) = std::fs::read_to_string(&log)
+            && text.contains("SIGABRT")
+        {
+            return Some(text);
+        }
+    }
+    None
+}
+
+/// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
+/// signals hosts use in their work pass through unremarked).
+fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = ["gdb", "-batch", "-nx", "-q"].map(String::from).to_vec();
+    for ex in [
+        format!("set logging file {}", log.display()),
+        "set logging overwrite on".into(),
+        "set logging redirect on".into(),
+        "set logging enabled on".into(),
+        "handle SIGPIPE SIGALRM SIGCHLD SIGUSR1 SIGUSR2 SIGHUP SIGWINCH SIGINT SIGTERM SIGURG SIGIO nostop noprint pass"
+            .into(),
+        "run".into(),
+        "bt".into(),
+        "kill".into(),
+    ] {
+        v.push("-ex".into());
+        v.push(ex);
+    }
+    v.push("--args".into());
+    v.extend(command.iter().cloned());
+    v
+}
+
+/// [`run_once_until`], made as `how` says.
+fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How) -> Result<RunResult, RunError> {
+    let wrapped;
+    let spec = match how {
+        How::UnderGdb(log) => {
+            let mut s = spec.clone();
+            s.command = under_gdb(&spec.command, log);
+            wrapped = s;
+            &wrapped
+        }
+        How::Plain | How::FastUnwind => spec,
+    };
+    let asan_forced: &[&str] = if matches!(how, How::FastUnwind) { &["fast_unwind_on_fatal=1"] } else { &[] };
     let program = spec.command.first().ok_or(RunError::NoCommand)?;
     let started = Instant::now();
     let mut opts = SimOptions::new(spec.profile.clone());
@@ -760,7 +853,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .env("GCL_PORT_URL", &url)
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
-        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan", ASAN_DEFAULTS))
+        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan", asan_forced))
         .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan", &[]))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
