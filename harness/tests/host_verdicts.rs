@@ -362,6 +362,8 @@ fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
     for (command, needle) in cases {
         let mut r = run(command.clone());
         r.timeout_hang = Duration::from_millis(1500);
+        // The run budget is how long a hang's confirmation waits.
+        r.budget = Duration::from_secs(8);
         let c = campaign(r, "truncate,no-prompt,bad-prompt", 12, false);
         let hangs: Vec<&str> = c
             .findings
@@ -372,7 +374,108 @@ fn one_wait_without_a_deadline_is_one_hang_named_by_its_code() {
         assert_eq!(hangs.len(), 1, "{command:?}: {hangs:?}");
         assert!(hangs[0].starts_with(needle), "{command:?}: {hangs:?}");
         assert!(c.findings.len() == 1, "{command:?}: {:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+        // Reported once confirmed: a second run waited (up to the run budget) and the host
+        // still neither sent nor exited.
+        assert!(c.findings[0].confirmed_after_ms.is_some_and(|ms| ms > 1500), "{command:?}: {:?}", c.findings[0]);
     }
+}
+
+/// A correct host whose timeouts differ by command, as Barrett's API and real hands have them
+/// (2 s for the prompt after ^C, 15 s for the banner after RESET, 10 s per answer, 5 s per
+/// RealTime block; a tenth of that here), has no finding in a 60-run campaign with default
+/// options: calibration measures its wait at every kind of answer, RESET's banner among them
+/// (it measured three fixed answers, and a correct host that waited 15 s at RESET was hung
+/// after 12.1 s).
+#[test]
+fn a_host_whose_timeouts_differ_by_command_has_no_finding() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut r = run(python("py_timeouts_by_command.py", &["0.1"]));
+    // The CLI's: the least hang timeout, calibration raises it.
+    r.timeout_hang = Duration::from_secs(3);
+    let opts = FuzzOptions {
+        run: r,
+        seed: 0,
+        runs: Some(60),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 1,
+        weights: Weights::default(),
+        max_planned: 3,
+        minimize: true,
+        guided: true,
+        calibrate: true,
+        shard: None,
+    };
+    let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, Vec::<&str>::new(), "notes: {:?}", c.notes);
+    assert_eq!(c.runs, 60);
+    let cal = c.calibration.unwrap();
+    let banner = cal.by_kind.iter().find(|k| k.kind.contains("banner")).expect("RESET's banner measured");
+    assert_eq!(banner.state, "answer to RESET", "{cal:?}");
+    assert!(banner.gave_up_ms.is_some(), "{cal:?}");
+    let kinds: Vec<&str> = c.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
+    let measured: Vec<&str> = cal.by_kind.iter().map(|k| k.kind.as_str()).collect();
+    assert_eq!(measured, kinds, "every kind of answer the systematic pass knows");
+}
+
+/// A hang is confirmed before it is reported: a second run of its schedule waits as long as
+/// the run budget allows. The host above, given a hang timeout below the 1.5 s it waits for
+/// RESET's banner, gives up in that second run: late, not hung, an INFO note (it was `hang in
+/// gclhost.py:read_until`, a false finding).
+#[test]
+fn a_host_that_gives_up_late_is_a_note_not_a_hang() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut r = run(python("py_timeouts_by_command.py", &["0.1"]));
+    r.timeout_hang = Duration::from_millis(1200);
+    r.budget = Duration::from_secs(10);
+    let c = campaign(r, "bad-prompt,no-prompt", 10, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, Vec::<&str>::new());
+    let late: Vec<&String> = c.notes.keys().filter(|n| n.starts_with("note: late, not hung: gave up after ")).collect();
+    assert!(late.iter().any(|n| n.ends_with("(awaiting the answer after RESET)")), "{:?}", c.notes);
+}
+
+/// A host whose first read (the prompt after its ^C) has no deadline: calibration, silencing
+/// the hand there, sees it wait past the hang timeout its other answers give, and that hang is
+/// confirmed and reported in a 30 s campaign; calibration took at most a quarter of it (it
+/// waited 30 s a point, the whole campaign, and the campaign said NO FINDING).
+#[test]
+fn a_hang_calibration_sees_is_reported_in_a_short_campaign() {
+    if !python_with("serial") {
+        return;
+    }
+    let mut r = run(python("py_sync_forever.py", &["1"]));
+    r.timeout_hang = Duration::from_secs(3);
+    r.budget = Duration::from_secs(12);
+    let opts = FuzzOptions {
+        run: r,
+        seed: 0,
+        runs: None,
+        duration: Some(Duration::from_secs(30)),
+        ok_exit_codes: vec![0, 1],
+        jobs: 1,
+        weights: Weights::default(),
+        max_planned: 3,
+        minimize: true,
+        guided: true,
+        calibrate: true,
+        shard: None,
+    };
+    let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+    let hangs: Vec<&gcl_harness::fuzz::host::Finding> =
+        c.findings.iter().filter(|f| f.verdict.kind == FindingKind::Hang).collect();
+    assert_eq!(hangs.len(), 1, "{:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
+    assert_eq!(hangs[0].verdict.signature, "hang in py_sync_forever.py:sync");
+    assert!(hangs[0].by_calibration && hangs[0].confirmed_after_ms.is_some(), "{:?}", hangs[0]);
+    let cal = c.calibration.unwrap();
+    assert_eq!(cal.share_ms, Some(7500), "a quarter of --duration");
+    let first = cal.by_kind.first().unwrap();
+    assert_eq!((first.answer, first.gave_up_ms), (1, None), "{cal:?}");
 }
 
 /// One bug, one finding: a host whose one bug is a read without a deadline also waits for

@@ -4,8 +4,8 @@ each other answer, 5 s for each RealTime feedback block. It runs RESET, the supe
 scenario and a RealTime loop; anything the hand does wrong (a cut, garbled or refused answer,
 a broken block, silence) is reported on one line and the host exits 1, in RealTime or not.
 
-GCL_TEST_TIMEOUT_SCALE (default 1) multiplies every timeout: 0.1 makes them 0.2, 1.5, 1.0 and
-0.5 s, for short test campaigns.
+argv[1] (default 1) multiplies every timeout: 0.1 makes them 0.2, 1.5, 1.0 and 0.5 s, for
+short test campaigns.
 
 Expected: no finding from `gcl fuzz host` with default options (calibration measures each
 kind of answer, the RESET banner's 15 s among them; a wait past the hang timeout is
@@ -19,7 +19,7 @@ import time
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "host_mutants"))
 import gclhost  # noqa: E402
 
-SCALE = float(os.environ.get("GCL_TEST_TIMEOUT_SCALE", "1"))
+SCALE = float(sys.argv[1]) if len(sys.argv) > 1 else 1.0
 SYNC, RESET, ANSWER, BLOCK_WAIT = 2.0 * SCALE, 15.0 * SCALE, 10.0 * SCALE, 5.0 * SCALE
 BLOCK = 9  # feedback of the loop below (seed profile): 3 x (velocity, position high, low)
 

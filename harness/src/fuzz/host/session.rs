@@ -742,7 +742,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 
 /// Most second runs made to learn more of one crash (a host that answers the same bytes
 /// differently may not crash the same way every time).
-const SECOND_RUNS: usize = 2;
+const SECOND_RUNS: usize = 4;
 
 /// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
 /// as gdb prints it, or `None` (no gdb, or no second run aborted).
