@@ -42,19 +42,23 @@ fn python(file: &str, args: &[&str]) -> Vec<String> {
 
 /// Builds `hosts/NAME.c`, or `NAME` as a path from this crate (`tests/host_mutants/x.c`).
 fn build_c(name: &str, dir: &Path) -> Option<PathBuf> {
-    let src = if name.ends_with(".c") {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(name)
-    } else {
-        hosts().join(format!("{name}.c"))
-    };
+    if name.ends_with(".c") { build(name, &[], dir) } else { build(&format!("{name}.c"), &[], dir) }
+}
+
+/// Builds `hosts/FILE`, or `FILE` as a path from this crate when it has a `/`, as C (or C++, by
+/// its `.cpp`) with `flags` into `dir`; `None` (and a line) without a compiler.
+fn build(file: &str, flags: &[&str], dir: &Path) -> Option<PathBuf> {
+    let src = if file.contains('/') { Path::new(env!("CARGO_MANIFEST_DIR")).join(file) } else { hosts().join(file) };
     let out = dir.join(src.file_stem().unwrap());
-    let ok = Command::new("cc")
+    let compiler = if file.ends_with(".cpp") { "c++" } else { "cc" };
+    let ok = Command::new(compiler)
+        .args(flags)
         .args(["-g", "-O0", "-fno-omit-frame-pointer", "-o"])
         .arg(&out)
         .arg(&src)
         .output()
         .is_ok_and(|o| o.status.success());
-    if ok || !missing("a C compiler") { ok.then_some(out) } else { None }
+    if ok || !missing(&format!("{compiler} {}", flags.join(" "))) { ok.then_some(out) } else { None }
 }
 
 fn stack_tool() -> bool {
@@ -760,4 +764,85 @@ fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
     let c = campaign(correct, "rt-block-length,rt-byte-flip,rt-extreme", 8, false);
     let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
     assert_eq!(found, Vec::<&str>::new());
+}
+
+/// An overflow through a libc call (`sscanf`) is signed by the host's own function that made
+/// it, once per function: c_sscanf_word's one bug is one finding (it was two, `... in
+/// scanf_common` and `... in ?`), c_sscanf_two's two functions two (told apart by heap or
+/// stack only, both `in scanf_common`, as Barrett's API's HandPGet and HandGet were).
+#[test]
+fn an_overflow_through_sscanf_is_one_finding_per_function_of_the_host() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str]); 2] = [
+        ("c_sscanf_word", &["crash: asan stack-buffer-overflow in first_word"]),
+        ("c_sscanf_two", &["crash: asan heap-buffer-overflow in hand_get", "crash: asan stack-buffer-overflow in hand_pget"]),
+    ];
+    for (name, want) in cases {
+        let Some(exe) = build(&format!("{name}.c"), &["-fsanitize=address"], dir.path()) else { return };
+        // One misbehaviour a run: a schedule that gives one crash gives it again (the
+        // second run that completes a report without frames makes the same one).
+        let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+        r.timeout_hang = Duration::from_millis(2500);
+        let opts = FuzzOptions {
+            run: r,
+            seed: 0,
+            runs: Some(30),
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs: 2,
+            weights: Weights::parse("overlong-line,garbage").unwrap(),
+            max_planned: 1,
+            minimize: false,
+            guided: true,
+            calibrate: false,
+            shard: None,
+        };
+        let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+        let mut crashes: Vec<&str> = c
+            .findings
+            .iter()
+            .filter(|f| f.verdict.kind == FindingKind::Crash)
+            .map(|f| f.verdict.signature.as_str())
+            .collect();
+        crashes.sort_unstable();
+        assert_eq!(crashes, want, "{name}");
+        for f in c.findings.iter().filter(|f| f.verdict.kind == FindingKind::Crash) {
+            assert!(f.verdict.message.contains("through scanf_common"), "the interceptor in the message: {f:?}");
+        }
+    }
+}
+
+/// A C++ host that lets an exception escape (a failed read after the hand hung up) is one
+/// crash named by what was thrown and where it was thrown (gdb's stack at the SIGABRT, from a
+/// second run of the same schedule), built plainly or with AddressSanitizer; what() in the
+/// message (it was `crash: SIGABRT`, with no word of the exception).
+#[test]
+fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
+    if Command::new("gdb").arg("--version").output().is_err() && missing("gdb") {
+        return;
+    }
+    for (flags, name) in [(&[][..], "plain"), (&["-fsanitize=address"][..], "asan")] {
+        let dir = tempfile::tempdir().unwrap();
+        let Some(exe) = build("cpp_uncaught_hangup.cpp", flags, dir.path()) else { return };
+        let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+        r.timeout_hang = Duration::from_secs(3);
+        let c = campaign(r, "hang-up", 6, false);
+        let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+        assert_eq!(found, vec!["crash: uncaught C++ exception std::system_error in Port::check"], "{name}");
+        let m = &c.findings[0].verdict.message;
+        assert!(m.contains("Input/output error") && m.contains("called from Port::"), "{name}: {m}");
+    }
+}
+
+/// A host that crashes in RealTime (an overflow in its acknowledgement of a control block)
+/// has one finding, the crash; the loop it was in when it died is not a second one (`left in
+/// RealTime`): a crashed host did not choose how to leave.
+#[test]
+fn a_crash_in_realtime_is_one_finding() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("c_rt_ack.c", &["-fsanitize=address"], dir.path()) else { return };
+    let r = run_once(&run(vec![exe.display().to_string(), "{port}".into()]), &Schedule::default()).unwrap();
+    let found: Vec<String> = judge(&r, &[0, 1]).into_iter().map(|v| v.signature).collect();
+    assert_eq!(found, vec!["crash: asan stack-buffer-overflow in read_ack".to_string()], "{}", r.stderr);
+    assert!(r.ended_in.starts_with("RealTime"), "{}", r.ended_in);
 }

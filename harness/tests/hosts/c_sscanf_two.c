@@ -1,10 +1,10 @@
-/* Mutant: two functions each read an answer's values with sscanf("%s") into a word too small
+/* BUG: two functions each read an answer's values with sscanf("%s") into a word too small
  * for them, as Barrett's API did in HandPGet and HandGet: hand_pget into 8 bytes on the
  * stack, hand_get into 8 bytes on the heap. Plausible bug: 'a value is at most 7 digits'.
  * Expected findings: two crashes, one per function, `asan stack-buffer-overflow in
  * hand_pget` and `asan heap-buffer-overflow in hand_get`, each once, never signed by
  * sscanf's interceptor (`scanf_common`). */
-#include "gclhost.h"
+#include "../host_mutants/gclhost.h"
 
 static char answer[8192];
 

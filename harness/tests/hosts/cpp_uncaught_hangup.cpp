@@ -1,4 +1,4 @@
-// Mutant: a C++ host whose port class throws std::system_error when a read or write fails
+// BUG: a C++ host whose port class throws std::system_error when a read or write fails
 // (the hand hung up: EIO on a pty, a reset on TCP) and that never catches it, as a ROS node
 // on Boost.Asio did (`terminate called after throwing an instance of
 // 'boost::wrapexcept<boost::system::system_error>' what(): write: Input/output error`).

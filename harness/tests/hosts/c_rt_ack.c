@@ -1,11 +1,11 @@
-/* Mutant: in RealTime, the hand's acknowledgement of a control block (its feedback block,
+/* BUG: in RealTime, the hand's acknowledgement of a control block (its feedback block,
  * '*' and 9 bytes for the loop below) is read into an 8-byte buffer, as a public C library's
  * was. The host dies in RealTime, with the hand in its loop.
  * Plausible bug: 'a block is 8 bytes' (a layout with fewer fields).
  * Expected finding: ONE crash, `asan stack-buffer-overflow in read_ack`; not a second
  * `violation: leaves-cleanly: left in RealTime` (a host that crashed did not choose how to
  * leave). */
-#include "gclhost.h"
+#include "../host_mutants/gclhost.h"
 
 #define FEEDBACK 10 /* '*' + 3 x (velocity, position high, position low) */
 

@@ -1,9 +1,9 @@
-/* Mutant: the first word of each answer line is read with sscanf("%s") into an 8-byte word
+/* BUG: the first word of each answer line is read with sscanf("%s") into an 8-byte word
  * on the stack. Plausible bug: 'a GCL value is a short number'; a longer word (an overlong or
  * garbled line) overflows it inside sscanf.
  * Expected finding: one crash, `asan stack-buffer-overflow in first_word` (the host's own
  * function; sscanf's interceptor in the message), whichever line overflows it. */
-#include "gclhost.h"
+#include "../host_mutants/gclhost.h"
 
 /* The answer to the last command up to its prompt into buf; 0, or -1 on timeout. */
 static int read_answer(int fd, char *buf, size_t cap) {
