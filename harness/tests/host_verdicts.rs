@@ -846,3 +846,62 @@ fn a_crash_in_realtime_is_one_finding() {
     assert_eq!(found, vec!["crash: asan stack-buffer-overflow in read_ack".to_string()], "{}", r.stderr);
     assert!(r.ended_in.starts_with("RealTime"), "{}", r.ended_in);
 }
+
+/// The host's timeouts calibration measured are printed one line a kind of answer and are on
+/// the report's page (its facts), with the hang timeout they gave (they were printed only).
+#[test]
+fn the_measured_host_timeouts_are_on_the_page() {
+    if !python_with("serial") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("rep");
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "host", "--profile", "seed", "--runs", "2", "--report"])
+        .arg(&rep)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .arg("--")
+        .args(python("py_timeouts_by_command.py", &["0.1"]))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("  echo, banner, prompt (answer 2, answer to RESET): gave up after 1."), "{err}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rep.join("report.json")).unwrap()).unwrap();
+    let facts: Vec<(String, String)> = report["host"]["facts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| (f[0].as_str().unwrap().to_string(), f[1].as_str().unwrap().to_string()))
+        .collect();
+    let reset = facts.iter().find(|(k, _)| k == "host timeout: echo, banner, prompt (answer to RESET)");
+    assert!(reset.is_some_and(|(_, v)| v.starts_with("gave up after 1.")), "{facts:?}");
+    assert!(facts.iter().any(|(k, v)| k == "hang timeout" && v.contains("(measured: ")), "{facts:?}");
+    let page = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    assert!(page.contains("host timeout: echo, banner, prompt (answer to RESET)"), "the page shows them");
+}
+
+/// `gcl check-host`'s progress counts the failing clauses its verdict then lists (it said
+/// "1/1 runs, 0 failing" above a FAIL), and an LF says after which line it came (it said
+/// `LF after ""`).
+#[test]
+fn check_host_counts_its_failing_clauses_and_names_the_line_an_lf_followed() {
+    if !python_with("serial") {
+        return;
+    }
+    let mutant = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/host_mutants/py_sends_lf.py");
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["check-host", "--profile", "seed", "--"])
+        .arg(deps::python())
+        .arg(&mutant)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
+    let last = stderr.lines().filter(|l| l.starts_with("gcl check-host: ")).last().unwrap_or_default();
+    assert!(last.contains("1/1 runs, 1 failing clause(s)"), "{stderr}");
+    assert!(stdout.contains("1 failing"), "{stdout}");
+    assert!(stdout.contains("LF after \"") && !stdout.contains("LF after \"\""), "{stdout}");
+}
