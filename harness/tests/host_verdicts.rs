@@ -474,7 +474,7 @@ fn a_hang_calibration_sees_is_reported_in_a_short_campaign() {
     let hangs: Vec<&gcl_harness::fuzz::host::Finding> =
         c.findings.iter().filter(|f| f.verdict.kind == FindingKind::Hang).collect();
     assert_eq!(hangs.len(), 1, "{:?}", c.findings.iter().map(|f| &f.verdict).collect::<Vec<_>>());
-    assert_eq!(hangs[0].verdict.signature, "hang in py_sync_forever.py:sync");
+    assert_eq!(hangs[0].verdict.signature, "hang in py_sync_forever.py:wait_prompt");
     assert!(hangs[0].by_calibration && hangs[0].confirmed_after_ms.is_some(), "{:?}", hangs[0]);
     let cal = c.calibration.unwrap();
     assert_eq!(cal.share_ms, Some(7500), "a quarter of --duration");
