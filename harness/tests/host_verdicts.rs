@@ -775,7 +775,10 @@ fn an_overflow_through_sscanf_is_one_finding_per_function_of_the_host() {
     let dir = tempfile::tempdir().unwrap();
     let cases: [(&str, &[&str]); 2] = [
         ("c_sscanf_word", &["crash: asan stack-buffer-overflow in first_word"]),
-        ("c_sscanf_two", &["crash: asan heap-buffer-overflow in hand_get", "crash: asan stack-buffer-overflow in hand_pget"]),
+        (
+            "c_sscanf_two",
+            &["crash: asan heap-buffer-overflow in hand_get", "crash: asan stack-buffer-overflow in hand_pget"],
+        ),
     ];
     for (name, want) in cases {
         let Some(exe) = build(&format!("{name}.c"), &["-fsanitize=address"], dir.path()) else { return };
@@ -900,7 +903,7 @@ fn check_host_counts_its_failing_clauses_and_names_the_line_an_lf_followed() {
         .unwrap();
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
-    let last = stderr.lines().filter(|l| l.starts_with("gcl check-host: ")).last().unwrap_or_default();
+    let last = stderr.lines().rfind(|l| l.starts_with("gcl check-host: ")).unwrap_or_default();
     assert!(last.contains("1/1 runs, 1 failing clause(s)"), "{stderr}");
     assert!(stdout.contains("1 failing"), "{stdout}");
     assert!(stdout.contains("LF after \"") && !stdout.contains("LF after \"\""), "{stdout}");

@@ -567,7 +567,10 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
 /// The hang timeout and the host's own timeouts, as the report's facts.
 fn timeout_facts(opts: &FuzzOptions, c: &Campaign) -> Vec<(String, String)> {
     let Some(cal) = &c.calibration else {
-        return vec![("hang timeout".into(), format!("{} (--timeout-hang)", secs(opts.run.timeout_hang.as_millis() as u64)))];
+        return vec![(
+            "hang timeout".into(),
+            format!("{} (--timeout-hang)", secs(opts.run.timeout_hang.as_millis() as u64)),
+        )];
     };
     let mut v = vec![(
         "hang timeout".into(),
@@ -585,7 +588,10 @@ fn timeout_facts(opts: &FuzzOptions, c: &Campaign) -> Vec<(String, String)> {
         v.push((format!("host timeout: {} ({})", k.kind, k.state), waited));
     }
     if !cal.unmeasured.is_empty() {
-        v.push(("host timeouts not measured".into(), format!("{} (calibration's share ran out)", cal.unmeasured.join("; "))));
+        v.push((
+            "host timeouts not measured".into(),
+            format!("{} (calibration's share ran out)", cal.unmeasured.join("; ")),
+        ));
     }
     v
 }

@@ -244,12 +244,10 @@ fn own_site(report: &str, owner_first: bool) -> Option<(String, Option<String>, 
             let caller = frames[i + 1..].iter().find(|f| !f.system()).map(|f| f.func.clone());
             Some((frames[i].func.clone(), through(i), caller))
         }
-        None => {
-            match owner {
-                Some(f) => Some((f.func, through(frames.len()), None)),
-                None => frames.first().map(|f| (f.func.clone(), None, None)),
-            }
-        }
+        None => match owner {
+            Some(f) => Some((f.func, through(frames.len()), None)),
+            None => frames.first().map(|f| (f.func.clone(), None, None)),
+        },
     }
 }
 
@@ -333,11 +331,7 @@ fn uncaught(s: &str) -> Option<CrashReport> {
     let (ty, what) = if let Some(at) = s.find(GNU) {
         let rest = &s[at + GNU.len()..];
         let ty = rest.split('\'').next().unwrap_or_default().to_string();
-        let what = rest
-            .lines()
-            .nth(1)
-            .and_then(|l| l.trim().strip_prefix("what():"))
-            .map(|w| w.trim().to_string());
+        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
         (ty, what)
     } else if let Some(at) = s.find(LLVM) {
         let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
@@ -883,7 +877,10 @@ mod tests {
         let py = "Fatal Python error: Aborted\n\nCurrent thread 0x00007f (most recent call first):\n  File \"/usr/lib/python3/dist-packages/serial/serialposix.py\", line 565 in read\n  File \"/t/hosts/py_host.py\", line 20 in read_prompt\n  File \"/t/hosts/py_host.py\", line 40 in main\n  File \"/t/hosts/py_host.py\", line 44 in <module>\n\nExtension modules: x\n";
         assert_eq!(
             faulthandler_frames(py).unwrap(),
-            ("py_host.py:read_prompt < py_host.py:main < py_host.py:<module>".into(), Some("serialposix.py:read".into()))
+            (
+                "py_host.py:read_prompt < py_host.py:main < py_host.py:<module>".into(),
+                Some("serialposix.py:read".into())
+            )
         );
         let eu = "PID 12 - process\nTID 12:\n#0  0x00007f3 __GI___libc_read - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x0000555 read_line - /tmp/c_host\n#2  0x0000556 main - /tmp/c_host\n#3  0x00007f4 __libc_start_call_main - /usr/lib/x86_64-linux-gnu/libc.so.6\n";
         assert_eq!(native_frames(eu).unwrap(), ("read_line < main".into(), Some("__GI___libc_read".into())));

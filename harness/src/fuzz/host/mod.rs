@@ -752,8 +752,10 @@ impl Shared {
             Confirmation::Hung(waited) => {
                 self.suspects.insert(key.clone(), Suspect::Confirmed);
                 f.confirmed_after_ms = Some(waited.as_millis() as u64);
-                f.verdict.message +=
-                    &format!("; confirmed: a second run waited {:.1} s and it still neither sent nor exited", waited.as_secs_f64());
+                f.verdict.message += &format!(
+                    "; confirmed: a second run waited {:.1} s and it still neither sent nor exited",
+                    waited.as_secs_f64()
+                );
                 match self.by_sig.get(&f.verdict.signature) {
                     Some(&k) => {
                         self.findings[k].hits += f.hits;
@@ -1439,7 +1441,9 @@ mod tests {
     #[test]
     fn an_uncaught_exception_is_named_by_what_was_thrown_not_by_sigabrt() {
         let mut r = ended(HostEnd::Signal(6), "awaiting the answer after FGET");
-        r.stderr = "terminate called after throwing an instance of 'std::system_error'\n  what():  read: Input/output error\n".into();
+        r.stderr =
+            "terminate called after throwing an instance of 'std::system_error'\n  what():  read: Input/output error\n"
+                .into();
         let v = judge(&r, &[0, 1]);
         assert_eq!(v.len(), 1, "{v:?}");
         assert_eq!(v[0].signature, "crash: uncaught C++ exception std::system_error");
