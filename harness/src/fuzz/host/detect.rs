@@ -257,7 +257,7 @@ pub const ASAN_SECOND_RUN: &str =
     "--- AddressSanitizer's report in a second run of the same schedule, with its fast unwinder ---";
 
 /// The kind of an AddressSanitizer report (`stack-buffer-overflow`), from its first line.
-pub fn asan_kind(report: &str) -> String {
+fn asan_kind(report: &str) -> String {
     let line = report.lines().next().unwrap_or_default();
     let after = line.split("AddressSanitizer:").nth(1).unwrap_or_default();
     after.split_whitespace().next().unwrap_or("unknown").to_string()
@@ -302,6 +302,10 @@ fn asan(s: &str) -> Option<CrashReport> {
     }
     let headline = if site == "?" {
         format!("{headline} (the sanitizer printed no frame)")
+    } else if second {
+        let mut context = context;
+        context.push("from a second run of the same schedule: the first run's report had no frame".into());
+        format!("{headline} (in {site}, {})", context.join(", "))
     } else if context.is_empty() {
         format!("{headline} (in {site})")
     } else {
@@ -817,6 +821,7 @@ mod tests {
         let r = crash_report(&completed).unwrap();
         assert_eq!(r.signature, "asan stack-buffer-overflow in first_word");
         assert!(r.headline.contains("through scanf_common < __interceptor___isoc99_vsscanf"), "{}", r.headline);
+        assert!(r.headline.contains("from a second run of the same schedule"), "{}", r.headline);
         // A report of the first run with its frames (the slow unwinder did not crash) is signed
         // by its first own frame, as ever.
         assert_eq!(crash_report(SSCANF_STACK_FAST).unwrap().signature, "asan stack-buffer-overflow in main");

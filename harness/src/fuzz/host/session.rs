@@ -717,13 +717,13 @@ enum How<'a> {
 /// [`detect::ASAN_SECOND_RUN`](super::detect::ASAN_SECOND_RUN).
 pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
     let mut r = run_inner(spec, schedule, cancel, How::Plain)?;
-    if let Some(kind) = super::detect::asan_without_frames(&r.stderr) {
-        // The same report, with frames; a host that answers the same bytes differently may
-        // need another try.
+    if super::detect::asan_without_frames(&r.stderr).is_some() {
+        // A report with frames; a host that answers the same bytes differently may need
+        // another try (and may then crash another way: the report it gives is the run's).
         for _ in 0..SECOND_RUNS {
             let Ok(second) = run_inner(spec, schedule, cancel, How::FastUnwind) else { break };
             let report = second.stderr.find("ERROR: AddressSanitizer:").map(|at| &second.stderr[at..]);
-            if let Some(report) = report.filter(|rep| super::detect::asan_kind(rep) == kind) {
+            if let Some(report) = report.filter(|rep| super::detect::asan_without_frames(rep).is_none()) {
                 r.stderr.push_str(&format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
                 break;
             }
