@@ -480,6 +480,8 @@ fn a_hang_calibration_sees_is_reported_in_a_short_campaign() {
     assert_eq!(cal.share_ms, Some(7500), "a quarter of --duration");
     let first = cal.by_kind.first().unwrap();
     assert_eq!((first.answer, first.gave_up_ms), (1, None), "{cal:?}");
+    // Its wait there was cut by that share (which the campaign says), not by the 30 s cap.
+    assert!(first.cut_by_share, "{cal:?}");
 }
 
 /// One bug, one finding: a host whose one bug is a read without a deadline also waits for

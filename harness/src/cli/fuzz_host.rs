@@ -194,7 +194,8 @@ pub struct Args {
     /// Run a bundle's schedule once and say whether its finding comes back.
     #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
     replay: Option<PathBuf>,
-    /// N hands and N hosts at once, each pair on its own line. The schedules are the same for
+    /// N hands and N hosts at once, each pair on its own line (calibration runs up to 8 at
+    /// once, or N when more). The schedules are the same for
     /// the same --seed and --jobs: run i's guidance sees runs 0..=i-N in order (a worker waits
     /// for a slow one), so with a host that answers the same bytes the same way, the findings,
     /// their first run and minimized schedules come back run for run. Wall times do not, nor
@@ -400,16 +401,27 @@ fn calibration_lines(c: &Calibration) -> Vec<String> {
     for k in &c.by_kind {
         let waited = match k.gave_up_ms {
             Some(ms) => format!("gave up after {}", secs(ms)),
+            None if k.cut_by_share => {
+                format!("waited past {} (calibration's share ran out): neither sent nor exited", secs(k.waited_past_ms))
+            }
             None => format!("waited past {}: neither sent nor exited", secs(k.waited_past_ms)),
         };
         lines.push(format!("  {} (answer {}, {}): {waited}", k.kind, k.answer, k.state));
     }
-    if !c.unmeasured.is_empty() {
+    let cut: Vec<&str> = c.by_kind.iter().filter(|k| k.cut_by_share).map(|k| k.kind.as_str()).collect();
+    if !c.unmeasured.is_empty() || !cut.is_empty() {
+        let mut what = Vec::new();
+        if !cut.is_empty() {
+            what.push(format!("waits cut short at: {}", cut.join("; ")));
+        }
+        if !c.unmeasured.is_empty() {
+            what.push(format!("not measured: {}", c.unmeasured.join("; ")));
+        }
         lines.push(format!(
-            "  calibration cut short at its share of the campaign (a 1/{CALIBRATION_SHARE} of --duration, {}): \
-             not measured: {}; the hang timeout rests on what was",
+            "  calibration cut short at its share of the campaign (1/{CALIBRATION_SHARE} of --duration, {}): {}; \
+             the campaign goes on with what it measured",
             c.share_ms.map_or("-".to_string(), secs),
-            c.unmeasured.join("; ")
+            what.join("; ")
         ));
     }
     lines

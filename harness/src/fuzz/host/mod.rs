@@ -348,6 +348,10 @@ pub struct KindWait {
     pub gave_up_ms: Option<u64>,
     /// How long calibration waited for it there, milliseconds.
     pub waited_past_ms: u64,
+    /// That wait was cut short by calibration's share of the campaign (a quarter of its
+    /// duration), not by [`CALIBRATION_CAP`] or the run budget.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cut_by_share: bool,
 }
 
 /// What calibration measured: how long the host waits for a hand that went silent, at each
@@ -430,6 +434,7 @@ pub fn calibrate(
             }
             let mut r = run.clone();
             limited(&mut r);
+            let cut_by_share = r.timeout_hang < CALIBRATION_CAP.min(run.budget);
             if r.timeout_hang < LONG_WAIT {
                 // The share has run out: this kind is left unmeasured.
                 if let Ok(mut m) = measured.lock() {
@@ -453,6 +458,7 @@ pub fn calibrate(
                         state: k.state.clone(),
                         gave_up_ms,
                         waited_past_ms,
+                        cut_by_share: cut_by_share && gave_up_ms.is_none(),
                     };
                     let silent = gave_up_ms.is_none() && !result.talking_at_end && still.is_some();
                     let suspect = silent.then_some((silence, result));
