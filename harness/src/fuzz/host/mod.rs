@@ -958,7 +958,8 @@ pub enum Confirmation {
     Late(Duration, String),
     /// It did not wait past the hang timeout this time (a note).
     NotAgain,
-    /// The campaign stopped before it could be confirmed (a note).
+    /// The campaign stopped (a signal), or its time ran out, before it could be confirmed (a
+    /// note).
     Stopped,
 }
 
@@ -971,7 +972,7 @@ impl Confirmation {
             }
             Confirmation::NotAgain => format!("note: hang not reproduced: {signature} ({state})"),
             Confirmation::Stopped | Confirmation::Hung(_) => {
-                format!("note: hang not confirmed (the campaign stopped first): {signature} ({state})")
+                format!("note: hang not confirmed (the campaign ended first): {signature} ({state})")
             }
         }
     }
@@ -1081,17 +1082,12 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             sh.learn(&r, opts);
         }
     }
-    // A confirmation waits as long as the run budget allows, within what is left of the
-    // campaign's time, but at least twice the hang timeout (once the runs have ended, no
-    // longer: a suspect found at the end does not hold the campaign up for a run budget).
+    // A confirmation waits as long as the run budget allows (a shorter wait would take a host
+    // that acts late for a hung one). Once the runs have ended, a campaign with a duration
+    // confirms for one run budget more at most: suspects still waiting then are notes.
     let runs_over = AtomicBool::new(false);
-    let window = || {
-        let least = opts.run.timeout_hang * 2;
-        if runs_over.load(Ordering::Relaxed) {
-            return least.min(opts.run.budget);
-        }
-        let left = duration.map_or(opts.run.budget, |d| d.saturating_sub(started.elapsed()));
-        opts.run.budget.min(left.max(least))
+    let out_of_time = || {
+        runs_over.load(Ordering::Relaxed) && duration.is_some_and(|d| started.elapsed() > d + opts.run.budget)
     };
     // Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
     let shrunk = |schedule: &Schedule, sig: &str, shrink: bool| -> Option<(Schedule, RunResult)> {
@@ -1158,10 +1154,10 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             drop(sh);
             let outcome = if known {
                 Confirmation::Hung(Duration::ZERO)
-            } else if stop.load(Ordering::Relaxed) {
+            } else if stop.load(Ordering::Relaxed) || out_of_time() {
                 Confirmation::Stopped
             } else {
-                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, window(), stop)
+                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, stop)
                     .unwrap_or(Confirmation::Stopped)
             };
             let new = shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
