@@ -369,7 +369,7 @@ fn host_pages_have_their_own_titles_tables_and_replay_commands() {
     let rep = dir.path().join("check");
     let o = gcl(&["check-host", "--report", rep.to_str().unwrap(), "--", &deps::python(), &host, "{port}"]);
     assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
-    let html = page(&rep.join("report.html"), "gcl check-host: python3 ");
+    let html = page(&rep.join("report.html"), &format!("gcl check-host: {} ", deps::python()));
     let text = html.root_element().text().collect::<String>();
     assert!(!text.contains("suite hash") && !text.contains("liveness"), "nothing of conform's");
     let rt = html.select(&sel("#host-realtime-blocks")).next().unwrap().text().collect::<String>();
