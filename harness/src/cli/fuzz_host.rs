@@ -273,6 +273,12 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let done = std::sync::atomic::AtomicU64::new(0);
     let found = std::sync::atomic::AtomicU64::new(0);
     let on_event = |e: Event| match e {
+        // Said as soon as measured: the hang timeout the runs use, and what was left unmeasured.
+        Event::Calibrated(c) => {
+            for line in calibration_lines(&c) {
+                progress.println(&line);
+            }
+        }
         Event::Run { .. } => {
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.update(n, found.load(Ordering::Relaxed), "");
@@ -327,11 +333,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             campaign.pass_runs,
             kinds.join("; ")
         );
-    }
-    if let Some(c) = &campaign.calibration {
-        for line in calibration_lines(c) {
-            eprintln!("{line}");
-        }
     }
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");

@@ -585,6 +585,8 @@ pub enum Event {
     },
     /// A new distinct finding (after minimization).
     Found(Box<Finding>),
+    /// Calibration ended, before the runs: what it measured.
+    Calibrated(Box<Calibration>),
 }
 
 /// A campaign's results.
@@ -1026,7 +1028,10 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     let duration = opts.campaign_duration();
     let calibration = if opts.calibrate {
         match calibrate(&opts.run, duration.map(|d| d / CALIBRATION_SHARE), opts.jobs, stop) {
-            Ok(c) => Some(c),
+            Ok(c) => {
+                on_event(Event::Calibrated(Box::new(c.clone())));
+                Some(c)
+            }
             Err(RunError::Cancelled) => {
                 return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
             }
@@ -1086,9 +1091,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     // that acts late for a hung one). Once the runs have ended, a campaign with a duration
     // confirms for one run budget more at most: suspects still waiting then are notes.
     let runs_over = AtomicBool::new(false);
-    let out_of_time = || {
-        runs_over.load(Ordering::Relaxed) && duration.is_some_and(|d| started.elapsed() > d + opts.run.budget)
-    };
+    let out_of_time =
+        || runs_over.load(Ordering::Relaxed) && duration.is_some_and(|d| started.elapsed() > d + opts.run.budget);
     // Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
     let shrunk = |schedule: &Schedule, sig: &str, shrink: bool| -> Option<(Schedule, RunResult)> {
         if !(shrink && opts.minimize && schedule.planned.len() > 1) {
