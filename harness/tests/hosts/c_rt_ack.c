@@ -23,11 +23,11 @@ static int read_ack(int fd) {
 int main(int argc, char **argv) {
     int fd = gcl_open(argc, argv);
     if (write(fd, "\x03", 1) != 1 || gcl_prompt(fd)) return 1;
-    gcl_send(fd, "HI");
+    gcl_send_line(fd, "HI");
     if (gcl_prompt(fd)) return 1;
-    gcl_send(fd, "123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0");
+    gcl_send_line(fd, "123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0");
     if (gcl_prompt(fd)) return 1;
-    gcl_send(fd, "123LOOP");
+    gcl_send_line(fd, "123LOOP");
     for (int c; (c = gcl_getc(fd, 1000)) != '*';) {
         if (c < 0) { fprintf(stderr, "host: no '*' after LOOP\n"); return 1; }
     }

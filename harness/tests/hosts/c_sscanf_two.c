@@ -12,7 +12,7 @@ static char answer[8192];
 static const char *ask(int fd, const char *line) {
     size_t n = 0;
     int c;
-    gcl_send(fd, line);
+    gcl_send_line(fd, line);
     while ((c = gcl_getc(fd, 1000)) >= 0 && n + 1 < sizeof answer) {
         answer[n++] = (char)c;
         answer[n] = 0;

@@ -30,7 +30,7 @@ int main(int argc, char **argv) {
     static char buf[8192];
     if (write(fd, "\x03", 1) != 1 || gcl_prompt(fd)) return 1;
     for (int i = 0; gcl_scenario[i]; i++) {
-        gcl_send(fd, gcl_scenario[i]);
+        gcl_send_line(fd, gcl_scenario[i]);
         if (read_answer(fd, buf, sizeof buf) != 0) { fprintf(stderr, "host: %s: no answer\n", gcl_scenario[i]); return 1; }
         if (first_word(buf) != 0) { fprintf(stderr, "host: %s: refused\n", gcl_scenario[i]); return 1; }
     }

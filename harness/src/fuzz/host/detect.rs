@@ -51,6 +51,8 @@ fn system_frame(func: &str, place: &str) -> bool {
         "sanitizer_common",
         "compiler-rt",
         "sysdeps/",
+        "stdio-common/",
+        "libio/",
         "csu/",
         "nptl/",
         "stdlib/abort",
@@ -252,9 +254,8 @@ fn own_site(report: &str, owner_first: bool) -> Option<(String, Option<String>, 
 }
 
 /// The heading under which a run's stderr gets the AddressSanitizer report of a second run of
-/// the same schedule with the fast unwinder, when the first report had no frame.
-pub const ASAN_SECOND_RUN: &str =
-    "--- AddressSanitizer's report in a second run of the same schedule, with its fast unwinder ---";
+/// the same schedule, when the first report named no frame of the host's own code.
+pub const ASAN_SECOND_RUN: &str = "--- AddressSanitizer's report in a second run of the same schedule ---";
 
 /// The kind of an AddressSanitizer report (`stack-buffer-overflow`), from its first line.
 fn asan_kind(report: &str) -> String {
@@ -263,15 +264,38 @@ fn asan_kind(report: &str) -> String {
     after.split_whitespace().next().unwrap_or("unknown").to_string()
 }
 
-/// The kind of stderr's AddressSanitizer report when its stack has no frame (its unwinder
-/// crashed on a smashed stack: `nested bug in the same thread`) and no second run completed
-/// it yet.
+/// Whether a sanitizer report names a frame of the host's own code: in its stack, or as the
+/// frame whose variable overflowed.
+fn names_own(report: &str) -> bool {
+    sanitizer_stack(report).iter().any(|f| !f.system())
+        || report
+            .find("is located in stack of thread")
+            .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+            .is_some_and(|f| !f.system())
+}
+
+/// Whether a report taken with AddressSanitizer's fast unwinder can be trusted to name the
+/// host's frame: it names the frame whose variable overflowed, or its first frame is the host's
+/// own. (The fast unwinder follows frame pointers, and skips the caller of an interceptor that
+/// keeps none: a `sscanf` into a heap buffer reads `in main`, its caller lost.)
+pub fn asan_fast_report_names_own(report: &str) -> bool {
+    let owner = report
+        .find("is located in stack of thread")
+        .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+        .is_some_and(|f| !f.system());
+    owner || sanitizer_stack(report).first().is_some_and(|f| !f.system())
+}
+
+/// The kind of stderr's AddressSanitizer report when it names no frame of the host's own code
+/// and no second run completed it yet: its stack has no frame at all (the unwinder crashed on a
+/// smashed stack: `nested bug in the same thread`), or only the system's (an overflow that ran
+/// off the end of the stack inside `sscanf`: `stack-overflow` in `__vfscanf_internal`).
 pub fn asan_without_frames(s: &str) -> Option<String> {
     let at = s.find("ERROR: AddressSanitizer:")?;
     if s.contains(ASAN_SECOND_RUN) {
         return None;
     }
-    sanitizer_stack(&s[at..]).is_empty().then(|| asan_kind(&s[at..]))
+    (!names_own(&s[at..])).then(|| asan_kind(&s[at..]))
 }
 
 fn asan(s: &str) -> Option<CrashReport> {
@@ -281,9 +305,10 @@ fn asan(s: &str) -> Option<CrashReport> {
     if let Some(cut) = rest.find(ASAN_SECOND_RUN) {
         rest = &rest[..cut];
     }
-    // A report without frames, completed by a second run's (see `asan_without_frames`).
+    // A report naming none of the host's frames, completed by a second run's (see
+    // `asan_without_frames`).
     let mut second = false;
-    if sanitizer_stack(rest).is_empty()
+    if !names_own(rest)
         && let Some(at) = s.find(ASAN_SECOND_RUN)
         && let Some(r) = s[at..].find("ERROR: AddressSanitizer:")
     {
@@ -556,8 +581,8 @@ pub fn faulthandler_frames(dump: &str) -> Option<(String, Option<String>)> {
 /// Frames of a native stack as `eu-stack -m` (`#1 0x… read_line - /path/exe`) or `gdb -batch
 /// -ex bt` (`#1  0x… in read_line (fd=3) at host.c:20`, `from /lib/…` for a library) print
 /// them, for the first thread listed: the host's own frames first, with the system frames it
-/// waits in ([`NativeFrame::system`]: libc's `read`, `syscall`, Boost.Asio's `poll_read`, the
-/// sanitizer's interceptors; see [`own_first`]).
+/// waits in (the system's: libc's `read`, `syscall`, Boost.Asio's `poll_read`, the
+/// sanitizer's interceptors).
 pub fn native_frames(text: &str) -> Option<(String, Option<String>)> {
     let mut all = Vec::new();
     let mut seen_thread = false;
@@ -822,6 +847,12 @@ mod tests {
         assert_eq!(r.signature, "asan stack-buffer-overflow in first_word");
         assert!(r.headline.contains("through scanf_common < __interceptor___isoc99_vsscanf"), "{}", r.headline);
         assert!(r.headline.contains("from a second run of the same schedule"), "{}", r.headline);
+        // A report that names only the system's frames (an overflow that ran off the stack's
+        // end inside libc's scanf) is completed the same way.
+        let off_the_end = "==11557==ERROR: AddressSanitizer: stack-overflow on address 0x7ffc71608000 (pc 0x7f219327f746 bp 0x7ffc71606fb0 sp 0x7ffc716068c0 T0)\n    #0 0x7f219327f746 in __vfscanf_internal ../stdio-common/vfscanf-internal.c:1140\n    #1 0x7f2193280361 in __isoc99_vsscanf ../libio/iovsscanf.c:32\n    #2 0x7f219347230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n";
+        assert_eq!(asan_without_frames(off_the_end).as_deref(), Some("stack-overflow"));
+        let completed = format!("{off_the_end}\n{ASAN_SECOND_RUN}\n{SSCANF_STACK_FAST}");
+        assert_eq!(crash_report(&completed).unwrap().signature, "asan stack-buffer-overflow in first_word");
         // A report of the first run with its frames (the slow unwinder did not crash) is signed
         // by its first own frame, as ever.
         assert_eq!(crash_report(SSCANF_STACK_FAST).unwrap().signature, "asan stack-buffer-overflow in main");

@@ -710,20 +710,28 @@ enum How<'a> {
 /// [`detect::ABORT_STACK`](super::detect::ABORT_STACK)), where the crash's signature finds the
 /// frame that threw.
 ///
-/// An AddressSanitizer report without a single frame (the default, slow, unwinder crashed on a
-/// stack that a `sscanf` or `strcpy` smashed: `nested bug in the same thread`) is completed the
-/// same way: a second run with the fast unwinder, which stops where the frames are smashed and
-/// goes on to name the function whose variable overflowed; its report is appended under
+/// An AddressSanitizer report that names no frame of the host's own code (the default, slow,
+/// unwinder crashed on a stack that a `sscanf` or `strcpy` smashed: `nested bug in the same
+/// thread`) is completed the same way: a second run with the fast unwinder, which stops where
+/// the frames are smashed and goes on to name the function whose variable overflowed (or, in
+/// turn, one as the host runs); its report is appended under
 /// [`detect::ASAN_SECOND_RUN`](super::detect::ASAN_SECOND_RUN).
 pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
     let mut r = run_inner(spec, schedule, cancel, How::Plain)?;
     if super::detect::asan_without_frames(&r.stderr).is_some() {
-        // A report with frames; a host that answers the same bytes differently may need
-        // another try (and may then crash another way: the report it gives is the run's).
-        for _ in 0..SECOND_RUNS {
-            let Ok(second) = run_inner(spec, schedule, cancel, How::FastUnwind) else { break };
+        // A report that names the host's frame: with the fast unwinder (which stops where the
+        // frames are smashed), else as the host runs (the fast one loses the caller of an
+        // interceptor). A host that answers the same bytes differently may need another try,
+        // and may then crash another way: the report it gives is the run's.
+        for attempt in 0..SECOND_RUNS {
+            let how = if attempt % 2 == 0 { How::FastUnwind } else { How::Plain };
+            let Ok(second) = run_inner(spec, schedule, cancel, how) else { break };
             let report = second.stderr.find("ERROR: AddressSanitizer:").map(|at| &second.stderr[at..]);
-            if let Some(report) = report.filter(|rep| super::detect::asan_without_frames(rep).is_none()) {
+            let trusted = |rep: &&str| match how {
+                How::FastUnwind => super::detect::asan_fast_report_names_own(rep),
+                _ => super::detect::asan_without_frames(rep).is_none(),
+            };
+            if let Some(report) = report.filter(trusted) {
                 r.stderr.push_str(&format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
                 break;
             }
