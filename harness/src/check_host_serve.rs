@@ -95,6 +95,7 @@ pub fn serve(
         stack: None,
         leftovers: Vec::new(),
         gave_up_after: None,
+        waits: Vec::new(),
         stderr: String::new(),
         observations: 0,
         wrong_values: Vec::new(),

@@ -68,7 +68,8 @@ fn host_run(command: Vec<String>) -> HostRun {
         // Above every timeout the hosts use (at most 2 s), so waiting out its own timeout is
         // never a hang.
         timeout_hang: Duration::from_millis(2500),
-        budget: Duration::from_secs(30),
+        // Also how long a hang's confirmation waits.
+        budget: Duration::from_secs(12),
     }
 }
 

@@ -684,6 +684,9 @@ fn failure_view(
     }
     if let Some(t) = &c.transcript {
         body.push_str(&transcript_view(t, c.diff.as_ref(), "hand said", Some(preambles)));
+        if r.kind.is_host() {
+            body.push_str(&session_blocks_view(&r.profile, t));
+        }
     }
     details(
         &format!(
@@ -726,6 +729,49 @@ fn field_table(rows: &[FieldRow]) -> String {
         );
     }
     h.push_str("</table>\n");
+    h
+}
+
+/// A host's session's RealTime blocks decoded field by field ([`diff::session_blocks`]): a
+/// table for the host's control blocks and one for the hand's feedback blocks, one row per
+/// block, one column per field of the layout (a new header row where the layout changes).
+fn session_blocks_view(profile: &str, transcript: &str) -> String {
+    let Ok(t) = gcl_transcript::parse(transcript) else { return String::new() };
+    let blocks = diff::session_blocks(profile, &t);
+    let mut h = String::new();
+    for (from_host, what) in [(true, "the host's control blocks"), (false, "the hand's feedback blocks")] {
+        let mine: Vec<&diff::SessionBlock> = blocks.iter().filter(|b| b.from_host == from_host).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let _ = writeln!(h, "<p>RealTime: {what}, decoded field by field (values as sent, high byte first):</p>");
+        let mut table = String::from("<table>\n");
+        let mut columns: Option<Vec<(Option<u8>, &str)>> = None;
+        for b in mine {
+            let cols: Vec<(Option<u8>, &str)> = b.fields.iter().map(|(m, n, _)| (*m, *n)).collect();
+            if columns.as_ref() != Some(&cols) {
+                table.push_str("<tr><th>step</th><th>header</th>");
+                for (m, n) in &cols {
+                    let motor = m.map_or("hand".to_string(), |m| format!("motor {m}"));
+                    let _ = write!(table, "<th>{} {}</th>", esc(&motor), esc(n));
+                }
+                table.push_str("</tr>\n");
+                columns = Some(cols);
+            }
+            let _ = write!(
+                table,
+                "<tr><td class=\"n\">{}</td><td><code>{}</code></td>",
+                b.step,
+                esc(&gcl_transcript::escape_text(&[b.header]))
+            );
+            for (_, _, v) in &b.fields {
+                let _ = write!(table, "<td class=\"n\">{v}</td>");
+            }
+            table.push_str("</tr>\n");
+        }
+        table.push_str("</table>\n");
+        h.push_str(&table);
+    }
     h
 }
 
@@ -1065,6 +1111,23 @@ mod tests {
         assert!(page.contains("<strong>FAIL</strong>: 1 of the 2 cases that ran fail (MUST 1)"), "{page}");
         assert!(page.contains("decision:framing-echo"));
         assert!(!page.contains("<script"), "self-contained and inert");
+    }
+
+    /// A host page shows a finding's RealTime blocks decoded field by field (they were escaped
+    /// text: `"*\x14\x00..."`), the host's control blocks and the hand's feedback apart.
+    #[test]
+    fn a_host_page_decodes_the_sessions_realtime_blocks() {
+        let mut r = crate::report::tests::sample();
+        r.kind = ReportKind::FuzzHost;
+        r.host = Some(crate::report::HostDetails { command: vec!["host".into()], runs: 1, ..Default::default() });
+        r.cases[1].diff = None;
+        r.cases[1].transcript = Some(diff::tests::SESSION.into());
+        let page = to_html(&r);
+        assert!(page.contains("RealTime: the host's control blocks, decoded field by field"), "{page}");
+        assert!(page.contains("RealTime: the hand's feedback blocks, decoded field by field"), "{page}");
+        assert!(page.contains("<th>motor 2 LFAP</th>"), "{page}");
+        assert!(page.contains("<td class=\"n\">1028</td>"), "{page}");
+        assert!(page.contains("<th>motor 1 LCV</th>"), "{page}");
     }
 
     #[test]
