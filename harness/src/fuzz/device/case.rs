@@ -35,8 +35,12 @@ pub struct BuiltCase {
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
     /// The unmutated model's run of the transcript, each answer byte tagged with the step it
-    /// answers (see [`crate::align`]).
+    /// answers (see [`crate::align`]). Empty until [`BuiltCase::check`] made it (a case built
+    /// with [`build_case_sending`] and friends is checked).
     pub model: crate::align::ModelRun,
+    /// Whether the transcript was checked to pass on the model as a fresh hand meets it, and
+    /// `model` holds that run.
+    pub checked: bool,
     /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
     /// (`None` for a block outside the loop, which sends nothing).
     pub block_bytes: Vec<Option<Vec<u8>>>,
@@ -235,10 +239,63 @@ pub fn build_case_sending(
     build_case_on(p, &DeviceConfig::default(), actions, id, title, wide, home, blocks)
 }
 
+/// [`build_case_sending`] without its last check, the model's own replay of the transcript
+/// ([`BuiltCase::check`]): a campaign in this process runs that check only for a case the hand
+/// fails, where a signature needs its tagged run (a case the hand passes finds nothing, and the
+/// replay was a fifth of a case's cost). A case the model would not pass is then no finding.
+pub fn build_case_unchecked(
+    p: &Arc<Profile>,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+) -> Result<BuiltCase, NotACase> {
+    assemble(p, &DeviceConfig::default(), actions, id, title, wide, home, &[])
+}
+
+impl BuiltCase {
+    /// The last check of a case, deferred by [`build_case_unchecked`]: the transcript passes on
+    /// the unmutated model as a fresh hand meets it (an answer that runs past its step, or timing
+    /// the recorder's shadow does not follow, is no case), and that run, tagged, is kept.
+    pub fn check(&mut self, p: &Arc<Profile>) -> Result<(), NotACase> {
+        self.check_on(p, &DeviceConfig::default())
+    }
+
+    fn check_on(&mut self, p: &Arc<Profile>, config: &DeviceConfig) -> Result<(), NotACase> {
+        if self.checked {
+            return Ok(());
+        }
+        let mut run_config = config.clone();
+        run_config.scenario.objects = self.transcript.header.objects();
+        self.model =
+            crate::align::model_run_on(p, run_config, &self.transcript).map_err(|out| NotACase(out.summary()))?;
+        self.checked = true;
+        Ok(())
+    }
+}
+
 /// [`build_case_sending`] with a model built from `config`, not the profile's own hand: what a
 /// hand with that difference would answer, shaped as any case (see `variant`).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build_case_on(
+    p: &Arc<Profile>,
+    config: &DeviceConfig,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+    blocks: &[Option<Vec<u8>>],
+) -> Result<BuiltCase, NotACase> {
+    let mut b = assemble(p, config, actions, id, title, wide, home, blocks)?;
+    b.check_on(p, config)?;
+    Ok(b)
+}
+
+/// [`build_case_on`] but its last check ([`BuiltCase::check`]).
+#[allow(clippy::too_many_arguments)]
+fn assemble(
     p: &Arc<Profile>,
     config: &DeviceConfig,
     actions: &[HostAction],
@@ -594,16 +651,12 @@ pub(super) fn build_case_on(
             }
         }
     }
-    // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
-    // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let mut run_config = config.clone();
-    run_config.scenario.objects = transcript.header.objects();
-    let model = crate::align::model_run_on(p, run_config, &transcript).map_err(|out| NotACase(out.summary()))?;
     Ok(BuiltCase {
         transcript,
         features: walk.features,
         eeprom_writes,
-        model,
+        model: crate::align::ModelRun::default(),
+        checked: false,
         block_bytes,
         step_decisions,
         action_steps,

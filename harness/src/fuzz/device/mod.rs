@@ -549,6 +549,19 @@ impl Hand<'_> {
         }
     }
 
+    /// The longest wait for the rest of a line the hand parted in (see
+    /// [`complete_parting_line`]): the profile's longest line twice over at the line's rate, and
+    /// 20 ms for the hand to write it; 50 ms off a serial line.
+    fn line_wait(&self) -> Duration {
+        match &self.opts.target {
+            Target::Serial { baud, .. } => {
+                let bytes = 2.0 * self.opts.profile.framing.max_line as f64;
+                Duration::from_secs_f64(10.0 * bytes / f64::from((*baud).max(1))) + Duration::from_millis(20)
+            }
+            _ => Duration::from_millis(50),
+        }
+    }
+
     /// Whether a quick run comes next.
     fn quick(&self, thorough: bool) -> bool {
         !matches!(self.opts.target, Target::Sim { .. }) && !thorough && !self.new && !self.dirty && self.link.is_some()
@@ -596,14 +609,54 @@ impl Hand<'_> {
             ro.drain_quiet = Duration::ZERO;
             ro.trailing = Duration::ZERO;
         }
+        let line_wait = self.line_wait();
         let link = self.link()?;
-        let out = replay(t, link.as_mut(), &ro);
+        let mut out = replay(t, link.as_mut(), &ro);
+        if outside {
+            complete_parting_line(link.as_mut(), &mut out, &p, line_wait);
+        }
         self.new = false;
         self.dirty = !out.is_pass();
         if matches!(out, ReplayOutcome::Disconnected(_)) {
             self.link = None;
         }
         Ok(out)
+    }
+}
+
+/// After a mismatch on a hand outside this process, reads on until the line the hand parted in
+/// has ended (its line ending or the prompt after the parting byte), at most `wait`, and adds
+/// what came to the failing step's answer. The replayer stops reading at the parting byte, and
+/// on a serial line the rest of the line is still on its way then: `1 1` of `1 1 0 1` reads as a
+/// wrong value, where the whole line shows the values in another order (the signature and the
+/// explanations judge the line the hand sent, as they do in process, where an answer comes
+/// whole). Bytes past the line's end that came with it are kept too; nothing else is read.
+fn complete_parting_line(link: &mut dyn Link, out: &mut ReplayOutcome, p: &Profile, wait: Duration) {
+    let ReplayOutcome::Mismatch(m) = out else { return };
+    if m.trailing {
+        return;
+    }
+    let Some(e) = m.exchange.last_mut() else { return };
+    let eol = p.framing.line_ending.as_bytes();
+    let ends = |r: &[u8]| {
+        let rest = r.get(m.offset..).unwrap_or_default();
+        eol.is_empty() || rest.windows(eol.len()).any(|w| w == eol)
+    };
+    let ceiling = m.offset.saturating_add(crate::replay::ceiling_for(eol.len() + p.framing.max_line));
+    let until = link.elapsed() + wait;
+    let before = e.received.len();
+    while !ends(&e.received) && e.received.len() < ceiling {
+        let left = until.saturating_sub(link.elapsed());
+        if left.is_zero() {
+            break;
+        }
+        match link.recv(&mut e.received, left) {
+            Ok(0) | Err(_) => break,
+            Ok(_) => {}
+        }
+    }
+    if e.received.len() > before {
+        m.actual = gcl_transcript::matcher::show(e.received.get(m.offset..).unwrap_or_default(), m.form);
     }
 }
 
@@ -1119,6 +1172,23 @@ fn build_for_sending(
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
     let b = case::build_case_sending(&opts.profile, actions, id, title, opts.wide(), opts.home(), blocks)?;
+    admitted(opts, b)
+}
+
+/// [`build_for`] without the model's own replay of the case ([`case::build_case_unchecked`]):
+/// for the campaign's draws in this process, checked only when the hand fails the case.
+fn build_unchecked_for(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+) -> Result<BuiltCase, NotACase> {
+    let b = case::build_case_unchecked(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    admitted(opts, b)
+}
+
+/// A built case unless the run refuses it (see [`build_for`]).
+fn admitted(opts: &FuzzOptions, b: BuiltCase) -> Result<BuiltCase, NotACase> {
     // A case resting on a decision the hand took differently judges nothing of it.
     let rests: Vec<String> = b
         .transcript
@@ -1438,7 +1508,14 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let Ok(built) = build_for(opts, &actions, "fuzz", "a generated case") else {
+        // (in this process the model's own replay of the case waits for a failure: see
+        // [`case::build_case_unchecked`])
+        let built = if opts.wide() {
+            build_for(opts, &actions, "fuzz", "a generated case")
+        } else {
+            build_unchecked_for(opts, &actions, "fuzz", "a generated case")
+        };
+        let Ok(mut built) = built else {
             lock().dropped += 1;
             continue;
         };
@@ -1474,6 +1551,12 @@ fn worker(
             }
         }
         let mut outcome = hand.run(&built.transcript, false)?;
+        if !outcome.is_pass() && built.check(&p).is_err() {
+            // No case after all: the model fails it too.
+            tickets.fetch_sub(1, Ordering::SeqCst);
+            lock().dropped += 1;
+            continue;
+        }
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
         let known = if outcome.is_pass() { Vec::new() } else { lock().explained.clone() };
         let mut sig = judged(opts, &mut hand, &actions, &built, &outcome, &known)?;
