@@ -95,3 +95,61 @@ fn a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does() {
     let sig = gcl_harness::fuzz::device::judge_once(&o, &actions).unwrap().unwrap().expect("the hand moves to 1000");
     assert_eq!(sig.explanation, "FSET refused but applied in part", "{sig}");
 }
+
+/// The independent hand with `args` (`--bug NAME`, `--decide NAME`), over exec.
+fn hand_options(py: &str, args: &[&str]) -> FuzzOptions {
+    let mut argv = vec![py.to_string(), hand().display().to_string()];
+    argv.extend(args.iter().map(|a| a.to_string()));
+    let mut o = FuzzOptions::new(Target::Exec { argv }, Profile::builtin("seed").unwrap());
+    o.seed = 1;
+    o
+}
+
+fn line(l: &str) -> gcl_harness::fuzz::device::action::HostAction {
+    gcl_harness::fuzz::device::action::HostAction::Line(l.to_string())
+}
+
+fn block(header: u8, values: &[i64], pause_ms: u64) -> gcl_harness::fuzz::device::action::HostAction {
+    gcl_harness::fuzz::device::action::HostAction::Block { header, values: values.to_vec(), extra: 0, pause_ms }
+}
+
+/// Issue 31, "a known deviation hides a different bug on the same field". The independent hand
+/// decides where LFDP counts from otherwise than the model (`--decide lfdp-counts-from-home`:
+/// from home, not from where LOOP finds the motor; the seed names only "the last reported
+/// position"), so its baseline has `value at RealTime block (LFDP)`. LFDPC ignored, planted in
+/// the same hand, shows on the same field; it was that key, known, and hid behind the
+/// baseline. It is named by the parameter whose value made the difference, `LFDPC set without
+/// effect` (a model that holds it, the case built anew on it and answered so by the hand), so
+/// it is new.
+#[test]
+fn a_known_deviation_on_a_field_does_not_hide_another_bug_on_it() {
+    let Some(py) = deps::python_with(&[]) else { return };
+    let judge = |args: &[&str], actions: &[gcl_harness::fuzz::device::action::HostAction]| {
+        gcl_harness::fuzz::device::judge_once(&hand_options(&py, args), actions).unwrap().unwrap()
+    };
+    let decided = ["--decide", "lfdp-counts-from-home"];
+    // The deviation: motor 1 moved before LOOP; the model's first LFDP counts from where LOOP
+    // found it (0), this hand's from home (clipped at 127).
+    let deviation = [line("1FSET LFDP 1 LFS 0 LFAP 0 LFV 0"), line("1M 1000"), line("1LOOP"), block(b'A', &[], 0)];
+    let known = judge(&decided, &deviation).expect("the hand counts LFDP from home");
+    assert_eq!(known.key(), "value at RealTime block LFDP", "{known}");
+    let mut baseline = gcl_harness::fuzz::device::Baseline::default();
+    baseline.keys.insert(known.key());
+    // LFDPC: two motors at one velocity, motor 2 dividing its movement by 2; LOOP right after
+    // HI, where both ways of counting agree.
+    let lfdpc = [
+        line("12FSET LCV 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 1"),
+        line("2FSET LFDPC 2"),
+        line("12LOOP"),
+        block(b'C', &[5, 5], 0),
+        block(b'C', &[5, 5], 0),
+        block(b'A', &[], 20),
+        block(b'A', &[], 20),
+    ];
+    assert_eq!(judge(&decided, &lfdpc), None, "without the plant the hand passes the LFDPC case");
+    let planted = [decided[0], decided[1], "--bug", "lfdpc-ignored"];
+    let sig = judge(&planted, &lfdpc).expect("the planted bug shows");
+    assert_eq!(sig.explanation, "LFDPC set without effect", "{sig}");
+    let id = gcl_harness::fuzz::device::finding_id(&sig);
+    assert_eq!(baseline.explains("seed", &id, &sig), None, "new against the baseline: {sig}");
+}

@@ -325,6 +325,16 @@ impl Device {
         self.out.clear();
     }
 
+    /// The value the hand's behaviour reads for parameter `id` of `motor` (1..=4; any for a
+    /// global): what is stored, or the factory value of a parameter stored but without effect
+    /// (a fault, or [`DeviceConfig::without_effect`]). [`Device::params`] is what reads give.
+    pub fn effective(&self, id: ParamId, motor: u8) -> i64 {
+        match Motor::new(motor.clamp(1, 4)) {
+            Some(m) => self.behaviour(id, m),
+            None => self.params.get(&self.profile, id, motor),
+        }
+    }
+
     /// The simulated time the hand has reached.
     pub fn now(&self) -> Duration {
         Duration::from_nanos(self.now_ns)

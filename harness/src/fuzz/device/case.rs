@@ -236,7 +236,17 @@ pub fn build_case_sending(
     home: bool,
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
-    build_case_on(p, &DeviceConfig::default(), actions, id, title, wide, home, blocks)
+    build_case_on(p, (&DeviceConfig::default(), Model::Profile), actions, id, title, wide, home, blocks)
+}
+
+/// The model a case is built on: the profile's hand as the fuzzer judges it, or one that holds
+/// a hypothesis about the hand (see `variant`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Model {
+    /// The profile's hand.
+    Profile,
+    /// A hypothesis about the hand's, to be asked of the hand.
+    Hypothesis,
 }
 
 /// [`build_case_sending`] without its last check, the model's own replay of the transcript
@@ -251,7 +261,7 @@ pub fn build_case_unchecked(
     wide: bool,
     home: bool,
 ) -> Result<BuiltCase, NotACase> {
-    assemble(p, &DeviceConfig::default(), actions, id, title, wide, home, &[])
+    assemble(p, (&DeviceConfig::default(), Model::Profile), actions, id, title, wide, home, &[])
 }
 
 impl BuiltCase {
@@ -280,7 +290,7 @@ impl BuiltCase {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build_case_on(
     p: &Arc<Profile>,
-    config: &DeviceConfig,
+    on: (&DeviceConfig, Model),
     actions: &[HostAction],
     id: &str,
     title: &str,
@@ -288,8 +298,8 @@ pub(super) fn build_case_on(
     home: bool,
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
-    let mut b = assemble(p, config, actions, id, title, wide, home, blocks)?;
-    b.check_on(p, config)?;
+    let mut b = assemble(p, on, actions, id, title, wide, home, blocks)?;
+    b.check_on(p, on.0)?;
     Ok(b)
 }
 
@@ -297,7 +307,7 @@ pub(super) fn build_case_on(
 #[allow(clippy::too_many_arguments)]
 fn assemble(
     p: &Arc<Profile>,
-    config: &DeviceConfig,
+    (config, model): (&DeviceConfig, Model),
     actions: &[HostAction],
     id: &str,
     title: &str,
@@ -360,7 +370,7 @@ fn assemble(
                 // decide, not the model's fresh start: such a case is not one the model can judge.
                 if wide
                     && cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
-                    && p.role(Role::OverTemperature).is_some_and(|id| walk.shadow.params().get(p, id, 1) != 0)
+                    && p.role(Role::OverTemperature).is_some_and(|id| walk.shadow.effective(id, 1) != 0)
                 {
                     return Err(NotACase(
                         "a motion with the over-temperature limit set, on a hand outside this process".into(),
@@ -601,7 +611,7 @@ fn assemble(
             }
         }
     }
-    let mut relations = Relations::default();
+    let mut relations = Relations::new(model == Model::Hypothesis);
     for (i, kind) in kinds {
         let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
         if wide && let Some((_, note)) = notes.iter().find(|(at, _)| *at == i) {
@@ -709,7 +719,7 @@ fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<Fi
 fn moves_all(p: &Profile, c: &gcl_model::Command, shadow: &Device) -> bool {
     match c.prefix {
         Some(set) => (1..=4u8).all(|m| set.contains(m)),
-        None => p.role(Role::Enabled).is_none_or(|id| (1..=4u8).all(|m| shadow.params().get(p, id, m) != 0)),
+        None => p.role(Role::Enabled).is_none_or(|id| (1..=4u8).all(|m| shadow.effective(id, m) != 0)),
     }
 }
 

@@ -18,20 +18,26 @@
 //! Byte for byte only where the hand's answers are exact (the in-process sim, whose noise and
 //! clock are the model's). A hand outside this process answers with its own noise and timing:
 //! there the case is built anew from the same actions on the model holding the hypothesis,
-//! shaped as any case for such a hand (positions within their bands), and the hand's answers
-//! up to the failing step must be what that case expects, the failing step's otherwise than
-//! the case did (`fits_within`). Afresh there only from a value read back, as the rewrites.
+//! shaped as any case for such a hand (positions within their bands, the ratios of
+//! `super::relate` from the coefficients that model acts on), and the hand's answers up to the
+//! failing step must be what that case expects, the failing step's otherwise than the case
+//! did, and the profile's model's not (`fits_within`: a hypothesis whose case judges no closer
+//! than the case tells nothing). A new one is then asked of the hand: it answers the
+//! hypothesis's case as it expects up to the step where it parted (`super::confirms`). The
+//! same failures as in process (a value, a block, an answer cut short) are explained so. A
+//! hypothesis that changes the control block's size (a control flag without effect) is not
+//! expressible there: its case encodes other bytes than the hand was sent.
 
 use std::sync::Arc;
 
 use gcl_model::Profile;
 use gcl_model::grammar::{Args, Line, parse_line};
 use gcl_model::spec::{CommandKind, ParamId};
-use gcl_transcript::Form;
+use gcl_transcript::{Form, Transcript};
 
 use super::action::HostAction;
 use super::case::BuiltCase;
-use super::{Fresh, FuzzOptions};
+use super::{Fresh, FuzzError, FuzzOptions, Hand};
 use crate::replay::{ReplayOutcome, replay};
 
 /// One hypothesis: what it says, and the model that holds it (the profile, or a patch of it,
@@ -159,40 +165,46 @@ fn sent_lines(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Vec<u8>
 /// whatever the bug), outside it only from a value read back (`Fresh::rewrite`).
 pub(super) fn explains(
     opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
     actions: &[HostAction],
     built: &BuiltCase,
     out: &ReplayOutcome,
     known: &[String],
     fresh: Fresh,
-) -> Option<String> {
-    let failed = out.failed_step()?;
+) -> Result<Option<String>, FuzzError> {
+    let Some(failed) = out.failed_step() else { return Ok(None) };
     let said = out.exchange().iter().find(|e| e.step == failed).is_some_and(|e| !e.received.is_empty());
-    // (outside this process, afresh only where a rewrite would look: a value read back)
-    let fresh =
-        if opts.wide() { fresh.rewrite } else { fresh.exact && (matches!(out, ReplayOutcome::Mismatch(_)) || said) };
+    let fresh = fresh.exact && (matches!(out, ReplayOutcome::Mismatch(_)) || said);
     let mut candidates: Vec<Variant> =
         variants(opts, built, failed).into_iter().filter(|v| fresh || known.contains(&v.says)).collect();
     candidates.sort_by_key(|v| !known.contains(&v.says));
     let mut found = None;
     for v in candidates {
+        let known_one = known.contains(&v.says);
         let fits = if opts.wide() {
-            fits_within(opts, actions, built, out, v.profile, &v.config)
+            match fits_within(opts, actions, built, out, v.profile.clone(), &v.config) {
+                // A new one is asked of the hand: the case built on the hypothesis's model,
+                // replayed, is answered as it expects up to the step where the hand parted.
+                Some(t) if !known_one => super::confirms(opts, &hand.run(&t, true)?, out),
+                Some(_) => true,
+                None => false,
+            }
         } else {
             answers_alike(built, out, v.profile, v.config)
         };
         if !fits {
             continue;
         }
-        if known.contains(&v.says) {
-            return Some(v.says);
+        if known_one {
+            return Ok(Some(v.says));
         }
         // (two hypotheses that explain the case alike tell neither)
         if found.is_some() {
-            return None;
+            return Ok(None);
         }
         found = Some(v.says);
     }
-    found
+    Ok(found)
 }
 
 /// In process: the model built from `config` answers every step of the failing transcript up
@@ -212,9 +224,12 @@ fn answers_alike(
 
 /// Outside this process: the case built anew from the same actions on the model from
 /// `config`, shaped as any case for such a hand (its bands for noise and timing), expects what
-/// the hand answered at every step up to the failing one, and there expects otherwise than the
-/// case did. The hand's answers are matched as one stream (the variant's answers may end a
-/// step earlier or later than the case's did).
+/// the hand answered at every step up to the failing one, there expects otherwise than the
+/// case did, and does not expect what the profile's model answered: a hypothesis whose case
+/// judges the hand's answers no closer than the case did (a relation it cannot make, a band
+/// wide enough for both) tells nothing of the hand. The hand's answers are matched as one
+/// stream (the variant's answers may end a step earlier or later than the case's did).
+/// Returns the hypothesis's case, for the hand to answer (see [`explains`]).
 fn fits_within(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -222,27 +237,32 @@ fn fits_within(
     out: &ReplayOutcome,
     profile: Arc<Profile>,
     config: &gcl_model::DeviceConfig,
-) -> bool {
-    let Some(failed) = out.failed_step() else { return false };
-    let Ok(v) =
-        super::case::build_case_on(&profile, config, actions, "fuzz", "variant", true, opts.home(), &built.block_bytes)
-    else {
-        return false;
-    };
+) -> Option<Transcript> {
+    let failed = out.failed_step()?;
+    let on = (config, super::case::Model::Hypothesis);
+    let v = super::case::build_case_on(&profile, on, actions, "fuzz", "variant", true, opts.home(), &built.block_bytes)
+        .ok()?;
     let (old, new) = (&built.transcript.steps, &v.transcript.steps);
     let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
     if new.len() != old.len()
         || (0..=failed).any(|s| send(&old[s]) != send(&new[s]))
         || new[failed].expect == old[failed].expect
     {
-        return false;
+        return None;
     }
-    let Some(stream) = (0..=failed)
+    let stream = (0..=failed)
         .map(|s| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone()))
-        .collect::<Option<Vec<Vec<u8>>>>()
-    else {
-        return false;
-    };
+        .collect::<Option<Vec<Vec<u8>>>>()?;
     let judges: Vec<&gcl_transcript::Step> = new.iter().collect();
-    super::follows(&judges, &stream.concat(), failed + 1, matches!(out, ReplayOutcome::Mismatch(_)))
+    let none = gcl_transcript::Captures::new();
+    let short = matches!(out, ReplayOutcome::Mismatch(_));
+    // (what the profile's model answered up to the end of the failing step, by its tags)
+    let run = &built.model;
+    if run.tags.len() != run.stream.len() || run.tags.is_empty() {
+        return None;
+    }
+    let model: Vec<u8> =
+        run.stream.iter().zip(&run.tags).take_while(|(_, t)| **t as usize <= failed).map(|(b, _)| *b).collect();
+    let tells = !super::follows(&judges, &model, failed + 1, false, &none);
+    (tells && super::follows(&judges, &stream.concat(), failed + 1, short, &none)).then_some(v.transcript)
 }
