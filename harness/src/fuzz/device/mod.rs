@@ -728,9 +728,8 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
 ///   explanation holds only if the hand, replayed the whole case, answers as the rewrite does;
 /// - on a hand outside this process, a value or a block's answer (or an answer cut short) that
 ///   a model holding the hypothesis expects where the profile's model does not
-///   ([`variant::explains`]); any new explanation there holds only if the hand answers the
-///   hypothesis's own case as it expects up to the step where it parted ([`confirms`]): a
-///   few cases per finding.
+///   ([`variant::explains`]), which holds only if the hand answers the hypothesis's own case
+///   as it expects up to the step where it parted ([`confirms`]): a few cases per finding.
 ///
 /// Not from a status: its key is already its bits, whatever command shows them, and a set
 /// without effect would explain a status never reported as well as the bug that never reports
@@ -750,13 +749,11 @@ fn judged(
     let fresh = Fresh { rewrite, exact: rewrite || block || sig.kind == "missing" };
     let link = sig.kind == "link";
     if !link && let Some(e) = explain(opts, hand, actions, built, out, known, fresh, &sig.command)? {
-        // A rewrite that fits up to where the hand parted may fit by chance (a block of
-        // another layout of the same size, values within the bands): a new explanation from a
-        // block in process holds only if the hand answers the whole case as the rewrite does;
-        // outside this process (any new one there: its bands are a hand's, not the model's) if
-        // it answers the rewrite's case as it expects up to the step where it parted, so a
-        // later difference of another cause does not hide it.
-        let check = !known.contains(&e.says) && !e.exact && (block || opts.wide());
+        // A block's answer that a rewrite fits up to where the hand parted may fit by chance
+        // (another layout of the same size, values within the bands): a new explanation from
+        // one holds only if the hand answers the whole case as the rewrite does. (Outside this
+        // process a rewrite explains afresh only a value read back.)
+        let check = block && !known.contains(&e.says) && !e.exact;
         let confirmed = match (&e.whole, check) {
             (_, false) => true,
             (Some(t), true) => confirms(opts, &hand.run(t, true)?, out),
