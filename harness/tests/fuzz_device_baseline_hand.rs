@@ -153,3 +153,41 @@ fn a_known_deviation_on_a_field_does_not_hide_another_bug_on_it() {
     let id = gcl_harness::fuzz::device::finding_id(&sig);
     assert_eq!(baseline.explains("seed", &id, &sig), None, "new against the baseline: {sig}");
 }
+
+/// Issue 31, "a case that rests on a second clause hides the first": rt-lcvc-scaling reads
+/// LCVC's effect through LFV, which another clause defines. On the independent hand with its
+/// feedback velocity broken (`--bug lfv-zero`) that case fails already, so an LCVC ignored on
+/// top of it (`--bug lcvc-ignored`) added no failure. Its behavioural twin, rt-lcvc-positions,
+/// reads where the motors went (FGET P after the loop): it passes the hand with LFV broken,
+/// and fails once LCVC is ignored too. The clean hand passes both.
+#[test]
+fn a_hand_whose_feedback_velocity_is_broken_still_fails_a_case_when_it_ignores_lcvc() {
+    use gcl_harness::conform::{self, ConformOptions};
+    use std::collections::BTreeSet;
+    let Some(py) = deps::python_with(&[]) else { return };
+    let p = Profile::builtin("seed").unwrap();
+    let cases = gcl_harness::suite::generate(&p).unwrap();
+    let failing = |bugs: &[&str]| -> BTreeSet<String> {
+        let mut argv = vec![py.clone(), hand().display().to_string()];
+        for b in bugs {
+            argv.extend(["--bug".to_string(), b.to_string()]);
+        }
+        let opts = ConformOptions {
+            target: Target::Exec { argv },
+            open: Default::default(),
+            only: vec!["rt-lcvc-*".into()],
+            ..ConformOptions::in_process(p.clone(), vec![])
+        };
+        let r = conform::run(&cases, &opts, None, &mut |_, _, _| {}).unwrap().report;
+        let ran: BTreeSet<String> = r.cases.iter().map(|c| c.id.clone()).collect();
+        assert!(ran.contains("rt-lcvc-scaling") && ran.contains("rt-lcvc-positions"), "{bugs:?}: ran {ran:?}");
+        r.cases.iter().filter(|c| c.verdict.fails_run()).map(|c| c.id.clone()).collect()
+    };
+    assert_eq!(failing(&[]), BTreeSet::new(), "the clean hand scales by LCVC");
+    let lfv_broken = failing(&["lfv-zero"]);
+    assert!(lfv_broken.contains("rt-lcvc-scaling"), "LFV reads 0: the case that reads LCVC through it fails");
+    assert!(!lfv_broken.contains("rt-lcvc-positions"), "the twin does not read LFV");
+    let both = failing(&["lfv-zero", "lcvc-ignored"]);
+    let added: Vec<&String> = both.difference(&lfv_broken).collect();
+    assert_eq!(added, vec!["rt-lcvc-positions"], "LCVC ignored on top of a broken LFV fails a case of its own");
+}
