@@ -596,10 +596,12 @@ fn assemble(
     {
         def.requires.push(Requirement::AbortTiming);
     }
-    if wide {
+    if wide && model == Model::Profile {
         // A feedback block inside an answer shaped as text or bytes (a block with bytes too
         // many, the answer to ^C mid-block) holds strain and positions exactly: such a case
-        // would judge a real hand by the model's noise.
+        // would judge a real hand by the model's noise. (A hypothesis's case may: judged
+        // exactly it is only the harder to answer, and a hand that does not answer it as it
+        // expects is not named by it.)
         let block_steps: BTreeSet<usize> =
             kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
         for (i, c) in caps.iter().enumerate() {
