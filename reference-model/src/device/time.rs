@@ -176,12 +176,12 @@ impl Device {
         for m in Motor::ALL {
             let before = self.motors[m].pos;
             let motor = &mut self.motors[m];
-            let term = motor.step(self.limits[m]);
+            let term = motor.step(&self.limits[m]);
             let moved = (motor.pos - before).abs();
             if moved > 0.0 {
                 moving += 1;
                 let odometer = m.pick_mut(&mut self.nv.odometer_counts);
-                *odometer = odometer.saturating_add(moved.round() as u64);
+                *odometer = odometer.saturating_add(physics::round(moved) as u64);
             }
             if let Some(t) = term {
                 self.terminate_motor(m, t);
