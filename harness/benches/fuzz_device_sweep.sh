@@ -5,8 +5,9 @@
 # 38400 (`gcl sim --pty --time fast --baud 38400 --fault F`, fuzzed as `serial:PATH?baud=38400`),
 # both with `--no abort-timing` (fast time ends a motion at once) and findings unminimized.
 #
-#   harness/benches/fuzz_device_sweep.sh [exec|pty] [OUT] [FAULT...]
+#   harness/benches/fuzz_device_sweep.sh [sim|exec|pty] [OUT] [FAULT...]
 #
+# `sim` is the same sweep in process (RUNS_SIM cases, default 2000), as issue 19 measured it.
 # GCL (default target/release/gcl), RUNS (exec: cases per campaign, default 300), SECONDS_PTY
 # (pty: seconds per campaign, default 20), PROFILE (default bh8-262) and SEED (default 1) set
 # the rest. Each campaign writes its report into OUT/<way>/<fault>/ (fuzz-device.json) and one
@@ -20,6 +21,7 @@ shift 2 2>/dev/null || shift $#
 GCL=${GCL:-target/release/gcl}
 GCL=$(realpath "$GCL")
 RUNS=${RUNS:-300}
+RUNS_SIM=${RUNS_SIM:-2000}
 SECONDS_PTY=${SECONDS_PTY:-20}
 PROFILE=${PROFILE:-bh8-262}
 SEED=${SEED:-1}
@@ -37,6 +39,10 @@ for f in "${faults[@]}"; do
     rm -rf "$dir"
     mkdir -p "$dir"
     case "$way" in
+    sim)
+        "$GCL" fuzz device --target "sim:$PROFILE" --fault "$f" --seed "$SEED" --runs "$RUNS_SIM" --no-minimize -q \
+            --report "$dir" >"$dir/console.txt" 2>&1
+        ;;
     exec)
         "$GCL" fuzz device --target "exec:$GCL sim --stdio --profile $PROFILE --fault $f" --profile "$PROFILE" \
             --no abort-timing --seed "$SEED" --runs "$RUNS" --no-minimize -q --report "$dir" >"$dir/console.txt" 2>&1
@@ -55,7 +61,7 @@ for f in "${faults[@]}"; do
         wait "$sim" 2>/dev/null
         ;;
     *)
-        echo "way: exec or pty" >&2
+        echo "way: sim, exec or pty" >&2
         exit 2
         ;;
     esac

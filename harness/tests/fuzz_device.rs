@@ -651,7 +651,7 @@ fn the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target() {
 #[test]
 fn a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it() {
     for (fault, says) in [
-        (Fault::PartialSetApplied, "FSET refused but applied in part"),
+        (Fault::PartialSetApplied, "set refused but applied in part"),
         (Fault::ResetKeepsRam, "RESET keeps the values set"),
         (Fault::LsgIgnored, "LSG set without effect"),
         (Fault::LctIgnored, "LCT set without effect"),

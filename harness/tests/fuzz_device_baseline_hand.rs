@@ -93,7 +93,7 @@ fn a_hand_outside_this_process_is_named_by_a_model_that_behaves_as_it_does() {
     let line = |l: &str| gcl_harness::fuzz::device::action::HostAction::Line(l.to_string());
     let actions = [line("FSET DP 1000 MCV"), line("M"), line("FGET P")];
     let sig = gcl_harness::fuzz::device::judge_once(&o, &actions).unwrap().unwrap().expect("the hand moves to 1000");
-    assert_eq!(sig.explanation, "FSET refused but applied in part", "{sig}");
+    assert_eq!(sig.explanation, "set refused but applied in part", "{sig}");
 }
 
 /// The independent hand with `args` (`--bug NAME`, `--decide NAME`), over exec.

@@ -1279,11 +1279,7 @@ impl Profile {
 
     /// The parameters the transfer command `cmd` (one of [`PERSIST_COMMANDS`]) moves.
     pub fn persisted(&self, cmd: &str) -> &[ParamId] {
-        PERSIST_COMMANDS
-            .iter()
-            .position(|c| *c == cmd)
-            .and_then(|i| self.persisted.get(i))
-            .map_or(&[], Vec::as_slice)
+        PERSIST_COMMANDS.iter().position(|c| *c == cmd).and_then(|i| self.persisted.get(i)).map_or(&[], Vec::as_slice)
     }
 
     /// The parameter that plays `role` in this profile, if it has one.

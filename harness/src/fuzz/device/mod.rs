@@ -746,7 +746,11 @@ fn judged(
     let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
     let block = sig.command == "RealTime block";
     let rewrite = sig.kind == "value" && !block || block && !opts.wide();
-    let fresh = Fresh { rewrite, exact: rewrite || block || sig.kind == "missing" };
+    let fresh = Fresh {
+        rewrite,
+        exact: rewrite || block || sig.kind == "missing",
+        decision: sig.kind == "status" && !opts.wide(),
+    };
     let link = sig.kind == "link";
     if !link && let Some(e) = explain(opts, hand, actions, built, out, known, fresh, &sig.command)? {
         // A block's answer that a rewrite fits up to where the hand parted may fit by chance
@@ -856,10 +860,16 @@ const PREFIX_ACCEPTED: &str = "prefix accepted on a command that takes none";
 struct Fresh {
     rewrite: bool,
     exact: bool,
+    /// In process, from a status too, but only the other side of a decision the model takes
+    /// (a refused set applied in part, RESET keeping RAM, a prefix accepted): a model that
+    /// holds it answering every step byte for byte as the hand did, the status included. (Not
+    /// a set without effect: that explains a status never reported as well as the bug that
+    /// never reports it, as mpe-ignored showed.)
+    decision: bool,
 }
 
 impl Fresh {
-    const NONE: Fresh = Fresh { rewrite: false, exact: false };
+    const NONE: Fresh = Fresh { rewrite: false, exact: false, decision: false };
 }
 
 /// [`explain`]'s rewrites (see there); what they cannot follow, [`variant`] may still name.

@@ -40,12 +40,17 @@ use super::case::BuiltCase;
 use super::{Fresh, FuzzError, FuzzOptions, Hand};
 use crate::replay::{ReplayOutcome, replay};
 
+/// The explanation of a set line the hand refuses and still applies in its valid pairs.
+const REFUSED_SET_APPLIED: &str = "set refused but applied in part";
+
 /// One hypothesis: what it says, and the model that holds it (the profile, or a patch of it,
 /// and the device's configuration).
 struct Variant {
     says: String,
     profile: Arc<Profile>,
     config: gcl_model::DeviceConfig,
+    /// The other side of a decision the model takes (see [`Fresh::decision`]).
+    decision: bool,
 }
 
 /// The hypotheses a case allows, each a model unlike the profile's in one way:
@@ -53,7 +58,7 @@ struct Variant {
 /// - a letter prefix the case sends, naming one motor more (`prefix 123+4`, the key
 ///   [`super::explain`]'s prefix rewrite gives the same bug);
 /// - the other side of a decision the model takes, where the case meets it: a set the model
-///   refuses applied in its valid pairs (`FSET refused but applied in part`; decision
+///   refuses applied in its valid pairs (`set refused but applied in part`, FSET or PSET; decision
 ///   framing-line-atomic), a prefix on a command that takes none ignored (`prefix accepted on
 ///   a command that takes none`, the rewrite's key; seed-prefix-rules), RESET keeping the
 ///   values in RAM (`RESET keeps the values set`; bh8-reset). The model plays each as it plays
@@ -92,6 +97,7 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             says: format!("{} set without effect", p.param(id).name),
             profile: p.clone(),
             config: gcl_model::DeviceConfig { without_effect: vec![id], ..base.clone() },
+            decision: false,
         })
         .collect();
     for (k, pre) in p.prefixes.iter().enumerate() {
@@ -116,20 +122,19 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
                 says: format!("prefix {digits}+{m}"),
                 profile: Arc::new(patched),
                 config: base.clone(),
+                decision: false,
             });
         }
     }
-    let refused_set = parsed.iter().find_map(|r| match r {
-        Err(r) => {
-            r.partial.as_ref().filter(|c| matches!(c.args, Args::Pairs(_))).map(|c| p.command(c.command).name.clone())
-        }
-        _ => None,
-    });
+    let refused_set = parsed
+        .iter()
+        .any(|r| matches!(r, Err(r) if r.partial.as_ref().is_some_and(|c| matches!(c.args, Args::Pairs(_)))));
     let mut other_side = |says: String, fault: gcl_model::Fault| {
         out.push(Variant {
             says,
             profile: p.clone(),
             config: gcl_model::DeviceConfig { faults: vec![fault], ..base.clone() },
+            decision: true,
         });
     };
     if parsed.iter().any(|r| matches!(r, Err(r) if r.problems == [gcl_model::grammar::Problem::PrefixNotAllowed])) {
@@ -138,8 +143,9 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
     if parsed.iter().any(|r| matches!(r, Ok(Line::Command(c)) if c.kind(p) == CommandKind::Reset)) {
         other_side("RESET keeps the values set".into(), gcl_model::Fault::ResetKeepsRam);
     }
-    if let Some(name) = refused_set {
-        other_side(format!("{name} refused but applied in part"), gcl_model::Fault::PartialSetApplied);
+    // (the hypothesis is every set line's, FSET's and PSET's alike: one key whichever shows it)
+    if refused_set {
+        other_side(REFUSED_SET_APPLIED.into(), gcl_model::Fault::PartialSetApplied);
     }
     out
 }
@@ -174,9 +180,10 @@ pub(super) fn explains(
 ) -> Result<Option<String>, FuzzError> {
     let Some(failed) = out.failed_step() else { return Ok(None) };
     let said = out.exchange().iter().find(|e| e.step == failed).is_some_and(|e| !e.received.is_empty());
-    let fresh = fresh.exact && (matches!(out, ReplayOutcome::Mismatch(_)) || said);
+    let wrong = matches!(out, ReplayOutcome::Mismatch(_));
+    let fresh_one = |v: &Variant| (fresh.exact && (wrong || said)) || (fresh.decision && wrong && v.decision);
     let mut candidates: Vec<Variant> =
-        variants(opts, built, failed).into_iter().filter(|v| fresh || known.contains(&v.says)).collect();
+        variants(opts, built, failed).into_iter().filter(|v| fresh_one(v) || known.contains(&v.says)).collect();
     candidates.sort_by_key(|v| !known.contains(&v.says));
     let mut found = None;
     for v in candidates {
