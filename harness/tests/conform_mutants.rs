@@ -47,7 +47,7 @@ const MUTANTS: &[(&str, &str, &[&str])] = &[
     ("en-ignored", B44, &["param-en-narrows-motion", "rt-loop-en-motors"]),
     ("sgflip-ignored", B44, &["param-sgflip-effect", "rt-lfs-sgflip"]),
     ("otemp-ignored", B44, &["status-8192-overtemperature", "cmd-m-overtemp"]),
-    ("lcvc-ignored", B44, &["rt-lcvc-scaling"]),
+    ("lcvc-ignored", B44, &["rt-lcvc-scaling", "rt-lcvc-positions"]),
     ("lfvc-ignored", B44, &["rt-lfvc-scaling", "rt-lfv-formula"]),
     ("lfdpc-ignored", B44, &["rt-lfdpc-scaling"]),
     ("lfdpd-ignored", B44, &["rt-lfdpd-discard"]),

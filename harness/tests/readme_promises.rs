@@ -388,6 +388,13 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "the hand must answer that case so when it is replayed",
+        &[
+            "harness/tests/fuzz_device_baseline_hand.rs::a_known_deviation_on_a_field_does_not_hide_another_bug_on_it",
+            "harness/tests/fuzz_device.rs::a_realtime_flag_without_effect_over_a_pty_is_named_by_the_flag",
+        ],
+    ),
+    (
         "corpora of several workers, machines or runs merge by copying",
         &["harness/tests/fuzz_device.rs::the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus"],
     ),
