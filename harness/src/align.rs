@@ -356,6 +356,10 @@ pub fn command_word(p: &Profile, line: &[u8]) -> String {
 /// The signature of a failed replay of a case whose model run is `run`; `None` for a pass.
 /// `whole_reads`: the link hands over an answer whole (the in-process sim), so a RealTime
 /// answer that ends early or late is known to be of another size.
+///
+/// Where the hand parts from the model's run → a flood or restart → trailing bytes → a
+/// RealTime block's field → the start of an answer (a prompt too many, a loop exit, the echo)
+/// → the line of the answer it lies in (status, prompt, line ending, value).
 pub fn signature(
     p: &Profile,
     t: &Transcript,
@@ -364,74 +368,160 @@ pub fn signature(
     whole_reads: bool,
 ) -> Option<FindingSignature> {
     let step = out.failed_step()?;
-    let fr = &p.framing;
-    let sent_of = |i: usize| t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    let hex_step = |i: usize| {
-        t.steps.get(i).is_some_and(|s| {
-            s.send.as_ref().is_some_and(|h| h.form == Form::Hex)
-                || s.expect.segments.iter().any(|g| g.form == Form::Hex)
-        })
-    };
-    let is_abort = |i: usize| sent_of(i).first() == Some(&fr.abort);
-    // Without the model's tags (a run whose timing the tagging changed), the step read in.
-    let fallback = || {
-        let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
-        let (s, _) = crate::triage::step_signature(&case, out, p)?;
-        let kind = match s.kind.as_str() {
-            "missing-answer" => "missing",
-            "flood" => "extra",
-            k => k,
-        };
-        Some(sig(s.command.clone(), kind, ""))
-    };
     if let ReplayOutcome::Disconnected(_) = out {
         return Some(sig(command_at(p, t, step), "link", ""));
     }
-    let Some(pt) = parting(out) else { return fallback() };
-    let pe = [fr.line_ending.as_bytes(), fr.prompt.as_bytes()].concat();
-    let Some(x) = (if run.tags.is_empty() { None } else { carry(&pt.hand, pt.at, &run.stream, &pe) }) else {
-        return fallback();
+    let Some(s) = Parted::of(p, t, run, out, step) else { return step_fallback(p, t, out) };
+    if let Some(found) = s.flood_or_restart().or_else(|| s.trailing()).or_else(|| s.realtime_block(whole_reads)) {
+        return Some(found);
+    }
+    let unit = s.unit();
+    Some(s.answer_start(&unit).unwrap_or_else(|| s.in_line(&unit)))
+}
+
+/// Without the model's tags (a run whose timing the tagging changed): takes the replay; gives
+/// the signature of the step read in.
+fn step_fallback(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
+    let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
+    let (s, _) = crate::triage::step_signature(&case, out, p)?;
+    let kind = match s.kind.as_str() {
+        "missing-answer" => "missing",
+        "flood" => "extra",
+        k => k,
     };
-    let got = &pt.hand[pt.at..];
-    let banner = crate::record::BANNER_TEXT;
-    // The input a model position answers: its step, the line among the step's lines, where
-    // that line's answer begins, and the command word.
-    let who = |x: usize| -> (usize, Vec<u8>, usize, String) {
-        let owner = run.tags.get(x).map_or(step, |s| *s as usize);
-        let (line, a) = owner_line(p, &sent_of(owner), run, owner, x);
-        let in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
-        let block_answer = in_loop && run.stream.get(a) == Some(&gcl_model::realtime::FEEDBACK_HEADER);
-        let command = if hex_step(owner) || is_abort(owner) && block_answer {
-            "RealTime block".to_string()
-        } else if is_abort(owner) {
-            "^C".to_string()
-        } else {
-            command_word(p, &line)
-        };
-        (owner, line, a, command)
+    Some(sig(s.command.clone(), kind, ""))
+}
+
+/// Takes a transcript and a step; gives the bytes the step sends (none past the end).
+fn sent_of(t: &Transcript, i: usize) -> Vec<u8> {
+    t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default()
+}
+
+/// Takes a transcript and a step; gives whether the step sends or expects hex (RealTime).
+fn hex_step(t: &Transcript, i: usize) -> bool {
+    t.steps.get(i).is_some_and(|s| {
+        s.send.as_ref().is_some_and(|h| h.form == Form::Hex) || s.expect.segments.iter().any(|g| g.form == Form::Hex)
+    })
+}
+
+/// Takes a transcript and a step; gives whether the step sends ^C.
+fn is_abort(p: &Profile, t: &Transcript, i: usize) -> bool {
+    sent_of(t, i).first() == Some(&p.framing.abort)
+}
+
+/// The input a model position answers.
+struct Owner {
+    /// Its step.
+    step: usize,
+    /// The line among the step's lines.
+    line: Vec<u8>,
+    /// Where that line's answer begins in the model's stream.
+    answer: usize,
+    /// The command word.
+    command: String,
+}
+
+/// Takes a position `x` in the model's run (`step`: the replay's failing step, for an untagged
+/// position); gives the input it answers.
+fn owner_of(p: &Profile, t: &Transcript, run: &ModelRun, step: usize, x: usize) -> Owner {
+    let owner = run.tags.get(x).map_or(step, |s| *s as usize);
+    let (line, a) = owner_line(p, &sent_of(t, owner), run, owner, x);
+    let in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
+    let block_answer = in_loop && run.stream.get(a) == Some(&gcl_model::realtime::FEEDBACK_HEADER);
+    let command = if hex_step(t, owner) || is_abort(p, t, owner) && block_answer {
+        "RealTime block".to_string()
+    } else if is_abort(p, t, owner) {
+        "^C".to_string()
+    } else {
+        command_word(p, &line)
     };
-    let (owner, line, a, command) = who(x);
-    let model_rest = &run.stream[x..];
-    // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
-    if let ReplayOutcome::Flooded(_) = out {
-        return Some(sig(command, "extra", "flood"));
+    Owner { step: owner, line, answer: a, command }
+}
+
+/// A failed replay where the hand parts from the model's tagged run: what the signature's
+/// stages read.
+struct Parted<'a> {
+    p: &'a Profile,
+    t: &'a Transcript,
+    run: &'a ModelRun,
+    out: &'a ReplayOutcome,
+    /// The replay's failing step.
+    step: usize,
+    pt: Parting,
+    /// A line ending then the prompt.
+    pe: Vec<u8>,
+    /// The model's position for the parting byte.
+    x: usize,
+    /// The input the model's answer at `x` answers.
+    owner: Owner,
+}
+
+/// The model's answer unit holding the parting: from the last prompt before it (or the
+/// owner's answer's start) to the next prompt.
+struct Unit {
+    start: usize,
+    end: usize,
+    /// The owner's echo's length, when the unit begins with it.
+    echo_len: usize,
+    /// The unit is the first answer after the model left the loop.
+    loop_exit: bool,
+}
+
+impl<'a> Parted<'a> {
+    /// Takes the failed replay and the model's run; gives where the hand parts from it, or
+    /// `None` (no parting byte, or a run without tags).
+    fn of(p: &'a Profile, t: &'a Transcript, run: &'a ModelRun, out: &'a ReplayOutcome, step: usize) -> Option<Self> {
+        let pt = parting(out)?;
+        let fr = &p.framing;
+        let pe = [fr.line_ending.as_bytes(), fr.prompt.as_bytes()].concat();
+        let x = if run.tags.is_empty() { None } else { carry(&pt.hand, pt.at, &run.stream, &pe) }?;
+        let owner = owner_of(p, t, run, step, x);
+        Some(Parted { p, t, run, out, step, pt, pe, x, owner })
     }
-    if !model_rest.windows(banner.len()).any(|w| w == banner) && got.windows(banner.len()).any(|w| w == banner) {
-        return Some(sig(command, "restart", ""));
+
+    /// What the hand sent from the parting byte on.
+    fn got(&self) -> &[u8] {
+        &self.pt.hand[self.pt.at..]
     }
-    if let ReplayOutcome::Mismatch(m) = out
-        && m.trailing
-    {
-        let (_, _, _, c) = who(run.stream.len().saturating_sub(1));
-        return Some(sig(c, "extra", ""));
+
+    /// Gives a flood (whatever it repeats), or a restart (a banner the model does not send).
+    fn flood_or_restart(&self) -> Option<FindingSignature> {
+        let banner = crate::record::BANNER_TEXT;
+        let (got, model_rest) = (self.got(), &self.run.stream[self.x..]);
+        // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
+        if let ReplayOutcome::Flooded(_) = self.out {
+            return Some(sig(self.owner.command.clone(), "extra", "flood"));
+        }
+        if !model_rest.windows(banner.len()).any(|w| w == banner) && got.windows(banner.len()).any(|w| w == banner) {
+            return Some(sig(self.owner.command.clone(), "restart", ""));
+        }
+        None
     }
-    // RealTime: a block's answer, by field.
-    if command == "RealTime block" {
+
+    /// Gives bytes after the case's last answer, as extra to the last input.
+    fn trailing(&self) -> Option<FindingSignature> {
+        if let ReplayOutcome::Mismatch(m) = self.out
+            && m.trailing
+        {
+            let c = owner_of(self.p, self.t, self.run, self.step, self.run.stream.len().saturating_sub(1)).command;
+            return Some(sig(c, "extra", ""));
+        }
+        None
+    }
+
+    /// RealTime: a block's answer, by field (or its framing); `None` for any other input.
+    fn realtime_block(&self, whole_reads: bool) -> Option<FindingSignature> {
+        let Owner { step: owner, answer: a, command, .. } = &self.owner;
+        let (owner, a, x, run, pt, out) = (*owner, *a, self.x, self.run, &self.pt, self.out);
+        if command != "RealTime block" {
+            return None;
+        }
+        let command = command.clone();
         // Past a prompt the model gave to input sent in the loop (a bad header's status), the
         // model has left the loop: the rest of the step is answered outside it, and a hand
         // that parts there stayed in.
         let sent_in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
-        if sent_in_loop && !prompt_ends(&run.stream[a..x], &pe).is_empty() {
+        if sent_in_loop && !prompt_ends(&run.stream[a..x], &self.pe).is_empty() {
             return Some(sig(command, "framing", "loop exit"));
         }
         let off = x - a;
@@ -448,125 +538,148 @@ pub fn signature(
         if off == 0 || whole_reads && hand_len != model_len && model_len == fb.size() {
             return Some(sig(command, "framing", "block"));
         }
-        return Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
+        Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
             Some(f) => sig(command, "value", f.name()),
             None if off >= fb.size() => sig(command, "extra", ""),
             None => sig(command, "framing", ""),
-        });
+        })
     }
-    // The model's answer unit holding x: from the last prompt before it (or the owner's
-    // answer's start) to the next prompt.
-    let unit_start = prompt_ends(&run.stream[..=x], &pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
-    let unit_end = prompt_ends(&run.stream[unit_start..], &pe).first().map_or(run.stream.len(), |e| unit_start + e);
-    let echo_len = if fr.echo && unit_start == a && !is_abort(owner) {
-        line.iter().filter(|b| **b != fr.terminator).count()
-    } else {
-        0
-    };
-    // The first line of a line's answer, right after an input the model took as leaving
-    // RealTime mode: a hand that stayed in the loop takes the line for blocks.
-    // (before the first line ending: within the echo. Past it, a status line is the line's
-    // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
-    // empty lines, and only the status tells them apart)
-    let first_line = !run.stream[unit_start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
-    let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
-    let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
-    let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
-    // Likewise for the first answer after the model left the loop within a step's answer: a
-    // bad header ends the loop with its status and prompt, and the rest of the line (or the
-    // lines sent with it) is answered outside it. Any prompt the model gives to an input sent
-    // in the loop is that exit.
-    let exits_at = |u: usize| -> bool {
-        let Some(k) = u.checked_sub(1).and_then(|i| run.tags.get(i)).map(|k| *k as usize) else { return false };
-        let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
-        in_loop(k) && prompt_ends(&run.stream[ks..u], &pe).first() == Some(&(u - ks))
-    };
-    // A prompt (or a status line) too many at the start of an answer, after which the hand
-    // goes on with the model's answer: more than the answer before.
-    // (not a status line where the model has just left the loop: a hand still in it refuses
-    // the line's first byte as a header)
-    let loop_exit = first_line && (unit_start == a && leaves_loop || exits_at(unit_start));
-    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
-        // (a bare prompt, or one status line and a prompt)
-        let bare = got.starts_with(&pe);
-        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !loop_exit;
-        if let Some(mut e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
-            // (bare prompts may come several: one too many per empty line queued before)
-            while bare && got[e..].starts_with(&pe) {
-                e += pe.len();
-            }
-            let after = &got[e..];
-            let want = &run.stream[x..unit_end.min(x + 4)];
-            // (what follows may not have been read yet)
-            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
-                let (_, _, _, c) = who(x - 1);
-                return Some(sig(c, "extra", ""));
+
+    /// Gives the model's answer unit holding the parting, and what its start is.
+    fn unit(&self) -> Unit {
+        let (p, t, run, x, pe) = (self.p, self.t, self.run, self.x, &self.pe);
+        let fr = &p.framing;
+        let Owner { step: owner, line, answer: a, .. } = &self.owner;
+        let (owner, a) = (*owner, *a);
+        let start = prompt_ends(&run.stream[..=x], pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
+        let end = prompt_ends(&run.stream[start..], pe).first().map_or(run.stream.len(), |e| start + e);
+        let echo_len = if fr.echo && start == a && !is_abort(p, t, owner) {
+            line.iter().filter(|b| **b != fr.terminator).count()
+        } else {
+            0
+        };
+        // The first line of a line's answer, right after an input the model took as leaving
+        // RealTime mode: a hand that stayed in the loop takes the line for blocks.
+        // (before the first line ending: within the echo. Past it, a status line is the line's
+        // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
+        // empty lines, and only the status tells them apart)
+        let first_line = !run.stream[start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
+        let prev_send = (0..owner).rev().find(|i| !sent_of(t, *i).is_empty());
+        let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
+        let leaves_loop = in_loop(owner) && is_abort(p, t, owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
+        // Likewise for the first answer after the model left the loop within a step's answer: a
+        // bad header ends the loop with its status and prompt, and the rest of the line (or the
+        // lines sent with it) is answered outside it. Any prompt the model gives to an input sent
+        // in the loop is that exit.
+        let exits_at = |u: usize| -> bool {
+            let Some(k) = u.checked_sub(1).and_then(|i| run.tags.get(i)).map(|k| *k as usize) else { return false };
+            let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
+            in_loop(k) && prompt_ends(&run.stream[ks..u], pe).first() == Some(&(u - ks))
+        };
+        // A prompt (or a status line) too many at the start of an answer, after which the hand
+        // goes on with the model's answer: more than the answer before.
+        // (not a status line where the model has just left the loop: a hand still in it refuses
+        // the line's first byte as a header)
+        let loop_exit = first_line && (start == a && leaves_loop || exits_at(start));
+        Unit { start, end, echo_len, loop_exit }
+    }
+
+    /// Takes the unit; gives a prompt or status line too many at its start, a loop exit, or a
+    /// parting within the echo; `None` past them.
+    fn answer_start(&self, u: &Unit) -> Option<FindingSignature> {
+        let (fr, run, x, pe, got) = (&self.p.framing, self.run, self.x, &self.pe, self.got());
+        if x == u.start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
+            // (a bare prompt, or one status line and a prompt)
+            let bare = got.starts_with(pe);
+            let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !u.loop_exit;
+            if let Some(mut e) = prompt_ends(got, pe).first().copied().filter(|_| bare || status_line) {
+                // (bare prompts may come several: one too many per empty line queued before)
+                while bare && got[e..].starts_with(pe) {
+                    e += pe.len();
+                }
+                let after = &got[e..];
+                let want = &run.stream[x..u.end.min(x + 4)];
+                // (what follows may not have been read yet)
+                if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+                    let c = owner_of(self.p, self.t, run, self.step, x - 1).command;
+                    return Some(sig(c, "extra", ""));
+                }
             }
         }
-    }
-    if loop_exit {
-        return Some(sig("RealTime block".into(), "framing", "loop exit"));
-    }
-    if x < unit_start + echo_len {
-        return Some(sig(command, "framing", "echo"));
-    }
-    // The line of the model's answer the parting lies in, and the hand's line there.
-    let eol = fr.line_ending.as_bytes();
-    let unit = &run.stream[unit_start..unit_end];
-    let rel = (x - unit_start).min(unit.len());
-    let line_no = if unit_start == a { count(&unit[..rel], eol) } else { 0 };
-    let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
-    let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
-    let param = param_at(p, &line, line_no, m_line);
-    let status_of = |l: &[u8]| -> Option<u64> {
-        let s = String::from_utf8_lossy(l);
-        let mut w = s.split_whitespace();
-        (w.next() == Some("ERR")).then(|| w.next().and_then(|n| n.parse().ok()).unwrap_or(0))
-    };
-    let (ms, hs) = (status_of(m_line), status_of(h_line));
-    if ms.is_some() || hs.is_some() {
-        let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
-        // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
-        let cause = if is_abort(owner) { stopped_by_abort(p, t, owner) } else { String::new() };
-        return Some(FindingSignature { cause, ..s });
-    }
-    let prompt = fr.prompt.as_bytes();
-    let m_rest = &run.stream[x..unit_end];
-    if let ReplayOutcome::Timeout(to) = out {
-        // Stopped short. Only the prompt's tail missing is framing (a prompt without its
-        // space); an answer that stops before its prompt lacks part of itself.
-        let kind = if to.offset > 0 && prompt.ends_with(m_rest) && !m_rest.is_empty() { "framing" } else { "missing" };
-        return Some(sig(command, kind, &param));
-    }
-    let trimmed = prompt.trim_ascii_end();
-    let m_is_prompt = m_line.starts_with(trimmed) && !trimmed.is_empty();
-    let h_is_prompt = h_line.starts_with(trimmed) && !trimmed.is_empty();
-    if m_is_prompt && h_is_prompt {
-        return Some(sig(command, "framing", "prompt"));
-    }
-    if m_is_prompt {
-        return Some(sig(command, "extra", &param));
-    }
-    if h_is_prompt {
-        return Some(sig(command, "missing", &param));
-    }
-    let at_eol = |s: &[u8]| s.first().is_some_and(|b| matches!(b, b'\n' | b'\r'));
-    if at_eol(got) || at_eol(m_rest) {
-        let kind = if at_eol(got) && at_eol(m_rest) { "framing" } else { "value" };
-        if kind == "framing" {
-            return Some(sig(command, kind, "line ending"));
+        if u.loop_exit {
+            return Some(sig("RealTime block".into(), "framing", "loop exit"));
         }
+        if x < u.start + u.echo_len {
+            return Some(sig(self.owner.command.clone(), "framing", "echo"));
+        }
+        None
     }
-    // Values: the golden line (with its ranges) against the hand's.
-    let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
-    let golden = golden_line(t, step, &pt, eol).unwrap_or_else(|| ts(m_line));
-    let h_text = ts(h_line);
-    if is_reordering(&h_text, &golden) || reorders_with_captures(t, out, step, &pt, eol) {
-        return Some(sig(command, "order", &param));
+
+    /// Takes the unit; gives the signature by the line of the model's answer the parting lies
+    /// in against the hand's line there: a status, a missing or extra line, a prompt, a line
+    /// ending, an order, or a value.
+    fn in_line(&self, u: &Unit) -> FindingSignature {
+        let (p, t, run, out, x, pt, step) = (self.p, self.t, self.run, self.out, self.x, &self.pt, self.step);
+        let Owner { step: owner, line, answer: a, command } = &self.owner;
+        let (owner, a, command) = (*owner, *a, command.clone());
+        let fr = &p.framing;
+        let got = self.got();
+        // The line of the model's answer the parting lies in, and the hand's line there.
+        let eol = fr.line_ending.as_bytes();
+        let unit = &run.stream[u.start..u.end];
+        let rel = (x - u.start).min(unit.len());
+        let line_no = if u.start == a { count(&unit[..rel], eol) } else { 0 };
+        let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
+        let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
+        let param = param_at(p, line, line_no, m_line);
+        let status_of = |l: &[u8]| -> Option<u64> {
+            let s = String::from_utf8_lossy(l);
+            let mut w = s.split_whitespace();
+            (w.next() == Some("ERR")).then(|| w.next().and_then(|n| n.parse().ok()).unwrap_or(0))
+        };
+        let (ms, hs) = (status_of(m_line), status_of(h_line));
+        if ms.is_some() || hs.is_some() {
+            let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
+            // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
+            let cause = if is_abort(p, t, owner) { stopped_by_abort(p, t, owner) } else { String::new() };
+            return FindingSignature { cause, ..s };
+        }
+        let prompt = fr.prompt.as_bytes();
+        let m_rest = &run.stream[x..u.end];
+        if let ReplayOutcome::Timeout(to) = out {
+            // Stopped short. Only the prompt's tail missing is framing (a prompt without its
+            // space); an answer that stops before its prompt lacks part of itself.
+            let kind =
+                if to.offset > 0 && prompt.ends_with(m_rest) && !m_rest.is_empty() { "framing" } else { "missing" };
+            return sig(command, kind, &param);
+        }
+        let trimmed = prompt.trim_ascii_end();
+        let m_is_prompt = m_line.starts_with(trimmed) && !trimmed.is_empty();
+        let h_is_prompt = h_line.starts_with(trimmed) && !trimmed.is_empty();
+        if m_is_prompt && h_is_prompt {
+            return sig(command, "framing", "prompt");
+        }
+        if m_is_prompt {
+            return sig(command, "extra", &param);
+        }
+        if h_is_prompt {
+            return sig(command, "missing", &param);
+        }
+        let at_eol = |s: &[u8]| s.first().is_some_and(|b| matches!(b, b'\n' | b'\r'));
+        if at_eol(got) && at_eol(m_rest) {
+            return sig(command, "framing", "line ending");
+        }
+        // Values: the golden line (with its ranges) against the hand's.
+        let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
+        let golden = golden_line(t, step, pt, eol).unwrap_or_else(|| ts(m_line));
+        let h_text = ts(h_line);
+        if is_reordering(&h_text, &golden) || reorders_with_captures(t, out, step, pt, eol) {
+            return sig(command, "order", &param);
+        }
+        let motors = differing_motors(p, line, &h_text, &golden);
+        let (cause, cause_step) = cause_of(p, t, owner, line, &param, &motors).unzip();
+        FindingSignature { motors, cause: cause.unwrap_or_default(), cause_step, ..sig(command, "value", &param) }
     }
-    let motors = differing_motors(p, &line, &h_text, &golden);
-    let (cause, cause_step) = cause_of(p, t, owner, &line, &param, &motors).unzip();
-    Some(FindingSignature { motors, cause: cause.unwrap_or_default(), cause_step, ..sig(command, "value", &param) })
 }
 
 fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {

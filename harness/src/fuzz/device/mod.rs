@@ -962,6 +962,9 @@ impl Fresh {
 }
 
 /// [`explain`]'s rewrites (see there); what they cannot follow, [`variant`] may still name.
+///
+/// The hypotheses (prefixes widened, sets without effect, a prefix accepted) → the known ones
+/// first, the rest when `fresh` → the first that holds on the hand's answers.
 fn explain_by_rewrite(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -971,19 +974,62 @@ fn explain_by_rewrite(
     fresh: bool,
     at: &str,
 ) -> Option<Explained> {
-    use gcl_model::MotorSet;
-    use gcl_model::grammar::{Args, Line, parse_line};
-    use gcl_model::spec::CommandKind;
     let p = &opts.profile;
     let failed = out.failed_step()?;
-    let line_of = |a: &HostAction| match a {
+    let mut hyps = prefix_hypotheses(p, actions);
+    hyps.extend(set_hypotheses(p, actions));
+    hyps.extend(prefix_accepted_hypothesis(p, actions));
+    let answered = answered_before_abort(p, actions, built, out);
+    // What already explains a finding first, then (when `fresh`) the rest.
+    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
+    if hyps.is_empty() {
+        return None;
+    }
+    hyps.sort_by_key(|h| !known.contains(&h.says));
+    let mut found: Option<Explained> = None;
+    for h in hyps {
+        let Some(whole) = rewrite_holds(opts, &h, &answered, built, out, failed) else { continue };
+        if known.contains(&h.says) {
+            return Some(Explained { says: h.says, whole: None, exact: false });
+        }
+        // (a new one: another bug that explains the case as well leaves it unexplained)
+        if found.is_some() {
+            return None;
+        }
+        found = Some(Explained { says: h.says, whole, exact: false });
+    }
+    found
+}
+
+/// Takes an action; gives its line, when it sends one (a line, or a line then ^C).
+fn line_of(a: &HostAction) -> Option<String> {
+    match a {
         HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => Some(l.clone()),
         _ => None,
-    };
-    let with_line = |a: &HostAction, l: String| match a {
+    }
+}
+
+/// Takes an action that sends a line and another line; gives the action sending that one.
+fn with_line(a: &HostAction, l: String) -> HostAction {
+    match a {
         HostAction::LineThenAbort { after_ms, .. } => HostAction::LineThenAbort { line: l, after_ms: *after_ms },
         _ => HostAction::Line(l),
-    };
+    }
+}
+
+/// Takes a line; gives its shortest tail that is the same command (`command`), unprefixed.
+fn unprefixed_tail<'l>(p: &Profile, line: &'l str, command: gcl_model::spec::CommandId) -> Option<&'l str> {
+    use gcl_model::grammar::{Line, parse_line};
+    (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(
+        |t| matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == command),
+    )
+}
+
+/// Takes the case's actions; gives the prefix hypotheses: each prefix of its lines widened by
+/// one motor, on every line with that prefix (wider prefixes first).
+fn prefix_hypotheses(p: &Profile, actions: &[HostAction]) -> Vec<Hypothesis> {
+    use gcl_model::MotorSet;
+    use gcl_model::grammar::{Line, parse_line};
     let digits = |m: MotorSet| m.iter().map(|x| x.to_string()).collect::<String>();
     let mut hyps: Vec<Hypothesis> = Vec::new();
     // Prefixes: each prefixed line, its prefix, and the line without it (the shortest tail
@@ -993,10 +1039,7 @@ fn explain_by_rewrite(
         let Some(line) = line_of(a) else { continue };
         let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
         let Some(pre) = c.prefix else { continue };
-        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
-            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
-        });
-        if let Some(t) = tail {
+        if let Some(t) = unprefixed_tail(p, &line, c.command) {
             prefixed.push((i, pre, t.to_string()));
         }
     }
@@ -1023,6 +1066,14 @@ fn explain_by_rewrite(
             hyps.push(h);
         }
     }
+    hyps
+}
+
+/// Takes the case's actions; gives the sets-without-effect hypotheses: a parameter's pair
+/// dropped from every set line, one hypothesis per parameter.
+fn set_hypotheses(p: &Profile, actions: &[HostAction]) -> Vec<Hypothesis> {
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
     // Sets without effect: a parameter's pair dropped from every set line (a line left without
     // pairs becomes an empty line, which changes nothing, keeps the steps in step and is
     // answered as the set was, but for the echo: the hand's echo of the line as sent is taken
@@ -1045,6 +1096,7 @@ fn explain_by_rewrite(
             by_param.entry(*id).or_default().push((i, rewritten));
         }
     }
+    let mut hyps = Vec::new();
     for (id, lines) in by_param {
         let mut v = actions.to_vec();
         let mut echoes = Vec::new();
@@ -1060,6 +1112,13 @@ fn explain_by_rewrite(
             any_kind: Vec::new(),
         });
     }
+    hyps
+}
+
+/// Takes the case's actions; gives the prefix-accepted hypothesis, when a line is refused for
+/// its prefix alone: every such line sent without it.
+fn prefix_accepted_hypothesis(p: &Profile, actions: &[HostAction]) -> Option<Hypothesis> {
+    use gcl_model::grammar::{Line, parse_line};
     // A prefix accepted where the command takes none: every line the model refuses for its
     // prefix alone, sent without it (the shortest tail that is the same command unprefixed).
     // The hand's echo is of the line as sent. A hand that ignores the prefix answers as the
@@ -1079,20 +1138,28 @@ fn explain_by_rewrite(
         }
         let lenient = gcl_model::grammar::ParseOptions { ignore_forbidden_prefix: true, ..Default::default() };
         let Ok(Line::Command(c)) = gcl_model::grammar::parse_line_with(p, line.as_bytes(), lenient) else { continue };
-        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
-            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
-        });
-        if let Some(t) = tail {
+        if let Some(t) = unprefixed_tail(p, &line, c.command) {
             accepted.echoes.push((line.clone(), t.to_string()));
             accepted.any_kind.push(p.command(c.command).name.clone());
             accepted.actions[i] = with_line(a, t.to_string());
         }
     }
-    if !accepted.echoes.is_empty() {
-        hyps.push(accepted);
-    }
-    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
-    let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    (!accepted.echoes.is_empty()).then_some(accepted)
+}
+
+/// Takes a step of a replay; gives what the hand answered to it.
+fn received_at(out: &ReplayOutcome, s: usize) -> Option<Vec<u8>> {
+    out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone())
+}
+
+/// Takes a step; gives the bytes it sends.
+fn sent_by(s: &gcl_transcript::Step) -> Option<Vec<u8>> {
+    s.send.as_ref().map(|h| h.bytes.clone())
+}
+
+/// Takes the case's actions and the replay; gives, per action, whether it is a line sent then
+/// aborted whose answer the hand completed before the ^C (the host waited for it).
+fn answered_before_abort(p: &Profile, actions: &[HostAction], built: &BuiltCase, out: &ReplayOutcome) -> Vec<bool> {
     // A line sent and then aborted whose answer the hand completed before the ^C (the host
     // waited for it, as the case expected): in a rewrite the ^C comes after the answer too,
     // wherever the model would have had it land.
@@ -1107,100 +1174,103 @@ fn explain_by_rewrite(
         let mut bytes = line.as_bytes().to_vec();
         bytes.push(p.framing.terminator);
         let at = (from..built.transcript.steps.len())
-            .find(|s| send(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
+            .find(|s| sent_by(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
         from = at.map_or(from, |s| s + 1);
         // (the step's answer ends at a prompt after the line's echo: not at the answer before
         // it, which ends a step whose line is answered in the next one)
         let echoed = |r: &[u8]| !p.framing.echo || r.windows(line.len()).any(|w| w == line.as_bytes());
-        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe) && echoed(&r)));
+        answered.push(at.and_then(|s| received_at(out, s)).is_some_and(|r| r.ends_with(&pe) && echoed(&r)));
     }
-    let in_hand_time = |v: Vec<HostAction>| -> Vec<HostAction> {
-        v.into_iter()
-            .zip(&answered)
-            .flat_map(|(a, done)| match a {
-                HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
-                a => vec![a],
-            })
-            .collect()
-    };
-    // Whether a step's line reads parameter `id` back.
-    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| {
-        let line = send(s).unwrap_or_default();
-        let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
-        match parse_line(p, line) {
-            Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
-                (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
-                (k, _) => matches!(
-                    k,
-                    CommandKind::MotorListValues
-                        | CommandKind::MotorListAllValues
-                        | CommandKind::GlobalListValues
-                        | CommandKind::GlobalListAllValues
-                ),
-            },
-            _ => false,
-        }
-    };
-    // What already explains a finding first, then (when `fresh`) the rest.
-    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
-    if hyps.is_empty() {
+    answered
+}
+
+/// Takes a hypothesis's actions and which were answered before their ^C; gives the actions
+/// in the hand's time (such a line sent, then ^C after its answer).
+fn in_hand_time(v: Vec<HostAction>, answered: &[bool]) -> Vec<HostAction> {
+    v.into_iter()
+        .zip(answered)
+        .flat_map(|(a, done)| match a {
+            HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
+            a => vec![a],
+        })
+        .collect()
+}
+
+/// Takes a step and a parameter; gives whether the step's line reads the parameter back.
+fn reads_back(p: &Profile, s: &gcl_transcript::Step, id: gcl_model::spec::ParamId) -> bool {
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
+    let line = sent_by(s).unwrap_or_default();
+    let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
+    match parse_line(p, line) {
+        Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
+            (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
+            (k, _) => matches!(
+                k,
+                CommandKind::MotorListValues
+                    | CommandKind::MotorListAllValues
+                    | CommandKind::GlobalListValues
+                    | CommandKind::GlobalListAllValues
+            ),
+        },
+        _ => false,
+    }
+}
+
+/// Takes a hypothesis and the replay that failed at step `failed`: builds its rewrite and
+/// judges the hand's answers by it. Gives `None` when it does not hold, else the whole case
+/// as the hand meets it under the explanation (when the rewrite keeps the steps' count).
+fn rewrite_holds(
+    opts: &FuzzOptions,
+    h: &Hypothesis,
+    answered: &[bool],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    failed: usize,
+) -> Option<Option<Transcript>> {
+    let p = &opts.profile;
+    let received = |s: usize| received_at(out, s);
+    // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
+    let b = build_for_sending(opts, &in_hand_time(h.actions.clone(), answered), "fuzz", "explain", &built.block_bytes)
+        .ok()?;
+    let (old, new) = (&built.transcript.steps, &b.transcript.steps);
+    if new.len() <= failed || old.len() <= failed {
         return None;
     }
-    hyps.sort_by_key(|h| !known.contains(&h.says));
-    let mut found: Option<Explained> = None;
-    for h in hyps {
-        // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
-        let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions.clone()), "fuzz", "explain", &built.block_bytes)
-        else {
-            continue;
-        };
-        let (old, new) = (&built.transcript.steps, &b.transcript.steps);
-        if new.len() <= failed || old.len() <= failed {
-            continue;
-        }
-        let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
-        // The hand's answers from step d on, as one stream: a rewrite that changes a block's
-        // size moves where one step's answer ends and the next begins (the replay read each
-        // step as long as the original case expected), so the rewrite's expectations are
-        // matched in turn along the stream, each ending where the next byte would break it.
-        let Some(gots) = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>() else { continue };
-        let (stream, judges, need, complete) = rewritten_stream(p, &h, &gots, d, failed, old, new, &reads, &send);
-        let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
-        // (the values the hand's answers before step d captured, as the rewrite's steps there
-        // capture them: a relation from d on reads them)
-        let mut caps = gcl_transcript::Captures::new();
-        for (s, step) in new.iter().enumerate().take(d) {
-            let got = received(s).unwrap_or_default();
-            match step.expect.matches_with(&caps, &got) {
-                Some(c) => caps = c,
-                None => break,
-            }
-        }
-        let holds = complete && follows(&judges, &stream, need, mismatch, &caps);
-        if holds {
-            // The whole case as the hand meets it under the explanation: the rewrite's steps,
-            // with the lines it rewrote sent as they were (their answers are echo and prompt,
-            // or held to the case's own expectation).
-            let whole = (old.len() == new.len()).then(|| {
-                let mut t = b.transcript.clone();
-                for (i, st) in t.steps.iter_mut().enumerate() {
-                    if send(&old[i]) != send(st) {
-                        *st = old[i].clone();
-                    }
-                }
-                t
-            });
-            if known.contains(&h.says) {
-                return Some(Explained { says: h.says, whole: None, exact: false });
-            }
-            // (a new one: another bug that explains the case as well leaves it unexplained)
-            if found.is_some() {
-                return None;
-            }
-            found = Some(Explained { says: h.says, whole, exact: false });
+    let d = (0..=failed).find(|s| sent_by(&old[*s]) != sent_by(&new[*s]))?;
+    // The hand's answers from step d on, as one stream: a rewrite that changes a block's
+    // size moves where one step's answer ends and the next begins (the replay read each
+    // step as long as the original case expected), so the rewrite's expectations are
+    // matched in turn along the stream, each ending where the next byte would break it.
+    let gots = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>()?;
+    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| reads_back(p, s, id);
+    let (stream, judges, need, complete) = rewritten_stream(p, h, &gots, d, failed, old, new, &reads, &sent_by);
+    let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
+    // (the values the hand's answers before step d captured, as the rewrite's steps there
+    // capture them: a relation from d on reads them)
+    let mut caps = gcl_transcript::Captures::new();
+    for (s, step) in new.iter().enumerate().take(d) {
+        let got = received(s).unwrap_or_default();
+        match step.expect.matches_with(&caps, &got) {
+            Some(c) => caps = c,
+            None => break,
         }
     }
-    found
+    if !(complete && follows(&judges, &stream, need, mismatch, &caps)) {
+        return None;
+    }
+    // The whole case as the hand meets it under the explanation: the rewrite's steps,
+    // with the lines it rewrote sent as they were (their answers are echo and prompt,
+    // or held to the case's own expectation).
+    Some((old.len() == new.len()).then(|| {
+        let mut t = b.transcript.clone();
+        for (i, st) in t.steps.iter_mut().enumerate() {
+            if sent_by(&old[i]) != sent_by(st) {
+                *st = old[i].clone();
+            }
+        }
+        t
+    }))
 }
 
 /// The hand's answers to steps `d..=failed` (`gots`, one per step) as one stream, as the
