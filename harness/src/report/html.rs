@@ -10,25 +10,9 @@ use std::fmt::Write;
 use gcl_transcript::{Form, Level, Transcript};
 
 use super::diff::{self, FieldRow};
-use super::page::{Page, details, pre};
+use super::page::{Page, details, esc, pre};
 use super::svg::{Band, Plot, Series};
 use super::{CaseResult, ReportKind, RunReport, Verdict};
-
-/// Text escaped for HTML content and attribute values.
-pub(crate) fn esc(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\'' => o.push_str("&#39;"),
-            c => o.push(c),
-        }
-    }
-    o
-}
 
 fn class(v: Verdict) -> &'static str {
     match v {

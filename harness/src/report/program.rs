@@ -6,7 +6,7 @@
 
 use gcl_host::client::programs::RealtimeReport;
 
-use super::html::esc;
+use super::page::esc;
 use super::page::Page;
 use super::svg::{Band, Plot, Series};
 

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
-use crate::report::html::esc;
+use crate::report::page::esc;
 use crate::report::page::{Page, details, pre};
 use crate::report::svg::{Plot, Series};
 
