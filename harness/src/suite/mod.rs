@@ -18,6 +18,7 @@
 pub(crate) mod build;
 mod cases;
 pub(crate) mod depends;
+pub(crate) mod plan;
 
 pub use build::{DECISION_CLAUSE, DECISIONS_KEY};
 pub use depends::FRAMING;

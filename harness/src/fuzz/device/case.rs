@@ -19,9 +19,8 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 use super::action::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
-use crate::suite::build::{
-    CaseB, FieldRule, Plan, Range, Shape, build_from, capture_plan, capture_plan_on, value_range,
-};
+use crate::suite::build::{CaseB, build_from, capture_plan, capture_plan_on, value_range};
+use crate::suite::plan::{FieldRule, Plan, Range, Shape};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
 
