@@ -283,7 +283,7 @@ pub fn host_suite_hash(with_operators: bool) -> String {
             h.update(format!("{}\n", o.name()));
         }
     }
-    crate::certify::hex(&h.finalize())
+    crate::digest::hex(&h.finalize())
 }
 
 fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {

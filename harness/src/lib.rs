@@ -19,6 +19,7 @@ pub mod check_host;
 pub mod check_host_serve;
 pub mod conform;
 pub mod deadline;
+pub mod digest;
 pub mod fuzz;
 pub mod outputs;
 pub mod preflight;

@@ -592,7 +592,7 @@ fn cases_table(r: &RunReport) -> String {
             (false, _) => String::new(),
             (true, Verdict::Skip) => "<td class=\"muted\">not run</td>".to_string(),
             (true, _) => {
-                let file = format!("transcripts/{}.gcl", crate::certify::safe_name(&c.id));
+                let file = format!("transcripts/{}.gcl", super::safe_name(&c.id));
                 format!("<td><a href=\"{}\">{}</a></td>", esc(&file), esc(&file))
             }
         };

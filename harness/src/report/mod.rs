@@ -125,6 +125,11 @@ pub const CONTEXT_CHARS: usize = 40;
 /// with a note saying how much was left out.
 pub const MAX_SHOWN: usize = 8192;
 
+/// The file name a case's transcript has in a bundle's `transcripts/` (without `.gcl`).
+pub(crate) fn safe_name(id: &str) -> String {
+    id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+}
+
 /// Words as one command line for a POSIX shell, each quoted as it needs by the `shlex` crate:
 /// pasted into `sh`, the line runs exactly these words as its argv (`-- sh -c 'sleep 0.1; exit
 /// 3'`, a target holding `'; touch X; echo '`), never a command of its own. Every command a
@@ -508,7 +513,7 @@ impl ProfileSpec {
     /// SHA-256 of a loaded profile: of its JSON form, every include resolved, so two files
     /// that load to the same profile have the same hash.
     pub fn digest(profile: &gcl_model::Profile) -> String {
-        crate::certify::sha256_hex(&serde_json::to_vec(profile).unwrap_or_default())
+        crate::digest::sha256_hex(&serde_json::to_vec(profile).unwrap_or_default())
     }
 
     /// How people see it: `bh8-262-4.3` for a built-in; for a file, the file, the id it

@@ -261,7 +261,7 @@ pub fn suite_hash(cases: &[Case]) -> String {
         h.update(c.text().as_bytes());
         h.update([0]);
     }
-    crate::certify::hex(&h.finalize())
+    crate::digest::hex(&h.finalize())
 }
 
 #[derive(Serialize)]

@@ -551,7 +551,7 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
 /// The content-hash name of a corpus entry.
 pub fn corpus_name(actions: &[HostAction]) -> String {
     let json = serde_json::to_vec(actions).unwrap_or_default();
-    format!("{}.json", &crate::certify::sha256_hex(&json)[..20])
+    format!("{}.json", &crate::digest::sha256_hex(&json)[..20])
 }
 
 /// Corpus files that did not read or parse, each with why.
