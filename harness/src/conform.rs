@@ -15,6 +15,8 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
 use crate::deadline::DeadlinePolicy;
+/// Which levels run (kept here, where `conform` options name it).
+pub use crate::suite::LevelFilter;
 use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard, replay};
 use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
@@ -101,41 +103,6 @@ pub enum KnownFailuresError {
     },
 }
 
-/// Which levels to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LevelFilter {
-    /// MUST only.
-    Must,
-    /// MUST and SHOULD.
-    Should,
-    /// Every level: MUST, SHOULD, MAY, INFO.
-    All,
-}
-
-impl LevelFilter {
-    /// Whether a case of `level` runs.
-    pub fn admits(self, level: Level) -> bool {
-        match self {
-            LevelFilter::Must => level == Level::Must,
-            LevelFilter::Should => matches!(level, Level::Must | Level::Should),
-            LevelFilter::All => true,
-        }
-    }
-
-    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
-    pub fn from_name(name: &str) -> Option<LevelFilter> {
-        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
-    }
-
-    /// The lower-case name.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            LevelFilter::Must => "must",
-            LevelFilter::Should => "should",
-            LevelFilter::All => "all",
-        }
-    }
-}
 
 /// One entry of a known-failures file.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]

@@ -37,7 +37,8 @@ use super::device::corpus_name;
 use super::device::report::FuzzReport;
 use super::host::bundle::{BundleInfo, dir_name};
 use super::host::{Campaign, Finding};
-use super::shard::{Merged, Provenance, ShardSetError};
+use super::shard::{Provenance, ShardSetError};
+use crate::report::merged::Merged;
 use crate::report::RunReport;
 use gcl_host::files::{MAX_INPUT_BYTES, read_limited_no_follow};
 

@@ -66,7 +66,7 @@ fn headline(r: &RunReport) -> String {
     let cannot_test =
         r.stopped.as_ref().filter(|st| st.cause == crate::report::StopCause::CannotTest).map(|st| st.message.as_str());
     // A host session that judged nothing says why, first.
-    let session = r.cases.iter().find(|c| c.id == crate::check_host::SESSION_CASE && c.verdict == Verdict::Error);
+    let session = r.cases.iter().find(|c| c.id == super::SESSION_CASE && c.verdict == Verdict::Error);
     let mut s = match (r.kind, bad.len()) {
         (ReportKind::CheckHost, _) if session.is_some() => {
             session.and_then(|c| c.message.clone()).unwrap_or_else(|| "nothing judged".into())

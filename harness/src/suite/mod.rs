@@ -406,3 +406,39 @@ pub fn count_by_level(cases: &[Case]) -> BTreeMap<Level, usize> {
     }
     m
 }
+/// Which levels to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LevelFilter {
+    /// MUST only.
+    Must,
+    /// MUST and SHOULD.
+    Should,
+    /// Every level: MUST, SHOULD, MAY, INFO.
+    All,
+}
+
+impl LevelFilter {
+    /// Whether a case of `level` runs.
+    pub fn admits(self, level: Level) -> bool {
+        match self {
+            LevelFilter::Must => level == Level::Must,
+            LevelFilter::Should => matches!(level, Level::Must | Level::Should),
+            LevelFilter::All => true,
+        }
+    }
+
+    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
+    pub fn from_name(name: &str) -> Option<LevelFilter> {
+        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
+    }
+
+    /// The lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LevelFilter::Must => "must",
+            LevelFilter::Should => "should",
+            LevelFilter::All => "all",
+        }
+    }
+}
+

@@ -104,7 +104,7 @@ impl FuzzReport {
     }
 
     /// The shards a merged report holds (`None`: not a merge).
-    pub fn merged(&self) -> Option<&crate::fuzz::shard::Merged> {
+    pub fn merged(&self) -> Option<&crate::report::merged::Merged> {
         self.provenance.as_ref().and_then(|p| p.merged.as_ref())
     }
 
