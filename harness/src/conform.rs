@@ -25,7 +25,7 @@ use crate::report::{
 use crate::suite::{self, Case};
 use gcl_host::link::{Link, LinkError, SimLink, byte_time};
 use gcl_host::target::{OpenOptions, Target, open};
-use gcl_transcript::{Form, Level, Requirement};
+use gcl_transcript::{Form, Requirement};
 
 /// Why a conformance run could not run (a failing hand is a report, not an error).
 #[derive(Debug, thiserror::Error)]

@@ -16,7 +16,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use gcl_harness::check_host::{CheckHostOptions, check_host};
+use gcl_harness::host_check::{CheckHostOptions, check_host};
 use gcl_harness::fuzz::host::{
     Event, FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, run_once,
 };
