@@ -682,11 +682,7 @@ fn stopped_by_abort(p: &Profile, t: &Transcript, owner: usize) -> String {
 /// The command at step `i` for a link failure: the step's own line.
 fn command_at(p: &Profile, t: &Transcript, i: usize) -> String {
     let sent = t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    command_of(
-        &sent,
-        t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)),
-        p,
-    )
+    command_of(&sent, t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)), p)
 }
 
 /// Among the lines step `owner` sent, the one whose answer holds model position `x`, and where

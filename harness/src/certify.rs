@@ -25,9 +25,9 @@ use ed25519_dalek::{Signature, Signer, SigningKey, Verifier, VerifyingKey};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::digest::hex;
 /// The digest of a manifest line (kept here for callers that check a bundle by hand).
 pub use crate::digest::sha256_hex;
-use crate::digest::hex;
 use crate::report::{ProfileOrigin, ProfileSpec, RunOptions, RunReport, Verdict, write_all, write_atomic};
 use gcl_host::files::{MAX_INPUT_BYTES, open_regular, read_limited, read_text_limited, too_large};
 

@@ -15,13 +15,13 @@ use globset::{Glob, GlobSet, GlobSetBuilder};
 use serde::Deserialize;
 
 use crate::deadline::DeadlinePolicy;
-/// Which levels run (kept here, where `conform` options name it).
-pub use crate::suite::LevelFilter;
 use crate::replay::{ReplayOptions, ReplayOutcome, actual_transcript, discard, replay};
 use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
 };
+/// Which levels run (kept here, where `conform` options name it).
+pub use crate::suite::LevelFilter;
 use crate::suite::{self, Case};
 use gcl_host::link::{Link, LinkError, SimLink, byte_time};
 use gcl_host::target::{OpenOptions, Target, open};
@@ -102,7 +102,6 @@ pub enum KnownFailuresError {
         error: Box<KnownFailuresError>,
     },
 }
-
 
 /// One entry of a known-failures file.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]

@@ -635,7 +635,19 @@ const LAYERS: &[&[&str]] = &[
     // the hand on its transports: the simulator, output files, recording and replay
     &["outputs", "record", "replay", "sim"],
     // conformance: the suite and its vectors, alignment, triage, pre-flight, deadlines, the runner, certificates, reports
-    &["align", "certify", "conform", "deadline", "known_failures", "motion", "preflight", "report", "suite", "triage", "vectors"],
+    &[
+        "align",
+        "certify",
+        "conform",
+        "deadline",
+        "known_failures",
+        "motion",
+        "preflight",
+        "report",
+        "suite",
+        "triage",
+        "vectors",
+    ],
     // the fuzzers (device, host, merge, shard) and the host check built on the host fuzzer's sessions
     &["fuzz", "host_check"],
     // the command line (the `gcl` binary)
@@ -678,7 +690,11 @@ fn without_literals(code: &str) -> String {
         if c == b'\'' {
             // a char literal ('x', '\n', '\''), not a lifetime
             let rest = &code[i + 1..];
-            let len = if rest.starts_with('\\') { rest[1..].find('\'').map(|k| k + 2) } else { rest.chars().next().map(char::len_utf8) };
+            let len = if rest.starts_with('\\') {
+                rest[1..].find('\'').map(|k| k + 2)
+            } else {
+                rest.chars().next().map(char::len_utf8)
+            };
             if let Some(l) = len
                 && rest[l..].starts_with('\'')
             {

@@ -10,7 +10,8 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::level::Level;
-use crate::realtime::{FieldType, RtFlag};
+pub use crate::rtflags::BlockKind;
+use crate::rtflags::{FieldType, RtFlag};
 use crate::status::{StatusBits, StatusTexts};
 
 /// Files under `spec/` compiled into the model, by their path relative to `spec/`.
@@ -462,16 +463,6 @@ pub enum Scope {
     Motor,
     /// One value for the hand.
     Global,
-}
-
-/// Which RealTime block a flag adds a field to.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum BlockKind {
-    /// Host to hand.
-    Control,
-    /// Hand to host.
-    Feedback,
 }
 
 /// The field a RealTime flag adds when it is 1.

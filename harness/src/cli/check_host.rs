@@ -6,21 +6,21 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use gcl_harness::host_check::{CheckHostOptions, SESSION_CASE, check_host_until, grade_served, stopped_report};
 use gcl_harness::fuzz::host::{RunError, unreached};
+use gcl_harness::host_check::{CheckHostOptions, SESSION_CASE, check_host_until, grade_served, stopped_report};
 use gcl_harness::report::Verdict;
 
 use super::fuzz_host::HostArgs;
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK};
-use std::io::{Read, Write};
-use std::os::fd::AsFd;
-use gcl_harness::host_check_serve::{ServeOptions, Served, serve};
 use gcl_harness::fuzz::host::{Weights, fresh_schedule};
+use gcl_harness::host_check_serve::{ServeOptions, Served, serve};
 use gcl_harness::sim::misbehave::Schedule;
 use gcl_model::Fault;
 use gcl_model::escape::printable;
 use nix::sys::signal::{SigSet, SigmaskHow, Signal, pthread_sigmask};
 use nix::sys::signalfd::SignalFd;
+use std::io::{Read, Write};
+use std::os::fd::AsFd;
 
 /// `gcl check-host`'s hang timeout when `--timeout-hang` is not given: a perfect hand never
 /// goes silent, so a host silent this long waits for nothing it will get; above the 5 to 15 s
@@ -225,7 +225,12 @@ const ASSUMED_ANSWERS: u32 = 8;
 const MAX_PLANNED: usize = 3;
 
 /// Runs `gcl check-host --serve`.
-pub fn run_serve(host: &HostArgs, args: &ServeArgs, seed: u64, save_session: Option<&std::path::Path>) -> anyhow::Result<u8> {
+pub fn run_serve(
+    host: &HostArgs,
+    args: &ServeArgs,
+    seed: u64,
+    save_session: Option<&std::path::Path>,
+) -> anyhow::Result<u8> {
     let mut run = host.host_run(seed, CHECK_HANG_DEFAULT)?;
     let schedule = match args.misbehave {
         Some((s, i)) => fresh_schedule(s, i, &args.ops.clone().unwrap_or_default(), MAX_PLANNED, ASSUMED_ANSWERS),

@@ -119,7 +119,6 @@ pub struct DeviceArgs {
     pub shard: Option<gcl_harness::fuzz::shard::Shard>,
 }
 
-
 /// Runs `gcl fuzz`.
 pub fn run(a: Args) -> anyhow::Result<u8> {
     match a.command {

@@ -56,7 +56,6 @@ enum Command {
     },
 }
 
-
 /// The suite directory, or a clear error when there is none: outside the repository the
 /// default `vectors/suite` does not exist, and listing 870 "missing" files, or advising a
 /// regenerate that would write them into the current directory, helps nobody.
