@@ -329,7 +329,7 @@ pub struct RunControl {
     /// Run the framing pre-flight before the first case.
     pub preflight: bool,
     /// Before a run with abort-timing cases on a hand outside this process, close the hand
-    /// once and compare the time with the model's ([`crate::fuzz::device::MotionProbe`], the
+    /// once and compare the time with the model's ([`crate::motion::MotionProbe`], the
     /// fuzzer's probe): a hand whose motions end at once cannot take a ^C mid-motion, so those
     /// cases are SKIP with that reason (`--assume-real-time` turns the probe off).
     pub real_time_probe: bool,
@@ -1045,8 +1045,8 @@ fn motion_time(
     policy: &DeadlinePolicy,
     baud: Option<u32>,
     after_reset: bool,
-) -> Option<crate::fuzz::device::NotRealTime> {
-    let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+) -> Option<crate::motion::NotRealTime> {
+    let probe = crate::motion::MotionProbe::new(&opts.profile)?;
     let probe = match after_reset {
         true => probe.after_reset(&opts.profile).unwrap_or(probe),
         false => probe,

@@ -13,6 +13,7 @@
 // way (`gcl_harness::...`) from either side.
 extern crate self as gcl_harness;
 
+pub mod actions;
 pub mod align;
 pub mod certify;
 pub mod conform;
@@ -21,6 +22,7 @@ pub mod digest;
 pub mod fuzz;
 pub mod host_check;
 pub mod host_check_serve;
+pub mod motion;
 pub mod outputs;
 pub mod preflight;
 pub mod record;

@@ -632,15 +632,15 @@ fn every_test_left_out_of_the_default_run_is_run_by_ci() {
 /// The layers of the harness library, lowest first: a top-level module may use its own layer
 /// and the ones below, never one above (the crate split follows these lines).
 const LAYERS: &[&[&str]] = &[
-    // the hand on its transports: the simulator, output files, recording and replay
-    &["outputs", "record", "replay", "sim"],
-    // conformance: the suite and its vectors, alignment, triage, pre-flight, deadlines, the runner, certificates, reports
+    // the hand on its transports: the simulator, output files and digests, recording and replay
+    &["digest", "outputs", "record", "replay", "sim"],
+    // conformance: the suite, its vectors and its cases built from host actions, alignment, triage, pre-flight, deadlines, the motion probe, the runner, certificates, reports
     &[
+        "actions",
         "align",
         "certify",
         "conform",
         "deadline",
-        "known_failures",
         "motion",
         "preflight",
         "report",
@@ -649,7 +649,7 @@ const LAYERS: &[&[&str]] = &[
         "vectors",
     ],
     // the fuzzers (device, host, merge, shard) and the host check built on the host fuzzer's sessions
-    &["fuzz", "host_check"],
+    &["fuzz", "host_check", "host_check_serve"],
     // the command line (the `gcl` binary)
     &["cli"],
 ];

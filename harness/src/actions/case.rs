@@ -7,7 +7,7 @@
 //!
 //! A shadow [`Device`] walks the same bytes while the case is assembled: it gives the
 //! RealTime layout a block is encoded with, the model's positions for the bands, and the
-//! coverage features ([`super::coverage`]), all through the model's public API.
+//! coverage features (`fuzz::device::coverage` counts them), all through the model's public API.
 
 use std::collections::BTreeSet;
 use std::sync::Arc;
@@ -16,7 +16,7 @@ use std::time::Duration;
 use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
 
-use super::action::HostAction;
+use super::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
 use crate::suite::build::{CaseB, build_from, capture_plan, capture_plan_on, value_range};
@@ -157,7 +157,7 @@ enum ShapeKind {
     Block(bool),
 }
 
-pub(super) fn mpe(p: &Profile, motor: u8) -> i64 {
+pub(crate) fn mpe(p: &Profile, motor: u8) -> i64 {
     p.param_id("MPE").map_or(0, |id| p.default_for(id, motor))
 }
 
@@ -241,7 +241,7 @@ pub fn build_case_sending(
 /// The model a case is built on: the profile's hand as the fuzzer judges it, or one that holds
 /// a hypothesis about the hand (see `variant`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Model {
+pub(crate) enum Model {
     /// The profile's hand.
     Profile,
     /// A hypothesis about the hand's, to be asked of the hand.
@@ -287,7 +287,7 @@ impl BuiltCase {
 /// [`build_case_sending`] with a model built from `config`, not the profile's own hand: what a
 /// hand with that difference would answer, shaped as any case (see `variant`).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn build_case_on(
+pub(crate) fn build_case_on(
     p: &Arc<Profile>,
     on: (&DeviceConfig, Model),
     actions: &[HostAction],
@@ -852,7 +852,7 @@ mod tests {
         assert!(decisions(&past).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&past));
         // A finding of it says so: `[INFO: rests on seed-motion-model]`.
         let p = Profile::builtin("seed").unwrap();
-        let (level, rests_on) = super::super::Finding::binding(&p, &past.rests_on(None));
+        let (level, rests_on) = crate::fuzz::device::Finding::binding(&p, &past.rests_on(None));
         assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
         // IO from the open stop ends short of its goal: the model's 16 is the same decision's.
         let open = wide_case(&[HostAction::Line("2IO".into())]).expect("a case");

@@ -375,7 +375,7 @@ fn relation(name: &str, ratio: f64, pairs: &[(i64, i64)]) -> Option<Relation> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::action::HostAction;
+    use super::super::HostAction;
     use super::super::case::build_case;
     use gcl_model::Profile;
     use gcl_transcript::{Piece, Transcript};
