@@ -1298,13 +1298,4 @@ mod tests {
         assert!(kept.lower_bound_ms > fresh.lower_bound_ms + 1000.0, "{fresh:?} {kept:?}");
         assert!(kept.motion_ms > fresh.motion_ms + 1000.0, "{fresh:?} {kept:?}");
     }
-
-    #[test]
-    fn level_filter() {
-        assert!(LevelFilter::Must.admits(Level::Must));
-        assert!(!LevelFilter::Must.admits(Level::Should));
-        assert!(LevelFilter::Should.admits(Level::Should));
-        assert!(!LevelFilter::Should.admits(Level::Info));
-        assert!(LevelFilter::All.admits(Level::Info));
-    }
 }

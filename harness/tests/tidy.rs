@@ -691,7 +691,7 @@ fn without_literals(code: &str) -> String {
             // a char literal ('x', '\n', '\''), not a lifetime
             let rest = &code[i + 1..];
             let len = if rest.starts_with('\\') {
-                rest[1..].find('\'').map(|k| k + 2)
+                rest.get(2..).and_then(|r| r.find('\'')).map(|k| k + 2)
             } else {
                 rest.chars().next().map(char::len_utf8)
             };
@@ -804,9 +804,7 @@ fn module_graph(src: &str) -> std::collections::BTreeMap<String, std::collection
                 if at > 0 && (b[at - 1].is_ascii_alphanumeric() || b[at - 1] == b'_' || b[at - 1] == b':') {
                     continue;
                 }
-                let mut base: Vec<&str> = if root == "crate::" || root == "gcl_harness::" {
-                    Vec::new()
-                } else if me.is_empty() {
+                let mut base: Vec<&str> = if root == "crate::" || root == "gcl_harness::" || me.is_empty() {
                     Vec::new()
                 } else {
                     me.split("::").collect()

@@ -441,3 +441,17 @@ impl LevelFilter {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_filter() {
+        assert!(LevelFilter::Must.admits(Level::Must));
+        assert!(!LevelFilter::Must.admits(Level::Should));
+        assert!(LevelFilter::Should.admits(Level::Should));
+        assert!(!LevelFilter::Should.admits(Level::Info));
+        assert!(LevelFilter::All.admits(Level::Info));
+    }
+}
