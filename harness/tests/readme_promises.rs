@@ -449,7 +449,10 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "A case rests on the model's joint stops when the model answers it otherwise with the stops taken away",
-        &["harness/src/actions/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision"],
+        &[
+            "harness/src/actions/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision",
+            "harness/src/fuzz/device/mod.rs::a_finding_past_the_joint_stop_is_info",
+        ],
     ),
     (
         "`--write-budget N` caps EEPROM writes (restores included) over the whole run",

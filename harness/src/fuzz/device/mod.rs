@@ -1966,6 +1966,18 @@ pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
 mod tests {
     use super::*;
 
+    /// A case that drives the fingers past the model's joint stop rests on seed-motion-model
+    /// (see `actions::case`'s `a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision`),
+    /// and a finding of it says so: `[INFO: rests on seed-motion-model]`.
+    #[test]
+    fn a_finding_past_the_joint_stop_is_info() {
+        let p = Profile::builtin("seed").unwrap();
+        let past = build_case(&p, &[HostAction::Line("C".into()), HostAction::Line("IC".into())], "t", "t", true, true)
+            .expect("a case");
+        let (level, rests_on) = Finding::binding(&p, &past.rests_on(None));
+        assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
+    }
+
     /// Issue 29 item 2: a campaign that draws only cases it drops ends after [`DROP_LIMIT`] of
     /// them in a row, saying why; a case run in between starts the count again.
     #[test]
