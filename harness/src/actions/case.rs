@@ -29,7 +29,7 @@ use gcl_transcript::{Requirement, Transcript};
 pub struct BuiltCase {
     /// The golden transcript (preamble, the actions, a restore of the EEPROM if it was written).
     pub transcript: Transcript,
-    /// Coverage features the shadow model reached (see [`super::coverage`]).
+    /// Coverage features the shadow model reached (counted by `fuzz::device::coverage`).
     pub features: BTreeSet<String>,
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
