@@ -40,7 +40,7 @@ use gcl_transcript::{Form, Transcript};
 use serde::{Deserialize, Serialize};
 
 use crate::replay::{ReplayOutcome, replay};
-use crate::triage::{expected_tokens, is_reordering};
+use crate::suite::Case;
 
 /// The model's run of a case: its answers as one stream, each byte tagged with the step whose
 /// input it answers.
@@ -350,7 +350,7 @@ fn carry(hand: &[u8], at: usize, model: &[u8], pe: &[u8]) -> Option<usize> {
 /// The command word of a line as the signature shows it: the model's name for a command it
 /// parses, `CR` for an empty line, else the first word without a motor prefix.
 pub fn command_word(p: &Profile, line: &[u8]) -> String {
-    crate::triage::command_of(line, false, p)
+    command_of(line, false, p)
 }
 
 /// The signature of a failed replay of a case whose model run is `run`; `None` for a pass.
@@ -383,7 +383,7 @@ pub fn signature(
 /// the signature of the step read in.
 fn step_fallback(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
     let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
-    let (s, _) = crate::triage::step_signature(&case, out, p)?;
+    let (s, _) = step_signature(&case, out, p)?;
     let kind = match s.kind.as_str() {
         "missing-answer" => "missing",
         "flood" => "extra",
@@ -795,11 +795,7 @@ fn stopped_by_abort(p: &Profile, t: &Transcript, owner: usize) -> String {
 /// The command at step `i` for a link failure: the step's own line.
 fn command_at(p: &Profile, t: &Transcript, i: usize) -> String {
     let sent = t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    crate::triage::command_of(
-        &sent,
-        t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)),
-        p,
-    )
+    command_of(&sent, t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)), p)
 }
 
 /// Among the lines step `owner` sent, the one whose answer holds model position `x`, and where
@@ -966,4 +962,246 @@ fn differing_motors(p: &Profile, line: &[u8], actual: &str, golden: &str) -> Str
         return String::new();
     }
     motors.iter().zip(a.iter().zip(&e)).filter(|(_, (x, tok))| !tok.accepts(x)).map(|(m, _)| m.to_string()).collect()
+}
+
+/// Where one failing case parts from its golden.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Signature {
+    /// What groups compare: one bug, one key ([`crate::align::FindingSignature::key`]).
+    pub key: String,
+    /// The command being answered.
+    pub command: String,
+    /// The kind of difference (see [`crate::align`]).
+    pub kind: String,
+    /// What the difference concerns (a parameter, a RealTime field, status bits), if anything.
+    pub detail: String,
+    /// For a value read back: the command before it that decided the value.
+    pub cause: String,
+}
+
+/// The signature of a failed replay by the step it failed in, the command that step sent
+/// and the first differing line: what [`crate::align`] falls back on when the model's run of
+/// the case cannot be tagged. Kinds: framing, status, order, value, missing-answer, flood,
+/// link.
+pub fn step_signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Option<(Signature, Option<String>)> {
+    let step = outcome.failed_step()?;
+    let t = &case.transcript;
+    let golden = t.steps.get(step.min(t.steps.len().saturating_sub(1)));
+    let sent = golden.and_then(|s| s.send.as_ref()).map(|h| h.bytes.as_slice()).unwrap_or_default();
+    let hex = golden.is_some_and(|s| s.expect.segments.iter().any(|g| g.form == Form::Hex))
+        || golden.and_then(|s| s.send.as_ref()).is_some_and(|h| h.form == Form::Hex);
+    let command = command_of(sent, hex, profile);
+    let eol = profile.framing.line_ending.as_bytes();
+    let prompt = profile.framing.prompt.as_bytes();
+    let framing_text = gcl_transcript::escape_text(&[eol, prompt].concat());
+    let (kind, hint) = match outcome {
+        ReplayOutcome::Pass(_) => return None,
+        ReplayOutcome::Disconnected(_) => ("link", None),
+        ReplayOutcome::Flooded(_) => ("flood", None),
+        ReplayOutcome::Timeout(to) => {
+            if to.offset > 0 && !to.expected.is_empty() && framing_text.ends_with(&to.expected) {
+                ("framing", None)
+            } else {
+                ("missing-answer", None)
+            }
+        }
+        ReplayOutcome::Mismatch(m) if m.trailing => ("framing", None),
+        ReplayOutcome::Mismatch(m) => {
+            let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            classify(got, m.offset, &m.expected, &m.expected_full, sent, profile)
+        }
+    };
+    let key = format!("{kind} at {command}");
+    Some((Signature { key, command, kind: kind.to_string(), detail: String::new(), cause: String::new() }, hint))
+}
+
+/// The command word of a step's first line: `^C`, `CR`, `RealTime block`, or the word itself
+/// without its motor prefix.
+pub(crate) fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
+    let fr = &profile.framing;
+    if sent.first() == Some(&fr.abort) {
+        return "^C".to_string();
+    }
+    if hex {
+        return "RealTime block".to_string();
+    }
+    let line = sent.split(|b| *b == fr.terminator).next().unwrap_or_default();
+    if line.iter().all(|b| b.is_ascii_whitespace()) {
+        return "CR".to_string();
+    }
+    if let Ok(Line::Command(c)) = parse_line(profile, line) {
+        return profile.command(c.command).name.clone();
+    }
+    // A line the model refuses: its first word, without a motor prefix, as sent.
+    let text = String::from_utf8_lossy(line);
+    let word = text.split_whitespace().next().unwrap_or_default();
+    let bare = word.trim_start_matches(|c: char| profile.prefixes.iter().any(|p| p.char == c.to_ascii_uppercase()));
+    let w = if bare.is_empty() { word } else { bare };
+    w.chars().take(16).collect::<String>().to_ascii_uppercase()
+}
+
+fn classify(
+    got: &[u8],
+    offset: usize,
+    expected_rest: &str,
+    golden: &str,
+    sent: &[u8],
+    profile: &Profile,
+) -> (&'static str, Option<String>) {
+    let fr = &profile.framing;
+    let offset = offset.min(got.len());
+    let echo_len =
+        if fr.echo { sent.iter().take_while(|b| **b != fr.terminator && **b != fr.abort).count() } else { 0 };
+    if offset < echo_len {
+        return ("framing", Some("echo".to_string()));
+    }
+    let is_eol = |b: &u8| matches!(b, b'\n' | b'\r');
+    let line_start = got[..offset].iter().rposition(is_eol).map_or(0, |i| i + 1);
+    let line_end = got[offset..].iter().position(is_eol).map_or(got.len(), |i| offset + i);
+    let actual_line = &got[line_start..line_end];
+    // The golden's line at the same place: as many line endings in as the answer has.
+    let line_no = {
+        let eol = fr.line_ending.as_bytes();
+        got[..line_start].windows(eol.len().max(1)).filter(|w| *w == eol).count()
+    };
+    let expected_line = {
+        let text = golden.trim_matches('"');
+        let eol = gcl_transcript::escape_text(fr.line_ending.as_bytes());
+        match text.split(eol.as_str()).nth(line_no) {
+            Some(l) if !eol.is_empty() => l.to_string(),
+            _ => {
+                let mut s = gcl_transcript::escape_text(&got[line_start..offset]);
+                let rest = expected_rest.split("\\n").next().unwrap_or_default();
+                s.push_str(rest.split("\\r").next().unwrap_or_default());
+                s
+            }
+        }
+    };
+    let status_word = b"ERR";
+    let is_status = |l: &[u8]| l.starts_with(status_word);
+    if is_status(actual_line) || expected_line.starts_with("ERR") {
+        let number =
+            |l: &str| l.split_whitespace().nth(1).filter(|n| n.bytes().all(|b| b.is_ascii_digit())).map(str::to_string);
+        let hint = if expected_line.starts_with("ERR") {
+            number(&expected_line)
+        } else {
+            number(&String::from_utf8_lossy(actual_line))
+        };
+        return ("status", hint);
+    }
+    let prompt = fr.prompt.trim_end();
+    if actual_line.starts_with(prompt.as_bytes()) || expected_line.starts_with(prompt) {
+        return ("framing", None);
+    }
+    let a_eol = got.get(offset).is_some_and(is_eol);
+    let e_eol = expected_rest.starts_with("\\n") || expected_rest.starts_with("\\r");
+    if a_eol && e_eol {
+        return ("framing", None);
+    }
+    // One side ends the line where the other goes on, or the content differs.
+    let kind = if is_reordering(&String::from_utf8_lossy(actual_line), &expected_line) { "order" } else { "value" };
+    (kind, None)
+}
+
+/// Whether `actual` holds the tokens of `expected` in another order: the tokens do not match
+/// in place, but each expected token (a literal, or an elision `{int A..B}` with its range,
+/// or any other elision) matches a different actual token. A wrong value that happens to fit
+/// a wide elision elsewhere is still a wrong value unless every token finds a partner.
+pub fn is_reordering(actual: &str, expected: &str) -> bool {
+    let a: Vec<&str> = actual.split_whitespace().collect();
+    let e = expected_tokens(expected);
+    if a.len() != e.len() || a.len() < 2 || a.len() > 64 {
+        return false;
+    }
+    if a.iter().zip(&e).all(|(x, t)| t.accepts(x)) {
+        return false;
+    }
+    // A perfect matching of expected tokens to actual ones (Kuhn's augmenting paths).
+    fn augment(i: usize, e: &[Token], a: &[&str], seen: &mut [bool], owner: &mut [Option<usize>]) -> bool {
+        for j in 0..a.len() {
+            if !seen[j] && e[i].accepts(a[j]) {
+                seen[j] = true;
+                if owner[j].is_none_or(|k| augment(k, e, a, seen, owner)) {
+                    owner[j] = Some(i);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+    let mut owner = vec![None; a.len()];
+    (0..e.len()).all(|i| augment(i, &e, &a, &mut vec![false; a.len()], &mut owner))
+}
+
+/// One expected token of a golden line: a literal, an integer in a range, or anything.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Token {
+    /// These characters exactly.
+    Literal(String),
+    /// A decimal integer within the range (inclusive).
+    Int(i64, i64),
+    /// Any token (an elision without a range).
+    Any,
+}
+
+impl Token {
+    /// Whether an actual token fits.
+    pub fn accepts(&self, actual: &str) -> bool {
+        match self {
+            Token::Literal(l) => l == actual,
+            Token::Int(lo, hi) => actual.parse::<i64>().is_ok_and(|v| (*lo..=*hi).contains(&v)),
+            Token::Any => true,
+        }
+    }
+}
+
+/// The tokens of a golden line as written (escaped text with elisions): `{int A..B}` keeps its
+/// range, any other elision matches anything.
+pub fn expected_tokens(text: &str) -> Vec<Token> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut elision: Option<String> = None;
+    let flush = |cur: &mut String, out: &mut Vec<Token>| {
+        if !cur.is_empty() {
+            out.push(Token::Literal(std::mem::take(cur)));
+        }
+    };
+    for ch in text.chars() {
+        match (&mut elision, ch) {
+            (None, '{') => {
+                flush(&mut cur, &mut out);
+                elision = Some(String::new());
+            }
+            (Some(body), '}') => {
+                let body = std::mem::take(body);
+                elision = None;
+                let range = body.strip_prefix("int ").and_then(|r| {
+                    let (lo, hi) = r.trim().split_once("..")?;
+                    Some((lo.parse().ok()?, hi.parse().ok()?))
+                });
+                out.push(range.map_or(Token::Any, |(lo, hi)| Token::Int(lo, hi)));
+            }
+            (Some(body), c) => body.push(c),
+            (None, c) if c.is_whitespace() => flush(&mut cur, &mut out),
+            (None, c) => cur.push(c),
+        }
+    }
+    flush(&mut cur, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reordered_values_are_told_from_changed_ones() {
+        assert!(is_reordering("150 1000 1000 1000", "1000 1000 1000 150"));
+        assert!(is_reordering("150 1000 1000 1000", "{int 990..1010} 1000 1000 150"));
+        assert!(!is_reordering("150 1000 1000 1001", "1000 1000 1000 150"));
+        assert!(!is_reordering("1000 1000 1000 150", "1000 1000 1000 150"));
+        // A wrong value is not an order because an elision elsewhere is wide (mcv-ignored).
+        assert!(!is_reordering("793 793", "{int 144..298} {int 765..1744}"));
+        assert!(is_reordering("800 200", "{int 144..298} {int 765..1744}"));
+    }
 }

@@ -20,10 +20,12 @@ use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
 };
+/// Which levels run (kept here, where `conform` options name it).
+pub use crate::suite::LevelFilter;
 use crate::suite::{self, Case};
 use gcl_host::link::{Link, LinkError, SimLink, byte_time};
 use gcl_host::target::{OpenOptions, Target, open};
-use gcl_transcript::{Form, Level, Requirement};
+use gcl_transcript::{Form, Requirement};
 
 /// Why a conformance run could not run (a failing hand is a report, not an error).
 #[derive(Debug, thiserror::Error)]
@@ -99,42 +101,6 @@ pub enum KnownFailuresError {
         /// What is wrong with it.
         error: Box<KnownFailuresError>,
     },
-}
-
-/// Which levels to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LevelFilter {
-    /// MUST only.
-    Must,
-    /// MUST and SHOULD.
-    Should,
-    /// Every level: MUST, SHOULD, MAY, INFO.
-    All,
-}
-
-impl LevelFilter {
-    /// Whether a case of `level` runs.
-    pub fn admits(self, level: Level) -> bool {
-        match self {
-            LevelFilter::Must => level == Level::Must,
-            LevelFilter::Should => matches!(level, Level::Must | Level::Should),
-            LevelFilter::All => true,
-        }
-    }
-
-    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
-    pub fn from_name(name: &str) -> Option<LevelFilter> {
-        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
-    }
-
-    /// The lower-case name.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            LevelFilter::Must => "must",
-            LevelFilter::Should => "should",
-            LevelFilter::All => "all",
-        }
-    }
 }
 
 /// One entry of a known-failures file.
@@ -363,7 +329,7 @@ pub struct RunControl {
     /// Run the framing pre-flight before the first case.
     pub preflight: bool,
     /// Before a run with abort-timing cases on a hand outside this process, close the hand
-    /// once and compare the time with the model's ([`crate::fuzz::device::MotionProbe`], the
+    /// once and compare the time with the model's ([`crate::motion::MotionProbe`], the
     /// fuzzer's probe): a hand whose motions end at once cannot take a ^C mid-motion, so those
     /// cases are SKIP with that reason (`--assume-real-time` turns the probe off).
     pub real_time_probe: bool,
@@ -1367,8 +1333,8 @@ fn motion_time(
     policy: &DeadlinePolicy,
     baud: Option<u32>,
     after_reset: bool,
-) -> Option<crate::fuzz::device::NotRealTime> {
-    let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+) -> Option<crate::motion::NotRealTime> {
+    let probe = crate::motion::MotionProbe::new(&opts.profile)?;
     let probe = match after_reset {
         true => probe.after_reset(&opts.profile).unwrap_or(probe),
         false => probe,
@@ -1619,14 +1585,5 @@ mod tests {
         let kept = bound_of(&[("cmd-c", false), ("cmd-hi", true)]);
         assert!(kept.lower_bound_ms > fresh.lower_bound_ms + 1000.0, "{fresh:?} {kept:?}");
         assert!(kept.motion_ms > fresh.motion_ms + 1000.0, "{fresh:?} {kept:?}");
-    }
-
-    #[test]
-    fn level_filter() {
-        assert!(LevelFilter::Must.admits(Level::Must));
-        assert!(!LevelFilter::Must.admits(Level::Should));
-        assert!(LevelFilter::Should.admits(Level::Should));
-        assert!(!LevelFilter::Should.admits(Level::Info));
-        assert!(LevelFilter::All.admits(Level::Info));
     }
 }

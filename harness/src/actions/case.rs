@@ -7,7 +7,7 @@
 //!
 //! A shadow [`Device`] walks the same bytes while the case is assembled: it gives the
 //! RealTime layout a block is encoded with, the model's positions for the bands, and the
-//! coverage features ([`super::coverage`]), all through the model's public API.
+//! coverage features (`fuzz::device::coverage` counts them), all through the model's public API.
 
 use std::collections::BTreeSet;
 use std::sync::Arc;
@@ -16,12 +16,11 @@ use std::time::Duration;
 use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, StatusBits, parse_line};
 
-use super::action::HostAction;
+use super::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::Captured;
-use crate::suite::build::{
-    CaseB, CaseDef, FieldRule, Plan, Range, Shape, build_from, capture_plan, capture_plan_on, value_range,
-};
+use crate::suite::build::{CaseB, CaseDef, build_from, capture_plan, capture_plan_on, value_range};
+use crate::suite::plan::{FieldRule, Plan, Range, Shape};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
 
@@ -30,7 +29,7 @@ use gcl_transcript::{Requirement, Transcript};
 pub struct BuiltCase {
     /// The golden transcript (preamble, the actions, a restore of the EEPROM if it was written).
     pub transcript: Transcript,
-    /// Coverage features the shadow model reached (see [`super::coverage`]).
+    /// Coverage features the shadow model reached (counted by `fuzz::device::coverage`).
     pub features: BTreeSet<String>,
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
@@ -158,7 +157,7 @@ enum ShapeKind {
     Block(bool),
 }
 
-pub(super) fn mpe(p: &Profile, motor: u8) -> i64 {
+pub(crate) fn mpe(p: &Profile, motor: u8) -> i64 {
     p.param_id("MPE").map_or(0, |id| p.default_for(id, motor))
 }
 
@@ -242,7 +241,7 @@ pub fn build_case_sending(
 /// The model a case is built on: the profile's hand as the fuzzer judges it, or one that holds
 /// a hypothesis about the hand (see `variant`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Model {
+pub(crate) enum Model {
     /// The profile's hand.
     Profile,
     /// A hypothesis about the hand's, to be asked of the hand.
@@ -288,7 +287,7 @@ impl BuiltCase {
 /// [`build_case_sending`] with a model built from `config`, not the profile's own hand: what a
 /// hand with that difference would answer, shaped as any case (see `variant`).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn build_case_on(
+pub(crate) fn build_case_on(
     p: &Arc<Profile>,
     on: (&DeviceConfig, Model),
     actions: &[HostAction],
@@ -1008,10 +1007,7 @@ mod tests {
         // hand with its stop elsewhere is no MUST finding. C alone stops short of the stop.
         let past = wide_case(&[HostAction::Line("C".into()), HostAction::Line("IC".into())]).expect("a case");
         assert!(decisions(&past).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&past));
-        // A finding of it says so: `[INFO: rests on seed-motion-model]`.
-        let p = Profile::builtin("seed").unwrap();
-        let (level, rests_on) = super::super::Finding::binding(&p, &past.rests_on(None));
-        assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
+        // (A finding of it says so: `fuzz::device`'s `a_finding_past_the_joint_stop_is_info`.)
         // IO from the open stop ends short of its goal: the model's 16 is the same decision's.
         let open = wide_case(&[HostAction::Line("2IO".into())]).expect("a case");
         assert!(decisions(&open).iter().any(|d| d == "seed-motion-model"), "{:?}", decisions(&open));
