@@ -71,15 +71,15 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "real time, every byte paced at the hand's BAUD (9600 at the factory) in both directions",
         &[
-            "harness/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
-            "harness/src/sim/engine.rs::host_bytes_reach_the_model_at_their_wire_time",
-            "harness/src/sim/engine.rs::real_time_waits_for_the_clock",
+            "line/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
+            "line/src/sim/engine.rs::host_bytes_reach_the_model_at_their_wire_time",
+            "line/src/sim/engine.rs::real_time_waits_for_the_clock",
         ],
     ),
     (
         "`PSET BAUD`/`FSET BAUD` changing the pace after their answer",
         &[
-            "harness/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
+            "line/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
             "harness/tests/host_compat.rs::a_library_that_changes_the_baud_rate_reopens_to_one_fresh_prompt",
         ],
     ),
@@ -87,7 +87,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         "what the host left unread is discarded on close",
         &[
             "harness/tests/sim_port.rs::an_answer_left_unread_is_gone_after_a_close_and_reopen",
-            "harness/src/sim/engine.rs::output_without_a_listener_is_lost_and_unread_output_is_discarded",
+            "line/src/sim/engine.rs::output_without_a_listener_is_lost_and_unread_output_is_discarded",
         ],
     ),
     (
@@ -97,7 +97,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "Nothing is dropped while a host reads slowly: the simulator stops reading it instead.",
         &[
-            "harness/src/sim/engine.rs::a_host_that_does_not_read_is_not_read_and_loses_nothing",
+            "line/src/sim/engine.rs::a_host_that_does_not_read_is_not_read_and_loses_nothing",
             "harness/tests/sim_port.rs::ten_thousand_pipelined_commands_lose_no_byte_over_the_pty_and_tcp",
         ],
     ),
@@ -158,7 +158,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "a case that homes the fingers after one that closed them counts the move back",
-        &["harness/src/conform.rs::the_wire_bound_counts_the_echo_once_and_where_the_case_before_left_the_fingers"],
+        &["conformance/src/conform.rs::the_wire_bound_counts_the_echo_once_and_where_the_case_before_left_the_fingers"],
     ),
     // Certificates, inputs, outputs.
     (
@@ -222,7 +222,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[
             "harness/tests/adversarial.rs::regenerate_never_writes_through_a_symlink",
             "harness/tests/adversarial.rs::outputs_never_write_through_or_remove_a_users_link",
-            "harness/src/outputs.rs::writes_replace_files_and_links_never_their_targets",
+            "line/src/outputs.rs::writes_replace_files_and_links_never_their_targets",
         ],
     ),
     (
@@ -248,21 +248,21 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "× 2 + 50 ms (`--margin MS`), at least 500 ms on serial and 200 ms on TCP targets",
-        &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
+        &["conformance/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
     ),
     (
         "reads or writes its EEPROM, keeps at least its golden `within`",
-        &["harness/src/deadline.rs::eeprom_steps_keep_their_golden_deadline"],
+        &["conformance/src/deadline.rs::eeprom_steps_keep_their_golden_deadline"],
     ),
     (
         "one that stopped short (a prompt without its space) is judged at once",
-        &["harness/src/replay.rs::a_short_answer_times_out_at_the_step_deadline"],
+        &["line/src/replay.rs::a_short_answer_times_out_at_the_step_deadline"],
     ),
     (
         "fails the case as a flood",
         &[
             "harness/tests/conform_runner.rs::a_hand_that_floods_costs_bounded_memory_and_reports_and_ends_the_run",
-            "harness/src/replay.rs::a_hand_that_floods_an_open_elision_fails_with_a_bounded_prefix",
+            "line/src/replay.rs::a_hand_that_floods_an_open_elision_fails_with_a_bounded_prefix",
         ],
     ),
     (
@@ -416,7 +416,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "minimization stops at `--duration`",
-        &["harness/src/fuzz/device/mod.rs::minimization_stops_at_the_campaigns_duration"],
+        &["fuzzers/src/fuzz/device/mod.rs::minimization_stops_at_the_campaigns_duration"],
     ),
     (
         "a listed case that fails otherwise is a FAIL, `fails otherwise than its known failure`",
@@ -428,7 +428,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "there they are known only on the command the baseline had them on",
-        &["harness/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
+        &["fuzzers/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
     ),
     (
         "so a flood is one `unterminated line` finding whether it ends or the budget stops it",
@@ -437,21 +437,21 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "Against such a hand the strain at rest and what VERS says are the hand's own",
         &[
-            "harness/src/actions/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",
+            "conformance/src/actions/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",
         ],
     ),
     (
         "not on how an earlier answer that passed is written",
         &[
-            "harness/src/fuzz/device/mod.rs::a_bug_after_an_answer_resting_on_an_open_format_is_must",
-            "harness/src/fuzz/device/mod.rs::a_finding_rests_on_its_failing_steps_decisions_and_earlier_state_decisions",
+            "fuzzers/src/fuzz/device/mod.rs::a_bug_after_an_answer_resting_on_an_open_format_is_must",
+            "fuzzers/src/fuzz/device/mod.rs::a_finding_rests_on_its_failing_steps_decisions_and_earlier_state_decisions",
         ],
     ),
     (
         "A case rests on the model's joint stops when the model answers it otherwise with the stops taken away",
         &[
-            "harness/src/actions/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision",
-            "harness/src/fuzz/device/mod.rs::a_finding_past_the_joint_stop_is_info",
+            "conformance/src/actions/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision",
+            "fuzzers/src/fuzz/device/mod.rs::a_finding_past_the_joint_stop_is_info",
         ],
     ),
     (
@@ -523,7 +523,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         "`hang in host.py:read_prompt`",
         &[
             "harness/tests/host_verdicts.rs::one_wait_without_a_deadline_is_one_hang_named_by_its_code",
-            "harness/src/fuzz/host/detect.rs::a_python_host_blocked_in_pyserial_is_signed_by_the_call_in_its_program",
+            "fuzzers/src/fuzz/host/detect.rs::a_python_host_blocked_in_pyserial_is_signed_by_the_call_in_its_program",
         ],
     ),
     (
@@ -536,13 +536,13 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "`python port hang-up (pyserial) not handled`",
-        &["harness/src/fuzz/host/detect.rs::a_hang_up_is_one_signature_whatever_pyserial_raised_it_as"],
+        &["fuzzers/src/fuzz/host/detect.rs::a_hang_up_is_one_signature_whatever_pyserial_raised_it_as"],
     ),
     (
         "`exit-code: not an accepted code, in supervisory mode`",
         &[
             "harness/tests/host_verdicts.rs::one_exit_habit_is_one_finding_whatever_the_code",
-            "harness/src/fuzz/host/mod.rs::an_unexpected_exit_is_signed_by_its_class_and_mode_not_its_code",
+            "fuzzers/src/fuzz/host/mod.rs::an_unexpected_exit_is_signed_by_its_class_and_mode_not_its_code",
         ],
     ),
     (
@@ -564,8 +564,8 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "A crash's signature is its kind and where it was raised, never the callers that led there",
         &[
-            "harness/src/fuzz/host/detect.rs::one_exception_from_one_place_is_one_signature_whatever_the_caller",
-            "harness/src/fuzz/host/detect.rs::asan_reports_are_signed_by_the_hosts_frame_nearest_the_bad_access",
+            "fuzzers/src/fuzz/host/detect.rs::one_exception_from_one_place_is_one_signature_whatever_the_caller",
+            "fuzzers/src/fuzz/host/detect.rs::asan_reports_are_signed_by_the_hosts_frame_nearest_the_bad_access",
         ],
     ),
     (
@@ -629,8 +629,8 @@ const PROMISES: &[(&str, &[&str])] = &[
         "The hand runs in fast time, unpaced, by default; `--time real` gives a hand paced at its BAUD",
         &[
             "harness/tests/readme_promises.rs::the_host_fuzzers_hand_is_unpaced_by_default_and_paced_at_its_baud_in_real_time",
-            "harness/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
-            "harness/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
+            "line/src/sim/engine.rs::pacing_offers_a_byte_once_its_wire_time_has_passed",
+            "line/src/sim/engine.rs::the_hands_baud_sets_the_pace_after_the_answer_that_sets_it",
         ],
     ),
     // Host libraries in Python, C++ and CI.
@@ -789,7 +789,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         "turns a script of host lines and blocks into a golden transcript",
         &[
             "harness/tests/transcript_cli.rs::a_recording_of_the_simulator_replays_against_it",
-            "harness/src/record.rs::records_lines_loops_blocks_and_banners",
+            "line/src/record.rs::records_lines_loops_blocks_and_banners",
         ],
     ),
     (
@@ -797,7 +797,7 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[
             "harness/tests/conform_mutants.rs::certificates_are_written_and_tampering_is_caught",
             "harness/tests/hardening.rs::signed_certificates_verify_and_forgeries_do_not",
-            "harness/src/certify.rs::generated_keys_load_back_and_are_never_overwritten",
+            "conformance/src/certify.rs::generated_keys_load_back_and_are_never_overwritten",
         ],
     ),
     (
@@ -822,13 +822,13 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "runs the campaign's run indices K-1, K-1+N, ...",
         &[
-            "harness/src/fuzz/shard.rs::shards_partition_the_indices",
+            "fuzzers/src/fuzz/shard.rs::shards_partition_the_indices",
             "harness/tests/fuzz_merge.rs::merged_host_shards_equal_one_machine_running_the_same_runs",
         ],
     ),
     (
         "A step whose answer has not started by its deadline waits up to 2 s",
-        &["harness/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
+        &["conformance/src/deadline.rs::deadlines_follow_the_model_with_a_margin_and_a_floor"],
     ),
     (
         "`--no eeprom`, `--no motion`, `--no realtime` and `--no abort-timing` refuse what a case may do",
@@ -864,7 +864,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "Without `--runs` or `--duration` a campaign lasts 5 minutes, its calibration included",
         &[
-            "harness/src/fuzz/host/mod.rs::a_default_campaign_is_a_time_budget_under_ten_minutes",
+            "fuzzers/src/fuzz/host/mod.rs::a_default_campaign_is_a_time_budget_under_ten_minutes",
             "harness/tests/readme_promises.rs::fuzz_host_help_says_how_long_a_default_campaign_lasts",
         ],
     ),
@@ -872,14 +872,14 @@ const PROMISES: &[(&str, &[&str])] = &[
         "an overflow through `sscanf` or `strcpy` is signed by the host's function that called it",
         &[
             "harness/tests/host_verdicts.rs::an_overflow_through_sscanf_is_one_finding_per_function_of_the_host",
-            "harness/src/fuzz/host/detect.rs::an_overflow_through_sscanf_is_signed_by_the_hosts_function",
+            "fuzzers/src/fuzz/host/detect.rs::an_overflow_through_sscanf_is_signed_by_the_hosts_function",
         ],
     ),
     (
         "is signed by what was thrown and where: `uncaught C++ exception std::system_error in Port::check`",
         &[
             "harness/tests/host_verdicts.rs::an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where",
-            "harness/src/fuzz/host/detect.rs::an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where",
+            "fuzzers/src/fuzz/host/detect.rs::an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where",
         ],
     ),
     (
@@ -888,7 +888,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "the frames of the system's libraries it waits in (libc's `syscall`, libstdc++, Boost.Asio's `poll_read`, Poco) in the message",
-        &["harness/src/fuzz/host/detect.rs::a_hang_under_system_libraries_is_named_by_the_hosts_frame"],
+        &["fuzzers/src/fuzz/host/detect.rs::a_hang_under_system_libraries_is_named_by_the_hosts_frame"],
     ),
     (
         "(`gcl fuzz host --help` lists them)",

@@ -99,10 +99,10 @@ fn offenders(files: &[PathBuf], hit: impl Fn(&Path, &str) -> bool) -> Vec<String
 fn insta_snapshots_live_only_in_the_model() {
     let home = Path::new(ROOT).join("reference-model/tests/snapshots");
     let mut outside = Vec::new();
-    for dir in ["harness", "host", "transcript", "fuzz", "reference-model"] {
+    for dir in ["harness", "line", "conformance", "fuzzers", "host", "transcript", "fuzz", "reference-model"] {
         outside.extend(files_with_ext(dir, "snap").iter().filter(|p| !p.starts_with(&home)).map(|p| rel(p)));
     }
-    for dir in ["harness", "host", "transcript", "fuzz"] {
+    for dir in ["harness", "line", "conformance", "fuzzers", "host", "transcript", "fuzz"] {
         outside.extend(offenders(&rust_files(dir), |_, l| l.contains(concat!("insta", "::"))));
     }
     assert!(
@@ -152,6 +152,7 @@ fn the_cli_and_its_crates_stay_in_the_binary() {
             !r.starts_with("harness/src/cli/") && r != "harness/src/main.rs"
         })
         .collect();
+    lib.extend(LIBRARY_SRC.iter().flat_map(|d| rust_files(d)));
     lib.extend(rust_files("host/src"));
     let bad = offenders(&lib, |_, l| {
         ["crate::cli", "gcl_harness::cli", "mod cli", "anyhow", "clap", "indicatif"].iter().any(|w| has_word(l, w))
@@ -200,12 +201,13 @@ fn the_host_library_needs_nothing_of_the_harness() {
 
 /// Architecture invariant: profiles are data. No code compares a profile's id with a name
 /// (`p.id == "seed"`, a match arm on `"seed"`): what differs between profiles lives in the spec
-/// TOML, in the case data under `harness/suite-cases/`, or in which decisions a profile has.
+/// TOML, in the case data under `conformance/suite-cases/`, or in which decisions a profile has.
 #[test]
 fn no_code_branches_on_a_profile_id() {
     let ids: Vec<String> = gcl_model::Profile::builtin_names().map(str::to_string).collect();
     assert!(ids.iter().any(|i| i == "seed"), "{ids:?}");
     let mut files = rust_files("harness/src");
+    files.extend(LIBRARY_SRC.iter().flat_map(|d| rust_files(d)));
     files.extend(rust_files("host/src"));
     files.extend(rust_files("reference-model/src"));
     files.extend(rust_files("transcript/src"));
@@ -243,7 +245,7 @@ fn decisions_of(profile: &str) -> Vec<String> {
 #[test]
 fn cited_decisions_exist_in_the_spec() {
     let all: Vec<String> = gcl_model::Profile::builtin_names().flat_map(decisions_of).collect();
-    let mut files = rust_files("harness/src/suite");
+    let mut files = rust_files("conformance/src/suite");
     files.retain(|p| !p.ends_with("tests.rs"));
     let mut bad = Vec::new();
     let mut named = 0;
@@ -260,7 +262,7 @@ fn cited_decisions_exist_in_the_spec() {
         }
     }
     // Case scripts cite decisions as `clause: decision:ID`.
-    for p in files_with_ext("harness/suite-cases", "gcls") {
+    for p in files_with_ext("conformance/suite-cases", "gcls") {
         for (n, line) in std::fs::read_to_string(&p).unwrap().lines().enumerate() {
             if let Some(id) = line.trim().strip_prefix("clause:").and_then(|c| c.trim().strip_prefix("decision:")) {
                 named += 1;
@@ -604,7 +606,7 @@ fn every_test_left_out_of_the_default_run_is_run_by_ci() {
     let line = format!("cargo test --workspace -- --include-ignored{skips}");
     assert!(ci.lines().any(|l| l.trim_end().ends_with(&line)), ".ci/run does not run `{line}`");
     let mut files = Vec::new();
-    for dir in ["harness", "reference-model", "host", "transcript", "fuzz/src"] {
+    for dir in ["harness", "line", "conformance", "fuzzers", "reference-model", "host", "transcript", "fuzz/src"] {
         files.extend(files_with_ext(dir, "rs"));
     }
     let (mut slow, mut bad) = (0, Vec::new());
@@ -629,29 +631,28 @@ fn every_test_left_out_of_the_default_run_is_run_by_ci() {
     assert!(slow > 0);
 }
 
-/// The layers of the harness library, lowest first: a top-level module may use its own layer
-/// and the ones below, never one above (the crate split follows these lines).
+/// The library crates of the harness, lowest layer first (what the `gcl` binary's crate,
+/// `gcl-harness`, re-exports under one name).
+const LIBRARY_SRC: &[&str] = &["line/src", "conformance/src", "fuzzers/src"];
+
+/// The workspace's crates by layer, lowest first: a crate may depend on the crates of the
+/// layers below it, never on one of its own layer or above (the compiler then refuses a wrong
+/// import: the crate it would name is not a dependency).
 const LAYERS: &[&[&str]] = &[
+    // the reference model: pure, no I/O, no clock
+    &["gcl-model"],
+    // the transcript format, and the host library (links, targets, the client)
+    &["gcl-transcript", "gcl-host"],
     // the hand on its transports: the simulator, output files and digests, recording and replay
-    &["digest", "outputs", "record", "replay", "sim"],
-    // conformance: the suite, its vectors and its cases built from host actions, alignment, triage, pre-flight, deadlines, the motion probe, the runner, certificates, reports
-    &[
-        "actions",
-        "align",
-        "certify",
-        "conform",
-        "deadline",
-        "motion",
-        "preflight",
-        "report",
-        "suite",
-        "triage",
-        "vectors",
-    ],
+    &["gcl-line"],
+    // conformance: the suite, its cases built from host actions, alignment, triage, pre-flight, deadlines, the motion probe, the runner, certificates, reports, vectors
+    &["gcl-conformance"],
     // the fuzzers (device, host, merge, shard) and the host check built on the host fuzzer's sessions
-    &["fuzz", "host_check", "host_check_serve"],
-    // the command line (the `gcl` binary)
-    &["cli"],
+    &["gcl-fuzzers"],
+    // the command line (the `gcl` binary), which re-exports the layers below as `gcl_harness`
+    &["gcl-harness"],
+    // the cargo-fuzz targets
+    &["gcl-fuzz"],
 ];
 
 /// Code of a file with string and char literals emptied (their text is not a path).
@@ -869,7 +870,16 @@ fn cycles(graph: &std::collections::BTreeMap<String, std::collections::BTreeSet<
 #[test]
 fn no_circles_between_files() {
     let mut bad = Vec::new();
-    for src in ["reference-model/src", "transcript/src", "host/src", "harness/src", "fuzz/src"] {
+    for src in [
+        "reference-model/src",
+        "transcript/src",
+        "host/src",
+        "line/src",
+        "conformance/src",
+        "fuzzers/src",
+        "harness/src",
+        "fuzz/src",
+    ] {
         let graph = module_graph(src);
         for group in cycles(&graph) {
             let arrows: Vec<String> = group
@@ -882,31 +892,42 @@ fn no_circles_between_files() {
     assert!(bad.is_empty(), "modules in a circle:\n{}", bad.join("\n"));
 }
 
-/// Architecture invariant: the harness's layers (`LAYERS`) hold. No module uses one of a
-/// higher layer, and every top-level module has its layer.
+/// Architecture invariant: the workspace's layers (`LAYERS`) hold. Every crate has its layer,
+/// and its manifest names as dependencies only crates of the layers below it (the compiler does
+/// the rest); the `gcl` binary's crate holds no library module of its own (only `cli/`,
+/// `main.rs` and the re-exports of `lib.rs`).
 #[test]
-fn no_arrow_runs_up_the_harness_layers() {
-    let layer_of = |m: &str| -> Option<usize> {
-        let top = m.split("::").next().unwrap_or("");
-        LAYERS.iter().position(|l| l.contains(&top))
-    };
-    let graph = module_graph("harness/src");
+fn no_crate_depends_on_its_layer_or_one_above() {
+    let layer_of = |c: &str| LAYERS.iter().position(|l| l.contains(&c));
+    let root: toml::Table = std::fs::read_to_string(Path::new(ROOT).join("Cargo.toml")).unwrap().parse().unwrap();
+    let members: Vec<String> =
+        root["workspace"]["members"].as_array().unwrap().iter().map(|m| m.as_str().unwrap().to_string()).collect();
     let mut bad = Vec::new();
-    for (m, targets) in &graph {
-        if m.is_empty() {
-            continue;
-        }
-        let Some(from) = layer_of(m) else {
-            bad.push(format!("{m}: a top-level module with no layer in LAYERS"));
+    for dir in &members {
+        let manifest: toml::Table =
+            std::fs::read_to_string(Path::new(ROOT).join(dir).join("Cargo.toml")).unwrap().parse().unwrap();
+        let name = manifest["package"]["name"].as_str().unwrap().to_string();
+        let Some(mine) = layer_of(&name) else {
+            bad.push(format!("{dir}: crate {name} has no layer in LAYERS"));
             continue;
         };
-        for t in targets {
-            if let Some(to) = layer_of(t)
-                && to > from
-            {
-                bad.push(format!("{m} (layer {from}) -> {t} (layer {to})"));
+        for table in ["dependencies", "build-dependencies"] {
+            let deps = manifest.get(table).and_then(|t| t.as_table()).cloned().unwrap_or_default();
+            for dep in deps.keys() {
+                if let Some(theirs) = layer_of(dep)
+                    && theirs >= mine
+                {
+                    bad.push(format!("{name} (layer {mine}) -> {dep} (layer {theirs})"));
+                }
             }
         }
     }
+    assert_eq!(members.len(), LAYERS.iter().map(|l| l.len()).sum::<usize>(), "LAYERS lists every member");
+    let own: Vec<String> = std::fs::read_dir(Path::new(ROOT).join("harness/src"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !["cli", "main.rs", "lib.rs"].contains(&n.as_str()))
+        .collect();
+    assert!(own.is_empty(), "library modules in the binary's crate (they belong in a layer's crate): {own:?}");
     assert!(bad.is_empty(), "arrows up the layers:\n{}", bad.join("\n"));
 }
