@@ -454,16 +454,30 @@ fn secs(ms: u64) -> String {
     format!("{:.1} s", ms as f64 / 1000.0)
 }
 
+/// A give-up time under this (milliseconds) is no wait for the answer (see
+/// [`calibration_lines`]).
+const NO_WAIT_MS: u64 = 100;
+
 /// The host's timeouts as calibration measured them, for the console and the report: one
 /// line per kind of answer, the hang timeout, and what was left unmeasured.
 fn calibration_lines(c: &Calibration) -> Vec<String> {
     let mut lines = Vec::new();
-    if c.by_kind.is_empty() && c.unmeasured.is_empty() {
-        // No silence fired: the host took no answer at all, even from a perfect hand.
+    // A host that left within NO_WAIT_MS wherever the hand fell silent waited for no answer
+    // (it sends and goes, or was gone before the answer was due): nothing of a timeout.
+    let left_at_once = !c.by_kind.is_empty()
+        && c.unmeasured.is_empty()
+        && c.by_kind.iter().all(|k| k.gave_up_ms.is_some_and(|ms| ms < NO_WAIT_MS));
+    if (c.by_kind.is_empty() && c.unmeasured.is_empty()) || left_at_once {
+        // No silence fired, or none was waited for: the host took no answer at all, even
+        // from a perfect hand.
         lines.push(format!(
             "warning: host timeouts not measured: the host took no answer from the hand in its run without \
-             misbehaviour (did it open the port it was given as {{port}} or {{url}}?), so this campaign tried \
-             little or nothing; hang timeout {}",
+             misbehaviour ({}), so this campaign tried little or nothing; hang timeout {}",
+            if left_at_once {
+                "it left at once wherever the hand fell silent"
+            } else {
+                "did it open the port it was given as {port} or {url}?"
+            },
             secs(c.timeout_hang_ms)
         ));
         return lines;
