@@ -272,9 +272,17 @@ const USER_FILES: &[(&str, &str)] = &[
     ("my.script", "# FGET DP after a reset\nid: my\ntitle: FGET DP after a reset\nabort\nRESET\nFGET DP\n"),
 ];
 
-/// The example lines of README.md's `sh` blocks: continuations joined, comments dropped.
+/// The example lines of the `sh` blocks of README.md and the guides (`docs/src/`): continuations joined, comments dropped.
 fn readme_examples() -> Vec<String> {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md")).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root.join("docs/src"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    files.sort();
+    files.insert(0, root.join("README.md"));
+    let readme = files.iter().map(|f| std::fs::read_to_string(f).unwrap()).collect::<Vec<_>>().join("\n");
     let mut out = Vec::new();
     let mut in_sh = false;
     let mut cur = String::new();
