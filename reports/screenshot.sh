@@ -5,10 +5,10 @@
 #   reports/screenshot.sh [OUT_DIR]        (default: target/screenshots)
 #
 # It builds gcl, makes one report of each kind against the simulator (conform against the
-# fget-reversed and lfap-little-endian bugs, certify, fuzz device against fget-reversed, fuzz
+# fget-reversed, lfap-little-endian and prompt-no-space bugs, certify, fuzz device against fget-reversed, fuzz
 # host and check-host with a small Python host that breaks the protocol), and renders each
 # page twice: as it opens (the verdict, options and root causes) and with every <details>
-# open (a copy of the page with every <details> open). It also renders the mcv-ignored conform
+# open (a copy of the page with every <details> open), and prints its height as it opens. It also renders the mcv-ignored conform
 # page (a motion effect's window plot), a fuzz device run against the first one's findings as
 # its --baseline (known apart from new), and the RealTime example program's --plot page.
 # Chromium is installed with apt when missing. Environment: GCL_SHOT_HEIGHT (viewport height,
@@ -66,6 +66,7 @@ EOF
 set +e
 "$gcl" conform --target sim --fault fget-reversed --quiet --report "$work/conform-fget-reversed" >/dev/null
 "$gcl" conform --target sim --fault lfap-little-endian --quiet --report "$work/conform-lfap-little-endian" >/dev/null
+"$gcl" conform --target sim --fault prompt-no-space --quiet --report "$work/conform-prompt-no-space" >/dev/null
 "$gcl" conform --target sim --quiet --report "$work/conform-pass" >/dev/null
 "$gcl" conform --target sim --fault mcv-ignored --quiet --report "$work/conform-mcv-ignored" >/dev/null
 "$gcl" certify --target sim:seed --out "$work/certify" >/dev/null
@@ -95,11 +96,23 @@ shot() { # page.html name
             --screenshot="$out/$name-$mode.png" "$url" >/dev/null 2>&1 || echo "chromium failed on $page" >&2
         rm -rf "$profile"
     done
-    echo "$out/$name-{closed,open}.png  ($(wc -c <"$page") bytes of HTML)"
+    echo "$out/$name-{closed,open}.png  ($(wc -c <"$page") bytes of HTML, $(height "$page") px tall as it opens)"
+}
+
+height() { # page.html: its height in CSS pixels at 1280 px wide, <details> as they open
+    local page="$1" copy profile
+    copy="${page%.html}.height.html"
+    sed 's#</body>#<script>document.body.dataset.height = document.documentElement.scrollHeight</script></body>#' \
+        "$page" >"$copy"
+    profile="$(mktemp -d)"
+    "$browser" --headless --no-sandbox --disable-gpu --no-first-run --user-data-dir="$profile" \
+        --window-size=1280,1000 --dump-dom "file://$copy" 2>/dev/null | grep -o 'data-height="[0-9]*"' | tr -dc 0-9
+    rm -rf "$profile" "$copy"
 }
 
 shot "$work/conform-fget-reversed/report.html" conform-fget-reversed
 shot "$work/conform-lfap-little-endian/report.html" conform-lfap-little-endian
+shot "$work/conform-prompt-no-space/report.html" conform-prompt-no-space
 shot "$work/conform-pass/report.html" conform-pass
 shot "$work/conform-mcv-ignored/report.html" conform-mcv-ignored
 shot "$work/certify/report.html" certify

@@ -56,9 +56,9 @@ fn options(pace: Pace) -> SimOptions {
 
 fn pty_server(pace: Pace) -> Server {
     let (stop, signal) = stop_pair().unwrap();
-    let mut pty = Pty::open(None).unwrap();
-    let target = pty.path().display().to_string();
     let mut engine = Engine::new(&options(pace)).unwrap();
+    let mut pty = Pty::open(None, engine.line_baud()).unwrap();
+    let target = pty.path().display().to_string();
     let thread = std::thread::spawn(move || {
         pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });
@@ -180,12 +180,12 @@ fn pacing(rounds: usize) -> Result<(), LinkError> {
 /// per second against the series limit of the line (baud / 10 / 9).
 fn realtime_cycles(baud: u32, cycles: usize) -> Result<(), LinkError> {
     let (stop, signal) = stop_pair().unwrap();
-    let mut pty = Pty::open(None).unwrap();
-    let target = pty.path().display().to_string();
     let mut o = SimOptions::new(Profile::builtin("seed").unwrap());
     // Fast time so that HI completes at once; the line is paced at the hand's BAUD all the same.
     o.pace = Pace::Hand;
     let mut engine = Engine::new(&o).unwrap();
+    let mut pty = Pty::open(None, engine.line_baud()).unwrap();
+    let target = pty.path().display().to_string();
     let thread = std::thread::spawn(move || {
         pty.serve(&mut engine, &[signal.as_fd()]).unwrap();
     });

@@ -71,8 +71,7 @@ pub fn serve(
     all.push(hang_rx.as_fd());
     match opts.transport {
         Transport::Pty => {
-            let mut pty = Pty::open(None)?;
-            pty.match_speed(&engine)?;
+            let mut pty = Pty::open(None, engine.line_baud())?;
             let path = pty.path().display().to_string();
             ready(&Served { port: path.clone(), url: path });
             pty.serve(&mut engine, &all)?;
@@ -96,6 +95,7 @@ pub fn serve(
         stack: None,
         leftovers: Vec::new(),
         gave_up_after: None,
+        waits: Vec::new(),
         stderr: String::new(),
         observations: 0,
         wrong_values: Vec::new(),

@@ -71,7 +71,7 @@ fn main() -> ExitCode {
                 return ExitCode::from(cli::EXIT_OK);
             }
             // What a hand, a host or a file put in an error is shown escaped, never obeyed.
-            let _ = writeln!(std::io::stderr(), "gcl: error: {}", gcl_model::escape::printable(&format!("{e:#}")));
+            let _ = writeln!(std::io::stderr(), "gcl: error: {}", gcl_model::escape::printable(&cli::error_line(&e)));
             ExitCode::from(cli::EXIT_ERROR)
         }
     }

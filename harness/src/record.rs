@@ -41,6 +41,11 @@ pub struct RecordOptions {
     pub quiet: Duration,
     /// Write a RESET's banner as `{any}BarrettHand Firmware{any}` instead of its exact text.
     pub elide_banner: bool,
+    /// How the shadow model's hand differs from the profile's (default: not at all). Its
+    /// blocks' sizes and its mode decide where an answer ends, so a recording of a hand known
+    /// to differ in them (a hypothesis of the device fuzzer: a RealTime flag without effect)
+    /// gives the shadow the same difference.
+    pub shadow: DeviceConfig,
 }
 
 impl RecordOptions {
@@ -51,6 +56,7 @@ impl RecordOptions {
             timeout: Duration::from_secs(30),
             quiet: Duration::from_millis(100),
             elide_banner: true,
+            shadow: DeviceConfig::default(),
         }
     }
 }
@@ -90,7 +96,7 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
     // The recorder writes down whatever the hand says, GCL or not, so it does not parse the
     // answer; it only needs the host core's notion of where an answer ends.
     let framing = Framing::of(profile);
-    let mut shadow = Device::new(profile.clone(), DeviceConfig::default());
+    let mut shadow = Device::new(profile.clone(), opts.shadow.clone());
     shadow.clear_output();
     while shadow.poll_event().is_some() {}
     drain(link, opts.quiet, Duration::from_secs(10))?;

@@ -109,6 +109,7 @@ fn matches(clause: &str, want: &str) -> bool {
 const MOST_FAILING_CLAUSES: usize = 3;
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn the_largest_group_of_failures_names_the_clause_each_fault_breaks() {
     let mut unlisted = Vec::new();
     let mut too_many = Vec::new();

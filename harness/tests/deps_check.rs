@@ -35,6 +35,16 @@ fn a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci() {
         stderr.contains("SKIPPED needs_pyserial: /nonexistent/python with the Python module(s) serial"),
         "{stderr}"
     );
+    // libtest counts the skip as a pass; the line after its result says it was not.
+    let stdout = String::from_utf8_lossy(&local.stdout);
+    assert!(stdout.contains("test result: ok. 1 passed"), "{stdout}");
+    assert!(
+        stderr.contains(
+            "SKIPPED: 1 of the tests above did not run (libtest counts them as passed); 1 tests skipped so far in \
+this run, for want of: /nonexistent/python with the Python module(s) serial (1); run: python3 -m venv target/pyvenv"
+        ),
+        "{stderr}"
+    );
     let ci = run("true");
     let stdout = String::from_utf8_lossy(&ci.stdout);
     assert!(!ci.status.success(), "under CI a missing tool fails the test: {stdout}");

@@ -491,8 +491,9 @@ fn run_doc(doc: &Doc, dir: &Path, bins: &BTreeMap<String, PathBuf>, env: &[(Stri
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn documented_commands_run_as_written_or_by_their_stand_ins() {
-    let Some(python) = deps::python_with(&[]) else { return };
+    let Some(python) = deps::python_with(&["serial"]) else { return };
     let mut bins: BTreeMap<String, PathBuf> = BTreeMap::new();
     bins.insert("gcl".into(), GCL.into());
     bins.insert("sh".into(), "/bin/sh".into());

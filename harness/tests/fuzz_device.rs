@@ -57,6 +57,7 @@ fn replays_on(t: &gcl_transcript::Transcript, faults: Vec<Fault>) -> bool {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn every_fault_is_found_minimized_and_replays_or_is_listed_with_a_reason() {
     let listed = unfound_list();
     for name in listed.keys() {
@@ -133,6 +134,7 @@ fn few_list() -> BTreeMap<String, Few> {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
     let few = few_list();
     for name in few.keys() {
@@ -173,6 +175,7 @@ fn each_fault_gives_one_finding_or_a_documented_few_naming_its_command() {
 /// one finding (it was six: the command after a queued line or a ^C was blamed), and a wrong
 /// value that fits another elision's range is a value, not an order.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_is_named_by_its_command_and_kind() {
     let one = |fault: Fault| {
         let mut o = opts(vec![fault], 1000);
@@ -200,6 +203,7 @@ fn a_bug_is_named_by_its_command_and_kind() {
 /// finding per command that read the effect back (mcv-ignored and mov-ignored two each,
 /// g-includes-spread 25). 2000 runs, as the figures in `fuzz_device_findings.toml`.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
     let all = |fault: Fault| {
         let mut o = opts(vec![fault], 2000);
@@ -233,6 +237,7 @@ fn a_bug_read_back_by_many_commands_is_one_finding_named_by_its_explanation() {
 /// three findings that named no cause); a ^C sent to stop a step that ended already is named by
 /// the step (ds-ignored: IC and IO step by the factory DS).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_status_finding_names_the_command_it_concerns() {
     let all = |fault: Fault| {
         let mut o = opts(vec![fault], 2000);
@@ -442,6 +447,27 @@ fn the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus() {
     assert!(s2.corpus >= s.corpus);
 }
 
+/// The corpus figure a campaign prints is what its folder holds: the suite's seeds it takes
+/// into memory are not counted, nor are entries counted twice across runs.
+#[test]
+fn the_corpus_count_is_the_folders_entries() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = || std::fs::read_dir(dir.path()).unwrap().count();
+    let mut o = opts(vec![], 60);
+    o.corpus = Some(dir.path().to_path_buf());
+    assert!(o.suite_seeds, "the default seeds the corpus with the suite's cases");
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.corpus > 0);
+    assert_eq!(s.corpus, files());
+    o.seed = 2;
+    let s2 = run(&o, &|_| {}).unwrap();
+    assert_eq!(s2.corpus, files());
+    // Without a folder: the cases this run kept, the suite's seeds aside.
+    o.corpus = None;
+    let s3 = run(&o, &|_| {}).unwrap();
+    assert!(s3.corpus <= 60, "{} entries from 60 runs", s3.corpus);
+}
+
 #[test]
 fn the_unmutated_sim_over_exec_yields_no_findings() {
     let p = Profile::builtin("bh8-262").unwrap();
@@ -512,6 +538,7 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
 /// case before is judged again thoroughly and reported; its minimized transcript fails on
 /// the mutant and passes on the unmutated sim.
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     let (_sim, t) = PtySim::start(&["empty-line-two-prompts"]);
     let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
@@ -649,9 +676,10 @@ fn the_cli_exits_1_on_findings_0_without_and_2_on_a_bad_target() {
 /// on a model that has the bug answers as the hand did, byte for byte. Each is one finding
 /// named by its cause (they were two to four, under the motion or block where they showed).
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it() {
     for (fault, says) in [
-        (Fault::PartialSetApplied, "FSET refused but applied in part"),
+        (Fault::PartialSetApplied, "set refused but applied in part"),
         (Fault::ResetKeepsRam, "RESET keeps the values set"),
         (Fault::LsgIgnored, "LSG set without effect"),
         (Fault::LctIgnored, "LCT set without effect"),
@@ -665,4 +693,29 @@ fn a_bug_the_rewrite_cannot_follow_is_named_by_a_model_that_has_it() {
         assert_eq!(s.findings.len(), 1, "{fault}: {got:?}");
         assert_eq!(s.findings[0].signature.explanation, says, "{fault}: {got:?}");
     }
+}
+
+/// Issue 31: over a pty a RealTime flag without effect was a finding for each field it moved,
+/// none named by the flag (outside this process a block failure only joined a known
+/// explanation). Here the hand ignores LFV 0: its block answers are a byte longer (the
+/// velocity the block set, where a field of another flag would read otherwise), and on the
+/// line the extra byte is read as the next step's answer. A model holding the hypothesis, the
+/// case built anew on it and asked of the hand, names it; and a fault the hypothesis does not
+/// hold (the sim unmutated) is no finding at all.
+#[test]
+fn a_realtime_flag_without_effect_over_a_pty_is_named_by_the_flag() {
+    let actions: Vec<HostAction> = serde_json::from_str(
+        r#"[{"line":"1FSET LCV 1 LCPG 0 LFV 0 LFS 0 LFAP 0 LFDP 0 LCT 0 LFBP 0 LFAIN 0"},{"line":"PSET LFT 0"},
+            {"line":"1LOOP"},{"raw":[67,40]},{"raw":[67,40]},{"raw":[99,40]},"abort"]"#,
+    )
+    .unwrap();
+    let judged = |faults: &[&str]| {
+        let (_sim, t) = PtySim::start(faults);
+        let mut o = FuzzOptions::new(t, Profile::builtin("bh8-262").unwrap());
+        o.allowed.abort_timing = false;
+        gcl_harness::fuzz::device::judge_once(&o, &actions).unwrap().unwrap()
+    };
+    let sig = judged(&["lfv-ignored"]).expect("the hand sends LFV it was told not to");
+    assert_eq!(sig.explanation, "LFV set without effect", "{sig}");
+    assert_eq!(judged(&[]), None, "the unmutated sim passes the case");
 }

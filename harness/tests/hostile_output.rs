@@ -54,18 +54,14 @@ fn assert_shown_escaped(what: &str, run: &Run) {
 }
 
 /// A JUnit file reads with a strict XML parser here, and with Python's `minidom` and
-/// `junitparser` (in the venv `.ci/run` makes, `target/junit-venv`).
+/// `junitparser` (the tests' Python, [`deps::python_with`]).
 #[track_caller]
 fn assert_junit_parses(path: &Path) {
     let xml = std::fs::read_to_string(path).unwrap();
     if let Err(e) = roxmltree::Document::parse(&xml) {
         panic!("{}: {e}\n{xml}", path.display());
     }
-    let py = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/junit-venv/bin/python");
-    if !py.exists() {
-        deps::missing("target/junit-venv with junitparser", ".ci/run makes it");
-        return;
-    }
+    let Some(py) = deps::python_with(&["junitparser"]) else { return };
     let script = "import sys, xml.dom.minidom\nfrom junitparser import JUnitXml\n\
                   xml.dom.minidom.parse(sys.argv[1])\nfor s in JUnitXml.fromfile(sys.argv[1]):\n    list(s)\n";
     let o = Command::new(py).args(["-c", script]).arg(path).output().unwrap();
@@ -235,9 +231,13 @@ fn fuzz_host_shows_hostile_signatures_escaped_and_its_replay_commands_run_as_giv
     assert_shown_escaped("fuzz host --replay of a broken bundle", &r);
 }
 
-/// Item 3: `-- sh -c 'sleep 0.1; exit 3'`: the replay command printed for its finding, run by
-/// `sh`, is that argv, and pasted into a shell (with this `gcl` first on PATH) it reproduces
-/// the finding (before, it ran `gcl ... -- sh -c sleep 0.1` and then `exit 3` in the shell).
+/// Item 3: `-- sh -c 'printf ...; exit 3' {port}`: the replay command printed for its finding,
+/// run by `sh`, is that argv, and pasted into a shell (with this `gcl` first on PATH) it
+/// reproduces the finding (before, it ran `gcl ... -- sh -c printf ...` and then `exit 3` in
+/// the shell). The host sends the hand a line first: one that never does tests nothing.
+/// A host in one shell word: it sends the hand a line on the port (`$0`), then fails.
+const SEND_AND_FAIL: &str = "printf 'VERS\\r' >\"$0\"; sleep 0.1; exit 3";
+
 #[test]
 fn a_printed_replay_command_pasted_into_a_shell_reproduces_its_finding() {
     let dir = tempfile::tempdir().unwrap();
@@ -256,7 +256,8 @@ fn a_printed_replay_command_pasted_into_a_shell_reproduces_its_finding() {
         "--",
         "sh",
         "-c",
-        "sleep 0.1; exit 3",
+        SEND_AND_FAIL,
+        "{port}",
     ]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
     let report: serde_json::Value =
@@ -264,7 +265,7 @@ fn a_printed_replay_command_pasted_into_a_shell_reproduces_its_finding() {
     let f = &report["host"]["findings"][0];
     let line = f["replay"].as_str().unwrap();
     let bundle = f["bundle"].as_str().unwrap();
-    assert_eq!(argv_in_sh(line), ["gcl", "fuzz", "host", "--replay", bundle, "--", "sh", "-c", "sleep 0.1; exit 3"]);
+    assert_eq!(argv_in_sh(line), ["gcl", "fuzz", "host", "--replay", bundle, "--", "sh", "-c", SEND_AND_FAIL, "{port}"]);
     let bin = Path::new(env!("CARGO_BIN_EXE_gcl")).parent().unwrap();
     let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
     let o = Command::new("sh").arg("-c").arg(line).env("PATH", path).output().unwrap();
@@ -320,7 +321,7 @@ fn certify_shows_a_hostile_hands_and_a_forged_bundles_text_escaped() {
     assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
     assert_shown_escaped("certify", &r);
     let verify = r.stdout.split('`').nth(1).unwrap();
-    assert_eq!(argv_in_sh(verify), ["gcl", "certify", "--verify", s(&out)]);
+    assert_eq!(argv_in_sh(verify), ["gcl", "certify", "--verify", s(&out), "--allow-unverified"]);
 
     // Forged: the profile rewritten in the certificate and its report, the manifest redone.
     for name in ["certificate.json", "report.json"] {

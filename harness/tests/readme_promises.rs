@@ -1,10 +1,10 @@
-//! Every sentence of README.md that promises something a user can observe (an exit code, a
-//! message, a file written, a default, a limit) is held by a test (issue 21 item 2: "Sentences
+//! Every sentence of README.md and the guides (`docs/src/`) that promises something a user can
+//! observe (an exit code, a message, a file written, a default, a limit) is held by a test (issue 21 item 2: "Sentences
 //! that promise behaviour get a test too"). `PROMISES` pairs a verbatim fragment of each such
 //! sentence with the tests that hold it; `every_promise_is_quoted_as_written_and_held_by_a_test`
-//! fails when a sentence is reworded (its fragment is no longer in README.md) or a test is
-//! renamed or deleted, so the table cannot drift from either. The README's example command
-//! lines are `doc_examples.rs`'s; descriptions that promise nothing checkable are not listed.
+//! fails when a sentence is reworded (its fragment is no longer in README.md or a guide) or a
+//! test is renamed or deleted, so the table cannot drift from either. The documents' commands
+//! are `docs.rs`'s; descriptions that promise nothing checkable are not listed.
 //! The other tests here hold the promises no test held before.
 
 mod sim_support;
@@ -26,11 +26,19 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 const PROMISES: &[(&str, &[&str])] = &[
     // The two commands.
     (
+        "`cargo test --workspace -- --include-ignored` runs them too, as `.ci/run` does.",
+        &["harness/tests/tidy.rs::every_test_left_out_of_the_default_run_is_run_by_ci"],
+    ),
+    (
         "they use `GCL_PYTHON`, else a virtual environment at `target/pyvenv`, else",
         &["harness/tests/deps_check.rs::python_is_found_the_same_way_by_every_test"],
     ),
     (
         "they skip with a `SKIPPED <test>: ...` line that `cargo test` shows",
+        &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
+    ),
+    (
+        "after each test binary's result a line says how many of its tests did not run though libtest counts them as passed, with the run's total so far and the command that fixes it",
         &["harness/tests/deps_check.rs::a_missing_tool_is_a_visible_skip_here_and_a_failure_under_ci"],
     ),
     (
@@ -380,6 +388,13 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "the hand must answer that case so when it is replayed",
+        &[
+            "harness/tests/fuzz_device_baseline_hand.rs::a_known_deviation_on_a_field_does_not_hide_another_bug_on_it",
+            "harness/tests/fuzz_device.rs::a_realtime_flag_without_effect_over_a_pty_is_named_by_the_flag",
+        ],
+    ),
+    (
         "corpora of several workers, machines or runs merge by copying",
         &["harness/tests/fuzz_device.rs::the_unmutated_sim_yields_no_findings_and_workers_share_one_corpus"],
     ),
@@ -673,6 +688,18 @@ const PROMISES: &[(&str, &[&str])] = &[
         &[".ci/run::the planted CR LF bug fails gcl check-host, as it should"],
     ),
     (
+        "build the wheel in their first job (`gcl-wheel`: gcl is not on PyPI, so maturin builds it once from gcl's source",
+        &[
+            "python/tests/test_ci_recipes.py::test_github_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_gitlab_builds_the_wheel_first_and_every_job_installs_that_artifact",
+            "python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run",
+        ],
+    ),
+    (
+        "The cases a root cause blocks (they fail on its clause's bug, not their own) are folded under one line for it, apart from the cases that fail on their own; in JUnit their message starts `blocked by root-cause-N (CLAUSE): `.",
+        &["harness/tests/report_pages.rs::the_cases_a_bug_blocks_are_folded_under_its_root_cause"],
+    ),
+    (
         "a test holds the recipes to them",
         &["python/tests/test_ci_recipes.py::test_the_recipes_run_the_commands_of_ci_run"],
     ),
@@ -805,12 +832,60 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/readme_promises.rs::no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them"],
     ),
     (
-        "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`, default 60 s)",
+        "A hang is then silence for twice the longest plus 2 s (at least 3 s, at most `--run-budget`, default 60 s)",
         &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
     ),
     (
         "`--timeout-hang D` sets the hang timeout by hand and skips the measure",
         &["harness/tests/readme_promises.rs::fuzz_host_measures_its_hang_timeout_unless_given_one"],
+    ),
+    (
+        "measures the host's own give-up time at every kind of answer the systematic pass knows",
+        &["harness/tests/host_verdicts.rs::a_host_whose_timeouts_differ_by_command_has_no_finding"],
+    ),
+    (
+        "Calibration takes at most a quarter of `--duration`: what it has not measured by then it leaves, says so, and the campaign goes on with what it measured.",
+        &["harness/tests/host_verdicts.rs::a_hang_calibration_sees_is_reported_in_a_short_campaign"],
+    ),
+    (
+        "A hang is confirmed before it is reported: its (minimized) schedule runs again",
+        &[
+            "harness/tests/host_verdicts.rs::a_host_that_gives_up_late_is_a_note_not_a_hang",
+            "harness/tests/host_verdicts.rs::one_wait_without_a_deadline_is_one_hang_named_by_its_code",
+        ],
+    ),
+    (
+        "A host that waits past the hang timeout where calibration silenced the hand has its hang found there, confirmed and reported like any other.",
+        &["harness/tests/host_verdicts.rs::a_hang_calibration_sees_is_reported_in_a_short_campaign"],
+    ),
+    (
+        "Without `--runs` or `--duration` a campaign lasts 5 minutes, its calibration included",
+        &[
+            "harness/src/fuzz/host/mod.rs::a_default_campaign_is_a_time_budget_under_ten_minutes",
+            "harness/tests/readme_promises.rs::fuzz_host_help_says_how_long_a_default_campaign_lasts",
+        ],
+    ),
+    (
+        "an overflow through `sscanf` or `strcpy` is signed by the host's function that called it",
+        &[
+            "harness/tests/host_verdicts.rs::an_overflow_through_sscanf_is_one_finding_per_function_of_the_host",
+            "harness/src/fuzz/host/detect.rs::an_overflow_through_sscanf_is_signed_by_the_hosts_function",
+        ],
+    ),
+    (
+        "is signed by what was thrown and where: `uncaught C++ exception std::system_error in Port::check`",
+        &[
+            "harness/tests/host_verdicts.rs::an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where",
+            "harness/src/fuzz/host/detect.rs::an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where",
+        ],
+    ),
+    (
+        "A host that crashes has that one finding, not also the RealTime loop or the line it was in when it died.",
+        &["harness/tests/host_verdicts.rs::a_crash_in_realtime_is_one_finding"],
+    ),
+    (
+        "the frames of the system's libraries it waits in (libc's `syscall`, libstdc++, Boost.Asio's `poll_read`, Poco) in the message",
+        &["harness/src/fuzz/host/detect.rs::a_hang_under_system_libraries_is_named_by_the_hosts_frame"],
     ),
     (
         "(`gcl fuzz host --help` lists them)",
@@ -1182,7 +1257,7 @@ fn no_motion_realtime_eeprom_or_abort_timing_keeps_a_campaign_from_them() {
     assert!(!s.features.contains("abort:mid-motion"), "{:?}", s.features);
 }
 
-/// "A hang is then silence for twice as long plus 2 s (at least 3 s, at most `--run-budget`,
+/// "A hang is then silence for twice the longest plus 2 s (at least 3 s, at most `--run-budget`,
 /// default 60 s)"; "`--timeout-hang D` sets the hang timeout by hand and skips the measure".
 /// A host that never waits measures no timeout: its hang timeout is the floor, and `fuzz.json`
 /// keeps the calibration; with `--timeout-hang` there is none.
@@ -1212,6 +1287,17 @@ fn fuzz_host_measures_its_hang_timeout_unless_given_one() {
     assert_eq!(cal["timeout_hang_ms"], 3000, "at least 3 s: {cal}");
     let given = campaign(&["--timeout-hang", "5s"], "given");
     assert!(given.get("calibration").is_none_or(|c| c.is_null()), "no measure with --timeout-hang: {given}");
+}
+
+/// "Without `--runs` or `--duration` a campaign lasts 5 minutes ... and it says how to run
+/// longer": the help says so (the library's default is `a_default_campaign_is_a_time_budget_
+/// under_ten_minutes`).
+#[test]
+fn fuzz_host_help_says_how_long_a_default_campaign_lasts() {
+    let out = Command::new(GCL).args(["fuzz", "host", "--help"]).output().unwrap();
+    let help = collapse(&String::from_utf8_lossy(&out.stdout));
+    assert!(help.contains("Without --runs or --duration a campaign lasts 5 minutes"), "{help}");
+    assert!(help.contains("Stop after this long (30s, 5m; default 5m unless --runs is given)"), "{help}");
 }
 
 /// "`--ops delay-above,truncate=5` restricts and weights the misbehaviours (`gcl fuzz host
@@ -1377,7 +1463,7 @@ fn a_host_that_never_gives_up_is_measured_as_having_no_timeout() {
         timeout_hang: Duration::from_millis(500),
         budget: Duration::from_secs(1),
     };
-    let c = calibrate(&run, &std::sync::atomic::AtomicBool::new(false)).unwrap();
+    let c = calibrate(&run, None, 1, &std::sync::atomic::AtomicBool::new(false)).unwrap();
     assert!(!c.points.is_empty(), "the hand never fell silent on the host: {c:?}");
     assert!(c.points.iter().all(|(_, waited)| waited.is_none()), "{c:?}");
     assert_eq!(c.host_timeout_ms, None, "{c:?}");

@@ -165,3 +165,31 @@ fn stdio_exits_0_at_end_of_input() {
     link.close_input();
     assert_eq!(link.wait_exit(Duration::from_secs(10)), Some(0));
 }
+
+/// The start line says how the hand paces its bytes in words that read: "paced at the hand's
+/// BAUD", "paced at 38400 baud", or "unpaced" (never "paced at unpaced").
+#[test]
+fn the_start_line_says_how_the_hand_is_paced() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, want) in [
+        (&["--unpaced"][..], "(time real, unpaced)"),
+        (&["--time", "fast"][..], "(time fast, unpaced)"),
+        (&[][..], "(time real, paced at the hand's BAUD)"),
+        (&["--baud", "38400"][..], "(time real, paced at 38400 baud)"),
+    ] {
+        let log = dir.path().join("stderr");
+        let mut sim = SimProcess::start_logged(Transport::Tcp, args, std::fs::File::create(&log).unwrap());
+        let start = std::time::Instant::now();
+        let line = loop {
+            let text = std::fs::read_to_string(&log).unwrap();
+            if let Some(l) = text.lines().find(|l| l.starts_with("gcl sim: profile")) {
+                break l.to_string();
+            }
+            assert!(start.elapsed() < Duration::from_secs(30), "{args:?}: no start line in {text:?}");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert!(line.contains(want), "{args:?}: {line}");
+        assert!(!line.contains("paced at unpaced"), "{line}");
+        assert_eq!(sim.terminate().code(), Some(0));
+    }
+}

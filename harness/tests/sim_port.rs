@@ -204,3 +204,46 @@ fn a_host_at_another_speed_than_the_hand_exchanges_garbage_both_ways() {
     assert_eq!(read_quiet(&mut port, QUIET, Duration::from_secs(5)), b"\n\r=> ");
     assert!(!std::fs::read_to_string(log.path()).unwrap().contains("garbled"));
 }
+
+/// Everything a serialport port receives until it has been quiet for its timeout.
+fn read_quiet_serial(port: &mut serialport::TTYPort) -> Vec<u8> {
+    let mut got = Vec::new();
+    let mut buf = [0u8; 256];
+    loop {
+        match port.read(&mut buf) {
+            Ok(0) => return got,
+            Ok(n) => got.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => return got,
+            Err(e) => panic!("reading the port: {e}"),
+        }
+    }
+}
+
+/// The serialport crate, as Rust host libraries use it, sets every rate as an arbitrary one
+/// (termios2, `BOTHER`), which the simulator used to leave unjudged: a Rust host at the wrong
+/// speed talked. It is judged like a standard rate; a rate a real UART understands (within
+/// 2 % of the hand's) talks.
+#[test]
+fn a_rust_host_at_the_wrong_speed_is_garbled_too() {
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let sim = SimProcess::start_logged(Transport::Pty, &["--profile", "bh8-262"], log.reopen().unwrap());
+    let mut port = serialport::new(&sim.address, 115_200).timeout(QUIET).open_native().unwrap();
+    port.write_all(b"FGET DP\r").unwrap();
+    let got = read_quiet_serial(&mut port);
+    assert!(got.iter().all(|b| *b >= 0x80), "at 115200 nothing the hand sends is readable: {got:?}");
+    // 9650 bit/s: 0.5 % off the hand's 9600, which a UART takes in its stride.
+    serialport::SerialPort::set_baud_rate(&mut port, 9650).unwrap();
+    port.write_all(b"\x03").unwrap();
+    assert!(read_quiet_serial(&mut port).ends_with(b"\n\r=> "));
+    port.write_all(b"FGET DP\r").unwrap();
+    assert_eq!(read_quiet_serial(&mut port), b"FGET DP\n\r8500 8500 8500 1575\n\r=> ");
+    let said = std::fs::read_to_string(log.path()).unwrap();
+    assert_eq!(
+        said.lines().filter(|l| l.contains("baud; the hand runs at")).collect::<Vec<_>>(),
+        vec![
+            "gcl sim: the host opened the port at 115200 baud; the hand runs at 9600: bytes are garbled as on a real \
+             line (--no-speed-check to turn this off)"
+        ],
+        "{said}"
+    );
+}

@@ -145,6 +145,7 @@ fn incidental(failed: &BTreeMap<Fault, BTreeSet<String>>, checking: &BTreeSet<&s
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn every_wire_promise_is_checked_by_a_case_that_fails_without_it() {
     let list = allow_list();
     let listed = |p: &str, id: &str| -> Option<&Entry> {

@@ -579,3 +579,52 @@ fn goldens_match_the_abnf_grammar() {
     abnf::check("gcl-transcript 1\nexpect within 1s..2s \"{int 1..9 as p} {int p*2/3 +-25%}\" hex {i8 p +-0% as q}\n")
         .unwrap();
 }
+
+/// What `cargo test --workspace` leaves out, CI still runs (issue 33 item 4): every ignored
+/// test is in the slow group, `#[ignore = "slow: ..."]`, which `.ci/run` runs with
+/// `--include-ignored`, or is a report that is no gate and that `.ci/run` skips by name. The
+/// test step also skips one slow test whose commands another step of `.ci/run` runs as they are.
+#[test]
+fn every_test_left_out_of_the_default_run_is_run_by_ci() {
+    const SLOW: &str = "#[ignore = \"slow: .ci/run runs it (cargo test --workspace -- --include-ignored)\"]";
+    const REPORTS: &[&str] = &["necessity_report"];
+    // (test, what `.ci/run` runs instead: the same commands)
+    const ELSEWHERE: &[(&str, &[&str])] = &[(
+        "the_python_package_tests_pass",
+        &["python3 -m unittest discover -s tests -t .", "python3 -m gcl_vectors check -q"],
+    )];
+    let ci = std::fs::read_to_string(Path::new(ROOT).join(".ci/run")).unwrap();
+    for (test, commands) in ELSEWHERE {
+        for c in *commands {
+            assert!(ci.contains(c), ".ci/run skips {test} but does not run `{c}`");
+        }
+    }
+    let skips: String =
+        REPORTS.iter().chain(ELSEWHERE.iter().map(|(t, _)| t)).map(|r| format!(" --skip {r}")).collect();
+    let line = format!("cargo test --workspace -- --include-ignored{skips}");
+    assert!(ci.lines().any(|l| l.trim_end().ends_with(&line)), ".ci/run does not run `{line}`");
+    let mut files = Vec::new();
+    for dir in ["harness", "reference-model", "host", "transcript", "fuzz/src"] {
+        files.extend(files_with_ext(dir, "rs"));
+    }
+    let (mut slow, mut bad) = (0, Vec::new());
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, l) in lines.iter().enumerate() {
+            let l = l.trim();
+            if !l.starts_with("#[ignore") {
+                continue;
+            }
+            let name = lines[i + 1..].iter().find_map(|n| n.trim().strip_prefix("fn ")).unwrap_or("");
+            let name = name.split('(').next().unwrap_or("");
+            if l == SLOW {
+                slow += 1;
+            } else if !REPORTS.contains(&name) {
+                bad.push(format!("{}:{}: {l} (fn {name})", rel(f), i + 1));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "ignored tests that CI would not run (use `{SLOW}`):\n{}", bad.join("\n"));
+    assert!(slow > 0);
+}

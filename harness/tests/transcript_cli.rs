@@ -149,3 +149,30 @@ fn suite_check_passes_on_the_committed_suite() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("seed         framing-echo"), "{stdout}");
 }
+
+/// `gcl suite list` is a table: each column starts at one offset on every line, the title
+/// last (a level or a list of requirements longer than its column used to push the rest).
+#[test]
+fn suite_list_lines_up_its_columns() {
+    let out = gcl().args(["suite", "list"]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().filter(|l| !l.contains(" cases: ")).collect();
+    assert!(lines.len() > 300, "{stdout}");
+    // Where each of the first five fields starts.
+    let starts = |l: &str| -> Vec<usize> {
+        let mut v = Vec::new();
+        let mut prev = ' ';
+        for (i, c) in l.char_indices() {
+            if c != ' ' && prev == ' ' && v.len() < 5 {
+                v.push(i);
+            }
+            prev = c;
+        }
+        v
+    };
+    let first = starts(lines[0]);
+    for l in &lines {
+        assert_eq!(starts(l), first, "{l}\n(first line: {})", lines[0]);
+    }
+    assert!(lines.iter().any(|l| l.contains(" SHOULD ")) && lines.iter().any(|l| l.contains(" MUST ")));
+}

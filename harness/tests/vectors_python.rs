@@ -75,6 +75,7 @@ fn suite_files(profile: &str) -> Vec<String> {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn the_python_package_tests_pass() {
     let Some(py) = deps::python_with(&[]) else {
         return;
@@ -88,6 +89,7 @@ fn the_python_package_tests_pass() {
 }
 
 #[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn the_python_runner_passes_the_seed_suite_against_the_simulator() {
     let Some(py) = deps::python_with(&[]) else {
         return;

@@ -156,18 +156,10 @@ impl Link for SimLink {
 
     fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
         let deadline = self.device.now() + timeout;
-        while self.pending.is_empty() {
-            match self.device.poll_timeout() {
-                Some(t) if t <= deadline => {
-                    self.device.handle_timeout(t);
-                    self.collect();
-                }
-                _ => {
-                    self.device.handle_timeout(deadline);
-                    self.collect();
-                    break;
-                }
-            }
+        if self.pending.is_empty() {
+            // (the model runs to the deadline or to the first output, in one call)
+            self.device.handle_timeout_until_output(deadline);
+            self.collect();
         }
         let n = self.pending.len();
         buf.append(&mut self.pending);

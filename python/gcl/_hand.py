@@ -110,6 +110,30 @@ class Verdict:
     def passed(self):
         return self.exit_code == 0 and not self.failures
 
+    def counts(self):
+        """Cases per verdict, as the report counts them (``{"PASS": 9, "SKIP": 2}``)."""
+        return {v: n for v, n in sorted(self.report.get("summary", {}).items()) if n}
+
+    def __str__(self):
+        """``PASS: 9 PASS, 2 SKIP``, or ``FAIL: ...`` followed by what :meth:`explain` says."""
+        if self.passed:
+            head = "PASS"
+        elif self.exit_code in (0, 1):
+            head = "FAIL"
+        else:
+            head = "ERROR (gcl exited {})".format(self.exit_code)
+        counts = ", ".join("{} {}".format(n, v) for v, n in self.counts().items()) or "no clause graded"
+        text = "{}: {}".format(head, counts)
+        if not self.passed:
+            detail = self.explain()
+            if detail:
+                text += "\n" + detail
+        return text
+
+    def __repr__(self):
+        return "Verdict(passed={!r}, exit_code={!r}, counts={!r}, failures={!r})".format(
+            self.passed, self.exit_code, self.counts(), [f.id for f in self.failures])
+
     def explain(self):
         """The failing clauses, the misbehaviours that fired, and the session, for people."""
         lines = []

@@ -117,6 +117,22 @@ def test_a_hand_nobody_talks_to_judges_nothing():
     assert "nobody opened the port" in idle.verdict.failures[0].message
 
 
+def test_a_verdict_prints_as_what_it_says():
+    from gcl import Hand
+
+    with Hand(profile="seed") as good:
+        talk(good.url, b"\r")
+    text = str(good.verdict)
+    assert text.startswith("PASS: ") and " PASS" in text, text
+    assert repr(good.verdict).startswith("Verdict(passed=True, exit_code=0, counts={"), repr(good.verdict)
+    with Hand(profile="seed") as bad:
+        talk(bad.url, b"\r\n")
+    text = str(bad.verdict)
+    assert text.startswith("FAIL: ") and "host-line-ending" in text, text
+    assert "object at 0x" not in text + repr(bad.verdict)
+    assert "failures=['host-line-ending']" in repr(bad.verdict), repr(bad.verdict)
+
+
 def test_a_misbehaving_hand_plays_the_fuzzers_schedule():
     from gcl import Hand
 
@@ -127,20 +143,30 @@ def test_a_misbehaving_hand_plays_the_fuzzers_schedule():
     assert hand.verdict.fired and all(f.startswith("truncate") for f in hand.verdict.fired)
 
 
-def pytest_example(bug=None):
+def pytest_example(bug=None, command=None):
     env = dict(os.environ)
     env.pop("BH8HOST_BUG", None)
     if bug:
         env["BH8HOST_BUG"] = bug
     # The example runs as its author would: from its own folder, the plugin found by its
-    # entry point.
-    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rA", "tests"],
+    # entry point; `python -m pytest` unless `command` says otherwise (the bare `pytest`).
+    command = command or [sys.executable, "-m", "pytest"]
+    return subprocess.run(command + ["-q", "-p", "no:cacheprovider", "-rA", "tests"],
                           cwd=os.path.join(ROOT, "examples", "python-host"), env=env,
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
 
 
 def test_the_example_host_library_passes_its_suite():
     out = pytest_example()
+    assert out.returncode == 0, out.stdout
+    assert re.search(r"\b8 passed\b", out.stdout), out.stdout
+
+
+def test_the_example_runs_with_the_bare_pytest_command_too():
+    # `pytest` (the venv's script) puts no folder on sys.path by itself: the example's
+    # pyproject.toml does (`pythonpath`), else `import bh8host` fails.
+    bare = os.path.join(os.path.dirname(sys.executable), "pytest")
+    out = pytest_example(command=[bare])
     assert out.returncode == 0, out.stdout
     assert re.search(r"\b8 passed\b", out.stdout), out.stdout
 

@@ -40,8 +40,9 @@ impl Level {
 }
 
 impl fmt::Display for Level {
+    /// The name, padded as the format asks (`{:<6}` lines up a column of levels).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
+        f.pad(self.as_str())
     }
 }
 

@@ -114,27 +114,30 @@ impl ParamStore {
     /// global) for every parameter whose `persist` list names the command.
     pub fn transfer(&mut self, profile: &Profile, nv: &mut NvMemory, t: Transfer, scope: Scope, motors: MotorSet) {
         let cmd = t.command(scope);
-        for id in profile.param_ids() {
-            let p = profile.param(id);
-            if p.scope != scope || p.alias_of.is_some() || !p.persist.iter().any(|c| c == cmd) {
+        let targets: &[Motor] = match scope {
+            Scope::Motor => &Motor::ALL,
+            Scope::Global => &[Motor::F1],
+        };
+        for &id in profile.persisted(cmd) {
+            if t == Transfer::Save {
+                for m in targets.iter().filter(|m| scope == Scope::Global || motors.contains(m.number())) {
+                    nv.store(profile, id, m.number(), self.get(profile, id, m.number()));
+                }
                 continue;
             }
-            let targets = match scope {
-                Scope::Motor => motors,
-                Scope::Global => MotorSet::single(1).unwrap_or_default(),
+            // (what `NvMemory::load` gives, the saved entry looked up once per parameter)
+            let saved = match (t, scope) {
+                (Transfer::Load, Scope::Motor) => nv.motor.get(&profile.param(id).name).copied(),
+                (Transfer::Load, Scope::Global) => nv.global.get(&profile.param(id).name).map(|v| [*v; 4]),
+                _ => None,
             };
-            for m in targets.iter() {
-                match t {
-                    Transfer::Save => nv.store(profile, id, m, self.get(profile, id, m)),
-                    Transfer::Load => {
-                        let v = nv.load(profile, id, m);
-                        self.set_unchecked(profile, id, MotorSet::single(m).unwrap_or_default(), v)
-                    }
-                    Transfer::Defaults => {
-                        let v = profile.default_for(id, m);
-                        self.set_unchecked(profile, id, MotorSet::single(m).unwrap_or_default(), v)
-                    }
-                }
+            let Some(values) = self.values.get_mut(profile.slot_of(id)) else { continue };
+            for m in targets.iter().filter(|m| scope == Scope::Global || motors.contains(m.number())) {
+                let v = match saved.map(|a| *m.pick(&a)) {
+                    Some(v) if profile.value_ok(id, v) => v,
+                    _ => profile.default_for(id, m.number()),
+                };
+                *m.pick_mut(values) = v;
             }
         }
     }

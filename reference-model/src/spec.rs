@@ -858,7 +858,15 @@ pub struct Profile {
     /// The `[hand]` value sources, resolved.
     #[serde(skip)]
     hand_sources: HandSources,
+    /// The parameters each of the six transfers moves ([`PERSIST_COMMANDS`] order): those of
+    /// its scope, no alias, whose `persist` names it.
+    #[serde(skip)]
+    persisted: Vec<Vec<ParamId>>,
 }
+
+/// The transfer commands a parameter's `persist` list may name, in the order
+/// [`Profile::persisted`] keeps them.
+pub const PERSIST_COMMANDS: [&str; 6] = ["FSAVE", "FLOAD", "FDEF", "PSAVE", "PLOAD", "PDEF"];
 
 /// The largest magnitude a parameter value, range or argument may have in a spec file, so
 /// that the model's arithmetic on values can never overflow.
@@ -1228,6 +1236,18 @@ impl Profile {
             baud: source("baud", &hand.baud)?,
             low_strain_stop: source("low_strain_stop", &hand.low_strain_stop)?,
         };
+        let persisted = PERSIST_COMMANDS
+            .iter()
+            .map(|cmd| {
+                let scope = if cmd.starts_with('F') { Scope::Motor } else { Scope::Global };
+                f.params
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.scope == scope && p.alias_of.is_none() && p.persist.iter().any(|c| c == cmd))
+                    .map(|(i, _)| ParamId(i as u16))
+                    .collect()
+            })
+            .collect();
         let mut role_of = vec![None; f.params.len()];
         for (r, id) in Role::ALL.iter().zip(&roles) {
             if let Some(slot) = id.and_then(|id| role_of.get_mut(id.0 as usize)) {
@@ -1235,6 +1255,7 @@ impl Profile {
             }
         }
         Ok(Profile {
+            persisted,
             rt_slots,
             roles,
             role_of,
@@ -1254,6 +1275,11 @@ impl Profile {
             slots,
             id,
         })
+    }
+
+    /// The parameters the transfer command `cmd` (one of [`PERSIST_COMMANDS`]) moves.
+    pub fn persisted(&self, cmd: &str) -> &[ParamId] {
+        PERSIST_COMMANDS.iter().position(|c| *c == cmd).and_then(|i| self.persisted.get(i)).map_or(&[], Vec::as_slice)
     }
 
     /// The parameter that plays `role` in this profile, if it has one.

@@ -100,6 +100,8 @@ pub struct Matcher {
     /// The furthest state alive before the last byte, for reporting what was expected.
     best: State,
     consumed: usize,
+    /// Room for the next byte's states (kept from byte to byte: no allocation per byte).
+    spare: Vec<State>,
 }
 
 impl Matcher {
@@ -135,8 +137,15 @@ impl Matcher {
             });
             slots.push(Slot { capture, base });
         }
-        let mut m =
-            Matcher { pieces, slots, known: known.clone(), states: Vec::new(), best: State::at(0), consumed: 0 };
+        let mut m = Matcher {
+            pieces,
+            slots,
+            known: known.clone(),
+            states: Vec::new(),
+            best: State::at(0),
+            consumed: 0,
+            spare: Vec::new(),
+        };
         let mut start = Vec::new();
         m.close(State::at(0), &mut start);
         m.states = start;
@@ -179,16 +188,18 @@ impl Matcher {
         if self.states.is_empty() {
             return Feed::Dead;
         }
-        if let Some(f) = self.furthest() {
-            self.best = f;
+        if let Some(i) = self.furthest_index() {
+            self.best.clone_from(&self.states[i]);
         }
-        let mut next = Vec::with_capacity(self.states.len() + 2);
-        let states = std::mem::take(&mut self.states);
-        for s in states {
+        let mut next = std::mem::take(&mut self.spare);
+        next.clear();
+        let mut states = std::mem::take(&mut self.states);
+        for s in states.drain(..) {
             if let Some(t) = self.step(s, b) {
                 self.close(t, &mut next);
             }
         }
+        self.spare = states;
         self.states = next;
         self.consumed += 1;
         if self.states.is_empty() {
@@ -204,11 +215,16 @@ impl Matcher {
     /// state inside a `{text}` ranks above every state of the piece after it: where a text
     /// parts, what was wanted is the text (the way out of it parts at the same byte).
     fn furthest(&self) -> Option<State> {
+        self.furthest_index().and_then(|i| self.states.get(i)).cloned()
+    }
+
+    /// Where [`Matcher::furthest`] is among the states.
+    fn furthest_index(&self) -> Option<usize> {
         let rank = |s: &State| match self.pieces.get(s.piece) {
             Some((_, Piece::Text)) => (s.piece + 1, u32::MAX),
             _ => (s.piece, s.k),
         };
-        self.states.iter().max_by_key(|s| rank(s)).cloned()
+        self.states.iter().enumerate().max_by_key(|(_, s)| rank(s)).map(|(i, _)| i)
     }
 
     /// What numeric piece `i` reads for state `s`; `None` for a piece that is not numeric or

@@ -14,6 +14,7 @@ use gcl_harness::certify::{
     write_bundle,
 };
 use gcl_harness::conform::{LevelFilter, firmware_version};
+use gcl_harness::report::shell_command;
 use gcl_host::target::open;
 use gcl_model::escape::printable;
 
@@ -211,15 +212,30 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     if !cert.excused.is_empty() {
         writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
     }
-    let how = match &key {
-        Some(k) => format!("signed by key {}", fingerprint(&k.verifying_key())),
-        None => "unsigned (give --key to sign it)".to_string(),
+    // The check to run is one that can pass: a signed bundle against its public key (the
+    // `--keygen` pair's FILE.pub when it is there); an unsigned one only for agreeing with
+    // itself, which --verify refuses to call a pass without --allow-unverified.
+    let (how, check) = match (&key, &args.key) {
+        (Some(k), Some(path)) => {
+            let public = public_key_path(path);
+            let verify = ["gcl", "certify", "--verify", &args.out.display().to_string(), "--pubkey"].map(String::from);
+            let check = if public.is_file() {
+                shell_command(&[&verify[..], &[public.display().to_string()]].concat())
+            } else {
+                // A placeholder for the user to fill in, outside the quoted words.
+                format!(
+                    "{} PUBLIC-KEY-FILE (the public key of {})",
+                    shell_command(&verify),
+                    fingerprint(&k.verifying_key())
+                )
+            };
+            (format!("signed by key {}", fingerprint(&k.verifying_key())), check)
+        }
+        _ => (
+            "unsigned (give --key to sign it)".to_string(),
+            shell_command(&["gcl", "certify", "--verify", &args.out.display().to_string(), "--allow-unverified"]),
+        ),
     };
-    writeln!(
-        w,
-        "  certificate bundle: {}, {how} (check it with `{}`)",
-        args.out.display(),
-        gcl_harness::report::shell_command(&["gcl", "certify", "--verify", &args.out.display().to_string()])
-    )?;
+    writeln!(w, "  certificate bundle: {}, {how} (check it with `{check}`)", args.out.display())?;
     Ok(if cert.is_pass() || (cert.partial && report.passed()) { EXIT_OK } else { EXIT_FAIL })
 }

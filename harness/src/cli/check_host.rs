@@ -75,12 +75,19 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     // Ctrl-C or SIGTERM stops the host's process group and removes its run folder, and the
     // reports say the check was stopped. Before any thread starts.
     let stop = super::stop_on_signals("check-host")?;
-    let progress =
-        super::progress::Progress::new("gcl check-host", "runs", "failing", super::progress::Total::Units(1), false);
+    let progress = super::progress::Progress::new(
+        "gcl check-host",
+        "runs",
+        "failing clause(s)",
+        super::progress::Total::Units(1),
+        false,
+    );
     let started = time::OffsetDateTime::now_utc();
     let t0 = std::time::Instant::now();
     let outcome = check_host_until(&opts, &stop);
-    progress.update(1, 0, "");
+    // The run's failing clauses, as the verdict below counts them.
+    let failing = outcome.as_ref().map_or(0, |o| o.report.cases.iter().filter(|c| c.verdict.fails_run()).count());
+    progress.update(1, failing as u64, "");
     progress.finish();
     let (mut report, run) = match outcome {
         Ok(o) => {

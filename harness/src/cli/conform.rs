@@ -404,7 +404,9 @@ pub fn summary_text(r: &RunReport) -> String {
         s.push_str("  the hand did not answer the liveness probe after the suite\n");
     }
     s.push_str(&format!("  time: {:.3} s\n", r.duration_ms / 1000.0));
-    if let Some(w) = &r.wire {
+    if let Some(w) = r.wire.as_ref().filter(|w| w.refuted()) {
+        s.push_str(&format!("  {}\n", w.refuted_text()));
+    } else if let Some(w) = &r.wire {
         s.push_str(&format!(
             "  wire-time lower bound: {:.3} s over the {} PASS/FAIL cases (step after step, the larger of the bytes \
 received at {} baud, full duplex, and the model's motion time; {} bytes sent, {} received, {:.3} s of motion and \

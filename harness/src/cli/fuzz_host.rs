@@ -9,7 +9,8 @@ use std::time::Duration;
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
 use gcl_harness::fuzz::host::{
-    CALIBRATION_CAP, Campaign, Event, Finding, FindingKind, FuzzOptions, HostRun, Transport, Weights, judge, run_once,
+    CALIBRATION_SHARE, Calibration, Campaign, DEFAULT_DURATION, Event, Finding, FindingKind, FuzzOptions, HostRun,
+    Transport, Weights, judge, run_once,
 };
 use gcl_harness::report::{CaseResult, HostDetails, HostFinding, RunReport, StopCause, Stopped, Verdict};
 use gcl_harness::sim::misbehave::Operator;
@@ -42,9 +43,10 @@ pub struct HostArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(50..=4_000_000))]
     baud: Option<u32>,
     /// A hang: the host neither sends nor exits for this long after the hand's last answer.
-    /// Default for `fuzz host`: measured (the host's own give-up time when the hand goes
-    /// silent, twice as long plus 2 s, at least 3 s); for `check-host`, whose hand never
-    /// goes silent: 20 s (above the 5 to 15 s timeouts of real host libraries).
+    /// Default for `fuzz host`: measured (the host's longest give-up time when the hand goes
+    /// silent at each kind of answer, twice as long plus 2 s, at least 3 s), and confirmed by a
+    /// second run that waits up to --run-budget; for `check-host`, whose hand never goes
+    /// silent: 20 s (above the 5 to 15 s timeouts of real host libraries).
     #[arg(long, value_name = "D", value_parser = duration)]
     timeout_hang: Option<Duration>,
     /// A hang too: one run taking longer than this.
@@ -135,11 +137,16 @@ traceback on stderr), a hang (--timeout-hang of silence after the hand's last an
 or stderr, or a protocol violation (the clauses of `gcl check-host`).
 
 Before the campaign (unless --timeout-hang is given) the host's own give-up time is
-measured: the hand goes silent at its first, middle and last answer, and the time the host
-takes to send or exit is its timeout; a hang is then silence for twice as long plus 2 s (at least
-3 s, at most --run-budget). A hang's signature is the host's stack where it waits
-(faulthandler for Python hosts, eu-stack or gdb for native ones when installed), else its
-protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
+measured at every kind of answer: the hand goes silent at the first answer of each kind (the
+prompt after ^C, an answer with values, the banner after RESET, a RealTime block...), and the
+time the host takes to send or exit there is its timeout; this takes at most a quarter of
+--duration. A hang is then silence for twice the longest plus 2 s (at least 3 s, at most
+--run-budget), and it is confirmed before it is reported: its schedule runs again, waiting as
+long as --run-budget allows, and a host that acts late is an INFO note (late, not hung), not a
+finding; a host that waits past the hang timeout while calibration measures has its hang found
+there. A hang's signature is the innermost frame of the host's own code where it waits
+(faulthandler for Python hosts, eu-stack or gdb for native ones when installed; the frames of
+libc, libstdc++, Boost... it waits in go in the message), else its protocol state. How the host reacts to the hand's own misbehaviour is a finding only when it
 is unsafe (a crash, a hang, an exit code, sending before an answer the hand sent whole);
 otherwise it is an INFO note in the report. A host may say what it believes with
 `gcl-observe: NAME MOTOR VALUE [WHERE]` lines on stderr or on the descriptor GCL_OBSERVE_FD
@@ -151,7 +158,8 @@ showed (echo and values, prompt only, banner, feedback block...), one per run, t
 round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
 line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
 schedule that made the host take a new path. Each distinct finding is minimized and written
-to --out as a bundle; --replay BUNDLE runs it again.
+to --out as a bundle; --replay BUNDLE runs it again. Without --runs or --duration a campaign
+lasts 5 minutes.
 
 Misbehaviours (--ops NAME[,NAME=WEIGHT...]; default weight shown):
 {}
@@ -181,10 +189,10 @@ pub struct Args {
     /// Seed of the schedules (and of the hand's noise).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stop after N runs, at least 1 (default: 1000 when --duration is not given either).
+    /// Stop after N runs, at least 1 (without --runs or --duration: a 5-minute campaign).
     #[arg(long, value_name = "N", conflicts_with = "duration", value_parser = clap::value_parser!(u64).range(1..))]
     runs: Option<u64>,
-    /// Stop after this long (30s, 5m).
+    /// Stop after this long (30s, 5m; default 5m unless --runs is given).
     #[arg(long, value_name = "D", value_parser = duration)]
     duration: Option<Duration>,
     /// Where bundles go.
@@ -193,7 +201,8 @@ pub struct Args {
     /// Run a bundle's schedule once and say whether its finding comes back.
     #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
     replay: Option<PathBuf>,
-    /// N hands and N hosts at once, each pair on its own line. The schedules are the same for
+    /// N hands and N hosts at once, each pair on its own line (calibration runs up to 8 at
+    /// once, or N when more). The schedules are the same for
     /// the same --seed and --jobs: run i's guidance sees runs 0..=i-N in order (a worker waits
     /// for a slow one), so with a host that answers the same bytes the same way, the findings,
     /// their first run and minimized schedules come back run for run. Wall times do not, nor
@@ -246,10 +255,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         printable(&opts.run.profile.id),
         if opts.run.transport == Transport::Tcp { "tcp" } else { "pty" },
         opts.run.time.name(),
-        match opts.run.pace {
-            Pace::Unpaced => "unpaced".to_string(),
-            p => format!("paced at {p}"),
-        },
+        opts.run.pace.phrase(),
         opts.jobs,
         args.out.display()
     );
@@ -261,15 +267,26 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let stop = stop_on_signals()?;
     let out = args.out.clone();
     let info_of = |f: &Finding| info(&opts, f);
+    if opts.runs.is_none() && opts.duration.is_none() {
+        eprintln!("{}", default_budget_line());
+    }
     let total = match (opts.runs, opts.duration) {
         (Some(n), _) => super::progress::Total::Units(n),
         (None, Some(d)) => super::progress::Total::Time(d),
-        (None, None) => super::progress::Total::Units(1000),
+        (None, None) => super::progress::Total::Time(DEFAULT_DURATION),
     };
     let progress = super::progress::Progress::new("gcl fuzz host", "runs", "findings", total, false);
     let done = std::sync::atomic::AtomicU64::new(0);
     let found = std::sync::atomic::AtomicU64::new(0);
     let on_event = |e: Event| match e {
+        // Said as soon as measured: the hang timeout the runs use, and what was left unmeasured.
+        // (A run that did not reach the host is said once, as what ended the campaign.)
+        Event::Calibrated(c) if c.untested.is_some() => {}
+        Event::Calibrated(c) => {
+            for line in calibration_lines(&c) {
+                progress.println(&line);
+            }
+        }
         Event::Run { .. } => {
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.update(n, found.load(Ordering::Relaxed), "");
@@ -283,9 +300,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             };
             // The signature begins with the kind (`crash: ...`), so it is not repeated.
             progress.println(&format!(
-                "  finding: {} (run {}, {:.1} s, {} misbehaviour(s)) -> {}",
+                "  finding: {} ({}, {:.1} s, {} misbehaviour(s)) -> {}",
                 f.verdict.signature,
-                f.run,
+                if f.by_calibration { "calibration".to_string() } else { format!("run {}", f.run) },
                 f.found_after_ms as f64 / 1000.0,
                 f.schedule.planned.len(),
                 where_
@@ -328,35 +345,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             printable(&kinds.join("; "))
         );
     }
-    if let Some(c) = &campaign.calibration {
-        let points: Vec<String> = c
-            .points
-            .iter()
-            .map(|(a, w)| match w {
-                Some(ms) => format!("answer {a}: {:.1} s", *ms as f64 / 1000.0),
-                None => format!("answer {a}: waited past {} s", CALIBRATION_CAP.as_secs()),
-            })
-            .collect();
-        if campaign.untested.is_some() {
-            // Said once, below, as what ended the campaign.
-        } else if points.is_empty() {
-            // No silence fired: the host took no answer at all, even from a perfect hand.
-            eprintln!(
-                "warning: host timeouts not measured: the host took no answer from the hand in its run without \
-                 misbehaviour (did it open the port it was given as {{port}} or {{url}}?), so this campaign tried \
-                 little or nothing; hang timeout {:.1} s",
-                c.timeout_hang_ms as f64 / 1000.0
-            );
-        } else {
-            eprintln!(
-                "host timeouts (silence at {}): {}; hang timeout {:.1} s ({} calibration runs)",
-                points.join(", "),
-                c.host_timeout_ms.map_or("none seen".to_string(), |ms| format!("{:.1} s", ms as f64 / 1000.0)),
-                c.timeout_hang_ms as f64 / 1000.0,
-                c.runs
-            );
-        }
-    }
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
         for (n, runs) in &campaign.notes {
@@ -386,6 +374,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         eprintln!("gcl fuzz host: nothing tested: {why}");
         return Ok(EXIT_ERROR);
     }
+    if opts.runs.is_none() && opts.duration.is_none() && campaign.stopped.is_none() {
+        eprintln!("{}", default_budget_line());
+    }
     Ok(match (campaign.findings.is_empty(), &campaign.stopped) {
         (false, _) => EXIT_FAIL,
         // Stopped before its budget with no finding: no verdict on the host.
@@ -401,7 +392,9 @@ fn stopped_after(by: &str, opts: &FuzzOptions, c: &Campaign) -> String {
         (None, Some(d)) => {
             format!(" runs, {:.1} s of {}", c.elapsed_ms as f64 / 1000.0, humantime::format_duration(d))
         }
-        (None, None) => " of 1000".to_string(),
+        (None, None) => {
+            format!(" runs, {:.1} s of {}", c.elapsed_ms as f64 / 1000.0, humantime::format_duration(DEFAULT_DURATION))
+        }
     };
     let runs = if of.starts_with(" runs") { "" } else { " runs" };
     format!("stopped by {by} after {}{of}{runs}", c.runs)
@@ -441,11 +434,74 @@ fn provenance(args: &Args, opts: &FuzzOptions) -> gcl_harness::fuzz::shard::Prov
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
-    match (opts.runs, opts.duration) {
+    match (opts.runs, opts.campaign_duration()) {
         (_, Some(d)) => options.insert("duration".into(), ms(d)),
-        (n, None) => options.insert("runs".into(), n.unwrap_or(1000).to_string()),
+        (n, None) => options.insert("runs".into(), n.unwrap_or_default().to_string()),
     };
     gcl_harness::fuzz::shard::Provenance { shard: opts.shard, seed: opts.seed, options, merged: None }
+}
+
+/// What a campaign without `--runs` or `--duration` says, at its start and its end.
+fn default_budget_line() -> String {
+    format!(
+        "gcl fuzz host: no --runs or --duration: a {}-minute campaign; run longer with --duration (--duration 1h) or --runs N",
+        DEFAULT_DURATION.as_secs() / 60
+    )
+}
+
+/// Seconds for people, from milliseconds.
+fn secs(ms: u64) -> String {
+    format!("{:.1} s", ms as f64 / 1000.0)
+}
+
+/// The host's timeouts as calibration measured them, for the console and the report: one
+/// line per kind of answer, the hang timeout, and what was left unmeasured.
+fn calibration_lines(c: &Calibration) -> Vec<String> {
+    let mut lines = Vec::new();
+    if c.by_kind.is_empty() && c.unmeasured.is_empty() {
+        // No silence fired: the host took no answer at all, even from a perfect hand.
+        lines.push(format!(
+            "warning: host timeouts not measured: the host took no answer from the hand in its run without \
+             misbehaviour (did it open the port it was given as {{port}} or {{url}}?), so this campaign tried \
+             little or nothing; hang timeout {}",
+            secs(c.timeout_hang_ms)
+        ));
+        return lines;
+    }
+    lines.push(format!(
+        "host timeouts (the hand silent at each kind of answer): {}; hang timeout {} ({} calibration runs, {})",
+        c.host_timeout_ms.map_or("none seen".to_string(), secs),
+        secs(c.timeout_hang_ms),
+        c.runs,
+        secs(c.elapsed_ms)
+    ));
+    for k in &c.by_kind {
+        let waited = match k.gave_up_ms {
+            Some(ms) => format!("gave up after {}", secs(ms)),
+            None if k.cut_by_share => {
+                format!("waited past {} (calibration's share ran out): neither sent nor exited", secs(k.waited_past_ms))
+            }
+            None => format!("waited past {}: neither sent nor exited", secs(k.waited_past_ms)),
+        };
+        lines.push(format!("  {} (answer {}, {}): {waited}", k.kind, k.answer, k.state));
+    }
+    let cut: Vec<&str> = c.by_kind.iter().filter(|k| k.cut_by_share).map(|k| k.kind.as_str()).collect();
+    if !c.unmeasured.is_empty() || !cut.is_empty() {
+        let mut what = Vec::new();
+        if !cut.is_empty() {
+            what.push(format!("waits cut short at: {}", cut.join("; ")));
+        }
+        if !c.unmeasured.is_empty() {
+            what.push(format!("not measured: {}", c.unmeasured.join("; ")));
+        }
+        lines.push(format!(
+            "  calibration cut short at its share of the campaign (1/{CALIBRATION_SHARE} of --duration, {}): {}; \
+             the campaign goes on with what it measured",
+            c.share_ms.map_or("-".to_string(), secs),
+            what.join("; ")
+        ));
+    }
+    lines
 }
 
 /// SIGINT, SIGTERM and SIGHUP (a CI job's time limit) end the campaign: the runs in flight
@@ -615,6 +671,7 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
                 )
             }))
             .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
+            .chain(timeout_facts(opts, c))
             .collect(),
         merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),
         findings: c
@@ -634,6 +691,38 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
             })
             .collect(),
     }
+}
+
+/// The hang timeout and the host's own timeouts, as the report's facts.
+fn timeout_facts(opts: &FuzzOptions, c: &Campaign) -> Vec<(String, String)> {
+    let Some(cal) = &c.calibration else {
+        return vec![(
+            "hang timeout".into(),
+            format!("{} (--timeout-hang)", secs(opts.run.timeout_hang.as_millis() as u64)),
+        )];
+    };
+    let mut v = vec![(
+        "hang timeout".into(),
+        format!(
+            "{} (measured: twice the host's longest give-up time, {}, plus 2 s)",
+            secs(cal.timeout_hang_ms),
+            cal.host_timeout_ms.map_or("none seen".to_string(), secs)
+        ),
+    )];
+    for k in &cal.by_kind {
+        let waited = match k.gave_up_ms {
+            Some(ms) => format!("gave up after {}", secs(ms)),
+            None => format!("waited past {}", secs(k.waited_past_ms)),
+        };
+        v.push((format!("host timeout: {} ({})", k.kind, k.state), waited));
+    }
+    if !cal.unmeasured.is_empty() {
+        v.push((
+            "host timeouts not measured".into(),
+            format!("{} (calibration's share ran out)", cal.unmeasured.join("; ")),
+        ));
+    }
+    v
 }
 
 fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Result<u8> {

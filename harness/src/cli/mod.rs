@@ -29,6 +29,25 @@ pub const EXIT_FAIL: u8 = 1;
 /// Exit code: usage or infrastructure error.
 pub const EXIT_ERROR: u8 = 2;
 
+/// The one line `main` prints for an error: the error and its causes, outermost first, as
+/// anyhow's `{:#}` writes them, but without a cause that an earlier part already says in full
+/// (an error whose message embeds its source, as many `thiserror` messages do, would say it
+/// twice: `...(os error 2): cannot open ...(os error 2)`).
+pub fn error_line(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
 /// Loads a profile by built-in name or alias (`seed`, `bh8-262-4.3`, `bh8-262-4.4`,
 /// `bh8-262`) or from a TOML file ([`gcl_host::profiles::load`]).
 pub fn load_profile(name: &str) -> anyhow::Result<Arc<Profile>> {
@@ -135,4 +154,24 @@ static STOPPED_BY: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None
 /// N)`), once [`stop_on_signals`] heard one.
 pub fn stopped_by() -> Option<String> {
     STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("opening the target: {0}")]
+    struct Outer(#[source] std::io::Error);
+
+    #[test]
+    fn an_error_line_says_each_cause_once() {
+        let io = || std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory (os error 2)");
+        // A message that embeds its source: the source is not said again.
+        let e = anyhow::Error::new(Outer(io())).context("gcl fuzz device");
+        assert_eq!(error_line(&e), "gcl fuzz device: opening the target: No such file or directory (os error 2)");
+        // A context over a plain cause keeps both.
+        let e = anyhow::Error::new(io()).context("reading corpus/a.json");
+        assert_eq!(error_line(&e), "reading corpus/a.json: No such file or directory (os error 2)");
+    }
 }

@@ -32,7 +32,10 @@ Transports (exactly one):
                open is lost (so the power-up banner is never seen; send RESET to see one).
                While paced, the speed the host sets on the port is checked against the hand's
                rate: when they differ, bytes cross garbled both ways, as through a UART at the
-               wrong rate (a host that changes the hand's BAUD must change its own too).
+               wrong rate (a host that changes the hand's BAUD must change its own too). Each
+               byte is judged at the speed set when it crosses, standard or arbitrary
+               (termios2); within 2 % of the hand's rate is the same rate. The simulator sets
+               the port's speed once, before it prints the path, and never over the host's.
                --no-speed-check turns this off.
   --tcp ADDR   prints the bound address (e.g. 127.0.0.1:40123) alone on the first line of stdout.
                ADDR is HOST:PORT or PORT (127.0.0.1); port 0 picks a free one. One client at a
@@ -201,19 +204,18 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let stops = [signals.as_fd()];
 
     if args.pty {
-        let mut pty = Pty::open(args.link.as_deref())?;
         let mut engine = Engine::new(&opts)?;
-        pty.match_speed(&engine)?;
+        let mut pty = Pty::open(args.link.as_deref(), engine.line_baud())?;
         pty.set_speed_check(!args.no_speed_check);
         pty.on_speed_mismatch(|line| eprintln!("gcl sim: {line}"));
         announce(&pty.path().display().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on {}{} (time {}, paced at {}); stop with ^C",
+            "gcl sim: profile {} on {}{} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             pty.path().display(),
             pty.link().map(|l| format!(" (link {})", l.display())).unwrap_or_default(),
             opts.time.name(),
-            opts.pace
+            opts.pace.phrase()
         );
         pty.serve(&mut engine, &stops)?;
     } else if let Some(addr) = &args.tcp {
@@ -221,11 +223,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         announce(&server.local_addr().to_string())?;
         eprintln!(
-            "gcl sim: profile {} on tcp {} (time {}, paced at {}); stop with ^C",
+            "gcl sim: profile {} on tcp {} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             server.local_addr(),
             opts.time.name(),
-            opts.pace
+            opts.pace.phrase()
         );
         server.serve(&mut engine, &stops)?;
     } else {

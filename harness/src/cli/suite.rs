@@ -166,17 +166,25 @@ inside an existing folder)",
                     all
                 }
             };
-            for c in &cases {
-                let req: Vec<&str> = c.header().requires.iter().map(|r| r.as_str()).collect();
-                writeln!(
-                    w,
-                    "{:<12} {:<44} {:<6} {:<22} {}",
-                    c.profile,
-                    c.id(),
-                    c.level(),
-                    if req.is_empty() { "-".to_string() } else { req.join(",") },
-                    c.header().title
-                )?;
+            // Columns at least as wide as their widest entry (and as wide as ever for the
+            // built-in suites), so every title starts in one column.
+            let rows: Vec<[String; 5]> = cases
+                .iter()
+                .map(|c| {
+                    let req: Vec<&str> = c.header().requires.iter().map(|r| r.as_str()).collect();
+                    [
+                        c.profile.to_string(),
+                        c.id().to_string(),
+                        c.level().to_string(),
+                        if req.is_empty() { "-".to_string() } else { req.join(",") },
+                        c.header().title.clone(),
+                    ]
+                })
+                .collect();
+            let width = |i: usize, least: usize| rows.iter().map(|r| r[i].chars().count()).fold(least, usize::max);
+            let (w0, w1, w2, w3) = (width(0, 12), width(1, 44), width(2, 6), width(3, 22));
+            for [profile, id, level, req, title] in &rows {
+                writeln!(w, "{profile:<w0$} {id:<w1$} {level:<w2$} {req:<w3$} {title}")?;
             }
             let counts = suite::count_by_level(&cases);
             let per: Vec<String> =

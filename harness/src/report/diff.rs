@@ -391,8 +391,65 @@ pub fn realtime_rows(profile: &str, d: &Diff, transcript: Option<&str>) -> Vec<F
     decode_blocks(&golden, &actual, layout.as_ref())
 }
 
+/// One RealTime block of a host's session ([`session_blocks`]), decoded.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SessionBlock {
+    /// The transcript step it is in (1-based).
+    pub step: usize,
+    /// The host sent it (a control block); else the hand did (a feedback block).
+    pub from_host: bool,
+    /// Its header byte (`*`, `C`, `c`...).
+    pub header: u8,
+    /// Each field: its motor (`None` for a hand-wide one), its name (`LFAP`) and its value.
+    pub fields: Vec<(Option<u8>, &'static str, i64)>,
+}
+
+/// The RealTime blocks of a host's session transcript (as `gcl fuzz host` and `gcl
+/// check-host` keep it), decoded field by field with the layout in force at each step (the
+/// host's sends fed to a fresh model of `profile`): the hand's feedback blocks, each where a
+/// `*` begins a whole block, and the host's control blocks, a send of whole blocks. Bytes that
+/// make no whole block (one a misbehaviour cut or garbled) are left as the transcript has them.
+/// Empty for a profile the model does not have built in.
+pub fn session_blocks(profile: &str, t: &Transcript) -> Vec<SessionBlock> {
+    let Some(layouts) = layouts(profile, t) else { return Vec::new() };
+    let mut out = Vec::new();
+    let named = |l: &gcl_model::realtime::BlockLayout, values: Vec<i64>| {
+        l.fields().iter().zip(values).map(|(f, v)| (f.motor(), f.name(), v)).collect::<Vec<_>>()
+    };
+    for (i, s) in t.steps.iter().enumerate() {
+        let Some(layout) = layouts.get(i).and_then(|l| l.as_ref()) else { continue };
+        // The layout in force when the host sent: the previous step's (a send that starts the
+        // loop has none).
+        let sent_in = i.checked_sub(1).and_then(|j| layouts.get(j)).and_then(|l| l.as_ref());
+        if let (Some(send), Some(l)) = (&s.send, sent_in) {
+            let c = l.control();
+            let blocks: Vec<&[u8]> = send.bytes.chunks(c.size().max(1)).collect();
+            if c.size() > 0 && send.bytes.len() % c.size() == 0 && blocks.iter().all(|b| c.decode(b).is_ok()) {
+                for b in blocks {
+                    if let Ok((header, values)) = c.decode(b) {
+                        out.push(SessionBlock { step: i + 1, from_host: true, header, fields: named(c, values) });
+                    }
+                }
+            }
+        }
+        let f = layout.feedback();
+        let Some(bytes) = s.expect.exact_bytes() else { continue };
+        let mut at = 0;
+        while f.size() > 0 && at + f.size() <= bytes.len() {
+            match f.decode(&bytes[at..at + f.size()]) {
+                Ok((header, values)) => {
+                    out.push(SessionBlock { step: i + 1, from_host: false, header, fields: named(f, values) });
+                    at += f.size();
+                }
+                Err(_) => at += 1,
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn fget() -> Diff {
@@ -504,6 +561,46 @@ mod tests {
         let d = Diff { golden: "10 12".into(), form: Some(AnswerForm::Hex), ..d };
         assert!(is_hex(&d));
         assert_eq!(command(&d), "RealTime block");
+    }
+
+    /// A host's session in RealTime on seed, as `gcl fuzz host` keeps it: two control blocks,
+    /// the second one's feedback cut short.
+    pub(crate) const SESSION: &str = "gcl-transcript 1\nid: s\ntitle: s\nclause: host\nlevel: INFO\nprofile: seed\n\n\
+send \"\\x03\"\nexpect \"\\n\\r=> \"\n\nsend \"HI\\r\"\nexpect \"HI\\n\\r=> \"\n\n\
+send \"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\\r\"\n\
+expect \"123FSET LCV 1 LCVC 1 LCPG 0 LFV 1 LFVC 1 LFS 0 LFAP 1 LFDP 0\\n\\r=> \"\n\n\
+send \"123LOOP\\r\"\nexpect \"123LOOP*\"\n\n\
+send \"C\\x14\\x14\\x14\"\nexpect \"*\\x14\\x00\\x1C\\x14\\x04\\x04\\x14\\x00\\x1C\"\n\n\
+send \"C\\x14\\x14\\x14\"\nexpect \"*\\x14\\x00:\\x14\\x04\"\n\n\
+send \"\\x03\"\nexpect \"\\n\\r=> \"\n";
+
+    /// A host's session (as `gcl fuzz host` keeps it) has its RealTime blocks decoded field by
+    /// field with the layout its own FSET set: its control blocks and the hand's feedback; a
+    /// block a misbehaviour cut short stays bytes.
+    #[test]
+    fn a_host_sessions_realtime_blocks_are_decoded_field_by_field() {
+        let t = gcl_transcript::parse(SESSION).unwrap();
+        let blocks = session_blocks("seed", &t);
+        let host: Vec<&SessionBlock> = blocks.iter().filter(|b| b.from_host).collect();
+        let hand: Vec<&SessionBlock> = blocks.iter().filter(|b| !b.from_host).collect();
+        assert_eq!(host.len(), 2, "{blocks:?}");
+        assert_eq!((host[0].step, host[0].header), (5, b'C'));
+        assert_eq!(host[0].fields, vec![(Some(1), "LCV", 20), (Some(2), "LCV", 20), (Some(3), "LCV", 20)]);
+        // The second feedback block was cut short: only the first is decoded.
+        assert_eq!(hand.len(), 1, "{blocks:?}");
+        assert_eq!((hand[0].step, hand[0].header), (5, b'*'));
+        assert_eq!(
+            hand[0].fields,
+            vec![
+                (Some(1), "LFV", 20),
+                (Some(1), "LFAP", 28),
+                (Some(2), "LFV", 20),
+                (Some(2), "LFAP", 1028),
+                (Some(3), "LFV", 20),
+                (Some(3), "LFAP", 28)
+            ]
+        );
+        assert!(session_blocks("no-such-profile", &t).is_empty());
     }
 
     #[test]

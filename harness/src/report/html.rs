@@ -331,48 +331,12 @@ pub fn to_html(r: &RunReport) -> String {
         p.push(&level_table(r));
     }
 
-    if !r.groups.is_empty() {
-        p.heading("root-causes", "Root causes first");
-        p.push("<p>Failures grouped by where they part from their goldens (the command answered, the kind of difference), largest first; each names the clause of its smallest failing case.</p>\n");
-        for (i, g) in r.groups.iter().enumerate() {
-            let mut body = format!(
-                "<p>command <code>{}</code>, difference: {}, likely clause: <strong>{}</strong>, representative: {}</p>\n",
-                esc(&g.command),
-                esc(&g.kind),
-                esc(&g.clause),
-                case_link(r, &g.representative)
-            );
-            if let Some(d) = &g.diff {
-                body.push_str(&pre(&diff::aligned(d)));
-            }
-            if !g.blocked.is_empty() {
-                let blocked: Vec<String> = g.blocked.iter().map(|id| case_link(r, id)).collect();
-                body.push_str(&format!(
-                    "<p class=\"blocked\">{} blocked by this group (they fail on its clause's bug, not their own): {}</p>\n",
-                    g.blocked.len(),
-                    blocked.join(" ")
-                ));
-            }
-            let members: Vec<String> = g.cases.iter().map(|id| case_link(r, id)).collect();
-            body.push_str(&details(
-                &format!("the {} case(s) of this group", g.cases.len()),
-                &format!("<p>{}</p>\n", members.join(" ")),
-                g.cases.len() <= 12,
-                "members",
-                None,
-            ));
-            let line = g.diff.as_ref().map(diff::one_line).unwrap_or_default();
-            p.push(&details(
-                &format!("<strong>{}</strong> <span class=\"muted\">{}</span>", esc(&g.summary), esc(&line)),
-                &body,
-                i < 3,
-                "",
-                Some(&format!("group-{}", i + 1)),
-            ));
-        }
-    }
+    root_causes(&mut p, r);
 
-    if let Some(w) = &r.wire {
+    if let Some(w) = r.wire.as_ref().filter(|w| w.refuted()) {
+        p.heading("wire", "Wire time");
+        p.push(&format!("<p>{}.</p>\n", esc(&w.refuted_text())));
+    } else if let Some(w) = &r.wire {
         p.heading("wire", "Wire time");
         p.push(&format!(
             "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (a passing case: its pauses plus the \
@@ -391,37 +355,7 @@ failing case: its bytes one way; {} bytes sent, {} received, motion \
     }
 
     let goldens = goldens_for(r);
-    let failures: Vec<&CaseResult> = r.cases.iter().filter(|c| failing(c)).collect();
-    if !failures.is_empty() {
-        let label = if r.kind == ReportKind::FuzzHost { "Findings in detail" } else { "Failures" };
-        p.heading("failures", label);
-        let mut preambles = Vec::new();
-        // A window plot for each group's representative and each failure of a small group
-        // (or none): the members of a large group part the same way as their representative.
-        let big: std::collections::BTreeSet<&str> = r
-            .groups
-            .iter()
-            .filter(|g| g.cases.len() > 10)
-            .flat_map(|g| g.cases.iter().filter(|id| **id != g.representative).map(String::as_str))
-            .collect();
-        for c in &failures {
-            let plot = !big.contains(c.id.as_str());
-            p.push(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles, plot));
-        }
-        if !preambles.is_empty() {
-            p.heading("preambles", "Preambles");
-            p.push("<p>The steps that bring the hand to a known state before a case's check, as the failing cases above ran them (shown once each).</p>\n");
-            for (i, text) in preambles.iter().enumerate() {
-                p.push(&details(
-                    &format!("preamble {}", i + 1),
-                    &format!("<pre class=\"step\">{}</pre>\n", esc(text)),
-                    false,
-                    "",
-                    Some(&format!("preamble-{}", i + 1)),
-                ));
-            }
-        }
-    }
+    failures(&mut p, r, &goldens);
 
     let realtime: Vec<&CaseResult> = r.cases.iter().filter(|c| goldens.contains_key(c.id.as_str())).collect();
     if !realtime.is_empty() {
@@ -429,8 +363,21 @@ failing case: its bytes one way; {} bytes sent, {} received, motion \
         p.push("<p>Each RealTime case's feedback per block: every motor's position, velocity, strain and the other fields its layout sends, with the golden's accepted range shaded behind the values the hand sent. A failing case's plots are with its failure, marked where it fails.</p>\n");
         let (bad, good): (Vec<&CaseResult>, Vec<&CaseResult>) = realtime.iter().partition(|c| failing(c));
         if !bad.is_empty() {
-            let links: Vec<String> = bad.iter().map(|c| case_link(r, &c.id)).collect();
-            p.push(&format!("<p>Failing, plotted with their failures: {}</p>\n", links.join(" ")));
+            // Those that fail on their own by name; the blocked ones are with their root cause.
+            let blocked = r.blocked();
+            let (held, own): (Vec<&&CaseResult>, Vec<&&CaseResult>) =
+                bad.iter().partition(|c| blocked.contains(c.id.as_str()));
+            let links: Vec<String> = own.iter().map(|c| case_link(r, &c.id)).collect();
+            let mut line = format!("<p>Failing, plotted with their failures: {}", links.join(" "));
+            if !held.is_empty() {
+                let _ = write!(
+                    line,
+                    "{}{} blocked by a root cause (plotted under <a href=\"#failures\">Failures</a>, folded by root cause)",
+                    if own.is_empty() { "" } else { "; " },
+                    held.len()
+                );
+            }
+            p.push(&format!("{line}</p>\n"));
         }
         for c in good {
             let (Some(g), Some(t)) = (goldens.get(c.id.as_str()), c.transcript.as_deref()) else { continue };
@@ -473,6 +420,135 @@ failing case: its bytes one way; {} bytes sent, {} received, motion \
         p.push(&details(&format!("{} cases", r.cases.len()), &cases_table(r), false, "", None));
     }
     p.finish()
+}
+
+/// The root-cause groups, largest first: each with its diff, its clause, and the cases it
+/// blocks (listed when they are a few, else a link to where they are folded under Failures).
+fn root_causes(p: &mut Page, r: &RunReport) {
+    if r.groups.is_empty() {
+        return;
+    }
+    p.heading("root-causes", "Root causes first");
+    p.push("<p>Failures grouped by where they part from their goldens (the command answered, the kind of difference), largest first; each names the clause of its smallest failing case.</p>\n");
+    for (i, g) in r.groups.iter().enumerate() {
+        let mut body = format!(
+            "<p>command <code>{}</code>, difference: {}, likely clause: <strong>{}</strong>, representative: {}</p>\n",
+            esc(&g.command),
+            esc(&g.kind),
+            esc(&g.clause),
+            case_link(r, &g.representative)
+        );
+        if let Some(d) = &g.diff {
+            body.push_str(&pre(&diff::aligned(d)));
+        }
+        if !g.blocked.is_empty() {
+            let folded = format!("folded under <a href=\"#{}\">Failures</a>", blocked_anchor(i));
+            let listed = if g.blocked.len() <= FEW {
+                let blocked: Vec<String> = g.blocked.iter().map(|id| case_link(r, id)).collect();
+                format!(": {} ({folded})", blocked.join(" "))
+            } else {
+                format!(", {folded}")
+            };
+            body.push_str(&format!(
+                "<p class=\"blocked\">{} blocked by this group (they fail on its clause's bug, not their own){listed}.</p>\n",
+                g.blocked.len(),
+            ));
+        }
+        let members: Vec<String> = g.cases.iter().map(|id| case_link(r, id)).collect();
+        body.push_str(&details(
+            &format!("the {} case(s) of this group", g.cases.len()),
+            &format!("<p>{}</p>\n", members.join(" ")),
+            g.cases.len() <= FEW,
+            "members",
+            None,
+        ));
+        let line = g.diff.as_ref().map(diff::one_line).unwrap_or_default();
+        p.push(&details(
+            &format!("<strong>{}</strong> <span class=\"muted\">{}</span>", esc(&g.summary), esc(&line)),
+            &body,
+            i < 3,
+            "",
+            Some(&format!("group-{}", i + 1)),
+        ));
+    }
+}
+
+/// How many cases a list shows open; more are folded.
+const FEW: usize = 12;
+
+/// The anchor of the folded list of the cases group `i` (from 0) blocks.
+fn blocked_anchor(i: usize) -> String {
+    format!("blocked-{}", i + 1)
+}
+
+/// Every failing case folded with its diff, transcript and plots: first those that fail on
+/// their own, one line each; then, folded under one line per root cause, the cases it
+/// blocks (a bug in the prompt blocks every case of the suite: 353 identical lines would
+/// bury the one that matters).
+fn failures(p: &mut Page, r: &RunReport, goldens: &BTreeMap<&str, Transcript>) {
+    let failures: Vec<&CaseResult> = r.cases.iter().filter(|c| failing(c)).collect();
+    if failures.is_empty() {
+        return;
+    }
+    let label = if r.kind == ReportKind::FuzzHost { "Findings in detail" } else { "Failures" };
+    p.heading("failures", label);
+    let mut preambles = Vec::new();
+    // A window plot for each group's representative and each failure of a small group
+    // (or none): the members of a large group part the same way as their representative.
+    let big: std::collections::BTreeSet<&str> = r
+        .groups
+        .iter()
+        .filter(|g| g.cases.len() > 10)
+        .flat_map(|g| g.cases.iter().filter(|id| **id != g.representative).map(String::as_str))
+        .collect();
+    let blocked = r.blocked();
+    let own: Vec<&&CaseResult> = failures.iter().filter(|c| !blocked.contains(c.id.as_str())).collect();
+    if !blocked.is_empty() {
+        p.push(&format!(
+            "<p>{} case(s) fail on their own; {} more are blocked by a root cause (they fail on its clause's bug, not their own), folded under it below.</p>\n",
+            own.len(),
+            failures.len() - own.len()
+        ));
+    }
+    for c in own {
+        let plot = !big.contains(c.id.as_str());
+        p.push(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles, plot));
+    }
+    for (i, g) in r.groups.iter().enumerate().filter(|(_, g)| !g.blocked.is_empty()) {
+        let mut body = String::new();
+        for c in failures.iter().filter(|c| g.blocked.contains(&c.id)) {
+            let plot = !big.contains(c.id.as_str());
+            body.push_str(&failure_view(r, c, goldens.get(c.id.as_str()), &mut preambles, plot));
+        }
+        let line = g.diff.as_ref().map(diff::one_line).unwrap_or_else(|| g.summary.clone());
+        p.push(&details(
+            &format!(
+                "<strong>{} blocked</strong> by root cause <a href=\"#group-{}\">{}</a>, clause <code>{}</code> <span class=\"muted\">{}</span>",
+                g.blocked.len(),
+                i + 1,
+                i + 1,
+                esc(&g.clause),
+                esc(&line)
+            ),
+            &body,
+            false,
+            "blocked",
+            Some(&blocked_anchor(i)),
+        ));
+    }
+    if !preambles.is_empty() {
+        p.heading("preambles", "Preambles");
+        p.push("<p>The steps that bring the hand to a known state before a case's check, as the failing cases above ran them (shown once each).</p>\n");
+        for (i, text) in preambles.iter().enumerate() {
+            p.push(&details(
+                &format!("preamble {}", i + 1),
+                &format!("<pre class=\"step\">{}</pre>\n", esc(text)),
+                false,
+                "",
+                Some(&format!("preamble-{}", i + 1)),
+            ));
+        }
+    }
 }
 
 fn clause_table(r: &RunReport) -> String {
@@ -608,6 +684,9 @@ fn failure_view(
     }
     if let Some(t) = &c.transcript {
         body.push_str(&transcript_view(t, c.diff.as_ref(), "hand said", Some(preambles)));
+        if r.kind.is_host() {
+            body.push_str(&session_blocks_view(&r.profile, t));
+        }
     }
     details(
         &format!(
@@ -650,6 +729,49 @@ fn field_table(rows: &[FieldRow]) -> String {
         );
     }
     h.push_str("</table>\n");
+    h
+}
+
+/// A host's session's RealTime blocks decoded field by field ([`diff::session_blocks`]): a
+/// table for the host's control blocks and one for the hand's feedback blocks, one row per
+/// block, one column per field of the layout (a new header row where the layout changes).
+fn session_blocks_view(profile: &str, transcript: &str) -> String {
+    let Ok(t) = gcl_transcript::parse(transcript) else { return String::new() };
+    let blocks = diff::session_blocks(profile, &t);
+    let mut h = String::new();
+    for (from_host, what) in [(true, "the host's control blocks"), (false, "the hand's feedback blocks")] {
+        let mine: Vec<&diff::SessionBlock> = blocks.iter().filter(|b| b.from_host == from_host).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let _ = writeln!(h, "<p>RealTime: {what}, decoded field by field (values as sent, high byte first):</p>");
+        let mut table = String::from("<table>\n");
+        let mut columns: Option<Vec<(Option<u8>, &str)>> = None;
+        for b in mine {
+            let cols: Vec<(Option<u8>, &str)> = b.fields.iter().map(|(m, n, _)| (*m, *n)).collect();
+            if columns.as_ref() != Some(&cols) {
+                table.push_str("<tr><th>step</th><th>header</th>");
+                for (m, n) in &cols {
+                    let motor = m.map_or("hand".to_string(), |m| format!("motor {m}"));
+                    let _ = write!(table, "<th>{} {}</th>", esc(&motor), esc(n));
+                }
+                table.push_str("</tr>\n");
+                columns = Some(cols);
+            }
+            let _ = write!(
+                table,
+                "<tr><td class=\"n\">{}</td><td><code>{}</code></td>",
+                b.step,
+                esc(&gcl_transcript::escape_text(&[b.header]))
+            );
+            for (_, _, v) in &b.fields {
+                let _ = write!(table, "<td class=\"n\">{v}</td>");
+            }
+            table.push_str("</tr>\n");
+        }
+        table.push_str("</table>\n");
+        h.push_str(&table);
+    }
     h
 }
 
@@ -989,6 +1111,23 @@ mod tests {
         assert!(page.contains("<strong>FAIL</strong>: 1 of the 2 cases that ran fail (MUST 1)"), "{page}");
         assert!(page.contains("decision:framing-echo"));
         assert!(!page.contains("<script"), "self-contained and inert");
+    }
+
+    /// A host page shows a finding's RealTime blocks decoded field by field (they were escaped
+    /// text: `"*\x14\x00..."`), the host's control blocks and the hand's feedback apart.
+    #[test]
+    fn a_host_page_decodes_the_sessions_realtime_blocks() {
+        let mut r = crate::report::tests::sample();
+        r.kind = ReportKind::FuzzHost;
+        r.host = Some(crate::report::HostDetails { command: vec!["host".into()], runs: 1, ..Default::default() });
+        r.cases[1].diff = None;
+        r.cases[1].transcript = Some(diff::tests::SESSION.into());
+        let page = to_html(&r);
+        assert!(page.contains("RealTime: the host's control blocks, decoded field by field"), "{page}");
+        assert!(page.contains("RealTime: the hand's feedback blocks, decoded field by field"), "{page}");
+        assert!(page.contains("<th>motor 2 LFAP</th>"), "{page}");
+        assert!(page.contains("<td class=\"n\">1028</td>"), "{page}");
+        assert!(page.contains("<th>motor 1 LCV</th>"), "{page}");
     }
 
     #[test]

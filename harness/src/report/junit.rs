@@ -86,12 +86,18 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
         tc.push_attribute(("classname", classname.as_str()));
         tc.push_attribute(("time", t.as_str()));
         w.write_event(Event::Start(tc))?;
-        // CI shows the message on one line: the diff's summary says what differed.
-        let message = match (&c.diff, &c.message) {
+        // CI shows the message on one line: the diff's summary says what differed. A case
+        // blocked by a root cause says which first, so a dashboard groups them by it.
+        let mut message = match (&c.diff, &c.message) {
             (Some(d), _) => super::diff::one_line(d),
             (None, Some(m)) => m.clone(),
             (None, None) => c.verdict.to_string(),
         };
+        if c.verdict.fails_run()
+            && let Some((i, g)) = r.groups.iter().enumerate().find(|(_, g)| g.blocked.contains(&c.id))
+        {
+            message = format!("blocked by root-cause-{} ({}): {message}", i + 1, g.clause);
+        }
         let body = {
             let mut b = format!("{}\n{}\nclauses: {}\n", c.verdict, c.title, c.clauses.join(", "));
             if let Some(m) = &c.message {

@@ -264,6 +264,29 @@ pub struct WireTime {
     pub ratio: f64,
 }
 
+impl WireTime {
+    /// Whether the run itself refutes the bound: it took less time than its bytes would take
+    /// at `baud`, so the hand did not pace its bytes at that rate (an unpaced simulator, or a
+    /// link faster than the baud given) and the bound, which assumes it did, says nothing.
+    pub fn refuted(&self) -> bool {
+        self.actual_ms < self.lower_bound_ms
+    }
+
+    /// The sentence a report gives instead of a bound the run refutes.
+    pub fn refuted_text(&self) -> String {
+        format!(
+            "no wire-time bound: the run took {:.3} s, less than the {:.3} s its {} PASS/FAIL cases' bytes \
+would take at {} baud, so the hand does not pace its bytes at {} baud (an unpaced simulator?); the bound \
+assumes a hand that does",
+            self.actual_ms / 1000.0,
+            self.lower_bound_ms / 1000.0,
+            self.counted_cases,
+            self.baud,
+            self.baud
+        )
+    }
+}
+
 /// Every option that changed what a run ran or how it was judged, so a report (and a
 /// certificate) says what it is a report of.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]

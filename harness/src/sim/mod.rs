@@ -68,6 +68,17 @@ pub enum Pace {
     Unpaced,
 }
 
+impl Pace {
+    /// How a start line says it: "paced at the hand's BAUD", "paced at 38400 baud" or
+    /// "unpaced".
+    pub fn phrase(&self) -> String {
+        match self {
+            Pace::Unpaced => self.to_string(),
+            p => format!("paced at {p}"),
+        }
+    }
+}
+
 impl std::fmt::Display for Pace {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

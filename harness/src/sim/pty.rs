@@ -3,7 +3,9 @@
 //!
 //! The slave side is set raw (`cfmakeraw`): no echo by the line discipline, no CR/NL
 //! translation, no signals from ^C, so every byte reaches the hand as sent. The pty is created
-//! at the hand's line rate, so a host that never sets a speed talks at the hand's rate.
+//! at the hand's line rate, so a host that never sets a speed talks at the hand's rate; that is
+//! the only time the simulator sets the port's speed (before its path is known to anyone): from
+//! then on the speed is the host's, and the simulator only reads it, at each crossing.
 //!
 //! The port opens and closes like a serial port. The simulator keeps its own descriptor of the
 //! slave, so a host closing the port never hangs up the master and the hand keeps its state
@@ -42,13 +44,17 @@ pub struct Pty {
     open: bool,
     /// Whether bytes are garbled while the host's speed differs from the hand's.
     speed_check: bool,
+    /// The speed the host has set, read once in this turn of the serving loop (`None`: not
+    /// read yet): every byte that crosses in one turn crosses at the same moment.
+    speed_now: Option<Option<u32>>,
     /// The last mismatch noted in the trace (host rate, hand rate).
     mismatch: Option<(u32, u32)>,
     /// Told each new speed mismatch (the CLI prints it on stderr).
     on_mismatch: Option<fn(&str)>,
     /// The host's reads and writes of the slave (`IN_ACCESS`, `IN_MODIFY`), in the order they
-    /// happened.
-    reads: Inotify,
+    /// happened. Only a tapped line uses them: on any other the watch is removed when serving
+    /// starts, so neither the host's reads and writes nor the simulator's pay for it.
+    reads: Option<Inotify>,
     /// Output went to the host since it was last seen reading.
     wrote_since_read: bool,
     /// Host bytes were read whose write (`IN_MODIFY`) had not been seen: it may come late,
@@ -66,10 +72,17 @@ fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
 }
 
 impl Pty {
-    /// Creates a raw pty; with `link`, also a symbolic link to its slave at that path (an
-    /// existing symbolic link there is replaced unless it points at a pty that exists, i.e.
-    /// whose master is held open, as by another simulator; any other file is an error). The link is removed when the `Pty` is dropped.
-    pub fn open(link: Option<&Path>) -> Result<Pty, SimError> {
+    /// Creates a raw pty at `rate` bit/s (the hand's line rate, [`Engine::line_baud`]: a host
+    /// that sets no speed talks at it; `None`, an unpaced line, leaves the pty's default); with
+    /// `link`, also a symbolic link to its slave at that path (an existing symbolic link there
+    /// is replaced unless it points at a pty that exists, i.e. whose master is held open, as by
+    /// another simulator; any other file is an error). The link is removed when the `Pty` is
+    /// dropped.
+    ///
+    /// The speed is set here, before the path or the link exists for anyone to open, and never
+    /// again: a host that opens the port as soon as it is announced and sets its speed keeps
+    /// that speed.
+    pub fn open(link: Option<&Path>, rate: Option<u32>) -> Result<Pty, SimError> {
         // Both ends close-on-exec from the moment they exist (not set afterwards: a child
         // another thread starts in between would keep them). A host holding the simulator's
         // own slave would keep the port "open" after it closed it, so what it left unread would
@@ -90,6 +103,9 @@ impl Pty {
             .into();
         let mut t = termios::tcgetattr(&slave).map_err(|e| pty_err("tcgetattr", e))?;
         termios::cfmakeraw(&mut t);
+        if let Some(rate) = rate {
+            termios::cfsetspeed(&mut t, speed_for(rate)).map_err(|e| pty_err("cfsetspeed", e))?;
+        }
         termios::tcsetattr(&slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))?;
         fcntl(master.as_raw_fd(), FcntlArg::F_SETFL(OFlag::O_NONBLOCK))
             .map_err(|e| pty_err("cannot make the master non-blocking", e))?;
@@ -111,7 +127,7 @@ impl Pty {
             .add_watch(&path, AddWatchFlags::IN_ACCESS | AddWatchFlags::IN_MODIFY)
             .map_err(|e| pty_err("cannot watch the pty (inotify)", e))?;
         let mut pty = Pty {
-            reads,
+            reads: Some(reads),
             wrote_since_read: false,
             expect_modify: false,
             pending_write: false,
@@ -123,6 +139,7 @@ impl Pty {
             watch,
             open: true,
             speed_check: true,
+            speed_now: None,
             mismatch: None,
             on_mismatch: None,
         };
@@ -145,7 +162,9 @@ impl Pty {
 
     /// Turns the speed check on (the default) or off: while on, and the line is paced, bytes
     /// cross garbled in both directions whenever the speed the host set on the port differs
-    /// from the hand's rate, as through a UART at the wrong rate.
+    /// from the hand's rate, as through a UART at the wrong rate. Each byte is judged at the
+    /// speed set when it crosses: a host byte when the simulator takes it from the line, a
+    /// hand byte when its wire time has come and it is written to the host's side.
     pub fn set_speed_check(&mut self, on: bool) {
         self.speed_check = on;
     }
@@ -157,15 +176,15 @@ impl Pty {
     }
 
     /// The speed the host set on the port (the slave's termios, shared by every descriptor of
-    /// it), in bit/s.
-    /// `None` when it is not one of the standard speeds (a host that set an arbitrary rate
-    /// through `termios2`/`BOTHER`, as the serialport crate does): the check then stands aside.
-    fn host_speed(&self) -> Option<u32> {
-        let t = termios::tcgetattr(&self.slave).ok()?;
-        // Read the speed bits directly: nix's cfgetospeed panics on a speed it has no name for.
-        let mask = nix::libc::CBAUD | nix::libc::CBAUDEX;
-        let bits = t.control_flags.bits() & mask;
-        SPEEDS.iter().find(|(_, b)| *b as nix::libc::tcflag_t == bits).map(|(r, _)| *r)
+    /// it), in bit/s, read once per turn of the serving loop. Read with `TCGETS2`, so an
+    /// arbitrary rate (`BOTHER`, as the serialport crate sets every rate) is judged like a
+    /// standard one. `None` for speed 0 (hang up: a UART keeps its rate) or a port that cannot
+    /// be read: the check then stands aside.
+    fn host_speed(&mut self) -> Option<u32> {
+        let slave = &self.slave;
+        *self
+            .speed_now
+            .get_or_insert_with(|| rustix::termios::tcgetattr(slave).ok().map(|t| t.output_speed()).filter(|&s| s > 0))
     }
 
     /// Whether bytes at `hand` bit/s arrive garbled at the host's speed (and the reverse);
@@ -173,7 +192,7 @@ impl Pty {
     fn garbled(&mut self, engine: &mut Engine, hand: Option<u32>) -> bool {
         let (Some(hand), true) = (hand, self.speed_check) else { return false };
         let Some(host) = self.host_speed() else { return false };
-        if host == uart_rate(hand) {
+        if same_rate(host, uart_rate(hand)) {
             self.mismatch = None;
             return false;
         }
@@ -190,15 +209,6 @@ impl Pty {
             }
         }
         true
-    }
-
-    /// Sets the slave's speed to the hand's line rate (a host that opens the port without
-    /// setting a speed then talks at the hand's rate). Unpaced: left as it is.
-    pub fn match_speed(&self, engine: &Engine) -> Result<(), SimError> {
-        let Some(baud) = engine.line_baud() else { return Ok(()) };
-        let mut t = termios::tcgetattr(&self.slave).map_err(|e| pty_err("tcgetattr", e))?;
-        termios::cfsetspeed(&mut t, speed_for(baud)).map_err(|e| pty_err("cfsetspeed", e))?;
-        termios::tcsetattr(&self.slave, SetArg::TCSANOW, &t).map_err(|e| pty_err("tcsetattr", e))
     }
 
     /// Tells the engine when a host opened the port and when the last one closed it; on
@@ -298,7 +308,8 @@ impl Pty {
 
     /// Takes the host's reads and writes of the slave, in order.
     fn take_reads(&mut self) {
-        while let Ok(events) = self.reads.read_events() {
+        let Some(reads) = &self.reads else { return };
+        while let Ok(events) = reads.read_events() {
             if events.is_empty() {
                 break;
             }
@@ -362,8 +373,13 @@ impl Pty {
     /// Serves the hand until one of `stops` becomes readable. Returns an error only for a
     /// failure of the pty itself, never for anything a client does.
     pub fn serve(&mut self, engine: &mut Engine, stops: &[BorrowedFd<'_>]) -> Result<(), SimError> {
-        let _ = self.match_speed(engine);
         precise_timers();
+        // A tapped line takes the host's reads and writes as they come, so that inotify
+        // never merges a late write with a new one; no other line needs them.
+        let tapped = engine.tapped();
+        if !tapped {
+            self.reads = None;
+        }
         // Nobody has the port open yet (a host that opened it already is seen next).
         if self.open {
             self.open = false;
@@ -399,19 +415,21 @@ impl Pty {
                 let r = now + WRITE_RETRY;
                 deadline = Some(deadline.map_or(r, |d| d.min(r)));
             }
-            // A tapped line takes the host's reads and writes as they come, so that inotify
-            // never merges a late write with a new one.
-            let tapped = engine.tapped();
             let (master_in, port_events, host_io, stop) = {
                 let mut fds = Vec::with_capacity(3 + stops.len());
                 fds.push(PollFd::new(self.master.as_fd(), flags));
                 fds.push(PollFd::new(self.watch.as_fd(), IN));
-                fds.push(PollFd::new(self.reads.as_fd(), if tapped { IN } else { PollFlags::empty() }));
+                if let Some(reads) = &self.reads {
+                    fds.push(PollFd::new(reads.as_fd(), IN));
+                }
+                let own = fds.len();
                 fds.extend(stops.iter().map(|s| PollFd::new(*s, IN)));
                 wait(&mut fds, deadline).map_err(|e| SimError::io("waiting on the pty", e))?;
-                let stop = fds[3..].iter().any(|f| ready(f, IN));
-                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), tapped && ready(&fds[2], IN), stop)
+                let stop = fds[own..].iter().any(|f| ready(f, IN));
+                (readable_ok && ready(&fds[0], IN), ready(&fds[1], IN), own == 3 && ready(&fds[2], IN), stop)
             };
+            // What crosses from here on crosses now, at the speed the host has set now.
+            self.speed_now = None;
             if host_io {
                 self.take_reads();
             }
@@ -429,7 +447,9 @@ impl Pty {
                             break;
                         }
                         Ok(n) => {
-                            engine.host_unread(self.host_has_unread());
+                            if tapped {
+                                engine.host_unread(self.host_has_unread());
+                            }
                             if self.garbled(engine, engine.line_baud()) {
                                 buf[..n].iter_mut().for_each(|b| *b = garble(*b));
                             }
@@ -454,13 +474,15 @@ impl Pty {
             engine.wake();
             write_blocked = false;
             loop {
-                let (run, rate) = engine.head_run().unwrap_or((0, None));
-                let garble_out = self.garbled(engine, rate);
-                let out = engine.ready_output(Instant::now());
-                if out.is_empty() {
+                let now = Instant::now();
+                let ready_now = engine.ready_output(now).len();
+                if ready_now == 0 {
                     break;
                 }
-                let n = out.len().min(run.max(1));
+                let (run, rate) = engine.head_run().unwrap_or((0, None));
+                let n = ready_now.min(run.max(1));
+                let garble_out = self.garbled(engine, rate);
+                let out = engine.ready_output(now);
                 self.writing();
                 let written = if garble_out {
                     let g: Vec<u8> = out[..n].iter().map(|b| garble(*b)).collect();
@@ -528,6 +550,16 @@ fn uart_rate(baud: u32) -> u32 {
         .find(|&r| near(r))
         .or_else(|| SPEEDS.iter().map(|(r, _)| *r).find(|&r| r >= baud))
         .unwrap_or(baud)
+}
+
+/// Whether a host at `host` bit/s and a UART at `uart` bit/s understand each other: within 2 %.
+/// A UART samples each bit in its middle, timed from the start bit, so over a 10-bit frame the
+/// two clocks may drift apart by less than half a bit: about 4.5 % at most, and 2 % is what
+/// UART datasheets recommend for 8-bit frames (Microchip's USART operational-range tables),
+/// since the other side's clock has its own error. Standard rates are more than 10 % apart,
+/// so this only forgives a host's arbitrary rate near the hand's.
+fn same_rate(host: u32, uart: u32) -> bool {
+    u64::from(host.abs_diff(uart)) * 100 <= 2 * u64::from(uart)
 }
 
 /// The termios speed of the UART rate for `baud` (a UART runs at one of these).
@@ -611,5 +643,16 @@ mod tests {
         // A rate between standard ones runs at the next one up.
         assert_eq!(uart_rate(10_000), 19200);
         assert_eq!(uart_rate(1_000_000), 1_000_000);
+    }
+
+    /// A host's arbitrary rate near the hand's is understood; a neighbouring standard rate
+    /// never is.
+    #[test]
+    fn a_rate_within_two_percent_is_the_same_rate() {
+        assert!(same_rate(115_000, 115_200));
+        assert!(same_rate(9_500, 9_600) && !same_rate(9_400, 9_600));
+        for pair in SPEEDS.windows(2) {
+            assert!(!same_rate(pair[0].0, pair[1].0) && !same_rate(pair[1].0, pair[0].0), "{pair:?}");
+        }
     }
 }

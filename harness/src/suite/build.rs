@@ -719,9 +719,12 @@ pub(crate) fn capture_plan_on(
     plans: &[Plan],
     config: gcl_model::DeviceConfig,
 ) -> Result<Vec<Captured>, LinkError> {
-    let mut link = SimLink::new(profile.clone(), config);
     let mut opts = RecordOptions::new(profile.clone());
     opts.timeout = Duration::from_secs(120);
+    // (a hand with a difference in how it frames or sizes its answers: the shadow has it too)
+    opts.shadow.faults = config.faults.clone();
+    opts.shadow.without_effect = config.without_effect.clone();
+    let mut link = SimLink::new(profile.clone(), config);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();
     capture(&mut link, &steps, &opts)
 }

@@ -5,21 +5,37 @@ from the model there: that is the point (issue 19, "on a hand that already diffe
 hide"). It speaks GCL on stdin/stdout: `exec:python3 seed_hand.py [--bug NAME]`.
 
 Motions take simulated wall time (a quarter count per ms per unit of MCV/MOV), so ^C can land
-mid-motion. `--bug NAME` plants one bug: lcvc-scaling, extra-args-ignored, fsave-noop,
-full-block-for-c, lfdpc-ignored, fget-reversed.
+mid-motion. `--bug NAME` plants a bug (repeatable): lcvc-scaling, extra-args-ignored,
+fsave-noop, full-block-for-c, lfdpc-ignored, fget-reversed, lcvc-ignored (the control velocity
+is the datum alone), lfv-zero (the feedback velocity always reads 0). `--decide NAME` takes an
+open point otherwise than the hand does by default (repeatable): lfdp-counts-from-home (LFDP
+counts from the last position reported by FGET P, or from home, 0, where HI or RESET put it:
+LOOP does not set it; the seed names only "the last reported position").
 """
 import os
 import select
 import sys
 import time
 
-BUGS = {"lcvc-scaling", "extra-args-ignored", "fsave-noop", "full-block-for-c", "lfdpc-ignored", "fget-reversed"}
-BUG = None
-if "--bug" in sys.argv:
-    BUG = sys.argv[sys.argv.index("--bug") + 1]
-    if BUG not in BUGS:
-        sys.stderr.write("seed_hand: unknown bug %s (one of %s)\n" % (BUG, ", ".join(sorted(BUGS))))
-        sys.exit(2)
+BUGS = {"lcvc-scaling", "extra-args-ignored", "fsave-noop", "full-block-for-c", "lfdpc-ignored", "fget-reversed",
+        "lcvc-ignored", "lfv-zero"}
+DECISIONS = {"lfdp-counts-from-home"}
+
+
+def flags(name, known):
+    out = set()
+    for i, a in enumerate(sys.argv[:-1]):
+        if a == name:
+            v = sys.argv[i + 1]
+            if v not in known:
+                sys.stderr.write("seed_hand: unknown %s %s (one of %s)\n" % (name, v, ", ".join(sorted(known))))
+                sys.exit(2)
+            out.add(v)
+    return out
+
+
+PLANTED = flags("--bug", BUGS)
+DECIDED = flags("--decide", DECISIONS)
 
 NL = b"\n\r"
 PROMPT = b"\n\r=> "
@@ -105,7 +121,7 @@ class Hand:
         self.out(b"".join(NL + r.encode() for r in rows) + (NL + b"ERR %d" % code if code else b"") + PROMPT)
 
     def no_args(self, args):
-        if args and BUG != "extra-args-ignored":
+        if args and "extra-args-ignored" not in PLANTED:
             self.err(1024)
             return False
         return True
@@ -153,7 +169,7 @@ class Hand:
 
     def cmd_FGET(self, motors, args):
         rows = []
-        order = list(reversed(motors)) if BUG == "fget-reversed" else motors
+        order = list(reversed(motors)) if "fget-reversed" in PLANTED else motors
         for name in args:
             if name not in FGET_NAMES:
                 return self.lines(rows, 64)
@@ -175,7 +191,7 @@ class Hand:
         self.copy(motors, args, self.eeprom, self.par)
 
     def cmd_FSAVE(self, motors, args):
-        self.copy(motors, args, self.par, self.eeprom if BUG != "fsave-noop" else defaults())
+        self.copy(motors, args, self.par, self.eeprom if "fsave-noop" not in PLANTED else defaults())
 
     def copy(self, motors, args, src, dst):
         if self.no_args(args):
@@ -224,7 +240,7 @@ class Hand:
             self.start({m: 0 for m in motors}, "HI", 100)
 
     def motion(self, motors, args, target, maxargs=0):
-        if len(args) > maxargs and BUG != "extra-args-ignored":
+        if len(args) > maxargs and "extra-args-ignored" not in PLANTED:
             return self.err(1024)
         if not all(self.init[m] for m in motors):
             return self.err(4)
@@ -272,6 +288,8 @@ class Hand:
         if self.kind == "HI" and not aborted:
             for m in self.moves:
                 self.init[m], self.pos[m] = True, 0
+                if "lfdp-counts-from-home" in DECIDED:
+                    self.reported[m] = 0
         code = 0
         if not aborted and self.kind == "POS":
             if any(abs(self.pos[m] - g) > self.par[m]["MPE"] for m, (_, g, _, _) in self.moves.items()):
@@ -287,8 +305,9 @@ class Hand:
         self.loop = motors
         self.vel = {m: 0 for m in motors}
         self.t = time.monotonic()
-        for m in motors:
-            self.reported[m] = self.pos[m]
+        if "lfdp-counts-from-home" not in DECIDED:
+            for m in motors:
+                self.reported[m] = self.pos[m]
         self.state = "loop"
         self.out(b"*")
 
@@ -306,14 +325,14 @@ class Hand:
         for m in self.loop:
             p = self.par[m]
             if p["LFV"]:
-                v = int(self.vel[m] / max(1, p["LFVC"]))
+                v = 0 if "lfv-zero" in PLANTED else int(self.vel[m] / max(1, p["LFVC"]))
                 out += (max(-128, min(127, v)) & 0xFF).to_bytes(1, "big")
             if p["LFS"]:
                 out.append(255 if p["SGFLIP"] else 0)
             if p["LFAP"]:
                 out += self.pos[m].to_bytes(2, "big")
             if p["LFDP"]:
-                c = 1 if BUG == "lfdpc-ignored" else max(1, p["LFDPC"])
+                c = 1 if "lfdpc-ignored" in PLANTED else max(1, p["LFDPC"])
                 d = self.pos[m] - self.reported[m]
                 q = max(-128, min(127, int(d / c)))
                 self.reported[m] += q * c
@@ -338,15 +357,15 @@ class Hand:
         block = bytes(self.inbuf[1:need])
         del self.inbuf[:need]
         self.advance()
-        full = h in b"CA" or (h == ord("c") and BUG == "full-block-for-c")
+        full = h in b"CA" or (h == ord("c") and "full-block-for-c" in PLANTED)
         self.out(self.feedback() if full else b"*")
         i = 0
         for m in self.loop if data else ():
             if self.par[m]["LCV"]:
                 datum = block[i] - 256 if block[i] > 127 else block[i]
-                lcvc = self.par[m]["LCVC"]
+                lcvc = 1 if "lcvc-ignored" in PLANTED else self.par[m]["LCVC"]
                 # the planted bug divides by LCVC where the seed multiplies (the same at 1)
-                self.vel[m] = int(datum / max(1, lcvc)) if BUG == "lcvc-scaling" else datum * lcvc
+                self.vel[m] = int(datum / max(1, lcvc)) if "lcvc-scaling" in PLANTED else datum * lcvc
                 i += 1
             if self.par[m]["LCPG"]:
                 i += 1

@@ -31,6 +31,14 @@ static void gcl_send(int fd, const char *line) {
     if (write(fd, line, strlen(line)) < 0 || write(fd, "\r", 1) < 0) { perror("write"); exit(1); }
 }
 
+/* The line and its CR in one write: the hand takes them together, so the answers it counts
+ * (where a schedule's misbehaviours land) are the same from run to run. */
+static void gcl_send_line(int fd, const char *line) {
+    char buf[512];
+    int n = snprintf(buf, sizeof buf, "%s\r", line);
+    if (n < 0 || (size_t)n >= sizeof buf || write(fd, buf, (size_t)n) != n) { perror("write"); exit(1); }
+}
+
 /* Skips bytes up to and including the prompt; 0 on success, -1 on timeout. */
 static int gcl_prompt(int fd) {
     int state = 0, c;

@@ -276,21 +276,29 @@ impl Device {
         self.advance(now);
     }
 
+    /// [`Device::handle_timeout`], stopping early at the first millisecond tick after which the
+    /// hand has output waiting (its clock then stands at that tick): what a caller gets that
+    /// calls `handle_timeout` at each [`Device::poll_timeout`] up to `now` and looks for output
+    /// after each, in one call. Returns whether it stopped early.
+    pub fn handle_timeout_until_output(&mut self, now: Duration) -> bool {
+        self.advance_until(now, time::Stop::Output)
+    }
+
     /// When the hand next needs [`Device::handle_timeout`] to make progress on its own (a
     /// running command), or `None` when it only waits for input.
     pub fn poll_timeout(&self) -> Option<Duration> {
-        self.is_busy().then(|| Duration::from_nanos(self.next_tick_ns.max(self.now_ns)))
+        // (ticks that only count, such as HI settling at the open stop, need no call)
+        let quiet = self.quiet_ticks().saturating_mul(TICK_NS);
+        self.is_busy().then(|| Duration::from_nanos(self.next_tick_ns.saturating_add(quiet).max(self.now_ns)))
     }
 
     /// Runs a supervisory command in progress to completion, as fast as possible, and returns
     /// the time it completed. `limit` bounds the simulated time spent.
     pub fn run_until_idle(&mut self, limit: Duration) -> Duration {
         let end = self.now_ns.saturating_add(limit.as_nanos().min(u128::from(u64::MAX)) as u64);
-        while let Some(t) = self.poll_timeout() {
-            if t.as_nanos() as u64 > end {
-                break;
-            }
-            self.advance(t);
+        // (the ticks up to the command's end in one call, as one call per tick would run them)
+        if self.poll_timeout().is_some_and(|t| t.as_nanos() as u64 <= end) {
+            self.advance_until(Duration::from_nanos(end), time::Stop::NotBusy);
         }
         self.now()
     }
@@ -315,6 +323,16 @@ impl Device {
     /// Forgets the bytes written so far.
     pub fn clear_output(&mut self) {
         self.out.clear();
+    }
+
+    /// The value the hand's behaviour reads for parameter `id` of `motor` (1..=4; any for a
+    /// global): what is stored, or the factory value of a parameter stored but without effect
+    /// (a fault, or [`DeviceConfig::without_effect`]). [`Device::params`] is what reads give.
+    pub fn effective(&self, id: ParamId, motor: u8) -> i64 {
+        match Motor::new(motor.clamp(1, 4)) {
+            Some(m) => self.behaviour(id, m),
+            None => self.params.get(&self.profile, id, motor),
+        }
     }
 
     /// The simulated time the hand has reached.

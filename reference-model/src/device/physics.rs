@@ -95,7 +95,7 @@ impl Motor {
     }
 
     pub fn position(&self) -> i64 {
-        self.pos.round() as i64
+        round(self.pos)
     }
 
     pub fn power_down(&mut self) {
@@ -117,9 +117,13 @@ impl Motor {
     /// The raw strain: the free reading, plus what pressing into an object adds (halved
     /// once the motor is unpowered and the drive relaxes).
     pub fn strain(&self, object: Option<i64>, free: i64, per_count: f64) -> i64 {
+        // (nothing pressed: the free reading, as the arithmetic below gives it)
+        if object.is_none() && per_count.is_finite() && free.unsigned_abs() < 1 << 52 {
+            return free;
+        }
         let press = object.map_or(0.0, |o| (self.pos - o as f64).max(0.0));
         let k = if self.powered { 1.0 } else { 0.5 };
-        (free as f64 + press * per_count * k).round() as i64
+        round(free as f64 + press * per_count * k)
     }
 
     fn bounds(&self, l: &StepLimits) -> (f64, f64) {
@@ -131,13 +135,13 @@ impl Motor {
     }
 
     /// Advances one millisecond. Returns a termination when the supervisory goal ends.
-    pub fn step(&mut self, l: StepLimits) -> Option<Termination> {
-        let (lo, hi) = self.bounds(&l);
+    pub fn step(&mut self, l: &StepLimits) -> Option<Termination> {
         let Some(goal) = self.goal else {
             // RealTime velocity control, or idle.
             if self.rt_velocity == 0.0 && self.velocity == 0.0 {
                 return None;
             }
+            let (lo, hi) = self.bounds(l);
             let target = self.rt_velocity;
             if self.rt_uses_gain {
                 let k = (self.rt_gain as f64 / 64.0).clamp(0.0, 1.0);
@@ -152,6 +156,7 @@ impl Motor {
             self.pos = next;
             return None;
         };
+        let (lo, hi) = self.bounds(l);
         let before_contact = l.object.is_some_and(|(o, _)| self.pos < o as f64);
         let (speed, dir, target) = match goal {
             Goal::Position { target, .. } => {
@@ -226,5 +231,57 @@ impl Motor {
             _ => 0,
         };
         (stall == 1 && stalled_for > l.tstop_ms).then_some(Termination::Stall)
+    }
+}
+
+/// `x.round() as i64` (half away from zero, saturating, NaN as 0), without the library call
+/// `f64::round` is on targets without a rounding instruction: a millisecond tick rounds every
+/// moving motor's position and distance.
+pub(super) fn round(x: f64) -> i64 {
+    // (below 2^52 the fraction is exact: x minus its truncation)
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64;
+        let f = x - t as f64;
+        t + i64::from(f >= 0.5) - i64::from(f <= -0.5)
+    } else {
+        x.round() as i64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// [`super::round`] is `f64::round` to an `i64`, halves, the ends of the exact range and
+    /// the values that are not numbers included.
+    #[test]
+    fn round_is_the_library_round() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            -4_503_599_627_370_497.0,
+            1e19,
+            -1e19,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+        ];
+        // (positions and per-tick distances as the motors make them)
+        let mut x = -3.0;
+        while x < 20_000.0 {
+            xs.push(x);
+            x += 0.099_999_999_999_999_98;
+        }
+        for x in xs {
+            assert_eq!(super::round(x), x.round() as i64, "{x:?}");
+        }
     }
 }

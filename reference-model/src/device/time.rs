@@ -4,11 +4,29 @@
 
 use super::*;
 
+/// Where [`Device::advance_until`] stops early.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Stop {
+    /// Never: it runs to the instant asked for.
+    Never,
+    /// At the first tick after which output is waiting.
+    Output,
+    /// At the first tick after which no command runs.
+    NotBusy,
+}
+
 impl Device {
     pub(super) fn advance(&mut self, now: Duration) {
+        self.advance_until(now, Stop::Never);
+    }
+
+    /// [`Device::advance`], stopping after the first tick that meets `stop` with the hand's
+    /// clock at that tick: what a caller gets that advances tick by tick (to each
+    /// [`Device::poll_timeout`]) and looks after each. Returns whether it stopped so.
+    pub(super) fn advance_until(&mut self, now: Duration, stop: Stop) -> bool {
         let now_ns = now.as_nanos().min(u128::from(u64::MAX)) as u64;
         if now_ns <= self.now_ns {
-            return;
+            return false;
         }
         let elapsed_ms = (now_ns - self.now_ns) / 1_000_000;
         self.nv.powered_ms = self.powered_at_boot_ms.saturating_add(now_ns / 1_000_000);
@@ -25,9 +43,18 @@ impl Device {
             }
             self.now_ns = now_ns;
             self.next_tick_ns = now_ns.saturating_add(TICK_NS);
-            return;
+            return false;
         }
         while self.next_tick_ns <= now_ns {
+            // Ticks in which only counters run (HI settling at the open stop) pass at once.
+            let quiet = self.quiet_ticks();
+            if quiet > 0 {
+                let ticks = quiet.min((now_ns - self.next_tick_ns) / TICK_NS + 1);
+                self.pass_quiet_ticks(ticks);
+                self.now_ns = self.next_tick_ns.saturating_add((ticks - 1).saturating_mul(TICK_NS));
+                self.next_tick_ns = self.now_ns.saturating_add(TICK_NS);
+                continue;
+            }
             self.now_ns = self.next_tick_ns;
             self.next_tick_ns = self.next_tick_ns.saturating_add(TICK_NS);
             let moved = self.tick();
@@ -39,10 +66,24 @@ impl Device {
             if matches!(self.state, State::Idle) {
                 // The command finished: queued input runs at this instant.
                 self.drain_queue();
-                if matches!(self.state, State::Idle) {
-                    break;
-                }
             }
+            let stopped = match stop {
+                Stop::Never => false,
+                Stop::Output => !self.out.is_empty(),
+                Stop::NotBusy => !matches!(self.state, State::Busy(_)),
+            };
+            if stopped {
+                self.nv.powered_ms = self.powered_at_boot_ms.saturating_add(self.now_ns / 1_000_000);
+                return true;
+            }
+            if matches!(self.state, State::Idle) {
+                break;
+            }
+        }
+        if stop == Stop::NotBusy {
+            // (run tick by tick, the clock stays at the last tick that ran)
+            self.nv.powered_ms = self.powered_at_boot_ms.saturating_add(self.now_ns / 1_000_000);
+            return false;
         }
         if self.now_ns < now_ns {
             self.now_ns = now_ns;
@@ -50,6 +91,7 @@ impl Device {
                 self.next_tick_ns = now_ns.saturating_add(TICK_NS);
             }
         }
+        false
     }
 
     pub(super) fn loop_moving(&self) -> bool {
@@ -84,27 +126,68 @@ impl Device {
         self.limits = PerMotor(Motor::ALL.map(|m| self.step_limits(m)));
     }
 
+    /// How many ticks from the next one on change nothing but counters, while a command runs:
+    /// every motor of the hand still, or settling at the open stop during HI (a tick only counts
+    /// its time there), up to the tick in which the first settling motor is done. The board
+    /// only cools in them. 0 when the next tick may do more.
+    pub(super) fn quiet_ticks(&self) -> u64 {
+        if !matches!(self.state, State::Busy(_)) {
+            return 0;
+        }
+        let mut quiet = u64::MAX;
+        for m in Motor::ALL {
+            let motor = &self.motors[m];
+            match motor.goal {
+                None if motor.rt_velocity == 0.0 && motor.velocity == 0.0 => {}
+                // (the open stop is position 0: see `physics::Motor::step`)
+                Some(physics::Goal::Initialize { settled_ms, .. }) if motor.pos <= 0.0 && motor.velocity == 0.0 => {
+                    quiet = quiet.min(self.limits[m].settle_ms.saturating_sub(settled_ms.saturating_add(1)));
+                }
+                _ => return 0,
+            }
+        }
+        if quiet == u64::MAX { 0 } else { quiet }
+    }
+
+    /// Passes `ticks` of [`Device::quiet_ticks`] as [`Device::tick`] would, one by one: each
+    /// settling motor counts them, and the board cools by the same arithmetic.
+    fn pass_quiet_ticks(&mut self, ticks: u64) {
+        for m in Motor::ALL {
+            let motor = &mut self.motors[m];
+            if let Some(physics::Goal::Initialize { settled_ms, .. }) = motor.goal {
+                motor.goal = Some(physics::Goal::Initialize { settled_ms: settled_ms + ticks, stall_ms: 0 });
+            }
+        }
+        for _ in 0..ticks {
+            self.cool_tick(0);
+        }
+    }
+
+    /// One millisecond of heating by `moving` motors and of cooling toward ambient: the board
+    /// settles at moving × heat_per_motor_s × cooling_time_s tenths above ambient.
+    fn cool_tick(&mut self, moving: u32) {
+        let hand = &self.profile.hand;
+        self.heat += hand.heat_per_motor_s / 1000.0 * f64::from(moving) - self.heat / (hand.cooling_time_s * 1000.0);
+    }
+
     /// One millisecond of physics. Returns how many motors moved.
     pub(super) fn tick(&mut self) -> u32 {
         let mut moving = 0;
         for m in Motor::ALL {
             let before = self.motors[m].pos;
             let motor = &mut self.motors[m];
-            let term = motor.step(self.limits[m]);
+            let term = motor.step(&self.limits[m]);
             let moved = (motor.pos - before).abs();
             if moved > 0.0 {
                 moving += 1;
                 let odometer = m.pick_mut(&mut self.nv.odometer_counts);
-                *odometer = odometer.saturating_add(moved.round() as u64);
+                *odometer = odometer.saturating_add(physics::round(moved) as u64);
             }
             if let Some(t) = term {
                 self.terminate_motor(m, t);
             }
         }
-        // One millisecond of heating by the moving motors and of cooling toward ambient: the
-        // board settles at moving × heat_per_motor_s × cooling_time_s tenths above ambient.
-        let hand = &self.profile.hand;
-        self.heat += hand.heat_per_motor_s / 1000.0 * f64::from(moving) - self.heat / (hand.cooling_time_s * 1000.0);
+        self.cool_tick(moving);
         if let State::Busy(task) = &self.state
             && task.motors.motors().all(|m| self.motors[m].goal.is_none())
         {
@@ -155,5 +238,47 @@ impl Device {
             }
         }
         self.end_line(task.status);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs a command to its end one tick per iteration with none passed at once: the model's
+    /// time as it was before quiet ticks passed at once.
+    fn tick_by_tick(d: &mut Device) {
+        while matches!(d.state, State::Busy(_)) {
+            d.now_ns = d.next_tick_ns;
+            d.next_tick_ns = d.next_tick_ns.saturating_add(TICK_NS);
+            d.nv.powered_ms = d.powered_at_boot_ms.saturating_add(d.now_ns / 1_000_000);
+            d.tick();
+            if matches!(d.state, State::Idle) {
+                d.drain_queue();
+            }
+        }
+    }
+
+    /// HI on a warm board (after motions) and from a closed hand: the settling ticks passed at
+    /// once leave the hand as ticking through them does, the board's heat to the last bit, and
+    /// HI ends at the same tick.
+    #[test]
+    fn quiet_ticks_passed_at_once_leave_the_hand_as_ticking_does() {
+        for name in ["seed", "bh8-262"] {
+            let p = Profile::builtin(name).unwrap();
+            let mut a = Device::new(p, DeviceConfig { seed: 3, ..DeviceConfig::default() });
+            for (i, line) in ["HI", "C", "O", "C", "HI", "1M 2000", "HI"].into_iter().enumerate() {
+                let mut b = a.clone();
+                let bytes = format!("{line}\r").into_bytes();
+                let t = a.now();
+                a.handle_input(t, &bytes);
+                b.handle_input(t, &bytes);
+                a.run_until_idle(Duration::from_secs(600));
+                tick_by_tick(&mut b);
+                assert_eq!(format!("{a:?}"), format!("{b:?}"), "{name}: the hand after {line}");
+                // (the later HIs settle on a board the motions warmed: it cools as it settles)
+                assert!(i == 0 || a.heat > 0.0, "{name}: a warm board after {line}");
+            }
+        }
     }
 }

@@ -35,8 +35,12 @@ pub struct BuiltCase {
     /// EEPROM writes the transcript makes (FSAVE, PSAVE), restores included.
     pub eeprom_writes: usize,
     /// The unmutated model's run of the transcript, each answer byte tagged with the step it
-    /// answers (see [`crate::align`]).
+    /// answers (see [`crate::align`]). Empty until [`BuiltCase::check`] made it (a case built
+    /// with [`build_case_sending`] and friends is checked).
     pub model: crate::align::ModelRun,
+    /// Whether the transcript was checked to pass on the model as a fresh hand meets it, and
+    /// `model` holds that run.
+    pub checked: bool,
     /// The bytes each [`HostAction::Block`] sent, in the order of the blocks among the actions
     /// (`None` for a block outside the loop, which sends nothing).
     pub block_bytes: Vec<Option<Vec<u8>>>,
@@ -232,7 +236,53 @@ pub fn build_case_sending(
     home: bool,
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
-    build_case_on(p, &DeviceConfig::default(), actions, id, title, wide, home, blocks)
+    build_case_on(p, (&DeviceConfig::default(), Model::Profile), actions, id, title, wide, home, blocks)
+}
+
+/// The model a case is built on: the profile's hand as the fuzzer judges it, or one that holds
+/// a hypothesis about the hand (see `variant`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Model {
+    /// The profile's hand.
+    Profile,
+    /// A hypothesis about the hand's, to be asked of the hand.
+    Hypothesis,
+}
+
+/// [`build_case_sending`] without its last check, the model's own replay of the transcript
+/// ([`BuiltCase::check`]): a campaign in this process runs that check only for a case the hand
+/// fails, where a signature needs its tagged run (a case the hand passes finds nothing, and the
+/// replay was a fifth of a case's cost). A case the model would not pass is then no finding.
+pub fn build_case_unchecked(
+    p: &Arc<Profile>,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+) -> Result<BuiltCase, NotACase> {
+    assemble(p, (&DeviceConfig::default(), Model::Profile), actions, id, title, wide, home, &[])
+}
+
+impl BuiltCase {
+    /// The last check of a case, deferred by [`build_case_unchecked`]: the transcript passes on
+    /// the unmutated model as a fresh hand meets it (an answer that runs past its step, or timing
+    /// the recorder's shadow does not follow, is no case), and that run, tagged, is kept.
+    pub fn check(&mut self, p: &Arc<Profile>) -> Result<(), NotACase> {
+        self.check_on(p, &DeviceConfig::default())
+    }
+
+    fn check_on(&mut self, p: &Arc<Profile>, config: &DeviceConfig) -> Result<(), NotACase> {
+        if self.checked {
+            return Ok(());
+        }
+        let mut run_config = config.clone();
+        run_config.scenario.objects = self.transcript.header.objects();
+        self.model =
+            crate::align::model_run_on(p, run_config, &self.transcript).map_err(|out| NotACase(out.summary()))?;
+        self.checked = true;
+        Ok(())
+    }
 }
 
 /// [`build_case_sending`] with a model built from `config`, not the profile's own hand: what a
@@ -240,7 +290,24 @@ pub fn build_case_sending(
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build_case_on(
     p: &Arc<Profile>,
-    config: &DeviceConfig,
+    on: (&DeviceConfig, Model),
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+    wide: bool,
+    home: bool,
+    blocks: &[Option<Vec<u8>>],
+) -> Result<BuiltCase, NotACase> {
+    let mut b = assemble(p, on, actions, id, title, wide, home, blocks)?;
+    b.check_on(p, on.0)?;
+    Ok(b)
+}
+
+/// [`build_case_on`] but its last check ([`BuiltCase::check`]).
+#[allow(clippy::too_many_arguments)]
+fn assemble(
+    p: &Arc<Profile>,
+    (config, model): (&DeviceConfig, Model),
     actions: &[HostAction],
     id: &str,
     title: &str,
@@ -303,7 +370,7 @@ pub(super) fn build_case_on(
                 // decide, not the model's fresh start: such a case is not one the model can judge.
                 if wide
                     && cmd.as_ref().is_some_and(|c| c.kind(p).is_motion())
-                    && p.role(Role::OverTemperature).is_some_and(|id| walk.shadow.params().get(p, id, 1) != 0)
+                    && p.role(Role::OverTemperature).is_some_and(|id| walk.shadow.effective(id, 1) != 0)
                 {
                     return Err(NotACase(
                         "a motion with the over-temperature limit set, on a hand outside this process".into(),
@@ -529,10 +596,12 @@ pub(super) fn build_case_on(
     {
         def.requires.push(Requirement::AbortTiming);
     }
-    if wide {
+    if wide && model == Model::Profile {
         // A feedback block inside an answer shaped as text or bytes (a block with bytes too
         // many, the answer to ^C mid-block) holds strain and positions exactly: such a case
-        // would judge a real hand by the model's noise.
+        // would judge a real hand by the model's noise. (A hypothesis's case may: judged
+        // exactly it is only the harder to answer, and a hand that does not answer it as it
+        // expects is not named by it.)
         let block_steps: BTreeSet<usize> =
             kinds.iter().filter(|(_, k)| matches!(k, ShapeKind::Block(_))).map(|(i, _)| *i).collect();
         for (i, c) in caps.iter().enumerate() {
@@ -544,7 +613,7 @@ pub(super) fn build_case_on(
             }
         }
     }
-    let mut relations = Relations::default();
+    let mut relations = Relations::new(model == Model::Hypothesis);
     for (i, kind) in kinds {
         let (Some(plan), Some(c)) = (def.plans.get_mut(i), caps.get(i)) else { continue };
         if wide && let Some((_, note)) = notes.iter().find(|(at, _)| *at == i) {
@@ -594,16 +663,12 @@ pub(super) fn build_case_on(
             }
         }
     }
-    // The transcript must pass on the unmutated model as a fresh hand meets it (an answer that
-    // runs past its step, or timing the recorder's shadow does not follow, is no case).
-    let mut run_config = config.clone();
-    run_config.scenario.objects = transcript.header.objects();
-    let model = crate::align::model_run_on(p, run_config, &transcript).map_err(|out| NotACase(out.summary()))?;
     Ok(BuiltCase {
         transcript,
         features: walk.features,
         eeprom_writes,
-        model,
+        model: crate::align::ModelRun::default(),
+        checked: false,
         block_bytes,
         step_decisions,
         action_steps,
@@ -656,7 +721,7 @@ fn block_rules(p: &Profile, c: &Captured, uncertain: bool, wide: bool) -> Vec<Fi
 fn moves_all(p: &Profile, c: &gcl_model::Command, shadow: &Device) -> bool {
     match c.prefix {
         Some(set) => (1..=4u8).all(|m| set.contains(m)),
-        None => p.role(Role::Enabled).is_none_or(|id| (1..=4u8).all(|m| shadow.params().get(p, id, m) != 0)),
+        None => p.role(Role::Enabled).is_none_or(|id| (1..=4u8).all(|m| shadow.effective(id, m) != 0)),
     }
 }
 

@@ -365,7 +365,8 @@ pub struct FuzzSummary {
     pub findings: Vec<Finding>,
     /// Every coverage feature reached.
     pub features: BTreeSet<String>,
-    /// Corpus entries at the end (loaded and new).
+    /// Corpus entries at the end: the files of the `--corpus` folder, or without one the
+    /// cases this run kept for new coverage (the suite's seeds are not counted).
     pub corpus: usize,
     /// EEPROM writes made.
     pub eeprom_writes: u64,
@@ -578,6 +579,12 @@ pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Malformed), Fuzz
     Ok((out, bad))
 }
 
+/// How many entries (`.json` files) the corpus folder holds.
+fn corpus_files(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .map_or(0, |d| d.filter_map(Result::ok).filter(|e| e.path().extension().is_some_and(|x| x == "json")).count())
+}
+
 fn save_corpus(dir: &Path, actions: &[HostAction]) -> Result<(), FuzzError> {
     let path = dir.join(corpus_name(actions));
     if path.exists() {
@@ -606,6 +613,10 @@ struct Hand<'o> {
     dirty: bool,
 }
 
+/// How long a link just opened to a hand outside this process is given to say its first byte
+/// (a power-up banner) before the first case; a hand that says nothing costs this once.
+const POWER_UP_WAIT: Duration = Duration::from_secs(2);
+
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
 const TRAILING: Duration = Duration::from_millis(50);
 
@@ -628,6 +639,19 @@ impl Hand<'_> {
                 Duration::from_secs_f64(40.0 / f64::from((*baud).max(1))).max(Duration::from_millis(1))
             }
             _ => Duration::from_millis(1),
+        }
+    }
+
+    /// The longest wait for the rest of a line the hand parted in (see
+    /// [`complete_parting_line`]): the profile's longest line twice over at the line's rate, and
+    /// 20 ms for the hand to write it; 50 ms off a serial line.
+    fn line_wait(&self) -> Duration {
+        match &self.opts.target {
+            Target::Serial { baud, .. } => {
+                let bytes = 2.0 * self.opts.profile.framing.max_line as f64;
+                Duration::from_secs_f64(10.0 * bytes / f64::from((*baud).max(1))) + Duration::from_millis(20)
+            }
+            _ => Duration::from_millis(50),
         }
     }
 
@@ -655,6 +679,39 @@ impl Hand<'_> {
 
     /// Replays a case's transcript with deadlines from the model; `thorough` as the type says.
     fn run(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
+        let out = self.replay(t, thorough)?;
+        if !out.is_pass() && self.opts.wide() && t.header.requires.contains(&gcl_transcript::Requirement::Eeprom) {
+            self.restore_eeprom()?;
+        }
+        Ok(out)
+    }
+
+    /// After a case that writes the EEPROM failed on a hand outside this process: the factory
+    /// values written back (defaults, then save, for the motors and the globals), as the case
+    /// would have done at its end had it got there. Otherwise the values it saved stay in the
+    /// hand for every later case: a later RESET or load reads them back, and each such read is a
+    /// finding of its own (`value at FLISTV after RESET` in a campaign against a bug in the
+    /// RealTime flags). The writes are the case's own restore, already in its budget.
+    fn restore_eeprom(&mut self) -> Result<(), FuzzError> {
+        let p = &self.opts.profile;
+        let lines: Vec<HostAction> = [
+            gcl_model::spec::CommandKind::MotorDefaults,
+            gcl_model::spec::CommandKind::MotorSave,
+            gcl_model::spec::CommandKind::GlobalDefaults,
+            gcl_model::spec::CommandKind::GlobalSave,
+        ]
+        .into_iter()
+        .filter_map(|k| p.command_of_kind(k))
+        .map(|id| HostAction::Line(p.command(id).name.clone()))
+        .collect();
+        if let Ok(b) = build_case(p, &lines, "fuzz", "EEPROM restore", true, false) {
+            self.replay(&b.transcript, true)?;
+        }
+        Ok(())
+    }
+
+    /// One replay of a transcript (see [`Hand::run`]).
+    fn replay(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
         let mut ro = ReplayOptions { trailing: TRAILING, ..crate::suite::replay_options() };
         let outside = !matches!(self.opts.target, Target::Sim { .. });
@@ -678,14 +735,64 @@ impl Hand<'_> {
             ro.drain_quiet = Duration::ZERO;
             ro.trailing = Duration::ZERO;
         }
+        let line_wait = self.line_wait();
+        let opened = self.link.is_none();
         let link = self.link()?;
-        let out = replay(t, link.as_mut(), &ro);
+        if opened && outside {
+            // A hand just started (a child process) may print its power-up banner later than
+            // the drain's quiet: under load a Python hand's came after 300 ms, and the first
+            // case met it as the answer to its ^C. Its first byte is waited for, a while.
+            let mut first = Vec::new();
+            if link.recv(&mut first, POWER_UP_WAIT).is_ok_and(|n| n > 0) {
+                let _ = crate::replay::discard(link.as_mut(), ro.drain_quiet, ro.drain_limit);
+            }
+        }
+        let mut out = replay(t, link.as_mut(), &ro);
+        if outside {
+            complete_parting_line(link.as_mut(), &mut out, &p, line_wait);
+        }
         self.new = false;
         self.dirty = !out.is_pass();
         if matches!(out, ReplayOutcome::Disconnected(_)) {
             self.link = None;
         }
         Ok(out)
+    }
+}
+
+/// After a mismatch on a hand outside this process, reads on until the line the hand parted in
+/// has ended (its line ending or the prompt after the parting byte), at most `wait`, and adds
+/// what came to the failing step's answer. The replayer stops reading at the parting byte, and
+/// on a serial line the rest of the line is still on its way then: `1 1` of `1 1 0 1` reads as a
+/// wrong value, where the whole line shows the values in another order (the signature and the
+/// explanations judge the line the hand sent, as they do in process, where an answer comes
+/// whole). Bytes past the line's end that came with it are kept too; nothing else is read.
+fn complete_parting_line(link: &mut dyn Link, out: &mut ReplayOutcome, p: &Profile, wait: Duration) {
+    let ReplayOutcome::Mismatch(m) = out else { return };
+    if m.trailing {
+        return;
+    }
+    let Some(e) = m.exchange.last_mut() else { return };
+    let eol = p.framing.line_ending.as_bytes();
+    let ends = |r: &[u8]| {
+        let rest = r.get(m.offset..).unwrap_or_default();
+        eol.is_empty() || rest.windows(eol.len()).any(|w| w == eol)
+    };
+    let ceiling = m.offset.saturating_add(crate::replay::ceiling_for(eol.len() + p.framing.max_line));
+    let until = link.elapsed() + wait;
+    let before = e.received.len();
+    while !ends(&e.received) && e.received.len() < ceiling {
+        let left = until.saturating_sub(link.elapsed());
+        if left.is_zero() {
+            break;
+        }
+        match link.recv(&mut e.received, left) {
+            Ok(0) | Err(_) => break,
+            Ok(_) => {}
+        }
+    }
+    if e.received.len() > before {
+        m.actual = gcl_transcript::matcher::show(e.received.get(m.offset..).unwrap_or_default(), m.form);
     }
 }
 
@@ -707,9 +814,11 @@ pub fn signature(p: &Profile, built: &BuiltCase, out: &ReplayOutcome, whole_read
 /// - a RealTime block's answer on a link that hands over answers whole (the in-process sim),
 ///   where a rewrite must give the block's exact size and every field within the model's
 ///   tight bands, and still another layout of the same size can fit by chance: such a new
-///   explanation holds only if the hand, replayed the whole case, answers as the rewrite does.
-///   On a hand outside this process the block fields' bands are wide enough to fit another
-///   layout by chance, so there a block failure only joins a known explanation.
+///   explanation holds only if the hand, replayed the whole case, answers as the rewrite does;
+/// - on a hand outside this process, a value or a block's answer (or an answer cut short) that
+///   a model holding the hypothesis expects where the profile's model does not
+///   ([`variant::explains`]), which holds only if the hand answers the hypothesis's own case
+///   as it expects up to the step where it parted ([`confirms`]): a few cases per finding.
 ///
 /// Not from a status: its key is already its bits, whatever command shows them, and a set
 /// without effect would explain a status never reported as well as the bug that never reports
@@ -726,22 +835,28 @@ fn judged(
     let Some(mut sig) = signature(&opts.profile, built, out, !opts.wide()) else { return Ok(None) };
     let block = sig.command == "RealTime block";
     let rewrite = sig.kind == "value" && !block || block && !opts.wide();
-    let fresh = Fresh { rewrite, exact: rewrite || sig.kind == "missing" };
+    let fresh = Fresh {
+        rewrite,
+        exact: rewrite || block || sig.kind == "missing",
+        decision: sig.kind == "status" && !opts.wide(),
+    };
     let link = sig.kind == "link";
-    if !link && let Some(e) = explain(opts, actions, built, out, known, fresh, &sig.command) {
+    if !link && let Some(e) = explain(opts, hand, actions, built, out, known, fresh, &sig.command)? {
         // A block's answer that a rewrite fits up to where the hand parted may fit by chance
         // (another layout of the same size, values within the bands): a new explanation from
-        // one holds only if the hand answers the whole case as the rewrite does.
-        let confirmed = match (&e.whole, block && !known.contains(&e.says) && !e.exact) {
+        // one holds only if the hand answers the whole case as the rewrite does. (Outside this
+        // process a rewrite explains afresh only a value read back.)
+        let check = block && !known.contains(&e.says) && !e.exact;
+        let confirmed = match (&e.whole, check) {
             (_, false) => true,
-            (Some(t), true) => hand.run(t, true)?.is_pass(),
+            (Some(t), true) => confirms(opts, &hand.run(t, true)?, out),
             (None, true) => false,
         };
         if confirmed {
             sig.explanation = e.says;
-        } else if let Some(says) = variant::explains(opts, actions, built, out, known, fresh) {
+        } else if let Some(says) = variant::explains(opts, hand, actions, built, out, known, fresh)? {
             // (a rewrite's chance fit, unconfirmed, leaves the case to a model that answers
-            // it byte for byte)
+            // it as the hand did)
             sig.explanation = says;
         }
     }
@@ -789,22 +904,38 @@ struct Hypothesis {
 /// are tried first; the others only when `fresh`, and a new one holds only if no other new one
 /// does (a case that two bugs explain alike tells neither: lcvc-ignored's blocks were once
 /// explained as `prefix 2+1`).
+#[allow(clippy::too_many_arguments)]
 fn explain(
     opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
     actions: &[HostAction],
     built: &BuiltCase,
     out: &ReplayOutcome,
     known: &[String],
     fresh: Fresh,
     at: &str,
-) -> Option<Explained> {
-    explain_by_rewrite(opts, actions, built, out, known, fresh.rewrite, at).or_else(|| {
-        variant::explains(opts, actions, built, out, known, fresh).map(|says| Explained {
-            says,
-            whole: None,
-            exact: !opts.wide(),
-        })
-    })
+) -> Result<Option<Explained>, FuzzError> {
+    if let Some(e) = explain_by_rewrite(opts, actions, built, out, known, fresh.rewrite, at) {
+        return Ok(Some(e));
+    }
+    // (a variant's is shown: byte for byte in process, confirmed on the hand outside it)
+    Ok(variant::explains(opts, hand, actions, built, out, known, fresh)?.map(|says| Explained {
+        says,
+        whole: None,
+        exact: true,
+    }))
+}
+
+/// Whether a replay `again` of a hypothesis's case on a hand outside this process confirms it
+/// for the failure `out`: the hand answers it as it expects up to the step where it parted
+/// from the case, and that step too (a case that two of the hand's differences meet fails
+/// later at the other). In process: the whole case.
+fn confirms(opts: &FuzzOptions, again: &ReplayOutcome, out: &ReplayOutcome) -> bool {
+    match (opts.wide(), again.failed_step(), out.failed_step()) {
+        (_, None, _) => true,
+        (true, Some(s), Some(failed)) => s > failed,
+        _ => false,
+    }
 }
 
 /// The explanation of a prefix the hand accepts on a command that takes none (a rewrite's and
@@ -812,16 +943,22 @@ fn explain(
 const PREFIX_ACCEPTED: &str = "prefix accepted on a command that takes none";
 
 /// Where [`explain`] may find an explanation no finding has yet: by a rewrite (a value read
-/// back; a block in process), and by a model answering byte for byte (also an answer cut
-/// short: the hand said part of it, then nothing; see [`variant::explains`]).
+/// back; a block in process), and by a model that holds the hypothesis (a value, a block, or an
+/// answer cut short: the hand said part of it, then nothing; see [`variant::explains`]).
 #[derive(Clone, Copy)]
 struct Fresh {
     rewrite: bool,
     exact: bool,
+    /// In process, from a status too, but only the other side of a decision the model takes
+    /// (a refused set applied in part, RESET keeping RAM, a prefix accepted): a model that
+    /// holds it answering every step byte for byte as the hand did, the status included. (Not
+    /// a set without effect: that explains a status never reported as well as the bug that
+    /// never reports it, as mpe-ignored showed.)
+    decision: bool,
 }
 
 impl Fresh {
-    const NONE: Fresh = Fresh { rewrite: false, exact: false };
+    const NONE: Fresh = Fresh { rewrite: false, exact: false, decision: false };
 }
 
 /// [`explain`]'s rewrites (see there); what they cannot follow, [`variant`] may still name.
@@ -1029,7 +1166,17 @@ fn explain_by_rewrite(
         let Some(gots) = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>() else { continue };
         let (stream, judges, need, complete) = rewritten_stream(p, &h, &gots, d, failed, old, new, &reads, &send);
         let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
-        let holds = complete && follows(&judges, &stream, need, mismatch);
+        // (the values the hand's answers before step d captured, as the rewrite's steps there
+        // capture them: a relation from d on reads them)
+        let mut caps = gcl_transcript::Captures::new();
+        for (s, step) in new.iter().enumerate().take(d) {
+            let got = received(s).unwrap_or_default();
+            match step.expect.matches_with(&caps, &got) {
+                Some(c) => caps = c,
+                None => break,
+            }
+        }
+        let holds = complete && follows(&judges, &stream, need, mismatch, &caps);
         if holds {
             // The whole case as the hand meets it under the explanation: the rewrite's steps,
             // with the lines it rewrote sent as they were (their answers are echo and prompt,
@@ -1157,16 +1304,24 @@ struct Explained {
 /// until it is whole: an answer ending in `{any}` takes nothing of the next). With `short` (the
 /// hand parted from the case with a wrong byte, and the replay read no further) the stream may
 /// end anywhere: every byte up to the parting one, that one included, is what the rewrite
-/// expects. Without it the stream ends where the first `need` answers end.
-fn follows(judges: &[&gcl_transcript::Step], stream: &[u8], need: usize, short: bool) -> bool {
+/// expects. Without it the stream ends where the first `need` answers end. Values an answer
+/// captures (`{i8 as v1}`, from `caps` on) hold the relations of the answers after it.
+fn follows(
+    judges: &[&gcl_transcript::Step],
+    stream: &[u8],
+    need: usize,
+    short: bool,
+    caps: &gcl_transcript::Captures,
+) -> bool {
     use gcl_transcript::{Feed, Matcher};
     let Some(first) = judges.first() else { return false };
     let mut k = 0;
-    let mut mt = Matcher::new(&first.expect);
+    let mut mt = Matcher::with_captures(&first.expect, caps);
     for b in stream {
         // (a whole answer ends here when the next one begins with this byte)
         while mt.is_complete() && k + 1 < judges.len() {
-            let next = Matcher::new(&judges[k + 1].expect);
+            let known = mt.captures().unwrap_or_else(|| caps.clone());
+            let next = Matcher::with_captures(&judges[k + 1].expect, &known);
             if next.is_complete() {
                 // (the next answer is empty: it ends here too)
                 k += 1;
@@ -1201,6 +1356,23 @@ fn build_for_sending(
     blocks: &[Option<Vec<u8>>],
 ) -> Result<BuiltCase, NotACase> {
     let b = case::build_case_sending(&opts.profile, actions, id, title, opts.wide(), opts.home(), blocks)?;
+    admitted(opts, b)
+}
+
+/// [`build_for`] without the model's own replay of the case ([`case::build_case_unchecked`]):
+/// for the campaign's draws in this process, checked only when the hand fails the case.
+fn build_unchecked_for(
+    opts: &FuzzOptions,
+    actions: &[HostAction],
+    id: &str,
+    title: &str,
+) -> Result<BuiltCase, NotACase> {
+    let b = case::build_case_unchecked(&opts.profile, actions, id, title, opts.wide(), opts.home())?;
+    admitted(opts, b)
+}
+
+/// A built case unless the run refuses it (see [`build_for`]).
+fn admitted(opts: &FuzzOptions, b: BuiltCase) -> Result<BuiltCase, NotACase> {
     // A case resting on a decision the hand took differently judges nothing of it.
     if let Some(why) = skipped_decision(opts, &b) {
         return Err(NotACase(why));
@@ -1354,12 +1526,20 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
     if let Some(dir) = &opts.corpus {
         (corpus, malformed) = load_corpus(dir)?;
     }
+    let loaded = corpus.len();
     if opts.suite_seeds {
         corpus.extend(suite_seeds(&opts.profile).iter().cloned());
     }
     // Entries from other runs or the suite may do what this run refuses.
     let generator = Generator::new(&opts.profile, opts.allowed).holding_velocities(opts.wide());
-    corpus.retain(|a| generator.permits(a));
+    let mut i = 0;
+    let mut seeds = 0;
+    corpus.retain(|a| {
+        let keep = generator.permits(a);
+        seeds += usize::from(keep && i >= loaded);
+        i += 1;
+        keep
+    });
     let shared = Mutex::new(Shared {
         corpus,
         features: BTreeSet::new(),
@@ -1408,7 +1588,12 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         dropped: sh.dropped,
         findings: sh.findings,
         features: sh.features,
-        corpus: sh.corpus.len(),
+        // What a user can count: the corpus folder's entries, or without one, the cases this
+        // run kept (the suite's seeds, taken into memory, are the suite's, not the corpus's).
+        corpus: match &opts.corpus {
+            Some(dir) => corpus_files(dir),
+            None => sh.corpus.len() - seeds,
+        },
         eeprom_writes: writes.load(Ordering::SeqCst),
         wire_bytes: sh.wire_bytes,
         bytes_sent: sh.bytes_sent,
@@ -1517,7 +1702,14 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
-        let built = match build_for(opts, &actions, "fuzz", "a generated case") {
+        // (in this process the model's own replay of the case waits for a failure: see
+        // [`case::build_case_unchecked`])
+        let built = if opts.wide() {
+            build_for(opts, &actions, "fuzz", "a generated case")
+        } else {
+            build_unchecked_for(opts, &actions, "fuzz", "a generated case")
+        };
+        let mut built = match built {
             Ok(b) => b,
             Err(NotACase(why)) => {
                 if lock().dropped(&why) {
@@ -1560,6 +1752,12 @@ fn worker(
             }
         }
         let mut outcome = hand.run(&built.transcript, false)?;
+        if !outcome.is_pass() && built.check(&p).is_err() {
+            // No case after all: the model fails it too.
+            tickets.fetch_sub(1, Ordering::SeqCst);
+            lock().dropped += 1;
+            continue;
+        }
         let run_no = runs.fetch_add(1, Ordering::SeqCst) + 1;
         lock().dropped_in_a_row = 0;
         let known = if outcome.is_pass() { Vec::new() } else { lock().explained.clone() };
@@ -1713,7 +1911,9 @@ fn report_finding(
     for (key, actions) in earlier {
         let Ok(b) = build_for(opts, &actions, "fuzz", "join") else { continue };
         let out = hand.run(&b.transcript, true)?;
-        if explain(opts, &actions, &b, &out, std::slice::from_ref(&e), Fresh::NONE, "").is_some_and(|x| x.says == e) {
+        if explain(opts, hand, &actions, &b, &out, std::slice::from_ref(&e), Fresh::NONE, "")?
+            .is_some_and(|x| x.says == e)
+        {
             joined.push(key);
         }
     }

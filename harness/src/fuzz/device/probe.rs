@@ -1,21 +1,29 @@
-//! Asking the hand where a wrong position began.
+//! Asking the hand where a wrong value began, and whether the value itself is wrong.
 //!
-//! A position read back wrong is named by the last motion before the read that moved the
-//! differing motors ([`crate::align`]'s `cause`). When the position was already wrong before
-//! that motion (a hand that stayed in a RealTime loop the model left, a loop block's velocity
-//! read unsigned), the name points at an innocent command. The hand can tell: the case is
-//! built again with a read of the positions inserted just before the cause, at a quiescent
-//! point (before an action, all of whose steps end answered, outside RealTime mode), and run on
-//! the hand. If the inserted read already fails, the cause lies earlier: the cause as of that
-//! read (the same rule, the last motion, LOOP, HI or RESET before it that touches the motors
-//! that differ there) is asked the same way, up to [`PROBES`] reads. If the read passes, or no
-//! such case can be built, or the hand parts from the model before the read, the cause stays.
+//! A value read back wrong is named by the command before the read that decided it
+//! ([`crate::align`]'s `cause`): for a position the last motion that moved the differing
+//! motors, for a stored parameter the last line that set, restored, loaded or reset it. When
+//! the value was already wrong before that command (a hand that stayed in a RealTime loop the
+//! model left, a loop block's velocity read unsigned; a hand whose FDEF skips a parameter, whose
+//! wrong value a later save and RESET carry on), the name points at an innocent command. The
+//! hand can tell: the case is built again with a read of the value (the parameter's own getter:
+//! `FGET P`, `FGET MCV`) inserted just before the cause, at a quiescent point (before an action,
+//! all of whose steps end answered, outside RealTime mode), and run on the hand. If the
+//! inserted read already fails, the cause lies earlier: the cause as of that read (the same
+//! rule) is asked the same way, up to [`PROBES`] reads. If the read passes, or no such case can
+//! be built, or the hand parts from the model before the read, the cause stays.
+//!
+//! A stored value read wrong by another command than its getter (a listing: `FLISTV`,
+//! `FLISTAV`) is first asked by the getter, just before that read: if the getter reads it
+//! wrong too, the value is wrong whatever reads it, and the finding is the getter's (`value at
+//! FGET after FDEF`, one finding however many commands list the value); if the getter reads it
+//! right, the listing itself is at fault and the finding stays the listing's.
 //!
 //! A cause sent inside a RealTime session (a line the model takes as blocks, a block) has no
 //! quiescent point before it but the one before the session: the session's LOOP is named, and
 //! asked about in turn.
 
-use gcl_model::spec::{CommandKind, Role};
+use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Line, Profile, parse_line};
 use gcl_transcript::{Expect, Piece};
 
@@ -28,8 +36,8 @@ use crate::replay::ReplayOutcome;
 /// At most this many reads inserted for one finding (one run of the case on the hand each).
 pub(super) const PROBES: usize = 4;
 
-/// The finding's signature with the cause the hand's answers point at, when that is another
-/// command than `sig`'s; `None` when the cause stays (or `sig` is no position read back that a
+/// The finding's signature with the read and the cause the hand's answers point at, when that
+/// is another than `sig`'s; `None` when both stay (or `sig` is no value read back that a
 /// command decided, or an explanation names it).
 ///
 /// `built` and `out` are the case as reported and its thorough run on the hand; `actions`
@@ -43,17 +51,40 @@ pub(super) fn named(
     sig: &FindingSignature,
 ) -> Result<Option<FindingSignature>, FuzzError> {
     let p = &opts.profile;
-    let Some(position) = p.role(Role::Position).map(|id| p.param(id).name.clone()) else { return Ok(None) };
-    if sig.kind != "value" || sig.detail != position || sig.cause.is_empty() || !sig.explanation.is_empty() {
+    if sig.kind != "value" || sig.cause.is_empty() || !sig.explanation.is_empty() {
         return Ok(None);
     }
-    let Some(read) = p.command_of_kind(CommandKind::MotorGet).map(|id| format!("{} {position}", p.command(id).name))
-    else {
+    // (the value's parameter, and its getter)
+    let Some(id) = p.param_id(&sig.detail) else { return Ok(None) };
+    let position = p.role(Role::Position) == Some(id);
+    let spec = p.param(id);
+    if spec.live && !position {
         return Ok(None);
-    };
+    }
+    let getter_kind = if spec.scope == Scope::Global { CommandKind::GlobalGet } else { CommandKind::MotorGet };
+    let Some(getter) = p.command_of_kind(getter_kind).map(|g| p.command(g).name.clone()) else { return Ok(None) };
+    let read = format!("{getter} {}", spec.name);
     // (the case as reported, run again: where its cause was sent)
     let Some(now) = signature(p, built, out, !opts.wide()).filter(|s| s.key() == sig.key()) else { return Ok(None) };
+    let mut command = sig.command.clone();
     let mut cause = (sig.cause.clone(), now.cause_step);
+    // The read itself, when another command than the getter made it: asked by the getter.
+    if command != getter {
+        let Some(at) = out.failed_step() else { return Ok(None) };
+        let Some(i) = built.action_steps.iter().rposition(|(s, _)| *s <= at) else { return Ok(None) };
+        if !built.action_steps[i].1 {
+            return Ok(None);
+        }
+        let variant = [&actions[..i], &[HostAction::Line(read.clone())], &actions[i..]].concat();
+        match ask(opts, hand, built, &variant, i, &read, id)? {
+            Some(v) => {
+                command = getter.clone();
+                cause = v;
+            }
+            // (the getter reads it right, or the hand parted elsewhere: the read stays named)
+            None => return Ok(None),
+        }
+    }
     for _ in 0..PROBES {
         let Some(step) = cause.1 else { break };
         // The action that sent the cause (none: the preamble's), and where the read goes.
@@ -75,36 +106,52 @@ pub(super) fn named(
             // session ended there by ^C instead, then read; what the session did shows there)
             ([&actions[..i], &[HostAction::Abort, read_line]].concat(), i + 1)
         };
-        let Ok(mut b) = build_for_sending(opts, &variant, "fuzz", "probe", &built.block_bytes) else { break };
-        let Some(&(at, true)) = b.action_steps.get(j) else { break };
-        let sends_read = b
-            .transcript
-            .steps
-            .get(at)
-            .and_then(|s| s.send.as_ref())
-            .is_some_and(|h| h.bytes.starts_with(read.as_bytes()));
-        if !sends_read {
-            break;
+        match ask(opts, hand, built, &variant, j, &read, id)? {
+            Some(v) => cause = v,
+            None => break,
         }
-        if !opts.wide() {
-            let Some(e) = within_mpe(p, &b, at) else { break };
-            b.transcript.steps[at].expect = e;
-        }
-        let vout = hand.run(&b.transcript, true)?;
-        // (passed there, or parted earlier for another reason: the cause stays)
-        if vout.failed_step() != Some(at) {
-            break;
-        }
-        let Some(v) = signature(p, &b, &vout, !opts.wide()) else { break };
-        if v.kind != "value" || v.detail != position || v.cause.is_empty() {
-            break;
-        }
-        cause = (v.cause, v.cause_step);
     }
-    if cause.0 == sig.cause {
+    if (command.as_str(), cause.0.as_str()) == (sig.command.as_str(), sig.cause.as_str()) {
         return Ok(None);
     }
-    Ok(Some(FindingSignature { cause: cause.0, cause_step: cause.1, ..sig.clone() }))
+    Ok(Some(FindingSignature { command, cause: cause.0, cause_step: cause.1, ..sig.clone() }))
+}
+
+/// Runs `variant` (the case's actions with `read` of parameter `id` as action `j`) on the hand:
+/// the cause of the value as that read has it (the command and its step), when the read fails
+/// on it; `None` when it passes there, the hand parts from the model before it, or no such case
+/// can be built.
+fn ask(
+    opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
+    built: &BuiltCase,
+    variant: &[HostAction],
+    j: usize,
+    read: &str,
+    id: gcl_model::spec::ParamId,
+) -> Result<Option<(String, Option<usize>)>, FuzzError> {
+    let p = &opts.profile;
+    let Ok(mut b) = build_for_sending(opts, variant, "fuzz", "probe", &built.block_bytes) else { return Ok(None) };
+    let Some(&(at, true)) = b.action_steps.get(j) else { return Ok(None) };
+    let sends_read =
+        b.transcript.steps.get(at).and_then(|s| s.send.as_ref()).is_some_and(|h| h.bytes.starts_with(read.as_bytes()));
+    if !sends_read {
+        return Ok(None);
+    }
+    if !opts.wide() && p.role(Role::Position) == Some(id) {
+        let Some(e) = within_mpe(p, &b, at) else { return Ok(None) };
+        b.transcript.steps[at].expect = e;
+    }
+    let vout = hand.run(&b.transcript, true)?;
+    // (passed there, or parted earlier for another reason: the cause stays)
+    if vout.failed_step() != Some(at) {
+        return Ok(None);
+    }
+    let Some(v) = signature(p, &b, &vout, !opts.wide()) else { return Ok(None) };
+    if v.kind != "value" || v.detail != p.param(id).name || v.cause.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some((v.cause, v.cause_step)))
 }
 
 /// The LOOP command an action opens a RealTime session with: the last line of it the model
@@ -216,6 +263,22 @@ mod tests {
         let (sig, named) = asked(gcl_model::Fault::LcvUnsigned, &actions);
         assert_eq!(sig.key(), "value at FGET after IC");
         assert_eq!(named.map(|s| s.key()).as_deref(), Some("value at FGET after LOOP"));
+    }
+
+    /// A hand whose FDEF skips MCV: the value a listing shows wrong after FDEF is wrong to
+    /// FGET too, so the finding is FGET's, as when FGET reads it (over exec it was three
+    /// findings, FGET's, FLISTV's and FLISTAV's); and a wrong value RESET loaded from the EEPROM
+    /// after a save was wrong before RESET: FDEF is named, not RESET.
+    #[test]
+    fn a_stored_value_wrong_whatever_reads_it_is_named_by_its_getter_and_where_it_began() {
+        let lines = |ls: &[&str]| ls.iter().map(|l| HostAction::Line(l.to_string())).collect::<Vec<_>>();
+        let (sig, named) = asked(gcl_model::Fault::FdefSkipsMcv, &lines(&["FSET MCV 50", "FDEF", "FLISTV"]));
+        assert_eq!(sig.key(), "value at FLISTV after FDEF");
+        assert_eq!(named.map(|s| s.key()).as_deref(), Some("value at FGET after FDEF"));
+        let (sig, named) =
+            asked(gcl_model::Fault::FdefSkipsMcv, &lines(&["FSET MCV 50", "FDEF", "FSAVE", "RESET", "FGET MCV"]));
+        assert_eq!(sig.key(), "value at FGET after RESET");
+        assert_eq!(named.map(|s| s.key()).as_deref(), Some("value at FGET after FDEF"));
     }
 
     /// A position the motion named gets wrong (M to a DP the hand ignores) is right when read

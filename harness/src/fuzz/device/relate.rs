@@ -51,6 +51,11 @@ const MOST_LFV: i64 = 100;
 /// stretches the interval, so a reading must leave room for five times the model's before the
 /// signed byte clips it (a clipped anchor breaks the ratio: seen at 40 on a loaded machine).
 const MOST_LFDP: i64 = 24;
+/// [`MOST_LFDP`] for a case built on a hypothesis about the hand (a coefficient without
+/// effect reads larger): room for twice the model's reading under the signed byte's end. A
+/// hypothesis's case is only a hypothesis until the hand answers it (see `variant`): one whose
+/// relation a faster hand breaks names nothing, it never names the wrong bug.
+const MOST_LFDP_HYPOTHESIS: i64 = 63;
 /// The least LFV reading related: from 4 on, truncation stays inside the tolerance.
 const LEAST_LFV: i64 = 4;
 /// The least LFDP reading of the moving motor: half of it is still [`LEAST_LFV`].
@@ -94,7 +99,7 @@ impl LoopTrack {
     pub(super) fn enter(p: &Profile, shadow: &Device, id: usize) -> LoopTrack {
         let read = |role: Role, m: u8| -> Option<i64> {
             match p.role(role) {
-                Some(id) => Some(shadow.params().get(p, id, m)),
+                Some(id) => Some(shadow.effective(id, m)),
                 None => Motor::new(m).and_then(|motor| p.absent_value(role, motor)),
             }
         };
@@ -152,8 +157,10 @@ struct Anchor {
 }
 
 /// Relations across a case's feedback blocks (one per case).
-#[derive(Default)]
 pub(super) struct Relations {
+    /// The largest LFDP reading of the model related ([`MOST_LFDP`], or
+    /// [`MOST_LFDP_HYPOTHESIS`]).
+    most_lfdp: i64,
     anchor: Option<Anchor>,
     /// The loop whose LFDP readings `lfdp_bounded` follows.
     lfdp_loop: Option<usize>,
@@ -167,6 +174,18 @@ pub(super) struct Relations {
 }
 
 impl Relations {
+    /// Relations for a case; `hypothesis`: one built on a model that holds a hypothesis about
+    /// the hand (see [`MOST_LFDP_HYPOTHESIS`]).
+    pub(super) fn new(hypothesis: bool) -> Relations {
+        Relations {
+            most_lfdp: if hypothesis { MOST_LFDP_HYPOTHESIS } else { MOST_LFDP },
+            anchor: None,
+            lfdp_loop: None,
+            lfdp_bounded: [false; 4],
+            features: Vec::new(),
+        }
+    }
+
     /// The captures and relations for the answer `c` of step `step`, a feedback block with
     /// `note`, each holding the model's own answer.
     /// Every feedback block of a tracked loop comes here in order; `bind` is false where the
@@ -182,7 +201,7 @@ impl Relations {
         }
         let bounded = self.lfdp_bounded;
         for (m, b) in (1..=4u8).zip(self.lfdp_bounded.iter_mut()) {
-            if model(m, "LFDP").is_some_and(|v| v.abs() > MOST_LFDP) {
+            if model(m, "LFDP").is_some_and(|v| v.abs() > self.most_lfdp) {
                 *b = false;
             }
         }
@@ -274,10 +293,14 @@ impl Relations {
         // it) the model reads 8..=24; the motors after it that move no more are held to it
         // (a hand whose interval is short reads small values, where truncation is a whole
         // unit: held to a larger anchor, a smaller reading stays within the band's rounding).
-        let Some(&(am, ac, arate, agot)) = moving.iter().find(|x| (LEAST_LFDP..=MOST_LFDP).contains(&x.3.abs())) else {
+        let most = self.most_lfdp;
+        let Some(&(am, ac, arate, agot)) = moving.iter().find(|x| (LEAST_LFDP..=most).contains(&x.3.abs())) else {
             return Vec::new();
         };
-        moving.retain(|x| x.0 > am && x.2.abs() <= arate.abs());
+        // (a hypothesis's case holds the faster ones too where the tolerance allows: a motor
+        // whose coefficient the hypothesis takes away often moves more than the anchor)
+        let faster = self.most_lfdp > MOST_LFDP;
+        moving.retain(|x| x.0 > am && (faster || x.2.abs() <= arate.abs()));
         let name = format!("d{step}_{am}");
         let mut binds = Vec::new();
         for &(m, c, rate, got) in &moving {

@@ -18,21 +18,30 @@
 //! Byte for byte only where the hand's answers are exact (the in-process sim, whose noise and
 //! clock are the model's). A hand outside this process answers with its own noise and timing:
 //! there the case is built anew from the same actions on the model holding the hypothesis,
-//! shaped as any case for such a hand (positions within their bands), and the hand's answers
-//! up to the failing step must be what that case expects, the failing step's otherwise than
-//! the case did (`fits_within`). Afresh there only from a value read back, as the rewrites.
+//! shaped as any case for such a hand (positions within their bands, the ratios of
+//! `super::relate` from the coefficients that model acts on), and the hand's answers up to the
+//! failing step must be what that case expects, the failing step's otherwise than the case
+//! did, and the profile's model's not (`fits_within`: a hypothesis whose case judges no closer
+//! than the case tells nothing). A new one is then asked of the hand: it answers the
+//! hypothesis's case as it expects up to the step where it parted (`super::confirms`). The
+//! same failures as in process (a value, a block, an answer cut short) are explained so. A
+//! hypothesis that changes the control block's size (a control flag without effect) is not
+//! expressible there: its case encodes other bytes than the hand was sent.
 
 use std::sync::Arc;
 
 use gcl_model::Profile;
 use gcl_model::grammar::{Args, Line, parse_line};
 use gcl_model::spec::{CommandKind, ParamId};
-use gcl_transcript::Form;
+use gcl_transcript::{Form, Transcript};
 
 use super::action::HostAction;
 use super::case::BuiltCase;
-use super::{Fresh, FuzzOptions};
+use super::{Fresh, FuzzError, FuzzOptions, Hand};
 use crate::replay::{ReplayOutcome, replay};
+
+/// The explanation of a set line the hand refuses and still applies in its valid pairs.
+const REFUSED_SET_APPLIED: &str = "set refused but applied in part";
 
 /// One hypothesis: what it says, and the model that holds it (the profile, or a patch of it,
 /// and the device's configuration).
@@ -40,6 +49,8 @@ struct Variant {
     says: String,
     profile: Arc<Profile>,
     config: gcl_model::DeviceConfig,
+    /// The other side of a decision the model takes (see [`Fresh::decision`]).
+    decision: bool,
 }
 
 /// The hypotheses a case allows, each a model unlike the profile's in one way:
@@ -47,7 +58,7 @@ struct Variant {
 /// - a letter prefix the case sends, naming one motor more (`prefix 123+4`, the key
 ///   [`super::explain`]'s prefix rewrite gives the same bug);
 /// - the other side of a decision the model takes, where the case meets it: a set the model
-///   refuses applied in its valid pairs (`FSET refused but applied in part`; decision
+///   refuses applied in its valid pairs (`set refused but applied in part`, FSET or PSET; decision
 ///   framing-line-atomic), a prefix on a command that takes none ignored (`prefix accepted on
 ///   a command that takes none`, the rewrite's key; seed-prefix-rules), RESET keeping the
 ///   values in RAM (`RESET keeps the values set`; bh8-reset). The model plays each as it plays
@@ -86,6 +97,7 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
             says: format!("{} set without effect", p.param(id).name),
             profile: p.clone(),
             config: gcl_model::DeviceConfig { without_effect: vec![id], ..base.clone() },
+            decision: false,
         })
         .collect();
     for (k, pre) in p.prefixes.iter().enumerate() {
@@ -110,20 +122,19 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
                 says: format!("prefix {digits}+{m}"),
                 profile: Arc::new(patched),
                 config: base.clone(),
+                decision: false,
             });
         }
     }
-    let refused_set = parsed.iter().find_map(|r| match r {
-        Err(r) => {
-            r.partial.as_ref().filter(|c| matches!(c.args, Args::Pairs(_))).map(|c| p.command(c.command).name.clone())
-        }
-        _ => None,
-    });
+    let refused_set = parsed
+        .iter()
+        .any(|r| matches!(r, Err(r) if r.partial.as_ref().is_some_and(|c| matches!(c.args, Args::Pairs(_)))));
     let mut other_side = |says: String, fault: gcl_model::Fault| {
         out.push(Variant {
             says,
             profile: p.clone(),
             config: gcl_model::DeviceConfig { faults: vec![fault], ..base.clone() },
+            decision: true,
         });
     };
     if parsed.iter().any(|r| matches!(r, Err(r) if r.problems == [gcl_model::grammar::Problem::PrefixNotAllowed])) {
@@ -132,8 +143,9 @@ fn variants(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Variant> 
     if parsed.iter().any(|r| matches!(r, Ok(Line::Command(c)) if c.kind(p) == CommandKind::Reset)) {
         other_side("RESET keeps the values set".into(), gcl_model::Fault::ResetKeepsRam);
     }
-    if let Some(name) = refused_set {
-        other_side(format!("{name} refused but applied in part"), gcl_model::Fault::PartialSetApplied);
+    // (the hypothesis is every set line's, FSET's and PSET's alike: one key whichever shows it)
+    if refused_set {
+        other_side(REFUSED_SET_APPLIED.into(), gcl_model::Fault::PartialSetApplied);
     }
     out
 }
@@ -159,40 +171,47 @@ fn sent_lines(opts: &FuzzOptions, built: &BuiltCase, upto: usize) -> Vec<Vec<u8>
 /// whatever the bug), outside it only from a value read back (`Fresh::rewrite`).
 pub(super) fn explains(
     opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
     actions: &[HostAction],
     built: &BuiltCase,
     out: &ReplayOutcome,
     known: &[String],
     fresh: Fresh,
-) -> Option<String> {
-    let failed = out.failed_step()?;
+) -> Result<Option<String>, FuzzError> {
+    let Some(failed) = out.failed_step() else { return Ok(None) };
     let said = out.exchange().iter().find(|e| e.step == failed).is_some_and(|e| !e.received.is_empty());
-    // (outside this process, afresh only where a rewrite would look: a value read back)
-    let fresh =
-        if opts.wide() { fresh.rewrite } else { fresh.exact && (matches!(out, ReplayOutcome::Mismatch(_)) || said) };
+    let wrong = matches!(out, ReplayOutcome::Mismatch(_));
+    let fresh_one = |v: &Variant| (fresh.exact && (wrong || said)) || (fresh.decision && wrong && v.decision);
     let mut candidates: Vec<Variant> =
-        variants(opts, built, failed).into_iter().filter(|v| fresh || known.contains(&v.says)).collect();
+        variants(opts, built, failed).into_iter().filter(|v| fresh_one(v) || known.contains(&v.says)).collect();
     candidates.sort_by_key(|v| !known.contains(&v.says));
     let mut found = None;
     for v in candidates {
+        let known_one = known.contains(&v.says);
         let fits = if opts.wide() {
-            fits_within(opts, actions, built, out, v.profile, &v.config)
+            match fits_within(opts, actions, built, out, v.profile.clone(), &v.config) {
+                // A new one is asked of the hand: the case built on the hypothesis's model,
+                // replayed, is answered as it expects up to the step where the hand parted.
+                Some(t) if !known_one => super::confirms(opts, &hand.run(&t, true)?, out),
+                Some(_) => true,
+                None => false,
+            }
         } else {
             answers_alike(built, out, v.profile, v.config)
         };
         if !fits {
             continue;
         }
-        if known.contains(&v.says) {
-            return Some(v.says);
+        if known_one {
+            return Ok(Some(v.says));
         }
         // (two hypotheses that explain the case alike tell neither)
         if found.is_some() {
-            return None;
+            return Ok(None);
         }
         found = Some(v.says);
     }
-    found
+    Ok(found)
 }
 
 /// In process: the model built from `config` answers every step of the failing transcript up
@@ -212,9 +231,12 @@ fn answers_alike(
 
 /// Outside this process: the case built anew from the same actions on the model from
 /// `config`, shaped as any case for such a hand (its bands for noise and timing), expects what
-/// the hand answered at every step up to the failing one, and there expects otherwise than the
-/// case did. The hand's answers are matched as one stream (the variant's answers may end a
-/// step earlier or later than the case's did).
+/// the hand answered at every step up to the failing one, expects otherwise than the case did
+/// somewhere up to there, and does not expect what the profile's model answered: a hypothesis whose case
+/// judges the hand's answers no closer than the case did (a relation it cannot make, a band
+/// wide enough for both) tells nothing of the hand. The hand's answers are matched as one
+/// stream (the variant's answers may end a step earlier or later than the case's did).
+/// Returns the hypothesis's case, for the hand to answer (see [`explains`]).
 fn fits_within(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -222,27 +244,34 @@ fn fits_within(
     out: &ReplayOutcome,
     profile: Arc<Profile>,
     config: &gcl_model::DeviceConfig,
-) -> bool {
-    let Some(failed) = out.failed_step() else { return false };
-    let Ok(v) =
-        super::case::build_case_on(&profile, config, actions, "fuzz", "variant", true, opts.home(), &built.block_bytes)
-    else {
-        return false;
-    };
+) -> Option<Transcript> {
+    let failed = out.failed_step()?;
+    let on = (config, super::case::Model::Hypothesis);
+    let v = super::case::build_case_on(&profile, on, actions, "fuzz", "variant", true, opts.home(), &built.block_bytes)
+        .ok()?;
     let (old, new) = (&built.transcript.steps, &v.transcript.steps);
     let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    // (a difference may show a step late: on a serial line a block a byte longer than the
+    // case's is read into the next step's answer)
     if new.len() != old.len()
         || (0..=failed).any(|s| send(&old[s]) != send(&new[s]))
-        || new[failed].expect == old[failed].expect
+        || (0..=failed).all(|s| new[s].expect == old[s].expect)
     {
-        return false;
+        return None;
     }
-    let Some(stream) = (0..=failed)
+    let stream = (0..=failed)
         .map(|s| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone()))
-        .collect::<Option<Vec<Vec<u8>>>>()
-    else {
-        return false;
-    };
+        .collect::<Option<Vec<Vec<u8>>>>()?;
     let judges: Vec<&gcl_transcript::Step> = new.iter().collect();
-    super::follows(&judges, &stream.concat(), failed + 1, matches!(out, ReplayOutcome::Mismatch(_)))
+    let none = gcl_transcript::Captures::new();
+    let short = matches!(out, ReplayOutcome::Mismatch(_));
+    // (what the profile's model answered up to the end of the failing step, by its tags)
+    let run = &built.model;
+    if run.tags.len() != run.stream.len() || run.tags.is_empty() {
+        return None;
+    }
+    let model: Vec<u8> =
+        run.stream.iter().zip(&run.tags).take_while(|(_, t)| **t as usize <= failed).map(|(b, _)| *b).collect();
+    let tells = !super::follows(&judges, &model, failed + 1, false, &none);
+    (tells && super::follows(&judges, &stream.concat(), failed + 1, short, &none)).then_some(v.transcript)
 }

@@ -138,6 +138,8 @@ const COMMANDS_CAP: usize = 1000;
 pub struct HostChecker {
     profile: Arc<Profile>,
     line: Vec<u8>,
+    /// The last line the host ended (with CR), for a message about what followed it.
+    last_line: Option<Vec<u8>>,
     /// The last byte the host sent since the hand's last answer reached it or the port was
     /// last opened (for CR CR: a lone CR after an answer or a reopen is a resync).
     prev: Option<u8>,
@@ -191,6 +193,7 @@ impl HostChecker {
         HostChecker {
             profile,
             line: Vec::new(),
+            last_line: None,
             prev: None,
             unread: false,
             misbehaved: false,
@@ -331,7 +334,16 @@ impl HostChecker {
             return;
         }
         if b == b'\n' {
-            self.violate(HostClause::LineEnding, "LF sent", format!("LF after \"{}\"", esc(&self.line)));
+            // Which line it followed: the one being typed, else the one a CR just ended.
+            let detail = match (&self.line[..], &self.last_line, self.prev) {
+                ([], Some(l), Some(p)) if p == self.profile.framing.terminator => {
+                    format!("LF after \"{}\" and its CR", esc(l))
+                }
+                ([], Some(l), _) => format!("LF after \"{}\"", esc(l)),
+                ([], None, _) => "LF before any line".to_string(),
+                (line, _, _) => format!("LF after \"{}\"", esc(line)),
+            };
+            self.violate(HostClause::LineEnding, "LF sent", detail);
             return;
         }
         if self.sends_early() {
@@ -351,6 +363,7 @@ impl HostChecker {
     fn end_line(&mut self) {
         // LF never enters the line (`host_bytes` grades it apart).
         let text = std::mem::take(&mut self.line);
+        self.last_line = Some(text.clone());
         if text.iter().all(|c| c.is_ascii_whitespace()) {
             if self.prev == Some(self.profile.framing.terminator) {
                 self.violate(HostClause::LineEnding, "CR CR", "an empty line (two CRs in a row)".into());
@@ -648,6 +661,19 @@ mod tests {
         assert_eq!(run(&[b"HI\r", b"1LOOP\r"]), vec![HostClause::LeavesCleanly]);
         // ^C may interrupt anything.
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+
+    /// An LF says which line it followed: the one a CR just ended (`"1FGET P" and its CR`), the
+    /// one being typed, or none yet.
+    #[test]
+    fn an_lf_names_the_line_it_followed() {
+        let detail = |host: &[&[u8]]| {
+            let c = checked(host);
+            c.violations().iter().find(|v| v.kind == "LF sent").map(|v| v.detail.clone()).unwrap_or_default()
+        };
+        assert_eq!(detail(&[b"HI\r", b"1FGET P\r\n"]), "LF after \"1FGET P\" and its CR");
+        assert_eq!(detail(&[b"FGET D\nP\r"]), "LF after \"FGET D\"");
+        assert_eq!(detail(&[b"\n"]), "LF before any line");
     }
 
     /// RealTime over motors 1-3 of seed after HI, with velocity control: a control block is a header

@@ -6,7 +6,7 @@
 /// A crash report found on stderr.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CrashReport {
-    /// `asan`, `panic` or `python`.
+    /// `c++` (an exception nobody caught), `asan`, `panic` or `python`.
     pub kind: &'static str,
     /// Stable across runs of the same bug: the report's kind and where it was raised (the
     /// innermost frame, no address or line), never the callers that led there.
@@ -18,49 +18,390 @@ pub struct CrashReport {
 /// How many frames a hang's stack keeps (for people; its signature is the first).
 const TOP_FRAMES: usize = 3;
 
-/// Finds the first crash report on `stderr`.
+/// Finds the first crash report on `stderr`: a C++ runtime's message about an exception nobody
+/// caught (with where it was thrown when a sanitizer printed the stack), an AddressSanitizer
+/// report, a Rust panic, a Python traceback.
 pub fn crash_report(stderr: &str) -> Option<CrashReport> {
-    asan(stderr).or_else(|| panic(stderr)).or_else(|| python(stderr))
+    uncaught(stderr).or_else(|| asan(stderr)).or_else(|| panic(stderr)).or_else(|| python(stderr))
 }
 
-fn asan(s: &str) -> Option<CrashReport> {
-    let start = s.find("ERROR: AddressSanitizer:")?;
-    let rest = &s[start..];
-    let headline = rest.lines().next().unwrap_or_default().trim().to_string();
-    let what = headline
-        .trim_start_matches("ERROR: AddressSanitizer:")
-        .split_whitespace()
-        .next()
-        .unwrap_or("unknown")
-        .to_string();
-    // Frames of the first stack only (the access's, not the allocation's), the sanitizer's
-    // own left out, with whether each is a shared library's (`(/lib/…/libc.so.6+0x…)`): the
-    // innermost of the host's own is where it made the bad access (a `strcpy` intercepted in
-    // the sanitizer's library was given a bad buffer by its caller).
-    let frames: Vec<(String, bool)> = rest
+/// One frame of a native stack as a sanitizer, gdb or eu-stack prints it: the function (its
+/// parameters left out) and where it lives (a source file, or a module).
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct NativeFrame {
+    func: String,
+    place: String,
+}
+
+impl NativeFrame {
+    /// Whether it is the code of the system rather than the host's own: the C library and the
+    /// loader, the C++ and Rust runtimes, the sanitizers' runtime and interceptors, and the
+    /// libraries a host is built on (Boost, Poco, ROS), by their module, their source file
+    /// (`../sysdeps/...`, a header under `/usr/include`), or their namespace. A host's own
+    /// shared library (`libbarrett.so`) is the host's.
+    fn system(&self) -> bool {
+        system_frame(&self.func, &self.place)
+    }
+}
+
+/// See [`NativeFrame::system`].
+fn system_frame(func: &str, place: &str) -> bool {
+    const PLACES: &[&str] = &[
+        "libsanitizer",
+        "sanitizer_common",
+        "compiler-rt",
+        "sysdeps/",
+        "stdio-common/",
+        "libio/",
+        "csu/",
+        "nptl/",
+        "stdlib/abort",
+        "/usr/include/",
+        "/include/c++/",
+        "/boost/",
+        "/Poco/",
+        "/opt/ros/",
+        "<unknown module>",
+    ];
+    const MODULES: &[&str] = &[
+        "libc.so",
+        "libc-",
+        "libstdc++",
+        "libc++",
+        "libgcc_s",
+        "libm.so",
+        "libm-",
+        "libpthread",
+        "ld-linux",
+        "libdl",
+        "librt",
+        "libasan",
+        "libubsan",
+        "liblsan",
+        "libtsan",
+        "libhwasan",
+        "libclang_rt",
+        "libunwind",
+        "libboost_",
+        "libPoco",
+    ];
+    const NAMESPACES: &[&str] = &[
+        "std::",
+        "<std::",
+        "__gnu_cxx::",
+        "__cxxabiv1::",
+        "boost::",
+        "<boost::",
+        "void boost::",
+        "Poco::",
+        "asio::",
+        "ros::",
+        "rclcpp::",
+        "core::",
+        "<core::",
+        "alloc::",
+        "<alloc::",
+        "<&",
+    ];
+    // Functions of the C library and of the sanitizers' runtime, for a stack that says no
+    // more than their names.
+    const NAMES: &[&str] = &[
+        "read",
+        "write",
+        "poll",
+        "ppoll",
+        "select",
+        "pselect",
+        "nanosleep",
+        "clock_nanosleep",
+        "epoll_wait",
+        "epoll_pwait",
+        "sleep",
+        "usleep",
+        "syscall",
+        "recv",
+        "recvfrom",
+        "recvmsg",
+        "accept",
+        "accept4",
+        "connect",
+        "fgets",
+        "fgetc",
+        "getc",
+        "fread",
+        "getline",
+        "getdelim",
+        "waitpid",
+        "raise",
+        "abort",
+        "pthread_cond_wait",
+        "pthread_join",
+        "sem_wait",
+        "scanf_common",
+        "printf_common",
+        "_start",
+        "??",
+    ];
+    let module = place.trim_start_matches('(').rsplit('/').next().unwrap_or_default();
+    PLACES.iter().any(|p| place.contains(p))
+        || MODULES.iter().any(|m| module.starts_with(m))
+        || NAMESPACES.iter().any(|n| func.starts_with(n))
+        || NAMES.contains(&func)
+        || func.starts_with("__")
+        || func.starts_with("_dl_")
+        || func.starts_with("_IO_")
+        // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
+        || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
+}
+
+/// A function as a stack prints it, without its parameter list and ABI tag
+/// (`Port::check(int, char const*)` → `Port::check`, `Port::read[abi:cxx11]()` → `Port::read`).
+fn function_name(func: &str) -> String {
+    let mut f = func.trim();
+    if let Some(cut) = f.strip_suffix(" const") {
+        f = cut.trim_end();
+    }
+    if f.ends_with(')')
+        && let Some(open) = matching_open(f)
+        && open > 0
+    {
+        f = f[..open].trim_end();
+    }
+    let f = f.split("[abi:").next().unwrap_or(f);
+    f.to_string()
+}
+
+/// The index of the `(` that opens the parenthesised group `s` ends with.
+fn matching_open(s: &str) -> Option<usize> {
+    let mut depth = 0usize;
+    for (i, c) in s.char_indices().rev() {
+        match c {
+            ')' => depth += 1,
+            '(' => {
+                depth = depth.checked_sub(1)?;
+                if depth == 0 {
+                    return Some(i);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// A sanitizer's frame line (`#3 0x55 in hand_get /src/host.c:39`, `#5 0x7f in std::terminate()
+/// (/lib/x86_64-linux-gnu/libstdc++.so.6+0xa8e84)`); `None` for a frame without a function.
+fn sanitizer_frame(line: &str) -> Option<NativeFrame> {
+    let rest = line.trim_start().strip_prefix('#')?;
+    let (_, after) = rest.split_once(" in ")?;
+    let after = after.trim();
+    // The place is the last word: a source path with its line, or a module in parentheses.
+    let (func, place) = match after.rsplit_once(' ') {
+        Some((f, p)) if p.contains('/') || p.starts_with('(') => (f, p),
+        _ => (after, ""),
+    };
+    let func = function_name(func);
+    (!func.is_empty()).then(|| NativeFrame { func, place: place.to_string() })
+}
+
+/// The frames of the first stack of a sanitizer report that starts at `report` (the bad
+/// access's, not the allocation's), innermost first.
+fn sanitizer_stack(report: &str) -> Vec<NativeFrame> {
+    report
         .lines()
         .skip(1)
         .map(str::trim_start)
         .skip_while(|l| !l.starts_with('#'))
         .take_while(|l| l.starts_with('#'))
-        .filter_map(|l| {
-            let mut words = l.split(" in ").nth(1)?.split_whitespace();
-            let func = words.next()?.to_string();
-            let library = words.next().is_some_and(|w| w.contains(".so"));
-            Some((func, library))
-        })
-        .filter(|(f, _)| {
-            !f.starts_with("__asan") && !f.starts_with("__interceptor") && !f.starts_with("__interception")
-        })
-        .collect();
-    let own = frames.iter().position(|(_, lib)| !lib).unwrap_or(0);
-    let frames: Vec<String> = frames.into_iter().skip(own).map(|(f, _)| f).collect();
-    let site = frames.first().map_or("?", String::as_str);
-    let headline = match frames.get(1) {
-        Some(caller) => format!("{headline} (in {site}, called from {caller})"),
-        None => headline,
+        .filter_map(sanitizer_frame)
+        .collect()
+}
+
+/// Where a sanitizer report's bad access was made in the host's own code: the innermost frame
+/// of its first stack that is not the system's (a `strcpy` or `sscanf` the sanitizer
+/// intercepts was handed the bad buffer by its caller), with the system frames it went
+/// through (`scanf_common < __interceptor___isoc99_sscanf`) and its caller. A stack overflow
+/// through a libc call smashes the frames above the buffer, so the stack may end in the
+/// interceptor: then the frame that owns the overflowed variable (`is located in stack of
+/// thread T0 ... in frame #0 ... in hand_pget`) is the host's. So it is, first, in a report
+/// taken with the fast unwinder (`owner_first`), which skips the frame that called an
+/// interceptor (frame pointers link the frames only of code built with them).
+fn own_site(report: &str, owner_first: bool) -> Option<(String, Option<String>, Option<String>)> {
+    let frames = sanitizer_stack(report);
+    let owner = report
+        .find("is located in stack of thread")
+        .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+        .filter(|f| !f.system());
+    let own = frames.iter().position(|f| !f.system());
+    let through = |upto: usize| {
+        let sys: Vec<&str> = frames[..upto].iter().map(|f| f.func.as_str()).collect();
+        (!sys.is_empty()).then(|| sys.join(" < "))
+    };
+    if owner_first && let Some(f) = &owner {
+        let upto = own.unwrap_or(frames.len());
+        return Some((f.func.clone(), through(upto), None));
+    }
+    match own {
+        Some(i) => {
+            let caller = frames[i + 1..].iter().find(|f| !f.system()).map(|f| f.func.clone());
+            Some((frames[i].func.clone(), through(i), caller))
+        }
+        None => match owner {
+            Some(f) => Some((f.func, through(frames.len()), None)),
+            None => frames.first().map(|f| (f.func.clone(), None, None)),
+        },
+    }
+}
+
+/// The heading under which a run's stderr gets the AddressSanitizer report of a second run of
+/// the same schedule, when the first report named no frame of the host's own code.
+pub const ASAN_SECOND_RUN: &str = "--- AddressSanitizer's report in a second run of the same schedule ---";
+
+/// The kind of an AddressSanitizer report (`stack-buffer-overflow`), from its first line.
+fn asan_kind(report: &str) -> String {
+    let line = report.lines().next().unwrap_or_default();
+    let after = line.split("AddressSanitizer:").nth(1).unwrap_or_default();
+    after.split_whitespace().next().unwrap_or("unknown").to_string()
+}
+
+/// Whether a sanitizer report names a frame of the host's own code: in its stack, or as the
+/// frame whose variable overflowed.
+fn names_own(report: &str) -> bool {
+    sanitizer_stack(report).iter().any(|f| !f.system())
+        || report
+            .find("is located in stack of thread")
+            .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+            .is_some_and(|f| !f.system())
+}
+
+/// Whether a report taken with AddressSanitizer's fast unwinder can be trusted to name the
+/// host's frame: it names the frame whose variable overflowed, or its first frame is the host's
+/// own. (The fast unwinder follows frame pointers, and skips the caller of an interceptor that
+/// keeps none: a `sscanf` into a heap buffer reads `in main`, its caller lost.)
+pub fn asan_fast_report_names_own(report: &str) -> bool {
+    let owner = report
+        .find("is located in stack of thread")
+        .and_then(|at| report[at..].lines().skip(1).find_map(sanitizer_frame))
+        .is_some_and(|f| !f.system());
+    owner || sanitizer_stack(report).first().is_some_and(|f| !f.system())
+}
+
+/// The kind of stderr's AddressSanitizer report when it names no frame of the host's own code
+/// and no second run completed it yet: its stack has no frame at all (the unwinder crashed on a
+/// smashed stack: `nested bug in the same thread`), or only the system's (an overflow that ran
+/// off the end of the stack inside `sscanf`: `stack-overflow` in `__vfscanf_internal`).
+pub fn asan_without_frames(s: &str) -> Option<String> {
+    let at = s.find("ERROR: AddressSanitizer:")?;
+    if s.contains(ASAN_SECOND_RUN) {
+        return None;
+    }
+    (!names_own(&s[at..])).then(|| asan_kind(&s[at..]))
+}
+
+fn asan(s: &str) -> Option<CrashReport> {
+    let start = s.find("ERROR: AddressSanitizer:")?;
+    // The first report, up to a second run's if there is one.
+    let mut rest = &s[start..];
+    if let Some(cut) = rest.find(ASAN_SECOND_RUN) {
+        rest = &rest[..cut];
+    }
+    // A report naming none of the host's frames, completed by a second run's (see
+    // `asan_without_frames`).
+    let mut second = false;
+    if !names_own(rest)
+        && let Some(at) = s.find(ASAN_SECOND_RUN)
+        && let Some(r) = s[at..].find("ERROR: AddressSanitizer:")
+    {
+        rest = &s[at + r..];
+        second = true;
+    }
+    let headline = rest.lines().next().unwrap_or_default().trim().to_string();
+    let what = asan_kind(rest);
+    let (site, through, caller) = own_site(rest, second).unwrap_or_else(|| ("?".into(), None, None));
+    let mut context = Vec::new();
+    if let Some(t) = through {
+        context.push(format!("through {t}"));
+    }
+    if let Some(c) = caller {
+        context.push(format!("called from {c}"));
+    }
+    let headline = if site == "?" {
+        format!("{headline} (the sanitizer printed no frame)")
+    } else if second {
+        let mut context = context;
+        context.push("from a second run of the same schedule: the first run's report had no frame".into());
+        format!("{headline} (in {site}, {})", context.join(", "))
+    } else if context.is_empty() {
+        format!("{headline} (in {site})")
+    } else {
+        format!("{headline} (in {site}, {})", context.join(", "))
     };
     Some(CrashReport { kind: "asan", signature: format!("asan {what} in {site}"), headline })
+}
+
+/// The heading under which a run's stderr gets the host's stack at SIGABRT, taken by gdb in a
+/// second run of the same schedule.
+pub const ABORT_STACK: &str = "--- the host's stack at SIGABRT (gdb, in a second run of the same schedule) ---";
+
+/// Whether stderr has a C++ runtime's message about an exception nobody caught.
+pub fn uncaught_exception(stderr: &str) -> bool {
+    uncaught(stderr).is_some()
+}
+
+/// A C++ runtime's last words about an exception nobody caught: libstdc++'s `terminate called
+/// after throwing an instance of 'T'` and `what(): ...`, or libc++abi's `terminating due to
+/// uncaught exception of type T: ...`. Signed by what was thrown and, when the stack at the
+/// abort that follows is known ([`ABORT_STACK`], or a sanitizer's report of the SIGABRT), the
+/// host's own frame that threw: one unhandled error from one place is one finding. What
+/// `what()` said (an errno's text, which varies) is in the message.
+fn uncaught(s: &str) -> Option<CrashReport> {
+    const GNU: &str = "terminate called after throwing an instance of '";
+    const LLVM: &str = "terminating due to uncaught exception of type ";
+    let (ty, what) = if let Some(at) = s.find(GNU) {
+        let rest = &s[at + GNU.len()..];
+        let ty = rest.split('\'').next().unwrap_or_default().to_string();
+        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
+        (ty, what)
+    } else if let Some(at) = s.find(LLVM) {
+        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
+        match line.split_once(": ") {
+            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
+            None => (line.trim().to_string(), None),
+        }
+    } else if s.contains("terminate called without an active exception") {
+        ("(no exception: std::terminate called directly)".to_string(), None)
+    } else {
+        return None;
+    };
+    // Where it was thrown: the stack gdb took at the abort (a second run of the same
+    // schedule), else a sanitizer's at its SIGABRT handler.
+    let site = s
+        .find(ABORT_STACK)
+        .and_then(|at| native_frames(&s[at + ABORT_STACK.len()..]))
+        .and_then(|(own, _)| {
+            let mut frames = own.split(" < ").map(String::from);
+            let first = frames.next()?;
+            Some((first, None, frames.next()))
+        })
+        .or_else(|| s.find("ERROR: AddressSanitizer:").and_then(|at| own_site(&s[at..], false)))
+        .filter(|(f, _, _)| !system_frame(f, ""));
+    let mut signature = format!("uncaught C++ exception {ty}");
+    let mut headline = format!("an exception nobody caught: {ty}");
+    if let Some(w) = &what {
+        headline += &format!(", what(): {}", crate::report::truncate_note(w, 200));
+    }
+    match &site {
+        Some((f, _, caller)) => {
+            signature += &format!(" in {f}");
+            headline += &format!(" (thrown in {f}");
+            if let Some(c) = caller {
+                headline += &format!(", called from {c}");
+            }
+            headline.push(')');
+        }
+        None => headline += " (where it was thrown: no stack, gdb took none)",
+    }
+    Some(CrashReport { kind: "c++", signature, headline })
 }
 
 fn panic(s: &str) -> Option<CrashReport> {
@@ -155,6 +496,10 @@ pub struct HangStack {
     /// The top frames, no addresses or line numbers (`read_line < main`,
     /// `host.py:read_prompt < host.py:main`).
     pub frames: String,
+    /// The system's frames it waits in, above its own (`syscall < poll_read`, `read`), for
+    /// people: a hang is signed by the host's own code ([`HangStack::site`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub waits_in: Option<String>,
     /// A Python host blocked for ever inside one pyserial call (it did not wake while it was
     /// watched): that call (`serialposix.py:read`) and the host's program (`host.py`, the file
     /// of its outermost own frame). See [`HangStack::site`].
@@ -222,7 +567,7 @@ fn python_dump_frames(dump: &str) -> Option<Vec<(String, String)>> {
 /// Frames of a Python `faulthandler` dump (`File "x.py", line 12 in read_prompt`, most recent
 /// first) of the thread that was current, or of the first thread listed; the host's own
 /// files before the standard library and installed packages (where a read blocks).
-pub fn faulthandler_frames(dump: &str) -> Option<String> {
+pub fn faulthandler_frames(dump: &str) -> Option<(String, Option<String>)> {
     let all = python_dump_frames(dump)?
         .into_iter()
         .map(|(file, func)| {
@@ -235,9 +580,10 @@ pub fn faulthandler_frames(dump: &str) -> Option<String> {
 
 /// Frames of a native stack as `eu-stack -m` (`#1 0x… read_line - /path/exe`) or `gdb -batch
 /// -ex bt` (`#1  0x… in read_line (fd=3) at host.c:20`, `from /lib/…` for a library) print
-/// them, for the first thread listed; the program's own frames before those of shared
-/// libraries (libc's `read`, the sanitizer's interceptors).
-pub fn native_frames(text: &str) -> Option<String> {
+/// them, for the first thread listed: the host's own frames first, with the system frames it
+/// waits in (the system's: libc's `read`, `syscall`, Boost.Asio's `poll_read`, the
+/// sanitizer's interceptors).
+pub fn native_frames(text: &str) -> Option<(String, Option<String>)> {
     let mut all = Vec::new();
     let mut seen_thread = false;
     for l in text.lines() {
@@ -251,53 +597,53 @@ pub fn native_frames(text: &str) -> Option<String> {
         }
         let Some(rest) = t.strip_prefix('#') else { continue };
         // Skip the frame number and the address.
-        let mut words = rest.split_whitespace().skip(1).peekable();
-        if words.peek().is_some_and(|w| w.starts_with("0x")) {
-            words.next();
-        }
-        if words.peek() == Some(&"in") {
-            words.next();
-        }
-        let Some(func) = words.next() else { continue };
-        let func = func.split('(').next().unwrap_or(func).to_string();
+        let rest = rest.trim_start().split_once(char::is_whitespace).map_or("", |(_, r)| r).trim_start();
+        let rest = match rest.split_once(char::is_whitespace) {
+            Some((addr, r)) if addr.starts_with("0x") => r.trim_start(),
+            _ if rest.starts_with("0x") => "",
+            _ => rest,
+        };
+        let rest = rest.strip_prefix("in ").unwrap_or(rest);
+        // gdb: `FUNC (ARGS) at FILE:LINE` or `FUNC (ARGS) from MODULE`; eu-stack: `FUNC - MODULE`.
+        let (func, place) = if let Some((f, m)) = rest.rsplit_once(" - ") {
+            (function_name(f), m.trim().to_string())
+        } else {
+            let (f, p) = rest
+                .rsplit_once(" at ")
+                .or_else(|| rest.rsplit_once(" from "))
+                .map_or((rest, ""), |(f, p)| (f, p.trim()));
+            let f = f.trim();
+            // The arguments gdb prints after the function (`(fd=3, buf=0x7ff "")`).
+            let f = match matching_open(f) {
+                Some(open) if f.ends_with(')') && open > 0 => &f[..open],
+                _ => f,
+            };
+            (function_name(f), p.to_string())
+        };
         if func.is_empty() || func == "??" {
             continue;
         }
-        let tail: Vec<&str> = words.collect();
-        let module = tail.windows(2).find(|w| w[0] == "-" || w[0] == "from").map(|w| w[1]).unwrap_or_default();
-        let library = module.contains(".so")
-            || func.starts_with("__")
-            || ["std::", "<std::", "core::", "<core::", "alloc::", "<alloc::", "<&"]
-                .iter()
-                .any(|p| func.starts_with(p))
-            || func.starts_with("_dl_")
-            // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
-            || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
-            || [
-                "read",
-                "poll",
-                "select",
-                "pselect",
-                "ppoll",
-                "nanosleep",
-                "clock_nanosleep",
-                "epoll_wait",
-                "sleep",
-                "usleep",
-            ]
-            .contains(&func.as_str());
-        all.push((func, library));
+        let system = system_frame(&func, &place);
+        all.push((func, system));
     }
     own_first(all)
 }
 
-fn own_first(all: Vec<(String, bool)>) -> Option<String> {
+/// The host's own frames (the innermost [`TOP_FRAMES`], `read_line < main`), or every frame
+/// when none is its own; with the system frames innermost before its first own frame, where
+/// it waits (the [`TOP_FRAMES`] nearest the host's code, `syscall < poll_read`).
+fn own_first(all: Vec<(String, bool)>) -> Option<(String, Option<String>)> {
     if all.is_empty() {
         return None;
     }
-    let own: Vec<&String> = all.iter().filter(|(_, lib)| !lib).map(|(f, _)| f).collect();
-    let pick: Vec<&String> = if own.is_empty() { all.iter().map(|(f, _)| f).collect() } else { own };
-    Some(pick.into_iter().take(TOP_FRAMES).cloned().collect::<Vec<_>>().join(" < "))
+    let Some(first_own) = all.iter().position(|(_, lib)| !lib) else {
+        let frames = all.iter().take(TOP_FRAMES).map(|(f, _)| f.as_str()).collect::<Vec<_>>().join(" < ");
+        return Some((frames, None));
+    };
+    let waits: Vec<&str> = all[..first_own].iter().map(|(f, _)| f.as_str()).collect();
+    let waits_in = (!waits.is_empty()).then(|| waits[waits.len().saturating_sub(TOP_FRAMES)..].join(" < "));
+    let own: Vec<&str> = all.iter().filter(|(_, lib)| !lib).map(|(f, _)| f.as_str()).take(TOP_FRAMES).collect();
+    Some((own.join(" < "), waits_in))
 }
 
 /// Samples the stack of a stopped-in-place native process with `gdb -batch` or, failing that,
@@ -311,8 +657,8 @@ pub fn sample_native(pid: i32) -> Option<HangStack> {
     ];
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
-        if let Some(frames) = native_frames(&out) {
-            return Some(HangStack { by: tool.to_string(), frames, blocked_in: None });
+        if let Some((frames, waits_in)) = native_frames(&out) {
+            return Some(HangStack { by: tool.to_string(), frames, waits_in, blocked_in: None });
         }
     }
     None
@@ -459,14 +805,123 @@ mod tests {
         assert_eq!(signal_name(11), "SIGSEGV");
     }
 
+    /// What AddressSanitizer (gcc 12's) printed for `host_mutants/c_sscanf_two.c`: a heap word
+    /// overflowed through `sscanf`, the report's first frames the sanitizer's interceptor.
+    const SSCANF_HEAP: &str = "==20480==ERROR: AddressSanitizer: heap-buffer-overflow on address 0x602000000018 at pc 0x7fc748c716c5 bp 0x7fff5152bdc0 sp 0x7fff5152b570\nWRITE of size 257 at 0x602000000018 thread T0\n    #0 0x7fc748c716c4 in scanf_common ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors_format.inc:342\n    #1 0x7fc748c7230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n    #2 0x7fc748c723fe in __interceptor___isoc99_sscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1554\n    #3 0x558dee848ad6 in hand_get /work/harness/tests/host_mutants/c_sscanf_two.c:39\n    #4 0x558dee848c14 in main /work/harness/tests/host_mutants/c_sscanf_two.c:50\n    #5 0x7fc748a45249 in __libc_start_call_main ../sysdeps/nptl/libc_start_call_main.h:58\n    #6 0x7fc748a45304 in __libc_start_main_impl ../csu/libc-start.c:360\n    #7 0x558dee848240 in _start (/tmp/h30/c_sscanf_two+0x2240)\n\n0x602000000018 is located 0 bytes to the right of 8-byte region [0x602000000010,0x602000000018)\nallocated by thread T0 here:\n    #0 0x7fc748cb89cf in __interceptor_malloc ../../../../src/libsanitizer/asan/asan_malloc_linux.cpp:69\n    #1 0x558dee848a97 in hand_get /work/harness/tests/host_mutants/c_sscanf_two.c:37\n";
+
+    /// A stack word overflowed through `sscanf`: the default (slow) unwinder crashed on the
+    /// smashed stack, and the report has no frame.
+    const SSCANF_STACK_NO_FRAMES: &str = "AddressSanitizer:DEADLYSIGNAL\nAddressSanitizer: nested bug in the same thread, aborting.\n\n--- sanitizer log asan.20561 ---\n=================================================================\n==20561==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffeb3e60ed8 at pc 0x7f4d428716c5 bp 0x7ffeb3e60d40 sp 0x7ffeb3e604f0\nWRITE of size 1025 at 0x7ffeb3e60ed8 thread T0\n";
+
+    /// The same schedule run again with the fast unwinder: the frame that called `sscanf` is
+    /// skipped (the interceptor keeps no frame pointer), and the report goes on to name the
+    /// function whose variable overflowed.
+    const SSCANF_STACK_FAST: &str = "==12669==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7ffc11994e18 at pc 0x7f9f12a716c5 bp 0x7ffc11994c80 sp 0x7ffc11994430\nWRITE of size 9 at 0x7ffc11994e18 thread T0\n    #0 0x7f9f12a716c4 in scanf_common ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors_format.inc:342\n    #1 0x7f9f12a7230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n    #2 0x55f4e8e78bac in main /work/harness/tests/host_mutants/c_sscanf_word.c:35\n    #3 0x7f9f12845249 in __libc_start_call_main ../sysdeps/nptl/libc_start_call_main.h:58\n\nAddress 0x7ffc11994e18 is located in stack of thread T0 at offset 40 in frame\n    #0 0x55f4e8e788e2 in first_word /work/harness/tests/host_mutants/c_sscanf_word.c:21\n\n  This frame has 1 object(s):\n    [32, 40) 'word' (line 22) <== Memory access at offset 40 overflows this variable\n";
+
+    /// An overflow through `sscanf` is signed by the host's function that called it (the
+    /// interceptor, `scanf_common`, in the message), never by the interceptor; a report whose
+    /// unwinder crashed has its site from a second run's report (by the function whose
+    /// variable overflowed), else `?`, and says it printed no frame.
+    #[test]
+    fn an_overflow_through_sscanf_is_signed_by_the_hosts_function() {
+        let heap = crash_report(SSCANF_HEAP).unwrap();
+        assert_eq!(heap.signature, "asan heap-buffer-overflow in hand_get");
+        assert!(
+            heap.headline.ends_with(
+                "(in hand_get, through scanf_common < __interceptor___isoc99_vsscanf < __interceptor___isoc99_sscanf, called from main)"
+            ),
+            "{}",
+            heap.headline
+        );
+        // Another function overflowing through the same sscanf is another finding.
+        let other = SSCANF_HEAP.replace("in hand_get /work", "in hand_pget /work");
+        assert_eq!(crash_report(&other).unwrap().signature, "asan heap-buffer-overflow in hand_pget");
+        assert_eq!(asan_without_frames(SSCANF_HEAP), None);
+        assert_eq!(asan_without_frames(SSCANF_STACK_NO_FRAMES).as_deref(), Some("stack-buffer-overflow"));
+        let alone = crash_report(SSCANF_STACK_NO_FRAMES).unwrap();
+        assert_eq!(alone.signature, "asan stack-buffer-overflow in ?");
+        assert!(alone.headline.ends_with("(the sanitizer printed no frame)"), "{}", alone.headline);
+        let completed = format!("{SSCANF_STACK_NO_FRAMES}\n{ASAN_SECOND_RUN}\n{SSCANF_STACK_FAST}");
+        assert_eq!(asan_without_frames(&completed), None, "completed once");
+        let r = crash_report(&completed).unwrap();
+        assert_eq!(r.signature, "asan stack-buffer-overflow in first_word");
+        assert!(r.headline.contains("through scanf_common < __interceptor___isoc99_vsscanf"), "{}", r.headline);
+        assert!(r.headline.contains("from a second run of the same schedule"), "{}", r.headline);
+        // A report that names only the system's frames (an overflow that ran off the stack's
+        // end inside libc's scanf) is completed the same way.
+        let off_the_end = "==11557==ERROR: AddressSanitizer: stack-overflow on address 0x7ffc71608000 (pc 0x7f219327f746 bp 0x7ffc71606fb0 sp 0x7ffc716068c0 T0)\n    #0 0x7f219327f746 in __vfscanf_internal ../stdio-common/vfscanf-internal.c:1140\n    #1 0x7f2193280361 in __isoc99_vsscanf ../libio/iovsscanf.c:32\n    #2 0x7f219347230e in __interceptor___isoc99_vsscanf ../../../../src/libsanitizer/sanitizer_common/sanitizer_common_interceptors.inc:1531\n";
+        assert_eq!(asan_without_frames(off_the_end).as_deref(), Some("stack-overflow"));
+        let completed = format!("{off_the_end}\n{ASAN_SECOND_RUN}\n{SSCANF_STACK_FAST}");
+        assert_eq!(crash_report(&completed).unwrap().signature, "asan stack-buffer-overflow in first_word");
+        // A report of the first run with its frames (the slow unwinder did not crash) is signed
+        // by its first own frame, as ever.
+        assert_eq!(crash_report(SSCANF_STACK_FAST).unwrap().signature, "asan stack-buffer-overflow in main");
+    }
+
+    /// gdb's stack of `host_mutants/cpp_uncaught_hangup.cpp` at its SIGABRT (a second run).
+    const TERMINATE_GDB: &str = "Program received signal SIGABRT, Aborted.\n#0  __pthread_kill_implementation (threadid=<optimized out>, signo=signo@entry=6, no_tid=no_tid@entry=0) at ./nptl/pthread_kill.c:44\n#1  0x00007ffff7aa8f4f in __pthread_kill_internal (signo=6, threadid=<optimized out>) at ./nptl/pthread_kill.c:78\n#2  0x00007ffff7a59fb2 in __GI_raise (sig=sig@entry=6) at ../sysdeps/posix/raise.c:26\n#3  0x00007ffff7a44472 in __GI_abort () at ./stdlib/abort.c:79\n#4  0x00007ffff7c9d919 in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#5  0x00007ffff7ca8e1a in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#6  0x00007ffff7ca8e85 in std::terminate() () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#7  0x00007ffff7ca90d8 in __cxa_throw () from /lib/x86_64-linux-gnu/libstdc++.so.6\n#8  0x0000555555555215 in Port::check (r=-1, what=0x55555555a004 \"read\") at cpp_uncaught_hangup.cpp:60\n#9  0x0000555555555243 in Port::read_answer[abi:cxx11]() (this=0x7fffffffe3d0) at cpp_uncaught_hangup.cpp:51\n#10 0x000055555555524f in main (argc=2, argv=0x7fffffffe4f8) at cpp_uncaught_hangup.cpp:75\n";
+
+    /// libstdc++'s words about an exception nobody caught are read into the signature: what
+    /// was thrown and, with the stack at the abort, the host's frame that threw (`what()`,
+    /// whose text varies, in the message); libc++'s words too.
+    #[test]
+    fn an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where() {
+        let said = "terminate called after throwing an instance of 'boost::wrapexcept<boost::system::system_error>'\n  what():  write: Input/output error\n";
+        let alone = crash_report(said).unwrap();
+        assert_eq!(alone.kind, "c++");
+        assert_eq!(alone.signature, "uncaught C++ exception boost::wrapexcept<boost::system::system_error>");
+        assert!(alone.headline.contains("what(): write: Input/output error"), "{}", alone.headline);
+        let with_stack = format!("{said}\n{ABORT_STACK}\n{TERMINATE_GDB}");
+        let r = crash_report(&with_stack).unwrap();
+        assert_eq!(r.signature, "uncaught C++ exception boost::wrapexcept<boost::system::system_error> in Port::check");
+        assert!(r.headline.ends_with("(thrown in Port::check, called from Port::read_answer)"), "{}", r.headline);
+        let llvm = "libc++abi: terminating due to uncaught exception of type std::runtime_error: no prompt\n";
+        assert_eq!(crash_report(llvm).unwrap().signature, "uncaught C++ exception std::runtime_error");
+        assert!(uncaught_exception(said) && !uncaught_exception("all fine\n"));
+    }
+
+    /// A hang is named by the innermost frame of the host's own code: the system's frames it
+    /// waits in (libc's `syscall` as gdb prints it with libc's sources, Boost.Asio's header
+    /// code, libstdc++'s) go in the message, whichever tool took the stack.
+    #[test]
+    fn a_hang_under_system_libraries_is_named_by_the_hosts_frame() {
+        let gdb = "#0  syscall () at ../sysdeps/unix/sysv/linux/x86_64/syscall.S:38\n#1  0x000055 in boost::asio::detail::descriptor_ops::poll_read (d=3, state=0 '\\000', msec=-1, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:450\n#2  0x000055 in boost::asio::detail::descriptor_ops::sync_read (d=3, state=0 '\\000', bufs=0x7ff, count=1, all_empty=false, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:160\n#3  0x000055 in BarrettHand::initialize (this=0x7ffd) at src/hand.cpp:88\n#4  0x000055 in main () at src/main.cpp:12\n";
+        let (frames, waits) = native_frames(gdb).unwrap();
+        assert_eq!(frames, "BarrettHand::initialize < main");
+        assert_eq!(
+            waits.as_deref(),
+            Some(
+                "syscall < boost::asio::detail::descriptor_ops::poll_read < boost::asio::detail::descriptor_ops::sync_read"
+            )
+        );
+        let ros = "TID 9:\n#0  0x00007f poll - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x00007f boost::asio::detail::descriptor_ops::poll_read(int, unsigned char, int, boost::system::error_code&) - /opt/ros/noetic/lib/libserial.so\n#2  0x000055 BhandNode::read_reply(std::string&) - /ws/devel/lib/bhand/bhand_node\n#3  0x000055 main - /ws/devel/lib/bhand/bhand_node\n";
+        let stack = HangStack {
+            by: "eu-stack".into(),
+            frames: native_frames(ros).unwrap().0,
+            waits_in: native_frames(ros).unwrap().1,
+            blocked_in: None,
+        };
+        assert_eq!(stack.site(), "BhandNode::read_reply");
+        assert_eq!(stack.waits_in.as_deref(), Some("poll < boost::asio::detail::descriptor_ops::poll_read"));
+        // A host's own shared library is the host's (not the system's).
+        let own_lib = "#0 0x7f in read () from /lib/x86_64-linux-gnu/libc.so.6\n#1 0x7f in HandGet () from /usr/local/lib/libbarrett.so\n";
+        assert_eq!(native_frames(own_lib).unwrap().0, "HandGet");
+    }
+
     #[test]
     fn hang_stacks_name_the_hosts_own_code() {
         let py = "Fatal Python error: Aborted\n\nCurrent thread 0x00007f (most recent call first):\n  File \"/usr/lib/python3/dist-packages/serial/serialposix.py\", line 565 in read\n  File \"/t/hosts/py_host.py\", line 20 in read_prompt\n  File \"/t/hosts/py_host.py\", line 40 in main\n  File \"/t/hosts/py_host.py\", line 44 in <module>\n\nExtension modules: x\n";
-        assert_eq!(faulthandler_frames(py).unwrap(), "py_host.py:read_prompt < py_host.py:main < py_host.py:<module>");
+        assert_eq!(
+            faulthandler_frames(py).unwrap(),
+            (
+                "py_host.py:read_prompt < py_host.py:main < py_host.py:<module>".into(),
+                Some("serialposix.py:read".into())
+            )
+        );
         let eu = "PID 12 - process\nTID 12:\n#0  0x00007f3 __GI___libc_read - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x0000555 read_line - /tmp/c_host\n#2  0x0000556 main - /tmp/c_host\n#3  0x00007f4 __libc_start_call_main - /usr/lib/x86_64-linux-gnu/libc.so.6\n";
-        assert_eq!(native_frames(eu).unwrap(), "read_line < main");
+        assert_eq!(native_frames(eu).unwrap(), ("read_line < main".into(), Some("__GI___libc_read".into())));
         let gdb = "0x00007f in __GI___libc_read (fd=3, buf=0x7ff, nbytes=1) at ../sysdeps/unix/sysv/linux/read.c:26\n#0  0x00007f in __GI___libc_read (fd=3) at ../sysdeps/read.c:26\n#1  0x000055 in read_line (fd=3, buf=0x7ff \"\") at host.c:20\n#2  0x000055 in main () at host.c:40\n";
-        assert_eq!(native_frames(gdb).unwrap(), "read_line < main");
+        assert_eq!(native_frames(gdb).unwrap().0, "read_line < main");
         assert_eq!(native_frames("no frames here"), None);
     }
 
@@ -482,7 +937,8 @@ mod tests {
         };
         let stack = |d: &str| HangStack {
             by: "faulthandler".into(),
-            frames: faulthandler_frames(d).unwrap(),
+            frames: faulthandler_frames(d).unwrap().0,
+            waits_in: None,
             blocked_in: faulthandler_port_call(d),
         };
         let own_loop = stack(&dump("  File \"/t/prompt_forever.py\", line 12 in command\n"));

@@ -3,10 +3,14 @@
 //! Each run starts a fresh simulated hand ([`session`]) whose answers a seeded
 //! [`Schedule`] of misbehaviours changes ([`crate::sim::misbehave`]), runs the host command to
 //! its end, and judges it ([`judge`]): a crash (signal, sanitizer report, Rust panic, Python
-//! traceback), a hang, an unexpected exit code, or a protocol violation ([`check`]). Findings
-//! are deduplicated by signature; each distinct one is minimized (the fewest misbehaviours
-//! that still give the same signature) and written as a bundle ([`bundle`]) that `--replay`
-//! runs again. Before any random draw, a systematic pass (`systematic_pass`) puts every
+//! traceback, an exception a C++ runtime saw nobody catch), a hang, an unexpected exit code,
+//! or a protocol violation ([`check`]). Findings are deduplicated by signature; each distinct
+//! one is minimized (the fewest misbehaviours that still give the same signature) and written
+//! as a bundle ([`bundle`]) that `--replay` runs again. Before the runs, [`calibrate`]
+//! measures the host's own give-up time at each kind of answer (within a quarter of the
+//! campaign's duration) for the hang timeout; a hang a run shows is a suspect until
+//! [`confirm`] runs its schedule again waiting as long as the run budget allows: a host that
+//! still neither sends nor exits is hung, one that acts late is a note. Before any random draw, a systematic pass (`systematic_pass`) puts every
 //! misbehaviour, one per run, at every kind of answer the run without misbehaviour showed
 //! (and makes one run at the hand's line rate when the campaign is unpaced). Guidance keeps
 //! the schedules whose runs made the host take a new path after a misbehaviour (an operator
@@ -22,7 +26,7 @@ pub mod session;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Condvar, Mutex};
+use std::sync::{Condvar, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
 use rand_core::{RngCore, SeedableRng};
@@ -34,7 +38,8 @@ pub const SCHEMA: &str = include_str!("../../../../reports/fuzz-host.schema.json
 
 pub use check::{HostChecker, HostClause, HostViolation};
 pub use session::{
-    Dir, Exchange, HostEnd, HostRun, Leftover, RunError, RunResult, Transport, WrongValue, run_once, run_once_until,
+    Dir, Exchange, HostEnd, HostRun, LONG_WAIT, Leftover, RunError, RunResult, Transport, Wait, WrongValue, run_once,
+    run_once_until,
 };
 
 use crate::sim::Pace;
@@ -99,7 +104,10 @@ fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
                     "{what} ({state}), blocked in {} called from {} ({}; a pyserial port's deadline is its timeout)",
                     b.call, st.frames, st.by
                 ),
-                None => format!("{what} ({state}), stuck in {} ({})", st.frames, st.by),
+                None => match &st.waits_in {
+                    Some(w) => format!("{what} ({state}), stuck in {}, waiting in {w} ({})", st.frames, st.by),
+                    None => format!("{what} ({state}), stuck in {} ({})", st.frames, st.by),
+                },
             },
         },
         None => {
@@ -141,6 +149,12 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
     let mut v = Vec::new();
     let report = detect::crash_report(&r.stderr);
     match (&r.end, &report) {
+        // An exception nobody caught ends in SIGABRT: what was thrown (and where) says more.
+        (HostEnd::Signal(s), Some(c)) if c.kind == "c++" => v.push(Verdict {
+            kind: FindingKind::Crash,
+            signature: format!("crash: {}", c.signature),
+            message: format!("the host died of {}: {}", detect::signal_name(*s), c.headline),
+        }),
         (HostEnd::Signal(s), _) => {
             let frames = report.as_ref().map(|c| format!(" ({})", c.signature)).unwrap_or_default();
             let name = detect::signal_name(*s);
@@ -336,6 +350,12 @@ pub struct FuzzOptions {
 }
 
 impl FuzzOptions {
+    /// How long the campaign may run: `duration`, or without `runs` either, a time budget
+    /// ([`DEFAULT_DURATION`]); `None` with `runs` alone.
+    pub fn campaign_duration(&self) -> Option<Duration> {
+        self.duration.or(self.runs.is_none().then_some(DEFAULT_DURATION))
+    }
+
     /// The campaign's run index of this campaign's `t`-th run (its shard's).
     fn run_index(&self, t: u64) -> u64 {
         self.shard.map_or(t, |s| s.global(t))
@@ -345,13 +365,51 @@ impl FuzzOptions {
 /// The longest a calibration run waits for the host to act after the hand goes silent.
 pub const CALIBRATION_CAP: Duration = Duration::from_secs(30);
 
-/// What calibration measured: how long the host waits for a hand that went silent.
+/// The campaign a `gcl fuzz host` without `--runs` or `--duration` makes: a time budget that
+/// fits a coffee break whatever the host's speed (a host that takes 9 s a run made 1000 runs
+/// in 2 h 30 min).
+pub const DEFAULT_DURATION: Duration = Duration::from_secs(5 * 60);
+
+/// Calibration takes at most this fraction of a campaign's duration (a quarter); what it has
+/// not measured by then it leaves, and the campaign goes on with what it measured.
+pub const CALIBRATION_SHARE: u32 = 4;
+
+/// Calibration's silent hands run this many at once (or `--jobs`, when more): a host that
+/// never gives up at one kind of answer does not keep the others from being measured, and
+/// calibration takes about the longest wait, not their sum.
+pub const CALIBRATION_JOBS: usize = 8;
+
+/// One kind of answer calibration silenced the hand at, and how long the host waited there.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct KindWait {
+    /// The kind of answer (`banner, prompt`), as the systematic pass names it.
+    pub kind: String,
+    /// Its first answer in the run without misbehaviour, where the hand went silent.
+    pub answer: u32,
+    /// The protocol state of that answer (`answer to RESET`).
+    pub state: String,
+    /// The host's give-up time, milliseconds, or `None` when it neither sent nor exited while
+    /// calibration waited ([`KindWait::waited_past_ms`]).
+    pub gave_up_ms: Option<u64>,
+    /// How long calibration waited for it there, milliseconds.
+    pub waited_past_ms: u64,
+    /// That wait was cut short by calibration's share of the campaign (a quarter of its
+    /// duration), not by [`CALIBRATION_CAP`] or the run budget.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cut_by_share: bool,
+}
+
+/// What calibration measured: how long the host waits for a hand that went silent, at each
+/// kind of answer.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct Calibration {
     /// For each answer the hand went silent at: the host's give-up time in milliseconds, or
-    /// `None` when it neither sent nor exited within the calibration cap (it waits for ever
-    /// there).
+    /// `None` when it neither sent nor exited while calibration waited (the same as
+    /// `by_kind`, by answer).
     pub points: Vec<(u32, Option<u64>)>,
+    /// The same by kind of answer (one silence at the first answer of each kind).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub by_kind: Vec<KindWait>,
     /// The longest give-up time measured, milliseconds: the host's own timeout.
     pub host_timeout_ms: Option<u64>,
     /// The hang timeout the campaign used, milliseconds.
@@ -362,6 +420,20 @@ pub struct Calibration {
     /// ([`unreached`]); the campaign ends there (its [`Campaign::untested`]).
     #[serde(skip)]
     pub untested: Option<String>,
+    /// The most it could take, milliseconds (a quarter of the campaign's duration), if the
+    /// campaign has a duration.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub share_ms: Option<u64>,
+    /// Wall time it took, milliseconds.
+    #[serde(default)]
+    pub elapsed_ms: u64,
+    /// The kinds of answer it did not measure: its share ran out first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub unmeasured: Vec<String>,
+    /// Runs in which the host neither sent nor exited for longer than the hang timeout after
+    /// the hand fell silent: hangs calibration saw, which the campaign confirms and reports.
+    #[serde(skip)]
+    pub suspects: Vec<(Schedule, RunResult)>,
 }
 
 /// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
@@ -372,39 +444,149 @@ pub fn hang_timeout(host_timeout: Option<Duration>, floor: Duration, cap: Durati
     t.min(cap)
 }
 
-/// Measures how long the host waits when the hand goes silent: a run without misbehaviour
-/// (to count its answers), then runs where the hand goes silent at the first answer, the
-/// middle one and the last, each waiting up to [`CALIBRATION_CAP`] (or the run budget) for
-/// the host to send or exit. The hang timeout is [`hang_timeout`] of the longest wait seen.
-/// Known limit: a host whose timeouts differ from command to command may wait longer at an
-/// answer not measured; `--timeout-hang` then sets the hang timeout by hand.
-pub fn calibrate(run: &HostRun, stop: &AtomicBool) -> Result<Calibration, RunError> {
-    let cap = CALIBRATION_CAP.min(run.budget);
+/// Measures how long the host waits when the hand goes silent, at every kind of answer: a run
+/// without misbehaviour (for the kinds of answer it gives, those the systematic pass covers),
+/// then, for each kind, a run where the hand goes silent at its first answer, waiting up to
+/// [`CALIBRATION_CAP`] (or the run budget) for the host to send or exit; [`CALIBRATION_JOBS`]
+/// of them at once (or `jobs`, when more). The hang timeout is [`hang_timeout`] of the longest wait seen. With `share`, it ends
+/// within that time: each run's wait is cut to what is left of it, and kinds not reached are
+/// left unmeasured ([`Calibration::unmeasured`]). A run where the host waited longer than
+/// the hang timeout without acting is a hang calibration saw ([`Calibration::suspects`]).
+pub fn calibrate(
+    run: &HostRun,
+    share: Option<Duration>,
+    jobs: usize,
+    stop: &AtomicBool,
+) -> Result<Calibration, RunError> {
+    let started = Instant::now();
+    let deadline = share.map(|s| started + s);
+    let left = || deadline.map_or(Duration::MAX, |d| d.saturating_duration_since(Instant::now()));
+    let limited = |r: &mut HostRun| {
+        r.timeout_hang = CALIBRATION_CAP.min(run.budget).min(left());
+        r.budget = run.budget.min(left());
+    };
     let mut quiet = run.clone();
-    quiet.timeout_hang = cap;
+    limited(&mut quiet);
     let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
     if let Some(why) = unreached(&clean, &run.command) {
         let timeout_hang_ms = run.timeout_hang.as_millis() as u64;
-        return Ok(Calibration { runs: 1, untested: Some(why), timeout_hang_ms, ..Default::default() });
+        let elapsed_ms = started.elapsed().as_millis() as u64;
+        return Ok(Calibration { runs: 1, untested: Some(why), timeout_hang_ms, elapsed_ms, ..Default::default() });
     }
-    let n = clean.answers.max(1);
-    let mut at = vec![1, n.div_ceil(2), n];
-    at.dedup();
-    let mut c = Calibration { runs: 1, ..Default::default() };
-    for a in at {
-        let silence = Schedule { planned: vec![Planned { answer: a, op: Operator::Silence, arg: 0 }] };
-        let r = run_once_until(&quiet, &silence, stop)?;
-        c.runs += 1;
-        if r.fired.is_empty() {
-            continue;
+    let kinds: Vec<AnswerKindSeen> =
+        clean.answer_kinds.iter().filter(|k| k.ops.contains(&Operator::Silence)).cloned().collect();
+    let next = AtomicU64::new(0);
+    type Measured = (usize, Option<(KindWait, Option<(Schedule, RunResult)>)>);
+    let measured: Mutex<Vec<Measured>> = Mutex::new(Vec::new());
+    let error: Mutex<Option<RunError>> = Mutex::new(None);
+    let worker = || {
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed) as usize;
+            let Some(k) = kinds.get(i) else { return };
+            if stop.load(Ordering::Relaxed) || error.lock().map_or(true, |e| e.is_some()) {
+                return;
+            }
+            let mut r = run.clone();
+            limited(&mut r);
+            let cut_by_share = r.timeout_hang < CALIBRATION_CAP.min(run.budget);
+            if r.timeout_hang < LONG_WAIT {
+                // The share has run out: this kind is left unmeasured.
+                if let Ok(mut m) = measured.lock() {
+                    m.push((i, None));
+                }
+                continue;
+            }
+            let silence = Schedule { planned: vec![Planned { answer: k.answer, op: Operator::Silence, arg: 0 }] };
+            match run_once_until(&r, &silence, stop) {
+                Ok(result) => {
+                    if result.fired.is_empty() {
+                        continue;
+                    }
+                    let gave_up_ms = result.gave_up_after.map(|d| d.as_millis() as u64);
+                    let still = result.waits.iter().rev().find(|w| !w.acted).map(|w| w.waited);
+                    let waited_past_ms =
+                        gave_up_ms.unwrap_or_else(|| still.unwrap_or(r.timeout_hang).as_millis() as u64);
+                    let point = KindWait {
+                        kind: k.kind.clone(),
+                        answer: k.answer,
+                        state: k.state.clone(),
+                        gave_up_ms,
+                        waited_past_ms,
+                        cut_by_share: cut_by_share && gave_up_ms.is_none(),
+                    };
+                    let silent = gave_up_ms.is_none() && !result.talking_at_end && still.is_some();
+                    let suspect = silent.then_some((silence, result));
+                    if let Ok(mut m) = measured.lock() {
+                        m.push((i, Some((point, suspect))));
+                    }
+                }
+                Err(e) => {
+                    if let Ok(mut slot) = error.lock() {
+                        slot.get_or_insert(e);
+                    }
+                    return;
+                }
+            }
         }
-        let waited = r.gave_up_after.map(|d| d.as_millis() as u64);
-        c.points.push((a, waited));
+    };
+    std::thread::scope(|s| {
+        for _ in 0..jobs.max(CALIBRATION_JOBS).min(kinds.len()).max(1) {
+            s.spawn(worker);
+        }
+    });
+    if let Some(e) = error.into_inner().ok().flatten() {
+        return Err(e);
     }
-    c.host_timeout_ms = c.points.iter().filter_map(|(_, w)| *w).max();
+    if stop.load(Ordering::Relaxed) {
+        return Err(RunError::Cancelled);
+    }
+    let mut measured = measured.into_inner().unwrap_or_default();
+    measured.sort_by_key(|(i, _)| *i);
+    let mut c = Calibration {
+        runs: 1 + measured.iter().filter(|(_, m)| m.is_some()).count() as u64,
+        share_ms: share.map(|s| s.as_millis() as u64),
+        ..Default::default()
+    };
+    let mut silent = Vec::new();
+    for (i, m) in measured {
+        match m {
+            Some((point, suspect)) => {
+                c.points.push((point.answer, point.gave_up_ms));
+                c.by_kind.push(point);
+                silent.extend(suspect);
+            }
+            None => c.unmeasured.push(kinds[i].kind.clone()),
+        }
+    }
+    c.host_timeout_ms = c.by_kind.iter().filter_map(|k| k.gave_up_ms).max();
     let t = hang_timeout(c.host_timeout_ms.map(Duration::from_millis), run.timeout_hang, run.budget);
     c.timeout_hang_ms = t.as_millis() as u64;
+    // A host that waited past the hang timeout where the hand fell silent hangs there (to be
+    // confirmed like any other hang).
+    c.suspects = silent
+        .into_iter()
+        .filter(|(_, r)| r.waits.iter().any(|w| !w.acted && w.waited > t))
+        .map(|(s, mut r)| {
+            // Judged as the campaign's hang rule would: silent past its hang timeout.
+            if let HostEnd::OverBudget(state) = &r.end {
+                r.end = HostEnd::Hung(state.clone());
+            }
+            (s, r)
+        })
+        .collect();
+    c.elapsed_ms = started.elapsed().as_millis() as u64;
     Ok(c)
+}
+
+impl Finding {
+    /// Takes the minimized schedule and the run it gave.
+    fn shrunk(&mut self, schedule: Schedule, r: RunResult) {
+        self.schedule = schedule;
+        self.fired = r.fired;
+        self.end = r.end;
+        self.stderr = r.stderr;
+        self.exchanges = r.exchanges;
+    }
 }
 
 /// A distinct finding.
@@ -429,6 +611,14 @@ pub struct Finding {
     /// The hang timeout it was found with, milliseconds (calibrated or given).
     #[serde(default)]
     pub timeout_hang_ms: u64,
+    /// A hang: how long a second run of its schedule waited, milliseconds, with the host still
+    /// neither sending nor exiting (a hang is reported only so confirmed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub confirmed_after_ms: Option<u64>,
+    /// Found by calibration (the hand silent at one answer, before the campaign's runs), not
+    /// by a run of the campaign (`run` is then 0).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub by_calibration: bool,
     /// The host's stderr in it.
     #[serde(skip)]
     pub stderr: String,
@@ -449,6 +639,8 @@ pub enum Event {
     },
     /// A new distinct finding (after minimization).
     Found(Box<Finding>),
+    /// Calibration ended, before the runs: what it measured.
+    Calibrated(Box<Calibration>),
 }
 
 /// A campaign's results.
@@ -524,6 +716,30 @@ struct Shared {
     taken: u64,
     /// Runs that ended but wait for an earlier one to be taken in first.
     ended: BTreeMap<u64, (Schedule, RunResult)>,
+    /// Suspected hangs by signature and protocol state: being confirmed, or what their
+    /// confirmation said.
+    suspects: BTreeMap<(String, String), Suspect>,
+}
+
+/// A hang a run showed (the host silent for the hang timeout), before it is reported: a
+/// second run of its schedule waits as long as the run budget allows ([`confirm`]).
+#[derive(Debug, Clone)]
+enum Suspect {
+    /// Waiting for its confirmation: the finding it would be (with the runs that showed it).
+    Pending(Box<Finding>),
+    /// Confirmed: a finding.
+    Confirmed,
+    /// Not confirmed: counted under this note.
+    Dismissed(String),
+}
+
+/// What [`Shared::take`] found new in a run.
+#[derive(Debug, Clone)]
+enum New {
+    /// A distinct finding (its index).
+    Finding(usize),
+    /// A suspected hang to confirm (its key in [`Shared::suspects`]).
+    Suspect((String, String)),
 }
 
 impl Shared {
@@ -535,8 +751,8 @@ impl Shared {
     }
 
     /// Takes in run `i`: counts its operators, keeps its schedule when it took a new path,
-    /// records its findings; returns the indices of new findings.
-    fn take(&mut self, i: u64, schedule: Schedule, r: RunResult, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
+    /// records its findings; returns the new findings and suspected hangs.
+    fn take(&mut self, i: u64, schedule: Schedule, r: RunResult, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         if i == 0 {
             self.learn(&r, opts);
         }
@@ -555,33 +771,95 @@ impl Shared {
         }
         let mut new = Vec::new();
         for v in judge(&r, &opts.ok_exit_codes) {
-            match self.by_sig.get(&v.signature) {
-                Some(&k) => self.findings[k].hits += 1,
-                None => {
-                    let k = self.findings.len();
-                    self.by_sig.insert(v.signature.clone(), k);
-                    self.findings.push(Finding {
-                        verdict: v,
-                        run: i,
-                        found_after_ms: started.elapsed().as_millis() as u64,
-                        hits: 1,
-                        schedule: schedule.clone(),
-                        original: schedule.clone(),
-                        fired: r.fired.clone(),
-                        end: r.end.clone(),
-                        timeout_hang_ms: opts.run.timeout_hang.as_millis() as u64,
-                        stderr: r.stderr.clone(),
-                        exchanges: r.exchanges.clone(),
-                    });
-                    new.push(k);
-                }
+            if let Some(&k) = self.by_sig.get(&v.signature) {
+                self.findings[k].hits += 1;
+                continue;
             }
+            let finding = Finding {
+                verdict: v,
+                run: i,
+                found_after_ms: started.elapsed().as_millis() as u64,
+                hits: 1,
+                schedule: schedule.clone(),
+                original: schedule.clone(),
+                fired: r.fired.clone(),
+                end: r.end.clone(),
+                timeout_hang_ms: opts.run.timeout_hang.as_millis() as u64,
+                confirmed_after_ms: None,
+                by_calibration: false,
+                stderr: r.stderr.clone(),
+                exchanges: r.exchanges.clone(),
+            };
+            new.extend(self.add(finding));
         }
         new
     }
 
+    /// A finding not seen before: a hang (the host silent for the hang timeout) becomes a
+    /// suspect to confirm, once per signature and protocol state (a suspect already dismissed
+    /// there counts under its note); anything else a finding.
+    fn add(&mut self, f: Finding) -> Option<New> {
+        if let (FindingKind::Hang, HostEnd::Hung(state)) = (f.verdict.kind, &f.end) {
+            let key = (f.verdict.signature.clone(), state.clone());
+            return match self.suspects.get_mut(&key) {
+                Some(Suspect::Pending(p)) => {
+                    p.hits += 1;
+                    None
+                }
+                Some(Suspect::Dismissed(note)) => {
+                    *self.notes.entry(note.clone()).or_default() += 1;
+                    None
+                }
+                // Confirmed under this key but no finding by its signature: cannot be; a hit.
+                Some(Suspect::Confirmed) => None,
+                None => {
+                    self.suspects.insert(key.clone(), Suspect::Pending(Box::new(f)));
+                    Some(New::Suspect(key))
+                }
+            };
+        }
+        let k = self.findings.len();
+        self.by_sig.insert(f.verdict.signature.clone(), k);
+        self.findings.push(f);
+        Some(New::Finding(k))
+    }
+
+    /// What the confirmation of a suspected hang said: a finding (`Some` of its index when it
+    /// is a new one), or a note.
+    fn settle(&mut self, key: &(String, String), outcome: Confirmation) -> Option<usize> {
+        let Some(Suspect::Pending(mut f)) = self.suspects.remove(key) else { return None };
+        match outcome {
+            Confirmation::Hung(waited) => {
+                self.suspects.insert(key.clone(), Suspect::Confirmed);
+                f.confirmed_after_ms = Some(waited.as_millis() as u64);
+                f.verdict.message += &format!(
+                    "; confirmed: a second run waited {:.1} s and it still neither sent nor exited",
+                    waited.as_secs_f64()
+                );
+                match self.by_sig.get(&f.verdict.signature) {
+                    Some(&k) => {
+                        self.findings[k].hits += f.hits;
+                        None
+                    }
+                    None => {
+                        let k = self.findings.len();
+                        self.by_sig.insert(f.verdict.signature.clone(), k);
+                        self.findings.push(*f);
+                        Some(k)
+                    }
+                }
+            }
+            other => {
+                let note = other.note(&f.verdict.signature, &key.1);
+                *self.notes.entry(note.clone()).or_default() += f.hits;
+                self.suspects.insert(key.clone(), Suspect::Dismissed(note));
+                None
+            }
+        }
+    }
+
     /// Takes in every ended run whose turn has come.
-    fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<usize> {
+    fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         let mut new = Vec::new();
         while let Some((s, r)) = self.ended.remove(&self.taken) {
             new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
@@ -745,6 +1023,70 @@ pub fn minimize(
     Ok(best_run.map(|r| (best, r)))
 }
 
+/// What a second run of a suspected hang's schedule said ([`confirm`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Confirmation {
+    /// The host still neither sent nor exited, for this long: a hang.
+    Hung(Duration),
+    /// It acted after this long, in this protocol state: late, not hung (a note).
+    Late(Duration, String),
+    /// It did not wait past the hang timeout this time (a note).
+    NotAgain,
+    /// The campaign stopped (a signal), or its time ran out, before it could be confirmed (a
+    /// note).
+    Stopped,
+}
+
+impl Confirmation {
+    /// The INFO note a hang not confirmed is counted under.
+    fn note(&self, signature: &str, state: &str) -> String {
+        match self {
+            Confirmation::Late(waited, at) => {
+                format!("note: late, not hung: gave up after {:.1} s ({at})", waited.as_secs_f64())
+            }
+            Confirmation::NotAgain => format!("note: hang not reproduced: {signature} ({state})"),
+            Confirmation::Stopped | Confirmation::Hung(_) => {
+                format!("note: hang not confirmed (the campaign ended first): {signature} ({state})")
+            }
+        }
+    }
+}
+
+/// Confirms a hang a run showed in `state` (the host silent for `hang`, the campaign's hang
+/// timeout) before it is reported: runs `schedule` again waiting up to `window` (as long as
+/// the run budget allows) for the host to send or exit. A hang is a host that still does
+/// neither; one that acts later, after a wait longer than `hang`, is late, not hung: a note
+/// ("gave up after 15.0 s").
+pub fn confirm(
+    run: &HostRun,
+    schedule: &Schedule,
+    state: &str,
+    hang: Duration,
+    window: Duration,
+    stop: &AtomicBool,
+) -> Result<Confirmation, RunError> {
+    let mut patient = run.clone();
+    patient.timeout_hang = window.max(hang);
+    let r = match run_once_until(&patient, schedule, stop) {
+        Err(RunError::Cancelled) => return Ok(Confirmation::Stopped),
+        other => other?,
+    };
+    let late = |same: bool| {
+        r.waits.iter().filter(|w| w.acted && w.waited > hang && (!same || w.state == state)).max_by_key(|w| w.waited)
+    };
+    if let Some(w) = late(true) {
+        return Ok(Confirmation::Late(w.waited, w.state.clone()));
+    }
+    let still = r.waits.iter().find(|w| !w.acted).filter(|w| w.waited > hang && !r.talking_at_end);
+    if let Some(w) = still {
+        return Ok(Confirmation::Hung(w.waited));
+    }
+    Ok(match late(false) {
+        Some(w) => Confirmation::Late(w.waited, w.state.clone()),
+        None => Confirmation::NotAgain,
+    })
+}
+
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
 ///
 /// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of runs
@@ -755,9 +1097,13 @@ pub fn minimize(
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
+    let duration = opts.campaign_duration();
     let calibration = if opts.calibrate {
-        match calibrate(&opts.run, stop) {
-            Ok(c) => Some(c),
+        match calibrate(&opts.run, duration.map(|d| d / CALIBRATION_SHARE), opts.jobs, stop) {
+            Ok(c) => {
+                on_event(Event::Calibrated(Box::new(c.clone())));
+                Some(c)
+            }
             Err(RunError::Cancelled) => {
                 return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
             }
@@ -803,14 +1149,14 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         untested: None,
         taken: 0,
         ended: BTreeMap::new(),
+        suspects: BTreeMap::new(),
     });
     let turn = Condvar::new();
     let done = |t: u64| {
         let i = opts.run_index(t);
         stop.load(Ordering::Relaxed)
             || opts.runs.is_some_and(|n| i >= n)
-            || opts.duration.is_some_and(|d| started.elapsed() >= d)
-            || (opts.runs.is_none() && opts.duration.is_none() && i >= 1000)
+            || duration.is_some_and(|d| started.elapsed() >= d)
     };
     // A shard without run 0 learns how many answers a run without misbehaviour has (the span
     // of its schedules) from one run of its own, not counted.
@@ -835,31 +1181,118 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
             sh.learn(&r, opts);
         }
     }
-    let announce = |new: Vec<usize>, shrink: bool| {
-        for k in new {
-            let Ok(sh) = shared.lock() else { return };
-            let (schedule, sig) = (sh.findings[k].original.clone(), sh.findings[k].verdict.signature.clone());
-            drop(sh);
-            if shrink && opts.minimize && schedule.planned.len() > 1 {
-                let mut runs = 0;
-                let m = minimize(opts, &schedule, &sig, &mut runs, stop);
-                if let Ok(mut sh) = shared.lock() {
-                    sh.minimize_runs += runs;
-                    if let Ok(Some((s, mr))) = m {
-                        let f = &mut sh.findings[k];
-                        f.schedule = s;
-                        f.fired = mr.fired;
-                        f.end = mr.end;
-                        f.stderr = mr.stderr;
-                        f.exchanges = mr.exchanges;
+    // A confirmation waits as long as the run budget allows (a shorter wait would take a host
+    // that acts late for a hung one). Once the runs have ended, a campaign with a duration
+    // confirms for one run budget more at most: suspects still waiting then are notes.
+    let runs_over = AtomicBool::new(false);
+    let out_of_time =
+        || runs_over.load(Ordering::Relaxed) && duration.is_some_and(|d| started.elapsed() > d + opts.run.budget);
+    // Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
+    let shrunk = |schedule: &Schedule, sig: &str, shrink: bool| -> Option<(Schedule, RunResult)> {
+        if !(shrink && opts.minimize && schedule.planned.len() > 1) {
+            return None;
+        }
+        let mut runs = 0;
+        let m = minimize(opts, schedule, sig, &mut runs, stop);
+        if let Ok(mut sh) = shared.lock() {
+            sh.minimize_runs += runs;
+        }
+        m.ok().flatten()
+    };
+    let found = |k: usize| {
+        if let Ok(sh) = shared.lock() {
+            on_event(Event::Found(Box::new(sh.findings[k].clone())));
+        }
+    };
+    // Suspected hangs go to the confirmer, which runs them again beside the campaign's runs.
+    let (to_confirm, suspects) = mpsc::channel::<(String, String)>();
+    let to_confirm = Mutex::new(Some(to_confirm));
+    let announce = |new: Vec<New>, shrink: bool| {
+        for n in new {
+            match n {
+                New::Finding(k) => {
+                    let Ok(sh) = shared.lock() else { return };
+                    let (schedule, sig) = (sh.findings[k].original.clone(), sh.findings[k].verdict.signature.clone());
+                    drop(sh);
+                    if let Some((s, mr)) = shrunk(&schedule, &sig, shrink)
+                        && let Ok(mut sh) = shared.lock()
+                    {
+                        sh.findings[k].shrunk(s, mr);
+                    }
+                    found(k);
+                }
+                New::Suspect(key) => {
+                    let Ok(sh) = shared.lock() else { return };
+                    let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
+                    let schedule = f.original.clone();
+                    drop(sh);
+                    // Minimized first (with the campaign's hang timeout), then confirmed.
+                    if let Some((s, mr)) = shrunk(&schedule, &key.0, shrink)
+                        && let Ok(mut sh) = shared.lock()
+                        && let Some(Suspect::Pending(f)) = sh.suspects.get_mut(&key)
+                    {
+                        f.shrunk(s, mr);
+                    }
+                    if let Some(tx) = to_confirm.lock().ok().as_ref().and_then(|t| t.as_ref()) {
+                        let _ = tx.send(key);
                     }
                 }
             }
-            if let Ok(sh) = shared.lock() {
-                on_event(Event::Found(Box::new(sh.findings[k].clone())));
+        }
+    };
+    // One suspect at a time; a signature already confirmed needs no second wait.
+    let suspects = Mutex::new(suspects);
+    let confirmer = || {
+        let Ok(suspects) = suspects.lock() else { return };
+        for key in suspects.iter() {
+            let Ok(sh) = shared.lock() else { return };
+            let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
+            let schedule = f.schedule.clone();
+            let known = sh.by_sig.contains_key(&key.0);
+            drop(sh);
+            let outcome = if known {
+                Confirmation::Hung(Duration::ZERO)
+            } else if stop.load(Ordering::Relaxed) || out_of_time() {
+                Confirmation::Stopped
+            } else {
+                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, stop)
+                    .unwrap_or(Confirmation::Stopped)
+            };
+            let new = shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
+            if let Some(k) = new {
+                found(k);
             }
         }
     };
+    // The hangs calibration saw are confirmed and reported like any other.
+    if let Some(c) = &calibration {
+        let mut new = Vec::new();
+        if let Ok(mut sh) = shared.lock() {
+            for (schedule, r) in &c.suspects {
+                for mut v in judge(r, &opts.ok_exit_codes).into_iter().filter(|v| v.kind == FindingKind::Hang) {
+                    let at = r.fired.first().map(|f| format!("answer {} ({})", f.answer, f.state)).unwrap_or_default();
+                    v.message += &format!("; found by calibration, the hand silent at {at}");
+                    let f = Finding {
+                        verdict: v,
+                        run: 0,
+                        found_after_ms: started.elapsed().as_millis() as u64,
+                        hits: 1,
+                        schedule: schedule.clone(),
+                        original: schedule.clone(),
+                        fired: r.fired.clone(),
+                        end: r.end.clone(),
+                        timeout_hang_ms: c.timeout_hang_ms,
+                        confirmed_after_ms: None,
+                        by_calibration: true,
+                        stderr: r.stderr.clone(),
+                        exchanges: r.exchanges.clone(),
+                    };
+                    new.extend(sh.add(f));
+                }
+            }
+        }
+        announce(new, false);
+    }
     let worker = || {
         loop {
             let t = next.fetch_add(1, Ordering::Relaxed);
@@ -950,29 +1383,41 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         }
     };
     std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(worker);
+        let confirming = s.spawn(confirmer);
+        let workers: Vec<_> = (0..jobs).map(|_| s.spawn(worker)).collect();
+        for w in workers {
+            let _ = w.join();
         }
-    });
-    // Runs that ended after one before them was called off: taken in (in order), unminimized.
-    // (None after an unreached run 0: a campaign that could not test reports no finding.)
-    let left = match shared.lock() {
-        Ok(mut sh) if sh.untested.is_some() => {
-            sh.ended.clear();
-            Vec::new()
-        }
-        Ok(mut sh) => {
-            let ended = std::mem::take(&mut sh.ended);
-            let mut new = Vec::new();
-            for (t, (s, r)) in ended {
-                new.extend(sh.take(opts.run_index(t), s, r, opts, started));
+        runs_over.store(true, Ordering::Relaxed);
+        // Runs that ended after one before them was called off: taken in (in order),
+        // unminimized. (None after an unreached run 0: a campaign that could not test
+        // reports no finding.)
+        let left = match shared.lock() {
+            Ok(mut sh) if sh.untested.is_some() => {
+                sh.ended.clear();
+                Vec::new()
             }
-            new
+            Ok(mut sh) => {
+                let ended = std::mem::take(&mut sh.ended);
+                let mut new = Vec::new();
+                for (t, (s, r)) in ended {
+                    new.extend(sh.take(opts.run_index(t), s, r, opts, started));
+                }
+                new
+            }
+            Err(_) => Vec::new(),
+        };
+        announce(left, false);
+        // No more suspects: the confirmer ends once it has confirmed those it has.
+        if let Ok(mut tx) = to_confirm.lock() {
+            tx.take();
         }
-        Err(_) => Vec::new(),
-    };
-    announce(left, false);
-    let sh = shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
+        let _ = confirming.join();
+    });
+    let mut sh = shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
+    // In the order of the runs that found them (a hang is settled after its confirmation,
+    // which may end after later runs' findings).
+    sh.findings.sort_by_key(|f| f.run);
     if let Some(e) = sh.error {
         return Err(RunError::Io(std::io::Error::other(e)));
     }
@@ -1072,6 +1517,7 @@ mod tests {
             stack: None,
             leftovers: Vec::new(),
             gave_up_after: None,
+            waits: Vec::new(),
             stderr: String::new(),
             observations: 0,
             wrong_values: Vec::new(),
@@ -1126,6 +1572,59 @@ mod tests {
         assert!(v[0].message.contains("P 1 5120") && v[0].message.contains("after rt-block-length at answer 5"));
         r.wrong_values[0].place = Some("hostlib.py:212".into());
         assert_eq!(judge(&r, &[0])[0].signature, "silent wrong value: P at hostlib.py:212");
+    }
+
+    /// An exception nobody caught is one crash named by what was thrown (and where), not
+    /// `crash: SIGABRT`; a host that died of another signal keeps that name.
+    #[test]
+    fn an_uncaught_exception_is_named_by_what_was_thrown_not_by_sigabrt() {
+        let mut r = ended(HostEnd::Signal(6), "awaiting the answer after FGET");
+        r.stderr =
+            "terminate called after throwing an instance of 'std::system_error'\n  what():  read: Input/output error\n"
+                .into();
+        let v = judge(&r, &[0, 1]);
+        assert_eq!(v.len(), 1, "{v:?}");
+        assert_eq!(v[0].signature, "crash: uncaught C++ exception std::system_error");
+        assert!(v[0].message.starts_with("the host died of SIGABRT: ") && v[0].message.contains("Input/output error"));
+        r.stderr.clear();
+        assert_eq!(judge(&r, &[0, 1])[0].signature, "crash: SIGABRT");
+    }
+
+    /// A default campaign (neither --runs nor --duration) is a time budget that, with its
+    /// calibration inside it and a run budget's overrun, ends within 10 minutes whatever the
+    /// host's speed (1000 runs of a host that takes 9 s a run took 2 h 30 min); --runs alone
+    /// has no time budget.
+    #[test]
+    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
+        let mut o = FuzzOptions {
+            run: HostRun {
+                command: vec!["true".into()],
+                transport: Transport::Pty,
+                profile: gcl_model::Profile::builtin("seed").unwrap(),
+                time: crate::sim::TimeMode::Fast,
+                pace: Pace::Unpaced,
+                hand_seed: 0,
+                timeout_hang: Duration::from_secs(3),
+                budget: Duration::from_secs(60),
+            },
+            seed: 0,
+            runs: None,
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs: 1,
+            weights: Weights::default(),
+            max_planned: 3,
+            minimize: true,
+            guided: true,
+            calibrate: true,
+            shard: None,
+        };
+        let d = o.campaign_duration().expect("a time budget");
+        assert!(d + o.run.budget * 2 <= Duration::from_secs(600), "{d:?}");
+        o.runs = Some(1000);
+        assert_eq!(o.campaign_duration(), None);
+        o.duration = Some(Duration::from_secs(3600));
+        assert_eq!(o.campaign_duration(), Some(Duration::from_secs(3600)));
     }
 
     #[test]

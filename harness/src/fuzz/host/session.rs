@@ -122,6 +122,10 @@ pub struct RunResult {
     /// How long the host took to send or exit once the hand went silent (a `silence` that
     /// fired), or `None` (no silence, or the host did neither before the run ended).
     pub gave_up_after: Option<Duration>,
+    /// The host's long waits ([`Wait`]): each time it neither sent nor exited for more than
+    /// [`LONG_WAIT`] with the port open, and, when it was killed (a hang, the budget), the
+    /// wait it was in then. What confirms a hang or shows a host that acts late.
+    pub waits: Vec<Wait>,
     /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
     pub stderr: String,
     /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
@@ -162,6 +166,24 @@ pub struct RunResult {
 
 /// A host whose last bytes came this recently is still talking.
 pub const TALKING: Duration = Duration::from_millis(500);
+
+/// A wait of the host longer than this is kept in [`RunResult::waits`].
+pub const LONG_WAIT: Duration = Duration::from_secs(1);
+
+/// Most long waits kept of a run.
+const WAITS_CAP: usize = 32;
+
+/// A long wait of the host: it neither sent nor exited, with the port open, after the hand's
+/// last answer (or its own last bytes, or its (re)open).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Wait {
+    /// How long.
+    pub waited: Duration,
+    /// The protocol state it waited in (`awaiting the answer after RESET`).
+    pub state: String,
+    /// It ended the wait by sending or exiting (`false`: it was killed still waiting).
+    pub acted: bool,
+}
 
 /// A process the host left behind (it left the host's process group and still held the port
 /// or the host's stderr after the host ended), as found before it was killed.
@@ -359,6 +381,13 @@ pub(crate) struct Log {
     port_open: bool,
     /// A host opened the port at some time in the session.
     pub(crate) opened: bool,
+    /// When the port was last opened or closed (a host's wait counts from then at the
+    /// earliest).
+    port_changed: Instant,
+    /// The host's long waits that it ended by sending, closing the port or exiting.
+    waits: Vec<Wait>,
+    /// The host was killed (hung, over budget, called off): the port's close is not its act.
+    killed: bool,
     reactions: Vec<(String, String, String)>,
     /// Reactions still waiting for the host's next command: (index into reactions, commands seen).
     awaiting: Vec<(usize, usize)>,
@@ -392,6 +421,9 @@ impl Log {
             hung_up: false,
             port_open: false,
             opened: false,
+            port_changed: Instant::now(),
+            waits: Vec::new(),
+            killed: false,
             reactions: Vec::new(),
             awaiting: Vec::new(),
         }
@@ -492,6 +524,12 @@ impl LineTap for Tap {
         // held soon blocks in its write (the hand takes no more input while the output it
         // queued behind the held answer is at its cap), and is waiting for the hand, not
         // hung, until that answer is out.
+        // A long wait ends here (measured as the hang clock measures it).
+        let waited = now.saturating_duration_since(log.last_activity.max(log.port_changed));
+        if waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+            let state = log.checker.state();
+            log.waits.push(Wait { waited, state, acted: true });
+        }
         log.last_activity = log.last_activity.max(now);
         log.last_sent = Some(now);
         if log.silenced_at.is_some() && log.acted_at.is_none() {
@@ -568,9 +606,17 @@ impl LineTap for Tap {
 
     fn connection(&mut self, _device: &Device, open: bool) {
         if let Ok(mut log) = self.0.lock() {
+            let now = Instant::now();
+            // Closing the port after a long wait ends the wait: the host gave up.
+            let waited = now.saturating_duration_since(log.last_activity.max(log.port_changed));
+            if !open && log.port_open && !log.killed && waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+                let state = log.checker.state();
+                log.waits.push(Wait { waited, state, acted: true });
+            }
             log.checker.connection(open);
             log.port_open = open;
             log.opened |= open;
+            log.port_changed = now;
         }
     }
 
@@ -692,20 +738,133 @@ pub fn is_host_group(pgid: i32) -> bool {
 const CANCEL_GRACE: Duration = Duration::from_millis(500);
 
 /// The host's sanitizer options with a log file per process in `dir` (the user's own
-/// options kept; a `log_path` of theirs is replaced).
-fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str) -> String {
+/// options kept; a `log_path` of theirs is replaced), then `forced` (which override theirs).
+fn sanitizer_options(var: &str, dir: &std::path::Path, name: &str, forced: &[&str]) -> String {
     let mine = format!("log_path={}", dir.join(name).display());
-    match std::env::var(var) {
-        Ok(v) if !v.trim().is_empty() => {
-            let kept: Vec<&str> = v.split(':').filter(|o| !o.starts_with("log_path=") && !o.is_empty()).collect();
-            format!("{}:{mine}", kept.join(":"))
-        }
-        _ => mine,
-    }
+    let theirs = std::env::var(var).unwrap_or_default();
+    let mut all: Vec<&str> =
+        theirs.split(':').filter(|o| !o.starts_with("log_path=") && !o.trim().is_empty()).collect();
+    all.extend(forced);
+    all.push(&mine);
+    all.join(":")
+}
+
+/// How a run is made: as it is, or again to learn more of a crash.
+#[derive(Debug, Clone, Copy)]
+enum How<'a> {
+    /// The host as given.
+    Plain,
+    /// Under `gdb`, which writes the stack at a SIGABRT into this file.
+    UnderGdb(&'a std::path::Path),
+    /// With AddressSanitizer's fast unwinder (`fast_unwind_on_fatal=1`).
+    FastUnwind,
 }
 
 /// [`run_once`], called off ([`RunError::Cancelled`], the host killed) once `cancel` is set.
+///
+/// A native host that died of SIGABRT after its C++ runtime said an exception went uncaught
+/// (`terminate called after throwing...`) has its stack taken as a hung host's is: the same
+/// schedule is run once more under `gdb` (when installed), which stops at the signal and
+/// prints the stack, and that stack is appended to the run's stderr (under
+/// [`detect::ABORT_STACK`](super::detect::ABORT_STACK)), where the crash's signature finds the
+/// frame that threw.
+///
+/// An AddressSanitizer report that names no frame of the host's own code (the default, slow,
+/// unwinder crashed on a stack that a `sscanf` or `strcpy` smashed: `nested bug in the same
+/// thread`) is completed the same way: a second run with the fast unwinder, which stops where
+/// the frames are smashed and goes on to name the function whose variable overflowed (or, in
+/// turn, one as the host runs); its report is appended under
+/// [`detect::ASAN_SECOND_RUN`](super::detect::ASAN_SECOND_RUN).
 pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Result<RunResult, RunError> {
+    let mut r = run_inner(spec, schedule, cancel, How::Plain)?;
+    if super::detect::asan_without_frames(&r.stderr).is_some() {
+        // A report that names the host's frame: with the fast unwinder (which stops where the
+        // frames are smashed), else as the host runs (the fast one loses the caller of an
+        // interceptor). A host that answers the same bytes differently may need another try,
+        // and may then crash another way: the report it gives is the run's.
+        for attempt in 0..SECOND_RUNS {
+            let how = if attempt % 2 == 0 { How::FastUnwind } else { How::Plain };
+            let Ok(second) = run_inner(spec, schedule, cancel, how) else { break };
+            let report = second.stderr.find("ERROR: AddressSanitizer:").map(|at| &second.stderr[at..]);
+            let trusted = |rep: &&str| match how {
+                How::FastUnwind => super::detect::asan_fast_report_names_own(rep),
+                _ => super::detect::asan_without_frames(rep).is_none(),
+            };
+            if let Some(report) = report.filter(trusted) {
+                r.stderr.push_str(&format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
+                break;
+            }
+        }
+    }
+    let aborted = r.end == HostEnd::Signal(nix::sys::signal::Signal::SIGABRT as i32)
+        || r.stderr.contains("AddressSanitizer: ABRT");
+    if aborted
+        && super::detect::uncaught_exception(&r.stderr)
+        && let Some(stack) = abort_stack(spec, schedule, cancel)
+    {
+        r.stderr.push_str(&format!("\n{}\n{stack}", super::detect::ABORT_STACK));
+    }
+    Ok(r)
+}
+
+/// Most second runs made to learn more of one crash (a host that answers the same bytes
+/// differently may not crash the same way every time).
+const SECOND_RUNS: usize = 4;
+
+/// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
+/// as gdb prints it, or `None` (no gdb, or no second run aborted).
+fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Option<String> {
+    Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().ok()?;
+    let dir = RunDir::new().ok()?;
+    let log = dir.0.join("gdb.txt");
+    for _ in 0..SECOND_RUNS {
+        let _ = std::fs::remove_file(&log);
+        run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
+        if let Ok(text) = std::fs::read_to_string(&log)
+            && text.contains("SIGABRT")
+        {
+            return Some(text);
+        }
+    }
+    None
+}
+
+/// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
+/// signals hosts use in their work pass through unremarked).
+fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = ["gdb", "-batch", "-nx", "-q"].map(String::from).to_vec();
+    for ex in [
+        format!("set logging file {}", log.display()),
+        "set logging overwrite on".into(),
+        "set logging redirect on".into(),
+        "set logging enabled on".into(),
+        "handle SIGPIPE SIGALRM SIGCHLD SIGUSR1 SIGUSR2 SIGHUP SIGWINCH SIGINT SIGTERM SIGURG SIGIO nostop noprint pass"
+            .into(),
+        "run".into(),
+        "bt".into(),
+        "kill".into(),
+    ] {
+        v.push("-ex".into());
+        v.push(ex);
+    }
+    v.push("--args".into());
+    v.extend(command.iter().cloned());
+    v
+}
+
+/// [`run_once_until`], made as `how` says.
+fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How) -> Result<RunResult, RunError> {
+    let wrapped;
+    let spec = match how {
+        How::UnderGdb(log) => {
+            let mut s = spec.clone();
+            s.command = under_gdb(&spec.command, log);
+            wrapped = s;
+            &wrapped
+        }
+        How::Plain | How::FastUnwind => spec,
+    };
+    let asan_forced: &[&str] = if matches!(how, How::FastUnwind) { &["fast_unwind_on_fatal=1"] } else { &[] };
     let program = spec.command.first().ok_or(RunError::NoCommand)?;
     let started = Instant::now();
     let mut opts = SimOptions::new(spec.profile.clone());
@@ -733,8 +892,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut watch = None;
     let (port, url, hand) = match spec.transport {
         Transport::Pty => {
-            let mut pty = Pty::open(None)?;
-            pty.match_speed(&engine)?;
+            let mut pty = Pty::open(None, engine.line_baud())?;
             pty.set_speed_check(!line_rate);
             let path = pty.path().display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
@@ -762,8 +920,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
         .env(RUN_MARK, run_dir.mark())
-        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan"))
-        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan"))
+        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan", asan_forced))
+        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan", &[]))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -856,6 +1014,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     let mut stack = None;
     let mut ended_at = None;
     let mut closed_until = started;
+    let mut quiet_since = started;
     let mut talking_at_end = false;
     let end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
@@ -890,7 +1049,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         if !holds_port {
             closed_until = now;
         }
-        let quiet_since = last_activity.max(closed_until);
+        quiet_since = last_activity.max(closed_until);
         cancelled = cancel.load(Ordering::Relaxed);
         let verdict = if cancelled {
             Some(HostEnd::Exit(-1))
@@ -903,6 +1062,13 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             None
         };
         if let Some(v) = verdict {
+            if let Ok(mut l) = log.lock() {
+                l.killed = true;
+                if !cancelled {
+                    let state = l.checker.state();
+                    l.waits.push(Wait { waited: now.saturating_duration_since(quiet_since), state, acted: false });
+                }
+            }
             let mut reaped = false;
             if cancelled {
                 // Called off (the campaign or check is stopping): SIGTERM to the host's group,
@@ -986,14 +1152,23 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     }
     let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
     let ended_in = log.checker.state();
-    // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave.
+    // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave,
+    // nor did one that crashed (its crash is the finding, not the loop or line it was in).
     if !log.hung_up {
-        log.checker.finish(!matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
+        let crashed = matches!(end, HostEnd::Signal(_)) || super::detect::crash_report(&stderr).is_some();
+        log.checker.finish(!crashed && !matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
         if talking_at_end {
             log.checker.cut_off();
         }
     }
     let violations = log.checker.violations().to_vec();
+    // A host that exited (or died) with the port still open after a long wait ended it so.
+    if let Some(at) = ended_at.filter(|_| log.port_open && !log.killed) {
+        let waited = at.saturating_duration_since(quiet_since);
+        if waited > LONG_WAIT && log.waits.len() < WAITS_CAP {
+            log.waits.push(Wait { waited, state: ended_in.clone(), acted: true });
+        }
+    }
     let gave_up_after = log.silenced_at.and_then(|s| {
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
@@ -1003,6 +1178,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         stack,
         leftovers,
         gave_up_after,
+        waits: log.waits.clone(),
         stderr,
         observations: log.observations,
         wrong_values: log.wrong_values.clone(),
@@ -1077,9 +1253,9 @@ fn take_stack(
         let dump = String::from_utf8_lossy(b.kept.get(from..)?).into_owned();
         // The dump is ours, not the host's: it leaves stderr (no crash is read into it).
         b.kept.truncate(from);
-        let frames = super::detect::faulthandler_frames(&dump)?;
+        let (frames, waits_in) = super::detect::faulthandler_frames(&dump)?;
         let blocked_in = if blocked { super::detect::faulthandler_port_call(&dump) } else { None };
-        return Some(super::detect::HangStack { by: "faulthandler".into(), frames, blocked_in });
+        return Some(super::detect::HangStack { by: "faulthandler".into(), frames, waits_in, blocked_in });
     }
     super::detect::sample_native(target)
 }

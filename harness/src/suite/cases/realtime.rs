@@ -249,6 +249,8 @@ impl Gen {
             "the control velocity is LCV x LCVC: motor 1 has LCVC twice motor 2's",
         ));
 
+        self.lcvc_positions(datum, lcvc);
+
         // With LCPG 1 the gain starts at 0: a velocity alone does not move the motor. A motor
         // without LCV keeps its control velocity of 0 whatever its gain.
         let finger = self.limit(1);
@@ -288,6 +290,8 @@ impl Gen {
             .block(b"A", Shape::Block(moving))
             .abort();
         self.add(k);
+
+        self.lcpg_positions(datum, lcvc);
 
         self.scripts(&["rt-loop-en-motors"]);
 
@@ -382,6 +386,134 @@ impl Gen {
                 .abort();
             self.add(k);
         }
+    }
+
+    /// The counts per ms a motor runs at in the loop with velocity datum `datum` and `lcvc`, by
+    /// the model's arithmetic (no gain field: it runs at the control velocity at once).
+    fn rt_counts_per_ms(&self, datum: i64, lcvc: i64) -> f64 {
+        let h = &self.p.hand;
+        gcl_model::realtime::control_velocity(datum, lcvc, h.lcv_fraction_bits) * h.rt_velocity_counts_per_ms
+    }
+
+    /// A pause in the loop, and the landing window of the ^C after it, in which a motor at `v`
+    /// counts per ms moves far enough for a ratio to show (about 600 counts) and a hand twice as
+    /// fast still stays short of motor `m`'s joint stop; `None` where no such pause is.
+    fn rt_pause(&self, v: f64, m: u8) -> Option<(u64, u64)> {
+        let slack = 150u64;
+        let pause = ((600.0 / v.abs().max(1e-9)).round() as u64).clamp(30, 300);
+        let far = v.abs() * (pause + slack) as f64;
+        (v.abs() * pause as f64 >= 100.0 && 2.0 * far < (self.limit(m) - self.mpe(m)) as f64).then_some((pause, slack))
+    }
+
+    /// rt-lcvc-scaling reads LCVC's effect through LFV, which another clause defines: a hand
+    /// whose feedback velocity is broken fails it whatever its LCVC does, and an LCVC ignored
+    /// on top of that adds no failure. Its behavioural twin reads where the motors went: two
+    /// motors from home at one datum, motor 1 with twice motor 2's LCVC, the loop ended by ^C
+    /// after a pause, then FGET P: motor 1 went twice as far, whatever the velocity units or
+    /// how long the pause really was (both ran over the same interval; and a hand that kept the
+    /// motors going after the ^C until the read would keep the ratio too).
+    fn lcvc_positions(&mut self, datum: i64, lcvc: i64) {
+        let (v1, v2) = (self.rt_counts_per_ms(datum, 2 * lcvc), self.rt_counts_per_ms(datum, lcvc));
+        let Some((pause, slack)) = self.rt_pause(v1, 1) else { return };
+        let at = |v: f64, t: u64| (v * t as f64).round() as i64;
+        let window = pause..=pause + slack;
+        let pairs: Vec<(i64, i64)> = window.clone().map(|t| (at(v1, t), at(v2, t))).collect();
+        // (a hand that ignores LCVC runs both at the factory LCVC: the same distance)
+        let factory = self.default("LCVC", 1);
+        let same = self.rt_counts_per_ms(datum, factory);
+        let ignored: Vec<(i64, i64)> = window.map(|t| (at(same, t), at(same, t))).collect();
+        let Some(fit) = super::super::build::fit_tolerance("p1", 1, 2, &pairs, 2) else { return };
+        let rel = Relation::new("p1", 1, 2, fit.tolerance.max(25));
+        if ignored.iter().any(|(a, b)| {
+            let (lo, hi) = rel.band(*a);
+            (lo..=hi).contains(b)
+        }) {
+            return;
+        }
+        let (lo, hi) = (pairs.iter().map(|x| x.0).min().unwrap_or(0), pairs.iter().map(|x| x.0).max().unwrap_or(0));
+        let anchor = (self.mpe(1).max(lo / 4), (self.limit(1) - self.mpe(1)).min(4 * hi));
+        let evidence = format!(
+            "the control velocity is LCV x LCVC: motors 1 and 2 run from home at one datum ({datum}), motor \
+             1 with LCVC {} and motor 2 with LCVC {lcvc}, over the same interval (the ^C lands {pause}..{} \
+             ms after the block), so motor 2 goes half as far as motor 1 whatever the velocity units; the \
+             model reads {}..{} and {}..{}; a position read in motion is compared with 25 % tolerance, which \
+             refuses a hand that runs both alike (LCVC without effect); motor 1 must be off home and short \
+             of its stop",
+            2 * lcvc,
+            pause + slack,
+            lo,
+            hi,
+            pairs.iter().map(|x| x.1).min().unwrap_or(0),
+            pairs.iter().map(|x| x.1).max().unwrap_or(0),
+        );
+        let k = self
+            .rt_case(
+                "rt-lcvc-positions",
+                "The control velocity is LCV x LCVC, seen in where the motors go: one datum with twice the LCVC goes twice as far",
+                "12",
+                &["LCV"],
+            )
+            .src("Parameter LCVC")
+            .src("Parameter LCV")
+            // (the motors move over the host's pause: a hand whose motions take no time does not)
+            .requires(Requirement::AbortTiming)
+            .line(&format!("1FSET LCVC {}", 2 * lcvc))
+            .line(&format!("2FSET LCVC {lcvc}"))
+            .line("12LOOP")
+            // (`c`: no feedback asked, so no feedback flag's clause is read)
+            .block(&[b'c', datum as u8, datum as u8], Shape::Exact)
+            .pause_ms(pause)
+            .abort()
+            .get("12", &["P"], Some([anchor, (0, 0), (0, 0), (0, 0)]))
+            .capture(Target::Value { line: 0, token: 0 }, "p1")
+            .relate(Target::Value { line: 0, token: 1 }, rel, evidence, pairs);
+        self.add(k);
+    }
+
+    /// rt-lcpg-zero-gain reads LCPG's effect through LFAP and LFV, which other clauses define.
+    /// Its behavioural twin reads where the motor went: with LCPG 1 a velocity with gain 0 (the
+    /// gain at LOOP entry) leaves motor 1 at home; the same velocity with a gain in a second
+    /// loop moves it.
+    fn lcpg_positions(&mut self, datum: i64, lcvc: i64) {
+        if !self.p.decisions.iter().any(|d| d.id == "seed-lcpg-gain" || d.id == "bh8-rt-zero-gain") {
+            return;
+        }
+        let v = self.rt_counts_per_ms(datum, lcvc);
+        let Some((pause, _)) = self.rt_pause(v, 1) else { return };
+        let home = [(0, self.mpe(1)); 4];
+        let moved = [(2 * self.mpe(1), self.limit(1)), (0, 0), (0, 0), (0, 0)];
+        let mut k = self
+            .rt_case(
+                "rt-lcpg-zero-gain-positions",
+                "With LCPG 1 the gain starts at 0 on LOOP entry, seen in where the motor goes: a velocity alone leaves it at home; with a gain it moves",
+                "1",
+                &["LCPG"],
+            )
+            .src("Parameter LCPG")
+            // (the motor moves over the host's pause: a hand whose motions take no time does not)
+            .requires(Requirement::AbortTiming);
+        k = k.decision("seed-lcpg-gain").decision("bh8-rt-zero-gain");
+        let k = k
+            .note(format!(
+                "Control blocks (`c`, no feedback asked): motor 1 LCV then LCPG. After a velocity with gain 0 \
+                 and {pause} ms, motor 1 is still at home (within MPE); after the same velocity with gain 64 \
+                 in a new loop it has moved (the model runs it about {} counts)",
+                (v * pause as f64).round() as i64
+            ))
+            .line(&format!("1FSET LCV 1 LCVC {lcvc}"))
+            .line("1LOOP")
+            .comment(format!("velocity {datum}, gain 0"))
+            .block(&[b'c', datum as u8, 0], Shape::Exact)
+            .pause_ms(pause)
+            .abort()
+            .get("1", &["P"], Some(home))
+            .line("1LOOP")
+            .comment(format!("velocity {datum}, gain 64"))
+            .block(&[b'c', datum as u8, 64], Shape::Exact)
+            .pause_ms(pause)
+            .abort()
+            .get("1", &["P"], Some(moved));
+        self.add(k);
     }
 
     /// LFDPC divides the movement LFDP reports: motors 1 and 2 run at one control velocity
