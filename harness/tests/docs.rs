@@ -561,3 +561,103 @@ fn documented_commands_run_as_written_or_by_their_stand_ins() {
     );
     assert!(steps > 50, "only {steps} commands ran");
 }
+
+/// The anchor a heading gets, as mdbook (and GitHub) make it: its text in lower case, spaces as
+/// `-`, every character but letters, digits, `-` and `_` dropped.
+fn anchor(heading: &str) -> String {
+    heading
+        .chars()
+        .filter_map(|c| match c {
+            c if c.is_alphanumeric() || c == '_' || c == '-' => Some(c.to_lowercase().next().unwrap_or(c)),
+            c if c.is_whitespace() => Some('-'),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The links of a Markdown text (its images too), and the anchors of its headings.
+fn links_and_anchors(text: &str) -> (Vec<String>, BTreeSet<String>) {
+    use pulldown_cmark::{Event, Parser, Tag, TagEnd};
+    let (mut links, mut anchors) = (Vec::new(), BTreeSet::new());
+    let mut heading: Option<String> = None;
+    for event in Parser::new(text) {
+        match event {
+            Event::Start(Tag::Link { dest_url, .. } | Tag::Image { dest_url, .. }) => links.push(dest_url.to_string()),
+            Event::Start(Tag::Heading { id, .. }) => {
+                if let Some(id) = id {
+                    anchors.insert(id.to_string());
+                }
+                heading = Some(String::new());
+            }
+            Event::Text(t) | Event::Code(t) if heading.is_some() => heading.as_mut().unwrap().push_str(&t),
+            Event::End(TagEnd::Heading(_)) => anchors.extend(heading.take().map(|h| anchor(&h))),
+            _ => {}
+        }
+    }
+    (links, anchors)
+}
+
+/// The links of `docs` that lead nowhere: a relative link to a file that is not there, or to
+/// an anchor no heading of its file has. (Links to the web are not followed.)
+fn broken_links(docs: &[Doc]) -> Vec<String> {
+    let mut wrong = Vec::new();
+    for doc in docs {
+        let name = doc.path.strip_prefix(root()).unwrap_or(&doc.path).display().to_string();
+        let (links, own) = links_and_anchors(&doc.text);
+        for link in links {
+            if link.contains("://") || link.starts_with("mailto:") {
+                continue;
+            }
+            let (file, fragment) = link.split_once('#').map_or((link.as_str(), None), |(f, a)| (f, Some(a)));
+            let target = if file.is_empty() { doc.path.clone() } else { doc.path.parent().unwrap().join(file) };
+            if !file.is_empty() && !target.exists() {
+                wrong.push(format!("{name}: `{link}`: there is no {}", target.display()));
+                continue;
+            }
+            let Some(fragment) = fragment else { continue };
+            let anchors = if file.is_empty() {
+                own.clone()
+            } else if target.extension().is_some_and(|e| e == "md") {
+                links_and_anchors(&std::fs::read_to_string(&target).unwrap()).1
+            } else {
+                wrong.push(format!("{name}: `{link}`: an anchor in a file that is not Markdown"));
+                continue;
+            };
+            if !anchors.contains(fragment) {
+                wrong.push(format!("{name}: `{link}`: no heading of {file} has the anchor #{fragment}"));
+            }
+        }
+    }
+    wrong
+}
+
+/// Every relative link of README.md and the guides leads to a file of the repository, and a
+/// link with an anchor to a heading of that file.
+#[test]
+fn every_link_of_the_documents_leads_somewhere() {
+    let docs = documents();
+    let wrong = broken_links(&docs);
+    assert!(wrong.is_empty(), "links that lead nowhere:\n{}", wrong.join("\n"));
+    let count: usize = docs.iter().map(|d| links_and_anchors(&d.text).0.len()).sum();
+    assert!(count > 20, "only {count} links");
+}
+
+/// The link check fails on a missing file, a missing anchor, and a missing anchor in another
+/// file; it takes a heading's anchor as mdbook makes it.
+#[test]
+fn the_link_check_catches_a_link_to_nowhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let other = dir.path().join("other.md");
+    std::fs::write(&other, "# Other\n\n## Without a Rust toolchain: the `gcl` wheel\n").unwrap();
+    let doc = |text: &str| Doc { path: dir.path().join("doc.md"), text: text.to_string() };
+    let fine = doc("## Here\n\n[a](other.md) [b](other.md#without-a-rust-toolchain-the-gcl-wheel) [c](#here) [d](https://example.com/x.md)\n");
+    assert_eq!(broken_links(&[fine]), Vec::<String>::new());
+    for (text, what) in [
+        ("[a](gone.md)", "there is no"),
+        ("[a](#gone)", "has the anchor #gone"),
+        ("[a](other.md#the-wheel)", "has the anchor #the-wheel"),
+    ] {
+        let wrong = broken_links(&[doc(text)]);
+        assert!(wrong.iter().any(|w| w.contains(what)), "{text}: expected {what:?} in {wrong:#?}");
+    }
+}
