@@ -604,6 +604,22 @@ fn broken_links(docs: &[Doc]) -> Vec<String> {
     for doc in docs {
         let name = doc.path.strip_prefix(root()).unwrap_or(&doc.path).display().to_string();
         let (links, own) = links_and_anchors(&doc.text);
+        // mdbook's `{{#include FILE}}` and `{{#include FILE:ANCHOR}}` (a missing one is an ERROR
+        // line of `mdbook build`, which still exits 0).
+        for include in doc.text.split("{{#include ").skip(1).filter_map(|s| s.split_once("}}")).map(|(s, _)| s.trim()) {
+            let (file, part) = include.split_once(':').map_or((include, None), |(f, a)| (f, Some(a)));
+            let target = doc.path.parent().unwrap().join(file);
+            match std::fs::read_to_string(&target) {
+                Err(_) => wrong.push(format!("{name}: `{{{{#include {include}}}}}`: there is no {}", target.display())),
+                Ok(text) => {
+                    if let Some(part) = part.filter(|p| p.parse::<usize>().is_err() && !p.is_empty())
+                        && !text.contains(&format!("ANCHOR: {part}"))
+                    {
+                        wrong.push(format!("{name}: `{{{{#include {include}}}}}`: {file} has no `ANCHOR: {part}`"));
+                    }
+                }
+            }
+        }
         for link in links {
             if link.contains("://") || link.starts_with("mailto:") {
                 continue;
@@ -650,12 +666,14 @@ fn the_link_check_catches_a_link_to_nowhere() {
     let other = dir.path().join("other.md");
     std::fs::write(&other, "# Other\n\n## Without a Rust toolchain: the `gcl` wheel\n").unwrap();
     let doc = |text: &str| Doc { path: dir.path().join("doc.md"), text: text.to_string() };
-    let fine = doc("## Here\n\n[a](other.md) [b](other.md#without-a-rust-toolchain-the-gcl-wheel) [c](#here) [d](https://example.com/x.md)\n");
+    let fine = doc("## Here\n\n{{#include other.md}}\n\n[a](other.md) [b](other.md#without-a-rust-toolchain-the-gcl-wheel) [c](#here) [d](https://example.com/x.md)\n");
     assert_eq!(broken_links(&[fine]), Vec::<String>::new());
     for (text, what) in [
         ("[a](gone.md)", "there is no"),
         ("[a](#gone)", "has the anchor #gone"),
         ("[a](other.md#the-wheel)", "has the anchor #the-wheel"),
+        ("{{#include gone.md}}", "there is no"),
+        ("{{#include other.md:intro}}", "has no `ANCHOR: intro`"),
     ] {
         let wrong = broken_links(&[doc(text)]);
         assert!(wrong.iter().any(|w| w.contains(what)), "{text}: expected {what:?} in {wrong:#?}");
