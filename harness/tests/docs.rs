@@ -12,7 +12,9 @@
 //!   `console` block somewhere (a document's or a stand-in's), or quoted by a stand-in: a
 //!   `## ` heading of a file in `harness/tests/stand-ins/` followed by the `console` block that
 //!   runs in its place (the in-process model for a hand on `/dev/ttyUSB0`, the example host for
-//!   a host author's own program, seconds for minutes), or by `Not run: WHY`.
+//!   a host author's own program, seconds for minutes), or by `Run by FILE: `TEXT`` (a file
+//!   of the repository that CI runs, `.ci/run` or a test, holds each TEXT: checked), or by
+//!   `Not run: WHY`.
 //!
 //! [`every_documented_command_is_run`] fails on a command nobody runs, a stand-in for a command
 //! no document has any more, a `console` block marked `ignore` (trycmd's way to skip one), a
@@ -343,11 +345,35 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
                     && let Some(h) = heading
                 {
                     sections.entry(h.to_string()).or_default().1 = true;
+                } else if let Some(rest) = line.strip_prefix("Run by ")
+                    && let Some(h) = heading
+                {
+                    // `Run by FILE: `TEXT`...`: FILE (of the repository, which CI runs) holds
+                    // each TEXT, so the claim is checked, not taken on trust.
+                    sections.entry(h.to_string()).or_default().1 = true;
+                    let at = format!("{name}:{}", i + 1);
+                    let Some((file, texts)) = rest.split_once(": ") else {
+                        wrong.push(format!("{at}: `Run by FILE: `TEXT``, FILE holding each TEXT"));
+                        continue;
+                    };
+                    let Ok(held) = std::fs::read_to_string(root().join(file)) else {
+                        wrong.push(format!("{at}: run by {file}, which is not a file of the repository"));
+                        continue;
+                    };
+                    let texts: Vec<&str> = texts.split('`').skip(1).step_by(2).collect();
+                    if texts.is_empty() {
+                        wrong.push(format!("{at}: run by {file}, but no `TEXT` says what it runs"));
+                    }
+                    for text in texts {
+                        if !held.contains(text) {
+                            wrong.push(format!("{at}: run by {file}, which does not hold `{text}`"));
+                        }
+                    }
                 }
             }
             for (h, (blocks, not_run)) in sections {
                 match (blocks > 0, not_run) {
-                    (false, false) => wrong.push(format!("{name}: {h} neither runs a console block nor says `Not run: WHY`")),
+                    (false, false) => wrong.push(format!("{name}: {h} neither runs a console block nor says `Not run: WHY` or `Run by FILE: `TEXT``")),
                     (true, true) => wrong.push(format!("{name}: {h} runs a console block and says it is not run")),
                     _ => {}
                 }
@@ -381,6 +407,8 @@ fn every_documented_command_is_run() {
                 heading = h;
             } else if let Some(why) = line.strip_prefix("Not run: ") {
                 eprintln!("not run: {heading}: {why}");
+            } else if let Some(by) = line.strip_prefix("Run by ") {
+                eprintln!("run by {by}: {heading}");
             }
         }
     }
@@ -415,6 +443,11 @@ fn the_check_catches_a_command_nobody_runs() {
     // A stand-in without a run or a reason, or with both.
     fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nNothing.\n"], &[], "neither runs");
     fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nNot run: no.\n\n```console\n$ gcl b\n```\n"], &[], "says it is not run");
+    // A command run elsewhere: the file must hold what it runs.
+    let by_ci = |text: &str| format!("## `gcl a`\n\nRun by .ci/run: `{text}`.\n");
+    assert_eq!(check(&[doc("```sh\ngcl a\n```\n")], &[doc(&by_ci("cargo fmt --all -- --check"))], &[]), Vec::<String>::new());
+    fails(&["```sh\ngcl a\n```\n"], &[&by_ci("gcl a --nowhere")], &[], "which does not hold `gcl a --nowhere`");
+    fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nRun by no/such/file: `gcl a`.\n"], &[], "not a file of the repository");
     // The same command written otherwise (quotes, continuations) is the same command.
     let wrong = check(
         &[doc("```sh\ngcl explain \\\n  'HI'   # hi\n```\n")],

@@ -670,8 +670,11 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "`cd examples/python-host && pytest` passes",
-        &["python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite"],
+        "The example host library's suite, from its folder (`pytest` or `python -m pytest`)",
+        &[
+            "python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite",
+            "python/tests/test_wheel.py::test_the_example_runs_with_the_bare_pytest_command_too",
+        ],
     ),
     (
         "fails every test with `the host code broke GCL",
