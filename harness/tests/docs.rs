@@ -278,7 +278,15 @@ fn help_examples() -> (Vec<String>, Vec<String>) {
 
 /// Everything that would let a documented command go unrun. `help` is the `--help` examples.
 fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
+    check_and_count(docs, stand_ins, help).0
+}
+
+/// [`check`], and how many documented commands are held each way.
+fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<String>, BTreeMap<&'static str, usize>) {
     let mut wrong = Vec::new();
+    let mut count: BTreeMap<&'static str, usize> = BTreeMap::new();
+    // How each stand-in holds its command: runs a console block, or `Run by`, or `Not run`.
+    let mut held_by: BTreeMap<Vec<String>, &'static str> = BTreeMap::new();
     let mut run: BTreeSet<Vec<String>> = BTreeSet::new();
     // Each documented command, by its words, with where it is written.
     let mut documented: BTreeMap<Vec<String>, String> = BTreeMap::new();
@@ -291,7 +299,7 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
         let bins = if is_stand_in { STAND_IN_BINS } else { DOC_BINS };
         for doc in set {
             let name = doc.path.strip_prefix(root()).unwrap_or(&doc.path).display().to_string();
-            let mut sections: BTreeMap<String, (usize, bool)> = BTreeMap::new();
+            let mut sections: BTreeMap<String, (usize, Option<&'static str>)> = BTreeMap::new();
             for (heading, block) in blocks(&doc.text) {
                 let at = format!("{name}:{}", block.line);
                 if block.is_console() {
@@ -309,6 +317,9 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
                                 c.join(" "),
                                 program(&c)
                             ));
+                        }
+                        if !is_stand_in {
+                            *count.entry("console commands of the documents, run as written").or_default() += 1;
                         }
                         run.insert(c);
                     }
@@ -344,13 +355,13 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
                 } else if line.starts_with("Not run: ")
                     && let Some(h) = heading
                 {
-                    sections.entry(h.to_string()).or_default().1 = true;
+                    sections.entry(h.to_string()).or_default().1 = Some("not run (a reason given)");
                 } else if let Some(rest) = line.strip_prefix("Run by ")
                     && let Some(h) = heading
                 {
                     // `Run by FILE: `TEXT`...`: FILE (of the repository, which CI runs) holds
                     // each TEXT, so the claim is checked, not taken on trust.
-                    sections.entry(h.to_string()).or_default().1 = true;
+                    sections.entry(h.to_string()).or_default().1 = Some("run by another part of CI (checked in its file)");
                     let at = format!("{name}:{}", i + 1);
                     let Some((file, texts)) = rest.split_once(": ") else {
                         wrong.push(format!("{at}: `Run by FILE: `TEXT``, FILE holding each TEXT"));
@@ -372,7 +383,10 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
                 }
             }
             for (h, (blocks, not_run)) in sections {
-                match (blocks > 0, not_run) {
+                if let Some(cmd) = h.strip_prefix('`').and_then(|h| h.strip_suffix('`')) {
+                    held_by.insert(words(cmd), not_run.unwrap_or("run by a stand-in in its place"));
+                }
+                match (blocks > 0, not_run.is_some()) {
                     (false, false) => wrong.push(format!("{name}: {h} neither runs a console block nor says `Not run: WHY` or `Run by FILE: `TEXT``")),
                     (true, true) => wrong.push(format!("{name}: {h} runs a console block and says it is not run")),
                     _ => {}
@@ -381,6 +395,9 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
         }
     }
     for (w, at) in &documented {
+        let how = if run.contains(w) { Some("run as written by a console block") } else { held_by.get(w).copied() };
+        *count.entry(how.unwrap_or("not run by anything")).or_default() += 1;
+        *count.entry("documented commands (sh blocks, --help examples)").or_default() += 1;
         if !run.contains(w) && !quoted.contains_key(w) {
             wrong.push(format!("{at}: not run as written by any console block, and no stand-in quotes it"));
         }
@@ -390,15 +407,18 @@ fn check(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> Vec<String> {
             wrong.push(format!("{at}: a stand-in for `{}`, which no document or --help gives any more", w.join(" ")));
         }
     }
-    wrong
+    (wrong, count)
 }
 
 #[test]
 fn every_documented_command_is_run() {
     let (help, wrapped) = help_examples();
     assert!(wrapped.is_empty(), "--help examples that wrap (cannot be pasted):\n{}", wrapped.join("\n"));
-    let wrong = check(&documents(), &stand_ins(), &help);
+    let (wrong, count) = check_and_count(&documents(), &stand_ins(), &help);
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    for (what, n) in &count {
+        eprintln!("{n:4} {what}");
+    }
     // Say what is not run, and why.
     for doc in stand_ins() {
         let mut heading = "";
