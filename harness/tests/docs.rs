@@ -326,7 +326,9 @@ fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<Str
                     if is_stand_in {
                         match &heading {
                             Some(h) => sections.entry(h.clone()).or_default().0 += 1,
-                            None => wrong.push(format!("{at}: a stand-in's commands go under the `## ` heading that quotes what they stand for")),
+                            None => wrong.push(format!(
+                                "{at}: a stand-in's commands go under the `## ` heading that quotes what they stand for"
+                            )),
                         }
                     }
                 }
@@ -345,7 +347,10 @@ fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<Str
                 if let Some(h) = line.strip_prefix("## ") {
                     heading = Some(h);
                     let Some(cmd) = h.strip_prefix('`').and_then(|h| h.strip_suffix('`')) else {
-                        wrong.push(format!("{name}:{}: a stand-in's heading is the command it stands for, in backticks", i + 1));
+                        wrong.push(format!(
+                            "{name}:{}: a stand-in's heading is the command it stands for, in backticks",
+                            i + 1
+                        ));
                         continue;
                     };
                     if quoted.insert(words(cmd), format!("{name}:{}", i + 1)).is_some() {
@@ -361,7 +366,8 @@ fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<Str
                 {
                     // `Run by FILE: `TEXT`...`: FILE (of the repository, which CI runs) holds
                     // each TEXT, so the claim is checked, not taken on trust.
-                    sections.entry(h.to_string()).or_default().1 = Some("run by another part of CI (checked in its file)");
+                    sections.entry(h.to_string()).or_default().1 =
+                        Some("run by another part of CI (checked in its file)");
                     let at = format!("{name}:{}", i + 1);
                     let Some((file, texts)) = rest.split_once(": ") else {
                         wrong.push(format!("{at}: `Run by FILE: `TEXT``, FILE holding each TEXT"));
@@ -387,7 +393,9 @@ fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<Str
                     held_by.insert(words(cmd), not_run.unwrap_or("run by a stand-in in its place"));
                 }
                 match (blocks > 0, not_run.is_some()) {
-                    (false, false) => wrong.push(format!("{name}: {h} neither runs a console block nor says `Not run: WHY` or `Run by FILE: `TEXT``")),
+                    (false, false) => wrong.push(format!(
+                        "{name}: {h} neither runs a console block nor says `Not run: WHY` or `Run by FILE: `TEXT``"
+                    )),
                     (true, true) => wrong.push(format!("{name}: {h} runs a console block and says it is not run")),
                     _ => {}
                 }
@@ -438,7 +446,9 @@ fn every_documented_command_is_run() {
 #[test]
 fn the_check_catches_a_command_nobody_runs() {
     let doc = |text: &str| Doc { path: PathBuf::from("doc.md"), text: text.to_string() };
-    let fine_doc = doc("```sh\ngcl conform --target 'serial:/dev/ttyUSB0'   # a hand\n```\n\n```console\n$ gcl explain HI\n...\n```\n");
+    let fine_doc = doc(
+        "```sh\ngcl conform --target 'serial:/dev/ttyUSB0'   # a hand\n```\n\n```console\n$ gcl explain HI\n...\n```\n",
+    );
     let fine_stand_in = doc(
         "## `gcl conform --target serial:/dev/ttyUSB0`\n\nThe model stands for the hand.\n\n```console\n$ gcl conform --target sim\n...\n```\n\n## `gcl sim --pty`\n\nNot run: serves.\n",
     );
@@ -462,12 +472,25 @@ fn the_check_catches_a_command_nobody_runs() {
     fails(&["```console\n$ sh -c 'gcl explain HI'\n```\n"], &[], &[], "which the checker does not run");
     // A stand-in without a run or a reason, or with both.
     fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nNothing.\n"], &[], "neither runs");
-    fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nNot run: no.\n\n```console\n$ gcl b\n```\n"], &[], "says it is not run");
+    fails(
+        &["```sh\ngcl a\n```\n"],
+        &["## `gcl a`\n\nNot run: no.\n\n```console\n$ gcl b\n```\n"],
+        &[],
+        "says it is not run",
+    );
     // A command run elsewhere: the file must hold what it runs.
     let by_ci = |text: &str| format!("## `gcl a`\n\nRun by .ci/run: `{text}`.\n");
-    assert_eq!(check(&[doc("```sh\ngcl a\n```\n")], &[doc(&by_ci("cargo fmt --all -- --check"))], &[]), Vec::<String>::new());
+    assert_eq!(
+        check(&[doc("```sh\ngcl a\n```\n")], &[doc(&by_ci("cargo fmt --all -- --check"))], &[]),
+        Vec::<String>::new()
+    );
     fails(&["```sh\ngcl a\n```\n"], &[&by_ci("gcl a --nowhere")], &[], "which does not hold `gcl a --nowhere`");
-    fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nRun by no/such/file: `gcl a`.\n"], &[], "not a file of the repository");
+    fails(
+        &["```sh\ngcl a\n```\n"],
+        &["## `gcl a`\n\nRun by no/such/file: `gcl a`.\n"],
+        &[],
+        "not a file of the repository",
+    );
     // The same command written otherwise (quotes, continuations) is the same command.
     let wrong = check(
         &[doc("```sh\ngcl explain \\\n  'HI'   # hi\n```\n")],
@@ -509,11 +532,11 @@ fn run_doc(doc: &Doc, dir: &Path, bins: &BTreeMap<String, PathBuf>, env: &[(Stri
         }
         for step in steps(&block) {
             let at = format!("{name}:{}: `{}`", step.line, step.words.join(" "));
-            let assignments: Vec<(&str, &str)> =
-                step.words.iter().map_while(|w| w.split_once('=')).collect();
+            let assignments: Vec<(&str, &str)> = step.words.iter().map_while(|w| w.split_once('=')).collect();
             let mut words = step.words.iter().skip(assignments.len());
             let program = words.next().ok_or_else(|| format!("{at}: no program"))?;
-            let path = bins.get(program).ok_or_else(|| format!("{at}: `{program}` is not a program this checker runs"))?;
+            let path =
+                bins.get(program).ok_or_else(|| format!("{at}: `{program}` is not a program this checker runs"))?;
             let out = snapbox::cmd::Command::new(path)
                 .args(words)
                 .envs(env.iter().map(|(k, v)| (k.as_str(), v.as_str())))
@@ -534,8 +557,14 @@ fn run_doc(doc: &Doc, dir: &Path, bins: &BTreeMap<String, PathBuf>, env: &[(Stri
                     step.status
                 ));
             }
-            if let Err(e) = assert.try_eq(Some(&"what it printed"), snapbox::Data::text(actual), snapbox::Data::text(step.expected.clone())) {
-                return Err(format!("{at}: prints otherwise than the document says (`...` any lines, `[..]` any text):\n{e}"));
+            if let Err(e) = assert.try_eq(
+                Some(&"what it printed"),
+                snapbox::Data::text(actual),
+                snapbox::Data::text(step.expected.clone()),
+            ) {
+                return Err(format!(
+                    "{at}: prints otherwise than the document says (`...` any lines, `[..]` any text):\n{e}"
+                ));
             }
             ran += 1;
         }
@@ -719,7 +748,9 @@ fn the_link_check_catches_a_link_to_nowhere() {
     let other = dir.path().join("other.md");
     std::fs::write(&other, "# Other\n\n## Without a Rust toolchain: the `gcl` wheel\n").unwrap();
     let doc = |text: &str| Doc { path: dir.path().join("doc.md"), text: text.to_string() };
-    let fine = doc("## Here\n\n{{#include other.md}}\n\n[a](other.md) [b](other.md#without-a-rust-toolchain-the-gcl-wheel) [c](#here) [d](https://example.com/x.md)\n");
+    let fine = doc(
+        "## Here\n\n{{#include other.md}}\n\n[a](other.md) [b](other.md#without-a-rust-toolchain-the-gcl-wheel) [c](#here) [d](https://example.com/x.md)\n",
+    );
     assert_eq!(broken_links(&[fine]), Vec::<String>::new());
     for (text, what) in [
         ("[a](gone.md)", "there is no"),

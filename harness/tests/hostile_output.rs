@@ -265,7 +265,10 @@ fn a_printed_replay_command_pasted_into_a_shell_reproduces_its_finding() {
     let f = &report["host"]["findings"][0];
     let line = f["replay"].as_str().unwrap();
     let bundle = f["bundle"].as_str().unwrap();
-    assert_eq!(argv_in_sh(line), ["gcl", "fuzz", "host", "--replay", bundle, "--", "sh", "-c", SEND_AND_FAIL, "{port}"]);
+    assert_eq!(
+        argv_in_sh(line),
+        ["gcl", "fuzz", "host", "--replay", bundle, "--", "sh", "-c", SEND_AND_FAIL, "{port}"]
+    );
     let bin = Path::new(env!("CARGO_BIN_EXE_gcl")).parent().unwrap();
     let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
     let o = Command::new("sh").arg("-c").arg(line).env("PATH", path).output().unwrap();
