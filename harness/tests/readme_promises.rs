@@ -24,6 +24,22 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 /// `.ci/run`, named by the line it prints when it holds, where no `cargo test` can: the C++
 /// example needs CMake and a C++ compiler).
 const PROMISES: &[(&str, &[&str])] = &[
+    // The documents themselves.
+    (
+        "Every command in this README, in the guides and in `gcl --help` is run by the tests (`harness/tests/docs.rs`): as written, or by a stand-in that says what stands for what",
+        &[
+            "harness/tests/docs.rs::every_documented_command_is_run",
+            "harness/tests/docs.rs::documented_commands_run_as_written_or_by_their_stand_ins",
+            "harness/tests/docs.rs::the_check_catches_a_command_nobody_runs",
+        ],
+    ),
+    (
+        "so does a relative link of README.md or a chapter to a file that is not there or to an anchor no heading has",
+        &[
+            "harness/tests/docs.rs::every_link_of_the_documents_leads_somewhere",
+            "harness/tests/docs.rs::the_link_check_catches_a_link_to_nowhere",
+        ],
+    ),
     // The two commands.
     (
         "`cargo test --workspace -- --include-ignored` runs them too, as `.ci/run` does.",
