@@ -40,7 +40,7 @@ use gcl_transcript::{Form, Transcript};
 use serde::{Deserialize, Serialize};
 
 use crate::replay::{ReplayOutcome, replay};
-use crate::triage::{expected_tokens, is_reordering};
+use crate::suite::Case;
 
 /// The model's run of a case: its answers as one stream, each byte tagged with the step whose
 /// input it answers.
@@ -350,12 +350,16 @@ fn carry(hand: &[u8], at: usize, model: &[u8], pe: &[u8]) -> Option<usize> {
 /// The command word of a line as the signature shows it: the model's name for a command it
 /// parses, `CR` for an empty line, else the first word without a motor prefix.
 pub fn command_word(p: &Profile, line: &[u8]) -> String {
-    crate::triage::command_of(line, false, p)
+    command_of(line, false, p)
 }
 
 /// The signature of a failed replay of a case whose model run is `run`; `None` for a pass.
 /// `whole_reads`: the link hands over an answer whole (the in-process sim), so a RealTime
 /// answer that ends early or late is known to be of another size.
+///
+/// Where the hand parts from the model's run → a flood or restart → trailing bytes → a
+/// RealTime block's field → the start of an answer (a prompt too many, a loop exit, the echo)
+/// → the line of the answer it lies in (status, prompt, line ending, value).
 pub fn signature(
     p: &Profile,
     t: &Transcript,
@@ -364,74 +368,160 @@ pub fn signature(
     whole_reads: bool,
 ) -> Option<FindingSignature> {
     let step = out.failed_step()?;
-    let fr = &p.framing;
-    let sent_of = |i: usize| t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    let hex_step = |i: usize| {
-        t.steps.get(i).is_some_and(|s| {
-            s.send.as_ref().is_some_and(|h| h.form == Form::Hex)
-                || s.expect.segments.iter().any(|g| g.form == Form::Hex)
-        })
-    };
-    let is_abort = |i: usize| sent_of(i).first() == Some(&fr.abort);
-    // Without the model's tags (a run whose timing the tagging changed), the step read in.
-    let fallback = || {
-        let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
-        let (s, _) = crate::triage::step_signature(&case, out, p)?;
-        let kind = match s.kind.as_str() {
-            "missing-answer" => "missing",
-            "flood" => "extra",
-            k => k,
-        };
-        Some(sig(s.command.clone(), kind, ""))
-    };
     if let ReplayOutcome::Disconnected(_) = out {
         return Some(sig(command_at(p, t, step), "link", ""));
     }
-    let Some(pt) = parting(out) else { return fallback() };
-    let pe = [fr.line_ending.as_bytes(), fr.prompt.as_bytes()].concat();
-    let Some(x) = (if run.tags.is_empty() { None } else { carry(&pt.hand, pt.at, &run.stream, &pe) }) else {
-        return fallback();
+    let Some(s) = Parted::of(p, t, run, out, step) else { return step_fallback(p, t, out) };
+    if let Some(found) = s.flood_or_restart().or_else(|| s.trailing()).or_else(|| s.realtime_block(whole_reads)) {
+        return Some(found);
+    }
+    let unit = s.unit();
+    Some(s.answer_start(&unit).unwrap_or_else(|| s.in_line(&unit)))
+}
+
+/// Without the model's tags (a run whose timing the tagging changed): takes the replay; gives
+/// the signature of the step read in.
+fn step_fallback(p: &Profile, t: &Transcript, out: &ReplayOutcome) -> Option<FindingSignature> {
+    let case = crate::suite::Case { profile: p.id.clone(), transcript: t.clone() };
+    let (s, _) = step_signature(&case, out, p)?;
+    let kind = match s.kind.as_str() {
+        "missing-answer" => "missing",
+        "flood" => "extra",
+        k => k,
     };
-    let got = &pt.hand[pt.at..];
-    let banner = crate::record::BANNER_TEXT;
-    // The input a model position answers: its step, the line among the step's lines, where
-    // that line's answer begins, and the command word.
-    let who = |x: usize| -> (usize, Vec<u8>, usize, String) {
-        let owner = run.tags.get(x).map_or(step, |s| *s as usize);
-        let (line, a) = owner_line(p, &sent_of(owner), run, owner, x);
-        let in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
-        let block_answer = in_loop && run.stream.get(a) == Some(&gcl_model::realtime::FEEDBACK_HEADER);
-        let command = if hex_step(owner) || is_abort(owner) && block_answer {
-            "RealTime block".to_string()
-        } else if is_abort(owner) {
-            "^C".to_string()
-        } else {
-            command_word(p, &line)
-        };
-        (owner, line, a, command)
+    Some(sig(s.command.clone(), kind, ""))
+}
+
+/// Takes a transcript and a step; gives the bytes the step sends (none past the end).
+fn sent_of(t: &Transcript, i: usize) -> Vec<u8> {
+    t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default()
+}
+
+/// Takes a transcript and a step; gives whether the step sends or expects hex (RealTime).
+fn hex_step(t: &Transcript, i: usize) -> bool {
+    t.steps.get(i).is_some_and(|s| {
+        s.send.as_ref().is_some_and(|h| h.form == Form::Hex) || s.expect.segments.iter().any(|g| g.form == Form::Hex)
+    })
+}
+
+/// Takes a transcript and a step; gives whether the step sends ^C.
+fn is_abort(p: &Profile, t: &Transcript, i: usize) -> bool {
+    sent_of(t, i).first() == Some(&p.framing.abort)
+}
+
+/// The input a model position answers.
+struct Owner {
+    /// Its step.
+    step: usize,
+    /// The line among the step's lines.
+    line: Vec<u8>,
+    /// Where that line's answer begins in the model's stream.
+    answer: usize,
+    /// The command word.
+    command: String,
+}
+
+/// Takes a position `x` in the model's run (`step`: the replay's failing step, for an untagged
+/// position); gives the input it answers.
+fn owner_of(p: &Profile, t: &Transcript, run: &ModelRun, step: usize, x: usize) -> Owner {
+    let owner = run.tags.get(x).map_or(step, |s| *s as usize);
+    let (line, a) = owner_line(p, &sent_of(t, owner), run, owner, x);
+    let in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
+    let block_answer = in_loop && run.stream.get(a) == Some(&gcl_model::realtime::FEEDBACK_HEADER);
+    let command = if hex_step(t, owner) || is_abort(p, t, owner) && block_answer {
+        "RealTime block".to_string()
+    } else if is_abort(p, t, owner) {
+        "^C".to_string()
+    } else {
+        command_word(p, &line)
     };
-    let (owner, line, a, command) = who(x);
-    let model_rest = &run.stream[x..];
-    // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
-    if let ReplayOutcome::Flooded(_) = out {
-        return Some(sig(command, "extra", "flood"));
+    Owner { step: owner, line, answer: a, command }
+}
+
+/// A failed replay where the hand parts from the model's tagged run: what the signature's
+/// stages read.
+struct Parted<'a> {
+    p: &'a Profile,
+    t: &'a Transcript,
+    run: &'a ModelRun,
+    out: &'a ReplayOutcome,
+    /// The replay's failing step.
+    step: usize,
+    pt: Parting,
+    /// A line ending then the prompt.
+    pe: Vec<u8>,
+    /// The model's position for the parting byte.
+    x: usize,
+    /// The input the model's answer at `x` answers.
+    owner: Owner,
+}
+
+/// The model's answer unit holding the parting: from the last prompt before it (or the
+/// owner's answer's start) to the next prompt.
+struct Unit {
+    start: usize,
+    end: usize,
+    /// The owner's echo's length, when the unit begins with it.
+    echo_len: usize,
+    /// The unit is the first answer after the model left the loop.
+    loop_exit: bool,
+}
+
+impl<'a> Parted<'a> {
+    /// Takes the failed replay and the model's run; gives where the hand parts from it, or
+    /// `None` (no parting byte, or a run without tags).
+    fn of(p: &'a Profile, t: &'a Transcript, run: &'a ModelRun, out: &'a ReplayOutcome, step: usize) -> Option<Self> {
+        let pt = parting(out)?;
+        let fr = &p.framing;
+        let pe = [fr.line_ending.as_bytes(), fr.prompt.as_bytes()].concat();
+        let x = if run.tags.is_empty() { None } else { carry(&pt.hand, pt.at, &run.stream, &pe) }?;
+        let owner = owner_of(p, t, run, step, x);
+        Some(Parted { p, t, run, out, step, pt, pe, x, owner })
     }
-    if !model_rest.windows(banner.len()).any(|w| w == banner) && got.windows(banner.len()).any(|w| w == banner) {
-        return Some(sig(command, "restart", ""));
+
+    /// What the hand sent from the parting byte on.
+    fn got(&self) -> &[u8] {
+        &self.pt.hand[self.pt.at..]
     }
-    if let ReplayOutcome::Mismatch(m) = out
-        && m.trailing
-    {
-        let (_, _, _, c) = who(run.stream.len().saturating_sub(1));
-        return Some(sig(c, "extra", ""));
+
+    /// Gives a flood (whatever it repeats), or a restart (a banner the model does not send).
+    fn flood_or_restart(&self) -> Option<FindingSignature> {
+        let banner = crate::record::BANNER_TEXT;
+        let (got, model_rest) = (self.got(), &self.run.stream[self.x..]);
+        // A flood is a flood, whatever it repeats (a banner flooded in answer to ^C is no restart).
+        if let ReplayOutcome::Flooded(_) = self.out {
+            return Some(sig(self.owner.command.clone(), "extra", "flood"));
+        }
+        if !model_rest.windows(banner.len()).any(|w| w == banner) && got.windows(banner.len()).any(|w| w == banner) {
+            return Some(sig(self.owner.command.clone(), "restart", ""));
+        }
+        None
     }
-    // RealTime: a block's answer, by field.
-    if command == "RealTime block" {
+
+    /// Gives bytes after the case's last answer, as extra to the last input.
+    fn trailing(&self) -> Option<FindingSignature> {
+        if let ReplayOutcome::Mismatch(m) = self.out
+            && m.trailing
+        {
+            let c = owner_of(self.p, self.t, self.run, self.step, self.run.stream.len().saturating_sub(1)).command;
+            return Some(sig(c, "extra", ""));
+        }
+        None
+    }
+
+    /// RealTime: a block's answer, by field (or its framing); `None` for any other input.
+    fn realtime_block(&self, whole_reads: bool) -> Option<FindingSignature> {
+        let Owner { step: owner, answer: a, command, .. } = &self.owner;
+        let (owner, a, x, run, pt, out) = (*owner, *a, self.x, self.run, &self.pt, self.out);
+        if command != "RealTime block" {
+            return None;
+        }
+        let command = command.clone();
         // Past a prompt the model gave to input sent in the loop (a bad header's status), the
         // model has left the loop: the rest of the step is answered outside it, and a hand
         // that parts there stayed in.
         let sent_in_loop = run.layouts.get(owner).is_some_and(Option::is_some);
-        if sent_in_loop && !prompt_ends(&run.stream[a..x], &pe).is_empty() {
+        if sent_in_loop && !prompt_ends(&run.stream[a..x], &self.pe).is_empty() {
             return Some(sig(command, "framing", "loop exit"));
         }
         let off = x - a;
@@ -448,125 +538,148 @@ pub fn signature(
         if off == 0 || whole_reads && hand_len != model_len && model_len == fb.size() {
             return Some(sig(command, "framing", "block"));
         }
-        return Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
+        Some(match fb.fields().iter().find(|f| (f.offset()..f.offset() + f.size()).contains(&off)) {
             Some(f) => sig(command, "value", f.name()),
             None if off >= fb.size() => sig(command, "extra", ""),
             None => sig(command, "framing", ""),
-        });
+        })
     }
-    // The model's answer unit holding x: from the last prompt before it (or the owner's
-    // answer's start) to the next prompt.
-    let unit_start = prompt_ends(&run.stream[..=x], &pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
-    let unit_end = prompt_ends(&run.stream[unit_start..], &pe).first().map_or(run.stream.len(), |e| unit_start + e);
-    let echo_len = if fr.echo && unit_start == a && !is_abort(owner) {
-        line.iter().filter(|b| **b != fr.terminator).count()
-    } else {
-        0
-    };
-    // The first line of a line's answer, right after an input the model took as leaving
-    // RealTime mode: a hand that stayed in the loop takes the line for blocks.
-    // (before the first line ending: within the echo. Past it, a status line is the line's
-    // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
-    // empty lines, and only the status tells them apart)
-    let first_line = !run.stream[unit_start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
-    let prev_send = (0..owner).rev().find(|i| !sent_of(*i).is_empty());
-    let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
-    let leaves_loop = in_loop(owner) && is_abort(owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
-    // Likewise for the first answer after the model left the loop within a step's answer: a
-    // bad header ends the loop with its status and prompt, and the rest of the line (or the
-    // lines sent with it) is answered outside it. Any prompt the model gives to an input sent
-    // in the loop is that exit.
-    let exits_at = |u: usize| -> bool {
-        let Some(k) = u.checked_sub(1).and_then(|i| run.tags.get(i)).map(|k| *k as usize) else { return false };
-        let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
-        in_loop(k) && prompt_ends(&run.stream[ks..u], &pe).first() == Some(&(u - ks))
-    };
-    // A prompt (or a status line) too many at the start of an answer, after which the hand
-    // goes on with the model's answer: more than the answer before.
-    // (not a status line where the model has just left the loop: a hand still in it refuses
-    // the line's first byte as a header)
-    let loop_exit = first_line && (unit_start == a && leaves_loop || exits_at(unit_start));
-    if x == unit_start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
-        // (a bare prompt, or one status line and a prompt)
-        let bare = got.starts_with(&pe);
-        let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !loop_exit;
-        if let Some(mut e) = prompt_ends(got, &pe).first().copied().filter(|_| bare || status_line) {
-            // (bare prompts may come several: one too many per empty line queued before)
-            while bare && got[e..].starts_with(&pe) {
-                e += pe.len();
-            }
-            let after = &got[e..];
-            let want = &run.stream[x..unit_end.min(x + 4)];
-            // (what follows may not have been read yet)
-            if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
-                let (_, _, _, c) = who(x - 1);
-                return Some(sig(c, "extra", ""));
+
+    /// Gives the model's answer unit holding the parting, and what its start is.
+    fn unit(&self) -> Unit {
+        let (p, t, run, x, pe) = (self.p, self.t, self.run, self.x, &self.pe);
+        let fr = &p.framing;
+        let Owner { step: owner, line, answer: a, .. } = &self.owner;
+        let (owner, a) = (*owner, *a);
+        let start = prompt_ends(&run.stream[..=x], pe).last().copied().filter(|e| *e <= x).unwrap_or(0).max(a).min(x);
+        let end = prompt_ends(&run.stream[start..], pe).first().map_or(run.stream.len(), |e| start + e);
+        let echo_len = if fr.echo && start == a && !is_abort(p, t, owner) {
+            line.iter().filter(|b| **b != fr.terminator).count()
+        } else {
+            0
+        };
+        // The first line of a line's answer, right after an input the model took as leaving
+        // RealTime mode: a hand that stayed in the loop takes the line for blocks.
+        // (before the first line ending: within the echo. Past it, a status line is the line's
+        // own: a CR that gets `ERR 2048` may be a hand still in the loop, or one that errs on
+        // empty lines, and only the status tells them apart)
+        let first_line = !run.stream[start..x].windows(fr.line_ending.len()).any(|w| w == fr.line_ending.as_bytes());
+        let prev_send = (0..owner).rev().find(|i| !sent_of(t, *i).is_empty());
+        let in_loop = |i: usize| run.layouts.get(i).is_some_and(Option::is_some);
+        let leaves_loop = in_loop(owner) && is_abort(p, t, owner) || !in_loop(owner) && prev_send.is_some_and(in_loop);
+        // Likewise for the first answer after the model left the loop within a step's answer: a
+        // bad header ends the loop with its status and prompt, and the rest of the line (or the
+        // lines sent with it) is answered outside it. Any prompt the model gives to an input sent
+        // in the loop is that exit.
+        let exits_at = |u: usize| -> bool {
+            let Some(k) = u.checked_sub(1).and_then(|i| run.tags.get(i)).map(|k| *k as usize) else { return false };
+            let Some(ks) = run.tags.iter().position(|s| *s as usize == k) else { return false };
+            in_loop(k) && prompt_ends(&run.stream[ks..u], pe).first() == Some(&(u - ks))
+        };
+        // A prompt (or a status line) too many at the start of an answer, after which the hand
+        // goes on with the model's answer: more than the answer before.
+        // (not a status line where the model has just left the loop: a hand still in it refuses
+        // the line's first byte as a header)
+        let loop_exit = first_line && (start == a && leaves_loop || exits_at(start));
+        Unit { start, end, echo_len, loop_exit }
+    }
+
+    /// Takes the unit; gives a prompt or status line too many at its start, a loop exit, or a
+    /// parting within the echo; `None` past them.
+    fn answer_start(&self, u: &Unit) -> Option<FindingSignature> {
+        let (fr, run, x, pe, got) = (&self.p.framing, self.run, self.x, &self.pe, self.got());
+        if x == u.start && x > 0 && got.starts_with(fr.line_ending.as_bytes()) {
+            // (a bare prompt, or one status line and a prompt)
+            let bare = got.starts_with(pe);
+            let status_line = got[fr.line_ending.len()..].starts_with(b"ERR ") && !u.loop_exit;
+            if let Some(mut e) = prompt_ends(got, pe).first().copied().filter(|_| bare || status_line) {
+                // (bare prompts may come several: one too many per empty line queued before)
+                while bare && got[e..].starts_with(pe) {
+                    e += pe.len();
+                }
+                let after = &got[e..];
+                let want = &run.stream[x..u.end.min(x + 4)];
+                // (what follows may not have been read yet)
+                if !want.is_empty() && after.starts_with(&want[..want.len().min(after.len())]) {
+                    let c = owner_of(self.p, self.t, run, self.step, x - 1).command;
+                    return Some(sig(c, "extra", ""));
+                }
             }
         }
-    }
-    if loop_exit {
-        return Some(sig("RealTime block".into(), "framing", "loop exit"));
-    }
-    if x < unit_start + echo_len {
-        return Some(sig(command, "framing", "echo"));
-    }
-    // The line of the model's answer the parting lies in, and the hand's line there.
-    let eol = fr.line_ending.as_bytes();
-    let unit = &run.stream[unit_start..unit_end];
-    let rel = (x - unit_start).min(unit.len());
-    let line_no = if unit_start == a { count(&unit[..rel], eol) } else { 0 };
-    let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
-    let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
-    let param = param_at(p, &line, line_no, m_line);
-    let status_of = |l: &[u8]| -> Option<u64> {
-        let s = String::from_utf8_lossy(l);
-        let mut w = s.split_whitespace();
-        (w.next() == Some("ERR")).then(|| w.next().and_then(|n| n.parse().ok()).unwrap_or(0))
-    };
-    let (ms, hs) = (status_of(m_line), status_of(h_line));
-    if ms.is_some() || hs.is_some() {
-        let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
-        // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
-        let cause = if is_abort(owner) { stopped_by_abort(p, t, owner) } else { String::new() };
-        return Some(FindingSignature { cause, ..s });
-    }
-    let prompt = fr.prompt.as_bytes();
-    let m_rest = &run.stream[x..unit_end];
-    if let ReplayOutcome::Timeout(to) = out {
-        // Stopped short. Only the prompt's tail missing is framing (a prompt without its
-        // space); an answer that stops before its prompt lacks part of itself.
-        let kind = if to.offset > 0 && prompt.ends_with(m_rest) && !m_rest.is_empty() { "framing" } else { "missing" };
-        return Some(sig(command, kind, &param));
-    }
-    let trimmed = prompt.trim_ascii_end();
-    let m_is_prompt = m_line.starts_with(trimmed) && !trimmed.is_empty();
-    let h_is_prompt = h_line.starts_with(trimmed) && !trimmed.is_empty();
-    if m_is_prompt && h_is_prompt {
-        return Some(sig(command, "framing", "prompt"));
-    }
-    if m_is_prompt {
-        return Some(sig(command, "extra", &param));
-    }
-    if h_is_prompt {
-        return Some(sig(command, "missing", &param));
-    }
-    let at_eol = |s: &[u8]| s.first().is_some_and(|b| matches!(b, b'\n' | b'\r'));
-    if at_eol(got) || at_eol(m_rest) {
-        let kind = if at_eol(got) && at_eol(m_rest) { "framing" } else { "value" };
-        if kind == "framing" {
-            return Some(sig(command, kind, "line ending"));
+        if u.loop_exit {
+            return Some(sig("RealTime block".into(), "framing", "loop exit"));
         }
+        if x < u.start + u.echo_len {
+            return Some(sig(self.owner.command.clone(), "framing", "echo"));
+        }
+        None
     }
-    // Values: the golden line (with its ranges) against the hand's.
-    let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
-    let golden = golden_line(t, step, &pt, eol).unwrap_or_else(|| ts(m_line));
-    let h_text = ts(h_line);
-    if is_reordering(&h_text, &golden) || reorders_with_captures(t, out, step, &pt, eol) {
-        return Some(sig(command, "order", &param));
+
+    /// Takes the unit; gives the signature by the line of the model's answer the parting lies
+    /// in against the hand's line there: a status, a missing or extra line, a prompt, a line
+    /// ending, an order, or a value.
+    fn in_line(&self, u: &Unit) -> FindingSignature {
+        let (p, t, run, out, x, pt, step) = (self.p, self.t, self.run, self.out, self.x, &self.pt, self.step);
+        let Owner { step: owner, line, answer: a, command } = &self.owner;
+        let (owner, a, command) = (*owner, *a, command.clone());
+        let fr = &p.framing;
+        let got = self.got();
+        // The line of the model's answer the parting lies in, and the hand's line there.
+        let eol = fr.line_ending.as_bytes();
+        let unit = &run.stream[u.start..u.end];
+        let rel = (x - u.start).min(unit.len());
+        let line_no = if u.start == a { count(&unit[..rel], eol) } else { 0 };
+        let m_line = cut_line(&unit[find_back(unit, rel, eol)..], eol);
+        let h_line = cut_line(&pt.hand[find_back(&pt.hand, pt.at, eol)..], eol);
+        let param = param_at(p, line, line_no, m_line);
+        let status_of = |l: &[u8]| -> Option<u64> {
+            let s = String::from_utf8_lossy(l);
+            let mut w = s.split_whitespace();
+            (w.next() == Some("ERR")).then(|| w.next().and_then(|n| n.parse().ok()).unwrap_or(0))
+        };
+        let (ms, hs) = (status_of(m_line), status_of(h_line));
+        if ms.is_some() || hs.is_some() {
+            let s = sig(command, "status", &status_detail(ms.unwrap_or(0), hs.unwrap_or(0)));
+            // (a ^C's status is about what it stopped, or was to stop: the motion or loop before it)
+            let cause = if is_abort(p, t, owner) { stopped_by_abort(p, t, owner) } else { String::new() };
+            return FindingSignature { cause, ..s };
+        }
+        let prompt = fr.prompt.as_bytes();
+        let m_rest = &run.stream[x..u.end];
+        if let ReplayOutcome::Timeout(to) = out {
+            // Stopped short. Only the prompt's tail missing is framing (a prompt without its
+            // space); an answer that stops before its prompt lacks part of itself.
+            let kind =
+                if to.offset > 0 && prompt.ends_with(m_rest) && !m_rest.is_empty() { "framing" } else { "missing" };
+            return sig(command, kind, &param);
+        }
+        let trimmed = prompt.trim_ascii_end();
+        let m_is_prompt = m_line.starts_with(trimmed) && !trimmed.is_empty();
+        let h_is_prompt = h_line.starts_with(trimmed) && !trimmed.is_empty();
+        if m_is_prompt && h_is_prompt {
+            return sig(command, "framing", "prompt");
+        }
+        if m_is_prompt {
+            return sig(command, "extra", &param);
+        }
+        if h_is_prompt {
+            return sig(command, "missing", &param);
+        }
+        let at_eol = |s: &[u8]| s.first().is_some_and(|b| matches!(b, b'\n' | b'\r'));
+        if at_eol(got) && at_eol(m_rest) {
+            return sig(command, "framing", "line ending");
+        }
+        // Values: the golden line (with its ranges) against the hand's.
+        let ts = |x: &[u8]| String::from_utf8_lossy(x).into_owned();
+        let golden = golden_line(t, step, pt, eol).unwrap_or_else(|| ts(m_line));
+        let h_text = ts(h_line);
+        if is_reordering(&h_text, &golden) || reorders_with_captures(t, out, step, pt, eol) {
+            return sig(command, "order", &param);
+        }
+        let motors = differing_motors(p, line, &h_text, &golden);
+        let (cause, cause_step) = cause_of(p, t, owner, line, &param, &motors).unzip();
+        FindingSignature { motors, cause: cause.unwrap_or_default(), cause_step, ..sig(command, "value", &param) }
     }
-    let motors = differing_motors(p, &line, &h_text, &golden);
-    let (cause, cause_step) = cause_of(p, t, owner, &line, &param, &motors).unzip();
-    Some(FindingSignature { motors, cause: cause.unwrap_or_default(), cause_step, ..sig(command, "value", &param) })
 }
 
 fn sig(command: String, kind: &str, detail: &str) -> FindingSignature {
@@ -682,11 +795,7 @@ fn stopped_by_abort(p: &Profile, t: &Transcript, owner: usize) -> String {
 /// The command at step `i` for a link failure: the step's own line.
 fn command_at(p: &Profile, t: &Transcript, i: usize) -> String {
     let sent = t.steps.get(i).and_then(|s| s.send.as_ref()).map(|h| h.bytes.clone()).unwrap_or_default();
-    crate::triage::command_of(
-        &sent,
-        t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)),
-        p,
-    )
+    command_of(&sent, t.steps.get(i).is_some_and(|s| s.send.as_ref().is_some_and(|h| h.form == Form::Hex)), p)
 }
 
 /// Among the lines step `owner` sent, the one whose answer holds model position `x`, and where
@@ -853,4 +962,246 @@ fn differing_motors(p: &Profile, line: &[u8], actual: &str, golden: &str) -> Str
         return String::new();
     }
     motors.iter().zip(a.iter().zip(&e)).filter(|(_, (x, tok))| !tok.accepts(x)).map(|(m, _)| m.to_string()).collect()
+}
+
+/// Where one failing case parts from its golden.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Signature {
+    /// What groups compare: one bug, one key ([`crate::align::FindingSignature::key`]).
+    pub key: String,
+    /// The command being answered.
+    pub command: String,
+    /// The kind of difference (see [`crate::align`]).
+    pub kind: String,
+    /// What the difference concerns (a parameter, a RealTime field, status bits), if anything.
+    pub detail: String,
+    /// For a value read back: the command before it that decided the value.
+    pub cause: String,
+}
+
+/// The signature of a failed replay by the step it failed in, the command that step sent
+/// and the first differing line: what [`crate::align`] falls back on when the model's run of
+/// the case cannot be tagged. Kinds: framing, status, order, value, missing-answer, flood,
+/// link.
+pub fn step_signature(case: &Case, outcome: &ReplayOutcome, profile: &Profile) -> Option<(Signature, Option<String>)> {
+    let step = outcome.failed_step()?;
+    let t = &case.transcript;
+    let golden = t.steps.get(step.min(t.steps.len().saturating_sub(1)));
+    let sent = golden.and_then(|s| s.send.as_ref()).map(|h| h.bytes.as_slice()).unwrap_or_default();
+    let hex = golden.is_some_and(|s| s.expect.segments.iter().any(|g| g.form == Form::Hex))
+        || golden.and_then(|s| s.send.as_ref()).is_some_and(|h| h.form == Form::Hex);
+    let command = command_of(sent, hex, profile);
+    let eol = profile.framing.line_ending.as_bytes();
+    let prompt = profile.framing.prompt.as_bytes();
+    let framing_text = gcl_transcript::escape_text(&[eol, prompt].concat());
+    let (kind, hint) = match outcome {
+        ReplayOutcome::Pass(_) => return None,
+        ReplayOutcome::Disconnected(_) => ("link", None),
+        ReplayOutcome::Flooded(_) => ("flood", None),
+        ReplayOutcome::Timeout(to) => {
+            if to.offset > 0 && !to.expected.is_empty() && framing_text.ends_with(&to.expected) {
+                ("framing", None)
+            } else {
+                ("missing-answer", None)
+            }
+        }
+        ReplayOutcome::Mismatch(m) if m.trailing => ("framing", None),
+        ReplayOutcome::Mismatch(m) => {
+            let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            classify(got, m.offset, &m.expected, &m.expected_full, sent, profile)
+        }
+    };
+    let key = format!("{kind} at {command}");
+    Some((Signature { key, command, kind: kind.to_string(), detail: String::new(), cause: String::new() }, hint))
+}
+
+/// The command word of a step's first line: `^C`, `CR`, `RealTime block`, or the word itself
+/// without its motor prefix.
+pub(crate) fn command_of(sent: &[u8], hex: bool, profile: &Profile) -> String {
+    let fr = &profile.framing;
+    if sent.first() == Some(&fr.abort) {
+        return "^C".to_string();
+    }
+    if hex {
+        return "RealTime block".to_string();
+    }
+    let line = sent.split(|b| *b == fr.terminator).next().unwrap_or_default();
+    if line.iter().all(|b| b.is_ascii_whitespace()) {
+        return "CR".to_string();
+    }
+    if let Ok(Line::Command(c)) = parse_line(profile, line) {
+        return profile.command(c.command).name.clone();
+    }
+    // A line the model refuses: its first word, without a motor prefix, as sent.
+    let text = String::from_utf8_lossy(line);
+    let word = text.split_whitespace().next().unwrap_or_default();
+    let bare = word.trim_start_matches(|c: char| profile.prefixes.iter().any(|p| p.char == c.to_ascii_uppercase()));
+    let w = if bare.is_empty() { word } else { bare };
+    w.chars().take(16).collect::<String>().to_ascii_uppercase()
+}
+
+fn classify(
+    got: &[u8],
+    offset: usize,
+    expected_rest: &str,
+    golden: &str,
+    sent: &[u8],
+    profile: &Profile,
+) -> (&'static str, Option<String>) {
+    let fr = &profile.framing;
+    let offset = offset.min(got.len());
+    let echo_len =
+        if fr.echo { sent.iter().take_while(|b| **b != fr.terminator && **b != fr.abort).count() } else { 0 };
+    if offset < echo_len {
+        return ("framing", Some("echo".to_string()));
+    }
+    let is_eol = |b: &u8| matches!(b, b'\n' | b'\r');
+    let line_start = got[..offset].iter().rposition(is_eol).map_or(0, |i| i + 1);
+    let line_end = got[offset..].iter().position(is_eol).map_or(got.len(), |i| offset + i);
+    let actual_line = &got[line_start..line_end];
+    // The golden's line at the same place: as many line endings in as the answer has.
+    let line_no = {
+        let eol = fr.line_ending.as_bytes();
+        got[..line_start].windows(eol.len().max(1)).filter(|w| *w == eol).count()
+    };
+    let expected_line = {
+        let text = golden.trim_matches('"');
+        let eol = gcl_transcript::escape_text(fr.line_ending.as_bytes());
+        match text.split(eol.as_str()).nth(line_no) {
+            Some(l) if !eol.is_empty() => l.to_string(),
+            _ => {
+                let mut s = gcl_transcript::escape_text(&got[line_start..offset]);
+                let rest = expected_rest.split("\\n").next().unwrap_or_default();
+                s.push_str(rest.split("\\r").next().unwrap_or_default());
+                s
+            }
+        }
+    };
+    let status_word = b"ERR";
+    let is_status = |l: &[u8]| l.starts_with(status_word);
+    if is_status(actual_line) || expected_line.starts_with("ERR") {
+        let number =
+            |l: &str| l.split_whitespace().nth(1).filter(|n| n.bytes().all(|b| b.is_ascii_digit())).map(str::to_string);
+        let hint = if expected_line.starts_with("ERR") {
+            number(&expected_line)
+        } else {
+            number(&String::from_utf8_lossy(actual_line))
+        };
+        return ("status", hint);
+    }
+    let prompt = fr.prompt.trim_end();
+    if actual_line.starts_with(prompt.as_bytes()) || expected_line.starts_with(prompt) {
+        return ("framing", None);
+    }
+    let a_eol = got.get(offset).is_some_and(is_eol);
+    let e_eol = expected_rest.starts_with("\\n") || expected_rest.starts_with("\\r");
+    if a_eol && e_eol {
+        return ("framing", None);
+    }
+    // One side ends the line where the other goes on, or the content differs.
+    let kind = if is_reordering(&String::from_utf8_lossy(actual_line), &expected_line) { "order" } else { "value" };
+    (kind, None)
+}
+
+/// Whether `actual` holds the tokens of `expected` in another order: the tokens do not match
+/// in place, but each expected token (a literal, or an elision `{int A..B}` with its range,
+/// or any other elision) matches a different actual token. A wrong value that happens to fit
+/// a wide elision elsewhere is still a wrong value unless every token finds a partner.
+pub fn is_reordering(actual: &str, expected: &str) -> bool {
+    let a: Vec<&str> = actual.split_whitespace().collect();
+    let e = expected_tokens(expected);
+    if a.len() != e.len() || a.len() < 2 || a.len() > 64 {
+        return false;
+    }
+    if a.iter().zip(&e).all(|(x, t)| t.accepts(x)) {
+        return false;
+    }
+    // A perfect matching of expected tokens to actual ones (Kuhn's augmenting paths).
+    fn augment(i: usize, e: &[Token], a: &[&str], seen: &mut [bool], owner: &mut [Option<usize>]) -> bool {
+        for j in 0..a.len() {
+            if !seen[j] && e[i].accepts(a[j]) {
+                seen[j] = true;
+                if owner[j].is_none_or(|k| augment(k, e, a, seen, owner)) {
+                    owner[j] = Some(i);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+    let mut owner = vec![None; a.len()];
+    (0..e.len()).all(|i| augment(i, &e, &a, &mut vec![false; a.len()], &mut owner))
+}
+
+/// One expected token of a golden line: a literal, an integer in a range, or anything.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Token {
+    /// These characters exactly.
+    Literal(String),
+    /// A decimal integer within the range (inclusive).
+    Int(i64, i64),
+    /// Any token (an elision without a range).
+    Any,
+}
+
+impl Token {
+    /// Whether an actual token fits.
+    pub fn accepts(&self, actual: &str) -> bool {
+        match self {
+            Token::Literal(l) => l == actual,
+            Token::Int(lo, hi) => actual.parse::<i64>().is_ok_and(|v| (*lo..=*hi).contains(&v)),
+            Token::Any => true,
+        }
+    }
+}
+
+/// The tokens of a golden line as written (escaped text with elisions): `{int A..B}` keeps its
+/// range, any other elision matches anything.
+pub fn expected_tokens(text: &str) -> Vec<Token> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut elision: Option<String> = None;
+    let flush = |cur: &mut String, out: &mut Vec<Token>| {
+        if !cur.is_empty() {
+            out.push(Token::Literal(std::mem::take(cur)));
+        }
+    };
+    for ch in text.chars() {
+        match (&mut elision, ch) {
+            (None, '{') => {
+                flush(&mut cur, &mut out);
+                elision = Some(String::new());
+            }
+            (Some(body), '}') => {
+                let body = std::mem::take(body);
+                elision = None;
+                let range = body.strip_prefix("int ").and_then(|r| {
+                    let (lo, hi) = r.trim().split_once("..")?;
+                    Some((lo.parse().ok()?, hi.parse().ok()?))
+                });
+                out.push(range.map_or(Token::Any, |(lo, hi)| Token::Int(lo, hi)));
+            }
+            (Some(body), c) => body.push(c),
+            (None, c) if c.is_whitespace() => flush(&mut cur, &mut out),
+            (None, c) => cur.push(c),
+        }
+    }
+    flush(&mut cur, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reordered_values_are_told_from_changed_ones() {
+        assert!(is_reordering("150 1000 1000 1000", "1000 1000 1000 150"));
+        assert!(is_reordering("150 1000 1000 1000", "{int 990..1010} 1000 1000 150"));
+        assert!(!is_reordering("150 1000 1000 1001", "1000 1000 1000 150"));
+        assert!(!is_reordering("1000 1000 1000 150", "1000 1000 1000 150"));
+        // A wrong value is not an order because an elision elsewhere is wide (mcv-ignored).
+        assert!(!is_reordering("793 793", "{int 144..298} {int 765..1744}"));
+        assert!(is_reordering("800 200", "{int 144..298} {int 765..1744}"));
+    }
 }

@@ -25,6 +25,9 @@ use ed25519_dalek::{Signature, Signer, SigningKey, Verifier, VerifyingKey};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::digest::hex;
+/// The digest of a manifest line (kept here for callers that check a bundle by hand).
+pub use crate::digest::sha256_hex;
 use crate::report::{ProfileOrigin, ProfileSpec, RunOptions, RunReport, Verdict, write_all, write_atomic};
 use gcl_host::files::{MAX_INPUT_BYTES, open_regular, read_limited, read_text_limited, too_large};
 
@@ -258,21 +261,6 @@ fn builtin_disagreements(cert: &Certificate) -> Vec<String> {
     out
 }
 
-/// SHA-256 of bytes, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    hex(&Sha256::digest(bytes))
-}
-
-/// Bytes as lower-case hex (a digest's usual spelling).
-pub fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// The file name a case's transcript has in a bundle's `transcripts/` (without `.gcl`).
-pub(crate) fn safe_name(id: &str) -> String {
-    id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
-}
-
 /// Writes a whole bundle into `dir` (created if needed; it should be empty), signed with
 /// `key` when one is given.
 pub fn write_bundle(
@@ -285,7 +273,7 @@ pub fn write_bundle(
     std::fs::create_dir_all(dir.join("transcripts"))?;
     write_all(dir, report)?;
     for (id, text) in transcripts {
-        write_atomic(&dir.join("transcripts").join(format!("{}.gcl", safe_name(id))), text.as_bytes())?;
+        write_atomic(&dir.join("transcripts").join(format!("{}.gcl", crate::report::safe_name(id))), text.as_bytes())?;
     }
     write_atomic(&dir.join("certificate.json"), &serde_json::to_vec_pretty(cert)?)?;
     let mut lines = String::new();

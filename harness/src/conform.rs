@@ -20,10 +20,12 @@ use crate::report::{
     CONTEXT_CHARS, CaseResult, Diff, KnownFailureEntry, Liveness, MAX_SHOWN, REPORT_FORMAT, ResultStream, RunOptions,
     RunReport, StopCause, Stopped, Verdict, WireTime, truncate_note,
 };
+/// Which levels run (kept here, where `conform` options name it).
+pub use crate::suite::LevelFilter;
 use crate::suite::{self, Case};
 use gcl_host::link::{Link, LinkError, SimLink, byte_time};
 use gcl_host::target::{OpenOptions, Target, open};
-use gcl_transcript::{Form, Level, Requirement};
+use gcl_transcript::{Form, Requirement};
 
 /// Why a conformance run could not run (a failing hand is a report, not an error).
 #[derive(Debug, thiserror::Error)]
@@ -99,42 +101,6 @@ pub enum KnownFailuresError {
         /// What is wrong with it.
         error: Box<KnownFailuresError>,
     },
-}
-
-/// Which levels to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LevelFilter {
-    /// MUST only.
-    Must,
-    /// MUST and SHOULD.
-    Should,
-    /// Every level: MUST, SHOULD, MAY, INFO.
-    All,
-}
-
-impl LevelFilter {
-    /// Whether a case of `level` runs.
-    pub fn admits(self, level: Level) -> bool {
-        match self {
-            LevelFilter::Must => level == Level::Must,
-            LevelFilter::Should => matches!(level, Level::Must | Level::Should),
-            LevelFilter::All => true,
-        }
-    }
-
-    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
-    pub fn from_name(name: &str) -> Option<LevelFilter> {
-        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
-    }
-
-    /// The lower-case name.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            LevelFilter::Must => "must",
-            LevelFilter::Should => "should",
-            LevelFilter::All => "all",
-        }
-    }
 }
 
 /// One entry of a known-failures file.
@@ -363,7 +329,7 @@ pub struct RunControl {
     /// Run the framing pre-flight before the first case.
     pub preflight: bool,
     /// Before a run with abort-timing cases on a hand outside this process, close the hand
-    /// once and compare the time with the model's ([`crate::fuzz::device::MotionProbe`], the
+    /// once and compare the time with the model's ([`crate::motion::MotionProbe`], the
     /// fuzzer's probe): a hand whose motions end at once cannot take a ^C mid-motion, so those
     /// cases are SKIP with that reason (`--assume-real-time` turns the probe off).
     pub real_time_probe: bool,
@@ -674,369 +640,661 @@ fn reopen(opts: &ConformOptions, probe_timeout: Duration) -> Result<Box<dyn Link
 }
 
 /// As [`run`], telling `on` about the pre-flight, every case and an early end.
+///
+/// A run is select → probe → pre-flight → motion-time probe → cases → triage → report; each
+/// stage is a function below.
 pub fn run_with_events(
     cases: &[Case],
     opts: &ConformOptions,
     stream: Option<&mut ResultStream>,
     on: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<RunOutput, ConformError> {
-    let now = time::OffsetDateTime::now_utc();
-    let started_at = now.replace_nanosecond(0).unwrap_or(now);
-    let wall = Instant::now();
-    let (mut selected, mut skipped) = select(cases, opts)?;
-    let fresh_per_case = matches!(opts.target, Target::Sim { .. });
-    let probe_timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5)).max(Duration::from_secs(2));
-    let open_link = || open(&opts.target, &opts.open);
-    let policy = opts.control.deadlines.unwrap_or_else(|| DeadlinePolicy::for_target(&opts.target));
-    let link_baud = match &opts.target {
-        Target::Serial { baud, .. } => Some(*baud),
-        _ => opts.baud,
-    };
+    let clock = RunClock::start();
+    let mut selection = select_stage(cases, opts)?;
+    let plan = RunPlan::of(opts);
+    let (mut link, found) = probe_stage(opts, &plan)?;
+    let pre = preflight_stage(link.as_mut(), &found, opts, &plan, on);
+    let motion = motion_time_stage(link.as_mut(), &found, &pre, opts, &plan, &mut selection, on);
+    let objects = unplaced_stage(cases, opts, &selection, on);
+    let shared = alive_stage(link, found, opts, &plan)?;
+    let mut ran = cases_stage(cases.len(), selection, shared, opts, &plan, stream, on)?;
+    let after = after_stage(&mut ran, opts, &plan);
+    let times = clock.stop();
+    let triaged = triage_stage(cases, ran, &pre.clauses);
+    let preflight = preflight_text(pre.line, motion.into_iter().chain(objects).collect());
+    Ok(report_stage(cases, opts, &plan, times, preflight, triaged, after))
+}
 
-    let mut shared: Option<Box<dyn Link>> = None;
-    let mut preflight = None;
-    let mut framing_clauses: Vec<String> = Vec::new();
-    let mut notes: Vec<String> = Vec::new();
-    let before = {
-        let mut l = open_link()?;
-        let found = probe(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(Alive::Silent);
-        let ok = found.is_alive();
-        // Whether the pre-flight left the hand after RESET at a quiet prompt.
-        let mut settled = false;
-        if ok && opts.control.preflight {
-            if let Ok(p) = crate::preflight::run(l.as_mut(), &opts.profile, &policy) {
-                framing_clauses = p.clauses.clone();
-                let line = p.line();
-                on(RunEvent::Preflight(&line));
-                preflight = Some(line);
-                settled = p.settled;
-            }
-            // Its last answer may not have ended quietly (a flood, a missing prompt): drain.
-            if !settled {
-                let _ = discard(l.as_mut(), Duration::from_millis(50), AFTER_FAILURE_DRAIN);
-            }
-        }
-        if ok
-            && !fresh_per_case
-            && opts.control.real_time_probe
-            && selected.iter().any(|c| c.requires(&Requirement::AbortTiming))
-            && let Some(fast) = motion_time(l.as_mut(), opts, &policy, link_baud, settled)
-        {
-            let line = format!(
-                "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
-                 (as with `--no abort-timing`; `--assume-real-time` runs them)"
-            );
-            on(RunEvent::Preflight(&line));
-            let reason = format!("requires abort-timing, which the target lacks: {fast}");
-            selected.retain(|c| {
-                let timing = c.requires(&Requirement::AbortTiming);
-                if timing {
-                    skipped.push(result_of(c, Verdict::Skip, 0.0, Some(reason.clone())));
-                }
-                !timing
-            });
-            notes.push(line);
-        }
-        // One line for the cases whose object gcl cannot place here (each SKIP says so too).
-        let unplaced: Vec<&str> = cases
-            .iter()
-            .filter(|c| missing_fixture(c, opts).is_some() && skipped.iter().any(|r| r.id == c.id()))
-            .map(|c| c.id())
-            .collect();
-        if !unplaced.is_empty() {
-            let line = format!(
-                "objects: {} need an object in the fingers' way, which gcl cannot place on this target, so they are \
-                 SKIP (`--fixture object` runs them with the object in place: one at a time, with `--only`)",
-                unplaced.join(", ")
-            );
-            on(RunEvent::Preflight(&line));
-            notes.push(line);
+/// When a run started: the wall-clock second for the report, and the monotonic start.
+struct RunClock {
+    started_at: time::OffsetDateTime,
+    wall: Instant,
+}
+
+/// When a run started and how long it took.
+struct RunTimes {
+    started_at: time::OffsetDateTime,
+    duration_ms: f64,
+}
+
+impl RunClock {
+    /// Reads both clocks at the start of a run.
+    fn start() -> RunClock {
+        let now = time::OffsetDateTime::now_utc();
+        RunClock { started_at: now.replace_nanosecond(0).unwrap_or(now), wall: Instant::now() }
+    }
+
+    /// Reads the monotonic clock at the end of a run: gives its start and duration.
+    fn stop(self) -> RunTimes {
+        RunTimes { started_at: self.started_at, duration_ms: self.wall.elapsed().as_secs_f64() * 1000.0 }
+    }
+}
+
+/// What a run fixes from its options before the first byte.
+struct RunPlan {
+    /// The target is opened afresh for every case (the in-process simulator).
+    fresh_per_case: bool,
+    /// How long a liveness probe waits.
+    probe_timeout: Duration,
+    /// How deadlines are derived.
+    policy: DeadlinePolicy,
+    /// The line's baud, when there is one (for deadlines and the wire-time bound).
+    link_baud: Option<u32>,
+    /// The replay options every case starts from.
+    replay: ReplayOptions,
+}
+
+impl RunPlan {
+    /// Takes the options; gives the run's target kind, probe wait, deadlines, baud and replay
+    /// options.
+    fn of(opts: &ConformOptions) -> RunPlan {
+        let fresh_per_case = matches!(opts.target, Target::Sim { .. });
+        let policy = opts.control.deadlines.unwrap_or_else(|| DeadlinePolicy::for_target(&opts.target));
+        let mut replay = suite::replay_options();
+        if let Some(t) = opts.step_timeout {
+            replay.default_timeout = t;
+        } else {
+            replay.silent_wait = policy.silent_wait;
         }
         if !fresh_per_case {
-            shared = Some(l);
+            // A shared link was drained by the probe; between passing cases nothing is pending.
+            replay.drain_quiet = Duration::ZERO;
+            replay.trailing = Duration::from_millis(2);
         }
-        found
-    };
-    if !before.is_alive() {
+        RunPlan {
+            fresh_per_case,
+            probe_timeout: opts.step_timeout.unwrap_or(Duration::from_secs(5)).max(Duration::from_secs(2)),
+            policy,
+            link_baud: match &opts.target {
+                Target::Serial { baud, .. } => Some(*baud),
+                _ => opts.baud,
+            },
+            replay,
+        }
+    }
+}
+
+/// The cases a run will run, and the results of those it already skips.
+struct Selection<'c> {
+    to_run: Vec<&'c Case>,
+    skipped: Vec<CaseResult>,
+}
+
+/// Select: takes the cases and options; gives the cases to run and the SKIP results of the rest.
+fn select_stage<'c>(cases: &'c [Case], opts: &ConformOptions) -> Result<Selection<'c>, ConformError> {
+    let (to_run, skipped) = select(cases, opts)?;
+    Ok(Selection { to_run, skipped })
+}
+
+/// Probe: opens the target and sends the liveness probe; gives the link and what answered.
+fn probe_stage(opts: &ConformOptions, plan: &RunPlan) -> Result<(Box<dyn Link>, Alive), ConformError> {
+    let mut l = open(&opts.target, &opts.open)?;
+    let found = probe(l.as_mut(), &opts.profile, plan.probe_timeout).unwrap_or(Alive::Silent);
+    Ok((l, found))
+}
+
+/// What the framing pre-flight found.
+#[derive(Default)]
+struct PreflightFound {
+    /// Its line for people, when it ran.
+    line: Option<String>,
+    /// The framing clauses it found broken.
+    clauses: Vec<String>,
+    /// Whether it left the hand after RESET at a quiet prompt.
+    settled: bool,
+}
+
+/// Pre-flight: on a live hand, when asked, runs the framing pre-flight (`on` hears its line)
+/// and drains what it left pending; gives its line, clauses and whether the hand settled.
+fn preflight_stage(
+    link: &mut dyn Link,
+    found: &Alive,
+    opts: &ConformOptions,
+    plan: &RunPlan,
+    on: &mut dyn FnMut(RunEvent<'_>),
+) -> PreflightFound {
+    let mut pre = PreflightFound::default();
+    if !(found.is_alive() && opts.control.preflight) {
+        return pre;
+    }
+    if let Ok(p) = crate::preflight::run(link, &opts.profile, &plan.policy) {
+        let clauses = p.clauses.clone();
+        let line = p.line();
+        on(RunEvent::Preflight(&line));
+        pre = PreflightFound { line: Some(line), clauses, settled: p.settled };
+    }
+    // Its last answer may not have ended quietly (a flood, a missing prompt): drain.
+    if !pre.settled {
+        let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
+    }
+    pre
+}
+
+/// Motion-time probe: on a live hand kept across cases with abort-timing cases selected,
+/// probes its motions; when they end at once, moves those cases to SKIP. Gives the line `on`
+/// heard.
+fn motion_time_stage(
+    link: &mut dyn Link,
+    found: &Alive,
+    pre: &PreflightFound,
+    opts: &ConformOptions,
+    plan: &RunPlan,
+    selection: &mut Selection<'_>,
+    on: &mut dyn FnMut(RunEvent<'_>),
+) -> Option<String> {
+    if !(found.is_alive()
+        && !plan.fresh_per_case
+        && opts.control.real_time_probe
+        && selection.to_run.iter().any(|c| c.requires(&Requirement::AbortTiming)))
+    {
+        return None;
+    }
+    let fast = motion_time(link, opts, &plan.policy, plan.link_baud, pre.settled)?;
+    let line = format!(
+        "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
+         (as with `--no abort-timing`; `--assume-real-time` runs them)"
+    );
+    on(RunEvent::Preflight(&line));
+    let reason = format!("requires abort-timing, which the target lacks: {fast}");
+    let skipped = &mut selection.skipped;
+    selection.to_run.retain(|c| {
+        let timing = c.requires(&Requirement::AbortTiming);
+        if timing {
+            skipped.push(result_of(c, Verdict::Skip, 0.0, Some(reason.clone())));
+        }
+        !timing
+    });
+    Some(line)
+}
+
+/// Takes the selection; gives one line (also told to `on`) for the cases whose object gcl
+/// cannot place here (each SKIP says so too), or `None`.
+fn unplaced_stage(
+    cases: &[Case],
+    opts: &ConformOptions,
+    selection: &Selection<'_>,
+    on: &mut dyn FnMut(RunEvent<'_>),
+) -> Option<String> {
+    let unplaced: Vec<&str> = cases
+        .iter()
+        .filter(|c| missing_fixture(c, opts).is_some() && selection.skipped.iter().any(|r| r.id == c.id()))
+        .map(|c| c.id())
+        .collect();
+    if unplaced.is_empty() {
+        return None;
+    }
+    let line = format!(
+        "objects: {} need an object in the fingers' way, which gcl cannot place on this target, so they are \
+         SKIP (`--fixture object` runs them with the object in place: one at a time, with `--only`)",
+        unplaced.join(", ")
+    );
+    on(RunEvent::Preflight(&line));
+    Some(line)
+}
+
+/// Takes the probed link and what answered: ends the run when the hand is not alive, else
+/// gives the link to keep across cases (none when each case opens the target afresh).
+fn alive_stage(
+    link: Box<dyn Link>,
+    found: Alive,
+    opts: &ConformOptions,
+    plan: &RunPlan,
+) -> Result<Option<Box<dyn Link>>, ConformError> {
+    let shared = if plan.fresh_per_case { None } else { Some(link) };
+    if !found.is_alive() {
         return Err(ConformError::NotAlive {
             target: opts.target.to_string(),
             prompt: gcl_model::escape::escape(opts.profile.framing.prompt.as_bytes()),
-            why: before.why(probe_timeout),
+            why: found.why(plan.probe_timeout),
         });
     }
-    let before = true;
+    Ok(shared)
+}
 
-    let mut ropts = suite::replay_options();
-    if let Some(t) = opts.step_timeout {
-        ropts.default_timeout = t;
-    } else {
-        ropts.silent_wait = policy.silent_wait;
-    }
-    if !fresh_per_case {
-        // A shared link was drained by the probe; between passing cases nothing is pending.
-        ropts.drain_quiet = Duration::ZERO;
-        ropts.trailing = Duration::from_millis(2);
-    }
+/// What the cases stage gave.
+struct CasesRun {
+    /// Every result, skipped ones first, in the order `on` heard them.
+    results: Vec<CaseResult>,
+    /// The failures' signatures, for triage.
+    signatures: Vec<crate::triage::Failure>,
+    /// The actual transcripts kept (id, text).
+    transcripts: Vec<(String, String)>,
+    /// What each counted case exchanged, for the wire-time bound.
+    wire_cases: Vec<WireCase>,
+    /// How the run ended early, if it did.
+    stopped: Option<Stopped>,
+    /// The link still open after the last case, if any.
+    shared: Option<Box<dyn Link>>,
+}
 
-    let mut results: Vec<CaseResult> = Vec::with_capacity(cases.len());
-    let mut signatures: Vec<crate::triage::Failure> = Vec::new();
-    let mut transcripts = Vec::new();
-    let mut wire_cases: Vec<WireCase> = Vec::new();
-    let mut stream = stream;
-    let total = selected.len() + skipped.len();
-    for r in skipped {
-        if let Some(s) = stream.as_deref_mut() {
+/// Cases: takes the selection and the probed link; runs every case in order (SKIP after an
+/// early end), streaming and telling `on` each result; gives what they gave.
+fn cases_stage(
+    capacity: usize,
+    selection: Selection<'_>,
+    shared: Option<Box<dyn Link>>,
+    opts: &ConformOptions,
+    plan: &RunPlan,
+    stream: Option<&mut ResultStream>,
+    on: &mut dyn FnMut(RunEvent<'_>),
+) -> Result<CasesRun, ConformError> {
+    let total = selection.to_run.len() + selection.skipped.len();
+    let mut run = CaseLoop {
+        opts,
+        plan,
+        stream,
+        total,
+        run: CasesRun {
+            results: Vec::with_capacity(capacity),
+            signatures: Vec::new(),
+            transcripts: Vec::new(),
+            wire_cases: Vec::new(),
+            stopped: None,
+            shared,
+        },
+        failures: 0,
+        timeouts_in_a_row: 0,
+        first_timeout: String::new(),
+        unquiet_in_a_row: 0,
+        first_unquiet: String::new(),
+        // The first case follows the probes and the pre-flight: the bound starts it from a
+        // freshly powered-up model.
+        hand_carries: false,
+    };
+    for r in selection.skipped {
+        run.emit(r, on)?;
+    }
+    for case in selection.to_run {
+        run.case(case, on)?;
+    }
+    Ok(run.run)
+}
+
+/// The cases stage as it goes: what it gathered and the counters that end a run early.
+struct CaseLoop<'o, 's> {
+    opts: &'o ConformOptions,
+    plan: &'o RunPlan,
+    stream: Option<&'s mut ResultStream>,
+    /// How many results there will be.
+    total: usize,
+    run: CasesRun,
+    failures: usize,
+    timeouts_in_a_row: usize,
+    first_timeout: String,
+    unquiet_in_a_row: usize,
+    first_unquiet: String,
+    /// Whether the next case finds the hand where the case before left it.
+    hand_carries: bool,
+}
+
+impl CaseLoop<'_, '_> {
+    /// Takes a result: streams it, tells `on`, and keeps it.
+    fn emit(&mut self, r: CaseResult, on: &mut dyn FnMut(RunEvent<'_>)) -> Result<(), ConformError> {
+        if let Some(s) = self.stream.as_deref_mut() {
             s.push(&r).map_err(ConformError::Results)?;
         }
-        on(RunEvent::Case(&r, results.len() + 1, total));
-        results.push(r);
+        on(RunEvent::Case(&r, self.run.results.len() + 1, self.total));
+        self.run.results.push(r);
+        Ok(())
     }
-    let mut failures = 0usize;
-    let mut timeouts_in_a_row = 0usize;
-    let mut first_timeout = String::new();
-    let (mut unquiet_in_a_row, mut first_unquiet) = (0usize, String::new());
-    let mut stopped: Option<Stopped> = None;
-    // The first case follows the probes and the pre-flight: the bound starts it from a
-    // freshly powered-up model.
-    let mut hand_carries = false;
-    for case in selected {
-        if let Some(st) = &stopped {
+
+    /// Takes one case: runs it (or SKIPs it after an early end), judges it, reports it, and
+    /// decides whether the run ends there.
+    fn case(&mut self, case: &Case, on: &mut dyn FnMut(RunEvent<'_>)) -> Result<(), ConformError> {
+        if let Some(st) = &self.run.stopped {
             let r = result_of(case, Verdict::Skip, 0.0, Some(format!("not run: {}", st.message)));
-            if let Some(s) = stream.as_deref_mut() {
-                s.push(&r).map_err(ConformError::Results)?;
-            }
-            on(RunEvent::Case(&r, results.len() + 1, total));
-            results.push(r);
-            continue;
+            return self.emit(r, on);
         }
         let t0 = Instant::now();
         // Whether the hand starts this case where the case before left it (for the bound).
-        let carried = hand_carries && shared.is_some();
-        let link: &mut dyn Link = if fresh_per_case {
-            shared = Some(open(&opts.target, &open_options_for(opts, case))?);
-            shared.as_deref_mut().expect("just opened")
-        } else {
-            match shared.as_deref_mut() {
-                Some(l) => l,
-                None => match reopen(opts, probe_timeout) {
-                    Ok(l) => shared.insert(l).as_mut(),
-                    Err(e) => {
-                        // The link failed and the hand does not come back: the run ends
-                        // there, an infrastructure error, not a verdict on any clause.
-                        let message =
-                            format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
-                        let r = result_of(case, Verdict::Error, 0.0, Some(e));
-                        if let Some(s) = stream.as_deref_mut() {
-                            s.push(&r).map_err(ConformError::Results)?;
-                        }
-                        on(RunEvent::Case(&r, results.len() + 1, total));
-                        let st = Stopped { cause: StopCause::DeadHand, case: case.id().to_string(), message };
-                        on(RunEvent::Stopped(&st));
-                        stopped = Some(st);
-                        results.push(r);
-                        failures += 1;
-                        continue;
-                    }
-                },
+        let carried = self.hand_carries && self.run.shared.is_some();
+        if !self.link_for(case, on)? {
+            return Ok(());
+        }
+        let outcome = self.replay(case);
+        let ms = t0.elapsed().as_secs_f64() * 1000.0;
+        self.count_wire(case, &outcome, carried);
+        // The next case finds the hand where this one left it only when this one passed on
+        // a link that is kept (a failing case is drained, maybe reopened; a timed-out one
+        // may have left the hand anywhere).
+        self.hand_carries = !self.plan.fresh_per_case && outcome.is_pass();
+        let (mut r, flooded) = judged(case, &outcome, ms);
+        if matches!(outcome, ReplayOutcome::Disconnected(_)) {
+            self.run.shared = None;
+        }
+        self.timeouts_in_a_row = if r.verdict == Verdict::Timeout { self.timeouts_in_a_row + 1 } else { 0 };
+        if self.timeouts_in_a_row == 1 {
+            self.first_timeout = case.id().to_string();
+        }
+        self.triage_case(case, &outcome, &mut r);
+        known_verdict(&mut r, self.opts.known.lookup(&case.profile, case.id()));
+        self.keep_transcript(case, &outcome, &mut r);
+        self.drain_after(case, &outcome, flooded);
+        if outcome.is_pass() {
+            self.unquiet_in_a_row = 0;
+        }
+        if r.verdict.fails_run() {
+            self.failures += 1;
+        }
+        let id = r.id.clone();
+        self.emit(r, on)?;
+        self.run.stopped = self.stop_after(id);
+        if let Some(st) = &self.run.stopped {
+            on(RunEvent::Stopped(st));
+        }
+        Ok(())
+    }
+
+    /// Takes the case about to run: opens the target for it (afresh per case, or reopened
+    /// after a lost link). Gives `false` when the hand vanished for good: the case is ERROR
+    /// and the run stops, both reported.
+    fn link_for(&mut self, case: &Case, on: &mut dyn FnMut(RunEvent<'_>)) -> Result<bool, ConformError> {
+        if self.plan.fresh_per_case {
+            self.run.shared = Some(open(&self.opts.target, &open_options_for(self.opts, case))?);
+            return Ok(true);
+        }
+        if self.run.shared.is_some() {
+            return Ok(true);
+        }
+        match reopen(self.opts, self.plan.probe_timeout) {
+            Ok(l) => {
+                self.run.shared = Some(l);
+                Ok(true)
             }
-        };
-        let mut case_opts = ropts.clone();
+            Err(e) => {
+                // The link failed and the hand does not come back: the run ends there, an
+                // infrastructure error, not a verdict on any clause.
+                let message = format!("the hand vanished before case {} and could not be reopened: {e}", case.id());
+                self.emit(result_of(case, Verdict::Error, 0.0, Some(e)), on)?;
+                let st = Stopped { cause: StopCause::DeadHand, case: case.id().to_string(), message };
+                on(RunEvent::Stopped(&st));
+                self.run.stopped = Some(st);
+                self.failures += 1;
+                Ok(false)
+            }
+        }
+    }
+
+    /// Takes a case whose link is open: replays it with its own deadlines; gives the outcome.
+    fn replay(&mut self, case: &Case) -> ReplayOutcome {
+        let mut case_opts = self.plan.replay.clone();
         // The in-process model's time is simulated: waiting costs nothing there, so it keeps
         // the goldens' deadlines and the suite's in-process speed.
-        if opts.step_timeout.is_none()
-            && !fresh_per_case
-            && let Some(pred) = crate::deadline::predict(case, &opts.profile)
+        if self.opts.step_timeout.is_none()
+            && !self.plan.fresh_per_case
+            && let Some(pred) = crate::deadline::predict(case, &self.opts.profile)
         {
-            case_opts.budgets = crate::deadline::budgets(&opts.profile, case, &pred, &policy, link_baud);
+            case_opts.budgets =
+                crate::deadline::budgets(&self.opts.profile, case, &pred, &self.plan.policy, self.plan.link_baud);
         }
-        let outcome = suite::run_case(case, link, &case_opts);
-        let ms = t0.elapsed().as_secs_f64() * 1000.0;
-        // The wire-time bound counts cases that ran to their end or to a mismatch: a
-        // TIMEOUT's wait and an ERROR's reconnect are not line time.
+        let link = self.run.shared.as_deref_mut().expect("link_for opened one");
+        suite::run_case(case, link, &case_opts)
+    }
+
+    /// Takes a case's outcome: counts its bytes for the wire-time bound when it ran to its
+    /// end or to a mismatch (a TIMEOUT's wait and an ERROR's reconnect are not line time).
+    fn count_wire(&mut self, case: &Case, outcome: &ReplayOutcome, carried: bool) {
         if matches!(outcome, ReplayOutcome::Pass(_) | ReplayOutcome::Mismatch(_)) {
-            wire_cases.push(WireCase {
+            self.run.wire_cases.push(WireCase {
                 id: case.id().to_string(),
                 steps: outcome.exchange().iter().map(|e| (e.sent.len() as u64, e.received.len() as u64)).collect(),
                 passed: matches!(outcome, ReplayOutcome::Pass(_)),
                 carried,
             });
         }
-        // The next case finds the hand where this one left it only when this one passed on
-        // a link that is kept (a failing case is drained, maybe reopened; a timed-out one
-        // may have left the hand anywhere).
-        hand_carries = !fresh_per_case && outcome.is_pass();
-        let mut r = result_of(case, Verdict::Pass, ms, None);
-        let mut flooded = false;
-        match &outcome {
-            ReplayOutcome::Pass(_) => {}
-            ReplayOutcome::Mismatch(m) => {
-                r.verdict = Verdict::Fail;
-                r.message = Some(outcome.summary());
-                let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                r.diff = Some(diff_of(m.step, m.offset, &m.expected, &m.actual, got, m.form, &golden_of(case, m.step)));
-            }
-            ReplayOutcome::Timeout(t) => {
-                r.verdict = Verdict::Timeout;
-                r.message = Some(outcome.summary());
-                let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                r.diff = Some(diff_of(t.step, t.offset, &t.expected, "", got, t.form, &golden_of(case, t.step)));
-            }
-            ReplayOutcome::Flooded(f) => {
-                r.verdict = Verdict::Fail;
-                r.message = Some(outcome.summary());
-                let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
-                let actual = gcl_transcript::escape_text(got);
-                let golden = golden_of(case, f.step);
-                r.diff = Some(diff_of(f.step, 0, &golden, &actual, &[], Form::Text, &golden));
-                flooded = true;
-            }
-            ReplayOutcome::Disconnected(_) => {
-                r.verdict = Verdict::Error;
-                r.message = Some(outcome.summary());
-                shared = None;
-            }
-        }
-        timeouts_in_a_row = if r.verdict == Verdict::Timeout { timeouts_in_a_row + 1 } else { 0 };
-        if timeouts_in_a_row == 1 {
-            first_timeout = case.id().to_string();
-        }
-        if let Some((signature, hint)) = crate::triage::signature(case, &outcome, &opts.profile, fresh_per_case) {
+    }
+
+    /// Takes a judged case: signs its failure for triage (`r.failure`, and one more signature).
+    fn triage_case(&mut self, case: &Case, outcome: &ReplayOutcome, r: &mut CaseResult) {
+        if let Some((signature, hint)) =
+            crate::triage::signature(case, outcome, &self.opts.profile, self.plan.fresh_per_case)
+        {
             let step = outcome.failed_step().unwrap_or(0);
             r.failure = Some(format!("step {}: {}", step + 1, signature.key));
-            signatures.push(crate::triage::Failure { result: results.len(), step, signature, hint });
+            let result = self.run.results.len();
+            self.run.signatures.push(crate::triage::Failure { result, step, signature, hint });
         }
-        let known = opts.known.lookup(&case.profile, case.id());
-        if let Some(k) = known.filter(|k| r.verdict != Verdict::Pass && k.how.is_some() && k.how != r.failure) {
-            // Listed, but failing otherwise than listed: what is new is a failure.
-            let now = r.failure.as_deref().unwrap_or(r.verdict.as_str());
-            let was = r.message.take().map(|m| format!(" ({m})")).unwrap_or_default();
-            r.message = Some(format!(
-                "fails otherwise than its known failure: known `{}`, now `{now}`{was}",
-                k.how.as_deref().unwrap_or_default()
-            ));
-        } else if let Some(k) = known {
-            r.verdict = match r.verdict {
-                Verdict::Pass => Verdict::Xpass,
-                _ => Verdict::Xfail,
-            };
-            let was = r.message.take().map(|m| format!(" ({m})")).unwrap_or_default();
-            r.message = Some(match r.verdict {
-                Verdict::Xpass => {
-                    format!("listed as a known failure ({}), but it passes: remove it from the list", k.reason)
-                }
-                _ => format!("known failure: {}{was}", k.reason),
-            });
-        }
-        // A RealTime case keeps its exchange even when it passes: the report plots its blocks.
+    }
+
+    /// Takes a judged case: keeps its actual transcript in the result when it failed or is a
+    /// RealTime case (the report plots its blocks), and in the run's when asked.
+    fn keep_transcript(&mut self, case: &Case, outcome: &ReplayOutcome, r: &mut CaseResult) {
         let realtime =
             case.transcript.steps.iter().any(|s| s.expect.segments.first().is_some_and(|g| g.form == Form::Hex));
-        if r.verdict != Verdict::Pass || opts.keep_transcripts || realtime {
+        if r.verdict != Verdict::Pass || self.opts.keep_transcripts || realtime {
             let text = actual_transcript(&case.transcript, outcome.exchange()).to_text();
-            if opts.keep_transcripts {
-                transcripts.push((case.id().to_string(), text.clone()));
+            if self.opts.keep_transcripts {
+                self.run.transcripts.push((case.id().to_string(), text.clone()));
             }
             if r.verdict != Verdict::Pass || realtime {
                 r.transcript = Some(truncate_note(&text, MAX_SHOWN * 4));
             }
         }
+    }
+
+    /// Takes a case that did not pass on a kept link: drains what it left pending, so it is
+    /// not blamed on the next case; a hand that does not stop sending is reopened (and counted).
+    fn drain_after(&mut self, case: &Case, outcome: &ReplayOutcome, flooded: bool) {
         // Drained by how the case ended, not by its verdict: a known failure (XFAIL) stopped
         // reading mid-answer as a FAIL does, and leaves the link as a FAIL would.
-        if !outcome.is_pass() && !fresh_per_case && shared.is_some() {
-            // Whatever the failing case left pending must not be blamed on the next one; a
-            // hand that does not stop sending is reopened.
-            if let Some(l) = shared.as_deref_mut() {
-                // A timed-out step has just waited through a quiet spell; others wait for one.
-                let quiet = Duration::from_millis(match outcome {
-                    _ if flooded => 100,
-                    ReplayOutcome::Timeout(_) => 20,
-                    _ => 50,
-                });
-                match discard(l, quiet, AFTER_FAILURE_DRAIN) {
-                    Ok(d) if d.quiet => {}
-                    Ok(_) => {
-                        shared = None;
-                        unquiet_in_a_row += 1;
-                        if unquiet_in_a_row == 1 {
-                            first_unquiet = case.id().to_string();
-                        }
-                    }
-                    Err(_) => shared = None,
+        if outcome.is_pass() || self.plan.fresh_per_case {
+            return;
+        }
+        let Some(l) = self.run.shared.as_deref_mut() else {
+            return;
+        };
+        // A timed-out step has just waited through a quiet spell; others wait for one.
+        let quiet = Duration::from_millis(match outcome {
+            _ if flooded => 100,
+            ReplayOutcome::Timeout(_) => 20,
+            _ => 50,
+        });
+        match discard(l, quiet, AFTER_FAILURE_DRAIN) {
+            Ok(d) if d.quiet => {}
+            Ok(_) => {
+                self.run.shared = None;
+                self.unquiet_in_a_row += 1;
+                if self.unquiet_in_a_row == 1 {
+                    self.first_unquiet = case.id().to_string();
                 }
             }
+            Err(_) => self.run.shared = None,
         }
-        if outcome.is_pass() {
-            unquiet_in_a_row = 0;
-        }
-        if r.verdict.fails_run() {
-            failures += 1;
-        }
-        if let Some(s) = stream.as_deref_mut() {
-            s.push(&r).map_err(ConformError::Results)?;
-        }
-        on(RunEvent::Case(&r, results.len() + 1, total));
-        let id = r.id.clone();
-        results.push(r);
-        if let Some(max) = opts.control.max_failures
-            && failures >= max
+    }
+
+    /// Takes the id of the case just reported: gives why the run stops there (too many
+    /// failures, a flood, a dead hand), or `None`.
+    fn stop_after(&mut self, id: String) -> Option<Stopped> {
+        let control = &self.opts.control;
+        if let Some(max) = control.max_failures
+            && self.failures >= max
         {
+            let failures = self.failures;
             let message = format!(
                 "stopped after {failures} failing case{} (--max-failures {max}) at case {id}",
                 if failures == 1 { "" } else { "s" }
             );
-            stopped = Some(Stopped { cause: StopCause::MaxFailures, case: id.clone(), message });
-        } else if opts.control.dead_after > 0 && unquiet_in_a_row >= opts.control.dead_after {
-            let at = std::mem::take(&mut first_unquiet);
+            return Some(Stopped { cause: StopCause::MaxFailures, case: id, message });
+        }
+        if control.dead_after > 0 && self.unquiet_in_a_row >= control.dead_after {
+            let at = std::mem::take(&mut self.first_unquiet);
             let message = format!(
                 "the hand floods: it did not stop sending after {} failing cases in a row, from case {at}",
-                opts.control.dead_after
+                control.dead_after
             );
-            stopped = Some(Stopped { cause: StopCause::Flooding, case: at, message });
-        } else if opts.control.dead_after > 0 && timeouts_in_a_row >= opts.control.dead_after {
-            timeouts_in_a_row = 0;
-            // The probe of ^C and a bare CR is not enough: a hand that answers those and no
-            // command would time out case after case. It must answer a command line too.
-            let answers = |l: &mut dyn Link| match dead_hand(l, &opts.profile, probe_timeout) {
-                Some(why) => Err(why),
-                None => Ok(()),
-            };
-            let dead = match shared.as_deref_mut() {
-                Some(l) if !fresh_per_case => answers(l).err(),
-                _ => match reopen(opts, probe_timeout) {
-                    Ok(mut l) => {
-                        let dead = answers(l.as_mut()).err();
-                        if !fresh_per_case {
-                            shared = Some(l);
-                        }
-                        dead
-                    }
-                    Err(e) => Some(e),
-                },
-            };
-            if let Some(why) = dead {
-                let at = std::mem::take(&mut first_timeout);
-                let message = format!(
-                    "the hand stopped answering at case {at} ({} timeouts in a row from there, then {why})",
-                    opts.control.dead_after
-                );
-                stopped = Some(Stopped { cause: StopCause::DeadHand, case: at, message });
-            }
+            return Some(Stopped { cause: StopCause::Flooding, case: at, message });
         }
-        if let Some(st) = &stopped {
-            on(RunEvent::Stopped(st));
+        if control.dead_after > 0 && self.timeouts_in_a_row >= control.dead_after {
+            self.timeouts_in_a_row = 0;
+            let why = self.dead_after_timeouts()?;
+            let at = std::mem::take(&mut self.first_timeout);
+            let message = format!(
+                "the hand stopped answering at case {at} ({} timeouts in a row from there, then {why})",
+                control.dead_after
+            );
+            return Some(Stopped { cause: StopCause::DeadHand, case: at, message });
         }
+        None
     }
 
-    let after = match (&stopped, shared.as_deref_mut()) {
+    /// After timeouts in a row: asks the hand (on the kept link, or reopened) to answer a
+    /// command line; gives why it is dead, or `None` when it answers.
+    fn dead_after_timeouts(&mut self) -> Option<String> {
+        // The probe of ^C and a bare CR is not enough: a hand that answers those and no
+        // command would time out case after case. It must answer a command line too.
+        let (opts, probe_timeout) = (self.opts, self.plan.probe_timeout);
+        let answers = |l: &mut dyn Link| match dead_hand(l, &opts.profile, probe_timeout) {
+            Some(why) => Err(why),
+            None => Ok(()),
+        };
+        match self.run.shared.as_deref_mut() {
+            Some(l) if !self.plan.fresh_per_case => answers(l).err(),
+            _ => match reopen(opts, probe_timeout) {
+                Ok(mut l) => {
+                    let dead = answers(l.as_mut()).err();
+                    if !self.plan.fresh_per_case {
+                        self.run.shared = Some(l);
+                    }
+                    dead
+                }
+                Err(e) => Some(e),
+            },
+        }
+    }
+}
+
+/// Takes a case's replay outcome and time; gives its result as the wire judged it (verdict,
+/// message, diff) and whether the hand flooded.
+fn judged(case: &Case, outcome: &ReplayOutcome, ms: f64) -> (CaseResult, bool) {
+    let mut r = result_of(case, Verdict::Pass, ms, None);
+    let mut flooded = false;
+    match outcome {
+        ReplayOutcome::Pass(_) => {}
+        ReplayOutcome::Mismatch(m) => {
+            r.verdict = Verdict::Fail;
+            r.message = Some(outcome.summary());
+            let got = m.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            r.diff = Some(diff_of(m.step, m.offset, &m.expected, &m.actual, got, m.form, &golden_of(case, m.step)));
+        }
+        ReplayOutcome::Timeout(t) => {
+            r.verdict = Verdict::Timeout;
+            r.message = Some(outcome.summary());
+            let got = t.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            r.diff = Some(diff_of(t.step, t.offset, &t.expected, "", got, t.form, &golden_of(case, t.step)));
+        }
+        ReplayOutcome::Flooded(f) => {
+            r.verdict = Verdict::Fail;
+            r.message = Some(outcome.summary());
+            let got = f.exchange.last().map(|e| e.received.as_slice()).unwrap_or_default();
+            let actual = gcl_transcript::escape_text(got);
+            let golden = golden_of(case, f.step);
+            r.diff = Some(diff_of(f.step, 0, &golden, &actual, &[], Form::Text, &golden));
+            flooded = true;
+        }
+        ReplayOutcome::Disconnected(_) => {
+            r.verdict = Verdict::Error;
+            r.message = Some(outcome.summary());
+        }
+    }
+    (r, flooded)
+}
+
+/// Takes a judged result and its entry in the known-failures list, if any: a listed case
+/// becomes XFAIL (or XPASS when it passes), unless it fails otherwise than listed.
+fn known_verdict(r: &mut CaseResult, known: Option<&KnownFailure>) {
+    if let Some(k) = known.filter(|k| r.verdict != Verdict::Pass && k.how.is_some() && k.how != r.failure) {
+        // Listed, but failing otherwise than listed: what is new is a failure.
+        let now = r.failure.as_deref().unwrap_or(r.verdict.as_str());
+        let was = r.message.take().map(|m| format!(" ({m})")).unwrap_or_default();
+        r.message = Some(format!(
+            "fails otherwise than its known failure: known `{}`, now `{now}`{was}",
+            k.how.as_deref().unwrap_or_default()
+        ));
+    } else if let Some(k) = known {
+        r.verdict = match r.verdict {
+            Verdict::Pass => Verdict::Xpass,
+            _ => Verdict::Xfail,
+        };
+        let was = r.message.take().map(|m| format!(" ({m})")).unwrap_or_default();
+        r.message = Some(match r.verdict {
+            Verdict::Xpass => {
+                format!("listed as a known failure ({}), but it passes: remove it from the list", k.reason)
+            }
+            _ => format!("known failure: {}{was}", k.reason),
+        });
+    }
+}
+
+/// Takes the cases' end: gives whether the hand still answers the liveness probe (never after
+/// a flood or a dead hand), on the kept link or a fresh one.
+fn after_stage(ran: &mut CasesRun, opts: &ConformOptions, plan: &RunPlan) -> bool {
+    match (&ran.stopped, ran.shared.as_deref_mut()) {
         (Some(s), _) if s.cause != StopCause::MaxFailures => false,
-        (_, Some(l)) if !fresh_per_case => liveness(l, &opts.profile, probe_timeout).unwrap_or(false),
-        _ => match open_link() {
-            Ok(mut l) => liveness(l.as_mut(), &opts.profile, probe_timeout).unwrap_or(false),
+        (_, Some(l)) if !plan.fresh_per_case => liveness(l, &opts.profile, plan.probe_timeout).unwrap_or(false),
+        _ => match open(&opts.target, &opts.open) {
+            Ok(mut l) => liveness(l.as_mut(), &opts.profile, plan.probe_timeout).unwrap_or(false),
             Err(_) => false,
         },
-    };
-    let actual_ms = wall.elapsed().as_secs_f64() * 1000.0;
-    let wire = link_baud.map(|baud| wire_time(cases, &wire_cases, opts, ropts.trailing, baud, actual_ms));
-    let groups = crate::triage::group(cases, &results, &signatures, &framing_clauses);
+    }
+}
+
+/// The cases' results with their failures grouped by likely root cause.
+struct Triaged {
+    ran: CasesRun,
+    groups: Vec<crate::report::FailureGroup>,
+}
+
+/// Triage: takes the cases' results and the pre-flight's framing clauses; gives the failure
+/// groups beside them.
+fn triage_stage(cases: &[Case], ran: CasesRun, framing_clauses: &[String]) -> Triaged {
+    let groups = crate::triage::group(cases, &ran.results, &ran.signatures, framing_clauses);
+    Triaged { ran, groups }
+}
+
+/// Takes the pre-flight's line and the notes after it; gives the report's pre-flight text.
+fn preflight_text(line: Option<String>, notes: Vec<String>) -> Option<String> {
+    match (line, notes.is_empty()) {
+        (Some(p), false) => Some(format!("{p}\n{}", notes.join("\n"))),
+        (None, false) => Some(notes.join("\n")),
+        (p, true) => p,
+    }
+}
+
+/// Report: takes everything the stages gave; gives the run's output (report with its
+/// wire-time bound and tally, and the kept transcripts).
+fn report_stage(
+    cases: &[Case],
+    opts: &ConformOptions,
+    plan: &RunPlan,
+    times: RunTimes,
+    preflight: Option<String>,
+    triaged: Triaged,
+    after: bool,
+) -> RunOutput {
+    let Triaged { ran, groups } = triaged;
+    let wire = plan
+        .link_baud
+        .map(|baud| wire_time(cases, &ran.wire_cases, opts, plan.replay.trailing, baud, times.duration_ms));
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
         host: None,
@@ -1048,25 +1306,21 @@ pub fn run_with_events(
         target: opts.target.to_string(),
         profile: opts.profile.id.clone(),
         level: opts.level.as_str().to_string(),
-        started: started_at.format(&time::format_description::well_known::Rfc3339).unwrap_or_default(),
-        duration_ms: actual_ms,
+        started: times.started_at.format(&time::format_description::well_known::Rfc3339).unwrap_or_default(),
+        duration_ms: times.duration_ms,
         suite_hash: suite::suite_hash(cases),
-        liveness: Liveness { before, after },
+        liveness: Liveness { before: true, after },
         options: run_options(cases, opts),
-        preflight: match (preflight, notes.is_empty()) {
-            (Some(p), false) => Some(format!("{p}\n{}", notes.join("\n"))),
-            (None, false) => Some(notes.join("\n")),
-            (p, true) => p,
-        },
-        stopped,
+        preflight,
+        stopped: ran.stopped,
         groups,
         wire,
         summary: Default::default(),
         clauses: Vec::new(),
-        cases: results,
+        cases: ran.results,
     };
     report.tally();
-    Ok(RunOutput { report, transcripts })
+    RunOutput { report, transcripts: ran.transcripts }
 }
 
 /// Runs the motion-time probe on `link` with the run's deadlines; says how the target's motion
@@ -1079,8 +1333,8 @@ fn motion_time(
     policy: &DeadlinePolicy,
     baud: Option<u32>,
     after_reset: bool,
-) -> Option<crate::fuzz::device::NotRealTime> {
-    let probe = crate::fuzz::device::MotionProbe::new(&opts.profile)?;
+) -> Option<crate::motion::NotRealTime> {
+    let probe = crate::motion::MotionProbe::new(&opts.profile)?;
     let probe = match after_reset {
         true => probe.after_reset(&opts.profile).unwrap_or(probe),
         false => probe,
@@ -1331,14 +1585,5 @@ mod tests {
         let kept = bound_of(&[("cmd-c", false), ("cmd-hi", true)]);
         assert!(kept.lower_bound_ms > fresh.lower_bound_ms + 1000.0, "{fresh:?} {kept:?}");
         assert!(kept.motion_ms > fresh.motion_ms + 1000.0, "{fresh:?} {kept:?}");
-    }
-
-    #[test]
-    fn level_filter() {
-        assert!(LevelFilter::Must.admits(Level::Must));
-        assert!(!LevelFilter::Must.admits(Level::Should));
-        assert!(LevelFilter::Should.admits(Level::Should));
-        assert!(!LevelFilter::Should.admits(Level::Info));
-        assert!(LevelFilter::All.admits(Level::Info));
     }
 }

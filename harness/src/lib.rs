@@ -13,13 +13,16 @@
 // way (`gcl_harness::...`) from either side.
 extern crate self as gcl_harness;
 
+pub mod actions;
 pub mod align;
 pub mod certify;
-pub mod check_host;
-pub mod check_host_serve;
 pub mod conform;
 pub mod deadline;
+pub mod digest;
 pub mod fuzz;
+pub mod host_check;
+pub mod host_check_serve;
+pub mod motion;
 pub mod outputs;
 pub mod preflight;
 pub mod record;

@@ -16,10 +16,10 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use gcl_harness::check_host::{CheckHostOptions, check_host};
 use gcl_harness::fuzz::host::{
     Event, FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, run_once,
 };
+use gcl_harness::host_check::{CheckHostOptions, check_host};
 use gcl_harness::report::Verdict;
 use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};

@@ -587,7 +587,7 @@ fn out_of_range_figures_of_a_shard_are_refused_by_name() {
     // Host shards as gcl fuzz host writes them, with the figures set.
     let host_shard = |name: &str, k: u64, runs: u64, elapsed_ms: u64| {
         let dir = t.join(name);
-        let report = gcl_harness::check_host::host_report(
+        let report = gcl_harness::host_check::host_report(
             &["./host".to_string()],
             "seed",
             time::OffsetDateTime::UNIX_EPOCH,

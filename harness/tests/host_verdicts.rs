@@ -14,10 +14,10 @@ use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use gcl_harness::check_host::{CheckHostOptions, check_host};
 use gcl_harness::fuzz::host::{
     FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, judge, notes, run_once,
 };
+use gcl_harness::host_check::{CheckHostOptions, check_host};
 use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};
 

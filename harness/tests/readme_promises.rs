@@ -453,7 +453,7 @@ const PROMISES: &[(&str, &[&str])] = &[
     (
         "Against such a hand the strain at rest and what VERS says are the hand's own",
         &[
-            "harness/src/fuzz/device/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",
+            "harness/src/actions/case.rs::a_hand_outside_this_process_says_its_own_version_and_reads_its_own_strain_at_rest",
         ],
     ),
     (
@@ -465,7 +465,10 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "A case rests on the model's joint stops when the model answers it otherwise with the stops taken away",
-        &["harness/src/fuzz/device/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision"],
+        &[
+            "harness/src/actions/case.rs::a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision",
+            "harness/src/fuzz/device/mod.rs::a_finding_past_the_joint_stop_is_info",
+        ],
     ),
     (
         "`--write-budget N` caps EEPROM writes (restores included) over the whole run",

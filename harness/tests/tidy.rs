@@ -628,3 +628,285 @@ fn every_test_left_out_of_the_default_run_is_run_by_ci() {
     assert!(bad.is_empty(), "ignored tests that CI would not run (use `{SLOW}`):\n{}", bad.join("\n"));
     assert!(slow > 0);
 }
+
+/// The layers of the harness library, lowest first: a top-level module may use its own layer
+/// and the ones below, never one above (the crate split follows these lines).
+const LAYERS: &[&[&str]] = &[
+    // the hand on its transports: the simulator, output files and digests, recording and replay
+    &["digest", "outputs", "record", "replay", "sim"],
+    // conformance: the suite, its vectors and its cases built from host actions, alignment, triage, pre-flight, deadlines, the motion probe, the runner, certificates, reports
+    &[
+        "actions",
+        "align",
+        "certify",
+        "conform",
+        "deadline",
+        "motion",
+        "preflight",
+        "report",
+        "suite",
+        "triage",
+        "vectors",
+    ],
+    // the fuzzers (device, host, merge, shard) and the host check built on the host fuzzer's sessions
+    &["fuzz", "host_check", "host_check_serve"],
+    // the command line (the `gcl` binary)
+    &["cli"],
+];
+
+/// Code of a file with string and char literals emptied (their text is not a path).
+fn without_literals(code: &str) -> String {
+    let b = code.as_bytes();
+    let mut out = String::with_capacity(code.len());
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        let ident_before = i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_');
+        if (c == b'r' || c == b'b') && !ident_before {
+            // r"..", r#".."#, br"..", b".."
+            let mut j = i + 1;
+            if c == b'b' && j < b.len() && b[j] == b'r' {
+                j += 1;
+            }
+            let hashes = b[j..].iter().take_while(|&&x| x == b'#').count();
+            if j + hashes < b.len() && b[j + hashes] == b'"' && (hashes > 0 || b[j - 1] == b'r') {
+                let close = format!("\"{}", "#".repeat(hashes));
+                let start = j + hashes + 1;
+                let end = code[start..].find(&close).map_or(b.len(), |k| start + k + close.len());
+                out.push_str("\"\"");
+                i = end;
+                continue;
+            }
+        }
+        if c == b'"' {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != b'"' {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            out.push_str("\"\"");
+            i = j + 1;
+            continue;
+        }
+        if c == b'\'' {
+            // a char literal ('x', '\n', '\''), not a lifetime
+            let rest = &code[i + 1..];
+            let len = if rest.starts_with('\\') {
+                rest.get(2..).and_then(|r| r.find('\'')).map(|k| k + 2)
+            } else {
+                rest.chars().next().map(char::len_utf8)
+            };
+            if let Some(l) = len
+                && rest[l..].starts_with('\'')
+            {
+                out.push_str("' '");
+                i += l + 2;
+                continue;
+            }
+        }
+        let ch = code[i..].chars().next().unwrap();
+        out.push(ch);
+        i += ch.len_utf8();
+    }
+    out
+}
+
+/// The paths of a `use` tree or an inline path starting at `s` (after its root keyword):
+/// `a::b::{c, d::e}` gives `a::b::c` and `a::b::d::e`; `self` in a group names the prefix.
+fn path_tree(s: &str) -> Vec<Vec<String>> {
+    fn tree(s: &[u8], i: &mut usize) -> Vec<Vec<String>> {
+        let skip = |i: &mut usize| {
+            while *i < s.len() && s[*i].is_ascii_whitespace() {
+                *i += 1;
+            }
+        };
+        skip(i);
+        if *i < s.len() && s[*i] == b'{' {
+            *i += 1;
+            let mut all = Vec::new();
+            loop {
+                skip(i);
+                if *i >= s.len() || s[*i] == b'}' {
+                    *i += 1;
+                    break;
+                }
+                all.extend(tree(s, i));
+                skip(i);
+                if *i < s.len() && s[*i] == b',' {
+                    *i += 1;
+                }
+            }
+            return all;
+        }
+        let start = *i;
+        while *i < s.len() && (s[*i].is_ascii_alphanumeric() || s[*i] == b'_') {
+            *i += 1;
+        }
+        let seg = String::from_utf8_lossy(&s[start..*i]).into_owned();
+        if seg.is_empty() {
+            // `*` or the end of the path
+            if *i < s.len() && s[*i] == b'*' {
+                *i += 1;
+            }
+            return vec![Vec::new()];
+        }
+        let mut j = *i;
+        skip(&mut j);
+        if s[j..].starts_with(b"::") {
+            *i = j + 2;
+            let rest = tree(s, i);
+            return rest
+                .into_iter()
+                .map(|mut r| {
+                    if seg != "self" {
+                        r.insert(0, seg.clone());
+                    }
+                    r
+                })
+                .collect();
+        }
+        // `x as y` keeps `x`
+        if s[j..].starts_with(b"as ") {
+            *i = j + 3;
+            skip(i);
+            while *i < s.len() && (s[*i].is_ascii_alphanumeric() || s[*i] == b'_') {
+                *i += 1;
+            }
+        }
+        if seg == "self" { vec![Vec::new()] } else { vec![vec![seg]] }
+    }
+    let mut i = 0;
+    tree(s.as_bytes(), &mut i)
+}
+
+/// One crate's file-level module graph: each module (a file, named by its path in the crate)
+/// and the other modules its code names through `crate::`, `super::`, `self::` (and, in the
+/// harness, `gcl_harness::`). A module naming one of its own descendants is not an arrow (a
+/// module holds its children); a child naming its parent is.
+fn module_graph(src: &str) -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let files = rust_files(src);
+    let module_of = |p: &Path| -> String {
+        let r = p.strip_prefix(Path::new(ROOT).join(src)).unwrap().with_extension("");
+        let parts: Vec<String> = r.iter().map(|s| s.to_string_lossy().into_owned()).collect();
+        let parts: Vec<&str> = parts.iter().map(String::as_str).filter(|s| *s != "mod").collect();
+        if parts == ["lib"] || parts == ["main"] { String::new() } else { parts.join("::") }
+    };
+    let modules: BTreeSet<String> = files.iter().map(|p| module_of(p)).collect();
+    let mut graph = BTreeMap::new();
+    for f in &files {
+        let me = module_of(f);
+        let code: Vec<String> = code_lines(f).into_iter().map(|(_, l)| l).collect();
+        let code = without_literals(&code.join("\n"));
+        let mut targets = BTreeSet::new();
+        let b = code.as_bytes();
+        for root in ["crate::", "super::", "self::", "gcl_harness::"] {
+            for (at, _) in code.match_indices(root) {
+                if at > 0 && (b[at - 1].is_ascii_alphanumeric() || b[at - 1] == b'_' || b[at - 1] == b':') {
+                    continue;
+                }
+                let mut base: Vec<&str> = if root == "crate::" || root == "gcl_harness::" || me.is_empty() {
+                    Vec::new()
+                } else {
+                    me.split("::").collect()
+                };
+                let mut rest = &code[at + root.len()..];
+                if root == "super::" {
+                    base.pop();
+                    while let Some(r) = rest.strip_prefix("super::") {
+                        base.pop();
+                        rest = r;
+                    }
+                }
+                for path in path_tree(rest) {
+                    let full: Vec<&str> = base.iter().copied().chain(path.iter().map(String::as_str)).collect();
+                    let target = (1..=full.len()).rev().map(|k| full[..k].join("::")).find(|m| modules.contains(m));
+                    if let Some(t) = target
+                        && t != me
+                        && !(me.is_empty() || t.starts_with(&format!("{me}::")))
+                    {
+                        targets.insert(t);
+                    }
+                }
+            }
+        }
+        graph.insert(me, targets);
+    }
+    graph
+}
+
+/// The groups of modules that reach each other (strongly connected, more than one module).
+fn cycles(graph: &std::collections::BTreeMap<String, std::collections::BTreeSet<String>>) -> Vec<Vec<String>> {
+    use std::collections::BTreeSet;
+    let reach = |from: &String| -> BTreeSet<String> {
+        let mut seen = BTreeSet::new();
+        let mut stack = vec![from.clone()];
+        while let Some(m) = stack.pop() {
+            for t in graph.get(&m).into_iter().flatten() {
+                if seen.insert(t.clone()) {
+                    stack.push(t.clone());
+                }
+            }
+        }
+        seen
+    };
+    let reaches: std::collections::BTreeMap<&String, BTreeSet<String>> = graph.keys().map(|m| (m, reach(m))).collect();
+    let mut done = BTreeSet::new();
+    let mut out = Vec::new();
+    for m in graph.keys() {
+        if done.contains(m) || !reaches[m].contains(m) {
+            continue;
+        }
+        let group: Vec<String> = reaches[m].iter().filter(|o| reaches[*o].contains(m)).cloned().collect();
+        done.extend(group.iter().cloned());
+        out.push(group);
+    }
+    out
+}
+
+/// Architecture invariant: no circles between files. In every crate, no two modules (files)
+/// depend on each other, directly or round a circle: what two files share lives in the one
+/// that owns it, or in a module both stand on.
+#[test]
+fn no_circles_between_files() {
+    let mut bad = Vec::new();
+    for src in ["reference-model/src", "transcript/src", "host/src", "harness/src", "fuzz/src"] {
+        let graph = module_graph(src);
+        for group in cycles(&graph) {
+            let arrows: Vec<String> = group
+                .iter()
+                .flat_map(|m| graph[m].iter().filter(|t| group.contains(t)).map(move |t| format!("{m} -> {t}")))
+                .collect();
+            bad.push(format!("{src}: {}\n    {}", group.join(" <-> "), arrows.join("\n    ")));
+        }
+    }
+    assert!(bad.is_empty(), "modules in a circle:\n{}", bad.join("\n"));
+}
+
+/// Architecture invariant: the harness's layers (`LAYERS`) hold. No module uses one of a
+/// higher layer, and every top-level module has its layer.
+#[test]
+fn no_arrow_runs_up_the_harness_layers() {
+    let layer_of = |m: &str| -> Option<usize> {
+        let top = m.split("::").next().unwrap_or("");
+        LAYERS.iter().position(|l| l.contains(&top))
+    };
+    let graph = module_graph("harness/src");
+    let mut bad = Vec::new();
+    for (m, targets) in &graph {
+        if m.is_empty() {
+            continue;
+        }
+        let Some(from) = layer_of(m) else {
+            bad.push(format!("{m}: a top-level module with no layer in LAYERS"));
+            continue;
+        };
+        for t in targets {
+            if let Some(to) = layer_of(t)
+                && to > from
+            {
+                bad.push(format!("{m} (layer {from}) -> {t} (layer {to})"));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "arrows up the layers:\n{}", bad.join("\n"));
+}

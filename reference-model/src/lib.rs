@@ -29,6 +29,7 @@ pub mod level;
 pub mod motor;
 pub mod params;
 pub mod realtime;
+pub mod rtflags;
 pub mod spec;
 pub mod status;
 

@@ -220,6 +220,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn an_id_of_another_profile_reads_as_nothing_instead_of_panicking() {
+        let seed = Profile::builtin("seed").unwrap();
+        let store = ParamStore::defaults(&seed);
+        let foreign = crate::spec::ParamId(u16::MAX);
+        assert_eq!(seed.param(foreign).name, "");
+        assert!(seed.param(foreign).read_only);
+        assert_eq!(seed.command(crate::spec::CommandId(u16::MAX)).name, "");
+        assert_eq!(store.get(&seed, foreign, 1), 0);
+        let dp = seed.param_id("DP").unwrap();
+        assert_eq!(store.get(&seed, dp, 2), 1000);
+        assert_eq!(store.get(&seed, dp, 0), 0, "motor 0 does not exist");
+        assert_eq!(store.get(&seed, dp, 5), 0, "motor 5 does not exist");
+    }
+
+    #[test]
     fn save_load_defaults() {
         let p = Profile::builtin("seed").unwrap();
         let mut nv = NvMemory::default();

@@ -10,7 +10,8 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::level::Level;
-use crate::realtime::{FieldType, RtFlag};
+pub use crate::rtflags::BlockKind;
+use crate::rtflags::{FieldType, RtFlag};
 use crate::status::{StatusBits, StatusTexts};
 
 /// Files under `spec/` compiled into the model, by their path relative to `spec/`.
@@ -462,16 +463,6 @@ pub enum Scope {
     Motor,
     /// One value for the hand.
     Global,
-}
-
-/// Which RealTime block a flag adds a field to.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum BlockKind {
-    /// Host to hand.
-    Control,
-    /// Hand to host.
-    Feedback,
 }
 
 /// The field a RealTime flag adds when it is 1.
@@ -1505,6 +1496,14 @@ mod evidence_tests {
 mod closed_names_tests {
     use super::*;
 
+    #[test]
+    fn texts_come_from_the_profile() {
+        let seed = Profile::builtin("seed").unwrap();
+        assert_eq!(crate::status::StatusBits::TIMEOUT.describe(&seed), vec!["512: Timeout"]);
+        // The seed defines no 16384.
+        assert!(crate::status::StatusBits::ABORTED.describe(&seed).is_empty());
+    }
+
     /// Loads the seed with `extra` TOML appended to its top file.
     fn seed_with(extra: &str) -> Result<Profile, SpecError> {
         let seed = embedded("seed.toml").unwrap_or_default();
@@ -1609,21 +1608,6 @@ mod closed_names_tests {
                 other => panic!("expected an RtField error for {says}, got {other:?}"),
             }
         }
-    }
-
-    #[test]
-    fn an_id_of_another_profile_reads_as_nothing_instead_of_panicking() {
-        let seed = Profile::builtin("seed").unwrap();
-        let store = crate::params::ParamStore::defaults(&seed);
-        let foreign = ParamId(u16::MAX);
-        assert_eq!(seed.param(foreign).name, "");
-        assert!(seed.param(foreign).read_only);
-        assert_eq!(seed.command(CommandId(u16::MAX)).name, "");
-        assert_eq!(store.get(&seed, foreign, 1), 0);
-        let dp = seed.param_id("DP").unwrap();
-        assert_eq!(store.get(&seed, dp, 2), 1000);
-        assert_eq!(store.get(&seed, dp, 0), 0, "motor 0 does not exist");
-        assert_eq!(store.get(&seed, dp, 5), 0, "motor 5 does not exist");
     }
 
     #[test]

@@ -82,7 +82,6 @@ pub struct UnknownStatusBits(pub u32);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::Profile;
 
     #[test]
     fn composes_and_decomposes() {
@@ -91,13 +90,5 @@ mod tests {
         assert_eq!(s.iter().map(|b| b.code()).collect::<Vec<_>>(), vec![1, 2]);
         assert_eq!((StatusBits::PREFIX_NOT_ALLOWED | StatusBits::TOO_MANY_ARGUMENTS).code(), 5120);
         assert_eq!(StatusBits::from_code(32768), Err(UnknownStatusBits(32768)));
-    }
-
-    #[test]
-    fn texts_come_from_the_profile() {
-        let seed = Profile::builtin("seed").unwrap();
-        assert_eq!(StatusBits::TIMEOUT.describe(&seed), vec!["512: Timeout"]);
-        // The seed defines no 16384.
-        assert!(StatusBits::ABORTED.describe(&seed).is_empty());
     }
 }

@@ -119,20 +119,6 @@ pub struct DeviceArgs {
     pub shard: Option<gcl_harness::fuzz::shard::Shard>,
 }
 
-/// Refuses `--runs N` that leaves `--shard K/N` no run at all: such a shard would test
-/// nothing and still report.
-pub(super) fn refuse_empty_shard(
-    runs: Option<u64>,
-    shard: Option<gcl_harness::fuzz::shard::Shard>,
-) -> anyhow::Result<()> {
-    if let (Some(n), Some(s)) = (runs, shard)
-        && s.share(n) == 0
-    {
-        anyhow::bail!("--runs {n} leaves shard {s} no run (it would test nothing): give at least {} runs", s.index);
-    }
-    Ok(())
-}
-
 /// Runs `gcl fuzz`.
 pub fn run(a: Args) -> anyhow::Result<u8> {
     match a.command {
@@ -214,7 +200,7 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
         });
     }
-    refuse_empty_shard(a.runs, a.shard)?;
+    fuzz_host::refuse_empty_shard(a.runs, a.shard)?;
     // A CI time limit (SIGTERM) ends the campaign with its reports written. Before any thread
     // starts: a thread started earlier would keep the signals unblocked.
     o.stop = super::stop_on_signals("fuzz device")?;

@@ -234,7 +234,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
-    super::fuzz::refuse_empty_shard(args.runs, args.shard)?;
+    refuse_empty_shard(args.runs, args.shard)?;
     let opts = FuzzOptions {
         run,
         seed: args.seed,
@@ -611,7 +611,7 @@ pub(super) fn campaign_report(opts: &FuzzOptions, c: &Campaign, out: &std::path:
             transcript: None,
         });
     }
-    let mut report = gcl_harness::check_host::host_report(
+    let mut report = gcl_harness::host_check::host_report(
         &opts.run.command,
         &opts.run.profile.id,
         started,
@@ -757,4 +757,18 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
         }
         Ok(if verdicts.is_empty() { EXIT_OK } else { EXIT_FAIL })
     }
+}
+
+/// Refuses `--runs N` that leaves `--shard K/N` no run at all: such a shard would test
+/// nothing and still report.
+pub(super) fn refuse_empty_shard(
+    runs: Option<u64>,
+    shard: Option<gcl_harness::fuzz::shard::Shard>,
+) -> anyhow::Result<()> {
+    if let (Some(n), Some(s)) = (runs, shard)
+        && s.share(n) == 0
+    {
+        anyhow::bail!("--runs {n} leaves shard {s} no run (it would test nothing): give at least {} runs", s.index);
+    }
+    Ok(())
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use gcl_harness::fuzz::host::{FuzzOptions, HostRun, Transport, Weights};
 use gcl_harness::fuzz::merge::{self, Kind, NotCopied};
-use gcl_harness::fuzz::shard::Merged;
+use gcl_harness::report::merged::Merged;
 use gcl_harness::report::{CaseResult, Verdict};
 use gcl_harness::sim::{Pace, TimeMode};
 

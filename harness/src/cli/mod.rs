@@ -4,7 +4,6 @@
 
 pub mod certify;
 pub mod check_host;
-pub mod check_host_serve;
 pub mod conform;
 pub mod explain;
 pub mod fuzz;
@@ -156,6 +155,23 @@ pub fn stopped_by() -> Option<String> {
     STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }
 
+/// `rel` (a repository path such as `vectors/suite`) in the current directory or the nearest
+/// folder above it that has it, for the commands that only read it.
+pub(crate) fn find_upward(rel: &str) -> anyhow::Result<std::path::PathBuf> {
+    let cwd = std::env::current_dir()?;
+    for d in cwd.ancestors() {
+        let candidate = d.join(rel);
+        if candidate.is_dir() {
+            // Shown relative when it is the current directory's own, as before.
+            return Ok(if d == cwd { std::path::PathBuf::from(rel) } else { candidate });
+        }
+    }
+    anyhow::bail!(
+        "no {rel} in {} or any folder above it: run gcl inside a checkout of the repository, or give --dir DIR \
+(`gcl suite list` shows the cases built into gcl anywhere)",
+        cwd.display()
+    )
+}
 #[cfg(test)]
 mod tests {
     use super::*;

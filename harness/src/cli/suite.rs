@@ -56,24 +56,6 @@ enum Command {
     },
 }
 
-/// `rel` (a repository path such as `vectors/suite`) in the current directory or the nearest
-/// folder above it that has it, for the commands that only read it.
-pub(crate) fn find_upward(rel: &str) -> anyhow::Result<PathBuf> {
-    let cwd = std::env::current_dir()?;
-    for d in cwd.ancestors() {
-        let candidate = d.join(rel);
-        if candidate.is_dir() {
-            // Shown relative when it is the current directory's own, as before.
-            return Ok(if d == cwd { PathBuf::from(rel) } else { candidate });
-        }
-    }
-    anyhow::bail!(
-        "no {rel} in {} or any folder above it: run gcl inside a checkout of the repository, or give --dir DIR \
-(`gcl suite list` shows the cases built into gcl anywhere)",
-        cwd.display()
-    )
-}
-
 /// The suite directory, or a clear error when there is none: outside the repository the
 /// default `vectors/suite` does not exist, and listing 870 "missing" files, or advising a
 /// regenerate that would write them into the current directory, helps nobody.
@@ -133,7 +115,7 @@ inside an existing folder)",
         Command::Check { dir, vectors_dir } => {
             let dir = match dir {
                 Some(d) => d,
-                None => find_upward(suite::DEFAULT_DIR)?,
+                None => super::find_upward(suite::DEFAULT_DIR)?,
             };
             existing_suite(&dir)?;
             let cases = suite::generate_all()?;

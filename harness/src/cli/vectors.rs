@@ -78,7 +78,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         Command::Check { dir } => {
             let dir = match dir {
                 Some(d) => d,
-                None => super::suite::find_upward(vectors::DEFAULT_DIR)?,
+                None => super::find_upward(vectors::DEFAULT_DIR)?,
             };
             Ok(if check(&mut w, &dir, &cases)? { EXIT_OK } else { EXIT_FAIL })
         }

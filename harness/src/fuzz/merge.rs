@@ -37,8 +37,9 @@ use super::device::corpus_name;
 use super::device::report::FuzzReport;
 use super::host::bundle::{BundleInfo, dir_name};
 use super::host::{Campaign, Finding};
-use super::shard::{Merged, Provenance, ShardSetError};
+use super::shard::{Provenance, ShardSetError};
 use crate::report::RunReport;
+use crate::report::merged::Merged;
 use gcl_host::files::{MAX_INPUT_BYTES, read_limited_no_follow};
 
 /// The largest count a shard's report may hold (runs, hits, bytes...): 2^53 - 1, the largest

@@ -10,25 +10,9 @@ use std::fmt::Write;
 use gcl_transcript::{Form, Level, Transcript};
 
 use super::diff::{self, FieldRow};
-use super::page::{Page, details, pre};
+use super::page::{Page, details, esc, pre};
 use super::svg::{Band, Plot, Series};
 use super::{CaseResult, ReportKind, RunReport, Verdict};
-
-/// Text escaped for HTML content and attribute values.
-pub(crate) fn esc(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\'' => o.push_str("&#39;"),
-            c => o.push(c),
-        }
-    }
-    o
-}
 
 fn class(v: Verdict) -> &'static str {
     match v {
@@ -82,7 +66,7 @@ fn headline(r: &RunReport) -> String {
     let cannot_test =
         r.stopped.as_ref().filter(|st| st.cause == crate::report::StopCause::CannotTest).map(|st| st.message.as_str());
     // A host session that judged nothing says why, first.
-    let session = r.cases.iter().find(|c| c.id == crate::check_host::SESSION_CASE && c.verdict == Verdict::Error);
+    let session = r.cases.iter().find(|c| c.id == super::SESSION_CASE && c.verdict == Verdict::Error);
     let mut s = match (r.kind, bad.len()) {
         (ReportKind::CheckHost, _) if session.is_some() => {
             session.and_then(|c| c.message.clone()).unwrap_or_else(|| "nothing judged".into())
@@ -608,7 +592,7 @@ fn cases_table(r: &RunReport) -> String {
             (false, _) => String::new(),
             (true, Verdict::Skip) => "<td class=\"muted\">not run</td>".to_string(),
             (true, _) => {
-                let file = format!("transcripts/{}.gcl", crate::certify::safe_name(&c.id));
+                let file = format!("transcripts/{}.gcl", super::safe_name(&c.id));
                 format!("<td><a href=\"{}\">{}</a></td>", esc(&file), esc(&file))
             }
         };

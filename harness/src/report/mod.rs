@@ -7,6 +7,7 @@
 pub mod diff;
 pub(crate) mod html;
 pub(crate) mod junit;
+pub mod merged;
 pub mod page;
 pub mod program;
 pub mod svg;
@@ -124,6 +125,15 @@ pub const CONTEXT_CHARS: usize = 40;
 /// The longest text a report keeps of an actual answer or a transcript; longer ones are cut
 /// with a note saying how much was left out.
 pub const MAX_SHOWN: usize = 8192;
+
+/// The id of the case that says a host session (`gcl check-host`, `gcl fuzz host`) judged
+/// nothing or was stopped.
+pub const SESSION_CASE: &str = "host-session";
+
+/// The file name a case's transcript has in a bundle's `transcripts/` (without `.gcl`).
+pub(crate) fn safe_name(id: &str) -> String {
+    id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' }).collect()
+}
 
 /// Words as one command line for a POSIX shell, each quoted as it needs by the `shlex` crate:
 /// pasted into `sh`, the line runs exactly these words as its argv (`-- sh -c 'sleep 0.1; exit
@@ -508,7 +518,7 @@ impl ProfileSpec {
     /// SHA-256 of a loaded profile: of its JSON form, every include resolved, so two files
     /// that load to the same profile have the same hash.
     pub fn digest(profile: &gcl_model::Profile) -> String {
-        crate::certify::sha256_hex(&serde_json::to_vec(profile).unwrap_or_default())
+        crate::digest::sha256_hex(&serde_json::to_vec(profile).unwrap_or_default())
     }
 
     /// How people see it: `bh8-262-4.3` for a built-in; for a file, the file, the id it
@@ -659,7 +669,7 @@ pub struct HostDetails {
     pub findings: Vec<HostFinding>,
     /// A report `gcl fuzz merge` folded from shards: which it holds, of how many.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub merged: Option<crate::fuzz::shard::Merged>,
+    pub merged: Option<merged::Merged>,
 }
 
 /// One finding of `gcl fuzz host`, with what a person needs to run it again.
@@ -713,7 +723,7 @@ impl RunReport {
     /// certificate the suite's cases of the certified levels; the run is partial when some of
     /// them did not run, when known failures were excused, or when `certify --partial` asked.
     pub fn outcome(&self) -> Outcome {
-        let judged = crate::conform::LevelFilter::from_name(&self.level).unwrap_or(crate::conform::LevelFilter::All);
+        let judged = crate::suite::LevelFilter::from_name(&self.level).unwrap_or(crate::suite::LevelFilter::All);
         let in_scope = |c: &&CaseResult| c.level.parse::<gcl_transcript::Level>().map_or(true, |l| judged.admits(l));
         let scoped = self.cases.iter().filter(in_scope).count();
         let cases_total = self.certificate.as_ref().map_or(scoped, |c| c.cases_total);
@@ -767,7 +777,7 @@ impl RunReport {
         let h = self.host.as_ref();
         match self.kind {
             ReportKind::CheckHost => {
-                let clauses = self.cases.iter().filter(|c| c.id != crate::check_host::SESSION_CASE);
+                let clauses = self.cases.iter().filter(|c| c.id != SESSION_CASE);
                 let (n, exercised) =
                     clauses.fold((0, 0), |(n, e), c| (n + 1, e + usize::from(c.verdict != Verdict::Skip)));
                 Some(format!("{exercised} of {n} clauses exercised"))

@@ -5,7 +5,21 @@
 
 use std::fmt::Write;
 
-use super::html::esc;
+/// Text escaped for HTML content and attribute values.
+pub(crate) fn esc(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&#39;"),
+            c => o.push(c),
+        }
+    }
+    o
+}
 
 /// The style sheet of every page. Long lines wrap (`pre-wrap`, breaking anywhere) rather than
 /// hide behind a scroll bar.

@@ -6,8 +6,8 @@
 
 use gcl_host::client::programs::RealtimeReport;
 
-use super::html::esc;
 use super::page::Page;
+use super::page::esc;
 use super::svg::{Band, Plot, Series};
 
 /// Counts a finger may be off the model's position at the same block: what the examples'

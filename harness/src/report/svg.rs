@@ -4,7 +4,7 @@
 
 use std::fmt::Write;
 
-use super::html::esc;
+use super::page::esc;
 
 /// A series of points.
 #[derive(Debug, Clone, Default)]

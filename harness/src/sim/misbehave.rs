@@ -403,7 +403,8 @@ fn noise(arg: u32, n: usize) -> Vec<u8> {
         .collect()
 }
 
-/// Applies one operator to `out` when it applies to this answer; says what it did.
+/// Applies one operator to `out` when it applies to this answer; says what it did. Each
+/// operator is a function below, given the answer's parts.
 fn apply(
     op: Operator,
     arg: u32,
@@ -412,232 +413,318 @@ fn apply(
     power_up: &[u8],
     out: &mut Shaped,
 ) -> Option<String> {
-    let framing = &device.profile().framing;
-    let (eol, prompt) = (framing.line_ending.as_bytes(), framing.prompt.as_bytes());
-    let b = &mut out.bytes;
-    let sup = kind == AnswerKind::Supervisory;
-    let ends_prompt = b.ends_with(prompt);
-    let echo_end = find(b, eol);
+    let a = Parts::of(kind, device, power_up, &out.bytes);
     match op {
-        Operator::DelayBelow | Operator::DelayAbove => {
-            if b.is_empty() || out.hold.is_some() {
-                return None;
-            }
-            let t = pick(&COMMON_TIMEOUTS, arg);
-            let d = if op == Operator::DelayBelow { t * 9 / 10 } else { t * 11 / 10 };
-            let at = if ends_prompt && arg / 8 % 2 == 1 { b.len() - prompt.len() } else { 0 };
-            out.hold = Some((at, d));
-            let whr = if at == 0 { "the answer" } else { "the prompt" };
-            Some(format!("{whr} held back {} ms", d.as_millis()))
-        }
-        Operator::NoPrompt => {
-            if !sup || !ends_prompt {
-                return None;
-            }
-            b.truncate(b.len() - prompt.len());
-            Some("prompt left out".into())
-        }
-        Operator::BadPrompt => {
-            if !sup || !ends_prompt {
-                return None;
-            }
-            let bad = pick::<&[u8]>(&[b"=>", b"> ", b"=>  ", b"-> "], arg);
-            b.truncate(b.len() - prompt.len());
-            b.extend_from_slice(bad);
-            Some(format!("prompt sent as \"{}\"", gcl_model::escape::escape(bad)))
-        }
-        Operator::Truncate => {
-            if b.len() < 2 {
-                return None;
-            }
-            let at = 1 + arg as usize % (b.len() - 1);
-            let cut = b.len() - at;
-            b.truncate(at);
-            Some(format!("last {cut} bytes cut"))
-        }
-        Operator::Garbage => {
-            if b.is_empty() {
-                return None;
-            }
-            let at = arg as usize % b.len();
-            let g = noise(arg, 1 + (arg as usize / 7) % 8);
-            let what = format!("\"{}\" inserted at byte {at}", gcl_model::escape::escape(&g));
-            b.splice(at..at, g);
-            Some(what)
-        }
-        Operator::ExtraBytes => {
-            if b.is_empty() {
-                return None;
-            }
-            let extra: Vec<u8> = match arg % 4 {
-                0 => [eol, prompt].concat(),
-                1 => eol.to_vec(),
-                2 => vec![0],
-                _ => noise(arg, 4),
-            };
-            let what = format!("\"{}\" appended", gcl_model::escape::escape(&extra));
-            b.extend(extra);
-            Some(what)
-        }
-        Operator::ErrBits => {
-            let e = echo_end.filter(|&e| sup && ends_prompt && e > 0)?;
-            let err = pick(
-                &["ERR 32768", "ERR 65535", "ERR 2147483648", "ERR 4294967295", "ERR -1", "ERR 99999999999999999999"],
-                arg,
-            );
-            b.truncate(e);
-            b.extend_from_slice(eol);
-            b.extend_from_slice(err.as_bytes());
-            b.extend_from_slice(eol);
-            b.extend_from_slice(prompt);
-            Some(format!("answered {err}"))
-        }
-        Operator::WrongEcho => {
-            let e = echo_end.filter(|&e| sup && e > 0)?;
-            let i = arg as usize % e;
-            let c = b[i];
-            b[i] = if c.is_ascii_alphabetic() {
-                c ^ 0x20
-            } else if c == b'?' {
-                b'!'
-            } else {
-                b'?'
-            };
-            Some(format!(
-                "echo byte {i} {} sent as {}",
-                gcl_model::escape::escape(&[c]),
-                gcl_model::escape::escape(&[b[i]])
-            ))
-        }
-        Operator::CrLf => {
-            if !sup || echo_end.is_none() {
-                return None;
-            }
-            let mut v = Vec::with_capacity(b.len());
-            let mut i = 0;
-            while i < b.len() {
-                if b[i..].starts_with(eol) {
-                    v.extend_from_slice(b"\r\n");
-                    i += eol.len();
-                } else {
-                    v.push(b[i]);
-                    i += 1;
-                }
-            }
-            *b = v;
-            Some("lines end in CR LF".into())
-        }
-        Operator::OverlongLine => {
-            let e = echo_end.filter(|_| sup && ends_prompt)?;
-            let n = pick(&[81usize, 256, 1024, 4096], arg);
-            let mut line = eol.to_vec();
-            line.extend(b"1234567890".iter().cycle().take(n));
-            b.splice(e..e, line);
-            Some(format!("a {n}-byte line added"))
-        }
-        Operator::BannerVariant => {
-            let first = device.profile().banner.first()?.clone();
-            let at = find(b, first.as_bytes())?;
-            let end = at + first.len();
-            let what = match arg % 4 {
-                0 => {
-                    b.splice(end..end, b" V9.99 (rev Z)".iter().copied());
-                    "version suffix on the banner"
-                }
-                1 => {
-                    b.splice(end..end, [eol, b"Copyright (c) 2026 nobody"].concat());
-                    "extra banner line"
-                }
-                2 => {
-                    b[at..end].make_ascii_uppercase();
-                    "banner in upper case"
-                }
-                _ => {
-                    let cut = if b[end..].starts_with(eol) { end + eol.len() } else { end };
-                    b.drain(at..cut);
-                    "first banner line missing"
-                }
-            };
-            Some(what.into())
-        }
-        Operator::Restart => {
-            if !sup || b.is_empty() {
-                return None;
-            }
-            let at = arg as usize % b.len();
-            b.truncate(at);
-            b.extend_from_slice(power_up);
-            out.restart = true;
-            Some(format!("restart after {at} bytes: the hand powers up again (banner, prompt)"))
-        }
-        Operator::RtBlockLength => {
-            if kind != AnswerKind::Feedback || b.len() < 2 {
-                return None;
-            }
-            let n = 1 + (arg as usize / 2) % 2;
-            if arg.is_multiple_of(2) {
-                b.truncate(b.len() - n.min(b.len() - 1));
-                Some(format!("feedback block {n} bytes short"))
-            } else {
-                b.extend(noise(arg, n));
-                Some(format!("feedback block {n} bytes long"))
-            }
-        }
-        Operator::RtErr => {
-            if kind != AnswerKind::Feedback {
-                return None;
-            }
-            let err = pick(&["ERR 2048", "ERR 1024", "ERR 32768"], arg);
-            b.clear();
-            b.extend_from_slice(eol);
-            b.extend_from_slice(err.as_bytes());
-            Some(format!("\\n\\r{err} in place of the feedback block"))
-        }
-        Operator::RtByteFlip => {
-            if kind != AnswerKind::Feedback {
-                return None;
-            }
-            let i = arg as usize % b.len();
-            let bit = (arg / 16) % 8;
-            b[i] ^= 1 << bit;
-            Some(format!("bit {bit} of byte {i} flipped"))
-        }
-        Operator::RtExtreme => {
-            let layout = device.rt_layout().filter(|_| kind == AnswerKind::Feedback)?;
-            let fb = layout.feedback();
-            if b.len() != fb.size() || fb.fields().is_empty() {
-                return None;
-            }
-            for f in fb.fields() {
-                let v: i64 = match f.name() {
-                    "LFAP" | "LFBP" => 65535,
-                    "LFV" | "LFDP" => -128,
-                    _ if arg.is_multiple_of(2) => f.max(),
-                    _ => f.min(),
-                };
-                let v = v.clamp(f.min(), f.max());
-                let bytes = if f.size() == 1 { vec![v as u8] } else { (v as u16).to_be_bytes().to_vec() };
-                if let Some(slot) = b.get_mut(f.offset()..f.offset() + f.size()) {
-                    slot.copy_from_slice(&bytes[..f.size().min(bytes.len())]);
-                }
-            }
-            Some("feedback values at their extremes".into())
-        }
-        Operator::Silence => {
-            let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
-            b.truncate(at);
-            out.hold = None;
-            Some(format!("silent after {at} bytes of the answer, the line left open"))
-        }
-        Operator::HangUp => {
-            let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
-            b.truncate(at);
-            out.hang_up = true;
-            Some(format!("line hung up after {at} bytes of the answer"))
-        }
+        Operator::DelayBelow => delay(9, arg, &a, out),
+        Operator::DelayAbove => delay(11, arg, &a, out),
+        Operator::NoPrompt => no_prompt(&a, &mut out.bytes),
+        Operator::BadPrompt => bad_prompt(arg, &a, &mut out.bytes),
+        Operator::Truncate => truncate(arg, &mut out.bytes),
+        Operator::Garbage => garbage(arg, &mut out.bytes),
+        Operator::ExtraBytes => extra_bytes(arg, &a, &mut out.bytes),
+        Operator::ErrBits => err_bits(arg, &a, &mut out.bytes),
+        Operator::WrongEcho => wrong_echo(arg, &a, &mut out.bytes),
+        Operator::CrLf => crlf(&a, &mut out.bytes),
+        Operator::OverlongLine => overlong_line(arg, &a, &mut out.bytes),
+        Operator::BannerVariant => banner_variant(arg, &a, &mut out.bytes),
+        Operator::Restart => restart(arg, &a, out),
+        Operator::RtBlockLength => rt_block_length(arg, &a, &mut out.bytes),
+        Operator::RtErr => rt_err(arg, &a, &mut out.bytes),
+        Operator::RtByteFlip => rt_byte_flip(arg, &a, &mut out.bytes),
+        Operator::RtExtreme => rt_extreme(arg, &a, &mut out.bytes),
+        Operator::Silence => silence(arg, out),
+        Operator::HangUp => hang_up(arg, out),
         // The pace is the session's (the transport's owner reads the schedule); nothing changes.
         Operator::LineRate => Some("the session at the hand's line rate (its BAUD)".into()),
     }
+}
+
+/// An answer as an operator meets it: the hand's framing, and where the answer's parts are.
+struct Parts<'a> {
+    kind: AnswerKind,
+    device: &'a Device,
+    /// What the hand sends as it powers up.
+    power_up: &'a [u8],
+    eol: &'a [u8],
+    prompt: &'a [u8],
+    /// A supervisory answer (not a feedback block).
+    sup: bool,
+    /// The answer ends with the prompt.
+    ends_prompt: bool,
+    /// Where the echo ends (the first line ending), if anywhere.
+    echo_end: Option<usize>,
+}
+
+impl<'a> Parts<'a> {
+    /// Takes an answer and the hand it comes from; gives its parts.
+    fn of(kind: AnswerKind, device: &'a Device, power_up: &'a [u8], b: &[u8]) -> Parts<'a> {
+        let framing = &device.profile().framing;
+        let (eol, prompt) = (framing.line_ending.as_bytes(), framing.prompt.as_bytes());
+        Parts {
+            kind,
+            device,
+            power_up,
+            eol,
+            prompt,
+            sup: kind == AnswerKind::Supervisory,
+            ends_prompt: b.ends_with(prompt),
+            echo_end: find(b, eol),
+        }
+    }
+}
+
+/// `delay-below`/`delay-above`: holds back the answer (or its prompt) for `tenths`/10 of a
+/// common host timeout.
+fn delay(tenths: u32, arg: u32, a: &Parts<'_>, out: &mut Shaped) -> Option<String> {
+    let b = &out.bytes;
+    if b.is_empty() || out.hold.is_some() {
+        return None;
+    }
+    let t = pick(&COMMON_TIMEOUTS, arg);
+    let d = t * tenths / 10;
+    let at = if a.ends_prompt && arg / 8 % 2 == 1 { b.len() - a.prompt.len() } else { 0 };
+    out.hold = Some((at, d));
+    let whr = if at == 0 { "the answer" } else { "the prompt" };
+    Some(format!("{whr} held back {} ms", d.as_millis()))
+}
+
+/// `no-prompt`: a supervisory answer without its prompt.
+fn no_prompt(a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if !a.sup || !a.ends_prompt {
+        return None;
+    }
+    b.truncate(b.len() - a.prompt.len());
+    Some("prompt left out".into())
+}
+
+/// `bad-prompt`: a supervisory answer's prompt sent wrong.
+fn bad_prompt(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if !a.sup || !a.ends_prompt {
+        return None;
+    }
+    let bad = pick::<&[u8]>(&[b"=>", b"> ", b"=>  ", b"-> "], arg);
+    b.truncate(b.len() - a.prompt.len());
+    b.extend_from_slice(bad);
+    Some(format!("prompt sent as \"{}\"", gcl_model::escape::escape(bad)))
+}
+
+/// `truncate`: the answer's last bytes cut.
+fn truncate(arg: u32, b: &mut Vec<u8>) -> Option<String> {
+    if b.len() < 2 {
+        return None;
+    }
+    let at = 1 + arg as usize % (b.len() - 1);
+    let cut = b.len() - at;
+    b.truncate(at);
+    Some(format!("last {cut} bytes cut"))
+}
+
+/// `garbage`: noise inserted into the answer.
+fn garbage(arg: u32, b: &mut Vec<u8>) -> Option<String> {
+    if b.is_empty() {
+        return None;
+    }
+    let at = arg as usize % b.len();
+    let g = noise(arg, 1 + (arg as usize / 7) % 8);
+    let what = format!("\"{}\" inserted at byte {at}", gcl_model::escape::escape(&g));
+    b.splice(at..at, g);
+    Some(what)
+}
+
+/// `extra-bytes`: a line ending, a prompt, a NUL or noise after the answer.
+fn extra_bytes(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if b.is_empty() {
+        return None;
+    }
+    let extra: Vec<u8> = match arg % 4 {
+        0 => [a.eol, a.prompt].concat(),
+        1 => a.eol.to_vec(),
+        2 => vec![0],
+        _ => noise(arg, 4),
+    };
+    let what = format!("\"{}\" appended", gcl_model::escape::escape(&extra));
+    b.extend(extra);
+    Some(what)
+}
+
+/// `err-bits`: a supervisory answer replaced, after its echo, by an ERR GCL does not define.
+fn err_bits(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    let e = a.echo_end.filter(|&e| a.sup && a.ends_prompt && e > 0)?;
+    let err = pick(
+        &["ERR 32768", "ERR 65535", "ERR 2147483648", "ERR 4294967295", "ERR -1", "ERR 99999999999999999999"],
+        arg,
+    );
+    b.truncate(e);
+    b.extend_from_slice(a.eol);
+    b.extend_from_slice(err.as_bytes());
+    b.extend_from_slice(a.eol);
+    b.extend_from_slice(a.prompt);
+    Some(format!("answered {err}"))
+}
+
+/// `wrong-echo`: one byte of the echo sent otherwise.
+fn wrong_echo(arg: u32, a: &Parts<'_>, b: &mut [u8]) -> Option<String> {
+    let e = a.echo_end.filter(|&e| a.sup && e > 0)?;
+    let i = arg as usize % e;
+    let c = b[i];
+    b[i] = if c.is_ascii_alphabetic() {
+        c ^ 0x20
+    } else if c == b'?' {
+        b'!'
+    } else {
+        b'?'
+    };
+    Some(format!("echo byte {i} {} sent as {}", gcl_model::escape::escape(&[c]), gcl_model::escape::escape(&[b[i]])))
+}
+
+/// `crlf`: a supervisory answer's lines end in CR LF.
+fn crlf(a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if !a.sup || a.echo_end.is_none() {
+        return None;
+    }
+    let mut v = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i..].starts_with(a.eol) {
+            v.extend_from_slice(b"\r\n");
+            i += a.eol.len();
+        } else {
+            v.push(b[i]);
+            i += 1;
+        }
+    }
+    *b = v;
+    Some("lines end in CR LF".into())
+}
+
+/// `overlong-line`: a line longer than a host's buffer added after the echo.
+fn overlong_line(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    let e = a.echo_end.filter(|_| a.sup && a.ends_prompt)?;
+    let n = pick(&[81usize, 256, 1024, 4096], arg);
+    let mut line = a.eol.to_vec();
+    line.extend(b"1234567890".iter().cycle().take(n));
+    b.splice(e..e, line);
+    Some(format!("a {n}-byte line added"))
+}
+
+/// `banner-variant`: the banner's first line with a version suffix, a line after it, in
+/// upper case, or missing.
+fn banner_variant(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    let first = a.device.profile().banner.first()?.clone();
+    let at = find(b, first.as_bytes())?;
+    let end = at + first.len();
+    let what = match arg % 4 {
+        0 => {
+            b.splice(end..end, b" V9.99 (rev Z)".iter().copied());
+            "version suffix on the banner"
+        }
+        1 => {
+            b.splice(end..end, [a.eol, b"Copyright (c) 2026 nobody"].concat());
+            "extra banner line"
+        }
+        2 => {
+            b[at..end].make_ascii_uppercase();
+            "banner in upper case"
+        }
+        _ => {
+            let cut = if b[end..].starts_with(a.eol) { end + a.eol.len() } else { end };
+            b.drain(at..cut);
+            "first banner line missing"
+        }
+    };
+    Some(what.into())
+}
+
+/// `restart`: the supervisory answer cut, then the hand powers up again.
+fn restart(arg: u32, a: &Parts<'_>, out: &mut Shaped) -> Option<String> {
+    let b = &mut out.bytes;
+    if !a.sup || b.is_empty() {
+        return None;
+    }
+    let at = arg as usize % b.len();
+    b.truncate(at);
+    b.extend_from_slice(a.power_up);
+    out.restart = true;
+    Some(format!("restart after {at} bytes: the hand powers up again (banner, prompt)"))
+}
+
+/// `rt-block-length`: a feedback block a byte or two short or long.
+fn rt_block_length(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if a.kind != AnswerKind::Feedback || b.len() < 2 {
+        return None;
+    }
+    let n = 1 + (arg as usize / 2) % 2;
+    if arg.is_multiple_of(2) {
+        b.truncate(b.len() - n.min(b.len() - 1));
+        Some(format!("feedback block {n} bytes short"))
+    } else {
+        b.extend(noise(arg, n));
+        Some(format!("feedback block {n} bytes long"))
+    }
+}
+
+/// `rt-err`: an ERR line in place of a feedback block.
+fn rt_err(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
+    if a.kind != AnswerKind::Feedback {
+        return None;
+    }
+    let err = pick(&["ERR 2048", "ERR 1024", "ERR 32768"], arg);
+    b.clear();
+    b.extend_from_slice(a.eol);
+    b.extend_from_slice(err.as_bytes());
+    Some(format!("\\n\\r{err} in place of the feedback block"))
+}
+
+/// `rt-byte-flip`: one bit of a feedback block flipped.
+fn rt_byte_flip(arg: u32, a: &Parts<'_>, b: &mut [u8]) -> Option<String> {
+    if a.kind != AnswerKind::Feedback {
+        return None;
+    }
+    let i = arg as usize % b.len();
+    let bit = (arg / 16) % 8;
+    b[i] ^= 1 << bit;
+    Some(format!("bit {bit} of byte {i} flipped"))
+}
+
+/// `rt-extreme`: a feedback block's values at the extremes of their fields.
+fn rt_extreme(arg: u32, a: &Parts<'_>, b: &mut [u8]) -> Option<String> {
+    let layout = a.device.rt_layout().filter(|_| a.kind == AnswerKind::Feedback)?;
+    let fb = layout.feedback();
+    if b.len() != fb.size() || fb.fields().is_empty() {
+        return None;
+    }
+    for f in fb.fields() {
+        let v: i64 = match f.name() {
+            "LFAP" | "LFBP" => 65535,
+            "LFV" | "LFDP" => -128,
+            _ if arg.is_multiple_of(2) => f.max(),
+            _ => f.min(),
+        };
+        let v = v.clamp(f.min(), f.max());
+        let bytes = if f.size() == 1 { vec![v as u8] } else { (v as u16).to_be_bytes().to_vec() };
+        if let Some(slot) = b.get_mut(f.offset()..f.offset() + f.size()) {
+            slot.copy_from_slice(&bytes[..f.size().min(bytes.len())]);
+        }
+    }
+    Some("feedback values at their extremes".into())
+}
+
+/// `silence`: the answer cut, and nothing more sent (the line left open).
+fn silence(arg: u32, out: &mut Shaped) -> Option<String> {
+    let b = &mut out.bytes;
+    let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
+    b.truncate(at);
+    out.hold = None;
+    Some(format!("silent after {at} bytes of the answer, the line left open"))
+}
+
+/// `hang-up`: the answer cut, then the line hung up.
+fn hang_up(arg: u32, out: &mut Shaped) -> Option<String> {
+    let b = &mut out.bytes;
+    let at = if b.is_empty() { 0 } else { arg as usize % b.len() };
+    b.truncate(at);
+    out.hang_up = true;
+    Some(format!("line hung up after {at} bytes of the answer"))
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Turning a case plan into a golden transcript: the plan's host side runs against the
 //! in-process reference model through the same recorder `gcl record` uses, and each answer is
-//! written down exactly, except where the plan's [`Shape`] says the protocol lets it vary.
+//! written down exactly, except where the plan's [`Shape`](super::plan::Shape) says the protocol lets it vary.
 //! Every elision is checked to match the model's own answer before the case is accepted.
 
 use std::sync::Arc;
@@ -10,6 +10,8 @@ use gcl_model::Profile;
 use gcl_model::realtime::{ControlHeader, Field, RtFlag};
 use gcl_model::spec::{CommandKind, ParamSpec, Scope};
 
+use super::depends::prefix_motors;
+use super::plan::{Bind, FieldRule, Plan, Range, Shape, Target};
 use gcl_harness::record::{Captured, RecordOptions, answer_form, banner_expect, capture, suggest_within};
 use gcl_host::SimLink;
 use gcl_host::link::LinkError;
@@ -31,77 +33,10 @@ pub const DECISION_CLAUSE: &str = "decision:";
 /// begins (the fuzzer seeds its corpus from the steps after it).
 pub(crate) const CHECK_COMMENT: &str = "the check";
 
-/// An inclusive range of values.
-pub(crate) type Range = (i64, i64);
-
 /// Live values whose reading the protocol fixes (initialisation state, breakaway flags); every
 /// other live value (position, strain, temperature, odometer, uptime, serial number) varies
 /// from hand to hand and is elided to its parameter's range.
 const DETERMINED_LIVE: &[&str] = &["S", "BD", "BP"];
-
-/// How the answer of a planned step is written.
-#[derive(Debug, Clone)]
-pub(crate) enum Shape {
-    /// Exactly as the model answers.
-    Exact,
-    /// A RESET banner: `{any}BarrettHand Firmware{any}`.
-    Banner,
-    /// A RESET banner checked for what hosts rely on: the echo, any text, `BarrettHand
-    /// Firmware` then the line ending straight after it, at least one more byte of banner,
-    /// then the line ending and the prompt.
-    BannerLines,
-    /// Value lines after the echo: for line `i`, token `j`, a range (or exact).
-    Values(Vec<Vec<Option<Range>>>),
-    /// List lines `NAME value...`: values of live parameters elided to their ranges.
-    ListValues,
-    /// The echo, then `{text}`: one or more lines of text, none of them a status answer (text
-    /// the project chose: only that there is some, and that it is not `ERR n`, is checked).
-    AnyLines,
-    /// A RealTime answer: a feedback block with per-field rules (see [`FieldRule`]).
-    Block(Vec<FieldRule>),
-}
-
-/// An override for one feedback field.
-#[derive(Debug, Clone)]
-pub(crate) struct FieldRule {
-    /// The motor, or `None` for a hand-wide field.
-    pub motor: Option<u8>,
-    /// The flag name (LFAP, LFDP, ...).
-    pub name: &'static str,
-    /// The accepted range (`None`: exact).
-    pub range: Option<Range>,
-}
-
-/// Which value of an answer a [`Bind`] applies to.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) enum Target {
-    /// A feedback field of a RealTime answer (a [`Shape::Block`]).
-    Field {
-        /// The motor, or `None` for a hand-wide field.
-        motor: Option<u8>,
-        /// The flag name.
-        name: &'static str,
-    },
-    /// Token `token` of value line `line` of a [`Shape::Values`] answer (0-based).
-    Value { line: usize, token: usize },
-}
-
-/// A value of an answer captured under a name, or held to a relation with a value captured
-/// before it, or both. A relation is the case's subject written as arithmetic between two
-/// answers, so that the case does not rest on the absolute values another decision sets;
-/// it carries its evidence, which the golden states as a note.
-#[derive(Debug, Clone)]
-pub(crate) struct Bind {
-    pub target: Target,
-    pub capture: Option<String>,
-    pub relation: Option<Relation>,
-    /// Why the relation holds: the clause it writes down and how its factor and tolerance
-    /// follow from the model.
-    pub evidence: String,
-    /// Pairs (captured value, related value) the model gives over every situation the case
-    /// allows: each must lie in the relation's band, or the case is not built.
-    pub samples: Vec<(i64, i64)>,
-}
 
 /// A relation from the model's pairs (captured, related): the factor is the midpoint of their
 /// ratios as a fraction over 100, and the tolerance the least whole percent that holds every
@@ -152,18 +87,6 @@ pub(crate) fn lfv_exact(p: &Profile, datum: i64, lcvc: i64, lfvc: i64) -> f64 {
 
 pub(crate) fn gcd(a: i64, b: i64) -> i64 {
     if b == 0 { a } else { gcd(b, a % b) }
-}
-
-/// One planned step.
-#[derive(Debug, Clone)]
-pub(crate) struct Plan {
-    pub step: ScriptStep,
-    pub shape: Shape,
-    pub within_floor: Option<Duration>,
-    /// The soonest the answer may come (a timing window's lower bound), with its evidence.
-    pub earliest: Option<(Duration, String)>,
-    /// Captures and relations on the answer's values.
-    pub binds: Vec<Bind>,
 }
 
 /// A case before it runs.
@@ -456,17 +379,6 @@ impl CaseB {
         }
         false
     }
-}
-
-/// The motors a prefix names (all four when none), ascending.
-pub(crate) fn prefix_motors(p: &Profile, prefix: &str) -> Vec<u8> {
-    if prefix.is_empty() {
-        return vec![1, 2, 3, 4];
-    }
-    let mut ms: Vec<u8> = prefix.chars().filter_map(|c| p.prefix_motors(c)).flatten().copied().collect();
-    ms.sort_unstable();
-    ms.dedup();
-    ms
 }
 
 /// The answer of `[prefix]GETTER NAME...`: for each name a line of values (one for a

@@ -13,7 +13,7 @@ use gcl_model::Profile;
 use gcl_model::grammar::{self, Args, Line};
 use gcl_model::spec::CommandKind;
 
-use super::build::Plan;
+use super::plan::Plan;
 use gcl_harness::record::Captured;
 use gcl_transcript::script::Action;
 
@@ -58,7 +58,7 @@ fn command_of(p: &Profile, line: &[u8]) -> Option<(Vec<u8>, CommandKind, String)
     let rest = t[word_start..].trim_start_matches([' ', '\t', '\n']);
     let word = rest.split([' ', '\t', '\n']).next().unwrap_or_default();
     let id = p.command_id(word)?;
-    let motors = super::build::prefix_motors(p, prefix);
+    let motors = prefix_motors(p, prefix);
     Some((motors, p.command(id).kind, p.command(id).name.clone()))
 }
 
@@ -389,6 +389,17 @@ fn partly_valid(p: &Profile, text: &str, kind: CommandKind) -> bool {
         && items
             .iter()
             .any(|i| matches!(grammar::parse_line(p, format!("{word} {i}").as_bytes()), Ok(Line::Command(_))))
+}
+
+/// The motors a prefix names (all four when none), ascending.
+pub(crate) fn prefix_motors(p: &Profile, prefix: &str) -> Vec<u8> {
+    if prefix.is_empty() {
+        return vec![1, 2, 3, 4];
+    }
+    let mut ms: Vec<u8> = prefix.chars().filter_map(|c| p.prefix_motors(c)).flatten().copied().collect();
+    ms.sort_unstable();
+    ms.dedup();
+    ms
 }
 
 #[cfg(test)]

@@ -18,6 +18,7 @@
 pub(crate) mod build;
 mod cases;
 pub(crate) mod depends;
+pub(crate) mod plan;
 
 pub use build::{DECISION_CLAUSE, DECISIONS_KEY};
 pub use depends::FRAMING;
@@ -260,7 +261,7 @@ pub fn suite_hash(cases: &[Case]) -> String {
         h.update(c.text().as_bytes());
         h.update([0]);
     }
-    crate::certify::hex(&h.finalize())
+    crate::digest::hex(&h.finalize())
 }
 
 #[derive(Serialize)]
@@ -404,4 +405,53 @@ pub fn count_by_level(cases: &[Case]) -> BTreeMap<Level, usize> {
         *m.entry(c.level()).or_default() += 1;
     }
     m
+}
+/// Which levels to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LevelFilter {
+    /// MUST only.
+    Must,
+    /// MUST and SHOULD.
+    Should,
+    /// Every level: MUST, SHOULD, MAY, INFO.
+    All,
+}
+
+impl LevelFilter {
+    /// Whether a case of `level` runs.
+    pub fn admits(self, level: Level) -> bool {
+        match self {
+            LevelFilter::Must => level == Level::Must,
+            LevelFilter::Should => matches!(level, Level::Must | Level::Should),
+            LevelFilter::All => true,
+        }
+    }
+
+    /// The filter a report's `level` names (as [`LevelFilter::as_str`] writes it).
+    pub fn from_name(name: &str) -> Option<LevelFilter> {
+        [LevelFilter::Must, LevelFilter::Should, LevelFilter::All].into_iter().find(|l| l.as_str() == name)
+    }
+
+    /// The lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LevelFilter::Must => "must",
+            LevelFilter::Should => "should",
+            LevelFilter::All => "all",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_filter() {
+        assert!(LevelFilter::Must.admits(Level::Must));
+        assert!(!LevelFilter::Must.admits(Level::Should));
+        assert!(LevelFilter::Should.admits(Level::Should));
+        assert!(!LevelFilter::Should.admits(Level::Info));
+        assert!(LevelFilter::All.admits(Level::Info));
+    }
 }

@@ -174,138 +174,199 @@ fn request_json(r: &Request) -> Value {
     }
 }
 
+/// The `host` file: the model's answers → refusals → those answers broken → RealTime → ^C,
+/// each case then run through the oracle ([`outcome`]) into a test.
 pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
     let p = b.profile();
-    let cmd = |s: &str| Request::Command(s.to_string());
-    let echo = ["framing-echo"];
-    let mut tests: Vec<HostCase> = Vec::new();
-    let mut add = |id: &str, comment: &str, request: Request, stream: Vec<u8>, flags: &[&'static str]| {
-        tests.push(HostCase { id: id.into(), comment: comment.into(), request, stream, flags: flags.to_vec() });
-    };
-    // Answers, from the model.
+    let mut tests = HostCases::default();
     let fget = answer(p, &["FGET DP"]);
-    add("answer-one-line", "FGET DP: the echo, one line, the prompt", cmd("FGET DP"), fget.clone(), &echo);
-    add(
+    answer_cases(p, &fget, &mut tests);
+    refusal_cases(p, &mut tests);
+    violation_cases(&fget, &mut tests);
+    realtime_cases(p, &mut tests)?;
+    abort_cases(&mut tests);
+    for HostCase { id, comment, request: r, stream, flags } in tests.0 {
+        let (sent, out, ok) = outcome(p, &r, &stream)?;
+        let body = json!({
+            "request": request_json(&r),
+            "sent": hex_bytes(&sent),
+            "stream": hex_bytes(&stream),
+            "outcome": out,
+        });
+        b.push(Test::new(format!("host-{id}"), comment, ok, body).flags(&flags))?;
+    }
+    Ok(())
+}
+
+/// The host cases in the order they are written.
+#[derive(Default)]
+struct HostCases(Vec<HostCase>);
+
+impl HostCases {
+    /// Takes one case; keeps it after those before.
+    fn add(&mut self, id: &str, comment: &str, request: Request, stream: Vec<u8>, flags: &[&'static str]) {
+        self.0.push(HostCase { id: id.into(), comment: comment.into(), request, stream, flags: flags.to_vec() });
+    }
+}
+
+/// A supervisory command line as a request.
+fn cmd(s: &str) -> Request {
+    Request::Command(s.to_string())
+}
+
+/// The flags of a case about the echo.
+const ECHO: [&str; 1] = ["framing-echo"];
+
+/// Takes the profile and the model's answer to FGET DP; adds the model's answers.
+fn answer_cases(p: &std::sync::Arc<Profile>, fget: &[u8], t: &mut HostCases) {
+    // Answers, from the model.
+    t.add("answer-one-line", "FGET DP: the echo, one line, the prompt", cmd("FGET DP"), fget.to_vec(), &ECHO);
+    t.add(
         "answer-two-lines",
         "FGET DP DS: one line per name",
         cmd("FGET DP DS"),
         answer(p, &["FGET DP DS"]),
         &["framing-echo", "seed-fget-format", "bh8-fget-format"],
     );
-    add(
+    t.add(
         "answer-no-lines",
         "FSET DP 100: the echo and the prompt",
         cmd("FSET DP 100"),
         answer(p, &["FSET DP 100"]),
-        &echo,
+        &ECHO,
     );
-    add("answer-empty-line", "a bare CR: no echo, a fresh prompt", cmd(""), answer(p, &[""]), &["framing-empty-line"]);
-    add(
+    t.add(
+        "answer-empty-line",
+        "a bare CR: no echo, a fresh prompt",
+        cmd(""),
+        answer(p, &[""]),
+        &["framing-empty-line"],
+    );
+    t.add(
         "answer-echo-keeps-case",
         "the echo keeps the case that was sent",
         cmd("fget dp"),
         answer(p, &["fget dp"]),
         &["framing-echo", "framing-case"],
     );
-    add("answer-version", "VERS: lines of text", cmd("VERS"), answer(p, &["VERS"]), &["bh8-vers-text"]);
-    add(
+    t.add("answer-version", "VERS: lines of text", cmd("VERS"), answer(p, &["VERS"]), &["bh8-vers-text"]);
+    t.add(
         "answer-err-describes",
         "ERR 192: one line per bit",
         cmd("ERR 192"),
         answer(p, &["ERR 192"]),
         &["seed-err-command", "bh8-err-format"],
     );
+}
+
+/// Takes the profile; adds the model's refusals, and one with a status bit GCL does not define.
+fn refusal_cases(p: &std::sync::Arc<Profile>, t: &mut HostCases) {
     // Refusals, from the model.
-    add("refusal-unknown-command", "BOGUS is refused with 32", cmd("BOGUS"), answer(p, &["BOGUS"]), &echo);
-    add("refusal-read-only", "FSET P 5 is refused with 256", cmd("FSET P 5"), answer(p, &["FSET P 5"]), &echo);
-    add(
+    t.add("refusal-unknown-command", "BOGUS is refused with 32", cmd("BOGUS"), answer(p, &["BOGUS"]), &ECHO);
+    t.add("refusal-read-only", "FSET P 5 is refused with 256", cmd("FSET P 5"), answer(p, &["FSET P 5"]), &ECHO);
+    t.add(
         "refusal-combined",
         "FSET NOPE 1 DP 99999 is refused with 192",
         cmd("FSET NOPE 1 DP 99999"),
         answer(p, &["FSET NOPE 1 DP 99999"]),
         &["framing-errors-combine"],
     );
-    add(
+    t.add(
         "refusal-before-hi",
         "C before HI is refused with 4",
         cmd("C"),
         answer(p, &["C"]),
         &["seed-motion-before-hi", "bh8-motion-before-hi"],
     );
-    add(
+    t.add(
         "refusal-unknown-bit",
         "a status with a bit GCL does not define is still a refusal, with its number",
         cmd("BOGUS"),
         b"BOGUS\n\rERR 32768\n\r=> ".to_vec(),
         &[],
     );
+}
+
+/// Takes the model's answer to FGET DP; adds it broken one way each, and incomplete.
+fn violation_cases(fget: &[u8], t: &mut HostCases) {
     // Violations: the FGET DP answer broken one way each.
-    add(
+    t.add(
         "violation-echo-wrong",
         "the echo differs from the line sent",
         cmd("FGET DP"),
-        replace(&fget, b"FGET DP", b"FGET DQ", true),
-        &echo,
+        replace(fget, b"FGET DP", b"FGET DQ", true),
+        &ECHO,
     );
-    add(
+    t.add(
         "violation-echo-missing",
         "no echo: the answer starts with the line break",
         cmd("FGET DP"),
-        replace(&fget, b"FGET DP", b"", true),
-        &echo,
+        replace(fget, b"FGET DP", b"", true),
+        &ECHO,
     );
-    add("violation-crlf", "CR LF instead of LF CR", cmd("FGET DP"), replace(&fget, b"\n\r", b"\r\n", false), &echo);
-    add(
+    t.add("violation-crlf", "CR LF instead of LF CR", cmd("FGET DP"), replace(fget, b"\n\r", b"\r\n", false), &ECHO);
+    t.add(
         "violation-lf-only",
         "LF alone as the line break",
         cmd("FGET DP"),
-        replace(&fget, b"\n\r", b"\n", false),
-        &echo,
+        replace(fget, b"\n\r", b"\n", false),
+        &ECHO,
     );
-    add(
+    t.add(
         "violation-missing-line-break",
         "the line break after the echo is missing",
         cmd("FGET DP"),
-        replace(&fget, b"\n\r", b"", true),
-        &echo,
+        replace(fget, b"\n\r", b"", true),
+        &ECHO,
     );
-    add("violation-status-without-number", "ERR with no number", cmd("BOGUS"), b"BOGUS\n\rERR \n\r=> ".to_vec(), &echo);
-    add(
+    t.add(
+        "violation-status-without-number",
+        "ERR with no number",
+        cmd("BOGUS"),
+        b"BOGUS\n\rERR \n\r=> ".to_vec(),
+        &ECHO,
+    );
+    t.add(
         "violation-status-not-a-number",
         "ERR with a word for a number",
         cmd("BOGUS"),
         b"BOGUS\n\rERR x\n\r=> ".to_vec(),
-        &echo,
+        &ECHO,
     );
-    add(
+    t.add(
         "incomplete-prompt-without-space",
         "`=>` without its space is not a prompt: the host keeps waiting",
         cmd("FGET DP"),
         fget[..fget.len() - 1].to_vec(),
-        &echo,
+        &ECHO,
     );
-    add("incomplete-echo-only", "the echo and nothing else", cmd("FGET DP"), b"FGET DP".to_vec(), &echo);
+    t.add("incomplete-echo-only", "the echo and nothing else", cmd("FGET DP"), b"FGET DP".to_vec(), &ECHO);
+}
+
+/// Takes the profile; adds the RealTime cases (LOOP, feedback blocks, acknowledgements, ^C in
+/// the loop) when its layouts have LCV and LFAP.
+fn realtime_cases(p: &std::sync::Arc<Profile>, t: &mut HostCases) -> Result<(), VectorsError> {
     // RealTime.
     let names: Vec<String> = super::layout::rt_flags(p);
     let has = |n: &str| names.iter().any(|x| x == n);
     if has("LCV") && has("LFAP") {
         let l = layout_with(p, MotorSet::FINGERS, &["LCV", "LFAP"]);
         let rt = ["seed-rt-feedback-order", "seed-rt-field-order", "bh8-44-rt-field-order"];
-        add(
+        t.add(
             "loop-started",
             "LOOP answered by its echo and `*`",
             Request::Loop("123LOOP".into(), l.clone()),
             b"123LOOP*".to_vec(),
             &["bh8-loop-motors"],
         );
-        add(
+        t.add(
             "loop-refused-before-hi",
             "LOOP before HI is refused",
             Request::Loop("123LOOP".into(), l.clone()),
             answer(p, &["123LOOP"]),
             &["bh8-loop-failure", "seed-motion-before-hi", "bh8-motion-before-hi"],
         );
-        add(
+        t.add(
             "violation-loop-lines",
             "LOOP answered by a prompt, neither `*` nor ERR",
             Request::Loop("123LOOP".into(), l.clone()),
@@ -314,64 +375,64 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
         );
         let mut fb = Vec::new();
         l.feedback().encode(b'*', &[5000, 0, 65535], &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
-        add(
+        t.add(
             "feedback-block",
             "a feedback block: `*` then LFAP of motors 1, 2, 3, high byte first",
             Request::Block(ControlHeader::DataFeedback, l.clone()),
             fb.clone(),
             &rt,
         );
-        add(
+        t.add(
             "feedback-after-a",
             "`A` asks for feedback without control data",
             Request::Block(ControlHeader::Feedback, l.clone()),
             fb.clone(),
             &rt,
         );
-        add(
+        t.add(
             "incomplete-short-block",
             "a feedback block one byte short: the host keeps waiting",
             Request::Block(ControlHeader::DataFeedback, l.clone()),
             fb[..fb.len() - 1].to_vec(),
             &rt,
         );
-        add(
+        t.add(
             "violation-block-header",
             "a feedback block must start with `*`",
             Request::Block(ControlHeader::DataFeedback, l.clone()),
             replace(&fb, b"*", b"#", true),
             &rt,
         );
-        add("ack", "`a` is answered by `*` alone", Request::Block(ControlHeader::Ack, l.clone()), b"*".to_vec(), &rt);
-        add(
+        t.add("ack", "`a` is answered by `*` alone", Request::Block(ControlHeader::Ack, l.clone()), b"*".to_vec(), &rt);
+        t.add(
             "ack-after-c",
             "`c` is answered by `*` alone",
             Request::Block(ControlHeader::DataAck, l.clone()),
             b"*".to_vec(),
             &rt,
         );
-        add(
+        t.add(
             "refusal-bad-header",
             "ERR 2048 in RealTime mode: back to supervisory mode",
             Request::Block(ControlHeader::Feedback, l.clone()),
             b"\n\rERR 2048\n\r=> ".to_vec(),
             &[],
         );
-        add(
+        t.add(
             "violation-loop-ended-silently",
             "a prompt in RealTime mode without an ERR line",
             Request::Block(ControlHeader::Feedback, l.clone()),
             b"\n\r=> ".to_vec(),
             &[],
         );
-        add(
+        t.add(
             "abort-loop",
             "^C leaves the loop with a prompt",
             Request::AbortLoop(l.clone()),
             b"\n\r=> ".to_vec(),
             &["bh8-abort-loop"],
         );
-        add(
+        t.add(
             "abort-loop-with-status",
             "^C leaves the loop with ERR 16384 and a prompt",
             Request::AbortLoop(l.clone()),
@@ -389,7 +450,7 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             .collect();
         let mut fb = Vec::new();
         big.feedback().encode(b'*', &values, &mut fb).map_err(|e| VectorsError::Generate(e.to_string()))?;
-        add(
+        t.add(
             "feedback-every-field",
             "every feedback flag on all motors, each field at an edge of its type",
             Request::Block(ControlHeader::Feedback, big),
@@ -397,23 +458,17 @@ pub(crate) fn build(b: &mut FileBuilder<'_>) -> Result<(), VectorsError> {
             &rt,
         );
     }
-    add("abort-idle", "^C while idle: a fresh prompt", Request::Abort, b"\n\r=> ".to_vec(), &["framing-abort-idle"]);
-    add(
+    Ok(())
+}
+
+/// Adds ^C while idle and during a motion.
+fn abort_cases(t: &mut HostCases) {
+    t.add("abort-idle", "^C while idle: a fresh prompt", Request::Abort, b"\n\r=> ".to_vec(), &["framing-abort-idle"]);
+    t.add(
         "abort-motion",
         "^C during a motion: ERR 16384 then the prompt",
         Request::Abort,
         b"\n\rERR 16384\n\r=> ".to_vec(),
         &["bh8-abort-motion", "seed-abort"],
     );
-    for HostCase { id, comment, request: r, stream, flags } in tests {
-        let (sent, out, ok) = outcome(p, &r, &stream)?;
-        let body = json!({
-            "request": request_json(&r),
-            "sent": hex_bytes(&sent),
-            "stream": hex_bytes(&stream),
-            "outcome": out,
-        });
-        b.push(Test::new(format!("host-{id}"), comment, ok, body).flags(&flags))?;
-    }
-    Ok(())
 }

@@ -17,11 +17,10 @@
 //!
 //! The library prints nothing: progress goes to a callback, errors are [`FuzzError`].
 
-pub mod action;
-pub mod case;
+pub use crate::actions as action;
+pub use crate::actions::case;
 pub mod coverage;
 mod probe;
-mod relate;
 pub mod report;
 mod variant;
 
@@ -37,6 +36,7 @@ use serde::{Deserialize, Serialize};
 use self::action::{Allowed, Dice, Generator, HostAction, simpler};
 use self::case::{BuiltCase, NotACase, build_case};
 use crate::deadline::{self, DeadlinePolicy};
+use crate::motion::MotionProbe;
 use crate::replay::{ReplayOptions, ReplayOutcome, replay};
 use crate::suite::Case;
 use gcl_host::link::{Link, LinkError};
@@ -551,7 +551,7 @@ pub fn suite_seeds(p: &Arc<Profile>) -> Arc<Vec<Vec<HostAction>>> {
 /// The content-hash name of a corpus entry.
 pub fn corpus_name(actions: &[HostAction]) -> String {
     let json = serde_json::to_vec(actions).unwrap_or_default();
-    format!("{}.json", &crate::certify::sha256_hex(&json)[..20])
+    format!("{}.json", &crate::digest::sha256_hex(&json)[..20])
 }
 
 /// Corpus files that did not read or parse, each with why.
@@ -962,6 +962,9 @@ impl Fresh {
 }
 
 /// [`explain`]'s rewrites (see there); what they cannot follow, [`variant`] may still name.
+///
+/// The hypotheses (prefixes widened, sets without effect, a prefix accepted) → the known ones
+/// first, the rest when `fresh` → the first that holds on the hand's answers.
 fn explain_by_rewrite(
     opts: &FuzzOptions,
     actions: &[HostAction],
@@ -971,19 +974,62 @@ fn explain_by_rewrite(
     fresh: bool,
     at: &str,
 ) -> Option<Explained> {
-    use gcl_model::MotorSet;
-    use gcl_model::grammar::{Args, Line, parse_line};
-    use gcl_model::spec::CommandKind;
     let p = &opts.profile;
     let failed = out.failed_step()?;
-    let line_of = |a: &HostAction| match a {
+    let mut hyps = prefix_hypotheses(p, actions);
+    hyps.extend(set_hypotheses(p, actions));
+    hyps.extend(prefix_accepted_hypothesis(p, actions));
+    let answered = answered_before_abort(p, actions, built, out);
+    // What already explains a finding first, then (when `fresh`) the rest.
+    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
+    if hyps.is_empty() {
+        return None;
+    }
+    hyps.sort_by_key(|h| !known.contains(&h.says));
+    let mut found: Option<Explained> = None;
+    for h in hyps {
+        let Some(whole) = rewrite_holds(opts, &h, &answered, built, out, failed) else { continue };
+        if known.contains(&h.says) {
+            return Some(Explained { says: h.says, whole: None, exact: false });
+        }
+        // (a new one: another bug that explains the case as well leaves it unexplained)
+        if found.is_some() {
+            return None;
+        }
+        found = Some(Explained { says: h.says, whole, exact: false });
+    }
+    found
+}
+
+/// Takes an action; gives its line, when it sends one (a line, or a line then ^C).
+fn line_of(a: &HostAction) -> Option<String> {
+    match a {
         HostAction::Line(l) | HostAction::LineThenAbort { line: l, .. } => Some(l.clone()),
         _ => None,
-    };
-    let with_line = |a: &HostAction, l: String| match a {
+    }
+}
+
+/// Takes an action that sends a line and another line; gives the action sending that one.
+fn with_line(a: &HostAction, l: String) -> HostAction {
+    match a {
         HostAction::LineThenAbort { after_ms, .. } => HostAction::LineThenAbort { line: l, after_ms: *after_ms },
         _ => HostAction::Line(l),
-    };
+    }
+}
+
+/// Takes a line; gives its shortest tail that is the same command (`command`), unprefixed.
+fn unprefixed_tail<'l>(p: &Profile, line: &'l str, command: gcl_model::spec::CommandId) -> Option<&'l str> {
+    use gcl_model::grammar::{Line, parse_line};
+    (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(
+        |t| matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == command),
+    )
+}
+
+/// Takes the case's actions; gives the prefix hypotheses: each prefix of its lines widened by
+/// one motor, on every line with that prefix (wider prefixes first).
+fn prefix_hypotheses(p: &Profile, actions: &[HostAction]) -> Vec<Hypothesis> {
+    use gcl_model::MotorSet;
+    use gcl_model::grammar::{Line, parse_line};
     let digits = |m: MotorSet| m.iter().map(|x| x.to_string()).collect::<String>();
     let mut hyps: Vec<Hypothesis> = Vec::new();
     // Prefixes: each prefixed line, its prefix, and the line without it (the shortest tail
@@ -993,10 +1039,7 @@ fn explain_by_rewrite(
         let Some(line) = line_of(a) else { continue };
         let Ok(Line::Command(c)) = parse_line(p, line.as_bytes()) else { continue };
         let Some(pre) = c.prefix else { continue };
-        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
-            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
-        });
-        if let Some(t) = tail {
+        if let Some(t) = unprefixed_tail(p, &line, c.command) {
             prefixed.push((i, pre, t.to_string()));
         }
     }
@@ -1023,6 +1066,14 @@ fn explain_by_rewrite(
             hyps.push(h);
         }
     }
+    hyps
+}
+
+/// Takes the case's actions; gives the sets-without-effect hypotheses: a parameter's pair
+/// dropped from every set line, one hypothesis per parameter.
+fn set_hypotheses(p: &Profile, actions: &[HostAction]) -> Vec<Hypothesis> {
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
     // Sets without effect: a parameter's pair dropped from every set line (a line left without
     // pairs becomes an empty line, which changes nothing, keeps the steps in step and is
     // answered as the set was, but for the echo: the hand's echo of the line as sent is taken
@@ -1045,6 +1096,7 @@ fn explain_by_rewrite(
             by_param.entry(*id).or_default().push((i, rewritten));
         }
     }
+    let mut hyps = Vec::new();
     for (id, lines) in by_param {
         let mut v = actions.to_vec();
         let mut echoes = Vec::new();
@@ -1060,6 +1112,13 @@ fn explain_by_rewrite(
             any_kind: Vec::new(),
         });
     }
+    hyps
+}
+
+/// Takes the case's actions; gives the prefix-accepted hypothesis, when a line is refused for
+/// its prefix alone: every such line sent without it.
+fn prefix_accepted_hypothesis(p: &Profile, actions: &[HostAction]) -> Option<Hypothesis> {
+    use gcl_model::grammar::{Line, parse_line};
     // A prefix accepted where the command takes none: every line the model refuses for its
     // prefix alone, sent without it (the shortest tail that is the same command unprefixed).
     // The hand's echo is of the line as sent. A hand that ignores the prefix answers as the
@@ -1079,20 +1138,28 @@ fn explain_by_rewrite(
         }
         let lenient = gcl_model::grammar::ParseOptions { ignore_forbidden_prefix: true, ..Default::default() };
         let Ok(Line::Command(c)) = gcl_model::grammar::parse_line_with(p, line.as_bytes(), lenient) else { continue };
-        let tail = (1..line.len()).filter(|k| line.is_char_boundary(*k)).map(|k| &line[k..]).find(|t| {
-            matches!(parse_line(p, t.as_bytes()), Ok(Line::Command(d)) if d.prefix.is_none() && d.command == c.command)
-        });
-        if let Some(t) = tail {
+        if let Some(t) = unprefixed_tail(p, &line, c.command) {
             accepted.echoes.push((line.clone(), t.to_string()));
             accepted.any_kind.push(p.command(c.command).name.clone());
             accepted.actions[i] = with_line(a, t.to_string());
         }
     }
-    if !accepted.echoes.is_empty() {
-        hyps.push(accepted);
-    }
-    let received = |s: usize| out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone());
-    let send = |s: &gcl_transcript::Step| s.send.as_ref().map(|h| h.bytes.clone());
+    (!accepted.echoes.is_empty()).then_some(accepted)
+}
+
+/// Takes a step of a replay; gives what the hand answered to it.
+fn received_at(out: &ReplayOutcome, s: usize) -> Option<Vec<u8>> {
+    out.exchange().iter().find(|e| e.step == s).map(|e| e.received.clone())
+}
+
+/// Takes a step; gives the bytes it sends.
+fn sent_by(s: &gcl_transcript::Step) -> Option<Vec<u8>> {
+    s.send.as_ref().map(|h| h.bytes.clone())
+}
+
+/// Takes the case's actions and the replay; gives, per action, whether it is a line sent then
+/// aborted whose answer the hand completed before the ^C (the host waited for it).
+fn answered_before_abort(p: &Profile, actions: &[HostAction], built: &BuiltCase, out: &ReplayOutcome) -> Vec<bool> {
     // A line sent and then aborted whose answer the hand completed before the ^C (the host
     // waited for it, as the case expected): in a rewrite the ^C comes after the answer too,
     // wherever the model would have had it land.
@@ -1107,100 +1174,103 @@ fn explain_by_rewrite(
         let mut bytes = line.as_bytes().to_vec();
         bytes.push(p.framing.terminator);
         let at = (from..built.transcript.steps.len())
-            .find(|s| send(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
+            .find(|s| sent_by(&built.transcript.steps[*s]).as_deref() == Some(&bytes[..]));
         from = at.map_or(from, |s| s + 1);
         // (the step's answer ends at a prompt after the line's echo: not at the answer before
         // it, which ends a step whose line is answered in the next one)
         let echoed = |r: &[u8]| !p.framing.echo || r.windows(line.len()).any(|w| w == line.as_bytes());
-        answered.push(at.and_then(received).is_some_and(|r| r.ends_with(&pe) && echoed(&r)));
+        answered.push(at.and_then(|s| received_at(out, s)).is_some_and(|r| r.ends_with(&pe) && echoed(&r)));
     }
-    let in_hand_time = |v: Vec<HostAction>| -> Vec<HostAction> {
-        v.into_iter()
-            .zip(&answered)
-            .flat_map(|(a, done)| match a {
-                HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
-                a => vec![a],
-            })
-            .collect()
-    };
-    // Whether a step's line reads parameter `id` back.
-    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| {
-        let line = send(s).unwrap_or_default();
-        let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
-        match parse_line(p, line) {
-            Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
-                (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
-                (k, _) => matches!(
-                    k,
-                    CommandKind::MotorListValues
-                        | CommandKind::MotorListAllValues
-                        | CommandKind::GlobalListValues
-                        | CommandKind::GlobalListAllValues
-                ),
-            },
-            _ => false,
-        }
-    };
-    // What already explains a finding first, then (when `fresh`) the rest.
-    hyps.retain(|h| fresh || h.any_kind.iter().any(|c| c == at) || known.contains(&h.says));
-    if hyps.is_empty() {
+    answered
+}
+
+/// Takes a hypothesis's actions and which were answered before their ^C; gives the actions
+/// in the hand's time (such a line sent, then ^C after its answer).
+fn in_hand_time(v: Vec<HostAction>, answered: &[bool]) -> Vec<HostAction> {
+    v.into_iter()
+        .zip(answered)
+        .flat_map(|(a, done)| match a {
+            HostAction::LineThenAbort { line, .. } if *done => vec![HostAction::Line(line), HostAction::Abort],
+            a => vec![a],
+        })
+        .collect()
+}
+
+/// Takes a step and a parameter; gives whether the step's line reads the parameter back.
+fn reads_back(p: &Profile, s: &gcl_transcript::Step, id: gcl_model::spec::ParamId) -> bool {
+    use gcl_model::grammar::{Args, Line, parse_line};
+    use gcl_model::spec::CommandKind;
+    let line = sent_by(s).unwrap_or_default();
+    let line = line.strip_suffix(&[p.framing.terminator]).unwrap_or(&line);
+    match parse_line(p, line) {
+        Ok(Line::Command(c)) => match (c.kind(p), &c.args) {
+            (CommandKind::MotorGet | CommandKind::GlobalGet, Args::Names(ids)) => ids.contains(&id),
+            (k, _) => matches!(
+                k,
+                CommandKind::MotorListValues
+                    | CommandKind::MotorListAllValues
+                    | CommandKind::GlobalListValues
+                    | CommandKind::GlobalListAllValues
+            ),
+        },
+        _ => false,
+    }
+}
+
+/// Takes a hypothesis and the replay that failed at step `failed`: builds its rewrite and
+/// judges the hand's answers by it. Gives `None` when it does not hold, else the whole case
+/// as the hand meets it under the explanation (when the rewrite keeps the steps' count).
+fn rewrite_holds(
+    opts: &FuzzOptions,
+    h: &Hypothesis,
+    answered: &[bool],
+    built: &BuiltCase,
+    out: &ReplayOutcome,
+    failed: usize,
+) -> Option<Option<Transcript>> {
+    let p = &opts.profile;
+    let received = |s: usize| received_at(out, s);
+    // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
+    let b = build_for_sending(opts, &in_hand_time(h.actions.clone(), answered), "fuzz", "explain", &built.block_bytes)
+        .ok()?;
+    let (old, new) = (&built.transcript.steps, &b.transcript.steps);
+    if new.len() <= failed || old.len() <= failed {
         return None;
     }
-    hyps.sort_by_key(|h| !known.contains(&h.says));
-    let mut found: Option<Explained> = None;
-    for h in hyps {
-        // (the blocks send the bytes the hand was sent, whatever layout the rewrite has)
-        let Ok(b) = build_for_sending(opts, &in_hand_time(h.actions.clone()), "fuzz", "explain", &built.block_bytes)
-        else {
-            continue;
-        };
-        let (old, new) = (&built.transcript.steps, &b.transcript.steps);
-        if new.len() <= failed || old.len() <= failed {
-            continue;
-        }
-        let Some(d) = (0..=failed).find(|s| send(&old[*s]) != send(&new[*s])) else { continue };
-        // The hand's answers from step d on, as one stream: a rewrite that changes a block's
-        // size moves where one step's answer ends and the next begins (the replay read each
-        // step as long as the original case expected), so the rewrite's expectations are
-        // matched in turn along the stream, each ending where the next byte would break it.
-        let Some(gots) = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>() else { continue };
-        let (stream, judges, need, complete) = rewritten_stream(p, &h, &gots, d, failed, old, new, &reads, &send);
-        let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
-        // (the values the hand's answers before step d captured, as the rewrite's steps there
-        // capture them: a relation from d on reads them)
-        let mut caps = gcl_transcript::Captures::new();
-        for (s, step) in new.iter().enumerate().take(d) {
-            let got = received(s).unwrap_or_default();
-            match step.expect.matches_with(&caps, &got) {
-                Some(c) => caps = c,
-                None => break,
-            }
-        }
-        let holds = complete && follows(&judges, &stream, need, mismatch, &caps);
-        if holds {
-            // The whole case as the hand meets it under the explanation: the rewrite's steps,
-            // with the lines it rewrote sent as they were (their answers are echo and prompt,
-            // or held to the case's own expectation).
-            let whole = (old.len() == new.len()).then(|| {
-                let mut t = b.transcript.clone();
-                for (i, st) in t.steps.iter_mut().enumerate() {
-                    if send(&old[i]) != send(st) {
-                        *st = old[i].clone();
-                    }
-                }
-                t
-            });
-            if known.contains(&h.says) {
-                return Some(Explained { says: h.says, whole: None, exact: false });
-            }
-            // (a new one: another bug that explains the case as well leaves it unexplained)
-            if found.is_some() {
-                return None;
-            }
-            found = Some(Explained { says: h.says, whole, exact: false });
+    let d = (0..=failed).find(|s| sent_by(&old[*s]) != sent_by(&new[*s]))?;
+    // The hand's answers from step d on, as one stream: a rewrite that changes a block's
+    // size moves where one step's answer ends and the next begins (the replay read each
+    // step as long as the original case expected), so the rewrite's expectations are
+    // matched in turn along the stream, each ending where the next byte would break it.
+    let gots = (d..=failed).map(received).collect::<Option<Vec<Vec<u8>>>>()?;
+    let reads = |s: &gcl_transcript::Step, id: gcl_model::spec::ParamId| reads_back(p, s, id);
+    let (stream, judges, need, complete) = rewritten_stream(p, h, &gots, d, failed, old, new, &reads, &sent_by);
+    let mismatch = matches!(out, ReplayOutcome::Mismatch(_));
+    // (the values the hand's answers before step d captured, as the rewrite's steps there
+    // capture them: a relation from d on reads them)
+    let mut caps = gcl_transcript::Captures::new();
+    for (s, step) in new.iter().enumerate().take(d) {
+        let got = received(s).unwrap_or_default();
+        match step.expect.matches_with(&caps, &got) {
+            Some(c) => caps = c,
+            None => break,
         }
     }
-    found
+    if !(complete && follows(&judges, &stream, need, mismatch, &caps)) {
+        return None;
+    }
+    // The whole case as the hand meets it under the explanation: the rewrite's steps,
+    // with the lines it rewrote sent as they were (their answers are echo and prompt,
+    // or held to the case's own expectation).
+    Some((old.len() == new.len()).then(|| {
+        let mut t = b.transcript.clone();
+        for (i, st) in t.steps.iter_mut().enumerate() {
+            if sent_by(&old[i]) != sent_by(st) {
+                *st = old[i].clone();
+            }
+        }
+        t
+    }))
 }
 
 /// The hand's answers to steps `d..=failed` (`gots`, one per step) as one stream, as the
@@ -1381,97 +1451,6 @@ fn admitted(opts: &FuzzOptions, b: BuiltCase) -> Result<BuiltCase, NotACase> {
         return Err(NotACase("a ^C lands mid-motion, and abort timing is refused".into()));
     }
     Ok(b)
-}
-
-/// A target whose motion takes under this share of the model's time does not move in real time.
-const REAL_TIME_SHARE: u32 = 4;
-
-/// A hand whose motion from home ended far sooner than the model's: a simulator whose time
-/// follows the wire (`gcl sim --time fast`). ^C cannot land mid-motion on it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct NotRealTime {
-    /// The motion command of the probe.
-    pub command: String,
-    /// How long the target took for it, bytes included.
-    pub took_ms: u64,
-    /// How long the model's hand moves for it, bytes aside.
-    pub model_ms: u64,
-}
-
-impl std::fmt::Display for NotRealTime {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the target's motions end at once: `{}` from the home position took {} ms, where the model's hand \
-             takes {} ms (a simulator with `--time fast`?)",
-            self.command, self.took_ms, self.model_ms
-        )
-    }
-}
-
-/// The motion-time probe: the case (the suite's preamble, HI, then the profile's close
-/// command) and what judges its replay. `None` when the profile has no close command.
-pub struct MotionProbe {
-    /// The probe's transcript.
-    pub transcript: Transcript,
-    command: String,
-    model: Vec<deadline::StepPrediction>,
-}
-
-impl MotionProbe {
-    /// The probe for a profile.
-    pub fn new(p: &Arc<Profile>) -> Option<MotionProbe> {
-        let close = p.commands.iter().find(|c| c.kind == gcl_model::spec::CommandKind::Close)?;
-        let command = close.name.clone();
-        let built = build_case(p, &[HostAction::Line(command.clone())], "probe", "real-time probe", true, true).ok()?;
-        let case = Case { profile: p.id.clone(), transcript: built.transcript.clone() };
-        let model = deadline::predict(&case, p)?;
-        Some(MotionProbe { transcript: built.transcript, command, model })
-    }
-
-    /// The probe for a hand that has just answered RESET at an idle prompt (a runner's
-    /// pre-flight ends so): the preamble's ^C and RESET are left out, FDEF, HI and the close
-    /// kept. `None` when the probe does not start with them.
-    pub fn after_reset(&self, p: &Arc<Profile>) -> Option<MotionProbe> {
-        let mut transcript = self.transcript.clone();
-        let sends = |i: usize, bytes: &[u8]| {
-            transcript.steps.get(i).and_then(|s| s.send.as_ref()).is_some_and(|h| h.bytes == bytes)
-        };
-        let reset = [b"RESET".as_slice(), &[p.framing.terminator]].concat();
-        if !(sends(0, &[p.framing.abort]) && sends(1, &reset)) {
-            return None;
-        }
-        transcript.steps.drain(..2);
-        let case = Case { profile: p.id.clone(), transcript: transcript.clone() };
-        let model = deadline::predict(&case, p)?;
-        Some(MotionProbe { transcript, command: self.command.clone(), model })
-    }
-
-    /// The close step (0-based) and how long after its command a hand that moves in real time
-    /// is still moving (a quarter of the model's time for it): a run may stop the probe there
-    /// (^C) with the judgement already made, rather than wait for the hand to close.
-    pub fn decided_after(&self, p: &Profile) -> Option<(usize, Duration)> {
-        let sent = format!("{}{}", self.command, p.framing.terminator as char);
-        let step =
-            self.transcript.steps.iter().position(|s| s.send.as_ref().is_some_and(|h| h.bytes == sent.as_bytes()))?;
-        let model = self.model.get(step)?.busy();
-        (model > deadline::BUSY).then_some((step, model / REAL_TIME_SHARE))
-    }
-
-    /// Judges a replay of the probe: the target moved in far less time than the model's hand
-    /// (under a quarter of it). A slow or loaded target only takes longer, never shorter; a
-    /// probe that did not pass decides nothing.
-    pub fn judge(&self, p: &Profile, out: &ReplayOutcome) -> Option<NotRealTime> {
-        let sent = format!("{}{}", self.command, p.framing.terminator as char);
-        let done = out.failed_step().unwrap_or(usize::MAX);
-        let e = out.exchange().iter().find(|e| e.step < done && e.sent == sent.as_bytes())?;
-        let model = self.model.get(e.step).map_or(Duration::ZERO, |s| s.busy());
-        (model > deadline::BUSY && e.took < model / REAL_TIME_SHARE).then(|| NotRealTime {
-            command: self.command.clone(),
-            took_ms: e.took.as_millis() as u64,
-            model_ms: model.as_millis() as u64,
-        })
-    }
 }
 
 /// Before a campaign that lands ^C mid-motion on a hand outside this process: closes the
@@ -2056,6 +2035,18 @@ pub fn kinds(findings: &[Finding]) -> BTreeMap<String, usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A case that drives the fingers past the model's joint stop rests on seed-motion-model
+    /// (see `actions::case`'s `a_case_whose_answers_rest_on_the_joint_stops_names_the_motion_decision`),
+    /// and a finding of it says so: `[INFO: rests on seed-motion-model]`.
+    #[test]
+    fn a_finding_past_the_joint_stop_is_info() {
+        let p = Profile::builtin("seed").unwrap();
+        let past = build_case(&p, &[HostAction::Line("C".into()), HostAction::Line("IC".into())], "t", "t", true, true)
+            .expect("a case");
+        let (level, rests_on) = Finding::binding(&p, &past.rests_on(None));
+        assert_eq!((level, rests_on), (gcl_model::Level::Info, vec!["seed-motion-model".to_string()]));
+    }
 
     /// Issue 29 item 2: a campaign that draws only cases it drops ends after [`DROP_LIMIT`] of
     /// them in a row, saying why; a case run in between starts the count again.

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::coverage::{CoverageRow, table};
 use super::{Finding, FuzzError, FuzzOptions, FuzzSummary};
-use crate::report::html::esc;
+use crate::report::page::esc;
 use crate::report::page::{Page, details, pre};
 use crate::report::svg::{Plot, Series};
 
@@ -104,7 +104,7 @@ impl FuzzReport {
     }
 
     /// The shards a merged report holds (`None`: not a merge).
-    pub fn merged(&self) -> Option<&crate::fuzz::shard::Merged> {
+    pub fn merged(&self) -> Option<&crate::report::merged::Merged> {
         self.provenance.as_ref().and_then(|p| p.merged.as_ref())
     }
 

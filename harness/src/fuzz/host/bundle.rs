@@ -79,7 +79,7 @@ pub enum BundleError {
 
 /// The folder name of a finding: its kind and a short hash of its signature.
 pub fn dir_name(kind: FindingKind, signature: &str) -> String {
-    format!("{}-{}", kind.name(), &crate::certify::sha256_hex(signature.as_bytes())[..8])
+    format!("{}-{}", kind.name(), &crate::digest::sha256_hex(signature.as_bytes())[..8])
 }
 
 /// Writes a finding's bundle under `out`; returns its folder.

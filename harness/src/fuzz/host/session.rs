@@ -852,7 +852,8 @@ fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
     v
 }
 
-/// [`run_once_until`], made as `how` says.
+/// [`run_once_until`], made as `how` says: start the hand → spawn the host → read its output →
+/// watch it to its end → clear what it left behind → stop the hand → the result.
 fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How) -> Result<RunResult, RunError> {
     let wrapped;
     let spec = match how {
@@ -867,6 +868,68 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     let asan_forced: &[&str] = if matches!(how, How::FastUnwind) { &["fast_unwind_on_fatal=1"] } else { &[] };
     let program = spec.command.first().ok_or(RunError::NoCommand)?;
     let started = Instant::now();
+    let mut hand = start_hand(spec, schedule, started)?;
+    let mut child = match spawn_host(spec, program, &mut hand, asan_forced) {
+        Ok(c) => c,
+        Err(source) => {
+            hand.stop.stop();
+            let _ = hand.thread.join();
+            return Err(RunError::Spawn { command: program.clone(), source });
+        }
+    };
+    let host = HostProc::of(&child);
+    let out = read_host(&mut child, &hand.log);
+    let (tx, rx) = mpsc::channel();
+    let waiter = std::thread::spawn(move || {
+        let _ = tx.send(child.wait());
+    });
+    let watched = match watch_host(spec, cancel, started, &host, &hand.log, &out.errbuf, &rx) {
+        Ok(w) => w,
+        Err(e) => {
+            let _ = nix::sys::signal::killpg(host.pid, nix::sys::signal::Signal::SIGKILL);
+            live().groups.remove(&host.pid.as_raw());
+            hand.stop.stop();
+            let _ = hand.thread.join();
+            return Err(RunError::Io(e));
+        }
+    };
+    // Whatever the host left behind in its group goes with it.
+    let _ = nix::sys::signal::killpg(host.pid, nix::sys::signal::Signal::SIGKILL);
+    let _ = waiter.join();
+    live().groups.remove(&host.pid.as_raw());
+    let leftovers = clear_leftovers(spec, &hand, &out, &host);
+    let stderr = collect_stderr(out, &hand.run_dir);
+    hand.stop.stop();
+    if let Ok(Err(e)) = hand.thread.join() {
+        return Err(RunError::Sim(e));
+    }
+    if watched.cancelled {
+        return Err(RunError::Cancelled);
+    }
+    let mut log = hand.log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
+    Ok(result_of_run(&mut log, watched, leftovers, stderr, started))
+}
+
+/// The hand of one run: its transport serving in a thread, the log its tap fills, and the
+/// port the host is given.
+struct HandSide {
+    log: Arc<Mutex<Log>>,
+    /// Ends the transport's thread.
+    stop: StopHandle,
+    /// The transport's thread; the line closes (hangs up) when it ends.
+    thread: std::thread::JoinHandle<Result<(), SimError>>,
+    /// The port as the host names it (a pty's path, `127.0.0.1:N`).
+    port: String,
+    /// The port as a pyserial URL.
+    url: String,
+    /// Over TCP, the host's writes as it makes them (`host_writes`).
+    watch: Option<WriteWatch>,
+    run_dir: RunDir,
+}
+
+/// Takes the run and its schedule: starts the hand (engine, log, tap, run folder) on a fresh
+/// pty or TCP port; gives it serving.
+fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<HandSide, RunError> {
     let mut opts = SimOptions::new(spec.profile.clone());
     opts.seed = spec.hand_seed;
     opts.time = spec.time;
@@ -879,7 +942,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
         opts.pace = Pace::Hand;
     }
     let mut engine = Engine::new(&opts)?;
-    let (mut stop, stop_rx) = stop_pair()?;
+    let (stop, stop_rx) = stop_pair()?;
     let (hang_up, hang_rx) = stop_pair()?;
     let mut fresh = Log::new(schedule, engine.device(), spec.profile.clone(), hang_up);
     fresh.last_activity = started;
@@ -890,7 +953,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     // The hand: its transport in a thread; the line closes (hangs up) when the thread ends.
     // Over TCP, the host's writes are seen as it makes them (`host_writes`).
     let mut watch = None;
-    let (port, url, hand) = match spec.transport {
+    let (port, url, thread) = match spec.transport {
         Transport::Pty => {
             let mut pty = Pty::open(None, engine.line_baud())?;
             pty.set_speed_check(!line_rate);
@@ -909,14 +972,24 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
             (addr.clone(), format!("socket://{addr}"), h)
         }
     };
+    Ok(HandSide { log, stop, thread, port, url, watch, run_dir })
+}
 
-    let args: Vec<String> =
-        spec.command[1..].iter().map(|a| a.replace("{port}", &port).replace("{url}", &url)).collect();
+/// Takes the run and the serving hand: spawns the host command in its own process group,
+/// with the port and the sanitizer options in its environment; gives the child.
+fn spawn_host(
+    spec: &HostRun,
+    program: &str,
+    hand: &mut HandSide,
+    asan_forced: &[&str],
+) -> std::io::Result<std::process::Child> {
+    let (port, url, run_dir) = (&hand.port, &hand.url, &hand.run_dir);
+    let args: Vec<String> = spec.command[1..].iter().map(|a| a.replace("{port}", port).replace("{url}", url)).collect();
     let mut command = Command::new(program);
     command
         .args(&args)
-        .env("GCL_PORT", &port)
-        .env("GCL_PORT_URL", &url)
+        .env("GCL_PORT", port)
+        .env("GCL_PORT_URL", url)
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
         .env(RUN_MARK, run_dir.mark())
@@ -926,25 +999,46 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0);
-    if let Some(w) = &watch {
+    if let Some(w) = &hand.watch {
         w.prepare(&mut command);
     }
     let spawned = command.spawn();
-    if let Some(w) = &mut watch {
+    if let Some(w) = &mut hand.watch {
         w.spawned();
     }
-    let mut child = match spawned {
-        Ok(c) => c,
-        Err(source) => {
-            stop.stop();
-            let _ = hand.join();
-            return Err(RunError::Spawn { command: program.clone(), source });
-        }
-    };
-    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
-    live().groups.insert(pid.as_raw());
-    // When the host started (clock ticks since boot): what it leaves behind started later.
-    let host_start = start_time(pid.as_raw());
+    spawned
+}
+
+/// The host's process: its group (registered among the live ones) and when it started.
+struct HostProc {
+    pid: nix::unistd::Pid,
+    /// When the host started (clock ticks since boot): what it leaves behind started later.
+    start: Option<u64>,
+}
+
+impl HostProc {
+    /// Takes the spawned host: registers its process group; gives its pid and start time.
+    fn of(child: &std::process::Child) -> HostProc {
+        let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+        live().groups.insert(pid.as_raw());
+        HostProc { pid, start: start_time(pid.as_raw()) }
+    }
+}
+
+/// The readers of the host's output: stdout (observations only) and stderr (kept, capped).
+struct HostOutput {
+    /// Set when stdout ended.
+    out_done: Arc<AtomicBool>,
+    /// Stderr as read so far.
+    errbuf: Arc<Mutex<ErrBuf>>,
+    err_reader: std::thread::JoinHandle<()>,
+    /// The stderr pipe's inode, which names it while it is open.
+    err_inode: Option<u64>,
+}
+
+/// Takes the spawned host: reads its stdout for observations and its stderr (observations
+/// too, and kept up to [`STDERR_CAP`]) in threads; gives the readers.
+fn read_host(child: &mut std::process::Child, log: &Arc<Mutex<Log>>) -> HostOutput {
     let err_pipe = child.stderr.take();
     // Stdout carries observations only (GCL_OBSERVE_FD=1); the rest of it is dropped.
     let out_done = Arc::new(AtomicBool::new(child.stdout.is_none()));
@@ -1004,35 +1098,57 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
             }
         })
     };
-    let (tx, rx) = mpsc::channel();
-    let waiter = std::thread::spawn(move || {
-        let _ = tx.send(child.wait());
-    });
+    HostOutput { out_done, errbuf, err_reader, err_inode }
+}
 
+/// How the host's run ended, as the watch saw it.
+struct Watched {
+    end: HostEnd,
+    /// The run was called off.
+    cancelled: bool,
+    /// A hung host's stack.
+    stack: Option<super::detect::HangStack>,
+    /// When the host ended by itself.
+    ended_at: Option<Instant>,
+    /// Since when the host was quiet with the port open, at the end.
+    quiet_since: Instant,
+    /// The host was still sending when the budget ended it.
+    talking_at_end: bool,
+}
+
+/// Takes the running host (`rx` hears its exit): watches it every 5 ms until it exits, hangs,
+/// outlives the budget or is called off, killing it then (a hung one's stack taken first);
+/// gives how it ended, or the error of waiting for it.
+fn watch_host(
+    spec: &HostRun,
+    cancel: &AtomicBool,
+    started: Instant,
+    host: &HostProc,
+    log: &Arc<Mutex<Log>>,
+    errbuf: &Mutex<ErrBuf>,
+    rx: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
+) -> std::io::Result<Watched> {
     let state = |log: &Arc<Mutex<Log>>| log.lock().map(|l| l.checker.state()).unwrap_or_default();
-    let mut cancelled = false;
-    let mut stack = None;
-    let mut ended_at = None;
+    let mut w = Watched {
+        end: HostEnd::Exit(-1),
+        cancelled: false,
+        stack: None,
+        ended_at: None,
+        quiet_since: started,
+        talking_at_end: false,
+    };
     let mut closed_until = started;
-    let mut quiet_since = started;
-    let mut talking_at_end = false;
-    let end = loop {
+    w.end = loop {
         match rx.recv_timeout(Duration::from_millis(5)) {
             Ok(Ok(status)) => {
-                ended_at = Some(Instant::now());
+                w.ended_at = Some(Instant::now());
                 break match (status.code(), status.signal()) {
                     (Some(c), _) => HostEnd::Exit(c),
                     (None, Some(s)) => HostEnd::Signal(s),
                     (None, None) => HostEnd::Exit(-1),
                 };
             }
-            Ok(Err(e)) => {
-                let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
-                live().groups.remove(&pid.as_raw());
-                stop.stop();
-                let _ = hand.join();
-                return Err(RunError::Io(e));
-            }
+            Ok(Err(e)) => return Err(e),
             Err(mpsc::RecvTimeoutError::Disconnected) => break HostEnd::Exit(-1),
             Err(mpsc::RecvTimeoutError::Timeout) => {}
         }
@@ -1049,108 +1165,133 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
         if !holds_port {
             closed_until = now;
         }
-        quiet_since = last_activity.max(closed_until);
-        cancelled = cancel.load(Ordering::Relaxed);
-        let verdict = if cancelled {
+        w.quiet_since = last_activity.max(closed_until);
+        w.cancelled = cancel.load(Ordering::Relaxed);
+        let verdict = if w.cancelled {
             Some(HostEnd::Exit(-1))
         } else if now.duration_since(started) > spec.budget {
-            talking_at_end = flooding || last_sent.is_some_and(|t| now.saturating_duration_since(t) < TALKING);
-            Some(HostEnd::OverBudget(state(&log)))
-        } else if now > quiet_since && now.duration_since(quiet_since) > spec.timeout_hang {
-            Some(HostEnd::Hung(state(&log)))
+            w.talking_at_end = flooding || last_sent.is_some_and(|t| now.saturating_duration_since(t) < TALKING);
+            Some(HostEnd::OverBudget(state(log)))
+        } else if now > w.quiet_since && now.duration_since(w.quiet_since) > spec.timeout_hang {
+            Some(HostEnd::Hung(state(log)))
         } else {
             None
         };
         if let Some(v) = verdict {
             if let Ok(mut l) = log.lock() {
                 l.killed = true;
-                if !cancelled {
+                if !w.cancelled {
                     let state = l.checker.state();
-                    l.waits.push(Wait { waited: now.saturating_duration_since(quiet_since), state, acted: false });
+                    l.waits.push(Wait { waited: now.saturating_duration_since(w.quiet_since), state, acted: false });
                 }
             }
-            let mut reaped = false;
-            if cancelled {
-                // Called off (the campaign or check is stopping): SIGTERM to the host's group,
-                // a short grace to end by itself, then the whole group is killed.
-                let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGTERM);
-                reaped = rx.recv_timeout(CANCEL_GRACE).is_ok();
-            } else {
-                stack = take_stack(pid.as_raw(), &errbuf, Some(&rx), &mut reaped);
-            }
-            let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
-            if !reaped {
-                let _ = rx.recv_timeout(Duration::from_secs(5));
-            }
+            w.stack = kill_host(host, w.cancelled, errbuf, rx);
             break v;
         }
     };
-    // Whatever the host left behind in its group goes with it.
+    Ok(w)
+}
+
+/// Takes a host to end: a called-off one gets SIGTERM and a short grace, a hung one has its
+/// stack taken; then its group is killed and reaped. Gives the stack, if taken.
+fn kill_host(
+    host: &HostProc,
+    cancelled: bool,
+    errbuf: &Mutex<ErrBuf>,
+    rx: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
+) -> Option<super::detect::HangStack> {
+    let pid = host.pid;
+    let mut stack = None;
+    let mut reaped = false;
+    if cancelled {
+        // Called off (the campaign or check is stopping): SIGTERM to the host's group,
+        // a short grace to end by itself, then the whole group is killed.
+        let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGTERM);
+        reaped = rx.recv_timeout(CANCEL_GRACE).is_ok();
+    } else {
+        stack = take_stack(pid.as_raw(), errbuf, Some(rx), &mut reaped);
+    }
     let _ = nix::sys::signal::killpg(pid, nix::sys::signal::Signal::SIGKILL);
-    let _ = waiter.join();
-    live().groups.remove(&pid.as_raw());
-    // Stderr for a short grace; then whatever still holds the port or stderr (it left the
-    // group) is found and killed, and named.
+    if !reaped {
+        let _ = rx.recv_timeout(Duration::from_secs(5));
+    }
+    stack
+}
+
+/// Takes the ended host: reads stderr for a short grace; then finds whatever still holds the
+/// port or stderr, or is under the write watch (it left the group), takes its command line
+/// and stack, and kills it. Gives those leftovers.
+fn clear_leftovers(spec: &HostRun, hand: &HandSide, out: &HostOutput, host: &HostProc) -> Vec<Leftover> {
     // A pty's number is ours only while its master is open, i.e. while the hand's thread
     // runs (a hang-up ends it early): after that, the path may name another program's
     // terminal, which must never be touched. So the port is looked for only while the thread
     // runs, and what a search found counts only if it still ran after the search.
-    let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&port));
-    let pty_alive = || !hand.is_finished();
+    let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&hand.port));
+    let pty_alive = || !hand.thread.is_finished();
     let mut leftovers = Vec::new();
     // The pipe's inode names it only while it is open (a closed pipe's number is reused).
-    let err_open = !wait_eof(&errbuf, STDERR_GRACE);
-    let err_inode = err_inode.filter(|_| err_open);
+    let err_open = !wait_eof(&out.errbuf, STDERR_GRACE);
+    let err_inode = out.err_inode.filter(|_| err_open);
     // Over TCP, a process still under the write watch (the host's daemon, holding nothing of
     // the run's) is found by the run's mark in its environment.
-    let watched_left = watch.as_ref().is_some_and(|w| w.outlived(WATCH_GRACE));
-    let mark = watched_left.then(|| format!("{RUN_MARK}={}", run_dir.mark()));
+    let watched_left = hand.watch.as_ref().is_some_and(|w| w.outlived(WATCH_GRACE));
+    let mark = watched_left.then(|| format!("{RUN_MARK}={}", hand.run_dir.mark()));
     let search = |err_inode: Option<u64>| {
         let path = pty_path.as_deref().filter(|_| pty_alive());
-        let found = holders(path, err_inode, mark.as_deref(), host_start);
-        if path.is_some() && !pty_alive() { holders(None, err_inode, mark.as_deref(), host_start) } else { found }
+        let found = holders(path, err_inode, mark.as_deref(), host.start);
+        if path.is_some() && !pty_alive() { holders(None, err_inode, mark.as_deref(), host.start) } else { found }
     };
     // The search reads all of /proc: only when something still holds stderr or the port (the
     // hand's transport says when the last holder of its port closed it, soon after the host
     // ended).
     let port_held = pty_path.is_some() && {
         let until = Instant::now() + PORT_CLOSE_GRACE;
-        while log.lock().is_ok_and(|l| l.port_open) && Instant::now() < until && pty_alive() {
+        while hand.log.lock().is_ok_and(|l| l.port_open) && Instant::now() < until && pty_alive() {
             std::thread::sleep(Duration::from_millis(2));
         }
-        log.lock().map_or(true, |l| l.port_open)
+        hand.log.lock().map_or(true, |l| l.port_open)
     };
     let found = if err_open || port_held || watched_left { search(err_inode) } else { Vec::new() };
     if !found.is_empty() {
         for (p, name) in found {
             // What it is and where it is, before it goes: the signature names it.
-            let command = command_line(p, &port);
-            let stack = take_stack(p, &errbuf, None, &mut false);
+            let command = command_line(p, &hand.port);
+            let stack = take_stack(p, &out.errbuf, None, &mut false);
             let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
             leftovers.push(Leftover { pid: p, name, command, stack });
         }
-        wait_eof(&errbuf, STDERR_GRACE);
+        wait_eof(&out.errbuf, STDERR_GRACE);
     }
-    if wait_eof(&errbuf, Duration::ZERO) {
-        let _ = err_reader.join();
+    leftovers
+}
+
+/// Takes the readers once the host and its leftovers are gone: waits a short grace for the
+/// last observations; gives stderr as kept, with the run's sanitizer logs after it.
+fn collect_stderr(out: HostOutput, run_dir: &RunDir) -> String {
+    if wait_eof(&out.errbuf, Duration::ZERO) {
+        let _ = out.err_reader.join();
     }
     // The last observations on stdout, for the same grace.
     let grace = Instant::now() + STDERR_GRACE;
-    while !out_done.load(Ordering::Relaxed) && Instant::now() < grace {
+    while !out.out_done.load(Ordering::Relaxed) && Instant::now() < grace {
         std::thread::sleep(Duration::from_millis(5));
     }
-    let mut stderr = errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
+    let mut stderr = out.errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
     stderr.push_str(&run_dir.sanitizer_logs());
-    stop.stop();
-    let served = hand.join();
-    if let Ok(Err(e)) = served {
-        return Err(RunError::Sim(e));
-    }
-    if cancelled {
-        return Err(RunError::Cancelled);
-    }
-    let mut log = log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
+    stderr
+}
+
+/// Takes the hand's log after the run and how the host ended: closes the checker's judgement
+/// (how the host left, a long last wait, when it gave up); gives the run's result.
+fn result_of_run(
+    log: &mut Log,
+    watched: Watched,
+    leftovers: Vec<Leftover>,
+    stderr: String,
+    started: Instant,
+) -> RunResult {
+    let Watched { end, stack, ended_at, quiet_since, talking_at_end, .. } = watched;
     let ended_in = log.checker.state();
     // After a hang-up the host cannot leave cleanly; a host killed for hanging did not leave,
     // nor did one that crashed (its crash is the finding, not the loop or line it was in).
@@ -1173,7 +1314,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
         let acted = log.acted_at.or(ended_at.filter(|_| matches!(end, HostEnd::Exit(_) | HostEnd::Signal(_))))?;
         Some(acted.saturating_duration_since(s))
     });
-    Ok(RunResult {
+    RunResult {
         end,
         stack,
         leftovers,
@@ -1193,7 +1334,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
         elapsed: started.elapsed(),
         talking_at_end,
         port_opened: log.opened,
-    })
+    }
 }
 
 /// Waits up to `limit` for the stderr reader to reach the end; whether it did.

@@ -154,7 +154,7 @@ impl Gen {
 
     /// Setup lines and the positions each motor reaches after `{prefix}CMD` for a motion kind.
     pub(super) fn motion_recipe(&self, kind: CommandKind, prefix: &str) -> (Vec<String>, [Range; 4]) {
-        let sel = super::super::build::prefix_motors(&self.p, prefix);
+        let sel = super::super::depends::prefix_motors(&self.p, prefix);
         let mut pos = [0i64; 4];
         let mut setup = Vec::new();
         let mut exact: [Option<Range>; 4] = [None; 4];

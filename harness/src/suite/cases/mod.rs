@@ -15,7 +15,8 @@ use gcl_model::realtime::lfdp_step;
 use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, Scope};
 use gcl_model::{Profile, StatusBits};
 
-use super::build::{CaseB, CaseDef, FieldRule, Range, Shape, Target};
+use super::build::{CaseB, CaseDef};
+use super::plan::{FieldRule, Range, Shape, Target};
 use gcl_transcript::Relation;
 
 mod abort;

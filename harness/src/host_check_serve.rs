@@ -1,7 +1,7 @@
 //! `gcl check-host --serve`: a graded simulated hand that serves whoever connects (a test
 //! suite's host code, for example the `gcl_hand` pytest fixture) until it is stopped, then
 //! grades the whole session as `gcl check-host` grades one host command
-//! ([`crate::check_host::grade`]).
+//! ([`crate::host_check::grade`]).
 //!
 //! The hand is the `gcl sim` engine on a pty or a loopback TCP port, in this thread; the tap
 //! of `gcl fuzz host` and `gcl check-host` feeds both directions to the same
@@ -51,7 +51,7 @@ pub struct Served {
 
 /// Serves the hand until one of `stops` becomes readable (or a `hang-up` misbehaviour closes
 /// the line), telling `ready` where it listens first; returns the session as a run that ended
-/// with exit code 0, for [`crate::check_host::grade`].
+/// with exit code 0, for [`crate::host_check::grade`].
 pub fn serve(
     opts: &ServeOptions,
     stops: &[BorrowedFd<'_>],

@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use crate::fuzz::host::bundle::session_transcript;
 use crate::fuzz::host::{FindingKind, HostClause, HostEnd, HostRun, RunError, RunResult, judge, run_once_until};
+pub use crate::report::SESSION_CASE;
 use crate::report::{CaseResult, Diff, Liveness, RunOptions, RunReport, Verdict};
 use crate::sim::misbehave::Schedule;
 use gcl_transcript::Transcript;
@@ -101,9 +102,6 @@ pub fn grade_served(
     };
     grade_as(opts, r, started, t0, unreached)
 }
-
-/// The id of the case that says a session judged nothing ([`grade`]) or was stopped.
-pub const SESSION_CASE: &str = "host-session";
 
 /// Whether a clause was exercised by the host's traffic, and if not, why: a clause that no
 /// byte of the host exercised is "not exercised", never PASS.
@@ -283,7 +281,7 @@ pub fn host_suite_hash(with_operators: bool) -> String {
             h.update(format!("{}\n", o.name()));
         }
     }
-    crate::certify::hex(&h.finalize())
+    crate::digest::hex(&h.finalize())
 }
 
 fn case(id: &str, title: &str, clause: &str, verdict: Verdict, broken: &[String], session: &str) -> CaseResult {

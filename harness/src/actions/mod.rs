@@ -7,6 +7,9 @@
 //! RealTime blocks are drawn as a header and raw values; the case builder encodes them with
 //! the layout the shadow model is in when the block goes out.
 
+pub mod case;
+mod relate;
+
 use gcl_model::Profile;
 use gcl_model::spec::{ArgRule, CommandKind, CommandSpec, ParamSpec, PrefixRule, Role};
 use rand_core::RngCore;

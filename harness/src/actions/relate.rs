@@ -36,7 +36,8 @@ use gcl_model::spec::Role;
 use gcl_model::{Device, Motor, Profile};
 
 use crate::record::Captured;
-use crate::suite::build::{Bind, Target, fit_tolerance, gcd, lfv_exact};
+use crate::suite::build::{fit_tolerance, gcd, lfv_exact};
+use crate::suite::plan::{Bind, Target};
 use gcl_transcript::Relation;
 
 /// The least a velocity in motion is allowed to differ from the ratio, in percent (the suite's
@@ -374,7 +375,7 @@ fn relation(name: &str, ratio: f64, pairs: &[(i64, i64)]) -> Option<Relation> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::action::HostAction;
+    use super::super::HostAction;
     use super::super::case::build_case;
     use gcl_model::Profile;
     use gcl_transcript::{Piece, Transcript};
