@@ -1,5 +1,6 @@
 """One scenario of a host program against a BH8 hand, for `gcl check-host` and `gcl fuzz host`
-in CI (README, "Fuzzing a host library in CI"; the recipes in this folder run such a command).
+in CI (docs/src/host-libraries.md, "Grading a host and fuzzing it in CI"; the recipes in this
+folder run such a command).
 
     python3 ci/host_scenario.py PORT        # a device path or a pyserial URL (socket://...)
 

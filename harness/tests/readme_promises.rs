@@ -1,10 +1,10 @@
-//! Every sentence of README.md that promises something a user can observe (an exit code, a
-//! message, a file written, a default, a limit) is held by a test (issue 21 item 2: "Sentences
+//! Every sentence of README.md and the guides (`docs/src/`) that promises something a user can
+//! observe (an exit code, a message, a file written, a default, a limit) is held by a test (issue 21 item 2: "Sentences
 //! that promise behaviour get a test too"). `PROMISES` pairs a verbatim fragment of each such
 //! sentence with the tests that hold it; `every_promise_is_quoted_as_written_and_held_by_a_test`
-//! fails when a sentence is reworded (its fragment is no longer in README.md) or a test is
-//! renamed or deleted, so the table cannot drift from either. The README's example command
-//! lines are `doc_examples.rs`'s; descriptions that promise nothing checkable are not listed.
+//! fails when a sentence is reworded (its fragment is no longer in README.md or a guide) or a
+//! test is renamed or deleted, so the table cannot drift from either. The documents' commands
+//! are `docs.rs`'s; descriptions that promise nothing checkable are not listed.
 //! The other tests here hold the promises no test held before.
 
 mod sim_support;
@@ -24,6 +24,22 @@ const SELF: &str = "harness/tests/readme_promises.rs";
 /// `.ci/run`, named by the line it prints when it holds, where no `cargo test` can: the C++
 /// example needs CMake and a C++ compiler).
 const PROMISES: &[(&str, &[&str])] = &[
+    // The documents themselves.
+    (
+        "Every command in this README, in the guides and in `gcl --help` is run by the tests (`harness/tests/docs.rs`): as written, or by a stand-in that says what stands for what",
+        &[
+            "harness/tests/docs.rs::every_documented_command_is_run",
+            "harness/tests/docs.rs::documented_commands_run_as_written_or_by_their_stand_ins",
+            "harness/tests/docs.rs::the_check_catches_a_command_nobody_runs",
+        ],
+    ),
+    (
+        "so does a relative link of README.md or a chapter to a file that is not there or to an anchor no heading has",
+        &[
+            "harness/tests/docs.rs::every_link_of_the_documents_leads_somewhere",
+            "harness/tests/docs.rs::the_link_check_catches_a_link_to_nowhere",
+        ],
+    ),
     // The two commands.
     (
         "`cargo test --workspace -- --include-ignored` runs them too, as `.ci/run` does.",
@@ -673,8 +689,11 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "`cd examples/python-host && pytest` passes",
-        &["python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite"],
+        "The example host library's suite, from its folder (`pytest` or `python -m pytest`)",
+        &[
+            "python/tests/test_wheel.py::test_the_example_host_library_passes_its_suite",
+            "python/tests/test_wheel.py::test_the_example_runs_with_the_bare_pytest_command_too",
+        ],
     ),
     (
         "fails every test with `the host code broke GCL",
@@ -961,6 +980,18 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// README.md and the guides of `docs/src/`, one text.
+fn documents() -> String {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("docs/src"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    files.sort();
+    files.insert(0, root().join("README.md"));
+    files.iter().map(|f| std::fs::read_to_string(f).unwrap()).collect::<Vec<_>>().join("\n")
+}
+
 fn collapse(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
@@ -1040,11 +1071,11 @@ fn python_code_lines(text: &str) -> impl Iterator<Item = &str> {
 
 #[test]
 fn every_promise_is_quoted_as_written_and_held_by_a_test() {
-    let readme = collapse(&std::fs::read_to_string(root().join("README.md")).unwrap());
+    let readme = collapse(&documents());
     let mut wrong = Vec::new();
     for (fragment, tests) in PROMISES {
         if !readme.contains(&collapse(fragment)) {
-            wrong.push(format!("README.md no longer says {fragment:?}"));
+            wrong.push(format!("neither README.md nor docs/src/ says {fragment:?} any more"));
         }
         if tests.is_empty() {
             wrong.push(format!("{fragment:?} names no test"));
