@@ -589,7 +589,7 @@ fn suite_commands_outside_the_repository_read_the_built_in_catalogue_or_say_what
         assert!(!r.stdout.contains("missing"), "{}", r.stdout);
     }
     // Inside the repository, from any folder of it, `check` finds the committed suite.
-    let deep = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/suite");
+    let deep = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../conformance/src/suite");
     for args in [&["suite", "check"][..], &["vectors", "check"]] {
         let r = gcl_in(Some(&deep), args, Duration::from_secs(300));
         assert_eq!(r.code, Some(0), "{args:?}: {}{}", r.stdout, r.stderr);
