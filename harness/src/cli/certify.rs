@@ -74,117 +74,143 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut w = std::io::stdout().lock();
     if let Some(path) = &args.keygen {
-        let public = generate_key(path)?;
-        writeln!(
-            w,
-            "wrote the private key {} and the public key {} (fingerprint {})",
-            path.display(),
-            public_key_path(path).display(),
-            fingerprint(&public)
-        )?;
-        return Ok(EXIT_OK);
+        return keygen(path, &mut w);
     }
     if let Some(dir) = &args.verify {
-        let trusted = args.pubkey.as_deref().map(load_verifying_key).transpose()?;
-        return match verify(dir, trusted.as_ref())? {
-            Ok(v) => {
-                let cert = &v.certificate;
-                let signed = match &v.signed {
-                    Signed::Unsigned => "unsigned: anybody could have written it".to_string(),
-                    Signed::ByTrustedKey(k) => format!("signed by the trusted key {}", fingerprint(k)),
-                    Signed::ByUncheckedKey(k) => {
-                        format!("signed by key {} (give --pubkey to check whose it is)", fingerprint(k))
-                    }
-                };
-                writeln!(
-                    w,
-                    "intact, {signed}: {} ({}), profile {}, suite {}, {} clauses, verdict {}",
-                    dir.display(),
-                    printable(&cert.date),
-                    printable(&cert.profile),
-                    printable(&cert.suite_hash),
-                    cert.clauses.len(),
-                    printable(&cert.verdict)
-                )?;
-                if !cert.excused.is_empty() {
-                    writeln!(w, "  known failures excused (not covered): {}", printable(&cert.excused.join(", ")))?;
-                }
-                if matches!(v.signed, Signed::ByTrustedKey(_)) {
-                    return Ok(EXIT_OK);
-                }
-                // Without a trusted key, "intact" says only that the files agree with each
-                // other: a forger who re-signs with their own key, or writes no signature,
-                // makes a bundle that is just as intact.
-                writeln!(
-                    w,
-                    "AUTHENTICITY NOT CHECKED: no --pubkey was given, so nothing says who made this bundle; a re-signed \
-or unsigned forgery verifies the same. Give --pubkey FILE{}",
-                    if args.allow_unverified { "" } else { " (or --allow-unverified to accept it anyway)" }
-                )?;
-                Ok(if args.allow_unverified { EXIT_OK } else { EXIT_FAIL })
-            }
-            Err(problems) => {
-                writeln!(w, "TAMPERED: {}", dir.display())?;
-                for p in problems {
-                    writeln!(w, "  {}", printable(&p.to_string()))?;
-                }
-                Ok(EXIT_FAIL)
-            }
-        };
+        return verify_bundle(&args, dir, &mut w);
     }
     let Some(suite_args) = &args.suite else {
         anyhow::bail!("give --target (to certify a hand), --verify DIR (to check a bundle) or --keygen FILE");
     };
     if !args.partial {
-        let mut changed = Vec::new();
-        if !suite_args.skip.is_empty() {
-            changed.push("--skip");
-        }
-        if !suite_args.only.is_empty() {
-            changed.push("--only");
-        }
-        if !suite_args.fault.is_empty() {
-            changed.push("--fault");
-        }
-        if suite_args.suite.is_some() {
-            changed.push("--suite");
-        }
-        if !suite_args.skip_decision.is_empty() {
-            changed.push("--skip-decision");
-        }
-        // A known failure excuses a case exactly as a skip does: the certificate does not
-        // cover it.
-        if suite_args.known_failures.is_some() {
-            changed.push("--known-failures");
-        }
-        if !changed.is_empty() {
-            anyhow::bail!(
-                "{} {} what a certificate covers; give --partial to write a certificate that says it is partial",
-                changed.join(", "),
-                if changed.len() == 1 { "changes" } else { "change" }
-            );
-        }
+        refuse_partial(suite_args)?;
     }
     // Read the key before the run, so a bad key costs seconds, not a whole suite.
     let key = args.key.as_deref().map(load_signing_key).transpose()?;
+    refuse_full_out(&args.out)?;
+    certify_hand(&args, suite_args, key.as_ref(), &mut w)
+}
+
+/// `--keygen`: writes the key pair and says where.
+fn keygen(path: &std::path::Path, w: &mut impl Write) -> anyhow::Result<u8> {
+    let public = generate_key(path)?;
+    writeln!(
+        w,
+        "wrote the private key {} and the public key {} (fingerprint {})",
+        path.display(),
+        public_key_path(path).display(),
+        fingerprint(&public)
+    )?;
+    Ok(EXIT_OK)
+}
+
+/// `--verify`: checks the bundle in `dir` and says what it found; the exit code.
+fn verify_bundle(args: &Args, dir: &std::path::Path, w: &mut impl Write) -> anyhow::Result<u8> {
+    let trusted = args.pubkey.as_deref().map(load_verifying_key).transpose()?;
+    match verify(dir, trusted.as_ref())? {
+        Ok(v) => {
+            let cert = &v.certificate;
+            let signed = match &v.signed {
+                Signed::Unsigned => "unsigned: anybody could have written it".to_string(),
+                Signed::ByTrustedKey(k) => format!("signed by the trusted key {}", fingerprint(k)),
+                Signed::ByUncheckedKey(k) => {
+                    format!("signed by key {} (give --pubkey to check whose it is)", fingerprint(k))
+                }
+            };
+            writeln!(
+                w,
+                "intact, {signed}: {} ({}), profile {}, suite {}, {} clauses, verdict {}",
+                dir.display(),
+                printable(&cert.date),
+                printable(&cert.profile),
+                printable(&cert.suite_hash),
+                cert.clauses.len(),
+                printable(&cert.verdict)
+            )?;
+            if !cert.excused.is_empty() {
+                writeln!(w, "  known failures excused (not covered): {}", printable(&cert.excused.join(", ")))?;
+            }
+            if matches!(v.signed, Signed::ByTrustedKey(_)) {
+                return Ok(EXIT_OK);
+            }
+            // Without a trusted key, "intact" says only that the files agree with each
+            // other: a forger who re-signs with their own key, or writes no signature,
+            // makes a bundle that is just as intact.
+            writeln!(
+                w,
+                "AUTHENTICITY NOT CHECKED: no --pubkey was given, so nothing says who made this bundle; a re-signed \
+or unsigned forgery verifies the same. Give --pubkey FILE{}",
+                if args.allow_unverified { "" } else { " (or --allow-unverified to accept it anyway)" }
+            )?;
+            Ok(if args.allow_unverified { EXIT_OK } else { EXIT_FAIL })
+        }
+        Err(problems) => {
+            writeln!(w, "TAMPERED: {}", dir.display())?;
+            for p in problems {
+                writeln!(w, "  {}", printable(&p.to_string()))?;
+            }
+            Ok(EXIT_FAIL)
+        }
+    }
+}
+
+/// Refuses the options that change what a certificate covers (without `--partial`).
+fn refuse_partial(suite_args: &SuiteArgs) -> anyhow::Result<()> {
+    let mut changed = Vec::new();
+    if !suite_args.skip.is_empty() {
+        changed.push("--skip");
+    }
+    if !suite_args.only.is_empty() {
+        changed.push("--only");
+    }
+    if !suite_args.fault.is_empty() {
+        changed.push("--fault");
+    }
+    if suite_args.suite.is_some() {
+        changed.push("--suite");
+    }
+    if !suite_args.skip_decision.is_empty() {
+        changed.push("--skip-decision");
+    }
+    // A known failure excuses a case exactly as a skip does: the certificate does not
+    // cover it.
+    if suite_args.known_failures.is_some() {
+        changed.push("--known-failures");
+    }
+    if !changed.is_empty() {
+        anyhow::bail!(
+            "{} {} what a certificate covers; give --partial to write a certificate that says it is partial",
+            changed.join(", "),
+            if changed.len() == 1 { "changes" } else { "change" }
+        );
+    }
+    Ok(())
+}
+
+/// Refuses an `--out` folder that holds anything.
+fn refuse_full_out(out: &std::path::Path) -> anyhow::Result<()> {
     // Empty: nothing in it but the lock file a certify that failed before its run left.
     let lock_name = std::ffi::OsStr::new(gcl_harness::outputs::LOCK_FILE);
-    if args.out.exists()
-        && std::fs::read_dir(&args.out)
-            .map(|mut d| d.any(|e| e.map_or(true, |e| e.file_name() != lock_name)))
-            .unwrap_or(true)
+    if out.exists()
+        && std::fs::read_dir(out).map(|mut d| d.any(|e| e.map_or(true, |e| e.file_name() != lock_name))).unwrap_or(true)
     {
-        anyhow::bail!("{} exists and is not empty; choose a new --out", args.out.display());
+        anyhow::bail!("{} exists and is not empty; choose a new --out", out.display());
     }
+    Ok(())
+}
+
+/// Runs the suite against the hand, writes the bundle (signed with `key`) and prints the
+/// certificate; the exit code.
+fn certify_hand(
+    args: &Args,
+    suite_args: &SuiteArgs,
+    key: Option<&ed25519_dalek::SigningKey>,
+    w: &mut impl Write,
+) -> anyhow::Result<u8> {
     let (opts, cases) = prepare(suite_args, LevelFilter::Should, true)?;
     let cases_total = cases.iter().filter(|c| LevelFilter::Should.admits(c.level())).count();
     // The firmware's own words first, so a certificate names what was tested.
-    let timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5));
-    let vers = {
-        let mut link = open(&opts.target, &opts.open).with_context(|| format!("opening {}", opts.target))?;
-        gcl_harness::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
-        firmware_version(link.as_mut(), &opts.profile, timeout)?
-    };
+    let vers = firmware_words(&opts)?;
     // Held until the bundle is written: a second certify on the same folder is refused.
     let held = gcl_harness::outputs::OutLock::acquire(&args.out, "certify")?;
     let lock_file = args.out.join(gcl_harness::outputs::LOCK_FILE);
@@ -195,7 +221,7 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     out.report.certificate = Some(gcl_harness::report::CertificateFacts {
         cases_total,
         firmware_version: vers,
-        signed_by: key.as_ref().map(|k| fingerprint(&k.verifying_key())),
+        signed_by: key.map(|k| fingerprint(&k.verifying_key())),
     });
     let report = &out.report;
     let cert = Certificate::of_run(report);
@@ -204,8 +230,28 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     // The lock file is ours and no part of the bundle; the lock itself holds until the bundle
     // is written.
     let _ = std::fs::remove_file(&lock_file);
-    write_bundle(&args.out, &cert, report, &out.transcripts, key.as_ref())?;
+    write_bundle(&args.out, &cert, report, &out.transcripts, key)?;
     drop(held);
+    print_certificate(args, key, report, &cert, w)?;
+    Ok(if cert.is_pass() || (cert.partial && report.passed()) { EXIT_OK } else { EXIT_FAIL })
+}
+
+/// The firmware's own words (`VERS`), after a liveness check.
+fn firmware_words(opts: &gcl_harness::conform::ConformOptions) -> anyhow::Result<Vec<String>> {
+    let timeout = opts.step_timeout.unwrap_or(Duration::from_secs(5));
+    let mut link = open(&opts.target, &opts.open).with_context(|| format!("opening {}", opts.target))?;
+    gcl_harness::conform::liveness(link.as_mut(), &opts.profile, timeout)?;
+    Ok(firmware_version(link.as_mut(), &opts.profile, timeout)?)
+}
+
+/// Prints the run's summary, the certificate and how to check its bundle.
+fn print_certificate(
+    args: &Args,
+    key: Option<&ed25519_dalek::SigningKey>,
+    report: &gcl_harness::report::RunReport,
+    cert: &Certificate,
+    w: &mut impl Write,
+) -> anyhow::Result<()> {
     write!(w, "{}", printable(&summary_text(report)))?;
     writeln!(w, "  firmware: {}", printable(&cert.firmware_version.join(" / ")))?;
     writeln!(w, "  certificate verdict: {}", cert.verdict)?;
@@ -215,7 +261,7 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
     // The check to run is one that can pass: a signed bundle against its public key (the
     // `--keygen` pair's FILE.pub when it is there); an unsigned one only for agreeing with
     // itself, which --verify refuses to call a pass without --allow-unverified.
-    let (how, check) = match (&key, &args.key) {
+    let (how, check) = match (key, &args.key) {
         (Some(k), Some(path)) => {
             let public = public_key_path(path);
             let verify = ["gcl", "certify", "--verify", &args.out.display().to_string(), "--pubkey"].map(String::from);
@@ -237,5 +283,5 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
         ),
     };
     writeln!(w, "  certificate bundle: {}, {how} (check it with `{check}`)", args.out.display())?;
-    Ok(if cert.is_pass() || (cert.partial && report.passed()) { EXIT_OK } else { EXIT_FAIL })
+    Ok(())
 }

@@ -129,7 +129,21 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 }
 
 fn device(a: DeviceArgs) -> anyhow::Result<u8> {
-    use gcl_harness::fuzz::device::{self as fd, Budget, FuzzOptions, Progress};
+    let (mut o, baselines) = device_options(&a)?;
+    fuzz_host::refuse_empty_shard(a.runs, a.shard)?;
+    // A CI time limit (SIGTERM) ends the campaign with its reports written. Before any thread
+    // starts: a thread started earlier would keep the signals unblocked.
+    o.stop = super::stop_on_signals("fuzz device")?;
+    let ran = device_campaign(&a, &o)?;
+    let report = device_report(&a, &o, &ran.summary, ran.timeline, &baselines);
+    print_device_summary(&a, &ran.summary, &report)?;
+    Ok(device_exit(&ran.summary, &report))
+}
+
+/// The campaign's options from the arguments (the profile, its refusals, known failures and
+/// baselines), with the baselines as the provenance names them; or why they make none.
+fn device_options(a: &DeviceArgs) -> anyhow::Result<(gcl_harness::fuzz::device::FuzzOptions, Vec<String>)> {
+    use gcl_harness::fuzz::device::{Budget, FuzzOptions};
     use gcl_host::target::Target;
     let profile = load_profile(a.target.model_profile(a.profile.as_deref()))?;
     if !a.fault.is_empty() && !matches!(a.target, Target::Sim { .. }) {
@@ -181,6 +195,13 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         }
         o.baseline.known.skip_decision(id, "--skip-decision");
     }
+    let baselines = add_baselines(a, &mut o)?;
+    Ok((o, baselines))
+}
+
+/// Adds `--baseline` folders to the options: each as the provenance names it; refused when
+/// one was recorded under another profile.
+fn add_baselines(a: &DeviceArgs, o: &mut gcl_harness::fuzz::device::FuzzOptions) -> anyhow::Result<Vec<String>> {
     let mut baselines = Vec::new();
     for dir in &a.baseline {
         let n = o.baseline.add_dir(dir).with_context(|| format!("--baseline {}", dir.display()))?;
@@ -200,10 +221,20 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
         });
     }
-    fuzz_host::refuse_empty_shard(a.runs, a.shard)?;
-    // A CI time limit (SIGTERM) ends the campaign with its reports written. Before any thread
-    // starts: a thread started earlier would keep the signals unblocked.
-    o.stop = super::stop_on_signals("fuzz device")?;
+    Ok(baselines)
+}
+
+/// What [`device_campaign`] gives: the summary, the coverage over time, and the folders held.
+struct DeviceRun {
+    summary: gcl_harness::fuzz::device::FuzzSummary,
+    timeline: Vec<gcl_harness::fuzz::device::report::CoveragePoint>,
+    /// Held until the reports are written.
+    _held: Vec<gcl_harness::outputs::OutLock>,
+}
+
+/// Runs the campaign with its progress line (findings printed as found) and its folders held.
+fn device_campaign(a: &DeviceArgs, o: &gcl_harness::fuzz::device::FuzzOptions) -> anyhow::Result<DeviceRun> {
+    use gcl_harness::fuzz::device::{self as fd, Budget, Progress};
     let total = match o.budget {
         Budget::Runs(n) => super::progress::Total::Units(n),
         Budget::Time(d) => super::progress::Total::Time(d),
@@ -252,12 +283,26 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
             _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
         }
     }
-    let s = fd::run(&o, &on_progress).context("gcl fuzz device")?;
+    let s = fd::run(o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
+    let timeline = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
+    Ok(DeviceRun { summary: s, timeline, _held })
+}
+
+/// The campaign's report: its summary, how a signal stopped it, its coverage over time and
+/// provenance (warning of corpus files skipped).
+fn device_report(
+    a: &DeviceArgs,
+    o: &gcl_harness::fuzz::device::FuzzOptions,
+    s: &gcl_harness::fuzz::device::FuzzSummary,
+    timeline: Vec<gcl_harness::fuzz::device::report::CoveragePoint>,
+    baselines: &[String],
+) -> gcl_harness::fuzz::device::report::FuzzReport {
+    use gcl_harness::fuzz::device::{self as fd, Budget};
     for (p, why) in &s.malformed_corpus {
         eprintln!("gcl fuzz device: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
     }
-    let mut report = fd::report::FuzzReport::new(&o, &s);
+    let mut report = fd::report::FuzzReport::new(o, s);
     if let Some(by) = super::stopped_by().filter(|_| s.interrupted) {
         let of = match o.budget {
             Budget::Runs(n) => format!(" of {n} runs"),
@@ -269,8 +314,19 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         eprintln!("gcl fuzz device: {st}; the report covers the runs made");
         report.stopped = Some(st);
     }
-    report.coverage_over_time = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
-    report.provenance = Some(provenance(&a, &o, &baselines));
+    report.coverage_over_time = timeline;
+    report.provenance = Some(provenance(a, o, baselines));
+    report
+}
+
+/// Prints the campaign's figures and findings, its coverage (unless `--quiet`), and writes
+/// the `--report` pages.
+fn print_device_summary(
+    a: &DeviceArgs,
+    s: &gcl_harness::fuzz::device::FuzzSummary,
+    report: &gcl_harness::fuzz::device::report::FuzzReport,
+) -> anyhow::Result<()> {
+    use gcl_harness::fuzz::device as fd;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -304,17 +360,26 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
         write!(out, "{}", fd::coverage::render(&report.coverage))?;
     }
     if let Some(dir) = &a.report {
-        for p in fd::report::write_all(dir, &report)? {
+        for p in fd::report::write_all(dir, report)? {
             writeln!(out, "wrote {}", p.display())?;
         }
     }
+    Ok(())
+}
+
+/// The exit code: a dead hand or nothing to test is an error; a new finding fails; stopped
+/// early without one, no verdict.
+fn device_exit(
+    s: &gcl_harness::fuzz::device::FuzzSummary,
+    report: &gcl_harness::fuzz::device::report::FuzzReport,
+) -> u8 {
     if let Some(why) = &s.dead_hand {
         eprintln!("gcl fuzz device: {}", printable(why));
-        return Ok(EXIT_ERROR);
+        return EXIT_ERROR;
     }
     if let Some(why) = &s.no_cases {
         eprintln!("gcl fuzz device: nothing left to test: {why}");
-        return Ok(EXIT_ERROR);
+        return EXIT_ERROR;
     }
     if s.runs == 0
         && !s.interrupted
@@ -324,11 +389,11 @@ fn device(a: DeviceArgs) -> anyhow::Result<u8> {
     }
     // Only new findings fail the run: what the baseline explains was known before. A
     // campaign stopped before its budget without one has no verdict.
-    Ok(match (s.findings.iter().any(|f| f.is_new()), &report.stopped) {
+    match (s.findings.iter().any(|f| f.is_new()), &report.stopped) {
         (true, _) => EXIT_FAIL,
         (false, Some(_)) => EXIT_ERROR,
         (false, None) => EXIT_OK,
-    })
+    }
 }
 
 /// What makes this campaign's folder a shard of its campaign (see

@@ -235,7 +235,23 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         return replay(&args, run, b);
     }
     refuse_empty_shard(args.runs, args.shard)?;
-    let opts = FuzzOptions {
+    let opts = host_options(&args, run);
+    print_header(&args, &opts);
+    let _held = hold_folders(&args)?;
+    let stop = stop_on_signals()?;
+    let campaign = run_campaign(&args, &opts, &stop)?;
+    let unwritten = rewrite_bundles(&args.out, &opts, &campaign);
+    print_campaign_summary(&campaign);
+    write_campaign_report(&args, &opts, &campaign)?;
+    if let Some(e) = unwritten {
+        return Err(e.into());
+    }
+    Ok(host_exit(&opts, &campaign))
+}
+
+/// The campaign's options from the arguments, around the host's run.
+fn host_options(args: &Args, run: HostRun) -> FuzzOptions {
+    FuzzOptions {
         run,
         seed: args.seed,
         runs: args.runs,
@@ -248,7 +264,11 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         guided: !args.no_guidance,
         calibrate: !args.host.timeout_hang_given(),
         shard: args.shard,
-    };
+    }
+}
+
+/// The campaign's first line: seed, profile, line, time, pace, jobs, where bundles go.
+fn print_header(args: &Args, opts: &FuzzOptions) {
     eprintln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {}, {} job(s), bundles in {}",
         opts.seed,
@@ -259,14 +279,24 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         opts.jobs,
         args.out.display()
     );
-    // Held for the campaign: a second campaign on the same folders is refused (issue 20).
-    let mut _held = vec![gcl_harness::outputs::OutLock::acquire(&args.out, "fuzz host --out")?];
+}
+
+/// The `--out` and `--report` folders, held for the campaign: a second campaign on the same
+/// folders is refused (issue 20).
+fn hold_folders(args: &Args) -> anyhow::Result<Vec<gcl_harness::outputs::OutLock>> {
+    let mut held = vec![gcl_harness::outputs::OutLock::acquire(&args.out, "fuzz host --out")?];
     if let Some(d) = args.host.report_dir().filter(|d| *d != args.out.as_path()) {
-        _held.push(gcl_harness::outputs::OutLock::acquire(d, "fuzz host --report")?);
+        held.push(gcl_harness::outputs::OutLock::acquire(d, "fuzz host --report")?);
     }
-    let stop = stop_on_signals()?;
+    Ok(held)
+}
+
+/// Runs the campaign with its progress line (calibration and findings said as they come,
+/// each finding's bundle written): the campaign, with its provenance and how a signal
+/// stopped it.
+fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::Result<Campaign> {
     let out = args.out.clone();
-    let info_of = |f: &Finding| info(&opts, f);
+    let info_of = |f: &Finding| info(opts, f);
     if opts.runs.is_none() && opts.duration.is_none() {
         eprintln!("{}", default_budget_line());
     }
@@ -309,22 +339,32 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             ));
         }
     };
-    let mut campaign = gcl_harness::fuzz::host::fuzz(&opts, &stop, &on_event).context("fuzzing")?;
-    campaign.provenance = Some(provenance(&args, &opts));
+    let mut campaign = gcl_harness::fuzz::host::fuzz(opts, stop, &on_event).context("fuzzing")?;
+    campaign.provenance = Some(provenance(args, opts));
     progress.finish();
-    campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, &opts, &campaign));
+    campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, opts, &campaign));
     if let Some(st) = &campaign.stopped {
         eprintln!("gcl fuzz host: {st}; the report covers the runs made");
     }
-    // Once more with the final hit counts. A bundle that cannot be written (a full disk) is
-    // an infrastructure error: it is marked incomplete, and the run exits 2 naming the file.
+    Ok(campaign)
+}
+
+/// Once more with the final hit counts. A bundle that cannot be written (a full disk) is an
+/// infrastructure error: said here, and the first one given back (the run exits 2 naming it).
+fn rewrite_bundles(out: &std::path::Path, opts: &FuzzOptions, campaign: &Campaign) -> Option<bundle::BundleError> {
+    // A bundle not written is marked incomplete.
     let mut unwritten = None;
     for f in &campaign.findings {
-        if let Err(e) = bundle::write(&out, &info(&opts, f), f) {
+        if let Err(e) = bundle::write(out, &info(opts, f), f) {
             eprintln!("gcl fuzz host: bundle not written: {e}");
             unwritten.get_or_insert(e);
         }
     }
+    unwritten
+}
+
+/// The campaign's figures, its systematic pass, notes and misbehaviours fired, on stderr.
+fn print_campaign_summary(campaign: &Campaign) {
     let secs = campaign.elapsed_ms as f64 / 1000.0;
     eprintln!(
         "gcl fuzz host: {} runs ({} reached the host; +{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
@@ -358,31 +398,38 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             eprintln!("  {op:<16} {}", list.join(", "));
         }
     }
+}
+
+/// With `--report`: the report pages and fuzz.json.
+fn write_campaign_report(args: &Args, opts: &FuzzOptions, campaign: &Campaign) -> anyhow::Result<()> {
     if let Some(dir) = args.host.report_dir() {
-        let report = campaign_report(&opts, &campaign, &out, args.ops.is_some());
+        let report = campaign_report(opts, campaign, &args.out, args.ops.is_some());
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());
         }
         let p = dir.join("fuzz.json");
-        gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(&campaign)?)?;
+        gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(campaign)?)?;
         eprintln!("wrote {}", p.display());
     }
-    if let Some(e) = unwritten {
-        return Err(e.into());
-    }
+    Ok(())
+}
+
+/// The exit code: untested is an error; a finding fails; stopped early without one, no
+/// verdict (with the default budget's line again when it ran out).
+fn host_exit(opts: &FuzzOptions, campaign: &Campaign) -> u8 {
     if let Some(why) = &campaign.untested {
         eprintln!("gcl fuzz host: nothing tested: {why}");
-        return Ok(EXIT_ERROR);
+        return EXIT_ERROR;
     }
     if opts.runs.is_none() && opts.duration.is_none() && campaign.stopped.is_none() {
         eprintln!("{}", default_budget_line());
     }
-    Ok(match (campaign.findings.is_empty(), &campaign.stopped) {
+    match (campaign.findings.is_empty(), &campaign.stopped) {
         (false, _) => EXIT_FAIL,
         // Stopped before its budget with no finding: no verdict on the host.
         (true, Some(_)) => EXIT_ERROR,
         (true, None) => EXIT_OK,
-    })
+    }
 }
 
 /// `stopped by SIGTERM after 3 of 1000 runs` (or `after 3 runs, 4.2 s of 5m`).

@@ -25,6 +25,7 @@ pub mod detect;
 pub mod session;
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex, mpsc};
 use std::time::{Duration, Instant};
@@ -1098,6 +1099,32 @@ pub fn confirm(
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
     let duration = opts.campaign_duration();
+    let calibration = match calibration_stage(opts, duration, stop, on_event, started)? {
+        ControlFlow::Continue(c) => c,
+        ControlFlow::Break(early) => return Ok(early),
+    };
+    let calibrated = calibrated_options(opts, calibration.as_ref());
+    let opts = calibrated.as_ref().unwrap_or(opts);
+    let w = Workers::new(opts, stop, on_event, started, duration);
+    if let ControlFlow::Break(early) = w.shard_answers()? {
+        return Ok(early);
+    }
+    if let Some(c) = &calibration {
+        w.take_calibration_suspects(c);
+    }
+    w.run_all();
+    w.finish(calibration)
+}
+
+/// Calibration (when asked): the measured timeouts, told to `on_event`; or the campaign that
+/// ends there (stopped, or the host unreached).
+fn calibration_stage(
+    opts: &FuzzOptions,
+    duration: Option<Duration>,
+    stop: &AtomicBool,
+    on_event: &(dyn Fn(Event) + Sync),
+    started: Instant,
+) -> Result<ControlFlow<Campaign, Option<Calibration>>, RunError> {
     let calibration = if opts.calibrate {
         match calibrate(&opts.run, duration.map(|d| d / CALIBRATION_SHARE), opts.jobs, stop) {
             Ok(c) => {
@@ -1105,7 +1132,10 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 Some(c)
             }
             Err(RunError::Cancelled) => {
-                return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
+                return Ok(ControlFlow::Break(Campaign {
+                    elapsed_ms: started.elapsed().as_millis() as u64,
+                    ..Default::default()
+                }));
             }
             Err(e) => return Err(e),
         }
@@ -1113,169 +1143,233 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         None
     };
     if let Some(why) = calibration.as_ref().and_then(|c| c.untested.clone()) {
-        return Ok(Campaign {
+        return Ok(ControlFlow::Break(Campaign {
             elapsed_ms: started.elapsed().as_millis() as u64,
             calibration,
             untested: Some(why),
             ..Default::default()
-        });
+        }));
     }
-    let calibrated;
-    let opts = match &calibration {
-        Some(c) => {
-            let mut o = opts.clone();
-            o.run.timeout_hang = Duration::from_millis(c.timeout_hang_ms);
-            calibrated = o;
-            &calibrated
+    Ok(ControlFlow::Continue(calibration))
+}
+
+/// The options with calibration's hang timeout, when calibration ran.
+fn calibrated_options(opts: &FuzzOptions, calibration: Option<&Calibration>) -> Option<FuzzOptions> {
+    calibration.map(|c| {
+        let mut o = opts.clone();
+        o.run.timeout_hang = Duration::from_millis(c.timeout_hang_ms);
+        o
+    })
+}
+
+/// A campaign's runs under way: its options and what its workers and confirmer share (the
+/// state runs are taken into, the run counters, the channel of suspected hangs).
+struct Workers<'a> {
+    opts: &'a FuzzOptions,
+    stop: &'a AtomicBool,
+    on_event: &'a (dyn Fn(Event) + Sync),
+    started: Instant,
+    duration: Option<Duration>,
+    jobs: u64,
+    next: AtomicU64,
+    completed: AtomicU64,
+    reached: AtomicU64,
+    shared: Mutex<Shared>,
+    /// Told when a run is taken in (or run 0's answers learnt).
+    turn: Condvar,
+    /// The workers have ended.
+    runs_over: AtomicBool,
+    /// Suspected hangs go to the confirmer, which runs them again beside the campaign's runs.
+    to_confirm: Mutex<Option<mpsc::Sender<(String, String)>>>,
+    suspects: Mutex<mpsc::Receiver<(String, String)>>,
+}
+
+impl<'a> Workers<'a> {
+    /// Nothing run yet.
+    fn new(
+        opts: &'a FuzzOptions,
+        stop: &'a AtomicBool,
+        on_event: &'a (dyn Fn(Event) + Sync),
+        started: Instant,
+        duration: Option<Duration>,
+    ) -> Self {
+        let (to_confirm, suspects) = mpsc::channel::<(String, String)>();
+        Workers {
+            opts,
+            stop,
+            on_event,
+            started,
+            duration,
+            jobs: opts.jobs.max(1) as u64,
+            next: AtomicU64::new(0),
+            completed: AtomicU64::new(0),
+            reached: AtomicU64::new(0),
+            shared: Mutex::new(Shared {
+                corpus: Vec::new(),
+                paths: BTreeSet::new(),
+                findings: Vec::new(),
+                by_sig: BTreeMap::new(),
+                fired_at: BTreeMap::new(),
+                answers: None,
+                answer_kinds: Vec::new(),
+                pass: Vec::new(),
+                notes: BTreeMap::new(),
+                minimize_runs: 0,
+                error: None,
+                untested: None,
+                taken: 0,
+                ended: BTreeMap::new(),
+                suspects: BTreeMap::new(),
+            }),
+            turn: Condvar::new(),
+            runs_over: AtomicBool::new(false),
+            to_confirm: Mutex::new(Some(to_confirm)),
+            suspects: Mutex::new(suspects),
         }
-        None => opts,
-    };
-    let next = AtomicU64::new(0);
-    let completed = AtomicU64::new(0);
-    let reached = AtomicU64::new(0);
-    let jobs = opts.jobs.max(1) as u64;
-    let shared = Mutex::new(Shared {
-        corpus: Vec::new(),
-        paths: BTreeSet::new(),
-        findings: Vec::new(),
-        by_sig: BTreeMap::new(),
-        fired_at: BTreeMap::new(),
-        answers: None,
-        answer_kinds: Vec::new(),
-        pass: Vec::new(),
-        notes: BTreeMap::new(),
-        minimize_runs: 0,
-        error: None,
-        untested: None,
-        taken: 0,
-        ended: BTreeMap::new(),
-        suspects: BTreeMap::new(),
-    });
-    let turn = Condvar::new();
-    let done = |t: u64| {
-        let i = opts.run_index(t);
-        stop.load(Ordering::Relaxed)
-            || opts.runs.is_some_and(|n| i >= n)
-            || duration.is_some_and(|d| started.elapsed() >= d)
-    };
-    // A shard without run 0 learns how many answers a run without misbehaviour has (the span
-    // of its schedules) from one run of its own, not counted.
-    if let Some(s) = opts.shard
-        && !s.owns(0)
-        && !done(0)
-    {
-        let r = match run_once_until(&opts.run, &Schedule::default(), stop) {
-            Err(RunError::Cancelled) => {
-                return Ok(Campaign { elapsed_ms: started.elapsed().as_millis() as u64, ..Default::default() });
+    }
+
+    /// Whether the run at turn `t` is past the campaign's end (stopped, runs or time spent).
+    fn done(&self, t: u64) -> bool {
+        let i = self.opts.run_index(t);
+        self.stop.load(Ordering::Relaxed)
+            || self.opts.runs.is_some_and(|n| i >= n)
+            || self.duration.is_some_and(|d| self.started.elapsed() >= d)
+    }
+
+    /// A confirmation waits as long as the run budget allows (a shorter wait would take a
+    /// host that acts late for a hung one). Once the runs have ended, a campaign with a
+    /// duration confirms for one run budget more at most: suspects still waiting then are
+    /// notes.
+    fn out_of_time(&self) -> bool {
+        self.runs_over.load(Ordering::Relaxed)
+            && self.duration.is_some_and(|d| self.started.elapsed() > d + self.opts.run.budget)
+    }
+
+    /// A shard without run 0 learns how many answers a run without misbehaviour has (the span
+    /// of its schedules) from one run of its own, not counted; or the campaign ends there.
+    fn shard_answers(&self) -> Result<ControlFlow<Campaign>, RunError> {
+        let opts = self.opts;
+        if let Some(s) = opts.shard
+            && !s.owns(0)
+            && !self.done(0)
+        {
+            let r = match run_once_until(&opts.run, &Schedule::default(), self.stop) {
+                Err(RunError::Cancelled) => {
+                    return Ok(ControlFlow::Break(Campaign {
+                        elapsed_ms: self.started.elapsed().as_millis() as u64,
+                        ..Default::default()
+                    }));
+                }
+                r => r?,
+            };
+            if let Some(why) = unreached(&r, &opts.run.command) {
+                return Ok(ControlFlow::Break(Campaign {
+                    elapsed_ms: self.started.elapsed().as_millis() as u64,
+                    untested: Some(why),
+                    ..Default::default()
+                }));
             }
-            r => r?,
-        };
-        if let Some(why) = unreached(&r, &opts.run.command) {
-            return Ok(Campaign {
-                elapsed_ms: started.elapsed().as_millis() as u64,
-                untested: Some(why),
-                ..Default::default()
-            });
+            if let Ok(mut sh) = self.shared.lock() {
+                sh.learn(&r, opts);
+            }
         }
-        if let Ok(mut sh) = shared.lock() {
-            sh.learn(&r, opts);
-        }
+        Ok(ControlFlow::Continue(()))
     }
-    // A confirmation waits as long as the run budget allows (a shorter wait would take a host
-    // that acts late for a hung one). Once the runs have ended, a campaign with a duration
-    // confirms for one run budget more at most: suspects still waiting then are notes.
-    let runs_over = AtomicBool::new(false);
-    let out_of_time =
-        || runs_over.load(Ordering::Relaxed) && duration.is_some_and(|d| started.elapsed() > d + opts.run.budget);
-    // Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
-    let shrunk = |schedule: &Schedule, sig: &str, shrink: bool| -> Option<(Schedule, RunResult)> {
-        if !(shrink && opts.minimize && schedule.planned.len() > 1) {
+
+    /// Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
+    fn shrunk(&self, schedule: &Schedule, sig: &str, shrink: bool) -> Option<(Schedule, RunResult)> {
+        if !(shrink && self.opts.minimize && schedule.planned.len() > 1) {
             return None;
         }
         let mut runs = 0;
-        let m = minimize(opts, schedule, sig, &mut runs, stop);
-        if let Ok(mut sh) = shared.lock() {
+        let m = minimize(self.opts, schedule, sig, &mut runs, self.stop);
+        if let Ok(mut sh) = self.shared.lock() {
             sh.minimize_runs += runs;
         }
         m.ok().flatten()
-    };
-    let found = |k: usize| {
-        if let Ok(sh) = shared.lock() {
-            on_event(Event::Found(Box::new(sh.findings[k].clone())));
+    }
+
+    /// Tells `on_event` of finding `k`.
+    fn found(&self, k: usize) {
+        if let Ok(sh) = self.shared.lock() {
+            (self.on_event)(Event::Found(Box::new(sh.findings[k].clone())));
         }
-    };
-    // Suspected hangs go to the confirmer, which runs them again beside the campaign's runs.
-    let (to_confirm, suspects) = mpsc::channel::<(String, String)>();
-    let to_confirm = Mutex::new(Some(to_confirm));
-    let announce = |new: Vec<New>, shrink: bool| {
+    }
+
+    /// What a run brought that is new: findings minimized (`shrink`) and told, suspected hangs
+    /// minimized and sent to the confirmer.
+    fn announce(&self, new: Vec<New>, shrink: bool) {
         for n in new {
             match n {
                 New::Finding(k) => {
-                    let Ok(sh) = shared.lock() else { return };
+                    let Ok(sh) = self.shared.lock() else { return };
                     let (schedule, sig) = (sh.findings[k].original.clone(), sh.findings[k].verdict.signature.clone());
                     drop(sh);
-                    if let Some((s, mr)) = shrunk(&schedule, &sig, shrink)
-                        && let Ok(mut sh) = shared.lock()
+                    if let Some((s, mr)) = self.shrunk(&schedule, &sig, shrink)
+                        && let Ok(mut sh) = self.shared.lock()
                     {
                         sh.findings[k].shrunk(s, mr);
                     }
-                    found(k);
+                    self.found(k);
                 }
                 New::Suspect(key) => {
-                    let Ok(sh) = shared.lock() else { return };
+                    let Ok(sh) = self.shared.lock() else { return };
                     let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
                     let schedule = f.original.clone();
                     drop(sh);
                     // Minimized first (with the campaign's hang timeout), then confirmed.
-                    if let Some((s, mr)) = shrunk(&schedule, &key.0, shrink)
-                        && let Ok(mut sh) = shared.lock()
+                    if let Some((s, mr)) = self.shrunk(&schedule, &key.0, shrink)
+                        && let Ok(mut sh) = self.shared.lock()
                         && let Some(Suspect::Pending(f)) = sh.suspects.get_mut(&key)
                     {
                         f.shrunk(s, mr);
                     }
-                    if let Some(tx) = to_confirm.lock().ok().as_ref().and_then(|t| t.as_ref()) {
+                    if let Some(tx) = self.to_confirm.lock().ok().as_ref().and_then(|t| t.as_ref()) {
                         let _ = tx.send(key);
                     }
                 }
             }
         }
-    };
-    // One suspect at a time; a signature already confirmed needs no second wait.
-    let suspects = Mutex::new(suspects);
-    let confirmer = || {
-        let Ok(suspects) = suspects.lock() else { return };
+    }
+
+    /// The confirmer: one suspect at a time until the channel closes; a signature already
+    /// confirmed needs no second wait.
+    fn confirmer(&self) {
+        let opts = self.opts;
+        let Ok(suspects) = self.suspects.lock() else { return };
         for key in suspects.iter() {
-            let Ok(sh) = shared.lock() else { return };
+            let Ok(sh) = self.shared.lock() else { return };
             let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
             let schedule = f.schedule.clone();
             let known = sh.by_sig.contains_key(&key.0);
             drop(sh);
             let outcome = if known {
                 Confirmation::Hung(Duration::ZERO)
-            } else if stop.load(Ordering::Relaxed) || out_of_time() {
+            } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
                 Confirmation::Stopped
             } else {
-                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, stop)
+                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
                     .unwrap_or(Confirmation::Stopped)
             };
-            let new = shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
+            let new = self.shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
             if let Some(k) = new {
-                found(k);
+                self.found(k);
             }
         }
-    };
-    // The hangs calibration saw are confirmed and reported like any other.
-    if let Some(c) = &calibration {
+    }
+
+    /// The hangs calibration saw, taken in as suspects: confirmed and reported like any other.
+    fn take_calibration_suspects(&self, c: &Calibration) {
         let mut new = Vec::new();
-        if let Ok(mut sh) = shared.lock() {
+        if let Ok(mut sh) = self.shared.lock() {
             for (schedule, r) in &c.suspects {
-                for mut v in judge(r, &opts.ok_exit_codes).into_iter().filter(|v| v.kind == FindingKind::Hang) {
+                for mut v in judge(r, &self.opts.ok_exit_codes).into_iter().filter(|v| v.kind == FindingKind::Hang) {
                     let at = r.fired.first().map(|f| format!("answer {} ({})", f.answer, f.state)).unwrap_or_default();
                     v.message += &format!("; found by calibration, the hand silent at {at}");
                     let f = Finding {
                         verdict: v,
                         run: 0,
-                        found_after_ms: started.elapsed().as_millis() as u64,
+                        found_after_ms: self.started.elapsed().as_millis() as u64,
                         hits: 1,
                         schedule: schedule.clone(),
                         original: schedule.clone(),
@@ -1291,108 +1385,144 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 }
             }
         }
-        announce(new, false);
+        self.announce(new, false);
     }
-    let worker = || {
+
+    /// One worker: takes turns until the campaign's end, each a schedule, a run, and the run
+    /// taken in.
+    fn worker(&self) {
         loop {
-            let t = next.fetch_add(1, Ordering::Relaxed);
-            if done(t) {
+            let t = self.next.fetch_add(1, Ordering::Relaxed);
+            if self.done(t) {
                 break;
             }
-            let i = opts.run_index(t);
+            let i = self.opts.run_index(t);
             let schedule = if i == 0 {
                 Schedule::default()
-            } else if opts.shard.is_some() {
-                // Unguided: only run 0's answer count is needed.
-                let Ok(mut sh) = shared.lock() else { break };
-                while sh.answers.is_none() && !done(t) {
-                    sh = match turn.wait_timeout(sh, Duration::from_millis(50)) {
-                        Ok((g, _)) => g,
-                        Err(_) => return,
-                    };
-                }
-                let Some(answers) = sh.answers else { break };
-                let pass = sh.pass.get(i as usize - 1).copied();
-                drop(sh);
-                match pass {
-                    Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-                    None => fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers),
-                }
+            } else if self.opts.shard.is_some() {
+                let Some(s) = self.unguided_schedule(t, i) else { return };
+                s
             } else {
-                // Guidance sees runs 0..visible, whatever else has ended by now.
-                let visible = (t + 1).saturating_sub(jobs);
-                let Ok(mut sh) = shared.lock() else { break };
-                while sh.taken < visible && !done(t) {
-                    sh = match turn.wait_timeout(sh, Duration::from_millis(50)) {
-                        Ok((g, _)) => g,
-                        Err(_) => return,
-                    };
-                }
-                if sh.taken < visible {
-                    break;
-                }
-                let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
-                let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
-                let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
-                // The pass starts with the first run that sees run 0.
-                let pass = i.checked_sub(jobs).and_then(|k| sh.pass.get(k as usize)).copied();
-                drop(sh);
-                match pass {
-                    Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-                    None => next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers),
-                }
+                let Some(s) = self.guided_schedule(t, i) else { return };
+                s
             };
-            let r = match run_once_until(&opts.run, &schedule, stop) {
-                Ok(r) => r,
-                Err(RunError::Cancelled) => break,
-                Err(e) => {
-                    if let Ok(mut sh) = shared.lock() {
-                        sh.error.get_or_insert(e.to_string());
-                    }
-                    stop.store(true, Ordering::Relaxed);
-                    break;
-                }
-            };
-            completed.fetch_add(1, Ordering::Relaxed);
-            on_event(Event::Run { index: i, elapsed: r.elapsed });
-            let missed = unreached(&r, &opts.run.command);
-            if missed.is_none() {
-                reached.fetch_add(1, Ordering::Relaxed);
-            }
-            // A host the hand without misbehaviour did not reach judges nothing in any run:
-            // the campaign ends (its run taken in as no finding of the host's).
-            if i == 0
-                && let Some(why) = missed
-            {
-                if let Ok(mut sh) = shared.lock() {
-                    sh.untested.get_or_insert(why);
-                }
-                stop.store(true, Ordering::Relaxed);
-                turn.notify_all();
+            if !self.run_and_take(t, i, schedule) {
                 break;
             }
-            let new = match shared.lock() {
-                Ok(mut sh) => {
-                    sh.ended.insert(t, (schedule, r));
-                    sh.take_ready(opts, started)
+        }
+    }
+
+    /// The schedule of run `i` (turn `t`) of a shard: unguided, only run 0's answer count is
+    /// needed (waited for); `None` when the campaign ends first.
+    fn unguided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+        let opts = self.opts;
+        let mut sh = self.shared.lock().ok()?;
+        while sh.answers.is_none() && !self.done(t) {
+            sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
+        }
+        let answers = sh.answers?;
+        let pass = sh.pass.get(i as usize - 1).copied();
+        drop(sh);
+        Some(match pass {
+            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
+            None => fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers),
+        })
+    }
+
+    /// The schedule of run `i` (turn `t`): guidance sees runs 0..visible, whatever else has
+    /// ended by now (waited for); `None` when the campaign ends first.
+    fn guided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+        let (opts, jobs) = (self.opts, self.jobs);
+        let visible = (t + 1).saturating_sub(jobs);
+        let mut sh = self.shared.lock().ok()?;
+        while sh.taken < visible && !self.done(t) {
+            sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
+        }
+        if sh.taken < visible {
+            return None;
+        }
+        let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
+        let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
+        let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
+        // The pass starts with the first run that sees run 0.
+        let pass = i.checked_sub(jobs).and_then(|k| sh.pass.get(k as usize)).copied();
+        drop(sh);
+        Some(match pass {
+            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
+            None => next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers),
+        })
+    }
+
+    /// Runs `schedule` as run `i` (turn `t`), counts it and takes it in (in turn order),
+    /// announcing what it brought; `false` when the worker is to end.
+    fn run_and_take(&self, t: u64, i: u64, schedule: Schedule) -> bool {
+        let opts = self.opts;
+        let r = match run_once_until(&opts.run, &schedule, self.stop) {
+            Ok(r) => r,
+            Err(RunError::Cancelled) => return false,
+            Err(e) => {
+                if let Ok(mut sh) = self.shared.lock() {
+                    sh.error.get_or_insert(e.to_string());
                 }
-                Err(_) => break,
-            };
-            turn.notify_all();
-            announce(new, true);
+                self.stop.store(true, Ordering::Relaxed);
+                return false;
+            }
+        };
+        self.completed.fetch_add(1, Ordering::Relaxed);
+        (self.on_event)(Event::Run { index: i, elapsed: r.elapsed });
+        let missed = unreached(&r, &opts.run.command);
+        if missed.is_none() {
+            self.reached.fetch_add(1, Ordering::Relaxed);
         }
-    };
-    std::thread::scope(|s| {
-        let confirming = s.spawn(confirmer);
-        let workers: Vec<_> = (0..jobs).map(|_| s.spawn(worker)).collect();
-        for w in workers {
-            let _ = w.join();
+        // A host the hand without misbehaviour did not reach judges nothing in any run:
+        // the campaign ends (its run taken in as no finding of the host's).
+        if i == 0
+            && let Some(why) = missed
+        {
+            if let Ok(mut sh) = self.shared.lock() {
+                sh.untested.get_or_insert(why);
+            }
+            self.stop.store(true, Ordering::Relaxed);
+            self.turn.notify_all();
+            return false;
         }
-        runs_over.store(true, Ordering::Relaxed);
-        // Runs that ended after one before them was called off: taken in (in order),
-        // unminimized. (None after an unreached run 0: a campaign that could not test
-        // reports no finding.)
-        let left = match shared.lock() {
+        let new = match self.shared.lock() {
+            Ok(mut sh) => {
+                sh.ended.insert(t, (schedule, r));
+                sh.take_ready(opts, self.started)
+            }
+            Err(_) => return false,
+        };
+        self.turn.notify_all();
+        self.announce(new, true);
+        true
+    }
+
+    /// The confirmer and `jobs` workers, until the workers end; then the runs left, and the
+    /// confirmer until it has confirmed those it has.
+    fn run_all(&self) {
+        std::thread::scope(|s| {
+            let confirming = s.spawn(|| self.confirmer());
+            let workers: Vec<_> = (0..self.jobs).map(|_| s.spawn(|| self.worker())).collect();
+            for w in workers {
+                let _ = w.join();
+            }
+            self.runs_over.store(true, Ordering::Relaxed);
+            let left = self.take_left();
+            self.announce(left, false);
+            // No more suspects: the confirmer ends once it has confirmed those it has.
+            if let Ok(mut tx) = self.to_confirm.lock() {
+                tx.take();
+            }
+            let _ = confirming.join();
+        });
+    }
+
+    /// Runs that ended after one before them was called off: taken in (in order), to be
+    /// announced unminimized. (None after an unreached run 0: a campaign that could not test
+    /// reports no finding.)
+    fn take_left(&self) -> Vec<New> {
+        match self.shared.lock() {
             Ok(mut sh) if sh.untested.is_some() => {
                 sh.ended.clear();
                 Vec::new()
@@ -1401,55 +1531,54 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
                 let ended = std::mem::take(&mut sh.ended);
                 let mut new = Vec::new();
                 for (t, (s, r)) in ended {
-                    new.extend(sh.take(opts.run_index(t), s, r, opts, started));
+                    new.extend(sh.take(self.opts.run_index(t), s, r, self.opts, self.started));
                 }
                 new
             }
             Err(_) => Vec::new(),
-        };
-        announce(left, false);
-        // No more suspects: the confirmer ends once it has confirmed those it has.
-        if let Ok(mut tx) = to_confirm.lock() {
-            tx.take();
         }
-        let _ = confirming.join();
-    });
-    let mut sh = shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
-    // In the order of the runs that found them (a hang is settled after its confirmation,
-    // which may end after later runs' findings).
-    sh.findings.sort_by_key(|f| f.run);
-    if let Some(e) = sh.error {
-        return Err(RunError::Io(std::io::Error::other(e)));
     }
-    let runs = completed.load(Ordering::Relaxed);
-    // No run at all, and nobody stopped it: the budget went before the first run.
-    let untested = sh.untested.or_else(|| {
-        (runs == 0 && !stop.load(Ordering::Relaxed)).then(|| {
-            let calibrating = calibration.as_ref().map_or(String::new(), |_| {
-                " (measuring the host's timeouts took it; a longer --duration, or --timeout-hang to skip the \
-                 measure)"
-                    .to_string()
-            });
-            format!("the budget ran out before the first run{calibrating}")
+
+    /// The campaign's results, once every thread has ended; a run's I/O error is the
+    /// campaign's.
+    fn finish(self, calibration: Option<Calibration>) -> Result<Campaign, RunError> {
+        let mut sh = self.shared.into_inner().map_err(|_| std::io::Error::other("a fuzzing thread panicked"))?;
+        // In the order of the runs that found them (a hang is settled after its confirmation,
+        // which may end after later runs' findings).
+        sh.findings.sort_by_key(|f| f.run);
+        if let Some(e) = sh.error {
+            return Err(RunError::Io(std::io::Error::other(e)));
+        }
+        let runs = self.completed.load(Ordering::Relaxed);
+        // No run at all, and nobody stopped it: the budget went before the first run.
+        let untested = sh.untested.or_else(|| {
+            (runs == 0 && !self.stop.load(Ordering::Relaxed)).then(|| {
+                let calibrating = calibration.as_ref().map_or(String::new(), |_| {
+                    " (measuring the host's timeouts took it; a longer --duration, or --timeout-hang to skip the \
+                     measure)"
+                        .to_string()
+                });
+                format!("the budget ran out before the first run{calibrating}")
+            })
+        });
+        Ok(Campaign {
+            runs,
+            minimize_runs: sh.minimize_runs,
+            elapsed_ms: self.started.elapsed().as_millis() as u64,
+            findings: sh.findings,
+            fired_at: sh.fired_at,
+            corpus: sh.corpus.len(),
+            paths: sh.paths.len(),
+            calibration,
+            notes: sh.notes,
+            pass_runs: sh.pass.len() as u64,
+            answer_kinds: sh.answer_kinds,
+            provenance: None,
+            reached: self.reached.load(Ordering::Relaxed),
+            untested,
+            stopped: None,
         })
-    });
-    Ok(Campaign {
-        runs,
-        minimize_runs: sh.minimize_runs,
-        elapsed_ms: started.elapsed().as_millis() as u64,
-        findings: sh.findings,
-        fired_at: sh.fired_at,
-        corpus: sh.corpus.len(),
-        paths: sh.paths.len(),
-        calibration,
-        notes: sh.notes,
-        pass_runs: sh.pass.len() as u64,
-        answer_kinds: sh.answer_kinds,
-        provenance: None,
-        reached: reached.load(Ordering::Relaxed),
-        untested,
-        stopped: None,
-    })
+    }
 }
 
 #[cfg(test)]
