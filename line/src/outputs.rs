@@ -142,7 +142,7 @@ impl OutLock {
         std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
         let path = dir.join(LOCK_FILE);
         loop {
-            let mut file = std::fs::OpenOptions::new()
+            let file = std::fs::OpenOptions::new()
                 .read(true)
                 .write(true)
                 .create(true)
@@ -153,8 +153,7 @@ impl OutLock {
                 .map_err(|e| named(&path, e))?;
             let held = file.try_clone().map_err(|e| named(&path, e))?;
             let Ok(lock) = nix::fcntl::Flock::lock(held, nix::fcntl::FlockArg::LockExclusiveNonblock) else {
-                let holder = std::fs::read_to_string(&path).unwrap_or_default();
-                let holder = holder.lines().next().unwrap_or("another gcl").chars().take(200).collect::<String>();
+                let holder = holder_line(&path);
                 return Err(io::Error::new(
                     io::ErrorKind::ResourceBusy,
                     format!("{} is in use by {holder}; wait for it to end or choose another folder", dir.display()),
@@ -166,8 +165,11 @@ impl OutLock {
             if std::fs::symlink_metadata(&path).map(|m| identity(&m)).ok() != ours {
                 continue;
             }
-            file.set_len(0)?;
-            writeln!(file, "gcl {what} (pid {})", std::process::id())?;
+            // The whole line in one write at the start, then the rest of an older holder's line
+            // cut: a reader never sees a part of it (see `holder_line`).
+            let line = format!("gcl {what} (pid {})\n", std::process::id());
+            std::os::unix::fs::FileExt::write_all_at(&file, line.as_bytes(), 0)?;
+            file.set_len(line.len() as u64)?;
             return Ok(OutLock { lock, path, made_dir });
         }
     }
@@ -186,11 +188,22 @@ pub fn held_by(dir: &Path) -> Option<String> {
     match nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockSharedNonblock) {
         // Free: a lock file a finished (or killed) command left.
         Ok(_free) => None,
-        Err(_) => {
-            let holder = std::fs::read_to_string(&path).unwrap_or_default();
-            Some(holder.lines().next().unwrap_or("another gcl").chars().take(200).collect())
-        }
+        Err(_) => Some(holder_line(&path)),
     }
+}
+
+/// The line the holder of the lock file at `path` wrote of itself (`gcl fuzz merge --out (pid
+/// N)`). A holder that has just taken the lock may not have written it yet: a line without its
+/// end is read again, for up to 100 ms, before it is "another gcl".
+fn holder_line(path: &Path) -> String {
+    for _ in 0..50 {
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        if let Some((line, _)) = text.split_once('\n') {
+            return line.chars().take(200).collect();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    "another gcl".to_string()
 }
 
 impl Drop for OutLock {
