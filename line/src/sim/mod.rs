@@ -10,34 +10,11 @@
 //! The module never reads the terminal, never installs signal handlers and never exits the
 //! process; `gcl sim` (in `cli/sim.rs`) does those.
 //!
-//! The engine (`engine.rs`) runs on one of two clocks: `fast` drives a `SimLink`, `real` follows
-//! the wall clock. Host bytes reach the model at their wire time and output is offered once its
-//! wire
-//! time has passed; the pace follows the hand's BAUD, `--baud`, or nothing. Past 64 KiB of untaken
-//! output it stops taking host bytes, and never drops them. The EEPROM file (`eeprom.rs`) is
-//! rewritten atomically and stale temporaries are removed at start; the trace (`trace.rs`) is
-//! flushed per line.
-//!
-//! The pty watches its slave with inotify (open, close; unread output discarded on close; output
-//! lost while nobody has it open) and follows the host's reads and writes in order, to tell a host
-//! that writes before reading its answer. Both its ends are close-on-exec from creation, so no
-//! child
-//! (a host under `fuzz host` or `check-host`) holds them: one pty behaviour for the three commands.
-//! The port starts at the hand's rate, set once before its path exists (never over a host's
-//! setting); each byte crossing is judged at the speed the host has set then (read with `TCGETS2`,
-//! so the serialport crate's arbitrary rates too; within 2 % is the same rate), and garbled on a
-//! mismatch, which is noted in the trace and told to the CLI once per change.
-//!
-//! TCP honours half-close. On a tapped line it learns which of the host's bytes the host wrote
-//! with output unread: from `host_writes.rs` when the host is a child of ours (the crate's one
-//! module with `unsafe`, for system calls no safe wrapper we use has), so the order of its read and
-//! write decides, not who runs first; otherwise by a look in `/proc/net/tcp` before it takes the
-//! host's next bytes. stdio writes without blocking, so signals always stop it.
-//!
-//! `wait.rs` polls with deadlines and stops on signals. The serving thread runs without timer
-//! slack and wakes ahead of each deadline by how late its wakes have been running (at most 50 µs),
-//! waiting out the rest on the clock, so a paced byte leaves at its wire time, not 20–50 µs
-//! later.
+//! The engine runs on one of two clocks: `fast` drives a `SimLink`, `real` follows the wall clock;
+//! the pace follows the hand's BAUD, `--baud`, or nothing. Past 64 KiB of output the host has not
+//! taken (`OUT_CAP`) it stops taking host bytes and never drops them. Stale EEPROM temporaries are
+//! removed at start; the trace is flushed per line. `host_writes` is the crate's one module with
+//! `unsafe`, for system calls no safe wrapper we use has.
 
 mod eeprom;
 mod engine;

@@ -16,10 +16,9 @@
 //! parameters behaviour reads), `realtime` (the loop's blocks), `time` (ticks and the end
 //! of a command), `physics` (one motor's motion) and [`fault`] (the deliberate bugs).
 //!
-//! The public surface is `handle_input` / `handle_timeout` in, `take_output` and `poll_event()`
-//! out (power-up, line done with its status, loop entered, loop left). Internally one `State` enum
-//! (`Idle`, `Busy(Task)`, `Loop(LoopState)`) carries each activity's data; `mode()` is a query
-//! derived from it.
+//! Besides the bytes, `poll_event()` tells what happened (power-up, line done with its status, loop
+//! entered, loop left). Internally one `State` enum (`Idle`, `Busy(Task)`, `Loop(LoopState)`)
+//! carries each activity's data; `mode()` is a query derived from it.
 //!
 //! In `realtime`, a `Control` comes in and a `Feedback` goes out, filled by an exhaustive match on
 //! `RtFlag`. In `time`, ticks that only count (HI settling at the open stop) pass at once, and

@@ -19,12 +19,9 @@
 //!
 //! ## The campaign
 //!
-//! Each case is replayed against the target with the suite's replayer (deadlines from
-//! `deadline.rs` outside this process); failures are minimized by delta debugging against the
-//! target. New-coverage cases go to a content-hashed corpus shared by `--jobs` workers; corpus
-//! files
-//! that do not parse are returned to the CLI, which warns. `report.rs` writes JSON, JUnit and
-//! HTML.
+//! Replays take their deadlines from `deadline.rs` outside this process, and minimization is delta
+//! debugging against the target. The corpus is shared by `--jobs` workers; corpus files that do not
+//! parse are returned to the CLI, which warns. `report.rs` writes JSON, JUnit and HTML.
 //!
 //! A hand outside this process is probed with `conform::dead_hand` before the campaign
 //! (`FuzzError::NotAlive`) and after a case that meets silence (`FuzzSummary::dead_hand`: the
@@ -106,11 +103,10 @@
 //! locates the cause as of a read. The finding takes the earliest cause so found (`after LOOP` for
 //! stay-in-loop's and lcv-unsigned's), and is dropped if that key was reported already.
 //!
-//! Findings are deduplicated by the key; a written finding names its key in an `x-signature`
-//! header, so a folder of findings is a `--baseline`, and a finding it (or `--known-failures`)
-//! explains is known, not new: only new ones fail the run. The fuzzer's expectations come from the
-//! model through the same path as the suite's goldens, so every written finding replays with `gcl
-//! replay`.
+//! A written finding names its key in an `x-signature` header, so a folder of findings is a
+//! `--baseline`, and a finding it (or `--known-failures`) explains is known, not new: only new ones
+//! fail the run. The fuzzer's expectations come from the model through the same path as the suite's
+//! goldens, so every written finding replays with `gcl replay`.
 //!
 //! ## Hands outside this process
 //!

@@ -19,16 +19,13 @@
 //!
 //! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
 //!
-//! This file calibrates the hang timeout (the host's give-up time when the hand goes silent at the
-//! first answer of each kind, several at once), has a hang confirmed by a confirmer thread beside
-//! the runs, makes a campaign without `--runs` or `--duration` a 5-minute one, builds the
-//! systematic
-//! pass from run 0's kinds of answer (each operator at each kind it applies to, one per run, in
-//! rounds, before any random schedule; a line-rate run first when unpaced), judges runs (a silent
-//! wrong value is named by the host's `WHERE`, else by the answer it came from), deduplicates,
-//! minimizes, keeps schedules whose runs took a new host path, and counts operators by protocol
-//! state and notes by runs. It takes runs in index order and schedules run i from runs 0..=i-jobs
-//! only, so `--jobs` campaigns repeat run for run.
+//! Calibration measures the host's give-up time at several kinds of answer at once (the hand goes
+//! silent at the first answer of that kind), and the confirmer runs in a thread beside the runs. A campaign
+//! without `--runs` or `--duration` is a 5-minute one. The systematic pass is built from run 0's
+//! kinds of answer (each operator at each kind it applies to, in rounds; a line-rate run first when
+//! unpaced). A silent wrong value is named by the host's `WHERE`, else by the answer it came from.
+//! Operators are counted by protocol state and notes by runs. Runs are taken in index order and run
+//! i is scheduled from runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run.
 //!
 //! The campaign (`Campaign`) is `fuzz.json` beside the reports; its schema is
 //! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/report_schema.rs`). A campaign
