@@ -24,6 +24,16 @@
 //! - `extra`: more than the answer: a line or a prompt too many, bytes after the last answer,
 //!   a flood;
 //! - `restart`: a banner nobody asked for; `link`: the link failed.
+//!
+//! The signature (`FindingSignature`) also names the command before a read that decided its value
+//! (`value at FGET after RESET`). Its `key` is what deduplication, groups and baselines compare: a
+//! status difference is its bits whatever command shows it. A line whose values hold a relation (a
+//! capture, then a value relative to it) is an order when another order of the hand's values fits
+//! it with the captures of the steps before; the first answer after the model left the loop within
+//! a step (a bad header's prompt) is the loop's exit. This module also owns the step-level
+//! signature
+//! it falls back on (`step_signature`, `Signature`) and the tokens of a golden line
+//! (`expected_tokens`, `is_reordering`, `command_of`).
 
 use std::collections::VecDeque;
 use std::ops::RangeInclusive;

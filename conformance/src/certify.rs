@@ -14,6 +14,13 @@
 //! `openssl genpkey -algorithm ed25519` and `openssl pkey -pubout` use. [`verify`] also
 //! recomputes the certificate's verdicts from the bundled `report.json`, so a certificate
 //! cannot disagree with the run it certifies.
+//!
+//! Verification checks the manifest, the signature, the certificate's verdict recomputed from the
+//! bundled `report.json`, and a built-in profile claim against this gcl's built-in spec and suite
+//! hash. Known failures (XFAIL) make a certificate partial and are listed in it (`excused`); a
+//! certificate that drops them disagrees with its report. Only a `--pubkey` says who made a bundle:
+//! without one the CLI says authenticity was not checked and exits 1 unless
+//! `--allow-unverified`.
 
 use std::collections::BTreeSet;
 use std::io::Read;

@@ -5,6 +5,34 @@
 //!
 //! The runner never hangs on a hung hand: every step of every case has a deadline, and a
 //! vanished hand ends its case as ERROR and is reopened for the next one.
+//!
+//! Selection covers levels, globs, refused requirements, skipped decisions, and set-ups neither
+//! placed nor declared. The liveness probe (`probe`) says what it found: silence, bytes without a
+//! prompt, a flood, a hang-up. The dead-hand rule's probe (`dead_hand`) is the liveness probe and
+//! then an unknown command line, so a hand answering only ^C and a bare CR is dead too; `gcl fuzz
+//! device` uses it as well.
+//!
+//! After the pre-flight, the motion-time probe (`motion.rs`, which `gcl fuzz device` runs too)
+//! runs before abort-timing cases on a hand outside this process. A hand whose motions end at once
+//! gets them SKIP with one line that says why, unless `--assume-real-time`; a hand still moving at
+//! a
+//! quarter of the model's time is stopped there with ^C (`MotionProbe::decided_after`) instead of
+//! being left to close. The pre-flight's last probe is RESET and ends at a quiet prompt, so the
+//! probe
+//! leaves out its own ^C and RESET (`MotionProbe::after_reset`) and nothing before the first case
+//! waits for quiet twice.
+//!
+//! Early ends: `--max-failures`, a hand that stops answering, a vanished target that cannot be
+//! reopened (an infrastructure end: exit 2, `result: ERROR`). A vanished target is drained and
+//! probed before it is reopened. `RunEvent`s tell the CLI about the pre-flight, each case and an
+//! early end as they happen.
+//!
+//! Wire-time accounting is a lower bound from the wire's physics: steps one after the other, as GCL
+//! is command-then-answer; per step the larger of its received bytes, full duplex with the echo,
+//! plus
+//! one byte where it sent any (no answer starts before the first byte has crossed), and the model's
+//! motion time; the model carries the hand's state from one passing case to the next on a kept
+//! link.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

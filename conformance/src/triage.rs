@@ -16,6 +16,11 @@
 //! Cases with one signature form a group; groups are listed largest first, each with the
 //! case of the smallest golden transcript as its representative, whose clause is named as the
 //! one most likely at fault (the smallest case exercises least besides its own clause).
+//!
+//! Groups are keyed by `align`'s key; link failures form no group (a vanished hand ends the run). A
+//! group's cases that do not check its clause are *blocked* by it (`FailureGroup::blocked`), and
+//! the
+//! clause table (`ClauseCoverage::blocked`) counts as failing only the clauses groups name.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;

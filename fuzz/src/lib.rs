@@ -10,6 +10,12 @@
 //! crate's tests run every function over the seed corpora in `seeds/` on stable, so the fuzz
 //! logic is built and exercised by `cargo test` like any other code. This crate owns no model
 //! logic: it only feeds the model and checks what comes out.
+//!
+//! Besides the model's own entry points (`grammar`, `device`, `realtime`, `spec`), `wire` is
+//! `gcl fuzz device`'s generator and oracle against the in-process sim with a fault,
+//! `transcript` the transcript reader's round trip, and `client` the host client core against
+//! any bytes. The `device` input's fault mask is 64 bits, one per fault, checked at compile
+//! time. `run-ci.sh` runs each target for a bounded time with `RUSTC_BOOTSTRAP=1`.
 
 pub mod replay;
 pub mod seeds;

@@ -9,6 +9,14 @@
 //! answers with a seeded misbehaviour [`Schedule`] (the schedules `gcl fuzz host` draws), so
 //! a test body can be run under misbehaviours. Several connections in one session are one
 //! session to the checker, as a serial line is one line however often it is opened.
+//!
+//! With `--misbehave SEED:I`, a `Misbehave` plays that run's schedule. The session is graded by
+//! `host_check::grade_served` (`host_check::grade` is the body of `check_host`). Nothing judged is
+//! never a pass: a session in which the host never opened the port or sent no byte
+//! (`fuzz::host::unreached`) is an ERROR case `host-session` (`report::SESSION_CASE`) with every
+//! clause SKIP ("not exercised"), and a clause no byte of the host exercised is SKIP too
+//! (`host_check::not_exercised`); `RunReport::judged` says how much a host report judged, and every
+//! writer shows it.
 
 use std::os::fd::{AsFd, BorrowedFd};
 use std::sync::{Arc, Mutex};

@@ -2,7 +2,7 @@
 //! unit tests pass (vector loader and schema check, transcript reader and matcher, the example
 //! host parser against the host vectors), its transcript runner passes the seed suite
 //! against `gcl sim --stdio`, and it fails against simulator faults naming the same cases
-//! `gcl conform` names. Python is found as every test finds it (`deps`); without one the tests
+//! `gcl conform` names (six faults). Python is found as every test finds it (`deps`); without one the tests
 //! say so in `cargo test`'s output, and fail under CI.
 
 mod deps;

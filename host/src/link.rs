@@ -4,6 +4,9 @@
 //! `certify`) does so through [`Link`]. The in-process [`SimLink`] runs the reference model
 //! with simulated time: waiting on it advances the model's clock instead of the wall clock,
 //! so a script behaves the same against the simulator and against a real hand, only faster.
+//!
+//! `drain` discards until quiet and keeps nothing (it returns a count). On a `SimLink` every byte
+//! costs its wire time at the hand's BAUD.
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

@@ -12,6 +12,11 @@
 //!
 //! Must never: write through a symbolic link, truncate an existing file in place, or leave a
 //! temporary behind on an error.
+//!
+//! `create_stream` opens `results.jsonl` the same way; `write_unique` never replaces another
+//! file (a second finding of the same name is `NAME-2.gcl`); `OutLock` holds `DIR/.gcl.lock`
+//! with `flock` for the command filling the folder, so a second one is refused, and `held_by`
+//! looks without taking it.
 
 use std::fs::File;
 use std::io::{self, Write};

@@ -13,6 +13,10 @@
 //! To know when RealTime mode starts and how big its blocks are, the recorder runs a *shadow*
 //! reference model of the profile beside the link and feeds it the same bytes. The shadow only
 //! shapes the capture; every byte written to the transcript comes from the link.
+//!
+//! A recording of a hand known to differ from the profile gives the shadow the difference
+//! (`RecordOptions::shadow`). A step's answer stops at `MAX_STEP_ANSWER` (a typed `Flooded` error),
+//! and errors show at most 200 bytes of an answer.
 
 use std::sync::Arc;
 use std::time::Duration;

@@ -5,6 +5,13 @@
 //! hand never hangs a run. An answer is consumed as soon as the shortest prefix of what arrived
 //! matches the step's expectation; bytes after it belong to the next step, and bytes left after
 //! the last step are a mismatch of their own. Nothing here panics on a hand's bytes.
+//!
+//! Every step has a deadline and an answer ceiling: its `within` and a ceiling from its golden,
+//! or a runner's `StepBudget`s. Outcomes are Pass, Mismatch (with the parting byte), Timeout,
+//! Flooded (a bounded prefix) and Disconnected. Captured values carry from step to step, and an
+//! answer complete sooner than its timing window (`within A..B`) is a Mismatch. The exchange as it
+//! happened is written back as a transcript (`actual_transcript`) that keeps the golden's comments,
+//! so a report finds the preamble and the check in it. `discard` drains a link keeping nothing.
 
 use std::fmt::Write as _;
 use std::time::Duration;

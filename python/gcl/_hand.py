@@ -1,4 +1,7 @@
-"""Start and stop graded simulated hands (``gcl check-host --serve``)."""
+"""Start and stop graded simulated hands (``gcl check-host --serve``).
+
+``Hand`` starts ``gcl check-host --serve``, reads where it listens, and at ``stop()`` closes
+its stdin and reads its ``report.json`` into a ``Verdict``."""
 
 import contextlib
 import json

@@ -28,6 +28,10 @@ The hang timer is SIGALRM's real-time timer, shared: a timer already running whe
 body starts (``pytest-timeout``'s, or your own) keeps its deadline and its handler, which
 runs when that deadline comes first; the timer is re-armed for what is left of it when the
 body ends.
+
+A ``pytest_runtest_call`` wrapper grades the hand when the test body ends, so a broken clause
+fails the test itself, not its teardown; it runs the hang timer alongside a timer already
+there, never in place of it.
 """
 
 import math

@@ -1,6 +1,12 @@
 """Tests of the installed wheel (run by .ci/run in a fresh venv that has only the wheel,
 pytest, pyserial and PyYAML): the binary, the metadata, the packages, the Hand API, the pytest
-plugin against examples/python-host, and the CI recipes in ci/."""
+plugin against examples/python-host, and the CI recipes in ci/.
+
+python/gcl_vectors/ holds one symlink per module of vectors/python/gcl_vectors/, so there is
+one copy; a module without its link fails here. The plugin runs over examples/python-host
+(correct, and two planted bugs); its limits (bad values, a foreign or missing gcl, a user's
+pytest-timeout) are in test_plugin_limits.py, and test_ci_recipes.py holds ci/*.yml to the
+command lines of .ci/run. The venv also holds pytest-timeout."""
 
 import importlib.metadata
 import os

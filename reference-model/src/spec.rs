@@ -4,6 +4,26 @@
 //! This module owns the mapping from TOML text to typed tables. It never touches the file
 //! system: the embedded profiles come in through `include_str!`, and a profile from
 //! elsewhere comes in through a caller-supplied resolver (see [`Profile::load_with`]).
+//!
+//! Includes expand to at most `MAX_SPEC_FILES` files and `MAX_SPEC_BYTES` of text
+//! (`SpecError::TooManyIncludes` / `TooLarge`), so an include bomb is refused before it costs
+//! memory.
+//! A TOML error names line and column but never quotes the file: a file named as a profile may be
+//! none.
+//!
+//! Protocol names resolve to closed types here, once. Every parameter with an `rt` table must be a
+//! known `RtFlag` with a GCL `FieldType`, block and scope (else `SpecError::UnknownRtFlag` /
+//! `RtField`); a decision's `level` is a `Level`, so a typo fails the load.
+//!
+//! The parameters the device interprets are found by `Role` (`Profile::role(Role::PositionError)`,
+//! `Profile::role_of(id)`). Each role declares in the `roles!` table what a profile without its
+//! parameter means (`Absence`: required, required with a RealTime flag, a value, the `[hand]` close
+//! targets, or not reported); that is checked here (`SpecError::MissingRole`) and applied by the
+//! device's one role reader (`Device::role`, through `Profile::absent_value`).
+//!
+//! Where the hand reads HI's speed and hold repetitions, its line rate and its low-strain stop is
+//! `[hand]` data (a parameter name or a fixed value), resolved to `Profile::hand_sources()`; an
+//! unknown name is `SpecError::UnknownHandParam`. So the device has no protocol fallback in code.
 
 use std::sync::Arc;
 

@@ -45,6 +45,18 @@
 //! assert!(!t.steps[0].expect.matches(b"VERS\n\rERR 32\n\r"));
 //! # Ok::<(), gcl_transcript::ParseError>(())
 //! ```
+//!
+//! In the matcher, values captured by name (`{i8 4..127 as v1}`) carry from step to step as
+//! `Captures`; a relation (`{i8 v1/2 +-25%}`) is a range computed from one; and `{text}` is lines
+//! none of which begins with `ERR`, tracked in a state's `k` like a line prefix. Strings are
+//! unescaped by `gcl_model::escape`, the one unescaper.
+//!
+//! A header's `Setup` lines (`setup: object M AT`) name what must be in place before the first
+//! step that no command can make; a transcript with one requires `object`, and `Header::objects`
+//! gives where each motor meets one. The harness reads it in one place each: `suite::model_config`
+//! (every fresh model a transcript runs on) and `conform::places_setup` (only the in-process `sim`
+//! places objects; elsewhere a case with a setup is SKIP unless the operator declares `--fixture
+//! object`; the device fuzzer leaves such cases out of its corpus).
 
 pub mod matcher;
 mod parse;

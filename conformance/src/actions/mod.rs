@@ -6,6 +6,15 @@
 //! and framing (maximum line, abort byte), so a new profile is fuzzed by its own data.
 //! RealTime blocks are drawn as a header and raw values; the case builder encodes them with
 //! the layout the shadow model is in when the block goes out.
+//!
+//! This lives below the fuzzer so that the runner's motion probe can build its case too
+//! (`fuzz::device` re-exports `action` and `case`); besides drawing actions it mutates corpus
+//! entries. `case` shapes answers wider for hands outside this process after RealTime motion or ^C
+//! mid-motion, and drops cases that do not pass on a fresh model; in process a drawn case is
+//! checked
+//! so only when the hand fails it (`build_case_unchecked`, `BuiltCase::check`). The shadow device
+//! gives the coverage features through the public model API only: the model is not
+//! instrumented.
 
 pub mod case;
 mod relate;

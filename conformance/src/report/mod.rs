@@ -3,6 +3,32 @@
 //!
 //! Results are also streamed to `results.jsonl` as each case ends (one flushed line per
 //! case), so a crash or a kill mid-run leaves everything already decided readable.
+//!
+//! `RunReport` has a `kind` (conform, certify, fuzz host, check-host), a host report's campaign in
+//! `host`, a hand's `profile_spec` and, for certify, `certificate`. `RunReport::outcome` is the one
+//! verdict line of a hand's run (PASS, PARTIAL, FAIL, ERROR, with its counts) that the console,
+//! `report.json`, JUnit, the page and a certificate show. The schema of `report.json` is
+//! `reports/report.schema.json`; JUnit XML is `junit.rs`.
+//!
+//! The pages: `page.rs` is the one page design every HTML report uses (the fuzz device's too), with
+//! the one `esc` every page writer escapes with: title, verdict first, the options that changed
+//! what
+//! ran, findings or groups, details folded in `<details>`, one inline style sheet, no script, no
+//! external resource. `html.rs` renders a `RunReport` in it (a transcript step by step with the
+//! failing step marked and shared preambles shown once). `diff.rs` is the one notation of a diff
+//! (the
+//! one-line summary JUnit and the console show, the golden and the actual aligned under a caret, a
+//! RealTime block decoded field by field, its layout found by feeding the transcript's sends to a
+//! fresh model); a diff carries its golden's form (`Diff::form`, text or hex). `merged.rs` says
+//! which shards a merged report holds (`Merged`). `svg.rs` draws plots as inline SVG (series,
+//! golden
+//! bands, windows, failure marks); conform keeps the exchange of every RealTime case, passing too,
+//! for the plots. `program.rs` is the page of the RealTime example program's run (`--example
+//! realtime -- --plot`), each finger's positions over the band of the reference model's own run.
+//!
+//! `harness/tests/report_pages.rs` parses every kind of page with an HTML5 parser and reads every
+//! `junit.xml` with Python's `junitparser` (`.ci/run` makes its venv); `reports/screenshot.sh`
+//! renders every kind of page with headless Chromium.
 
 pub mod diff;
 pub mod html;

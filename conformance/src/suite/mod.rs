@@ -14,6 +14,42 @@
 //! - [`run_case`]: one case over a [`Link`], as a [`ReplayOutcome`];
 //! - [`check`] / [`regenerate`]: staleness, and rewriting the files;
 //! - [`suite_hash`]: a version of the suite for reports and certificates.
+//!
+//! `cases/` is the catalogue, one module per area (`framing`, `commands`, `params`, `status`,
+//! `persistence`, `abort`, `motion`, `effects`, `realtime`, `examples`, `firmware`). Every
+//! hand-written case is data: a script (`conformance/suite-cases/<area>/<id>.gcls`, a `gcl record`
+//! script with a few suite keys, loaded by `cases/scripts.rs`). Its numbers and names come from the
+//! profile as `{expressions}` (`{limit:4 + mpe:4}`, `{code:missed-position}`,
+//! `{first-param:HSG|MSG}`), its steps may be gated (`step-when:`), `rt-flags:` sets the RealTime
+//! flags as the generators do, and an `expect:` line gives a step's answer a shape the profile
+//! fills
+//! in (a banner, any lines, list or get values elided to their ranges, positions near goals or in
+//! ranges, a feedback block with field ranges).
+//!
+//! The area modules keep only generators: those that iterate a profile table (commands,
+//! parameters, RealTime flags, statuses, the saved set) and those whose bounds need arithmetic
+//! scripts do not have (the motion trapezoid, LFDP stepping, velocity units);
+//! `conformance/suite-cases/generated.toml` lists each family and why. A case names every decision
+//! it may rest on and cites those its profile has; what differs between profiles is in the profile
+//! (its decisions) or in `conformance/suite-cases/sources.toml` (which document its clauses
+//! cite).
+//!
+//! `plan.rs` holds a case's plan (`Plan`: its steps, the `Shape` of each answer, its `Bind`s).
+//! `build.rs` runs each case's host side against the model and writes the golden answers, with
+//! elision ranges from the profile and the model's arithmetic. Where a case's clause is a ratio or
+//! an
+//! effect, a `Bind` captures one value and holds another to a relation with it (factor and
+//! tolerance from the model: `derive_relation`, `fit_tolerance`), so the case does not rest on
+//! absolute values another decision sets; a relation without evidence, or one the model's own pairs
+//! break, fails the build, and its evidence becomes a note (`harness/tests/suite_relations.rs`).
+//!
+//! `depends.rs` (which also owns `prefix_motors`) finds every decision a case rests on besides
+//! those it checks (written as `x-decisions`; only the short `FRAMING` list may be touched without
+//! being checked), and the case's level is the weakest of them. It finds them step by step
+//! (`decisions_by_step`) and names the decisions that concern only a step's own answer
+//! (`ANSWER_ONLY`), so that a device-fuzzer finding rests on its failing step's decisions and the
+//! earlier steps' state decisions only. This file loads, checks for staleness, regenerates and
+//! hashes the suite, and owns `LevelFilter` (which levels run).
 
 pub mod build;
 mod cases;

@@ -12,6 +12,10 @@
 //!
 //! This module only computes file texts; [`check`] and [`regenerate`] compare and write them.
 //! It never edits the goldens of `vectors/suite/`.
+//!
+//! The kinds are `grammar`, `parameters`, `status`, `layout`, `codec`, `lfdp` and `host`. Since the
+//! headers carry each profile's suite hash, `gcl suite regenerate` writes goldens and vectors
+//! together.
 
 mod codec;
 mod grammar;

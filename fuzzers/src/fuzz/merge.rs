@@ -14,7 +14,7 @@
 //! Only shards of one campaign fold: each report records its slice, seed and options
 //! ([`super::shard::Provenance`]), and [`super::shard::plan`] refuses another campaign's
 //! folder, another slicing, or the same slice twice. A slice that is missing is no error
-//! here: the merged report says which are missing, and the CLI exits 2.
+//! here: the merged report says which are missing (INCOMPLETE), and the CLI exits 2.
 //!
 //! Findings are deduplicated by signature: the one first found (the lowest run index of the
 //! campaign, for the host fuzzer, whose run indices are the campaign's) stands, with the hits

@@ -1,6 +1,20 @@
 //! The `gcl` subcommands. Each module owns one subcommand: its clap arguments and its `run`.
 //! `run` returns the process exit code: 0 success, 1 conformance failures, 2 usage or
 //! infrastructure errors (errors returned as `Err` become 2 in `main`).
+//!
+//! The `cli` module belongs to the `gcl` binary (`main.rs` declares `mod cli;`), not to the
+//! library. Each subcommand module owns its clap arguments (with its own value enums, such as
+//! `--level` and `--time`, mapped to the library's types). Only here do `anyhow`, `clap` and
+//! `indicatif` appear; the library returns typed errors (`ConformError`, `KnownFailuresError`,
+//! `ProfileError`, `KeyError`, `BundleError`, ...).
+//!
+//! Helpers two commands share live here: `find_upward`, `load_profile`; `progress`, the one
+//! progress display every long command uses (a bar with an ETA on a terminal; without one a line at
+//! the start, every 10 s from a ticker thread, and at the end; its threads start with the stop
+//! signals blocked, `without_stop_signals`); and `stop_on_signals`, which turns SIGINT, SIGTERM and
+//! SIGHUP into a stop flag for `fuzz host`, `fuzz device` and `check-host` and records which signal
+//! (and whether a host under test sent it: `stopped_by`). A second signal kills every live host's
+//! process group and removes its run folder (`fuzz::host::session::end_all`) before it exits.
 
 pub mod certify;
 pub mod check_host;

@@ -21,6 +21,27 @@
 //! `ERR n`), the hand broke GCL ([`ClientError::Violation`]), it was too slow, the link failed,
 //! or the caller asked for something no hand can be asked ([`ClientError::Misuse`], raised
 //! before a byte is sent and never by bytes from a hand).
+//!
+//! `core` is the host side as a sans-IO state machine: echo, `\n\r` lines, `ERR n`, the prompt,
+//! LOOP's `*`, RealTime blocks through the model's `BlockLayout`. Its outcomes are typed by who
+//! broke the protocol: `poll` gives an `Answer` (done with lines, refused with a status, loop
+//! started, feedback, ack, prompt; `ERR n` is data) or a `Violation` (the hand broke GCL; it keeps
+//! the bytes and escapes them only when displayed); request builders give a `Misuse` for what the
+//! caller cannot ask, before a byte goes out. `Misuse` is not a `poll` outcome at all, so no bytes
+//! from a hand produce one (`harness/tests/client_props.rs` checks the client over a babbling
+//! link).
+//!
+//! A RealTime block is requested as the model's typed `Control` and written by its `emit`, so a
+//! control that lacks a field of the loop's layout, or does not fit one, is a `Misuse`, never a
+//! block of the wrong shape.
+//!
+//! `ClientError` is `Refused | Violation | Timeout | Link | Misuse`. `client::ask` puts one
+//! command to a borrowed link (`conform::firmware_version` asks `VERS` with it, so a refusal is
+//! never taken for a version). `programs` is called by `harness/examples/`.
+//!
+//! There is one host-side notion of a GCL answer: the recorder does not parse answers (it writes
+//! down whatever a hand says) but ends its supervisory steps with the core's
+//! `Framing::prompt_end`.
 
 pub mod core;
 pub mod programs;

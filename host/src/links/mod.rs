@@ -1,6 +1,9 @@
 //! Links to hands outside this process: a serial port or pty ([`serial`]), a TCP server
 //! ([`tcp`]), a child process on stdin/stdout ([`exec`]). Each honours [`crate::Link::recv`]'s
 //! timeout and reports a vanished hand as [`crate::LinkError::Disconnected`].
+//!
+//! `SerialLink` uses the serialport crate and holds the port exclusively with `flock` and
+//! `TIOCEXCL`.
 
 pub mod exec;
 pub mod serial;

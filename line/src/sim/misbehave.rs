@@ -10,6 +10,20 @@
 //! up afresh ([`Shaped::restart`]); every other operator changes only bytes on their way out.
 //! Like the engine, this module does no I/O; the hang-up operator only says so
 //! ([`Shaped::hang_up`]) and the transport's owner closes the line.
+//!
+//! The engine's only knowledge of the tap is that hold. The tap also hears when a host comes and
+//! goes and, from the pty or TCP, whether the host wrote with output unread; the engine tells it
+//! when
+//! the transport takes an answer's last byte (`LineTap::delivered`), so "an answer is still coming"
+//! means on the line, not in the model.
+//!
+//! The operators: delays around common timeouts, prompt, truncation, garbage, `ERR` bits, echo,
+//! CR LF, overlong lines, banner, restart, RealTime block faults, hang-up, silence with the port
+//! left
+//! open; and `line-rate`, no misbehaviour: the session paced at the hand's BAUD, which the run's
+//! owner reads from the schedule. `Misbehave` records each new kind of answer (its shape: `echo,
+//! values, prompt`, `feedback block`...) with its first answer and the operators that apply to
+//! it.
 
 use std::time::Duration;
 

@@ -9,6 +9,12 @@
 //!
 //! The module never reads the terminal, never installs signal handlers and never exits the
 //! process; `gcl sim` (in `cli/sim.rs`) does those.
+//!
+//! The engine runs on one of two clocks: `fast` drives a `SimLink`, `real` follows the wall clock;
+//! the pace follows the hand's BAUD, `--baud`, or nothing. Past 64 KiB of output the host has not
+//! taken (`OUT_CAP`) it stops taking host bytes and never drops them. Stale EEPROM temporaries are
+//! removed at start; the trace is flushed per line. `host_writes` is the crate's one module with
+//! `unsafe`, for system calls no safe wrapper we use has.
 
 mod eeprom;
 mod engine;

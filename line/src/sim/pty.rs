@@ -14,6 +14,13 @@
 //! power-up banner is never seen by a host that opens the port later; the answer to a RESET
 //! the host sends is). When the last host closes the port, what it had not read is discarded,
 //! both in the simulator's queue and in the slave's input buffer.
+//!
+//! Both ends of the pty are close-on-exec from creation, so no child (a host under `gcl fuzz host`
+//! or `gcl check-host`) holds them: the three commands share one pty behaviour. Each byte crossing
+//! is judged at the speed the host has set then (read with `TCGETS2`, so the serialport crate's
+//! arbitrary rates too; within 2 % is the same rate), and garbled on a mismatch, which is noted in
+//! the trace and told to the CLI once per change. The transport also follows the host's reads and
+//! writes in order, to tell a host that writes before reading its answer.
 
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};

@@ -8,6 +8,11 @@
 //! (half-close) still gets every answer; the simulator then ends the stream. While the client
 //! does not read, the simulator stops reading it (backpressure; nothing is dropped). pyserial's
 //! `socket://HOST:PORT` works as a client.
+//!
+//! On a tapped line the transport learns which of the host's bytes the host wrote with output
+//! unread: from `host_writes` when the host is a child of ours, so the order of its read and write
+//! decides, not who runs first; otherwise by a look in `/proc/net/tcp` before it takes the host's
+//! next bytes.
 
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};

@@ -15,6 +15,18 @@
 //! concern: `framing` (bytes in, lines out, events), `supervisory` (command lines and the
 //! parameters behaviour reads), `realtime` (the loop's blocks), `time` (ticks and the end
 //! of a command), `physics` (one motor's motion) and [`fault`] (the deliberate bugs).
+//!
+//! Besides the bytes, `poll_event()` tells what happened (power-up, line done with its status, loop
+//! entered, loop left). Internally one `State` enum (`Idle`, `Busy(Task)`, `Loop(LoopState)`)
+//! carries each activity's data; `mode()` is a query derived from it.
+//!
+//! In `realtime`, a `Control` comes in and a `Feedback` goes out, filled by an exhaustive match on
+//! `RtFlag`. In `time`, ticks that only count (HI settling at the open stop) pass at once, and
+//! `handle_timeout_until_output`, which `SimLink` uses, runs a command's ticks up to its output in
+//! one call, each as tick-by-tick calls would (`tests/time_jumps.rs`). The deliberate `Fault`s of
+//! `fault` are framing, status, persistence and RealTime bugs, plus one `*-ignored` fault per
+//! parameter with an effect, under which the hand behaves as if the parameter had its factory
+//! value.
 
 pub mod fault;
 mod framing;

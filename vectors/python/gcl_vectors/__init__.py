@@ -6,6 +6,10 @@
   schema check;
 - `gcl_vectors.loader` loads vector files in your own tests.
 
-Stdlib only, plus pyserial for serial targets."""
+Stdlib only, plus pyserial for serial targets. Written from vectors/README.md alone: the
+runner has `gcl replay`'s targets, verdicts and exit codes, the loader its own small schema
+checker. `files.py` reads input files with the Rust reader's limits; the links have write
+deadlines and a bounded exec queue (`tests/test_limits.py` runs the attacks under a memory
+limit)."""
 
 __version__ = "1"

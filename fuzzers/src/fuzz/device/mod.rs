@@ -16,6 +16,113 @@
 //! and runs share and merge corpora.
 //!
 //! The library prints nothing: progress goes to a callback, errors are [`FuzzError`].
+//!
+//! ## The campaign
+//!
+//! Replays take their deadlines from `deadline.rs` outside this process, and minimization is delta
+//! debugging against the target. The corpus is shared by `--jobs` workers; corpus files that do not
+//! parse are returned to the CLI, which warns. `report.rs` writes JSON, JUnit and HTML.
+//!
+//! A hand outside this process is probed with `conform::dead_hand` before the campaign
+//! (`FuzzError::NotAlive`) and after a case that meets silence (`FuzzSummary::dead_hand`: the
+//! campaign ends, exit 2). `FuzzOptions::stop` (set by the CLI's signal handler) and `--duration`
+//! end the workers and minimization, so the reports are written; `FuzzReport::stopped` says why a
+//! campaign ended early: the signal, a dead hand, or `DROP_LIMIT` drawn cases dropped in a row
+//! (`FuzzSummary::no_cases`). `refuse_what_leaves_no_case` refuses, before a campaign, a
+//! `--skip-decision` that the case of no action (the preamble every case starts with) rests on
+//! (`FuzzError::NothingToTest`). `--skip-decision` drops cases resting on a decision (their
+//! `x-decisions`).
+//!
+//! Outside this process the replayer's parting line is read to its end before a failure is signed
+//! (`complete_parting_line`: on a serial line the rest of `1 1 0 1` is still on its way when `1 1`
+//! parts), a case that wrote the EEPROM and failed has its restore sent after it (its saved values
+//! would show in every later case), and a link just opened waits up to 2 s for its hand's
+//! banner.
+//!
+//! On a link kept across cases a case first runs *quick* (drained to four quiet byte-times, no
+//! trailing wait); only *thorough* runs (the replayer's quiet drain and trailing wait) report: a
+//! quick failure is run again thoroughly, and bytes the next quick drain meets send the case before
+//! it to a thorough run. Minimization runs thoroughly.
+//!
+//! ## Naming a finding
+//!
+//! Findings are signed by `align` (each case keeps its tagged model run, made while checking that
+//! it passes on a fresh model), plus `restart` and `silence`. They are then *explained* where one
+//! bug
+//! shows wherever its effect is read back: the case's actions are rewritten as a hand with that bug
+//! would take them (every line with a motor prefix widened by one motor; a parameter's pairs
+//! dropped
+//! from every set line, a line left without pairs sent empty; every line the model refuses for its
+//! prefix alone sent without it) and rebuilt by the model. When the rewrite answers what the hand
+//! did
+//! at every step from the first rewritten one to the failing one, the explanation (`prefix 123+4`,
+//! `MCV set without effect`, `prefix accepted on a command that takes none`) is the signature's
+//! key.
+//!
+//! The hand's answers are matched as one stream against the rewrite's expectations in turn (a block
+//! of another size moves where each step's answer ends; the rewrite's steps after the failing one
+//! may
+//! take what the case expected in it, as answers run a step behind their lines after a ^C); the
+//! hand's echo of a rewritten line is taken as the rewrite's line wherever it comes (a line sent
+//! without waiting is echoed in a later step's answer); and blocks send the bytes the hand was sent
+//! where the rewrite's layout has the same size. Wider prefixes are tried first; reads of the
+//! parameter are held to what was set; a line sent and then aborted whose answer the hand completed
+//! first is rewritten as the line and a ^C after it (the host waited).
+//!
+//! A new explanation is looked for from a value read back outside RealTime blocks, and (in-process
+//! sim only, where block sizes are exact) from a RealTime block's answer, which must then also be
+//! confirmed by the hand answering the whole case as the rewrite does (a replay; another layout of
+//! the same size can fit by chance); never from a status, except the accepted prefix where the
+//! failure shows at a refused line itself. Once found, an explanation is tried first on every later
+//! failure of any kind (`judged`'s `known`), and the unexplained findings met before it are run
+//! again
+//! against it alone; one it covers is dropped with its transcript and its key freed, so a later
+//! failure under that key that it does not cover is still found (`report_finding`,
+//! `Progress::Joined`, the console's `joined:` line).
+//!
+//! Where no rewrite holds, `variant.rs` replays the very transcript the hand failed on models that
+//! each hold one hypothesis (a parameter set without effect goes through
+//! `gcl_model::DeviceConfig::without_effect`; a letter prefix naming one motor more is a patch of
+//! the
+//! profile; the other side of a decision is played as the fault of that name). It starts afresh
+//! only
+//! from a wrong or cut-short answer (a silence fits many models), and from a status only the other
+//! side of a decision (a set without effect would explain a status never reported). Outside this
+//! process the case is built anew on the hypothesis's model (`case::build_case_on` with
+//! `Model::Hypothesis`: the shadow, the recorder's shadow, the captures, the relations from the
+//! coefficients that model acts on, `Device::effective`, and the model run all on it) with the
+//! bands
+//! of a hand outside, and a new hypothesis is confirmed on a few cases per finding. `judge_once`
+//! judges one list of actions as a campaign does (tests).
+//!
+//! A new finding that is a value read back wrong and named by the command that decided it (`value
+//! at FGET (P) after HOME`, `value at FLISTV (MCV) after RESET`) is then asked of the hand
+//! (`probe.rs`, once per new finding, after minimization, from `report_finding`); in process its
+//! positions are held to MPE (the model's clock is the hand's there), and
+//! `FindingSignature::cause_step`
+//! locates the cause as of a read. The finding takes the earliest cause so found (`after LOOP` for
+//! stay-in-loop's and lcv-unsigned's), and is dropped if that key was reported already.
+//!
+//! A written finding names its key in an `x-signature` header, so a folder of findings is a
+//! `--baseline`, and a finding it (or `--known-failures`) explains is known, not new: only new ones
+//! fail the run. The fuzzer's expectations come from the model through the same path as the suite's
+//! goldens, so every written finding replays with `gcl replay`.
+//!
+//! ## Hands outside this process
+//!
+//! Before a campaign that lands ^C mid-motion on a hand outside this process, `check_real_time`
+//! closes it once from home (`MotionProbe`, which `conform` shares) and refuses (exit 2) a target
+//! whose motion took under a quarter of the model's time. For such hands `case.rs` also drops what
+//! the model cannot judge there (a motion with the over-temperature limit set, a read among raw
+//! bytes, a ^C within 150 ms of a motion's end by the model's clock), and any case where the model
+//! answers a ^C with the abort status `requires: abort-timing` (dropped under `--no abort-timing`).
+//! There `actions/relate.rs` holds the ratio clauses in feedback blocks whose fields are otherwise
+//! any value, and `action.rs` draws half the RealTime sessions as *held* ones (one set of small
+//! data,
+//! one coefficient set apart for one motor, pauses before the blocks where abort timing is allowed;
+//! a pause makes the case require it), only for such hands, so campaigns on `sim` draw what they
+//! always drew. There a motion makes positions certain again only when it is absolute (not IC/IO)
+//! and moves every motor.
 
 pub use gcl_conformance::actions as action;
 pub use gcl_conformance::actions::case;

@@ -20,8 +20,9 @@
 //! right, the listing itself is at fault and the finding stays the listing's.
 //!
 //! A cause sent inside a RealTime session (a line the model takes as blocks, a block) has no
-//! quiescent point before it but the one before the session: the session's LOOP is named, and
-//! asked about in turn.
+//! quiescent point before it but the one before the session: for a block, the session's LOOP
+//! is named and asked about in turn; for a line sent in the loop, the session is ended there by
+//! ^C instead and the value read after it.
 
 use gcl_model::spec::{CommandKind, Role, Scope};
 use gcl_model::{Line, Profile, parse_line};

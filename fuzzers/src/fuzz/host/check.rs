@@ -5,6 +5,15 @@
 //! they go out, and keeps the host-side protocol state: the line being typed, whether an
 //! answer is still coming, the RealTime block being sent. It never panics on any bytes and
 //! never reads a clock.
+//!
+//! It follows restarts, takes a lone CR after an answer or a reopen as a resync, and hears from
+//! the pty whether the host wrote with answer bytes unread. Violations that follow a misbehaviour
+//! are
+//! INFO notes unless they are sending before a whole answer (an answer queued behind a held one is
+//! not whole either); once the hand sent a prompt or block the host had not asked for (an extra
+//! one,
+//! a late one it had given up on, or one inside its half-sent line), sending one answer early is an
+//! "out of step" note.
 
 use std::collections::VecDeque;
 use std::sync::Arc;

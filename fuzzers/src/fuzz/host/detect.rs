@@ -2,6 +2,16 @@
 //! turned into a stable signature for deduplication: its kind and the place that raised it
 //! (the innermost frame; the callers that led there are not part of it, so one habit reached
 //! from two call sites is one finding).
+//!
+//! A port that went away, whichever exception pyserial raised it as, is one "hang-up not handled".
+//! A sanitizer report is signed by the host's first own frame: the system's frames, libc,
+//! libstdc++,
+//! Boost and the sanitizer's interceptors are told apart by module, source path and namespace. A
+//! C++
+//! runtime's "terminate called" is signed by what was thrown and where. Hang stacks (faulthandler,
+//! eu-stack, gdb) are read into the frame of the host's own code that waits: a Python host blocked
+//! for ever in a pyserial call is signed by that call in its program (a pyserial port's deadline is
+//! its timeout, one setting for every read).
 
 /// A crash report found on stderr.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -18,6 +18,31 @@
 //! sequence) and mutates them.
 //!
 //! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
+//!
+//! Calibration measures the host's give-up time at several kinds of answer at once (the hand goes
+//! silent at the first answer of that kind), and the confirmer runs in a thread beside the runs. A campaign
+//! without `--runs` or `--duration` is a 5-minute one. The systematic pass is built from run 0's
+//! kinds of answer (each operator at each kind it applies to, in rounds; a line-rate run first when
+//! unpaced). A silent wrong value is named by the host's `WHERE`, else by the answer it came from.
+//! Operators are counted by protocol state and notes by runs. Runs are taken in index order and run
+//! i is scheduled from runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run.
+//!
+//! The campaign (`Campaign`) is `fuzz.json` beside the reports; its schema is
+//! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/report_schema.rs`). A campaign
+//! whose run without misbehaviour (the calibration's, or run 0) did not reach the host ends
+//! (`Campaign::untested`); `Campaign::reached` counts the runs that reached it, and a stop by a
+//! signal is `Campaign::stopped`; both become the report's `stopped` (`StopCause::CannotTest`,
+//! `StopCause::Signal`) and exit 2 without a finding. A run in which the host never opened the port
+//! or sent no byte is found by `unreached` (from `RunResult::port_opened` and the traffic).
+//!
+//! Under `--shard K/N` (`fuzz/shard.rs`) it runs its indices unguided, each schedule the pass's
+//! entry for its index or drawn from the seed and the index (`fresh_schedule`); a shard without run
+//! 0 makes one uncounted run 0 for the answer count schedules span and the pass. Each shard's
+//! report
+//! records what makes it part of its campaign (`shard::Provenance`: `--shard`, seed, every option
+//! that changed what ran, set by the CLI; a merged folder's `merged` slices). The merged host
+//! report
+//! is built by the same `campaign_report` as a shard's.
 
 pub mod bundle;
 pub mod check;

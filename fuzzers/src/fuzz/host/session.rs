@@ -21,6 +21,25 @@
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
 //! the rest is counted and noted, so a host writing without end costs no memory.
+//!
+//! The host runs with a sanitizer `log_path` of the run's own. The hang timer is fed by the tap and
+//! runs only while the host holds the port open (a host starting, ending or between a close and a
+//! reopen is not waiting for the hand; its budget still holds). A native host's stack comes from
+//! `gdb -batch` (it demangles Rust v0 symbols) or `eu-stack`, behind a shell or launcher, from the
+//! newest Python interpreter or waited-for program of its group. A run called off (the campaign or
+//! check stopping) sends SIGTERM to the host's group and SIGKILL after a short grace, and every
+//! live
+//! host group and run folder is registered (`end_all`) so a process that must exit at once leaves
+//! none behind. Left-over processes are looked for only when the port or stderr is still held (or,
+//! over TCP, a process still uses the write watch's filter, whose listener says so), by what holds
+//! them or by the run's `GCL_HOST_RUN` mark.
+//!
+//! `gcl-observe:` lines on stderr or stdout (`GCL_OBSERVE_FD`) are checked against every value the
+//! hand sent. What a crash left unsaid is completed with a second run of the same schedule (gdb's
+//! stack at an uncaught exception's SIGABRT; an AddressSanitizer report that names none of the
+//! host's frames, with the fast unwinder), and the host's long waits are recorded, which confirm a
+//! hang. An unexpected exit code is signed by its class and the hand's mode, the code in the
+//! message.
 
 use std::io::Read;
 use std::os::fd::AsFd;
