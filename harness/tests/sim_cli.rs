@@ -182,8 +182,10 @@ fn the_start_line_says_how_the_hand_is_paced() {
         let start = std::time::Instant::now();
         let line = loop {
             let text = std::fs::read_to_string(&log).unwrap();
-            if let Some(l) = text.lines().find(|l| l.starts_with("gcl sim: profile")) {
-                break l.to_string();
+            // A whole line: stderr is unbuffered, so the line may still be on its way.
+            if let Some(l) = text.split_inclusive('\n').find(|l| l.starts_with("gcl sim: profile") && l.ends_with('\n'))
+            {
+                break l.trim_end().to_string();
             }
             assert!(start.elapsed() < Duration::from_secs(30), "{args:?}: no start line in {text:?}");
             std::thread::sleep(Duration::from_millis(20));
