@@ -38,13 +38,24 @@ def outcome(out, test):
 
 
 TIMEOUTS = '''
+import os
 import time
 import pytest
+
+
+def talk(hand):
+    """The host code sends the hand a ^C and leaves (a session where nobody talked judges
+    nothing, and fails as such: these tests are about the timers)."""
+    fd = os.open(hand.port, os.O_RDWR | os.O_NOCTTY)
+    os.write(fd, b"\\x03")
+    time.sleep(0.2)
+    os.close(fd)
 
 
 @pytest.mark.timeout(3)
 @pytest.mark.gcl(profile="seed", schedules=1)
 def test_body_overruns(gcl_misbehaving_hand):
+    talk(gcl_misbehaving_hand)
     time.sleep(12)
 
 
@@ -57,12 +68,13 @@ def slow_teardown():
 @pytest.mark.timeout(4)
 @pytest.mark.gcl(profile="seed", schedules=1)
 def test_teardown_overruns(slow_teardown, gcl_misbehaving_hand):
-    pass
+    talk(gcl_misbehaving_hand)
 
 
 @pytest.mark.timeout(60)
 @pytest.mark.gcl(profile="seed", schedules=1, timeout=2)
 def test_host_hangs(gcl_misbehaving_hand):
+    talk(gcl_misbehaving_hand)
     time.sleep(30)
 '''
 
