@@ -521,7 +521,7 @@ fn calibration_lines(c: &Calibration) -> Vec<String> {
             "warning: host timeouts not measured: the host took no answer from the hand in its run without \
              misbehaviour ({}), so this campaign tried little or nothing; hang timeout {}",
             if left_at_once {
-                "it left at once wherever the hand fell silent"
+                "wherever the hand fell silent it left or sent again within 0.1 s, as a host that does not wait for answers does"
             } else {
                 "did it open the port it was given as {port} or {url}?"
             },
