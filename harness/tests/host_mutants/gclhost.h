@@ -27,8 +27,12 @@ static int gcl_getc(int fd, int ms) {
     return c;
 }
 
+/* The line, then its CR in a write of its own a moment later, as many hosts send them: the
+ * hand echoes the line as it comes and answers the CR in a piece of its own. */
 static void gcl_send(int fd, const char *line) {
-    if (write(fd, line, strlen(line)) < 0 || write(fd, "\r", 1) < 0) { perror("write"); exit(1); }
+    if (write(fd, line, strlen(line)) < 0) { perror("write"); exit(1); }
+    usleep(5000);
+    if (write(fd, "\r", 1) < 0) { perror("write"); exit(1); }
 }
 
 /* The line and its CR in one write: the hand takes them together, so the answers it counts

@@ -271,6 +271,9 @@ pub struct Misbehave {
     silent: bool,
     /// The kinds of answer seen, in order of first appearance.
     kinds: Vec<AnswerKindSeen>,
+    /// The last supervisory piece the hand sent did not end with its prompt: the answer it
+    /// began (an echo sent as the host's bytes came, the line's CR still to come) is still open.
+    open_answer: bool,
 }
 
 impl Misbehave {
@@ -279,7 +282,16 @@ impl Misbehave {
         let mut fresh = Device::with_profile(device.profile().clone());
         let power_up = fresh.take_output();
         let done = vec![false; schedule.planned.len()];
-        Misbehave { schedule, done, answers: 0, power_up, fired: Vec::new(), silent: false, kinds: Vec::new() }
+        Misbehave {
+            schedule,
+            done,
+            answers: 0,
+            power_up,
+            fired: Vec::new(),
+            silent: false,
+            kinds: Vec::new(),
+            open_answer: false,
+        }
     }
 
     /// What fired so far.
@@ -299,7 +311,7 @@ impl Misbehave {
     }
 
     /// Records the kind of this answer when it is a new one.
-    fn note_kind(&mut self, device: &Device, bytes: &[u8], kind: AnswerKind, state: &str) {
+    fn note_kind(&mut self, device: &Device, bytes: &[u8], kind: AnswerKind, echo_before: bool, state: &str) {
         if self.kinds.len() >= KINDS_CAP {
             return;
         }
@@ -310,7 +322,7 @@ impl Misbehave {
         let ops = Operator::ALL
             .iter()
             .copied()
-            .filter(|&op| apply(op, 0, kind, device, &self.power_up, &mut Shaped::plain(bytes)).is_some())
+            .filter(|&op| apply(op, 0, kind, echo_before, device, &self.power_up, &mut Shaped::plain(bytes)).is_some())
             .collect();
         self.kinds.push(AnswerKindSeen { kind: name, answer: self.answers, state: state.to_string(), ops });
     }
@@ -323,8 +335,13 @@ impl Misbehave {
         } else {
             AnswerKind::Supervisory
         };
+        // A host that writes a command and its CR apart gets the echo as one piece and the rest
+        // of the answer as the next: that piece's echo came before it.
+        let echo_before = kind == AnswerKind::Supervisory && self.open_answer;
         if !bytes.is_empty() {
-            self.note_kind(device, bytes, kind, state);
+            self.note_kind(device, bytes, kind, echo_before, state);
+            let prompt = device.profile().framing.prompt.as_bytes();
+            self.open_answer = kind == AnswerKind::Supervisory && !bytes.ends_with(prompt);
         }
         if self.silent {
             return Shaped::plain(&[]);
@@ -335,7 +352,7 @@ impl Misbehave {
             if self.done[i] || p.answer > self.answers || out.hang_up || self.silent {
                 continue;
             }
-            if let Some(what) = apply(p.op, p.arg, kind, device, &self.power_up, &mut out) {
+            if let Some(what) = apply(p.op, p.arg, kind, echo_before, device, &self.power_up, &mut out) {
                 self.done[i] = true;
                 self.silent |= p.op == Operator::Silence;
                 self.fired.push(Fired { index: i, answer: self.answers, op: p.op, state: state.to_string(), what });
@@ -423,11 +440,12 @@ fn apply(
     op: Operator,
     arg: u32,
     kind: AnswerKind,
+    echo_before: bool,
     device: &Device,
     power_up: &[u8],
     out: &mut Shaped,
 ) -> Option<String> {
-    let a = Parts::of(kind, device, power_up, &out.bytes);
+    let a = Parts::of(kind, echo_before, device, power_up, &out.bytes);
     match op {
         Operator::DelayBelow => delay(9, arg, &a, out),
         Operator::DelayAbove => delay(11, arg, &a, out),
@@ -467,11 +485,13 @@ struct Parts<'a> {
     ends_prompt: bool,
     /// Where the echo ends (the first line ending), if anywhere.
     echo_end: Option<usize>,
+    /// The echo came in an earlier piece (this one starts where the host's CR was answered).
+    echo_before: bool,
 }
 
 impl<'a> Parts<'a> {
     /// Takes an answer and the hand it comes from; gives its parts.
-    fn of(kind: AnswerKind, device: &'a Device, power_up: &'a [u8], b: &[u8]) -> Parts<'a> {
+    fn of(kind: AnswerKind, echo_before: bool, device: &'a Device, power_up: &'a [u8], b: &[u8]) -> Parts<'a> {
         let framing = &device.profile().framing;
         let (eol, prompt) = (framing.line_ending.as_bytes(), framing.prompt.as_bytes());
         Parts {
@@ -483,6 +503,7 @@ impl<'a> Parts<'a> {
             sup: kind == AnswerKind::Supervisory,
             ends_prompt: b.ends_with(prompt),
             echo_end: find(b, eol),
+            echo_before,
         }
     }
 }
@@ -563,7 +584,8 @@ fn extra_bytes(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
 
 /// `err-bits`: a supervisory answer replaced, after its echo, by an ERR GCL does not define.
 fn err_bits(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
-    let e = a.echo_end.filter(|&e| a.sup && a.ends_prompt && e > 0)?;
+    // After an echo: in this piece, or (a host that wrote its CR apart) in the one before.
+    let e = a.echo_end.filter(|&e| a.sup && a.ends_prompt && (e > 0 || a.echo_before))?;
     let err = pick(
         &["ERR 32768", "ERR 65535", "ERR 2147483648", "ERR 4294967295", "ERR -1", "ERR 99999999999999999999"],
         arg,
@@ -796,6 +818,13 @@ mod tests {
         assert_eq!(m.fired()[0].answer, 2);
         // Fired once only.
         assert_eq!(m.shape(&d, b"X\n\r=> ", "answer to X").bytes, b"X\n\r=> ".to_vec());
+        // A host that writes its CR apart gets the echo first and the answer's end after it:
+        // the end is an answer after an echo (unlike ^C's, which follows a prompt).
+        let mut m =
+            Misbehave::new(Schedule { planned: vec![Planned { answer: 1, op: Operator::ErrBits, arg: 1 }] }, &d);
+        assert_eq!(m.shape(&d, b"HI", "answer to HI").bytes, b"HI".to_vec());
+        assert_eq!(m.shape(&d, b"\n\r=> ", "answer to HI").bytes, b"\n\rERR 65535\n\r=> ".to_vec());
+        assert_eq!(m.fired()[0].answer, 2);
         // RealTime operators never touch a supervisory answer.
         for op in [Operator::RtErr, Operator::RtByteFlip, Operator::RtExtreme, Operator::RtBlockLength] {
             assert!(shape(op, 0, b"FGET DP\n\r1\n\r=> ").1.is_empty(), "{op}");
