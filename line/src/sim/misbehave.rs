@@ -600,7 +600,13 @@ fn err_bits(arg: u32, a: &Parts<'_>, b: &mut Vec<u8>) -> Option<String> {
 
 /// `wrong-echo`: one byte of the echo sent otherwise.
 fn wrong_echo(arg: u32, a: &Parts<'_>, b: &mut [u8]) -> Option<String> {
-    let e = a.echo_end.filter(|&e| a.sup && e > 0)?;
+    // The echo ends at the first line ending; a piece with none and no prompt is an echo alone
+    // (a host that writes its CR apart gets its command echoed as it comes).
+    let e = match a.echo_end {
+        Some(e) if a.sup && e > 0 => e,
+        None if a.sup && !a.ends_prompt && !b.is_empty() => b.len(),
+        _ => return None,
+    };
     let i = arg as usize % e;
     let c = b[i];
     b[i] = if c.is_ascii_alphabetic() {
@@ -825,6 +831,10 @@ mod tests {
         assert_eq!(m.shape(&d, b"HI", "answer to HI").bytes, b"HI".to_vec());
         assert_eq!(m.shape(&d, b"\n\r=> ", "answer to HI").bytes, b"\n\rERR 65535\n\r=> ".to_vec());
         assert_eq!(m.fired()[0].answer, 2);
+        // And its echo alone, in a piece of its own, is an echo still.
+        let mut m =
+            Misbehave::new(Schedule { planned: vec![Planned { answer: 1, op: Operator::WrongEcho, arg: 0 }] }, &d);
+        assert_eq!(m.shape(&d, b"HI", "answer to HI").bytes, b"hI".to_vec());
         // RealTime operators never touch a supervisory answer.
         for op in [Operator::RtErr, Operator::RtByteFlip, Operator::RtExtreme, Operator::RtBlockLength] {
             assert!(shape(op, 0, b"FGET DP\n\r1\n\r=> ").1.is_empty(), "{op}");
