@@ -4,6 +4,7 @@
 #
 #   GCL_FUZZ_SECONDS    seconds per target (default 30)
 #   GCL_FUZZ_TARGETS    space-separated targets (default: grammar device realtime spec wire transcript client)
+#   GCL_FUZZ_JOBS       targets fuzzed at once (default: one per core)
 #   GCL_FUZZ_SANITIZER  address (default) or none (faster; the model is forbid(unsafe_code),
 #                       so ASan mostly watches its dependencies)
 #   --build-only        install cargo-fuzz when missing and build every target, run none
@@ -39,8 +40,9 @@ fi
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 
-failed=()
-for t in $targets; do
+# One target, its log in $scratch/<t>.log; non-zero when it found a crash.
+fuzz_one() {
+    local t=$1
     mkdir -p "corpus/$t" "$scratch/$t"
     # seeds/<t>/crash-* reproduce model bugs already reported (tests/seeds.rs lists them);
     # leaving them out lets the run look for new ones instead of stopping on a known one.
@@ -50,16 +52,36 @@ for t in $targets; do
             *) cp "$f" "$scratch/$t/" ;;
         esac
     done
-    dict=()
+    local dict=()
     if [[ -f "seeds/dicts/$t.dict" ]]; then dict=(-dict="seeds/dicts/$t.dict"); fi
     echo "run-ci: fuzzing $t for ${seconds}s"
     # -timeout: an input that takes this long is a finding (a hang), not a slow test.
-    if ! cargo fuzz run --sanitizer "$sanitizer" "$t" "corpus/$t" "$scratch/$t" -- \
-        "${dict[@]}" -max_total_time="$seconds" -timeout=20 -print_final_stats=1; then
+    cargo fuzz run --sanitizer "$sanitizer" "$t" "corpus/$t" "$scratch/$t" -- \
+        "${dict[@]}" -max_total_time="$seconds" -timeout=20 -print_final_stats=1
+}
+
+# Each target runs on one core; GCL_FUZZ_JOBS of them at once (default: one per core), each
+# for its full ${seconds}s, its log printed whole when it ends.
+jobs=${GCL_FUZZ_JOBS:-$(nproc)}
+declare -A running=()
+failed=()
+finish_one() {
+    local pid rc=0
+    wait -n -p pid "${!running[@]}" || rc=$?
+    local t=${running[$pid]}
+    unset "running[$pid]"
+    cat "$scratch/$t.log"
+    if ((rc != 0)); then
         echo "run-ci: $t found a crash; reproducer in fuzz/artifacts/$t/" >&2
         failed+=("$t")
     fi
+}
+for t in $targets; do
+    while ((${#running[@]} >= jobs)); do finish_one; done
+    fuzz_one "$t" >"$scratch/$t.log" 2>&1 &
+    running[$!]=$t
 done
+while ((${#running[@]} > 0)); do finish_one; done
 
 if ((${#failed[@]})); then
     echo "run-ci: crashes in: ${failed[*]}" >&2
