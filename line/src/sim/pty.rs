@@ -357,17 +357,36 @@ impl Pty {
     }
 
     /// Whether a descriptor other than the simulator's own refers to the slave.
+    ///
+    /// A child this process is starting (another thread spawning a host, a compiler, ...)
+    /// holds a copy of every descriptor of ours, the simulator's own among them, from its
+    /// fork until its exec closes them (they are close-on-exec): that copy is still ours, not
+    /// a host's. Taken for a host, it kept a closed port's session going, and what the last
+    /// host left unread survived into the next one's (a reopen probe read an old answer when
+    /// its close met such a fork, on a loaded machine).
     fn held_elsewhere(&self) -> bool {
         let me = std::process::id().to_string();
         let own = self.slave.as_raw_fd().to_string();
+        let my_exe = std::fs::read_link("/proc/self/exe").ok();
         let Ok(procs) = std::fs::read_dir("/proc") else { return true };
         for p in procs.flatten() {
             let pid = p.file_name();
             let Some(pid) = pid.to_str().filter(|n| n.bytes().all(|b| b.is_ascii_digit())) else { continue };
             let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+            let mut ours_unexeced = None;
             for fd in fds.flatten() {
-                if pid == me && fd.file_name().to_str() == Some(own.as_str()) {
-                    continue;
+                if fd.file_name().to_str() == Some(own.as_str()) {
+                    if pid == me {
+                        continue;
+                    }
+                    let unexeced = *ours_unexeced.get_or_insert_with(|| {
+                        parent_of(&p.path()).as_deref() == Some(me.as_str())
+                            && my_exe.is_some()
+                            && std::fs::read_link(p.path().join("exe")).ok() == my_exe
+                    });
+                    if unexeced {
+                        continue;
+                    }
                 }
                 if std::fs::read_link(fd.path()).is_ok_and(|t| t == self.path) {
                     return true;
@@ -517,6 +536,14 @@ impl Pty {
     }
 }
 
+/// The parent's pid of the process whose `/proc` folder is `proc`, as `/proc/PID/stat` gives it
+/// (the fourth field, after the command name in parentheses, which may hold anything).
+fn parent_of(proc: &std::path::Path) -> Option<String> {
+    let stat = std::fs::read_to_string(proc.join("stat")).ok()?;
+    let after_name = &stat[stat.rfind(')')? + 1..];
+    after_name.split_whitespace().nth(1).map(str::to_string)
+}
+
 /// A byte as a UART at another rate would see it: not a bit-exact model of sampling at the
 /// wrong rate, but never the byte sent, and never a byte of the protocol (the top bit is set),
 /// so neither side can mistake it for a command, a CR, a ^C or a prompt.
@@ -650,6 +677,35 @@ mod tests {
         // A rate between standard ones runs at the next one up.
         assert_eq!(uart_rate(10_000), 19200);
         assert_eq!(uart_rate(1_000_000), 1_000_000);
+    }
+
+    /// A child of ours between its fork and its exec holds a copy of the simulator's own
+    /// descriptor of the slave: that is no host holding the port. A host's own open is.
+    #[test]
+    #[allow(unsafe_code)] // fork without exec: nothing safe makes such a child
+    fn our_own_descriptor_in_a_child_not_yet_execed_is_not_a_host() {
+        use nix::unistd::{ForkResult, fork};
+        let pty = Pty::open(None, None).unwrap();
+        assert!(!pty.held_elsewhere());
+        // A fork that never execs stands for a child caught between the two.
+        // SAFETY: the child only sleeps and leaves by _exit, both async-signal-safe.
+        match unsafe { fork() }.unwrap() {
+            ForkResult::Child => {
+                std::thread::sleep(std::time::Duration::from_secs(5));
+                // SAFETY: _exit runs no handler of the parent's.
+                unsafe { nix::libc::_exit(0) }
+            }
+            ForkResult::Parent { child } => {
+                let held_by_the_child = pty.held_elsewhere();
+                let host = std::fs::OpenOptions::new().read(true).write(true).open(pty.path()).unwrap();
+                let held_by_a_host = pty.held_elsewhere();
+                drop(host);
+                let _ = nix::sys::signal::kill(child, nix::sys::signal::Signal::SIGKILL);
+                let _ = nix::sys::wait::waitpid(child, None);
+                assert!(!held_by_the_child, "the child's copy of our own descriptor taken for a host");
+                assert!(held_by_a_host, "a host's open of the port not seen");
+            }
+        }
     }
 
     /// A host's arbitrary rate near the hand's is understood; a neighbouring standard rate
