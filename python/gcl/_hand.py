@@ -248,6 +248,14 @@ class Hand:
         if reader.is_alive() or not lines or lines[-1] != "ready":
             code = self._proc.poll()
             why = "did not say where it listens within {:.0f} s".format(START_TIMEOUT)
+            if code is None and not reader.is_alive():
+                # Its output ended: it is exiting, and can be waited for a moment after its
+                # output closed (on a loaded machine, poll() alone said "still running").
+                why = "closed its output before it said where it listens"
+                try:
+                    code = self._proc.wait(timeout=5)
+                except subprocess.TimeoutExpired:
+                    pass
             if code is not None:
                 why = "ended ({}) before it said where it listens: {}".format(code, self._proc.stderr.read().strip())
             self._kill()

@@ -177,6 +177,16 @@ def test_a_hand_that_fails_to_start_leaves_no_folder(own_tmp, tmp_path, monkeypa
     assert os.listdir(str(own_tmp)) == []
 
 
+def test_a_hand_that_closes_its_output_and_then_fails_is_said_to_have_ended(own_tmp, tmp_path, monkeypatch):
+    """Its output ends a moment before it can be waited for (so on a loaded machine, once):
+    it ended with its code, not "did not say where it listens within 30 s"."""
+    monkeypatch.setenv("GCL_BIN", fake_gcl(tmp_path, "gcl 0.1.0",
+                                           "exec >&-; echo 'gcl: error: no such profile' >&2; sleep 1; exit 2"))
+    with pytest.raises(HandError, match=r"ended \(2\) before it said where it listens: gcl: error: no such profile"):
+        Hand(profile="seed").start()
+    assert os.listdir(str(own_tmp)) == []
+
+
 def test_another_program_named_gcl_is_refused_at_once(own_tmp, tmp_path, monkeypatch):
     """GNU Common Lisp is also `gcl`: its --version is asked first, so the hand is not waited
     for (before: 30 s, then "did not say where it listens")."""
