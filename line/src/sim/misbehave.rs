@@ -377,6 +377,11 @@ fn kind_name(device: &Device, bytes: &[u8], kind: AnswerKind) -> String {
     let mut lines: Vec<&[u8]> = if eol.is_empty() { vec![text] } else { split(text, eol) };
     // The first line is the echo when the answer starts with one (an answer to ^C or a timer
     // starts with the line ending).
+    // A piece with no line ending and no prompt is an echo alone (a host that writes its CR
+    // apart gets its command echoed as it comes; `wrong-echo` takes it so too).
+    if lines.len() == 1 && body.is_none() && !text.is_empty() && !eol.is_empty() {
+        return "echo".into();
+    }
     if lines.len() > 1 && !lines[0].is_empty() {
         parts.push("echo");
     }
@@ -835,6 +840,7 @@ mod tests {
         let mut m =
             Misbehave::new(Schedule { planned: vec![Planned { answer: 1, op: Operator::WrongEcho, arg: 0 }] }, &d);
         assert_eq!(m.shape(&d, b"HI", "answer to HI").bytes, b"hI".to_vec());
+        assert_eq!(m.kinds()[0].kind, "echo", "{:?}", m.kinds());
         // RealTime operators never touch a supervisory answer.
         for op in [Operator::RtErr, Operator::RtByteFlip, Operator::RtExtreme, Operator::RtBlockLength] {
             assert!(shape(op, 0, b"FGET DP\n\r1\n\r=> ").1.is_empty(), "{op}");
