@@ -807,8 +807,17 @@ fn preflight_stage(
     }
     if let Ok(p) = crate::preflight::run(link, &opts.profile, &plan.policy) {
         let clauses = p.clauses.clone();
+        // Who the hand says it is comes first: a hand of another firmware fails wherever the
+        // two differ, and nothing else would tell the user why.
+        if let Some(who) = &p.identity {
+            on(RunEvent::Preflight(who));
+        }
         let line = p.line();
         on(RunEvent::Preflight(&line));
+        let line = match &p.identity {
+            Some(who) => format!("{who}\n{line}"),
+            None => line,
+        };
         pre = PreflightFound { line: Some(line), clauses, settled: p.settled };
     }
     // Its last answer may not have ended quietly (a flood, a missing prompt): drain.

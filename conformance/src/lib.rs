@@ -19,6 +19,7 @@ pub mod align;
 pub mod certify;
 pub mod conform;
 pub mod deadline;
+pub mod identity;
 pub mod motion;
 pub mod preflight;
 pub mod report;

@@ -4,15 +4,17 @@
 //! from 200 failures. The suite still runs afterwards, so every affected case is listed.
 //!
 //! The probe sends ^C, a bare CR, an unknown command word (its answer shows the echo and the
-//! status format) and RESET (its answer shows the banner), the same to the in-process model
-//! and to the hand, and compares what came back: line ending, prompt text, echo, status line
-//! shape, banner text. Each answer is read until the hand is quiet, within a deadline from the
+//! status format), VERS and RESET (its answer shows the banner), the same to the in-process
+//! model and to the hand, and compares what came back: line ending, prompt text, echo, status
+//! line shape, banner text; and who the hand says it is (the firmware series its VERS answer
+//! and banner name, against the profile's: [`crate::identity`]). Each answer is read until the hand is quiet, within a deadline from the
 //! model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes.
 
 use std::sync::Arc;
 use std::time::Duration;
 
 use gcl_model::escape::escape;
+use gcl_model::spec::CommandKind;
 use gcl_model::{DeviceConfig, Profile};
 
 use crate::deadline::DeadlinePolicy;
@@ -45,6 +47,9 @@ pub struct Preflight {
     /// Whether the last answer ended in a prompt followed by 60 ms of silence: the line is
     /// then already drained, and a runner need not wait for quiet again.
     pub settled: bool,
+    /// The hand named another firmware series than the profile models, in its banner or its
+    /// `VERS` answer: the line that says so ([`crate::identity::mismatch`]).
+    pub identity: Option<String>,
 }
 
 impl Preflight {
@@ -65,10 +70,12 @@ struct Probe {
 
 fn probes(profile: &Profile) -> Vec<Probe> {
     let t = profile.framing.terminator;
+    let vers = profile.command_of_kind(CommandKind::Version).map_or("VERS", |id| profile.command(id).name.as_str());
     vec![
         Probe { send: vec![profile.framing.abort], what: "^C" },
         Probe { send: vec![t], what: "a bare CR" },
         Probe { send: [UNKNOWN, &[t]].concat(), what: "an unknown command" },
+        Probe { send: [vers.as_bytes(), &[t]].concat(), what: "VERS" },
         Probe { send: [b"RESET".as_slice(), &[t]].concat(), what: "RESET" },
     ]
 }
@@ -136,6 +143,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
                 findings: vec![format!("no answer to {what}; the hand may have stopped answering")],
                 clauses: Vec::new(),
                 settled: false,
+                identity: None,
             });
         }
     }
@@ -204,8 +212,13 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
         findings.push(format!("{} gets no status line", p.what));
     }
 
+    // Who the hand says it is: the VERS answer and the banner.
+    let said: Vec<String> =
+        [&answers[3].2, &answers[4].2].into_iter().flat_map(|a| crate::identity::answer_lines(a, profile)).collect();
+    let identity = crate::identity::mismatch(profile, &said);
+
     // RESET: the banner.
-    let (_, expected, actual) = &answers[3];
+    let (_, expected, actual) = &answers[4];
     let has = |a: &[u8]| a.windows(BANNER_TEXT.len()).any(|w| w == BANNER_TEXT);
     if has(expected) && !has(actual) {
         clauses.extend(decision("-banner-text"));
@@ -216,7 +229,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             findings.push(format!("no answer to {}", p.what));
         }
     }
-    Ok(Preflight { findings, clauses, settled })
+    Ok(Preflight { findings, clauses, settled, identity })
 }
 
 fn split<'a>(s: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {

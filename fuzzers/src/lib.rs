@@ -10,7 +10,7 @@
 //! (`gcl-harness`); nothing below it may depend on it.
 
 // The modules of the layers below, under the names they had in one crate (`crate::suite`, ...).
-use gcl_conformance::{align, conform, deadline, motion, report, suite};
+use gcl_conformance::{align, conform, deadline, motion, preflight, report, suite};
 use gcl_line::{digest, outputs, replay, sim};
 
 pub mod fuzz;

@@ -74,11 +74,16 @@ pub struct Allowed {
     pub eeprom: bool,
     /// ^C landing during motion.
     pub abort_timing: bool,
+    /// On a serial line: the rate (bit/s) the line runs at. No action then sets the hand's
+    /// line-rate parameter (the profile's `[hand] baud`) to another rate, nor names it in a set
+    /// the hand refuses: the hand would move to a rate the port is not at, and every later
+    /// answer would be garbled (on a real hand, with a save, for good). `None`: any value.
+    pub keep_rate: Option<u32>,
 }
 
 impl Default for Allowed {
     fn default() -> Allowed {
-        Allowed { motion: true, realtime: true, eeprom: true, abort_timing: true }
+        Allowed { motion: true, realtime: true, eeprom: true, abort_timing: true, keep_rate: None }
     }
 }
 
@@ -151,6 +156,45 @@ impl<'p> Generator<'p> {
             && (self.allowed.eeprom || !matches!(k, CommandKind::MotorSave | CommandKind::GlobalSave))
     }
 
+    /// The line-rate parameter when its sets are guarded ([`Allowed::keep_rate`]), with the one
+    /// value it may be set to (the line's own rate, when the rate is a whole number of its
+    /// units).
+    fn guarded_rate(&self) -> Option<(&'p ParamSpec, Option<i64>)> {
+        let rate = i64::from(self.allowed.keep_rate?);
+        let gcl_model::spec::ValueSource::Param(id) = self.p.hand_sources().baud else { return None };
+        Some((self.p.param(id), (rate % 100 == 0).then_some(rate / 100)))
+    }
+
+    /// Whether a parameter may be drawn into a set: not the guarded line-rate parameter.
+    fn settable(&self, s: &ParamSpec) -> bool {
+        self.guarded_rate().is_none_or(|(g, _)| g.name != s.name)
+    }
+
+    /// Whether one line of host bytes would change the line's rate ([`Allowed::keep_rate`]): a
+    /// set of the line-rate parameter to another value, or a refused set that names it with
+    /// another value (a hand's bug may still apply it). Control bytes are read past, as a hand that ignores them
+    /// would.
+    pub fn changes_rate(&self, line: &[u8]) -> bool {
+        let Some((spec, keep)) = self.guarded_rate() else { return false };
+        let Some(id) = self.p.param_id(&spec.name) else { return false };
+        let clean: Vec<u8> = line.iter().copied().filter(|b| b.is_ascii_graphic() || *b == b' ').collect();
+        match gcl_model::parse_line(self.p, &clean) {
+            Ok(gcl_model::Line::Command(c)) => match &c.args {
+                gcl_model::Args::Pairs(ps) => ps.iter().any(|(p, v)| *p == id && Some(*v) != keep),
+                _ => false,
+            },
+            Ok(gcl_model::Line::Empty) => false,
+            Err(_) => {
+                let text = String::from_utf8_lossy(&clean).to_ascii_uppercase();
+                let words: Vec<&str> = text.split(|c: char| !c.is_ascii_alphanumeric()).collect();
+                let setter = self.p.setter(id).to_ascii_uppercase();
+                words.contains(&spec.name.to_ascii_uppercase().as_str())
+                    && words.iter().any(|w| w.ends_with(setter.as_str()))
+                    && words.iter().any(|w| w.parse::<i64>().is_ok_and(|v| Some(v) != keep))
+            }
+        }
+    }
+
     fn commands(&self, f: impl Fn(&CommandSpec) -> bool) -> Vec<&'p CommandSpec> {
         self.p.commands.iter().filter(|c| self.command_allowed(c) && f(c)).collect()
     }
@@ -171,9 +215,12 @@ impl<'p> Generator<'p> {
                 HostAction::Raw(b) => b.clone(),
                 HostAction::Block { .. } | HostAction::Abort => Vec::new(),
             };
-            bytes.split(|b| *b == term).all(|line| match gcl_model::parse_line(self.p, line) {
-                Ok(gcl_model::Line::Command(c)) => self.command_allowed(self.p.command(c.command)),
-                _ => true,
+            bytes.split(|b| *b == term).all(|line| {
+                !self.changes_rate(line)
+                    && match gcl_model::parse_line(self.p, line) {
+                        Ok(gcl_model::Line::Command(c)) => self.command_allowed(self.p.command(c.command)),
+                        _ => true,
+                    }
             })
         })
     }
@@ -315,6 +362,7 @@ impl<'p> Generator<'p> {
                 let ps = self.params_by(|s| {
                     self.p.param_id(&s.name).is_some_and(|id| self.p.setter(id) == c.name)
                         && (!s.read_only || read_only)
+                        && self.settable(s)
                 });
                 for _ in 0..1 + d.below(2) {
                     if let Some(s) = d.pick(&ps) {
@@ -395,7 +443,7 @@ impl<'p> Generator<'p> {
 
     /// A set line for a parameter with an effect, away from its default; returns its name.
     fn set_effect(&self, d: &mut Dice, out: &mut Vec<HostAction>) -> Option<String> {
-        let ps = self.params_by(|s| s.effect.is_some() && !s.read_only);
+        let ps = self.params_by(|s| s.effect.is_some() && !s.read_only && self.settable(s));
         let s = d.pick(&ps)?;
         let id = self.p.param_id(&s.name)?;
         let mut v = self.value(d, s);
@@ -430,7 +478,7 @@ impl<'p> Generator<'p> {
     /// One to three parameters set, maybe saved, then defaults, loads or a reset, then all
     /// read back.
     fn persistence(&self, d: &mut Dice, out: &mut Vec<HostAction>) {
-        let ps = self.params_by(|s| !s.read_only && !s.live && !s.persist.is_empty());
+        let ps = self.params_by(|s| !s.read_only && !s.live && !s.persist.is_empty() && self.settable(s));
         let mut names = Vec::new();
         for _ in 0..1 + d.below(3) {
             let Some(s) = d.pick(&ps) else { return };
@@ -767,4 +815,65 @@ pub fn from_transcript(p: &Profile, t: &gcl_transcript::Transcript) -> Vec<HostA
     }
     out.truncate(24);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn generator_lines(p: &Profile, allowed: Allowed, seed: u64, cases: usize) -> Vec<Vec<u8>> {
+        let g = Generator::new(p, allowed);
+        let mut d = Dice::new(seed);
+        let mut lines = Vec::new();
+        let mut base = Vec::new();
+        for i in 0..cases {
+            let actions = if i % 2 == 0 || base.is_empty() { g.case(&mut d) } else { g.mutate(&mut d, &base) };
+            for a in &actions {
+                if let HostAction::Line(l) | HostAction::PartialThenAbort(l) = a {
+                    lines.push(l.as_bytes().to_vec());
+                }
+                if let HostAction::Raw(b) = a {
+                    lines.extend(b.split(|c| *c == p.framing.terminator).map(<[u8]>::to_vec));
+                }
+            }
+            base = actions;
+        }
+        lines
+    }
+
+    #[test]
+    fn a_guarded_line_rate_is_never_set_to_another_rate() {
+        for name in ["bh8-262-4.3", "seed"] {
+            let p = Profile::builtin(name).unwrap();
+            let guarded = Allowed { keep_rate: Some(9600), ..Allowed::default() };
+            let g = Generator::new(&p, guarded);
+            // Unguarded, the generator does set it (so the guard is what keeps it out).
+            let free = generator_lines(&p, Allowed::default(), 7, 3000);
+            assert!(free.iter().any(|l| g.changes_rate(l)), "{name}: no rate change drawn unguarded");
+            let kept = generator_lines(&p, guarded, 7, 3000);
+            let bad: Vec<String> =
+                kept.iter().filter(|l| g.changes_rate(l)).map(|l| String::from_utf8_lossy(l).into_owned()).collect();
+            assert!(bad.is_empty(), "{name}: {bad:?}");
+        }
+    }
+
+    #[test]
+    fn what_changes_the_rate_is_read_as_a_hand_would() {
+        let p = Profile::builtin("bh8-262-4.3").unwrap();
+        let g = Generator::new(&p, Allowed { keep_rate: Some(9600), ..Allowed::default() });
+        for l in ["PSET BAUD 384", "pset baud 384", "PSET LFT 1 BAUD 192", "PSET BA\x01UD 384", "PSET BAUD 385"] {
+            assert!(g.changes_rate(l.as_bytes()), "{l:?} changes the rate");
+        }
+        for l in ["PSET BAUD 96", "PGET BAUD", "FGET BAUD", "PSET LFT 1", "PLIST", "PSET BAUD"] {
+            assert!(!g.changes_rate(l.as_bytes()), "{l:?} leaves the rate");
+        }
+        assert!(!g.permits(&[HostAction::Line("PSET BAUD 384".into())]));
+        assert!(g.permits(&[HostAction::Line("PSET BAUD 96".into())]));
+        // Not guarded (no serial line): anything goes.
+        let free = Generator::new(&p, Allowed::default());
+        assert!(!free.changes_rate(b"PSET BAUD 384"));
+        // At 38400 the one value allowed is 384.
+        let fast = Generator::new(&p, Allowed { keep_rate: Some(38400), ..Allowed::default() });
+        assert!(fast.changes_rate(b"PSET BAUD 96") && !fast.changes_rate(b"PSET BAUD 384"));
+    }
 }

@@ -265,6 +265,15 @@ fn device_campaign(a: &DeviceArgs, o: &gcl_harness::fuzz::device::FuzzOptions) -
                 f.actions.len()
             ));
         }
+        Progress::Note(line) => progress.println(&printable(line)),
+        Progress::NotReproduced(n) if !a.quiet => {
+            progress.println(&format!(
+                "not reproduced: {} (its minimized transcript failed so {} of {} times on a fresh connection: a note, not a finding)",
+                printable(&n.signature),
+                n.reproduced,
+                n.replays
+            ));
+        }
         Progress::Joined { finding, explanation } if !a.quiet => {
             progress.println(&format!(
                 "joined: {} is `{explanation}` (found since; its transcript removed)",
@@ -330,7 +339,7 @@ fn print_device_summary(
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{} runs ({} drawn cases dropped: the model made no case of them, they rest on a skipped decision, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
+        "{} runs ({} drawn cases dropped: the model made no case of them, they rest on a skipped decision, they would change a serial line's rate, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
         s.runs,
         s.dropped,
         s.elapsed.as_secs_f64(),
@@ -355,6 +364,21 @@ fn print_device_summary(
             f.actions.len(),
             f.path.as_ref().map_or(String::new(), |p| format!(": {}", p.display()))
         )?;
+    }
+    for n in &s.not_reproduced {
+        writeln!(
+            out,
+            "  note: not reproduced: {} (failed {} of {} replays of its minimized transcript on a fresh connection)",
+            printable(&n.signature),
+            n.reproduced,
+            n.replays
+        )?;
+    }
+    if let Some(who) = &s.identity {
+        writeln!(out, "  {}", printable(who))?;
+    }
+    for said in &s.hand_after {
+        writeln!(out, "  hand after: {}", printable(said))?;
     }
     if !a.quiet {
         write!(out, "{}", fd::coverage::render(&report.coverage))?;

@@ -298,9 +298,14 @@ pub const SIGNATURE_KEY: &str = "x-signature";
 
 impl FuzzOptions {
     /// Options for `target` with the defaults: 1000 runs, one worker, minimization on, and
-    /// for `serial:` targets no EEPROM writes at all (a real hand's EEPROM wears out).
+    /// for `serial:` targets no EEPROM writes at all (a real hand's EEPROM wears out) and no change
+    /// of the line's rate ([`Allowed::keep_rate`]).
     pub fn new(target: Target, profile: Arc<Profile>) -> FuzzOptions {
         let serial = matches!(target, Target::Serial { .. });
+        let keep_rate = match &target {
+            Target::Serial { baud, .. } => Some(*baud),
+            _ => None,
+        };
         FuzzOptions {
             open: OpenOptions { loaded_profile: Some(profile.clone()), ..OpenOptions::default() },
             target,
@@ -310,7 +315,7 @@ impl FuzzOptions {
             max_findings: None,
             corpus: None,
             out: None,
-            allowed: Allowed { eeprom: !serial, ..Allowed::default() },
+            allowed: Allowed { eeprom: !serial, keep_rate, ..Allowed::default() },
             write_budget: serial.then_some(0),
             jobs: 1,
             minimize: true,
@@ -502,6 +507,39 @@ pub struct FuzzSummary {
     pub no_cases: Option<String>,
     /// Corpus files that did not read or parse, with why: skipped, and worth a warning.
     pub malformed_corpus: Malformed,
+    /// Failures that did not fail again, the same way, when their minimized transcript was
+    /// replayed on a fresh connection: notes, never findings.
+    pub not_reproduced: Vec<NotReproduced>,
+    /// Who the hand says it is, when it names another firmware than the profile models
+    /// ([`gcl_conformance::identity::mismatch`]): said before the first case.
+    pub identity: Option<String>,
+    /// What the campaign left on a hand outside this process as it found it, checked at the
+    /// end (the line's rate on a serial line; the EEPROM): one sentence each.
+    pub hand_after: Vec<String>,
+}
+
+/// A failure whose minimized transcript did not fail again, with the same signature, on every
+/// replay on a fresh connection ([`CONFIRMATIONS`]): a note, not a finding.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NotReproduced {
+    /// The signature it had when first met, as people read it.
+    pub signature: String,
+    /// Its key.
+    pub key: String,
+    /// Replays that failed with the same signature.
+    pub reproduced: u32,
+    /// Replays made.
+    pub replays: u32,
+    /// The minimized transcript's text (what was replayed).
+    pub transcript_text: String,
+}
+
+/// How many times a finding's minimized transcript is replayed on a fresh connection before it
+/// is reported: every replay must fail with the same signature. A hand outside this process
+/// (a line, a pipe, a socket: timing varies) gets three; the in-process simulator, whose runs
+/// are the same every time, one.
+pub fn confirmations(target: &Target) -> u32 {
+    if matches!(target, Target::Sim { .. }) { 1 } else { 3 }
 }
 
 impl FuzzSummary {
@@ -533,6 +571,12 @@ pub enum Progress<'a> {
     },
     /// A new distinct finding, minimized.
     Finding(&'a Finding),
+    /// A line about the hand before the first case (who it says it is, when that is not the
+    /// firmware the profile models).
+    Note(&'a str),
+    /// A failure whose minimized transcript did not fail again the same way on a fresh
+    /// connection: not a finding.
+    NotReproduced(&'a NotReproduced),
     /// A finding reported earlier that an explanation found since covers: it is that bug, and
     /// no longer a finding of its own (its transcript is removed).
     Joined {
@@ -570,6 +614,8 @@ struct Shared {
     last_drop: String,
     /// See [`FuzzSummary::no_cases`].
     no_cases: Option<String>,
+    /// See [`FuzzSummary::not_reproduced`].
+    not_reproduced: Vec<NotReproduced>,
 }
 
 /// Drawn cases dropped in a row after which a campaign ends, having nothing to run: a few
@@ -1598,12 +1644,20 @@ pub fn judge_once(
 /// Runs the fuzzer. `progress` is called from worker threads.
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
     refuse_what_leaves_no_case(opts)?;
+    let mut identity = None;
     if opts.wide() {
         // As `gcl conform`: a hand that answers nothing is an infrastructure problem (exit 2),
         // not a campaign of "silence" findings.
         let mut l = gcl_host::target::open(&opts.target, &opts.open).map_err(FuzzError::Open)?;
         if let Some(why) = dead_hand(l.as_mut(), &opts.profile) {
             return Err(FuzzError::NotAlive { target: opts.target.to_string(), why });
+        }
+        // Who the hand says it is, first: a hand of another firmware fails wherever the two
+        // differ, and every such failure would be a finding.
+        let policy = DeadlinePolicy::for_target(&opts.target);
+        identity = crate::preflight::run(l.as_mut(), &opts.profile, &policy).ok().and_then(|p| p.identity);
+        if let Some(who) = &identity {
+            progress(Progress::Note(who));
         }
     }
     check_real_time(opts)?;
@@ -1644,6 +1698,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         dropped_in_a_row: 0,
         last_drop: String::new(),
         no_cases: None,
+        not_reproduced: Vec::new(),
     });
     let runs = AtomicU64::new(0);
     let tickets = AtomicU64::new(0);
@@ -1669,6 +1724,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         return Err(e);
     }
     name_status_commands(&mut sh.findings, &sh.status_at);
+    let hand_after = hand_after(opts, writes.load(Ordering::SeqCst));
     Ok(FuzzSummary {
         runs: runs.load(Ordering::SeqCst),
         dropped: sh.dropped,
@@ -1691,7 +1747,37 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         no_cases: sh.no_cases,
         malformed_corpus: malformed,
         minimizing: sh.minimizing,
+        not_reproduced: sh.not_reproduced,
+        identity,
+        hand_after,
     })
+}
+
+/// What a campaign left on a hand outside this process as it found it, checked where it can
+/// be: on a serial line, whether the hand still answers at the rate the campaign started at
+/// (no case changes it, [`Allowed::keep_rate`]); and what became of the EEPROM.
+fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
+    if !opts.wide() {
+        return Vec::new();
+    }
+    let mut said = Vec::new();
+    if let Target::Serial { baud, .. } = &opts.target {
+        said.push(match gcl_host::target::open(&opts.target, &opts.open) {
+            Ok(mut l) => match dead_hand(l.as_mut(), &opts.profile) {
+                None => format!("line: the hand answers at {baud} baud, the rate it started at"),
+                Some(why) => format!("line: the hand no longer answers at {baud} baud, the rate it started at: {why}"),
+            },
+            Err(e) => format!("line: the port could not be opened again at {baud} baud to check the hand: {e}"),
+        });
+    }
+    said.push(if eeprom_writes == 0 {
+        "EEPROM: no writes; the saved parameters are as they were found".to_string()
+    } else {
+        format!(
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back              (the values saved before the campaign were not read, so a hand whose saved values were not the              factory defaults now has the factory defaults)"
+        )
+    });
+    said
 }
 
 impl Shared {
@@ -1788,6 +1874,13 @@ fn worker(
             Some(b) => g.mutate(&mut dice, &b),
             None => g.case(&mut dice),
         };
+        // (the generator draws no set of a guarded line rate; a mutation may still copy one in)
+        if opts.allowed.keep_rate.is_some() && !g.permits(&actions) {
+            if lock().dropped("it would change the line's rate") {
+                stop.store(true, Ordering::SeqCst);
+            }
+            continue;
+        }
         // (in this process the model's own replay of the case waits for a failure: see
         // [`case::build_case_unchecked`])
         let built = if opts.wide() {
@@ -1924,9 +2017,29 @@ fn report_finding(
     let mut final_case = build_for(opts, &min_actions, "fuzz", "a finding").unwrap_or(min_case);
     let out = hand.run(&final_case.transcript, true)?;
     let mut sig = sig;
+    let alive = shared.lock().unwrap_or_else(|e| e.into_inner()).dead_hand.is_none();
+    // Confirmed before it is reported: the minimized transcript, replayed on a fresh
+    // connection, fails with the same signature every time (a dead hand cannot be asked).
+    if alive {
+        let of = confirmations(&opts.target);
+        let again = reproductions(opts, hand, &min_actions, &final_case, &sig, of)?;
+        if again < of {
+            let nr = NotReproduced {
+                signature: sig.to_string(),
+                key: sig.key(),
+                reproduced: again,
+                replays: of,
+                transcript_text: final_case.transcript.to_text(),
+            };
+            progress(Progress::NotReproduced(&nr));
+            let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
+            sh.minimizing += t0.elapsed();
+            sh.not_reproduced.push(nr);
+            return Ok(false);
+        }
+    }
     // A position wrong before the motion named: the hand is asked where it began (a dead
     // hand is not). Named so, it may be a finding already reported.
-    let alive = shared.lock().unwrap_or_else(|e| e.into_inner()).dead_hand.is_none();
     if alive && let Some(s) = probe::named(opts, hand, &min_actions, &final_case, &out, &sig)? {
         sig = s;
         let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
@@ -2016,6 +2129,28 @@ fn report_finding(
         progress(Progress::Joined { finding: f, explanation: &e });
     }
     Ok(opts.max_findings.is_some_and(|m| sh.findings.len() >= m))
+}
+
+/// How many of `of` replays of a finding's case, each on a fresh connection, fail with its
+/// signature (its own explanation, if it has one, known: the replay must keep it).
+fn reproductions(
+    opts: &FuzzOptions,
+    hand: &mut Hand<'_>,
+    actions: &[HostAction],
+    case: &BuiltCase,
+    sig: &FindingSignature,
+    of: u32,
+) -> Result<u32, FuzzError> {
+    let known: Vec<String> = [sig.explanation.clone()].into_iter().filter(|e| !e.is_empty()).collect();
+    let mut again = 0;
+    for _ in 0..of {
+        hand.link = None;
+        let out = hand.run(&case.transcript, true)?;
+        if judged(opts, hand, actions, case, &out, &known)?.is_some_and(|s| s.key() == sig.key()) {
+            again += 1;
+        }
+    }
+    Ok(again)
 }
 
 /// When minimization ends (it also ends on a signal), keeping the best so far: with the

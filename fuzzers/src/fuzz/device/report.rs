@@ -67,6 +67,16 @@ pub struct FuzzReport {
     /// drawn cases all dropped. A campaign that ended so without a new finding has no verdict.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+    /// Who the hand said it was, when it named another firmware than the profile models.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identity: Option<String>,
+    /// What the campaign left on a hand outside this process as it found it, checked at the end.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hand_after: Vec<String>,
+    /// Failures whose minimized transcript did not fail again the same way on every replay on a
+    /// fresh connection: notes, not findings.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_reproduced: Vec<super::NotReproduced>,
 }
 
 /// Coverage reached by a time in the run.
@@ -156,6 +166,9 @@ impl FuzzReport {
             stopped: s.dead_hand.clone().or_else(|| s.no_cases.clone()).or_else(|| {
                 (s.runs == 0 && !s.interrupted).then(|| "the budget ran out before the first case ran".to_string())
             }),
+            identity: s.identity.clone(),
+            hand_after: s.hand_after.clone(),
+            not_reproduced: s.not_reproduced.clone(),
         }
     }
 }
@@ -374,7 +387,12 @@ pub fn to_html(r: &FuzzReport) -> String {
         None => headline,
     };
     let mut p = Page::new(&format!("gcl fuzz device {} on {}", r.profile, r.target), ok, verdict, &headline);
-    p.facts(&[
+    let mut facts: Vec<(String, String)> = Vec::new();
+    // Who the hand said it was comes first: it explains every finding the two firmwares differ by.
+    if let Some(who) = &r.identity {
+        facts.push(("identity".into(), esc(who)));
+    }
+    facts.extend([
         ("target".into(), format!("<code>{}</code>", esc(&r.target))),
         ("profile".into(), esc(&r.profile)),
         ("judged".into(), format!("{} ({:.1} cases/s)", esc(&r.judged()), r.cases_per_second)),
@@ -382,6 +400,21 @@ pub fn to_html(r: &FuzzReport) -> String {
         ("wire".into(), format!("{} bytes; {} EEPROM writes", r.wire_bytes, r.eeprom_writes)),
         ("tool".into(), esc(&r.tool)),
     ]);
+    for said in &r.hand_after {
+        facts.push(("hand after".into(), esc(said)));
+    }
+    for n in &r.not_reproduced {
+        facts.push((
+            "not reproduced".into(),
+            format!(
+                "{} (failed {} of {} replays on a fresh connection: not a finding)",
+                esc(&n.signature),
+                n.reproduced,
+                n.replays
+            ),
+        ));
+    }
+    p.facts(&facts);
     let mut opts: Vec<(String, String)> = Vec::new();
     if !r.faults.is_empty() {
         opts.push(("fault".into(), r.faults.join(", ")));
