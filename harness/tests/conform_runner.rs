@@ -335,3 +335,37 @@ fn a_known_failure_leaves_the_link_as_clean_as_a_pass() {
     }
     pty.terminate();
 }
+
+/// Issue 37: a hand that names another firmware than the profile (its banner and VERS say 4.4,
+/// the run was given bh8-262-4.3) is told so in the run's first line, with the profile to use,
+/// and at the top of the report; a hand of the profile's own firmware hears nothing of it.
+#[test]
+fn a_hand_of_another_firmware_is_named_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = gcl(&[
+        "conform",
+        "--target",
+        "sim:bh8-262-4.4",
+        "--profile",
+        "bh8-262-4.3",
+        "--only",
+        "cmd-vers",
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    let line =
+        "identity: the hand says firmware 4.4; you chose bh8-262-4.3 (firmware 4.3): run with --profile bh8-262-4.4";
+    assert!(stderr.starts_with(line), "the first line of the run: {stderr}{stdout}");
+    assert!(report(&out).preflight.is_some_and(|p| p.starts_with(line)), "the report's first line too");
+
+    for (target, profile) in
+        [("sim:bh8-262-4.3", "bh8-262-4.3"), ("sim:bh8-262-4.4", "bh8-262-4.4"), ("sim:seed", "seed")]
+    {
+        let o = gcl(&["conform", "--target", target, "--profile", profile, "--only", "cmd-vers"]);
+        let (stdout, stderr) = text(&o);
+        assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+        assert!(!stderr.contains("identity:"), "{target}: {stderr}");
+    }
+}

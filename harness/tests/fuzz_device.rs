@@ -770,3 +770,89 @@ fn a_serial_campaign_leaves_the_hand_at_its_starting_rate() {
         broken.hand_after
     );
 }
+
+/// Issue 37: `fuzz device` asks a hand outside this process who it is before the first case and
+/// says it first when it names another firmware than the profile; the report keeps it.
+#[test]
+fn a_campaign_on_a_hand_of_another_firmware_says_so_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let target = format!("exec:{gcl} sim --stdio --profile bh8-262-4.4");
+    let rep = dir.path().join("r");
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &target, "--profile", "bh8-262-4.3", "--no", "abort-timing"])
+        .args(["--runs", "2", "--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let line =
+        "identity: the hand says firmware 4.4; you chose bh8-262-4.3 (firmware 4.3): run with --profile bh8-262-4.4";
+    assert!(stderr.starts_with(line), "{stderr}");
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    assert_eq!(r.identity.as_deref(), Some(line));
+    // The profile of the hand's own firmware: nothing said.
+    let out = Command::new(gcl)
+        .args([
+            "fuzz",
+            "device",
+            "--target",
+            &target,
+            "--profile",
+            "bh8-262-4.4",
+            "--no",
+            "abort-timing",
+            "--runs",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("identity:"));
+}
+
+/// Issue 37: a failure is a finding only if its minimized transcript fails again, the same way,
+/// on fresh connections. A hand that has the bug only in its second process (the first
+/// campaign connection after the start-up probe; every later connection is a correct hand)
+/// fails a case, and the replays on fresh connections pass: a `not reproduced` note with its
+/// count, no finding, exit 0. The same hand with the bug in every process is a finding.
+#[test]
+fn a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_finding() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let hand = dir.path().join("hand.sh");
+    let count = dir.path().join("count");
+    std::fs::write(
+        &hand,
+        format!(
+            "n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '{c}'\n\
+             if [ \"$n\" -eq \"$BUGGY_AT\" ] || [ \"$BUGGY_AT\" = all ]; then exec {gcl} sim --stdio --fault fget-reversed; fi\n\
+             exec {gcl} sim --stdio\n",
+            c = count.display()
+        ),
+    )
+    .unwrap();
+    let target = format!("exec:sh {}", hand.display());
+    let campaign = |buggy_at: &str| {
+        let _ = std::fs::remove_file(&count);
+        let rep = dir.path().join(format!("r-{buggy_at}"));
+        let out = Command::new(gcl)
+            .env("BUGGY_AT", buggy_at)
+            .args(["fuzz", "device", "--target", &target, "--no", "abort-timing", "--seed", "1", "--runs", "60"])
+            .args(["--max-findings", "1", "--report", rep.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let r: report::FuzzReport =
+            serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+        (out, r)
+    };
+    let (out, r) = campaign("2");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(r.findings.is_empty(), "{:?}", r.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>());
+    let n = r.not_reproduced.first().expect("the failure is noted");
+    assert_eq!((n.reproduced, n.replays), (0, 3), "{n:?}");
+    assert!(stdout.contains("note: not reproduced: "), "{stdout}");
+    let (out, r) = campaign("all");
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(r.findings.len(), 1);
+    assert!(r.not_reproduced.is_empty(), "{:?}", r.not_reproduced);
+}
