@@ -303,6 +303,7 @@ mod tests {
                 (b"\x03", b"\n\r=> "),
                 (b"\r", b"\n\r=> "),
                 (b"ZZQX\r", b"ZZQX\n\rError 32!\n\r=> "),
+                (b"VERS\r", b"VERS\n\rFirmware 4.4\n\r=> "),
                 (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
             ],
             pending: Vec::new(),
@@ -331,5 +332,30 @@ mod tests {
         assert_eq!(r.findings, vec!["the hand does not echo what it receives"], "{r:?}");
         let r = probe(vec![Fault::ResetNoBanner]);
         assert_eq!(r.findings, vec!["RESET prints no banner (no `BarrettHand Firmware`)"], "{r:?}");
+    }
+
+    #[test]
+    fn a_hand_of_another_firmware_is_named_from_its_vers_or_its_banner() {
+        let p = Profile::builtin("bh8-262-4.3").unwrap();
+        let policy = DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None });
+        let hand = |vers: &'static [u8], banner: &'static [u8]| Scripted {
+            answers: vec![
+                (b"\x03", b"\n\r=> "),
+                (b"\r", b"\n\r=> "),
+                (b"ZZQX\r", b"ZZQX\n\rERR 32\n\r=> "),
+                (b"VERS\r", vers),
+                (b"RESET\r", banner),
+            ],
+            pending: Vec::new(),
+            now: Duration::ZERO,
+        };
+        let said = "identity: the hand says firmware 4.4; you chose bh8-262-4.3 (firmware 4.3): run with --profile bh8-262-4.4";
+        // In VERS alone (a banner without a version), and in the banner alone (VERS refused).
+        let mut h = hand(b"VERS\n\rFirmware Version 4.41\n\r=> ", b"RESET\n\rBarrettHand Firmware\n\r=> ");
+        assert_eq!(run(&mut h, &p, &policy).unwrap().identity.as_deref(), Some(said));
+        let mut h = hand(b"VERS\n\rERR 32\n\r=> ", b"RESET\n\rBarrettHand Firmware\n\rVersion 4.4x\n\r=> ");
+        assert_eq!(run(&mut h, &p, &policy).unwrap().identity.as_deref(), Some(said));
+        let mut h = hand(b"VERS\n\rVersion 4.34\n\r=> ", b"RESET\n\rBarrettHand Firmware\n\r=> ");
+        assert_eq!(run(&mut h, &p, &policy).unwrap().identity, None);
     }
 }
