@@ -475,6 +475,30 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/readme_promises.rs::the_write_budget_caps_a_campaigns_eeprom_writes"],
     ),
     (
+        "on a `serial:` target no case sets the hand's line rate",
+        &[
+            "conformance/src/actions/mod.rs::a_guarded_line_rate_is_never_set_to_another_rate",
+            "conformance/src/actions/mod.rs::what_changes_the_rate_is_read_as_a_hand_would",
+            "harness/tests/fuzz_device.rs::a_serial_campaign_leaves_the_hand_at_its_starting_rate",
+        ],
+    ),
+    (
+        "After a serial campaign the port is opened again at the rate it started at and the hand probed",
+        &["harness/tests/fuzz_device.rs::a_serial_campaign_leaves_the_hand_at_its_starting_rate"],
+    ),
+    (
+        "every replay must fail with the same signature",
+        &["harness/tests/fuzz_device.rs::a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_finding"],
+    ),
+    (
+        "is told so in the very first line",
+        &[
+            "harness/tests/conform_runner.rs::a_hand_of_another_firmware_is_named_first",
+            "harness/tests/fuzz_device.rs::a_campaign_on_a_hand_of_another_firmware_says_so_first",
+            "conformance/src/preflight.rs::a_hand_of_another_firmware_is_named_from_its_vers_or_its_banner",
+        ],
+    ),
+    (
         "no FSAVE or PSAVE at all unless `--write-budget N` allows N writes",
         &["harness/tests/readme_promises.rs::serial_targets_are_fuzzed_without_eeprom_writes_and_by_one_worker"],
     ),
