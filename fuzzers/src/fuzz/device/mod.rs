@@ -1774,7 +1774,9 @@ fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
         "EEPROM: no writes; the saved parameters are as they were found".to_string()
     } else {
         format!(
-            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back              (the values saved before the campaign were not read, so a hand whose saved values were not the              factory defaults now has the factory defaults)"
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back \
+             (the values saved before the campaign were not read, so a hand whose saved values were not the \
+             factory defaults now has the factory defaults)"
         )
     });
     said
