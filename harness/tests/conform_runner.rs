@@ -369,3 +369,39 @@ fn a_hand_of_another_firmware_is_named_first() {
         assert!(!stderr.contains("identity:"), "{target}: {stderr}");
     }
 }
+
+/// Issue 37: a relation read after a number of RealTime cycles needs no clock. On a hand whose
+/// motions end at once (`gcl sim --stdio`, fast time), the LCVC twin `rt-lcvc-positions` is
+/// run, not skipped as needing abort timing: the correct hand passes it and a hand that
+/// ignores LCVC fails it, while the cases that do need the clock are still SKIP with why.
+#[test]
+fn a_relation_read_over_cycles_is_judged_on_a_hand_without_a_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |fault: &str| {
+        let target = format!("exec:{GCL} sim --stdio{fault}");
+        let out = dir.path().join(format!("r{}", fault.len()));
+        let o = gcl(&[
+            "conform",
+            "--target",
+            &target,
+            "--only",
+            "rt-lcvc-positions",
+            "--only",
+            "abort-motion",
+            "--report",
+            out.to_str().unwrap(),
+        ]);
+        let r = report(&out);
+        let verdict = |id: &str| r.cases.iter().find(|c| c.id == id).map(|c| (c.verdict, c.message.clone()));
+        (o.status.code(), verdict("rt-lcvc-positions"), verdict("abort-motion"))
+    };
+    let (code, lcvc, abort) = run("");
+    assert_eq!(code, Some(0));
+    assert_eq!(lcvc.map(|v| v.0), Some(Verdict::Pass));
+    let (v, why) = abort.unwrap();
+    assert_eq!(v, Verdict::Skip);
+    assert!(why.is_some_and(|w| w.contains("requires abort-timing")), "the skip says why");
+    let (code, lcvc, _) = run(" --fault lcvc-ignored");
+    assert_eq!(code, Some(1));
+    assert_eq!(lcvc.map(|v| v.0), Some(Verdict::Fail));
+}

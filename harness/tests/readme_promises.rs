@@ -488,7 +488,9 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "every replay must fail with the same signature",
-        &["harness/tests/fuzz_device.rs::a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_finding"],
+        &[
+            "harness/tests/fuzz_device.rs::a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_finding",
+        ],
     ),
     (
         "is told so in the very first line",

@@ -431,20 +431,27 @@ impl Gen {
             return;
         }
         let (lo, hi) = (pairs.iter().map(|x| x.0).min().unwrap_or(0), pairs.iter().map(|x| x.0).max().unwrap_or(0));
-        let anchor = (self.mpe(1).max(lo / 4), (self.limit(1) - self.mpe(1)).min(4 * hi));
+        // Off home by enough counts for the ratio to show through truncation (motor 2 then
+        // reads at least LEAST_ANCHOR), not by what the pause gives on the model's clock: the
+        // ratio holds however long the motors ran, so a hand whose motions take no wall time
+        // (a firmware build over a pipe, which still moves over the RealTime cycles it runs) is
+        // judged too.
+        let anchor = (2 * LEAST_ANCHOR, (self.limit(1) - self.mpe(1)).min(4 * hi));
         let evidence = format!(
             "the control velocity is LCV x LCVC: motors 1 and 2 run from home at one datum ({datum}), motor \
              1 with LCVC {} and motor 2 with LCVC {lcvc}, over the same interval (the ^C lands {pause}..{} \
              ms after the block), so motor 2 goes half as far as motor 1 whatever the velocity units; the \
              model reads {}..{} and {}..{}; a position read in motion is compared with 25 % tolerance, which \
-             refuses a hand that runs both alike (LCVC without effect); motor 1 must be off home and short \
-             of its stop",
+             refuses a hand that runs both alike (LCVC without effect); motor 1 must be {} counts or more \
+             from home (the least for the ratio to show) and short of its stop; no clock is read: the case \
+             holds on a hand whose motions take no wall time",
             2 * lcvc,
             pause + slack,
             lo,
             hi,
             pairs.iter().map(|x| x.1).min().unwrap_or(0),
             pairs.iter().map(|x| x.1).max().unwrap_or(0),
+            anchor.0,
         );
         let k = self
             .rt_case(
@@ -455,8 +462,8 @@ impl Gen {
             )
             .src("Parameter LCVC")
             .src("Parameter LCV")
-            // (the motors move over the host's pause: a hand whose motions take no time does not)
-            .requires(Requirement::AbortTiming)
+            // (no `requires: abort-timing`: the ^C ends the loop wherever the motors are, and the
+            // ratio is read, not a time)
             .line(&format!("1FSET LCVC {}", 2 * lcvc))
             .line(&format!("2FSET LCVC {lcvc}"))
             .line("12LOOP")
