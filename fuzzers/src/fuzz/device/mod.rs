@@ -532,6 +532,8 @@ pub struct NotReproduced {
     pub replays: u32,
     /// The minimized transcript's text (what was replayed).
     pub transcript_text: String,
+    /// How it failed when met, on the campaign's connection (expected against actual).
+    pub diff: String,
 }
 
 /// How many times a finding's minimized transcript is replayed on a fresh connection before it
@@ -2032,6 +2034,7 @@ fn report_finding(
                 reproduced: again,
                 replays: of,
                 transcript_text: final_case.transcript.to_text(),
+                diff: out.render(),
             };
             progress(Progress::NotReproduced(&nr));
             let mut sh = shared.lock().unwrap_or_else(|e| e.into_inner());
