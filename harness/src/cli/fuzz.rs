@@ -216,6 +216,21 @@ fn add_baselines(a: &DeviceArgs, o: &mut gcl_harness::fuzz::device::FuzzOptions)
                 o.profile.id
             );
         }
+        // ... and under its spec, not only its id: a file declaring the id with other contents
+        // is another profile.
+        let spec = gcl_harness::report::ProfileSpec::of(a.target.model_profile(a.profile.as_deref()), &o.profile);
+        if let Some((file, theirs)) = o.baseline.recorded_on_another_spec(&spec).first() {
+            let theirs = match theirs {
+                Some(d) => format!("a spec with sha256 {}", &d[..d.len().min(16)]),
+                None => format!("no spec (written by an older gcl, so taken as the built-in {})", o.profile.id),
+            };
+            anyhow::bail!(
+                "--baseline {}: {} names {theirs}, and this campaign's profile is {}: a baseline says what is known of a hand under the spec it was recorded on only (record the baseline again with this profile)",
+                dir.display(),
+                file.display(),
+                spec.label()
+            );
+        }
         baselines.push(match n {
             0 => format!("{} (no finding in it)", dir.display()),
             n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
