@@ -445,7 +445,8 @@ fn a_baseline_of_the_built_in_excuses_nothing_on_a_file_declaring_its_id() {
     std::fs::write(&doctored, seed.replacen("\nfinger_limit = 17800\n", "\nfinger_limit = 17000\n", 1)).unwrap();
     let found = dir.path().join("found");
     let fuzz = |more: &[&str]| {
-        let mut a = vec!["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "60", "--quiet"];
+        let mut a =
+            vec!["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "60", "--quiet"];
         a.extend(more);
         gcl(&a)
     };
@@ -455,7 +456,10 @@ fn a_baseline_of_the_built_in_excuses_nothing_on_a_file_declaring_its_id() {
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
     assert!(
         r.stderr.contains("names a spec with sha256 ")
-            && r.stderr.contains(&format!("this campaign's profile is {} (a profile file declaring id seed", doctored.display())),
+            && r.stderr.contains(&format!(
+                "this campaign's profile is {} (a profile file declaring id seed",
+                doctored.display()
+            )),
         "{}",
         r.stderr
     );
@@ -466,14 +470,19 @@ fn a_baseline_of_the_built_in_excuses_nothing_on_a_file_declaring_its_id() {
     for e in std::fs::read_dir(&found).unwrap() {
         let p = e.unwrap().path();
         let text = std::fs::read_to_string(&p).unwrap();
-        let old: String = text.lines().filter(|l| !l.starts_with("x-profile-sha256:")).map(|l| format!("{l}\n")).collect();
+        let old: String =
+            text.lines().filter(|l| !l.starts_with("x-profile-sha256:")).map(|l| format!("{l}\n")).collect();
         assert_ne!(old, text, "a finding names its spec");
         std::fs::write(&p, old).unwrap();
     }
     assert_eq!(fuzz(&["--baseline", s(&found)]).code, Some(0));
     let r = fuzz(&["--profile", s(&doctored), "--baseline", s(&found)]);
     assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
-    assert!(r.stderr.contains("names no spec (written by an older gcl, so taken as the built-in seed)"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("names no spec (written by an older gcl, so taken as the built-in seed)"),
+        "{}",
+        r.stderr
+    );
 }
 
 /// Replaces the value of the top-level `"verdict"` of a pretty-printed certificate.

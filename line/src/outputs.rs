@@ -316,12 +316,8 @@ mod tests {
         let lock = dir.path().join(LOCK_FILE);
         nix::unistd::mkfifo(&lock, nix::sys::stat::Mode::from_bits_truncate(0o644)).unwrap();
         // Held by another open file (flock locks an open file, so this is another holder).
-        let other = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .custom_flags(nix::libc::O_NONBLOCK)
-            .open(&lock)
-            .unwrap();
+        let other =
+            std::fs::OpenOptions::new().read(true).write(true).custom_flags(nix::libc::O_NONBLOCK).open(&lock).unwrap();
         let _held = nix::fcntl::Flock::lock(other, nix::fcntl::FlockArg::LockExclusiveNonblock).unwrap();
         let (tx, rx) = std::sync::mpsc::channel();
         let d = dir.path().to_path_buf();

@@ -3,7 +3,7 @@
 //! prints; the fuzzers live in `gcl_harness::fuzz`.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -331,6 +331,13 @@ fn device_report(
     }
     report.coverage_over_time = timeline;
     report.provenance = Some(provenance(a, o, baselines));
+    // Sealed, so that a merge takes this folder only as written.
+    if let Err(e) = gcl_harness::fuzz::merge::seal_device(&mut report, a.out.as_deref().unwrap_or(Path::new("."))) {
+        eprintln!(
+            "gcl fuzz device: warning: {}",
+            printable(&format!("the report is not sealed, and no merge takes it: {e}"))
+        );
+    }
     report
 }
 
@@ -454,5 +461,5 @@ fn provenance(
         (None, d) => options
             .insert("duration".into(), humantime::format_duration(d.unwrap_or(Duration::from_secs(60))).to_string()),
     };
-    gcl_harness::fuzz::shard::Provenance { shard: o.shard, seed: o.seed, options, merged: None }
+    gcl_harness::fuzz::shard::Provenance::new(o.shard, o.seed, options)
 }
