@@ -6,6 +6,7 @@
 //! schedule gives the same finding on any machine.
 
 mod deps;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -928,4 +929,88 @@ fn what_every_shard_found_at_run_0_is_one_finding() {
     let (code, err) = merge(&[&a, &a], &t.join("twice"));
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("shard 1/2 is given twice"), "{err}");
+}
+
+/// Issue 39, one more pass on merges with forged folders (each sealed again as a forger who
+/// knows how would): a record of a slice no campaign has (shard 7 of 3 merged as "shards 1, 3,
+/// 7 of 3"; a merged record of shards 0 and 9 of 3 as "shards 0–3, 9 of 3", complete, exit 1)
+/// is refused; a finding whose path names a file outside its folder reads nothing there; a
+/// FIFO held as `--out`'s lock file is refused at once (it hung, item 13); a folder given to
+/// merge inside the merge's aside folder is refused, not emptied.
+#[test]
+fn forged_shard_folders_are_refused_or_read_nothing_outside() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let s: Vec<PathBuf> = (1..=3).map(|k| t.join(format!("s{k}"))).collect();
+    for (k, dir) in s.iter().enumerate() {
+        device_shard(dir, &format!("{}/3", k + 1), &["--fault", "fget-reversed", "--runs", "60"]);
+    }
+    let copy = |from: &Path, name: &str| {
+        let to = t.join(name);
+        assert!(Command::new("cp").arg("-a").arg(from).arg(&to).status().unwrap().success());
+        to
+    };
+    let report = |d: &Path| d.join("report/fuzz-device.json");
+    // Slices no campaign has.
+    let beyond = copy(&s[1], "beyond");
+    edit_report(&report(&beyond), true, |v| v["provenance"]["shard"] = serde_json::json!({"index": 7, "count": 3}));
+    let (code, err) = merge(&[&s[0], &beyond, &s[2]], &t.join("x1"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("records shard 7 of 3, which no campaign has"), "{err}");
+    let claims = copy(&s[1], "claims");
+    edit_report(&report(&claims), true, |v| {
+        v["provenance"]["shard"] = Value::Null;
+        v["provenance"]["merged"] = serde_json::json!({"count": 3, "shards": [2, 9, 0]});
+    });
+    let (code, err) = merge(&[&s[0], &claims, &s[2]], &t.join("x2"));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("records shard 9 of 3") || err.contains("records shard 0 of 3"), "{err}");
+    // A finding whose path names a secret elsewhere: only its own folder's file of that name
+    // is looked at, and a link there is not followed.
+    let secret = t.join("secret.gcl");
+    std::fs::write(&secret, "root:$6$secretsalt$hash\n").unwrap();
+    let aimed = copy(&s[1], "aimed");
+    let sha = gcl_harness::digest::sha256_hex(&std::fs::read(&secret).unwrap());
+    for f in std::fs::read_dir(aimed.join("findings")).unwrap() {
+        std::fs::remove_file(f.unwrap().path()).unwrap();
+    }
+    std::os::unix::fs::symlink(&secret, aimed.join("findings/secret.gcl")).unwrap();
+    edit_report(&report(&aimed), true, |v| {
+        for f in v["findings"].as_array_mut().unwrap() {
+            f["path"] = serde_json::json!(secret.display().to_string());
+        }
+        v["provenance"]["holds"] = serde_json::json!({"findings/secret.gcl": sha, "../secret.gcl": sha});
+    });
+    let out = t.join("aimed-out");
+    // (the other shards find the same bug: the aimed shard's finding must stand)
+    let (code, err) = merge(&[&aimed, &s[0], &s[2]], &out);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("aimed/findings/secret.gcl: a symbolic link, not copied"), "{err}");
+    for sub in ["findings", "report"] {
+        for e in std::fs::read_dir(out.join(sub)).into_iter().flatten() {
+            let p = e.unwrap().path();
+            assert!(!std::fs::read_to_string(&p).unwrap().contains("secretsalt"), "{}", p.display());
+        }
+    }
+    // A FIFO held in place of --out's lock file.
+    let held = t.join("held");
+    std::fs::create_dir(&held).unwrap();
+    let lock = held.join(".gcl.lock");
+    nix::unistd::mkfifo(&lock, nix::sys::stat::Mode::from_bits_truncate(0o644)).unwrap();
+    let fifo =
+        std::fs::OpenOptions::new().read(true).write(true).custom_flags(nix::libc::O_NONBLOCK).open(&lock).unwrap();
+    let _flock = nix::fcntl::Flock::lock(fifo, nix::fcntl::FlockArg::LockExclusiveNonblock).unwrap();
+    let (code, err) = merge(&[&s[0], &s[1], &s[2]], &held);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains(".gcl.lock: a named pipe, not a lock file"), "{err}");
+    // A shard inside the folder a merge writes aside.
+    let m = t.join("m");
+    assert_eq!(merge(&[&s[0], &s[1], &s[2]], &m).0, 1);
+    let inside = m.join(".gcl-merge-new/s1");
+    std::fs::create_dir(m.join(".gcl-merge-new")).unwrap();
+    assert!(Command::new("cp").arg("-a").arg(&s[0]).arg(&inside).status().unwrap().success());
+    let (code, err) = merge(&[&inside, &s[1], &s[2]], &m);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("where a merge into") && err.contains("move it elsewhere first"), "{err}");
+    assert!(report(&inside).is_file(), "the shard given is untouched");
 }

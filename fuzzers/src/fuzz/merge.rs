@@ -105,7 +105,8 @@ pub enum MergeError {
     /// A folder holds neither a host nor a device campaign's report.
     #[error("{0}: no report/fuzz.json (gcl fuzz host) or report/fuzz-device.json (gcl fuzz device) in it")]
     NotAShard(PathBuf),
-    /// The output folder is held by another command (a campaign, another merge).
+    /// The output folder is held by another command (a campaign, another merge), or its lock
+    /// file is not one.
     #[error("{0}")]
     Busy(String),
     /// A shard's report carries no seal (written by a gcl before shards were sealed).
@@ -220,13 +221,14 @@ fn read_held_text(expected: &Expected, path: &Path) -> Result<String, MergeError
 /// every shard may show, see [`merge_host`]) a run of its own slices: a shard relabelled as
 /// another, or with its figures raised, is refused whatever its seal says.
 fn within_slices(path: &Path, p: &Provenance, runs: u64, finding_runs: &[u64]) -> Result<(), MergeError> {
+    p.check_slices(&path.display().to_string())?;
     let (n, ks) = p.covers();
     if let Some(total) = p.options.get("runs").and_then(|r| r.parse::<u64>().ok()) {
-        let share: u64 = ks
+        // Each slice's share of the campaign's runs, checked: `runs` is a figure from anywhere.
+        let share = ks
             .iter()
-            .filter(|&&k| k >= 1 && k <= n)
-            .map(|&k| super::shard::Shard { index: k, count: n }.share(total))
-            .sum();
+            .map(|&k| total.checked_add(n - k).map_or(total / n + 1, |t| t / n))
+            .fold(0u64, u64::saturating_add);
         figure(path, "runs", runs, share)?;
     }
     for &run in finding_runs.iter().filter(|&&r| r != 0) {
@@ -854,9 +856,16 @@ pub const MERGE_MARK: &str = ".gcl-merge";
 /// merge, or a campaign holding `out` or one of its parts, is refused) and makes the folder
 /// the merge is written into, beside what an earlier merge wrote, which [`Out::commit`]
 /// replaces whole. A folder with files no merge wrote is refused, not touched.
-pub fn take_out(out: &Path) -> Result<Out, MergeError> {
+/// An input inside the folder a merge writes aside (`out/.gcl-merge-new`, which a merge killed
+/// before its commit may leave, and the next one empties) is refused, never emptied.
+pub fn take_out(out: &Path, inputs: &[PathBuf]) -> Result<Out, MergeError> {
     let lock = crate::outputs::OutLock::acquire(out, "fuzz merge --out").map_err(|e| {
-        if e.kind() == std::io::ErrorKind::ResourceBusy { MergeError::Busy(e.to_string()) } else { io(out)(e) }
+        // (in use, or a lock file that is no lock file: the error names the folder or the file)
+        if matches!(e.kind(), std::io::ErrorKind::ResourceBusy | std::io::ErrorKind::InvalidInput) {
+            MergeError::Busy(e.to_string())
+        } else {
+            io(out)(e)
+        }
     })?;
     for part in MERGED_PARTS {
         let p = out.join(part);
@@ -875,8 +884,23 @@ pub fn take_out(out: &Path) -> Result<Out, MergeError> {
     if others && !ours {
         return Err(MergeError::NotOurs(out.to_path_buf()));
     }
-    // What a merge killed before its commit left (only in a folder a merge marked).
+    // What a merge killed before its commit left (only in a folder a merge marked), unless a
+    // folder given to merge is in it.
     let stage = out.join(STAGE);
+    if let Ok(inside) = std::fs::canonicalize(&stage) {
+        for dir in inputs {
+            if std::fs::canonicalize(dir).is_ok_and(|d| d.starts_with(&inside)) {
+                return Err(MergeError::Invalid {
+                    path: dir.clone(),
+                    reason: format!(
+                        "inside {}, where a merge into {} is written before it is put in place; move it elsewhere first",
+                        stage.display(),
+                        out.display()
+                    ),
+                });
+            }
+        }
+    }
     remove_part(&stage)?;
     let mark = out.join(MERGE_MARK);
     crate::report::write_atomic(
@@ -891,6 +915,24 @@ pub fn take_out(out: &Path) -> Result<Out, MergeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A shard's record bounds what it may hold: its share of `--runs`, runs of its own slices
+    /// (run 0 is the campaign's); a `--runs` of u64::MAX is no overflow.
+    #[test]
+    fn a_record_bounds_its_runs_and_findings() {
+        use super::super::shard::Shard;
+        let p = Path::new("s2/report/fuzz.json");
+        let options = [("runs".to_string(), "12".to_string())].into();
+        let two = Provenance::new(Some(Shard { index: 2, count: 3 }), 1, options);
+        assert!(within_slices(p, &two, 4, &[0, 1, 4, 10]).is_ok());
+        let e = within_slices(p, &two, 5, &[]).unwrap_err().to_string();
+        assert!(e.contains("`runs` 5 is out of range (at most 4)"), "{e}");
+        let e = within_slices(p, &two, 4, &[3]).unwrap_err().to_string();
+        assert!(e.contains("run 3, which is shard 1/3's, and it holds shard(s) 2 of 3"), "{e}");
+        let huge = [("runs".to_string(), u64::MAX.to_string())].into();
+        let last = Provenance::new(Some(Shard { index: 1, count: 3 }), 1, huge);
+        assert!(within_slices(p, &last, u64::MAX / 3, &[]).is_ok());
+    }
 
     #[test]
     fn counts_add_up_checked_and_refuse_by_name() {

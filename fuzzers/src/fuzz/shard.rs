@@ -114,6 +114,17 @@ impl Provenance {
         Provenance { shard, seed, options, merged: None, campaign: None, holds: BTreeMap::new(), digest: None }
     }
 
+    /// Refuses a record of a slice no campaign has (K outside 1..=N, N = 0): a report is data
+    /// from anywhere, and its slices are checked before anything counts on them. `folder`
+    /// names it in the error.
+    pub fn check_slices(&self, folder: &str) -> Result<(), ShardSetError> {
+        let (n, ks) = self.covers();
+        match ks.iter().find(|&&k| k == 0 || k > n) {
+            Some(&k) => Err(ShardSetError::NoSuchSlice { folder: folder.to_string(), index: k, count: n }),
+            None => Ok(()),
+        }
+    }
+
     /// How `other` differs from this one as a campaign (the seed and the options; not the
     /// slice): one entry per difference, the other's value first, `--ops: err-bits=1 against
     /// every operator`.
@@ -142,6 +153,16 @@ pub enum ShardSetError {
         "{0}: its report records no shard, seed or options (written by an older gcl?), so nothing says which campaign it belongs to"
     )]
     Unrecorded(String),
+    /// A folder records a slice no campaign has (K outside 1..=N, or N = 0).
+    #[error("{folder}: its report records shard {index} of {count}, which no campaign has (K/N runs from 1/N to N/N)")]
+    NoSuchSlice {
+        /// The folder.
+        folder: String,
+        /// K as recorded.
+        index: u64,
+        /// N as recorded.
+        count: u64,
+    },
     /// Two folders are of different campaigns.
     #[error("not shards of one campaign: {folder} differs from {first} ({folder}'s against {first}'s): {}", differences.join("; "))]
     Mixed {
@@ -189,6 +210,7 @@ pub fn plan(folders: &[(String, Option<Provenance>)]) -> Result<(Provenance, Mer
     let mut count = 0;
     for (name, p) in folders {
         let p = p.as_ref().ok_or_else(|| ShardSetError::Unrecorded(name.clone()))?;
+        p.check_slices(name)?;
         let (n, ks) = p.covers();
         match first {
             None => {
@@ -336,6 +358,19 @@ mod tests {
         assert!(e.contains("one of 3 shards") && e.contains("one of 4"), "{e}");
         let e = plan(&[all[0].clone(), ("old".into(), None)]).unwrap_err().to_string();
         assert!(e.contains("old: its report records no shard"), "{e}");
+        // Slices no campaign has (issue 39, a forged record): K beyond N, N = 0, a merged
+        // folder claiming shard 0 or 9 of 3 (it merged as "shards 0–3, 9 of 3", complete).
+        for (k, n) in [(7, 3), (1, 0), (0, 3)] {
+            let e = plan(&[shard(k, n, 5, "every operator")]).unwrap_err().to_string();
+            assert!(e.contains(&format!("records shard {k} of {n}, which no campaign has")), "{e}");
+        }
+        let mut forged = shard(1, 3, 5, "every operator");
+        if let Some(p) = forged.1.as_mut() {
+            p.shard = None;
+            p.merged = Some(Merged { count: 3, shards: vec![1, 9] });
+        }
+        let e = plan(&[forged]).unwrap_err().to_string();
+        assert!(e.contains("records shard 9 of 3"), "{e}");
     }
 
     #[test]

@@ -90,7 +90,7 @@ fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
 fn device(a: &Args) -> anyhow::Result<u8> {
     // Everything is read and checked before --out is touched.
     let m = merge::merge_device(&a.dirs)?;
-    let out = merge::take_out(&a.out)?;
+    let out = merge::take_out(&a.out, &a.dirs)?;
     let (entries, dups, mut not_copied) = merge::merge_corpora(&a.dirs, &out.stage().join("corpus"))?;
     let (r, more) = merge::write_device(&m, &out, Some(entries))?;
     not_copied.extend(more);
@@ -120,7 +120,7 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     let m = merge::merge_host(&a.dirs)?;
     let profile = load_profile(a.profile.as_deref().unwrap_or(&m.report.profile))
         .context("the shards' profile (give --profile FILE for a profile from a file)")?;
-    let out = merge::take_out(&a.out)?;
+    let out = merge::take_out(&a.out, &a.dirs)?;
     let (bundles, not_copied) = merge::write_host_bundles(&m, &out.stage().join("bundles"))?;
     let recorded = m.campaign.provenance.as_ref().map(|p| &p.options);
     // The misbehaviours the shards drew from, as they recorded them.
