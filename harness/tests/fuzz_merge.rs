@@ -1014,3 +1014,57 @@ fn forged_shard_folders_are_refused_or_read_nothing_outside() {
     assert!(err.contains("where a merge into") && err.contains("move it elsewhere first"), "{err}");
     assert!(report(&inside).is_file(), "the shard given is untouched");
 }
+
+/// Item 10 with a real host: a host whose first read (the prompt after its ^C) has no deadline
+/// is found hung by calibration in each of two shards, as run 0; their merge is one finding
+/// (it was refused: "run 0 is in two folders ... the same shard given twice?").
+#[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
+fn shards_of_a_host_calibration_finds_hung_merge_into_one_finding() {
+    if !python_ready() {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let host = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hosts/py_sync_forever.py");
+    let py = deps::python();
+    let shards: Vec<PathBuf> = (1..=2).map(|k| tmp.path().join(format!("s{k}"))).collect();
+    for (k, dir) in shards.iter().enumerate() {
+        let shard = format!("{}/2", k + 1);
+        let (report, out) = (dir.join("report"), dir.join("bundles"));
+        let o = gcl(&[
+            "fuzz",
+            "host",
+            "--profile",
+            "seed",
+            "--seed",
+            "1",
+            "--runs",
+            "4",
+            "--shard",
+            &shard,
+            "--run-budget",
+            "12s",
+            "--report",
+            report.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--",
+            &py,
+            host.to_str().unwrap(),
+            "1",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+        let c = json(&dir.join("report/fuzz.json"));
+        assert!(
+            c["findings"].as_array().unwrap().iter().any(|f| f["run"] == 0 && f["by_calibration"] == true),
+            "shard {shard}: {c:#}"
+        );
+    }
+    let merged = tmp.path().join("m");
+    let (code, err) = merge(&[&shards[0], &shards[1]], &merged);
+    assert_eq!(code, 1, "{err}");
+    let m = json(&merged.join("report/fuzz.json"));
+    let hangs: Vec<&Value> = m["findings"].as_array().unwrap().iter().filter(|f| f["by_calibration"] == true).collect();
+    assert_eq!(hangs.len(), 1, "{m:#}");
+    assert_eq!(hangs[0]["verdict"]["signature"], "hang in py_sync_forever.py:wait_prompt");
+}
