@@ -424,6 +424,67 @@ fn a_baseline_of_another_profile_is_refused_and_a_baseline_is_named() {
     assert!(page.contains("<code>--baseline</code>") && page.contains(&found.display().to_string()), "{page}");
 }
 
+/// Issue 39 item 11: a baseline is known by the spec it was recorded on, not by the id the
+/// spec declares: a baseline of the built-in `seed` explains nothing on a doctored file that
+/// declares `id = "seed"` (it did: exit 0, the finding "known: in the baseline"), and a
+/// finding that names no spec (an older gcl's) counts only against the built-in.
+#[test]
+fn a_baseline_of_the_built_in_excuses_nothing_on_a_file_declaring_its_id() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec");
+    // The seed spec with another finger limit, under the built-in's id, beside the files it
+    // includes.
+    std::fs::create_dir(dir.path().join("shared")).unwrap();
+    for e in std::fs::read_dir(spec.join("shared")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.path().join("shared").join(e.file_name())).unwrap();
+    }
+    let seed = std::fs::read_to_string(spec.join("seed.toml")).unwrap();
+    assert!(seed.contains("\nfinger_limit = 17800\n"));
+    let doctored = dir.path().join("doctored.toml");
+    std::fs::write(&doctored, seed.replacen("\nfinger_limit = 17800\n", "\nfinger_limit = 17000\n", 1)).unwrap();
+    let found = dir.path().join("found");
+    let fuzz = |more: &[&str]| {
+        let mut a =
+            vec!["fuzz", "device", "--target", "sim:seed", "--fault", "fget-reversed", "--runs", "60", "--quiet"];
+        a.extend(more);
+        gcl(&a)
+    };
+    let r = fuzz(&["--out", s(&found)]);
+    assert_eq!(r.code, Some(1), "{}{}", r.stdout, r.stderr);
+    let r = fuzz(&["--profile", s(&doctored), "--baseline", s(&found)]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stderr.contains("names a spec with sha256 ")
+            && r.stderr.contains(&format!(
+                "this campaign's profile is {} (a profile file declaring id seed",
+                doctored.display()
+            )),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("known"), "{}", r.stdout);
+    // The built-in itself: the baseline explains its finding.
+    assert_eq!(fuzz(&["--baseline", s(&found)]).code, Some(0));
+    // Findings written before they named their spec: taken as the built-in's.
+    for e in std::fs::read_dir(&found).unwrap() {
+        let p = e.unwrap().path();
+        let text = std::fs::read_to_string(&p).unwrap();
+        let old: String =
+            text.lines().filter(|l| !l.starts_with("x-profile-sha256:")).map(|l| format!("{l}\n")).collect();
+        assert_ne!(old, text, "a finding names its spec");
+        std::fs::write(&p, old).unwrap();
+    }
+    assert_eq!(fuzz(&["--baseline", s(&found)]).code, Some(0));
+    let r = fuzz(&["--profile", s(&doctored), "--baseline", s(&found)]);
+    assert_eq!(r.code, Some(2), "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stderr.contains("names no spec (written by an older gcl, so taken as the built-in seed)"),
+        "{}",
+        r.stderr
+    );
+}
+
 /// Replaces the value of the top-level `"verdict"` of a pretty-printed certificate.
 fn regex_free_replace_verdict(text: &str, to: &str) -> String {
     text.lines()

@@ -526,6 +526,10 @@ fn a_merged_device_page_never_offers_an_injected_command() {
     let json = shard.join("report/fuzz-device.json");
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     v["target"] = target.clone().into();
+    // Sealed again, as a forger would (a shard's digest is no signature): the page must hold
+    // whatever a sealed shard says.
+    v["provenance"]["digest"] =
+        gcl_harness::fuzz::shard::report_digest(&serde_json::to_vec(&v).unwrap()).unwrap().into();
     std::fs::write(&json, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
     let merged = dir.path().join("merged");
     let r = gcl(&["fuzz", "merge", s(&shard), "--out", s(&merged)]);

@@ -815,6 +815,23 @@ const PROMISES: &[(&str, &[&str])] = &[
         "holds `--out` against campaigns and other merges, and replaces what an earlier merge wrote there",
         &["harness/tests/fuzz_merge.rs::merges_hold_their_folder_and_replace_what_a_merge_wrote"],
     ),
+    // Issue 39 items 8 to 11.
+    (
+        "A shard is merged only as gcl wrote it",
+        &["harness/tests/fuzz_merge.rs::an_edited_relabelled_or_unsealed_shard_is_refused"],
+    ),
+    (
+        "What every shard finds in the campaign's own run 0 (calibration, the run without misbehaviour) is one finding of the merge",
+        &["harness/tests/fuzz_merge.rs::what_every_shard_found_at_run_0_is_one_finding"],
+    ),
+    (
+        "A merge is written beside `--out` and put in place whole once every input is read",
+        &["harness/tests/fuzz_merge.rs::a_merge_into_its_own_input_keeps_everything"],
+    ),
+    (
+        "a baseline recorded on another spec (a file declaring a built-in's id with",
+        &["harness/tests/hardening.rs::a_baseline_of_the_built_in_excuses_nothing_on_a_file_declaring_its_id"],
+    ),
     // Added after a second reading.
     (
         "`bh8-262-4.4` (alias `bh8-262`), or a spec TOML file",

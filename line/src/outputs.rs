@@ -153,9 +153,21 @@ impl OutLock {
                 .create(true)
                 .truncate(false)
                 .mode(0o644)
-                .custom_flags(nix::libc::O_NOFOLLOW)
+                // Never a link followed, never a wait on a FIFO or a device planted there.
+                .custom_flags(nix::libc::O_NOFOLLOW | nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY)
                 .open(&path)
                 .map_err(|e| named(&path, e))?;
+            let ty = file.metadata().map_err(|e| named(&path, e))?.file_type();
+            if !ty.is_file() {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "{}: {}, not a lock file; gcl makes its lock files regular files (remove it, or choose another folder)",
+                        path.display(),
+                        gcl_host::files::kind_of(&ty)
+                    ),
+                ));
+            }
             let held = file.try_clone().map_err(|e| named(&path, e))?;
             let Ok(lock) = nix::fcntl::Flock::lock(held, nix::fcntl::FlockArg::LockExclusiveNonblock) else {
                 let holder = holder_line(&path);
@@ -187,9 +199,13 @@ pub fn held_by(dir: &Path) -> Option<String> {
     let path = dir.join(LOCK_FILE);
     let file = std::fs::OpenOptions::new()
         .read(true)
-        .custom_flags(nix::libc::O_NOFOLLOW | nix::libc::O_NONBLOCK)
+        .custom_flags(nix::libc::O_NOFOLLOW | nix::libc::O_NONBLOCK | nix::libc::O_NOCTTY)
         .open(&path)
         .ok()?;
+    // Anything but a regular file is no lock of ours: nobody holds the folder with it.
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return None;
+    }
     match nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockSharedNonblock) {
         // Free: a lock file a finished (or killed) command left.
         Ok(_free) => None,
@@ -199,10 +215,15 @@ pub fn held_by(dir: &Path) -> Option<String> {
 
 /// The line the holder of the lock file at `path` wrote of itself (`gcl fuzz merge --out (pid
 /// N)`). A holder that has just taken the lock may not have written it yet: a line without its
-/// end is read again, for up to 100 ms, before it is "another gcl".
+/// end is read again, for up to 100 ms, before it is "another gcl". Read as a file from
+/// anywhere is: no link followed, no wait on a FIFO, a few KiB at most.
 fn holder_line(path: &Path) -> String {
     for _ in 0..50 {
-        let text = std::fs::read_to_string(path).unwrap_or_default();
+        let text = match gcl_host::files::read_limited_no_follow(path, 4096) {
+            Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => String::new(),
+            Err(e) => return format!("something that is not a gcl's lock ({}: {e})", path.display()),
+        };
         if let Some((line, _)) = text.split_once('\n') {
             return line.chars().take(200).collect();
         }
@@ -228,6 +249,7 @@ impl Drop for OutLock {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::os::unix::fs::FileTypeExt;
 
     fn names(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> =
@@ -283,6 +305,31 @@ mod tests {
         assert_eq!(std::fs::read(&a).unwrap(), b"bug A");
         assert_eq!(std::fs::read(&b).unwrap(), b"bug B");
         assert_eq!(names(dir.path()), ["fuzz-pset-status-2.gcl", "fuzz-pset-status.gcl"]);
+    }
+
+    /// Issue 39 item 13: a FIFO planted as the lock file and held by another process hung
+    /// `fuzz merge` (the holder's line was read from it, blocking for a writer for ever): it is
+    /// refused at once as no lock file, and seen from outside as no lock.
+    #[test]
+    fn a_fifo_in_place_of_the_lock_file_is_refused_never_waited_on() {
+        let dir = tempfile::tempdir().unwrap();
+        let lock = dir.path().join(LOCK_FILE);
+        nix::unistd::mkfifo(&lock, nix::sys::stat::Mode::from_bits_truncate(0o644)).unwrap();
+        // Held by another open file (flock locks an open file, so this is another holder).
+        let other =
+            std::fs::OpenOptions::new().read(true).write(true).custom_flags(nix::libc::O_NONBLOCK).open(&lock).unwrap();
+        let _held = nix::fcntl::Flock::lock(other, nix::fcntl::FlockArg::LockExclusiveNonblock).unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let d = dir.path().to_path_buf();
+        std::thread::spawn(move || {
+            let _ = tx.send((OutLock::acquire(&d, "fuzz merge --out").map(|_| ()), held_by(&d)));
+        });
+        // A watchdog, not a timing claim: the old code never came back.
+        let (acquired, seen) = rx.recv_timeout(std::time::Duration::from_secs(60)).expect("acquire hung on a FIFO");
+        let e = acquired.unwrap_err();
+        assert!(e.to_string().contains("a named pipe, not a lock file"), "{e}");
+        assert_eq!(seen, None);
+        assert!(std::fs::symlink_metadata(&lock).unwrap().file_type().is_fifo(), "left as it was");
     }
 
     #[test]

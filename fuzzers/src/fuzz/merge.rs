@@ -25,9 +25,22 @@
 //!
 //! A shard's folder is data from anywhere (a CI artifact): every file is read through the
 //! bounded reader of `gcl_host::files` without following a symbolic link, and only regular
-//! files are copied (a link, a FIFO or a device in a bundle is named and left behind). The
-//! merged folder is held ([`take_out`]) for the whole merge, and a merge replaces what an
-//! earlier merge wrote there, so no bundle outlives the report that lists it.
+//! files are copied (a link, a FIFO or a device in a bundle is named and left behind). A shard
+//! is taken only as gcl wrote it: its report is sealed ([`seal_host`], [`seal_device`]: the
+//! campaign's id, the files a merge reads with their digests, the report's own digest), and a
+//! report or file that does not match, or an unsealed report, is refused; a file its seal does
+//! not hold is never read (named, not copied). The seal is a digest, not a signature: a forger
+//! can make one anew, so what a shard's record allows is checked too (its `runs` within its
+//! share of `--runs`, a finding of a run of its own slices). What every shard finds in the
+//! campaign's run 0 (calibration, the run without misbehaviour, made by each shard) is one
+//! finding, its hits counting run 0 once. A merged folder is sealed as a shard is.
+//!
+//! The merged folder is held ([`take_out`]) for the whole merge and the merge is written
+//! beside it ([`Out`]), then put in place whole ([`Out::commit`]) once every input was read:
+//! an earlier merge merged again into its own folder loses nothing, and no bundle outlives
+//! the report that lists it. (Rather than refusing an input inside `--out`: the docs allow
+//! both, and a comparison of paths is fooled by bind mounts and hard links; building aside
+//! needs no such comparison.)
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -92,9 +105,23 @@ pub enum MergeError {
     /// A folder holds neither a host nor a device campaign's report.
     #[error("{0}: no report/fuzz.json (gcl fuzz host) or report/fuzz-device.json (gcl fuzz device) in it")]
     NotAShard(PathBuf),
-    /// The output folder is held by another command (a campaign, another merge).
+    /// The output folder is held by another command (a campaign, another merge), or its lock
+    /// file is not one.
     #[error("{0}")]
     Busy(String),
+    /// A shard's report carries no seal (written by a gcl before shards were sealed).
+    #[error(
+        "{0}: its report carries no campaign id or digest (written by an older gcl?), so nothing shows that it is a shard as written; run the shard again with this gcl"
+    )]
+    Unsealed(PathBuf),
+    /// A shard's report or file is not what its seal says.
+    #[error("{path}: {reason}; a shard is merged only as gcl wrote it")]
+    Tampered {
+        /// The file.
+        path: PathBuf,
+        /// What does not match.
+        reason: String,
+    },
     /// The output folder holds files no merge wrote.
     #[error(
         "{0} holds files that no `gcl fuzz merge` wrote (a shard's folder, or another command's); give a new or empty --out"
@@ -119,6 +146,104 @@ fn read_text(path: &Path) -> Result<String, MergeError> {
 fn load<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, MergeError> {
     serde_json::from_str(&read_text(path)?)
         .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: e.to_string() })
+}
+
+/// The fuzzers' names in a campaign id ([`super::shard::campaign_id`]).
+const HOST: &str = "fuzz host";
+const DEVICE: &str = "fuzz device";
+
+/// The files a merge may read from the shards, each with the SHA-256 its shard's seal gives
+/// it, by path.
+type Expected = BTreeMap<PathBuf, String>;
+
+/// A shard's report, parsed, its seal checked: the campaign id is its own record's, and the
+/// digest is the report's (see [`super::shard::seal`]). The files it holds join `expected`.
+/// A report without a provenance is left to [`super::shard::plan`], which refuses it by name.
+fn load_sealed<T: serde::de::DeserializeOwned>(
+    dir: &Path,
+    path: &Path,
+    fuzzer: &str,
+    provenance: fn(&T) -> Option<&Provenance>,
+    expected: &mut Expected,
+) -> Result<T, MergeError> {
+    let bytes = read(path, MAX_INPUT_BYTES)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: format!("not UTF-8 text: {e}") })?;
+    let report: T = serde_json::from_str(text)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: e.to_string() })?;
+    let Some(p) = provenance(&report) else { return Ok(report) };
+    let (Some(campaign), Some(digest)) = (&p.campaign, &p.digest) else {
+        return Err(MergeError::Unsealed(path.to_path_buf()));
+    };
+    let tampered = |reason: String| MergeError::Tampered { path: path.to_path_buf(), reason };
+    if *campaign != super::shard::campaign_id(fuzzer, p) {
+        return Err(tampered(format!(
+            "its campaign id {} is not the one its seed, options and shards make",
+            &campaign[..campaign.len().min(16)]
+        )));
+    }
+    let actual = super::shard::report_digest(&bytes)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: e.to_string() })?;
+    if actual != *digest {
+        return Err(tampered(format!(
+            "its content does not match the digest it records ({} against {}): changed after gcl wrote it",
+            &actual[..16],
+            &digest[..digest.len().min(16)]
+        )));
+    }
+    for (name, sha) in &p.holds {
+        expected.insert(dir.join(name), sha.clone());
+    }
+    Ok(report)
+}
+
+/// A file of a shard its seal holds, read and checked against the digest the seal gives it.
+fn read_held(expected: &Expected, path: &Path, limit: u64) -> Result<Vec<u8>, MergeError> {
+    let bytes = read(path, limit)?;
+    let tampered = |reason: &str| MergeError::Tampered { path: path.to_path_buf(), reason: reason.into() };
+    match expected.get(path) {
+        None => Err(tampered("not among the files its shard's seal holds")),
+        Some(d) if *d != crate::digest::sha256_hex(&bytes) => {
+            Err(tampered("not the file its shard's seal holds (changed after gcl wrote it)"))
+        }
+        Some(_) => Ok(bytes),
+    }
+}
+
+/// [`read_held`] as UTF-8 text.
+fn read_held_text(expected: &Expected, path: &Path) -> Result<String, MergeError> {
+    String::from_utf8(read_held(expected, path, MAX_INPUT_BYTES)?)
+        .map_err(|e| MergeError::Invalid { path: path.to_path_buf(), reason: format!("not UTF-8 text: {e}") })
+}
+
+/// What a folder's record allows: its `runs` at most the runs of its slices when the
+/// campaign's `--runs` is recorded, and each finding of a run (not the campaign's run 0, which
+/// every shard may show, see [`merge_host`]) a run of its own slices: a shard relabelled as
+/// another, or with its figures raised, is refused whatever its seal says.
+fn within_slices(path: &Path, p: &Provenance, runs: u64, finding_runs: &[u64]) -> Result<(), MergeError> {
+    p.check_slices(&path.display().to_string())?;
+    let (n, ks) = p.covers();
+    if let Some(total) = p.options.get("runs").and_then(|r| r.parse::<u64>().ok()) {
+        // Each slice's share of the campaign's runs, checked: `runs` is a figure from anywhere.
+        let share = ks
+            .iter()
+            .map(|&k| total.checked_add(n - k).map_or(total / n + 1, |t| t / n))
+            .fold(0u64, u64::saturating_add);
+        figure(path, "runs", runs, share)?;
+    }
+    for &run in finding_runs.iter().filter(|&&r| r != 0) {
+        let k = run % n.max(1) + 1;
+        if !ks.contains(&k) {
+            return Err(MergeError::Tampered {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "it reports run {run}, which is shard {k}/{n}'s, and it holds shard(s) {} of {n}",
+                    ks.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Whether `path` is a folder of its own: `Ok(false)` when absent, an error when it is a
@@ -212,11 +337,13 @@ pub struct HostMerge {
     pub transcripts: BTreeMap<String, String>,
     /// The bundle folder each finding's bundle comes from, by signature.
     pub bundles: BTreeMap<String, PathBuf>,
+    /// The shards' files their seals hold, with their digests.
+    expected: Expected,
 }
 
-/// A host shard's `fuzz.json` with every figure checked.
-fn load_campaign(path: &Path) -> Result<Campaign, MergeError> {
-    let c: Campaign = load(path)?;
+/// A host shard's `fuzz.json`, its seal and every figure checked.
+fn load_campaign(dir: &Path, path: &Path, expected: &mut Expected) -> Result<Campaign, MergeError> {
+    let c: Campaign = load_sealed(dir, path, HOST, |c: &Campaign| c.provenance.as_ref(), expected)?;
     for (field, v) in [("runs", c.runs), ("minimize_runs", c.minimize_runs), ("pass_runs", c.pass_runs)] {
         figure(path, field, v, MAX_COUNT)?;
     }
@@ -234,6 +361,10 @@ fn load_campaign(path: &Path) -> Result<Campaign, MergeError> {
             figure(path, "fired_at", *n, MAX_COUNT)?;
         }
     }
+    if let Some(p) = &c.provenance {
+        let runs: Vec<u64> = c.findings.iter().filter(|f| !f.by_calibration).map(|f| f.run).collect();
+        within_slices(path, p, c.runs, &runs)?;
+    }
     Ok(c)
 }
 
@@ -241,10 +372,17 @@ fn load_campaign(path: &Path) -> Result<Campaign, MergeError> {
 /// only: nothing is written until the shards are known to be one campaign.
 pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
     let mut shards = Vec::new();
+    let mut expected = Expected::new();
     for dir in dirs {
         let path = dir.join("report/fuzz.json");
-        let c = load_campaign(&path)?;
-        let r: RunReport = load(&dir.join("report/report.json"))?;
+        let c = load_campaign(dir, &path, &mut expected)?;
+        let rpath = dir.join("report/report.json");
+        let r: RunReport = if c.provenance.is_some() {
+            serde_json::from_str(&read_held_text(&expected, &rpath)?)
+                .map_err(|e| MergeError::Invalid { path: rpath.clone(), reason: e.to_string() })?
+        } else {
+            load(&rpath)?
+        };
         shards.push((dir, path, c, r));
     }
     let recorded: Vec<(String, Option<Provenance>)> =
@@ -303,6 +441,12 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
                 None => {
                     by_sig.insert(f.verdict.signature.clone(), (f, pos, bundle));
                 }
+                // The campaign's run 0 (its run without misbehaviour, its calibration) is made
+                // by every shard: one finding, its repeated run 0 counted once.
+                Some((have, _, _)) if have.run == 0 && f.run == 0 => {
+                    let hits = add(&path, "findings[].hits", have.hits, f.hits.saturating_sub(1))?;
+                    have.hits = hits;
+                }
                 Some((have, _, _)) if have.run == f.run => {
                     return Err(MergeError::Mixed(format!(
                         "run {} is in two folders ({}, and one before it): the same shard given twice?",
@@ -335,12 +479,12 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
         if !real_dir(bundle)? {
             return Err(MergeError::Invalid { path: bundle.clone(), reason: "the finding's bundle is missing".into() });
         }
-        transcripts.insert(f.verdict.signature.clone(), read_text(&bundle.join("transcript.gcl"))?);
-        f.stderr = read_text(&bundle.join("stderr.txt"))?;
+        transcripts.insert(f.verdict.signature.clone(), read_held_text(&expected, &bundle.join("transcript.gcl"))?);
+        f.stderr = read_held_text(&expected, &bundle.join("stderr.txt"))?;
         bundles.insert(f.verdict.signature.clone(), bundle.clone());
     }
     merged.findings = findings.into_iter().map(|(f, _, _)| f).collect();
-    Ok(HostMerge { campaign: merged, merged: merged_from, report, transcripts, bundles })
+    Ok(HostMerge { campaign: merged, merged: merged_from, report, transcripts, bundles, expected })
 }
 
 /// Copies each finding's bundle into `out/<name>`, its `finding.json` with the merged hit
@@ -363,14 +507,19 @@ pub fn write_host_bundles(m: &HostMerge, out: &Path) -> Result<(Vec<PathBuf>, No
                 skipped.push(format!("{}: {}", p.display(), kind_name(&ty)));
                 continue;
             }
+            if !m.expected.contains_key(&p) {
+                skipped.push(format!("{}: not among the files its shard's seal holds, not copied", p.display()));
+                continue;
+            }
             let bytes = if entry.file_name() == "finding.json" {
-                let mut info: BundleInfo = load(&p)?;
+                let mut info: BundleInfo = serde_json::from_slice(&read_held(&m.expected, &p, MAX_INPUT_BYTES)?)
+                    .map_err(|e| MergeError::Invalid { path: p.clone(), reason: e.to_string() })?;
                 info.hits = f.hits;
                 let mut b = serde_json::to_vec_pretty(&info).unwrap_or_default();
                 b.push(b'\n');
                 b
             } else {
-                read(&p, MAX_INPUT_BYTES)?
+                read_held(&m.expected, &p, MAX_INPUT_BYTES)?
             };
             let to = dst.join(entry.file_name());
             crate::report::write_atomic(&to, &bytes).map_err(io(&to))?;
@@ -386,9 +535,9 @@ fn kind_name(ty: &std::fs::FileType) -> String {
     format!("{what}, not copied")
 }
 
-/// A device shard's `fuzz-device.json` with every figure checked.
-fn load_device_report(path: &Path) -> Result<FuzzReport, MergeError> {
-    let r: FuzzReport = load(path)?;
+/// A device shard's `fuzz-device.json`, its seal and every figure checked.
+fn load_device_report(dir: &Path, path: &Path, expected: &mut Expected) -> Result<FuzzReport, MergeError> {
+    let r: FuzzReport = load_sealed(dir, path, DEVICE, |r: &FuzzReport| r.provenance.as_ref(), expected)?;
     for (field, v) in [
         ("runs", r.runs),
         ("dropped", r.dropped),
@@ -420,6 +569,9 @@ fn load_device_report(path: &Path) -> Result<FuzzReport, MergeError> {
     for row in &r.coverage {
         figure(path, "coverage[].reached", row.reached as u64, MAX_COUNT)?;
     }
+    if let Some(p) = &r.provenance {
+        within_slices(path, p, r.runs, &[])?;
+    }
     Ok(r)
 }
 
@@ -432,14 +584,17 @@ pub struct DeviceMerge {
     pub report: FuzzReport,
     /// The slices folded.
     pub merged: Merged,
+    /// The shards' files their seals hold, with their digests.
+    expected: Expected,
 }
 
 /// Folds the `report/fuzz-device.json` of device shards. Reads only.
 pub fn merge_device(dirs: &[PathBuf]) -> Result<DeviceMerge, MergeError> {
     let mut shards = Vec::new();
+    let mut expected = Expected::new();
     for dir in dirs {
         let path = dir.join("report/fuzz-device.json");
-        let r = load_device_report(&path)?;
+        let r = load_device_report(dir, &path, &mut expected)?;
         shards.push((dir, path, r));
     }
     let recorded: Vec<(String, Option<Provenance>)> =
@@ -507,17 +662,18 @@ pub fn merge_device(dirs: &[PathBuf]) -> Result<DeviceMerge, MergeError> {
         }
     }
     let report = merged.ok_or_else(|| MergeError::Mixed("no folder given".into()))?;
-    Ok(DeviceMerge { report, merged: merged_from })
+    Ok(DeviceMerge { report, merged: merged_from, expected })
 }
 
-/// Writes a device merge into `out`: each finding's transcript into `out/findings` (its path
-/// in the report then names the copy), then the reports into `out/report`. `corpus` is the
-/// merged corpus's size when the corpora were merged (else the shards' sizes add up).
-/// Returns the report as written and the files not copied.
-pub fn write_device(m: &DeviceMerge, out: &Path, corpus: Option<usize>) -> Result<(FuzzReport, NotCopied), MergeError> {
+/// Writes a device merge into `out` (aside, until [`Out::commit`]): each finding's transcript
+/// into `findings` (its path in the report then names the copy as it will be, in the merged
+/// folder), then the reports, sealed, into `report`. `corpus` is the merged corpus's size when
+/// the corpora were merged (else the shards' sizes add up). Returns the report as written and
+/// the files not copied.
+pub fn write_device(m: &DeviceMerge, out: &Out, corpus: Option<usize>) -> Result<(FuzzReport, NotCopied), MergeError> {
     let mut report = m.report.clone();
     let mut skipped = Vec::new();
-    let findings_out = out.join("findings");
+    let findings_out = out.stage.join("findings");
     for f in &mut report.findings {
         let Some(from) = f.path.clone() else { continue };
         if let Some(parent) = from.parent() {
@@ -531,18 +687,19 @@ pub fn write_device(m: &DeviceMerge, out: &Path, corpus: Option<usize>) -> Resul
             }
             _ => {}
         }
-        let text = read_text(&from)?;
+        let text = read_held_text(&m.expected, &from)?;
         // Two shards name their own findings alike (`fuzz-fget-order.gcl` for two orders):
         // each keeps a file of its own, never written over by the other.
         let stem = from.file_stem().and_then(|s| s.to_str()).unwrap_or("finding");
         let to =
             crate::outputs::write_unique(&findings_out, stem, "gcl", text.as_bytes()).map_err(io(&findings_out))?;
-        f.path = Some(to);
+        f.path = to.file_name().map(|n| out.out.join("findings").join(n));
     }
     if let Some(n) = corpus {
         report.corpus = n;
     }
-    let dir = out.join("report");
+    seal_device(&mut report, &findings_out)?;
+    let dir = out.stage.join("report");
     std::fs::create_dir_all(&dir).map_err(io(&dir))?;
     super::device::report::write_all(&dir, &report)
         .map_err(|e| MergeError::Invalid { path: dir.clone(), reason: e.to_string() })?;
@@ -598,19 +755,117 @@ pub fn merge_corpora(dirs: &[PathBuf], out: &Path) -> Result<(usize, usize, NotC
     Ok((names.len(), dups, skipped))
 }
 
+/// The files of a host campaign's folders its seal holds: `report/report.json` (in
+/// `report_dir`) and every regular file of each finding's bundle (in `bundles`).
+fn host_holds(c: &Campaign, report_dir: &Path, bundles: &Path) -> Result<BTreeMap<String, String>, MergeError> {
+    let mut files = vec![("report/report.json".to_string(), report_dir.join("report.json"))];
+    for f in &c.findings {
+        let name = dir_name(f.verdict.kind, &f.verdict.signature);
+        let dir = bundles.join(&name);
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for e in entries {
+            let e = e.map_err(io(&dir))?;
+            if e.file_type().is_ok_and(|t| t.is_file()) {
+                files.push((format!("bundles/{name}/{}", e.file_name().to_string_lossy()), e.path()));
+            }
+        }
+    }
+    super::shard::holds(files.iter().map(|(n, p)| (n.clone(), p.as_path())))
+        .map_err(|e| MergeError::Io { path: report_dir.to_path_buf(), error: e })
+}
+
+/// Seals a host campaign before its `fuzz.json` is written (`gcl fuzz host --report`, a
+/// merge): its campaign id, the files it holds (its `report.json` in `report_dir`, its
+/// bundles in `bundles`) and its digest, so that a merge takes it only as written.
+pub fn seal_host(c: &mut Campaign, report_dir: &Path, bundles: &Path) -> Result<(), MergeError> {
+    let holds = host_holds(c, report_dir, bundles)?;
+    super::shard::seal(c, |c: &mut Campaign| c.provenance.as_mut(), HOST, holds)
+        .map_err(|e| MergeError::Invalid { path: report_dir.join("fuzz.json"), reason: e.to_string() })
+}
+
+/// Seals a device campaign's report before it is written (`gcl fuzz device`, a merge): its
+/// campaign id, the findings' transcripts it holds (each finding's file, by its name, in
+/// `findings`) and its digest.
+pub fn seal_device(r: &mut FuzzReport, findings: &Path) -> Result<(), MergeError> {
+    let files: Vec<(String, PathBuf)> = r
+        .findings
+        .iter()
+        .filter_map(|f| f.path.as_ref()?.file_name())
+        .map(|n| (format!("findings/{}", n.to_string_lossy()), findings.join(n)))
+        .collect();
+    let holds = super::shard::holds(files.iter().map(|(n, p)| (n.clone(), p.as_path())))
+        .map_err(|e| MergeError::Io { path: findings.to_path_buf(), error: e })?;
+    super::shard::seal(r, |r: &mut FuzzReport| r.provenance.as_mut(), DEVICE, holds)
+        .map_err(|e| MergeError::Invalid { path: findings.to_path_buf(), reason: e.to_string() })
+}
+
+/// The folder inside `--out` a merge fills before it puts the merge in place ([`Out`]).
+pub const STAGE: &str = ".gcl-merge-new";
+
+/// The merged folder of a merge under way: `out`, held for the whole merge, and the folder
+/// beside its parts (`out/.gcl-merge-new`) the merge is written into. Nothing of `out` is
+/// replaced until [`Out::commit`], after every input was read: an input that is `out` itself
+/// (an earlier merge merged again into its own folder), or lies inside it, is read whole
+/// before anything of it goes.
+#[derive(Debug)]
+pub struct Out {
+    _lock: crate::outputs::OutLock,
+    out: PathBuf,
+    stage: PathBuf,
+}
+
+impl Out {
+    /// Where the merge is written until it is put in place.
+    pub fn stage(&self) -> &Path {
+        &self.stage
+    }
+
+    /// Puts the merge in place: the earlier merge's report goes first (no report ever lists
+    /// what is gone), each part is replaced by the new one, the new report comes last.
+    pub fn commit(self) -> Result<(), MergeError> {
+        remove_part(&self.out.join("report"))?;
+        for part in MERGED_PARTS.iter().filter(|p| **p != "report").chain(["report"].iter()) {
+            let (old, new) = (self.out.join(part), self.stage.join(part));
+            remove_part(&old)?;
+            if real_dir(&new)? {
+                std::fs::rename(&new, &old).map_err(io(&old))?;
+            }
+        }
+        std::fs::remove_dir(&self.stage).map_err(io(&self.stage))?;
+        Ok(())
+    }
+}
+
+/// Removes a part of a merged folder: a link is removed, never what it points to.
+fn remove_part(p: &Path) -> Result<(), MergeError> {
+    match std::fs::symlink_metadata(p) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(MergeError::Io { path: p.to_path_buf(), error: e }),
+        Ok(m) if !m.is_dir() => std::fs::remove_file(p).map_err(io(p)),
+        Ok(_) => std::fs::remove_dir_all(p).map_err(io(p)),
+    }
+}
+
 /// The folders of a merged `--out` that a merge writes (and a re-merge replaces).
 pub const MERGED_PARTS: [&str; 4] = ["report", "bundles", "findings", "corpus"];
 
 /// The file that marks a folder as a merge's output, so a later merge may replace it.
 pub const MERGE_MARK: &str = ".gcl-merge";
 
-/// Takes `out` for a merge: holds it for as long as the lock lives (a second merge, or a
-/// campaign holding `out` or one of its parts, is refused), and empties what an earlier merge
-/// wrote there, the report first, so that no bundle, finding or corpus entry of an earlier
-/// merge outlives it. A folder with files no merge wrote is refused, not emptied.
-pub fn take_out(out: &Path) -> Result<crate::outputs::OutLock, MergeError> {
+/// Takes `out` for a merge: holds it for as long as the returned [`Out`] lives (a second
+/// merge, or a campaign holding `out` or one of its parts, is refused) and makes the folder
+/// the merge is written into, beside what an earlier merge wrote, which [`Out::commit`]
+/// replaces whole. A folder with files no merge wrote is refused, not touched.
+/// An input inside the folder a merge writes aside (`out/.gcl-merge-new`, which a merge killed
+/// before its commit may leave, and the next one empties) is refused, never emptied.
+pub fn take_out(out: &Path, inputs: &[PathBuf]) -> Result<Out, MergeError> {
     let lock = crate::outputs::OutLock::acquire(out, "fuzz merge --out").map_err(|e| {
-        if e.kind() == std::io::ErrorKind::ResourceBusy { MergeError::Busy(e.to_string()) } else { io(out)(e) }
+        // (in use, or a lock file that is no lock file: the error names the folder or the file)
+        if matches!(e.kind(), std::io::ErrorKind::ResourceBusy | std::io::ErrorKind::InvalidInput) {
+            MergeError::Busy(e.to_string())
+        } else {
+            io(out)(e)
+        }
     })?;
     for part in MERGED_PARTS {
         let p = out.join(part);
@@ -629,27 +884,55 @@ pub fn take_out(out: &Path) -> Result<crate::outputs::OutLock, MergeError> {
     if others && !ours {
         return Err(MergeError::NotOurs(out.to_path_buf()));
     }
+    // What a merge killed before its commit left (only in a folder a merge marked), unless a
+    // folder given to merge is in it.
+    let stage = out.join(STAGE);
+    if let Ok(inside) = std::fs::canonicalize(&stage) {
+        for dir in inputs {
+            if std::fs::canonicalize(dir).is_ok_and(|d| d.starts_with(&inside)) {
+                return Err(MergeError::Invalid {
+                    path: dir.clone(),
+                    reason: format!(
+                        "inside {}, where a merge into {} is written before it is put in place; move it elsewhere first",
+                        stage.display(),
+                        out.display()
+                    ),
+                });
+            }
+        }
+    }
+    remove_part(&stage)?;
     let mark = out.join(MERGE_MARK);
     crate::report::write_atomic(
         &mark,
         b"written by gcl fuzz merge: a merge into this folder replaces report/, bundles/, findings/ and corpus/\n",
     )
     .map_err(io(&mark))?;
-    for part in MERGED_PARTS {
-        let p = out.join(part);
-        match std::fs::symlink_metadata(&p) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            // A link is removed, never what it points to.
-            Ok(m) if !m.is_dir() => std::fs::remove_file(&p).map_err(io(&p))?,
-            _ => std::fs::remove_dir_all(&p).map_err(io(&p))?,
-        }
-    }
-    Ok(lock)
+    std::fs::create_dir(&stage).map_err(io(&stage))?;
+    Ok(Out { _lock: lock, out: out.to_path_buf(), stage })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A shard's record bounds what it may hold: its share of `--runs`, runs of its own slices
+    /// (run 0 is the campaign's); a `--runs` of u64::MAX is no overflow.
+    #[test]
+    fn a_record_bounds_its_runs_and_findings() {
+        use super::super::shard::Shard;
+        let p = Path::new("s2/report/fuzz.json");
+        let options = [("runs".to_string(), "12".to_string())].into();
+        let two = Provenance::new(Some(Shard { index: 2, count: 3 }), 1, options);
+        assert!(within_slices(p, &two, 4, &[0, 1, 4, 10]).is_ok());
+        let e = within_slices(p, &two, 5, &[]).unwrap_err().to_string();
+        assert!(e.contains("`runs` 5 is out of range (at most 4)"), "{e}");
+        let e = within_slices(p, &two, 4, &[3]).unwrap_err().to_string();
+        assert!(e.contains("run 3, which is shard 1/3's, and it holds shard(s) 2 of 3"), "{e}");
+        let huge = [("runs".to_string(), u64::MAX.to_string())].into();
+        let last = Provenance::new(Some(Shard { index: 1, count: 3 }), 1, huge);
+        assert!(within_slices(p, &last, u64::MAX / 3, &[]).is_ok());
+    }
 
     #[test]
     fn counts_add_up_checked_and_refuse_by_name() {

@@ -5,6 +5,12 @@
 //! `gcl fuzz host` slices run indices: shard K runs indices K-1, K-1+N, K-1+2N, ...
 //! `gcl fuzz device` slices generator streams: its worker w draws from stream K-1+w·N, the
 //! stream worker K-1+w·N of a one-machine campaign with N times the workers would draw from.
+//!
+//! A shard's report is sealed ([`seal`]): its [`Provenance`] carries the campaign's id
+//! ([`campaign_id`], from the fuzzer, seed, options and N, so the machines agree on it without
+//! talking), the files of its folder a merge reads with their SHA-256 (`holds`), and the digest
+//! of the report itself ([`report_digest`]). Old shards without a seal are refused by a merge:
+//! a warning would let anyone strip the seal of an edited shard to have it merged.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
@@ -78,6 +84,18 @@ pub struct Provenance {
     /// Set on a merged folder: the slices it holds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merged: Option<Merged>,
+    /// The campaign's id ([`campaign_id`]: its fuzzer, seed, options and N), the same in every
+    /// shard of it and in their merges.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub campaign: Option<String>,
+    /// The files of the folder a merge reads or copies (`report/report.json`,
+    /// `bundles/NAME/FILE`, `findings/FILE`), each with its SHA-256.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub holds: BTreeMap<String, String>,
+    /// SHA-256 of the report it is written in, this field left out ([`report_digest`]): with
+    /// `holds`, a digest of everything the folder holds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub digest: Option<String>,
 }
 
 impl Provenance {
@@ -88,6 +106,22 @@ impl Provenance {
             (Some(m), _) => (m.count, m.shards.clone()),
             (None, Some(s)) => (s.count, vec![s.index]),
             (None, None) => (1, vec![1]),
+        }
+    }
+
+    /// A shard's or a merge's record, before it is sealed ([`seal`]).
+    pub fn new(shard: Option<Shard>, seed: u64, options: BTreeMap<String, String>) -> Provenance {
+        Provenance { shard, seed, options, merged: None, campaign: None, holds: BTreeMap::new(), digest: None }
+    }
+
+    /// Refuses a record of a slice no campaign has (K outside 1..=N, N = 0): a report is data
+    /// from anywhere, and its slices are checked before anything counts on them. `folder`
+    /// names it in the error.
+    pub fn check_slices(&self, folder: &str) -> Result<(), ShardSetError> {
+        let (n, ks) = self.covers();
+        match ks.iter().find(|&&k| k == 0 || k > n) {
+            Some(&k) => Err(ShardSetError::NoSuchSlice { folder: folder.to_string(), index: k, count: n }),
+            None => Ok(()),
         }
     }
 
@@ -119,6 +153,16 @@ pub enum ShardSetError {
         "{0}: its report records no shard, seed or options (written by an older gcl?), so nothing says which campaign it belongs to"
     )]
     Unrecorded(String),
+    /// A folder records a slice no campaign has (K outside 1..=N, or N = 0).
+    #[error("{folder}: its report records shard {index} of {count}, which no campaign has (K/N runs from 1/N to N/N)")]
+    NoSuchSlice {
+        /// The folder.
+        folder: String,
+        /// K as recorded.
+        index: u64,
+        /// N as recorded.
+        count: u64,
+    },
     /// Two folders are of different campaigns.
     #[error("not shards of one campaign: {folder} differs from {first} ({folder}'s against {first}'s): {}", differences.join("; "))]
     Mixed {
@@ -166,6 +210,7 @@ pub fn plan(folders: &[(String, Option<Provenance>)]) -> Result<(Provenance, Mer
     let mut count = 0;
     for (name, p) in folders {
         let p = p.as_ref().ok_or_else(|| ShardSetError::Unrecorded(name.clone()))?;
+        p.check_slices(name)?;
         let (n, ks) = p.covers();
         match first {
             None => {
@@ -200,7 +245,68 @@ pub fn plan(folders: &[(String, Option<Provenance>)]) -> Result<(Provenance, Mer
     }
     let (_, f) = first.ok_or_else(|| ShardSetError::Unrecorded("(no folder given)".into()))?;
     let merged = Merged { count, shards: seen.into_keys().collect() };
-    Ok((Provenance { shard: None, merged: Some(merged.clone()), ..f.clone() }, merged))
+    let p =
+        Provenance { shard: None, merged: Some(merged.clone()), ..Provenance::new(None, f.seed, f.options.clone()) };
+    Ok((p, merged))
+}
+
+/// The id of a campaign: SHA-256 of its fuzzer (`fuzz host`, `fuzz device`), seed, options and
+/// number of shards, so that the machines of one campaign agree on it without talking to each
+/// other, and a shard whose record was edited in part no longer matches its own id.
+pub fn campaign_id(fuzzer: &str, p: &Provenance) -> String {
+    let what = serde_json::json!({
+        "fuzzer": fuzzer,
+        "seed": p.seed,
+        "options": p.options,
+        "shards": p.covers().0,
+    });
+    crate::digest::sha256_hex(what.to_string().as_bytes())
+}
+
+/// The digest of a report's JSON text as its provenance records it: SHA-256 of the JSON
+/// parsed and printed compactly again, `provenance.digest` left out (so the digest can be
+/// written into the file it covers). Every other field counts, an unknown one included.
+pub fn report_digest(json: &[u8]) -> Result<String, serde_json::Error> {
+    let mut v: serde_json::Value = serde_json::from_slice(json)?;
+    if let Some(p) = v.get_mut("provenance").and_then(serde_json::Value::as_object_mut) {
+        p.remove("digest");
+    }
+    Ok(crate::digest::sha256_hex(&serde_json::to_vec(&v)?))
+}
+
+/// Seals `report` (a `fuzz.json` campaign or a `fuzz-device.json` report, its provenance
+/// reached through `provenance`) before it is written: its campaign id, the files it holds
+/// (path in the folder -> SHA-256, [`holds`]) and the digest of the report as
+/// `serde_json::to_string_pretty` prints it. Nothing happens without a provenance.
+pub fn seal<T: Serialize>(
+    report: &mut T,
+    provenance: fn(&mut T) -> Option<&mut Provenance>,
+    fuzzer: &str,
+    holds: BTreeMap<String, String>,
+) -> Result<(), serde_json::Error> {
+    let Some(p) = provenance(report) else { return Ok(()) };
+    p.campaign = Some(campaign_id(fuzzer, p));
+    p.holds = holds;
+    p.digest = None;
+    let digest = report_digest(serde_json::to_string_pretty(report)?.as_bytes())?;
+    if let Some(p) = provenance(report) {
+        p.digest = Some(digest);
+    }
+    Ok(())
+}
+
+/// The files of a folder a seal lists: each `(name, path)`, read as a shard's files are read
+/// (no link followed, at most [`gcl_host::files::MAX_INPUT_BYTES`]), with its SHA-256.
+pub fn holds<'a>(
+    files: impl IntoIterator<Item = (String, &'a std::path::Path)>,
+) -> std::io::Result<BTreeMap<String, String>> {
+    let mut out = BTreeMap::new();
+    for (name, path) in files {
+        let bytes = gcl_host::files::read_limited_no_follow(path, gcl_host::files::MAX_INPUT_BYTES)
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+        out.insert(name, crate::digest::sha256_hex(&bytes));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -224,10 +330,7 @@ mod tests {
 
     fn shard(k: u64, n: u64, seed: u64, ops: &str) -> (String, Option<Provenance>) {
         let options = [("ops".to_string(), ops.to_string())].into();
-        (
-            format!("shard-{k}"),
-            Some(Provenance { shard: Some(Shard { index: k, count: n }), seed, options, merged: None }),
-        )
+        (format!("shard-{k}"), Some(Provenance::new(Some(Shard { index: k, count: n }), seed, options)))
     }
 
     #[test]
@@ -255,6 +358,19 @@ mod tests {
         assert!(e.contains("one of 3 shards") && e.contains("one of 4"), "{e}");
         let e = plan(&[all[0].clone(), ("old".into(), None)]).unwrap_err().to_string();
         assert!(e.contains("old: its report records no shard"), "{e}");
+        // Slices no campaign has (issue 39, a forged record): K beyond N, N = 0, a merged
+        // folder claiming shard 0 or 9 of 3 (it merged as "shards 0–3, 9 of 3", complete).
+        for (k, n) in [(7, 3), (1, 0), (0, 3)] {
+            let e = plan(&[shard(k, n, 5, "every operator")]).unwrap_err().to_string();
+            assert!(e.contains(&format!("records shard {k} of {n}, which no campaign has")), "{e}");
+        }
+        let mut forged = shard(1, 3, 5, "every operator");
+        if let Some(p) = forged.1.as_mut() {
+            p.shard = None;
+            p.merged = Some(Merged { count: 3, shards: vec![1, 9] });
+        }
+        let e = plan(&[forged]).unwrap_err().to_string();
+        assert!(e.contains("records shard 9 of 3"), "{e}");
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! prints; the fuzzers live in `gcl_harness::fuzz`.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -216,6 +216,21 @@ fn add_baselines(a: &DeviceArgs, o: &mut gcl_harness::fuzz::device::FuzzOptions)
                 o.profile.id
             );
         }
+        // ... and under its spec, not only its id: a file declaring the id with other contents
+        // is another profile.
+        let spec = gcl_harness::report::ProfileSpec::of(a.target.model_profile(a.profile.as_deref()), &o.profile);
+        if let Some((file, theirs)) = o.baseline.recorded_on_another_spec(&spec).first() {
+            let theirs = match theirs {
+                Some(d) => format!("a spec with sha256 {}", &d[..d.len().min(16)]),
+                None => format!("no spec (written by an older gcl, so taken as the built-in {})", o.profile.id),
+            };
+            anyhow::bail!(
+                "--baseline {}: {} names {theirs}, and this campaign's profile is {}: a baseline says what is known of a hand under the spec it was recorded on only (record the baseline again with this profile)",
+                dir.display(),
+                file.display(),
+                spec.label()
+            );
+        }
         baselines.push(match n {
             0 => format!("{} (no finding in it)", dir.display()),
             n => format!("{} ({n} finding(s), recorded on profile {})", dir.display(), o.profile.id),
@@ -325,6 +340,13 @@ fn device_report(
     }
     report.coverage_over_time = timeline;
     report.provenance = Some(provenance(a, o, baselines));
+    // Sealed, so that a merge takes this folder only as written.
+    if let Err(e) = gcl_harness::fuzz::merge::seal_device(&mut report, a.out.as_deref().unwrap_or(Path::new("."))) {
+        eprintln!(
+            "gcl fuzz device: warning: {}",
+            printable(&format!("the report is not sealed, and no merge takes it: {e}"))
+        );
+    }
     report
 }
 
@@ -463,5 +485,5 @@ fn provenance(
         (None, d) => options
             .insert("duration".into(), humantime::format_duration(d.unwrap_or(Duration::from_secs(60))).to_string()),
     };
-    gcl_harness::fuzz::shard::Provenance { shard: o.shard, seed: o.seed, options, merged: None }
+    gcl_harness::fuzz::shard::Provenance::new(o.shard, o.seed, options)
 }

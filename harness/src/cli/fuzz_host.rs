@@ -407,8 +407,11 @@ fn write_campaign_report(args: &Args, opts: &FuzzOptions, campaign: &Campaign) -
         for p in gcl_harness::report::write_all(dir, &report)? {
             eprintln!("wrote {}", p.display());
         }
+        // Sealed, so that a merge takes this folder only as written.
+        let mut campaign = campaign.clone();
+        gcl_harness::fuzz::merge::seal_host(&mut campaign, dir, &args.out)?;
         let p = dir.join("fuzz.json");
-        gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(campaign)?)?;
+        gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(&campaign)?)?;
         eprintln!("wrote {}", p.display());
     }
     Ok(())
@@ -485,7 +488,7 @@ fn provenance(args: &Args, opts: &FuzzOptions) -> gcl_harness::fuzz::shard::Prov
         (_, Some(d)) => options.insert("duration".into(), ms(d)),
         (n, None) => options.insert("runs".into(), n.unwrap_or_default().to_string()),
     };
-    gcl_harness::fuzz::shard::Provenance { shard: opts.shard, seed: opts.seed, options, merged: None }
+    gcl_harness::fuzz::shard::Provenance::new(opts.shard, opts.seed, options)
 }
 
 /// What a campaign without `--runs` or `--duration` says, at its start and its end.

@@ -29,14 +29,21 @@ profile...), of another N, or the same shard twice is refused. A merged folder m
 again with the remaining shards. Missing shards are merged and said: the reports say
 \"merged from shards 1, 3 of 4 (INCOMPLETE: 2, 4 missing)\" and the exit code is 2.
 
+A shard is merged only as gcl wrote it: its report carries the campaign's id and a digest of
+the report and of every file a merge reads from the folder (a file edited, swapped or planted
+is refused or left behind, by name), and a shard written by an older gcl, without them, is
+refused. What every shard finds in the campaign's run 0 (calibration, the run without
+misbehaviour) is one finding.
+
 Files are read as they are: a symbolic link, a FIFO or a device in a shard's folder is never
 followed or copied (each is named), and a file over 4 MiB is refused. --out is held for the
 merge (a campaign or another merge using it is refused); it must be new, empty or an earlier
-merge's output, which the merge replaces whole.
+merge's output, which the merge replaces whole: the merge is written beside it and put in
+place once every input is read, so an earlier merge may be merged again into its own folder.
 
 Exit codes: 0 every shard merged, no new finding; 1 every shard merged, findings; 2 usage or
 infrastructure (shards missing, folders of different campaigns or the same shard twice,
-unreadable or out-of-range files, --out in use).
+a shard edited or unsealed, unreadable or out-of-range files, --out in use).
 
 Example:
   gcl fuzz merge shard-1 shard-2 shard-3 shard-4 --out merged")]
@@ -83,10 +90,11 @@ fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
 fn device(a: &Args) -> anyhow::Result<u8> {
     // Everything is read and checked before --out is touched.
     let m = merge::merge_device(&a.dirs)?;
-    let _held = merge::take_out(&a.out)?;
-    let (entries, dups, mut not_copied) = merge::merge_corpora(&a.dirs, &a.out.join("corpus"))?;
-    let (r, more) = merge::write_device(&m, &a.out, Some(entries))?;
+    let out = merge::take_out(&a.out, &a.dirs)?;
+    let (entries, dups, mut not_copied) = merge::merge_corpora(&a.dirs, &out.stage().join("corpus"))?;
+    let (r, more) = merge::write_device(&m, &out, Some(entries))?;
     not_copied.extend(more);
+    out.commit()?;
     eprintln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s) ({} new), corpus {} entries ({} duplicate(s) dropped) -> {}",
         m.merged.describe(),
@@ -112,8 +120,8 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     let m = merge::merge_host(&a.dirs)?;
     let profile = load_profile(a.profile.as_deref().unwrap_or(&m.report.profile))
         .context("the shards' profile (give --profile FILE for a profile from a file)")?;
-    let _held = merge::take_out(&a.out)?;
-    let (bundles, not_copied) = merge::write_host_bundles(&m, &a.out.join("bundles"))?;
+    let out = merge::take_out(&a.out, &a.dirs)?;
+    let (bundles, not_copied) = merge::write_host_bundles(&m, &out.stage().join("bundles"))?;
     let recorded = m.campaign.provenance.as_ref().map(|p| &p.options);
     // The misbehaviours the shards drew from, as they recorded them.
     let weights = recorded.and_then(|o| o.get("ops")).and_then(|ops| Weights::parse(ops).ok());
@@ -174,9 +182,13 @@ fn host(a: &Args) -> anyhow::Result<u8> {
         });
         report.tally();
     }
-    let dir = a.out.join("report");
+    // Written aside, sealed as a shard is (so that it merges again), then put in place.
+    let dir = out.stage().join("report");
     gcl_harness::report::write_all(&dir, &report)?;
-    gcl_harness::report::write_atomic(&dir.join("fuzz.json"), &serde_json::to_vec_pretty(&m.campaign)?)?;
+    let mut campaign = m.campaign.clone();
+    merge::seal_host(&mut campaign, &dir, &out.stage().join("bundles"))?;
+    gcl_harness::report::write_atomic(&dir.join("fuzz.json"), &serde_json::to_vec_pretty(&campaign)?)?;
+    out.commit()?;
     eprintln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s), {} bundle(s) -> {}",
         m.merged.describe(),

@@ -216,6 +216,10 @@ pub struct Baseline {
     /// file: a finding is known only on a profile it was found on
     /// ([`Baseline::recorded_elsewhere`]).
     pub recorded_on: BTreeMap<PathBuf, Vec<String>>,
+    /// The digest of the profile spec each earlier finding was recorded on (its transcript's
+    /// `x-profile-sha256`), by file; `None` for a finding written before findings named it
+    /// ([`Baseline::recorded_on_another_spec`]).
+    pub spec_of: BTreeMap<PathBuf, Option<String>>,
 }
 
 impl Baseline {
@@ -247,6 +251,8 @@ impl Baseline {
                 }
                 self.keys.insert(key.clone());
                 self.recorded_on.insert(path.clone(), t.header.profiles.clone());
+                let spec = t.header.extensions.iter().find(|(k, _)| k == PROFILE_SPEC_KEY).map(|(_, v)| v.clone());
+                self.spec_of.insert(path.clone(), spec);
                 n += 1;
             }
         }
@@ -261,6 +267,24 @@ impl Baseline {
             .iter()
             .filter(|(_, ps)| !ps.iter().any(|p| p == profile))
             .map(|(f, ps)| (f.as_path(), ps.as_slice()))
+            .collect()
+    }
+
+    /// The findings of the baseline recorded on another spec than the campaign's (its
+    /// [`crate::report::ProfileSpec`]), with the digest each names: a profile is known by its
+    /// spec, not its id, as certificates know it (a file declaring `bh8-262-4.4` with other
+    /// contents is another profile). A finding that names no spec (written before findings
+    /// named theirs) is taken as recorded on the built-in profile of its id, so it counts only
+    /// against exactly that spec.
+    pub fn recorded_on_another_spec(&self, spec: &crate::report::ProfileSpec) -> Vec<(&Path, Option<&str>)> {
+        let builtin = spec.origin == crate::report::ProfileOrigin::Builtin;
+        self.spec_of
+            .iter()
+            .filter(|(_, s)| match s {
+                Some(s) => *s != spec.sha256,
+                None => !builtin,
+            })
+            .map(|(f, s)| (f.as_path(), s.as_deref()))
             .collect()
     }
 
@@ -295,6 +319,10 @@ impl Baseline {
 
 /// The transcript header that names a written finding's signature key.
 pub const SIGNATURE_KEY: &str = "x-signature";
+
+/// The transcript header that names the digest of the profile spec a written finding was
+/// found on ([`crate::report::ProfileSpec::digest`]).
+pub const PROFILE_SPEC_KEY: &str = "x-profile-sha256";
 
 impl FuzzOptions {
     /// Options for `target` with the defaults: 1000 runs, one worker, minimization on, and
@@ -2057,6 +2085,11 @@ fn report_finding(
     let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
     (final_case.transcript.header.id, final_case.transcript.header.title) = (id.clone(), title);
     final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
+    final_case
+        .transcript
+        .header
+        .extensions
+        .push((PROFILE_SPEC_KEY.to_string(), crate::report::ProfileSpec::digest(&opts.profile)));
     let diff = out.render();
     // The steps of this (the final) transcript's run where it fails: what the finding rests on.
     let failing = crate::align::failing_steps(&opts.profile, &final_case.transcript, &final_case.model, &out);
