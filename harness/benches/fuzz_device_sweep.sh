@@ -11,7 +11,9 @@
 # GCL (default target/release/gcl), RUNS (exec: cases per campaign, default 300), SECONDS_PTY
 # (pty: seconds per campaign, default 20), PROFILE (default bh8-262) and SEED (default 1) set
 # the rest. Each campaign writes its report into OUT/<way>/<fault>/ (fuzz-device.json) and one
-# line `fault<TAB>findings<TAB>runs<TAB>key | key ...` into OUT/<way>.tsv; the last line of the
+# line `fault<TAB>findings<TAB>runs<TAB>key | key ...<TAB>not reproduced<TAB>signature (k/n) | ...`
+# into OUT/<way>.tsv (a failure that did not fail again on every replay on a fresh connection is
+# a note, not a finding: issue 37); the last line of the
 # file is the distribution (how many faults gave 0, 1, 2, ... findings). The pty campaigns are
 # timed, so their figures move with the machine's load: note `uptime` beside them.
 set -u
@@ -67,11 +69,12 @@ for f in "${faults[@]}"; do
     esac
     json="$dir/fuzz-device.json"
     if [ -s "$json" ]; then
-        jq -r --arg f "$f" '[$f, (.findings | length), .runs, ([.findings[] | .signature | (.command + " " + .kind + (if .detail then " (" + .detail + ")" else "" end) + (if .cause then " after " + .cause else "" end) + (if .explanation then ": " + .explanation else "" end))] | join(" | "))] | @tsv' "$json" >>"$tsv"
+        jq -r --arg f "$f" '[$f, (.findings | length), .runs, ([.findings[] | .signature | (.command + " " + .kind + (if .detail then " (" + .detail + ")" else "" end) + (if .cause then " after " + .cause else "" end) + (if .explanation then ": " + .explanation else "" end))] | join(" | ")), ((.not_reproduced // []) | length), ([(.not_reproduced // [])[] | .signature + " (" + (.reproduced | tostring) + "/" + (.replays | tostring) + ")"] | join(" | "))] | @tsv' "$json" >>"$tsv"
     else
         printf '%s\tERROR\t\t%s\n' "$f" "$(tail -1 "$dir/console.txt")" >>"$tsv"
     fi
     tail -1 "$tsv"
 done
 echo "# distribution (findings: faults): $(grep -v '^#' "$tsv" | cut -f2 | sort | uniq -c | awk '{printf "%s: %s, ", $2, $1}')" >>"$tsv"
+echo "# not reproduced (candidates: faults): $(grep -v '^#' "$tsv" | cut -f5 | sort | uniq -c | awk '{printf "%s: %s, ", $2, $1}')" >>"$tsv"
 tail -1 "$tsv"
