@@ -1,6 +1,7 @@
 //! `gcl fuzz merge DIR... --out DIR`: folds the outputs of a campaign's shards into one
 //! (library code in `gcl_harness::fuzz::merge`).
 
+use super::stdio::errln;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -68,10 +69,10 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 /// Names what was left behind, and says whether every shard was merged.
 fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
     for n in not_copied {
-        eprintln!("gcl fuzz merge: warning: {n}");
+        errln!("gcl fuzz merge: warning: {n}");
     }
     if !merged.complete() {
-        eprintln!(
+        errln!(
             "gcl fuzz merge: shard(s) {} of {} missing: the merged reports say INCOMPLETE, and the exit code is 2",
             merged.missing().iter().map(u64::to_string).collect::<Vec<_>>().join(", "),
             merged.count
@@ -87,7 +88,7 @@ fn device(a: &Args) -> anyhow::Result<u8> {
     let (entries, dups, mut not_copied) = merge::merge_corpora(&a.dirs, &a.out.join("corpus"))?;
     let (r, more) = merge::write_device(&m, &a.out, Some(entries))?;
     not_copied.extend(more);
-    eprintln!(
+    errln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s) ({} new), corpus {} entries ({} duplicate(s) dropped) -> {}",
         m.merged.describe(),
         r.runs,
@@ -177,7 +178,7 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     let dir = a.out.join("report");
     gcl_harness::report::write_all(&dir, &report)?;
     gcl_harness::report::write_atomic(&dir.join("fuzz.json"), &serde_json::to_vec_pretty(&m.campaign)?)?;
-    eprintln!(
+    errln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s), {} bundle(s) -> {}",
         m.merged.describe(),
         m.campaign.runs,
