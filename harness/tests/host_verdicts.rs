@@ -15,7 +15,8 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use gcl_harness::fuzz::host::{
-    FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, Transport, Weights, fuzz, judge, notes, run_once,
+    FindingKind, FuzzOptions, HostClause, HostEnd, HostRun, OVER_BUDGET_SENDING, Transport, Weights, fuzz, judge,
+    notes, run_once,
 };
 use gcl_harness::host_check::{CheckHostOptions, check_host};
 use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
@@ -315,11 +316,13 @@ fn a_host_blocked_in_its_write_while_the_hand_holds_an_answer_is_not_hung() {
     assert_eq!(hangs, Vec::<String>::new());
 }
 
-/// A host that floods one line that never ends is one finding whether it gets to the end of
-/// its flood or the run budget stops it mid-flood: stopped while still sending, it was acting,
-/// not hung (it was called both `hang in py_flood.py:<module>` and `unterminated line`).
+/// A host that floods one line that never ends is one `unterminated line` violation whether it
+/// gets to the end of its flood or the run budget stops it mid-flood: stopped while still
+/// sending, it was acting, not hung in its code (it was called both `hang in
+/// py_flood.py:<module>` and `unterminated line`). Stopped, it also never exited by itself
+/// (issue 39 item 2: that was no finding at all).
 #[test]
-fn a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it() {
+fn a_flood_is_one_violation_whether_it_ends_or_the_budget_stops_it() {
     if !python_with("threading") {
         return;
     }
@@ -336,8 +339,52 @@ fn a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it() {
     // (blocked in its write most of that time: the hand takes no more while its paced echo
     // is queued, which is why a flood counts as talking while its line runs on)
     assert!(matches!(stopped.end, HostEnd::OverBudget(_)) && stopped.talking_at_end, "{:?}", stopped.end);
-    assert_eq!(signatures(&ended), vec!["violation: line-ending: unterminated line".to_string()]);
-    assert_eq!(signatures(&stopped), signatures(&ended));
+    let violation = "violation: line-ending: unterminated line".to_string();
+    assert_eq!(signatures(&ended), vec![violation.clone()]);
+    assert_eq!(signatures(&stopped), vec![OVER_BUDGET_SENDING.to_string(), violation]);
+}
+
+/// Issue 39 item 2: a host that polls for ever, killed at the run budget while it still sends,
+/// never exited by itself: one finding, and `check-host` fails `host-exits-cleanly` (TIMEOUT).
+/// Both passed it, though the report said it "ran over the run budget ... and was killed".
+#[test]
+fn a_host_killed_at_the_run_budget_did_not_exit_cleanly() {
+    if !python_with("select") {
+        return;
+    }
+    let mut r = run(python("py_polls_forever.py", &[]));
+    r.budget = Duration::from_secs(3);
+    let res = run_once(&r, &Schedule::default()).unwrap();
+    assert!(matches!(res.end, HostEnd::OverBudget(_)) && res.talking_at_end, "{:?}", res.end);
+    let verdicts = judge(&res, &[0]);
+    assert_eq!(verdicts.iter().map(|v| v.signature.as_str()).collect::<Vec<_>>(), vec![OVER_BUDGET_SENDING]);
+    assert_eq!(verdicts[0].kind, FindingKind::Hang);
+    let report = check_host(&CheckHostOptions { run: r, ok_exit_codes: vec![0], golden: None }).unwrap().report;
+    let exits = report.cases.iter().find(|c| c.id == "host-exits-cleanly").unwrap();
+    assert_eq!(exits.verdict, gcl_harness::report::Verdict::Timeout, "{:?}", exits.message);
+    assert!(exits.message.as_deref().unwrap_or_default().contains("never exited by itself"), "{:?}", exits.message);
+}
+
+/// Issue 39 item 3: a host that writes a line longer than any the hand takes and never reads
+/// is blocked in its write for ever; killed as hung, its line is still broken: the run has
+/// the `unterminated line` violation whatever a second run says of the hang (the run had
+/// only the hang, and when its confirmation ended at the run budget with the line still
+/// running, the campaign said NO FINDING).
+#[test]
+fn a_violation_stands_whatever_becomes_of_its_hang() {
+    if !python_with("os") {
+        return;
+    }
+    let mut r = run(python("py_floods_unread.py", &[]));
+    r.timeout_hang = Duration::from_secs(2);
+    r.budget = Duration::from_secs(8);
+    let res = run_once(&r, &Schedule::default()).unwrap();
+    assert!(matches!(res.end, HostEnd::Hung(_)), "{:?}", res.end);
+    let signatures: Vec<String> = judge(&res, &[0]).into_iter().map(|v| v.signature).collect();
+    assert!(signatures.contains(&"violation: line-ending: unterminated line".to_string()), "{signatures:?}");
+    let c = campaign(r, "silence", 1, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert!(found.contains(&"violation: line-ending: unterminated line"), "{found:?} {:?}", c.notes);
 }
 
 /// A read without a deadline hangs in whichever state the hand breaks an answer: one bug,

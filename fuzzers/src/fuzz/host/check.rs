@@ -606,19 +606,16 @@ impl HostChecker {
         self.line.len() > self.profile.framing.max_line
     }
 
-    /// The host was stopped while it still sent (at the run budget): a line it was sending
-    /// that already runs past the longest line the hand takes is graded as a line that never
-    /// ends, as when such a host leaves by itself ([`HostChecker::finish`]); a shorter one may
-    /// have been about to end.
-    pub fn cut_off(&mut self) {
+    /// The host was stopped before it ended (`how`: `the run budget stopped the host`): a line
+    /// it was sending that already runs past the longest line the hand takes is graded as a
+    /// line that never ends, as when such a host leaves by itself ([`HostChecker::finish`]); a
+    /// shorter one may have been about to end.
+    pub fn cut_off(&mut self, how: &str) {
         if self.overlong_pending() {
             self.violate(
                 HostClause::LineEnding,
                 "unterminated line",
-                format!(
-                    "\"{}\" ran past the hand's longest line and had not ended when the run budget stopped the host",
-                    esc(&self.line)
-                ),
+                format!("\"{}\" ran past the hand's longest line and had not ended when {how}", esc(&self.line)),
             );
         }
     }

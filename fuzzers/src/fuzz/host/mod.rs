@@ -148,6 +148,10 @@ fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
     }
 }
 
+/// The signature of a host killed at the run budget while it still sent (a poll without end, a
+/// flood the hand's line rate holds up): it never exited by itself.
+pub const OVER_BUDGET_SENDING: &str = "over budget: still sending when the run budget ended";
+
 /// An unexpected exit code's signature: the class of the exit and the hand's mode when the
 /// host left, not the code. A host whose code says what went wrong (the last status it read,
 /// an errno) exits with a different code for every cause the hand gives it, and one habit
@@ -196,9 +200,16 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             message: c.headline.clone(),
         }),
         (HostEnd::Hung(state), _) => v.push(hang_verdict(r, state, false)),
-        // Still sending when the budget stopped it: acting, not hung (its pending line is
-        // judged as it stood).
-        (HostEnd::OverBudget(_), _) if r.talking_at_end => {}
+        // Still sending when the budget stopped it: acting, not hung in one place of its
+        // code (its pending line is judged as it stood), but it never ended by itself, and
+        // ending within the run budget is the host's to do: one finding, whatever it sent.
+        (HostEnd::OverBudget(state), _) if r.talking_at_end => v.push(Verdict {
+            kind: FindingKind::Hang,
+            signature: OVER_BUDGET_SENDING.to_string(),
+            message: format!(
+                "the host was still sending when the run budget ended ({state}) and was killed: it never exited by itself"
+            ),
+        }),
         (HostEnd::OverBudget(state), _) => v.push(hang_verdict(r, state, true)),
         (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
@@ -215,7 +226,7 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 },
             });
         }
-        (HostEnd::Exit(_), _) => {}
+        (HostEnd::Exit(_) | HostEnd::Served, _) => {}
     }
     if !r.leftovers.is_empty() {
         // Named by what was left (its command line, the same from run to run); where it was
@@ -263,6 +274,7 @@ impl std::fmt::Display for HostEnd {
             HostEnd::Signal(s) => write!(f, "was killed by signal {s}"),
             HostEnd::Hung(at) => write!(f, "hung ({at}) and was killed"),
             HostEnd::OverBudget(at) => write!(f, "ran over the run budget ({at}) and was killed"),
+            HostEnd::Served => write!(f, "was served: no host process was run"),
         }
     }
 }

@@ -126,6 +126,10 @@ pub enum HostEnd {
     Hung(String),
     /// It ran past the run budget; it was killed. The protocol state it was in.
     OverBudget(String),
+    /// There was no host process to end: a session `gcl check-host --serve` served to whoever
+    /// connected, ended when the hand was stopped. How the client ended is not the hand's to
+    /// see, so nothing is judged of it.
+    Served,
 }
 
 /// What one run gave.
@@ -1317,8 +1321,13 @@ fn result_of_run(
     if !log.hung_up {
         let crashed = matches!(end, HostEnd::Signal(_)) || super::detect::crash_report(&stderr).is_some();
         log.checker.finish(!crashed && !matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
-        if talking_at_end {
-            log.checker.cut_off();
+        // A line already longer than any the hand takes is broken however the host was
+        // stopped: killed at the budget or as hung, that violation is the run's, whatever a
+        // second run says of the hang.
+        match &end {
+            HostEnd::OverBudget(_) => log.checker.cut_off("the run budget stopped the host"),
+            HostEnd::Hung(_) => log.checker.cut_off("the host was killed as hung"),
+            HostEnd::Exit(_) | HostEnd::Signal(_) | HostEnd::Served => {}
         }
     }
     let violations = log.checker.violations().to_vec();
