@@ -80,6 +80,7 @@ pub fn serve(
     match opts.transport {
         Transport::Pty => {
             let mut pty = Pty::open(None, engine.line_baud())?;
+            crate::fuzz::host::session::tell_garbling(&mut pty, &log);
             let path = pty.path().display().to_string();
             ready(&Served { port: path.clone(), url: path });
             pty.serve(&mut engine, &all)?;

@@ -1018,3 +1018,28 @@ fn check_host_counts_its_failing_clauses_and_names_the_line_an_lf_followed() {
     assert!(stdout.contains("1 failing"), "{stdout}");
     assert!(stdout.contains("LF after \"") && !stdout.contains("LF after \"\""), "{stdout}");
 }
+
+/// Issue 39 item 16: a host that sets its port to 19200 baud against a 9600 hand, in real time
+/// on a paced line, sends garbled bytes; the clause they fail says why, as `gcl sim` says it
+/// on stderr (it said only `unterminated line "\xC2..."`, never "speed").
+#[test]
+fn a_host_at_the_wrong_speed_is_told_so_by_the_clause_it_fails() {
+    if !python_with("termios") {
+        return;
+    }
+    let mut r = run(python("py_wrong_speed.py", &["19200"]));
+    r.profile = gcl_model::Profile::builtin("bh8-262-4.4").unwrap();
+    r.time = TimeMode::Real;
+    r.pace = Pace::Hand;
+    let bad = failing(&r);
+    assert!(bad.iter().any(|f| f.starts_with("host-line-ending: ")), "{bad:?}");
+    let says = "speed mismatch: the host opened the port at 19200 baud; the hand runs at 9600";
+    assert!(bad.iter().filter(|f| !f.starts_with("host-exits-cleanly")).all(|f| f.contains(says)), "{bad:?}");
+    // At the hand's own speed nothing is garbled, and nothing says so.
+    let mut right = run(python("py_wrong_speed.py", &["9600"]));
+    right.profile = r.profile.clone();
+    right.time = TimeMode::Real;
+    right.pace = Pace::Hand;
+    let ok = failing(&right);
+    assert!(ok.is_empty(), "{ok:?}");
+}

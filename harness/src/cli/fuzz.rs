@@ -209,7 +209,9 @@ fn add_baselines(a: &DeviceArgs, o: &mut gcl_harness::fuzz::device::FuzzOptions)
         // A finding is known only under the profile it was found under.
         if let Some((file, profiles)) = o.baseline.recorded_elsewhere(&o.profile.id).first() {
             anyhow::bail!(
-                "--baseline {}: {} was recorded on profile {}, and this campaign's profile is {}: a baseline says what                  is known of a hand under its own profile only (record a baseline with --profile {}, or fuzz with the                  baseline's profile)",
+                "--baseline {}: {} was recorded on profile {}, and this campaign's profile is {}: a baseline says what \
+                 is known of a hand under its own profile only (record a baseline with --profile {}, or fuzz with the \
+                 baseline's profile)",
                 dir.display(),
                 file.display(),
                 profiles.join(" "),

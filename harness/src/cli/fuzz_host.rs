@@ -134,7 +134,7 @@ fn after_help() -> String {
 Each run starts a fresh simulated hand on a fresh pty (or TCP port), runs COMMAND to its end,
 and judges it: a crash (death by signal; an AddressSanitizer report, Rust panic or Python
 traceback on stderr), a hang (--timeout-hang of silence after the hand's last answer, or
---run-budget unless the host was still sending then), an exit code outside --ok-exit-codes, a process left behind holding the port
+--run-budget: a host still sending then never exited either), an exit code outside --ok-exit-codes, a process left behind holding the port
 or stderr, or a protocol violation (the clauses of `gcl check-host`).
 
 Before the campaign (unless --timeout-hang is given) the host's own give-up time is

@@ -208,7 +208,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         let mut pty = Pty::open(args.link.as_deref(), engine.line_baud())?;
         pty.set_speed_check(!args.no_speed_check);
-        pty.on_speed_mismatch(|line| errln!("gcl sim: {line}"));
+        pty.on_speed_mismatch(|line| errln!("gcl sim: {line} (--no-speed-check to turn this off)"));
         announce(&pty.path().display().to_string())?;
         errln!(
             "gcl sim: profile {} on {}{} (time {}, {}); stop with ^C",

@@ -980,6 +980,7 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
         Transport::Pty => {
             let mut pty = Pty::open(None, engine.line_baud())?;
             pty.set_speed_check(!line_rate);
+            tell_garbling(&mut pty, &log);
             let path = pty.path().display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
             (path.clone(), path, h)
@@ -1122,6 +1123,17 @@ fn read_host(child: &mut std::process::Child, log: &Arc<Mutex<Log>>) -> HostOutp
         })
     };
     HostOutput { out_done, errbuf, err_reader, err_inode }
+}
+
+/// The pty's speed-mismatch notice goes to the checker, so the violations the garbled bytes
+/// make say why (as `gcl sim` says it on stderr).
+pub(crate) fn tell_garbling(pty: &mut Pty, log: &Arc<Mutex<Log>>) {
+    let log = log.clone();
+    pty.on_speed_mismatch(move |why| {
+        if let Ok(mut l) = log.lock() {
+            l.checker.garbled_because(why);
+        }
+    });
 }
 
 /// How the host's run ended, as the watch saw it.
