@@ -550,6 +550,9 @@ fn a_single_run_keeps_a_host_that_never_ends_and_a_violation_whose_hang_went() {
             host.to_str().unwrap(),
         ]);
         assert_eq!(code, 1, "{}: {out}{err}", host.display());
+        // The progress line counts the finding told after the run (it said `0 findings`).
+        let last = err.lines().find(|l| l.ends_with("(done)")).unwrap_or_default();
+        assert!(last.starts_with("gcl fuzz host: 1/1 runs, 1 findings"), "{err}");
         let fuzz: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(report.join("fuzz.json")).unwrap()).unwrap();
         let found: Vec<&str> =

@@ -323,7 +323,9 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
             progress.update(n, found.load(Ordering::Relaxed), "");
         }
         Event::Found(f) => {
-            found.fetch_add(1, Ordering::Relaxed);
+            // Counted at once: a finding is told after its run, and the last line must count it.
+            let n = found.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.update(done.load(Ordering::Relaxed), n, "");
             let dir = bundle::write(&out, &info_of(&f), &f);
             let where_ = match &dir {
                 Ok(d) => d.display().to_string(),
