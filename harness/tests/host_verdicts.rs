@@ -1043,3 +1043,29 @@ fn a_host_at_the_wrong_speed_is_told_so_by_the_clause_it_fails() {
     let ok = failing(&right);
     assert!(ok.is_empty(), "{ok:?}");
 }
+
+/// Issue 39 item 3, the same loss in a hang's second run: a host that reads longer than the
+/// hang timeout is suspected of a hang with a short line pending (not graded: it may have been
+/// about to end); the confirmation run finds it late, not hung, and there it exits and its
+/// unended line is graded. That violation is the campaign's finding (the second run's verdicts
+/// were dropped: NO FINDING, one note).
+#[test]
+fn a_violation_of_a_hangs_second_run_is_a_finding() {
+    if !python_with("termios") {
+        return;
+    }
+    let mut r = run(python("py_wrong_speed.py", &["19200", "3"]));
+    r.profile = gcl_model::Profile::builtin("bh8-262-4.4").unwrap();
+    r.time = TimeMode::Real;
+    r.pace = Pace::Hand;
+    r.timeout_hang = Duration::from_secs(1);
+    r.budget = Duration::from_secs(10);
+    let c = campaign(r, "silence", 1, false);
+    assert!(c.notes.keys().any(|n| n.starts_with("note: late, not hung")), "{:?}", c.notes);
+    let found: Vec<(&str, &str)> =
+        c.findings.iter().map(|f| (f.verdict.signature.as_str(), f.verdict.message.as_str())).collect();
+    assert!(
+        found.iter().any(|(s, m)| *s == "violation: line-ending: unterminated line" && m.contains("speed mismatch")),
+        "{found:?}"
+    );
+}

@@ -459,6 +459,10 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/check_host_serve.rs::a_served_session_invents_no_exit"],
     ),
     (
+        "what else that second run shows (a line it leaves unended when it exits, a crash) is a finding like any run's",
+        &["harness/tests/host_verdicts.rs::a_violation_of_a_hangs_second_run_is_a_finding"],
+    ),
+    (
         "killed as hung too, and that violation stands whatever the hang's confirmation says",
         &["harness/tests/host_verdicts.rs::a_violation_stands_whatever_becomes_of_its_hang"],
     ),

@@ -896,6 +896,41 @@ impl Shared {
         }
     }
 
+    /// What a hang's confirmation run `r` showed besides the hang (a line it left unended
+    /// when it exited, a crash, an exit code): findings like any run's, under the suspect's
+    /// run and schedule, whatever the confirmation said of the hang (which its own verdicts of
+    /// kind hang are not: the confirmation decides those). The indices of new findings.
+    fn take_confirmation_run(
+        &mut self,
+        suspect: &Finding,
+        r: &RunResult,
+        opts: &FuzzOptions,
+        started: Instant,
+    ) -> Vec<usize> {
+        let mut new = Vec::new();
+        for v in judge(r, &opts.ok_exit_codes).into_iter().filter(|v| v.kind != FindingKind::Hang) {
+            if let Some(&k) = self.by_sig.get(&v.signature) {
+                self.findings[k].hits += 1;
+                continue;
+            }
+            let k = self.findings.len();
+            self.by_sig.insert(v.signature.clone(), k);
+            self.findings.push(Finding {
+                verdict: v,
+                found_after_ms: started.elapsed().as_millis() as u64,
+                hits: 1,
+                fired: r.fired.clone(),
+                end: r.end.clone(),
+                confirmed_after_ms: None,
+                stderr: r.stderr.clone(),
+                exchanges: r.exchanges.clone(),
+                ..suspect.clone()
+            });
+            new.push(k);
+        }
+        new
+    }
+
     /// Takes in every ended run whose turn has come.
     fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         let mut new = Vec::new();
@@ -1095,6 +1130,10 @@ impl Confirmation {
 /// the run budget allows) for the host to send or exit. A hang is a host that still does
 /// neither; one that acts later, after a wait longer than `hang`, is late, not hung: a note
 /// ("gave up after 15.0 s").
+///
+/// The second run comes back too (`None` when it was called off): what else it shows (a
+/// violation, a crash, an exit code) is the campaign's like any run's, whatever it says of
+/// the hang.
 pub fn confirm(
     run: &HostRun,
     schedule: &Schedule,
@@ -1102,27 +1141,33 @@ pub fn confirm(
     hang: Duration,
     window: Duration,
     stop: &AtomicBool,
-) -> Result<Confirmation, RunError> {
+) -> Result<(Confirmation, Option<RunResult>), RunError> {
     let mut patient = run.clone();
     patient.timeout_hang = window.max(hang);
     let r = match run_once_until(&patient, schedule, stop) {
-        Err(RunError::Cancelled) => return Ok(Confirmation::Stopped),
+        Err(RunError::Cancelled) => return Ok((Confirmation::Stopped, None)),
         other => other?,
     };
+    let outcome = judge_confirmation(&r, state, hang);
+    Ok((outcome, Some(r)))
+}
+
+/// What a confirmation run `r` says of a hang suspected in `state` with hang timeout `hang`.
+fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmation {
     let late = |same: bool| {
         r.waits.iter().filter(|w| w.acted && w.waited > hang && (!same || w.state == state)).max_by_key(|w| w.waited)
     };
     if let Some(w) = late(true) {
-        return Ok(Confirmation::Late(w.waited, w.state.clone()));
+        return Confirmation::Late(w.waited, w.state.clone());
     }
     let still = r.waits.iter().find(|w| !w.acted).filter(|w| w.waited > hang && !r.talking_at_end);
     if let Some(w) = still {
-        return Ok(Confirmation::Hung(w.waited));
+        return Confirmation::Hung(w.waited);
     }
-    Ok(match late(false) {
+    match late(false) {
         Some(w) => Confirmation::Late(w.waited, w.state.clone()),
         None => Confirmation::NotAgain,
-    })
+    }
 }
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
@@ -1377,19 +1422,25 @@ impl<'a> Workers<'a> {
         for key in suspects.iter() {
             let Ok(sh) = self.shared.lock() else { return };
             let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
-            let schedule = f.schedule.clone();
+            let pending = (**f).clone();
             let known = sh.by_sig.contains_key(&key.0);
             drop(sh);
-            let outcome = if known {
-                Confirmation::Hung(Duration::ZERO)
+            let (outcome, second) = if known {
+                (Confirmation::Hung(Duration::ZERO), None)
             } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
-                Confirmation::Stopped
+                (Confirmation::Stopped, None)
             } else {
-                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
-                    .unwrap_or(Confirmation::Stopped)
+                confirm(&opts.run, &pending.schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
+                    .unwrap_or((Confirmation::Stopped, None))
             };
-            let new = self.shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
-            if let Some(k) = new {
+            let mut new: Vec<usize> = Vec::new();
+            if let Ok(mut sh) = self.shared.lock() {
+                new.extend(sh.settle(&key, outcome));
+                if let Some(r) = &second {
+                    new.extend(sh.take_confirmation_run(&pending, r, opts, self.started));
+                }
+            }
+            for k in new {
                 self.found(k);
             }
         }
