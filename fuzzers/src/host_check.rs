@@ -120,6 +120,9 @@ fn not_exercised(clause: HostClause, r: &RunResult) -> Option<&'static str> {
         HostClause::ValidCommands if r.commands.is_empty() => Some("the host sent no command"),
         HostClause::WaitsForAnswer if !after_answer => Some("the host sent nothing after an answer began"),
         HostClause::RealtimeBlocks | HostClause::LeavesCleanly if !rt => Some("the host never entered RealTime"),
+        HostClause::ExitsCleanly if r.end == HostEnd::Served => {
+            Some("a served session has no host process: how its client ended is not seen")
+        }
         _ => None,
     }
 }
@@ -211,6 +214,15 @@ fn grade_as(
             c.transcript = Some(crate::report::truncate_note(&session, crate::report::MAX_SHOWN));
         }
         cases.push(c);
+    }
+    // A host that reached the hand but exercised no clause and matched no golden (a served client that sent only
+    // ^C) judged nothing: an ERROR that says so, never a pass.
+    if unreached.is_none() && cases.iter().all(|c| c.verdict == Verdict::Skip) {
+        let mut c = case(SESSION_CASE, "the host talks to the hand", "host: process", Verdict::Error, &[], &session);
+        c.message = Some("nothing judged: the host exercised no clause".into());
+        c.transcript = None;
+        c.duration_ms = r.elapsed.as_secs_f64() * 1000.0;
+        cases.insert(0, c);
     }
     let report = host_report(
         &opts.run.command,

@@ -58,8 +58,8 @@ pub struct Served {
 }
 
 /// Serves the hand until one of `stops` becomes readable (or a `hang-up` misbehaviour closes
-/// the line), telling `ready` where it listens first; returns the session as a run that ended
-/// with exit code 0, for [`crate::host_check::grade`].
+/// the line), telling `ready` where it listens first; returns the session as a run that no
+/// host process made ([`HostEnd::Served`]), for [`crate::host_check::grade_served`].
 pub fn serve(
     opts: &ServeOptions,
     stops: &[BorrowedFd<'_>],
@@ -80,6 +80,7 @@ pub fn serve(
     match opts.transport {
         Transport::Pty => {
             let mut pty = Pty::open(None, engine.line_baud())?;
+            crate::fuzz::host::session::tell_garbling(&mut pty, &log);
             let path = pty.path().display().to_string();
             ready(&Served { port: path.clone(), url: path });
             pty.serve(&mut engine, &all)?;
@@ -99,7 +100,7 @@ pub fn serve(
     }
     let violations = log.checker.violations().to_vec();
     Ok(RunResult {
-        end: HostEnd::Exit(0),
+        end: HostEnd::Served,
         stack: None,
         leftovers: Vec::new(),
         gave_up_after: None,

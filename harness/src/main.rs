@@ -1,6 +1,5 @@
 //! `gcl`: the conformance kit for the Grasper Control Language.
 
-use std::io::Write;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -61,18 +60,21 @@ fn main() -> ExitCode {
         Command::Suite(a) => cli::suite::run(a),
         Command::Vectors(a) => cli::vectors::run(a),
     };
-    match result {
-        Ok(code) => ExitCode::from(code),
+    let code = match result {
+        Ok(code) => code,
         Err(e) => {
-            // A closed pipe (`gcl spec | head`) is not an error.
-            if e.chain().any(|c| {
-                c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-            }) {
-                return ExitCode::from(cli::EXIT_OK);
-            }
             // What a hand, a host or a file put in an error is shown escaped, never obeyed.
-            let _ = writeln!(std::io::stderr(), "gcl: error: {}", gcl_model::escape::printable(&cli::error_line(&e)));
-            ExitCode::from(cli::EXIT_ERROR)
+            cli::stdio::errln!("gcl: error: {}", gcl_model::escape::printable(&cli::error_line(&e)));
+            cli::EXIT_ERROR
         }
+    };
+    // The verdict's code whatever became of stdout (a closed pipe is its reader's choice);
+    // output that could not be written where it was asked for (`> /dev/full`) fails a pass.
+    match cli::stdio::finish() {
+        Some(e) => {
+            cli::stdio::errln!("gcl: error: writing to stdout: {e}");
+            ExitCode::from(if code == cli::EXIT_OK { cli::EXIT_ERROR } else { code })
+        }
+        None => ExitCode::from(code),
     }
 }

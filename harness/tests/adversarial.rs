@@ -7,11 +7,11 @@ mod bounded;
 mod deps;
 mod sim_support;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use bounded::{MEMORY, Run, gcl_bounded};
+use bounded::{Closed, MEMORY, Run, gcl_bounded, gcl_bounded_closing};
 use sim_support::GCL;
 
 fn gcl(args: &[&str]) -> Run {
@@ -884,4 +884,138 @@ fn a_stopped_check_leaves_no_host_and_no_run_folder() {
     assert_eq!(json["stopped"]["cause"], "signal", "{json}");
     assert!(junit.contains(r#"errors="1""#), "{junit}");
     assert!(html.contains("<strong>STOPPED</strong>"), "{html}");
+}
+
+// --- Issue 39 item 1 (a closed stdout or stderr changes no verdict and loses no file) -----
+
+/// Runs `gcl ARGS` in `cwd` with `closed` a pipe nobody reads.
+fn gcl_closing(cwd: &Path, args: &[&str], closed: Closed) -> Run {
+    gcl_bounded_closing(Some(cwd), args, Duration::from_secs(120), Some(closed))
+}
+
+/// Issue 39 item 1: a reader that went away (`gcl conform ... | true`) turned a failure into
+/// exit 0 and left no report (the summary went out with `?` before the reports, and `main`
+/// took any broken pipe for success); `check-host` panicked (exit 101). Whichever stream is
+/// closed, every command here writes its files and exits with its verdict's code.
+#[test]
+fn a_closed_output_changes_no_verdict_and_loses_no_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let talker = "exec 3<>\"$GCL_PORT\"; printf 'XYZZY\\r' >&3; sleep 0.3";
+    for closed in [Closed::Stdout, Closed::Stderr] {
+        let tag = format!("{closed:?}");
+        let at = |name: &str| d.join(format!("{name}-{tag}"));
+        let (conform, cert, fuzz, findings, check, serve) =
+            (at("conform"), at("cert"), at("fuzz"), at("findings"), at("check"), at("serve"));
+        let runs: [(Vec<&str>, u8, PathBuf); 5] = [
+            (
+                vec!["conform", "--target", "sim:seed", "--fault", "fget-reversed", "--report", s(&conform)],
+                1,
+                conform.join("report.json"),
+            ),
+            (
+                vec!["certify", "--target", "sim:seed", "--partial", "--fault", "fget-reversed", "--out", s(&cert)],
+                1,
+                cert.join("certificate.json"),
+            ),
+            (
+                vec![
+                    "fuzz",
+                    "device",
+                    "--target",
+                    "sim:seed",
+                    "--fault",
+                    "fget-reversed",
+                    "--runs",
+                    "50",
+                    "--out",
+                    s(&findings),
+                    "--report",
+                    s(&fuzz),
+                ],
+                1,
+                fuzz.join("fuzz-device.json"),
+            ),
+            (
+                vec!["check-host", "--profile", "seed", "--report", s(&check), "--", "sh", "-c", talker],
+                1,
+                check.join("report.json"),
+            ),
+            // Nobody connects and stdin ends at once: nothing judged, exit 2, and the reports.
+            (
+                vec!["check-host", "--serve", "--stop-on-eof", "--profile", "seed", "--report", s(&serve)],
+                2,
+                serve.join("report.json"),
+            ),
+        ];
+        for (args, code, file) in runs {
+            let r = gcl_closing(d, &args, closed);
+            assert_eq!(r.code, Some(i32::from(code)), "{tag} closed, {args:?}: {}{}", r.stdout, r.stderr);
+            assert!(file.is_file(), "{tag} closed, {args:?}: no {}: {}{}", file.display(), r.stdout, r.stderr);
+            assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+        }
+        assert!(std::fs::read_dir(&findings).unwrap().count() > 0, "{tag} closed: no finding written");
+    }
+}
+
+/// Issue 39 item 1, the same for every subcommand: the exit code does not depend on whether
+/// anybody reads stdout or stderr, and nothing panics. Two exceptions, each a verdict of its
+/// own: output that could not be written at all (`> /dev/full`) fails a pass with exit 2 and
+/// a line, and `gcl sim` does not serve a hand whose address nobody can read.
+#[test]
+fn every_command_exits_alike_whoever_reads_its_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("s.gcls"), "HI\nFGET P\n").unwrap();
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/framing-echo.gcl");
+    let r = gcl_bounded(
+        Some(d),
+        &["certify", "--target", "sim:seed", "--partial", "--only", "framing-*"],
+        Duration::from_secs(120),
+    );
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let commands: Vec<Vec<&str>> = vec![
+        vec!["--help"],
+        vec!["--version"],
+        vec!["conform", "--no-such-option"],
+        vec!["spec"],
+        vec!["spec", "--profile", "seed"],
+        vec!["explain", "HI", "FGET P", "XYZZY"],
+        vec!["suite", "list"],
+        vec!["record", "--target", "sim:seed", "--script", "s.gcls"],
+        vec!["replay", "--target", "sim:seed", s(&golden)],
+        vec!["replay", "--target", "sim:bh8-262-4.4", s(&golden)],
+        vec!["conform", "--target", "sim:seed", "--only", "framing-*"],
+        vec!["certify", "--verify", "certificate", "--allow-unverified"],
+        vec!["certify", "--keygen", "key"],
+        vec!["fuzz", "host", "--runs", "1", "--", "true"],
+        vec!["fuzz", "device", "--target", "sim:seed", "--runs", "5"],
+        vec!["check-host", "--profile", "seed", "--", "true"],
+    ];
+    for args in &commands {
+        let open = gcl_bounded(Some(d), args, Duration::from_secs(120));
+        assert!(!open.stderr.contains("panicked"), "{args:?}: {}", open.stderr);
+        // `--keygen` refuses to replace the key it wrote: each run writes its own.
+        let _ = std::fs::remove_file(d.join("key"));
+        let _ = std::fs::remove_file(d.join("key.pub"));
+        for closed in [Closed::Stdout, Closed::Stderr] {
+            let r = gcl_closing(d, args, closed);
+            assert_eq!(r.code, open.code, "{args:?} with {closed:?} closed: {}{}", r.stdout, r.stderr);
+            assert!(!r.stderr.contains("panicked"), "{args:?}: {}", r.stderr);
+            let _ = std::fs::remove_file(d.join("key"));
+            let _ = std::fs::remove_file(d.join("key.pub"));
+        }
+    }
+    // Output that could not be written where it was asked for fails a pass.
+    let full = Command::new(GCL)
+        .args(["spec", "--profile", "seed"])
+        .stdout(std::fs::File::create("/dev/full").unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(full.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&full.stderr).contains("writing to stdout: No space left on device"));
+    // A simulated hand whose address nobody can read is not served, and that is no success.
+    let r = gcl_closing(d, &["sim", "--tcp", "0"], Closed::Stdout);
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("stdout is closed"), "{}", r.stderr);
 }

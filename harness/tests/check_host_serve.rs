@@ -72,11 +72,13 @@ fn a_served_hand_grades_whoever_connected() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
     assert_eq!(report["target"], "host: good host");
-    // Every clause passes, but RealTime's two: the host never entered it, so they are not
-    // exercised.
+    // Every clause passes, but RealTime's two (the host never entered it) and how the host
+    // exits (there is no host process): those are not exercised.
     let cases = report["cases"].as_array().unwrap();
-    let realtime = |c: &serde_json::Value| c["id"] == "host-realtime-blocks" || c["id"] == "host-leaves-cleanly";
-    assert!(cases.iter().all(|c| c["verdict"] == if realtime(c) { "SKIP" } else { "PASS" }), "{cases:?}");
+    let idle = |c: &serde_json::Value| {
+        c["id"] == "host-realtime-blocks" || c["id"] == "host-leaves-cleanly" || c["id"] == "host-exits-cleanly"
+    };
+    assert!(cases.iter().all(|c| c["verdict"] == if idle(c) { "SKIP" } else { "PASS" }), "{cases:?}");
 
     let (child, port, _) = serve(&[]);
     talk(&port, &[b"FGET DP\r\n"]);
@@ -120,4 +122,26 @@ fn a_served_hand_nobody_talks_to_judges_nothing() {
     let (code, out) = stop(child);
     assert_eq!(code, 2, "{out}");
     assert!(out.contains("the port was opened, but nothing was sent to the hand"), "{out}");
+}
+
+/// Issue 39 item 4: a served session has no host process, so nothing is known of how it
+/// exits: `host-exits-cleanly` is not exercised (it was PASS, from an exit code 0 the session
+/// made up), and a client that sent only ^C exercised nothing: an ERROR, exit 2 (it was exit
+/// 0 on that one PASS).
+#[test]
+fn a_served_session_invents_no_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (child, port, _) = serve(&["--report", dir.path().to_str().unwrap()]);
+    talk(&port, &[]);
+    let (code, out) = stop(child);
+    assert_eq!(code, 2, "{out}");
+    assert!(!out.lines().any(|l| l.starts_with("PASS")), "{out}");
+    assert!(out.lines().any(|l| l.starts_with("ERROR") && l.contains("host-session")), "{out}");
+    assert!(out.contains("nothing judged: the host exercised no clause"), "{out}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    let exits = report["cases"].as_array().unwrap().iter().find(|c| c["id"] == "host-exits-cleanly").unwrap();
+    assert_eq!(exits["verdict"], "SKIP", "{exits}");
+    assert!(exits["message"].as_str().unwrap().contains("no host process"), "{exits}");
+    assert_eq!(report["summary"]["PASS"], 0, "{report}");
 }

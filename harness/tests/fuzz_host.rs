@@ -513,3 +513,50 @@ fn a_host_that_never_takes_an_answer_is_warned_about() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning: host timeouts not measured: the host took no answer"), "{err}");
 }
+
+/// Issue 39 items 2 and 3, as a user runs them: `gcl fuzz host --runs 1` on a host that polls
+/// for ever (killed at the run budget) and on one that floods a line and never reads (killed
+/// as hung) has its finding and exits 1; it said NO FINDING and exited 0 on both (the second
+/// with the note `hang not reproduced`, its violation gone with the hang).
+#[test]
+fn a_single_run_keeps_a_host_that_never_ends_and_a_violation_whose_hang_went() {
+    if deps::python_with(&["select"]).is_none() {
+        return;
+    }
+    let hosts = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hosts");
+    let dir = tempfile::tempdir().unwrap();
+    for (host, budget, want) in [
+        ("py_polls_forever.py", "4s", gcl_harness::fuzz::host::OVER_BUDGET_SENDING),
+        ("py_floods_unread.py", "6s", "violation: line-ending: unterminated line"),
+    ] {
+        let report = dir.path().join(host);
+        let bundles = dir.path().join(format!("{host}-findings"));
+        let host = hosts.join(host);
+        let (code, out, err) = gcl(&[
+            "fuzz",
+            "host",
+            "--runs",
+            "1",
+            "--run-budget",
+            budget,
+            "--timeout-hang",
+            "2s",
+            "--out",
+            bundles.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--",
+            &deps::python(),
+            host.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{}: {out}{err}", host.display());
+        // The progress line counts the finding told after the run (it said `0 findings`).
+        let last = err.lines().find(|l| l.ends_with("(done)")).unwrap_or_default();
+        assert!(last.starts_with("gcl fuzz host: 1/1 runs, 1 findings"), "{err}");
+        let fuzz: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("fuzz.json")).unwrap()).unwrap();
+        let found: Vec<&str> =
+            fuzz["findings"].as_array().unwrap().iter().map(|f| f["verdict"]["signature"].as_str().unwrap()).collect();
+        assert!(found.contains(&want), "{}: {found:?}", host.display());
+    }
+}

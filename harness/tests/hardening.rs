@@ -412,6 +412,10 @@ fn a_baseline_of_another_profile_is_refused_and_a_baseline_is_named() {
         "{}",
         r.stderr
     );
+    // One sentence, spaced as one (issue 39 item 16: a string broken over lines without `\`
+    // put a run of 18 spaces in it, twice).
+    assert!(r.stderr.contains("a baseline says what is known of a hand under its own profile only"), "{}", r.stderr);
+    assert!(!r.stderr.contains("  "), "{}", r.stderr);
     assert!(!r.stdout.contains("known"), "{}", r.stdout);
     let rep = dir.path().join("rep");
     let r = fuzz("sim:seed", &["--baseline", s(&found), "--report", s(&rep)]);

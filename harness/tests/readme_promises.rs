@@ -447,8 +447,24 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["fuzzers/src/fuzz/device/mod.rs::a_status_the_baseline_has_on_another_command_is_new"],
     ),
     (
-        "so a flood is one `unterminated line` finding whether it ends or the budget stops it",
-        &["harness/tests/host_verdicts.rs::a_flood_is_one_finding_whether_it_ends_or_the_budget_stops_it"],
+        "so a flood is one `unterminated line` violation whether it ends or the budget stops it",
+        &["harness/tests/host_verdicts.rs::a_flood_is_one_violation_whether_it_ends_or_the_budget_stops_it"],
+    ),
+    (
+        "but it never exited by itself: one finding, `over budget: still sending when the run budget ended`, whatever it sent (`check-host` fails `host-exits-cleanly`)",
+        &["harness/tests/host_verdicts.rs::a_host_killed_at_the_run_budget_did_not_exit_cleanly"],
+    ),
+    (
+        "A session of `check-host --serve` has no host process, so `host-exits-cleanly` is \"not exercised\" there, and a session whose client exercised no clause (it sent only ^C) is an ERROR, exit 2.",
+        &["harness/tests/check_host_serve.rs::a_served_session_invents_no_exit"],
+    ),
+    (
+        "what else that second run shows (a line it leaves unended when it exits, a crash) is a finding like any run's",
+        &["harness/tests/host_verdicts.rs::a_violation_of_a_hangs_second_run_is_a_finding"],
+    ),
+    (
+        "killed as hung too, and that violation stands whatever the hang's confirmation says",
+        &["harness/tests/host_verdicts.rs::a_violation_stands_whatever_becomes_of_its_hang"],
     ),
     (
         "Against such a hand the strain at rest and what VERS says are the hand's own",

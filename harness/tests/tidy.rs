@@ -167,6 +167,24 @@ fn the_cli_and_its_crates_stay_in_the_binary() {
     assert!(bad.is_empty(), "`gcl_harness::cli` outside the binary:\n{}", bad.join("\n"));
 }
 
+/// Issue 39 item 1: what a command prints never decides its fate. The binary writes to stdout
+/// and stderr only through `harness/src/cli/stdio.rs` (a closed pipe or a full disk is
+/// dropped there, and `main` judges it once), and no library prints with a macro that panics
+/// when its stream is closed (`println!` and `eprintln!` do).
+#[test]
+fn the_binary_prints_through_one_door() {
+    const PRINTING: &[&str] = &["println!", "eprintln!", "print!", "eprint!", "dbg!"];
+    let mut binary: Vec<PathBuf> = rust_files("harness/src/cli");
+    binary.push(Path::new(ROOT).join("harness/src/main.rs"));
+    binary.retain(|p| !p.ends_with("cli/stdio.rs"));
+    let bad = offenders(&binary, |_, l| PRINTING.iter().chain(&["io::stdout", "io::stderr"]).any(|w| has_word(l, w)));
+    assert!(bad.is_empty(), "printing around harness/src/cli/stdio.rs:\n{}", bad.join("\n"));
+    let mut lib: Vec<PathBuf> = LIBRARY_SRC.iter().flat_map(|d| rust_files(d)).collect();
+    lib.extend(rust_files("host/src"));
+    let bad = offenders(&lib, |_, l| PRINTING.iter().any(|w| has_word(l, w)));
+    assert!(bad.is_empty(), "a library prints with a macro that panics on a closed stream:\n{}", bad.join("\n"));
+}
+
 /// Architecture invariant: the host library (`gcl-host`) carries nothing of the harness. Its
 /// manifest is what the compiler enforces (a module that reaches for the suite, a report or
 /// the CLI does not build); this keeps the manifest from growing the harness's crates back, and

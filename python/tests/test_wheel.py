@@ -235,8 +235,9 @@ def test_fault(gcl_hand):
 @pytest.mark.gcl(profile="seed", schedules=2, seed=9)
 def test_schedules(gcl_misbehaving_hand):
     assert gcl_misbehaving_hand.planned
-    # A session nobody talks in judges nothing (an ERROR); a ^C is talking.
-    serial.serial_for_url(gcl_misbehaving_hand.url).write(b"\\x03")
+    # A session nobody talks in judges nothing (an ERROR), nor does one of a lone ^C (no
+    # clause is exercised by it): a command is talking.
+    ask(gcl_misbehaving_hand.url, b"FGET DP")
 '''
 
 

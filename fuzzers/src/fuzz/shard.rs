@@ -42,7 +42,9 @@ impl Shard {
 
     /// How many of the campaign's indices `0..total` are this shard's.
     pub fn share(self, total: u64) -> u64 {
-        (total + self.count - self.index) / self.count
+        // The indices index-1, index-1+count, ... below total; computed without a sum that
+        // overflows (`--shard 1/18446744073709551615` is a shard like any other).
+        if total < self.index { 0 } else { (total - self.index) / self.count + 1 }
     }
 }
 
@@ -326,6 +328,26 @@ mod tests {
             assert_eq!(s.share(10), (0..10).filter(|&i| s.owns(i)).count() as u64);
         }
         assert_eq!(shards.iter().map(|s| s.share(10)).sum::<u64>(), 10);
+    }
+
+    /// Issue 39 item 16: the largest shard count and the largest campaign are shards like any
+    /// other (`share` overflowed, a panic in debug builds and a wrong share in release).
+    #[test]
+    fn a_share_never_overflows() {
+        let max = u64::MAX;
+        let first: Shard = format!("1/{max}").parse().unwrap();
+        let last: Shard = format!("{max}/{max}").parse().unwrap();
+        assert_eq!(first.share(5), 1);
+        assert_eq!(last.share(5), 0);
+        assert_eq!(first.share(max), 1);
+        assert_eq!(last.share(max), 1);
+        let half: Shard = "2/2".parse().unwrap();
+        assert_eq!(half.share(max), max / 2);
+        assert_eq!("1/2".parse::<Shard>().unwrap().share(max), max / 2 + 1);
+        for (k, n, total) in [(1, 3, 0), (3, 3, 2), (3, 3, 3), (2, 3, 7)] {
+            let s = Shard { index: k, count: n };
+            assert_eq!(s.share(total), (0..total).filter(|&i| s.owns(i)).count() as u64, "{k}/{n} of {total}");
+        }
     }
 
     fn shard(k: u64, n: u64, seed: u64, ops: &str) -> (String, Option<Provenance>) {

@@ -72,7 +72,7 @@ pub struct Args {
 
 /// Runs `gcl certify`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     if let Some(path) = &args.keygen {
         return keygen(path, &mut w);
     }

@@ -3,6 +3,7 @@
 //! whoever connects, until stopped (library code in `gcl_harness::host_check_serve`), which
 //! the `gcl_hand` pytest fixture runs.
 
+use super::stdio::{errln, outln};
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -105,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
             if let Some(p) = &args.save_session {
                 gcl_harness::report::write_atomic(p, o.session.as_bytes())
                     .with_context(|| format!("writing {}", p.display()))?;
-                eprintln!("wrote {}", p.display());
+                errln!("wrote {}", p.display());
             }
             (o.report, Some(o.run))
         }
@@ -138,7 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     print_clauses(&report);
     if let Some(dir) = args.host.report_dir() {
         for p in gcl_harness::report::write_all(dir, &report)? {
-            eprintln!("wrote {}", p.display());
+            errln!("wrote {}", p.display());
         }
     }
     Ok(exit_code(&report))
@@ -149,9 +150,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
 pub(super) fn print_clauses(report: &gcl_harness::report::RunReport) {
     for c in &report.cases {
         let verdict = if c.verdict == Verdict::Skip { "not exercised" } else { c.verdict.as_str() };
-        println!("{verdict:<7} {:<24} {}", c.id, c.title);
+        outln!("{verdict:<7} {:<24} {}", c.id, c.title);
         if let Some(m) = &c.message {
-            println!("        {}", gcl_model::escape::printable(m));
+            outln!("        {}", gcl_model::escape::printable(m));
         }
     }
     let session = report.cases.iter().any(|c| c.id == SESSION_CASE);
@@ -159,9 +160,9 @@ pub(super) fn print_clauses(report: &gcl_harness::report::RunReport) {
     let idle = report.cases.iter().filter(|c| c.verdict == Verdict::Skip).count();
     let judged = report.judged().unwrap_or_default();
     if session {
-        println!("nothing judged: {idle} clause(s) not exercised ({judged})");
+        outln!("nothing judged: {idle} clause(s) not exercised ({judged})");
     } else {
-        println!("{} clause(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
+        outln!("{} clause(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
     }
 }
 
@@ -270,7 +271,7 @@ pub fn run_serve(
     let started = time::OffsetDateTime::now_utc();
     let t0 = std::time::Instant::now();
     let mut announce = |s: &Served| {
-        let mut out = std::io::stdout().lock();
+        let mut out = super::stdio::out();
         let _ = writeln!(out, "port {}\nurl {}", s.port, s.url);
         for p in &schedule.planned {
             let _ = writeln!(out, "planned {} at answer {} (variant {})", p.op, p.answer, p.arg);
@@ -288,7 +289,7 @@ pub fn run_serve(
     }
     let report = outcome.report;
     {
-        let mut out = std::io::stdout().lock();
+        let mut out = super::stdio::out();
         for f in &outcome.run.fired {
             writeln!(out, "fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what))?;
         }
@@ -298,7 +299,7 @@ pub fn run_serve(
     print_clauses(&report);
     if let Some(dir) = host.report_dir() {
         for p in gcl_harness::report::write_all(dir, &report)? {
-            eprintln!("wrote {}", p.display());
+            errln!("wrote {}", p.display());
         }
     }
     Ok(exit_code(&report))

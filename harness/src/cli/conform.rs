@@ -1,6 +1,7 @@
 //! `gcl conform`: the conformance suite against a hand, with a verdict per case and per
 //! clause, reports CI systems read, and exit codes that mean something.
 
+use super::stdio::errln;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
@@ -183,7 +184,7 @@ pub fn prepare(
         None => KnownFailures::default(),
     };
     for k in known.entries_for(&profile.id, &cases).iter().filter(|k| !k.matched) {
-        eprintln!(
+        errln!(
             "gcl: warning: known failure `{}` in {} matches no case of profile {}; it is stale or a typo",
             printable(&k.case),
             known.source().unwrap_or("the known-failures list"),
@@ -469,7 +470,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         args.report.as_deref().map(|d| gcl_harness::outputs::OutLock::acquire(d, "conform --report")).transpose()?;
     let mut out = run_with_progress(&opts, &cases, args.report.as_deref(), args.quiet, "gcl conform")?;
     record_options(&mut out.report, &args.suite, &opts.profile);
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     write!(w, "{}", printable(&summary_text(&out.report)))?;
     if let Some(dir) = &args.report {
         let files = write_all(dir, &out.report)?;

@@ -215,7 +215,7 @@ fn parsed_text(p: &Value) -> String {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let profile = load_profile(&args.profile)?;
     let results = explain_lines(&profile, args.seed, &args.lines)?;
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     for r in &results {
         if args.json {
             writeln!(w, "{}", serde_json::to_string(&r.to_json(&profile))?)?;

@@ -2,6 +2,7 @@
 //! model. This module only turns arguments into the library's options and
 //! prints; the fuzzers live in `gcl_harness::fuzz`.
 
+use super::stdio::errln;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -208,7 +209,9 @@ fn add_baselines(a: &DeviceArgs, o: &mut gcl_harness::fuzz::device::FuzzOptions)
         // A finding is known only under the profile it was found under.
         if let Some((file, profiles)) = o.baseline.recorded_elsewhere(&o.profile.id).first() {
             anyhow::bail!(
-                "--baseline {}: {} was recorded on profile {}, and this campaign's profile is {}: a baseline says what                  is known of a hand under its own profile only (record a baseline with --profile {}, or fuzz with the                  baseline's profile)",
+                "--baseline {}: {} was recorded on profile {}, and this campaign's profile is {}: a baseline says what \
+                 is known of a hand under its own profile only (record a baseline with --profile {}, or fuzz with the \
+                 baseline's profile)",
                 dir.display(),
                 file.display(),
                 profiles.join(" "),
@@ -324,7 +327,7 @@ fn device_report(
 ) -> gcl_harness::fuzz::device::report::FuzzReport {
     use gcl_harness::fuzz::device::{self as fd, Budget};
     for (p, why) in &s.malformed_corpus {
-        eprintln!("gcl fuzz device: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
+        errln!("gcl fuzz device: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
     }
     let mut report = fd::report::FuzzReport::new(o, s);
     if let Some(by) = super::stopped_by().filter(|_| s.interrupted) {
@@ -335,14 +338,14 @@ fn device_report(
             }
         };
         let st = format!("stopped by {by} after {}{of}", s.runs);
-        eprintln!("gcl fuzz device: {st}; the report covers the runs made");
+        errln!("gcl fuzz device: {st}; the report covers the runs made");
         report.stopped = Some(st);
     }
     report.coverage_over_time = timeline;
     report.provenance = Some(provenance(a, o, baselines));
     // Sealed, so that a merge takes this folder only as written.
     if let Err(e) = gcl_harness::fuzz::merge::seal_device(&mut report, a.out.as_deref().unwrap_or(Path::new("."))) {
-        eprintln!(
+        errln!(
             "gcl fuzz device: warning: {}",
             printable(&format!("the report is not sealed, and no merge takes it: {e}"))
         );
@@ -358,7 +361,7 @@ fn print_device_summary(
     report: &gcl_harness::fuzz::device::report::FuzzReport,
 ) -> anyhow::Result<()> {
     use gcl_harness::fuzz::device as fd;
-    let mut out = std::io::stdout().lock();
+    let mut out = super::stdio::out();
     writeln!(
         out,
         "{} runs ({} drawn cases dropped: the model made no case of them, they rest on a skipped decision, they would change a serial line's rate, or the EEPROM write budget was spent) in {:.1} s, {:.1} cases/s, {:.0} wire bytes/s ({:.0} sent, {:.0} received), {:.1} lines sent/s; {} distinct findings ({} new, {} known); {} corpus entries; {} EEPROM writes",
@@ -420,18 +423,18 @@ fn device_exit(
     report: &gcl_harness::fuzz::device::report::FuzzReport,
 ) -> u8 {
     if let Some(why) = &s.dead_hand {
-        eprintln!("gcl fuzz device: {}", printable(why));
+        errln!("gcl fuzz device: {}", printable(why));
         return EXIT_ERROR;
     }
     if let Some(why) = &s.no_cases {
-        eprintln!("gcl fuzz device: nothing left to test: {why}");
+        errln!("gcl fuzz device: nothing left to test: {why}");
         return EXIT_ERROR;
     }
     if s.runs == 0
         && !s.interrupted
         && let Some(why) = &report.stopped
     {
-        eprintln!("gcl fuzz device: nothing tested: {why}");
+        errln!("gcl fuzz device: nothing tested: {why}");
     }
     // Only new findings fail the run: what the baseline explains was known before. A
     // campaign stopped before its budget without one has no verdict.

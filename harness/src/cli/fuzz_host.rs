@@ -1,6 +1,7 @@
 //! `gcl fuzz host`: the adversarial hand for host libraries (library code in
 //! `gcl_harness::fuzz::host`). Also owns the arguments `gcl check-host` shares.
 
+use super::stdio::errln;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -133,7 +134,7 @@ fn after_help() -> String {
 Each run starts a fresh simulated hand on a fresh pty (or TCP port), runs COMMAND to its end,
 and judges it: a crash (death by signal; an AddressSanitizer report, Rust panic or Python
 traceback on stderr), a hang (--timeout-hang of silence after the hand's last answer, or
---run-budget unless the host was still sending then), an exit code outside --ok-exit-codes, a process left behind holding the port
+--run-budget: a host still sending then never exited either), an exit code outside --ok-exit-codes, a process left behind holding the port
 or stderr, or a protocol violation (the clauses of `gcl check-host`).
 
 Before the campaign (unless --timeout-hang is given) the host's own give-up time is
@@ -269,7 +270,7 @@ fn host_options(args: &Args, run: HostRun) -> FuzzOptions {
 
 /// The campaign's first line: seed, profile, line, time, pace, jobs, where bundles go.
 fn print_header(args: &Args, opts: &FuzzOptions) {
-    eprintln!(
+    errln!(
         "gcl fuzz host: seed {}, profile {}, {} line, time {}, {}, {} job(s), bundles in {}",
         opts.seed,
         printable(&opts.run.profile.id),
@@ -298,7 +299,7 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
     let out = args.out.clone();
     let info_of = |f: &Finding| info(opts, f);
     if opts.runs.is_none() && opts.duration.is_none() {
-        eprintln!("{}", default_budget_line());
+        errln!("{}", default_budget_line());
     }
     let total = match (opts.runs, opts.duration) {
         (Some(n), _) => super::progress::Total::Units(n),
@@ -322,7 +323,9 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
             progress.update(n, found.load(Ordering::Relaxed), "");
         }
         Event::Found(f) => {
-            found.fetch_add(1, Ordering::Relaxed);
+            // Counted at once: a finding is told after its run, and the last line must count it.
+            let n = found.fetch_add(1, Ordering::Relaxed) + 1;
+            progress.update(done.load(Ordering::Relaxed), n, "");
             let dir = bundle::write(&out, &info_of(&f), &f);
             let where_ = match &dir {
                 Ok(d) => d.display().to_string(),
@@ -344,7 +347,7 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
     progress.finish();
     campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, opts, &campaign));
     if let Some(st) = &campaign.stopped {
-        eprintln!("gcl fuzz host: {st}; the report covers the runs made");
+        errln!("gcl fuzz host: {st}; the report covers the runs made");
     }
     Ok(campaign)
 }
@@ -356,7 +359,7 @@ fn rewrite_bundles(out: &std::path::Path, opts: &FuzzOptions, campaign: &Campaig
     let mut unwritten = None;
     for f in &campaign.findings {
         if let Err(e) = bundle::write(out, &info(opts, f), f) {
-            eprintln!("gcl fuzz host: bundle not written: {e}");
+            errln!("gcl fuzz host: bundle not written: {e}");
             unwritten.get_or_insert(e);
         }
     }
@@ -366,7 +369,7 @@ fn rewrite_bundles(out: &std::path::Path, opts: &FuzzOptions, campaign: &Campaig
 /// The campaign's figures, its systematic pass, notes and misbehaviours fired, on stderr.
 fn print_campaign_summary(campaign: &Campaign) {
     let secs = campaign.elapsed_ms as f64 / 1000.0;
-    eprintln!(
+    errln!(
         "gcl fuzz host: {} runs ({} reached the host; +{} to minimize) in {:.1} s ({:.1} runs/s), {} distinct finding(s), {} paths, {} schedules kept",
         campaign.runs,
         campaign.reached,
@@ -379,23 +382,23 @@ fn print_campaign_summary(campaign: &Campaign) {
     );
     if campaign.pass_runs > 0 {
         let kinds: Vec<&str> = campaign.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
-        eprintln!(
+        errln!(
             "systematic pass: {} runs, every misbehaviour at every kind of answer ({})",
             campaign.pass_runs,
             printable(&kinds.join("; "))
         );
     }
     if !campaign.notes.is_empty() {
-        eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
+        errln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
         for (n, runs) in &campaign.notes {
-            eprintln!("  {} (x{runs})", printable(n));
+            errln!("  {} (x{runs})", printable(n));
         }
     }
     if !campaign.fired_at.is_empty() {
-        eprintln!("misbehaviours fired, by protocol state:");
+        errln!("misbehaviours fired, by protocol state:");
         for (op, states) in &campaign.fired_at {
             let list: Vec<String> = states.iter().map(|(s, n)| format!("{} x{n}", printable(s))).collect();
-            eprintln!("  {op:<16} {}", list.join(", "));
+            errln!("  {op:<16} {}", list.join(", "));
         }
     }
 }
@@ -405,14 +408,14 @@ fn write_campaign_report(args: &Args, opts: &FuzzOptions, campaign: &Campaign) -
     if let Some(dir) = args.host.report_dir() {
         let report = campaign_report(opts, campaign, &args.out, args.ops.is_some());
         for p in gcl_harness::report::write_all(dir, &report)? {
-            eprintln!("wrote {}", p.display());
+            errln!("wrote {}", p.display());
         }
         // Sealed, so that a merge takes this folder only as written.
         let mut campaign = campaign.clone();
         gcl_harness::fuzz::merge::seal_host(&mut campaign, dir, &args.out)?;
         let p = dir.join("fuzz.json");
         gcl_harness::report::write_atomic(&p, &serde_json::to_vec_pretty(&campaign)?)?;
-        eprintln!("wrote {}", p.display());
+        errln!("wrote {}", p.display());
     }
     Ok(())
 }
@@ -421,11 +424,11 @@ fn write_campaign_report(args: &Args, opts: &FuzzOptions, campaign: &Campaign) -
 /// verdict (with the default budget's line again when it ran out).
 fn host_exit(opts: &FuzzOptions, campaign: &Campaign) -> u8 {
     if let Some(why) = &campaign.untested {
-        eprintln!("gcl fuzz host: nothing tested: {why}");
+        errln!("gcl fuzz host: nothing tested: {why}");
         return EXIT_ERROR;
     }
     if opts.runs.is_none() && opts.duration.is_none() && campaign.stopped.is_none() {
-        eprintln!("{}", default_budget_line());
+        errln!("{}", default_budget_line());
     }
     match (campaign.findings.is_empty(), &campaign.stopped) {
         (false, _) => EXIT_FAIL,
@@ -804,20 +807,20 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     let r = run_once(&run, &schedule)?;
     // A host that never talked to the hand reproduces nothing, and refutes nothing either.
     if let Some(why) = gcl_harness::fuzz::host::unreached(&r, &run.command) {
-        eprintln!("gcl fuzz host: nothing tested: {why}");
+        errln!("gcl fuzz host: nothing tested: {why}");
         return Ok(EXIT_ERROR);
     }
     let verdicts = judge(&r, &args.host.ok_exit_codes());
     for f in &r.fired {
-        eprintln!("  fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what));
+        errln!("  fired {} at answer {} ({}): {}", f.op, f.answer, printable(&f.state), printable(&f.what));
     }
     if verdicts.iter().any(|v| v.signature == info.signature) {
-        eprintln!("gcl fuzz host: reproduced: {}", printable(&info.signature));
+        errln!("gcl fuzz host: reproduced: {}", printable(&info.signature));
         Ok(EXIT_FAIL)
     } else {
-        eprintln!("gcl fuzz host: NOT reproduced: {}", printable(&info.signature));
+        errln!("gcl fuzz host: NOT reproduced: {}", printable(&info.signature));
         for v in &verdicts {
-            eprintln!("  instead: {}", printable(&v.signature));
+            errln!("  instead: {}", printable(&v.signature));
         }
         Ok(if verdicts.is_empty() { EXIT_OK } else { EXIT_FAIL })
     }

@@ -1,6 +1,7 @@
 //! `gcl fuzz merge DIR... --out DIR`: folds the outputs of a campaign's shards into one
 //! (library code in `gcl_harness::fuzz::merge`).
 
+use super::stdio::errln;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -75,10 +76,10 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 /// Names what was left behind, and says whether every shard was merged.
 fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
     for n in not_copied {
-        eprintln!("gcl fuzz merge: warning: {n}");
+        errln!("gcl fuzz merge: warning: {n}");
     }
     if !merged.complete() {
-        eprintln!(
+        errln!(
             "gcl fuzz merge: shard(s) {} of {} missing: the merged reports say INCOMPLETE, and the exit code is 2",
             merged.missing().iter().map(u64::to_string).collect::<Vec<_>>().join(", "),
             merged.count
@@ -95,7 +96,7 @@ fn device(a: &Args) -> anyhow::Result<u8> {
     let (r, more) = merge::write_device(&m, &out, Some(entries))?;
     not_copied.extend(more);
     out.commit()?;
-    eprintln!(
+    errln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s) ({} new), corpus {} entries ({} duplicate(s) dropped) -> {}",
         m.merged.describe(),
         r.runs,
@@ -189,7 +190,7 @@ fn host(a: &Args) -> anyhow::Result<u8> {
     merge::seal_host(&mut campaign, &dir, &out.stage().join("bundles"))?;
     gcl_harness::report::write_atomic(&dir.join("fuzz.json"), &serde_json::to_vec_pretty(&campaign)?)?;
     out.commit()?;
-    eprintln!(
+    errln!(
         "gcl fuzz merge: merged from {}: {} runs, {} distinct finding(s), {} bundle(s) -> {}",
         m.merged.describe(),
         m.campaign.runs,

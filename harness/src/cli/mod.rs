@@ -8,6 +8,9 @@
 //! `indicatif` appear; the library returns typed errors (`ConformError`, `KnownFailuresError`,
 //! `ProfileError`, `KeyError`, `BundleError`, ...).
 //!
+//! Every command prints through `stdio` (`outln!`, `errln!`, `stdio::out()`): a reader that
+//! went away or a full disk never cuts a command short or changes its exit code.
+//!
 //! Helpers two commands share live here: `find_upward`, `load_profile`; `progress`, the one
 //! progress display every long command uses (a bar with an ETA on a terminal; without one a line at
 //! the start, every 10 s from a ticker thread, and at the end; its threads start with the stop
@@ -28,12 +31,14 @@ pub mod record;
 pub mod replay;
 pub mod sim;
 pub mod spec;
+pub mod stdio;
 pub mod suite;
 pub mod vectors;
 
 use std::sync::Arc;
 
 use gcl_model::Profile;
+use stdio::errln;
 
 /// Exit code: everything passed.
 pub const EXIT_OK: u8 = 0;
@@ -130,7 +135,7 @@ pub fn stop_on_signals(what: &'static str) -> anyhow::Result<std::sync::Arc<std:
             let by = if from_host { format!("{name} from the host under test (pid {pid})") } else { name.to_string() };
             *STOPPED_BY.lock().unwrap_or_else(|e| e.into_inner()) = Some(by);
             flag.store(true, Ordering::Relaxed);
-            eprintln!("gcl {what}: stopping: the work in flight is called off (again to exit now)");
+            errln!("gcl {what}: stopping: the work in flight is called off (again to exit now)");
         }
     });
     Ok(stop)

@@ -8,7 +8,7 @@
 //! Lines other than progress (a failing case, a finding) go through [`Progress::println`], so
 //! they never tear the bar.
 
-use std::io::IsTerminal;
+use super::stdio::errln;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -80,7 +80,7 @@ impl Progress {
     /// `failing_word` (`failing`, `findings`). `quiet`: only the bar or lines that end it are
     /// left out, never a failure line the caller prints.
     pub fn new(what: &str, unit: &'static str, failing_word: &'static str, total: Total, quiet: bool) -> Progress {
-        let tty = std::io::stderr().is_terminal();
+        let tty = super::stdio::stderr_is_terminal();
         let state = Arc::new(State {
             what: what.to_string(),
             unit,
@@ -125,7 +125,7 @@ impl Progress {
                         let mut last = st.last_line.lock().unwrap_or_else(|e| e.into_inner());
                         if !st.finished.load(Ordering::Relaxed) && due(*last, Instant::now()) {
                             *last = Instant::now();
-                            eprintln!("{}", st.line());
+                            errln!("{}", st.line());
                         }
                     }
                 })
@@ -152,7 +152,7 @@ impl Progress {
         }
         if self.plain && !self.state.started_line.swap(true, Ordering::Relaxed) {
             *self.state.last_line.lock().unwrap_or_else(|e| e.into_inner()) = Instant::now();
-            eprintln!("{}", self.state.line());
+            errln!("{}", self.state.line());
         }
     }
 
@@ -162,7 +162,7 @@ impl Progress {
         let line = &*gcl_model::escape::printable(line);
         match &self.bar {
             Some(b) => b.println(line),
-            None => eprintln!("{line}"),
+            None => errln!("{line}"),
         }
     }
 
@@ -175,7 +175,7 @@ impl Progress {
             b.finish_and_clear();
         }
         if self.plain {
-            eprintln!("{} (done)", self.state.line());
+            errln!("{} (done)", self.state.line());
         }
     }
 }

@@ -2,6 +2,7 @@
 //! answered as a golden transcript (the script syntax is in
 //! [`gcl_transcript::script`] and `vectors/README.md`).
 
+use super::stdio::errln;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -106,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     // A script's `setup:` lines: `sim` places the objects; any other hand is recorded as it is,
     // with the objects the operator put there.
     if !header.setup.is_empty() && !gcl_harness::conform::places_setup(&target) {
-        eprintln!(
+        errln!(
             "gcl record: note: the script needs {} in place; gcl cannot place it on {target}, so it records the hand as it is",
             gcl_model::escape::printable(&gcl_transcript::Setup::list(&header.setup))
         );
@@ -119,7 +120,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     let (t, caps) = record(link.as_mut(), header, &script, &opts, args.allow_timeouts)?;
     for (i, c) in caps.iter().enumerate() {
         if c.timed_out {
-            eprintln!("gcl record: step {} (script line {}) timed out; kept what arrived", i + 1, script.steps[i].line);
+            errln!("gcl record: step {} (script line {}) timed out; kept what arrived", i + 1, script.steps[i].line);
         }
     }
     let text = t.to_text();
@@ -129,9 +130,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         Some(path) => {
             gcl_harness::report::write_atomic(&path, text.as_bytes())
                 .with_context(|| format!("writing {}", path.display()))?;
-            eprintln!("gcl record: wrote {} ({} steps)", path.display(), t.steps.len());
+            errln!("gcl record: wrote {} ({} steps)", path.display(), t.steps.len());
         }
-        None => std::io::stdout().lock().write_all(text.as_bytes())?,
+        None => super::stdio::out().write_all(text.as_bytes())?,
     }
     Ok(EXIT_OK)
 }

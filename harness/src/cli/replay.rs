@@ -3,6 +3,7 @@
 //! escaped, at the byte where they part), 2 on errors (a file that does not parse, a target
 //! that does not open, a link that fails).
 
+use super::stdio::errln;
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -89,7 +90,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let simulated = super::load_profile(p)?.id.clone();
         for (f, t) in &transcripts {
             if !t.header.profiles.is_empty() && !t.header.profiles.contains(&simulated) {
-                eprintln!(
+                errln!(
                     "gcl replay: warning: {} is written for profile {}, but the target simulates {simulated}; \
 differences may come from the profile, not a bug (use --target sim:{} or sim to match)",
                     f.display(),
@@ -101,7 +102,7 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
     }
     let mut code = EXIT_OK;
     let mut shared: Option<Box<dyn gcl_host::Link>> = None;
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     for (f, t) in &transcripts {
         let sim = gcl_harness::conform::places_setup(&target);
         if !t.header.setup.is_empty() && !sim && args.fixture.is_empty() {

@@ -2,6 +2,7 @@
 //! [`gcl_harness::sim`]). This module parses arguments, turns start-up problems into one line on
 //! stderr and exit code 2, and stops cleanly on SIGINT, SIGTERM and SIGHUP.
 
+use super::stdio::errln;
 use std::io::Write;
 use std::os::fd::AsFd;
 use std::path::PathBuf;
@@ -207,9 +208,9 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut engine = Engine::new(&opts)?;
         let mut pty = Pty::open(args.link.as_deref(), engine.line_baud())?;
         pty.set_speed_check(!args.no_speed_check);
-        pty.on_speed_mismatch(|line| eprintln!("gcl sim: {line}"));
+        pty.on_speed_mismatch(|line| errln!("gcl sim: {line} (--no-speed-check to turn this off)"));
         announce(&pty.path().display().to_string())?;
-        eprintln!(
+        errln!(
             "gcl sim: profile {} on {}{} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             pty.path().display(),
@@ -222,7 +223,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         let mut server = TcpServer::bind(addr, args.allow_remote)?;
         let mut engine = Engine::new(&opts)?;
         announce(&server.local_addr().to_string())?;
-        eprintln!(
+        errln!(
             "gcl sim: profile {} on tcp {} (time {}, {}); stop with ^C",
             gcl_model::escape::printable(&opts.profile.id),
             server.local_addr(),
@@ -237,10 +238,14 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     Ok(EXIT_OK)
 }
 
-/// The first line of stdout: what clients connect to.
+/// The first line of stdout: what clients connect to. A hand nobody can find is not served:
+/// when that line cannot be written (stdout closed), the command ends with an error.
 fn announce(what: &str) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
+    let mut out = super::stdio::out();
     writeln!(out, "{what}")?;
     out.flush()?;
+    if super::stdio::stdout_lost() {
+        anyhow::bail!("stdout is closed: nobody can read where the hand is ({what}), so it is not served");
+    }
     Ok(())
 }

@@ -20,7 +20,7 @@ pub struct Args {
 /// Runs `gcl spec`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let p = load_profile(&args.profile)?;
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     if args.json {
         serde_json::to_writer_pretty(&mut w, &*p)?;
         writeln!(w)?;
@@ -110,6 +110,6 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     for d in &p.decisions {
         writeln!(w, "  [{}] {} {} ({})\n      {}", d.level, d.id, d.evidence, d.clause, d.resolution)?;
     }
-    std::io::stdout().lock().write_all(gcl_model::escape::printable(&String::from_utf8_lossy(&text)).as_bytes())?;
+    super::stdio::out().write_all(gcl_model::escape::printable(&String::from_utf8_lossy(&text)).as_bytes())?;
     Ok(EXIT_OK)
 }

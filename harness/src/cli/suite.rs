@@ -83,7 +83,7 @@ fn json_dir(suite_dir: &Path) -> PathBuf {
 
 /// Runs `gcl suite`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     match args.command {
         Command::Regenerate { dir, vectors_dir } => {
             // A new suite directory is made only where its parent exists (`vectors/` in the

@@ -68,7 +68,7 @@ pub(crate) fn check(w: &mut dyn Write, dir: &Path, cases: &[suite::Case]) -> any
 
 /// Runs `gcl vectors`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let mut w = std::io::stdout().lock();
+    let mut w = super::stdio::out();
     let cases = suite::generate_all()?;
     match args.command {
         Command::Regenerate { dir } => {

@@ -22,16 +22,46 @@ pub const MEMORY: &str = "--data=402653184";
 
 /// Runs `gcl ARGS` in `cwd` under [`MEMORY`], killing it if it has not ended within `limit`.
 pub fn gcl_bounded(cwd: Option<&Path>, args: &[&str], limit: Duration) -> Run {
+    gcl_bounded_closing(cwd, args, limit, None)
+}
+
+/// One of `gcl`'s output streams, given as a pipe whose reading end is closed before `gcl`
+/// starts (`gcl ... | true` where `true` has already ended): every write to it fails with
+/// EPIPE.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Closed {
+    Stdout,
+    Stderr,
+}
+
+/// A pipe nobody reads: its writing end, for a child.
+fn closed_pipe() -> Stdio {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    Stdio::from(writer)
+}
+
+/// As [`gcl_bounded`], with the `closed` stream (if any) a pipe nobody reads; what `gcl`
+/// printed on it is "" in the [`Run`].
+pub fn gcl_bounded_closing(cwd: Option<&Path>, args: &[&str], limit: Duration, closed: Option<Closed>) -> Run {
     let mut cmd = Command::new("prlimit");
     cmd.arg(MEMORY).arg("--").arg(GCL).args(args);
     // Few malloc arenas, so the limit measures what the program keeps, not address space.
-    cmd.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    cmd.env("MALLOC_ARENA_MAX", "2").stdin(Stdio::null());
+    cmd.stdout(if closed == Some(Closed::Stdout) { closed_pipe() } else { Stdio::piped() });
+    cmd.stderr(if closed == Some(Closed::Stderr) { closed_pipe() } else { Stdio::piped() });
     if let Some(d) = cwd {
         cmd.current_dir(d);
     }
     let mut child = cmd.spawn().expect("prlimit (util-linux) runs gcl");
-    let out_pipe = child.stdout.take().unwrap();
-    let err_pipe = child.stderr.take().unwrap();
+    let out_pipe: Box<dyn std::io::Read + Send> = match child.stdout.take() {
+        Some(p) => Box::new(p),
+        None => Box::new(std::io::empty()),
+    };
+    let err_pipe: Box<dyn std::io::Read + Send> = match child.stderr.take() {
+        Some(p) => Box::new(p),
+        None => Box::new(std::io::empty()),
+    };
     let read = |mut p: Box<dyn std::io::Read + Send>| {
         std::thread::spawn(move || {
             // Keep at most 1 MiB of what gcl prints: a flood echoed into a message is a finding,
@@ -51,8 +81,8 @@ pub fn gcl_bounded(cwd: Option<&Path>, args: &[&str], limit: Duration) -> Run {
             String::from_utf8_lossy(&kept).into_owned()
         })
     };
-    let out = read(Box::new(out_pipe));
-    let err = read(Box::new(err_pipe));
+    let out = read(out_pipe);
+    let err = read(err_pipe);
     let end = Instant::now() + limit;
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {

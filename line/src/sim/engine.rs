@@ -487,7 +487,9 @@ impl Engine {
         if let Err(e) = f.update(self.link.device().nv())
             && !self.eeprom_warned
         {
-            eprintln!("gcl sim: warning: {e}");
+            // On stderr; a closed one must not take the hand down (`eprintln!` would panic).
+            use std::io::Write as _;
+            let _ = writeln!(std::io::stderr(), "gcl sim: warning: {e}");
             self.eeprom_warned = true;
         }
     }

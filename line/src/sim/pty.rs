@@ -39,6 +39,15 @@ use super::{Engine, SimError};
 /// How soon a write the pty master refused is tried again.
 const WRITE_RETRY: std::time::Duration = std::time::Duration::from_millis(5);
 
+/// Who is told of a speed mismatch ([`Pty::on_speed_mismatch`]).
+struct Notice(Box<dyn FnMut(&str) + Send>);
+
+impl std::fmt::Debug for Notice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Notice")
+    }
+}
+
 /// A pseudo-terminal pair held by the simulator.
 #[derive(Debug)]
 pub struct Pty {
@@ -57,7 +66,7 @@ pub struct Pty {
     /// The last mismatch noted in the trace (host rate, hand rate).
     mismatch: Option<(u32, u32)>,
     /// Told each new speed mismatch (the CLI prints it on stderr).
-    on_mismatch: Option<fn(&str)>,
+    on_mismatch: Option<Notice>,
     /// The host's reads and writes of the slave (`IN_ACCESS`, `IN_MODIFY`), in the order they
     /// happened. Only a tapped line uses them: on any other the watch is removed when serving
     /// starts, so neither the host's reads and writes nor the simulator's pay for it.
@@ -177,9 +186,10 @@ impl Pty {
     }
 
     /// Tells `notice` of each speed mismatch, once per change (the same line goes into the
-    /// trace): `gcl sim` prints it, since a client at the wrong speed sees only garbage.
-    pub fn on_speed_mismatch(&mut self, notice: fn(&str)) {
-        self.on_mismatch = Some(notice);
+    /// trace): `gcl sim` prints it, since a client at the wrong speed sees only garbage, and
+    /// `check-host` and `fuzz host` put it in the violations the garbled bytes make.
+    pub fn on_speed_mismatch(&mut self, notice: impl FnMut(&str) + Send + 'static) {
+        self.on_mismatch = Some(Notice(Box::new(notice)));
     }
 
     /// The speed the host set on the port (the slave's termios, shared by every descriptor of
@@ -206,12 +216,11 @@ impl Pty {
         if self.mismatch != Some((host, hand)) {
             self.mismatch = Some((host, hand));
             let line = format!(
-                "the host opened the port at {host} baud; the hand runs at {}: bytes are garbled as on a real line \
-                 (--no-speed-check to turn this off)",
+                "the host opened the port at {host} baud; the hand runs at {}: bytes are garbled as on a real line",
                 uart_rate(hand)
             );
-            engine.note(&format!("speed mismatch: {line}"));
-            if let Some(tell) = self.on_mismatch {
+            engine.note(&format!("speed mismatch: {line} (--no-speed-check to turn this off)"));
+            if let Some(Notice(tell)) = &mut self.on_mismatch {
                 tell(&line);
             }
         }

@@ -85,7 +85,12 @@ impl Trace {
         if writeln!(self.out, "{text}").and_then(|_| self.out.flush()).is_err() {
             // A full disk must not take the hand down: warn once and stop tracing.
             self.failed = true;
-            eprintln!("gcl sim: warning: cannot write trace file {}; tracing stopped", self.path.display());
+            // On stderr; a closed one must not take the hand down either.
+            let _ = writeln!(
+                std::io::stderr(),
+                "gcl sim: warning: cannot write trace file {}; tracing stopped",
+                self.path.display()
+            );
         }
     }
 }

@@ -194,6 +194,9 @@ pub struct HostChecker {
     /// Command words the host sent, in order.
     commands: Vec<String>,
     violations: Vec<HostViolation>,
+    /// Why the host's bytes arrive garbled, once the line said so (a speed mismatch: the
+    /// pty's notice, [`HostChecker::garbled_because`]).
+    garbled: Option<String>,
 }
 
 impl HostChecker {
@@ -219,6 +222,22 @@ impl HostChecker {
             mode: Mode::Idle,
             commands: Vec::new(),
             violations: Vec::new(),
+            garbled: None,
+        }
+    }
+
+    /// The line garbles what crosses it from now on (`why`: the pty's speed-mismatch notice,
+    /// `the host opened the port at 19200 baud; the hand runs at 9600: ...`): every violation
+    /// found after it says so, since the bytes it quotes are not what the host meant.
+    pub fn garbled_because(&mut self, why: &str) {
+        self.garbled = Some(why.to_string());
+    }
+
+    /// A violation's detail, with why the line garbles bytes when it does.
+    fn detail(&self, detail: String) -> String {
+        match &self.garbled {
+            Some(why) => format!("{detail} (speed mismatch: {why})"),
+            None => detail,
         }
     }
 
@@ -261,6 +280,7 @@ impl HostChecker {
         // One of each kind per session is enough to grade and to deduplicate.
         if !self.violations.iter().any(|v| v.clause == clause && v.kind == kind) {
             let after_misbehaviour = self.misbehaved;
+            let detail = self.detail(detail);
             self.violations.push(HostViolation {
                 clause,
                 kind: kind.to_string(),
@@ -287,10 +307,10 @@ impl HostChecker {
             self.violations.push(HostViolation {
                 clause: HostClause::WaitsForAnswer,
                 kind,
-                detail: format!(
+                detail: self.detail(format!(
                     "{detail}, after the hand sent a prompt or block it had not asked for (an extra one, or a late \
                      one it had given up on), which it took for this answer"
-                ),
+                )),
                 after_misbehaviour: true,
                 out_of_step: true,
             });
@@ -606,19 +626,16 @@ impl HostChecker {
         self.line.len() > self.profile.framing.max_line
     }
 
-    /// The host was stopped while it still sent (at the run budget): a line it was sending
-    /// that already runs past the longest line the hand takes is graded as a line that never
-    /// ends, as when such a host leaves by itself ([`HostChecker::finish`]); a shorter one may
-    /// have been about to end.
-    pub fn cut_off(&mut self) {
+    /// The host was stopped before it ended (`how`: `the run budget stopped the host`): a line
+    /// it was sending that already runs past the longest line the hand takes is graded as a
+    /// line that never ends, as when such a host leaves by itself ([`HostChecker::finish`]); a
+    /// shorter one may have been about to end.
+    pub fn cut_off(&mut self, how: &str) {
         if self.overlong_pending() {
             self.violate(
                 HostClause::LineEnding,
                 "unterminated line",
-                format!(
-                    "\"{}\" ran past the hand's longest line and had not ended when the run budget stopped the host",
-                    esc(&self.line)
-                ),
+                format!("\"{}\" ran past the hand's longest line and had not ended when {how}", esc(&self.line)),
             );
         }
     }

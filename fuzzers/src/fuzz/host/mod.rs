@@ -148,6 +148,10 @@ fn hang_verdict(r: &RunResult, state: &str, over_budget: bool) -> Verdict {
     }
 }
 
+/// The signature of a host killed at the run budget while it still sent (a poll without end, a
+/// flood the hand's line rate holds up): it never exited by itself.
+pub const OVER_BUDGET_SENDING: &str = "over budget: still sending when the run budget ended";
+
 /// An unexpected exit code's signature: the class of the exit and the hand's mode when the
 /// host left, not the code. A host whose code says what went wrong (the last status it read,
 /// an errno) exits with a different code for every cause the hand gives it, and one habit
@@ -196,9 +200,16 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             message: c.headline.clone(),
         }),
         (HostEnd::Hung(state), _) => v.push(hang_verdict(r, state, false)),
-        // Still sending when the budget stopped it: acting, not hung (its pending line is
-        // judged as it stood).
-        (HostEnd::OverBudget(_), _) if r.talking_at_end => {}
+        // Still sending when the budget stopped it: acting, not hung in one place of its
+        // code (its pending line is judged as it stood), but it never ended by itself, and
+        // ending within the run budget is the host's to do: one finding, whatever it sent.
+        (HostEnd::OverBudget(state), _) if r.talking_at_end => v.push(Verdict {
+            kind: FindingKind::Hang,
+            signature: OVER_BUDGET_SENDING.to_string(),
+            message: format!(
+                "the host was still sending when the run budget ended ({state}) and was killed: it never exited by itself"
+            ),
+        }),
         (HostEnd::OverBudget(state), _) => v.push(hang_verdict(r, state, true)),
         (HostEnd::Exit(c), _) if !ok_exit_codes.contains(c) => {
             let last = r.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or_default();
@@ -215,7 +226,7 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
                 },
             });
         }
-        (HostEnd::Exit(_), _) => {}
+        (HostEnd::Exit(_) | HostEnd::Served, _) => {}
     }
     if !r.leftovers.is_empty() {
         // Named by what was left (its command line, the same from run to run); where it was
@@ -263,6 +274,7 @@ impl std::fmt::Display for HostEnd {
             HostEnd::Signal(s) => write!(f, "was killed by signal {s}"),
             HostEnd::Hung(at) => write!(f, "hung ({at}) and was killed"),
             HostEnd::OverBudget(at) => write!(f, "ran over the run budget ({at}) and was killed"),
+            HostEnd::Served => write!(f, "was served: no host process was run"),
         }
     }
 }
@@ -884,6 +896,41 @@ impl Shared {
         }
     }
 
+    /// What a hang's confirmation run `r` showed besides the hang (a line it left unended
+    /// when it exited, a crash, an exit code): findings like any run's, under the suspect's
+    /// run and schedule, whatever the confirmation said of the hang (which its own verdicts of
+    /// kind hang are not: the confirmation decides those). The indices of new findings.
+    fn take_confirmation_run(
+        &mut self,
+        suspect: &Finding,
+        r: &RunResult,
+        opts: &FuzzOptions,
+        started: Instant,
+    ) -> Vec<usize> {
+        let mut new = Vec::new();
+        for v in judge(r, &opts.ok_exit_codes).into_iter().filter(|v| v.kind != FindingKind::Hang) {
+            if let Some(&k) = self.by_sig.get(&v.signature) {
+                self.findings[k].hits += 1;
+                continue;
+            }
+            let k = self.findings.len();
+            self.by_sig.insert(v.signature.clone(), k);
+            self.findings.push(Finding {
+                verdict: v,
+                found_after_ms: started.elapsed().as_millis() as u64,
+                hits: 1,
+                fired: r.fired.clone(),
+                end: r.end.clone(),
+                confirmed_after_ms: None,
+                stderr: r.stderr.clone(),
+                exchanges: r.exchanges.clone(),
+                ..suspect.clone()
+            });
+            new.push(k);
+        }
+        new
+    }
+
     /// Takes in every ended run whose turn has come.
     fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         let mut new = Vec::new();
@@ -1083,6 +1130,10 @@ impl Confirmation {
 /// the run budget allows) for the host to send or exit. A hang is a host that still does
 /// neither; one that acts later, after a wait longer than `hang`, is late, not hung: a note
 /// ("gave up after 15.0 s").
+///
+/// The second run comes back too (`None` when it was called off): what else it shows (a
+/// violation, a crash, an exit code) is the campaign's like any run's, whatever it says of
+/// the hang.
 pub fn confirm(
     run: &HostRun,
     schedule: &Schedule,
@@ -1090,27 +1141,33 @@ pub fn confirm(
     hang: Duration,
     window: Duration,
     stop: &AtomicBool,
-) -> Result<Confirmation, RunError> {
+) -> Result<(Confirmation, Option<RunResult>), RunError> {
     let mut patient = run.clone();
     patient.timeout_hang = window.max(hang);
     let r = match run_once_until(&patient, schedule, stop) {
-        Err(RunError::Cancelled) => return Ok(Confirmation::Stopped),
+        Err(RunError::Cancelled) => return Ok((Confirmation::Stopped, None)),
         other => other?,
     };
+    let outcome = judge_confirmation(&r, state, hang);
+    Ok((outcome, Some(r)))
+}
+
+/// What a confirmation run `r` says of a hang suspected in `state` with hang timeout `hang`.
+fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmation {
     let late = |same: bool| {
         r.waits.iter().filter(|w| w.acted && w.waited > hang && (!same || w.state == state)).max_by_key(|w| w.waited)
     };
     if let Some(w) = late(true) {
-        return Ok(Confirmation::Late(w.waited, w.state.clone()));
+        return Confirmation::Late(w.waited, w.state.clone());
     }
     let still = r.waits.iter().find(|w| !w.acted).filter(|w| w.waited > hang && !r.talking_at_end);
     if let Some(w) = still {
-        return Ok(Confirmation::Hung(w.waited));
+        return Confirmation::Hung(w.waited);
     }
-    Ok(match late(false) {
+    match late(false) {
         Some(w) => Confirmation::Late(w.waited, w.state.clone()),
         None => Confirmation::NotAgain,
-    })
+    }
 }
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
@@ -1365,19 +1422,25 @@ impl<'a> Workers<'a> {
         for key in suspects.iter() {
             let Ok(sh) = self.shared.lock() else { return };
             let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
-            let schedule = f.schedule.clone();
+            let pending = (**f).clone();
             let known = sh.by_sig.contains_key(&key.0);
             drop(sh);
-            let outcome = if known {
-                Confirmation::Hung(Duration::ZERO)
+            let (outcome, second) = if known {
+                (Confirmation::Hung(Duration::ZERO), None)
             } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
-                Confirmation::Stopped
+                (Confirmation::Stopped, None)
             } else {
-                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
-                    .unwrap_or(Confirmation::Stopped)
+                confirm(&opts.run, &pending.schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
+                    .unwrap_or((Confirmation::Stopped, None))
             };
-            let new = self.shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
-            if let Some(k) = new {
+            let mut new: Vec<usize> = Vec::new();
+            if let Ok(mut sh) = self.shared.lock() {
+                new.extend(sh.settle(&key, outcome));
+                if let Some(r) = &second {
+                    new.extend(sh.take_confirmation_run(&pending, r, opts, self.started));
+                }
+            }
+            for k in new {
                 self.found(k);
             }
         }

@@ -126,6 +126,10 @@ pub enum HostEnd {
     Hung(String),
     /// It ran past the run budget; it was killed. The protocol state it was in.
     OverBudget(String),
+    /// There was no host process to end: a session `gcl check-host --serve` served to whoever
+    /// connected, ended when the hand was stopped. How the client ended is not the hand's to
+    /// see, so nothing is judged of it.
+    Served,
 }
 
 /// What one run gave.
@@ -976,6 +980,7 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
         Transport::Pty => {
             let mut pty = Pty::open(None, engine.line_baud())?;
             pty.set_speed_check(!line_rate);
+            tell_garbling(&mut pty, &log);
             let path = pty.path().display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
             (path.clone(), path, h)
@@ -1118,6 +1123,17 @@ fn read_host(child: &mut std::process::Child, log: &Arc<Mutex<Log>>) -> HostOutp
         })
     };
     HostOutput { out_done, errbuf, err_reader, err_inode }
+}
+
+/// The pty's speed-mismatch notice goes to the checker, so the violations the garbled bytes
+/// make say why (as `gcl sim` says it on stderr).
+pub(crate) fn tell_garbling(pty: &mut Pty, log: &Arc<Mutex<Log>>) {
+    let log = log.clone();
+    pty.on_speed_mismatch(move |why| {
+        if let Ok(mut l) = log.lock() {
+            l.checker.garbled_because(why);
+        }
+    });
 }
 
 /// How the host's run ended, as the watch saw it.
@@ -1317,8 +1333,13 @@ fn result_of_run(
     if !log.hung_up {
         let crashed = matches!(end, HostEnd::Signal(_)) || super::detect::crash_report(&stderr).is_some();
         log.checker.finish(!crashed && !matches!(end, HostEnd::Hung(_) | HostEnd::OverBudget(_)));
-        if talking_at_end {
-            log.checker.cut_off();
+        // A line already longer than any the hand takes is broken however the host was
+        // stopped: killed at the budget or as hung, that violation is the run's, whatever a
+        // second run says of the hang.
+        match &end {
+            HostEnd::OverBudget(_) => log.checker.cut_off("the run budget stopped the host"),
+            HostEnd::Hung(_) => log.checker.cut_off("the host was killed as hung"),
+            HostEnd::Exit(_) | HostEnd::Signal(_) | HostEnd::Served => {}
         }
     }
     let violations = log.checker.violations().to_vec();
