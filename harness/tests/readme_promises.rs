@@ -566,6 +566,17 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::sanitizer_reports_are_read_from_a_log_file_per_run"],
     ),
     (
+        "a FIFO or a symbolic link in it is named, never opened or followed",
+        &["harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped"],
+    ),
+    (
+        "within its 256 KiB (stderr and the logs each have half",
+        &[
+            "harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped",
+            "fuzzers/src/fuzz/host/session.rs::stderr_and_what_follows_it_are_kept_within_the_cap",
+        ],
+    ),
+    (
         "named in a `leftover` finding, signed by its command line",
         &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
     ),
