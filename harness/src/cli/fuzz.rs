@@ -378,14 +378,14 @@ fn device_exit(
         return EXIT_ERROR;
     }
     if let Some(why) = &s.no_cases {
-        eprintln!("gcl fuzz device: nothing left to test: {why}");
+        eprintln!("gcl fuzz device: nothing left to test: {}", printable(why));
         return EXIT_ERROR;
     }
     if s.runs == 0
         && !s.interrupted
         && let Some(why) = &report.stopped
     {
-        eprintln!("gcl fuzz device: nothing tested: {why}");
+        eprintln!("gcl fuzz device: nothing tested: {}", printable(why));
     }
     // Only new findings fail the run: what the baseline explains was known before. A
     // campaign stopped before its budget without one has no verdict.
