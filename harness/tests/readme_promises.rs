@@ -680,8 +680,20 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "`schedules` below 1 or a `timeout` of 0 or less is an error naming it",
+        "`schedules` that is not a whole number from 1 to 10000, a `seed` that `--seed` does not take, or a `timeout` of 0 or less is an error naming it",
         &["python/tests/test_plugin_limits.py::test_values_out_of_range_are_refused_by_name"],
+    ),
+    (
+        "A test that calls `pytest.skip()` or `pytest.xfail()` is reported skipped or xfailed, ungraded",
+        &["python/tests/test_plugin_limits.py::test_skip_and_xfail_inside_a_gcl_hand_test_are_reported_as_such"],
+    ),
+    (
+        "Ctrl-C stops the session as pytest stops it, never as a failed test",
+        &["python/tests/test_plugin_limits.py::test_ctrl_c_stops_the_session_and_fails_no_test"],
+    ),
+    (
+        "so no `gcl-hand-*` folder is left, and pytest then ends by SIGTERM",
+        &["python/tests/test_plugin_limits.py::test_sigterm_leaves_no_hand_folder_and_ends_pytest_by_it"],
     ),
     (
         "a timer already running (`pytest-timeout`'s) keeps its deadline and handler",

@@ -232,6 +232,17 @@ class Hand:
         except OSError as e:
             self._remove_tmp()
             raise HandError("cannot run {}: {}".format(command[0], e.strerror or e)) from None
+        try:
+            self._read_header()
+        except BaseException:
+            # Ctrl-C or SIGTERM (as KeyboardInterrupt) while it starts: nothing is left behind.
+            self._kill()
+            self._remove_tmp()
+            raise
+        return self
+
+    def _read_header(self):
+        """Reads where the started hand listens; :class:`HandError` when it does not say."""
         # The first lines: port, url, planned misbehaviours, ready (read by a thread, so that
         # a hand that never gets there cannot hold the caller past START_TIMEOUT).
         lines = []
@@ -269,7 +280,6 @@ class Hand:
                 self.url = value
             elif key == "planned":
                 self.planned.append(value)
-        return self
 
     def stop(self):
         """Stops the hand and grades the session; returns the :class:`Verdict`."""
@@ -283,6 +293,12 @@ class Hand:
                 proc.kill()
                 proc.communicate()
                 raise HandError("gcl check-host --serve did not stop within {:.0f} s".format(STOP_TIMEOUT)) from None
+            except BaseException:
+                # Interrupted while it grades (Ctrl-C, SIGTERM): it goes before its folder does,
+                # so that it writes nothing there afterwards.
+                proc.kill()
+                proc.wait()
+                raise
             # 2 is also a session that judged nothing: a verdict (its ERROR case), not a failure to run.
             judged_nothing = proc.returncode == 2 and any(
                 line.startswith("ERROR") and " host-session " in line for line in out.splitlines())
