@@ -225,7 +225,7 @@ fn sanitizer_frame(line: &str) -> Option<NativeFrame> {
         _ => (after, None),
     };
     let func = function_name(func);
-    (!func.is_empty()).then(|| NativeFrame { func, module })
+    (!func.is_empty()).then_some(NativeFrame { func, module })
 }
 
 /// Whether a word is a source file and line (`host.c:20`, `host.c:20:5`).
