@@ -318,3 +318,28 @@ def test_skip_and_xfail_inside_a_gcl_hand_test_are_reported_as_such(tmp_path):
     got = dict(re.findall(r"^test_outcomes.py::(test_\S+) (\w+)", out, re.M))
     assert got == {"test_skips_at_once": "SKIPPED", "test_skips_after_talking": "SKIPPED", "test_xfails": "XFAIL",
                    "test_xfails_misbehaving[schedule-0:1]": "XFAIL"}, out
+
+
+def test_a_verdict_shows_what_the_host_sent_escaped():
+    """A host's bytes quoted in a verdict (its unknown command word, here an OSC that retitles
+    the window, a screen clear and a right-to-left override) are shown escaped by ``str()``
+    and ``explain()``, which the plugin's failures print: they reached the terminal raw."""
+    hostile = b"A\x00\x1b]0;PWNED\x07\x1b[2J\xe2\x80\xae"
+    hand = Hand(profile="seed").start()
+    fd = os.open(hand.port, os.O_RDWR | os.O_NOCTTY)
+    try:
+        os.write(fd, b"\x03")
+        time.sleep(0.3)
+        os.write(fd, hostile + b"\r")
+        time.sleep(0.5)
+    finally:
+        os.close(fd)
+    verdict = hand.stop()
+    assert [f.id for f in verdict.failures] == ["host-valid-commands"], verdict
+    obeyed = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+    for text in (str(verdict), verdict.explain(), str(verdict.failures[0])):
+        assert not obeyed.search(text), repr(text)
+    assert "]0;PWNED\\x07" in str(verdict.failures[0]), str(verdict.failures[0])
+    from gcl._hand import printable
+
+    assert printable("a\tb\nc\r\x1b\x9b\u202e") == "a\tb\nc\\r\\x1B\\u{009B}\\u{202E}"
