@@ -343,3 +343,23 @@ def test_a_verdict_shows_what_the_host_sent_escaped():
     from gcl._hand import printable
 
     assert printable("a\tb\nc\r\x1b\x9b\u202e") == "a\tb\nc\\r\\x1B\\u{009B}\\u{202E}"
+
+
+def test_pytest_exit_inside_a_gcl_hand_test_ends_the_session(tmp_path):
+    """``pytest.exit()`` in a gcl_hand test ends the session with its code (before: the test
+    FAILED, "nothing of the host code was judged", and the session ran on)."""
+    run = run_pytest(tmp_path, {"test_exit.py": '''
+        import pytest
+
+
+        @pytest.mark.gcl(profile="seed")
+        def test_a(gcl_hand):
+            pytest.exit("enough", returncode=7)
+
+
+        @pytest.mark.gcl(profile="seed")
+        def test_b(gcl_hand):
+            pass
+        '''})
+    assert run.returncode == 7 and "Exit: enough" in run.stdout, run.stdout
+    assert "FAILED" not in run.stdout and "PASSED" not in run.stdout, run.stdout
