@@ -741,14 +741,21 @@ impl RunDir {
             match gcl_host::files::read_head_no_follow(f, body_room as u64) {
                 Ok((bytes, more)) => {
                     out.push_str(&heading);
-                    let text = String::from_utf8_lossy(&bytes);
-                    let text = cut_at_char(&text, body_room);
+                    let whole = String::from_utf8_lossy(&bytes);
+                    let text = cut_at_char(&whole, body_room);
                     out.push_str(text);
-                    if more || text.len() < bytes.len() {
+                    if more || text.len() < whole.len() {
                         out.push_str("\n--- (cut: the rest of this log is not kept) ---\n");
                     }
                 }
-                Err(e) => out.push_str(&format!("\n--- sanitizer log {name}: not read: {e} ---\n")),
+                Err(e) => {
+                    let line = format!("\n--- sanitizer log {name}: not read: {e} ---\n");
+                    if out.len() + line.len() + LOG_CUT_NOTE <= room {
+                        out.push_str(&line);
+                    } else {
+                        left_out += 1;
+                    }
+                }
             }
         }
         if left_out > 0 {
@@ -768,8 +775,9 @@ const SANITIZERS: [(&str, &str); 2] = [("ASAN_OPTIONS", "asan"), ("UBSAN_OPTIONS
 /// of thousands is a host at play).
 const MAX_LOGS: usize = 256;
 
-/// Room kept for the note that a log was cut, and for the line that logs were left out.
-const LOG_CUT_NOTE: usize = 128;
+/// Room kept for the note that a log was cut and for the line that logs were left out (each
+/// under 100 bytes).
+const LOG_CUT_NOTE: usize = 192;
 
 /// The longest beginning of `text` of at most `limit` bytes that ends on a character.
 fn cut_at_char(text: &str, limit: usize) -> &str {
@@ -1692,6 +1700,41 @@ mod tests {
         let s = join_capped(&"h".repeat(STDERR_CAP), &"t".repeat(STDERR_CAP));
         assert_eq!((s.matches('h').count(), s.matches('t').count()), (STDERR_CAP / 2, STDERR_CAP / 2));
         assert_eq!(join_capped("a", "b"), "ab");
+    }
+
+    /// A run's folder is the host's: only its sanitizer logs are read, a FIFO and a link
+    /// are named and never opened or followed, and what is read (a log that grows when read as
+    /// text included) keeps within its room, saying what it cut and what it left out.
+    #[test]
+    fn a_run_folders_logs_are_read_as_the_hosts_data_within_their_room() {
+        let dir = RunDir::new().unwrap();
+        let p = |n: &str| dir.0.join(n);
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::write(outside.path().join("secret"), "SECRET OUTSIDE").unwrap();
+        std::fs::write(p("asan.1"), "==1==ERROR: AddressSanitizer: heap-buffer-overflow\n").unwrap();
+        nix::unistd::mkfifo(&p("asan.2"), nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+        std::os::unix::fs::symlink(outside.path().join("secret"), p("asan.3")).unwrap();
+        std::fs::write(p("notes.txt"), "not a log").unwrap();
+        std::fs::write(p("ubsan.4"), [0xFF; 100_000]).unwrap();
+        for i in 0..20 {
+            std::fs::write(p(&format!("asan.x{i:02}")), vec![b'A'; 256 * 1024]).unwrap();
+        }
+        let room = tail_room("");
+        let logs = dir.sanitizer_logs(room);
+        assert!(logs.len() <= room, "{}", logs.len());
+        assert!(logs.contains("--- sanitizer log asan.1 ---\n==1==ERROR: AddressSanitizer"), "{logs:.300}");
+        assert!(logs.contains("asan.2: not read: not a regular file (a named pipe)"), "{logs:.600}");
+        assert!(logs.contains("asan.3: not read: a symbolic link, not followed"), "{logs:.600}");
+        assert!(!logs.contains("SECRET") && !logs.contains("not a log"));
+        assert!(logs.contains("(cut: the rest of this log is not kept)"));
+        assert!(logs.contains("more sanitizer log(s) not kept"), "{}", &logs[logs.len() - 300..]);
+        // A log too long for a small room is cut there; a file of \xFF grows threefold as
+        // text and is cut as text.
+        std::fs::remove_dir_all(&dir.0).unwrap();
+        std::fs::create_dir(&dir.0).unwrap();
+        std::fs::write(p("ubsan.4"), [0xFF; 3000]).unwrap();
+        let logs = dir.sanitizer_logs(4000);
+        assert!(logs.len() <= 4000 && logs.contains("(cut: the rest of this log is not kept)"), "{}", logs.len());
     }
 
     #[test]
