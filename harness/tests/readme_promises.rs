@@ -567,7 +567,10 @@ const PROMISES: &[(&str, &[&str])] = &[
     ),
     (
         "a FIFO or a symbolic link in it is named, never opened or followed",
-        &["harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped"],
+        &[
+            "harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped",
+            "fuzzers/src/fuzz/host/session.rs::a_run_folders_logs_are_read_as_the_hosts_data_within_their_room",
+        ],
     ),
     (
         "within its 256 KiB (stderr and the logs each have half",
