@@ -695,6 +695,67 @@ fn sanitizer_reports_are_read_from_a_log_file_per_run() {
     assert!(v.iter().any(|v| v.signature.contains("asan stack-buffer-overflow in read_line")), "{v:?}");
 }
 
+/// The run's folder is the host's to write into (it is the `log_path` its sanitizer options
+/// name), so what is there is read as data from the host: a FIFO neither hangs `gcl` (it was
+/// opened with a blocking `open`, for ever), a symbolic link is not followed (a file outside
+/// reached `stderr.txt`, `finding.json`, `fuzz.json` and the reports), and 20 logs of 256 KiB
+/// are kept within stderr's 256 KiB all told (they made a 5.2 MiB `stderr.txt`).
+#[test]
+fn what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped() {
+    let dir = tempfile::tempdir().unwrap();
+    let outside = dir.path().join("outside.txt");
+    std::fs::write(&outside, "SECRET-FROM-OUTSIDE-THE-RUN\n").unwrap();
+    // A host that talks (a ^C), then fills its log folder (found from ASAN_OPTIONS's
+    // `log_path=DIR/asan`) and exits with a code that is a finding.
+    let script = r#"exec 3<>"$GCL_PORT"; printf '\003' >&3; sleep 0.3
+p=${ASAN_OPTIONS##*log_path=}; p=${p%%:*}
+printf '==7== what a sanitizer said first\n' > "$p.0"
+mkfifo "$p.1"; ln -s "$0" "$p.2"
+i=3; while [ $i -le 22 ]; do head -c 262144 /dev/zero | tr '\0' A > "$p.x$i"; i=$((i+1)); done
+exit 3"#;
+    let (out, report) = (dir.path().join("out"), dir.path().join("report"));
+    let args = [
+        "fuzz",
+        "host",
+        "--profile",
+        "seed",
+        "--runs",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--",
+        "sh",
+        "-c",
+        script,
+        outside.to_str().unwrap(),
+    ];
+    let r = bounded::gcl_bounded(None, &args, Duration::from_secs(120));
+    assert_eq!(r.code, Some(1), "a FIFO in the run's folder hung gcl, or no finding:\n{}\n{}", r.stdout, r.stderr);
+    let mut files = Vec::new();
+    let mut stack = vec![dir.path().to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            if e.file_type().unwrap().is_dir() { stack.push(e.path()) } else { files.push(e.path()) }
+        }
+    }
+    let stderr_txt: Vec<_> = files.iter().filter(|p| p.ends_with("stderr.txt")).collect();
+    assert!(!stderr_txt.is_empty(), "no bundle: {files:?}");
+    for f in files.iter().filter(|p| **p != outside) {
+        let text = String::from_utf8_lossy(&std::fs::read(f).unwrap()).into_owned();
+        assert!(!text.contains("SECRET-FROM-OUTSIDE"), "{}: a file outside the run's folder was read", f.display());
+    }
+    for f in stderr_txt {
+        let text = std::fs::read_to_string(f).unwrap();
+        assert!(text.len() <= 256 * 1024, "{}: {} bytes", f.display(), text.len());
+        assert!(text.contains("==7== what a sanitizer said first"), "{text:.2000}");
+        assert!(text.contains("asan.1: not read: not a regular file (a named pipe)"), "{text:.2000}");
+        assert!(text.contains("asan.2: not read: a symbolic link, not followed"), "{text:.2000}");
+        assert!(text.contains("more sanitizer log(s) not kept"), "{}", &text[text.len().saturating_sub(2000)..]);
+    }
+}
+
 /// A host that leaves a detached (setsid) process holding the port and its stderr: the run
 /// ends within its budget, the process is killed, and the verdict says so; check-host does
 /// not pass host-exits-cleanly.
@@ -880,18 +941,24 @@ fn a_host_that_trusts_a_short_block_gives_a_silent_wrong_value() {
 /// it, once per function: c_sscanf_word's one bug is one finding (it was two, `... in
 /// scanf_common` and `... in ?`), c_sscanf_two's two functions two (told apart by heap or
 /// stack only, both `in scanf_common`, as Barrett's API's HandPGet and HandGet were).
+/// Each is built as if in a folder named as one of glibc's (`csu/`, `libio/`): its frames are
+/// its own still (they were taken for glibc's by their source path: c_sscanf_two gave three
+/// findings, `in scanf_common` twice and `in ?`).
 #[test]
 fn an_overflow_through_sscanf_is_one_finding_per_function_of_the_host() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[&str]); 2] = [
-        ("c_sscanf_word", &["crash: asan stack-buffer-overflow in first_word"]),
+    let cases: [(&str, &str, &[&str]); 2] = [
+        ("c_sscanf_word", "csu", &["crash: asan stack-buffer-overflow in first_word"]),
         (
             "c_sscanf_two",
+            "libio",
             &["crash: asan heap-buffer-overflow in hand_get", "crash: asan stack-buffer-overflow in hand_pget"],
         ),
     ];
-    for (name, want) in cases {
-        let Some(exe) = build(&format!("{name}.c"), &["-fsanitize=address"], dir.path()) else { return };
+    for (name, folder, want) in cases {
+        // The debug information names the source as `/home/u/FOLDER/NAME.c`.
+        let moved = format!("-fdebug-prefix-map={}=/home/u/{folder}", hosts().display());
+        let Some(exe) = build(&format!("{name}.c"), &["-fsanitize=address", &moved], dir.path()) else { return };
         // One misbehaviour a run: a schedule that gives one crash gives it again (the
         // second run that completes a report without frames makes the same one).
         let mut r = run(vec![exe.display().to_string(), "{port}".into()]);

@@ -33,9 +33,12 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// Every character of `text` a terminal would obey: controls but newline and tab.
+/// Every character of `text` a terminal would obey: controls but newline and tab, and the
+/// bidirectional controls (U+202E reorders what follows it).
 fn obeyed(text: &str) -> Vec<char> {
-    text.chars().filter(|c| c.is_control() && !matches!(c, '\n' | '\t')).collect()
+    text.chars()
+        .filter(|c| c.is_control() && !matches!(c, '\n' | '\t') || gcl_model::escape::bidi_control(*c))
+        .collect()
 }
 
 /// `run`'s output has the hostile text, escaped, and nothing a terminal would obey.
@@ -278,8 +281,8 @@ fn a_printed_replay_command_pasted_into_a_shell_reproduces_its_finding() {
 }
 
 /// A profile whose hand is hostile: `seed`'s spec with control bytes in its version text (what
-/// the hand answers to VERS), its title and the text of ERR 32, in a copy of `spec/` (for its
-/// includes).
+/// the hand answers to VERS), its title (with a right-to-left override too) and the text of
+/// ERR 32, in a copy of `spec/` (for its includes).
 fn hostile_profile(dir: &Path) -> PathBuf {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../spec");
     let to = dir.join("spec");
@@ -294,7 +297,7 @@ fn hostile_profile(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(spec.join("seed.toml"))
         .unwrap()
         .replacen("version = [\"GCL seed profile", &format!("version = [\"GCL {esc} seed profile"), 1)
-        .replacen("title = \"GCL as", &format!("title = \"GCL {esc} as"), 1);
+        .replacen("title = \"GCL as", &format!("title = \"GCL {esc} \\u202Eas"), 1);
     let p = to.join("hostile.toml");
     std::fs::write(&p, text).unwrap();
     p
@@ -369,10 +372,80 @@ fn hand_and_file_bytes_are_shown_escaped_by_conform_replay_and_spec() {
     assert_shown_escaped("conform", &r);
     let r = gcl(&["spec", "--profile", s(&profile)]);
     assert_shown_escaped("spec", &r);
+    // The title's right-to-left override is shown, not obeyed (it was printed raw).
+    assert!(r.stdout.contains("\\u{202E}as"), "{}", r.stdout);
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../vectors/suite/seed/cmd-err.gcl");
     let r = gcl(&["replay", s(&golden), "--target", &hand]);
     assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
     assert_shown_escaped("replay", &r);
+    // A transcript whose file name is hostile (a folder of them from elsewhere, globbed):
+    // its verdict line names it escaped (it was printed raw).
+    let named = dir.path().join(format!("x{HOSTILE}\u{202E}.gcl"));
+    std::fs::copy(&golden, &named).unwrap();
+    let r = gcl(&["replay", s(&named), "--target", "sim"]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(
+        r.stdout.contains(&format!("PASS {}", s(&dir.path().join(format!("x{SHOWN}\\u{{202E}}.gcl"))))),
+        "{}",
+        r.stdout
+    );
+    assert_shown_escaped("replay of a hostile file name", &r);
+}
+
+/// Issue 39 item 14: `gcl fuzz merge` names what it leaves behind of a shard, and a shard's
+/// file names are a CI artifact's: a bundle's entry and corpus entries named to retitle the
+/// window and clear the screen (and with a right-to-left override) are shown escaped (they
+/// reached the terminal raw).
+#[test]
+fn fuzz_merge_shows_a_shards_hostile_file_names_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let hostile = format!("x{HOSTILE}\u{202E}");
+    let fifo = |p: &Path| nix::unistd::mkfifo(p, nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+    // A host campaign of one shard, with a FIFO in its finding's bundle.
+    let shard = dir.path().join("host");
+    let (rep, out) = (shard.join("report"), shard.join("bundles"));
+    let r = gcl(&[
+        "fuzz",
+        "host",
+        "--shard",
+        "1/1",
+        "--runs",
+        "1",
+        "--timeout-hang",
+        "5s",
+        "--report",
+        s(&rep),
+        "--out",
+        s(&out),
+        "--",
+        "sh",
+        "-c",
+        SEND_AND_FAIL,
+        "{port}",
+    ]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    let bundle = std::fs::read_dir(&out).unwrap().next().unwrap().unwrap().path();
+    fifo(&bundle.join(&hostile));
+    let r = gcl(&["fuzz", "merge", s(&shard), "--out", s(&dir.path().join("merged-host"))]);
+    assert_eq!(r.code, Some(1), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("a named pipe, not copied"), "{}", r.stderr);
+    assert_shown_escaped("fuzz merge (host)", &r);
+    // A device campaign of one shard, with a FIFO and a file that is no corpus entry, each
+    // named to do harm, in its corpus.
+    let shard = dir.path().join("device");
+    let (rep, out, corpus) = (shard.join("report"), shard.join("findings"), shard.join("corpus"));
+    let r = gcl(&["fuzz", "device", "--target", "sim:seed", "--shard", "1/1", "--runs", "4", "--quiet"]
+        .into_iter()
+        .chain(["--report", s(&rep), "--out", s(&out), "--corpus", s(&corpus)])
+        .collect::<Vec<_>>());
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    fifo(&corpus.join(format!("{hostile}.json")));
+    std::fs::write(corpus.join(format!("y{hostile}.json")), format!("[\"{}\"]", "\\u001b]0;PWNED\\u0007")).unwrap();
+    let r = gcl(&["fuzz", "merge", s(&shard), "--out", s(&dir.path().join("merged-device"))]);
+    assert_eq!(r.code, Some(0), "{}\n{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("not a corpus entry, not copied"), "{}", r.stderr);
+    assert!(r.stderr.contains(&format!("x{SHOWN}\\u{{202E}}.json: a named pipe")), "{}", r.stderr);
+    assert_shown_escaped("fuzz merge (device)", &r);
 }
 
 /// A run report with every field a writer reads set, for each kind of report.

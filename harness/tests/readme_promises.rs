@@ -608,6 +608,20 @@ const PROMISES: &[(&str, &[&str])] = &[
         &["harness/tests/host_verdicts.rs::sanitizer_reports_are_read_from_a_log_file_per_run"],
     ),
     (
+        "a FIFO or a symbolic link in it is named, never opened or followed",
+        &[
+            "harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped",
+            "fuzzers/src/fuzz/host/session.rs::a_run_folders_logs_are_read_as_the_hosts_data_within_their_room",
+        ],
+    ),
+    (
+        "within its 256 KiB (stderr and the logs each have half",
+        &[
+            "harness/tests/host_verdicts.rs::what_a_host_leaves_in_its_log_folder_is_read_as_its_data_and_capped",
+            "fuzzers/src/fuzz/host/session.rs::stderr_and_what_follows_it_are_kept_within_the_cap",
+        ],
+    ),
+    (
         "named in a `leftover` finding, signed by its command line",
         &["harness/tests/host_verdicts.rs::a_process_left_behind_is_killed_and_named_within_the_budget"],
     ),
@@ -711,8 +725,20 @@ const PROMISES: &[(&str, &[&str])] = &[
         ],
     ),
     (
-        "`schedules` below 1 or a `timeout` of 0 or less is an error naming it",
+        "`schedules` that is not a whole number from 1 to 10000, a `seed` that `--seed` does not take, or a `timeout` of 0 or less is an error naming it",
         &["python/tests/test_plugin_limits.py::test_values_out_of_range_are_refused_by_name"],
+    ),
+    (
+        "A test that calls `pytest.skip()` or `pytest.xfail()` is reported skipped or xfailed, ungraded",
+        &["python/tests/test_plugin_limits.py::test_skip_and_xfail_inside_a_gcl_hand_test_are_reported_as_such"],
+    ),
+    (
+        "Ctrl-C stops the session as pytest stops it, never as a failed test",
+        &["python/tests/test_plugin_limits.py::test_ctrl_c_stops_the_session_and_fails_no_test"],
+    ),
+    (
+        "so no `gcl-hand-*` folder is left, and pytest then ends by SIGTERM",
+        &["python/tests/test_plugin_limits.py::test_sigterm_leaves_no_hand_folder_and_ends_pytest_by_it"],
     ),
     (
         "a timer already running (`pytest-timeout`'s) keeps its deadline and handler",

@@ -2,7 +2,8 @@
 //! (transcripts, scripts, suite files, known-failures lists, scenarios, EEPROM images, profile
 //! TOML, keys, certificate bundles) goes through [`read_limited`] or [`open_regular`]; what
 //! comes from somewhere untrusted whose links must not be followed (the shards `gcl fuzz merge`
-//! folds) through [`read_limited_no_follow`].
+//! folds) through [`read_limited_no_follow`], or [`read_head_no_follow`] where the beginning of
+//! a file too long is kept (the sanitizer logs a host under test writes).
 //!
 //! - Only regular files are accepted. A FIFO is opened without blocking and refused, so a
 //!   named pipe called `x.gcl` in a suite directory cannot hang a run; `/dev/zero`, a
@@ -84,6 +85,17 @@ pub fn read_limited(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
 /// [`read_limited`] through [`open_regular_no_follow`]: a symbolic link is refused.
 pub fn read_limited_no_follow(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
     read_whole(open_regular_no_follow(path)?, limit)
+}
+
+/// The first `limit` bytes of a regular file from somewhere untrusted (a log a program under
+/// test wrote), through [`open_regular_no_follow`], and whether there was more: for text whose
+/// beginning is worth keeping when the whole is too long (a sanitizer's report).
+pub fn read_head_no_follow(path: &Path, limit: u64) -> io::Result<(Vec<u8>, bool)> {
+    let mut bytes = Vec::new();
+    open_regular_no_follow(path)?.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
+    let more = bytes.len() as u64 > limit;
+    bytes.truncate(usize::try_from(limit).unwrap_or(usize::MAX));
+    Ok((bytes, more))
 }
 
 fn read_whole(file: File, limit: u64) -> io::Result<Vec<u8>> {
@@ -169,5 +181,10 @@ mod tests {
         let big = dir.path().join("big");
         File::create(&big).unwrap().set_len(1 << 30).unwrap();
         assert_eq!(read_limited_no_follow(&big, 100).unwrap_err().kind(), io::ErrorKind::FileTooLarge);
+        // The head reader: the same refusals, and the beginning of a file too long.
+        assert_eq!(read_head_no_follow(&big, 100).unwrap(), (vec![0; 100], true));
+        assert_eq!(read_head_no_follow(&secret, 6).unwrap(), (b"root:x".to_vec(), false));
+        assert!(read_head_no_follow(&link, 100).unwrap_err().to_string().contains("symbolic link"));
+        assert!(read_head_no_follow(&fifo, 100).unwrap_err().to_string().contains("named pipe"));
     }
 }

@@ -23,6 +23,29 @@ STOP_TIMEOUT = 30.0
 VERSION_TIMEOUT = 10.0
 
 
+#: What a terminal would obey rather than show: the C0 controls but newline and tab, DEL, the
+#: C1 controls, the bidirectional controls (U+202E reorders what follows it) and U+FFFE/U+FFFF.
+_HIDDEN = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069\ufffe\uffff]")
+
+
+def _shown(match):
+    c = match.group(0)
+    if c == "\r":
+        return "\\r"
+    if c <= "\x7f":
+        return "\\x{:02X}".format(ord(c))
+    return "\\u{{{:04X}}}".format(ord(c))
+
+
+def printable(text):
+    """``text`` with what a terminal would obey written out, as ``gcl`` shows text for people
+    (its ``escape::printable``): a report's messages quote what the host sent, which may be
+    an escape sequence (``ESC]0;`` retitling the window) or a right-to-left override. Newline
+    and tab stay; ``\\r`` is written ``\\r``, other C0 controls and DEL ``\\xHH``, the rest
+    ``\\u{HHHH}``."""
+    return _HIDDEN.sub(_shown, text)
+
+
 class HandError(RuntimeError):
     """The simulated hand could not be started or stopped (not a verdict on the host)."""
 
@@ -91,7 +114,7 @@ class Failure:
         text = "{} {}: {}\n  {}".format(self.verdict, self.id, self.title, self.message)
         if self.diff:
             text += "\n  expected: {}\n  actual:   {}".format(self.diff.get("expected"), self.diff.get("actual"))
-        return text
+        return printable(text)
 
     def __repr__(self):
         return "Failure({!r}, {!r})".format(self.id, self.message)
@@ -149,7 +172,8 @@ class Verdict:
         if transcript:
             lines.append("the session (what the host sent and the hand answered):")
             lines.extend("  " + t for t in transcript.splitlines())
-        return "\n".join(lines)
+        # What the host sent is quoted: shown, never obeyed.
+        return printable("\n".join(lines))
 
 
 class Hand:
@@ -232,6 +256,17 @@ class Hand:
         except OSError as e:
             self._remove_tmp()
             raise HandError("cannot run {}: {}".format(command[0], e.strerror or e)) from None
+        try:
+            self._read_header()
+        except BaseException:
+            # Ctrl-C or SIGTERM (as KeyboardInterrupt) while it starts: nothing is left behind.
+            self._kill()
+            self._remove_tmp()
+            raise
+        return self
+
+    def _read_header(self):
+        """Reads where the started hand listens; :class:`HandError` when it does not say."""
         # The first lines: port, url, planned misbehaviours, ready (read by a thread, so that
         # a hand that never gets there cannot hold the caller past START_TIMEOUT).
         lines = []
@@ -269,7 +304,6 @@ class Hand:
                 self.url = value
             elif key == "planned":
                 self.planned.append(value)
-        return self
 
     def stop(self):
         """Stops the hand and grades the session; returns the :class:`Verdict`."""
@@ -283,6 +317,12 @@ class Hand:
                 proc.kill()
                 proc.communicate()
                 raise HandError("gcl check-host --serve did not stop within {:.0f} s".format(STOP_TIMEOUT)) from None
+            except BaseException:
+                # Interrupted while it grades (Ctrl-C, SIGTERM): it goes before its folder does,
+                # so that it writes nothing there afterwards.
+                proc.kill()
+                proc.wait()
+                raise
             # 2 is also a session that judged nothing: a verdict (its ERROR case), not a failure to run.
             judged_nothing = proc.returncode == 2 and any(
                 line.startswith("ERROR") and " host-session " in line for line in out.splitlines())

@@ -16,12 +16,13 @@ that fired.
 
 Options, per test with ``@pytest.mark.gcl(...)`` or for the run on the command line:
 ``profile`` (``--gcl-profile``, default bh8-262), ``baud``, ``time`` ("fast" or "real"),
-``fault`` (a deliberate firmware bug, or a list), ``tcp``, ``seed`` (``--gcl-seed``),
-``schedules`` (``--gcl-schedules``, a whole number, at least 1), ``ops`` (which
+``fault`` (a deliberate firmware bug, or a list), ``tcp``, ``seed`` (``--gcl-seed``, a whole
+number from 0 to 2^64 - 1), ``schedules`` (``--gcl-schedules``, a whole number from 1 to
+10000), ``ops`` (which
 misbehaviours, as ``gcl fuzz host --ops``), ``timeout`` (seconds, more than 0, default 20,
 misbehaving hands only), ``allow`` (clause ids a test breaks on purpose, such as
 ``["host-valid-commands"]`` for a test that sends an unknown command to see it refused). A
-value out of range fails the test at collection (``schedules``, ``timeout``) or at setup,
+value out of range fails the test at collection (``schedules``, ``seed``, ``timeout``) or at setup,
 naming it; it is never taken as "no schedule" or "no timer".
 
 The hang timer is SIGALRM's real-time timer, shared: a timer already running when the test
@@ -31,18 +32,27 @@ body ends.
 
 A ``pytest_runtest_call`` wrapper grades the hand when the test body ends, so a broken clause
 fails the test itself, not its teardown; it runs the hang timer alongside a timer already
-there, never in place of it.
+there, never in place of it. A test that skips or xfails itself (``pytest.skip()``,
+``pytest.xfail()``) is reported so, ungraded; Ctrl-C (or ``pytest.exit()``) stops the hand and
+the session as pytest stops it, never as a failed test.
+
+While a hand runs, SIGTERM (what CI runners and ``timeout`` send) stops the session as Ctrl-C
+does, so that every hand is stopped and its temporary folder removed; pytest then ends by
+SIGTERM, as it was asked to. Only where SIGTERM had no handler of its own (yours is left
+alone), and a second SIGTERM ends the process at once.
 """
 
+import contextlib
 import math
 import os
+import re
 import signal
 import threading
 import time
 
 import pytest
 
-from ._hand import Hand
+from ._hand import Hand, HandError
 
 FIXTURES = ("gcl_hand", "gcl_misbehaving_hand")
 HAND_OPTIONS = ("profile", "baud", "time", "fault", "tcp", "seed")
@@ -52,12 +62,32 @@ class HostHang(Exception):
     """The host code neither returned nor failed within the test's timeout."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM came while a hand ran: the session stops as at Ctrl-C (see the module's notes)."""
+
+
+#: The most schedules a test runs under (each is a run of the test).
+MAX_SCHEDULES = 10000
+
+
+def _whole(value, name, least, most, what):
+    """``value`` as a whole number from ``least`` to ``most`` (an int, or a string of ASCII
+    digits), else a ValueError naming ``name``."""
+    text = str(value).strip() if isinstance(value, (int, str)) and not isinstance(value, bool) else ""
+    if not re.fullmatch(r"[0-9]{1,20}", text) or not least <= int(text) <= most:
+        raise ValueError("{}={!r}: give {}".format(name, value, what))
+    return int(text)
+
+
 def _schedules(value):
     """``schedules``: a whole number of at least 1 (0 would run the test under no schedule)."""
-    if isinstance(value, bool) or not isinstance(value, (int, str)) or not str(value).strip().isdigit() \
-            or int(value) < 1:
-        raise ValueError("schedules={!r}: give a whole number of schedules, at least 1".format(value))
-    return int(value)
+    return _whole(value, "schedules", 1, MAX_SCHEDULES,
+                  "a whole number of schedules, at least 1 (at most {})".format(MAX_SCHEDULES))
+
+
+def _seed(value):
+    """``seed``: what ``gcl fuzz host --seed`` takes, a whole number from 0 to 2^64 - 1."""
+    return _whole(value, "seed", 0, 2 ** 64 - 1, "a whole number from 0 to 2^64 - 1")
 
 
 def _timeout(value):
@@ -85,7 +115,8 @@ def _option_type(check):
 def pytest_addoption(parser):
     group = parser.getgroup("gcl", "gcl simulated hands")
     group.addoption("--gcl-profile", default=None, help="profile of gcl_hand (default bh8-262)")
-    group.addoption("--gcl-seed", type=int, default=None, help="seed of the misbehaviour schedules (default 0)")
+    group.addoption("--gcl-seed", type=_option_type(_seed), default=None,
+                    help="seed of the misbehaviour schedules (default 0)")
     group.addoption("--gcl-schedules", type=_option_type(_schedules), default=None,
                     help="schedules each gcl_misbehaving_hand test runs under (default 3, at least 1)")
 
@@ -117,11 +148,11 @@ def pytest_generate_tests(metafunc):
     try:
         n = _schedules(_setting(metafunc.config, marker, "schedules", 3))
         _timeout(marker.get("timeout", 20))
+        seed = _seed(_setting(metafunc.config, marker, "seed", 0))
     except ValueError as e:
         refused = "gcl: {}: {}".format(metafunc.definition.nodeid, e)
     if refused:
         pytest.fail(refused, pytrace=False)
-    seed = int(_setting(metafunc.config, marker, "seed", 0))
     metafunc.parametrize("gcl_misbehaving_hand", [(seed, i) for i in range(1, n + 1)], indirect=True,
                          ids=["schedule-{}:{}".format(seed, i) for i in range(1, n + 1)])
 
@@ -145,20 +176,67 @@ def _hand(request, misbehave=None):
     return hand
 
 
+class _Sigterm:
+    """SIGTERM as :class:`Terminated` while hands run (see the module's notes)."""
+
+    hands = 0
+    installed = False
+    received = False
+
+    @classmethod
+    def on_sigterm(cls, signum, frame):
+        if cls.received:
+            # A second one: at once.
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        cls.received = True
+        raise Terminated("SIGTERM")
+
+    @classmethod
+    @contextlib.contextmanager
+    def while_a_hand_runs(cls):
+        main = threading.current_thread() is threading.main_thread()
+        if main and cls.hands == 0 and signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, cls.on_sigterm)
+            cls.installed = True
+        cls.hands += 1
+        try:
+            yield
+        finally:
+            cls.hands -= 1
+            if cls.hands == 0 and cls.installed and not cls.received:
+                signal.signal(signal.SIGTERM, signal.SIG_DFL)
+                cls.installed = False
+
+
+def pytest_unconfigure(config):
+    """After a SIGTERM the session stopped for: the process ends by it, once pytest is done."""
+    if _Sigterm.received:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+
 @pytest.fixture
 def gcl_hand(request):
     """A graded simulated hand (see the module's notes)."""
-    hand = _hand(request)
-    yield hand
-    hand.stop()
+    with _Sigterm.while_a_hand_runs():
+        hand = _hand(request)
+        try:
+            yield hand
+        finally:
+            hand.stop()
 
 
 @pytest.fixture
 def gcl_misbehaving_hand(request):
     """A graded simulated hand that misbehaves by a seeded schedule (see the module's notes)."""
-    hand = _hand(request, misbehave=request.param)
-    yield hand
-    hand.stop()
+    with _Sigterm.while_a_hand_runs():
+        hand = _hand(request, misbehave=request.param)
+        try:
+            yield hand
+        finally:
+            hand.stop()
 
 
 def _graded_hand(item):
@@ -243,6 +321,16 @@ def pytest_runtest_call(item):
         timer = _HangTimer(hand.timeout)
     try:
         result = yield
+    except (pytest.skip.Exception, pytest.xfail.Exception, pytest.exit.Exception, KeyboardInterrupt):
+        # The test chose its outcome (skip, xfail), or the run is being stopped (Ctrl-C,
+        # SIGTERM, pytest.exit()): ungraded, and what was raised goes on as it is (it was made
+        # a failure, and the session ran on after Ctrl-C). The hand is stopped; a hand that
+        # was interrupted too (Ctrl-C reaches the whole process group) says nothing more.
+        try:
+            hand.stop()
+        except HandError:
+            pass
+        raise
     except HostHang:
         verdict = _verdict(item, hand)
         raise pytest.fail.Exception("the host code hung: no return within {:.0f} s{}\n{}".format(

@@ -30,13 +30,17 @@ pub fn escape_also(bytes: &[u8], also: &[u8]) -> String {
 /// Text with every control character written out, so that what a hand, a host or a file
 /// put in it is shown, never obeyed: a terminal meets no escape sequence (`ESC]0;` retitling
 /// the window, `ESC[2J` clearing it), no carriage return overwriting the line, and an XML
-/// 1.0 file no character it forbids. Newline and tab stay (multi-line text keeps its lines);
-/// `\r` is written `\r`, the other C0 controls and DEL `\xHH` as [`escape`] writes those bytes,
-/// the C1 controls and the non-characters U+FFFE and U+FFFF `\u{HHHH}`. A backslash stays as
-/// it is: text already escaped (`"A\x00"`) is not escaped twice, so this is for people, not
-/// to be inverted. Text without such characters is returned as it is, unallocated.
+/// 1.0 file no character it forbids, and no bidirectional control reorders what a person
+/// reads (U+202E, the right-to-left override, shows `exe.txt` for `txt.exe`). Newline and tab
+/// stay (multi-line text keeps its lines); `\r` is written `\r`, the other C0 controls and DEL
+/// `\xHH` as [`escape`] writes those bytes, the C1 controls, the bidirectional controls and
+/// the non-characters U+FFFE and U+FFFF `\u{HHHH}`. A backslash stays as it is: text already
+/// escaped (`"A\x00"`) is not escaped twice, so this is for people, not to be inverted. Text
+/// without such characters is returned as it is, unallocated.
 pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
-    let shown = |c: char| matches!(c, '\n' | '\t') || !(c.is_control() || matches!(c, '\u{FFFE}' | '\u{FFFF}'));
+    let shown = |c: char| {
+        matches!(c, '\n' | '\t') || !(c.is_control() || matches!(c, '\u{FFFE}' | '\u{FFFF}') || bidi_control(c))
+    };
     if text.chars().all(shown) {
         return std::borrow::Cow::Borrowed(text);
     }
@@ -50,6 +54,12 @@ pub fn printable(text: &str) -> std::borrow::Cow<'_, str> {
         }
     }
     std::borrow::Cow::Owned(s)
+}
+
+/// Whether `c` is one of Unicode's bidirectional controls (the marks, embeddings, overrides
+/// and isolates), which change the order in which the text around them is shown.
+pub fn bidi_control(c: char) -> bool {
+    matches!(c, '\u{061C}' | '\u{200E}' | '\u{200F}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}')
 }
 
 /// Why escaped text does not decode.
@@ -132,7 +142,10 @@ mod tests {
         let every: String = (0..=0x10FFFFu32).filter_map(char::from_u32).collect();
         assert!(printable(&every).chars().all(|c| matches!(c, '\n' | '\t')
             || (' '..='\u{7e}').contains(&c)
-            || c > '\u{9f}' && c < '\u{fffe}'
+            || c > '\u{9f}' && c < '\u{fffe}' && !bidi_control(c)
             || c > '\u{ffff}'));
+        // A right-to-left override (or any bidirectional control) is shown, never obeyed.
+        assert_eq!(printable("profile \u{202E}txt.exe"), "profile \\u{202E}txt.exe");
+        assert_eq!(printable("\u{2066}a\u{2069}\u{200F}\u{061C}"), "\\u{2066}a\\u{2069}\\u{200F}\\u{061C}");
     }
 }

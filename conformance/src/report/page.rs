@@ -5,7 +5,9 @@
 
 use std::fmt::Write;
 
-/// Text escaped for HTML content and attribute values.
+/// Text escaped for HTML content and attribute values. A bidirectional control (U+202E, the
+/// right-to-left override, in a host's file name or a profile's title) is shown as
+/// `\u{202E}`, never obeyed: it would reorder what the page shows around it.
 pub fn esc(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
     for ch in s.chars() {
@@ -15,6 +17,9 @@ pub fn esc(s: &str) -> String {
             '>' => o.push_str("&gt;"),
             '"' => o.push_str("&quot;"),
             '\'' => o.push_str("&#39;"),
+            c if gcl_model::escape::bidi_control(c) => {
+                let _ = write!(o, "\\u{{{:04X}}}", c as u32);
+            }
             c => o.push(c),
         }
     }
@@ -124,4 +129,12 @@ pub fn details(summary: &str, body: &str, open: bool, class: &str, id: Option<&s
 /// A preformatted block of plain text.
 pub fn pre(text: &str) -> String {
     format!("<pre>{}</pre>\n", esc(text))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_bidirectional_control_is_shown_not_obeyed() {
+        assert_eq!(super::esc("<a> \u{202E}txt.exe"), "&lt;a&gt; \\u{202E}txt.exe");
+    }
 }

@@ -145,7 +145,7 @@ or unsigned forgery verifies the same. Give --pubkey FILE{}",
             Ok(if args.allow_unverified { EXIT_OK } else { EXIT_FAIL })
         }
         Err(problems) => {
-            writeln!(w, "TAMPERED: {}", dir.display())?;
+            writeln!(w, "TAMPERED: {}", printable(&dir.display().to_string()))?;
             for p in problems {
                 writeln!(w, "  {}", printable(&p.to_string()))?;
             }
@@ -256,7 +256,7 @@ fn print_certificate(
     writeln!(w, "  firmware: {}", printable(&cert.firmware_version.join(" / ")))?;
     writeln!(w, "  certificate verdict: {}", cert.verdict)?;
     if !cert.excused.is_empty() {
-        writeln!(w, "  known failures excused (not covered): {}", cert.excused.join(", "))?;
+        writeln!(w, "  known failures excused (not covered): {}", printable(&cert.excused.join(", ")))?;
     }
     // The check to run is one that can pass: a signed bundle against its public key (the
     // `--keygen` pair's FILE.pub when it is there); an unsigned one only for agreeing with

@@ -427,14 +427,14 @@ fn device_exit(
         return EXIT_ERROR;
     }
     if let Some(why) = &s.no_cases {
-        errln!("gcl fuzz device: nothing left to test: {why}");
+        errln!("gcl fuzz device: nothing left to test: {}", printable(why));
         return EXIT_ERROR;
     }
     if s.runs == 0
         && !s.interrupted
         && let Some(why) = &report.stopped
     {
-        errln!("gcl fuzz device: nothing tested: {why}");
+        errln!("gcl fuzz device: nothing tested: {}", printable(why));
     }
     // Only new findings fail the run: what the baseline explains was known before. A
     // campaign stopped before its budget without one has no verdict.

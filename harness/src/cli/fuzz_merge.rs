@@ -10,6 +10,7 @@ use gcl_harness::fuzz::merge::{self, Kind, NotCopied};
 use gcl_harness::report::merged::Merged;
 use gcl_harness::report::{CaseResult, Verdict};
 use gcl_harness::sim::{Pace, TimeMode};
+use gcl_model::escape::printable;
 
 use super::{EXIT_ERROR, EXIT_FAIL, EXIT_OK, load_profile};
 
@@ -75,8 +76,9 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
 
 /// Names what was left behind, and says whether every shard was merged.
 fn finish(merged: &Merged, not_copied: &NotCopied) -> bool {
+    // The names are a shard's (a CI artifact's): shown, never obeyed.
     for n in not_copied {
-        errln!("gcl fuzz merge: warning: {n}");
+        errln!("gcl fuzz merge: warning: {}", printable(n));
     }
     if !merged.complete() {
         errln!(

@@ -93,7 +93,7 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
                 errln!(
                     "gcl replay: warning: {} is written for profile {}, but the target simulates {simulated}; \
 differences may come from the profile, not a bug (use --target sim:{} or sim to match)",
-                    f.display(),
+                    printable(&f.display().to_string()),
                     printable(&t.header.profiles.join(", ")),
                     printable(&t.header.profiles[0])
                 );
@@ -109,7 +109,7 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
             writeln!(
                 w,
                 "SKIP {}: needs {} in place, which gcl cannot place on {target}; put it there and pass --fixture object",
-                f.display(),
+                printable(&f.display().to_string()),
                 printable(&gcl_transcript::Setup::list(&t.header.setup))
             )?;
             continue;
@@ -133,16 +133,21 @@ differences may come from the profile, not a bug (use --target sim:{} or sim to 
         match &out {
             ReplayOutcome::Pass(p) => {
                 if !args.quiet {
-                    writeln!(w, "PASS {} ({} steps)", f.display(), p.exchange.len())?;
+                    writeln!(w, "PASS {} ({} steps)", printable(&f.display().to_string()), p.exchange.len())?;
                 }
             }
             ReplayOutcome::Mismatch(_) | ReplayOutcome::Timeout(_) | ReplayOutcome::Flooded(_) => {
                 let verdict = if matches!(out, ReplayOutcome::Timeout(_)) { "TIMEOUT" } else { "FAIL" };
-                writeln!(w, "{verdict} {}: {}", f.display(), printable(out.render().trim_end()))?;
+                writeln!(
+                    w,
+                    "{verdict} {}: {}",
+                    printable(&f.display().to_string()),
+                    printable(out.render().trim_end())
+                )?;
                 code = code.max(EXIT_FAIL);
             }
             ReplayOutcome::Disconnected(_) => {
-                writeln!(w, "ERROR {}: {}", f.display(), printable(&out.summary()))?;
+                writeln!(w, "ERROR {}: {}", printable(&f.display().to_string()), printable(&out.summary()))?;
                 code = EXIT_ERROR;
             }
         }

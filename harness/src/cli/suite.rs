@@ -7,6 +7,7 @@
 //! (or a suite on disk with `--dir`), and `check` finds the committed suite in the current
 //! directory or the nearest folder above it that has one, as git finds its repository.
 
+use gcl_model::escape::printable;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -166,7 +167,8 @@ inside an existing folder)",
             let width = |i: usize, least: usize| rows.iter().map(|r| r[i].chars().count()).fold(least, usize::max);
             let (w0, w1, w2, w3) = (width(0, 12), width(1, 44), width(2, 6), width(3, 22));
             for [profile, id, level, req, title] in &rows {
-                writeln!(w, "{profile:<w0$} {id:<w1$} {level:<w2$} {req:<w3$} {title}")?;
+                // A suite folder may come from anywhere: its text is shown, never obeyed.
+                writeln!(w, "{}", printable(&format!("{profile:<w0$} {id:<w1$} {level:<w2$} {req:<w3$} {title}")))?;
             }
             let counts = suite::count_by_level(&cases);
             let per: Vec<String> =

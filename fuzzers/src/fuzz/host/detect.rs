@@ -4,11 +4,11 @@
 //! from two call sites is one finding).
 //!
 //! A port that went away, whichever exception pyserial raised it as, is one "hang-up not handled".
-//! A sanitizer report is signed by the host's first own frame: the system's frames, libc,
-//! libstdc++,
-//! Boost and the sanitizer's interceptors are told apart by module, source path and namespace. A
-//! C++
-//! runtime's "terminate called" is signed by what was thrown and where. Hang stacks (faulthandler,
+//! A sanitizer report is signed by the host's first own frame: the system's frames (libc,
+//! libstdc++, Boost, the sanitizer's interceptors) are told apart by the object file a frame
+//! comes from, when the stack names it, and by their function's name or namespace; never by
+//! the folders of a source path, which are the host's to name. A C++ runtime's "terminate
+//! called" is signed by what was thrown and where. Hang stacks (faulthandler,
 //! eu-stack, gdb) are read into the frame of the host's own code that waits: a Python host blocked
 //! for ever in a pyserial call is signed by that call in its program (a pyserial port's deadline is
 //! its timeout, one setting for every read).
@@ -36,43 +36,30 @@ pub fn crash_report(stderr: &str) -> Option<CrashReport> {
 }
 
 /// One frame of a native stack as a sanitizer, gdb or eu-stack prints it: the function (its
-/// parameters left out) and where it lives (a source file, or a module).
+/// parameters left out) and the object file it comes from, when the stack names it (a
+/// sanitizer's `(libc.so.6+0x29d90)`, gdb's `from /lib/...`, eu-stack's module); a frame
+/// printed with its source file names no object file.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct NativeFrame {
     func: String,
-    place: String,
+    module: Option<String>,
 }
 
 impl NativeFrame {
-    /// Whether it is the code of the system rather than the host's own: the C library and the
-    /// loader, the C++ and Rust runtimes, the sanitizers' runtime and interceptors, and the
-    /// libraries a host is built on (Boost, Poco, ROS), by their module, their source file
-    /// (`../sysdeps/...`, a header under `/usr/include`), or their namespace. A host's own
-    /// shared library (`libbarrett.so`) is the host's.
+    /// Whether it is the code of the system rather than the host's own (see [`system_frame`]).
     fn system(&self) -> bool {
-        system_frame(&self.func, &self.place)
+        system_frame(&self.func, self.module.as_deref())
     }
 }
 
-/// See [`NativeFrame::system`].
-fn system_frame(func: &str, place: &str) -> bool {
-    const PLACES: &[&str] = &[
-        "libsanitizer",
-        "sanitizer_common",
-        "compiler-rt",
-        "sysdeps/",
-        "stdio-common/",
-        "libio/",
-        "csu/",
-        "nptl/",
-        "stdlib/abort",
-        "/usr/include/",
-        "/include/c++/",
-        "/boost/",
-        "/Poco/",
-        "/opt/ros/",
-        "<unknown module>",
-    ];
+/// Whether a frame is the code of the system rather than the host's own: the C library and
+/// the loader, the C++ and Rust runtimes, the sanitizers' runtime and interceptors, and the
+/// libraries a host is built on (Boost, Poco, ROS), told by the object file it comes from
+/// (`module`, when the stack names it) or by its function's name or namespace. Never by the
+/// words of a source path: the host's own code may live in a folder named `csu/`, `libio/` or
+/// `boost/` as well as glibc's or Boost's does (such a host was signed `in ?`). A host's own
+/// shared library (`libbarrett.so`) is the host's.
+fn system_frame(func: &str, module: Option<&str>) -> bool {
     const MODULES: &[&str] = &[
         "libc.so",
         "libc-",
@@ -149,12 +136,34 @@ fn system_frame(func: &str, place: &str) -> bool {
         "sem_wait",
         "scanf_common",
         "printf_common",
+        // What the sanitizers intercept, as newer ones name their interceptors.
+        "strcpy",
+        "strncpy",
+        "strcat",
+        "strncat",
+        "strlen",
+        "memcpy",
+        "memmove",
+        "memset",
+        "sprintf",
+        "vsprintf",
+        "snprintf",
+        "vsnprintf",
+        "sscanf",
+        "vsscanf",
+        "malloc",
+        "calloc",
+        "realloc",
+        "free",
         "_start",
         "??",
     ];
-    let module = place.trim_start_matches('(').rsplit('/').next().unwrap_or_default();
-    PLACES.iter().any(|p| place.contains(p))
-        || MODULES.iter().any(|m| module.starts_with(m))
+    // A library installed with ROS, an address in no known object file.
+    let system_module = |m: &str| {
+        let file = m.rsplit('/').next().unwrap_or_default();
+        MODULES.iter().any(|x| file.starts_with(x)) || m.starts_with("/opt/ros/") || m == "<unknown module>"
+    };
+    module.is_some_and(system_module)
         || NAMESPACES.iter().any(|n| func.starts_with(n))
         || NAMES.contains(&func)
         || func.starts_with("__")
@@ -205,13 +214,25 @@ fn sanitizer_frame(line: &str) -> Option<NativeFrame> {
     let rest = line.trim_start().strip_prefix('#')?;
     let (_, after) = rest.split_once(" in ")?;
     let after = after.trim();
-    // The place is the last word: a source path with its line, or a module in parentheses.
-    let (func, place) = match after.rsplit_once(' ') {
-        Some((f, p)) if p.contains('/') || p.starts_with('(') => (f, p),
-        _ => (after, ""),
+    // Where it lives is the last word: a module and offset in parentheses, or a source path
+    // with its line (which names no module).
+    let (func, module) = match after.rsplit_once(' ') {
+        Some((f, p)) if p.starts_with('(') && p.ends_with(')') => {
+            let inner = &p[1..p.len() - 1];
+            (f, Some(inner.rsplit_once('+').map_or(inner, |(m, _)| m).to_string()))
+        }
+        Some((f, p)) if p.contains('/') || source_line(p) => (f, None),
+        _ => (after, None),
     };
     let func = function_name(func);
-    (!func.is_empty()).then(|| NativeFrame { func, place: place.to_string() })
+    (!func.is_empty()).then_some(NativeFrame { func, module })
+}
+
+/// Whether a word is a source file and line (`host.c:20`, `host.c:20:5`).
+fn source_line(word: &str) -> bool {
+    let mut parts = word.split(':');
+    parts.next().is_some_and(|f| f.contains('.'))
+        && parts.next().is_some_and(|l| !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// The frames of the first stack of a sanitizer report that starts at `report` (the bad
@@ -394,7 +415,7 @@ fn uncaught(s: &str) -> Option<CrashReport> {
             Some((first, None, frames.next()))
         })
         .or_else(|| s.find("ERROR: AddressSanitizer:").and_then(|at| own_site(&s[at..], false)))
-        .filter(|(f, _, _)| !system_frame(f, ""));
+        .filter(|(f, _, _)| !system_frame(f, None));
     let mut signature = format!("uncaught C++ exception {ty}");
     let mut headline = format!("an exception nobody caught: {ty}");
     if let Some(w) = &what {
@@ -614,26 +635,27 @@ pub fn native_frames(text: &str) -> Option<(String, Option<String>)> {
             _ => rest,
         };
         let rest = rest.strip_prefix("in ").unwrap_or(rest);
-        // gdb: `FUNC (ARGS) at FILE:LINE` or `FUNC (ARGS) from MODULE`; eu-stack: `FUNC - MODULE`.
-        let (func, place) = if let Some((f, m)) = rest.rsplit_once(" - ") {
-            (function_name(f), m.trim().to_string())
+        // gdb: `FUNC (ARGS) at FILE:LINE` (no module) or `FUNC (ARGS) from MODULE`; eu-stack:
+        // `FUNC - MODULE`.
+        let (func, module) = if let Some((f, m)) = rest.rsplit_once(" - ") {
+            (function_name(f), Some(m.trim()))
         } else {
-            let (f, p) = rest
-                .rsplit_once(" at ")
-                .or_else(|| rest.rsplit_once(" from "))
-                .map_or((rest, ""), |(f, p)| (f, p.trim()));
+            let (f, module) = match rest.rsplit_once(" at ") {
+                Some((f, _)) => (f, None),
+                None => rest.rsplit_once(" from ").map_or((rest, None), |(f, m)| (f, Some(m.trim()))),
+            };
             let f = f.trim();
             // The arguments gdb prints after the function (`(fd=3, buf=0x7ff "")`).
             let f = match matching_open(f) {
                 Some(open) if f.ends_with(')') && open > 0 => &f[..open],
                 _ => f,
             };
-            (function_name(f), p.to_string())
+            (function_name(f), module)
         };
         if func.is_empty() || func == "??" {
             continue;
         }
-        let system = system_frame(&func, &place);
+        let system = system_frame(&func, module);
         all.push((func, system));
     }
     own_first(all)
@@ -866,6 +888,47 @@ mod tests {
         // A report of the first run with its frames (the slow unwinder did not crash) is signed
         // by its first own frame, as ever.
         assert_eq!(crash_report(SSCANF_STACK_FAST).unwrap().signature, "asan stack-buffer-overflow in main");
+    }
+
+    /// A host's own code is the host's wherever it was built: in a folder named as glibc's
+    /// (`csu/`, `libio/`, `nptl/`, `sysdeps/`) or a library's (`boost/`), its frames are its
+    /// own (they were taken for the system's by their source path, and such a host was signed
+    /// `in ?` or `in scanf_common`); the system's frames are told by the object file they come
+    /// from or by their function, whatever folder names their source.
+    #[test]
+    fn frames_are_the_systems_by_their_object_file_not_by_their_source_folder() {
+        for folder in ["/home/u/csu/", "/src/libio/", "/w/nptl/", "/w/sysdeps/", "/w/boost/", "/usr/include/x/"] {
+            let heap = SSCANF_HEAP.replace("/work/harness/tests/host_mutants/", folder);
+            let r = crash_report(&heap).unwrap();
+            assert_eq!(r.signature, "asan heap-buffer-overflow in hand_get", "{folder}");
+            assert!(r.headline.ends_with("called from main)"), "{folder}: {}", r.headline);
+            let fast = SSCANF_STACK_FAST.replace("/work/harness/tests/host_mutants/", folder);
+            let completed = format!("{SSCANF_STACK_NO_FRAMES}\n{ASAN_SECOND_RUN}\n{fast}");
+            assert_eq!(
+                crash_report(&completed).unwrap().signature,
+                "asan stack-buffer-overflow in first_word",
+                "{folder}"
+            );
+            let eu = format!(
+                "TID 1:\n#0  0x7f3 __GI___libc_read - /usr/lib/x86_64-linux-gnu/libc.so.6\n#1  0x555 read_line - {folder}c_host\n#2  0x556 main - {folder}c_host\n"
+            );
+            assert_eq!(native_frames(&eu).unwrap().0, "read_line < main", "{folder}");
+            let gdb = format!(
+                "#0  0x00007f in __GI___libc_read (fd=3) at ../sysdeps/read.c:26\n#1  0x000055 in read_line (fd=3) at {folder}host.c:20\n#2  0x000055 in main () at {folder}host.c:40\n"
+            );
+            assert_eq!(native_frames(&gdb).unwrap().0, "read_line < main", "{folder}");
+        }
+        // The system's code is the system's by its object file, whatever its function's name.
+        let libc =
+            "#0 0x7f in vfscanf_helper (/lib/x86_64-linux-gnu/libc.so.6+0x5e)\n#1 0x55 in parse /h/csu/host.c:9\n";
+        let report = format!(
+            "==1==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7f\nWRITE of size 9\n    {}",
+            libc.replace('\n', "\n    ")
+        );
+        assert_eq!(crash_report(&report).unwrap().signature, "asan stack-buffer-overflow in parse");
+        // A source file named without a folder is a source file, not a part of the function.
+        let bare = "==1==ERROR: AddressSanitizer: stack-buffer-overflow on address 0x7f\nWRITE of size 9\n    #0 0x55 in read_line host.c:20\n    #1 0x56 in main host.c:40\n";
+        assert_eq!(crash_report(bare).unwrap().signature, "asan stack-buffer-overflow in read_line");
     }
 
     /// gdb's stack of `host_mutants/cpp_uncaught_hangup.cpp` at its SIGABRT (a second run).

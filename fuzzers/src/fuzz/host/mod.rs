@@ -263,6 +263,32 @@ pub fn judge(r: &RunResult, ok_exit_codes: &[i32]) -> Vec<Verdict> {
             message: format!("{}: {}", x.clause.title(), x.detail),
         });
     }
+    v.into_iter().map(bounded).collect()
+}
+
+/// The longest signature kept whole. A signature quotes the host's own text (a panic's path,
+/// a function's name, an exception's line), which a host may make as long as it likes (a
+/// 100 KB panic path was a 100 KB finding line and heading in every report).
+pub const SIGNATURE_CAP: usize = 240;
+
+/// The longest message of a finding kept.
+const MESSAGE_CAP: usize = 4096;
+
+/// `v` with its signature and message within [`SIGNATURE_CAP`] and [`MESSAGE_CAP`]: a longer
+/// signature is cut and ends with a digest of the whole (`… #1a2b3c4d`), so that it stays the
+/// same from run to run and two long ones stay apart.
+fn bounded(mut v: Verdict) -> Verdict {
+    if v.signature.len() > SIGNATURE_CAP {
+        let mut cut = SIGNATURE_CAP - 16;
+        while !v.signature.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        let digest = crate::digest::sha256_hex(v.signature.as_bytes());
+        v.signature = format!("{}… #{}", &v.signature[..cut], &digest[..8]);
+    }
+    if v.message.len() > MESSAGE_CAP {
+        v.message = crate::report::truncate_note(&v.message, MESSAGE_CAP);
+    }
     v
 }
 
@@ -1805,6 +1831,28 @@ mod tests {
         assert!(v[0].message.starts_with("the host died of SIGABRT: ") && v[0].message.contains("Input/output error"));
         r.stderr.clear();
         assert_eq!(judge(&r, &[0, 1])[0].signature, "crash: SIGABRT");
+    }
+
+    /// A host's own text in a signature (here a panic's path of 100 KB) is cut to
+    /// [`SIGNATURE_CAP`], the same from run to run, and two such signatures stay apart; the
+    /// message is bounded too.
+    #[test]
+    fn a_signature_of_the_hosts_text_is_bounded_and_stays_apart() {
+        let panic = |c: char| {
+            let mut r = ended(HostEnd::Exit(101), "at the prompt after HI");
+            r.stderr =
+                format!("thread 'main' panicked at {}:1:1:\n{}\n", c.to_string().repeat(100_000), "m".repeat(9000));
+            judge(&r, &[0])
+        };
+        let (a, b) = (panic('a'), panic('b'));
+        assert!(a[0].signature.len() <= SIGNATURE_CAP && a[0].message.len() <= MESSAGE_CAP + 64, "{:?}", a[0]);
+        assert!(a[0].signature.starts_with("crash: panic at aaaa") && a[0].signature.contains("… #"));
+        assert_eq!(panic('a')[0].signature, a[0].signature);
+        assert_ne!(b[0].signature, a[0].signature);
+        // A short one is as it was.
+        let mut r = ended(HostEnd::Exit(101), "at the prompt after HI");
+        r.stderr = "thread 'main' panicked at src/main.rs:10:5:\nboom\n".into();
+        assert_eq!(judge(&r, &[0])[0].signature, "crash: panic at src/main.rs:10");
     }
 
     /// A default campaign (neither --runs nor --duration) is a time budget that, with its

@@ -149,7 +149,8 @@ pub struct RunResult {
     /// [`LONG_WAIT`] with the port open, and, when it was killed (a hang, the budget), the
     /// wait it was in then. What confirms a hang or shows a host that acts late.
     pub waits: Vec<Wait>,
-    /// Its stderr (the first [`STDERR_CAP`] bytes; sanitizer logs appended).
+    /// Its stderr with its sanitizer logs after it (and what a second run added), at most
+    /// [`STDERR_CAP`] bytes all told.
     pub stderr: String,
     /// Observations the host made (`gcl-observe:` lines, [`OBSERVE`]).
     pub observations: u64,
@@ -650,7 +651,7 @@ impl LineTap for Tap {
     }
 }
 
-/// Longest stderr kept.
+/// Longest stderr kept, with the sanitizer logs read after it and what a second run adds.
 pub const STDERR_CAP: usize = 256 * 1024;
 
 /// How long stderr is read after the host ended: what a leftover holding it writes later is
@@ -701,21 +702,114 @@ impl RunDir {
         self.0.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
     }
 
-    /// The sanitizer logs written into it (`asan.PID`, ...), each under a heading.
-    fn sanitizer_logs(&self) -> String {
+    /// The sanitizer logs written into it (`asan.PID`, ...), each under a heading, in at most
+    /// `room` bytes all told (a log cut short, and logs left out, are said).
+    ///
+    /// The folder is the host's to write into (its `log_path`), so what is there is data from
+    /// the host: only entries named as a sanitizer names its logs are read, each as a regular
+    /// file through `gcl_host::files` (a symbolic link is not followed, a FIFO is refused
+    /// without blocking, and each is named under its heading); at most [`MAX_LOGS`] names are
+    /// kept from the listing.
+    fn sanitizer_logs(&self, room: usize) -> String {
         let mut out = String::new();
+        // The folder itself may have been replaced (by a link elsewhere).
+        if !std::fs::symlink_metadata(&self.0).is_ok_and(|m| m.is_dir()) {
+            return out;
+        }
         let Ok(entries) = std::fs::read_dir(&self.0) else { return out };
-        let mut files: Vec<_> = entries.flatten().map(|e| e.path()).collect();
+        let mut files = Vec::new();
+        let mut unlisted = 0usize;
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let is_log = SANITIZERS
+                .iter()
+                .any(|(_, n)| name.as_encoded_bytes().strip_prefix(n.as_bytes()).is_some_and(|r| r.starts_with(b".")));
+            if !is_log {
+                continue;
+            }
+            if files.len() < MAX_LOGS {
+                files.push(e.path());
+            } else {
+                unlisted += 1;
+            }
+        }
         files.sort();
-        for f in files {
-            let Ok(file) = std::fs::File::open(&f) else { continue };
-            let mut text = Vec::new();
-            let _ = file.take(STDERR_CAP as u64).read_to_end(&mut text);
-            let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            out.push_str(&format!("\n--- sanitizer log {name} ---\n{}", String::from_utf8_lossy(&text)));
+        let mut left_out = unlisted;
+        for f in &files {
+            let name = f.file_name().map(|n| gcl_model::escape::escape(n.as_encoded_bytes())).unwrap_or_default();
+            let heading = format!("\n--- sanitizer log {name} ---\n");
+            let Some(body_room) = room.saturating_sub(out.len()).checked_sub(heading.len() + LOG_CUT_NOTE) else {
+                left_out += 1;
+                continue;
+            };
+            match gcl_host::files::read_head_no_follow(f, body_room as u64) {
+                Ok((bytes, more)) => {
+                    out.push_str(&heading);
+                    let whole = String::from_utf8_lossy(&bytes);
+                    let text = cut_at_char(&whole, body_room);
+                    out.push_str(text);
+                    if more || text.len() < whole.len() {
+                        out.push_str("\n--- (cut: the rest of this log is not kept) ---\n");
+                    }
+                }
+                Err(e) => {
+                    let line = format!("\n--- sanitizer log {name}: not read: {e} ---\n");
+                    if out.len() + line.len() + LOG_CUT_NOTE <= room {
+                        out.push_str(&line);
+                    } else {
+                        left_out += 1;
+                    }
+                }
+            }
+        }
+        if left_out > 0 {
+            out.push_str(&format!(
+                "\n--- {left_out} more sanitizer log(s) not kept: stderr is kept up to {STDERR_CAP} bytes ---\n"
+            ));
         }
         out
     }
+}
+
+/// The sanitizers whose logs a run's folder gets: the variable of their options, and the name
+/// their logs take there (`asan.PID`).
+const SANITIZERS: [(&str, &str); 2] = [("ASAN_OPTIONS", "asan"), ("UBSAN_OPTIONS", "ubsan")];
+
+/// Most sanitizer logs of one run that are read (a host has one or a few processes; a folder
+/// of thousands is a host at play).
+const MAX_LOGS: usize = 256;
+
+/// Room kept for the note that a log was cut and for the line that logs were left out (each
+/// under 100 bytes).
+const LOG_CUT_NOTE: usize = 192;
+
+/// The longest beginning of `text` of at most `limit` bytes that ends on a character.
+fn cut_at_char(text: &str, limit: usize) -> &str {
+    if text.len() <= limit {
+        return text;
+    }
+    let mut end = limit;
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    &text[..end]
+}
+
+/// `head` (the host's stderr as kept) followed by `tail` (what is read after it: its sanitizer
+/// logs, a second run's report), in at most [`STDERR_CAP`] bytes: each may have half, and what
+/// one leaves unused the other may take.
+fn join_capped(head: &str, tail: &str) -> String {
+    let tail = cut_at_char(tail, STDERR_CAP - head.len().min(STDERR_CAP / 2));
+    let head = cut_at_char(head, STDERR_CAP - tail.len());
+    let mut s = String::with_capacity(head.len() + tail.len());
+    s.push_str(head);
+    s.push_str(tail);
+    s
+}
+
+/// The room [`join_capped`] leaves for a tail after `head`.
+fn tail_room(head: &str) -> usize {
+    STDERR_CAP - head.len().min(STDERR_CAP / 2)
 }
 
 impl Drop for RunDir {
@@ -814,7 +908,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
                 _ => super::detect::asan_without_frames(rep).is_none(),
             };
             if let Some(report) = report.filter(trusted) {
-                r.stderr.push_str(&format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
+                r.stderr = join_capped(&r.stderr, &format!("\n{}\n{report}", super::detect::ASAN_SECOND_RUN));
                 break;
             }
         }
@@ -825,7 +919,7 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
         && super::detect::uncaught_exception(&r.stderr)
         && let Some(stack) = abort_stack(spec, schedule, cancel)
     {
-        r.stderr.push_str(&format!("\n{}\n{stack}", super::detect::ABORT_STACK));
+        r.stderr = join_capped(&r.stderr, &format!("\n{}\n{stack}", super::detect::ABORT_STACK));
     }
     Ok(r)
 }
@@ -843,10 +937,12 @@ fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Opti
     for _ in 0..SECOND_RUNS {
         let _ = std::fs::remove_file(&log);
         run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
-        if let Ok(text) = std::fs::read_to_string(&log)
+        // gdb's log is in a folder of this run's own, but read as the host's logs are.
+        if let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64)
+            && let text = String::from_utf8_lossy(&text)
             && text.contains("SIGABRT")
         {
-            return Some(text);
+            return Some(text.into_owned());
         }
     }
     None
@@ -1017,8 +1113,8 @@ fn spawn_host(
         .env("PYTHONFAULTHANDLER", "1")
         .env("GCL_OBSERVE_FD", "1")
         .env(RUN_MARK, run_dir.mark())
-        .env("ASAN_OPTIONS", sanitizer_options("ASAN_OPTIONS", &run_dir.0, "asan", asan_forced))
-        .env("UBSAN_OPTIONS", sanitizer_options("UBSAN_OPTIONS", &run_dir.0, "ubsan", &[]))
+        .env(SANITIZERS[0].0, sanitizer_options(SANITIZERS[0].0, &run_dir.0, SANITIZERS[0].1, asan_forced))
+        .env(SANITIZERS[1].0, sanitizer_options(SANITIZERS[1].0, &run_dir.0, SANITIZERS[1].1, &[]))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -1312,9 +1408,9 @@ fn collect_stderr(out: HostOutput, run_dir: &RunDir) -> String {
     while !out.out_done.load(Ordering::Relaxed) && Instant::now() < grace {
         std::thread::sleep(Duration::from_millis(5));
     }
-    let mut stderr = out.errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
-    stderr.push_str(&run_dir.sanitizer_logs());
-    stderr
+    let stderr = out.errbuf.lock().map(|b| String::from_utf8_lossy(&b.kept).into_owned()).unwrap_or_default();
+    let logs = run_dir.sanitizer_logs(tail_room(&stderr));
+    join_capped(&stderr, &logs)
 }
 
 /// Takes the hand's log after the run and how the host ended: closes the checker's judgement
@@ -1609,6 +1705,58 @@ impl LineSplitter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What follows the host's stderr (its sanitizer logs, a second run's report) is kept
+    /// with it within [`STDERR_CAP`] bytes all told, counted as kept (stderr that is not UTF-8
+    /// grows when read): each may have half, and what one leaves the other may take.
+    #[test]
+    fn stderr_and_what_follows_it_are_kept_within_the_cap() {
+        let tail = "\n--- sanitizer log asan.1 ---\n==1==ERROR: AddressSanitizer: x\n";
+        let head = String::from_utf8_lossy(&[0xFF; STDERR_CAP]).into_owned();
+        assert!(head.len() > STDERR_CAP);
+        let s = join_capped(&head, tail);
+        assert!(s.len() <= STDERR_CAP && s.ends_with(tail), "{}", s.len());
+        let s = join_capped("short\n", &"A".repeat(2 * STDERR_CAP));
+        assert!(s.len() == STDERR_CAP && s.starts_with("short\nAAA"), "{}", s.len());
+        let s = join_capped(&"h".repeat(STDERR_CAP), &"t".repeat(STDERR_CAP));
+        assert_eq!((s.matches('h').count(), s.matches('t').count()), (STDERR_CAP / 2, STDERR_CAP / 2));
+        assert_eq!(join_capped("a", "b"), "ab");
+    }
+
+    /// A run's folder is the host's: only its sanitizer logs are read, a FIFO and a link
+    /// are named and never opened or followed, and what is read (a log that grows when read as
+    /// text included) keeps within its room, saying what it cut and what it left out.
+    #[test]
+    fn a_run_folders_logs_are_read_as_the_hosts_data_within_their_room() {
+        let dir = RunDir::new().unwrap();
+        let p = |n: &str| dir.0.join(n);
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::write(outside.path().join("secret"), "SECRET OUTSIDE").unwrap();
+        std::fs::write(p("asan.1"), "==1==ERROR: AddressSanitizer: heap-buffer-overflow\n").unwrap();
+        nix::unistd::mkfifo(&p("asan.2"), nix::sys::stat::Mode::from_bits_truncate(0o600)).unwrap();
+        std::os::unix::fs::symlink(outside.path().join("secret"), p("asan.3")).unwrap();
+        std::fs::write(p("notes.txt"), "not a log").unwrap();
+        std::fs::write(p("ubsan.4"), [0xFF; 100_000]).unwrap();
+        for i in 0..20 {
+            std::fs::write(p(&format!("asan.x{i:02}")), vec![b'A'; 256 * 1024]).unwrap();
+        }
+        let room = tail_room("");
+        let logs = dir.sanitizer_logs(room);
+        assert!(logs.len() <= room, "{}", logs.len());
+        assert!(logs.contains("--- sanitizer log asan.1 ---\n==1==ERROR: AddressSanitizer"), "{logs:.300}");
+        assert!(logs.contains("asan.2: not read: not a regular file (a named pipe)"), "{logs:.600}");
+        assert!(logs.contains("asan.3: not read: a symbolic link, not followed"), "{logs:.600}");
+        assert!(!logs.contains("SECRET") && !logs.contains("not a log"));
+        assert!(logs.contains("(cut: the rest of this log is not kept)"));
+        assert!(logs.contains("more sanitizer log(s) not kept"), "{}", &logs[logs.len() - 300..]);
+        // A log too long for a small room is cut there; a file of \xFF grows threefold as
+        // text and is cut as text.
+        std::fs::remove_dir_all(&dir.0).unwrap();
+        std::fs::create_dir(&dir.0).unwrap();
+        std::fs::write(p("ubsan.4"), [0xFF; 3000]).unwrap();
+        let logs = dir.sanitizer_logs(4000);
+        assert!(logs.len() <= 4000 && logs.contains("(cut: the rest of this log is not kept)"), "{}", logs.len());
+    }
 
     #[test]
     fn an_observation_may_say_where_in_the_host_it_was_made() {
