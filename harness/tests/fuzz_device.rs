@@ -856,3 +856,29 @@ fn a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_findi
     assert_eq!(r.findings.len(), 1);
     assert!(r.not_reproduced.is_empty(), "{:?}", r.not_reproduced);
 }
+
+/// Issue 37: a failure that rests on a state an earlier case left (a hand whose FDEF skips MCV
+/// shows it only after a case that set MCV; alone, on a fresh hand, the failing case passes) is
+/// not lost to the confirmation on fresh connections: an earlier case, the preamble and the
+/// failing case are confirmed as one, and that transcript fails on a fresh faulty hand and
+/// passes on a correct one.
+#[test]
+fn a_failure_resting_on_an_earlier_cases_state_is_reported_with_that_case() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let dir = tempfile::tempdir().unwrap();
+    let faulty: Target = format!("exec:{gcl} sim --stdio --fault fdef-skips-mcv").parse().unwrap();
+    let mut o = FuzzOptions::new(faulty, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.minimize = false;
+    o.allowed.abort_timing = false;
+    o.out = Some(dir.path().to_path_buf());
+    let s = run(&o, &|_| {}).unwrap();
+    let f = s.findings.first().unwrap_or_else(|| panic!("found: notes {:?}", s.not_reproduced));
+    assert!(f.transcript.header.title.contains("an earlier case"), "{}", f.transcript.header.title);
+    let path = f.path.as_ref().unwrap().to_str().unwrap().to_string();
+    let replay =
+        |target: String| Command::new(gcl).args(["replay", &path, "--target", &target]).output().unwrap().status.code();
+    assert_eq!(replay(format!("exec:{gcl} sim --stdio --fault fdef-skips-mcv")), Some(1));
+    assert_eq!(replay(format!("exec:{gcl} sim --stdio")), Some(0));
+}

@@ -1878,6 +1878,8 @@ fn worker(
     let mut hand = Hand { opts, link: None, new: true, dirty: false };
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
+    // The cases that passed last on this link, the latest last (see [`Met::before`]).
+    let mut recent: std::collections::VecDeque<Vec<HostAction>> = std::collections::VecDeque::new();
     loop {
         if stop.load(Ordering::SeqCst) || opts.stop.load(Ordering::SeqCst) {
             return Ok(());
@@ -1956,7 +1958,8 @@ fn worker(
             let known = lock().explained.clone();
             if let Some(sig) = judged(opts, &mut hand, &pa, &pb, &out, &known)? {
                 let new = lock().saw(&sig);
-                if new && report_finding(opts, &mut hand, shared, start, &pa, &pb, sig, prun, progress)? {
+                let met = Met { actions: &pa, built: &pb, run: prun, before: &[] };
+                if new && report_finding(opts, &mut hand, shared, start, met, sig, progress)? {
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
                 }
@@ -1997,6 +2000,10 @@ fn worker(
         }
         progress(Progress::Run { runs: run_no, findings: nfind, features: nfeat, elapsed: start.elapsed() });
         let Some(sig) = sig else {
+            if recent.len() == RECENT_CASES {
+                recent.pop_front();
+            }
+            recent.push_back(actions.clone());
             prev = Some((actions, built, run_no));
             continue;
         };
@@ -2014,47 +2021,103 @@ fn worker(
             stop.store(true, Ordering::SeqCst);
             if lock().saw(&sig) {
                 let o = FuzzOptions { minimize: false, ..opts.clone() };
-                report_finding(&o, &mut hand, shared, start, &actions, &built, sig, run_no, progress)?;
+                let met = Met { actions: &actions, built: &built, run: run_no, before: &[] };
+                report_finding(&o, &mut hand, shared, start, met, sig, progress)?;
             }
             return Ok(());
         }
         let new = lock().saw(&sig);
-        if new && report_finding(opts, &mut hand, shared, start, &actions, &built, sig, run_no, progress)? {
+        let before: Vec<Vec<HostAction>> = recent.iter().cloned().collect();
+        let met = Met { actions: &actions, built: &built, run: run_no, before: &before };
+        if new && report_finding(opts, &mut hand, shared, start, met, sig, progress)? {
             stop.store(true, Ordering::SeqCst);
         }
     }
 }
 
-/// Minimizes a new finding, writes its transcript, and adds it to the run's findings; says
-/// whether the run has found as many as it was to find.
-#[allow(clippy::too_many_arguments)]
+/// A failing case as a campaign met it.
+#[derive(Clone, Copy)]
+struct Met<'a> {
+    /// Its actions.
+    actions: &'a [HostAction],
+    /// The case built from them.
+    built: &'a BuiltCase,
+    /// Its run number.
+    run: u64,
+    /// The actions of the cases that passed last before it on the same link, the latest last
+    /// (at most [`RECENT_CASES`]): a state one of them left (a parameter a broken preamble did
+    /// not reset) may be part of the failure.
+    before: &'a [Vec<HostAction>],
+}
+
+/// How many of the cases that passed last on a link a failure that does not reproduce alone is
+/// tried after (see [`report_finding`]).
+const RECENT_CASES: usize = 8;
+
+/// The preamble every case starts with (^C, RESET, FDEF, PDEF, HI when it moves), as host
+/// actions: what stood between two cases run one after the other on a link.
+fn preamble_actions(opts: &FuzzOptions) -> Vec<HostAction> {
+    let p = &opts.profile;
+    let mut v = vec![HostAction::Abort, HostAction::Line("RESET".into()), HostAction::Line("FDEF".into())];
+    if p.command_id("PDEF").is_some() {
+        v.push(HostAction::Line("PDEF".into()));
+    }
+    if opts.home() {
+        v.push(HostAction::Line("HI".into()));
+    }
+    v
+}
+
+/// Minimizes a new finding, confirms it on fresh connections, writes its transcript, and adds
+/// it to the run's findings; says whether the run has found as many as it was to find.
+///
+/// A failure whose minimized transcript does not fail again on a fresh connection may rest on
+/// a state an earlier case left on the link (a hand whose FDEF skips MCV shows it only after a
+/// case that set MCV): each case that passed last before it (the latest first), the preamble
+/// and the failing case are then tried as one case on fresh connections, and the first that
+/// fails every time is reported whole. Otherwise the failure is a [`NotReproduced`] note.
 fn report_finding(
     opts: &FuzzOptions,
     hand: &mut Hand<'_>,
     shared: &Mutex<Shared>,
     start: Instant,
-    actions: &[HostAction],
-    built: &BuiltCase,
+    met: Met<'_>,
     sig: FindingSignature,
-    run_no: u64,
     progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<bool, FuzzError> {
+    let Met { actions, built, run: run_no, before } = met;
     let found_after = start.elapsed();
     let t0 = Instant::now();
-    let (min_actions, min_case) = if opts.minimize {
+    let (mut min_actions, min_case) = if opts.minimize {
         minimize(opts, hand, actions, built, &sig, minimizing_ends(opts.budget, start))?
     } else {
         (actions.to_vec(), built.clone())
     };
     let mut final_case = build_for(opts, &min_actions, "fuzz", "a finding").unwrap_or(min_case);
-    let out = hand.run(&final_case.transcript, true)?;
+    let mut out = hand.run(&final_case.transcript, true)?;
     let mut sig = sig;
+    let mut with_before = false;
     let alive = shared.lock().unwrap_or_else(|e| e.into_inner()).dead_hand.is_none();
     // Confirmed before it is reported: the minimized transcript, replayed on a fresh
     // connection, fails with the same signature every time (a dead hand cannot be asked).
     if alive {
         let of = confirmations(&opts.target);
-        let again = reproductions(opts, hand, &min_actions, &final_case, &sig, of)?;
+        let mut again = reproductions(opts, hand, &min_actions, &final_case, &sig, of, false)?;
+        for earlier in before.iter().rev() {
+            if again == of {
+                break;
+            }
+            let mut whole = earlier.clone();
+            whole.extend(preamble_actions(opts));
+            whole.extend(actions.iter().cloned());
+            if let Ok(b) = build_for(opts, &whole, "fuzz", "a finding with a case before it")
+                && reproductions(opts, hand, &whole, &b, &sig, of, true)? == of
+            {
+                (min_actions, final_case, again) = (whole, b, of);
+                with_before = true;
+                out = hand.run(&final_case.transcript, true)?;
+            }
+        }
         if again < of {
             let nr = NotReproduced {
                 signature: sig.to_string(),
@@ -2082,7 +2145,14 @@ fn report_finding(
         }
     }
     let id = finding_id(&sig);
-    let title = format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len());
+    let title = if with_before {
+        format!(
+            "gcl fuzz device: {sig} (an earlier case, the preamble and the failing case: it fails only after the \
+             state the earlier case left)"
+        )
+    } else {
+        format!("gcl fuzz device: {sig} (minimized from {} actions)", actions.len())
+    };
     (final_case.transcript.header.id, final_case.transcript.header.title) = (id.clone(), title);
     final_case.transcript.header.extensions.push((SIGNATURE_KEY.to_string(), sig.key()));
     final_case
@@ -2170,7 +2240,8 @@ fn report_finding(
 }
 
 /// How many of `of` replays of a finding's case, each on a fresh connection, fail with its
-/// signature (its own explanation, if it has one, known: the replay must keep it).
+/// signature (its own explanation, if it has one, known: the replay must keep it); with
+/// `first_miss`, the count stops at the first replay that does not.
 fn reproductions(
     opts: &FuzzOptions,
     hand: &mut Hand<'_>,
@@ -2178,6 +2249,7 @@ fn reproductions(
     case: &BuiltCase,
     sig: &FindingSignature,
     of: u32,
+    first_miss: bool,
 ) -> Result<u32, FuzzError> {
     let known: Vec<String> = [sig.explanation.clone()].into_iter().filter(|e| !e.is_empty()).collect();
     let mut again = 0;
@@ -2186,6 +2258,8 @@ fn reproductions(
         let out = hand.run(&case.transcript, true)?;
         if judged(opts, hand, actions, case, &out, &known)?.is_some_and(|s| s.key() == sig.key()) {
             again += 1;
+        } else if first_miss {
+            break;
         }
     }
     Ok(again)
