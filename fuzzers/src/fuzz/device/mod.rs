@@ -2460,7 +2460,8 @@ mod tests {
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the fault shows");
         let shared = Mutex::new(Shared::default());
-        report_finding(&opts, &mut hand, &shared, Instant::now(), &actions, &built, sig, 1, &|_| {}).unwrap();
+        let met = Met { actions: &actions, built: &built, run: 1, before: &[] };
+        report_finding(&opts, &mut hand, &shared, Instant::now(), met, sig, &|_| {}).unwrap();
         let mut findings = shared.into_inner().unwrap().findings;
         assert_eq!(findings.len(), 1, "{findings:?}");
         (built, findings.remove(0))
