@@ -513,3 +513,68 @@ fn a_host_that_never_takes_an_answer_is_warned_about() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("warning: host timeouts not measured: the host took no answer"), "{err}");
 }
+
+/// A campaign that ends inside its systematic pass says how much of it ran, on the console,
+/// in fuzz.json and on the page, and claims "every misbehaviour at every kind of answer" only
+/// when the whole pass ran (issue 38 item 3, issue 39 item 5: `--runs 12` said `41 runs,
+/// every misbehaviour at every kind of answer` after 11).
+#[test]
+fn a_short_campaign_says_how_much_of_the_systematic_pass_it_made() {
+    if !python_ready() {
+        return;
+    }
+    let py = deps::python();
+    let host = mutants().join("gclhost.py").display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = |runs: &str, jobs: &str, name: &str| {
+        let report = dir.path().join(name);
+        let (code, _, err) = gcl(&[
+            "fuzz",
+            "host",
+            "--profile",
+            "seed",
+            "--runs",
+            runs,
+            "--jobs",
+            jobs,
+            "--timeout-hang",
+            "2500ms",
+            "--out",
+            dir.path().join(format!("{name}-out")).to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--",
+            &py,
+            &host,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let fuzz: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("fuzz.json")).unwrap()).unwrap();
+        let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+        (err, fuzz, page)
+    };
+    // Run 0 has no misbehaviour: runs 1 to 11 are the first 11 of the pass.
+    let (err, fuzz, page) = campaign("12", "1", "short");
+    let total = fuzz["pass_runs"].as_u64().unwrap();
+    assert!(total > 11, "{fuzz}");
+    let line = err.lines().find(|l| l.starts_with("systematic pass:")).unwrap_or_else(|| panic!("{err}"));
+    assert!(line.starts_with(&format!("systematic pass: 11 of {total} runs ({} not reached: ", total - 11)), "{line}");
+    assert!(line.contains("a complete pass needs about ") && line.ends_with(" at --jobs 1"), "{line}");
+    assert!(!err.contains("every misbehaviour at every kind of answer"), "{err}");
+    assert_eq!(fuzz["pass"]["made"], 11, "{fuzz}");
+    assert_eq!(fuzz["pass"]["not_reached"].as_array().unwrap().len() as u64, total - 11, "{fuzz}");
+    assert!(page.contains(&format!("11 of {total} runs ({} not reached", total - 11)), "the page says it too");
+    // At --jobs 2 the pass starts at run 2 (run 1 cannot see run 0): 2 of 4 runs are the pass's.
+    let (err, fuzz, _) = campaign("4", "2", "jobs");
+    assert_eq!(fuzz["pass"]["made"], 2, "{fuzz}");
+    assert!(err.contains(&format!("systematic pass: 2 of {total} runs")), "{err}");
+    // The whole pass: the claim, and nothing not reached.
+    let (err, fuzz, page) = campaign(&(total + 1).to_string(), "1", "whole");
+    assert!(
+        err.contains(&format!("systematic pass: {total} of {total} runs, every misbehaviour at every kind of answer")),
+        "{err}"
+    );
+    assert_eq!(fuzz["pass"]["made"], total, "{fuzz}");
+    assert!(fuzz["pass"].get("not_reached").is_none(), "{fuzz}");
+    assert!(page.contains("every misbehaviour at every kind of answer"));
+}

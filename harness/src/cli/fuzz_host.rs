@@ -377,13 +377,8 @@ fn print_campaign_summary(campaign: &Campaign) {
         campaign.paths,
         campaign.corpus
     );
-    if campaign.pass_runs > 0 {
-        let kinds: Vec<&str> = campaign.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
-        eprintln!(
-            "systematic pass: {} runs, every misbehaviour at every kind of answer ({})",
-            campaign.pass_runs,
-            printable(&kinds.join("; "))
-        );
+    if let Some(line) = campaign.pass_line() {
+        eprintln!("{}", printable(&line));
     }
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
@@ -732,6 +727,7 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
                 )
             }))
             .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
+            .chain(c.pass_line().map(|l| ("systematic pass".into(), l.replacen("systematic pass: ", "", 1))))
             .chain(timeout_facts(opts, c))
             .collect(),
         merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),

@@ -700,6 +700,10 @@ pub struct Campaign {
     /// Runs of the systematic pass (made or not: a short campaign may end inside it).
     #[serde(default)]
     pub pass_runs: u64,
+    /// How much of the systematic pass this campaign made, and what it did not reach
+    /// ([`Campaign::pass_line`] says it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pass: Option<PassAccount>,
     /// What makes it (a shard of) a campaign: its `--shard`, seed and options, and for a
     /// merged folder the shards it holds. Set by the CLI, which knows the options as given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -716,6 +720,189 @@ pub struct Campaign {
     /// the caller that heard it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+}
+
+/// A run of the systematic pass that a campaign was to make and did not (its runs or its
+/// time ran out first, or a signal stopped it).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PassLeft {
+    /// The misbehaviour.
+    pub op: Operator,
+    /// The answer it was planned at: the first of its kind.
+    pub answer: u32,
+    /// That kind of answer (`banner, prompt`).
+    pub kind: String,
+}
+
+/// How much of its systematic pass a campaign made: the runs made, those not reached, and
+/// about how long a campaign with the same `--jobs` needs to make them all.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PassAccount {
+    /// Runs of the pass made (each ran to its end, whatever it found).
+    pub made: u64,
+    /// The runs of the pass this campaign was to make and did not, in the pass's order (a
+    /// shard's: those of its own run indices).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_reached: Vec<PassLeft>,
+    /// About how long, milliseconds, a campaign with the same `--jobs` takes from its start to
+    /// the end of the whole pass (calibration, the runs before the pass, the pass), estimated
+    /// from the runs made (by misbehaviour) and calibration's waits; absent when the pass was
+    /// complete or nothing was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub complete_ms: Option<u64>,
+    /// The campaign's `--jobs`, which the estimate is for.
+    pub jobs: u64,
+}
+
+impl PassAccount {
+    /// Every run of the pass this campaign was to make was made.
+    pub fn complete(&self) -> bool {
+        self.not_reached.is_empty()
+    }
+}
+
+/// A duration for people, rounded: `40 s` below two minutes, else whole minutes, up.
+pub fn about(ms: u64) -> String {
+    if ms < 120_000 { format!("{} s", ms.div_ceil(1000).max(1)) } else { format!("{} min", ms.div_ceil(60_000)) }
+}
+
+impl Campaign {
+    /// What the summary says of the systematic pass: how many of its runs were made, and,
+    /// only when all were, that every misbehaviour met every kind of answer; else what was not
+    /// reached and about how long a complete pass needs. `None` without a pass (the campaign
+    /// ended before run 0 was taken in, or no misbehaviour applies).
+    pub fn pass_line(&self) -> Option<String> {
+        if self.pass_runs == 0 {
+            return None;
+        }
+        let kinds: Vec<&str> = self.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
+        let kinds = kinds.join("; ");
+        let Some(p) = &self.pass else {
+            return Some(format!(
+                "systematic pass: {} runs planned (how many were made is not recorded) ({kinds})",
+                self.pass_runs
+            ));
+        };
+        let owned = p.made + p.not_reached.len() as u64;
+        // A shard's share, or a merge of some shards: the other runs are other shards'.
+        let others = self.pass_runs.saturating_sub(owned);
+        let elsewhere = if others > 0 { format!(", {others} left to other shards") } else { String::new() };
+        if p.complete() && others == 0 {
+            return Some(format!(
+                "systematic pass: {} of {} runs, every misbehaviour at every kind of answer ({kinds})",
+                p.made, self.pass_runs
+            ));
+        }
+        if p.complete() {
+            return Some(format!(
+                "systematic pass: {} of {} runs ({} made here, all of this campaign's share{elsewhere}) ({kinds})",
+                p.made, self.pass_runs, p.made
+            ));
+        }
+        // Not reached, by misbehaviour in the pass's order: `silence x4, hang-up x3`.
+        let mut by_op: Vec<(Operator, usize)> = Vec::new();
+        for l in &p.not_reached {
+            match by_op.iter_mut().find(|(op, _)| *op == l.op) {
+                Some((_, n)) => *n += 1,
+                None => by_op.push((l.op, 1)),
+            }
+        }
+        let left: Vec<String> = by_op.iter().map(|(op, n)| format!("{op} x{n}")).collect();
+        let needs = match p.complete_ms {
+            Some(ms) => format!("; a complete pass needs about {} at --jobs {}", about(ms), p.jobs),
+            None => String::new(),
+        };
+        Some(format!(
+            "systematic pass: {} of {} runs ({} not reached: {}{elsewhere}){needs}",
+            p.made,
+            self.pass_runs,
+            p.not_reached.len(),
+            left.join(", ")
+        ))
+    }
+}
+
+/// What a campaign's runs took, for the account of its systematic pass ([`pass_account`]).
+#[derive(Debug, Default)]
+struct RunTimes {
+    /// Runs made.
+    runs: u64,
+    /// Their wall time together, milliseconds.
+    total_ms: u64,
+    /// Each entry of the pass made, with its run's wall time, milliseconds.
+    pass: BTreeMap<usize, u64>,
+}
+
+impl RunTimes {
+    /// A run ended (entry `entry` of the pass, if it is one) after `elapsed`.
+    fn ran(&mut self, entry: Option<usize>, elapsed: Duration) {
+        let ms = elapsed.as_millis() as u64;
+        self.runs += 1;
+        self.total_ms += ms;
+        if let Some(k) = entry {
+            self.pass.insert(k, ms);
+        }
+    }
+}
+
+/// How much of `pass` a campaign with `opts` made, given what its runs took; `None` without
+/// a pass. A shard was to make the entries whose runs are its own; the estimate of a complete
+/// pass takes each run made as it was, and each not made as the runs made with the same
+/// misbehaviour took on average (a silence: a run's average plus the host's wait calibration
+/// measured at that kind), else as all runs made took on average.
+fn pass_account(
+    pass: &[PassEntry],
+    kinds: &[AnswerKindSeen],
+    times: &RunTimes,
+    opts: &FuzzOptions,
+    calibration: Option<&Calibration>,
+) -> Option<PassAccount> {
+    if pass.is_empty() {
+        return None;
+    }
+    let jobs = opts.jobs.max(1) as u64;
+    // Pass entry k is run k + 1 of a shard (which makes run 0 before it if it is its own),
+    // run k + jobs of a guided campaign (runs 0..jobs before it).
+    let before = opts.shard.map_or(jobs, |s| u64::from(s.owns(0)));
+    let owned = |k: usize| opts.shard.is_none_or(|s| s.owns(k as u64 + 1));
+    let kind_of = |answer: u32| kinds.iter().find(|k| k.answer == answer).map_or_else(String::new, |k| k.kind.clone());
+    let not_reached: Vec<PassLeft> = pass
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| owned(*k) && !times.pass.contains_key(k))
+        .map(|(_, e)| PassLeft { op: e.op, answer: e.answer, kind: kind_of(e.answer) })
+        .collect();
+    let made = times.pass.len() as u64;
+    let mean = (times.runs > 0).then(|| times.total_ms / times.runs);
+    let complete_ms = match mean {
+        Some(mean) if !not_reached.is_empty() => {
+            let mut by_op: BTreeMap<Operator, (u64, u64)> = BTreeMap::new();
+            for (k, ms) in &times.pass {
+                let e = by_op.entry(pass[*k].op).or_default();
+                *e = (e.0 + 1, e.1 + ms);
+            }
+            let waited = |answer: u32| {
+                calibration
+                    .and_then(|c| c.by_kind.iter().find(|w| w.answer == answer))
+                    .map(|w| w.gave_up_ms.unwrap_or(w.waited_past_ms))
+            };
+            let cost = |e: &PassEntry| match (by_op.get(&e.op), e.op) {
+                (Some((n, total)), _) => total / n,
+                (None, Operator::Silence) => mean + waited(e.answer).unwrap_or(0),
+                (None, _) => mean,
+            };
+            let work: u64 = before * mean
+                + pass
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| owned(*k))
+                    .map(|(k, e)| times.pass.get(&k).copied().unwrap_or_else(|| cost(e)))
+                    .sum::<u64>();
+            Some(calibration.map_or(0, |c| c.elapsed_ms) + work.div_ceil(jobs))
+        }
+        _ => None,
+    };
+    Some(PassAccount { made, not_reached, complete_ms, jobs })
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -745,6 +932,8 @@ struct Shared {
     /// Suspected hangs by signature and protocol state: being confirmed, or what their
     /// confirmation said.
     suspects: BTreeMap<(String, String), Suspect>,
+    /// What the runs took, and which entries of the pass were made.
+    timing: RunTimes,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1245,6 +1434,7 @@ impl<'a> Workers<'a> {
                 taken: 0,
                 ended: BTreeMap::new(),
                 suspects: BTreeMap::new(),
+                timing: RunTimes::default(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
@@ -1422,8 +1612,8 @@ impl<'a> Workers<'a> {
                 break;
             }
             let i = self.opts.run_index(t);
-            let schedule = if i == 0 {
-                Schedule::default()
+            let (schedule, entry) = if i == 0 {
+                (Schedule::default(), None)
             } else if self.opts.shard.is_some() {
                 let Some(s) = self.unguided_schedule(t, i) else { return };
                 s
@@ -1431,32 +1621,35 @@ impl<'a> Workers<'a> {
                 let Some(s) = self.guided_schedule(t, i) else { return };
                 s
             };
-            if !self.run_and_take(t, i, schedule) {
+            if !self.run_and_take(t, i, schedule, entry) {
                 break;
             }
         }
     }
 
-    /// The schedule of run `i` (turn `t`) of a shard: unguided, only run 0's answer count is
-    /// needed (waited for); `None` when the campaign ends first.
-    fn unguided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+    /// The schedule of run `i` (turn `t`) of a shard, with the entry of the systematic pass it
+    /// is (if any): unguided, only run 0's answer count is needed (waited for); `None` when the
+    /// campaign ends first.
+    fn unguided_schedule(&self, t: u64, i: u64) -> Option<(Schedule, Option<usize>)> {
         let opts = self.opts;
         let mut sh = self.shared.lock().ok()?;
         while sh.answers.is_none() && !self.done(t) {
             sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
         }
         let answers = sh.answers?;
-        let pass = sh.pass.get(i as usize - 1).copied();
+        let k = i as usize - 1;
+        let pass = sh.pass.get(k).copied();
         drop(sh);
         Some(match pass {
-            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-            None => fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers),
+            Some(e) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            None => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
         })
     }
 
-    /// The schedule of run `i` (turn `t`): guidance sees runs 0..visible, whatever else has
-    /// ended by now (waited for); `None` when the campaign ends first.
-    fn guided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+    /// The schedule of run `i` (turn `t`), with the entry of the systematic pass it is (if
+    /// any): guidance sees runs 0..visible, whatever else has ended by now (waited for); `None`
+    /// when the campaign ends first.
+    fn guided_schedule(&self, t: u64, i: u64) -> Option<(Schedule, Option<usize>)> {
         let (opts, jobs) = (self.opts, self.jobs);
         let visible = (t + 1).saturating_sub(jobs);
         let mut sh = self.shared.lock().ok()?;
@@ -1470,17 +1663,19 @@ impl<'a> Workers<'a> {
         let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
         let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
         // The pass starts with the first run that sees run 0.
-        let pass = i.checked_sub(jobs).and_then(|k| sh.pass.get(k as usize)).copied();
+        let k = i.checked_sub(jobs).map(|k| k as usize);
+        let pass = k.and_then(|k| sh.pass.get(k)).copied();
         drop(sh);
-        Some(match pass {
-            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-            None => next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers),
+        Some(match (pass, k) {
+            (Some(e), Some(k)) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            _ => (next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None),
         })
     }
 
-    /// Runs `schedule` as run `i` (turn `t`), counts it and takes it in (in turn order),
-    /// announcing what it brought; `false` when the worker is to end.
-    fn run_and_take(&self, t: u64, i: u64, schedule: Schedule) -> bool {
+    /// Runs `schedule` as run `i` (turn `t`; entry `entry` of the systematic pass, if it is
+    /// one), counts it and takes it in (in turn order), announcing what it brought; `false`
+    /// when the worker is to end.
+    fn run_and_take(&self, t: u64, i: u64, schedule: Schedule, entry: Option<usize>) -> bool {
         let opts = self.opts;
         let r = match run_once_until(&opts.run, &schedule, self.stop) {
             Ok(r) => r,
@@ -1494,6 +1689,9 @@ impl<'a> Workers<'a> {
             }
         };
         self.completed.fetch_add(1, Ordering::Relaxed);
+        if let Ok(mut sh) = self.shared.lock() {
+            sh.timing.ran(entry, r.elapsed);
+        }
         (self.on_event)(Event::Run { index: i, elapsed: r.elapsed });
         let missed = unreached(&r, &opts.run.command);
         if missed.is_none() {
@@ -1575,6 +1773,7 @@ impl<'a> Workers<'a> {
             return Err(RunError::Io(std::io::Error::other(e)));
         }
         let runs = self.completed.load(Ordering::Relaxed);
+        let pass = pass_account(&sh.pass, &sh.answer_kinds, &sh.timing, self.opts, calibration.as_ref());
         // No run at all, and nobody stopped it: the budget went before the first run.
         let untested = sh.untested.or_else(|| {
             (runs == 0 && !self.stop.load(Ordering::Relaxed)).then(|| {
@@ -1597,6 +1796,7 @@ impl<'a> Workers<'a> {
             calibration,
             notes: sh.notes,
             pass_runs: sh.pass.len() as u64,
+            pass,
             answer_kinds: sh.answer_kinds,
             provenance: None,
             reached: self.reached.load(Ordering::Relaxed),
@@ -1662,6 +1862,49 @@ mod tests {
         assert_eq!(ops, [LineRate, Truncate, RtErr].into_iter().collect());
         assert!(systematic_pass(&kinds, &Weights::default(), false).iter().all(|e| e.op != LineRate));
         assert!(systematic_pass(&[], &Weights::parse("truncate").unwrap(), true).is_empty());
+    }
+
+    /// A shard accounts for the runs of the pass that are its own: those it made, and those
+    /// of its run indices it did not reach; the pass's claim is made only when all ran.
+    #[test]
+    fn the_pass_is_accounted_for_by_what_ran_and_a_shard_by_its_own_runs() {
+        use Operator::*;
+        let kinds = vec![kind("prompt", 1, &[Truncate, Garbage, Silence]), kind("echo, prompt", 2, &[Truncate])];
+        let pass = systematic_pass(&kinds, &Weights::default(), false);
+        assert_eq!(pass.len(), 4);
+        let mut opts = a_campaign();
+        let mut times = RunTimes::default();
+        times.ran(None, Duration::from_millis(100));
+        times.ran(Some(0), Duration::from_millis(100));
+        let cal = Calibration {
+            by_kind: vec![KindWait { answer: 1, gave_up_ms: Some(5_000), ..Default::default() }],
+            elapsed_ms: 1_000,
+            ..Default::default()
+        };
+        let a = pass_account(&pass, &kinds, &times, &opts, Some(&cal)).unwrap();
+        assert_eq!((a.made, a.not_reached.len(), a.jobs), (1, 3, 1));
+        // Calibration, run 0, the run made, two runs of 100 ms and a silence waited out.
+        assert_eq!(a.complete_ms, Some(1_000 + 100 + 100 + 200 + 5_100));
+        let c = Campaign { pass_runs: 4, pass: Some(a), answer_kinds: kinds.clone(), ..Default::default() };
+        let line = c.pass_line().unwrap();
+        assert!(line.starts_with("systematic pass: 1 of 4 runs (3 not reached: "), "{line}");
+        assert!(line.ends_with("; a complete pass needs about 7 s at --jobs 1"), "{line}");
+        assert!(!line.contains("every misbehaviour"), "{line}");
+        // Shard 1/2 owns runs 0, 2, 4: entries 1 and 3.
+        opts.shard = Some(crate::fuzz::shard::Shard { index: 1, count: 2 });
+        let mut times = RunTimes::default();
+        times.ran(Some(1), Duration::from_millis(100));
+        times.ran(Some(3), Duration::from_millis(100));
+        let a = pass_account(&pass, &kinds, &times, &opts, None).unwrap();
+        assert_eq!((a.made, a.not_reached.len(), a.complete_ms), (2, 0, None));
+        let c = Campaign { pass_runs: 4, pass: Some(a), answer_kinds: kinds.clone(), ..Default::default() };
+        let line = c.pass_line().unwrap();
+        assert!(line.contains("2 of 4 runs") && line.contains("2 left to other shards"), "{line}");
+        assert!(!line.contains("every misbehaviour"), "{line}");
+        // The whole pass made: the claim.
+        let whole = PassAccount { made: 4, jobs: 1, ..Default::default() };
+        let c = Campaign { pass_runs: 4, pass: Some(whole), answer_kinds: kinds, ..Default::default() };
+        assert!(c.pass_line().unwrap().contains("4 of 4 runs, every misbehaviour at every kind of answer"));
     }
 
     /// A run that ended so, with nothing else to judge.
@@ -1748,9 +1991,9 @@ mod tests {
     /// calibration inside it and a run budget's overrun, ends within 10 minutes whatever the
     /// host's speed (1000 runs of a host that takes 9 s a run took 2 h 30 min); --runs alone
     /// has no time budget.
-    #[test]
-    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
-        let mut o = FuzzOptions {
+    /// A one-job campaign's options (default ops, no budget given).
+    fn a_campaign() -> FuzzOptions {
+        FuzzOptions {
             run: HostRun {
                 command: vec!["true".into()],
                 transport: Transport::Pty,
@@ -1772,7 +2015,12 @@ mod tests {
             guided: true,
             calibrate: true,
             shard: None,
-        };
+        }
+    }
+
+    #[test]
+    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
+        let mut o = a_campaign();
         let d = o.campaign_duration().expect("a time budget");
         assert!(d + o.run.budget * 2 <= Duration::from_secs(600), "{d:?}");
         o.runs = Some(1000);
