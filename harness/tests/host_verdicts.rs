@@ -971,3 +971,28 @@ fn check_host_counts_its_failing_clauses_and_names_the_line_an_lf_followed() {
     assert!(stdout.contains("1 failing"), "{stdout}");
     assert!(stdout.contains("LF after \"") && !stdout.contains("LF after \"\""), "{stdout}");
 }
+
+/// A host that reads each answer up to `=>` and discards the prompt's space with
+/// `tcflush(TCIFLUSH)` before it writes its next command has read that answer: on a paced line
+/// the space comes after its last read, and the flush (which the pty's master sees in packet
+/// mode) consumes it. It was `waits-for-answer: sent before the prompt` (issue 38 item 4). A
+/// campaign whose line-rate run meets the same timing has no finding either.
+#[test]
+fn a_flush_of_the_input_is_a_read_of_the_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("c_flush_after_prompt", dir.path()) else { return };
+    for (pace, time) in [
+        (Pace::Fixed(9600), TimeMode::Fast),
+        (Pace::Fixed(1200), TimeMode::Fast),
+        (Pace::Fixed(9600), TimeMode::Real),
+        (Pace::Unpaced, TimeMode::Fast),
+    ] {
+        let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+        r.pace = pace;
+        r.time = time;
+        assert_eq!(failing(&r), Vec::<String>::new(), "{pace} {}", time.name());
+    }
+    let c = campaign(run(vec![exe.display().to_string(), "{port}".into()]), "line-rate,truncate,crlf", 6, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert!(found.is_empty(), "{found:?}");
+}
