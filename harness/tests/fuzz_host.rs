@@ -70,6 +70,7 @@ fn host_run(command: Vec<String>) -> HostRun {
         timeout_hang: Duration::from_millis(2500),
         // Also how long a hang's confirmation waits.
         budget: Duration::from_secs(12),
+        link: None,
     }
 }
 

@@ -77,6 +77,7 @@ fn run(command: Vec<String>) -> HostRun {
         hand_seed: 0,
         timeout_hang: Duration::from_secs(20),
         budget: Duration::from_secs(60),
+        link: None,
     }
 }
 
@@ -995,4 +996,69 @@ fn a_flush_of_the_input_is_a_read_of_the_answer() {
     let c = campaign(run(vec![exe.display().to_string(), "{port}".into()]), "line-rate,truncate,crlf", 6, false);
     let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
     assert!(found.is_empty(), "{found:?}");
+}
+
+/// The largest count of hosts alive at once that `c_fixed_path` noted in `dir`.
+fn most_alive(dir: &Path) -> u32 {
+    let log = std::fs::read_to_string(dir.join("alive.log")).unwrap_or_default();
+    log.lines().filter_map(|l| l.trim().parse().ok()).max().unwrap_or(0)
+}
+
+/// `--jobs N` is at most N hosts alive at once, calibration (which silenced the hand at every
+/// kind of answer up to 8 at once) included; with a link per slot (`--link DIR/ttyUSB{slot}`),
+/// a host that opens only a fixed device path gets its own, and never shares a port: no void
+/// run, no finding, and no link left after (issue 38 item 1).
+#[test]
+fn a_fixed_path_host_never_shares_a_port_and_jobs_bounds_the_hosts_alive() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("c_fixed_path", dir.path()) else { return };
+    for jobs in [1, 4] {
+        let devs = dir.path().join(format!("dev{jobs}"));
+        let alive = dir.path().join(format!("alive{jobs}"));
+        std::fs::create_dir_all(&devs).unwrap();
+        std::fs::create_dir_all(&alive).unwrap();
+        let command = vec![exe.display().to_string(), "{port}".into(), "1".into(), alive.display().to_string()];
+        let mut r = run(command);
+        r.timeout_hang = Duration::from_secs(3);
+        r.link = Some(devs.join("ttyUSB{slot}"));
+        let opts = FuzzOptions {
+            run: r,
+            seed: 5,
+            runs: Some(12),
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs,
+            weights: Weights::default(),
+            max_planned: 3,
+            minimize: true,
+            guided: true,
+            calibrate: true,
+            shard: None,
+        };
+        let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+        let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+        assert!(found.is_empty(), "--jobs {jobs}: {found:?}");
+        assert_eq!((c.runs, c.void_runs), (12, 0), "--jobs {jobs}: {:?}", c.void);
+        let most = most_alive(&alive);
+        assert!((1..=jobs as u32).contains(&most), "--jobs {jobs}: {most} hosts alive at once");
+        assert_eq!(std::fs::read_dir(&devs).unwrap().count(), 0, "every link removed");
+    }
+}
+
+/// A run whose port a process of another run opens (another `GCL_HOST_RUN`) is void: no
+/// verdict of it, an error the campaign makes the run again for.
+#[test]
+fn a_run_whose_port_another_runs_process_opens_is_void() {
+    let intruder = "GCL_HOST_RUN=another sh -c 'exec 3<>\"$GCL_PORT\"; sleep 1' & \
+                    exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 2";
+    let r = run(vec!["sh".into(), "-c".into(), intruder.into()]);
+    match run_once(&r, &Schedule::default()) {
+        Err(gcl_harness::fuzz::host::RunError::Shared(why)) => {
+            assert!(why.contains("of another run opened this run's port"), "{why}")
+        }
+        other => panic!("not void: {other:?}"),
+    }
+    // Its own children carry its mark: no intruder.
+    let own = "sh -c 'exec 3<>\"$GCL_PORT\"; sleep 1' & exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 2";
+    assert!(run_once(&run(vec!["sh".into(), "-c".into(), own.into()]), &Schedule::default()).is_ok());
 }

@@ -294,6 +294,8 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
             merged.answer_kinds = c.answer_kinds;
             merged.pass_runs = c.pass_runs;
         }
+        merged.void_runs = add(&path, "void_runs", merged.void_runs, c.void_runs)?;
+        merged.void.extend(c.void.into_iter().take(8usize.saturating_sub(merged.void.len())));
         // Each shard made and missed runs of its own indices: the campaign's are their sums.
         if let Some(p) = c.pass {
             let m = merged.pass.get_or_insert_with(|| PassAccount { jobs: p.jobs, ..PassAccount::default() });

@@ -82,6 +82,7 @@ impl HostArgs {
             hand_seed,
             timeout_hang: self.timeout_hang.unwrap_or(default_hang),
             budget: self.run_budget,
+            link: None,
         })
     }
 
@@ -201,14 +202,21 @@ pub struct Args {
     /// Run a bundle's schedule once and say whether its finding comes back.
     #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
     replay: Option<PathBuf>,
-    /// N hands and N hosts at once, each pair on its own line (calibration runs up to 8 at
-    /// once, or N when more). The schedules are the same for
+    /// At most N hosts alive at once, each with its own hand on its own line: the runs,
+    /// calibration, minimization and hangs' confirmations all take one of N slots. The
+    /// schedules are the same for
     /// the same --seed and --jobs: run i's guidance sees runs 0..=i-N in order (a worker waits
     /// for a slow one), so with a host that answers the same bytes the same way, the findings,
     /// their first run and minimized schedules come back run for run. Wall times do not, nor
     /// how many runs a --duration makes.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=64))]
     jobs: u64,
+    /// Give each slot's host a symbolic link to its pty as {port}, made at PATTERN with {slot}
+    /// (1 to --jobs) replaced, before its run and removed after it: for a host that opens only a
+    /// fixed device path (--link '/dev/ttyUSB{slot}'). A link never serves two live hosts; a run
+    /// whose port a process of another run opened is void, made again, never a finding.
+    #[arg(long, value_name = "PATTERN")]
+    link: Option<String>,
     /// Only these misbehaviours, optionally weighted: delay-above,truncate=5.
     #[arg(long, value_name = "LIST", value_parser = Weights::parse)]
     ops: Option<Weights>,
@@ -230,7 +238,8 @@ pub struct Args {
 
 /// Runs `gcl fuzz host`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
+    let mut run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
+    run.link = link_pattern(&args, &run)?;
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -247,6 +256,28 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         return Err(e.into());
     }
     Ok(host_exit(&opts, &campaign))
+}
+
+/// `--link PATTERN` as the runs' link: over a pty only; without `{slot}` only at `--jobs 1`
+/// (two slots would share one link); its folder must exist. A replay, one run, takes slot 1.
+fn link_pattern(args: &Args, run: &HostRun) -> anyhow::Result<Option<PathBuf>> {
+    let Some(p) = &args.link else { return Ok(None) };
+    if run.transport != Transport::Pty {
+        anyhow::bail!("--link makes a link to a pty: it cannot go with --tcp");
+    }
+    if !p.contains("{slot}") && args.jobs > 1 {
+        anyhow::bail!(
+            "--link {p}: without {{slot}} the {} slots of --jobs {} would share one link; put {{slot}} in it (/dev/ttyUSB{{slot}})",
+            args.jobs,
+            args.jobs
+        );
+    }
+    let first = PathBuf::from(p.replace("{slot}", "1"));
+    let dir = first.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    if !dir.is_dir() {
+        anyhow::bail!("--link {p}: no folder {} to make the link in", dir.display());
+    }
+    Ok(Some(PathBuf::from(p)))
 }
 
 /// The campaign's options from the arguments, around the host's run.
@@ -379,6 +410,14 @@ fn print_campaign_summary(campaign: &Campaign) {
     );
     if let Some(line) = campaign.pass_line() {
         eprintln!("{}", printable(&line));
+    }
+    if campaign.void_runs > 0 {
+        eprintln!(
+            "warning: {} run(s) void, made again and never judged: processes of two runs held one port ({}); \
+             a host that opens a fixed device path needs --link with {{slot}}",
+            campaign.void_runs,
+            printable(&campaign.void.join("; "))
+        );
     }
     if !campaign.notes.is_empty() {
         eprintln!("notes (the host's reaction to the hand's misbehaviour, no finding):");
@@ -794,6 +833,8 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     if let (false, Some(ms)) = (args.host.timeout_hang_given(), info.timeout_hang_ms) {
         run.timeout_hang = std::time::Duration::from_millis(ms);
     }
+    // One run: slot 1's link.
+    run.link = run.link.map(|l| l.to_string_lossy().replace("{slot}", "1").into());
     let r = run_once(&run, &schedule)?;
     // A host that never talked to the hand reproduces nothing, and refutes nothing either.
     if let Some(why) = gcl_harness::fuzz::host::unreached(&r, &run.command) {

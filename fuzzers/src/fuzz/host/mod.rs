@@ -400,10 +400,131 @@ pub const DEFAULT_DURATION: Duration = Duration::from_secs(5 * 60);
 /// not measured by then it leaves, and the campaign goes on with what it measured.
 pub const CALIBRATION_SHARE: u32 = 4;
 
-/// Calibration's silent hands run this many at once (or `--jobs`, when more): a host that
-/// never gives up at one kind of answer does not keep the others from being measured, and
-/// calibration takes about the longest wait, not their sum.
-pub const CALIBRATION_JOBS: usize = 8;
+/// A run found void (processes of two runs held its port) is made again up to this many
+/// times; then it is left out, never a finding.
+pub const VOID_RETRIES: usize = 3;
+
+/// Most void runs described in [`Campaign::void`].
+const VOID_KEPT: usize = 8;
+
+/// A campaign's slots: at most `jobs` hosts alive at once, whatever runs them (the runs,
+/// calibration, minimization, a hang's confirmation), each run in one slot, taken in the order
+/// asked for. A run's `link` may name its slot (`{slot}`, from 1): each slot has its own link,
+/// so a link never serves two live hosts. A run found void ([`RunError::Shared`]) is made again
+/// ([`VOID_RETRIES`]), and counted.
+#[derive(Debug)]
+pub struct Slots {
+    state: Mutex<SlotState>,
+    freed: Condvar,
+    /// Void runs, and how the first few were void.
+    void: Mutex<(u64, Vec<String>)>,
+}
+
+#[derive(Debug)]
+struct SlotState {
+    /// Each slot: taken or free.
+    taken: Vec<bool>,
+    /// The next ticket given, and the ticket served next.
+    next: u64,
+    serving: u64,
+    /// Tickets given up (their run called off) before they were served.
+    abandoned: BTreeSet<u64>,
+}
+
+impl SlotState {
+    /// The next ticket not given up is served next.
+    fn advance(&mut self) {
+        self.serving += 1;
+        while self.abandoned.remove(&{ self.serving }) {
+            self.serving += 1;
+        }
+    }
+}
+
+impl Slots {
+    /// `jobs` slots (at least one).
+    pub fn new(jobs: usize) -> Slots {
+        Slots {
+            state: Mutex::new(SlotState {
+                taken: vec![false; jobs.max(1)],
+                next: 0,
+                serving: 0,
+                abandoned: BTreeSet::new(),
+            }),
+            freed: Condvar::new(),
+            void: Mutex::new((0, Vec::new())),
+        }
+    }
+
+    /// Waits for a free slot, in turn; `None` when `stop` is set first.
+    fn take(&self, stop: &AtomicBool) -> Option<usize> {
+        let mut st = self.state.lock().ok()?;
+        let ticket = st.next;
+        st.next += 1;
+        loop {
+            if st.serving == ticket
+                && let Some(k) = st.taken.iter().position(|t| !t)
+            {
+                st.taken[k] = true;
+                st.advance();
+                self.freed.notify_all();
+                return Some(k);
+            }
+            if stop.load(Ordering::Relaxed) {
+                if st.serving == ticket {
+                    st.advance();
+                } else {
+                    st.abandoned.insert(ticket);
+                }
+                self.freed.notify_all();
+                return None;
+            }
+            st = self.freed.wait_timeout(st, Duration::from_millis(50)).ok()?.0;
+        }
+    }
+
+    fn give(&self, k: usize) {
+        if let Ok(mut st) = self.state.lock() {
+            st.taken[k] = false;
+        }
+        self.freed.notify_all();
+    }
+
+    /// Runs `schedule` in a slot (its link, when `run` has one, made for the slot): made again
+    /// when void, up to [`VOID_RETRIES`] times, then [`RunError::Shared`].
+    pub fn run(&self, run: &HostRun, schedule: &Schedule, stop: &AtomicBool) -> Result<RunResult, RunError> {
+        let Some(k) = self.take(stop) else { return Err(RunError::Cancelled) };
+        let mut spec = run.clone();
+        if let Some(l) = &run.link {
+            spec.link = Some(l.to_string_lossy().replace("{slot}", &(k + 1).to_string()).into());
+        }
+        let mut tries = 0;
+        let r = loop {
+            match run_once_until(&spec, schedule, stop) {
+                Err(RunError::Shared(why)) => {
+                    if let Ok(mut v) = self.void.lock() {
+                        v.0 += 1;
+                        if v.1.len() < VOID_KEPT {
+                            v.1.push(why.clone());
+                        }
+                    }
+                    tries += 1;
+                    if tries > VOID_RETRIES {
+                        break Err(RunError::Shared(why));
+                    }
+                }
+                other => break other,
+            }
+        };
+        self.give(k);
+        r
+    }
+
+    /// Void runs so far, and how the first few were.
+    fn voided(&self) -> (u64, Vec<String>) {
+        self.void.lock().map(|v| v.clone()).unwrap_or_default()
+    }
+}
 
 /// One kind of answer calibration silenced the hand at, and how long the host waited there.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -460,6 +581,12 @@ pub struct Calibration {
     /// the hand fell silent: hangs calibration saw, which the campaign confirms and reports.
     #[serde(skip)]
     pub suspects: Vec<(Schedule, RunResult)>,
+    /// Runs found void (processes of two runs held one port) and made again.
+    #[serde(skip)]
+    pub void_runs: u64,
+    /// How the first few of them were void.
+    #[serde(skip)]
+    pub void: Vec<String>,
 }
 
 /// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
@@ -473,8 +600,8 @@ pub fn hang_timeout(host_timeout: Option<Duration>, floor: Duration, cap: Durati
 /// Measures how long the host waits when the hand goes silent, at every kind of answer: a run
 /// without misbehaviour (for the kinds of answer it gives, those the systematic pass covers),
 /// then, for each kind, a run where the hand goes silent at its first answer, waiting up to
-/// [`CALIBRATION_CAP`] (or the run budget) for the host to send or exit; [`CALIBRATION_JOBS`]
-/// of them at once (or `jobs`, when more). The hang timeout is [`hang_timeout`] of the longest wait seen. With `share`, it ends
+/// [`CALIBRATION_CAP`] (or the run budget) for the host to send or exit; `jobs` of them at once
+/// at most (the campaign's slots: [`Slots`]). The hang timeout is [`hang_timeout`] of the longest wait seen. With `share`, it ends
 /// within that time: each run's wait is cut to what is left of it, and kinds not reached are
 /// left unmeasured ([`Calibration::unmeasured`]). A run where the host waited longer than
 /// the hang timeout without acting is a hang calibration saw ([`Calibration::suspects`]).
@@ -491,9 +618,10 @@ pub fn calibrate(
         r.timeout_hang = CALIBRATION_CAP.min(run.budget).min(left());
         r.budget = run.budget.min(left());
     };
+    let slots = Slots::new(jobs);
     let mut quiet = run.clone();
     limited(&mut quiet);
-    let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
+    let clean = slots.run(&quiet, &Schedule::default(), stop)?;
     if let Some(why) = unreached(&clean, &run.command) {
         let timeout_hang_ms = run.timeout_hang.as_millis() as u64;
         let elapsed_ms = started.elapsed().as_millis() as u64;
@@ -523,7 +651,7 @@ pub fn calibrate(
                 continue;
             }
             let silence = Schedule { planned: vec![Planned { answer: k.answer, op: Operator::Silence, arg: 0 }] };
-            match run_once_until(&r, &silence, stop) {
+            match slots.run(&r, &silence, stop) {
                 Ok(result) => {
                     if result.fired.is_empty() {
                         continue;
@@ -546,6 +674,12 @@ pub fn calibrate(
                         m.push((i, Some((point, suspect))));
                     }
                 }
+                // Void every time: left unmeasured.
+                Err(RunError::Shared(_)) => {
+                    if let Ok(mut m) = measured.lock() {
+                        m.push((i, None));
+                    }
+                }
                 Err(e) => {
                     if let Ok(mut slot) = error.lock() {
                         slot.get_or_insert(e);
@@ -556,7 +690,7 @@ pub fn calibrate(
         }
     };
     std::thread::scope(|s| {
-        for _ in 0..jobs.max(CALIBRATION_JOBS).min(kinds.len()).max(1) {
+        for _ in 0..jobs.min(kinds.len()).max(1) {
             s.spawn(worker);
         }
     });
@@ -600,6 +734,7 @@ pub fn calibrate(
             (s, r)
         })
         .collect();
+    (c.void_runs, c.void) = slots.voided();
     c.elapsed_ms = started.elapsed().as_millis() as u64;
     Ok(c)
 }
@@ -720,6 +855,18 @@ pub struct Campaign {
     /// the caller that heard it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+    /// Runs found void, calibration's included: processes of two runs held one port (a host
+    /// that opens a fixed device path, linked to another run's port). Each was made again
+    /// ([`VOID_RETRIES`] times at most), none judged.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub void_runs: u64,
+    /// How the first few of them were void.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub void: Vec<String>,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// A run of the systematic pass that a campaign was to make and did not (its runs or its
@@ -934,6 +1081,8 @@ struct Shared {
     suspects: BTreeMap<(String, String), Suspect>,
     /// What the runs took, and which entries of the pass were made.
     timing: RunTimes,
+    /// Turns whose run was void every time it was made: passed over when runs are taken in.
+    skipped: BTreeSet<u64>,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1076,8 +1225,12 @@ impl Shared {
     /// Takes in every ended run whose turn has come.
     fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         let mut new = Vec::new();
-        while let Some((s, r)) = self.ended.remove(&self.taken) {
-            new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
+        loop {
+            if let Some((s, r)) = self.ended.remove(&self.taken) {
+                new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
+            } else if !self.skipped.remove(&self.taken) {
+                break;
+            }
             self.taken += 1;
         }
         new
@@ -1211,6 +1364,7 @@ pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, 
 /// stands).
 pub fn minimize(
     opts: &FuzzOptions,
+    slots: &Slots,
     schedule: &Schedule,
     signature: &str,
     runs: &mut u64,
@@ -1218,7 +1372,7 @@ pub fn minimize(
 ) -> Result<Option<(Schedule, RunResult)>, RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
-        let r = run_once_until(&opts.run, s, stop)?;
+        let r = slots.run(&opts.run, s, stop)?;
         Ok(judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature).then_some(r))
     };
     // Keep only what fired: entries that never fired changed nothing.
@@ -1274,6 +1428,7 @@ impl Confirmation {
 /// ("gave up after 15.0 s").
 pub fn confirm(
     run: &HostRun,
+    slots: &Slots,
     schedule: &Schedule,
     state: &str,
     hang: Duration,
@@ -1282,8 +1437,10 @@ pub fn confirm(
 ) -> Result<Confirmation, RunError> {
     let mut patient = run.clone();
     patient.timeout_hang = window.max(hang);
-    let r = match run_once_until(&patient, schedule, stop) {
+    let r = match slots.run(&patient, schedule, stop) {
         Err(RunError::Cancelled) => return Ok(Confirmation::Stopped),
+        // Void every time: nothing confirmed.
+        Err(RunError::Shared(_)) => return Ok(Confirmation::NotAgain),
         other => other?,
     };
     let late = |same: bool| {
@@ -1396,6 +1553,8 @@ struct Workers<'a> {
     /// Suspected hangs go to the confirmer, which runs them again beside the campaign's runs.
     to_confirm: Mutex<Option<mpsc::Sender<(String, String)>>>,
     suspects: Mutex<mpsc::Receiver<(String, String)>>,
+    /// Every run of the campaign takes one: `jobs` hosts alive at once at most.
+    slots: Slots,
 }
 
 impl<'a> Workers<'a> {
@@ -1435,11 +1594,13 @@ impl<'a> Workers<'a> {
                 ended: BTreeMap::new(),
                 suspects: BTreeMap::new(),
                 timing: RunTimes::default(),
+                skipped: BTreeSet::new(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
             to_confirm: Mutex::new(Some(to_confirm)),
             suspects: Mutex::new(suspects),
+            slots: Slots::new(opts.jobs),
         }
     }
 
@@ -1468,7 +1629,7 @@ impl<'a> Workers<'a> {
             && !s.owns(0)
             && !self.done(0)
         {
-            let r = match run_once_until(&opts.run, &Schedule::default(), self.stop) {
+            let r = match self.slots.run(&opts.run, &Schedule::default(), self.stop) {
                 Err(RunError::Cancelled) => {
                     return Ok(ControlFlow::Break(Campaign {
                         elapsed_ms: self.started.elapsed().as_millis() as u64,
@@ -1497,7 +1658,7 @@ impl<'a> Workers<'a> {
             return None;
         }
         let mut runs = 0;
-        let m = minimize(self.opts, schedule, sig, &mut runs, self.stop);
+        let m = minimize(self.opts, &self.slots, schedule, sig, &mut runs, self.stop);
         if let Ok(mut sh) = self.shared.lock() {
             sh.minimize_runs += runs;
         }
@@ -1563,7 +1724,7 @@ impl<'a> Workers<'a> {
             } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
                 Confirmation::Stopped
             } else {
-                confirm(&opts.run, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
+                confirm(&opts.run, &self.slots, &schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
                     .unwrap_or(Confirmation::Stopped)
             };
             let new = self.shared.lock().ok().and_then(|mut sh| sh.settle(&key, outcome));
@@ -1677,9 +1838,20 @@ impl<'a> Workers<'a> {
     /// when the worker is to end.
     fn run_and_take(&self, t: u64, i: u64, schedule: Schedule, entry: Option<usize>) -> bool {
         let opts = self.opts;
-        let r = match run_once_until(&opts.run, &schedule, self.stop) {
+        let r = match self.slots.run(&opts.run, &schedule, self.stop) {
             Ok(r) => r,
             Err(RunError::Cancelled) => return false,
+            // Void every time it was made: left out (counted, warned), never a finding.
+            Err(RunError::Shared(_)) => {
+                if let Ok(mut sh) = self.shared.lock() {
+                    sh.skipped.insert(t);
+                    let new = sh.take_ready(opts, self.started);
+                    drop(sh);
+                    self.turn.notify_all();
+                    self.announce(new, true);
+                }
+                return true;
+            }
             Err(e) => {
                 if let Ok(mut sh) = self.shared.lock() {
                     sh.error.get_or_insert(e.to_string());
@@ -1773,6 +1945,12 @@ impl<'a> Workers<'a> {
             return Err(RunError::Io(std::io::Error::other(e)));
         }
         let runs = self.completed.load(Ordering::Relaxed);
+        let (mut void_runs, mut void) = self.slots.voided();
+        if let Some(c) = &calibration {
+            void_runs += c.void_runs;
+            void.splice(0..0, c.void.iter().cloned());
+            void.truncate(VOID_KEPT);
+        }
         let pass = pass_account(&sh.pass, &sh.answer_kinds, &sh.timing, self.opts, calibration.as_ref());
         // No run at all, and nobody stopped it: the budget went before the first run.
         let untested = sh.untested.or_else(|| {
@@ -1802,6 +1980,8 @@ impl<'a> Workers<'a> {
             reached: self.reached.load(Ordering::Relaxed),
             untested,
             stopped: None,
+            void_runs,
+            void,
         })
     }
 }
@@ -2003,6 +2183,7 @@ mod tests {
                 hand_seed: 0,
                 timeout_hang: Duration::from_secs(3),
                 budget: Duration::from_secs(60),
+                link: None,
             },
             seed: 0,
             runs: None,

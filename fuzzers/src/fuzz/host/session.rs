@@ -90,6 +90,9 @@ pub struct HostRun {
     pub timeout_hang: Duration,
     /// The longest a run may take.
     pub budget: Duration,
+    /// Over a pty: a symbolic link to it made for the run, and given to the host as the port
+    /// (`gcl fuzz host --link`, one per slot), removed when the run ends.
+    pub link: Option<std::path::PathBuf>,
 }
 
 /// Which way bytes went.
@@ -271,6 +274,10 @@ pub enum RunError {
     /// The run was called off (the campaign is stopping); the host was killed.
     #[error("the run was called off")]
     Cancelled,
+    /// Processes of two runs held the run's port: what it shows is no verdict on the host
+    /// (void; the campaign runs it again).
+    #[error("void run: {0}")]
+    Shared(String),
 }
 
 /// Most bytes of the traffic kept each way; the rest is counted, not kept.
@@ -902,7 +909,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     let waiter = std::thread::spawn(move || {
         let _ = tx.send(child.wait());
     });
-    let watched = match watch_host(spec, cancel, started, &host, &hand.log, &out.errbuf, &rx) {
+    let watched = match watch_host(spec, cancel, started, &host, &mut hand, &out.errbuf, &rx) {
         Ok(w) => w,
         Err(e) => {
             let _ = nix::sys::signal::killpg(host.pid, nix::sys::signal::Signal::SIGKILL);
@@ -925,6 +932,9 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     if watched.cancelled {
         return Err(RunError::Cancelled);
     }
+    if let Some(other) = hand.shared.as_ref().and_then(|w| w.intruder.clone()) {
+        return Err(RunError::Shared(other));
+    }
     let mut log = hand.log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
     Ok(result_of_run(&mut log, watched, leftovers, stderr, started))
 }
@@ -944,6 +954,73 @@ struct HandSide {
     /// Over TCP, the host's writes as it makes them (`host_writes`).
     watch: Option<WriteWatch>,
     run_dir: RunDir,
+    /// Over a pty: its slave's path (the port may be a link to it).
+    pty_path: Option<String>,
+    /// Over a pty: who opens it ([`SharedPortWatch`]).
+    shared: Option<SharedPortWatch>,
+}
+
+/// Watches a run's pty for opens by a process of another run (another `GCL_HOST_RUN`): a
+/// host of a campaign that opens a fixed device path, linked to whichever run's port, ends up
+/// on another run's line. The processes holding the port are looked at when someone opens it
+/// (inotify, read as the run is watched), so the run is known void ([`RunError::Shared`]),
+/// never a finding. A process that opens and closes the port between two looks is missed.
+struct SharedPortWatch {
+    opens: nix::sys::inotify::Inotify,
+    path: std::path::PathBuf,
+    /// `GCL_HOST_RUN=` this run's mark.
+    mark: String,
+    /// The first process of another run seen holding the port.
+    intruder: Option<String>,
+}
+
+impl SharedPortWatch {
+    fn new(path: &str, mark: &str) -> Option<SharedPortWatch> {
+        use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
+        let opens = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).ok()?;
+        opens.add_watch(path, AddWatchFlags::IN_OPEN).ok()?;
+        Some(SharedPortWatch { opens, path: path.into(), mark: format!("{RUN_MARK}={mark}"), intruder: None })
+    }
+
+    /// After opens of the port: whether a process of another run holds it now.
+    fn look(&mut self) {
+        let mut opened = false;
+        while let Ok(events) = self.opens.read_events() {
+            if events.is_empty() {
+                break;
+            }
+            opened = true;
+        }
+        if !opened || self.intruder.is_some() {
+            return;
+        }
+        let me = std::process::id() as i32;
+        let Ok(procs) = std::fs::read_dir("/proc") else { return };
+        for p in procs.flatten() {
+            let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            if pid == me {
+                continue;
+            }
+            let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+            if !fds.flatten().any(|fd| std::fs::read_link(fd.path()).is_ok_and(|t| t == self.path)) {
+                continue;
+            }
+            // Another run's mark: a process of another run. (No mark: not a run's; a child
+            // of ours between fork and exec still has our own environment.)
+            let env = std::fs::read(p.path().join("environ")).unwrap_or_default();
+            let prefix = format!("{RUN_MARK}=");
+            let other = env.split(|b| *b == 0).any(|v| v.starts_with(prefix.as_bytes()) && v != self.mark.as_bytes());
+            if other {
+                let name = std::fs::read_to_string(p.path().join("comm")).unwrap_or_default();
+                self.intruder = Some(format!(
+                    "process {pid} ({}) of another run opened this run's port {}",
+                    name.trim(),
+                    self.path.display()
+                ));
+                return;
+            }
+        }
+    }
 }
 
 /// Takes the run and its schedule: starts the hand (engine, log, tap, run folder) on a fresh
@@ -972,13 +1049,16 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
     // The hand: its transport in a thread; the line closes (hangs up) when the thread ends.
     // Over TCP, the host's writes are seen as it makes them (`host_writes`).
     let mut watch = None;
+    let mut pty_path = None;
     let (port, url, thread) = match spec.transport {
         Transport::Pty => {
-            let mut pty = Pty::open(None, engine.line_baud())?;
+            let mut pty = Pty::open(spec.link.as_deref(), engine.line_baud())?;
             pty.set_speed_check(!line_rate);
-            let path = pty.path().display().to_string();
+            pty_path = Some(pty.path().display().to_string());
+            // The link, when there is one, is the port the host is given.
+            let port = pty.link().unwrap_or(pty.path()).display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
-            (path.clone(), path, h)
+            (port.clone(), port, h)
         }
         Transport::Tcp => {
             let mut server = TcpServer::bind("127.0.0.1:0", false)?;
@@ -991,7 +1071,8 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
             (addr.clone(), format!("socket://{addr}"), h)
         }
     };
-    Ok(HandSide { log, stop, thread, port, url, watch, run_dir })
+    let shared = pty_path.as_deref().and_then(|p| SharedPortWatch::new(p, &run_dir.mark()));
+    Ok(HandSide { log, stop, thread, port, url, watch, run_dir, pty_path, shared })
 }
 
 /// Takes the run and the serving hand: spawns the host command in its own process group,
@@ -1143,10 +1224,11 @@ fn watch_host(
     cancel: &AtomicBool,
     started: Instant,
     host: &HostProc,
-    log: &Arc<Mutex<Log>>,
+    hand: &mut HandSide,
     errbuf: &Mutex<ErrBuf>,
     rx: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
 ) -> std::io::Result<Watched> {
+    let log = &hand.log.clone();
     let state = |log: &Arc<Mutex<Log>>| log.lock().map(|l| l.checker.state()).unwrap_or_default();
     let mut w = Watched {
         end: HostEnd::Exit(-1),
@@ -1170,6 +1252,9 @@ fn watch_host(
             Ok(Err(e)) => return Err(e),
             Err(mpsc::RecvTimeoutError::Disconnected) => break HostEnd::Exit(-1),
             Err(mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        if let Some(w) = &mut hand.shared {
+            w.look();
         }
         let now = Instant::now();
         let (last_activity, holds_port, last_sent, flooding) = log
@@ -1245,7 +1330,7 @@ fn clear_leftovers(spec: &HostRun, hand: &HandSide, out: &HostOutput, host: &Hos
     // runs (a hang-up ends it early): after that, the path may name another program's
     // terminal, which must never be touched. So the port is looked for only while the thread
     // runs, and what a search found counts only if it still ran after the search.
-    let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&hand.port));
+    let pty_path = hand.pty_path.as_ref().filter(|_| spec.transport == Transport::Pty).map(std::path::PathBuf::from);
     let pty_alive = || !hand.thread.is_finished();
     let mut leftovers = Vec::new();
     // The pipe's inode names it only while it is open (a closed pipe's number is reused).
