@@ -1174,8 +1174,13 @@ impl Shared {
                     *self.notes.entry(note.clone()).or_default() += 1;
                     None
                 }
-                // Confirmed under this key but no finding by its signature: cannot be; a hit.
-                Some(Suspect::Confirmed) => None,
+                // Confirmed under this key (or its signature elsewhere): a hit of its finding.
+                Some(Suspect::Confirmed) => {
+                    if let Some(&k) = self.by_sig.get(&f.verdict.signature) {
+                        self.findings[k].hits += 1;
+                    }
+                    None
+                }
                 None => {
                     self.suspects.insert(key.clone(), Suspect::Pending(Box::new(f)));
                     Some(New::Suspect(key))
@@ -1200,18 +1205,42 @@ impl Shared {
                     "; confirmed: a second run waited {:.1} s and it still neither sent nor exited",
                     waited.as_secs_f64()
                 );
-                match self.by_sig.get(&f.verdict.signature) {
+                // Runs of this signature whose hang did not come back elsewhere (another state)
+                // are hits of the confirmed hang, not notes beside it.
+                let sig = f.verdict.signature.clone();
+                let earlier: Vec<String> =
+                    self.notes.keys().filter(|n| Confirmation::is_note_of(n, &sig)).cloned().collect();
+                let mut hits = f.hits;
+                for n in earlier {
+                    hits += self.notes.remove(&n).unwrap_or(0);
+                }
+                for s in self.suspects.values_mut() {
+                    if let Suspect::Dismissed(n) = s
+                        && Confirmation::is_note_of(n, &sig)
+                    {
+                        *s = Suspect::Confirmed;
+                    }
+                }
+                match self.by_sig.get(&sig) {
                     Some(&k) => {
-                        self.findings[k].hits += f.hits;
+                        self.findings[k].hits += hits;
                         None
                     }
                     None => {
                         let k = self.findings.len();
-                        self.by_sig.insert(f.verdict.signature.clone(), k);
+                        self.by_sig.insert(sig, k);
+                        f.hits = hits;
                         self.findings.push(*f);
                         Some(k)
                     }
                 }
+            }
+            // The same hang confirmed at another state already: a hit of its finding.
+            _ if self.by_sig.contains_key(&f.verdict.signature) => {
+                let k = self.by_sig[&f.verdict.signature];
+                self.findings[k].hits += f.hits;
+                self.suspects.insert(key.clone(), Suspect::Confirmed);
+                None
             }
             other => {
                 let note = other.note(&f.verdict.signature, &key.1);
@@ -1407,6 +1436,14 @@ pub enum Confirmation {
 }
 
 impl Confirmation {
+    /// Whether `note` is one a hang signed `signature` was counted under when it did not come
+    /// back or the campaign ended first.
+    fn is_note_of(note: &str, signature: &str) -> bool {
+        ["note: hang not reproduced: ", "note: hang not confirmed (the campaign ended first): "]
+            .iter()
+            .any(|head| note.strip_prefix(head).is_some_and(|rest| rest.starts_with(&format!("{signature} ("))))
+    }
+
     /// The INFO note a hang not confirmed is counted under.
     fn note(&self, signature: &str, state: &str) -> String {
         match self {
@@ -2085,6 +2122,49 @@ mod tests {
         let whole = PassAccount { made: 4, jobs: 1, ..Default::default() };
         let c = Campaign { pass_runs: 4, pass: Some(whole), answer_kinds: kinds, ..Default::default() };
         assert!(c.pass_line().unwrap().contains("4 of 4 runs, every misbehaviour at every kind of answer"));
+    }
+
+    /// A hang that did not come back at one state and was confirmed at another is one finding
+    /// with every run that showed it, not a finding and a `hang not reproduced` note of the
+    /// same signature beside it; a later miss of a confirmed signature is a hit too.
+    #[test]
+    fn a_confirmed_hang_takes_in_the_runs_where_it_did_not_come_back() {
+        let opts = a_campaign();
+        let stop = AtomicBool::new(false);
+        let w = Workers::new(&opts, &stop, &|_| {}, Instant::now(), None);
+        let mut sh = w.shared.lock().unwrap();
+        let hang = |state: &str, run: u64| {
+            let r = ended(HostEnd::Hung(state.into()), state);
+            let v = judge(&r, &[0]).remove(0);
+            Finding {
+                verdict: v,
+                run,
+                found_after_ms: 0,
+                hits: 1,
+                schedule: Schedule::default(),
+                original: Schedule::default(),
+                fired: Vec::new(),
+                end: r.end.clone(),
+                timeout_hang_ms: 0,
+                confirmed_after_ms: None,
+                by_calibration: false,
+                stderr: String::new(),
+                exchanges: Vec::new(),
+            }
+        };
+        let Some(New::Suspect(a)) = sh.add(hang("awaiting the answer after HI", 1)) else { panic!() };
+        assert_eq!(sh.settle(&a, Confirmation::NotAgain), None);
+        assert_eq!(sh.notes.len(), 1, "{:?}", sh.notes);
+        let Some(New::Suspect(b)) = sh.add(hang("awaiting the answer after FGET", 2)) else { panic!() };
+        let k = sh.settle(&b, Confirmation::Hung(Duration::from_secs(9))).expect("a finding");
+        assert!(sh.notes.is_empty(), "{:?}", sh.notes);
+        assert_eq!(sh.findings[k].hits, 2);
+        let Some(New::Suspect(c)) = sh.add(hang("awaiting the answer after C", 3)) else { panic!() };
+        assert_eq!(sh.settle(&c, Confirmation::NotAgain), None);
+        assert!(sh.notes.is_empty(), "{:?}", sh.notes);
+        assert_eq!(sh.findings[k].hits, 3);
+        assert!(sh.add(hang("awaiting the answer after HI", 4)).is_none());
+        assert_eq!(sh.findings[k].hits, 4);
     }
 
     /// A run that ended so, with nothing else to judge.
