@@ -579,3 +579,25 @@ fn a_short_campaign_says_how_much_of_the_systematic_pass_it_made() {
     assert!(fuzz["pass"].get("not_reached").is_none(), "{fuzz}");
     assert!(page.contains("every misbehaviour at every kind of answer"));
 }
+
+/// A host that ends its lines with LF is one finding, `LF sent` (it was also `unterminated
+/// line`), and where it did not wait for an answer calibration says so, not `gave up after
+/// 0.0 s` (issue 38 item 6).
+#[test]
+fn a_host_that_ends_lines_with_lf_is_one_finding_and_no_wait_is_no_timeout() {
+    if !python_ready() {
+        return;
+    }
+    let py = deps::python();
+    let dir = tempfile::tempdir().unwrap();
+    let host = mutants().join("py_sends_lf.py").display().to_string();
+    let out = dir.path().join("out");
+    let (code, _, err) =
+        gcl(&["fuzz", "host", "--profile", "seed", "--runs", "1", "--out", out.to_str().unwrap(), "--", &py, &host]);
+    assert_eq!(code, 1, "{err}");
+    let found: Vec<&str> = err.lines().filter(|l| l.starts_with("  finding: ")).collect();
+    assert_eq!(found.len(), 1, "{err}");
+    assert!(found[0].contains("violation: line-ending: LF sent"), "{err}");
+    assert!(!err.contains("gave up after 0.0 s"), "{err}");
+    assert!(err.contains(": did not wait: sent or left within 0.1 s"), "{err}");
+}
