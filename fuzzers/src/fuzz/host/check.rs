@@ -249,11 +249,22 @@ impl HostChecker {
         }
     }
 
-    /// The name of the answer the hand is about to send (for misbehaviour reports).
-    pub fn answer_state(&self, device: &Device) -> String {
+    /// The name of the answer the hand is about to send, `bytes` (for misbehaviour reports):
+    /// by the command its echo names, else the host's last command (a host that sent its next
+    /// line before this answer came has a last command this answer is not to).
+    pub fn answer_state(&self, device: &Device, bytes: &[u8]) -> String {
         // The answer to LOOP itself is the last supervisory one (the loop starts after it).
         if device.mode() == Mode::Loop && self.mode == Mode::Loop {
             return "RealTime feedback".to_string();
+        }
+        let echo = bytes.split(|b| *b == b'\n').next().unwrap_or_default();
+        if !echo.is_empty()
+            && let Ok(Line::Command(c)) = gcl_model::parse_line(&self.profile, echo)
+        {
+            let canon = c.to_line(&self.profile);
+            let word =
+                canon.split_whitespace().next().unwrap_or_default().trim_start_matches(|c: char| c.is_ascii_digit());
+            return format!("answer to {word}");
         }
         match &self.last_command {
             Some(c) => format!("answer to {c}"),
@@ -691,6 +702,20 @@ mod tests {
         assert_eq!(kinds(&[b"HI\nFGET P\n"]), vec!["LF sent"]);
         assert_eq!(kinds(&[b"HI\r", b"FGET P"]), vec!["unterminated line"]);
         assert_eq!(kinds(&[b"HI\n\x03", b"FGET P"]), vec!["LF sent", "unterminated line"]);
+    }
+
+    /// An answer is named by the command its echo names: a host that sent `FGET P` before the
+    /// answer to HI came had its answer to HI named "answer to FGET".
+    #[test]
+    fn an_answer_is_named_by_its_echo() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let mut c = HostChecker::new(p);
+        c.host_bytes(&d, b"HI\rFGET P\r");
+        assert_eq!(c.answer_state(&d, b"HI\n\r=> "), "answer to HI");
+        assert_eq!(c.answer_state(&d, b"FGET P\n\r0 0 0 0\n\r=> "), "answer to FGET");
+        // No echo (a prompt alone): the last command.
+        assert_eq!(c.answer_state(&d, b"\n\r=> "), "answer to FGET");
     }
 
     /// A byte sent early before any command names the hand's answer, not an empty command

@@ -577,7 +577,7 @@ impl LineTap for Tap {
     fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped {
         let Ok(mut log) = self.0.lock() else { return Shaped::plain(bytes) };
         let log = &mut *log;
-        let state = log.checker.answer_state(device);
+        let state = log.checker.answer_state(device, bytes);
         log.last_answer.clone_from(&state);
         let before = log.misbehave.fired().len();
         let shaped = log.misbehave.shape(device, bytes, &state);
