@@ -178,7 +178,33 @@ fn function_name(func: &str) -> String {
         f = f[..open].trim_end();
     }
     let f = f.split("[abi:").next().unwrap_or(f);
-    f.to_string()
+    trim_templates(f)
+}
+
+/// A function's name with each template argument list shown as `<…>`
+/// (`reactive_socket_recv_op<boost::asio::mutable_buffers_1, …>::do_complete` →
+/// `reactive_socket_recv_op<…>::do_complete`): a Boost frame's arguments ran to thousands of
+/// characters in one message. `operator<`, `operator<<`, `operator->` stay; a name whose
+/// brackets do not balance stays whole.
+fn trim_templates(f: &str) -> String {
+    let mut out = String::with_capacity(f.len());
+    let mut depth = 0usize;
+    for (i, c) in f.char_indices() {
+        let operator = depth == 0 && (f[..i].ends_with("operator") || f[..i].ends_with("operator<"));
+        match c {
+            '<' if operator => out.push(c),
+            '<' => {
+                if depth == 0 {
+                    out.push_str("<…>");
+                }
+                depth += 1;
+            }
+            '>' if depth > 0 => depth -= 1,
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    if depth == 0 { out } else { f.to_string() }
 }
 
 /// The index of the `(` that opens the parenthesised group `s` ends with.
@@ -893,6 +919,23 @@ mod tests {
     /// A hang is named by the innermost frame of the host's own code: the system's frames it
     /// waits in (libc's `syscall` as gdb prints it with libc's sources, Boost.Asio's header
     /// code, libstdc++'s) go in the message, whichever tool took the stack.
+    #[test]
+    fn a_template_frame_is_named_without_its_template_arguments() {
+        assert_eq!(
+            function_name(
+                "boost::asio::detail::reactive_socket_recv_op<boost::asio::mutable_buffers_1, \
+                 boost::asio::detail::read_op<boost::asio::basic_serial_port<boost::asio::any_io_executor>, \
+                 std::vector<char, std::allocator<char> > > >::do_complete(void*, int)"
+            ),
+            "boost::asio::detail::reactive_socket_recv_op<…>::do_complete"
+        );
+        assert_eq!(function_name("std::vector<int>::operator[](unsigned long)"), "std::vector<…>::operator[]");
+        assert_eq!(function_name("Port::operator<<(char const*)"), "Port::operator<<");
+        assert_eq!(function_name("operator<(Pos const&, Pos const&)"), "operator<");
+        assert_eq!(function_name("Ptr<int>::operator->()"), "Ptr<…>::operator->");
+        assert_eq!(function_name("read_line"), "read_line");
+    }
+
     #[test]
     fn a_hang_under_system_libraries_is_named_by_the_hosts_frame() {
         let gdb = "#0  syscall () at ../sysdeps/unix/sysv/linux/x86_64/syscall.S:38\n#1  0x000055 in boost::asio::detail::descriptor_ops::poll_read (d=3, state=0 '\\000', msec=-1, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:450\n#2  0x000055 in boost::asio::detail::descriptor_ops::sync_read (d=3, state=0 '\\000', bufs=0x7ff, count=1, all_empty=false, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:160\n#3  0x000055 in BarrettHand::initialize (this=0x7ffd) at src/hand.cpp:88\n#4  0x000055 in main () at src/main.cpp:12\n";
