@@ -1083,6 +1083,8 @@ struct Shared {
     timing: RunTimes,
     /// Turns whose run was void every time it was made: passed over when runs are taken in.
     skipped: BTreeSet<u64>,
+    /// The host's waits calibration measured, by answer, milliseconds (the pass's costs).
+    waits: BTreeMap<u32, u64>,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1107,10 +1109,15 @@ enum New {
 }
 
 impl Shared {
-    /// Learns from the run without misbehaviour: the span of fresh schedules and the pass.
+    /// Learns from the run without misbehaviour: the span of fresh schedules and the pass
+    /// (ordered by cost from calibration's waits, unless sharded: every shard must make the
+    /// same pass of its own run 0).
     fn learn(&mut self, r: &RunResult, opts: &FuzzOptions) {
         self.answers = Some(r.answers.max(1));
         self.pass = systematic_pass(&r.answer_kinds, &opts.weights, opts.run.pace == Pace::Unpaced);
+        if opts.shard.is_none() {
+            order_by_cost(&mut self.pass, &self.waits);
+        }
         self.answer_kinds.clone_from(&r.answer_kinds);
     }
 
@@ -1376,6 +1383,31 @@ fn systematic_pass(kinds: &[AnswerKindSeen], weights: &Weights, unpaced: bool) -
     pass
 }
 
+/// The misbehaviours that make a host wait out its own timeout at the answer they hit: they
+/// hold back, cut or spoil the prompt it waits for (or the rest of a feedback block).
+fn waits_out_a_timeout(op: Operator) -> bool {
+    use Operator::*;
+    matches!(op, DelayBelow | DelayAbove | NoPrompt | BadPrompt | Truncate | Silence | RtBlockLength)
+}
+
+/// The least measured wait (milliseconds) that orders a pass by cost: below it, a run that
+/// waits out the host's timeout costs about what any run does.
+const COSTLY_WAIT_MS: u64 = 2_000;
+
+/// Orders `pass` by cost, cheapest first, from the host's waits calibration measured (`waits`:
+/// by answer, milliseconds, given up or waited past): a misbehaviour that makes the host wait
+/// out its timeout ([`waits_out_a_timeout`]) at a kind where it waited [`COSTLY_WAIT_MS`] or
+/// more costs that wait (in whole seconds, so that timing noise does not reorder it), any other
+/// nothing. The order is kept among runs of one cost (the rounds, the line-rate run first); a
+/// host without such waits keeps the pass as it is.
+fn order_by_cost(pass: &mut [PassEntry], waits: &BTreeMap<u32, u64>) {
+    let cost = |e: &PassEntry| match waits.get(&e.answer) {
+        Some(&ms) if ms >= COSTLY_WAIT_MS && waits_out_a_timeout(e.op) => ms.div_ceil(1000),
+        _ => 0,
+    };
+    pass.sort_by_key(cost);
+}
+
 /// The generator of run `i` of a campaign with this seed.
 fn run_rng(seed: u64, i: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
@@ -1518,6 +1550,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         return Ok(early);
     }
     if let Some(c) = &calibration {
+        if let Ok(mut sh) = w.shared.lock() {
+            sh.waits = c.by_kind.iter().map(|k| (k.answer, k.gave_up_ms.unwrap_or(k.waited_past_ms))).collect();
+        }
         w.take_calibration_suspects(c);
     }
     w.run_all();
@@ -1632,6 +1667,7 @@ impl<'a> Workers<'a> {
                 suspects: BTreeMap::new(),
                 timing: RunTimes::default(),
                 skipped: BTreeSet::new(),
+                waits: BTreeMap::new(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
@@ -2165,6 +2201,32 @@ mod tests {
         assert_eq!(sh.findings[k].hits, 3);
         assert!(sh.add(hang("awaiting the answer after HI", 4)).is_none());
         assert_eq!(sh.findings[k].hits, 4);
+    }
+
+    /// With calibration's waits, the pass runs the misbehaviours that make the host wait out a
+    /// long timeout last, the cheapest of them first; the rest keep their order (the rounds).
+    /// A host whose waits are short keeps the pass as it is.
+    #[test]
+    fn the_pass_runs_what_waits_out_a_long_timeout_last() {
+        use Operator::*;
+        let kinds = vec![
+            kind("prompt", 1, &[Truncate, Garbage, Silence]),
+            kind("echo, values, prompt", 2, &[Truncate, Garbage, ErrBits, NoPrompt, Silence]),
+        ];
+        let pass = systematic_pass(&kinds, &Weights::default(), true);
+        let mut ordered = pass.clone();
+        let waits: BTreeMap<u32, u64> = [(1, 15_000), (2, 10_400)].into_iter().collect();
+        order_by_cost(&mut ordered, &waits);
+        assert_eq!(ordered.len(), pass.len());
+        let cheap: Vec<PassEntry> = pass.iter().filter(|e| !waits_out_a_timeout(e.op)).copied().collect();
+        assert_eq!(ordered[..cheap.len()], cheap[..], "the cheap ones first, in the pass's order");
+        assert_eq!(ordered[0].op, LineRate);
+        let costly: Vec<(Operator, u32)> = ordered[cheap.len()..].iter().map(|e| (e.op, e.answer)).collect();
+        assert_eq!(costly.iter().filter(|(_, a)| *a == 2).count(), 3, "{costly:?}");
+        assert!(costly[..3].iter().all(|(_, a)| *a == 2), "11 s before 15 s: {costly:?}");
+        let mut short = pass.clone();
+        order_by_cost(&mut short, &[(1, 1_000), (2, 1_500)].into_iter().collect());
+        assert_eq!(short, pass);
     }
 
     /// A run that ended so, with nothing else to judge.
