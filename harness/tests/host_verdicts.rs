@@ -1083,3 +1083,27 @@ fn host_timeouts_say_where_the_host_never_gave_up() {
     let line = err.lines().find(|l| l.starts_with("host timeouts (")).unwrap_or_else(|| panic!("{err}"));
     assert!(line.contains(" at most where it gave up (") && line.contains(" it neither sent nor exited)"), "{line}");
 }
+
+/// A hang with a thread on the CPU is signed by that thread's own frame, the loop that makes no
+/// progress (`parse_values`), and the thread that waits for it without a deadline goes in the
+/// message; it was signed by the waiting frame (issue 38 item 5).
+#[test]
+fn a_hang_with_a_spinning_thread_is_signed_by_that_thread() {
+    if !stack_tool() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("c_spinning_parser.c", &["-pthread"], dir.path()) else { return };
+    let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+    r.timeout_hang = Duration::from_secs(2);
+    r.budget = Duration::from_secs(8);
+    let c = campaign(r, "crlf", 8, false);
+    let found: Vec<(&str, &str)> =
+        c.findings.iter().map(|f| (f.verdict.signature.as_str(), f.verdict.message.as_str())).collect();
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].0, "hang in parse_values", "{found:?}");
+    assert!(
+        found[0].1.contains("was on the CPU") && found[0].1.contains("the main thread waits in command"),
+        "{found:?}"
+    );
+}

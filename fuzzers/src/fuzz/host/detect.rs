@@ -685,19 +685,82 @@ fn own_first(all: Vec<(String, bool)>) -> Option<(String, Option<String>)> {
 /// Samples the stack of a stopped-in-place native process with `gdb -batch` or, failing that,
 /// `eu-stack` (each when installed; each given 10 s). `None` when neither is there, the
 /// process cannot be traced, or no frame could be read.
+///
+/// A host with a thread on the CPU (a parser whose loop makes no progress, while the caller
+/// waits for it without a deadline) is hung in that thread: the stack is that thread's, and the
+/// thread that waits (the main one) is named in `by`, for the message.
 pub fn sample_native(pid: i32) -> Option<HangStack> {
+    let busy = busy_thread(pid, BUSY_WINDOW);
+    let bt = if busy.is_some() { "thread apply all bt" } else { "bt" };
     // gdb first: it demangles Rust's v0 symbols (`_RNv…`), which eu-stack prints raw.
     let tools: [(&str, Vec<String>); 2] = [
-        ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), "bt".into()]),
+        ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), bt.into()]),
         ("eu-stack", vec!["-m".into(), "-p".into(), pid.to_string()]),
     ];
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
+        if let Some(tid) = busy
+            && let Some((frames, waits_in)) = thread_section(&out, tid).and_then(|t| native_frames(&t))
+        {
+            let waiting = (tid != pid)
+                .then(|| thread_section(&out, pid).and_then(|t| native_frames(&t)))
+                .flatten()
+                .map(|(f, w)| match w {
+                    Some(w) => format!("; the main thread waits in {f}, in {w}"),
+                    None => format!("; the main thread waits in {f}"),
+                })
+                .unwrap_or_default();
+            let by = format!("{tool}: thread {tid} was on the CPU, a loop that makes no progress{waiting}");
+            return Some(HangStack { by, frames, waits_in, blocked_in: None });
+        }
         if let Some((frames, waits_in)) = native_frames(&out) {
             return Some(HangStack { by: tool.to_string(), frames, waits_in, blocked_in: None });
         }
     }
     None
+}
+
+/// How long a hung host's threads are watched for one on the CPU.
+const BUSY_WINDOW: std::time::Duration = std::time::Duration::from_millis(300);
+
+/// The thread of `pid` that ran on the CPU most while it was watched for `window`, when it ran
+/// for a third of it at least (a loop that makes no progress, on a machine that may be busy):
+/// its id. A host that waits uses next to none.
+fn busy_thread(pid: i32, window: std::time::Duration) -> Option<i32> {
+    let cpu = || -> Option<std::collections::BTreeMap<i32, u64>> {
+        let mut m = std::collections::BTreeMap::new();
+        for t in std::fs::read_dir(format!("/proc/{pid}/task")).ok()?.flatten() {
+            let Some(tid) = t.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            let stat = std::fs::read_to_string(t.path().join("stat")).unwrap_or_default();
+            // utime and stime: fields 14 and 15, the 12th and 13th after the name.
+            let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+            let ticks = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+            m.insert(tid, ticks(11) + ticks(12));
+        }
+        Some(m)
+    };
+    let before = cpu()?;
+    std::thread::sleep(window);
+    let after = cpu()?;
+    // /proc counts CPU time in USER_HZ, 100 a second on Linux whatever the kernel's own tick.
+    let per_second = 100.0;
+    let (tid, used) = after
+        .iter()
+        .filter_map(|(t, v)| Some((*t, v.checked_sub(*before.get(t)?)?)))
+        .max_by_key(|(t, used)| (*used, std::cmp::Reverse(*t)))?;
+    (used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
+}
+
+/// The lines of one thread's stack in a stack tool's text of every thread (`Thread 2 (Thread
+/// 0x7f... (LWP 1235) ...):` from gdb, `TID 1235:` from eu-stack), its header first.
+fn thread_section(text: &str, tid: i32) -> Option<String> {
+    let lwp = format!("(LWP {tid})");
+    let eu = format!("TID {tid}:");
+    let header = |l: &str| l.starts_with("Thread ") || l.starts_with("TID ");
+    let mut lines = text.lines().map(str::trim);
+    lines.find(|l| header(l) && (l.contains(&lwp) || *l == eu))?;
+    let body: Vec<&str> = lines.take_while(|l| !header(l)).collect();
+    Some(format!("Thread {tid}\n{}", body.join("\n")))
 }
 
 /// Runs a tool with a deadline; its stdout, or `None` when it is missing or overran.
