@@ -899,6 +899,20 @@ fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
         let m = &c.findings[0].verdict.message;
         assert!(m.contains("Input/output error") && m.contains("called from Port::"), "{name}: {m}");
     }
+    // Behind a wrapper script that runs the host (no exec, so the wrapper exits by itself
+    // after the SIGABRT): gdb runs the script's interpreter and follows the host (it took no
+    // stack: `where it was thrown: no stack, gdb took none`).
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("cpp_uncaught_hangup.cpp", &[], dir.path()) else { return };
+    let wrapper = dir.path().join("wrapper.sh");
+    std::fs::write(&wrapper, format!("#!/bin/sh\ntrue\n{} \"$1\"\necho \"driver ended: $?\" >&2\n", exe.display()))
+        .unwrap();
+    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let mut r = run(vec![wrapper.display().to_string(), "{port}".into()]);
+    r.timeout_hang = Duration::from_secs(3);
+    let c = campaign(r, "hang-up", 6, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, vec!["crash: uncaught C++ exception std::system_error in Port::check"], "behind a wrapper");
 }
 
 /// A host that crashes in RealTime (an overflow in its acknowledgement of a control block)

@@ -822,10 +822,9 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             }
         }
     }
-    let aborted = r.end == HostEnd::Signal(nix::sys::signal::Signal::SIGABRT as i32)
-        || r.stderr.contains("AddressSanitizer: ABRT");
-    if aborted
-        && super::detect::uncaught_exception(&r.stderr)
+    // An exception nobody caught ends in SIGABRT, though a wrapper that ran the host may have
+    // exited by itself after it: what the C++ runtime wrote says so either way.
+    if super::detect::uncaught_exception(&r.stderr)
         && let Some(stack) = abort_stack(spec, schedule, cancel)
     {
         r.stderr.push_str(&format!("\n{}\n{stack}", super::detect::ABORT_STACK));
@@ -856,8 +855,16 @@ fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Opti
 }
 
 /// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
-/// signals hosts use in their work pass through unremarked).
+/// signals hosts use in their work pass through unremarked). A script (`#!`) runs under its
+/// interpreter (gdb runs no script itself: it took no stack of a host behind a wrapper), and
+/// every process it starts is followed (`detach-on-fork off`): the one that aborts has its
+/// stack taken, and the others going first (a wrapper's `ln`) only resume the rest.
 fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
+    let script = log.with_extension("gdb");
+    let _ = std::fs::write(
+        &script,
+        "set detach-on-fork off\nset schedule-multiple on\ncatch signal SIGABRT\ncommands\nbt\nkill inferiors 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\nquit\nend\n",
+    );
     let mut v: Vec<String> = ["gdb", "-batch", "-nx", "-q"].map(String::from).to_vec();
     for ex in [
         format!("set logging file {}", log.display()),
@@ -866,14 +873,49 @@ fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
         "set logging enabled on".into(),
         "handle SIGPIPE SIGALRM SIGCHLD SIGUSR1 SIGUSR2 SIGHUP SIGWINCH SIGINT SIGTERM SIGURG SIGIO nostop noprint pass"
             .into(),
+        format!("source {}", script.display()),
         "run".into(),
-        "bt".into(),
-        "kill".into(),
     ] {
         v.push("-ex".into());
         v.push(ex);
     }
+    // A process that ended first (a wrapper's helper) stops the run: the wrapper goes on.
+    for _ in 0..8 {
+        for ex in ["inferior 1", "continue"] {
+            v.push("-ex".into());
+            v.push(ex.into());
+        }
+    }
+    for ex in ["bt", "kill"] {
+        v.push("-ex".into());
+        v.push(ex.into());
+    }
     v.push("--args".into());
+    v.extend(interpreted(command));
+    v
+}
+
+/// `command` with a script (a file that starts with `#!`, found as the shell would) preceded by
+/// its interpreter and that line's argument, as the kernel runs it.
+fn interpreted(command: &[String]) -> Vec<String> {
+    let Some(program) = command.first() else { return Vec::new() };
+    let path = if program.contains('/') {
+        Some(std::path::PathBuf::from(program))
+    } else {
+        std::env::var_os("PATH").and_then(|p| std::env::split_paths(&p).map(|d| d.join(program)).find(|f| f.is_file()))
+    };
+    let mut head = [0u8; 256];
+    let n = path
+        .as_ref()
+        .and_then(|p| std::fs::File::open(p).ok())
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head).ok())
+        .unwrap_or(0);
+    let Some(line) = head[..n].strip_prefix(b"#!") else { return command.to_vec() };
+    let line = String::from_utf8_lossy(line.split(|b| *b == b'\n').next().unwrap_or_default()).into_owned();
+    let mut words = line.trim().splitn(2, char::is_whitespace);
+    let Some(interpreter) = words.next().filter(|w| !w.is_empty()) else { return command.to_vec() };
+    let mut v = vec![interpreter.to_string()];
+    v.extend(words.next().map(|a| a.trim().to_string()).filter(|a| !a.is_empty()));
     v.extend(command.iter().cloned());
     v
 }
