@@ -25,7 +25,8 @@
 //! kinds of answer (each operator at each kind it applies to, in rounds; a line-rate run first when
 //! unpaced). A silent wrong value is named by the host's `WHERE`, else by the answer it came from.
 //! Operators are counted by protocol state and notes by runs. Runs are taken in index order and run
-//! i is scheduled from runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run.
+//! i is scheduled from run 0 and runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run
+//! (and the pass starts at run 1 whatever `--jobs`).
 //!
 //! The campaign (`Campaign`) is `fuzz.json` beside the reports; its schema is
 //! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/report_schema.rs`). A campaign
@@ -1008,9 +1009,8 @@ fn pass_account(
         return None;
     }
     let jobs = opts.jobs.max(1) as u64;
-    // Pass entry k is run k + 1 of a shard (which makes run 0 before it if it is its own),
-    // run k + jobs of a guided campaign (runs 0..jobs before it).
-    let before = opts.shard.map_or(jobs, |s| u64::from(s.owns(0)));
+    // Pass entry k is run k + 1 (run 0 before it, in a shard only if it is its own).
+    let before = opts.shard.map_or(1, |s| u64::from(s.owns(0)));
     let owned = |k: usize| opts.shard.is_none_or(|s| s.owns(k as u64 + 1));
     let kind_of = |answer: u32| kinds.iter().find(|k| k.answer == answer).map_or_else(String::new, |k| k.kind.clone());
     let not_reached: Vec<PassLeft> = pass
@@ -1530,9 +1530,10 @@ pub fn confirm(
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
 ///
-/// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of runs
-/// `0..=i-jobs` (guidance sees those, taken in index order, and no others; a worker waits for
-/// them when a slow run holds them up). With a host that behaves the same given the same
+/// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of run 0 and
+/// runs `0..=i-jobs` (guidance sees those, taken in index order, and no others; a worker waits
+/// for them when a slow run holds them up; every run waits for run 0, of which the systematic
+/// pass is made, so the pass starts at run 1 whatever `jobs`). With a host that behaves the same given the same
 /// bytes, a campaign with the same seed and `jobs` makes the same schedules and findings (first
 /// run, hits, minimized schedule) run for run; wall times are not reproducible, nor is which
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
@@ -1885,7 +1886,8 @@ impl<'a> Workers<'a> {
     /// when the campaign ends first.
     fn guided_schedule(&self, t: u64, i: u64) -> Option<(Schedule, Option<usize>)> {
         let (opts, jobs) = (self.opts, self.jobs);
-        let visible = (t + 1).saturating_sub(jobs);
+        // Every run sees run 0 (whose kinds of answer make the pass), and runs 0..=i-jobs.
+        let visible = (t + 1).saturating_sub(jobs).max(1);
         let mut sh = self.shared.lock().ok()?;
         while sh.taken < visible && !self.done(t) {
             sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
@@ -1895,9 +1897,9 @@ impl<'a> Workers<'a> {
         }
         let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
         let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
-        let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
-        // The pass starts with the first run that sees run 0.
-        let k = i.checked_sub(jobs).map(|k| k as usize);
+        let answers = sh.answers.unwrap_or(8);
+        // The pass starts at run 1, whatever the jobs (as in a shard).
+        let k = i.checked_sub(1).map(|k| k as usize);
         let pass = k.and_then(|k| sh.pass.get(k)).copied();
         drop(sh);
         Some(match (pass, k) {
