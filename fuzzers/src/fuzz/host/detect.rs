@@ -999,6 +999,23 @@ mod tests {
         assert_eq!(function_name("read_line"), "read_line");
     }
 
+    /// One thread's stack out of gdb's `thread apply all bt` or eu-stack's listing.
+    #[test]
+    fn one_threads_stack_is_cut_out_of_every_threads() {
+        let gdb = "Thread 2 (Thread 0x7f00 (LWP 1235) \"host\"):\n#0  0x0000 in parse_values (a=0x1) at h.c:20\n\
+                   #1  0x0000 in parser (arg=0x0) at h.c:50\n\n\
+                   Thread 1 (Thread 0x7f01 (LWP 1234) \"host\"):\n#0  0x0000 in __futex_wait () from /lib/libc.so.6\n\
+                   #1  0x0000 in command (line=0x1) at h.c:70\n#2  0x0000 in main () at h.c:80\n";
+        let busy = thread_section(gdb, 1235).and_then(|t| native_frames(&t)).unwrap();
+        assert_eq!(busy.0, "parse_values < parser");
+        let main = thread_section(gdb, 1234).and_then(|t| native_frames(&t)).unwrap();
+        assert_eq!(main.0, "command < main");
+        assert_eq!(thread_section(gdb, 99), None);
+        let eu = "PID 1234 - process\nTID 1234:\n#0  0x7f in __futex_wait - /lib/libc.so.6\n#1  0x55 in command - /h\n\
+                  TID 1235:\n#0  0x55 in parse_values - /h\n";
+        assert_eq!(thread_section(eu, 1235).and_then(|t| native_frames(&t)).unwrap().0, "parse_values");
+    }
+
     #[test]
     fn a_hang_under_system_libraries_is_named_by_the_hosts_frame() {
         let gdb = "#0  syscall () at ../sysdeps/unix/sysv/linux/x86_64/syscall.S:38\n#1  0x000055 in boost::asio::detail::descriptor_ops::poll_read (d=3, state=0 '\\000', msec=-1, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:450\n#2  0x000055 in boost::asio::detail::descriptor_ops::sync_read (d=3, state=0 '\\000', bufs=0x7ff, count=1, all_empty=false, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:160\n#3  0x000055 in BarrettHand::initialize (this=0x7ffd) at src/hand.cpp:88\n#4  0x000055 in main () at src/main.cpp:12\n";
