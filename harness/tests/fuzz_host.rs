@@ -601,3 +601,32 @@ fn a_host_that_ends_lines_with_lf_is_one_finding_and_no_wait_is_no_timeout() {
     assert!(!err.contains("gave up after 0.0 s"), "{err}");
     assert!(err.contains(": did not wait: sent or left within 0.1 s"), "{err}");
 }
+
+/// `--link` is refused where a link could serve two hosts (no `{slot}` at more than one job)
+/// or has no pty to point at (`--tcp`), and with `{slot}` every slot's link is made for its
+/// runs and removed after them.
+#[test]
+fn link_patterns_are_one_link_per_slot_or_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let fixed = dir.path().join("ttyUSB0").display().to_string();
+    let host = ["--", "sh", "-c", "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3"];
+    let with = |extra: &[&str]| {
+        let mut args = vec!["fuzz", "host", "--runs", "2", "--timeout-hang", "2s", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&host);
+        gcl(&args)
+    };
+    let (code, _, err) = with(&["--jobs", "2", "--link", &fixed]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("would share one link; put {slot} in it"), "{err}");
+    let pattern = dir.path().join("ttyUSB{slot}").display().to_string();
+    let (code, _, err) = with(&["--tcp", "--link", &pattern]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot go with --tcp"), "{err}");
+    let (code, _, err) = with(&["--jobs", "2", "--link", &pattern]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!dir.path().join("ttyUSB1").exists() && !dir.path().join("ttyUSB2").exists(), "links removed");
+    let (code, _, err) = with(&["--jobs", "1", "--link", &fixed]);
+    assert_eq!(code, 0, "one job, one link: {err}");
+}
