@@ -70,6 +70,7 @@ fn spec(command: Vec<String>) -> HostRun {
         hand_seed: 0,
         timeout_hang: Duration::from_secs(3),
         budget: Duration::from_secs(30),
+        link: None,
     }
 }
 

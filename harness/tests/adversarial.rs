@@ -811,7 +811,8 @@ fn a_stopped_device_campaign_says_so_and_has_no_verdict() {
 fn a_stopped_host_campaign_says_so_and_has_no_verdict() {
     let dir = tempfile::tempdir().unwrap();
     let host = "echo run >> runs; exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 0.1";
-    let args = ["fuzz", "host", "--profile", "seed", "--duration", "1h", "--timeout-hang", "3s"];
+    // One job: three runs begun are two ended (at the default four, three may all be in flight).
+    let args = ["fuzz", "host", "--profile", "seed", "--duration", "1h", "--timeout-hang", "3s", "--jobs", "1"];
     let child =
         spawn_gcl(dir.path(), &[&args[..], &["--report", "rep", "--out", "out", "--", "sh", "-c", host]].concat());
     wait_for_lines(&dir.path().join("runs"), 3);

@@ -70,6 +70,7 @@ fn host_run(command: Vec<String>) -> HostRun {
         timeout_hang: Duration::from_millis(2500),
         // Also how long a hang's confirmation waits.
         budget: Duration::from_secs(12),
+        link: None,
     }
 }
 
@@ -559,4 +560,120 @@ fn a_single_run_keeps_a_host_that_never_ends_and_a_violation_whose_hang_went() {
             fuzz["findings"].as_array().unwrap().iter().map(|f| f["verdict"]["signature"].as_str().unwrap()).collect();
         assert!(found.contains(&want), "{}: {found:?}", host.display());
     }
+}
+
+/// A campaign that ends inside its systematic pass says how much of it ran, on the console,
+/// in fuzz.json and on the page, and claims "every misbehaviour at every kind of answer" only
+/// when the whole pass ran (issue 38 item 3, issue 39 item 5: `--runs 12` said `41 runs,
+/// every misbehaviour at every kind of answer` after 11).
+#[test]
+fn a_short_campaign_says_how_much_of_the_systematic_pass_it_made() {
+    if !python_ready() {
+        return;
+    }
+    let py = deps::python();
+    let host = mutants().join("gclhost.py").display().to_string();
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = |runs: &str, jobs: &str, name: &str| {
+        let report = dir.path().join(name);
+        let (code, _, err) = gcl(&[
+            "fuzz",
+            "host",
+            "--profile",
+            "seed",
+            "--runs",
+            runs,
+            "--jobs",
+            jobs,
+            "--timeout-hang",
+            "2500ms",
+            "--out",
+            dir.path().join(format!("{name}-out")).to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+            "--",
+            &py,
+            &host,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let fuzz: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("fuzz.json")).unwrap()).unwrap();
+        let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+        (err, fuzz, page)
+    };
+    // Run 0 has no misbehaviour: runs 1 to 11 are the first 11 of the pass.
+    let (err, fuzz, page) = campaign("12", "1", "short");
+    let total = fuzz["pass_runs"].as_u64().unwrap();
+    assert!(total > 11, "{fuzz}");
+    let line = err.lines().find(|l| l.starts_with("systematic pass:")).unwrap_or_else(|| panic!("{err}"));
+    assert!(line.starts_with(&format!("systematic pass: 11 of {total} runs ({} not reached: ", total - 11)), "{line}");
+    assert!(line.contains("a complete pass needs about ") && line.ends_with(" at --jobs 1"), "{line}");
+    assert!(!err.contains("every misbehaviour at every kind of answer"), "{err}");
+    assert_eq!(fuzz["pass"]["made"], 11, "{fuzz}");
+    assert_eq!(fuzz["pass"]["not_reached"].as_array().unwrap().len() as u64, total - 11, "{fuzz}");
+    assert!(page.contains(&format!("11 of {total} runs ({} not reached", total - 11)), "the page says it too");
+    // At --jobs 2 too the pass starts at run 1 (every run waits for run 0): 3 of 4 runs.
+    let (err, fuzz, _) = campaign("4", "2", "jobs");
+    assert_eq!(fuzz["pass"]["made"], 3, "{fuzz}");
+    assert!(err.contains(&format!("systematic pass: 3 of {total} runs")), "{err}");
+    // The whole pass: the claim, and nothing not reached.
+    let (err, fuzz, page) = campaign(&(total + 1).to_string(), "1", "whole");
+    assert!(
+        err.contains(&format!("systematic pass: {total} of {total} runs, every misbehaviour at every kind of answer")),
+        "{err}"
+    );
+    assert_eq!(fuzz["pass"]["made"], total, "{fuzz}");
+    assert!(fuzz["pass"].get("not_reached").is_none(), "{fuzz}");
+    assert!(page.contains("every misbehaviour at every kind of answer"));
+}
+
+/// A host that ends its lines with LF is one finding, `LF sent` (it was also `unterminated
+/// line`), and where it did not wait for an answer calibration says so, not `gave up after
+/// 0.0 s` (issue 38 item 6).
+#[test]
+fn a_host_that_ends_lines_with_lf_is_one_finding_and_no_wait_is_no_timeout() {
+    if !python_ready() {
+        return;
+    }
+    let py = deps::python();
+    let dir = tempfile::tempdir().unwrap();
+    let host = mutants().join("py_sends_lf.py").display().to_string();
+    let out = dir.path().join("out");
+    let (code, _, err) =
+        gcl(&["fuzz", "host", "--profile", "seed", "--runs", "1", "--out", out.to_str().unwrap(), "--", &py, &host]);
+    assert_eq!(code, 1, "{err}");
+    let found: Vec<&str> = err.lines().filter(|l| l.starts_with("  finding: ")).collect();
+    assert_eq!(found.len(), 1, "{err}");
+    assert!(found[0].contains("violation: line-ending: LF sent"), "{err}");
+    assert!(!err.contains("gave up after 0.0 s"), "{err}");
+    assert!(err.contains(": did not wait: sent or left within 0.1 s"), "{err}");
+}
+
+/// `--link` is refused where a link could serve two hosts (no `{slot}` at more than one job)
+/// or has no pty to point at (`--tcp`), and with `{slot}` every slot's link is made for its
+/// runs and removed after them.
+#[test]
+fn link_patterns_are_one_link_per_slot_or_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let fixed = dir.path().join("ttyUSB0").display().to_string();
+    let host = ["--", "sh", "-c", "exec 3<>\"$GCL_PORT\"; printf '\\003' >&3"];
+    let with = |extra: &[&str]| {
+        let mut args = vec!["fuzz", "host", "--runs", "2", "--timeout-hang", "2s", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&host);
+        gcl(&args)
+    };
+    let (code, _, err) = with(&["--jobs", "2", "--link", &fixed]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("would share one link; put {slot} in it"), "{err}");
+    let pattern = dir.path().join("ttyUSB{slot}").display().to_string();
+    let (code, _, err) = with(&["--tcp", "--link", &pattern]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot go with --tcp"), "{err}");
+    let (code, _, err) = with(&["--jobs", "2", "--link", &pattern]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!dir.path().join("ttyUSB1").exists() && !dir.path().join("ttyUSB2").exists(), "links removed");
+    let (code, _, err) = with(&["--jobs", "1", "--link", &fixed]);
+    assert_eq!(code, 0, "one job, one link: {err}");
 }

@@ -78,6 +78,7 @@ fn run(command: Vec<String>) -> HostRun {
         hand_seed: 0,
         timeout_hang: Duration::from_secs(20),
         budget: Duration::from_secs(60),
+        link: None,
     }
 }
 
@@ -1012,6 +1013,20 @@ fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
         let m = &c.findings[0].verdict.message;
         assert!(m.contains("Input/output error") && m.contains("called from Port::"), "{name}: {m}");
     }
+    // Behind a wrapper script that runs the host (no exec, so the wrapper exits by itself
+    // after the SIGABRT): gdb runs the script's interpreter and follows the host (it took no
+    // stack: `where it was thrown: no stack, gdb took none`).
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("cpp_uncaught_hangup.cpp", &[], dir.path()) else { return };
+    let wrapper = dir.path().join("wrapper.sh");
+    std::fs::write(&wrapper, format!("#!/bin/sh\ntrue\n{} \"$1\"\necho \"driver ended: $?\" >&2\n", exe.display()))
+        .unwrap();
+    std::fs::set_permissions(&wrapper, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let mut r = run(vec![wrapper.display().to_string(), "{port}".into()]);
+    r.timeout_hang = Duration::from_secs(3);
+    let c = campaign(r, "hang-up", 6, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert_eq!(found, vec!["crash: uncaught C++ exception std::system_error in Port::check"], "behind a wrapper");
 }
 
 /// A host that crashes in RealTime (an overflow in its acknowledgement of a control block)
@@ -1133,6 +1148,141 @@ fn a_violation_of_a_hangs_second_run_is_a_finding() {
         c.findings.iter().map(|f| (f.verdict.signature.as_str(), f.verdict.message.as_str())).collect();
     assert!(
         found.iter().any(|(s, m)| *s == "violation: line-ending: unterminated line" && m.contains("speed mismatch")),
+        "{found:?}"
+    );
+}
+
+/// A host that reads each answer up to `=>` and discards the prompt's space with
+/// `tcflush(TCIFLUSH)` before it writes its next command has read that answer: on a paced line
+/// the space comes after its last read, and the flush (which the pty's master sees in packet
+/// mode) consumes it. It was `waits-for-answer: sent before the prompt` (issue 38 item 4). A
+/// campaign whose line-rate run meets the same timing has no finding either.
+#[test]
+fn a_flush_of_the_input_is_a_read_of_the_answer() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("c_flush_after_prompt", dir.path()) else { return };
+    for (pace, time) in [
+        (Pace::Fixed(9600), TimeMode::Fast),
+        (Pace::Fixed(1200), TimeMode::Fast),
+        (Pace::Fixed(9600), TimeMode::Real),
+        (Pace::Unpaced, TimeMode::Fast),
+    ] {
+        let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+        r.pace = pace;
+        r.time = time;
+        assert_eq!(failing(&r), Vec::<String>::new(), "{pace} {}", time.name());
+    }
+    let c = campaign(run(vec![exe.display().to_string(), "{port}".into()]), "line-rate,truncate,crlf", 6, false);
+    let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+    assert!(found.is_empty(), "{found:?}");
+}
+
+/// The largest count of hosts alive at once that `c_fixed_path` noted in `dir`.
+fn most_alive(dir: &Path) -> u32 {
+    let log = std::fs::read_to_string(dir.join("alive.log")).unwrap_or_default();
+    log.lines().filter_map(|l| l.trim().parse().ok()).max().unwrap_or(0)
+}
+
+/// `--jobs N` is at most N hosts alive at once, calibration (which silenced the hand at every
+/// kind of answer up to 8 at once) included; with a link per slot (`--link DIR/ttyUSB{slot}`),
+/// a host that opens only a fixed device path gets its own, and never shares a port: no void
+/// run, no finding, and no link left after (issue 38 item 1).
+#[test]
+fn a_fixed_path_host_never_shares_a_port_and_jobs_bounds_the_hosts_alive() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build_c("c_fixed_path", dir.path()) else { return };
+    for jobs in [1, 4] {
+        let devs = dir.path().join(format!("dev{jobs}"));
+        let alive = dir.path().join(format!("alive{jobs}"));
+        std::fs::create_dir_all(&devs).unwrap();
+        std::fs::create_dir_all(&alive).unwrap();
+        let command = vec![exe.display().to_string(), "{port}".into(), "1".into(), alive.display().to_string()];
+        let mut r = run(command);
+        r.timeout_hang = Duration::from_secs(3);
+        r.link = Some(devs.join("ttyUSB{slot}"));
+        let opts = FuzzOptions {
+            run: r,
+            seed: 5,
+            runs: Some(12),
+            duration: None,
+            ok_exit_codes: vec![0, 1],
+            jobs,
+            weights: Weights::default(),
+            max_planned: 3,
+            minimize: true,
+            guided: true,
+            calibrate: true,
+            shard: None,
+        };
+        let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+        let found: Vec<&str> = c.findings.iter().map(|f| f.verdict.signature.as_str()).collect();
+        assert!(found.is_empty(), "--jobs {jobs}: {found:?}");
+        assert_eq!((c.runs, c.void_runs), (12, 0), "--jobs {jobs}: {:?}", c.void);
+        let most = most_alive(&alive);
+        assert!((1..=jobs as u32).contains(&most), "--jobs {jobs}: {most} hosts alive at once");
+        assert_eq!(std::fs::read_dir(&devs).unwrap().count(), 0, "every link removed");
+    }
+}
+
+/// A run whose port a process of another run opens (another `GCL_HOST_RUN`) is void: no
+/// verdict of it, an error the campaign makes the run again for.
+#[test]
+fn a_run_whose_port_another_runs_process_opens_is_void() {
+    let intruder = "GCL_HOST_RUN=another sh -c 'exec 3<>\"$GCL_PORT\"; sleep 1' & \
+                    exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 2";
+    let r = run(vec!["sh".into(), "-c".into(), intruder.into()]);
+    match run_once(&r, &Schedule::default()) {
+        Err(gcl_harness::fuzz::host::RunError::Shared(why)) => {
+            assert!(why.contains("of another run opened this run's port"), "{why}")
+        }
+        other => panic!("not void: {other:?}"),
+    }
+    // Its own children carry its mark: no intruder.
+    let own = "sh -c 'exec 3<>\"$GCL_PORT\"; sleep 1' & exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 2";
+    assert!(run_once(&run(vec!["sh".into(), "-c".into(), own.into()]), &Schedule::default()).is_ok());
+}
+
+/// The headline of the measured timeouts gives the longest give-up time as the host's timeout
+/// only beside how many kinds of answer it never gave up at (it said `1.1 s` when 3 of 4 kinds
+/// never gave up).
+#[test]
+fn host_timeouts_say_where_the_host_never_gave_up() {
+    if !python_with("serial") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "host", "--profile", "seed", "--runs", "1", "--run-budget", "4s", "--out"])
+        .arg(dir.path().join("out"))
+        .arg("--")
+        .args(python("py_sync_forever.py", &["1"]))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let line = err.lines().find(|l| l.starts_with("host timeouts (")).unwrap_or_else(|| panic!("{err}"));
+    assert!(line.contains(" at most where it gave up (") && line.contains(" it neither sent nor exited)"), "{line}");
+}
+
+/// A hang with a thread on the CPU is signed by that thread's own frame, the loop that makes no
+/// progress (`parse_values`), and the thread that waits for it without a deadline goes in the
+/// message; it was signed by the waiting frame (issue 38 item 5).
+#[test]
+fn a_hang_with_a_spinning_thread_is_signed_by_that_thread() {
+    if !stack_tool() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("c_spinning_parser.c", &["-pthread"], dir.path()) else { return };
+    let mut r = run(vec![exe.display().to_string(), "{port}".into()]);
+    r.timeout_hang = Duration::from_secs(2);
+    r.budget = Duration::from_secs(8);
+    let c = campaign(r, "crlf", 8, false);
+    let found: Vec<(&str, &str)> =
+        c.findings.iter().map(|f| (f.verdict.signature.as_str(), f.verdict.message.as_str())).collect();
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].0, "hang in parse_values", "{found:?}");
+    assert!(
+        found[0].1.contains("was on the CPU") && found[0].1.contains("the main thread waits in command"),
         "{found:?}"
     );
 }

@@ -1569,6 +1569,7 @@ fn a_host_that_never_gives_up_is_measured_as_having_no_timeout() {
         hand_seed: 0,
         timeout_hang: Duration::from_millis(500),
         budget: Duration::from_secs(1),
+        link: None,
     };
     let c = calibrate(&run, None, 1, &std::sync::atomic::AtomicBool::new(false)).unwrap();
     assert!(!c.points.is_empty(), "the hand never fell silent on the host: {c:?}");

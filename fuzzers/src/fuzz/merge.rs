@@ -49,7 +49,7 @@ use super::device::action::HostAction;
 use super::device::corpus_name;
 use super::device::report::FuzzReport;
 use super::host::bundle::{BundleInfo, dir_name};
-use super::host::{Campaign, Finding};
+use super::host::{Campaign, Finding, PassAccount};
 use super::shard::{Provenance, ShardSetError};
 use crate::report::RunReport;
 use crate::report::merged::Merged;
@@ -348,6 +348,10 @@ fn load_campaign(dir: &Path, path: &Path, expected: &mut Expected) -> Result<Cam
         figure(path, field, v, MAX_COUNT)?;
     }
     figure(path, "elapsed_ms", c.elapsed_ms, MAX_ELAPSED_MS)?;
+    if let Some(p) = &c.pass {
+        figure(path, "pass.made", p.made, MAX_COUNT)?;
+        figure(path, "pass.complete_ms", p.complete_ms.unwrap_or_default(), MAX_ELAPSED_MS)?;
+    }
     figure(path, "corpus", c.corpus as u64, MAX_COUNT)?;
     figure(path, "paths", c.paths as u64, MAX_COUNT)?;
     for f in &c.findings {
@@ -427,6 +431,15 @@ pub fn merge_host(dirs: &[PathBuf]) -> Result<HostMerge, MergeError> {
         if merged.answer_kinds.is_empty() {
             merged.answer_kinds = c.answer_kinds;
             merged.pass_runs = c.pass_runs;
+        }
+        merged.void_runs = add(&path, "void_runs", merged.void_runs, c.void_runs)?;
+        merged.void.extend(c.void.into_iter().take(8usize.saturating_sub(merged.void.len())));
+        // Each shard made and missed runs of its own indices: the campaign's are their sums.
+        if let Some(p) = c.pass {
+            let m = merged.pass.get_or_insert_with(|| PassAccount { jobs: p.jobs, ..PassAccount::default() });
+            m.made = add(&path, "pass.made", m.made, p.made)?;
+            m.not_reached.extend(p.not_reached);
+            m.complete_ms = m.complete_ms.max(p.complete_ms);
         }
         for (op, states) in c.fired_at {
             let m = merged.fired_at.entry(op).or_default();

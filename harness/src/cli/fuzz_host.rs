@@ -83,6 +83,7 @@ impl HostArgs {
             hand_seed,
             timeout_hang: self.timeout_hang.unwrap_or(default_hang),
             budget: self.run_budget,
+            link: None,
         })
     }
 
@@ -202,14 +203,26 @@ pub struct Args {
     /// Run a bundle's schedule once and say whether its finding comes back.
     #[arg(long, value_name = "BUNDLE", conflicts_with_all = ["runs", "duration"])]
     replay: Option<PathBuf>,
-    /// N hands and N hosts at once, each pair on its own line (calibration runs up to 8 at
-    /// once, or N when more). The schedules are the same for
-    /// the same --seed and --jobs: run i's guidance sees runs 0..=i-N in order (a worker waits
-    /// for a slow one), so with a host that answers the same bytes the same way, the findings,
+    /// At most N hosts alive at once, each with its own hand on its own line: the runs,
+    /// calibration, minimization and hangs' confirmations all take one of N slots. The
+    /// schedules are the same for
+    /// the same --seed and --jobs: run i's guidance sees run 0 and runs 0..=i-N in order (a
+    /// worker waits for a slow one; the systematic pass, made of run 0, starts at run 1), so with a host that answers the same bytes the same way, the findings,
     /// their first run and minimized schedules come back run for run. Wall times do not, nor
     /// how many runs a --duration makes.
-    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=64))]
+    ///
+    /// Default 4: hosts mostly wait (for answers, for their timeouts), so four at once use the
+    /// cores a one-job campaign leaves idle (a pyserial host with 1 s timeouts: 80 runs in
+    /// 42 s at --jobs 1, 17 s at 4; a C host with 15 s timeouts: 31 runs in 2 min at 1, 57 and
+    /// the whole systematic pass at 4).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=64))]
     jobs: u64,
+    /// Give each slot's host a symbolic link to its pty as {port}, made at PATTERN with {slot}
+    /// (1 to --jobs) replaced, before its run and removed after it: for a host that opens only a
+    /// fixed device path (--link '/dev/ttyUSB{slot}'). A link never serves two live hosts; a run
+    /// whose port a process of another run opened is void, made again, never a finding.
+    #[arg(long, value_name = "PATTERN")]
+    link: Option<String>,
     /// Only these misbehaviours, optionally weighted: delay-above,truncate=5.
     #[arg(long, value_name = "LIST", value_parser = Weights::parse)]
     ops: Option<Weights>,
@@ -231,7 +244,8 @@ pub struct Args {
 
 /// Runs `gcl fuzz host`.
 pub fn run(args: Args) -> anyhow::Result<u8> {
-    let run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
+    let mut run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
+    run.link = link_pattern(&args, &run)?;
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -248,6 +262,28 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
         return Err(e.into());
     }
     Ok(host_exit(&opts, &campaign))
+}
+
+/// `--link PATTERN` as the runs' link: over a pty only; without `{slot}` only at `--jobs 1`
+/// (two slots would share one link); its folder must exist. A replay, one run, takes slot 1.
+fn link_pattern(args: &Args, run: &HostRun) -> anyhow::Result<Option<PathBuf>> {
+    let Some(p) = &args.link else { return Ok(None) };
+    if run.transport != Transport::Pty {
+        anyhow::bail!("--link makes a link to a pty: it cannot go with --tcp");
+    }
+    if !p.contains("{slot}") && args.jobs > 1 {
+        anyhow::bail!(
+            "--link {p}: without {{slot}} the {} slots of --jobs {} would share one link; put {{slot}} in it (/dev/ttyUSB{{slot}})",
+            args.jobs,
+            args.jobs
+        );
+    }
+    let first = PathBuf::from(p.replace("{slot}", "1"));
+    let dir = first.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    if !dir.is_dir() {
+        anyhow::bail!("--link {p}: no folder {} to make the link in", dir.display());
+    }
+    Ok(Some(PathBuf::from(p)))
 }
 
 /// The campaign's options from the arguments, around the host's run.
@@ -380,12 +416,15 @@ fn print_campaign_summary(campaign: &Campaign) {
         campaign.paths,
         campaign.corpus
     );
-    if campaign.pass_runs > 0 {
-        let kinds: Vec<&str> = campaign.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
+    if let Some(line) = campaign.pass_line() {
+        errln!("{}", printable(&line));
+    }
+    if campaign.void_runs > 0 {
         errln!(
-            "systematic pass: {} runs, every misbehaviour at every kind of answer ({})",
-            campaign.pass_runs,
-            printable(&kinds.join("; "))
+            "warning: {} run(s) void, made again and never judged: processes of two runs held one port ({}); \
+             a host that opens a fixed device path needs --link with {{slot}}",
+            campaign.void_runs,
+            printable(&campaign.void.join("; "))
         );
     }
     if !campaign.notes.is_empty() {
@@ -535,15 +574,30 @@ fn calibration_lines(c: &Calibration) -> Vec<String> {
         ));
         return lines;
     }
+    // The longest give-up time is the host's timeout only where it gave up: where it never
+    // did, the line says so beside it (it said `1.1 s` when 3 of 4 kinds never gave up).
+    let gave_up = c.by_kind.iter().filter(|k| k.gave_up_ms.is_some()).count();
+    let never = c.by_kind.len() - gave_up;
+    let timeouts = match (c.host_timeout_ms, never) {
+        (None, 0) => "none seen".to_string(),
+        (None, n) => format!("none seen: at all {n} kinds it neither sent nor exited"),
+        (Some(ms), 0) => secs(ms),
+        (Some(ms), n) => format!(
+            "{} at most where it gave up ({gave_up} of {} kinds; at {n} it neither sent nor exited)",
+            secs(ms),
+            c.by_kind.len()
+        ),
+    };
     lines.push(format!(
-        "host timeouts (the hand silent at each kind of answer): {}; hang timeout {} ({} calibration runs, {})",
-        c.host_timeout_ms.map_or("none seen".to_string(), secs),
+        "host timeouts (the hand silent at each kind of answer): {timeouts}; hang timeout {} ({} calibration runs, {})",
         secs(c.timeout_hang_ms),
         c.runs,
         secs(c.elapsed_ms)
     ));
     for k in &c.by_kind {
         let waited = match k.gave_up_ms {
+            // No wait at all is no give-up time (it said `gave up after 0.0 s`).
+            Some(ms) if ms < NO_WAIT_MS => "did not wait: sent or left within 0.1 s".to_string(),
             Some(ms) => format!("gave up after {}", secs(ms)),
             None if k.cut_by_share => {
                 format!("waited past {} (calibration's share ran out): neither sent nor exited", secs(k.waited_past_ms))
@@ -738,6 +792,7 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
                 )
             }))
             .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
+            .chain(c.pass_line().map(|l| ("systematic pass".into(), l.replacen("systematic pass: ", "", 1))))
             .chain(timeout_facts(opts, c))
             .collect(),
         merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),
@@ -778,6 +833,7 @@ fn timeout_facts(opts: &FuzzOptions, c: &Campaign) -> Vec<(String, String)> {
     )];
     for k in &cal.by_kind {
         let waited = match k.gave_up_ms {
+            Some(ms) if ms < NO_WAIT_MS => "did not wait: sent or left within 0.1 s".to_string(),
             Some(ms) => format!("gave up after {}", secs(ms)),
             None => format!("waited past {}", secs(k.waited_past_ms)),
         };
@@ -804,6 +860,8 @@ fn replay(args: &Args, mut run: HostRun, dir: &std::path::Path) -> anyhow::Resul
     if let (false, Some(ms)) = (args.host.timeout_hang_given(), info.timeout_hang_ms) {
         run.timeout_hang = std::time::Duration::from_millis(ms);
     }
+    // One run: slot 1's link.
+    run.link = run.link.map(|l| l.to_string_lossy().replace("{slot}", "1").into());
     let r = run_once(&run, &schedule)?;
     // A host that never talked to the hand reproduces nothing, and refutes nothing either.
     if let Some(why) = gcl_harness::fuzz::host::unreached(&r, &run.command) {

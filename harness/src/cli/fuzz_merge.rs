@@ -144,6 +144,7 @@ fn host(a: &Args) -> anyhow::Result<u8> {
             hand_seed: m.report.options.seed.unwrap_or(0),
             timeout_hang: std::time::Duration::ZERO,
             budget: std::time::Duration::ZERO,
+            link: None,
         },
         seed: m.report.options.seed.unwrap_or(0),
         runs: None,

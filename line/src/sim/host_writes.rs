@@ -486,6 +486,20 @@ fn tcp_info(sock: &OwnedFd) -> Option<libc::tcp_info> {
     }
 }
 
+/// Puts a pty's master in packet mode (`TIOCPKT`): each read of it then begins with a status
+/// byte, 0 before the slave's output, or alone with `TIOCPKT_FLUSHREAD` set once the slave's
+/// input was flushed (`tcflush(TCIFLUSH)` by the host), which [`super::pty`] takes for a read.
+/// No safe wrapper we use has this ioctl.
+pub fn pty_packet_mode(master: std::os::fd::BorrowedFd<'_>) -> std::io::Result<()> {
+    let on: libc::c_int = 1;
+    // SAFETY: TIOCPKT reads one c_int through the pointer, which lives across the call; the
+    // descriptor is borrowed, so open.
+    if unsafe { libc::ioctl(master.as_raw_fd(), libc::TIOCPKT, &on) } < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,7 +14,7 @@
 //! the pace follows the hand's BAUD, `--baud`, or nothing. Past 64 KiB of output the host has not
 //! taken (`OUT_CAP`) it stops taking host bytes and never drops them. Stale EEPROM temporaries are
 //! removed at start; the trace is flushed per line. `host_writes` is the crate's one module with
-//! `unsafe`, for system calls no safe wrapper we use has.
+//! `unsafe`, for system calls no safe wrapper we use has (also the pty master's packet mode).
 
 mod eeprom;
 mod engine;

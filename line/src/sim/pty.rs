@@ -20,7 +20,9 @@
 //! is judged at the speed the host has set then (read with `TCGETS2`, so the serialport crate's
 //! arbitrary rates too; within 2 % is the same rate), and garbled on a mismatch, which is noted in
 //! the trace and told to the CLI once per change. The transport also follows the host's reads and
-//! writes in order, to tell a host that writes before reading its answer.
+//! writes in order, to tell a host that writes before reading its answer; on such a (tapped) line
+//! the master is in packet mode, so a host's flush of its input (`tcflush(TCIFLUSH)`), which
+//! consumes what was waiting as a read does, is seen too.
 
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, AsRawFd, BorrowedFd, OwnedFd};
@@ -81,7 +83,14 @@ pub struct Pty {
     /// The host wrote after output went to it and before it read any of it (a write seen
     /// before the read): the next bytes judged were sent with that output unread.
     wrote_before_read: bool,
+    /// The master is in packet mode (a tapped line): the host's flushes of its input are seen.
+    packet: bool,
 }
+
+/// The status byte a pty master in packet mode puts before the slave's output.
+const TIOCPKT_DATA: u8 = 0;
+/// The status bit of a pty master in packet mode that says the slave's input was flushed.
+const TIOCPKT_FLUSHREAD: u8 = 1;
 
 fn pty_err(what: &str, e: impl std::fmt::Display) -> SimError {
     SimError::Pty(format!("{what}: {e}"))
@@ -148,6 +157,7 @@ impl Pty {
             expect_modify: false,
             pending_write: false,
             wrote_before_read: false,
+            packet: false,
             master: pair.master,
             slave: pair.slave,
             path,
@@ -295,6 +305,32 @@ impl Pty {
             }
         }
         let _ = termios::tcflush(&self.slave, FlushArg::TCIFLUSH);
+        // That flush is ours, not the host's: its status is taken off the master now, so
+        // that the next host's reads are not credited with it.
+        if self.packet {
+            let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLPRI)];
+            let status = nix::poll::poll(&mut fds, nix::poll::PollTimeout::ZERO).is_ok_and(|n| n > 0)
+                && fds[0].revents().is_some_and(|r| r.contains(PollFlags::POLLPRI));
+            if status {
+                // In packet mode a pending status is read before any data, alone.
+                let mut one = [0u8; 1];
+                let _ = nix::unistd::read(self.master.as_raw_fd(), &mut one);
+            }
+        }
+    }
+
+    /// The host flushed its input (`tcflush(TCIFLUSH)` or `TCIOFLUSH`, pyserial's
+    /// `reset_input_buffer`): what was waiting for it is consumed, as by a read. The flush
+    /// happened after the master's last read; a write seen since whose bytes have not been read
+    /// yet is taken to follow it (a host that writes, then flushes an answer it had not read,
+    /// is missed; one that flushes, then writes, is never taken for one that did not read).
+    fn flushed(&mut self) {
+        self.take_reads();
+        self.wrote_since_read = false;
+        if self.pending_write {
+            self.wrote_before_read = false;
+        }
+        self.expect_modify = false;
     }
 
     /// Whether the host left output unread when it wrote the bytes just read: output went out
@@ -415,6 +451,9 @@ impl Pty {
         if !tapped {
             self.reads = None;
         }
+        // A tapped line also sees the host flush its input (a flush is a read); where the
+        // kernel refuses packet mode, a flush goes unseen as before.
+        self.packet = tapped && super::host_writes::pty_packet_mode(self.master.as_fd()).is_ok();
         // Nobody has the port open yet (a host that opened it already is seen next).
         if self.open {
             self.open = false;
@@ -481,14 +520,25 @@ impl Pty {
                             backoff_until = Some(Instant::now() + BACKOFF);
                             break;
                         }
+                        // In packet mode: a status alone (a flush of the host's input), or
+                        // the host's bytes after a 0.
+                        Ok(_) if self.packet && buf[0] != TIOCPKT_DATA => {
+                            if buf[0] & TIOCPKT_FLUSHREAD != 0 {
+                                self.flushed();
+                            }
+                        }
                         Ok(n) => {
+                            let data = if self.packet { &mut buf[1..n] } else { &mut buf[..n] };
+                            if data.is_empty() {
+                                continue;
+                            }
                             if tapped {
                                 engine.host_unread(self.host_has_unread());
                             }
                             if self.garbled(engine, engine.line_baud()) {
-                                buf[..n].iter_mut().for_each(|b| *b = garble(*b));
+                                data.iter_mut().for_each(|b| *b = garble(*b));
                             }
-                            engine.input(&buf[..n]);
+                            engine.input(data);
                         }
                         Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
                         Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,

@@ -149,6 +149,9 @@ pub struct HostChecker {
     line: Vec<u8>,
     /// The last line the host ended (with CR), for a message about what followed it.
     last_line: Option<Vec<u8>>,
+    /// An LF came while the line under way was being typed (`LF sent`, a host that ends its
+    /// lines with LF): the line that never ends with CR is that one bug, not a second.
+    lf_in_line: bool,
     /// The last byte the host sent since the hand's last answer reached it or the port was
     /// last opened (for CR CR: a lone CR after an answer or a reopen is a resync).
     prev: Option<u8>,
@@ -206,6 +209,7 @@ impl HostChecker {
             profile,
             line: Vec::new(),
             last_line: None,
+            lf_in_line: false,
             prev: None,
             unread: false,
             misbehaved: false,
@@ -264,11 +268,22 @@ impl HostChecker {
         }
     }
 
-    /// The name of the answer the hand is about to send (for misbehaviour reports).
-    pub fn answer_state(&self, device: &Device) -> String {
+    /// The name of the answer the hand is about to send, `bytes` (for misbehaviour reports):
+    /// by the command its echo names, else the host's last command (a host that sent its next
+    /// line before this answer came has a last command this answer is not to).
+    pub fn answer_state(&self, device: &Device, bytes: &[u8]) -> String {
         // The answer to LOOP itself is the last supervisory one (the loop starts after it).
         if device.mode() == Mode::Loop && self.mode == Mode::Loop {
             return "RealTime feedback".to_string();
+        }
+        let echo = bytes.split(|b| *b == b'\n').next().unwrap_or_default();
+        if !echo.is_empty()
+            && let Ok(Line::Command(c)) = gcl_model::parse_line(&self.profile, echo)
+        {
+            let canon = c.to_line(&self.profile);
+            let word =
+                canon.split_whitespace().next().unwrap_or_default().trim_start_matches(|c: char| c.is_ascii_digit());
+            return format!("answer to {word}");
         }
         match &self.last_command {
             Some(c) => format!("answer to {c}"),
@@ -357,6 +372,7 @@ impl HostChecker {
     fn supervisory_byte(&mut self, b: u8) {
         if b == self.profile.framing.abort {
             self.line.clear();
+            self.lf_in_line = false;
             self.pending = true;
             self.broken = true;
             self.last_command = Some("^C".into());
@@ -372,15 +388,16 @@ impl HostChecker {
                 ([], None, _) => "LF before any line".to_string(),
                 (line, _, _) => format!("LF after \"{}\"", esc(line)),
             };
+            self.lf_in_line |= !self.line.is_empty();
             self.violate(HostClause::LineEnding, "LF sent", detail);
             return;
         }
         if self.sends_early() {
-            let cmd = self.last_command.clone().unwrap_or_default();
-            self.early(
-                "sent before the prompt",
-                format!("byte \"{}\" sent before the answer to {cmd} had ended", esc(&[b])),
-            );
+            let answer = match &self.last_command {
+                Some(cmd) if !cmd.is_empty() => format!("the answer to {cmd}"),
+                _ => "the hand's answer".to_string(),
+            };
+            self.early("sent before the prompt", format!("byte \"{}\" sent before {answer} had ended", esc(&[b])));
         }
         if b == self.profile.framing.terminator {
             self.end_line();
@@ -392,6 +409,7 @@ impl HostChecker {
     fn end_line(&mut self) {
         // LF never enters the line (`host_bytes` grades it apart).
         let text = std::mem::take(&mut self.line);
+        self.lf_in_line = false;
         self.last_line = Some(text.clone());
         if text.iter().all(|c| c.is_ascii_whitespace()) {
             if self.prev == Some(self.profile.framing.terminator) {
@@ -582,6 +600,7 @@ impl HostChecker {
         self.block_split = None;
         self.desynced = false;
         self.line.clear();
+        self.lf_in_line = false;
         self.misbehaved = true;
         self.broken = true;
     }
@@ -608,8 +627,9 @@ impl HostChecker {
                 "the host went away with the hand in its RealTime loop".into(),
             );
         }
-        if !self.line.is_empty() {
-            // A line must end in CR: the last one too (framing, not RealTime).
+        if !self.line.is_empty() && !self.lf_in_line {
+            // A line must end in CR: the last one too (framing, not RealTime). One ended with
+            // LF is already `LF sent`.
             self.violate(
                 HostClause::LineEnding,
                 "unterminated line",
@@ -679,7 +699,8 @@ mod tests {
 
     #[test]
     fn each_clause_is_caught() {
-        assert_eq!(run(&[b"FGET DP\n"]), vec![HostClause::LineEnding, HostClause::LineEnding]);
+        // One bug, one violation: a line ended with LF is not also a line never ended with CR.
+        assert_eq!(run(&[b"FGET DP\n"]), vec![HostClause::LineEnding]);
         assert_eq!(run(&[b"FGET DP\r\n"]), vec![HostClause::LineEnding]);
         assert_eq!(run(&[b"FGET QQ\r"]), vec![HostClause::ValidCommands]);
         assert_eq!(run(&[b"FGET DP\rFGET DP\r"]), vec![HostClause::WaitsForAnswer]);
@@ -687,6 +708,47 @@ mod tests {
         assert_eq!(run(&[b"HI\r", b"1LOOP\r"]), vec![HostClause::LeavesCleanly]);
         // ^C may interrupt anything.
         assert_eq!(run(&[b"FGET DP\r\x03"]), vec![]);
+    }
+
+    /// A host that ends its lines with LF: one violation, `LF sent`, not also `unterminated
+    /// line` for the same line (it was two findings); a line with no end at all is still one.
+    #[test]
+    fn a_line_ended_with_lf_is_one_violation() {
+        let kinds = |host: &[&[u8]]| checked(host).violations().iter().map(|v| v.kind.clone()).collect::<Vec<_>>();
+        assert_eq!(kinds(&[b"HI\n"]), vec!["LF sent"]);
+        assert_eq!(kinds(&[b"HI\nFGET P\n"]), vec!["LF sent"]);
+        assert_eq!(kinds(&[b"HI\r", b"FGET P"]), vec!["unterminated line"]);
+        assert_eq!(kinds(&[b"HI\n\x03", b"FGET P"]), vec!["LF sent", "unterminated line"]);
+    }
+
+    /// An answer is named by the command its echo names: a host that sent `FGET P` before the
+    /// answer to HI came had its answer to HI named "answer to FGET".
+    #[test]
+    fn an_answer_is_named_by_its_echo() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let mut c = HostChecker::new(p);
+        c.host_bytes(&d, b"HI\rFGET P\r");
+        assert_eq!(c.answer_state(&d, b"HI\n\r=> "), "answer to HI");
+        assert_eq!(c.answer_state(&d, b"FGET P\n\r0 0 0 0\n\r=> "), "answer to FGET");
+        // No echo (a prompt alone): the last command.
+        assert_eq!(c.answer_state(&d, b"\n\r=> "), "answer to FGET");
+    }
+
+    /// A byte sent early before any command names the hand's answer, not an empty command
+    /// (`before the answer to  had ended`).
+    #[test]
+    fn an_early_byte_before_any_command_names_the_hands_answer() {
+        let p = Profile::builtin("seed").unwrap();
+        let d = Device::with_profile(p.clone());
+        let mut c = HostChecker::new(p);
+        c.hand_bytes(&d, b"\n\r=> ", false);
+        c.delivered();
+        c.host_unread(true);
+        c.host_bytes(&d, b"HI\r");
+        let v = c.violations();
+        assert_eq!(v.len(), 1, "{v:?}");
+        assert_eq!(v[0].detail, "byte \"H\" sent before the hand's answer had ended", "{v:?}");
     }
 
     /// An LF says which line it followed: the one a CR just ended (`"1FGET P" and its CR`), the

@@ -187,7 +187,33 @@ fn function_name(func: &str) -> String {
         f = f[..open].trim_end();
     }
     let f = f.split("[abi:").next().unwrap_or(f);
-    f.to_string()
+    trim_templates(f)
+}
+
+/// A function's name with each template argument list shown as `<…>`
+/// (`reactive_socket_recv_op<boost::asio::mutable_buffers_1, …>::do_complete` →
+/// `reactive_socket_recv_op<…>::do_complete`): a Boost frame's arguments ran to thousands of
+/// characters in one message. `operator<`, `operator<<`, `operator->` stay; a name whose
+/// brackets do not balance stays whole.
+fn trim_templates(f: &str) -> String {
+    let mut out = String::with_capacity(f.len());
+    let mut depth = 0usize;
+    for (i, c) in f.char_indices() {
+        let operator = depth == 0 && (f[..i].ends_with("operator") || f[..i].ends_with("operator<"));
+        match c {
+            '<' if operator => out.push(c),
+            '<' => {
+                if depth == 0 {
+                    out.push_str("<…>");
+                }
+                depth += 1;
+            }
+            '>' if depth > 0 => depth -= 1,
+            _ if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    if depth == 0 { out } else { f.to_string() }
 }
 
 /// The index of the `(` that opens the parenthesised group `s` ends with.
@@ -681,19 +707,82 @@ fn own_first(all: Vec<(String, bool)>) -> Option<(String, Option<String>)> {
 /// Samples the stack of a stopped-in-place native process with `gdb -batch` or, failing that,
 /// `eu-stack` (each when installed; each given 10 s). `None` when neither is there, the
 /// process cannot be traced, or no frame could be read.
+///
+/// A host with a thread on the CPU (a parser whose loop makes no progress, while the caller
+/// waits for it without a deadline) is hung in that thread: the stack is that thread's, and the
+/// thread that waits (the main one) is named in `by`, for the message.
 pub fn sample_native(pid: i32) -> Option<HangStack> {
+    let busy = busy_thread(pid, BUSY_WINDOW);
+    let bt = if busy.is_some() { "thread apply all bt" } else { "bt" };
     // gdb first: it demangles Rust's v0 symbols (`_RNv…`), which eu-stack prints raw.
     let tools: [(&str, Vec<String>); 2] = [
-        ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), "bt".into()]),
+        ("gdb", vec!["-batch".into(), "-nx".into(), "-p".into(), pid.to_string(), "-ex".into(), bt.into()]),
         ("eu-stack", vec!["-m".into(), "-p".into(), pid.to_string()]),
     ];
     for (tool, args) in tools {
         let Some(out) = run_bounded(tool, &args, std::time::Duration::from_secs(10)) else { continue };
+        if let Some(tid) = busy
+            && let Some((frames, waits_in)) = thread_section(&out, tid).and_then(|t| native_frames(&t))
+        {
+            let waiting = (tid != pid)
+                .then(|| thread_section(&out, pid).and_then(|t| native_frames(&t)))
+                .flatten()
+                .map(|(f, w)| match w {
+                    Some(w) => format!("; the main thread waits in {f}, in {w}"),
+                    None => format!("; the main thread waits in {f}"),
+                })
+                .unwrap_or_default();
+            let by = format!("{tool}: thread {tid} was on the CPU, a loop that makes no progress{waiting}");
+            return Some(HangStack { by, frames, waits_in, blocked_in: None });
+        }
         if let Some((frames, waits_in)) = native_frames(&out) {
             return Some(HangStack { by: tool.to_string(), frames, waits_in, blocked_in: None });
         }
     }
     None
+}
+
+/// How long a hung host's threads are watched for one on the CPU.
+const BUSY_WINDOW: std::time::Duration = std::time::Duration::from_millis(300);
+
+/// The thread of `pid` that ran on the CPU most while it was watched for `window`, when it ran
+/// for a third of it at least (a loop that makes no progress, on a machine that may be busy):
+/// its id. A host that waits uses next to none.
+fn busy_thread(pid: i32, window: std::time::Duration) -> Option<i32> {
+    let cpu = || -> Option<std::collections::BTreeMap<i32, u64>> {
+        let mut m = std::collections::BTreeMap::new();
+        for t in std::fs::read_dir(format!("/proc/{pid}/task")).ok()?.flatten() {
+            let Some(tid) = t.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            let stat = std::fs::read_to_string(t.path().join("stat")).unwrap_or_default();
+            // utime and stime: fields 14 and 15, the 12th and 13th after the name.
+            let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
+            let ticks = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+            m.insert(tid, ticks(11) + ticks(12));
+        }
+        Some(m)
+    };
+    let before = cpu()?;
+    std::thread::sleep(window);
+    let after = cpu()?;
+    // /proc counts CPU time in USER_HZ, 100 a second on Linux whatever the kernel's own tick.
+    let per_second = 100.0;
+    let (tid, used) = after
+        .iter()
+        .filter_map(|(t, v)| Some((*t, v.checked_sub(*before.get(t)?)?)))
+        .max_by_key(|(t, used)| (*used, std::cmp::Reverse(*t)))?;
+    (used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
+}
+
+/// The lines of one thread's stack in a stack tool's text of every thread (`Thread 2 (Thread
+/// 0x7f... (LWP 1235) ...):` from gdb, `TID 1235:` from eu-stack), its header first.
+fn thread_section(text: &str, tid: i32) -> Option<String> {
+    let lwp = format!("(LWP {tid})");
+    let eu = format!("TID {tid}:");
+    let header = |l: &str| l.starts_with("Thread ") || l.starts_with("TID ");
+    let mut lines = text.lines().map(str::trim);
+    lines.find(|l| header(l) && (l.contains(&lwp) || *l == eu))?;
+    let body: Vec<&str> = lines.take_while(|l| !header(l)).collect();
+    Some(format!("Thread {tid}\n{}", body.join("\n")))
 }
 
 /// Runs a tool with a deadline; its stdout, or `None` when it is missing or overran.
@@ -956,6 +1045,40 @@ mod tests {
     /// A hang is named by the innermost frame of the host's own code: the system's frames it
     /// waits in (libc's `syscall` as gdb prints it with libc's sources, Boost.Asio's header
     /// code, libstdc++'s) go in the message, whichever tool took the stack.
+    #[test]
+    fn a_template_frame_is_named_without_its_template_arguments() {
+        assert_eq!(
+            function_name(
+                "boost::asio::detail::reactive_socket_recv_op<boost::asio::mutable_buffers_1, \
+                 boost::asio::detail::read_op<boost::asio::basic_serial_port<boost::asio::any_io_executor>, \
+                 std::vector<char, std::allocator<char> > > >::do_complete(void*, int)"
+            ),
+            "boost::asio::detail::reactive_socket_recv_op<…>::do_complete"
+        );
+        assert_eq!(function_name("std::vector<int>::operator[](unsigned long)"), "std::vector<…>::operator[]");
+        assert_eq!(function_name("Port::operator<<(char const*)"), "Port::operator<<");
+        assert_eq!(function_name("operator<(Pos const&, Pos const&)"), "operator<");
+        assert_eq!(function_name("Ptr<int>::operator->()"), "Ptr<…>::operator->");
+        assert_eq!(function_name("read_line"), "read_line");
+    }
+
+    /// One thread's stack out of gdb's `thread apply all bt` or eu-stack's listing.
+    #[test]
+    fn one_threads_stack_is_cut_out_of_every_threads() {
+        let gdb = "Thread 2 (Thread 0x7f00 (LWP 1235) \"host\"):\n#0  0x0000 in parse_values (a=0x1) at h.c:20\n\
+                   #1  0x0000 in parser (arg=0x0) at h.c:50\n\n\
+                   Thread 1 (Thread 0x7f01 (LWP 1234) \"host\"):\n#0  0x0000 in __futex_wait () from /lib/libc.so.6\n\
+                   #1  0x0000 in command (line=0x1) at h.c:70\n#2  0x0000 in main () at h.c:80\n";
+        let busy = thread_section(gdb, 1235).and_then(|t| native_frames(&t)).unwrap();
+        assert_eq!(busy.0, "parse_values < parser");
+        let main = thread_section(gdb, 1234).and_then(|t| native_frames(&t)).unwrap();
+        assert_eq!(main.0, "command < main");
+        assert_eq!(thread_section(gdb, 99), None);
+        let eu = "PID 1234 - process\nTID 1234:\n#0  0x7f in __futex_wait - /lib/libc.so.6\n#1  0x55 in command - /h\n\
+                  TID 1235:\n#0  0x55 in parse_values - /h\n";
+        assert_eq!(thread_section(eu, 1235).and_then(|t| native_frames(&t)).unwrap().0, "parse_values");
+    }
+
     #[test]
     fn a_hang_under_system_libraries_is_named_by_the_hosts_frame() {
         let gdb = "#0  syscall () at ../sysdeps/unix/sysv/linux/x86_64/syscall.S:38\n#1  0x000055 in boost::asio::detail::descriptor_ops::poll_read (d=3, state=0 '\\000', msec=-1, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:450\n#2  0x000055 in boost::asio::detail::descriptor_ops::sync_read (d=3, state=0 '\\000', bufs=0x7ff, count=1, all_empty=false, ec=...) at /usr/include/boost/asio/detail/impl/descriptor_ops.ipp:160\n#3  0x000055 in BarrettHand::initialize (this=0x7ffd) at src/hand.cpp:88\n#4  0x000055 in main () at src/main.cpp:12\n";

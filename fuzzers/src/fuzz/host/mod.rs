@@ -25,7 +25,8 @@
 //! kinds of answer (each operator at each kind it applies to, in rounds; a line-rate run first when
 //! unpaced). A silent wrong value is named by the host's `WHERE`, else by the answer it came from.
 //! Operators are counted by protocol state and notes by runs. Runs are taken in index order and run
-//! i is scheduled from runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run.
+//! i is scheduled from run 0 and runs 0..=i-jobs only, so `--jobs` campaigns repeat run for run
+//! (and the pass starts at run 1 whatever `--jobs`).
 //!
 //! The campaign (`Campaign`) is `fuzz.json` beside the reports; its schema is
 //! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/report_schema.rs`). A campaign
@@ -438,10 +439,131 @@ pub const DEFAULT_DURATION: Duration = Duration::from_secs(5 * 60);
 /// not measured by then it leaves, and the campaign goes on with what it measured.
 pub const CALIBRATION_SHARE: u32 = 4;
 
-/// Calibration's silent hands run this many at once (or `--jobs`, when more): a host that
-/// never gives up at one kind of answer does not keep the others from being measured, and
-/// calibration takes about the longest wait, not their sum.
-pub const CALIBRATION_JOBS: usize = 8;
+/// A run found void (processes of two runs held its port) is made again up to this many
+/// times; then it is left out, never a finding.
+pub const VOID_RETRIES: usize = 3;
+
+/// Most void runs described in [`Campaign::void`].
+const VOID_KEPT: usize = 8;
+
+/// A campaign's slots: at most `jobs` hosts alive at once, whatever runs them (the runs,
+/// calibration, minimization, a hang's confirmation), each run in one slot, taken in the order
+/// asked for. A run's `link` may name its slot (`{slot}`, from 1): each slot has its own link,
+/// so a link never serves two live hosts. A run found void ([`RunError::Shared`]) is made again
+/// ([`VOID_RETRIES`]), and counted.
+#[derive(Debug)]
+pub struct Slots {
+    state: Mutex<SlotState>,
+    freed: Condvar,
+    /// Void runs, and how the first few were void.
+    void: Mutex<(u64, Vec<String>)>,
+}
+
+#[derive(Debug)]
+struct SlotState {
+    /// Each slot: taken or free.
+    taken: Vec<bool>,
+    /// The next ticket given, and the ticket served next.
+    next: u64,
+    serving: u64,
+    /// Tickets given up (their run called off) before they were served.
+    abandoned: BTreeSet<u64>,
+}
+
+impl SlotState {
+    /// The next ticket not given up is served next.
+    fn advance(&mut self) {
+        self.serving += 1;
+        while self.abandoned.remove(&{ self.serving }) {
+            self.serving += 1;
+        }
+    }
+}
+
+impl Slots {
+    /// `jobs` slots (at least one).
+    pub fn new(jobs: usize) -> Slots {
+        Slots {
+            state: Mutex::new(SlotState {
+                taken: vec![false; jobs.max(1)],
+                next: 0,
+                serving: 0,
+                abandoned: BTreeSet::new(),
+            }),
+            freed: Condvar::new(),
+            void: Mutex::new((0, Vec::new())),
+        }
+    }
+
+    /// Waits for a free slot, in turn; `None` when `stop` is set first.
+    fn take(&self, stop: &AtomicBool) -> Option<usize> {
+        let mut st = self.state.lock().ok()?;
+        let ticket = st.next;
+        st.next += 1;
+        loop {
+            if st.serving == ticket
+                && let Some(k) = st.taken.iter().position(|t| !t)
+            {
+                st.taken[k] = true;
+                st.advance();
+                self.freed.notify_all();
+                return Some(k);
+            }
+            if stop.load(Ordering::Relaxed) {
+                if st.serving == ticket {
+                    st.advance();
+                } else {
+                    st.abandoned.insert(ticket);
+                }
+                self.freed.notify_all();
+                return None;
+            }
+            st = self.freed.wait_timeout(st, Duration::from_millis(50)).ok()?.0;
+        }
+    }
+
+    fn give(&self, k: usize) {
+        if let Ok(mut st) = self.state.lock() {
+            st.taken[k] = false;
+        }
+        self.freed.notify_all();
+    }
+
+    /// Runs `schedule` in a slot (its link, when `run` has one, made for the slot): made again
+    /// when void, up to [`VOID_RETRIES`] times, then [`RunError::Shared`].
+    pub fn run(&self, run: &HostRun, schedule: &Schedule, stop: &AtomicBool) -> Result<RunResult, RunError> {
+        let Some(k) = self.take(stop) else { return Err(RunError::Cancelled) };
+        let mut spec = run.clone();
+        if let Some(l) = &run.link {
+            spec.link = Some(l.to_string_lossy().replace("{slot}", &(k + 1).to_string()).into());
+        }
+        let mut tries = 0;
+        let r = loop {
+            match run_once_until(&spec, schedule, stop) {
+                Err(RunError::Shared(why)) => {
+                    if let Ok(mut v) = self.void.lock() {
+                        v.0 += 1;
+                        if v.1.len() < VOID_KEPT {
+                            v.1.push(why.clone());
+                        }
+                    }
+                    tries += 1;
+                    if tries > VOID_RETRIES {
+                        break Err(RunError::Shared(why));
+                    }
+                }
+                other => break other,
+            }
+        };
+        self.give(k);
+        r
+    }
+
+    /// Void runs so far, and how the first few were.
+    fn voided(&self) -> (u64, Vec<String>) {
+        self.void.lock().map(|v| v.clone()).unwrap_or_default()
+    }
+}
 
 /// One kind of answer calibration silenced the hand at, and how long the host waited there.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -498,6 +620,12 @@ pub struct Calibration {
     /// the hand fell silent: hangs calibration saw, which the campaign confirms and reports.
     #[serde(skip)]
     pub suspects: Vec<(Schedule, RunResult)>,
+    /// Runs found void (processes of two runs held one port) and made again.
+    #[serde(skip)]
+    pub void_runs: u64,
+    /// How the first few of them were void.
+    #[serde(skip)]
+    pub void: Vec<String>,
 }
 
 /// The hang timeout for a host that gives up after `host_timeout` at most: twice as long plus
@@ -511,8 +639,8 @@ pub fn hang_timeout(host_timeout: Option<Duration>, floor: Duration, cap: Durati
 /// Measures how long the host waits when the hand goes silent, at every kind of answer: a run
 /// without misbehaviour (for the kinds of answer it gives, those the systematic pass covers),
 /// then, for each kind, a run where the hand goes silent at its first answer, waiting up to
-/// [`CALIBRATION_CAP`] (or the run budget) for the host to send or exit; [`CALIBRATION_JOBS`]
-/// of them at once (or `jobs`, when more). The hang timeout is [`hang_timeout`] of the longest wait seen. With `share`, it ends
+/// [`CALIBRATION_CAP`] (or the run budget) for the host to send or exit; `jobs` of them at once
+/// at most (the campaign's slots: [`Slots`]). The hang timeout is [`hang_timeout`] of the longest wait seen. With `share`, it ends
 /// within that time: each run's wait is cut to what is left of it, and kinds not reached are
 /// left unmeasured ([`Calibration::unmeasured`]). A run where the host waited longer than
 /// the hang timeout without acting is a hang calibration saw ([`Calibration::suspects`]).
@@ -529,9 +657,10 @@ pub fn calibrate(
         r.timeout_hang = CALIBRATION_CAP.min(run.budget).min(left());
         r.budget = run.budget.min(left());
     };
+    let slots = Slots::new(jobs);
     let mut quiet = run.clone();
     limited(&mut quiet);
-    let clean = run_once_until(&quiet, &Schedule::default(), stop)?;
+    let clean = slots.run(&quiet, &Schedule::default(), stop)?;
     if let Some(why) = unreached(&clean, &run.command) {
         let timeout_hang_ms = run.timeout_hang.as_millis() as u64;
         let elapsed_ms = started.elapsed().as_millis() as u64;
@@ -561,7 +690,7 @@ pub fn calibrate(
                 continue;
             }
             let silence = Schedule { planned: vec![Planned { answer: k.answer, op: Operator::Silence, arg: 0 }] };
-            match run_once_until(&r, &silence, stop) {
+            match slots.run(&r, &silence, stop) {
                 Ok(result) => {
                     if result.fired.is_empty() {
                         continue;
@@ -584,6 +713,12 @@ pub fn calibrate(
                         m.push((i, Some((point, suspect))));
                     }
                 }
+                // Void every time: left unmeasured.
+                Err(RunError::Shared(_)) => {
+                    if let Ok(mut m) = measured.lock() {
+                        m.push((i, None));
+                    }
+                }
                 Err(e) => {
                     if let Ok(mut slot) = error.lock() {
                         slot.get_or_insert(e);
@@ -594,7 +729,7 @@ pub fn calibrate(
         }
     };
     std::thread::scope(|s| {
-        for _ in 0..jobs.max(CALIBRATION_JOBS).min(kinds.len()).max(1) {
+        for _ in 0..jobs.min(kinds.len()).max(1) {
             s.spawn(worker);
         }
     });
@@ -638,6 +773,7 @@ pub fn calibrate(
             (s, r)
         })
         .collect();
+    (c.void_runs, c.void) = slots.voided();
     c.elapsed_ms = started.elapsed().as_millis() as u64;
     Ok(c)
 }
@@ -738,6 +874,10 @@ pub struct Campaign {
     /// Runs of the systematic pass (made or not: a short campaign may end inside it).
     #[serde(default)]
     pub pass_runs: u64,
+    /// How much of the systematic pass this campaign made, and what it did not reach
+    /// ([`Campaign::pass_line`] says it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pass: Option<PassAccount>,
     /// What makes it (a shard of) a campaign: its `--shard`, seed and options, and for a
     /// merged folder the shards it holds. Set by the CLI, which knows the options as given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -754,6 +894,200 @@ pub struct Campaign {
     /// the caller that heard it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+    /// Runs found void, calibration's included: processes of two runs held one port (a host
+    /// that opens a fixed device path, linked to another run's port). Each was made again
+    /// ([`VOID_RETRIES`] times at most), none judged.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub void_runs: u64,
+    /// How the first few of them were void.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub void: Vec<String>,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
+/// A run of the systematic pass that a campaign was to make and did not (its runs or its
+/// time ran out first, or a signal stopped it).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PassLeft {
+    /// The misbehaviour.
+    pub op: Operator,
+    /// The answer it was planned at: the first of its kind.
+    pub answer: u32,
+    /// That kind of answer (`banner, prompt`).
+    pub kind: String,
+}
+
+/// How much of its systematic pass a campaign made: the runs made, those not reached, and
+/// about how long a campaign with the same `--jobs` needs to make them all.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PassAccount {
+    /// Runs of the pass made (each ran to its end, whatever it found).
+    pub made: u64,
+    /// The runs of the pass this campaign was to make and did not, in the pass's order (a
+    /// shard's: those of its own run indices).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_reached: Vec<PassLeft>,
+    /// About how long, milliseconds, a campaign with the same `--jobs` takes from its start to
+    /// the end of the whole pass (calibration, the runs before the pass, the pass), estimated
+    /// from the runs made (by misbehaviour) and calibration's waits; absent when the pass was
+    /// complete or nothing was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub complete_ms: Option<u64>,
+    /// The campaign's `--jobs`, which the estimate is for.
+    pub jobs: u64,
+}
+
+impl PassAccount {
+    /// Every run of the pass this campaign was to make was made.
+    pub fn complete(&self) -> bool {
+        self.not_reached.is_empty()
+    }
+}
+
+/// A duration for people, rounded: `40 s` below two minutes, else whole minutes, up.
+pub fn about(ms: u64) -> String {
+    if ms < 120_000 { format!("{} s", ms.div_ceil(1000).max(1)) } else { format!("{} min", ms.div_ceil(60_000)) }
+}
+
+impl Campaign {
+    /// What the summary says of the systematic pass: how many of its runs were made, and,
+    /// only when all were, that every misbehaviour met every kind of answer; else what was not
+    /// reached and about how long a complete pass needs. `None` without a pass (the campaign
+    /// ended before run 0 was taken in, or no misbehaviour applies).
+    pub fn pass_line(&self) -> Option<String> {
+        if self.pass_runs == 0 {
+            return None;
+        }
+        let kinds: Vec<&str> = self.answer_kinds.iter().map(|k| k.kind.as_str()).collect();
+        let kinds = kinds.join("; ");
+        let Some(p) = &self.pass else {
+            return Some(format!(
+                "systematic pass: {} runs planned (how many were made is not recorded) ({kinds})",
+                self.pass_runs
+            ));
+        };
+        let owned = p.made + p.not_reached.len() as u64;
+        // A shard's share, or a merge of some shards: the other runs are other shards'.
+        let others = self.pass_runs.saturating_sub(owned);
+        let elsewhere = if others > 0 { format!(", {others} left to other shards") } else { String::new() };
+        if p.complete() && others == 0 {
+            return Some(format!(
+                "systematic pass: {} of {} runs, every misbehaviour at every kind of answer ({kinds})",
+                p.made, self.pass_runs
+            ));
+        }
+        if p.complete() {
+            return Some(format!(
+                "systematic pass: {} of {} runs ({} made here, all of this campaign's share{elsewhere}) ({kinds})",
+                p.made, self.pass_runs, p.made
+            ));
+        }
+        // Not reached, by misbehaviour in the pass's order: `silence x4, hang-up x3`.
+        let mut by_op: Vec<(Operator, usize)> = Vec::new();
+        for l in &p.not_reached {
+            match by_op.iter_mut().find(|(op, _)| *op == l.op) {
+                Some((_, n)) => *n += 1,
+                None => by_op.push((l.op, 1)),
+            }
+        }
+        let left: Vec<String> = by_op.iter().map(|(op, n)| format!("{op} x{n}")).collect();
+        let needs = match p.complete_ms {
+            Some(ms) => format!("; a complete pass needs about {} at --jobs {}", about(ms), p.jobs),
+            None => String::new(),
+        };
+        Some(format!(
+            "systematic pass: {} of {} runs ({} not reached: {}{elsewhere}){needs}",
+            p.made,
+            self.pass_runs,
+            p.not_reached.len(),
+            left.join(", ")
+        ))
+    }
+}
+
+/// What a campaign's runs took, for the account of its systematic pass ([`pass_account`]).
+#[derive(Debug, Default)]
+struct RunTimes {
+    /// Runs made.
+    runs: u64,
+    /// Their wall time together, milliseconds.
+    total_ms: u64,
+    /// Each entry of the pass made, with its run's wall time, milliseconds.
+    pass: BTreeMap<usize, u64>,
+}
+
+impl RunTimes {
+    /// A run ended (entry `entry` of the pass, if it is one) after `elapsed`.
+    fn ran(&mut self, entry: Option<usize>, elapsed: Duration) {
+        let ms = elapsed.as_millis() as u64;
+        self.runs += 1;
+        self.total_ms += ms;
+        if let Some(k) = entry {
+            self.pass.insert(k, ms);
+        }
+    }
+}
+
+/// How much of `pass` a campaign with `opts` made, given what its runs took; `None` without
+/// a pass. A shard was to make the entries whose runs are its own; the estimate of a complete
+/// pass takes each run made as it was, and each not made as the runs made with the same
+/// misbehaviour took on average (a silence: a run's average plus the host's wait calibration
+/// measured at that kind), else as all runs made took on average.
+fn pass_account(
+    pass: &[PassEntry],
+    kinds: &[AnswerKindSeen],
+    times: &RunTimes,
+    opts: &FuzzOptions,
+    calibration: Option<&Calibration>,
+) -> Option<PassAccount> {
+    if pass.is_empty() {
+        return None;
+    }
+    let jobs = opts.jobs.max(1) as u64;
+    // Pass entry k is run k + 1 (run 0 before it, in a shard only if it is its own).
+    let before = opts.shard.map_or(1, |s| u64::from(s.owns(0)));
+    let owned = |k: usize| opts.shard.is_none_or(|s| s.owns(k as u64 + 1));
+    let kind_of = |answer: u32| kinds.iter().find(|k| k.answer == answer).map_or_else(String::new, |k| k.kind.clone());
+    let not_reached: Vec<PassLeft> = pass
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| owned(*k) && !times.pass.contains_key(k))
+        .map(|(_, e)| PassLeft { op: e.op, answer: e.answer, kind: kind_of(e.answer) })
+        .collect();
+    let made = times.pass.len() as u64;
+    let mean = (times.runs > 0).then(|| times.total_ms / times.runs);
+    let complete_ms = match mean {
+        Some(mean) if !not_reached.is_empty() => {
+            let mut by_op: BTreeMap<Operator, (u64, u64)> = BTreeMap::new();
+            for (k, ms) in &times.pass {
+                let e = by_op.entry(pass[*k].op).or_default();
+                *e = (e.0 + 1, e.1 + ms);
+            }
+            let waited = |answer: u32| {
+                calibration
+                    .and_then(|c| c.by_kind.iter().find(|w| w.answer == answer))
+                    .map(|w| w.gave_up_ms.unwrap_or(w.waited_past_ms))
+            };
+            let cost = |e: &PassEntry| match (by_op.get(&e.op), e.op) {
+                (Some((n, total)), _) => total / n,
+                (None, Operator::Silence) => mean + waited(e.answer).unwrap_or(0),
+                (None, _) => mean,
+            };
+            let work: u64 = before * mean
+                + pass
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| owned(*k))
+                    .map(|(k, e)| times.pass.get(&k).copied().unwrap_or_else(|| cost(e)))
+                    .sum::<u64>();
+            Some(calibration.map_or(0, |c| c.elapsed_ms) + work.div_ceil(jobs))
+        }
+        _ => None,
+    };
+    Some(PassAccount { made, not_reached, complete_ms, jobs })
 }
 
 /// Shared state of a campaign's workers. Runs are taken into it (corpus, paths, findings) in
@@ -783,6 +1117,12 @@ struct Shared {
     /// Suspected hangs by signature and protocol state: being confirmed, or what their
     /// confirmation said.
     suspects: BTreeMap<(String, String), Suspect>,
+    /// What the runs took, and which entries of the pass were made.
+    timing: RunTimes,
+    /// Turns whose run was void every time it was made: passed over when runs are taken in.
+    skipped: BTreeSet<u64>,
+    /// The host's waits calibration measured, by answer, milliseconds (the pass's costs).
+    waits: BTreeMap<u32, u64>,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -807,10 +1147,15 @@ enum New {
 }
 
 impl Shared {
-    /// Learns from the run without misbehaviour: the span of fresh schedules and the pass.
+    /// Learns from the run without misbehaviour: the span of fresh schedules and the pass
+    /// (ordered by cost from calibration's waits, unless sharded: every shard must make the
+    /// same pass of its own run 0).
     fn learn(&mut self, r: &RunResult, opts: &FuzzOptions) {
         self.answers = Some(r.answers.max(1));
         self.pass = systematic_pass(&r.answer_kinds, &opts.weights, opts.run.pace == Pace::Unpaced);
+        if opts.shard.is_none() {
+            order_by_cost(&mut self.pass, &self.waits);
+        }
         self.answer_kinds.clone_from(&r.answer_kinds);
     }
 
@@ -874,8 +1219,13 @@ impl Shared {
                     *self.notes.entry(note.clone()).or_default() += 1;
                     None
                 }
-                // Confirmed under this key but no finding by its signature: cannot be; a hit.
-                Some(Suspect::Confirmed) => None,
+                // Confirmed under this key (or its signature elsewhere): a hit of its finding.
+                Some(Suspect::Confirmed) => {
+                    if let Some(&k) = self.by_sig.get(&f.verdict.signature) {
+                        self.findings[k].hits += 1;
+                    }
+                    None
+                }
                 None => {
                     self.suspects.insert(key.clone(), Suspect::Pending(Box::new(f)));
                     Some(New::Suspect(key))
@@ -900,18 +1250,42 @@ impl Shared {
                     "; confirmed: a second run waited {:.1} s and it still neither sent nor exited",
                     waited.as_secs_f64()
                 );
-                match self.by_sig.get(&f.verdict.signature) {
+                // Runs of this signature whose hang did not come back elsewhere (another state)
+                // are hits of the confirmed hang, not notes beside it.
+                let sig = f.verdict.signature.clone();
+                let earlier: Vec<String> =
+                    self.notes.keys().filter(|n| Confirmation::is_note_of(n, &sig)).cloned().collect();
+                let mut hits = f.hits;
+                for n in earlier {
+                    hits += self.notes.remove(&n).unwrap_or(0);
+                }
+                for s in self.suspects.values_mut() {
+                    if let Suspect::Dismissed(n) = s
+                        && Confirmation::is_note_of(n, &sig)
+                    {
+                        *s = Suspect::Confirmed;
+                    }
+                }
+                match self.by_sig.get(&sig) {
                     Some(&k) => {
-                        self.findings[k].hits += f.hits;
+                        self.findings[k].hits += hits;
                         None
                     }
                     None => {
                         let k = self.findings.len();
-                        self.by_sig.insert(f.verdict.signature.clone(), k);
+                        self.by_sig.insert(sig, k);
+                        f.hits = hits;
                         self.findings.push(*f);
                         Some(k)
                     }
                 }
+            }
+            // The same hang confirmed at another state already: a hit of its finding.
+            _ if self.by_sig.contains_key(&f.verdict.signature) => {
+                let k = self.by_sig[&f.verdict.signature];
+                self.findings[k].hits += f.hits;
+                self.suspects.insert(key.clone(), Suspect::Confirmed);
+                None
             }
             other => {
                 let note = other.note(&f.verdict.signature, &key.1);
@@ -960,8 +1334,12 @@ impl Shared {
     /// Takes in every ended run whose turn has come.
     fn take_ready(&mut self, opts: &FuzzOptions, started: Instant) -> Vec<New> {
         let mut new = Vec::new();
-        while let Some((s, r)) = self.ended.remove(&self.taken) {
-            new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
+        loop {
+            if let Some((s, r)) = self.ended.remove(&self.taken) {
+                new.extend(self.take(opts.run_index(self.taken), s, r, opts, started));
+            } else if !self.skipped.remove(&self.taken) {
+                break;
+            }
             self.taken += 1;
         }
         new
@@ -1078,6 +1456,31 @@ fn systematic_pass(kinds: &[AnswerKindSeen], weights: &Weights, unpaced: bool) -
     pass
 }
 
+/// The misbehaviours that make a host wait out its own timeout at the answer they hit: they
+/// hold back, cut or spoil the prompt it waits for (or the rest of a feedback block).
+fn waits_out_a_timeout(op: Operator) -> bool {
+    use Operator::*;
+    matches!(op, DelayBelow | DelayAbove | NoPrompt | BadPrompt | Truncate | Silence | RtBlockLength)
+}
+
+/// The least measured wait (milliseconds) that orders a pass by cost: below it, a run that
+/// waits out the host's timeout costs about what any run does.
+const COSTLY_WAIT_MS: u64 = 2_000;
+
+/// Orders `pass` by cost, cheapest first, from the host's waits calibration measured (`waits`:
+/// by answer, milliseconds, given up or waited past): a misbehaviour that makes the host wait
+/// out its timeout ([`waits_out_a_timeout`]) at a kind where it waited [`COSTLY_WAIT_MS`] or
+/// more costs that wait (in whole seconds, so that timing noise does not reorder it), any other
+/// nothing. The order is kept among runs of one cost (the rounds, the line-rate run first); a
+/// host without such waits keeps the pass as it is.
+fn order_by_cost(pass: &mut [PassEntry], waits: &BTreeMap<u32, u64>) {
+    let cost = |e: &PassEntry| match waits.get(&e.answer) {
+        Some(&ms) if ms >= COSTLY_WAIT_MS && waits_out_a_timeout(e.op) => ms.div_ceil(1000),
+        _ => 0,
+    };
+    pass.sort_by_key(cost);
+}
+
 /// The generator of run `i` of a campaign with this seed.
 fn run_rng(seed: u64, i: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15))
@@ -1095,6 +1498,7 @@ pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, 
 /// stands).
 pub fn minimize(
     opts: &FuzzOptions,
+    slots: &Slots,
     schedule: &Schedule,
     signature: &str,
     runs: &mut u64,
@@ -1102,7 +1506,7 @@ pub fn minimize(
 ) -> Result<Option<(Schedule, RunResult)>, RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
-        let r = run_once_until(&opts.run, s, stop)?;
+        let r = slots.run(&opts.run, s, stop)?;
         Ok(judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature).then_some(r))
     };
     // Keep only what fired: entries that never fired changed nothing.
@@ -1137,6 +1541,14 @@ pub enum Confirmation {
 }
 
 impl Confirmation {
+    /// Whether `note` is one a hang signed `signature` was counted under when it did not come
+    /// back or the campaign ended first.
+    fn is_note_of(note: &str, signature: &str) -> bool {
+        ["note: hang not reproduced: ", "note: hang not confirmed (the campaign ended first): "]
+            .iter()
+            .any(|head| note.strip_prefix(head).is_some_and(|rest| rest.starts_with(&format!("{signature} ("))))
+    }
+
     /// The INFO note a hang not confirmed is counted under.
     fn note(&self, signature: &str, state: &str) -> String {
         match self {
@@ -1162,6 +1574,7 @@ impl Confirmation {
 /// the hang.
 pub fn confirm(
     run: &HostRun,
+    slots: &Slots,
     schedule: &Schedule,
     state: &str,
     hang: Duration,
@@ -1170,8 +1583,10 @@ pub fn confirm(
 ) -> Result<(Confirmation, Option<RunResult>), RunError> {
     let mut patient = run.clone();
     patient.timeout_hang = window.max(hang);
-    let r = match run_once_until(&patient, schedule, stop) {
+    let r = match slots.run(&patient, schedule, stop) {
         Err(RunError::Cancelled) => return Ok((Confirmation::Stopped, None)),
+        // Void every time: nothing confirmed.
+        Err(RunError::Shared(_)) => return Ok((Confirmation::NotAgain, None)),
         other => other?,
     };
     let outcome = judge_confirmation(&r, state, hang);
@@ -1198,9 +1613,10 @@ fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmatio
 
 /// Runs a campaign; `on_event` hears of each run and each new finding; `stop` ends it early.
 ///
-/// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of runs
-/// `0..=i-jobs` (guidance sees those, taken in index order, and no others; a worker waits for
-/// them when a slow run holds them up). With a host that behaves the same given the same
+/// The schedule of run `i` is a function of the seed, `i`, `jobs` and the results of run 0 and
+/// runs `0..=i-jobs` (guidance sees those, taken in index order, and no others; a worker waits
+/// for them when a slow run holds them up; every run waits for run 0, of which the systematic
+/// pass is made, so the pass starts at run 1 whatever `jobs`). With a host that behaves the same given the same
 /// bytes, a campaign with the same seed and `jobs` makes the same schedules and findings (first
 /// run, hits, minimized schedule) run for run; wall times are not reproducible, nor is which
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
@@ -1218,6 +1634,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
         return Ok(early);
     }
     if let Some(c) = &calibration {
+        if let Ok(mut sh) = w.shared.lock() {
+            sh.waits = c.by_kind.iter().map(|k| (k.answer, k.gave_up_ms.unwrap_or(k.waited_past_ms))).collect();
+        }
         w.take_calibration_suspects(c);
     }
     w.run_all();
@@ -1290,6 +1709,8 @@ struct Workers<'a> {
     /// Suspected hangs go to the confirmer, which runs them again beside the campaign's runs.
     to_confirm: Mutex<Option<mpsc::Sender<(String, String)>>>,
     suspects: Mutex<mpsc::Receiver<(String, String)>>,
+    /// Every run of the campaign takes one: `jobs` hosts alive at once at most.
+    slots: Slots,
 }
 
 impl<'a> Workers<'a> {
@@ -1328,11 +1749,15 @@ impl<'a> Workers<'a> {
                 taken: 0,
                 ended: BTreeMap::new(),
                 suspects: BTreeMap::new(),
+                timing: RunTimes::default(),
+                skipped: BTreeSet::new(),
+                waits: BTreeMap::new(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
             to_confirm: Mutex::new(Some(to_confirm)),
             suspects: Mutex::new(suspects),
+            slots: Slots::new(opts.jobs),
         }
     }
 
@@ -1361,7 +1786,7 @@ impl<'a> Workers<'a> {
             && !s.owns(0)
             && !self.done(0)
         {
-            let r = match run_once_until(&opts.run, &Schedule::default(), self.stop) {
+            let r = match self.slots.run(&opts.run, &Schedule::default(), self.stop) {
                 Err(RunError::Cancelled) => {
                     return Ok(ControlFlow::Break(Campaign {
                         elapsed_ms: self.started.elapsed().as_millis() as u64,
@@ -1390,7 +1815,7 @@ impl<'a> Workers<'a> {
             return None;
         }
         let mut runs = 0;
-        let m = minimize(self.opts, schedule, sig, &mut runs, self.stop);
+        let m = minimize(self.opts, &self.slots, schedule, sig, &mut runs, self.stop);
         if let Ok(mut sh) = self.shared.lock() {
             sh.minimize_runs += runs;
         }
@@ -1456,8 +1881,16 @@ impl<'a> Workers<'a> {
             } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
                 (Confirmation::Stopped, None)
             } else {
-                confirm(&opts.run, &pending.schedule, &key.1, opts.run.timeout_hang, opts.run.budget, self.stop)
-                    .unwrap_or((Confirmation::Stopped, None))
+                confirm(
+                    &opts.run,
+                    &self.slots,
+                    &pending.schedule,
+                    &key.1,
+                    opts.run.timeout_hang,
+                    opts.run.budget,
+                    self.stop,
+                )
+                .unwrap_or((Confirmation::Stopped, None))
             };
             let mut new: Vec<usize> = Vec::new();
             if let Ok(mut sh) = self.shared.lock() {
@@ -1511,8 +1944,8 @@ impl<'a> Workers<'a> {
                 break;
             }
             let i = self.opts.run_index(t);
-            let schedule = if i == 0 {
-                Schedule::default()
+            let (schedule, entry) = if i == 0 {
+                (Schedule::default(), None)
             } else if self.opts.shard.is_some() {
                 let Some(s) = self.unguided_schedule(t, i) else { return };
                 s
@@ -1520,34 +1953,38 @@ impl<'a> Workers<'a> {
                 let Some(s) = self.guided_schedule(t, i) else { return };
                 s
             };
-            if !self.run_and_take(t, i, schedule) {
+            if !self.run_and_take(t, i, schedule, entry) {
                 break;
             }
         }
     }
 
-    /// The schedule of run `i` (turn `t`) of a shard: unguided, only run 0's answer count is
-    /// needed (waited for); `None` when the campaign ends first.
-    fn unguided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+    /// The schedule of run `i` (turn `t`) of a shard, with the entry of the systematic pass it
+    /// is (if any): unguided, only run 0's answer count is needed (waited for); `None` when the
+    /// campaign ends first.
+    fn unguided_schedule(&self, t: u64, i: u64) -> Option<(Schedule, Option<usize>)> {
         let opts = self.opts;
         let mut sh = self.shared.lock().ok()?;
         while sh.answers.is_none() && !self.done(t) {
             sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
         }
         let answers = sh.answers?;
-        let pass = sh.pass.get(i as usize - 1).copied();
+        let k = i as usize - 1;
+        let pass = sh.pass.get(k).copied();
         drop(sh);
         Some(match pass {
-            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-            None => fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers),
+            Some(e) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            None => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
         })
     }
 
-    /// The schedule of run `i` (turn `t`): guidance sees runs 0..visible, whatever else has
-    /// ended by now (waited for); `None` when the campaign ends first.
-    fn guided_schedule(&self, t: u64, i: u64) -> Option<Schedule> {
+    /// The schedule of run `i` (turn `t`), with the entry of the systematic pass it is (if
+    /// any): guidance sees runs 0..visible, whatever else has ended by now (waited for); `None`
+    /// when the campaign ends first.
+    fn guided_schedule(&self, t: u64, i: u64) -> Option<(Schedule, Option<usize>)> {
         let (opts, jobs) = (self.opts, self.jobs);
-        let visible = (t + 1).saturating_sub(jobs);
+        // Every run sees run 0 (whose kinds of answer make the pass), and runs 0..=i-jobs.
+        let visible = (t + 1).saturating_sub(jobs).max(1);
         let mut sh = self.shared.lock().ok()?;
         while sh.taken < visible && !self.done(t) {
             sh = self.turn.wait_timeout(sh, Duration::from_millis(50)).ok()?.0;
@@ -1557,23 +1994,36 @@ impl<'a> Workers<'a> {
         }
         let kept = if opts.guided { sh.corpus.partition_point(|(j, _)| *j < visible) } else { 0 };
         let corpus: Vec<Schedule> = sh.corpus[..kept].iter().map(|(_, s)| s.clone()).collect();
-        let answers = if visible > 0 { sh.answers.unwrap_or(8) } else { 8 };
-        // The pass starts with the first run that sees run 0.
-        let pass = i.checked_sub(jobs).and_then(|k| sh.pass.get(k as usize)).copied();
+        let answers = sh.answers.unwrap_or(8);
+        // The pass starts at run 1, whatever the jobs (as in a shard).
+        let k = i.checked_sub(1).map(|k| k as usize);
+        let pass = k.and_then(|k| sh.pass.get(k)).copied();
         drop(sh);
-        Some(match pass {
-            Some(e) => e.schedule(&mut run_rng(opts.seed, i)),
-            None => next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers),
+        Some(match (pass, k) {
+            (Some(e), Some(k)) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            _ => (next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None),
         })
     }
 
-    /// Runs `schedule` as run `i` (turn `t`), counts it and takes it in (in turn order),
-    /// announcing what it brought; `false` when the worker is to end.
-    fn run_and_take(&self, t: u64, i: u64, schedule: Schedule) -> bool {
+    /// Runs `schedule` as run `i` (turn `t`; entry `entry` of the systematic pass, if it is
+    /// one), counts it and takes it in (in turn order), announcing what it brought; `false`
+    /// when the worker is to end.
+    fn run_and_take(&self, t: u64, i: u64, schedule: Schedule, entry: Option<usize>) -> bool {
         let opts = self.opts;
-        let r = match run_once_until(&opts.run, &schedule, self.stop) {
+        let r = match self.slots.run(&opts.run, &schedule, self.stop) {
             Ok(r) => r,
             Err(RunError::Cancelled) => return false,
+            // Void every time it was made: left out (counted, warned), never a finding.
+            Err(RunError::Shared(_)) => {
+                if let Ok(mut sh) = self.shared.lock() {
+                    sh.skipped.insert(t);
+                    let new = sh.take_ready(opts, self.started);
+                    drop(sh);
+                    self.turn.notify_all();
+                    self.announce(new, true);
+                }
+                return true;
+            }
             Err(e) => {
                 if let Ok(mut sh) = self.shared.lock() {
                     sh.error.get_or_insert(e.to_string());
@@ -1583,6 +2033,9 @@ impl<'a> Workers<'a> {
             }
         };
         self.completed.fetch_add(1, Ordering::Relaxed);
+        if let Ok(mut sh) = self.shared.lock() {
+            sh.timing.ran(entry, r.elapsed);
+        }
         (self.on_event)(Event::Run { index: i, elapsed: r.elapsed });
         let missed = unreached(&r, &opts.run.command);
         if missed.is_none() {
@@ -1664,6 +2117,13 @@ impl<'a> Workers<'a> {
             return Err(RunError::Io(std::io::Error::other(e)));
         }
         let runs = self.completed.load(Ordering::Relaxed);
+        let (mut void_runs, mut void) = self.slots.voided();
+        if let Some(c) = &calibration {
+            void_runs += c.void_runs;
+            void.splice(0..0, c.void.iter().cloned());
+            void.truncate(VOID_KEPT);
+        }
+        let pass = pass_account(&sh.pass, &sh.answer_kinds, &sh.timing, self.opts, calibration.as_ref());
         // No run at all, and nobody stopped it: the budget went before the first run.
         let untested = sh.untested.or_else(|| {
             (runs == 0 && !self.stop.load(Ordering::Relaxed)).then(|| {
@@ -1686,11 +2146,14 @@ impl<'a> Workers<'a> {
             calibration,
             notes: sh.notes,
             pass_runs: sh.pass.len() as u64,
+            pass,
             answer_kinds: sh.answer_kinds,
             provenance: None,
             reached: self.reached.load(Ordering::Relaxed),
             untested,
             stopped: None,
+            void_runs,
+            void,
         })
     }
 }
@@ -1751,6 +2214,118 @@ mod tests {
         assert_eq!(ops, [LineRate, Truncate, RtErr].into_iter().collect());
         assert!(systematic_pass(&kinds, &Weights::default(), false).iter().all(|e| e.op != LineRate));
         assert!(systematic_pass(&[], &Weights::parse("truncate").unwrap(), true).is_empty());
+    }
+
+    /// A shard accounts for the runs of the pass that are its own: those it made, and those
+    /// of its run indices it did not reach; the pass's claim is made only when all ran.
+    #[test]
+    fn the_pass_is_accounted_for_by_what_ran_and_a_shard_by_its_own_runs() {
+        use Operator::*;
+        let kinds = vec![kind("prompt", 1, &[Truncate, Garbage, Silence]), kind("echo, prompt", 2, &[Truncate])];
+        let pass = systematic_pass(&kinds, &Weights::default(), false);
+        assert_eq!(pass.len(), 4);
+        let mut opts = a_campaign();
+        let mut times = RunTimes::default();
+        times.ran(None, Duration::from_millis(100));
+        times.ran(Some(0), Duration::from_millis(100));
+        let cal = Calibration {
+            by_kind: vec![KindWait { answer: 1, gave_up_ms: Some(5_000), ..Default::default() }],
+            elapsed_ms: 1_000,
+            ..Default::default()
+        };
+        let a = pass_account(&pass, &kinds, &times, &opts, Some(&cal)).unwrap();
+        assert_eq!((a.made, a.not_reached.len(), a.jobs), (1, 3, 1));
+        // Calibration, run 0, the run made, two runs of 100 ms and a silence waited out.
+        assert_eq!(a.complete_ms, Some(1_000 + 100 + 100 + 200 + 5_100));
+        let c = Campaign { pass_runs: 4, pass: Some(a), answer_kinds: kinds.clone(), ..Default::default() };
+        let line = c.pass_line().unwrap();
+        assert!(line.starts_with("systematic pass: 1 of 4 runs (3 not reached: "), "{line}");
+        assert!(line.ends_with("; a complete pass needs about 7 s at --jobs 1"), "{line}");
+        assert!(!line.contains("every misbehaviour"), "{line}");
+        // Shard 1/2 owns runs 0, 2, 4: entries 1 and 3.
+        opts.shard = Some(crate::fuzz::shard::Shard { index: 1, count: 2 });
+        let mut times = RunTimes::default();
+        times.ran(Some(1), Duration::from_millis(100));
+        times.ran(Some(3), Duration::from_millis(100));
+        let a = pass_account(&pass, &kinds, &times, &opts, None).unwrap();
+        assert_eq!((a.made, a.not_reached.len(), a.complete_ms), (2, 0, None));
+        let c = Campaign { pass_runs: 4, pass: Some(a), answer_kinds: kinds.clone(), ..Default::default() };
+        let line = c.pass_line().unwrap();
+        assert!(line.contains("2 of 4 runs") && line.contains("2 left to other shards"), "{line}");
+        assert!(!line.contains("every misbehaviour"), "{line}");
+        // The whole pass made: the claim.
+        let whole = PassAccount { made: 4, jobs: 1, ..Default::default() };
+        let c = Campaign { pass_runs: 4, pass: Some(whole), answer_kinds: kinds, ..Default::default() };
+        assert!(c.pass_line().unwrap().contains("4 of 4 runs, every misbehaviour at every kind of answer"));
+    }
+
+    /// A hang that did not come back at one state and was confirmed at another is one finding
+    /// with every run that showed it, not a finding and a `hang not reproduced` note of the
+    /// same signature beside it; a later miss of a confirmed signature is a hit too.
+    #[test]
+    fn a_confirmed_hang_takes_in_the_runs_where_it_did_not_come_back() {
+        let opts = a_campaign();
+        let stop = AtomicBool::new(false);
+        let w = Workers::new(&opts, &stop, &|_| {}, Instant::now(), None);
+        let mut sh = w.shared.lock().unwrap();
+        let hang = |state: &str, run: u64| {
+            let r = ended(HostEnd::Hung(state.into()), state);
+            let v = judge(&r, &[0]).remove(0);
+            Finding {
+                verdict: v,
+                run,
+                found_after_ms: 0,
+                hits: 1,
+                schedule: Schedule::default(),
+                original: Schedule::default(),
+                fired: Vec::new(),
+                end: r.end.clone(),
+                timeout_hang_ms: 0,
+                confirmed_after_ms: None,
+                by_calibration: false,
+                stderr: String::new(),
+                exchanges: Vec::new(),
+            }
+        };
+        let Some(New::Suspect(a)) = sh.add(hang("awaiting the answer after HI", 1)) else { panic!() };
+        assert_eq!(sh.settle(&a, Confirmation::NotAgain), None);
+        assert_eq!(sh.notes.len(), 1, "{:?}", sh.notes);
+        let Some(New::Suspect(b)) = sh.add(hang("awaiting the answer after FGET", 2)) else { panic!() };
+        let k = sh.settle(&b, Confirmation::Hung(Duration::from_secs(9))).expect("a finding");
+        assert!(sh.notes.is_empty(), "{:?}", sh.notes);
+        assert_eq!(sh.findings[k].hits, 2);
+        let Some(New::Suspect(c)) = sh.add(hang("awaiting the answer after C", 3)) else { panic!() };
+        assert_eq!(sh.settle(&c, Confirmation::NotAgain), None);
+        assert!(sh.notes.is_empty(), "{:?}", sh.notes);
+        assert_eq!(sh.findings[k].hits, 3);
+        assert!(sh.add(hang("awaiting the answer after HI", 4)).is_none());
+        assert_eq!(sh.findings[k].hits, 4);
+    }
+
+    /// With calibration's waits, the pass runs the misbehaviours that make the host wait out a
+    /// long timeout last, the cheapest of them first; the rest keep their order (the rounds).
+    /// A host whose waits are short keeps the pass as it is.
+    #[test]
+    fn the_pass_runs_what_waits_out_a_long_timeout_last() {
+        use Operator::*;
+        let kinds = vec![
+            kind("prompt", 1, &[Truncate, Garbage, Silence]),
+            kind("echo, values, prompt", 2, &[Truncate, Garbage, ErrBits, NoPrompt, Silence]),
+        ];
+        let pass = systematic_pass(&kinds, &Weights::default(), true);
+        let mut ordered = pass.clone();
+        let waits: BTreeMap<u32, u64> = [(1, 15_000), (2, 10_400)].into_iter().collect();
+        order_by_cost(&mut ordered, &waits);
+        assert_eq!(ordered.len(), pass.len());
+        let cheap: Vec<PassEntry> = pass.iter().filter(|e| !waits_out_a_timeout(e.op)).copied().collect();
+        assert_eq!(ordered[..cheap.len()], cheap[..], "the cheap ones first, in the pass's order");
+        assert_eq!(ordered[0].op, LineRate);
+        let costly: Vec<(Operator, u32)> = ordered[cheap.len()..].iter().map(|e| (e.op, e.answer)).collect();
+        assert_eq!(costly.iter().filter(|(_, a)| *a == 2).count(), 3, "{costly:?}");
+        assert!(costly[..3].iter().all(|(_, a)| *a == 2), "11 s before 15 s: {costly:?}");
+        let mut short = pass.clone();
+        order_by_cost(&mut short, &[(1, 1_000), (2, 1_500)].into_iter().collect());
+        assert_eq!(short, pass);
     }
 
     /// A run that ended so, with nothing else to judge.
@@ -1859,9 +2434,9 @@ mod tests {
     /// calibration inside it and a run budget's overrun, ends within 10 minutes whatever the
     /// host's speed (1000 runs of a host that takes 9 s a run took 2 h 30 min); --runs alone
     /// has no time budget.
-    #[test]
-    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
-        let mut o = FuzzOptions {
+    /// A one-job campaign's options (default ops, no budget given).
+    fn a_campaign() -> FuzzOptions {
+        FuzzOptions {
             run: HostRun {
                 command: vec!["true".into()],
                 transport: Transport::Pty,
@@ -1871,6 +2446,7 @@ mod tests {
                 hand_seed: 0,
                 timeout_hang: Duration::from_secs(3),
                 budget: Duration::from_secs(60),
+                link: None,
             },
             seed: 0,
             runs: None,
@@ -1883,7 +2459,12 @@ mod tests {
             guided: true,
             calibrate: true,
             shard: None,
-        };
+        }
+    }
+
+    #[test]
+    fn a_default_campaign_is_a_time_budget_under_ten_minutes() {
+        let mut o = a_campaign();
         let d = o.campaign_duration().expect("a time budget");
         assert!(d + o.run.budget * 2 <= Duration::from_secs(600), "{d:?}");
         o.runs = Some(1000);

@@ -90,6 +90,9 @@ pub struct HostRun {
     pub timeout_hang: Duration,
     /// The longest a run may take.
     pub budget: Duration,
+    /// Over a pty: a symbolic link to it made for the run, and given to the host as the port
+    /// (`gcl fuzz host --link`, one per slot), removed when the run ends.
+    pub link: Option<std::path::PathBuf>,
 }
 
 /// Which way bytes went.
@@ -276,6 +279,10 @@ pub enum RunError {
     /// The run was called off (the campaign is stopping); the host was killed.
     #[error("the run was called off")]
     Cancelled,
+    /// Processes of two runs held the run's port: what it shows is no verdict on the host
+    /// (void; the campaign runs it again).
+    #[error("void run: {0}")]
+    Shared(String),
 }
 
 /// Most bytes of the traffic kept each way; the rest is counted, not kept.
@@ -575,7 +582,7 @@ impl LineTap for Tap {
     fn hand_bytes(&mut self, device: &Device, bytes: &[u8]) -> Shaped {
         let Ok(mut log) = self.0.lock() else { return Shaped::plain(bytes) };
         let log = &mut *log;
-        let state = log.checker.answer_state(device);
+        let state = log.checker.answer_state(device, bytes);
         log.last_answer.clone_from(&state);
         let before = log.misbehave.fired().len();
         let shaped = log.misbehave.shape(device, bytes, &state);
@@ -913,10 +920,9 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
             }
         }
     }
-    let aborted = r.end == HostEnd::Signal(nix::sys::signal::Signal::SIGABRT as i32)
-        || r.stderr.contains("AddressSanitizer: ABRT");
-    if aborted
-        && super::detect::uncaught_exception(&r.stderr)
+    // An exception nobody caught ends in SIGABRT, though a wrapper that ran the host may have
+    // exited by itself after it: what the C++ runtime wrote says so either way.
+    if super::detect::uncaught_exception(&r.stderr)
         && let Some(stack) = abort_stack(spec, schedule, cancel)
     {
         r.stderr = join_capped(&r.stderr, &format!("\n{}\n{stack}", super::detect::ABORT_STACK));
@@ -949,8 +955,16 @@ fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Opti
 }
 
 /// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
-/// signals hosts use in their work pass through unremarked).
+/// signals hosts use in their work pass through unremarked). A script (`#!`) runs under its
+/// interpreter (gdb runs no script itself: it took no stack of a host behind a wrapper), and
+/// every process it starts is followed (`detach-on-fork off`): the one that aborts has its
+/// stack taken, and the others going first (a wrapper's `ln`) only resume the rest.
 fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
+    let script = log.with_extension("gdb");
+    let _ = std::fs::write(
+        &script,
+        "set detach-on-fork off\nset schedule-multiple on\ncatch signal SIGABRT\ncommands\nbt\nkill inferiors 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\nquit\nend\n",
+    );
     let mut v: Vec<String> = ["gdb", "-batch", "-nx", "-q"].map(String::from).to_vec();
     for ex in [
         format!("set logging file {}", log.display()),
@@ -959,14 +973,49 @@ fn under_gdb(command: &[String], log: &std::path::Path) -> Vec<String> {
         "set logging enabled on".into(),
         "handle SIGPIPE SIGALRM SIGCHLD SIGUSR1 SIGUSR2 SIGHUP SIGWINCH SIGINT SIGTERM SIGURG SIGIO nostop noprint pass"
             .into(),
+        format!("source {}", script.display()),
         "run".into(),
-        "bt".into(),
-        "kill".into(),
     ] {
         v.push("-ex".into());
         v.push(ex);
     }
+    // A process that ended first (a wrapper's helper) stops the run: the wrapper goes on.
+    for _ in 0..8 {
+        for ex in ["inferior 1", "continue"] {
+            v.push("-ex".into());
+            v.push(ex.into());
+        }
+    }
+    for ex in ["bt", "kill"] {
+        v.push("-ex".into());
+        v.push(ex.into());
+    }
     v.push("--args".into());
+    v.extend(interpreted(command));
+    v
+}
+
+/// `command` with a script (a file that starts with `#!`, found as the shell would) preceded by
+/// its interpreter and that line's argument, as the kernel runs it.
+fn interpreted(command: &[String]) -> Vec<String> {
+    let Some(program) = command.first() else { return Vec::new() };
+    let path = if program.contains('/') {
+        Some(std::path::PathBuf::from(program))
+    } else {
+        std::env::var_os("PATH").and_then(|p| std::env::split_paths(&p).map(|d| d.join(program)).find(|f| f.is_file()))
+    };
+    let mut head = [0u8; 256];
+    let n = path
+        .as_ref()
+        .and_then(|p| std::fs::File::open(p).ok())
+        .and_then(|mut f| std::io::Read::read(&mut f, &mut head).ok())
+        .unwrap_or(0);
+    let Some(line) = head[..n].strip_prefix(b"#!") else { return command.to_vec() };
+    let line = String::from_utf8_lossy(line.split(|b| *b == b'\n').next().unwrap_or_default()).into_owned();
+    let mut words = line.trim().splitn(2, char::is_whitespace);
+    let Some(interpreter) = words.next().filter(|w| !w.is_empty()) else { return command.to_vec() };
+    let mut v = vec![interpreter.to_string()];
+    v.extend(words.next().map(|a| a.trim().to_string()).filter(|a| !a.is_empty()));
     v.extend(command.iter().cloned());
     v
 }
@@ -1002,7 +1051,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     let waiter = std::thread::spawn(move || {
         let _ = tx.send(child.wait());
     });
-    let watched = match watch_host(spec, cancel, started, &host, &hand.log, &out.errbuf, &rx) {
+    let watched = match watch_host(spec, cancel, started, &host, &mut hand, &out.errbuf, &rx) {
         Ok(w) => w,
         Err(e) => {
             let _ = nix::sys::signal::killpg(host.pid, nix::sys::signal::Signal::SIGKILL);
@@ -1025,6 +1074,9 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     if watched.cancelled {
         return Err(RunError::Cancelled);
     }
+    if let Some(other) = hand.shared.as_ref().and_then(|w| w.intruder.clone()) {
+        return Err(RunError::Shared(other));
+    }
     let mut log = hand.log.lock().map_err(|_| std::io::Error::other("the hand's thread panicked"))?;
     Ok(result_of_run(&mut log, watched, leftovers, stderr, started))
 }
@@ -1044,6 +1096,73 @@ struct HandSide {
     /// Over TCP, the host's writes as it makes them (`host_writes`).
     watch: Option<WriteWatch>,
     run_dir: RunDir,
+    /// Over a pty: its slave's path (the port may be a link to it).
+    pty_path: Option<String>,
+    /// Over a pty: who opens it ([`SharedPortWatch`]).
+    shared: Option<SharedPortWatch>,
+}
+
+/// Watches a run's pty for opens by a process of another run (another `GCL_HOST_RUN`): a
+/// host of a campaign that opens a fixed device path, linked to whichever run's port, ends up
+/// on another run's line. The processes holding the port are looked at when someone opens it
+/// (inotify, read as the run is watched), so the run is known void ([`RunError::Shared`]),
+/// never a finding. A process that opens and closes the port between two looks is missed.
+struct SharedPortWatch {
+    opens: nix::sys::inotify::Inotify,
+    path: std::path::PathBuf,
+    /// `GCL_HOST_RUN=` this run's mark.
+    mark: String,
+    /// The first process of another run seen holding the port.
+    intruder: Option<String>,
+}
+
+impl SharedPortWatch {
+    fn new(path: &str, mark: &str) -> Option<SharedPortWatch> {
+        use nix::sys::inotify::{AddWatchFlags, InitFlags, Inotify};
+        let opens = Inotify::init(InitFlags::IN_NONBLOCK | InitFlags::IN_CLOEXEC).ok()?;
+        opens.add_watch(path, AddWatchFlags::IN_OPEN).ok()?;
+        Some(SharedPortWatch { opens, path: path.into(), mark: format!("{RUN_MARK}={mark}"), intruder: None })
+    }
+
+    /// After opens of the port: whether a process of another run holds it now.
+    fn look(&mut self) {
+        let mut opened = false;
+        while let Ok(events) = self.opens.read_events() {
+            if events.is_empty() {
+                break;
+            }
+            opened = true;
+        }
+        if !opened || self.intruder.is_some() {
+            return;
+        }
+        let me = std::process::id() as i32;
+        let Ok(procs) = std::fs::read_dir("/proc") else { return };
+        for p in procs.flatten() {
+            let Some(pid) = p.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+            if pid == me {
+                continue;
+            }
+            let Ok(fds) = std::fs::read_dir(p.path().join("fd")) else { continue };
+            if !fds.flatten().any(|fd| std::fs::read_link(fd.path()).is_ok_and(|t| t == self.path)) {
+                continue;
+            }
+            // Another run's mark: a process of another run. (No mark: not a run's; a child
+            // of ours between fork and exec still has our own environment.)
+            let env = std::fs::read(p.path().join("environ")).unwrap_or_default();
+            let prefix = format!("{RUN_MARK}=");
+            let other = env.split(|b| *b == 0).any(|v| v.starts_with(prefix.as_bytes()) && v != self.mark.as_bytes());
+            if other {
+                let name = std::fs::read_to_string(p.path().join("comm")).unwrap_or_default();
+                self.intruder = Some(format!(
+                    "process {pid} ({}) of another run opened this run's port {}",
+                    name.trim(),
+                    self.path.display()
+                ));
+                return;
+            }
+        }
+    }
 }
 
 /// Takes the run and its schedule: starts the hand (engine, log, tap, run folder) on a fresh
@@ -1072,14 +1191,17 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
     // The hand: its transport in a thread; the line closes (hangs up) when the thread ends.
     // Over TCP, the host's writes are seen as it makes them (`host_writes`).
     let mut watch = None;
+    let mut pty_path = None;
     let (port, url, thread) = match spec.transport {
         Transport::Pty => {
-            let mut pty = Pty::open(None, engine.line_baud())?;
+            let mut pty = Pty::open(spec.link.as_deref(), engine.line_baud())?;
             pty.set_speed_check(!line_rate);
             tell_garbling(&mut pty, &log);
-            let path = pty.path().display().to_string();
+            pty_path = Some(pty.path().display().to_string());
+            // The link, when there is one, is the port the host is given.
+            let port = pty.link().unwrap_or(pty.path()).display().to_string();
             let h = std::thread::spawn(move || pty.serve(&mut engine, &[stop_rx.as_fd(), hang_rx.as_fd()]));
-            (path.clone(), path, h)
+            (port.clone(), port, h)
         }
         Transport::Tcp => {
             let mut server = TcpServer::bind("127.0.0.1:0", false)?;
@@ -1092,7 +1214,8 @@ fn start_hand(spec: &HostRun, schedule: &Schedule, started: Instant) -> Result<H
             (addr.clone(), format!("socket://{addr}"), h)
         }
     };
-    Ok(HandSide { log, stop, thread, port, url, watch, run_dir })
+    let shared = pty_path.as_deref().and_then(|p| SharedPortWatch::new(p, &run_dir.mark()));
+    Ok(HandSide { log, stop, thread, port, url, watch, run_dir, pty_path, shared })
 }
 
 /// Takes the run and the serving hand: spawns the host command in its own process group,
@@ -1255,10 +1378,11 @@ fn watch_host(
     cancel: &AtomicBool,
     started: Instant,
     host: &HostProc,
-    log: &Arc<Mutex<Log>>,
+    hand: &mut HandSide,
     errbuf: &Mutex<ErrBuf>,
     rx: &mpsc::Receiver<std::io::Result<std::process::ExitStatus>>,
 ) -> std::io::Result<Watched> {
+    let log = &hand.log.clone();
     let state = |log: &Arc<Mutex<Log>>| log.lock().map(|l| l.checker.state()).unwrap_or_default();
     let mut w = Watched {
         end: HostEnd::Exit(-1),
@@ -1282,6 +1406,9 @@ fn watch_host(
             Ok(Err(e)) => return Err(e),
             Err(mpsc::RecvTimeoutError::Disconnected) => break HostEnd::Exit(-1),
             Err(mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        if let Some(w) = &mut hand.shared {
+            w.look();
         }
         let now = Instant::now();
         let (last_activity, holds_port, last_sent, flooding) = log
@@ -1357,7 +1484,7 @@ fn clear_leftovers(spec: &HostRun, hand: &HandSide, out: &HostOutput, host: &Hos
     // runs (a hang-up ends it early): after that, the path may name another program's
     // terminal, which must never be touched. So the port is looked for only while the thread
     // runs, and what a search found counts only if it still ran after the search.
-    let pty_path = (spec.transport == Transport::Pty).then(|| std::path::PathBuf::from(&hand.port));
+    let pty_path = hand.pty_path.as_ref().filter(|_| spec.transport == Transport::Pty).map(std::path::PathBuf::from);
     let pty_alive = || !hand.thread.is_finished();
     let mut leftovers = Vec::new();
     // The pipe's inode names it only while it is open (a closed pipe's number is reused).
