@@ -547,7 +547,7 @@ pub struct FuzzSummary {
 }
 
 /// A failure whose minimized transcript did not fail again, with the same signature, on every
-/// replay on a fresh connection ([`CONFIRMATIONS`]): a note, not a finding.
+/// replay on a fresh connection ([`confirmations`]): a note, not a finding.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct NotReproduced {
     /// The signature it had when first met, as people read it.
