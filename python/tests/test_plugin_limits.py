@@ -43,16 +43,23 @@ def outcome(out, test):
 
 TIMEOUTS = '''
 import os
+import select
 import time
 import pytest
 
 
 def talk(hand):
-    """The host code sends the hand a ^C and leaves (a session where nobody talked judges
-    nothing, and fails as such: these tests are about the timers)."""
+    """The host code asks the hand one command, reads its answer for at most a second, and
+    leaves (a session that exercised no clause judges nothing, and fails as such; a lone ^C
+    exercises none: these tests are about the timers)."""
     fd = os.open(hand.port, os.O_RDWR | os.O_NOCTTY)
-    os.write(fd, b"\\x03")
-    time.sleep(0.2)
+    os.write(fd, b"FGET DP\\r")
+    got, end = b"", time.monotonic() + 1.0
+    while not got.endswith(b"=> ") and time.monotonic() < end:
+        ready, _, _ = select.select([fd], [], [], max(0.0, end - time.monotonic()))
+        if not ready:
+            break
+        got += os.read(fd, 256)
     os.close(fd)
 
 
