@@ -550,7 +550,11 @@ fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     // The extra prompt parts from the model at whatever the host sends next; it is named as
     // more than the answer to the empty line before, and each finding is real.
     let sigs: Vec<String> = s.findings.iter().map(|f| f.signature.to_string()).collect();
-    assert!(sigs.contains(&"extra at CR".to_string()), "{sigs:?}");
+    assert!(
+        sigs.contains(&"extra at CR".to_string()),
+        "{sigs:?}; not reproduced: {:#?}",
+        s.not_reproduced.iter().map(|n| (&n.signature, n.reproduced, n.replays, &n.diff)).collect::<Vec<_>>()
+    );
     for f in &s.findings {
         assert!(!replays_on(&f.transcript, vec![Fault::EmptyLineTwoPrompts]), "{}: fails on the mutant", f.signature);
         assert!(replays_on(&f.transcript, vec![]), "{}: passes on the unmutated sim", f.signature);

@@ -794,6 +794,9 @@ struct Hand<'o> {
     /// Whether the last run failed: it stopped reading mid-case, so the next run drains
     /// thoroughly.
     dirty: bool,
+    /// The trailing wait of a thorough run: [`TRAILING`], or [`SURE_TRAILING`] while a case is
+    /// judged again or confirmed.
+    trailing: Duration,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
@@ -803,7 +806,27 @@ const POWER_UP_WAIT: Duration = Duration::from_secs(2);
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
 const TRAILING: Duration = Duration::from_millis(50);
 
-impl Hand<'_> {
+/// The trailing wait of a thorough run that judges bytes already seen to follow a case (a case
+/// judged again because bytes followed its quick run) or that confirms a finding. A hand
+/// outside this process on a busy machine can be late by more than [`TRAILING`]: a finding of
+/// bytes after the last answer then failed one of its confirmations and became a note (CI,
+/// under the test lanes' load).
+const SURE_TRAILING: Duration = Duration::from_millis(500);
+
+impl<'o> Hand<'o> {
+    fn new(opts: &'o FuzzOptions) -> Self {
+        Hand { opts, link: None, new: true, dirty: false, trailing: TRAILING }
+    }
+
+    /// Runs `f` with the longer trailing wait of [`SURE_TRAILING`] on a hand outside this
+    /// process (the simulator in process answers whole, at once).
+    fn surely<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+        let outside = !matches!(self.opts.target, Target::Sim { .. });
+        let was = std::mem::replace(&mut self.trailing, if outside { SURE_TRAILING } else { TRAILING });
+        let r = f(self);
+        self.trailing = was;
+        r
+    }
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
@@ -896,7 +919,7 @@ impl Hand<'_> {
     /// One replay of a transcript (see [`Hand::run`]).
     fn replay(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
-        let mut ro = ReplayOptions { trailing: TRAILING, ..crate::suite::replay_options() };
+        let mut ro = ReplayOptions { trailing: self.trailing, ..crate::suite::replay_options() };
         let outside = !matches!(self.opts.target, Target::Sim { .. });
         if outside {
             let case = Case { profile: p.id.clone(), transcript: t.clone() };
@@ -1647,7 +1670,7 @@ pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
     }
     let p = &opts.profile;
     let Some(probe) = MotionProbe::new(p) else { return Ok(()) };
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     let out = hand.run(&probe.transcript, true)?;
     match probe.judge(p, &out) {
         Some(n) => Err(FuzzError::NotRealTime { command: n.command, took_ms: n.took_ms, model_ms: n.model_ms }),
@@ -1666,7 +1689,7 @@ pub fn judge_once(
         Ok(b) => b,
         Err(e) => return Ok(Err(e)),
     };
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     let out = hand.run(&built.transcript, true)?;
     judged(opts, &mut hand, actions, &built, &out, &[]).map(Ok)
 }
@@ -1875,7 +1898,7 @@ fn worker(
     let gen_no_eeprom = Generator::new(&p, allowed).holding_velocities(opts.wide());
     let stream = opts.shard.map_or(w as u64, |s| s.global(w as u64));
     let mut dice = Dice::new(opts.seed.wrapping_add(stream));
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     // The cases that passed last on this link, the latest last (see [`Met::before`]).
@@ -1954,7 +1977,7 @@ fn worker(
             && let Some((pa, pb, prun)) = prev.take()
         {
             lock().rejudged += 1;
-            let out = hand.run(&pb.transcript, true)?;
+            let out = hand.surely(|h| h.run(&pb.transcript, true))?;
             let known = lock().explained.clone();
             if let Some(sig) = judged(opts, &mut hand, &pa, &pb, &out, &known)? {
                 let new = lock().saw(&sig);
@@ -2255,7 +2278,7 @@ fn reproductions(
     let mut again = 0;
     for _ in 0..of {
         hand.link = None;
-        let out = hand.run(&case.transcript, true)?;
+        let out = hand.surely(|h| h.run(&case.transcript, true))?;
         if judged(opts, hand, actions, case, &out, &known)?.is_some_and(|s| s.key() == sig.key()) {
             again += 1;
         } else if first_miss {
@@ -2432,7 +2455,7 @@ mod tests {
         let actions: Vec<HostAction> =
             ["FGET MCV", "vers", "FGET DP", "FGET MOV"].iter().map(|l| HostAction::Line(l.to_string())).collect();
         let built = build_for(&opts, &actions, "t", "t").unwrap();
-        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let mut hand = Hand::new(&opts);
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the lower-case line fails");
         let start = Instant::now();
@@ -2456,7 +2479,7 @@ mod tests {
         opts.minimize = false;
         let actions: Vec<HostAction> = lines.iter().map(|l| HostAction::Line(l.to_string())).collect();
         let built = build_for(&opts, &actions, "t", "t").unwrap();
-        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let mut hand = Hand::new(&opts);
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the fault shows");
         let shared = Mutex::new(Shared::default());
