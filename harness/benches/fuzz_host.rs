@@ -95,7 +95,7 @@ fn clean_runs(label: &str, run: &HostRun, n: usize, jobs: usize) {
 }
 
 /// Python mutants: file, the operators fuzzed, the kind of finding and what its signature names
-/// (as in `tests/fuzz_host.rs`).
+/// (as in `tests/it/fuzz_host.rs`).
 const MUTANTS: [(&str, &str, FindingKind, &str); 6] = [
     ("py_prompt_forever.py", "no-prompt,truncate,bad-prompt,silence", FindingKind::Hang, "awaiting the answer"),
     ("py_err_table.py", "err-bits,garbage", FindingKind::Crash, "python KeyError"),

@@ -1,7 +1,7 @@
 //! # gcl-harness: the `gcl` binary, and the harness under one name
 //!
 //! The top layer: the command line (`src/cli/`, a module of the binary, so nothing in a
-//! library can reach it; `anyhow`, `clap` and `indicatif` belong to it and `tests/tidy.rs`
+//! library can reach it; `anyhow`, `clap` and `indicatif` belong to it and `tests/it/tidy.rs`
 //! holds that line). The library part of this crate is the layers below under one name, so
 //! the binary, the tests and the benches write `gcl_harness::sim`, `gcl_harness::fuzz`, ...:
 //!

@@ -26,7 +26,7 @@
 //! for the plots. `program.rs` is the page of the RealTime example program's run (`--example
 //! realtime -- --plot`), each finger's positions over the band of the reference model's own run.
 //!
-//! `harness/tests/report_pages.rs` parses every kind of page with an HTML5 parser and reads every
+//! `harness/tests/it/report_pages.rs` parses every kind of page with an HTML5 parser and reads every
 //! `junit.xml` with Python's `junitparser` (`.ci/run` makes its venv); `reports/screenshot.sh`
 //! renders every kind of page with headless Chromium.
 

@@ -6,7 +6,7 @@
 //! ending and the prompt on every step, ^C and RESET in the preamble, the FGET line format in
 //! read-backs. Those framing decisions are fine; any other decision found here that the case
 //! does not check means the case's answer also depends on an unrelated choice, so a hand that
-//! chose differently fails it for the wrong reason. `harness/tests/suite_decisions.rs` holds
+//! chose differently fails it for the wrong reason. `harness/tests/it/suite_decisions.rs` holds
 //! every case to that.
 
 use gcl_model::Profile;

@@ -41,7 +41,7 @@
 //! effect, a `Bind` captures one value and holds another to a relation with it (factor and
 //! tolerance from the model: `derive_relation`, `fit_tolerance`), so the case does not rest on
 //! absolute values another decision sets; a relation without evidence, or one the model's own pairs
-//! break, fails the build, and its evidence becomes a note (`harness/tests/suite_relations.rs`).
+//! break, fails the build, and its evidence becomes a note (`harness/tests/it/suite_relations.rs`).
 //!
 //! `depends.rs` (which also owns `prefix_motors`) finds every decision a case rests on besides
 //! those it checks (written as `x-decisions`; only the short `FRAMING` list may be touched without

@@ -12,7 +12,7 @@
 //!
 //! Stderr is treated the same way, silently: there is nowhere left to say it failed.
 //!
-//! `harness/tests/tidy.rs` (`the_binary_prints_through_one_door`) holds every other file of the
+//! `harness/tests/it/tidy.rs` (`the_binary_prints_through_one_door`) holds every other file of the
 //! binary to these: no `println!`, `eprintln!`, `std::io::stdout()` or `std::io::stderr()`.
 
 use std::io::{self, Write};

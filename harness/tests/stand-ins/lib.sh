@@ -1,4 +1,4 @@
-# The stand-ins' shell helpers (harness/tests/docs.rs writes this file into the folder every
+# The stand-ins' shell helpers (harness/tests/it/docs.rs writes this file into the folder every
 # documented command runs in). A stand-in uses them as `sh -c '. ./lib.sh; ...'`.
 
 # wait_line FILE: waits (up to 30 s) until FILE holds a line.

@@ -28,7 +28,7 @@
 //! started, feedback, ack, prompt; `ERR n` is data) or a `Violation` (the hand broke GCL; it keeps
 //! the bytes and escapes them only when displayed); request builders give a `Misuse` for what the
 //! caller cannot ask, before a byte goes out. `Misuse` is not a `poll` outcome at all, so no bytes
-//! from a hand produce one (`harness/tests/client_props.rs` checks the client over a babbling
+//! from a hand produce one (`harness/tests/it/client_props.rs` checks the client over a babbling
 //! link).
 //!
 //! A RealTime block is requested as the model's typed `Control` and written by its `emit`, so a

@@ -23,7 +23,7 @@
 //! In `realtime`, a `Control` comes in and a `Feedback` goes out, filled by an exhaustive match on
 //! `RtFlag`. In `time`, ticks that only count (HI settling at the open stop) pass at once, and
 //! `handle_timeout_until_output`, which `SimLink` uses, runs a command's ticks up to its output in
-//! one call, each as tick-by-tick calls would (`tests/time_jumps.rs`). The deliberate `Fault`s of
+//! one call, each as tick-by-tick calls would (`tests/it/time_jumps.rs`). The deliberate `Fault`s of
 //! `fault` are framing, status, persistence and RealTime bugs, plus one `*-ignored` fault per
 //! parameter with an effect, under which the hand behaves as if the parameter had its factory
 //! value.

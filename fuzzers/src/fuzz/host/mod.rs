@@ -29,7 +29,7 @@
 //! (and the pass starts at run 1 whatever `--jobs`).
 //!
 //! The campaign (`Campaign`) is `fuzz.json` beside the reports; its schema is
-//! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/report_schema.rs`). A campaign
+//! `reports/fuzz-host.schema.json` (`SCHEMA`, checked by `tests/it/report_schema.rs`). A campaign
 //! whose run without misbehaviour (the calibration's, or run 0) did not reach the host ends
 //! (`Campaign::untested`); `Campaign::reached` counts the runs that reached it, and a stop by a
 //! signal is `Campaign::stopped`; both become the report's `stopped` (`StopCause::CannotTest`,
