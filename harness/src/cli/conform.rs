@@ -284,9 +284,20 @@ pub fn run_with_progress(
             }
         }
         RunEvent::Stopped(st) => progress.println(&format!("{what}: {}", st.message)),
-    })?;
+    });
     progress.finish();
-    Ok(out)
+    if out.is_err()
+        && let Some(s) = stream.take()
+    {
+        // A run that could not start (a port that is not there) judged nothing: the empty
+        // results.jsonl it made goes, so that a report folder it made goes with its lock.
+        let path = s.path().to_path_buf();
+        drop(s);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file() && m.len() == 0) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+    Ok(out?)
 }
 
 /// The summary table printed at the end of a run.

@@ -310,6 +310,8 @@ fn device_campaign(a: &DeviceArgs, o: &gcl_harness::fuzz::device::FuzzOptions) -
             _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
         }
     }
+    // Let go last held first: a parent the first lock made for both goes once both are empty.
+    _held.reverse();
     let s = fd::run(o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
     let timeline = timeline.into_inner().unwrap_or_else(|e| e.into_inner());

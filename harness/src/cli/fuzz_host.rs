@@ -325,6 +325,8 @@ fn hold_folders(args: &Args) -> anyhow::Result<Vec<gcl_harness::outputs::OutLock
     if let Some(d) = args.host.report_dir().filter(|d| *d != args.out.as_path()) {
         held.push(gcl_harness::outputs::OutLock::acquire(d, "fuzz host --report")?);
     }
+    // Let go last held first: a parent the first lock made for both goes once both are empty.
+    held.reverse();
     Ok(held)
 }
 
