@@ -109,7 +109,7 @@ answering.\n\nExit codes: 0 no case failed (PASS or PARTIAL: SKIP and XFAIL allo
 errored or passed while listed as a known failure; 2 usage or infrastructure error (including a hand that \
 does not answer the liveness probe).\n\nExamples:\n  gcl conform --target sim\n  gcl conform --target \
 sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0 --profile bh8-262-4.3 \
---known-failures known.toml")]
+--known-failures reports/known.toml")]
 pub struct Args {
     /// The hand and the suite.
     #[command(flatten)]
