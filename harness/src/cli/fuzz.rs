@@ -410,6 +410,7 @@ fn print_device_summary(
     if !a.quiet {
         write!(out, "{}", fd::coverage::render(&report.coverage))?;
     }
+    writeln!(out, "  result: {}", report.verdict())?;
     if let Some(dir) = &a.report {
         for p in fd::report::write_all(dir, report)? {
             writeln!(out, "wrote {}", p.display())?;

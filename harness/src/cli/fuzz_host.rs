@@ -261,7 +261,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(e) = unwritten {
         return Err(e.into());
     }
-    Ok(host_exit(&opts, &campaign))
+    let code = host_exit(&opts, &campaign);
+    // The verdict in the words every report of it uses.
+    errln!("result: {}", campaign_report(&opts, &campaign, &args.out, args.ops.is_some()).verdict_line());
+    Ok(code)
 }
 
 /// `--link PATTERN` as the runs' link: over a pty only; without `{slot}` only at `--jobs 1`
