@@ -285,7 +285,6 @@ pub fn run_with_progress(
         }
         RunEvent::Stopped(st) => progress.println(&format!("{what}: {}", st.message)),
     });
-    progress.finish();
     if out.is_err()
         && let Some(s) = stream.take()
     {
@@ -297,7 +296,9 @@ pub fn run_with_progress(
             let _ = std::fs::remove_file(&path);
         }
     }
-    Ok(out?)
+    let out = out?;
+    progress.finish();
+    Ok(out)
 }
 
 /// The summary table printed at the end of a run.
