@@ -850,3 +850,45 @@ fn every_output_says_its_verdicts_in_the_words_of_the_reference_table() {
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
+
+/// Issue 40 item 5: a `fuzz device` page's banner is coloured by the highest level of what is
+/// new: red for a new finding at MUST, amber when every new finding is at INFO (a baseline
+/// page whose only new finding rests on an open point was red), green when nothing is new.
+#[test]
+fn a_fuzz_device_banner_follows_the_highest_level_of_what_is_new() {
+    use gcl_harness::fuzz::device::report::{FuzzReport, to_html};
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("r");
+    let o = gcl(&[
+        "fuzz",
+        "device",
+        "--target",
+        "sim",
+        "--fault",
+        "fget-reversed",
+        "--seed",
+        "1",
+        "--runs",
+        "300",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut r: FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    assert!(
+        !r.findings.is_empty() && r.findings.iter().all(|f| f.known.is_none() && f.level == gcl_model::Level::Must)
+    );
+    let banner = |r: &FuzzReport| {
+        let (class, word, _) = verdict_block(&Html::parse_document(&to_html(r)));
+        (class, word)
+    };
+    assert_eq!(banner(&r), ("fail".to_string(), "FINDINGS".to_string()));
+    for f in &mut r.findings {
+        f.level = gcl_model::Level::Info;
+    }
+    assert_eq!(banner(&r), ("partial".to_string(), "FINDINGS".to_string()), "only INFO is new: not red");
+    for f in &mut r.findings {
+        f.known = Some("in the baseline".into());
+    }
+    assert_eq!(banner(&r), ("pass".to_string(), "NO NEW FINDING".to_string()));
+}
