@@ -839,11 +839,11 @@ fn written_paths(docs: &[Doc]) -> Vec<(String, PathBuf, bool)> {
             for c in commands {
                 let mut cwd = PathBuf::new();
                 for part in c.split(|w| w == "&&" || w == ";") {
-                    if let [cd, dir] = part {
-                        if cd == "cd" {
-                            cwd.push(dir);
-                            continue;
-                        }
+                    if let [cd, dir] = part
+                        && cd == "cd"
+                    {
+                        cwd.push(dir);
+                        continue;
                     }
                     for (i, w) in part.iter().enumerate() {
                         let (option, value) = match w.split_once('=') {
@@ -892,9 +892,8 @@ fn the_documented_commands_write_only_where_git_ignores() {
         let wrong = not_ignored(&written_paths(&[doc(text)]));
         assert!(wrong.iter().any(|w| w.contains(what)), "{text}: expected {what:?} in {wrong:?}");
     }
-    for fine in ["```sh\ngcl conform --target sim --report reports/x\ngcl certify --keygen ~/k.pem\n```\n"] {
-        assert_eq!(not_ignored(&written_paths(&[doc(fine)])), Vec::<String>::new());
-    }
+    let fine = "```sh\ngcl conform --target sim --report reports/x\ngcl certify --keygen ~/k.pem\n```\n";
+    assert_eq!(not_ignored(&written_paths(&[doc(fine)])), Vec::<String>::new());
 }
 
 /// The paths of [`written_paths`] that git does not ignore, and private keys in the checkout.
