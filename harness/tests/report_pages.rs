@@ -744,6 +744,10 @@ fn every_output_says_its_verdicts_in_the_words_of_the_reference_table() {
                 .collect(),
         ),
         ("not-tested", vec!["check-host", "--", "true", "{port}"].into_iter().map(String::from).collect()),
+        (
+            "campaign-not-tested",
+            vec!["fuzz", "host", "--runs", "2", "--", "true", "{port}"].into_iter().map(String::from).collect(),
+        ),
     ];
     // A correct run of the host check, with the example host (built by `cargo test`).
     if let Some(h) = &host {
@@ -776,6 +780,9 @@ fn every_output_says_its_verdicts_in_the_words_of_the_reference_table() {
         args.splice(at..at, [flag.to_string(), out.display().to_string()]);
         if args[1] == "device" {
             args.splice(at..at, ["--report".to_string(), out.join("report").display().to_string()]);
+        }
+        if args[1] == "host" {
+            args.splice(at..at, ["--out".to_string(), dir.path().join("bundles").display().to_string()]);
         }
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = gcl(&args);
@@ -828,7 +835,7 @@ fn every_output_says_its_verdicts_in_the_words_of_the_reference_table() {
                 assert_ne!(class, "pass", "{name}: an unsigned certificate is not green");
             }
             "partial" => assert_eq!(word, "PARTIAL", "{name}: {text}"),
-            "not-tested" => assert_eq!(word, "NOT TESTED", "{name}: {text}"),
+            "not-tested" | "campaign-not-tested" => assert_eq!(word, "NOT TESTED", "{name}: {text}"),
             "host-pass" => assert_eq!(word, "PASS", "{name}: {text}"),
             _ => {}
         }
