@@ -12,7 +12,9 @@
 # page (a motion effect's window plot), a fuzz device run against the first one's findings as
 # its --baseline (known apart from new), and the RealTime example program's --plot page.
 # Chromium is installed with apt when missing. Environment: GCL_SHOT_HEIGHT (viewport height,
-# default 2200), GCL_SHOT_BUILD (release, the default, or debug: no release build needed).
+# default 2200), GCL_SHOT_BUILD (release, the default: the release build that is there, built
+# only when there is none; rebuild: built anew, as cargo sees fit; or debug: no release build
+# needed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out="${1:-target/screenshots}"
@@ -32,8 +34,12 @@ if [ -z "$browser" ]; then
 fi
 
 build="${GCL_SHOT_BUILD:-release}"
-if [ "$build" = release ]; then
+if [ "$build" = release ] && [ -x target/release/gcl ] && [ -x target/release/examples/realtime ]; then
+    # A release build takes minutes: the one that is there is used, and said.
+    echo "using the release build that is there: target/release/gcl ($(target/release/gcl --version)); GCL_SHOT_BUILD=rebuild builds it anew"
+elif [ "$build" = release ] || [ "$build" = rebuild ]; then
     cargo build --release -q -p gcl-harness --bin gcl --example realtime
+    build=release
 else
     cargo build -q -p gcl-harness --bin gcl --example realtime
     build=debug

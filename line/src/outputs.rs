@@ -124,13 +124,15 @@ pub const LOCK_FILE: &str = ".gcl.lock";
 /// as the value lives (the kernel drops the lock when the process ends, kill -9 included).
 /// A second campaign or report on the same folder is refused instead of overwriting the
 /// first one's files. When the value is dropped the lock file is removed (only if it is still
-/// this lock's file), and so is the folder if `acquire` made it and it is left empty: a run
-/// that wrote nothing leaves nothing behind.
+/// this lock's file), and so is the folder if `acquire` made it and it is left empty, and each
+/// parent `acquire` made for it that is left empty too: a run that wrote nothing leaves
+/// nothing behind.
 #[derive(Debug)]
 pub struct OutLock {
     lock: nix::fcntl::Flock<File>,
     path: PathBuf,
-    made_dir: Option<PathBuf>,
+    /// The folders `acquire` made, `dir` first and then its parents it made.
+    made_dirs: Vec<PathBuf>,
 }
 
 /// Device and inode of an open file or a path: the identity of a lock file.
@@ -143,7 +145,12 @@ impl OutLock {
     /// Takes `dir` (creating it) for `what` (`fuzz device`, `conform --report`, ...), or says
     /// which process holds it.
     pub fn acquire(dir: &Path, what: &str) -> io::Result<OutLock> {
-        let made_dir = (!dir.exists()).then(|| dir.to_path_buf());
+        let made_dirs: Vec<PathBuf> = dir
+            .ancestors()
+            .filter(|d| !d.as_os_str().is_empty())
+            .take_while(|d| std::fs::symlink_metadata(d).is_err())
+            .map(Path::to_path_buf)
+            .collect();
         std::fs::create_dir_all(dir).map_err(|e| named(dir, e))?;
         let path = dir.join(LOCK_FILE);
         loop {
@@ -187,7 +194,7 @@ impl OutLock {
             let line = format!("gcl {what} (pid {})\n", std::process::id());
             std::os::unix::fs::FileExt::write_all_at(&file, line.as_bytes(), 0)?;
             file.set_len(line.len() as u64)?;
-            return Ok(OutLock { lock, path, made_dir });
+            return Ok(OutLock { lock, path, made_dirs });
         }
     }
 }
@@ -239,9 +246,12 @@ impl Drop for OutLock {
         if ours.is_some() && std::fs::symlink_metadata(&self.path).map(|m| identity(&m)).ok() == ours {
             let _ = std::fs::remove_file(&self.path);
         }
-        if let Some(d) = &self.made_dir {
-            // Removes the folder only when empty: never a file somebody (or this run) wrote.
-            let _ = std::fs::remove_dir(d);
+        // Removes a folder only when empty: never a file somebody (or this run) wrote; and a
+        // parent only once the folder in it is gone.
+        for d in &self.made_dirs {
+            if std::fs::remove_dir(d).is_err() {
+                break;
+            }
         }
     }
 }
@@ -345,6 +355,9 @@ mod tests {
         // A folder the lock made is removed with it when nothing was written there.
         let made = dir.path().join("reports");
         drop(OutLock::acquire(&made, "conform --report").unwrap());
+        assert!(!made.exists());
+        // And the parents it made for it, up to the first that was there.
+        drop(OutLock::acquire(&made.join("hand/now"), "conform --report").unwrap());
         assert!(!made.exists());
         // Seen from outside without taking it: held while held, free after.
         let looked = dir.path().join("looked");

@@ -49,6 +49,19 @@ def test_name_version_and_metadata_come_from_cargo_toml():
     assert [e.value for e in entry] == ["gcl.pytest_plugin"]
 
 
+def test_the_wheel_brings_pyserial_and_names_the_pytest_extra():
+    # The host-library guide installs the wheel and pytest, and nothing else: its host
+    # scenario (ci/host_scenario.py) and the example host library need pyserial.
+    requires = importlib.metadata.requires(cargo_package()[0]) or []
+    plain = [r for r in requires if "extra" not in r]
+    assert any(r.replace(" ", "").startswith("pyserial>=") for r in plain), requires
+    assert any(r.startswith("pytest") and "pytest" in r.split(";", 1)[-1] for r in requires if ";" in r), requires
+    guide = open(os.path.join(ROOT, "docs", "src", "host-libraries.md"), encoding="utf-8").read()
+    assert "pip install target/wheels/gcl_harness-*.whl 'pytest>=8'" in guide
+    readme = open(os.path.join(ROOT, "python", "README.md"), encoding="utf-8").read()
+    assert "gcl_harness-*.whl" in readme and "gcl-harness-*.whl" not in readme
+
+
 def test_the_packages_come_from_the_wheel_and_gcl_vectors_is_the_source_trees():
     import gcl
     import gcl_vectors

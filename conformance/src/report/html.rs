@@ -51,10 +51,20 @@ fn hand_verdict(r: &RunReport) -> (&'static str, &'static str, String) {
         ("PARTIAL", false) => format!("{rest}; {}", o.detail),
         (_, false) => format!("{}; {rest}", o.detail),
     };
-    let tone = match o.word {
+    let mut tone = match o.word {
         "PASS" => "pass",
         "PARTIAL" => "partial",
         _ => "fail",
+    };
+    // An unsigned certificate says so first: nothing shows who made it.
+    let unsigned = r.kind == ReportKind::Certify && r.certificate.as_ref().is_some_and(|c| c.signed_by.is_none());
+    let headline = if unsigned {
+        if tone == "pass" {
+            tone = "partial";
+        }
+        format!("UNSIGNED certificate: nothing shows who made it (sign it with --key); {headline}")
+    } else {
+        headline
     };
     (o.word, tone, headline)
 }
@@ -95,7 +105,10 @@ fn headline(r: &RunReport) -> String {
                 *by_level.entry(c.level.parse().unwrap_or(Level::Info)).or_default() += 1;
             }
             let levels: Vec<String> = by_level.iter().map(|(l, n)| format!("{l} {n}")).collect();
-            let mut s = format!("{n} of {} {what} fail", r.cases.len());
+            let mut s = match super::verdict_counts(&bad) {
+                Some(words) => format!("{n} of {} {what} did not pass ({words})", r.cases.len()),
+                None => format!("{n} of {} {what} fail", r.cases.len()),
+            };
             if !r.kind.is_host() {
                 s.push_str(&format!(" ({})", levels.join(", ")));
             }
@@ -117,19 +130,6 @@ fn headline(r: &RunReport) -> String {
         s.push_str("; the hand did not answer the liveness probe");
     }
     s
-}
-
-/// The verdict of a host report that failed nothing it judged but did not pass either:
-/// `STOPPED` (a signal ended it) or `NOT TESTED` (the host never talked to the hand).
-fn host_unjudged(r: &RunReport) -> Option<&'static str> {
-    let failing = r.cases.iter().any(|c| matches!(c.verdict, Verdict::Fail | Verdict::Timeout | Verdict::Xpass));
-    let errors = r.cases.iter().any(|c| c.verdict == Verdict::Error);
-    match r.stopped.as_ref().map(|s| s.cause) {
-        _ if failing => None,
-        Some(crate::report::StopCause::Signal) => Some("STOPPED"),
-        _ if errors => Some("NOT TESTED"),
-        _ => None,
-    }
 }
 
 /// The title: the command and what it judged.
@@ -291,16 +291,7 @@ pub fn to_html(r: &RunReport) -> String {
     let ok = r.passed();
     let mut p = if r.kind.is_host() {
         // A merge that lacks shards judged only part of the campaign: never NO FINDING.
-        let incomplete = r.host.as_ref().and_then(|h| h.merged.as_ref()).is_some_and(|m| !m.complete());
-        let verdict = match (r.kind, ok) {
-            (ReportKind::FuzzHost, _) if incomplete => "INCOMPLETE",
-            (ReportKind::FuzzHost, true) => "NO FINDING",
-            (_, false) if host_unjudged(r).is_some() => host_unjudged(r).unwrap_or_default(),
-            (ReportKind::FuzzHost, false) => "FINDINGS",
-            (_, true) => "PASSED",
-            (_, false) => "FAILED",
-        };
-        Page::new(&title(r), ok, verdict, &headline(r))
+        Page::new(&title(r), ok, &r.verdict_line(), &headline(r))
     } else {
         let (word, tone, headline) = hand_verdict(r);
         Page::toned(&title(r), tone, word, &headline)

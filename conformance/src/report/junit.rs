@@ -41,10 +41,8 @@ pub fn to_junit(r: &RunReport) -> std::io::Result<String> {
     w.write_event(Event::Start(suite))?;
     // The pre-flight, an early end and the root-cause groups lead, as properties CI shows.
     let mut props: Vec<(String, String)> = Vec::new();
-    // A hand's verdict line, as every other output of the run says it (PARTIAL included).
-    if !r.kind.is_host() {
-        props.push(("gcl.verdict".into(), r.outcome().verdict));
-    }
+    // The run's verdict line, as every other output of the run says it (PARTIAL included).
+    props.push(("gcl.verdict".into(), r.verdict_line()));
     for (k, v) in r.options.pairs() {
         props.push((format!("gcl.{k}"), v.to_string()));
     }

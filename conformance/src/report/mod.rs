@@ -491,8 +491,9 @@ pub struct RunReport {
     /// A host report's campaign (fuzz host, check-host).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub host: Option<HostDetails>,
-    /// A hand's run: the verdict line every output of the run shows ([`RunReport::outcome`]);
-    /// filled when the report is written.
+    /// The verdict line every output of the run shows ([`RunReport::verdict_line`]), in the
+    /// words of the reference's table (`docs/src/reference.md`, Verdicts); filled when the
+    /// report is written.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub verdict: String,
     /// Which spec the profile came from: a built-in one, or a file (with the hash of what ran).
@@ -577,6 +578,22 @@ pub struct CertificateFacts {
     /// The fingerprint of the key that signs the bundle, or `None` for an unsigned bundle.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub signed_by: Option<String>,
+}
+
+/// The verdicts of `bad` (the cases that fail a run) counted by word, `TIMEOUT 300, FAIL 56`,
+/// or `None` when every one is FAIL: a line that says they "fail" must not hide that a table
+/// beside it says TIMEOUT.
+pub(crate) fn verdict_counts(bad: &[&CaseResult]) -> Option<String> {
+    if bad.iter().all(|c| c.verdict == Verdict::Fail) {
+        return None;
+    }
+    let mut counts: BTreeMap<Verdict, usize> = BTreeMap::new();
+    for c in bad {
+        *counts.entry(c.verdict).or_default() += 1;
+    }
+    let mut by: Vec<(Verdict, usize)> = counts.into_iter().collect();
+    by.sort_by_key(|(v, n)| (std::cmp::Reverse(*n), *v));
+    Some(by.iter().map(|(v, n)| format!("{v} {n}")).collect::<Vec<_>>().join(", "))
 }
 
 /// What a hand's run amounts to, computed by [`RunReport::outcome`] alone: the console's
@@ -739,6 +756,48 @@ impl RunReport {
             && !self.cases.iter().any(|c| c.verdict.fails_run())
     }
 
+    /// The run's verdict line, the one the console's `result:`, `report.json`'s `verdict`,
+    /// JUnit's `gcl.verdict` and the page's banner show, in the words of the reference's table
+    /// (`docs/src/reference.md`, Verdicts): a hand's run, [`RunReport::outcome`]'s line; a
+    /// host's, `PASS` or `FAIL` (check-host), `NO FINDING` or `FINDINGS` (fuzz host),
+    /// `NOT TESTED` (the host never talked to the hand), `STOPPED` (a signal ended it before
+    /// anything failed) or `INCOMPLETE` (a merge that lacks shards).
+    pub fn verdict_line(&self) -> String {
+        if !self.kind.is_host() {
+            return self.outcome().verdict;
+        }
+        let ok = self.passed();
+        let incomplete = self.host.as_ref().and_then(|h| h.merged.as_ref()).is_some_and(|m| !m.complete());
+        let campaign = self.kind == ReportKind::FuzzHost;
+        let word = if campaign && incomplete {
+            "INCOMPLETE"
+        } else if campaign && ok {
+            "NO FINDING"
+        } else if let Some(w) = self.host_unjudged().filter(|_| !ok) {
+            w
+        } else if campaign {
+            "FINDINGS"
+        } else if ok {
+            "PASS"
+        } else {
+            "FAIL"
+        };
+        word.to_string()
+    }
+
+    /// The verdict of a host report that failed nothing it judged but did not pass either:
+    /// `STOPPED` (a signal ended it) or `NOT TESTED` (the host never talked to the hand).
+    fn host_unjudged(&self) -> Option<&'static str> {
+        let failing = self.cases.iter().any(|c| matches!(c.verdict, Verdict::Fail | Verdict::Timeout | Verdict::Xpass));
+        let errors = self.cases.iter().any(|c| c.verdict == Verdict::Error);
+        match self.stopped.as_ref().map(|s| s.cause) {
+            _ if failing => None,
+            Some(StopCause::Signal) => Some("STOPPED"),
+            _ if errors => Some("NOT TESTED"),
+            _ => None,
+        }
+    }
+
     /// How many cases ran (every verdict but SKIP).
     pub fn ran(&self) -> usize {
         self.cases.iter().filter(|c| c.verdict != Verdict::Skip).count()
@@ -769,7 +828,15 @@ impl RunReport {
                 *by_level.entry(c.level.parse().unwrap_or(gcl_transcript::Level::Info)).or_default() += 1;
             }
             let levels: Vec<String> = by_level.iter().map(|(l, n)| format!("{l} {n}")).collect();
-            parts.push(format!("{} of the {cases_run} cases that ran fail ({})", bad.len(), levels.join(", ")));
+            parts.push(match verdict_counts(&bad) {
+                // Not all of them FAIL: the page's table names them by their verdicts.
+                Some(words) => format!(
+                    "{} of the {cases_run} cases that ran did not pass ({words}; {})",
+                    bad.len(),
+                    levels.join(", ")
+                ),
+                None => format!("{} of the {cases_run} cases that ran fail ({})", bad.len(), levels.join(", ")),
+            });
             if !self.groups.is_empty() {
                 parts.push(format!("{} likely root cause(s)", self.groups.len()));
             }
@@ -900,11 +967,11 @@ impl ResultStream {
 
 pub use crate::outputs::write_atomic;
 
-/// Writes `report.json`, `junit.xml` and `report.html` into `dir`; a hand's `report.json`
-/// with its verdict line ([`RunReport::outcome`]).
+/// Writes `report.json`, `junit.xml` and `report.html` into `dir`; `report.json` with its
+/// verdict line ([`RunReport::verdict_line`]).
 pub fn write_all(dir: &Path, report: &RunReport) -> std::io::Result<Vec<PathBuf>> {
     let json = dir.join("report.json");
-    let verdict = if report.kind.is_host() { String::new() } else { report.outcome().verdict };
+    let verdict = report.verdict_line();
     if report.verdict == verdict {
         write_atomic(&json, &serde_json::to_vec_pretty(report)?)?;
     } else {

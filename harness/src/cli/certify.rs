@@ -35,9 +35,9 @@ reported as unsigned. Without --pubkey, --verify says that authenticity was not 
 --partial, and the certificate names the excused cases.\n\nExit codes: 0 certified (or, with --verify, intact and \
 signed by --pubkey, or intact with --allow-unverified); 1 a case failed or nothing ran (or the bundle was tampered \
 with, is unsigned while --pubkey was given, or its authenticity was not checked); 2 usage or infrastructure error (a missing \
-bundle folder, an unreadable key).\n\nExamples:\n  gcl certify --keygen lab-key.pem\n  gcl certify --target \
-serial:/dev/ttyUSB0 --profile bh8-262-4.3 --key lab-key.pem --out cert\n  gcl certify --verify \
-cert --pubkey lab-key.pem.pub"
+bundle folder, an unreadable key).\n\nExamples:\n  gcl certify --keygen ~/gcl-lab-key.pem\n  gcl certify --target \
+serial:/dev/ttyUSB0 --profile bh8-262-4.3 \\\n      --key ~/gcl-lab-key.pem --out reports/cert\n  gcl certify --verify \
+reports/cert --pubkey ~/gcl-lab-key.pem.pub"
 )]
 pub struct Args {
     /// Check the bundle in DIR (manifest, signature, agreement with its report) instead of

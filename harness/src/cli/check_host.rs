@@ -164,6 +164,7 @@ pub(super) fn print_clauses(report: &gcl_harness::report::RunReport) {
     } else {
         outln!("{} clause(s), {failed} failing, {idle} not exercised ({judged})", report.cases.len());
     }
+    outln!("result: {}", report.verdict_line());
 }
 
 /// 0 every clause exercised passes, 1 a clause fails, 2 nothing judged (the host never

@@ -109,7 +109,7 @@ answering.\n\nExit codes: 0 no case failed (PASS or PARTIAL: SKIP and XFAIL allo
 errored or passed while listed as a known failure; 2 usage or infrastructure error (including a hand that \
 does not answer the liveness probe).\n\nExamples:\n  gcl conform --target sim\n  gcl conform --target \
 sim:seed --level must --report reports/out\n  gcl conform --target serial:/dev/ttyUSB0 --profile bh8-262-4.3 \
---known-failures known.toml")]
+--known-failures reports/known.toml")]
 pub struct Args {
     /// The hand and the suite.
     #[command(flatten)]
@@ -284,7 +284,19 @@ pub fn run_with_progress(
             }
         }
         RunEvent::Stopped(st) => progress.println(&format!("{what}: {}", st.message)),
-    })?;
+    });
+    if out.is_err()
+        && let Some(s) = stream.take()
+    {
+        // A run that could not start (a port that is not there) judged nothing: the empty
+        // results.jsonl it made goes, so that a report folder it made goes with its lock.
+        let path = s.path().to_path_buf();
+        drop(s);
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file() && m.len() == 0) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+    let out = out?;
     progress.finish();
     Ok(out)
 }

@@ -46,7 +46,7 @@ such as framing-line-ending), 5000 drawn cases dropped in a row end the campaign
 it, and a signal (SIGINT, SIGTERM, SIGHUP) that stops it before a new finding leaves no verdict (every report says \
 `stopped by SIGTERM after N of M runs`); also a usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
 writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
---target sim --fault fget-reversed --seed 1 --runs 500 --out findings\n  gcl fuzz device --target 'exec:gcl sim \
+--target sim --fault fget-reversed --seed 1 --runs 500 --out reports/findings\n  gcl fuzz device --target 'exec:gcl sim \
 --stdio' --no abort-timing --duration 30s --jobs 2\n  gcl fuzz device --target serial:/dev/ttyUSB0 \
 --profile bh8-262-4.3 --no motion --duration 5m")]
 pub struct DeviceArgs {
@@ -310,6 +310,8 @@ fn device_campaign(a: &DeviceArgs, o: &gcl_harness::fuzz::device::FuzzOptions) -
             _held.push(gcl_harness::outputs::OutLock::acquire(d, what)?);
         }
     }
+    // Let go last held first: a parent the first lock made for both goes once both are empty.
+    _held.reverse();
     let s = fd::run(o, &on_progress).context("gcl fuzz device")?;
     progress.finish();
     let timeline = timeline.into_inner().unwrap_or_else(|e| e.into_inner());
@@ -408,6 +410,7 @@ fn print_device_summary(
     if !a.quiet {
         write!(out, "{}", fd::coverage::render(&report.coverage))?;
     }
+    writeln!(out, "  result: {}", report.verdict())?;
     if let Some(dir) = &a.report {
         for p in fd::report::write_all(dir, report)? {
             writeln!(out, "wrote {}", p.display())?;

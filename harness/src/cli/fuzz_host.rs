@@ -261,7 +261,10 @@ pub fn run(args: Args) -> anyhow::Result<u8> {
     if let Some(e) = unwritten {
         return Err(e.into());
     }
-    Ok(host_exit(&opts, &campaign))
+    let code = host_exit(&opts, &campaign);
+    // The verdict in the words every report of it uses.
+    errln!("result: {}", campaign_report(&opts, &campaign, &args.out, args.ops.is_some()).verdict_line());
+    Ok(code)
 }
 
 /// `--link PATTERN` as the runs' link: over a pty only; without `{slot}` only at `--jobs 1`
@@ -325,6 +328,8 @@ fn hold_folders(args: &Args) -> anyhow::Result<Vec<gcl_harness::outputs::OutLock
     if let Some(d) = args.host.report_dir().filter(|d| *d != args.out.as_path()) {
         held.push(gcl_harness::outputs::OutLock::acquire(d, "fuzz host --report")?);
     }
+    // Let go last held first: a parent the first lock made for both goes once both are empty.
+    held.reverse();
     Ok(held)
 }
 
@@ -345,7 +350,8 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
     let progress = super::progress::Progress::new("gcl fuzz host", "runs", "findings", total, false);
     let done = std::sync::atomic::AtomicU64::new(0);
     let found = std::sync::atomic::AtomicU64::new(0);
-    let on_event = |e: Event| match e {
+    let on_event = |e: Event| {
+        match e {
         // Said as soon as measured: the hang timeout the runs use, and what was left unmeasured.
         // (A run that did not reach the host is said once, as what ended the campaign.)
         Event::Calibrated(c) if c.untested.is_some() => {}
@@ -354,6 +360,11 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
                 progress.println(&line);
             }
         }
+        // A confirmation may wait a whole run budget: said before it waits.
+        Event::Confirming { signature, state, wait } => progress.println(&format!(
+            "  confirming {signature} ({state}): its schedule runs again, waiting up to {} for the host to act (--run-budget)",
+            secs(wait.as_millis() as u64)
+        )),
         Event::Run { .. } => {
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress.update(n, found.load(Ordering::Relaxed), "");
@@ -377,6 +388,7 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
                 where_
             ));
         }
+    }
     };
     let mut campaign = gcl_harness::fuzz::host::fuzz(opts, stop, &on_event).context("fuzzing")?;
     campaign.provenance = Some(provenance(args, opts));

@@ -48,7 +48,8 @@ infrastructure (shards missing, folders of different campaigns or the same shard
 a shard edited or unsealed, unreadable or out-of-range files, --out in use).
 
 Example:
-  gcl fuzz merge shard-1 shard-2 shard-3 shard-4 --out merged")]
+  gcl fuzz merge reports/shard-1 reports/shard-2 reports/shard-3 reports/shard-4 \\
+      --out reports/merged")]
 pub struct Args {
     /// The shards' folders.
     #[arg(required = true, value_name = "DIR")]

@@ -52,7 +52,9 @@ impl State {
         let total = *self.total.lock().unwrap_or_else(|e| e.into_inner());
         let (count, eta) = match total {
             Total::Units(n) => {
-                let eta = (done > 0 && n > done)
+                // No ETA before its basis: the first units carry the start (the pre-flight,
+                // the probes), and one of them said `ETA 79 s` for a run of 0.9 s.
+                let eta = (done >= eta_basis(n) && n > done)
                     .then(|| elapsed.mul_f64((n - done) as f64 / done as f64))
                     .map(|d| format!(", ETA {}", secs(d)));
                 (format!("{done}/{n} {}", self.unit), eta.unwrap_or_default())
@@ -61,6 +63,12 @@ impl State {
         };
         format!("{}: {count}, {failures} {}, {} elapsed{eta}", self.what, self.failing_word, secs(elapsed))
     }
+}
+
+/// How many of `n` units must be done before the rest is estimated from them: a twentieth,
+/// and at least 3.
+fn eta_basis(n: u64) -> u64 {
+    (n / 20).max(3)
 }
 
 fn secs(d: Duration) -> String {
@@ -199,5 +207,32 @@ mod tests {
         assert!(!due(last, last + Duration::from_millis(9_999)));
         assert!(due(last, last + Duration::from_secs(10)));
         assert!(due(last, last + Duration::from_secs(29)));
+    }
+
+    fn state(done: u64, total: u64) -> State {
+        State {
+            what: "gcl conform".into(),
+            unit: "cases",
+            failing_word: "failing",
+            total: Mutex::new(Total::Units(total)),
+            done: AtomicU64::new(done),
+            failures: AtomicU64::new(0),
+            started: Instant::now(),
+            last_line: Mutex::new(Instant::now()),
+            finished: AtomicBool::new(false),
+            started_line: AtomicBool::new(false),
+        }
+    }
+
+    /// Issue 40: the first line of a run (one case done, which carried the pre-flight) gives
+    /// no ETA; once a twentieth of the cases are done, it does.
+    #[test]
+    fn no_eta_before_a_twentieth_of_the_units_are_done() {
+        for done in [1, 2, 16] {
+            assert!(!state(done, 356).line().contains("ETA"), "{}", state(done, 356).line());
+        }
+        assert!(state(17, 356).line().contains("ETA"), "{}", state(17, 356).line());
+        assert!(!state(2, 10).line().contains("ETA"));
+        assert!(state(3, 10).line().contains("ETA"));
     }
 }

@@ -20,7 +20,7 @@ use gcl_transcript::{Level, is_slug};
 #[command(after_help = "Script lines: a host line (sent with a CR), `line: ESCAPED`, `nowait: LINE`, \
 `raw: ESCAPED`, `partial: ESCAPED`, `block: 43 14 FB`, `abort`, `wait`, `pause: 200ms`, `timeout: 30s`, `# comment`, \
 and transcript header keys (`id:`, `title:`, `clause:`, `level:`, `profile:`, `requires:`, `setup:` (`sim` places its objects), `note:`).\n\n\
-Example:\n  gcl record --target sim:seed --script my-case.script --out my-case.gcl")]
+Example:\n  gcl record --target sim:seed --script my-case.script --out reports/my-case.gcl")]
 pub struct Args {
     /// The hand: `sim`, `sim:PROFILE`, `serial:PATH?baud=N`, `tcp://HOST:PORT` or `exec:COMMAND ARGS`.
     #[arg(long)]

@@ -66,10 +66,12 @@ fn md_files(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// README.md and the chapters of the book.
+/// README.md and the chapters of the book, with `vectors/README.md`, which the book's vectors
+/// chapter includes whole.
 fn documents() -> Vec<Doc> {
     let mut files = vec![root().join("README.md")];
     files.extend(md_files(&root().join("docs/src")));
+    files.push(root().join("vectors/README.md"));
     read_docs(files)
 }
 
@@ -133,21 +135,44 @@ struct Step {
     words: Vec<String>,
     status: i32,
     expected: String,
+    /// Whether the command goes on in trycmd's `> ` lines, which a shell cannot take: a
+    /// document continues a command as a shell does, with `\` at the end of the line.
+    continued_by_gt: bool,
+}
+
+/// A command line's words, and whether it ends in `\` (the next line goes on with it).
+fn command_words(text: &str) -> (Vec<String>, bool) {
+    let text = text.trim();
+    match text.strip_suffix('\\') {
+        Some(head) => (shlex::Shlex::new(head).collect(), true),
+        None => (shlex::Shlex::new(text).collect(), false),
+    }
 }
 
 fn steps(block: &Block) -> Vec<Step> {
     let mut out: Vec<Step> = Vec::new();
     let mut in_command = false;
+    // The command's last line ended in `\`: the next line goes on with it, as in a shell.
+    let mut goes_on = false;
     for (i, l) in block.lines.iter().enumerate() {
+        if goes_on && let Some(step) = out.last_mut() {
+            let (more, on) = command_words(l);
+            step.words.extend(more);
+            goes_on = on;
+            continue;
+        }
         if let Some(cmd) = l.strip_prefix("$ ") {
             let line = block.line + 1 + i;
-            out.push(Step { line, words: shlex::Shlex::new(cmd.trim()).collect(), status: 0, expected: String::new() });
+            let (words, on) = command_words(cmd);
+            goes_on = on;
+            out.push(Step { line, words, status: 0, expected: String::new(), continued_by_gt: false });
             in_command = true;
             continue;
         }
         let Some(step) = out.last_mut() else { continue };
         if in_command && let Some(more) = l.strip_prefix("> ") {
             step.words.extend(shlex::Shlex::new(more.trim()));
+            step.continued_by_gt = true;
             continue;
         }
         if in_command && let Some(status) = l.strip_prefix("? ") {
@@ -310,6 +335,14 @@ fn check_and_count(docs: &[Doc], stand_ins: &[Doc], help: &[String]) -> (Vec<Str
                     if commands.is_empty() {
                         wrong.push(format!("{at}: a console block with no `$ ` command"));
                     }
+                    // What a reader pastes must be what a shell takes.
+                    for s in steps(&block).iter().filter(|s| s.continued_by_gt && !is_stand_in) {
+                        wrong.push(format!(
+                            "{name}:{}: `{}` goes on in `> ` lines, which a shell cannot take: end its lines in `\\`",
+                            s.line,
+                            s.words.join(" ")
+                        ));
+                    }
                     for c in commands {
                         if !bins.contains(&program(&c)) {
                             wrong.push(format!(
@@ -470,6 +503,14 @@ fn the_check_catches_a_command_nobody_runs() {
     fails(&["```console,ignore\n$ gcl explain HI\n```\n"], &[], &[], "marked `ignore`");
     fails(&["```console\n$ cargo run -- explain HI\n```\n"], &[], &[], "which the checker does not run");
     fails(&["```console\n$ sh -c 'gcl explain HI'\n```\n"], &[], &[], "which the checker does not run");
+    // A document's command that goes on in trycmd's `> ` lines (a shell takes `\`).
+    fails(&["```console\n$ gcl explain\n> HI\n```\n"], &[], &[], "which a shell cannot take");
+    let wrong = check(&[doc("```console\n$ gcl explain \\\n    HI\n```\n")], &[doc("")], &[]);
+    assert_eq!(wrong, Vec::<String>::new());
+    assert_eq!(
+        console_commands(&blocks("```console\n$ gcl explain \\\n    HI\n? 0\n> HI\n```\n")[0].1),
+        vec![words("gcl explain HI")]
+    );
     // A stand-in without a run or a reason, or with both.
     fails(&["```sh\ngcl a\n```\n"], &["## `gcl a`\n\nNothing.\n"], &[], "neither runs");
     fails(
@@ -533,7 +574,18 @@ fn run_doc(doc: &Doc, dir: &Path, bins: &BTreeMap<String, PathBuf>, env: &[(Stri
         for step in steps(&block) {
             let at = format!("{name}:{}: `{}`", step.line, step.words.join(" "));
             let assignments: Vec<(&str, &str)> = step.words.iter().map_while(|w| w.split_once('=')).collect();
-            let mut words = step.words.iter().skip(assignments.len());
+            // A word that starts `~/` is in the home folder, as a shell reads it (the checker's
+            // home, a folder of its own).
+            let home = env.iter().find(|(k, _)| k == "HOME").map(|(_, v)| v.as_str());
+            let expanded: Vec<String> = step
+                .words
+                .iter()
+                .map(|w| match (w.strip_prefix("~/"), home) {
+                    (Some(rest), Some(h)) => format!("{h}/{rest}"),
+                    _ => w.clone(),
+                })
+                .collect();
+            let mut words = expanded.iter().skip(assignments.len());
             let program = words.next().ok_or_else(|| format!("{at}: no program"))?;
             let path =
                 bins.get(program).ok_or_else(|| format!("{at}: `{program}` is not a program this checker runs"))?;
@@ -617,8 +669,13 @@ fn documented_commands_run_as_written_or_by_their_stand_ins() {
                     let folder = dir.path().join(format!("{i}"));
                     std::fs::create_dir(&folder).unwrap();
                     for (name, text) in &files {
-                        std::fs::write(folder.join(name), text).unwrap();
+                        let path = folder.join(name);
+                        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+                        std::fs::write(path, text).unwrap();
                     }
+                    std::fs::create_dir(folder.join("home")).unwrap();
+                    let mut env = env.clone();
+                    env.push(("HOME".to_string(), folder.join("home").display().to_string()));
                     let r = run_doc(doc, &folder, &bins, &env);
                     results.lock().unwrap().push((doc.path.clone(), r));
                 }
@@ -757,4 +814,109 @@ fn the_link_check_catches_a_link_to_nowhere() {
         let wrong = broken_links(&[doc(text)]);
         assert!(wrong.iter().any(|w| w.contains(what)), "{text}: expected {what:?} in {wrong:#?}");
     }
+}
+
+/// The options whose value is a path a command writes (`--keygen` a private key, and its
+/// `.pub` beside it).
+const OUTPUT_OPTIONS: &[&str] =
+    &["--report", "--out", "--corpus", "--write-known-failures", "--keygen", "--plot", "--save-session", "--link"];
+
+/// The paths the commands of `docs` write, each with where it is written and whether it is a
+/// private key: every `sh` command and `console` step, as run from the checkout's root (a
+/// `cd DIR &&` before a command moves it), relative paths joined to where it runs.
+fn written_paths(docs: &[Doc]) -> Vec<(String, PathBuf, bool)> {
+    let mut out = Vec::new();
+    for doc in docs {
+        let name = doc.path.strip_prefix(root()).unwrap_or(&doc.path).display().to_string();
+        for (_, block) in blocks(&doc.text) {
+            let commands: Vec<Vec<String>> = if block.is_console() {
+                console_commands(&block)
+            } else if block.lang() == "sh" {
+                sh_commands(&block).iter().map(|c| words(c)).collect()
+            } else {
+                continue;
+            };
+            for c in commands {
+                let mut cwd = PathBuf::new();
+                for part in c.split(|w| w == "&&" || w == ";") {
+                    if let [cd, dir] = part
+                        && cd == "cd"
+                    {
+                        cwd.push(dir);
+                        continue;
+                    }
+                    for (i, w) in part.iter().enumerate() {
+                        let (option, value) = match w.split_once('=') {
+                            Some((o, v)) if o.starts_with("--") => (o, Some(v.to_string())),
+                            _ => (w.as_str(), part.get(i + 1).cloned()),
+                        };
+                        if !OUTPUT_OPTIONS.contains(&option) {
+                            continue;
+                        }
+                        let Some(value) = value else { continue };
+                        let at = format!("{name}:{}: `{}`", block.line, c.join(" "));
+                        out.push((at, cwd.join(value), option == "--keygen"));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// What the commands of README.md, the guides and the `--help` examples write goes into a folder git ignores (run
+/// from the checkout's root, they leave `git status` clean), or outside the checkout (a path
+/// from `/` or `~/`); and a private key never into the checkout, ignored or not.
+#[test]
+fn the_documented_commands_write_only_where_git_ignores() {
+    let repo = Command::new("git").args(["rev-parse", "--show-toplevel"]).current_dir(root()).output();
+    if !repo.is_ok_and(|o| o.status.success()) {
+        deps::missing("git and a git checkout", "run the tests in a clone of the repository");
+        return;
+    }
+    // README.md, the chapters, and every `--help`'s examples.
+    let (help, _) = help_examples();
+    let mut docs = documents();
+    docs.push(Doc { path: root().join("gcl --help"), text: format!("```sh\n{}\n```\n", help.join("\n")) });
+    let written = written_paths(&docs);
+    assert!(written.len() > 20, "only {} paths found: {written:?}", written.len());
+    let wrong = not_ignored(&written);
+    assert!(wrong.is_empty(), "documented commands that write where git does not ignore:\n{}", wrong.join("\n"));
+    // The check fails on a file written at the root, and on a private key in an ignored folder.
+    let doc = |text: &str| Doc { path: root().join("doc.md"), text: text.to_string() };
+    for (text, what) in [
+        ("```sh\ngcl conform --target sim --write-known-failures known.toml\n```\n", "known.toml"),
+        ("```console\n$ gcl certify --keygen reports/key.pem\n```\n", "a private key"),
+        ("```sh\ncd vectors && gcl record --target sim --script s --out my.gcl\n```\n", "vectors/my.gcl"),
+    ] {
+        let wrong = not_ignored(&written_paths(&[doc(text)]));
+        assert!(wrong.iter().any(|w| w.contains(what)), "{text}: expected {what:?} in {wrong:?}");
+    }
+    let fine = "```sh\ngcl conform --target sim --report reports/x\ngcl certify --keygen ~/k.pem\n```\n";
+    assert_eq!(not_ignored(&written_paths(&[doc(fine)])), Vec::<String>::new());
+}
+
+/// The paths of [`written_paths`] that git does not ignore, and private keys in the checkout.
+fn not_ignored(written: &[(String, PathBuf, bool)]) -> Vec<String> {
+    let mut wrong = Vec::new();
+    for (at, path, key) in written {
+        let text = path.display().to_string();
+        if text.starts_with('/') || text.starts_with("~/") {
+            continue;
+        }
+        if *key {
+            wrong.push(format!("{at}: writes a private key into the checkout ({text}): write it outside, `~/...`"));
+            continue;
+        }
+        let ignored = Command::new("git")
+            .args(["check-ignore", "-q", "--no-index", "--"])
+            .arg(path)
+            .current_dir(root())
+            .status()
+            .unwrap();
+        if !ignored.success() {
+            wrong.push(format!("{at}: writes {text}, which git does not ignore"));
+        }
+    }
+    wrong
 }

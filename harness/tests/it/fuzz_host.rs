@@ -677,3 +677,41 @@ fn link_patterns_are_one_link_per_slot_or_refused() {
     let (code, _, err) = with(&["--jobs", "1", "--link", &fixed]);
     assert_eq!(code, 0, "one job, one link: {err}");
 }
+
+/// Issue 40: a hang's confirmation waits up to the run budget (`--timeout-hang 1s` took 62 s,
+/// 59.9 s of it a confirmation said nowhere): the console says so before it waits.
+#[test]
+fn a_hang_confirmation_says_how_long_it_may_wait() {
+    if !python_ready() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bundles");
+    let mut args = vec![
+        "fuzz",
+        "host",
+        "--ops",
+        "silence",
+        "--runs",
+        "2",
+        "--jobs",
+        "1",
+        "--timeout-hang",
+        "1s",
+        "--run-budget",
+        "4s",
+        "--no-minimize",
+        "--out",
+        out.to_str().unwrap(),
+        "--",
+    ];
+    let host = python("py_prompt_forever.py");
+    args.extend(host.iter().map(String::as_str));
+    args.push("{port}");
+    let (code, _, stderr) = gcl(&args);
+    assert_eq!(code, 1, "{stderr}");
+    let line = stderr.lines().find(|l| l.contains("confirming hang")).unwrap_or_else(|| panic!("{stderr}"));
+    assert!(line.contains("waiting up to 4.0 s for the host to act"), "{line}");
+    let at = stderr.find("confirming hang").unwrap();
+    assert!(stderr[at..].contains("finding: hang"), "said before the finding: {stderr}");
+}

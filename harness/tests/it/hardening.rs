@@ -691,6 +691,30 @@ fn an_error_says_its_cause_once() {
     }
 }
 
+/// A run that could not start (a port or a firmware that is not there) leaves no report
+/// folder behind, nor the parents it made for it (issue 40: `reports/hand` was left holding an
+/// empty `results.jsonl`).
+#[test]
+fn a_run_that_could_not_start_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no-such-port");
+    let serial = format!("serial:{}?baud=9600", s(&missing));
+    let exec = format!("exec:{}", s(&dir.path().join("no-such-firmware")));
+    let reports = dir.path().join("reports");
+    let out = reports.join("hand");
+    for args in [
+        &["conform", "--target", &serial, "--report", s(&out)][..],
+        &["conform", "--target", &exec, "--report", s(&out)],
+        &["certify", "--target", &serial, "--out", s(&out)],
+        &["fuzz", "device", "--target", &exec, "--runs", "3", "--out", s(&out), "--report", s(&reports.join("r"))],
+        &["check-host", "--report", s(&out), "--", s(&dir.path().join("no-such-host")), "{port}"],
+    ] {
+        let r = gcl(args);
+        assert_eq!(r.code, Some(2), "{args:?}: {}", r.stderr);
+        assert!(!reports.exists(), "{args:?} left {:?}", std::fs::read_dir(&reports).map(|d| d.count()));
+    }
+}
+
 /// The check `gcl certify` tells its user to run is one that passes on the bundle it wrote:
 /// with `--pubkey` for a signed bundle, with `--allow-unverified` for an unsigned one (a bare
 /// `--verify` exits 1 on both: authenticity not checked).

@@ -776,8 +776,8 @@ const PROMISES: &[(&str, &[&str])] = &[
     // Checked by `.ci/run`, which builds the C++ example with CMake (a check there is named
     // by the line it prints: `.ci/run::LINE`).
     (
-        "`-DBH8HOST_PLANTED_LF=ON` plants a CR LF bug that fails the check-host test",
-        &[".ci/run::the planted CR LF bug fails gcl check-host, as it should"],
+        "`-DBH8HOST_PLANTED_LF=ON` plants a CR LF bug that fails both tests: the check-host test on its clause `host-line-ending`, and the campaign with the finding `violation: line-ending: LF sent` in its first run",
+        &[".ci/run::the planted CR LF bug fails both gcl tests, as it should"],
     ),
     (
         "build the wheel in their first job (`gcl-wheel`: gcl is not on PyPI, so maturin builds it once from gcl's source",
@@ -1196,7 +1196,7 @@ fn the_table_check_catches_a_missing_test_and_a_non_test() {
     assert!(test_in("t.py", py, "test_after").is_ok(), "{py}");
     assert!(test_in("t.py", py, "test_in_a_string").is_err(), "{py}");
     assert!(test_in("t.py", py, "test_in_a_docstring").is_err(), "{py}");
-    assert!(has_test(".ci/run", "the planted CR LF bug fails gcl check-host, as it should").is_ok());
+    assert!(has_test(".ci/run", "the planted CR LF bug fails both gcl tests, as it should").is_ok());
     assert!(has_test(".ci/run", "the planted CR LF bug passes").is_err());
 }
 

@@ -680,3 +680,222 @@ fn the_realtime_example_program_is_plotted_block_by_block_against_the_model() {
     let f2 = html.select(&sel("svg[data-plot=\"example-realtime-F2-position\"]")).next().unwrap();
     assert!(f2.select(&sel("line[stroke-dasharray]")).next().is_some(), "where F2 leaves its band");
 }
+
+/// The verdict words of the reference's table (`docs/src/reference.md`, Verdicts): the first
+/// cell of each row, read from the page, so that the outputs and the table cannot drift apart.
+fn verdict_table() -> Vec<String> {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/src/reference.md")).unwrap();
+    let section = text.split("\n## Verdicts\n").nth(1).expect("reference.md has a Verdicts section");
+    let section = section.split("\n## ").next().unwrap();
+    let words: Vec<String> = section
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|l| l.split_once('`').map(|(w, _)| w.to_string()))
+        .collect();
+    assert!(words.len() >= 10, "{words:?}");
+    words
+}
+
+/// The verdict words in a verdict line: each run of upper-case words (`FAIL (PARTIAL: 12 of
+/// 336 cases)` holds FAIL and PARTIAL; `NO NEW FINDING` is one).
+fn verdict_words(line: &str) -> Vec<String> {
+    line.split(|c: char| !(c.is_ascii_uppercase() || c == ' '))
+        .map(str::trim)
+        .filter(|w| w.len() >= 2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// Issue 40 item 4: one verdict vocabulary. Every verdict a command prints (`result:`,
+/// `certificate verdict:`), a page's banner and level table, `report.json` (the run's, each
+/// case's and clause's) and JUnit's `gcl.verdict` property use only the words of the
+/// reference's table; a PARTIAL has its reason beside it; a line that says cases fail names the
+/// TIMEOUTs the table beside it shows; an unsigned certificate says so in its banner.
+#[test]
+fn every_output_says_its_verdicts_in_the_words_of_the_reference_table() {
+    let table = verdict_table();
+    let dir = tempfile::tempdir().unwrap();
+    let mut said: Vec<(String, String)> = Vec::new();
+    let mut say = |at: &str, line: &str| said.push((at.to_string(), line.to_string()));
+    let host = deps::example("host_scenario");
+    let mut runs: Vec<(&str, Vec<String>)> = vec![
+        ("pass", vec!["conform", "--target", "sim", "--quiet"].into_iter().map(String::from).collect()),
+        (
+            "timeouts",
+            vec!["conform", "--target", "sim", "--fault", "prompt-no-space", "--quiet"]
+                .into_iter()
+                .map(String::from)
+                .collect(),
+        ),
+        ("partial", vec!["conform", "--target", "exec:gcl-missing-firmware"].into_iter().map(String::from).collect()),
+        ("unsigned", vec!["certify", "--target", "sim:seed"].into_iter().map(String::from).collect()),
+        (
+            "findings",
+            vec!["fuzz", "device", "--target", "sim", "--fault", "fget-reversed", "--seed", "1", "--runs", "300"]
+                .into_iter()
+                .map(String::from)
+                .collect(),
+        ),
+        (
+            "no-finding",
+            vec!["fuzz", "device", "--target", "sim", "--seed", "1", "--runs", "20"]
+                .into_iter()
+                .map(String::from)
+                .collect(),
+        ),
+        ("not-tested", vec!["check-host", "--", "true", "{port}"].into_iter().map(String::from).collect()),
+        (
+            "campaign-not-tested",
+            vec!["fuzz", "host", "--runs", "2", "--", "true", "{port}"].into_iter().map(String::from).collect(),
+        ),
+    ];
+    // A correct run of the host check, with the example host (built by `cargo test`).
+    if let Some(h) = &host {
+        runs.push((
+            "host-pass",
+            [
+                "check-host",
+                "--profile",
+                "bh8-262",
+                "--",
+                &h.display().to_string(),
+                "--target",
+                "serial:{port}",
+                "--profile",
+                "bh8-262",
+            ]
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        ));
+    }
+    // A run whose cases did not all run: the simulator over exec, whose motions end at once.
+    let exec = format!("exec:{} sim --stdio", env!("CARGO_BIN_EXE_gcl"));
+    runs[2].1 = ["conform", "--target", &exec, "--quiet"].into_iter().map(String::from).collect();
+    for (name, mut args) in runs {
+        let out = dir.path().join(name);
+        let flag = if args[0] == "certify" || args[1] == "device" { "--out" } else { "--report" };
+        // The report goes before `--`, a host's command after it.
+        let at = args.iter().position(|a| a == "--").unwrap_or(args.len());
+        args.splice(at..at, [flag.to_string(), out.display().to_string()]);
+        if args[1] == "device" {
+            args.splice(at..at, ["--report".to_string(), out.join("report").display().to_string()]);
+        }
+        if args[1] == "host" {
+            args.splice(at..at, ["--out".to_string(), dir.path().join("bundles").display().to_string()]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = gcl(&args);
+        let console = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        let lines: Vec<&str> = console
+            .lines()
+            .filter_map(|l| {
+                l.trim().strip_prefix("result: ").or_else(|| l.trim().strip_prefix("certificate verdict: "))
+            })
+            .collect();
+        assert!(!lines.is_empty(), "{name}: no `result:` line: {console}");
+        for l in lines {
+            say(&format!("{name}: console"), l);
+        }
+        let folder = if args[1] == "device" { out.join("report") } else { out.clone() };
+        let html_file = ["report.html", "fuzz-device.html"].iter().map(|f| folder.join(f)).find(|p| p.exists());
+        let html = Html::parse_document(&std::fs::read_to_string(html_file.unwrap()).unwrap());
+        let (class, word, text) = verdict_block(&html);
+        say(&format!("{name}: page banner"), &word);
+        // A PARTIAL banner has its reason beside the word.
+        if word == "PARTIAL" {
+            let reason = text.strip_prefix("PARTIAL: ").unwrap_or_default();
+            assert!(reason.chars().next().is_some_and(|c| c.is_ascii_digit()), "{name}: {text}");
+        }
+        // The level table's head: its verdict columns.
+        for th in html.select(&sel("#levels tr")).take(1).flat_map(|tr| tr.select(&sel("th")).collect::<Vec<_>>()) {
+            let t = th.text().collect::<String>();
+            if t != "level" && t != "cases" {
+                say(&format!("{name}: page level table"), &t);
+            }
+        }
+        if let Ok(json) = std::fs::read(folder.join("report.json")) {
+            let report: serde_json::Value = serde_json::from_slice(&json).unwrap();
+            say(
+                &format!("{name}: report.json verdict"),
+                report["verdict"].as_str().unwrap_or_else(|| panic!("{name}: no verdict in report.json")),
+            );
+            for key in ["cases", "clauses"] {
+                for c in report[key].as_array().into_iter().flatten() {
+                    say(&format!("{name}: report.json {key}"), c["verdict"].as_str().unwrap());
+                }
+            }
+        }
+        say(&format!("{name}: JUnit gcl.verdict"), &junit_verdict(&folder.join("junit.xml")));
+        match name {
+            // The banner's line names the TIMEOUTs the level table shows, not only "fail".
+            "timeouts" => assert!(text.contains("TIMEOUT"), "{name}: {text}"),
+            "unsigned" => {
+                assert!(text.contains("UNSIGNED"), "{name}: {text}");
+                assert_ne!(class, "pass", "{name}: an unsigned certificate is not green");
+            }
+            "partial" => assert_eq!(word, "PARTIAL", "{name}: {text}"),
+            "not-tested" | "campaign-not-tested" => assert_eq!(word, "NOT TESTED", "{name}: {text}"),
+            "host-pass" => assert_eq!(word, "PASS", "{name}: {text}"),
+            _ => {}
+        }
+    }
+    let mut wrong = Vec::new();
+    for (at, line) in &said {
+        let words = verdict_words(line);
+        if words.is_empty() {
+            wrong.push(format!("{at}: `{line}` says no verdict"));
+        }
+        for w in words {
+            if !table.contains(&w) {
+                wrong.push(format!("{at}: `{w}` (in `{line}`) is not a word of the reference's table"));
+            }
+        }
+        if line.contains("PARTIAL") && !line.contains("PARTIAL: ") && !at.ends_with("page banner") {
+            wrong.push(format!("{at}: `{line}`: a PARTIAL without its reason"));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// Issue 40 item 5: a `fuzz device` page's banner is coloured by the highest level of what is
+/// new: red for a new finding at MUST, amber when every new finding is at INFO (a baseline
+/// page whose only new finding rests on an open point was red), green when nothing is new.
+#[test]
+fn a_fuzz_device_banner_follows_the_highest_level_of_what_is_new() {
+    use gcl_harness::fuzz::device::report::{FuzzReport, to_html};
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("r");
+    let o = gcl(&[
+        "fuzz",
+        "device",
+        "--target",
+        "sim",
+        "--fault",
+        "fget-reversed",
+        "--seed",
+        "1",
+        "--runs",
+        "300",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut r: FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    assert!(
+        !r.findings.is_empty() && r.findings.iter().all(|f| f.known.is_none() && f.level == gcl_model::Level::Must)
+    );
+    let banner = |r: &FuzzReport| {
+        let (class, word, _) = verdict_block(&Html::parse_document(&to_html(r)));
+        (class, word)
+    };
+    assert_eq!(banner(&r), ("fail".to_string(), "FINDINGS".to_string()));
+    for f in &mut r.findings {
+        f.level = gcl_model::Level::Info;
+    }
+    assert_eq!(banner(&r), ("partial".to_string(), "FINDINGS".to_string()), "only INFO is new: not red");
+    for f in &mut r.findings {
+        f.known = Some("in the baseline".into());
+    }
+    assert_eq!(banner(&r), ("pass".to_string(), "NO NEW FINDING".to_string()));
+}

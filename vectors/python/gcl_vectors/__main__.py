@@ -35,6 +35,7 @@ def cmd_replay(args):
         print("gcl_vectors: error: opening %s: %s" % (args.target, e), file=sys.stderr)
         return EXIT_ERROR
     code = EXIT_OK
+    tally = {"passed": 0, "failed": 0, "skipped": 0, "errors": 0}
     try:
         if spec[0] == "exec":
             wait_banner(link)
@@ -43,15 +44,19 @@ def cmd_replay(args):
                 # This runner drives no simulator of its own: it cannot place an object.
                 what = " and ".join("object %d %d" % (m, at) for _, m, at in t.setup)
                 print("SKIP %s: needs %s in place, which this runner cannot place; put it there and pass --fixture object" % (f, what))
+                tally["skipped"] += 1
                 continue
             out = replay(t, link, default_timeout=args.timeout / 1000.0, resync=args.resync)
             if out.verdict == "PASS":
+                tally["passed"] += 1
                 if not args.quiet:
                     print("PASS %s (%d steps)" % (f, out.steps))
             elif out.verdict in ("FAIL", "TIMEOUT"):
+                tally["failed"] += 1
                 print("%s %s: %s" % (out.verdict, f, out.detail))
                 code = max(code, EXIT_FAIL)
             else:
+                tally["errors"] += 1
                 print("ERROR %s: %s" % (f, out.detail))
                 code = EXIT_ERROR
             sys.stdout.flush()
@@ -60,7 +65,17 @@ def cmd_replay(args):
         return EXIT_ERROR
     finally:
         link.close()
+    print(summary(tally))
     return code
+
+
+def summary(tally):
+    """The last line of a replay: how many transcripts passed, failed (FAIL or TIMEOUT) and
+    were skipped (SKIP), and the errors (ERROR) when there were any."""
+    line = "%d passed, %d failed, %d skipped" % (tally["passed"], tally["failed"], tally["skipped"])
+    if tally["errors"]:
+        line += ", %d errors" % tally["errors"]
+    return line
 
 
 def cmd_check(args):

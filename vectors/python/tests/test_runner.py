@@ -99,6 +99,7 @@ class Runner(unittest.TestCase):
         code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)], banner=b"\n\rBarrettHand\n\r=> ")
         self.assertEqual(code, 0, out)
         self.assertIn("PASS", out)
+        self.assertEqual(out.splitlines()[-1], "1 passed, 0 failed, 0 skipped", out)
 
     def test_fail_where_the_answer_parts(self):
         code, out = self.run_against([(b"FGET DP\r", ANSWER.replace(b"1000", b"3000"))])
@@ -123,6 +124,7 @@ class Runner(unittest.TestCase):
         code, out = self.run_against([(b"FGET DP\r", ANSWER[:-1])])
         self.assertEqual(code, 1, out)
         self.assertIn("TIMEOUT", out)
+        self.assertEqual(out.splitlines()[-1], "0 passed, 1 failed, 0 skipped", out)
 
     def test_bytes_after_the_last_step_fail(self):
         code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK + b"!")])
@@ -133,6 +135,7 @@ class Runner(unittest.TestCase):
         code, out = self.run_against([(b"FGET DP\r", None)])
         self.assertEqual(code, 2, out)
         self.assertIn("ERROR", out)
+        self.assertEqual(out.splitlines()[-1], "0 passed, 0 failed, 0 skipped, 1 errors", out)
 
 
     def test_a_relation_carries_a_value_from_step_to_step(self):
@@ -159,6 +162,7 @@ class Runner(unittest.TestCase):
         code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)])
         self.assertEqual(code, 0, out)
         self.assertTrue(out.startswith("SKIP ") and "object 1 8500" in out and "--fixture object" in out, out)
+        self.assertEqual(out.splitlines()[-1], "0 passed, 0 failed, 1 skipped", out)
         code, out = self.run_against([(b"FGET DP\r", ANSWER), (b"A", BLOCK)], extra=("--fixture", "object"))
         self.assertEqual(code, 0, out)
         self.assertTrue(out.startswith("PASS "), out)

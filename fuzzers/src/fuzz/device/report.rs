@@ -113,6 +113,25 @@ impl FuzzReport {
             && self.merged().is_none_or(|m| m.complete())
     }
 
+    /// The campaign's verdict, in the words of the reference's table (`docs/src/reference.md`,
+    /// Verdicts), as the page's banner and the console's `result:` line say it: `FINDINGS`
+    /// (new ones), `NO FINDING`, `NO NEW FINDING` (a baseline or known failures explain every
+    /// one), `STOPPED` (a signal ended it first), `ERROR` (the hand stopped answering, or no
+    /// case could be drawn, first), `INCOMPLETE` (a merge that lacks shards).
+    pub fn verdict(&self) -> &'static str {
+        let new = self.new_findings();
+        let known = self.findings.len() - new;
+        match (new, known, &self.stopped) {
+            // A merge that lacks shards judged only part of the campaign.
+            _ if self.merged().is_some_and(|m| !m.complete()) => "INCOMPLETE",
+            (0, _, Some(st)) if st.starts_with("stopped by") => "STOPPED",
+            (0, _, Some(_)) => "ERROR",
+            (0, 0, None) => "NO FINDING",
+            (0, _, None) => "NO NEW FINDING",
+            _ => "FINDINGS",
+        }
+    }
+
     /// The shards a merged report holds (`None`: not a merge).
     pub fn merged(&self) -> Option<&crate::report::merged::Merged> {
         self.provenance.as_ref().and_then(|p| p.merged.as_ref())
@@ -199,7 +218,7 @@ pub fn to_junit(r: &FuzzReport) -> std::io::Result<String> {
     suite.push_attribute(("time", time.as_str()));
     w.write_event(Event::Start(suite))?;
     w.write_event(Event::Start(BytesStart::new("properties")))?;
-    let mut props = vec![("judged", r.judged())];
+    let mut props = vec![("gcl.verdict", r.verdict().to_string()), ("judged", r.judged())];
     if let Some(st) = &r.stopped {
         props.push(("stopped", st.clone()));
     }
@@ -352,11 +371,24 @@ fn first_line(diff: &str) -> Option<&str> {
     diff.lines().map(str::trim).find(|l| !l.is_empty())
 }
 
+/// The banner's colour, by the highest level of what is new: red for a new finding at MUST or
+/// SHOULD, or a campaign that judged nothing or part of the campaign (no verdict); amber when
+/// the new findings are all at MAY or INFO (open points a hand may decide otherwise, not a
+/// broken rule); green when nothing is new.
+fn tone(r: &FuzzReport) -> &'static str {
+    let highest = r.findings.iter().filter(|f| f.is_new()).map(|f| f.level).min();
+    match highest {
+        _ if !r.passed() && r.new_findings() == 0 => "fail",
+        None => "pass",
+        Some(gcl_model::Level::Must | gcl_model::Level::Should) => "fail",
+        Some(gcl_model::Level::May | gcl_model::Level::Info) => "partial",
+    }
+}
+
 /// The page: the verdict, the options, an index of findings (kind, signature, transcript
 /// path, the exact `gcl replay` command), coverage over time and by category, then each
 /// finding's diff and transcript, folded.
 pub fn to_html(r: &FuzzReport) -> String {
-    let ok = r.passed();
     let new = r.new_findings();
     let known = r.findings.len() - new;
     let secs = r.duration_ms as f64 / 1000.0;
@@ -372,21 +404,12 @@ pub fn to_html(r: &FuzzReport) -> String {
     if let Some(st) = &r.stopped {
         headline.push_str(&format!("; ended early: {st}"));
     }
-    let incomplete = r.merged().is_some_and(|m| !m.complete());
-    let verdict = match (new, known, &r.stopped) {
-        // A merge that lacks shards judged only part of the campaign.
-        _ if incomplete => "INCOMPLETE",
-        (0, _, Some(st)) if st.starts_with("stopped by") => "STOPPED",
-        (0, _, Some(_)) => "NO VERDICT",
-        (0, 0, None) => "NO FINDING",
-        (0, _, None) => "NO NEW FINDING",
-        _ => "FINDINGS",
-    };
+    let verdict = r.verdict();
     let headline = match r.merged() {
         Some(m) => format!("{headline}; merged from {}", m.describe()),
         None => headline,
     };
-    let mut p = Page::new(&format!("gcl fuzz device {} on {}", r.profile, r.target), ok, verdict, &headline);
+    let mut p = Page::toned(&format!("gcl fuzz device {} on {}", r.profile, r.target), tone(r), verdict, &headline);
     let mut facts: Vec<(String, String)> = Vec::new();
     // Who the hand said it was comes first: it explains every finding the two firmwares differ by.
     if let Some(who) = &r.identity {

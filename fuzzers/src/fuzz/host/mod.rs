@@ -841,6 +841,16 @@ pub enum Event {
     Found(Box<Finding>),
     /// Calibration ended, before the runs: what it measured.
     Calibrated(Box<Calibration>),
+    /// A suspected hang's schedule runs again to confirm it, waiting up to `wait` for the host
+    /// to act: said before the wait, which may be the whole run budget.
+    Confirming {
+        /// The hang's signature.
+        signature: String,
+        /// Where the host waited (`awaiting the answer after RESET`).
+        state: String,
+        /// The longest the confirmation waits.
+        wait: Duration,
+    },
 }
 
 /// A campaign's results.
@@ -1881,6 +1891,12 @@ impl<'a> Workers<'a> {
             } else if self.stop.load(Ordering::Relaxed) || self.out_of_time() {
                 (Confirmation::Stopped, None)
             } else {
+                let wait = opts.run.budget.max(opts.run.timeout_hang);
+                (self.on_event)(Event::Confirming {
+                    signature: pending.verdict.signature.clone(),
+                    state: key.1.clone(),
+                    wait,
+                });
                 confirm(
                     &opts.run,
                     &self.slots,
