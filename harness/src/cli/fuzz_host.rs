@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
+use gcl_harness::fuzz::host::coverage::CoverageUse;
 use gcl_harness::fuzz::host::{
     CALIBRATION_SHARE, Calibration, Campaign, DEFAULT_DURATION, Event, Finding, FindingKind, FuzzOptions, HostRun,
     Transport, Weights, judge, run_once,
@@ -84,6 +85,8 @@ impl HostArgs {
             timeout_hang: self.timeout_hang.unwrap_or(default_hang),
             budget: self.run_budget,
             link: None,
+            coverage: Default::default(),
+            env: Vec::new(),
         })
     }
 
@@ -235,6 +238,18 @@ pub struct Args {
     /// Every schedule fresh from the seed: no mutation of the runs that took a new path.
     #[arg(long)]
     no_guidance: bool,
+    /// The host's code coverage: guide (the default), measure or off. Each run gives the host
+    /// an AFL map (__AFL_SHM_ID): a host built with afl-cc/afl-clang-fast, python-afl
+    /// (afl.init()) or cargo-afl writes the edges it reaches there. With guide, a schedule whose
+    /// run reached a new edge is kept beside those that took a new wire path, and mutated (a
+    /// power schedule favours those reaching rare edges); measure reports the edges reached but
+    /// guides by wire paths only (the runs of off, to compare). A host that writes no edge gets
+    /// a note, and wire paths alone guide it. Shards (--shard) run unguided, without it.
+    #[arg(long, value_name = "MODE", default_value = "guide", conflicts_with = "no_coverage")]
+    coverage: CoverageUse,
+    /// --coverage off.
+    #[arg(long)]
+    no_coverage: bool,
     /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
     /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one
     /// (fuzz.json records the shard, the seed and every option that changed what ran).
@@ -246,6 +261,8 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
     run.link = link_pattern(&args, &run)?;
+    // A shard runs unguided: coverage would guide nothing there.
+    run.coverage = if args.no_coverage || args.shard.is_some() { CoverageUse::Off } else { args.coverage };
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -418,6 +435,9 @@ fn print_campaign_summary(campaign: &Campaign) {
     );
     if let Some(line) = campaign.pass_line() {
         errln!("{}", printable(&line));
+    }
+    if let Some(c) = &campaign.coverage {
+        errln!("{}", printable(&c.line()));
     }
     if campaign.void_runs > 0 {
         errln!(

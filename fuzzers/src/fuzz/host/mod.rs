@@ -47,6 +47,7 @@
 
 pub mod bundle;
 pub mod check;
+pub mod coverage;
 pub mod detect;
 pub mod session;
 
@@ -539,7 +540,16 @@ impl Slots {
         }
         let mut tries = 0;
         let r = loop {
-            match run_once_until(&spec, schedule, stop) {
+            // A fresh coverage map for each try: a void try's edges are not the run's.
+            let map = match coverage::map_for(&mut spec) {
+                Ok(m) => m,
+                Err(e) => break Err(e.into()),
+            };
+            let r = run_once_until(&spec, schedule, stop).map(|mut r| {
+                r.edges = map.as_ref().map(coverage::ShmMap::edges);
+                r
+            });
+            match r {
                 Err(RunError::Shared(why)) => {
                     if let Ok(mut v) = self.void.lock() {
                         v.0 += 1;
@@ -902,6 +912,10 @@ pub struct Campaign {
     /// How the first few of them were void.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub void: Vec<String>,
+    /// The host's code coverage, when the runs read it (`--coverage`): edges reached, over
+    /// time, the schedules that added some; or why there was none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<coverage::CoverageAccount>,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -1123,6 +1137,8 @@ struct Shared {
     skipped: BTreeSet<u64>,
     /// The host's waits calibration measured, by answer, milliseconds (the pass's costs).
     waits: BTreeMap<u32, u64>,
+    /// The host's code coverage, when the runs read it ([`coverage`]).
+    coverage: coverage::Coverage,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1172,8 +1188,12 @@ impl Shared {
         for p in paths_of(&r) {
             fresh_path |= self.paths.insert(p);
         }
-        if fresh_path && !r.fired.is_empty() {
+        let ms = started.elapsed().as_millis() as u64;
+        let new_edges = self.coverage.take(i, r.edges.as_deref(), ms, self.taken + 1, &schedule);
+        let for_edges = opts.run.coverage == coverage::CoverageUse::Guide && new_edges > 0;
+        if (fresh_path || for_edges) && !r.fired.is_empty() {
             self.corpus.push((i, schedule.clone()));
+            self.coverage.kept(r.edges.as_deref(), for_edges);
         }
         for (sig, _) in notes(&r) {
             *self.notes.entry(sig).or_default() += 1;
@@ -1352,6 +1372,66 @@ fn paths_of(r: &RunResult) -> Vec<String> {
     let mut v: Vec<String> = r.reactions.iter().map(|(op, st, next)| format!("{op}@{st}->{next}")).collect();
     v.push(format!("seq:{}", r.commands.join(" ")));
     v
+}
+
+/// A schedule for people: `silence@3 truncate@5`.
+pub fn schedule_text(s: &Schedule) -> String {
+    s.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(" ")
+}
+
+/// Guided by the host's coverage: a mutation (one or two of [`mutate`]) of the kept schedule
+/// the power schedule picks ([`coverage::Coverage::pick`]), or one time in eight a fresh
+/// schedule.
+fn next_covered(
+    rng: &mut Pcg64Mcg,
+    opts: &FuzzOptions,
+    corpus: &[Schedule],
+    cov: &coverage::Coverage,
+    visible: u64,
+    kinds: &[AnswerKindSeen],
+    answers: u32,
+) -> Schedule {
+    if corpus.is_empty() || rng.next_u64().is_multiple_of(8) {
+        return fresh_from(rng, &opts.weights, opts.max_planned, answers);
+    }
+    let k = cov.pick(corpus.len(), visible, rng.next_u64());
+    let mut s = corpus[k].clone();
+    // One change mostly (a second may undo what the first found), two one time in four.
+    for _ in 0..1 + u64::from(rng.next_u64().is_multiple_of(4)) {
+        mutate(rng, opts, &mut s, kinds, answers);
+    }
+    s
+}
+
+/// One change to a schedule: add a misbehaviour (anywhere, or, twice as often, within three
+/// answers after the last one: a longer sequence of what the hand did), drop one, change one's
+/// operator or its variant (`arg`), move one by an answer, or move it to the first answer of
+/// another kind.
+fn mutate(rng: &mut Pcg64Mcg, opts: &FuzzOptions, s: &mut Schedule, kinds: &[AnswerKindSeen], answers: u32) {
+    let n = s.planned.len();
+    let i = if n == 0 { 0 } else { rng.next_u64() as usize % n };
+    match rng.next_u64() % 8 {
+        6 | 7 if n > 0 && n < opts.max_planned + 2 => {
+            let mut p = planned(rng, &opts.weights, answers);
+            p.answer = s.planned[n - 1].answer + 1 + (rng.next_u64() % 3) as u32;
+            s.planned.push(p);
+        }
+        1 if n > 1 => {
+            s.planned.remove(i);
+        }
+        2 if n > 0 => s.planned[i].op = opts.weights.pick(rng),
+        3 if n > 0 => s.planned[i].arg = rng.next_u64() as u32,
+        4 if n > 0 => {
+            let a = s.planned[i].answer;
+            s.planned[i].answer = if rng.next_u64().is_multiple_of(2) { a.saturating_sub(1).max(1) } else { a + 1 };
+        }
+        5 if n > 0 && !kinds.is_empty() => {
+            s.planned[i].answer = kinds[rng.next_u64() as usize % kinds.len()].answer;
+        }
+        _ if n < opts.max_planned + 2 => s.planned.push(planned(rng, &opts.weights, answers)),
+        _ => s.planned[i].arg = rng.next_u64() as u32,
+    }
+    s.planned.sort_by_key(|p| p.answer);
 }
 
 /// A fresh schedule or a mutation of a kept one.
@@ -1622,6 +1702,19 @@ fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmatio
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
     let started = Instant::now();
+    // With coverage: the host's edge count (an afl-cc binary says it), and a map that fits it.
+    let reads = opts.run.coverage != coverage::CoverageUse::Off;
+    let host_edges = reads.then(|| coverage::instrumented_edges(&opts.run.command)).flatten();
+    let mapped;
+    let opts = if reads {
+        let mut o = opts.clone();
+        o.run.env.retain(|(k, _)| k != coverage::MAP_SIZE_ENV);
+        o.run.env.push((coverage::MAP_SIZE_ENV.to_string(), coverage::map_size_for(host_edges).to_string()));
+        mapped = o;
+        &mapped
+    } else {
+        opts
+    };
     let duration = opts.campaign_duration();
     let calibration = match calibration_stage(opts, duration, stop, on_event, started)? {
         ControlFlow::Continue(c) => c,
@@ -1632,6 +1725,9 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     let w = Workers::new(opts, stop, on_event, started, duration);
     if let ControlFlow::Break(early) = w.shard_answers()? {
         return Ok(early);
+    }
+    if let Ok(mut sh) = w.shared.lock() {
+        sh.coverage = coverage::Coverage::new(coverage::map_size_in(&opts.run.env), host_edges);
     }
     if let Some(c) = &calibration {
         if let Ok(mut sh) = w.shared.lock() {
@@ -1752,6 +1848,7 @@ impl<'a> Workers<'a> {
                 timing: RunTimes::default(),
                 skipped: BTreeSet::new(),
                 waits: BTreeMap::new(),
+                coverage: coverage::Coverage::new(coverage::map_size_in(&opts.run.env), None),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
@@ -1998,11 +2095,24 @@ impl<'a> Workers<'a> {
         // The pass starts at run 1, whatever the jobs (as in a shard).
         let k = i.checked_sub(1).map(|k| k as usize);
         let pass = k.and_then(|k| sh.pass.get(k)).copied();
+        if let (Some(e), Some(k)) = (pass, k) {
+            return Some((e.schedule(&mut run_rng(opts.seed, i)), Some(k)));
+        }
+        // Guided by coverage once the host showed it has some (run 0 is always seen).
+        if opts.guided && opts.run.coverage == coverage::CoverageUse::Guide && sh.coverage.guiding() {
+            let s = next_covered(
+                &mut run_rng(opts.seed, i),
+                opts,
+                &corpus,
+                &sh.coverage,
+                visible,
+                &sh.answer_kinds,
+                answers,
+            );
+            return Some((s, None));
+        }
         drop(sh);
-        Some(match (pass, k) {
-            (Some(e), Some(k)) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
-            _ => (next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None),
-        })
+        Some((next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None))
     }
 
     /// Runs `schedule` as run `i` (turn `t`; entry `entry` of the systematic pass, if it is
@@ -2154,6 +2264,8 @@ impl<'a> Workers<'a> {
             stopped: None,
             void_runs,
             void,
+            coverage: (self.opts.run.coverage != coverage::CoverageUse::Off)
+                .then(|| sh.coverage.account(self.started.elapsed().as_millis() as u64, runs)),
         })
     }
 }
@@ -2350,6 +2462,7 @@ mod tests {
             elapsed: Duration::ZERO,
             talking_at_end: false,
             port_opened: true,
+            edges: None,
         }
     }
 
@@ -2447,6 +2560,8 @@ mod tests {
                 timeout_hang: Duration::from_secs(3),
                 budget: Duration::from_secs(60),
                 link: None,
+                coverage: Default::default(),
+                env: Vec::new(),
             },
             seed: 0,
             runs: None,
