@@ -197,3 +197,49 @@ fn a_python_afl_host_reports_its_edges_and_its_deep_bug_is_found_with_coverage()
     let crash = c.findings.iter().find(|f| f.verdict.kind == FindingKind::Crash).expect("the deep bug");
     assert!(crash.verdict.signature.contains("retry_slot"), "{}", crash.verdict.signature);
 }
+
+/// What a user sees of an afl-cc host's coverage: the console's line (edges of the host's
+/// edges, schedules kept for them), the report page's plots (edges over time beside runs over
+/// time) and table of the runs that added edges, and `fuzz.json`'s account. `--no-coverage`
+/// reads no map: none of them.
+#[test]
+fn the_console_the_report_page_and_fuzz_json_show_the_edges_reached() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(host) = afl_host(dir.path()) else { return };
+    let gcl = |report: &str, extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+            .args(["fuzz", "host", "--profile", "seed", "--runs", "20", "--jobs", "2", "--timeout-hang", "3s"])
+            .args(["--ops", OPS, "--no-minimize"])
+            .args(extra)
+            .arg("--report")
+            .arg(dir.path().join(report))
+            .arg("--out")
+            .arg(dir.path().join(format!("{report}-bundles")))
+            .arg("--")
+            .args(&host)
+            .output()
+            .unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+        let html = std::fs::read_to_string(dir.path().join(report).join("report.html")).unwrap();
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap();
+        (String::from_utf8_lossy(&out.stderr).to_string(), html, json)
+    };
+    let (console, html, json) = gcl("on", &[]);
+    let line = console.lines().find(|l| l.starts_with("coverage: ")).unwrap_or_else(|| panic!("{console}"));
+    assert!(
+        line.contains(" edges of ") && line.contains("%) reached") && line.contains("kept for new edges"),
+        "{line}"
+    );
+    let cov = &json["coverage"];
+    assert_eq!(cov["instrumented"], true, "{json:#}");
+    assert!(cov["over_time"].as_array().unwrap().len() >= 2, "{cov:#}");
+    assert_eq!(cov["added_by"][0]["schedule"], "no misbehaviour");
+    for needle in ["Edges of the host", "Runs over time", "fuzz-host-edges", "fuzz-host-runs", "code coverage"] {
+        assert!(html.contains(needle), "the page has {needle}");
+    }
+    let (console, html, json) = gcl("off", &["--no-coverage"]);
+    assert!(!console.contains("coverage: "), "{console}");
+    assert!(json.get("coverage").is_none(), "{json:#}");
+    assert!(!html.contains("fuzz-host-edges"));
+}

@@ -813,9 +813,20 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
             }))
             .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
             .chain(c.pass_line().map(|l| ("systematic pass".into(), l.replacen("systematic pass: ", "", 1))))
+            .chain(c.coverage.as_ref().map(|cov| ("code coverage".into(), cov.line().replacen("coverage: ", "", 1))))
             .chain(timeout_facts(opts, c))
             .collect(),
         merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),
+        edges_over_time: c
+            .coverage
+            .as_ref()
+            .map(|cov| cov.over_time.iter().map(|p| (p.ms, p.runs, p.edges)).collect())
+            .unwrap_or_default(),
+        added_coverage: c
+            .coverage
+            .as_ref()
+            .map(|cov| cov.added_by.iter().map(|a| (a.run, a.new_edges, a.schedule.clone())).collect())
+            .unwrap_or_default(),
         findings: c
             .findings
             .iter()
