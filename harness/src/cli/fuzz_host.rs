@@ -162,7 +162,9 @@ misbehaviour. Then a systematic pass puts every misbehaviour at every kind of an
 showed (echo and values, prompt only, banner, feedback block...), one per run, the first
 round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
 line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
-schedule that made the host take a new path. Each distinct finding is minimized and written
+schedule that made the host take a new path, or (--coverage) reach code of the host no run
+before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl writes its
+edges to the AFL map each run is given (__AFL_SHM_ID). Each distinct finding is minimized and written
 to --out as a bundle; --replay BUNDLE runs it again. Without --runs or --duration a campaign
 lasts 5 minutes.
 

@@ -15,7 +15,9 @@
 //! (and makes one run at the hand's line rate when the campaign is unpaced). Guidance keeps
 //! the schedules whose runs made the host take a new path after a misbehaviour (an operator
 //! at a protocol state followed by a command not seen there before, or a new command
-//! sequence) and mutates them.
+//! sequence) and mutates them; with the host's code coverage ([`coverage`], `--coverage`), also
+//! those whose runs reached an edge of the host's code no earlier run had, mutated from a power
+//! schedule (`next_covered`, `mutate`).
 //!
 //! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
 //!
