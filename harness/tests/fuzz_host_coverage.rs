@@ -243,3 +243,37 @@ fn the_console_the_report_page_and_fuzz_json_show_the_edges_reached() {
     assert!(json.get("coverage").is_none(), "{json:#}");
     assert!(!html.contains("fuzz-host-edges"));
 }
+
+/// `--corpus DIR` keeps the schedules a campaign kept: a second campaign runs them right after
+/// its systematic pass, and in no more runs than run 0, the pass and those schedules, it reaches
+/// every edge the first campaign reached.
+#[test]
+fn a_corpus_carries_the_edges_reached_to_the_next_campaign() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(host) = afl_host(dir.path()) else { return };
+    let corpus = dir.path().join("corpus");
+    let gcl = |report: &str, runs: u64| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+            .args(["fuzz", "host", "--profile", "seed", "--jobs", "2", "--timeout-hang", "3s", "--no-minimize"])
+            .args(["--ops", OPS, "--runs", &runs.to_string(), "--corpus"])
+            .arg(&corpus)
+            .arg("--report")
+            .arg(dir.path().join(report))
+            .arg("--out")
+            .arg(dir.path().join(format!("{report}-bundles")))
+            .arg("--")
+            .args(&host)
+            .output()
+            .unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&std::fs::read(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap()
+    };
+    let first = gcl("first", 60);
+    let kept = std::fs::read_dir(&corpus).unwrap().count() as u64;
+    assert_eq!(kept, first["corpus"].as_u64().unwrap(), "every kept schedule is in the corpus");
+    let pass = first["pass_runs"].as_u64().unwrap();
+    let second = gcl("second", 1 + pass + kept);
+    assert_eq!(second["seeds"].as_u64(), Some(kept));
+    let edges = |j: &serde_json::Value| j["coverage"]["edges"].as_u64().unwrap();
+    assert!(edges(&second) >= edges(&first), "{} edges, then {}", edges(&first), edges(&second));
+}

@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
+use gcl_harness::fuzz::host::corpus;
 use gcl_harness::fuzz::host::coverage::CoverageUse;
 use gcl_harness::fuzz::host::{
     CALIBRATION_SHARE, Calibration, Campaign, DEFAULT_DURATION, Event, Finding, FindingKind, FuzzOptions, HostRun,
@@ -252,6 +253,11 @@ pub struct Args {
     /// --coverage off.
     #[arg(long)]
     no_coverage: bool,
+    /// A corpus folder kept across campaigns: its schedules (JSON, named by a hash of their
+    /// content) run right after the systematic pass, and the schedules this campaign keeps (for
+    /// a new wire path or a new edge) are added to it. Not with --shard (unguided).
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    corpus: Option<PathBuf>,
     /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
     /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one
     /// (fuzz.json records the shard, the seed and every option that changed what ran).
@@ -397,7 +403,26 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
             ));
         }
     };
-    let mut campaign = gcl_harness::fuzz::host::fuzz(opts, stop, &on_event).context("fuzzing")?;
+    let seeds = match &args.corpus {
+        Some(dir) => {
+            let (seeds, bad) = corpus::load(dir).with_context(|| format!("reading the corpus {}", dir.display()))?;
+            for (p, why) in &bad {
+                errln!("gcl fuzz host: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
+            }
+            errln!(
+                "gcl fuzz host: {} schedule(s) from the corpus {}, run after the systematic pass",
+                seeds.len(),
+                dir.display()
+            );
+            seeds
+        }
+        None => Vec::new(),
+    };
+    let mut campaign = gcl_harness::fuzz::host::fuzz_seeded(opts, seeds, stop, &on_event).context("fuzzing")?;
+    if let Some(dir) = &args.corpus {
+        let new = corpus::save(dir, &campaign.kept).with_context(|| format!("writing the corpus {}", dir.display()))?;
+        errln!("gcl fuzz host: corpus {}: {new} new schedule(s) of the {} kept", dir.display(), campaign.kept.len());
+    }
     campaign.provenance = Some(provenance(args, opts));
     progress.finish();
     campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, opts, &campaign));

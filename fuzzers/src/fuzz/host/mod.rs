@@ -49,6 +49,7 @@
 
 pub mod bundle;
 pub mod check;
+pub mod corpus;
 pub mod coverage;
 pub mod detect;
 pub mod session;
@@ -918,6 +919,12 @@ pub struct Campaign {
     /// time, the schedules that added some; or why there was none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coverage: Option<coverage::CoverageAccount>,
+    /// Schedules of an earlier campaign's corpus (`--corpus`) this one was given to run.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub seeds: u64,
+    /// The schedules guidance kept, in the order kept (what `--corpus` saves).
+    #[serde(skip)]
+    pub kept: Vec<Schedule>,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -1141,6 +1148,8 @@ struct Shared {
     waits: BTreeMap<u32, u64>,
     /// The host's code coverage, when the runs read it ([`coverage`]).
     coverage: coverage::Coverage,
+    /// Schedules of an earlier campaign's corpus (`--corpus`), run right after the pass.
+    seeds: Vec<Schedule>,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1703,6 +1712,18 @@ fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmatio
 /// run, hits, minimized schedule) run for run; wall times are not reproducible, nor is which
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
+    fuzz_seeded(opts, Vec::new(), stop, on_event)
+}
+
+/// [`fuzz`], with the schedules of an earlier campaign's corpus ([`corpus`]) run right after the
+/// systematic pass (a guided campaign's; a shard runs none); the campaign's own kept schedules
+/// are in [`Campaign::kept`].
+pub fn fuzz_seeded(
+    opts: &FuzzOptions,
+    seeds: Vec<Schedule>,
+    stop: &AtomicBool,
+    on_event: &(dyn Fn(Event) + Sync),
+) -> Result<Campaign, RunError> {
     let started = Instant::now();
     // With coverage: the host's edge count (an afl-cc binary says it), and a map that fits it.
     let reads = opts.run.coverage != coverage::CoverageUse::Off;
@@ -1730,6 +1751,7 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     }
     if let Ok(mut sh) = w.shared.lock() {
         sh.coverage = coverage::Coverage::new(coverage::map_size_in(&opts.run.env), host_edges);
+        sh.seeds = seeds;
     }
     if let Some(c) = &calibration {
         if let Ok(mut sh) = w.shared.lock() {
@@ -1851,6 +1873,7 @@ impl<'a> Workers<'a> {
                 skipped: BTreeSet::new(),
                 waits: BTreeMap::new(),
                 coverage: coverage::Coverage::new(coverage::map_size_in(&opts.run.env), None),
+                seeds: Vec::new(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
@@ -2100,6 +2123,10 @@ impl<'a> Workers<'a> {
         if let (Some(e), Some(k)) = (pass, k) {
             return Some((e.schedule(&mut run_rng(opts.seed, i)), Some(k)));
         }
+        // Then an earlier campaign's corpus, each once (kept again if it brings anything new).
+        if let Some(s) = k.and_then(|k| k.checked_sub(sh.pass.len())).and_then(|j| sh.seeds.get(j)) {
+            return Some((s.clone(), None));
+        }
         // Guided by coverage once the host showed it has some (run 0 is always seen).
         if opts.guided && opts.run.coverage == coverage::CoverageUse::Guide && sh.coverage.guiding() {
             let s = next_covered(
@@ -2266,6 +2293,8 @@ impl<'a> Workers<'a> {
             stopped: None,
             void_runs,
             void,
+            seeds: sh.seeds.len() as u64,
+            kept: sh.corpus.iter().map(|(_, s)| s.clone()).collect(),
             coverage: (self.opts.run.coverage != coverage::CoverageUse::Off)
                 .then(|| sh.coverage.account(self.started.elapsed().as_millis() as u64, runs)),
         })
