@@ -65,7 +65,7 @@ mod tests {
         let a = Schedule { planned: vec![Planned { answer: 2, op: Operator::ErrBits, arg: 7 }] };
         let b = Schedule { planned: vec![Planned { answer: 3, op: Operator::Garbage, arg: 1 }] };
         assert_eq!(save(dir.path(), &[a.clone(), b.clone(), a.clone()]).unwrap(), 2);
-        assert_eq!(save(dir.path(), &[b.clone()]).unwrap(), 0, "already there");
+        assert_eq!(save(dir.path(), std::slice::from_ref(&b)).unwrap(), 0, "already there");
         std::fs::write(dir.path().join("zz.json"), "{").unwrap();
         let (got, bad) = load(dir.path()).unwrap();
         let mut want = vec![a, b];
