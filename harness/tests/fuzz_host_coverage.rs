@@ -185,7 +185,10 @@ fn the_deep_bug_of_an_afl_cc_host_is_found_with_coverage_and_not_by_wire_paths_a
 }
 
 /// A Python host with python-afl writes the lines it runs to the same map: edges rise, the
-/// schedules that added them replay to them, and the deep bug is found with coverage.
+/// deep bug is found with coverage, and the schedules that added edges replay to them, but for
+/// a few: python-afl maps every module's lines, and which lines of pyserial's read a run takes
+/// depends on how the bytes arrived (a run of the campaign reached 380 edges, their replays
+/// 378).
 #[test]
 #[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
 fn a_python_afl_host_reports_its_edges_and_its_deep_bug_is_found_with_coverage() {
@@ -194,9 +197,10 @@ fn a_python_afl_host_reports_its_edges_and_its_deep_bug_is_found_with_coverage()
     let cov = c.coverage.clone().unwrap();
     assert!(cov.instrumented && cov.host_edges.is_none(), "python-afl's map does not say its size: {cov:?}");
     assert!(cov.over_time.last().unwrap().edges > cov.over_time[0].edges, "{:?}", cov.over_time);
-    assert_eq!(replayed_edges(&host, &cov), cov.edges as usize);
     let crash = c.findings.iter().find(|f| f.verdict.kind == FindingKind::Crash).expect("the deep bug");
     assert!(crash.verdict.signature.contains("retry_slot"), "{}", crash.verdict.signature);
+    let again = replayed_edges(&host, &cov) as u64;
+    assert!(again * 100 >= cov.edges * 97, "{again} edges replayed of {}", cov.edges);
 }
 
 /// What a user sees of an afl-cc host's coverage: the console's line (edges of the host's
