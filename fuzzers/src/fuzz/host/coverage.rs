@@ -228,16 +228,21 @@ pub fn map_size_in(env: &[(String, String)]) -> usize {
         .map_or(MAP_SIZE, |n| n.clamp(MAP_SIZE, MAP_SIZE_MAX))
 }
 
-/// The map for one run of `spec` when it reads coverage (`None` otherwise), its id put in
-/// the run's environment (`__AFL_SHM_ID`, replacing a former run's).
-pub fn map_for(spec: &mut super::HostRun) -> std::io::Result<Option<ShmMap>> {
-    if spec.coverage == CoverageUse::Off {
+/// The map for one run that reads coverage as `coverage` says (`None` when off), its id put in
+/// the run's environment `env` (`__AFL_SHM_ID`, replacing a former run's).
+pub fn map_for(coverage: CoverageUse, env: &mut Vec<(String, String)>) -> std::io::Result<Option<ShmMap>> {
+    if coverage == CoverageUse::Off {
         return Ok(None);
     }
-    let map = ShmMap::new(map_size_in(&spec.env))?;
-    spec.env.retain(|(k, _)| k != SHM_ENV);
-    spec.env.push((SHM_ENV.to_string(), map.id().to_string()));
+    let map = ShmMap::new(map_size_in(env))?;
+    env.retain(|(k, _)| k != SHM_ENV);
+    env.push((SHM_ENV.to_string(), map.id().to_string()));
     Ok(Some(map))
+}
+
+/// A schedule for people: `silence@3 truncate@5`.
+pub fn schedule_text(s: &Schedule) -> String {
+    s.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(" ")
 }
 
 /// One point of the campaign's coverage over time.
@@ -358,7 +363,7 @@ impl Coverage {
             self.account.edges = self.hits.len() as u64;
             self.account.over_time.push(CoveragePoint { ms, runs, edges: self.account.edges });
             if self.account.added_by.len() < ADDED_KEPT {
-                let text = super::schedule_text(schedule);
+                let text = schedule_text(schedule);
                 let text = if text.is_empty() { "no misbehaviour".to_string() } else { text };
                 self.account.added_by.push(Added { run: i, new_edges: new, schedule: text, planned: schedule.clone() });
             }

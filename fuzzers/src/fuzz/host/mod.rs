@@ -544,7 +544,7 @@ impl Slots {
         let mut tries = 0;
         let r = loop {
             // A fresh coverage map for each try: a void try's edges are not the run's.
-            let map = match coverage::map_for(&mut spec) {
+            let map = match coverage::map_for(spec.coverage, &mut spec.env) {
                 Ok(m) => m,
                 Err(e) => break Err(e.into()),
             };
@@ -1383,11 +1383,6 @@ fn paths_of(r: &RunResult) -> Vec<String> {
     let mut v: Vec<String> = r.reactions.iter().map(|(op, st, next)| format!("{op}@{st}->{next}")).collect();
     v.push(format!("seq:{}", r.commands.join(" ")));
     v
-}
-
-/// A schedule for people: `silence@3 truncate@5`.
-pub fn schedule_text(s: &Schedule) -> String {
-    s.planned.iter().map(|p| format!("{}@{}", p.op, p.answer)).collect::<Vec<_>>().join(" ")
 }
 
 /// Guided by the host's coverage: a mutation (one or two of [`mutate`]) of the kept schedule
