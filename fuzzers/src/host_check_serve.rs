@@ -119,5 +119,6 @@ pub fn serve(
         elapsed: started.elapsed(),
         talking_at_end: false,
         port_opened: log.opened,
+        edges: None,
     })
 }

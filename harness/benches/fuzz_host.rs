@@ -71,6 +71,8 @@ fn spec(command: Vec<String>) -> HostRun {
         timeout_hang: Duration::from_secs(3),
         budget: Duration::from_secs(30),
         link: None,
+        coverage: Default::default(),
+        env: Vec::new(),
     }
 }
 

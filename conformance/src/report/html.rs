@@ -990,8 +990,45 @@ pub fn transcript_view(text: &str, d: Option<&super::Diff>, answer: &str, shared
     h
 }
 
+/// The host's code coverage (when it was read): edges reached over time beside runs over time,
+/// and the runs that added edges with their schedules.
+fn host_coverage_section(p: &mut Page, h: &crate::report::HostDetails) {
+    if h.edges_over_time.is_empty() {
+        return;
+    }
+    p.heading("coverage", "The host's code coverage");
+    let plot = |title: &str, y: &str, name: &str, pick: fn(&(u64, u64, u64)) -> u64| Plot {
+        title: title.into(),
+        x_label: "seconds".into(),
+        y_label: y.into(),
+        series: vec![Series {
+            name: name.into(),
+            points: h.edges_over_time.iter().map(|t| (t.0 as f64 / 1000.0, pick(t) as f64)).collect(),
+            steps: true,
+            dots: true,
+        }],
+        ..Default::default()
+    };
+    p.push(
+        &plot("Edges of the host's code reached over time", "edges", "edges reached", |t| t.2)
+            .to_svg("fuzz-host-edges"),
+    );
+    p.push(&plot("Runs over time", "runs", "runs made", |t| t.1).to_svg("fuzz-host-runs"));
+    let mut t = String::from("<table><tr><th>run</th><th>new edges</th><th>schedule</th></tr>\n");
+    for (run, new, schedule) in &h.added_coverage {
+        let _ = writeln!(
+            t,
+            "<tr><td class=\"n\">{run}</td><td class=\"n\">{new}</td><td><code>{}</code></td></tr>",
+            esc(schedule)
+        );
+    }
+    t.push_str("</table>\n");
+    p.push("<p>The runs that reached edges no run before them had (kept for guidance when coverage guided):</p>\n");
+    p.push(&t);
+}
+
 /// The fuzz host campaign: findings with their bundles and replay commands, findings over
-/// runs, the misbehaviour × protocol-state table.
+/// runs, the host's code coverage, the misbehaviour × protocol-state table.
 fn fuzz_host_sections(p: &mut Page, r: &RunReport) {
     let Some(h) = &r.host else { return };
     p.heading("findings", "Findings");
@@ -1031,6 +1068,7 @@ fn fuzz_host_sections(p: &mut Page, r: &RunReport) {
         };
         p.push(&plot.to_svg("fuzz-host-findings"));
     }
+    host_coverage_section(p, h);
     p.heading("fired", "Misbehaviours fired, by protocol state");
     if h.fired_at.is_empty() {
         p.push("<p class=\"muted\">None fired.</p>\n");

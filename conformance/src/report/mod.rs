@@ -713,6 +713,14 @@ pub struct HostDetails {
     /// A report `gcl fuzz merge` folded from shards: which it holds, of how many.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub merged: Option<merged::Merged>,
+    /// The host's code coverage over the campaign (fuzz host with `--coverage` on an
+    /// instrumented host): (milliseconds since the start, runs, edges reached) at each rise
+    /// and at the end.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub edges_over_time: Vec<(u64, u64, u64)>,
+    /// The runs that reached edges no run before them had: (run, new edges, schedule).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub added_coverage: Vec<(u64, u64, String)>,
 }
 
 /// One finding of `gcl fuzz host`, with what a person needs to run it again.

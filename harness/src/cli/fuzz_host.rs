@@ -9,6 +9,8 @@ use std::time::Duration;
 
 use anyhow::Context;
 use gcl_harness::fuzz::host::bundle::{self, BundleInfo};
+use gcl_harness::fuzz::host::corpus;
+use gcl_harness::fuzz::host::coverage::CoverageUse;
 use gcl_harness::fuzz::host::{
     CALIBRATION_SHARE, Calibration, Campaign, DEFAULT_DURATION, Event, Finding, FindingKind, FuzzOptions, HostRun,
     Transport, Weights, judge, run_once,
@@ -84,6 +86,8 @@ impl HostArgs {
             timeout_hang: self.timeout_hang.unwrap_or(default_hang),
             budget: self.run_budget,
             link: None,
+            coverage: Default::default(),
+            env: Vec::new(),
         })
     }
 
@@ -159,7 +163,9 @@ misbehaviour. Then a systematic pass puts every misbehaviour at every kind of an
 showed (echo and values, prompt only, banner, feedback block...), one per run, the first
 round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
 line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
-schedule that made the host take a new path. Each distinct finding is minimized and written
+schedule that made the host take a new path, or (--coverage) reach code of the host no run
+before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl writes its
+edges to the AFL map each run is given (__AFL_SHM_ID). Each distinct finding is minimized and written
 to --out as a bundle; --replay BUNDLE runs it again. Without --runs or --duration a campaign
 lasts 5 minutes.
 
@@ -235,6 +241,23 @@ pub struct Args {
     /// Every schedule fresh from the seed: no mutation of the runs that took a new path.
     #[arg(long)]
     no_guidance: bool,
+    /// The host's code coverage: guide (the default), measure or off. Each run gives the host
+    /// an AFL map (__AFL_SHM_ID): a host built with afl-cc/afl-clang-fast, python-afl
+    /// (afl.init()) or cargo-afl writes the edges it reaches there. With guide, a schedule whose
+    /// run reached a new edge is kept beside those that took a new wire path, and mutated (a
+    /// power schedule favours those reaching rare edges); measure reports the edges reached but
+    /// guides by wire paths only (the runs of off, to compare). A host that writes no edge gets
+    /// a note, and wire paths alone guide it. Shards (--shard) run unguided, without it.
+    #[arg(long, value_name = "MODE", default_value = "guide", conflicts_with = "no_coverage")]
+    coverage: CoverageUse,
+    /// --coverage off.
+    #[arg(long)]
+    no_coverage: bool,
+    /// A corpus folder kept across campaigns: its schedules (JSON, named by a hash of their
+    /// content) run right after the systematic pass, and the schedules this campaign keeps (for
+    /// a new wire path or a new edge) are added to it. Not with --shard (unguided).
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    corpus: Option<PathBuf>,
     /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
     /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one
     /// (fuzz.json records the shard, the seed and every option that changed what ran).
@@ -246,6 +269,8 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
     run.link = link_pattern(&args, &run)?;
+    // A shard runs unguided: coverage would guide nothing there.
+    run.coverage = if args.no_coverage || args.shard.is_some() { CoverageUse::Off } else { args.coverage };
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -390,7 +415,26 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
         }
     }
     };
-    let mut campaign = gcl_harness::fuzz::host::fuzz(opts, stop, &on_event).context("fuzzing")?;
+    let seeds = match &args.corpus {
+        Some(dir) => {
+            let (seeds, bad) = corpus::load(dir).with_context(|| format!("reading the corpus {}", dir.display()))?;
+            for (p, why) in &bad {
+                errln!("gcl fuzz host: warning: {}", printable(&format!("corpus file {} skipped: {why}", p.display())));
+            }
+            errln!(
+                "gcl fuzz host: {} schedule(s) from the corpus {}, run after the systematic pass",
+                seeds.len(),
+                dir.display()
+            );
+            seeds
+        }
+        None => Vec::new(),
+    };
+    let mut campaign = gcl_harness::fuzz::host::fuzz_seeded(opts, seeds, stop, &on_event).context("fuzzing")?;
+    if let Some(dir) = &args.corpus {
+        let new = corpus::save(dir, &campaign.kept).with_context(|| format!("writing the corpus {}", dir.display()))?;
+        errln!("gcl fuzz host: corpus {}: {new} new schedule(s) of the {} kept", dir.display(), campaign.kept.len());
+    }
     campaign.provenance = Some(provenance(args, opts));
     progress.finish();
     campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, opts, &campaign));
@@ -430,6 +474,9 @@ fn print_campaign_summary(campaign: &Campaign) {
     );
     if let Some(line) = campaign.pass_line() {
         errln!("{}", printable(&line));
+    }
+    if let Some(c) = &campaign.coverage {
+        errln!("{}", printable(&c.line()));
     }
     if campaign.void_runs > 0 {
         errln!(
@@ -805,9 +852,20 @@ fn host_details(opts: &FuzzOptions, c: &Campaign, out: &std::path::Path, ops_giv
             }))
             .chain(c.provenance.as_ref().and_then(|p| p.merged.as_ref()).map(|m| ("merged from".into(), m.describe())))
             .chain(c.pass_line().map(|l| ("systematic pass".into(), l.replacen("systematic pass: ", "", 1))))
+            .chain(c.coverage.as_ref().map(|cov| ("code coverage".into(), cov.line().replacen("coverage: ", "", 1))))
             .chain(timeout_facts(opts, c))
             .collect(),
         merged: c.provenance.as_ref().and_then(|p| p.merged.clone()),
+        edges_over_time: c
+            .coverage
+            .as_ref()
+            .map(|cov| cov.over_time.iter().map(|p| (p.ms, p.runs, p.edges)).collect())
+            .unwrap_or_default(),
+        added_coverage: c
+            .coverage
+            .as_ref()
+            .map(|cov| cov.added_by.iter().map(|a| (a.run, a.new_edges, a.schedule.clone())).collect())
+            .unwrap_or_default(),
         findings: c
             .findings
             .iter()

@@ -146,6 +146,8 @@ fn host(a: &Args) -> anyhow::Result<u8> {
             timeout_hang: std::time::Duration::ZERO,
             budget: std::time::Duration::ZERO,
             link: None,
+            coverage: Default::default(),
+            env: Vec::new(),
         },
         seed: m.report.options.seed.unwrap_or(0),
         runs: None,

@@ -71,6 +71,8 @@ fn host_run(command: Vec<String>) -> HostRun {
         // Also how long a hang's confirmation waits.
         budget: Duration::from_secs(12),
         link: None,
+        coverage: Default::default(),
+        env: Vec::new(),
     }
 }
 

@@ -79,6 +79,8 @@ fn run(command: Vec<String>) -> HostRun {
         timeout_hang: Duration::from_secs(20),
         budget: Duration::from_secs(60),
         link: None,
+        coverage: Default::default(),
+        env: Vec::new(),
     }
 }
 

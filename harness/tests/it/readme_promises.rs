@@ -1574,6 +1574,8 @@ fn a_host_that_never_gives_up_is_measured_as_having_no_timeout() {
         timeout_hang: Duration::from_millis(500),
         budget: Duration::from_secs(1),
         link: None,
+        coverage: Default::default(),
+        env: Vec::new(),
     };
     let c = calibrate(&run, None, 1, &std::sync::atomic::AtomicBool::new(false)).unwrap();
     assert!(!c.points.is_empty(), "the hand never fell silent on the host: {c:?}");

@@ -162,6 +162,25 @@ fn fuzz_host_campaigns_validate_against_their_schema() {
         c.findings[0].verdict.kind = kind;
         check(&serde_json::to_value(&c).unwrap());
     }
+    // The host's code coverage (issue 42): the shell wrote no AFL map, so a note; and an
+    // instrumented host's account, with its rise and the runs that added edges.
+    assert_eq!(c.coverage.as_ref().and_then(|k| k.note.as_deref()), Some(host::coverage::NOT_INSTRUMENTED));
+    c.coverage = Some(host::coverage::CoverageAccount {
+        instrumented: true,
+        edges: 5,
+        host_edges: Some(9),
+        map_size: 65536,
+        kept: 1,
+        over_time: vec![host::coverage::CoveragePoint { ms: 12, runs: 1, edges: 3 }],
+        added_by: vec![host::coverage::Added {
+            run: 1,
+            new_edges: 2,
+            schedule: "truncate@2".into(),
+            planned: Schedule { planned: vec![planned] },
+        }],
+        note: None,
+    });
+    check(&serde_json::to_value(&c).unwrap());
     // And it refuses what it should: an unknown field, an unknown misbehaviour.
     let mut bad = serde_json::to_value(&c).unwrap();
     bad["surprise"] = 1.into();

@@ -15,7 +15,9 @@
 //! (and makes one run at the hand's line rate when the campaign is unpaced). Guidance keeps
 //! the schedules whose runs made the host take a new path after a misbehaviour (an operator
 //! at a protocol state followed by a command not seen there before, or a new command
-//! sequence) and mutates them.
+//! sequence) and mutates them; with the host's code coverage ([`coverage`], `--coverage`), also
+//! those whose runs reached an edge of the host's code no earlier run had, mutated from a power
+//! schedule (`next_covered`, `mutate`).
 //!
 //! Library code: no clap, no printing; progress goes to the caller through [`Event`]s.
 //!
@@ -47,6 +49,8 @@
 
 pub mod bundle;
 pub mod check;
+pub mod corpus;
+pub mod coverage;
 pub mod detect;
 pub mod session;
 
@@ -539,7 +543,16 @@ impl Slots {
         }
         let mut tries = 0;
         let r = loop {
-            match run_once_until(&spec, schedule, stop) {
+            // A fresh coverage map for each try: a void try's edges are not the run's.
+            let map = match coverage::map_for(spec.coverage, &mut spec.env) {
+                Ok(m) => m,
+                Err(e) => break Err(e.into()),
+            };
+            let r = run_once_until(&spec, schedule, stop).map(|mut r| {
+                r.edges = map.as_ref().map(coverage::ShmMap::edges);
+                r
+            });
+            match r {
                 Err(RunError::Shared(why)) => {
                     if let Ok(mut v) = self.void.lock() {
                         v.0 += 1;
@@ -912,6 +925,16 @@ pub struct Campaign {
     /// How the first few of them were void.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub void: Vec<String>,
+    /// The host's code coverage, when the runs read it (`--coverage`): edges reached, over
+    /// time, the schedules that added some; or why there was none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<coverage::CoverageAccount>,
+    /// Schedules of an earlier campaign's corpus (`--corpus`) this one was given to run.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub seeds: u64,
+    /// The schedules guidance kept, in the order kept (what `--corpus` saves).
+    #[serde(skip)]
+    pub kept: Vec<Schedule>,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -1133,6 +1156,10 @@ struct Shared {
     skipped: BTreeSet<u64>,
     /// The host's waits calibration measured, by answer, milliseconds (the pass's costs).
     waits: BTreeMap<u32, u64>,
+    /// The host's code coverage, when the runs read it ([`coverage`]).
+    coverage: coverage::Coverage,
+    /// Schedules of an earlier campaign's corpus (`--corpus`), run right after the pass.
+    seeds: Vec<Schedule>,
 }
 
 /// A hang a run showed (the host silent for the hang timeout), before it is reported: a
@@ -1182,8 +1209,12 @@ impl Shared {
         for p in paths_of(&r) {
             fresh_path |= self.paths.insert(p);
         }
-        if fresh_path && !r.fired.is_empty() {
+        let ms = started.elapsed().as_millis() as u64;
+        let new_edges = self.coverage.take(i, r.edges.as_deref(), ms, self.taken + 1, &schedule);
+        let for_edges = opts.run.coverage == coverage::CoverageUse::Guide && new_edges > 0;
+        if (fresh_path || for_edges) && !r.fired.is_empty() {
             self.corpus.push((i, schedule.clone()));
+            self.coverage.kept(r.edges.as_deref(), for_edges);
         }
         for (sig, _) in notes(&r) {
             *self.notes.entry(sig).or_default() += 1;
@@ -1362,6 +1393,61 @@ fn paths_of(r: &RunResult) -> Vec<String> {
     let mut v: Vec<String> = r.reactions.iter().map(|(op, st, next)| format!("{op}@{st}->{next}")).collect();
     v.push(format!("seq:{}", r.commands.join(" ")));
     v
+}
+
+/// Guided by the host's coverage: a mutation (one or two of [`mutate`]) of the kept schedule
+/// the power schedule picks ([`coverage::Coverage::pick`]), or one time in eight a fresh
+/// schedule.
+fn next_covered(
+    rng: &mut Pcg64Mcg,
+    opts: &FuzzOptions,
+    corpus: &[Schedule],
+    cov: &coverage::Coverage,
+    visible: u64,
+    kinds: &[AnswerKindSeen],
+    answers: u32,
+) -> Schedule {
+    if corpus.is_empty() || rng.next_u64().is_multiple_of(8) {
+        return fresh_from(rng, &opts.weights, opts.max_planned, answers);
+    }
+    let k = cov.pick(corpus.len(), visible, rng.next_u64());
+    let mut s = corpus[k].clone();
+    // One change mostly (a second may undo what the first found), two one time in four.
+    for _ in 0..1 + u64::from(rng.next_u64().is_multiple_of(4)) {
+        mutate(rng, opts, &mut s, kinds, answers);
+    }
+    s
+}
+
+/// One change to a schedule: add a misbehaviour (anywhere, or, twice as often, within three
+/// answers after the last one: a longer sequence of what the hand did), drop one, change one's
+/// operator or its variant (`arg`), move one by an answer, or move it to the first answer of
+/// another kind.
+fn mutate(rng: &mut Pcg64Mcg, opts: &FuzzOptions, s: &mut Schedule, kinds: &[AnswerKindSeen], answers: u32) {
+    let n = s.planned.len();
+    let i = if n == 0 { 0 } else { rng.next_u64() as usize % n };
+    match rng.next_u64() % 8 {
+        6 | 7 if n > 0 && n < opts.max_planned + 2 => {
+            let mut p = planned(rng, &opts.weights, answers);
+            p.answer = s.planned[n - 1].answer + 1 + (rng.next_u64() % 3) as u32;
+            s.planned.push(p);
+        }
+        1 if n > 1 => {
+            s.planned.remove(i);
+        }
+        2 if n > 0 => s.planned[i].op = opts.weights.pick(rng),
+        3 if n > 0 => s.planned[i].arg = rng.next_u64() as u32,
+        4 if n > 0 => {
+            let a = s.planned[i].answer;
+            s.planned[i].answer = if rng.next_u64().is_multiple_of(2) { a.saturating_sub(1).max(1) } else { a + 1 };
+        }
+        5 if n > 0 && !kinds.is_empty() => {
+            s.planned[i].answer = kinds[rng.next_u64() as usize % kinds.len()].answer;
+        }
+        _ if n < opts.max_planned + 2 => s.planned.push(planned(rng, &opts.weights, answers)),
+        _ => s.planned[i].arg = rng.next_u64() as u32,
+    }
+    s.planned.sort_by_key(|p| p.answer);
 }
 
 /// A fresh schedule or a mutation of a kept one.
@@ -1631,7 +1717,32 @@ fn judge_confirmation(r: &RunResult, state: &str, hang: Duration) -> Confirmatio
 /// run, hits, minimized schedule) run for run; wall times are not reproducible, nor is which
 /// runs a `--duration` leaves room for. With `jobs` 1 every run sees all runs before it.
 pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + Sync)) -> Result<Campaign, RunError> {
+    fuzz_seeded(opts, Vec::new(), stop, on_event)
+}
+
+/// [`fuzz`], with the schedules of an earlier campaign's corpus ([`corpus`]) run right after the
+/// systematic pass (a guided campaign's; a shard runs none); the campaign's own kept schedules
+/// are in [`Campaign::kept`].
+pub fn fuzz_seeded(
+    opts: &FuzzOptions,
+    seeds: Vec<Schedule>,
+    stop: &AtomicBool,
+    on_event: &(dyn Fn(Event) + Sync),
+) -> Result<Campaign, RunError> {
     let started = Instant::now();
+    // With coverage: the host's edge count (an afl-cc binary says it), and a map that fits it.
+    let reads = opts.run.coverage != coverage::CoverageUse::Off;
+    let host_edges = reads.then(|| coverage::instrumented_edges(&opts.run.command)).flatten();
+    let mapped;
+    let opts = if reads {
+        let mut o = opts.clone();
+        o.run.env.retain(|(k, _)| k != coverage::MAP_SIZE_ENV);
+        o.run.env.push((coverage::MAP_SIZE_ENV.to_string(), coverage::map_size_for(host_edges).to_string()));
+        mapped = o;
+        &mapped
+    } else {
+        opts
+    };
     let duration = opts.campaign_duration();
     let calibration = match calibration_stage(opts, duration, stop, on_event, started)? {
         ControlFlow::Continue(c) => c,
@@ -1642,6 +1753,10 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
     let w = Workers::new(opts, stop, on_event, started, duration);
     if let ControlFlow::Break(early) = w.shard_answers()? {
         return Ok(early);
+    }
+    if let Ok(mut sh) = w.shared.lock() {
+        sh.coverage = coverage::Coverage::new(coverage::map_size_in(&opts.run.env), host_edges);
+        sh.seeds = seeds;
     }
     if let Some(c) = &calibration {
         if let Ok(mut sh) = w.shared.lock() {
@@ -1762,6 +1877,8 @@ impl<'a> Workers<'a> {
                 timing: RunTimes::default(),
                 skipped: BTreeSet::new(),
                 waits: BTreeMap::new(),
+                coverage: coverage::Coverage::new(coverage::map_size_in(&opts.run.env), None),
+                seeds: Vec::new(),
             }),
             turn: Condvar::new(),
             runs_over: AtomicBool::new(false),
@@ -2014,11 +2131,28 @@ impl<'a> Workers<'a> {
         // The pass starts at run 1, whatever the jobs (as in a shard).
         let k = i.checked_sub(1).map(|k| k as usize);
         let pass = k.and_then(|k| sh.pass.get(k)).copied();
+        if let (Some(e), Some(k)) = (pass, k) {
+            return Some((e.schedule(&mut run_rng(opts.seed, i)), Some(k)));
+        }
+        // Then an earlier campaign's corpus, each once (kept again if it brings anything new).
+        if let Some(s) = k.and_then(|k| k.checked_sub(sh.pass.len())).and_then(|j| sh.seeds.get(j)) {
+            return Some((s.clone(), None));
+        }
+        // Guided by coverage once the host showed it has some (run 0 is always seen).
+        if opts.guided && opts.run.coverage == coverage::CoverageUse::Guide && sh.coverage.guiding() {
+            let s = next_covered(
+                &mut run_rng(opts.seed, i),
+                opts,
+                &corpus,
+                &sh.coverage,
+                visible,
+                &sh.answer_kinds,
+                answers,
+            );
+            return Some((s, None));
+        }
         drop(sh);
-        Some(match (pass, k) {
-            (Some(e), Some(k)) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
-            _ => (next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None),
-        })
+        Some((next_schedule(&mut run_rng(opts.seed, i), opts, &corpus, answers), None))
     }
 
     /// Runs `schedule` as run `i` (turn `t`; entry `entry` of the systematic pass, if it is
@@ -2170,6 +2304,10 @@ impl<'a> Workers<'a> {
             stopped: None,
             void_runs,
             void,
+            seeds: sh.seeds.len() as u64,
+            kept: sh.corpus.iter().map(|(_, s)| s.clone()).collect(),
+            coverage: (self.opts.run.coverage != coverage::CoverageUse::Off)
+                .then(|| sh.coverage.account(self.started.elapsed().as_millis() as u64, runs)),
         })
     }
 }
@@ -2366,6 +2504,7 @@ mod tests {
             elapsed: Duration::ZERO,
             talking_at_end: false,
             port_opened: true,
+            edges: None,
         }
     }
 
@@ -2463,6 +2602,8 @@ mod tests {
                 timeout_hang: Duration::from_secs(3),
                 budget: Duration::from_secs(60),
                 link: None,
+                coverage: Default::default(),
+                env: Vec::new(),
             },
             seed: 0,
             runs: None,

@@ -93,6 +93,11 @@ pub struct HostRun {
     /// Over a pty: a symbolic link to it made for the run, and given to the host as the port
     /// (`gcl fuzz host --link`, one per slot), removed when the run ends.
     pub link: Option<std::path::PathBuf>,
+    /// Whether each run of a campaign reads the host's code coverage, and whether it guides
+    /// (`--coverage`): [`super::Slots`] gives every run an AFL map ([`super::coverage`]).
+    pub coverage: super::coverage::CoverageUse,
+    /// More environment for the host (set per run: the coverage map's id).
+    pub env: Vec<(String, String)>,
 }
 
 /// Which way bytes went.
@@ -189,6 +194,9 @@ pub struct RunResult {
     /// Whether a host opened the port (or connected) at all: a run in which none did, or in
     /// which the host sent nothing, judged nothing of it ([`super::unreached`]).
     pub port_opened: bool,
+    /// The edges of the host's code the run reached, when a coverage map was read
+    /// ([`super::coverage`]; set by [`super::Slots`]).
+    pub edges: Option<Vec<u32>>,
 }
 
 /// A host whose last bytes came this recently is still talking.
@@ -1238,6 +1246,7 @@ fn spawn_host(
         .env(RUN_MARK, run_dir.mark())
         .env(SANITIZERS[0].0, sanitizer_options(SANITIZERS[0].0, &run_dir.0, SANITIZERS[0].1, asan_forced))
         .env(SANITIZERS[1].0, sanitizer_options(SANITIZERS[1].0, &run_dir.0, SANITIZERS[1].1, &[]))
+        .envs(spec.env.iter().map(|(k, v)| (k, v)))
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -1597,6 +1606,7 @@ fn result_of_run(
         elapsed: started.elapsed(),
         talking_at_end,
         port_opened: log.opened,
+        edges: None,
     }
 }
 

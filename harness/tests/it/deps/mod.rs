@@ -257,3 +257,53 @@ pub fn example(name: &str) -> Option<PathBuf> {
     missing(&format!("the example {}", p.display()), "cargo test --workspace builds the examples");
     None
 }
+
+/// How to get AFL++'s compiler (issue 42: hosts built with coverage instrumentation).
+pub const AFL_HOW: &str = "apt-get install afl++ (Debian/Ubuntu)";
+
+/// `afl-cc` (AFL++'s compiler wrapper) when it is on `PATH` and builds a program; `None` after
+/// [`missing`] otherwise.
+pub fn afl_cc() -> Option<String> {
+    let works = Command::new("afl-cc").arg("--version").output().is_ok_and(|o| o.status.success());
+    if works {
+        return Some("afl-cc".into());
+    }
+    missing("afl-cc (AFL++)", AFL_HOW);
+    None
+}
+
+/// How to get python-afl by hand.
+pub const PYTHON_AFL_HOW: &str =
+    "target/pyvenv/bin/python -m pip install python-afl, or set GCL_PYTHON to a Python with it";
+
+/// [`python`] with pyserial and python-afl (the `afl` module), which is installed into
+/// `target/pyvenv` the first time it is needed (under the venv's lock; it builds a C
+/// extension); `None` after [`missing`] when that fails.
+pub fn python_afl() -> Option<String> {
+    let py = python();
+    let has = |py: &str| imports(Path::new(py), &["serial", "afl"]);
+    if has(&py) {
+        return Some(py);
+    }
+    let venv = target().join("pyvenv/bin/python");
+    if std::env::var("GCL_PYTHON").map_or(true, |p| p.is_empty()) && venv.exists() {
+        static TRIED: OnceLock<()> = OnceLock::new();
+        TRIED.get_or_init(|| {
+            let Ok(file) = std::fs::File::create(target().join("pyvenv.lock")) else { return };
+            let Ok(_lock) = nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockExclusive) else { return };
+            if has(&py) {
+                return;
+            }
+            say("installing python-afl into target/pyvenv for the coverage tests, once\n");
+            let _ = Command::new(&venv)
+                .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--retries", "1"])
+                .args(["--timeout", "15", "python-afl"])
+                .output();
+        });
+        if has(&py) {
+            return Some(py);
+        }
+    }
+    missing(&format!("{py} with the Python modules serial, afl (python-afl)"), PYTHON_AFL_HOW);
+    None
+}
