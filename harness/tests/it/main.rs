@@ -22,6 +22,7 @@ mod docs;
 mod fuzz_device;
 mod fuzz_device_baseline_hand;
 mod fuzz_host;
+mod fuzz_host_coverage;
 mod fuzz_merge;
 mod hardening;
 mod host_compat;

@@ -8,7 +8,7 @@
 //! and python-afl (installed into `target/pyvenv` on first use); without them the tests are
 //! skipped with a line, and fail under CI (`CI=true`).
 
-mod deps;
+use crate::deps;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
