@@ -16,8 +16,9 @@
 //! host's stderr is still held (the transport never heard the port's last close, or stderr
 //! never ended) the process holding it (one that left the group with `setsid`) is found
 //! through `/proc`, its command line and stack taken, killed and named in the result
-//! ([`RunResult::leftovers`]). A run whose
-//! host left nothing behind reads no `/proc`.
+//! ([`RunResult::leftovers`]). Then whatever still carries the run's `GCL_HOST_RUN` mark (a
+//! daemon holding nothing of the run's) is ended, unnamed, so that no process of a finished run
+//! can reach a later run's port: one read of `/proc` per run.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
 //! the rest is counted and noted, so a host writing without end costs no memory.
@@ -1066,6 +1067,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     let _ = waiter.join();
     live().groups.remove(&host.pid.as_raw());
     let leftovers = clear_leftovers(spec, &hand, &out, &host);
+    end_marked(&hand.run_dir.mark(), host.start);
     let stderr = collect_stderr(out, &hand.run_dir);
     hand.stop.stop();
     if let Ok(Err(e)) = hand.thread.join() {
@@ -1522,6 +1524,19 @@ fn clear_leftovers(spec: &HostRun, hand: &HandSide, out: &HostOutput, host: &Hos
         wait_eof(&out.errbuf, STDERR_GRACE);
     }
     leftovers
+}
+
+/// Ends every process still carrying the run's mark (`mark`) that started with its host or
+/// after (`host_start`): what a host left behind holding nothing of the run's (a daemon that
+/// closed the port and stderr), which would outlive the run and could open a later run's port
+/// (the same `--link`, a fixed device path) between two looks of its watcher. Such a process
+/// is no finding (it holds nothing of the run's); it is ended, not named. One read of `/proc`
+/// per run, so that no process of a finished run is alive when its slot is given again.
+fn end_marked(mark: &str, host_start: Option<u64>) {
+    for (p, _) in holders(None, None, Some(&format!("{RUN_MARK}={mark}")), host_start) {
+        let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+        let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+    }
 }
 
 /// Takes the readers once the host and its leftovers are gone: waits a short grace for the
