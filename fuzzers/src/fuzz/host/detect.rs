@@ -745,32 +745,48 @@ pub fn sample_native(pid: i32) -> Option<HangStack> {
 /// How long a hung host's threads are watched for one on the CPU.
 const BUSY_WINDOW: std::time::Duration = std::time::Duration::from_millis(300);
 
-/// The thread of `pid` that ran on the CPU most while it was watched for `window`, when it ran
-/// for a third of it at least (a loop that makes no progress, on a machine that may be busy):
-/// its id. A host that waits uses next to none.
+/// The thread of `pid` that wanted the CPU most while it was watched for `window`: its id, when
+/// it was running or waiting for a CPU (state `R`) at two thirds of the looks at least, or ran
+/// for a third of the window. A loop that makes no progress is runnable however busy the
+/// machine is (on a loaded one it may get little CPU: counting CPU time alone missed it under
+/// load); a host that waits sleeps in a call (state `S`), and uses next to none.
 fn busy_thread(pid: i32, window: std::time::Duration) -> Option<i32> {
-    let cpu = || -> Option<std::collections::BTreeMap<i32, u64>> {
+    // Each thread: its state letter and its CPU time (utime + stime, USER_HZ ticks).
+    let look = || -> Option<std::collections::BTreeMap<i32, (char, u64)>> {
         let mut m = std::collections::BTreeMap::new();
         for t in std::fs::read_dir(format!("/proc/{pid}/task")).ok()?.flatten() {
             let Some(tid) = t.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
             let stat = std::fs::read_to_string(t.path().join("stat")).unwrap_or_default();
-            // utime and stime: fields 14 and 15, the 12th and 13th after the name.
+            // After the name: the state, then (11th and 12th after it) utime and stime.
             let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
             let ticks = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-            m.insert(tid, ticks(11) + ticks(12));
+            let state = f.first().and_then(|s| s.chars().next()).unwrap_or('?');
+            m.insert(tid, (state, ticks(11) + ticks(12)));
         }
         Some(m)
     };
-    let before = cpu()?;
-    std::thread::sleep(window);
-    let after = cpu()?;
+    const LOOKS: u32 = 30;
+    let before = look()?;
+    let mut runnable: std::collections::BTreeMap<i32, u32> = std::collections::BTreeMap::new();
+    let mut after = before.clone();
+    for _ in 0..LOOKS {
+        std::thread::sleep(window / LOOKS);
+        let Some(now) = look() else { break };
+        for (t, (state, _)) in &now {
+            if *state == 'R' {
+                *runnable.entry(*t).or_default() += 1;
+            }
+        }
+        after = now;
+    }
     // /proc counts CPU time in USER_HZ, 100 a second on Linux whatever the kernel's own tick.
     let per_second = 100.0;
-    let (tid, used) = after
-        .iter()
-        .filter_map(|(t, v)| Some((*t, v.checked_sub(*before.get(t)?)?)))
-        .max_by_key(|(t, used)| (*used, std::cmp::Reverse(*t)))?;
-    (used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
+    let ran = |t: &i32| after.get(t).zip(before.get(t)).map_or(0, |(a, b)| a.1.saturating_sub(b.1));
+    let (tid, looks, used) = after
+        .keys()
+        .map(|t| (*t, runnable.get(t).copied().unwrap_or(0), ran(t)))
+        .max_by_key(|(t, looks, used)| (*looks, *used, std::cmp::Reverse(*t)))?;
+    (looks * 3 >= LOOKS * 2 || used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
 }
 
 /// The lines of one thread's stack in a stack tool's text of every thread (`Thread 2 (Thread
