@@ -1029,6 +1029,27 @@ fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
     assert_eq!(found, vec!["crash: uncaught C++ exception std::system_error in Port::check"], "behind a wrapper");
 }
 
+/// The place an uncaught exception was thrown comes from a second run under gdb; a host that
+/// throws from another place in that run (timing) must not lend it to the first run's crash:
+/// only a second run that threw the same (type and what()) is taken. It was taken whatever it
+/// threw, and a crash whose what() said `write: ...` was signed `in read_line`.
+#[test]
+fn an_uncaught_exception_is_placed_only_by_a_second_run_that_threw_the_same() {
+    if Command::new("gdb").arg("--version").output().is_err() && missing("gdb") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("cpp_throws_by_turns.cpp", &[], dir.path()) else { return };
+    let command = vec![exe.display().to_string(), "{port}".into(), dir.path().display().to_string()];
+    let r = run_once(&run(command), &Schedule::default()).unwrap();
+    let found: Vec<String> = judge(&r, &[0, 1]).into_iter().map(|v| v.signature).collect();
+    assert!(
+        found.contains(&"crash: uncaught C++ exception std::runtime_error in send_line".to_string()),
+        "{found:?}\n{}",
+        r.stderr
+    );
+}
+
 /// A host that crashes in RealTime (an overflow in its acknowledgement of a control block)
 /// has one finding, the crash; the loop it was in when it died is not a second one (`left in
 /// RealTime`): a crashed host did not choose how to leave.

@@ -412,24 +412,7 @@ pub fn uncaught_exception(stderr: &str) -> bool {
 /// host's own frame that threw: one unhandled error from one place is one finding. What
 /// `what()` said (an errno's text, which varies) is in the message.
 fn uncaught(s: &str) -> Option<CrashReport> {
-    const GNU: &str = "terminate called after throwing an instance of '";
-    const LLVM: &str = "terminating due to uncaught exception of type ";
-    let (ty, what) = if let Some(at) = s.find(GNU) {
-        let rest = &s[at + GNU.len()..];
-        let ty = rest.split('\'').next().unwrap_or_default().to_string();
-        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
-        (ty, what)
-    } else if let Some(at) = s.find(LLVM) {
-        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
-        match line.split_once(": ") {
-            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
-            None => (line.trim().to_string(), None),
-        }
-    } else if s.contains("terminate called without an active exception") {
-        ("(no exception: std::terminate called directly)".to_string(), None)
-    } else {
-        return None;
-    };
+    let (ty, what) = thrown(s)?;
     // Where it was thrown: the stack gdb took at the abort (a second run of the same
     // schedule), else a sanitizer's at its SIGABRT handler.
     let site = s
@@ -459,6 +442,30 @@ fn uncaught(s: &str) -> Option<CrashReport> {
         None => headline += " (where it was thrown: no stack, gdb took none)",
     }
     Some(CrashReport { kind: "c++", signature, headline })
+}
+
+/// What a C++ runtime said went uncaught in `s` (the first such report): the type thrown and
+/// its `what()`. A second run's stack places a crash only when that run threw the same.
+pub fn thrown(s: &str) -> Option<(String, Option<String>)> {
+    const GNU: &str = "terminate called after throwing an instance of '";
+    const LLVM: &str = "terminating due to uncaught exception of type ";
+    let (ty, what) = if let Some(at) = s.find(GNU) {
+        let rest = &s[at + GNU.len()..];
+        let ty = rest.split('\'').next().unwrap_or_default().to_string();
+        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
+        (ty, what)
+    } else if let Some(at) = s.find(LLVM) {
+        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
+        match line.split_once(": ") {
+            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
+            None => (line.trim().to_string(), None),
+        }
+    } else if s.contains("terminate called without an active exception") {
+        ("(no exception: std::terminate called directly)".to_string(), None)
+    } else {
+        return None;
+    };
+    Some((ty, what))
 }
 
 fn panic(s: &str) -> Option<CrashReport> {

@@ -923,8 +923,8 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     }
     // An exception nobody caught ends in SIGABRT, though a wrapper that ran the host may have
     // exited by itself after it: what the C++ runtime wrote says so either way.
-    if super::detect::uncaught_exception(&r.stderr)
-        && let Some(stack) = abort_stack(spec, schedule, cancel)
+    if let Some(first) = super::detect::thrown(&r.stderr)
+        && let Some(stack) = abort_stack(spec, schedule, cancel, &first)
     {
         r.stderr = join_capped(&r.stderr, &format!("\n{}\n{stack}", super::detect::ABORT_STACK));
     }
@@ -936,14 +936,24 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 const SECOND_RUNS: usize = 4;
 
 /// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
-/// as gdb prints it, or `None` (no gdb, or no second run aborted).
-fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Option<String> {
+/// as gdb prints it, or `None` (no gdb, or no second run aborted having thrown what the first
+/// did, `first`: type and `what()`). A host whose failure depends on timing may throw from
+/// another place in a second run; that place is not the first run's.
+fn abort_stack(
+    spec: &HostRun,
+    schedule: &Schedule,
+    cancel: &AtomicBool,
+    first: &(String, Option<String>),
+) -> Option<String> {
     Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().ok()?;
     let dir = RunDir::new().ok()?;
     let log = dir.0.join("gdb.txt");
     for _ in 0..SECOND_RUNS {
         let _ = std::fs::remove_file(&log);
-        run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
+        let second = run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
+        if super::detect::thrown(&second.stderr).as_ref() != Some(first) {
+            continue;
+        }
         // gdb's log is in a folder of this run's own, but read as the host's logs are.
         if let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64)
             && let text = String::from_utf8_lossy(&text)
