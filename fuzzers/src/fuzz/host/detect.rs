@@ -400,6 +400,10 @@ fn asan(s: &str) -> Option<CrashReport> {
 /// second run of the same schedule.
 pub const ABORT_STACK: &str = "--- the host's stack at SIGABRT (gdb, in a second run of the same schedule) ---";
 
+/// The line a run's stderr gets instead of [`ABORT_STACK`] when no stack was taken, followed by
+/// why (gdb missing, or no second run under it threw the same).
+pub const ABORT_NO_STACK: &str = "--- no stack at SIGABRT: ";
+
 /// Whether stderr has a C++ runtime's message about an exception nobody caught.
 pub fn uncaught_exception(stderr: &str) -> bool {
     uncaught(stderr).is_some()
@@ -439,7 +443,10 @@ fn uncaught(s: &str) -> Option<CrashReport> {
             }
             headline.push(')');
         }
-        None => headline += " (where it was thrown: no stack, gdb took none)",
+        None => match s.find(ABORT_NO_STACK).and_then(|at| s[at + ABORT_NO_STACK.len()..].lines().next()) {
+            Some(why) => headline += &format!(" (where it was thrown: not known, {})", why.trim()),
+            None => headline += " (where it was thrown: no stack, gdb took none)",
+        },
     }
     Some(CrashReport { kind: "c++", signature, headline })
 }
@@ -1049,6 +1056,21 @@ mod tests {
     /// libstdc++'s words about an exception nobody caught are read into the signature: what
     /// was thrown and, with the stack at the abort, the host's frame that threw (`what()`,
     /// whose text varies, in the message); libc++'s words too.
+    /// With gdb installed but no second run that threw the same, the message says so; it said
+    /// `no stack, gdb took none`, as if gdb were missing (issue 38, "What was seen" 6).
+    #[test]
+    fn an_uncaught_exception_without_a_stack_says_why() {
+        let said = "terminate called after throwing an instance of 'std::future_error'\n  what():  std::future_error: Broken promise\n";
+        let why = format!("{said}\n{ABORT_NO_STACK}4 second runs under gdb did not throw it again\n");
+        let r = crash_report(&why).unwrap();
+        assert!(
+            r.headline.ends_with("(where it was thrown: not known, 4 second runs under gdb did not throw it again)"),
+            "{}",
+            r.headline
+        );
+        assert_eq!(r.signature, "uncaught C++ exception std::future_error");
+    }
+
     #[test]
     fn an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where() {
         let said = "terminate called after throwing an instance of 'boost::wrapexcept<boost::system::system_error>'\n  what():  write: Input/output error\n";

@@ -923,10 +923,12 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     }
     // An exception nobody caught ends in SIGABRT, though a wrapper that ran the host may have
     // exited by itself after it: what the C++ runtime wrote says so either way.
-    if let Some(first) = super::detect::thrown(&r.stderr)
-        && let Some(stack) = abort_stack(spec, schedule, cancel, &first)
-    {
-        r.stderr = join_capped(&r.stderr, &format!("\n{}\n{stack}", super::detect::ABORT_STACK));
+    if let Some(first) = super::detect::thrown(&r.stderr) {
+        let added = match abort_stack(spec, schedule, cancel, &first) {
+            Ok(stack) => format!("\n{}\n{stack}", super::detect::ABORT_STACK),
+            Err(why) => format!("\n{}{why}", super::detect::ABORT_NO_STACK),
+        };
+        r.stderr = join_capped(&r.stderr, &added);
     }
     Ok(r)
 }
@@ -936,33 +938,43 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 const SECOND_RUNS: usize = 4;
 
 /// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
-/// as gdb prints it, or `None` (no gdb, or no second run aborted having thrown what the first
-/// did, `first`: type and `what()`). A host whose failure depends on timing may throw from
-/// another place in a second run; that place is not the first run's.
+/// as gdb prints it, or why there is none: no gdb, or no second run aborted having thrown what
+/// the first did (`first`: type and `what()`). A host whose failure depends on timing may throw
+/// from another place in a second run; that place is not the first run's.
 fn abort_stack(
     spec: &HostRun,
     schedule: &Schedule,
     cancel: &AtomicBool,
     first: &(String, Option<String>),
-) -> Option<String> {
-    Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().ok()?;
-    let dir = RunDir::new().ok()?;
+) -> Result<String, String> {
+    let gdb = Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status();
+    if gdb.is_err() {
+        return Err("gdb is not installed".into());
+    }
+    let dir = RunDir::new().map_err(|e| format!("no folder for gdb's log: {e}"))?;
     let log = dir.0.join("gdb.txt");
+    let (mut made, mut same) = (0, 0);
     for _ in 0..SECOND_RUNS {
         let _ = std::fs::remove_file(&log);
-        let second = run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
+        let Ok(second) = run_inner(spec, schedule, cancel, How::UnderGdb(&log)) else { break };
+        made += 1;
         if super::detect::thrown(&second.stderr).as_ref() != Some(first) {
             continue;
         }
+        same += 1;
         // gdb's log is in a folder of this run's own, but read as the host's logs are.
         if let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64)
             && let text = String::from_utf8_lossy(&text)
             && text.contains("SIGABRT")
         {
-            return Some(text.into_owned());
+            return Ok(text.into_owned());
         }
     }
-    None
+    Err(if same > 0 {
+        format!("gdb took no stack in {same} second run(s) that threw it again")
+    } else {
+        format!("{made} second run(s) under gdb did not throw it again")
+    })
 }
 
 /// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
