@@ -404,6 +404,10 @@ pub const ABORT_STACK: &str = "--- the host's stack at SIGABRT (gdb, in a second
 /// why (gdb missing, or no second run under it threw the same).
 pub const ABORT_NO_STACK: &str = "--- no stack at SIGABRT: ";
 
+/// The line after a gdb stack ([`ABORT_STACK`]) taken in a second run that threw the same type
+/// with another `what()` (timing took it elsewhere), followed by that `what()`.
+pub const ABORT_OTHER: &str = "--- that second run threw it with what(): ";
+
 /// Whether stderr has a C++ runtime's message about an exception nobody caught.
 pub fn uncaught_exception(stderr: &str) -> bool {
     uncaught(stderr).is_some()
@@ -440,6 +444,10 @@ fn uncaught(s: &str) -> Option<CrashReport> {
             headline += &format!(" (thrown in {f}");
             if let Some(c) = caller {
                 headline += &format!(", called from {c}");
+            }
+            if let Some(other) = s.find(ABORT_OTHER).and_then(|at| s[at + ABORT_OTHER.len()..].lines().next()) {
+                let other = crate::report::truncate_note(other.trim(), 200);
+                headline += &format!(", in a second run that threw it with what(): {other}");
             }
             headline.push(')');
         }
@@ -1069,6 +1077,23 @@ mod tests {
             r.headline
         );
         assert_eq!(r.signature, "uncaught C++ exception std::future_error");
+    }
+
+    /// A stack from a second run that threw the same type with another what() is said to be
+    /// that run's, with what it threw.
+    #[test]
+    fn a_stack_from_a_second_run_that_threw_otherwise_says_so() {
+        let said = "terminate called after throwing an instance of 'std::system_error'\n  what():  write: Input/output error\n";
+        let s = format!("{said}\n{ABORT_STACK}\n{TERMINATE_GDB}\n{ABORT_OTHER}read: Input/output error\n");
+        let r = crash_report(&s).unwrap();
+        assert_eq!(r.signature, "uncaught C++ exception std::system_error in Port::check");
+        assert!(
+            r.headline.ends_with(
+                "(thrown in Port::check, called from Port::read_answer, in a second run that threw it with what(): read: Input/output error)"
+            ),
+            "{}",
+            r.headline
+        );
     }
 
     #[test]

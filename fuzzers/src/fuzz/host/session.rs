@@ -938,9 +938,10 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 const SECOND_RUNS: usize = 4;
 
 /// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
-/// as gdb prints it, or why there is none: no gdb, or no second run aborted having thrown what
-/// the first did (`first`: type and `what()`). A host whose failure depends on timing may throw
-/// from another place in a second run; that place is not the first run's.
+/// as gdb prints it, or why there is none. A host whose failure depends on timing may throw
+/// from another place in a second run: a run that threw what the first did (`first`: type and
+/// `what()`) gives the stack; else one that threw the same type does, with the `what()` it
+/// threw (the stack is then said to be that run's, [`detect::ABORT_OTHER`](super::detect::ABORT_OTHER)).
 fn abort_stack(
     spec: &HostRun,
     schedule: &Schedule,
@@ -953,27 +954,35 @@ fn abort_stack(
     }
     let dir = RunDir::new().map_err(|e| format!("no folder for gdb's log: {e}"))?;
     let log = dir.0.join("gdb.txt");
-    let (mut made, mut same) = (0, 0);
+    let (mut made, mut aborted) = (0, 0);
+    let mut other = None;
     for _ in 0..SECOND_RUNS {
         let _ = std::fs::remove_file(&log);
         let Ok(second) = run_inner(spec, schedule, cancel, How::UnderGdb(&log)) else { break };
         made += 1;
-        if super::detect::thrown(&second.stderr).as_ref() != Some(first) {
+        let Some(threw) = super::detect::thrown(&second.stderr) else { continue };
+        if threw.0 != first.0 {
             continue;
         }
-        same += 1;
+        aborted += 1;
         // gdb's log is in a folder of this run's own, but read as the host's logs are.
-        if let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64)
-            && let text = String::from_utf8_lossy(&text)
-            && text.contains("SIGABRT")
-        {
+        let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64) else { continue };
+        let text = String::from_utf8_lossy(&text);
+        if !text.contains("SIGABRT") {
+            continue;
+        }
+        if threw.1 == first.1 {
             return Ok(text.into_owned());
         }
+        let said = threw.1.unwrap_or_default();
+        other.get_or_insert(format!("{text}\n{}{said}", super::detect::ABORT_OTHER));
     }
-    Err(if same > 0 {
-        format!("gdb took no stack in {same} second run(s) that threw it again")
-    } else {
-        format!("{made} second run(s) under gdb did not throw it again")
+    other.ok_or_else(|| {
+        if aborted > 0 {
+            format!("gdb took no stack in {aborted} second run(s) that threw it again")
+        } else {
+            format!("{made} second run(s) under gdb did not throw it again")
+        }
     })
 }
 
