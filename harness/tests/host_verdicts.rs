@@ -1030,9 +1030,9 @@ fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
 }
 
 /// The place an uncaught exception was thrown comes from a second run under gdb; a host that
-/// throws from another place in that run (timing) must not lend it to the first run's crash:
-/// only a second run that threw the same (type and what()) is taken. It was taken whatever it
-/// threw, and a crash whose what() said `write: ...` was signed `in read_line`.
+/// throws from another place in that run (timing) must not lend it to the first run's crash
+/// when another second run threw the same (type and what()). The first second run was taken
+/// whatever it threw, and a crash whose what() said `write: ...` was signed `in read_line`.
 #[test]
 fn an_uncaught_exception_is_placed_only_by_a_second_run_that_threw_the_same() {
     if Command::new("gdb").arg("--version").output().is_err() && missing("gdb") {

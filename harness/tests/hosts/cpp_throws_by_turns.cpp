@@ -5,7 +5,8 @@
  * the other place.
  * Usage: cpp_throws_by_turns PORT FOLDER.
  * Expected: its first run's crash is signed by the place that threw what that run's what()
- * says (`in send_line`), never by the other place a second run threw from. */
+ * says (`in send_line`): a second run under gdb that threw the same is taken before one that
+ * threw from the other place. */
 #include <fcntl.h>
 #include <unistd.h>
 #include <cstdio>
