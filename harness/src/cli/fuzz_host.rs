@@ -481,7 +481,7 @@ fn print_campaign_summary(campaign: &Campaign) {
     if campaign.void_runs > 0 {
         errln!(
             "warning: {} run(s) void, made again and never judged: processes of two runs held one port ({}); \
-             a host that opens a fixed device path needs --link with {{slot}}",
+             one host at a time from the first; a host that opens a fixed device path needs --link with {{slot}}",
             campaign.void_runs,
             printable(&campaign.void.join("; "))
         );

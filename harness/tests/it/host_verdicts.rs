@@ -1031,6 +1031,27 @@ fn an_uncaught_cpp_exception_is_named_by_what_was_thrown_and_where() {
     assert_eq!(found, vec!["crash: uncaught C++ exception std::system_error in Port::check"], "behind a wrapper");
 }
 
+/// The place an uncaught exception was thrown comes from a second run under gdb; a host that
+/// throws from another place in that run (timing) must not lend it to the first run's crash
+/// when another second run threw the same (type and what()). The first second run was taken
+/// whatever it threw, and a crash whose what() said `write: ...` was signed `in read_line`.
+#[test]
+fn an_uncaught_exception_is_placed_only_by_a_second_run_that_threw_the_same() {
+    if Command::new("gdb").arg("--version").output().is_err() && missing("gdb") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let Some(exe) = build("cpp_throws_by_turns.cpp", &[], dir.path()) else { return };
+    let command = vec![exe.display().to_string(), "{port}".into(), dir.path().display().to_string()];
+    let r = run_once(&run(command), &Schedule::default()).unwrap();
+    let found: Vec<String> = judge(&r, &[0, 1]).into_iter().map(|v| v.signature).collect();
+    assert!(
+        found.contains(&"crash: uncaught C++ exception std::runtime_error in send_line".to_string()),
+        "{found:?}\n{}",
+        r.stderr
+    );
+}
+
 /// A host that crashes in RealTime (an overflow in its acknowledgement of a control block)
 /// has one finding, the crash; the loop it was in when it died is not a second one (`left in
 /// RealTime`): a crashed host did not choose how to leave.
@@ -1242,6 +1263,42 @@ fn a_run_whose_port_another_runs_process_opens_is_void() {
     // Its own children carry its mark: no intruder.
     let own = "sh -c 'exec 3<>\"$GCL_PORT\"; sleep 1' & exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 2";
     assert!(run_once(&run(vec!["sh".into(), "-c".into(), own.into()]), &Schedule::default()).is_ok());
+}
+
+/// A process a run left behind holding nothing of its own (a daemon that closed the port and
+/// stderr) is ended with its run, so that it cannot open a later run's port: here it waits for
+/// the slot's link to be made again, and opens it. Before, it outlived its run and the later
+/// run was void (or, had it opened and closed the port between two looks, judged with another
+/// run's bytes on its line).
+#[test]
+fn a_process_a_run_left_behind_never_reaches_a_later_runs_port() {
+    let dir = tempfile::tempdir().unwrap();
+    // Once the slot's link is another (made again, for the next run), it opens it.
+    let daemon = "first=$(stat -c %i.%z \"$GCL_PORT\"); i=0; while [ $i -lt 200 ]; do \
+                  now=$(stat -c %i.%z \"$GCL_PORT\" 2>/dev/null); \
+                  if [ -n \"$now\" ] && [ \"$now\" != \"$first\" ]; then exec 3<>\"$GCL_PORT\"; sleep 1; exit 0; fi; \
+                  sleep 0.05; i=$((i+1)); done";
+    let host = format!(
+        "setsid sh -c '{daemon}' </dev/null >/dev/null 2>&1 & exec 3<>\"$GCL_PORT\"; printf '\\003' >&3; sleep 1"
+    );
+    let mut r = run(vec!["sh".into(), "-c".into(), host]);
+    r.link = Some(dir.path().join("ttyUSB{slot}"));
+    let opts = FuzzOptions {
+        run: r,
+        seed: 5,
+        runs: Some(3),
+        duration: None,
+        ok_exit_codes: vec![0, 1],
+        jobs: 1,
+        weights: Weights::parse("truncate").unwrap(),
+        max_planned: 1,
+        minimize: false,
+        guided: true,
+        calibrate: false,
+        shard: None,
+    };
+    let c = fuzz(&opts, &AtomicBool::new(false), &|_| {}).unwrap();
+    assert_eq!((c.runs, c.void_runs), (3, 0), "{:?}", c.void);
 }
 
 /// The headline of the measured timeouts gives the longest give-up time as the host's timeout

@@ -400,6 +400,14 @@ fn asan(s: &str) -> Option<CrashReport> {
 /// second run of the same schedule.
 pub const ABORT_STACK: &str = "--- the host's stack at SIGABRT (gdb, in a second run of the same schedule) ---";
 
+/// The line a run's stderr gets instead of [`ABORT_STACK`] when no stack was taken, followed by
+/// why (gdb missing, or no second run under it threw the same).
+pub const ABORT_NO_STACK: &str = "--- no stack at SIGABRT: ";
+
+/// The line after a gdb stack ([`ABORT_STACK`]) taken in a second run that threw the same type
+/// with another `what()` (timing took it elsewhere), followed by that `what()`.
+pub const ABORT_OTHER: &str = "--- that second run threw it with what(): ";
+
 /// Whether stderr has a C++ runtime's message about an exception nobody caught.
 pub fn uncaught_exception(stderr: &str) -> bool {
     uncaught(stderr).is_some()
@@ -412,24 +420,7 @@ pub fn uncaught_exception(stderr: &str) -> bool {
 /// host's own frame that threw: one unhandled error from one place is one finding. What
 /// `what()` said (an errno's text, which varies) is in the message.
 fn uncaught(s: &str) -> Option<CrashReport> {
-    const GNU: &str = "terminate called after throwing an instance of '";
-    const LLVM: &str = "terminating due to uncaught exception of type ";
-    let (ty, what) = if let Some(at) = s.find(GNU) {
-        let rest = &s[at + GNU.len()..];
-        let ty = rest.split('\'').next().unwrap_or_default().to_string();
-        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
-        (ty, what)
-    } else if let Some(at) = s.find(LLVM) {
-        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
-        match line.split_once(": ") {
-            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
-            None => (line.trim().to_string(), None),
-        }
-    } else if s.contains("terminate called without an active exception") {
-        ("(no exception: std::terminate called directly)".to_string(), None)
-    } else {
-        return None;
-    };
+    let (ty, what) = thrown(s)?;
     // Where it was thrown: the stack gdb took at the abort (a second run of the same
     // schedule), else a sanitizer's at its SIGABRT handler.
     let site = s
@@ -454,11 +445,42 @@ fn uncaught(s: &str) -> Option<CrashReport> {
             if let Some(c) = caller {
                 headline += &format!(", called from {c}");
             }
+            if let Some(other) = s.find(ABORT_OTHER).and_then(|at| s[at + ABORT_OTHER.len()..].lines().next()) {
+                let other = crate::report::truncate_note(other.trim(), 200);
+                headline += &format!(", in a second run that threw it with what(): {other}");
+            }
             headline.push(')');
         }
-        None => headline += " (where it was thrown: no stack, gdb took none)",
+        None => match s.find(ABORT_NO_STACK).and_then(|at| s[at + ABORT_NO_STACK.len()..].lines().next()) {
+            Some(why) => headline += &format!(" (where it was thrown: not known, {})", why.trim()),
+            None => headline += " (where it was thrown: no stack, gdb took none)",
+        },
     }
     Some(CrashReport { kind: "c++", signature, headline })
+}
+
+/// What a C++ runtime said went uncaught in `s` (the first such report): the type thrown and
+/// its `what()`. A second run's stack places a crash only when that run threw the same.
+pub fn thrown(s: &str) -> Option<(String, Option<String>)> {
+    const GNU: &str = "terminate called after throwing an instance of '";
+    const LLVM: &str = "terminating due to uncaught exception of type ";
+    let (ty, what) = if let Some(at) = s.find(GNU) {
+        let rest = &s[at + GNU.len()..];
+        let ty = rest.split('\'').next().unwrap_or_default().to_string();
+        let what = rest.lines().nth(1).and_then(|l| l.trim().strip_prefix("what():")).map(|w| w.trim().to_string());
+        (ty, what)
+    } else if let Some(at) = s.find(LLVM) {
+        let line = s[at + LLVM.len()..].lines().next().unwrap_or_default();
+        match line.split_once(": ") {
+            Some((t, w)) => (t.trim().to_string(), Some(w.trim().to_string())),
+            None => (line.trim().to_string(), None),
+        }
+    } else if s.contains("terminate called without an active exception") {
+        ("(no exception: std::terminate called directly)".to_string(), None)
+    } else {
+        return None;
+    };
+    Some((ty, what))
 }
 
 fn panic(s: &str) -> Option<CrashReport> {
@@ -745,32 +767,48 @@ pub fn sample_native(pid: i32) -> Option<HangStack> {
 /// How long a hung host's threads are watched for one on the CPU.
 const BUSY_WINDOW: std::time::Duration = std::time::Duration::from_millis(300);
 
-/// The thread of `pid` that ran on the CPU most while it was watched for `window`, when it ran
-/// for a third of it at least (a loop that makes no progress, on a machine that may be busy):
-/// its id. A host that waits uses next to none.
+/// The thread of `pid` that wanted the CPU most while it was watched for `window`: its id, when
+/// it was running or waiting for a CPU (state `R`) at two thirds of the looks at least, or ran
+/// for a third of the window. A loop that makes no progress is runnable however busy the
+/// machine is (on a loaded one it may get little CPU: counting CPU time alone missed it under
+/// load); a host that waits sleeps in a call (state `S`), and uses next to none.
 fn busy_thread(pid: i32, window: std::time::Duration) -> Option<i32> {
-    let cpu = || -> Option<std::collections::BTreeMap<i32, u64>> {
+    // Each thread: its state letter and its CPU time (utime + stime, USER_HZ ticks).
+    let look = || -> Option<std::collections::BTreeMap<i32, (char, u64)>> {
         let mut m = std::collections::BTreeMap::new();
         for t in std::fs::read_dir(format!("/proc/{pid}/task")).ok()?.flatten() {
             let Some(tid) = t.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
             let stat = std::fs::read_to_string(t.path().join("stat")).unwrap_or_default();
-            // utime and stime: fields 14 and 15, the 12th and 13th after the name.
+            // After the name: the state, then (11th and 12th after it) utime and stime.
             let f: Vec<&str> = stat.rsplit_once(')').map(|(_, r)| r.split_whitespace().collect()).unwrap_or_default();
             let ticks = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-            m.insert(tid, ticks(11) + ticks(12));
+            let state = f.first().and_then(|s| s.chars().next()).unwrap_or('?');
+            m.insert(tid, (state, ticks(11) + ticks(12)));
         }
         Some(m)
     };
-    let before = cpu()?;
-    std::thread::sleep(window);
-    let after = cpu()?;
+    const LOOKS: u32 = 30;
+    let before = look()?;
+    let mut runnable: std::collections::BTreeMap<i32, u32> = std::collections::BTreeMap::new();
+    let mut after = before.clone();
+    for _ in 0..LOOKS {
+        std::thread::sleep(window / LOOKS);
+        let Some(now) = look() else { break };
+        for (t, (state, _)) in &now {
+            if *state == 'R' {
+                *runnable.entry(*t).or_default() += 1;
+            }
+        }
+        after = now;
+    }
     // /proc counts CPU time in USER_HZ, 100 a second on Linux whatever the kernel's own tick.
     let per_second = 100.0;
-    let (tid, used) = after
-        .iter()
-        .filter_map(|(t, v)| Some((*t, v.checked_sub(*before.get(t)?)?)))
-        .max_by_key(|(t, used)| (*used, std::cmp::Reverse(*t)))?;
-    (used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
+    let ran = |t: &i32| after.get(t).zip(before.get(t)).map_or(0, |(a, b)| a.1.saturating_sub(b.1));
+    let (tid, looks, used) = after
+        .keys()
+        .map(|t| (*t, runnable.get(t).copied().unwrap_or(0), ran(t)))
+        .max_by_key(|(t, looks, used)| (*looks, *used, std::cmp::Reverse(*t)))?;
+    (looks * 3 >= LOOKS * 2 || used as f64 >= window.as_secs_f64() * per_second / 3.0).then_some(tid)
 }
 
 /// The lines of one thread's stack in a stack tool's text of every thread (`Thread 2 (Thread
@@ -1026,6 +1064,38 @@ mod tests {
     /// libstdc++'s words about an exception nobody caught are read into the signature: what
     /// was thrown and, with the stack at the abort, the host's frame that threw (`what()`,
     /// whose text varies, in the message); libc++'s words too.
+    /// With gdb installed but no second run that threw the same, the message says so; it said
+    /// `no stack, gdb took none`, as if gdb were missing (issue 38, "What was seen" 6).
+    #[test]
+    fn an_uncaught_exception_without_a_stack_says_why() {
+        let said = "terminate called after throwing an instance of 'std::future_error'\n  what():  std::future_error: Broken promise\n";
+        let why = format!("{said}\n{ABORT_NO_STACK}4 second runs under gdb did not throw it again\n");
+        let r = crash_report(&why).unwrap();
+        assert!(
+            r.headline.ends_with("(where it was thrown: not known, 4 second runs under gdb did not throw it again)"),
+            "{}",
+            r.headline
+        );
+        assert_eq!(r.signature, "uncaught C++ exception std::future_error");
+    }
+
+    /// A stack from a second run that threw the same type with another what() is said to be
+    /// that run's, with what it threw.
+    #[test]
+    fn a_stack_from_a_second_run_that_threw_otherwise_says_so() {
+        let said = "terminate called after throwing an instance of 'std::system_error'\n  what():  write: Input/output error\n";
+        let s = format!("{said}\n{ABORT_STACK}\n{TERMINATE_GDB}\n{ABORT_OTHER}read: Input/output error\n");
+        let r = crash_report(&s).unwrap();
+        assert_eq!(r.signature, "uncaught C++ exception std::system_error in Port::check");
+        assert!(
+            r.headline.ends_with(
+                "(thrown in Port::check, called from Port::read_answer, in a second run that threw it with what(): read: Input/output error)"
+            ),
+            "{}",
+            r.headline
+        );
+    }
+
     #[test]
     fn an_uncaught_cpp_exception_is_signed_by_what_was_thrown_and_where() {
         let said = "terminate called after throwing an instance of 'boost::wrapexcept<boost::system::system_error>'\n  what():  write: Input/output error\n";

@@ -454,7 +454,11 @@ const VOID_KEPT: usize = 8;
 /// calibration, minimization, a hang's confirmation), each run in one slot, taken in the order
 /// asked for. A run's `link` may name its slot (`{slot}`, from 1): each slot has its own link,
 /// so a link never serves two live hosts. A run found void ([`RunError::Shared`]) is made again
-/// ([`VOID_RETRIES`]), and counted.
+/// ([`VOID_RETRIES`]), and counted, and from then on one host is alive at a time: a process of
+/// another run can reach a port only while that run is alive or through what it left behind
+/// (ended with its run, by its mark), so the rest of the campaign cannot share a port, whether
+/// or not a look would have caught it (a process that opens and closes a port between two
+/// looks is not seen; nothing on Linux names a pty's opener to an unprivileged watcher).
 #[derive(Debug)]
 pub struct Slots {
     state: Mutex<SlotState>,
@@ -472,6 +476,8 @@ struct SlotState {
     serving: u64,
     /// Tickets given up (their run called off) before they were served.
     abandoned: BTreeSet<u64>,
+    /// How many slots may be taken at once: all, or one after a void run.
+    width: usize,
 }
 
 impl SlotState {
@@ -493,6 +499,7 @@ impl Slots {
                 next: 0,
                 serving: 0,
                 abandoned: BTreeSet::new(),
+                width: jobs.max(1),
             }),
             freed: Condvar::new(),
             void: Mutex::new((0, Vec::new())),
@@ -506,6 +513,7 @@ impl Slots {
         st.next += 1;
         loop {
             if st.serving == ticket
+                && st.taken.iter().filter(|t| **t).count() < st.width
                 && let Some(k) = st.taken.iter().position(|t| !t)
             {
                 st.taken[k] = true;
@@ -554,12 +562,7 @@ impl Slots {
             });
             match r {
                 Err(RunError::Shared(why)) => {
-                    if let Ok(mut v) = self.void.lock() {
-                        v.0 += 1;
-                        if v.1.len() < VOID_KEPT {
-                            v.1.push(why.clone());
-                        }
-                    }
+                    self.found_void(&why);
                     tries += 1;
                     if tries > VOID_RETRIES {
                         break Err(RunError::Shared(why));
@@ -570,6 +573,24 @@ impl Slots {
         };
         self.give(k);
         r
+    }
+
+    /// Counts a void run and narrows the campaign to one host alive at a time.
+    fn found_void(&self, why: &str) {
+        if let Ok(mut v) = self.void.lock() {
+            v.0 += 1;
+            if v.1.len() < VOID_KEPT {
+                v.1.push(why.to_string());
+            }
+        }
+        self.narrow();
+    }
+
+    /// One host alive at a time from now on.
+    fn narrow(&self) {
+        if let Ok(mut st) = self.state.lock() {
+            st.width = 1;
+        }
     }
 
     /// Void runs so far, and how the first few were.
@@ -1751,6 +1772,11 @@ pub fn fuzz_seeded(
     let calibrated = calibrated_options(opts, calibration.as_ref());
     let opts = calibrated.as_ref().unwrap_or(opts);
     let w = Workers::new(opts, stop, on_event, started, duration);
+    // Calibration shared a port: the campaign runs one host at a time (as [`Slots`] after a
+    // void run of its own).
+    if calibration.as_ref().is_some_and(|c| c.void_runs > 0) {
+        w.slots.narrow();
+    }
     if let ControlFlow::Break(early) = w.shard_answers()? {
         return Ok(early);
     }
@@ -2318,6 +2344,26 @@ mod tests {
 
     fn kind(kind: &str, answer: u32, ops: &[Operator]) -> AnswerKindSeen {
         AnswerKindSeen { kind: kind.into(), answer, state: format!("state of {answer}"), ops: ops.to_vec() }
+    }
+
+    /// After a void run no two hosts are alive at once: a second slot is not given while one is
+    /// taken (before, the campaign went on at `--jobs` and a process of another run could
+    /// again reach a port unseen, opening and closing it between two looks).
+    #[test]
+    fn after_a_void_run_one_host_is_alive_at_a_time() {
+        let slots = Slots::new(3);
+        let go = AtomicBool::new(false);
+        let a = slots.take(&go).unwrap();
+        let b = slots.take(&go).unwrap();
+        assert_ne!(a, b, "two slots at --jobs 3 before any void run");
+        slots.give(b);
+        slots.found_void("process 1 (sh) of another run opened this run's port /dev/pts/9");
+        // A slot is still taken: the next run waits (here it is called off instead).
+        let stopped = AtomicBool::new(true);
+        assert_eq!(slots.take(&stopped), None, "a second host alive after a void run");
+        slots.give(a);
+        assert!(slots.take(&go).is_some());
+        assert_eq!(slots.voided().0, 1);
     }
 
     #[test]

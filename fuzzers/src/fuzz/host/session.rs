@@ -16,8 +16,9 @@
 //! host's stderr is still held (the transport never heard the port's last close, or stderr
 //! never ended) the process holding it (one that left the group with `setsid`) is found
 //! through `/proc`, its command line and stack taken, killed and named in the result
-//! ([`RunResult::leftovers`]). A run whose
-//! host left nothing behind reads no `/proc`.
+//! ([`RunResult::leftovers`]). Then whatever still carries the run's `GCL_HOST_RUN` mark (a
+//! daemon holding nothing of the run's) is ended, unnamed, so that no process of a finished run
+//! can reach a later run's port: one read of `/proc` per run.
 //!
 //! What is kept of the traffic is capped ([`KEEP_CAP`] each way, stderr at [`STDERR_CAP`]);
 //! the rest is counted and noted, so a host writing without end costs no memory.
@@ -930,10 +931,12 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
     }
     // An exception nobody caught ends in SIGABRT, though a wrapper that ran the host may have
     // exited by itself after it: what the C++ runtime wrote says so either way.
-    if super::detect::uncaught_exception(&r.stderr)
-        && let Some(stack) = abort_stack(spec, schedule, cancel)
-    {
-        r.stderr = join_capped(&r.stderr, &format!("\n{}\n{stack}", super::detect::ABORT_STACK));
+    if let Some(first) = super::detect::thrown(&r.stderr) {
+        let added = match abort_stack(spec, schedule, cancel, &first) {
+            Ok(stack) => format!("\n{}\n{stack}", super::detect::ABORT_STACK),
+            Err(why) => format!("\n{}{why}", super::detect::ABORT_NO_STACK),
+        };
+        r.stderr = join_capped(&r.stderr, &added);
     }
     Ok(r)
 }
@@ -943,23 +946,52 @@ pub fn run_once_until(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) 
 const SECOND_RUNS: usize = 4;
 
 /// The stack at SIGABRT of a second run of `schedule` under `gdb` (see [`run_once_until`]),
-/// as gdb prints it, or `None` (no gdb, or no second run aborted).
-fn abort_stack(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool) -> Option<String> {
-    Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status().ok()?;
-    let dir = RunDir::new().ok()?;
+/// as gdb prints it, or why there is none. A host whose failure depends on timing may throw
+/// from another place in a second run: a run that threw what the first did (`first`: type and
+/// `what()`) gives the stack; else one that threw the same type does, with the `what()` it
+/// threw (the stack is then said to be that run's, [`detect::ABORT_OTHER`](super::detect::ABORT_OTHER)).
+fn abort_stack(
+    spec: &HostRun,
+    schedule: &Schedule,
+    cancel: &AtomicBool,
+    first: &(String, Option<String>),
+) -> Result<String, String> {
+    let gdb = Command::new("gdb").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status();
+    if gdb.is_err() {
+        return Err("gdb is not installed".into());
+    }
+    let dir = RunDir::new().map_err(|e| format!("no folder for gdb's log: {e}"))?;
     let log = dir.0.join("gdb.txt");
+    let (mut made, mut aborted) = (0, 0);
+    let mut other = None;
     for _ in 0..SECOND_RUNS {
         let _ = std::fs::remove_file(&log);
-        run_inner(spec, schedule, cancel, How::UnderGdb(&log)).ok()?;
-        // gdb's log is in a folder of this run's own, but read as the host's logs are.
-        if let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64)
-            && let text = String::from_utf8_lossy(&text)
-            && text.contains("SIGABRT")
-        {
-            return Some(text.into_owned());
+        let Ok(second) = run_inner(spec, schedule, cancel, How::UnderGdb(&log)) else { break };
+        made += 1;
+        let Some(threw) = super::detect::thrown(&second.stderr) else { continue };
+        if threw.0 != first.0 {
+            continue;
         }
+        aborted += 1;
+        // gdb's log is in a folder of this run's own, but read as the host's logs are.
+        let Ok((text, _)) = gcl_host::files::read_head_no_follow(&log, STDERR_CAP as u64) else { continue };
+        let text = String::from_utf8_lossy(&text);
+        if !text.contains("SIGABRT") {
+            continue;
+        }
+        if threw.1 == first.1 {
+            return Ok(text.into_owned());
+        }
+        let said = threw.1.unwrap_or_default();
+        other.get_or_insert(format!("{text}\n{}{said}", super::detect::ABORT_OTHER));
     }
-    None
+    other.ok_or_else(|| {
+        if aborted > 0 {
+            format!("gdb took no stack in {aborted} second run(s) that threw it again")
+        } else {
+            format!("{made} second run(s) under gdb did not throw it again")
+        }
+    })
 }
 
 /// The host command run under `gdb`, which writes the stack at a SIGABRT into `log` (the
@@ -1074,6 +1106,7 @@ fn run_inner(spec: &HostRun, schedule: &Schedule, cancel: &AtomicBool, how: How)
     let _ = waiter.join();
     live().groups.remove(&host.pid.as_raw());
     let leftovers = clear_leftovers(spec, &hand, &out, &host);
+    end_marked(&hand.run_dir.mark(), host.start);
     let stderr = collect_stderr(out, &hand.run_dir);
     hand.stop.stop();
     if let Ok(Err(e)) = hand.thread.join() {
@@ -1531,6 +1564,19 @@ fn clear_leftovers(spec: &HostRun, hand: &HandSide, out: &HostOutput, host: &Hos
         wait_eof(&out.errbuf, STDERR_GRACE);
     }
     leftovers
+}
+
+/// Ends every process still carrying the run's mark (`mark`) that started with its host or
+/// after (`host_start`): what a host left behind holding nothing of the run's (a daemon that
+/// closed the port and stderr), which would outlive the run and could open a later run's port
+/// (the same `--link`, a fixed device path) between two looks of its watcher. Such a process
+/// is no finding (it holds nothing of the run's); it is ended, not named. One read of `/proc`
+/// per run, so that no process of a finished run is alive when its slot is given again.
+fn end_marked(mark: &str, host_start: Option<u64>) {
+    for (p, _) in holders(None, None, Some(&format!("{RUN_MARK}={mark}")), host_start) {
+        let _ = nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+        let _ = nix::sys::signal::kill(nix::unistd::Pid::from_raw(p), nix::sys::signal::Signal::SIGKILL);
+    }
 }
 
 /// Takes the readers once the host and its leftovers are gone: waits a short grace for the
