@@ -91,10 +91,22 @@ impl SimProcess {
         }
     }
 
-    /// A new client (a new open of the pty, a new TCP connection).
+    /// A new client (a new open of the pty, a new TCP connection). A pty this process just
+    /// closed may still be held for a moment by a child another test is starting (until it
+    /// execs, it holds a copy of every descriptor, and with it the port's lock; every test
+    /// file shares this process, issue 41): a port that is busy is opened again, for 10 s.
     pub fn hand(&self, profile: &str) -> Hand {
         let opts = OpenOptions { profile: Some(profile.into()), ..Default::default() };
-        let mut h = Hand::open(&self.target().parse().unwrap(), &opts).expect("open the simulator");
+        let target = self.target().parse().unwrap();
+        let until = Instant::now() + Duration::from_secs(10);
+        let mut h = loop {
+            match Hand::open(&target, &opts) {
+                Err(e) if format!("{e:?}").contains("is in use by another program") && Instant::now() < until => {
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                r => break r.expect("open the simulator"),
+            }
+        };
         h.set_timeouts(test_timeouts());
         h
     }
