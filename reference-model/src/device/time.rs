@@ -168,8 +168,24 @@ impl Device {
                 motor.goal = Some(physics::Goal::Initialize { settled_ms: settled_ms + ticks, stall_ms: 0 });
             }
         }
+        self.cool_ticks(ticks, 0);
+    }
+
+    /// [`Device::cool_tick`] `ticks` times over.
+    fn cool_ticks(&mut self, ticks: u64, moving: u32) {
+        let hand = &self.profile.hand;
+        let cooling = hand.cooling_time_s * 1000.0;
+        if self.heat.to_bits() == 0
+            && moving == 0
+            && hand.heat_per_motor_s.is_finite()
+            && cooling != 0.0
+            && !cooling.is_nan()
+        {
+            // (a cold board at rest stays cold: 0 + (0 - 0 / c) is 0 again, bit for bit)
+            return;
+        }
         for _ in 0..ticks {
-            self.cool_tick(0);
+            self.cool_tick(moving);
         }
     }
 
@@ -209,13 +225,7 @@ impl Device {
             }
             self.motors[m].pass_steady(kind, ticks);
         }
-        if self.heat == 0.0 && moving == 0 {
-            // (a cold board at rest stays cold: 0 + 0 - 0 / c)
-            return;
-        }
-        for _ in 0..ticks {
-            self.cool_tick(moving);
-        }
+        self.cool_ticks(ticks, moving);
     }
 
     /// One millisecond of heating by `moving` motors and of cooling toward ambient: the board
