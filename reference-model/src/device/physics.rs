@@ -190,7 +190,11 @@ impl Motor {
         // The last tick decides: each condition of a cruise holds all along one if it holds at
         // its last tick, so the longest is found by halving.
         let cruises = |n: u64| exact_run(self.pos, delta, n) && self.cruises_to(l, goal, target, delta, n);
-        let (mut yes, mut no) = (0, upper);
+        // (a stretch of one tick is no gain: the tick runs as any other)
+        if upper < 2 || !cruises(2) {
+            return None;
+        }
+        let (mut yes, mut no) = (2, upper);
         if cruises(upper) {
             yes = upper;
         } else {
@@ -199,7 +203,7 @@ impl Motor {
                 if cruises(mid) { yes = mid } else { no = mid }
             }
         }
-        (yes > 0).then_some(Steady { ticks: yes, kind: SteadyKind::Cruise(delta) })
+        Some(Steady { ticks: yes, kind: SteadyKind::Cruise(delta) })
     }
 
     /// Whether the `n`-th tick (n ≥ 1) of a cruise by `delta` per tick, each tick exact, is
@@ -464,7 +468,8 @@ fn exact_run(start: f64, delta: f64, n: u64) -> bool {
         return g == i32::MAX;
     }
     let reach = start.abs() + n as f64 * delta.abs();
-    reach < 2f64.powi(g + 52)
+    // (2^(g+52), a normal number for g in the range above)
+    reach < f64::from_bits(((g + 52 + 1023) as u64) << 52)
 }
 
 /// `x.round() as i64` (half away from zero, saturating, NaN as 0), without the library call
