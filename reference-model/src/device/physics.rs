@@ -160,7 +160,7 @@ impl Motor {
             Goal::Initialize { .. } => (l.init_speed, -1.0, None),
             Goal::Position { target, .. } => {
                 let d = target - self.pos;
-                if !(d.abs() >= 0.5) {
+                if d.abs() < 0.5 || d.is_nan() {
                     return None;
                 }
                 let dir = d.signum();
@@ -238,7 +238,8 @@ impl Motor {
             }
         }
         let sg = strain_at(after, self.powered, l.object.map(|(o, _)| o), l.free_strain, l.strain_per_count);
-        !(l.high_strain < 255 && sg > l.high_strain) && !(l.low_strain < 255 && sg < l.low_strain)
+        let ends = (l.high_strain < 255 && sg > l.high_strain) || (l.low_strain < 255 && sg < l.low_strain);
+        !ends
     }
 
     /// A motor at rest with a goal whose next tick leaves it where it is (blocked at a stop, or
