@@ -1,5 +1,7 @@
 //! Time: advancing the hand to a new instant, 1 ms physics ticks while something moves, and
-//! the end of a running command. Every `now` is monotonic and saturating (see the module
+//! the end of a running command. Stretches of ticks that only count, or that repeat the one
+//! before for every motor (see `physics`), pass in one step; the tests below hold them to the
+//! tick loop. Every `now` is monotonic and saturating (see the module
 //! docs of [`super`]).
 
 use super::*;
