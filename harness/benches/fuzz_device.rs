@@ -2,6 +2,7 @@
 //!
 //! Run with `cargo bench -p gcl-harness --bench fuzz_device`. Figures:
 //! - cases per second against the in-process sim (bh8-262, no fault, findings not minimized),
+//!   and beside it cases per CPU-second of this process (which a busy machine moves less),
 //!   at 2,000 and at 20,000 cases (the corpus grows as a campaign goes on, and with it the
 //!   cases drawn from it: a later fall shows at the larger figure; issue 31);
 //! - cases per second over `exec:gcl sim --stdio` (one child reused, `--no abort-timing`,
@@ -71,14 +72,32 @@ fn in_process(p: &std::sync::Arc<Profile>, runs: u64) {
     o.budget = Budget::Runs(runs);
     o.seed = 1;
     o.minimize = false;
+    let cpu = cpu_seconds();
     let s = run(&o, &|_| {}).unwrap();
+    let per_cpu = match (cpu, cpu_seconds()) {
+        (Some(a), Some(b)) if b > a => format!("{:.0} per CPU-second", s.runs as f64 / (b - a)),
+        _ => "CPU time unknown".to_string(),
+    };
     println!(
-        "in-process sim, {runs} cases: {} cases in {:.2} s = {:.0} cases/s ({} dropped by the model)",
+        "in-process sim, {runs} cases: {} cases in {:.2} s = {:.0} cases/s, {per_cpu} ({} dropped by the model)",
         s.runs,
         s.elapsed.as_secs_f64(),
         s.cases_per_second(),
         s.dropped
     );
+}
+
+/// The CPU time this process has used (user and system, every thread, those ended too), from
+/// `/proc/self/stat` in clock ticks of 1/100 s (Linux's `USER_HZ`); `None` elsewhere. Beside a
+/// wall-clock figure it tells a slower program from a busier machine.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // (the fields after the command's name, which is in parentheses and may hold spaces)
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok());
+    // (utime and stime are fields 14 and 15 of the line, 12 and 13 after the name)
+    Some((ticks(11)? + ticks(12)?) as f64 / 100.0)
 }
 
 /// Cases per second over `exec:gcl sim --stdio`.

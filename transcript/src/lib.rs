@@ -621,6 +621,15 @@ impl Expect {
     /// Whether `actual` is exactly a complete answer given the values captured by earlier
     /// steps; if so, those values and the ones this answer captured.
     pub fn matches_with(&self, captured: &Captures, actual: &[u8]) -> Option<Captures> {
+        // (no elision: the answer is these bytes and nothing else, and captures nothing)
+        if self.pieces().all(|(_, p)| matches!(p, Piece::Bytes(_))) {
+            let mut rest = actual;
+            for (_, p) in self.pieces() {
+                let Piece::Bytes(b) = p else { return None };
+                rest = rest.strip_prefix(b.as_slice())?;
+            }
+            return rest.is_empty().then(|| captured.clone());
+        }
         let mut m = Matcher::with_captures(self, captured);
         for &b in actual {
             if m.feed(b) == Feed::Dead {

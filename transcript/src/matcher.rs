@@ -188,6 +188,27 @@ impl Matcher {
         if self.states.is_empty() {
             return Feed::Dead;
         }
+        // One way through, inside a literal that this byte goes on with and does not end: the
+        // way moves a byte on (what the general path below gives, without its bookkeeping).
+        if let [s] = self.states.as_mut_slice()
+            && let Some((_, Piece::Bytes(lit))) = self.pieces.get(s.piece)
+            && (s.k as usize) + 1 < lit.len()
+            && lit[s.k as usize] == b
+        {
+            self.best.clone_from(s);
+            s.k += 1;
+            self.consumed += 1;
+            return Feed::Alive;
+        }
+        self.feed_every_way(b)
+    }
+
+    /// [`Matcher::feed`] by its general path: every state takes the byte, then the states
+    /// reachable without a byte are added.
+    fn feed_every_way(&mut self, b: u8) -> Feed {
+        if self.states.is_empty() {
+            return Feed::Dead;
+        }
         if let Some(i) = self.furthest_index() {
             self.best.clone_from(&self.states[i]);
         }
@@ -519,6 +540,52 @@ mod tests {
 
     fn b(s: &str) -> Piece {
         Piece::Bytes(s.as_bytes().to_vec())
+    }
+
+    /// A piece for [`feeding_fast_is_feeding_every_way`], over a small alphabet so that bytes
+    /// often go on with a literal.
+    fn piece() -> impl proptest::strategy::Strategy<Value = Piece> {
+        use proptest::prelude::*;
+        prop_oneof![
+            4 => proptest::collection::vec(proptest::sample::select(b"AB1-\n\r".to_vec()), 1..6).prop_map(Piece::Bytes),
+            1 => (-20i64..20, 0i64..40).prop_map(|(lo, w)| Piece::Int(Some((lo, lo + w)))),
+            1 => Just(Piece::Int(None)),
+            1 => Just(Piece::Line),
+            1 => Just(Piece::Any),
+            1 => Just(Piece::Text),
+            1 => Just(Piece::AnyByte),
+        ]
+    }
+
+    proptest::proptest! {
+        /// The fast path of [`Matcher::feed`] (one way through, inside a literal) answers every
+        /// byte as the general path does: the same outcome, progress, captures and what was
+        /// expected where the bytes part; and [`Expect::matches_with`] (bytes compared when
+        /// nothing is elided) answers a whole answer as the general path does.
+        #[test]
+        fn feeding_fast_is_feeding_every_way(
+            parts in proptest::collection::vec(piece(), 1..6),
+            bytes in proptest::collection::vec(proptest::sample::select(b"AB1-2\n\rx".to_vec()), 0..40),
+        ) {
+            let e = text(&parts);
+            // (whole answers: an expectation without elisions is compared as bytes)
+            let known = Captures::from([("p1".to_string(), 5)]);
+            let mut whole = Matcher::with_captures(&e, &known);
+            let dead = bytes.iter().any(|&b| whole.feed_every_way(b) == Feed::Dead);
+            proptest::prop_assert_eq!(e.matches_with(&known, &bytes), if dead { None } else { whole.captures() });
+            let mut fast = Matcher::new(&e);
+            let mut general = fast.clone();
+            for &b in &bytes {
+                proptest::prop_assert_eq!(fast.feed(b), general.feed_every_way(b));
+                proptest::prop_assert_eq!(fast.consumed(), general.consumed());
+                proptest::prop_assert_eq!(fast.is_complete(), general.is_complete());
+                proptest::prop_assert_eq!(fast.captures(), general.captures());
+                proptest::prop_assert_eq!(fast.expected_at_parting(), general.expected_at_parting());
+                proptest::prop_assert_eq!(fast.expected_rest(), general.expected_rest());
+                proptest::prop_assert_eq!(fast.form_at_parting(), general.form_at_parting());
+                proptest::prop_assert_eq!(&fast.states, &general.states);
+            }
+        }
     }
 
     #[test]

@@ -43,7 +43,8 @@ pub const SAFE_LINE: usize = 68;
 /// Decision ids by topic: the first ids the profile has are used.
 fn topic(p: &Profile, ids: &[&str], out: &mut Vec<String>) {
     for id in ids {
-        if p.decisions.iter().any(|d| d.id == *id) && !out.iter().any(|x| x == id) {
+        // (the short list first: most ids asked for are found already)
+        if !out.iter().any(|x| x == id) && p.decisions.iter().any(|d| d.id == *id) {
             out.push((*id).to_string());
         }
     }
@@ -151,7 +152,7 @@ pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Ve
         }
     }
     let order = |id: &String| p.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
-    found.sort_by_key(order);
+    found.sort_by_cached_key(order);
     found
 }
 

@@ -1,5 +1,7 @@
 //! Time: advancing the hand to a new instant, 1 ms physics ticks while something moves, and
-//! the end of a running command. Every `now` is monotonic and saturating (see the module
+//! the end of a running command. Stretches of ticks that only count, or that repeat the one
+//! before for every motor (see `physics`), pass in one step; the tests below hold them to the
+//! tick loop. Every `now` is monotonic and saturating (see the module
 //! docs of [`super`]).
 
 use super::*;
@@ -51,6 +53,16 @@ impl Device {
             if quiet > 0 {
                 let ticks = quiet.min((now_ns - self.next_tick_ns) / TICK_NS + 1);
                 self.pass_quiet_ticks(ticks);
+                self.now_ns = self.next_tick_ns.saturating_add((ticks - 1).saturating_mul(TICK_NS));
+                self.next_tick_ns = self.now_ns.saturating_add(TICK_NS);
+                continue;
+            }
+            // Ticks that repeat the one before (motors cruising at full speed, blocked, at rest)
+            // pass at once too, up to the instant asked for.
+            let left = (now_ns - self.next_tick_ns) / TICK_NS + 1;
+            let steady = if left > 1 { self.steady_ticks(left) } else { None };
+            if let Some((ticks, kinds)) = steady {
+                self.pass_steady_ticks(ticks, kinds);
                 self.now_ns = self.next_tick_ns.saturating_add((ticks - 1).saturating_mul(TICK_NS));
                 self.next_tick_ns = self.now_ns.saturating_add(TICK_NS);
                 continue;
@@ -158,9 +170,64 @@ impl Device {
                 motor.goal = Some(physics::Goal::Initialize { settled_ms: settled_ms + ticks, stall_ms: 0 });
             }
         }
-        for _ in 0..ticks {
-            self.cool_tick(0);
+        self.cool_ticks(ticks, 0);
+    }
+
+    /// [`Device::cool_tick`] `ticks` times over.
+    fn cool_ticks(&mut self, ticks: u64, moving: u32) {
+        let hand = &self.profile.hand;
+        let cooling = hand.cooling_time_s * 1000.0;
+        if self.heat.to_bits() == 0
+            && moving == 0
+            && hand.heat_per_motor_s.is_finite()
+            && cooling != 0.0
+            && !cooling.is_nan()
+        {
+            // (a cold board at rest stays cold: 0 + (0 - 0 / c) is 0 again, bit for bit)
+            return;
         }
+        for _ in 0..ticks {
+            self.cool_tick(moving);
+        }
+    }
+
+    /// How many ticks from the next one on (at most `max`, and more than one) repeat the one
+    /// before for every motor while a command runs, with what each motor's ticks do (see
+    /// `physics::Motor::steady`); `None` when the next tick may do more, or when no motor has a
+    /// goal left (that tick ends the command).
+    fn steady_ticks(&self, max: u64) -> Option<(u64, PerMotor<physics::SteadyKind>)> {
+        if !matches!(self.state, State::Busy(_)) {
+            return None;
+        }
+        let mut ticks = max;
+        let mut kinds = PerMotor([physics::SteadyKind::Rest; 4]);
+        for m in Motor::ALL {
+            let s = self.motors[m].steady(&self.limits[m], ticks)?;
+            ticks = ticks.min(s.ticks);
+            if ticks <= 1 {
+                return None;
+            }
+            kinds[m] = s.kind;
+        }
+        let busy = kinds.iter().any(|(_, k)| *k != physics::SteadyKind::Rest);
+        busy.then_some((ticks, kinds))
+    }
+
+    /// Passes `ticks` of [`Device::steady_ticks`] as [`Device::tick`] would, one by one: each
+    /// motor moves, counts and wears its odometer as its ticks would, and the board heats and
+    /// cools by the same arithmetic, tick by tick.
+    fn pass_steady_ticks(&mut self, ticks: u64, kinds: PerMotor<physics::SteadyKind>) {
+        let mut moving = 0;
+        for m in Motor::ALL {
+            let kind = kinds[m];
+            if let physics::SteadyKind::Cruise(delta) = kind {
+                moving += 1;
+                let odometer = m.pick_mut(&mut self.nv.odometer_counts);
+                *odometer = odometer.saturating_add((physics::round(delta.abs()) as u64).saturating_mul(ticks));
+            }
+            self.motors[m].pass_steady(kind, ticks);
+        }
+        self.cool_ticks(ticks, moving);
     }
 
     /// One millisecond of heating by `moving` motors and of cooling toward ambient: the board
@@ -255,6 +322,191 @@ mod tests {
             d.tick();
             if matches!(d.state, State::Idle) {
                 d.drain_queue();
+            }
+        }
+    }
+
+    /// [`Device::advance_until`] as it was before any tick passed at once: one tick per
+    /// iteration, every one of them run. The oracle of the ticks passed at once.
+    fn advance_ticking(d: &mut Device, now: Duration, stop: Stop) -> bool {
+        let now_ns = now.as_nanos().min(u128::from(u64::MAX)) as u64;
+        if now_ns <= d.now_ns {
+            return false;
+        }
+        let elapsed_ms = (now_ns - d.now_ns) / 1_000_000;
+        d.nv.powered_ms = d.powered_at_boot_ms.saturating_add(now_ns / 1_000_000);
+        let active = match d.state {
+            State::Busy(_) => true,
+            State::Loop(_) => d.loop_moving(),
+            State::Idle => false,
+        };
+        if !active {
+            if d.heat > 0.0 && elapsed_ms > 0 {
+                d.heat *= (-(elapsed_ms as f64) / (d.profile.hand.cooling_time_s * 1000.0)).exp();
+            }
+            d.now_ns = now_ns;
+            d.next_tick_ns = now_ns.saturating_add(TICK_NS);
+            return false;
+        }
+        while d.next_tick_ns <= now_ns {
+            d.now_ns = d.next_tick_ns;
+            d.next_tick_ns = d.next_tick_ns.saturating_add(TICK_NS);
+            let moved = d.tick();
+            if matches!(d.state, State::Loop(_)) && moved == 0 {
+                break;
+            }
+            if matches!(d.state, State::Idle) {
+                d.drain_queue();
+            }
+            let stopped = match stop {
+                Stop::Never => false,
+                Stop::Output => !d.out.is_empty(),
+                Stop::NotBusy => !matches!(d.state, State::Busy(_)),
+            };
+            if stopped {
+                d.nv.powered_ms = d.powered_at_boot_ms.saturating_add(d.now_ns / 1_000_000);
+                return true;
+            }
+            if matches!(d.state, State::Idle) {
+                break;
+            }
+        }
+        if stop == Stop::NotBusy {
+            d.nv.powered_ms = d.powered_at_boot_ms.saturating_add(d.now_ns / 1_000_000);
+            return false;
+        }
+        if d.now_ns < now_ns {
+            d.now_ns = now_ns;
+            if d.next_tick_ns <= now_ns {
+                d.next_tick_ns = now_ns.saturating_add(TICK_NS);
+            }
+        }
+        false
+    }
+
+    /// Everything of a hand that time changes, bit for bit (floats print exactly), less its
+    /// profile.
+    fn moving_state(d: &Device) -> String {
+        format!(
+            "{:?} {:?} {:?} heat {:?} now {} next {} out {:?} queue {:?} events {:?} {:?} {:?} {:?}",
+            d.motors,
+            d.state,
+            d.nv,
+            d.heat,
+            d.now_ns,
+            d.next_tick_ns,
+            d.out,
+            d.queue,
+            d.events,
+            d.params,
+            d.rng,
+            d.limits
+        )
+    }
+
+    /// What the host does next in [`motions_in_one_step_are_the_tick_loop`].
+    #[derive(Debug, Clone)]
+    enum Act {
+        /// Sends bytes after this many ms.
+        Send(u64, Vec<u8>),
+        /// Lets this many ms pass.
+        Wait(u64),
+        /// Lets time pass up to the first output, at most this many ms.
+        UntilOutput(u64),
+        /// Runs the command to its end.
+        Idle,
+    }
+
+    fn act() -> impl proptest::strategy::Strategy<Value = Act> {
+        use proptest::prelude::*;
+        let motors = prop::sample::select(vec!["", "1", "2", "3", "4", "S", "G", "12", "123"]);
+        let command = prop_oneof![
+            Just("HI".to_string()),
+            Just("C".to_string()),
+            Just("O".to_string()),
+            Just("TC".to_string()),
+            Just("TO".to_string()),
+            Just("HOME".to_string()),
+            (0i64..20_000).prop_map(|n| format!("M {n}")),
+            (0i64..6000).prop_map(|n| format!("IC {n}")),
+            (0i64..6000).prop_map(|n| format!("IO {n}")),
+        ];
+        let line = (motors, command).prop_map(|(m, c)| format!("{m}{c}\r").into_bytes());
+        let set = (
+            prop::sample::select(vec![
+                "ACCEL", "MCV", "MOV", "TSTOP", "HSG", "LSG", "BS", "HOLD", "IVEL", "IHIT", "MPE",
+            ]),
+            prop_oneof![0i64..4, 1i64..300, Just(255), Just(256)],
+        )
+            .prop_map(|(p, v)| format!("FSET {p} {v}\r").into_bytes());
+        let read = prop::sample::select(vec!["FGET P\r", "FGET TEMP\r", "FGET SG\r", "\x03"])
+            .prop_map(|s| s.as_bytes().to_vec());
+        prop_oneof![
+            4 => (0u64..5, line).prop_map(|(t, l)| Act::Send(t, l)),
+            2 => (0u64..5, set).prop_map(|(t, l)| Act::Send(t, l)),
+            2 => (0u64..3000, read).prop_map(|(t, l)| Act::Send(t, l)),
+            2 => (1u64..3000).prop_map(Act::Wait),
+            2 => (1u64..3000).prop_map(Act::UntilOutput),
+            3 => Just(Act::Idle),
+        ]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig { cases: 256, ..Default::default() })]
+
+        /// The ticks passed at once (cruising, stalling, at rest, settling) leave the hand bit
+        /// for bit as running every tick does, through random motions: any motor set, speed,
+        /// acceleration, stall time, strain limits, objects in the way and starting positions,
+        /// with reads, aborts and waits that stop anywhere in a motion.
+        #[test]
+        fn motions_in_one_step_are_the_tick_loop(
+            profile in proptest::sample::select(vec!["seed", "bh8-262-4.4", "bh8-262-4.3"]),
+            objects in proptest::array::uniform4(proptest::option::of(0i64..18_000)),
+            initial in proptest::array::uniform4(0i64..18_000),
+            acts in proptest::collection::vec(act(), 1..24),
+        ) {
+            let p = Profile::builtin(profile).unwrap();
+            let scenario = Scenario { objects, initial_positions: initial, ..Scenario::default() };
+            let mut a = Device::new(p, DeviceConfig { seed: 7, scenario, ..DeviceConfig::default() });
+            let mut b = a.clone();
+            for (i, act) in acts.iter().enumerate() {
+                let (sa, sb) = match act {
+                    Act::Send(ms, bytes) => {
+                        let t = a.now() + Duration::from_millis(*ms);
+                        a.handle_input(t, bytes);
+                        advance_ticking(&mut b, t, Stop::Never);
+                        for &x in bytes {
+                            b.input_byte(x);
+                        }
+                        (false, false)
+                    }
+                    Act::Wait(ms) => {
+                        let t = a.now() + Duration::from_millis(*ms);
+                        a.handle_timeout(t);
+                        advance_ticking(&mut b, t, Stop::Never);
+                        (false, false)
+                    }
+                    Act::UntilOutput(ms) => {
+                        let t = a.now() + Duration::from_millis(*ms);
+                        (a.handle_timeout_until_output(t), advance_ticking(&mut b, t, Stop::Output))
+                    }
+                    Act::Idle => {
+                        let limit = Duration::from_secs(60);
+                        let end = a.now() + limit;
+                        a.run_until_idle(limit);
+                        if b.poll_timeout().is_some_and(|t| t <= end) {
+                            advance_ticking(&mut b, end, Stop::NotBusy);
+                        }
+                        (false, false)
+                    }
+                };
+                if !matches!(act, Act::Idle) {
+                    proptest::prop_assert_eq!(sa, sb, "stopped early after act {} {:?}", i, act);
+                }
+                proptest::prop_assert_eq!(moving_state(&a), moving_state(&b), "after act {} {:?}", i, act);
+                // (a link takes what the hand wrote after every call)
+                a.clear_output();
+                b.clear_output();
             }
         }
     }
