@@ -882,3 +882,29 @@ fn a_failure_resting_on_an_earlier_cases_state_is_reported_with_that_case() {
     assert_eq!(replay(format!("exec:{gcl} sim --stdio --fault fdef-skips-mcv")), Some(1));
     assert_eq!(replay(format!("exec:{gcl} sim --stdio")), Some(0));
 }
+
+/// Issue 37: a run that fails mid-block leaves a hand whose control block is longer than the
+/// model's waiting for the rest of it (`en-ignored`), or one whose block is shorter answering
+/// what follows as blocks (`lcv-ignored`). The campaign brings such a hand back to its prompt
+/// before the next run on the link: the thorough run that judges the failure again, the
+/// dead-hand probe. Before, the next case's first ^C was taken as block data and answered
+/// `*` (a `value at ^C` that never reproduced on a fresh connection, a note, while the bug's
+/// own finding was lost), and the probe's ^C and CR too (a hand said to be dead).
+#[test]
+fn a_hand_left_mid_block_by_a_failed_run_is_brought_back_before_the_next() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    for fault in ["en-ignored", "lcv-ignored"] {
+        let target: Target = format!("exec:{gcl} sim --stdio --fault {fault}").parse().unwrap();
+        let mut o = FuzzOptions::new(target, Profile::builtin("bh8-262").unwrap());
+        o.budget = Budget::Runs(30);
+        o.seed = 1;
+        o.minimize = false;
+        o.max_findings = Some(1);
+        o.allowed.abort_timing = false;
+        let s = run(&o, &|_| {}).unwrap();
+        assert!(s.not_reproduced.is_empty(), "{fault}: {:?}", s.not_reproduced);
+        assert_eq!(s.dead_hand, None, "{fault}");
+        let f = s.findings.first().unwrap_or_else(|| panic!("{fault}: no finding"));
+        assert_eq!(f.signature.command, "RealTime block", "{fault}: {}", f.signature);
+    }
+}

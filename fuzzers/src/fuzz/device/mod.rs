@@ -800,6 +800,9 @@ struct Hand<'o> {
 /// (a power-up banner) before the first case; a hand that says nothing costs this once.
 const POWER_UP_WAIT: Duration = Duration::from_secs(2);
 
+/// The shortest wait for each answer of [`Hand::to_prompt`]'s resynchronisation.
+const RESYNC_WAIT: Duration = Duration::from_millis(200);
+
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
 const TRAILING: Duration = Duration::from_millis(50);
 
@@ -893,6 +896,39 @@ impl Hand<'_> {
         Ok(())
     }
 
+    /// After a failed run on a kept link to a hand outside this process: brings the hand back
+    /// to its prompt before the next run (the host client's resynchronisation: a CR, then ^C
+    /// one at a time until a prompt comes back). A run that failed stopped sending mid-case,
+    /// and may have left the hand in the middle of a RealTime block (a hand whose control block
+    /// is longer than the model's waits for more data): there a ^C is data, so the next
+    /// case's first ^C completed the block and was answered `*`, and that case failed as
+    /// `value at ^C`, on this link only (issue 37: the candidate that never reproduced on a
+    /// fresh connection). A hand that does not come back is left as it is: the next run says
+    /// how it answers; a lost link is reopened.
+    fn to_prompt(&mut self) {
+        let Some(link) = self.link.take() else { return };
+        let mut client = gcl_host::client::Hand::new(link, self.opts.profile.clone());
+        let timeouts = client.timeouts();
+        client.set_timeouts(gcl_host::client::Timeouts { sync: self.line_wait().max(RESYNC_WAIT), ..timeouts });
+        match client.resync() {
+            Ok(())
+            | Err(gcl_host::client::ClientError::Timeout { .. } | gcl_host::client::ClientError::Violation { .. }) => {
+                self.link = Some(client.into_link());
+            }
+            Err(_) => {}
+        }
+    }
+
+    /// The dead-hand rule after a case met silence: the hand brought back to its prompt
+    /// first ([`Hand::to_prompt`]). A hand that waits for the rest of a RealTime block (its
+    /// control block is longer than the model's) takes the probe's ^C and CR as data: it is
+    /// not dead, and it was said to be (`lcv-ignored` over exec ended its campaigns so).
+    fn dead(&mut self) -> Result<Option<String>, FuzzError> {
+        self.to_prompt();
+        let p = self.opts.profile.clone();
+        Ok(dead_hand(self.link()?.as_mut(), &p))
+    }
+
     /// One replay of a transcript (see [`Hand::run`]).
     fn replay(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
@@ -919,6 +955,9 @@ impl Hand<'_> {
             ro.trailing = Duration::ZERO;
         }
         let line_wait = self.line_wait();
+        if outside && self.dirty {
+            self.to_prompt();
+        }
         let opened = self.link.is_none();
         let link = self.link()?;
         if opened && outside {
@@ -2013,7 +2052,7 @@ fn worker(
         // dead hand cannot minimize it.
         if opts.wide()
             && matches!(&outcome, ReplayOutcome::Timeout(to) if to.offset == 0)
-            && let Some(why) = dead_hand(hand.link()?.as_mut(), &p)
+            && let Some(why) = hand.dead()?
         {
             lock().dead_hand.get_or_insert(format!(
                 "the hand stopped answering at run {run_no} (the case met silence, then {why})"
