@@ -908,3 +908,42 @@ fn a_hand_left_mid_block_by_a_failed_run_is_brought_back_before_the_next() {
         assert_eq!(f.signature.command, "RealTime block", "{fault}: {}", f.signature);
     }
 }
+
+/// Issue 37 item 4: a finding's confirmations over `exec:` start their fresh hands at once,
+/// while the finding is minimized, not one after the other as each replay needs one (a Python
+/// hand behind a pyenv shim took about 0.6 s to start, three times per finding). The hand
+/// logs when each of its processes starts and when it first hears from the campaign: some
+/// process starts before an earlier one has heard anything. One after the other, every
+/// process was first spoken to before the next one started.
+#[test]
+fn a_findings_fresh_hands_over_exec_are_started_ahead() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let hand = dir.path().join("hand.sh");
+    let (count, log) = (dir.path().join("count"), dir.path().join("log"));
+    std::fs::write(
+        &hand,
+        format!(
+            "n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '{c}'\n\
+             echo \"start $n\" >> '{l}'\n\
+             {{ dd bs=1 count=1 2>/dev/null; echo \"heard $n\" >> '{l}'; cat; }} | {gcl} sim --stdio --fault fget-reversed\n",
+            c = count.display(),
+            l = log.display()
+        ),
+    )
+    .unwrap();
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &format!("exec:sh {}", hand.display())])
+        .args(["--no", "abort-timing", "--seed", "1", "--runs", "60", "--max-findings", "1", "--no-minimize"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stdout));
+    let log = std::fs::read_to_string(&log).unwrap();
+    let order: Vec<(&str, u32)> =
+        log.lines().filter_map(|l| l.split_once(' ')).map(|(what, n)| (what, n.parse().unwrap())).collect();
+    let heard = |n: u32| order.iter().position(|&e| e == ("heard", n));
+    let ahead = order.iter().enumerate().any(|(i, &(what, n))| {
+        what == "start" && (1..n).any(|m| heard(m).is_none_or(|h| h > i) && order.contains(&("start", m)))
+    });
+    assert!(ahead, "every hand was spoken to before the next started:\n{log}");
+}

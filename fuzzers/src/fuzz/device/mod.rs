@@ -794,11 +794,17 @@ struct Hand<'o> {
     /// Whether the last run failed: it stopped reading mid-case, so the next run drains
     /// thoroughly.
     dirty: bool,
+    /// Hands started ahead, not yet used, the oldest first: the fresh connections of a
+    /// finding's confirmations over `exec:` (see [`Hand::open_ahead`]).
+    ahead: std::collections::VecDeque<Box<dyn Link>>,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
 /// (a power-up banner) before the first case; a hand that says nothing costs this once.
 const POWER_UP_WAIT: Duration = Duration::from_secs(2);
+
+/// The most bytes of a power-up banner read to find its prompt (the rest is drained).
+const POWER_UP_BYTES: usize = 4096;
 
 /// The shortest wait for each answer of [`Hand::to_prompt`]'s resynchronisation.
 const RESYNC_WAIT: Duration = Duration::from_millis(200);
@@ -806,14 +812,39 @@ const RESYNC_WAIT: Duration = Duration::from_millis(200);
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
 const TRAILING: Duration = Duration::from_millis(50);
 
-impl Hand<'_> {
+impl<'o> Hand<'o> {
+    fn new(opts: &'o FuzzOptions) -> Hand<'o> {
+        Hand { opts, link: None, new: true, dirty: false, ahead: Default::default() }
+    }
+
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
             self.new = true;
-            self.link = Some(gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
+            self.link = Some(match self.ahead.pop_front() {
+                Some(l) => l,
+                None => gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?,
+            });
         }
         self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
+    }
+
+    /// On an `exec:` target, starts hands until `n` wait unused, for the next fresh
+    /// connections: their start-up (a process, an interpreter, a power-up banner) runs at
+    /// once, not one after the other. A Python hand behind a pyenv shim took about 0.6 s to
+    /// start, three times per finding (issue 37 item 4). A serial port or a TCP server takes one
+    /// connection at a time: nothing is started ahead there, nor for a hand in this process.
+    fn open_ahead(&mut self, n: u32) {
+        if !matches!(self.opts.target, Target::Exec { .. }) {
+            return;
+        }
+        while self.ahead.len() < n as usize {
+            match gcl_host::target::open(&self.opts.target, &self.opts.open) {
+                Ok(l) => self.ahead.push_back(l),
+                // (the next connection opened in turn says what failed)
+                Err(_) => return,
+            }
+        }
     }
 
     /// The quiet that ends a quick drain: four byte-times on a serial line (at least 1 ms),
@@ -904,19 +935,19 @@ impl Hand<'_> {
     /// case's first ^C completed the block and was answered `*`, and that case failed as
     /// `value at ^C`, on this link only (issue 37: the candidate that never reproduced on a
     /// fresh connection). A hand that does not come back is left as it is: the next run says
-    /// how it answers; a lost link is reopened.
-    fn to_prompt(&mut self) {
-        let Some(link) = self.link.take() else { return };
+    /// how it answers; a lost link is reopened. Says whether the hand came back.
+    fn to_prompt(&mut self) -> bool {
+        let Some(link) = self.link.take() else { return false };
         let mut client = gcl_host::client::Hand::new(link, self.opts.profile.clone());
         let timeouts = client.timeouts();
         client.set_timeouts(gcl_host::client::Timeouts { sync: self.line_wait().max(RESYNC_WAIT), ..timeouts });
-        match client.resync() {
-            Ok(())
-            | Err(gcl_host::client::ClientError::Timeout { .. } | gcl_host::client::ClientError::Violation { .. }) => {
-                self.link = Some(client.into_link());
-            }
-            Err(_) => {}
+        let back = client.resync();
+        if let Ok(())
+        | Err(gcl_host::client::ClientError::Timeout { .. } | gcl_host::client::ClientError::Violation { .. }) = back
+        {
+            self.link = Some(client.into_link());
         }
+        back.is_ok()
     }
 
     /// The dead-hand rule after a case met silence: the hand brought back to its prompt
@@ -924,7 +955,7 @@ impl Hand<'_> {
     /// control block is longer than the model's) takes the probe's ^C and CR as data: it is
     /// not dead, and it was said to be (`lcv-ignored` over exec ended its campaigns so).
     fn dead(&mut self) -> Result<Option<String>, FuzzError> {
-        self.to_prompt();
+        let _ = self.to_prompt();
         let p = self.opts.profile.clone();
         Ok(dead_hand(self.link()?.as_mut(), &p))
     }
@@ -946,6 +977,12 @@ impl Hand<'_> {
             }
             ro.silent_wait = policy.silent_wait;
         }
+        let quick_quiet = self.quick_quiet();
+        // (the resynchronisation ends in a quiet line: the replay's drain need not wait one out
+        // again)
+        if outside && self.dirty && self.to_prompt() {
+            ro.drain_quiet = quick_quiet;
+        }
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
@@ -955,18 +992,32 @@ impl Hand<'_> {
             ro.trailing = Duration::ZERO;
         }
         let line_wait = self.line_wait();
-        if outside && self.dirty {
-            self.to_prompt();
-        }
         let opened = self.link.is_none();
         let link = self.link()?;
         if opened && outside {
             // A hand just started (a child process) may print its power-up banner later than
             // the drain's quiet: under load a Python hand's came after 300 ms, and the first
             // case met it as the answer to its ^C. Its first byte is waited for, a while.
+            // A banner that ends in the prompt has ended: only what follows at once is
+            // drained; otherwise the line must fall quiet. The replay's own drain then only
+            // takes what followed (it waited out the same quiet again: with the quiet after
+            // the prompt, 600 ms per fresh connection, three per finding).
             let mut first = Vec::new();
             if link.recv(&mut first, POWER_UP_WAIT).is_ok_and(|n| n > 0) {
-                let _ = crate::replay::discard(link.as_mut(), ro.drain_quiet, ro.drain_limit);
+                let prompt = [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat();
+                let until = link.elapsed() + ro.drain_limit;
+                let mut quiet = ro.drain_quiet;
+                while first.len() < POWER_UP_BYTES && link.elapsed() < until {
+                    if first.ends_with(&prompt) {
+                        quiet = quick_quiet;
+                        break;
+                    }
+                    if !link.recv(&mut first, ro.drain_quiet).is_ok_and(|n| n > 0) {
+                        break;
+                    }
+                }
+                let _ = crate::replay::discard(link.as_mut(), quiet, ro.drain_limit);
+                ro.drain_quiet = quick_quiet;
             }
         }
         let mut out = replay(t, link.as_mut(), &ro);
@@ -1686,7 +1737,7 @@ pub fn check_real_time(opts: &FuzzOptions) -> Result<(), FuzzError> {
     }
     let p = &opts.profile;
     let Some(probe) = MotionProbe::new(p) else { return Ok(()) };
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     let out = hand.run(&probe.transcript, true)?;
     match probe.judge(p, &out) {
         Some(n) => Err(FuzzError::NotRealTime { command: n.command, took_ms: n.took_ms, model_ms: n.model_ms }),
@@ -1705,7 +1756,7 @@ pub fn judge_once(
         Ok(b) => b,
         Err(e) => return Ok(Err(e)),
     };
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     let out = hand.run(&built.transcript, true)?;
     judged(opts, &mut hand, actions, &built, &out, &[]).map(Ok)
 }
@@ -1914,7 +1965,7 @@ fn worker(
     let gen_no_eeprom = Generator::new(&p, allowed).holding_velocities(opts.wide());
     let stream = opts.shard.map_or(w as u64, |s| s.global(w as u64));
     let mut dice = Dice::new(opts.seed.wrapping_add(stream));
-    let mut hand = Hand { opts, link: None, new: true, dirty: false };
+    let mut hand = Hand::new(opts);
     // The last case that passed a quick run, with its run number.
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     // The cases that passed last on this link, the latest last (see [`Met::before`]).
@@ -2127,6 +2178,8 @@ fn report_finding(
     let Met { actions, built, run: run_no, before } = met;
     let found_after = start.elapsed();
     let t0 = Instant::now();
+    // (the confirmations' hands start while the finding is minimized)
+    hand.open_ahead(confirmations(&opts.target));
     let (mut min_actions, min_case) = if opts.minimize {
         minimize(opts, hand, actions, built, &sig, minimizing_ends(opts.budget, start))?
     } else {
@@ -2292,6 +2345,7 @@ fn reproductions(
 ) -> Result<u32, FuzzError> {
     let known: Vec<String> = [sig.explanation.clone()].into_iter().filter(|e| !e.is_empty()).collect();
     let mut again = 0;
+    hand.open_ahead(of);
     for _ in 0..of {
         hand.link = None;
         let out = hand.run(&case.transcript, true)?;
@@ -2471,7 +2525,7 @@ mod tests {
         let actions: Vec<HostAction> =
             ["FGET MCV", "vers", "FGET DP", "FGET MOV"].iter().map(|l| HostAction::Line(l.to_string())).collect();
         let built = build_for(&opts, &actions, "t", "t").unwrap();
-        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let mut hand = Hand::new(&opts);
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the lower-case line fails");
         let start = Instant::now();
@@ -2495,7 +2549,7 @@ mod tests {
         opts.minimize = false;
         let actions: Vec<HostAction> = lines.iter().map(|l| HostAction::Line(l.to_string())).collect();
         let built = build_for(&opts, &actions, "t", "t").unwrap();
-        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let mut hand = Hand::new(&opts);
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = judged(&opts, &mut hand, &actions, &built, &out, &[]).unwrap().expect("the fault shows");
         let shared = Mutex::new(Shared::default());
