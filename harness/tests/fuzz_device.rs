@@ -947,3 +947,46 @@ fn a_findings_fresh_hands_over_exec_are_started_ahead() {
     });
     assert!(ahead, "every hand was spoken to before the next started:\n{log}");
 }
+
+/// Issue 37 item 2: a campaign that writes the EEPROM of a hand outside this process leaves
+/// the values the hand had saved, not the factory defaults its cases save back: it reads them
+/// before the first case and saves them again at the end, and says so. The hand is an `exec:`
+/// sim whose EEPROM is a file, with non-factory values saved in it first.
+#[test]
+fn a_campaign_that_writes_the_eeprom_leaves_the_values_the_hand_had_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let eeprom = dir.path().join("eeprom.json");
+    let ask = |lines: &str| {
+        let mut sim = Command::new(gcl)
+            .args(["sim", "--stdio", "--eeprom", eeprom.to_str().unwrap()])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        sim.stdin.take().unwrap().write_all(lines.as_bytes()).unwrap();
+        String::from_utf8_lossy(&sim.wait_with_output().unwrap().stdout).into_owned()
+    };
+    ask("FSET MCV 100\r2FSET MOV 70\rFSAVE\rPSET LFT 1\rPSAVE\r");
+    let saved = |text: String| {
+        let lines: Vec<&str> = text.split("\n\r").collect();
+        let after = |cmd: &str| lines.iter().position(|l| l.ends_with(cmd)).and_then(|i| lines.get(i + 1)).copied();
+        (after("FGET MCV MOV").map(str::to_string), text.contains("PGET LFT\n\r1\n\r"))
+    };
+    let before = saved(ask("FLOAD\rFGET MCV MOV\rPLOAD\rPGET LFT\r"));
+    assert_eq!(before.0.as_deref(), Some("100 100 100 100"), "{before:?}");
+    let rep = dir.path().join("r");
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &format!("exec:{gcl} sim --stdio --eeprom {}", eeprom.display())])
+        .args(["--no", "abort-timing", "--seed", "1", "--runs", "40", "--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(r.eeprom_writes > 0, "no EEPROM writes to leave anything: {stdout}");
+    let text = ask("FLOAD\rFGET MCV MOV\rPLOAD\rPGET LFT\r");
+    assert_eq!(saved(text.clone()), before, "{text}");
+    let line = r.hand_after.iter().find(|l| l.starts_with("EEPROM")).unwrap();
+    assert!(line.contains("saved back and read back as found"), "{line}");
+}

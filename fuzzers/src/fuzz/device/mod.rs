@@ -129,6 +129,7 @@ pub use gcl_conformance::actions::case;
 pub mod coverage;
 mod probe;
 pub mod report;
+mod saved;
 mod variant;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -1765,6 +1766,7 @@ pub fn judge_once(
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
     refuse_what_leaves_no_case(opts)?;
     let mut identity = None;
+    let mut saved_before = None;
     if opts.wide() {
         // As `gcl conform`: a hand that answers nothing is an infrastructure problem (exit 2),
         // not a campaign of "silence" findings.
@@ -1778,6 +1780,10 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         identity = crate::preflight::run(l.as_mut(), &opts.profile, &policy).ok().and_then(|p| p.identity);
         if let Some(who) = &identity {
             progress(Progress::Note(who));
+        }
+        // What the hand has saved, before a case may save over it (see [`saved`]).
+        if opts.allowed.eeprom && opts.write_budget != Some(0) {
+            saved_before = Some(saved::read(l, &opts.profile).1);
         }
     }
     check_real_time(opts)?;
@@ -1844,7 +1850,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         return Err(e);
     }
     name_status_commands(&mut sh.findings, &sh.status_at);
-    let hand_after = hand_after(opts, writes.load(Ordering::SeqCst));
+    let hand_after = hand_after(opts, writes.load(Ordering::SeqCst), saved_before.as_ref());
     Ok(FuzzSummary {
         runs: runs.load(Ordering::SeqCst),
         dropped: sh.dropped,
@@ -1876,11 +1882,38 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
 /// What a campaign left on a hand outside this process as it found it, checked where it can
 /// be: on a serial line, whether the hand still answers at the rate the campaign started at
 /// (no case changes it, [`Allowed::keep_rate`]); and what became of the EEPROM.
-fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
+fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<saved::Saved, String>>) -> Vec<String> {
     if !opts.wide() {
         return Vec::new();
     }
     let mut said = Vec::new();
+    // (the saved values first: the line is checked after the restore's own sets)
+    let eeprom = match saved {
+        _ if eeprom_writes == 0 => "EEPROM: no writes; the saved parameters are as they were found".to_string(),
+        Some(Ok(s)) => {
+            let rate = match &opts.target {
+                Target::Serial { baud, .. } => Some(*baud),
+                _ => None,
+            };
+            let done = match gcl_host::target::open(&opts.target, &opts.open) {
+                Ok(l) => saved::restore(l, &opts.profile, s, rate).1,
+                Err(e) => {
+                    format!("the hand could not be reached to save back the values saved before the campaign: {e}")
+                }
+            };
+            format!("EEPROM: {eeprom_writes} writes; {done}")
+        }
+        Some(Err(why)) => format!(
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back, and \
+             the values saved before the campaign could not be read ({why}): a hand whose saved values were not \
+             the factory defaults now has the factory defaults"
+        ),
+        None => format!(
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back \
+             (the values saved before the campaign were not read, so a hand whose saved values were not the \
+             factory defaults now has the factory defaults)"
+        ),
+    };
     if let Target::Serial { baud, .. } = &opts.target {
         said.push(match gcl_host::target::open(&opts.target, &opts.open) {
             Ok(mut l) => match dead_hand(l.as_mut(), &opts.profile) {
@@ -1890,15 +1923,7 @@ fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
             Err(e) => format!("line: the port could not be opened again at {baud} baud to check the hand: {e}"),
         });
     }
-    said.push(if eeprom_writes == 0 {
-        "EEPROM: no writes; the saved parameters are as they were found".to_string()
-    } else {
-        format!(
-            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back \
-             (the values saved before the campaign were not read, so a hand whose saved values were not the \
-             factory defaults now has the factory defaults)"
-        )
-    });
+    said.push(eeprom);
     said
 }
 
