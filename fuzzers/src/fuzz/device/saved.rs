@@ -63,15 +63,51 @@ fn client(link: Box<dyn Link>, p: &Arc<Profile>) -> Hand {
 /// Reads the saved values over `link` (see the module doc); gives the link back.
 pub fn read(link: Box<dyn Link>, p: &Arc<Profile>) -> (Box<dyn Link>, Result<Saved, String>) {
     let mut c = client(link, p);
-    let saved = read_with(&mut c, p).map_err(|e| e.to_string());
+    let saved = read_trusted(&mut c, p).map_err(|e| e.to_string()).and_then(|r| r);
     (c.into_link(), saved)
 }
 
-fn read_with(c: &mut Hand, p: &Profile) -> Result<Saved, ClientError> {
+/// Reads the values the load commands bring back (see the module doc). First the same reading
+/// after the default commands, held to the profile's defaults: a hand that reads them otherwise
+/// (another order, another scale) would have its saved values written back wrong, so nothing
+/// is trusted to be written back.
+fn read_trusted(c: &mut Hand, p: &Profile) -> Result<Result<Saved, String>, ClientError> {
     c.resync()?;
+    let defaults = read_with(c, p, CommandKind::MotorDefaults, CommandKind::GlobalDefaults)?;
+    let mut wrong = Vec::new();
+    for (n, v) in &defaults.motors {
+        let Some(s) = p.param_id(n).map(|id| p.param(id)) else { continue };
+        let want: Vec<Option<i64>> =
+            (0..4).map(|i| if i == 3 { s.default_spread.or(s.default) } else { s.default }).collect();
+        if v.iter().zip(&want).any(|(v, w)| w.is_some_and(|w| w != *v)) {
+            wrong.push(format!("{n} {}", join(v)));
+        }
+    }
+    for (n, v) in &defaults.globals {
+        if p.param_id(n).and_then(|id| p.param(id).default).is_some_and(|d| d != *v) {
+            wrong.push(format!("{n} {v}"));
+        }
+    }
+    if !wrong.is_empty() {
+        return Ok(Err(format!(
+            "after the default commands the hand reads values other than the profile's defaults ({}), so its \
+             readings are not trusted to be saved back",
+            wrong.join(", ")
+        )));
+    }
+    Ok(Ok(read_with(c, p, CommandKind::MotorLoad, CommandKind::GlobalLoad)?))
+}
+
+/// The stored parameters' values after the commands of `motor` and `global` kinds (the load
+/// or the default commands).
+fn read_with(c: &mut Hand, p: &Profile, motor: CommandKind, global: CommandKind) -> Result<Saved, ClientError> {
     let mut saved = Saved { motors: Vec::new(), globals: Vec::new() };
-    if let Some(load) = name_of(p, CommandKind::MotorLoad) {
-        c.command(&load)?;
+    let (Some(mload), Some(gload)) = (name_of(p, CommandKind::MotorLoad), name_of(p, CommandKind::GlobalLoad)) else {
+        return Ok(saved);
+    };
+    if let Some(cmd) = name_of(p, motor) {
+        let load = mload;
+        c.command(&cmd)?;
         let names: Vec<&str> = stored(p, Scope::Motor, &load).map(|s| s.name.as_str()).collect();
         // (as many names to a line as fit the hand's longest line)
         let mut chunks: Vec<Vec<&str>> = vec![Vec::new()];
@@ -97,8 +133,9 @@ fn read_with(c: &mut Hand, p: &Profile) -> Result<Saved, ClientError> {
         }
         saved.motors = names.iter().map(|n| n.to_string()).zip(values).collect();
     }
-    if let Some(load) = name_of(p, CommandKind::GlobalLoad) {
-        c.command(&load)?;
+    if let Some(cmd) = name_of(p, global) {
+        let load = gload;
+        c.command(&cmd)?;
         for s in stored(p, Scope::Global, &load) {
             saved.globals.push((s.name.clone(), c.pget(&s.name)?));
         }
@@ -150,7 +187,7 @@ fn restore_with(c: &mut Hand, p: &Profile, saved: &Saved, rate: Option<u32>) -> 
         }
         c.command(&save)?;
     }
-    let again = read_with(c, p)?;
+    let again = read_with(c, p, CommandKind::MotorLoad, CommandKind::GlobalLoad)?;
     let mut differ = Vec::new();
     for ((n, was), (_, now)) in saved.motors.iter().zip(&again.motors) {
         if was != now {
