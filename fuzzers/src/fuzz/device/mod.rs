@@ -807,7 +807,7 @@ const POWER_UP_WAIT: Duration = Duration::from_secs(2);
 /// The most bytes of a power-up banner read to find its prompt (the rest is drained).
 const POWER_UP_BYTES: usize = 4096;
 
-/// The shortest wait for each answer of [`Hand::to_prompt`]'s resynchronisation.
+/// The shortest wait for each answer of [`Hand::back_to_prompt`]'s resynchronisation.
 const RESYNC_WAIT: Duration = Duration::from_millis(200);
 
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
@@ -937,7 +937,7 @@ impl<'o> Hand<'o> {
     /// `value at ^C`, on this link only (issue 37: the candidate that never reproduced on a
     /// fresh connection). A hand that does not come back is left as it is: the next run says
     /// how it answers; a lost link is reopened. Says whether the hand came back.
-    fn to_prompt(&mut self) -> bool {
+    fn back_to_prompt(&mut self) -> bool {
         let Some(link) = self.link.take() else { return false };
         let mut client = gcl_host::client::Hand::new(link, self.opts.profile.clone());
         let timeouts = client.timeouts();
@@ -952,11 +952,11 @@ impl<'o> Hand<'o> {
     }
 
     /// The dead-hand rule after a case met silence: the hand brought back to its prompt
-    /// first ([`Hand::to_prompt`]). A hand that waits for the rest of a RealTime block (its
+    /// first ([`Hand::back_to_prompt`]). A hand that waits for the rest of a RealTime block (its
     /// control block is longer than the model's) takes the probe's ^C and CR as data: it is
     /// not dead, and it was said to be (`lcv-ignored` over exec ended its campaigns so).
     fn dead(&mut self) -> Result<Option<String>, FuzzError> {
-        let _ = self.to_prompt();
+        let _ = self.back_to_prompt();
         let p = self.opts.profile.clone();
         Ok(dead_hand(self.link()?.as_mut(), &p))
     }
@@ -981,7 +981,7 @@ impl<'o> Hand<'o> {
         let quick_quiet = self.quick_quiet();
         // (the resynchronisation ends in a quiet line: the replay's drain need not wait one out
         // again)
-        if outside && self.dirty && self.to_prompt() {
+        if outside && self.dirty && self.back_to_prompt() {
             ro.drain_quiet = quick_quiet;
         }
         if self.link.is_none() {

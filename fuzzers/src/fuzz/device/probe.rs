@@ -208,7 +208,7 @@ mod tests {
         let mut opts = FuzzOptions::new(Target::Sim { profile: None }, p);
         opts.open.faults = vec![fault];
         let built = build_for(&opts, actions, "t", "t").unwrap();
-        let mut hand = Hand { opts: &opts, link: None, new: true, dirty: false };
+        let mut hand = Hand::new(&opts);
         let out = hand.run(&built.transcript, true).unwrap();
         let sig = signature(&opts.profile, &built, &out, true).expect("the case fails");
         let named = named(&opts, &mut hand, actions, &built, &out, &sig).unwrap();
