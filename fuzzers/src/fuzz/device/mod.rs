@@ -798,6 +798,8 @@ struct Hand<'o> {
     /// Hands started ahead, not yet used, the oldest first: the fresh connections of a
     /// finding's confirmations over `exec:` (see [`Hand::open_ahead`]).
     ahead: std::collections::VecDeque<Box<dyn Link>>,
+    /// Whether [`Hand::back_to_prompt`] failed on this link (it is not tried again there).
+    unsynced: bool,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
@@ -807,6 +809,14 @@ const POWER_UP_WAIT: Duration = Duration::from_secs(2);
 /// The most bytes of a power-up banner read to find its prompt (the rest is drained).
 const POWER_UP_BYTES: usize = 4096;
 
+/// ^C sent at most by [`Hand::back_to_prompt`]: more than the data bytes of the longest
+/// control block (4 motors × LCV, LCPG and a 2-byte LCT), as the host client's resync.
+const RESYNC_ATTEMPTS: usize = 18;
+
+/// The quiet that ends [`Hand::back_to_prompt`] once a prompt came (prompts of earlier ^C may
+/// still be on their way).
+const RESYNC_QUIET: Duration = Duration::from_millis(50);
+
 /// The shortest wait for each answer of [`Hand::back_to_prompt`]'s resynchronisation.
 const RESYNC_WAIT: Duration = Duration::from_millis(200);
 
@@ -815,13 +825,14 @@ const TRAILING: Duration = Duration::from_millis(50);
 
 impl<'o> Hand<'o> {
     fn new(opts: &'o FuzzOptions) -> Hand<'o> {
-        Hand { opts, link: None, new: true, dirty: false, ahead: Default::default() }
+        Hand { opts, link: None, new: true, dirty: false, ahead: Default::default(), unsynced: false }
     }
 
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
             self.new = true;
+            self.unsynced = false;
             self.link = Some(match self.ahead.pop_front() {
                 Some(l) => l,
                 None => gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?,
@@ -929,26 +940,54 @@ impl<'o> Hand<'o> {
     }
 
     /// After a failed run on a kept link to a hand outside this process: brings the hand back
-    /// to its prompt before the next run (the host client's resynchronisation: a CR, then ^C
-    /// one at a time until a prompt comes back). A run that failed stopped sending mid-case,
-    /// and may have left the hand in the middle of a RealTime block (a hand whose control block
-    /// is longer than the model's waits for more data): there a ^C is data, so the next
-    /// case's first ^C completed the block and was answered `*`, and that case failed as
-    /// `value at ^C`, on this link only (issue 37: the candidate that never reproduced on a
-    /// fresh connection). A hand that does not come back is left as it is: the next run says
-    /// how it answers; a lost link is reopened. Says whether the hand came back.
+    /// to its prompt before the next run: ^C, one at a time, until an answer holds a prompt
+    /// (as the liveness probe, any prompt-like answer: a hand with another line ending is back
+    /// too), then the line's quiet. A run that failed stopped sending mid-case, and may have
+    /// left the hand in the middle of a RealTime block (a hand whose control block is longer
+    /// than the model's waits for more data): there a ^C is data, so the next case's first ^C
+    /// completed the block and was answered `*`, and that case failed as `value at ^C`, on this
+    /// link only (issue 37: the candidate that never reproduced on a fresh connection). A hand
+    /// that does not come back within [`RESYNC_ATTEMPTS`] is left as it is, and not tried again
+    /// on this link (a hand that never says a prompt would pay the attempts after every failed
+    /// case): the next run says how it answers; a lost link is reopened. Says whether the hand
+    /// came back.
     fn back_to_prompt(&mut self) -> bool {
-        let Some(link) = self.link.take() else { return false };
-        let mut client = gcl_host::client::Hand::new(link, self.opts.profile.clone());
-        let timeouts = client.timeouts();
-        client.set_timeouts(gcl_host::client::Timeouts { sync: self.line_wait().max(RESYNC_WAIT), ..timeouts });
-        let back = client.resync();
-        if let Ok(())
-        | Err(gcl_host::client::ClientError::Timeout { .. } | gcl_host::client::ClientError::Violation { .. }) = back
-        {
-            self.link = Some(client.into_link());
+        if self.unsynced {
+            return false;
         }
-        back.is_ok()
+        let wait = self.line_wait().max(RESYNC_WAIT);
+        let p = self.opts.profile.clone();
+        let prompt = p.framing.prompt.trim_end().as_bytes().to_vec();
+        let Some(link) = self.link.as_mut() else { return false };
+        let mut got = Vec::new();
+        for _ in 0..RESYNC_ATTEMPTS {
+            if link.send(&[p.framing.abort]).is_err() {
+                self.link = None;
+                return false;
+            }
+            got.clear();
+            let until = link.elapsed() + wait;
+            loop {
+                if !prompt.is_empty() && got.windows(prompt.len()).any(|w| w == prompt.as_slice()) {
+                    let _ = crate::replay::discard(link.as_mut(), RESYNC_QUIET, wait);
+                    return true;
+                }
+                let left = until.saturating_sub(link.elapsed());
+                if left.is_zero() || got.len() > POWER_UP_BYTES {
+                    break;
+                }
+                match link.recv(&mut got, left) {
+                    Ok(0) => break,
+                    Ok(_) => {}
+                    Err(_) => {
+                        self.link = None;
+                        return false;
+                    }
+                }
+            }
+        }
+        self.unsynced = true;
+        false
     }
 
     /// The dead-hand rule after a case met silence: the hand brought back to its prompt
