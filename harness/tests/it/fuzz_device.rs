@@ -886,3 +886,115 @@ fn a_failure_resting_on_an_earlier_cases_state_is_reported_with_that_case() {
     assert_eq!(replay(format!("exec:{gcl} sim --stdio --fault fdef-skips-mcv")), Some(1));
     assert_eq!(replay(format!("exec:{gcl} sim --stdio")), Some(0));
 }
+
+/// Issue 37: a run that fails mid-block leaves a hand whose control block is longer than the
+/// model's waiting for the rest of it (`en-ignored`), or one whose block is shorter answering
+/// what follows as blocks (`lcv-ignored`). The campaign brings such a hand back to its prompt
+/// before the next run on the link: the thorough run that judges the failure again, the
+/// dead-hand probe. Before, the next case's first ^C was taken as block data and answered
+/// `*` (a `value at ^C` that never reproduced on a fresh connection, a note, while the bug's
+/// own finding was lost), and the probe's ^C and CR too (a hand said to be dead).
+#[test]
+fn a_hand_left_mid_block_by_a_failed_run_is_brought_back_before_the_next() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    for fault in ["en-ignored", "lcv-ignored"] {
+        let target: Target = format!("exec:{gcl} sim --stdio --fault {fault}").parse().unwrap();
+        let mut o = FuzzOptions::new(target, Profile::builtin("bh8-262").unwrap());
+        o.budget = Budget::Runs(30);
+        o.seed = 1;
+        o.minimize = false;
+        o.max_findings = Some(1);
+        o.allowed.abort_timing = false;
+        let s = run(&o, &|_| {}).unwrap();
+        assert!(s.not_reproduced.is_empty(), "{fault}: {:?}", s.not_reproduced);
+        assert_eq!(s.dead_hand, None, "{fault}");
+        let f = s.findings.first().unwrap_or_else(|| panic!("{fault}: no finding"));
+        assert_eq!(f.signature.command, "RealTime block", "{fault}: {}", f.signature);
+    }
+}
+
+/// Issue 37 item 4: a finding's confirmations over `exec:` start their fresh hands at once,
+/// while the finding is minimized, not one after the other as each replay needs one (a Python
+/// hand behind a pyenv shim took about 0.6 s to start, three times per finding). The hand
+/// logs when each of its processes starts and when it first hears from the campaign: some
+/// process starts before an earlier one has heard anything. One after the other, every
+/// process was first spoken to before the next one started.
+#[test]
+fn a_findings_fresh_hands_over_exec_are_started_ahead() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let hand = dir.path().join("hand.sh");
+    let log = dir.path().join("log");
+    // (each process by its shell's id: hands started at once would race over a counter)
+    std::fs::write(
+        &hand,
+        format!(
+            "echo \"start $$\" >> '{l}'\n\
+             {{ dd bs=1 count=1 2>/dev/null; echo \"heard $$\" >> '{l}'; cat; }} | {gcl} sim --stdio --fault fget-reversed\n",
+            l = log.display()
+        ),
+    )
+    .unwrap();
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &format!("exec:sh {}", hand.display())])
+        .args(["--no", "abort-timing", "--seed", "1", "--runs", "60", "--max-findings", "1", "--no-minimize"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stdout));
+    let log = std::fs::read_to_string(&log).unwrap();
+    // A process starts while another that started before it has not been spoken to.
+    let mut waiting = std::collections::BTreeSet::new();
+    let mut ahead = false;
+    for (what, id) in log.lines().filter_map(|l| l.split_once(' ')) {
+        if what == "start" {
+            ahead |= !waiting.is_empty();
+            waiting.insert(id);
+        } else {
+            waiting.remove(id);
+        }
+    }
+    assert!(ahead, "every hand was spoken to before the next started:\n{log}");
+}
+
+/// Issue 37 item 2: a campaign that writes the EEPROM of a hand outside this process leaves
+/// the values the hand had saved, not the factory defaults its cases save back: it reads them
+/// before the first case and saves them again at the end, and says so. The hand is an `exec:`
+/// sim whose EEPROM is a file, with non-factory values saved in it first.
+#[test]
+fn a_campaign_that_writes_the_eeprom_leaves_the_values_the_hand_had_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let eeprom = dir.path().join("eeprom.json");
+    let ask = |lines: &str| {
+        let mut sim = Command::new(gcl)
+            .args(["sim", "--stdio", "--eeprom", eeprom.to_str().unwrap()])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        sim.stdin.take().unwrap().write_all(lines.as_bytes()).unwrap();
+        String::from_utf8_lossy(&sim.wait_with_output().unwrap().stdout).into_owned()
+    };
+    ask("FSET MCV 100\r2FSET MOV 70\rFSAVE\rPSET LFT 1\rPSAVE\r");
+    let saved = |text: String| {
+        let lines: Vec<&str> = text.split("\n\r").collect();
+        let after = |cmd: &str| lines.iter().position(|l| l.ends_with(cmd)).and_then(|i| lines.get(i + 1)).copied();
+        (after("FGET MCV MOV").map(str::to_string), text.contains("PGET LFT\n\r1\n\r"))
+    };
+    let before = saved(ask("FLOAD\rFGET MCV MOV\rPLOAD\rPGET LFT\r"));
+    assert_eq!(before.0.as_deref(), Some("100 100 100 100"), "{before:?}");
+    let rep = dir.path().join("r");
+    let out = Command::new(gcl)
+        .args(["fuzz", "device", "--target", &format!("exec:{gcl} sim --stdio --eeprom {}", eeprom.display())])
+        .args(["--no", "abort-timing", "--seed", "1", "--runs", "40", "--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap()).unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(r.eeprom_writes > 0, "no EEPROM writes to leave anything: {stdout}");
+    let text = ask("FLOAD\rFGET MCV MOV\rPLOAD\rPGET LFT\r");
+    assert_eq!(saved(text.clone()), before, "{text}");
+    let line = r.hand_after.iter().find(|l| l.starts_with("EEPROM")).unwrap();
+    assert!(line.contains("saved back and read back as found"), "{line}");
+}

@@ -129,6 +129,7 @@ pub use gcl_conformance::actions::case;
 pub mod coverage;
 mod probe;
 pub mod report;
+mod saved;
 mod variant;
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -797,11 +798,30 @@ struct Hand<'o> {
     /// The trailing wait of a thorough run: [`TRAILING`], or [`SURE_TRAILING`] while a case is
     /// judged again or confirmed.
     trailing: Duration,
+    /// Hands started ahead, not yet used, the oldest first: the fresh connections of a
+    /// finding's confirmations over `exec:` (see [`Hand::open_ahead`]).
+    ahead: std::collections::VecDeque<Box<dyn Link>>,
+    /// Whether [`Hand::back_to_prompt`] failed on this link (it is not tried again there).
+    unsynced: bool,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
 /// (a power-up banner) before the first case; a hand that says nothing costs this once.
 const POWER_UP_WAIT: Duration = Duration::from_secs(2);
+
+/// The most bytes of a power-up banner read to find its prompt (the rest is drained).
+const POWER_UP_BYTES: usize = 4096;
+
+/// ^C sent at most by [`Hand::back_to_prompt`]: more than the data bytes of the longest
+/// control block (4 motors × LCV, LCPG and a 2-byte LCT), as the host client's resync.
+const RESYNC_ATTEMPTS: usize = 18;
+
+/// The quiet that ends [`Hand::back_to_prompt`] once a prompt came (prompts of earlier ^C may
+/// still be on their way).
+const RESYNC_QUIET: Duration = Duration::from_millis(50);
+
+/// The shortest wait for each answer of [`Hand::back_to_prompt`]'s resynchronisation.
+const RESYNC_WAIT: Duration = Duration::from_millis(200);
 
 /// The trailing wait of a thorough run: bytes a hand sends after a case's last answer.
 const TRAILING: Duration = Duration::from_millis(50);
@@ -815,7 +835,15 @@ const SURE_TRAILING: Duration = Duration::from_millis(500);
 
 impl<'o> Hand<'o> {
     fn new(opts: &'o FuzzOptions) -> Self {
-        Hand { opts, link: None, new: true, dirty: false, trailing: TRAILING }
+        Hand {
+            opts,
+            link: None,
+            new: true,
+            dirty: false,
+            trailing: TRAILING,
+            ahead: Default::default(),
+            unsynced: false,
+        }
     }
 
     /// Runs `f` with the longer trailing wait of [`SURE_TRAILING`] on a hand outside this
@@ -827,13 +855,36 @@ impl<'o> Hand<'o> {
         self.trailing = was;
         r
     }
+
     fn link(&mut self) -> Result<&mut Box<dyn Link>, FuzzError> {
         let fresh = matches!(self.opts.target, Target::Sim { .. });
         if fresh || self.link.is_none() {
             self.new = true;
-            self.link = Some(gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?);
+            self.unsynced = false;
+            self.link = Some(match self.ahead.pop_front() {
+                Some(l) => l,
+                None => gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?,
+            });
         }
         self.link.as_mut().ok_or_else(|| FuzzError::Vanished("no link".into()))
+    }
+
+    /// On an `exec:` target, starts hands until `n` wait unused, for the next fresh
+    /// connections: their start-up (a process, an interpreter, a power-up banner) runs at
+    /// once, not one after the other. A Python hand behind a pyenv shim took about 0.6 s to
+    /// start, three times per finding (issue 37 item 4). A serial port or a TCP server takes one
+    /// connection at a time: nothing is started ahead there, nor for a hand in this process.
+    fn open_ahead(&mut self, n: u32) {
+        if !matches!(self.opts.target, Target::Exec { .. }) {
+            return;
+        }
+        while self.ahead.len() < n as usize {
+            match gcl_host::target::open(&self.opts.target, &self.opts.open) {
+                Ok(l) => self.ahead.push_back(l),
+                // (the next connection opened in turn says what failed)
+                Err(_) => return,
+            }
+        }
     }
 
     /// The quiet that ends a quick drain: four byte-times on a serial line (at least 1 ms),
@@ -916,6 +967,67 @@ impl<'o> Hand<'o> {
         Ok(())
     }
 
+    /// After a failed run on a kept link to a hand outside this process: brings the hand back
+    /// to its prompt before the next run: ^C, one at a time, until an answer holds a prompt
+    /// (as the liveness probe, any prompt-like answer: a hand with another line ending is back
+    /// too), then the line's quiet. A run that failed stopped sending mid-case, and may have
+    /// left the hand in the middle of a RealTime block (a hand whose control block is longer
+    /// than the model's waits for more data): there a ^C is data, so the next case's first ^C
+    /// completed the block and was answered `*`, and that case failed as `value at ^C`, on this
+    /// link only (issue 37: the candidate that never reproduced on a fresh connection). A hand
+    /// that does not come back within [`RESYNC_ATTEMPTS`] is left as it is, and not tried again
+    /// on this link (a hand that never says a prompt would pay the attempts after every failed
+    /// case): the next run says how it answers; a lost link is reopened. Says whether the hand
+    /// came back.
+    fn back_to_prompt(&mut self) -> bool {
+        if self.unsynced {
+            return false;
+        }
+        let wait = self.line_wait().max(RESYNC_WAIT);
+        let p = self.opts.profile.clone();
+        let prompt = p.framing.prompt.trim_end().as_bytes().to_vec();
+        let Some(link) = self.link.as_mut() else { return false };
+        let mut got = Vec::new();
+        for _ in 0..RESYNC_ATTEMPTS {
+            if link.send(&[p.framing.abort]).is_err() {
+                self.link = None;
+                return false;
+            }
+            got.clear();
+            let until = link.elapsed() + wait;
+            loop {
+                if !prompt.is_empty() && got.windows(prompt.len()).any(|w| w == prompt.as_slice()) {
+                    let _ = crate::replay::discard(link.as_mut(), RESYNC_QUIET, wait);
+                    return true;
+                }
+                let left = until.saturating_sub(link.elapsed());
+                if left.is_zero() || got.len() > POWER_UP_BYTES {
+                    break;
+                }
+                match link.recv(&mut got, left) {
+                    Ok(0) => break,
+                    Ok(_) => {}
+                    Err(_) => {
+                        self.link = None;
+                        return false;
+                    }
+                }
+            }
+        }
+        self.unsynced = true;
+        false
+    }
+
+    /// The dead-hand rule after a case met silence: the hand brought back to its prompt
+    /// first ([`Hand::back_to_prompt`]). A hand that waits for the rest of a RealTime block (its
+    /// control block is longer than the model's) takes the probe's ^C and CR as data: it is
+    /// not dead, and it was said to be (`lcv-ignored` over exec ended its campaigns so).
+    fn dead(&mut self) -> Result<Option<String>, FuzzError> {
+        let _ = self.back_to_prompt();
+        let p = self.opts.profile.clone();
+        Ok(dead_hand(self.link()?.as_mut(), &p))
+    }
+
     /// One replay of a transcript (see [`Hand::run`]).
     fn replay(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let p = self.opts.profile.clone();
@@ -933,6 +1045,12 @@ impl<'o> Hand<'o> {
             }
             ro.silent_wait = policy.silent_wait;
         }
+        let quick_quiet = self.quick_quiet();
+        // (the resynchronisation ends in a quiet line: the replay's drain need not wait one out
+        // again)
+        if outside && self.dirty && self.back_to_prompt() {
+            ro.drain_quiet = quick_quiet;
+        }
         if self.link.is_none() {
             ro.drain_quiet = crate::suite::replay_options().drain_quiet.max(Duration::from_millis(300));
         }
@@ -948,9 +1066,26 @@ impl<'o> Hand<'o> {
             // A hand just started (a child process) may print its power-up banner later than
             // the drain's quiet: under load a Python hand's came after 300 ms, and the first
             // case met it as the answer to its ^C. Its first byte is waited for, a while.
+            // A banner that ends in the prompt has ended: only what follows at once is
+            // drained; otherwise the line must fall quiet. The replay's own drain then only
+            // takes what followed (it waited out the same quiet again: with the quiet after
+            // the prompt, 600 ms per fresh connection, three per finding).
             let mut first = Vec::new();
             if link.recv(&mut first, POWER_UP_WAIT).is_ok_and(|n| n > 0) {
-                let _ = crate::replay::discard(link.as_mut(), ro.drain_quiet, ro.drain_limit);
+                let prompt = [p.framing.line_ending.as_bytes(), p.framing.prompt.as_bytes()].concat();
+                let until = link.elapsed() + ro.drain_limit;
+                let mut quiet = ro.drain_quiet;
+                while first.len() < POWER_UP_BYTES && link.elapsed() < until {
+                    if first.ends_with(&prompt) {
+                        quiet = quick_quiet;
+                        break;
+                    }
+                    if !link.recv(&mut first, ro.drain_quiet).is_ok_and(|n| n > 0) {
+                        break;
+                    }
+                }
+                let _ = crate::replay::discard(link.as_mut(), quiet, ro.drain_limit);
+                ro.drain_quiet = quick_quiet;
             }
         }
         let mut out = replay(t, link.as_mut(), &ro);
@@ -1698,6 +1833,7 @@ pub fn judge_once(
 pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Result<FuzzSummary, FuzzError> {
     refuse_what_leaves_no_case(opts)?;
     let mut identity = None;
+    let mut saved_before = None;
     if opts.wide() {
         // As `gcl conform`: a hand that answers nothing is an infrastructure problem (exit 2),
         // not a campaign of "silence" findings.
@@ -1711,6 +1847,10 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         identity = crate::preflight::run(l.as_mut(), &opts.profile, &policy).ok().and_then(|p| p.identity);
         if let Some(who) = &identity {
             progress(Progress::Note(who));
+        }
+        // What the hand has saved, before a case may save over it (see [`saved`]).
+        if opts.allowed.eeprom && opts.write_budget != Some(0) {
+            saved_before = Some(saved::read(l, &opts.profile).1);
         }
     }
     check_real_time(opts)?;
@@ -1777,7 +1917,7 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
         return Err(e);
     }
     name_status_commands(&mut sh.findings, &sh.status_at);
-    let hand_after = hand_after(opts, writes.load(Ordering::SeqCst));
+    let hand_after = hand_after(opts, writes.load(Ordering::SeqCst), saved_before.as_ref());
     Ok(FuzzSummary {
         runs: runs.load(Ordering::SeqCst),
         dropped: sh.dropped,
@@ -1809,11 +1949,38 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
 /// What a campaign left on a hand outside this process as it found it, checked where it can
 /// be: on a serial line, whether the hand still answers at the rate the campaign started at
 /// (no case changes it, [`Allowed::keep_rate`]); and what became of the EEPROM.
-fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
+fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<saved::Saved, String>>) -> Vec<String> {
     if !opts.wide() {
         return Vec::new();
     }
     let mut said = Vec::new();
+    // (the saved values first: the line is checked after the restore's own sets)
+    let eeprom = match saved {
+        _ if eeprom_writes == 0 => "EEPROM: no writes; the saved parameters are as they were found".to_string(),
+        Some(Ok(s)) => {
+            let rate = match &opts.target {
+                Target::Serial { baud, .. } => Some(*baud),
+                _ => None,
+            };
+            let done = match gcl_host::target::open(&opts.target, &opts.open) {
+                Ok(l) => saved::restore(l, &opts.profile, s, rate).1,
+                Err(e) => {
+                    format!("the hand could not be reached to save back the values saved before the campaign: {e}")
+                }
+            };
+            format!("EEPROM: {eeprom_writes} writes; {done}")
+        }
+        Some(Err(why)) => format!(
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back, and \
+             the values saved before the campaign could not be read ({why}): a hand whose saved values were not \
+             the factory defaults now has the factory defaults"
+        ),
+        None => format!(
+            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back \
+             (the values saved before the campaign were not read, so a hand whose saved values were not the \
+             factory defaults now has the factory defaults)"
+        ),
+    };
     if let Target::Serial { baud, .. } = &opts.target {
         said.push(match gcl_host::target::open(&opts.target, &opts.open) {
             Ok(mut l) => match dead_hand(l.as_mut(), &opts.profile) {
@@ -1823,15 +1990,7 @@ fn hand_after(opts: &FuzzOptions, eeprom_writes: u64) -> Vec<String> {
             Err(e) => format!("line: the port could not be opened again at {baud} baud to check the hand: {e}"),
         });
     }
-    said.push(if eeprom_writes == 0 {
-        "EEPROM: no writes; the saved parameters are as they were found".to_string()
-    } else {
-        format!(
-            "EEPROM: {eeprom_writes} writes; every case that saved parameters saved the factory defaults back \
-             (the values saved before the campaign were not read, so a hand whose saved values were not the \
-             factory defaults now has the factory defaults)"
-        )
-    });
+    said.push(eeprom);
     said
 }
 
@@ -2036,7 +2195,7 @@ fn worker(
         // dead hand cannot minimize it.
         if opts.wide()
             && matches!(&outcome, ReplayOutcome::Timeout(to) if to.offset == 0)
-            && let Some(why) = dead_hand(hand.link()?.as_mut(), &p)
+            && let Some(why) = hand.dead()?
         {
             lock().dead_hand.get_or_insert(format!(
                 "the hand stopped answering at run {run_no} (the case met silence, then {why})"
@@ -2111,6 +2270,8 @@ fn report_finding(
     let Met { actions, built, run: run_no, before } = met;
     let found_after = start.elapsed();
     let t0 = Instant::now();
+    // (the confirmations' hands start while the finding is minimized)
+    hand.open_ahead(confirmations(&opts.target));
     let (mut min_actions, min_case) = if opts.minimize {
         minimize(opts, hand, actions, built, &sig, minimizing_ends(opts.budget, start))?
     } else {
@@ -2276,6 +2437,7 @@ fn reproductions(
 ) -> Result<u32, FuzzError> {
     let known: Vec<String> = [sig.explanation.clone()].into_iter().filter(|e| !e.is_empty()).collect();
     let mut again = 0;
+    hand.open_ahead(of);
     for _ in 0..of {
         hand.link = None;
         let out = hand.surely(|h| h.run(&case.transcript, true))?;
