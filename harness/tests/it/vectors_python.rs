@@ -103,7 +103,8 @@ fn the_python_runner_passes_the_seed_suite_against_the_simulator() {
     assert!(readme.contains(DOCUMENTED_REPLAY), "vectors/README.md no longer gives `{DOCUMENTED_REPLAY}`");
     // The command as written, by a shell whose `python3` and `gcl` are the tests'.
     let bin = tempfile::tempdir().unwrap();
-    std::os::unix::fs::symlink(&py, bin.path().join("python3")).unwrap();
+    let word = "python3"; // the documented command's word for deps::python_with's interpreter
+    std::os::unix::fs::symlink(&py, bin.path().join(word)).unwrap();
     std::os::unix::fs::symlink(GCL, bin.path().join("gcl")).unwrap();
     let script = format!("PATH='{}':\"$PATH\"; {DOCUMENTED_REPLAY}", bin.path().display());
     let r = run(&python_dir(), "sh", &["-c", &script], Duration::from_secs(900));
