@@ -99,6 +99,18 @@ fn campaign(opts: &FuzzOptions) -> Campaign {
 
 /// SysV segments this process made that still exist (`/proc/sysvipc/shm`'s `cpid`, the fifth
 /// column).
+/// Runs a `gcl fuzz host` campaign to its end: it exits 0 or 1 (findings), and no
+/// shared-memory segment it made outlives it (counted by its pid: tests beside this one in the
+/// process make maps of their own).
+fn run_campaign(cmd: &mut Command) -> std::process::Output {
+    let child = cmd.stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let pid = child.id();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(segments_made_by(pid), 0, "no shared-memory segment outlives the campaign");
+    out
+}
+
 fn segments_made_by(pid: u32) -> usize {
     let pid = pid.to_string();
     std::fs::read_to_string("/proc/sysvipc/shm")
@@ -210,8 +222,8 @@ fn the_console_the_report_page_and_fuzz_json_show_the_edges_reached() {
     let dir = tempfile::tempdir().unwrap();
     let Some(host) = afl_host(dir.path()) else { return };
     let gcl = |report: &str, extra: &[&str]| {
-        let child = Command::new(env!("CARGO_BIN_EXE_gcl"))
-            .args(["fuzz", "host", "--profile", "seed", "--runs", "20", "--jobs", "2", "--timeout-hang", "3s"])
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
+        cmd.args(["fuzz", "host", "--profile", "seed", "--runs", "20", "--jobs", "2", "--timeout-hang", "3s"])
             .args(["--ops", OPS, "--no-minimize"])
             .args(extra)
             .arg("--report")
@@ -219,16 +231,8 @@ fn the_console_the_report_page_and_fuzz_json_show_the_edges_reached() {
             .arg("--out")
             .arg(dir.path().join(format!("{report}-bundles")))
             .arg("--")
-            .args(&host)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let pid = child.id();
-        let out = child.wait_with_output().unwrap();
-        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
-        // (the maps are the campaign's own: a test beside this one in the process makes others)
-        assert_eq!(segments_made_by(pid), 0, "no shared-memory segment outlives the campaign");
+            .args(&host);
+        let out = run_campaign(&mut cmd);
         let html = std::fs::read_to_string(dir.path().join(report).join("report.html")).unwrap();
         let json: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap();
@@ -265,8 +269,8 @@ fn a_corpus_carries_the_edges_and_the_deep_bug_to_the_next_campaign() {
     let Some(host) = afl_host(dir.path()) else { return };
     let corpus = dir.path().join("corpus");
     let gcl = |report: &str, runs: u64| -> serde_json::Value {
-        let child = Command::new(env!("CARGO_BIN_EXE_gcl"))
-            .args(["fuzz", "host", "--seed", "2", "--jobs", "2", "--timeout-hang", "3s", "--no-minimize"])
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
+        cmd.args(["fuzz", "host", "--seed", "2", "--jobs", "2", "--timeout-hang", "3s", "--no-minimize"])
             .args(["--ops", OPS, "--runs", &runs.to_string(), "--corpus"])
             .arg(&corpus)
             .arg("--report")
@@ -274,16 +278,8 @@ fn a_corpus_carries_the_edges_and_the_deep_bug_to_the_next_campaign() {
             .arg("--out")
             .arg(dir.path().join(format!("{report}-bundles")))
             .arg("--")
-            .args(&host)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let pid = child.id();
-        let out = child.wait_with_output().unwrap();
-        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
-        // (the maps are the campaign's own: a test beside this one in the process makes others)
-        assert_eq!(segments_made_by(pid), 0, "no shared-memory segment outlives the campaign");
+            .args(&host);
+        let out = run_campaign(&mut cmd);
         serde_json::from_slice(&std::fs::read(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap()
     };
     let crash = |j: &serde_json::Value| {
