@@ -279,7 +279,7 @@ fn a_corpus_carries_the_edges_and_the_deep_bug_to_the_next_campaign() {
             .arg(dir.path().join(format!("{report}-bundles")))
             .arg("--")
             .args(&host);
-        let out = run_campaign(&mut cmd);
+        run_campaign(&mut cmd);
         serde_json::from_slice(&std::fs::read(dir.path().join(report).join("fuzz.json")).unwrap()).unwrap()
     };
     let crash = |j: &serde_json::Value| {
