@@ -17,7 +17,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use gcl_harness::fuzz::host::coverage::{CoverageAccount, CoverageUse, NOT_INSTRUMENTED};
-use gcl_harness::fuzz::host::{Campaign, FindingKind, FuzzOptions, HostRun, Slots, Transport, Weights, fuzz};
+use gcl_harness::fuzz::host::{
+    Campaign, Event, FindingKind, FuzzOptions, HostRun, Slots, Transport, Weights, fuzz, fuzz_seeded, judge,
+};
+use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};
 
 fn hosts() -> PathBuf {
@@ -30,9 +33,16 @@ const OPS: &str = "err-bits,garbage,overlong-line,crlf";
 
 /// `hosts/c_deep_parser.c` built into `dir` with `compiler` (`afl-cc` or `cc`).
 fn build(compiler: &str, dir: &Path) -> Option<String> {
-    let out = dir.join(format!("deep-{}", compiler.replace('-', "_")));
+    build_with(compiler, dir, &[])
+}
+
+/// `hosts/c_deep_parser.c` built into `dir` with `compiler` and `flags` (`-DSHALLOW_TOO`).
+fn build_with(compiler: &str, dir: &Path, flags: &[&str]) -> Option<String> {
+    let out = dir.join(format!("deep-{}{}", compiler.replace('-', "_"), flags.concat().replace('-', "_")));
     let o = Command::new(compiler)
-        .args(["-O0", "-g", "-o"])
+        .args(["-O0", "-g"])
+        .args(flags)
+        .arg("-o")
         .arg(&out)
         .arg(hosts().join("c_deep_parser.c"))
         .env("AFL_QUIET", "1")
@@ -295,4 +305,57 @@ fn a_corpus_carries_the_edges_and_the_deep_bug_to_the_next_campaign() {
     let edges = |j: &serde_json::Value| j["coverage"]["edges"].as_u64().unwrap();
     assert!(edges(&second) >= edges(&first), "{} edges, then {}", edges(&first), edges(&second));
     assert!(crash(&second).is_some(), "the corpus's crashing schedule runs again: {second:#}");
+}
+
+/// The deep hosts' bug, answer by answer (answer 1 is the prompt after the host's ^C, then one
+/// per `1FGET P`): `ERR 32768`, a vertical tab, an 81-byte line, `ERR 2147483648`.
+fn deep_schedule() -> Schedule {
+    let at = |answer: u32, op: Operator, arg: u32| Planned { answer, op, arg };
+    Schedule {
+        planned: vec![
+            at(2, Operator::ErrBits, 0),
+            at(3, Operator::Garbage, 0),
+            at(4, Operator::OverlongLine, 0),
+            at(5, Operator::ErrBits, 2),
+        ],
+    }
+}
+
+/// Minimization keeps a finding's coverage: the edges its run reached first in the campaign.
+/// The deep host built with `-DSHALLOW_TOO` crashes with the same signal by a shallower way too
+/// (err-bits then overlong-line, the deep schedule without its garbage), so minimizing by the
+/// signature alone would trade the deep bug for that one (it did: `err-bits@2
+/// overlong-line@4`). Given the deep schedule as a corpus, the campaign finds the deep crash
+/// right after its systematic pass (one misbehaviour per run: no crash), and its minimized
+/// schedule still takes the host to `retry_slot`: every step is needed for that, so it stays
+/// whole.
+#[test]
+fn minimization_keeps_the_edges_a_finding_reached_first_not_a_shallower_crash_of_the_same_signal() {
+    let dir = tempfile::tempdir().unwrap();
+    if deps::afl_cc().is_none() {
+        return;
+    }
+    let Some(bin) = build_with("afl-cc", dir.path(), &["-DSHALLOW_TOO"]) else { return };
+    let host = vec![bin, "{port}".to_string()];
+    let mut opts = options(host, CoverageUse::Guide, 1, 300, 1);
+    opts.minimize = true;
+    // The shallower schedule crashes with the same signature (or the test could not fail).
+    let shallow = Schedule { planned: vec![deep_schedule().planned[0], deep_schedule().planned[2]] };
+    let r = Slots::new(1).run(&opts.run, &shallow, &AtomicBool::new(false)).expect("a run");
+    let shallow_sig: Vec<String> = judge(&r, &[0]).into_iter().map(|v| v.signature).collect();
+    assert!(shallow_sig.iter().any(|s| s == "crash: SIGSEGV"), "{shallow_sig:?}");
+    let stop = AtomicBool::new(false);
+    let on_event = |e: Event| {
+        if let Event::Found(f) = e
+            && f.verdict.kind == FindingKind::Crash
+        {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    };
+    let c = fuzz_seeded(&opts, vec![deep_schedule()], &stop, &on_event).expect("campaign");
+    let crash = c.findings.iter().find(|f| f.verdict.kind == FindingKind::Crash).expect("the deep crash");
+    assert_eq!(crash.original, deep_schedule(), "found by the corpus's schedule, after the pass");
+    assert!(!crash.first_edges.is_empty(), "its run reached edges no run before it had");
+    assert!(c.minimize_runs >= 4, "each misbehaviour was tried without: {} runs", c.minimize_runs);
+    assert_eq!(crash.schedule, deep_schedule(), "minimized, it still reaches the deep bug's code");
 }
