@@ -359,3 +359,91 @@ fn minimization_keeps_the_edges_a_finding_reached_first_not_a_shallower_crash_of
     assert!(c.minimize_runs >= 4, "each misbehaviour was tried without: {} runs", c.minimize_runs);
     assert_eq!(crash.schedule, deep_schedule(), "minimized, it still reaches the deep bug's code");
 }
+
+/// The schedules of a corpus folder (not its subfolders), each with its misbehaviours and the
+/// edges its file holds.
+fn corpus_files(dir: &Path) -> Vec<(String, usize, Vec<u64>)> {
+    let Ok(rd) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut out: Vec<(String, usize, Vec<u64>)> = rd
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .map(|p| {
+            let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+            let edges =
+                j["edges"].as_array().map(|a| a.iter().map(|e| e.as_u64().unwrap()).collect()).unwrap_or_default();
+            let planned = j["planned"].as_array().unwrap().len();
+            (p.file_name().unwrap().to_string_lossy().to_string(), planned, edges)
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Shards share a corpus: two shard processes of one campaign, started together on one folder,
+/// each write the schedules that reached edges new to it (with those edges) to
+/// `DIR/incoming`; `gcl fuzz merge-corpus DIR` folds them into the folder, keeping only
+/// schedules that add edges and every edge they reached; and the next campaign's shards each
+/// run their share of that base after their pass (its provenance names the base, so shards of
+/// two bases do not merge).
+#[test]
+fn shards_write_a_shared_corpus_that_a_merge_keeps_to_the_schedules_adding_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(host) = afl_host(dir.path()) else { return };
+    let corpus = dir.path().join("corpus");
+    let shard = |round: &str, k: u32| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
+        cmd.args(["fuzz", "host", "--profile", "seed", "--seed", "1", "--runs", "60", "--jobs", "1"])
+            .args(["--timeout-hang", "3s", "--no-minimize", "--ops", OPS, "--shard", &format!("{k}/2"), "--corpus"])
+            .arg(&corpus)
+            .arg("--report")
+            .arg(dir.path().join(format!("{round}-{k}")))
+            .arg("--out")
+            .arg(dir.path().join(format!("{round}-{k}-bundles")))
+            .arg("--")
+            .args(&host)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        cmd.spawn().unwrap()
+    };
+    let fuzz_json = |name: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.path().join(name).join("fuzz.json")).unwrap()).unwrap()
+    };
+    // Two processes at once, on one folder.
+    let (a, b) = (shard("first", 1), shard("first", 2));
+    for child in [a, b] {
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let incoming = corpus_files(&corpus.join("incoming"));
+    assert!(corpus_files(&corpus).is_empty(), "no shard writes the base");
+    for k in 1..=2 {
+        let j = fuzz_json(&format!("first-{k}"));
+        assert!(j["coverage"]["kept"].as_u64().unwrap() >= 1, "shard {k} kept schedules for new edges: {j:#}");
+    }
+    assert!(incoming.len() >= 2 && incoming.iter().all(|(_, _, e)| !e.is_empty()), "{incoming:?}");
+    let all_edges: BTreeSet<u64> = incoming.iter().flat_map(|(_, _, e)| e.iter().copied()).collect();
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl")).args(["fuzz", "merge-corpus"]).arg(&corpus).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let base = corpus_files(&corpus);
+    assert!(!corpus.join("incoming").exists(), "the incoming schedules were folded in");
+    assert!(!base.is_empty() && base.len() < incoming.len(), "{} of {} kept", base.len(), incoming.len());
+    let kept_edges: BTreeSet<u64> = base.iter().flat_map(|(_, _, e)| e.iter().copied()).collect();
+    assert_eq!(kept_edges, all_edges, "every edge the shards reached is reached by a kept schedule");
+    // Each kept schedule is, for an edge it reached, one of the smallest that reached it.
+    for (name, planned, edges) in &base {
+        let smallest_for = |e: &u64| !incoming.iter().any(|(_, p, es)| p < planned && es.contains(e));
+        assert!(edges.iter().any(smallest_for), "{name} ({planned} misbehaviours) is the smallest for no edge");
+    }
+    // The next campaign's shards run the base after their pass, and say which base they ran.
+    let (a, b) = (shard("second", 1), shard("second", 2));
+    for child in [a, b] {
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    for k in 1..=2 {
+        let j = fuzz_json(&format!("second-{k}"));
+        assert_eq!(j["seeds"].as_u64(), Some(base.len() as u64), "{j:#}");
+        let named = j["provenance"]["options"]["corpus"].as_str().unwrap_or_default().to_string();
+        assert!(named.starts_with(&format!("{} schedule(s), ", base.len())), "{:#}", j["provenance"]);
+    }
+}

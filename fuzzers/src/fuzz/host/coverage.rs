@@ -387,6 +387,11 @@ impl Coverage {
         }
     }
 
+    /// The edges of corpus entry `k`'s run (none when it read no map).
+    pub fn entry_edges(&self, k: usize) -> &[u32] {
+        self.entries.get(k).map_or(&[], Vec::as_slice)
+    }
+
     /// Whether guidance by coverage is on: some run reached an edge.
     pub fn guiding(&self) -> bool {
         self.account.instrumented

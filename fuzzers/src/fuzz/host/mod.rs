@@ -39,7 +39,8 @@
 //! or sent no byte is found by `unreached` (from `RunResult::port_opened` and the traffic).
 //!
 //! Under `--shard K/N` (`fuzz/shard.rs`) it runs its indices unguided, each schedule the pass's
-//! entry for its index or drawn from the seed and the index (`fresh_schedule`); a shard without run
+//! entry for its index, then a schedule of the `--corpus` base read at its start ([`corpus`]), or
+//! drawn from the seed and the index (`fresh_schedule`); a shard without run
 //! 0 makes one uncounted run 0 for the answer count schedules span and the pass. Each shard's
 //! report
 //! records what makes it part of its campaign (`shard::Provenance`: `--shard`, seed, every option
@@ -958,9 +959,10 @@ pub struct Campaign {
     /// Schedules of an earlier campaign's corpus (`--corpus`) this one was given to run.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub seeds: u64,
-    /// The schedules guidance kept, in the order kept (what `--corpus` saves).
+    /// The schedules guidance kept, in the order kept, each with its run's edges (what
+    /// `--corpus` saves).
     #[serde(skip)]
-    pub kept: Vec<Schedule>,
+    pub kept: Vec<corpus::Entry>,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -1237,7 +1239,11 @@ impl Shared {
         }
         let ms = started.elapsed().as_millis() as u64;
         let first_edges = self.coverage.take(i, r.edges.as_deref(), ms, self.taken + 1, &schedule);
-        let for_edges = opts.run.coverage == coverage::CoverageUse::Guide && !first_edges.is_empty();
+        // A shard that reads the host's coverage keeps what reached new edges for the corpus it
+        // writes (unguided, it does not run them).
+        let keeps_edges = opts.run.coverage == coverage::CoverageUse::Guide
+            || (opts.shard.is_some() && opts.run.coverage != coverage::CoverageUse::Off);
+        let for_edges = keeps_edges && !first_edges.is_empty();
         if (fresh_path || for_edges) && !r.fired.is_empty() {
             self.corpus.push((i, schedule.clone()));
             self.coverage.kept(r.edges.as_deref(), for_edges);
@@ -1761,8 +1767,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
 }
 
 /// [`fuzz`], with the schedules of an earlier campaign's corpus ([`corpus`]) run right after the
-/// systematic pass (a guided campaign's; a shard runs none); the campaign's own kept schedules
-/// are in [`Campaign::kept`].
+/// systematic pass (a shard runs those whose run index is its own); the campaign's own kept
+/// schedules are in [`Campaign::kept`].
 pub fn fuzz_seeded(
     opts: &FuzzOptions,
     seeds: Vec<Schedule>,
@@ -2153,10 +2159,13 @@ impl<'a> Workers<'a> {
         let answers = sh.answers?;
         let k = i as usize - 1;
         let pass = sh.pass.get(k).copied();
+        // After the pass, the corpus's base (every shard reads the same at its start).
+        let seed = k.checked_sub(sh.pass.len()).and_then(|j| sh.seeds.get(j)).cloned();
         drop(sh);
-        Some(match pass {
-            Some(e) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
-            None => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
+        Some(match (pass, seed) {
+            (Some(e), _) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            (None, Some(s)) => (s, None),
+            (None, None) => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
         })
     }
 
@@ -2354,7 +2363,12 @@ impl<'a> Workers<'a> {
             void_runs,
             void,
             seeds: sh.seeds.len() as u64,
-            kept: sh.corpus.iter().map(|(_, s)| s.clone()).collect(),
+            kept: sh
+                .corpus
+                .iter()
+                .enumerate()
+                .map(|(k, (_, s))| corpus::Entry { schedule: s.clone(), edges: sh.coverage.entry_edges(k).to_vec() })
+                .collect(),
             coverage: (self.opts.run.coverage != coverage::CoverageUse::Off)
                 .then(|| sh.coverage.account(self.started.elapsed().as_millis() as u64, runs)),
         })
