@@ -5,8 +5,9 @@
 //! The hosts are `hosts/c_deep_parser.c` and `hosts/py_deep_parser.py`: the same commands
 //! whatever they read, and a bug behind four misbehaviours in order (err-bits, garbage,
 //! overlong-line, then err-bits of a large code). They need `afl-cc` (`apt-get install afl++`)
-//! and python-afl (installed into `target/pyvenv` on first use); without them the tests are
-//! skipped with a line, and fail under CI (`CI=true`).
+//! and python-afl (installed into `target/pyvenv` on first use), or the wheel's `gcl.afl_cov`
+//! (from `python/`); without them the tests are skipped with a line, and fail under CI
+//! (`CI=true`). Also here: minimization keeping a finding's edges, and shards sharing a corpus.
 
 use crate::deps;
 
@@ -138,7 +139,13 @@ fn deep_crash(c: &Campaign) -> Option<u64> {
 
 /// Each schedule that added coverage, run again: the union of their edges is the campaign's.
 fn replayed_edges(command: &[String], cov: &CoverageAccount) -> usize {
-    let run = options(command.to_vec(), CoverageUse::Measure, 0, 1, 1).run;
+    replayed_edges_with(command, &[], cov)
+}
+
+/// [`replayed_edges`] of a host run with `env`.
+fn replayed_edges_with(command: &[String], env: &[(String, String)], cov: &CoverageAccount) -> usize {
+    let mut run = options(command.to_vec(), CoverageUse::Measure, 0, 1, 1).run;
+    run.env = env.to_vec();
     let slots = Slots::new(1);
     let mut union = BTreeSet::new();
     for a in &cov.added_by {
@@ -446,4 +453,29 @@ fn shards_write_a_shared_corpus_that_a_merge_keeps_to_the_schedules_adding_edges
         let named = j["provenance"]["options"]["corpus"].as_str().unwrap_or_default().to_string();
         assert!(named.starts_with(&format!("{} schedule(s), ", base.len())), "{:#}", j["provenance"]);
     }
+}
+
+/// A Python host without python-afl: run through `python -m gcl.afl_cov` (the wheel's module,
+/// here from `python/` on `PYTHONPATH`), it writes the lines it runs to the map of each run.
+/// `import afl` in the host is the module's stand-in, so python-afl is never imported, whether
+/// or not the interpreter has it. Edges rise over the campaign, and the schedules that added
+/// edges replay to nearly the same edges (pyserial's read loop takes lines that depend on how
+/// the bytes arrived, as under python-afl).
+#[test]
+fn a_python_host_without_python_afl_records_its_lines_through_gcl_afl_cov() {
+    let Some(py) = deps::python_with(&["serial"]) else { return };
+    let python_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../python");
+    let host = vec![py, "-m".into(), "gcl.afl_cov".into(), hosts().join("py_deep_parser.py").display().to_string()];
+    let env = vec![("PYTHONPATH".to_string(), python_dir.display().to_string())];
+    let mut opts = options(host.clone(), CoverageUse::Guide, 2, 40, 2);
+    opts.run.env = env.clone();
+    let c = campaign(&opts);
+    let cov = c.coverage.clone().expect("a coverage account");
+    assert!(cov.instrumented && cov.note.is_none(), "{cov:?}");
+    let first = cov.over_time.first().unwrap();
+    assert_eq!(first.runs, 1, "run 0 reaches the host's lines");
+    assert!(cov.over_time.last().unwrap().edges > first.edges, "edges rise past run 0's: {:?}", cov.over_time);
+    assert!(cov.kept >= 1, "{cov:?}");
+    let again = replayed_edges_with(&host, &env, &cov) as u64;
+    assert!(again * 100 >= cov.edges * 97, "{again} edges replayed of {}", cov.edges);
 }
