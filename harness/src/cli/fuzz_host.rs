@@ -164,8 +164,10 @@ showed (echo and values, prompt only, banner, feedback block...), one per run, t
 round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
 line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
 schedule that made the host take a new path, or (--coverage) reach code of the host no run
-before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl writes its
-edges to the AFL map each run is given (__AFL_SHM_ID). Each distinct finding is minimized and written
+before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl, or a Python
+host run as `python -m gcl.afl_cov host.py ARGS`, writes its edges to the AFL map each run is
+given (__AFL_SHM_ID). Each distinct finding is minimized (keeping the edges its run reached
+first, with coverage) and written
 to --out as a bundle; --replay BUNDLE runs it again. Without --runs or --duration a campaign
 lasts 5 minutes.
 
@@ -243,7 +245,8 @@ pub struct Args {
     no_guidance: bool,
     /// The host's code coverage: guide (the default), measure or off. Each run gives the host
     /// an AFL map (__AFL_SHM_ID): a host built with afl-cc/afl-clang-fast, python-afl
-    /// (afl.init()) or cargo-afl writes the edges it reaches there. With guide, a schedule whose
+    /// (afl.init()), `python -m gcl.afl_cov host.py` or cargo-afl writes the edges it reaches
+    /// there. With guide, a schedule whose
     /// run reached a new edge is kept beside those that took a new wire path, and mutated (a
     /// power schedule favours those reaching rare edges); measure reports the edges reached but
     /// guides by wire paths only (the runs of off, to compare). A host that writes no edge gets

@@ -92,7 +92,7 @@ pub const MAP_SIZE_MAX: usize = 1 << 23;
 
 /// What the campaign says of a host that wrote no edge to its map.
 pub const NOT_INSTRUMENTED: &str = "coverage: the host wrote no edge to the AFL map it was given (__AFL_SHM_ID): it \
-is not built with afl-cc/afl-clang-fast, python-afl or cargo-afl; guided by wire paths only";
+is not built with afl-cc/afl-clang-fast, python-afl or cargo-afl, nor run through gcl.afl_cov; guided by wire paths only";
 
 /// A SysV shared-memory map for one run, removed when dropped (and marked for removal from the
 /// start: see the module's notes).
