@@ -478,4 +478,11 @@ fn a_python_host_without_python_afl_records_its_lines_through_gcl_afl_cov() {
     assert!(cov.kept >= 1, "{cov:?}");
     let again = replayed_edges_with(&host, &env, &cov) as u64;
     assert!(again * 100 >= cov.edges * 97, "{again} edges replayed of {}", cov.edges);
+    eprintln!(
+        "{} edges over {} runs ({:?}); the replays of the {} schedules that added edges: {again}",
+        cov.edges,
+        c.runs,
+        cov.over_time.iter().map(|p| (p.runs, p.edges)).collect::<Vec<_>>(),
+        cov.added_by.len()
+    );
 }
