@@ -82,6 +82,20 @@ def test_a_host_writes_the_same_edges_for_the_same_path_and_more_for_a_deeper_on
     assert deep - shallow, "the deeper path reaches edges the shallow one did not"
 
 
+def test_only_records_the_files_under_the_folders_it_names(tmp_path):
+    host = tmp_path / "host.py"
+    host.write_text(HOST)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    for only, recorded in ((elsewhere, False), (tmp_path, True)):
+        m = Map()
+        env = dict(os.environ, __AFL_SHM_ID=str(m.id), AFL_MAP_SIZE=str(SIZE))
+        r = subprocess.run([sys.executable, "-m", "gcl.afl_cov", "--only", str(only), str(host), "x"],
+                           env=env, capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        assert bool(m.edges()) == recorded, (only, len(m.edges()))
+
+
 def test_without_a_map_the_host_runs_untraced(tmp_path):
     host = tmp_path / "host.py"
     host.write_text(HOST)

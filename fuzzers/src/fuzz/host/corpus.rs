@@ -129,6 +129,9 @@ pub fn merge(dir: &Path, from: &[PathBuf]) -> std::io::Result<Merged> {
         folders.push(f.clone());
         folders.push(f.join(INCOMING));
     }
+    // A folder named twice (DIR among FROM) is read once.
+    let mut seen = BTreeSet::new();
+    folders.retain(|f| seen.insert(f.canonicalize().unwrap_or_else(|_| f.clone())));
     let mut all: BTreeMap<String, Entry> = BTreeMap::new();
     let mut merged = Merged::default();
     let mut read_incoming = Vec::new();
@@ -242,7 +245,10 @@ mod tests {
         assert_eq!(got, want, "big's edges are small's and covered's");
         assert!(!base.join(INCOMING).exists(), "the incoming schedules were folded in");
         assert_eq!(load(&other).unwrap().0.len(), 1, "another folder is only read");
-        // A merge of a merged base changes nothing.
+        // A merge of a merged base changes nothing, even given itself again.
         assert_eq!(merge(&base, &[]).unwrap().kept, 3);
+        save(&base.join(INCOMING), std::slice::from_ref(&big)).unwrap();
+        assert_eq!(merge(&base, &[base.clone(), dir.path().join("base/../base")]).unwrap().kept, 3);
+        assert!(!base.join(INCOMING).exists());
     }
 }
