@@ -34,6 +34,25 @@ pub enum FuzzCommand {
     /// Fold the report, bundle, finding and corpus folders of a campaign's shards
     /// (`--shard K/N`) into one.
     Merge(super::fuzz_merge::Args),
+    /// Fold `gcl fuzz host` corpus folders (`--corpus`: a base, the schedules shards wrote to
+    /// its `incoming/`, other folders) into one, keeping only schedules that add edges.
+    MergeCorpus(MergeCorpusArgs),
+}
+
+/// Arguments of `gcl fuzz merge-corpus`.
+#[derive(Debug, clap::Args)]
+#[command(after_help = "\
+Each schedule file of a `gcl fuzz host --corpus` folder holds the edges of the host's code its
+run reached. The merge reads DIR, DIR/incoming (what shards wrote) and each FROM folder (and
+its incoming/), and keeps in DIR, for each edge, the schedule with the fewest misbehaviours
+that reached it (as afl-cmin does), and every schedule without edges (its run read no map).
+The others are removed from DIR, and the incoming files read are removed; FROM folders are only
+read. Nothing is run: the edges are those the files hold.")]
+pub struct MergeCorpusArgs {
+    /// The corpus folder to merge into (made if missing).
+    pub dir: PathBuf,
+    /// Other corpus folders to fold in (another machine's, a cache).
+    pub from: Vec<PathBuf>,
 }
 
 /// Arguments of `gcl fuzz device`.
@@ -126,7 +145,25 @@ pub fn run(a: Args) -> anyhow::Result<u8> {
         FuzzCommand::Device(d) => device(d),
         FuzzCommand::Host(h) => fuzz_host::run(h),
         FuzzCommand::Merge(m) => super::fuzz_merge::run(m),
+        FuzzCommand::MergeCorpus(m) => merge_corpus(m),
     }
+}
+
+fn merge_corpus(a: MergeCorpusArgs) -> anyhow::Result<u8> {
+    let m = gcl_harness::fuzz::host::corpus::merge(&a.dir, &a.from)
+        .with_context(|| format!("merging into the corpus {}", a.dir.display()))?;
+    for (p, why) in &m.malformed {
+        errln!("gcl fuzz merge-corpus: warning: {}", printable(&format!("{} left as it is: {why}", p.display())));
+    }
+    errln!(
+        "gcl fuzz merge-corpus: {} schedule(s) read, {} kept in {} ({} edges; {} without edges kept as they are)",
+        m.read,
+        m.kept,
+        a.dir.display(),
+        m.edges,
+        m.without_edges
+    );
+    Ok(EXIT_OK)
 }
 
 fn device(a: DeviceArgs) -> anyhow::Result<u8> {

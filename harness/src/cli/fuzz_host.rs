@@ -164,8 +164,10 @@ showed (echo and values, prompt only, banner, feedback block...), one per run, t
 round trying each misbehaviour once; an unpaced campaign opens it with one run at the hand's
 line rate (line-rate). Later runs follow a schedule drawn from --seed, or a mutation of a
 schedule that made the host take a new path, or (--coverage) reach code of the host no run
-before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl writes its
-edges to the AFL map each run is given (__AFL_SHM_ID). Each distinct finding is minimized and written
+before it reached: a host built with afl-cc/afl-clang-fast, python-afl or cargo-afl, or a Python
+host run as `python -m gcl.afl_cov host.py ARGS`, writes its edges to the AFL map each run is
+given (__AFL_SHM_ID). Each distinct finding is minimized (keeping the edges its run reached
+first, with coverage) and written
 to --out as a bundle; --replay BUNDLE runs it again. Without --runs or --duration a campaign
 lasts 5 minutes.
 
@@ -243,11 +245,13 @@ pub struct Args {
     no_guidance: bool,
     /// The host's code coverage: guide (the default), measure or off. Each run gives the host
     /// an AFL map (__AFL_SHM_ID): a host built with afl-cc/afl-clang-fast, python-afl
-    /// (afl.init()) or cargo-afl writes the edges it reaches there. With guide, a schedule whose
+    /// (afl.init()), `python -m gcl.afl_cov host.py` or cargo-afl writes the edges it reaches
+    /// there. With guide, a schedule whose
     /// run reached a new edge is kept beside those that took a new wire path, and mutated (a
     /// power schedule favours those reaching rare edges); measure reports the edges reached but
     /// guides by wire paths only (the runs of off, to compare). A host that writes no edge gets
-    /// a note, and wire paths alone guide it. Shards (--shard) run unguided, without it.
+    /// a note, and wire paths alone guide it. Shards (--shard) run unguided: they read it only
+    /// with --corpus (as measure), to keep the schedules that reached new edges.
     #[arg(long, value_name = "MODE", default_value = "guide", conflicts_with = "no_coverage")]
     coverage: CoverageUse,
     /// --coverage off.
@@ -255,8 +259,11 @@ pub struct Args {
     no_coverage: bool,
     /// A corpus folder kept across campaigns: its schedules (JSON, named by a hash of their
     /// content) run right after the systematic pass, and the schedules this campaign keeps (for
-    /// a new wire path or a new edge) are added to it. Not with --shard (unguided).
-    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    /// a new wire path or a new edge) are added to it, with the edges their runs reached. A
+    /// shard runs its share of the folder's schedules as read at its start and writes what it
+    /// kept to DIR/incoming; `gcl fuzz merge-corpus DIR` folds those in, keeping only
+    /// schedules that add edges.
+    #[arg(long, value_name = "DIR")]
     corpus: Option<PathBuf>,
     /// Run only shard K of N of the campaign (run indices K-1, K-1+N, ...; unguided), for a
     /// CI matrix; `gcl fuzz merge` folds the shards' --report and --out folders into one
@@ -269,8 +276,14 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<u8> {
     let mut run = args.host.host_run(args.seed, FUZZ_HANG_FLOOR)?;
     run.link = link_pattern(&args, &run)?;
-    // A shard runs unguided: coverage would guide nothing there.
-    run.coverage = if args.no_coverage || args.shard.is_some() { CoverageUse::Off } else { args.coverage };
+    // A shard runs unguided: coverage would guide nothing there, but with a corpus it tells
+    // which schedules reached new edges (read as `measure`: the same runs).
+    run.coverage = match (args.no_coverage, args.shard.is_some(), args.corpus.is_some()) {
+        (true, _, _) => CoverageUse::Off,
+        (false, false, _) => args.coverage,
+        (false, true, true) if args.coverage != CoverageUse::Off => CoverageUse::Measure,
+        (false, true, _) => CoverageUse::Off,
+    };
     if let Some(b) = &args.replay {
         return replay(&args, run, b);
     }
@@ -430,12 +443,16 @@ fn run_campaign(args: &Args, opts: &FuzzOptions, stop: &AtomicBool) -> anyhow::R
         }
         None => Vec::new(),
     };
+    // What a shard's provenance records of the base it ran: shards of two bases do not merge.
+    let base = (!seeds.is_empty()).then(|| format!("{} schedule(s), {}", seeds.len(), corpus::digest(&seeds)));
     let mut campaign = gcl_harness::fuzz::host::fuzz_seeded(opts, seeds, stop, &on_event).context("fuzzing")?;
     if let Some(dir) = &args.corpus {
-        let new = corpus::save(dir, &campaign.kept).with_context(|| format!("writing the corpus {}", dir.display()))?;
-        errln!("gcl fuzz host: corpus {}: {new} new schedule(s) of the {} kept", dir.display(), campaign.kept.len());
+        // A shard writes beside the base, which every shard of the campaign reads at its start.
+        let to = if opts.shard.is_some() { dir.join(corpus::INCOMING) } else { dir.clone() };
+        let new = corpus::save(&to, &campaign.kept).with_context(|| format!("writing the corpus {}", to.display()))?;
+        errln!("gcl fuzz host: corpus {}: {new} new schedule(s) of the {} kept", to.display(), campaign.kept.len());
     }
-    campaign.provenance = Some(provenance(args, opts));
+    campaign.provenance = Some(provenance(args, opts, base));
     progress.finish();
     campaign.stopped = super::stopped_by().map(|by| stopped_after(&by, opts, &campaign));
     if let Some(st) = &campaign.stopped {
@@ -554,7 +571,7 @@ fn stopped_after(by: &str, opts: &FuzzOptions, c: &Campaign) -> String {
 /// What makes this campaign's folder a shard of its campaign (see
 /// [`gcl_harness::fuzz::shard::Provenance`]): its `--shard`, seed, and every option that
 /// changed what ran or how it was judged, as its effective value.
-fn provenance(args: &Args, opts: &FuzzOptions) -> gcl_harness::fuzz::shard::Provenance {
+fn provenance(args: &Args, opts: &FuzzOptions, base: Option<String>) -> gcl_harness::fuzz::shard::Provenance {
     let ms = |d: Duration| humantime::format_duration(d).to_string();
     let profile = gcl_harness::report::ProfileSpec::of(&args.host.profile, &opts.run.profile);
     let mut options: std::collections::BTreeMap<String, String> = [
@@ -585,6 +602,9 @@ fn provenance(args: &Args, opts: &FuzzOptions) -> gcl_harness::fuzz::shard::Prov
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
+    if let Some(b) = base {
+        options.insert("corpus".into(), b);
+    }
     match (opts.runs, opts.campaign_duration()) {
         (_, Some(d)) => options.insert("duration".into(), ms(d)),
         (n, None) => options.insert("runs".into(), n.unwrap_or_default().to_string()),

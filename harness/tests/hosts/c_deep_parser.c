@@ -10,7 +10,11 @@
  * overlong-line, err-bits of 2^31, 2^32-1 or 20 digits): one crash, SIGSEGV in
  * `retry_slot`. Built with afl-cc it writes its edges to the map of __AFL_SHM_ID, and each
  * state reached is new code: `gcl fuzz host` guided by coverage keeps each step
- * (harness/tests/fuzz_host.rs). Every read has a 1 s deadline; it exits 0 at the end. */
+ * (harness/tests/fuzz_host.rs). Every read has a 1 s deadline; it exits 0 at the end.
+ * Built with -DSHALLOW_TOO it has a second bug with the same signal: a line longer than 80
+ * bytes while `recovering` is logged through a null pointer (SIGSEGV in `log_overflow`), so
+ * err-bits then overlong-line, the deep schedule without its garbage, crashes too, in
+ * shallower code (fuzz_host_coverage.rs: minimization keeps the deep bug's edges). */
 #define _GNU_SOURCE
 #include "../host_mutants/gclhost.h"
 
@@ -58,6 +62,15 @@ __attribute__((noinline)) static void retry_slot(long code) {
     table[code] = 1;
 }
 
+#ifdef SHALLOW_TOO
+static char *volatile overflow_log;
+
+/* The second bug: an overlong line logged before the log is made. */
+__attribute__((noinline)) static void log_overflow(size_t n) {
+    overflow_log[n] = 0;
+}
+#endif
+
 int main(int argc, char **argv) {
     int fd = gcl_open(argc, argv);
     enum { IDLE, RECOVERING, RESYNCING, BUFFERED } state = IDLE;
@@ -73,6 +86,9 @@ int main(int argc, char **argv) {
             break;
         case RECOVERING:
             if (has_foreign_byte(n)) state = RESYNCING;
+#ifdef SHALLOW_TOO
+            else if (has_long_line(n)) log_overflow(n);
+#endif
             break;
         case RESYNCING:
             if (has_long_line(n)) state = BUFFERED;

@@ -6,8 +6,9 @@ line longer than 80 bytes; in that state the next `ERR n` whose value passes a c
 (n > 1000000) is taken as an index into a 16-entry list: an IndexError nobody catches.
 Expected finding, only with err-bits, garbage, overlong-line and err-bits (of 2^31, 2^32-1 or
 20 digits) in that order: one crash, a traceback in `retry_slot`. With python-afl
-(`afl.init()`) each state reached is new lines in the map of __AFL_SHM_ID; without it the host
-runs the same, uninstrumented. Every read has a 1 s deadline; it exits 0 at the end.
+(`afl.init()`), or run through `python -m gcl.afl_cov` (whose stand-in `afl` it then imports),
+each state reached is new lines in the map of __AFL_SHM_ID; without either the host runs the
+same, uninstrumented. Every read has a 1 s deadline; it exits 0 at the end.
 """
 import os
 import sys

@@ -5,8 +5,9 @@
 //! The hosts are `hosts/c_deep_parser.c` and `hosts/py_deep_parser.py`: the same commands
 //! whatever they read, and a bug behind four misbehaviours in order (err-bits, garbage,
 //! overlong-line, then err-bits of a large code). They need `afl-cc` (`apt-get install afl++`)
-//! and python-afl (installed into `target/pyvenv` on first use); without them the tests are
-//! skipped with a line, and fail under CI (`CI=true`).
+//! and python-afl (installed into `target/pyvenv` on first use), or the wheel's `gcl.afl_cov`
+//! (from `python/`); without them the tests are skipped with a line, and fail under CI
+//! (`CI=true`). Also here: minimization keeping a finding's edges, and shards sharing a corpus.
 
 use crate::deps;
 
@@ -17,7 +18,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use gcl_harness::fuzz::host::coverage::{CoverageAccount, CoverageUse, NOT_INSTRUMENTED};
-use gcl_harness::fuzz::host::{Campaign, FindingKind, FuzzOptions, HostRun, Slots, Transport, Weights, fuzz};
+use gcl_harness::fuzz::host::{
+    Campaign, Event, FindingKind, FuzzOptions, HostRun, Slots, Transport, Weights, fuzz, fuzz_seeded, judge,
+};
+use gcl_harness::sim::misbehave::{Operator, Planned, Schedule};
 use gcl_harness::sim::{Pace, TimeMode};
 
 fn hosts() -> PathBuf {
@@ -30,9 +34,16 @@ const OPS: &str = "err-bits,garbage,overlong-line,crlf";
 
 /// `hosts/c_deep_parser.c` built into `dir` with `compiler` (`afl-cc` or `cc`).
 fn build(compiler: &str, dir: &Path) -> Option<String> {
-    let out = dir.join(format!("deep-{}", compiler.replace('-', "_")));
+    build_with(compiler, dir, &[])
+}
+
+/// `hosts/c_deep_parser.c` built into `dir` with `compiler` and `flags` (`-DSHALLOW_TOO`).
+fn build_with(compiler: &str, dir: &Path, flags: &[&str]) -> Option<String> {
+    let out = dir.join(format!("deep-{}{}", compiler.replace('-', "_"), flags.concat().replace('-', "_")));
     let o = Command::new(compiler)
-        .args(["-O0", "-g", "-o"])
+        .args(["-O0", "-g"])
+        .args(flags)
+        .arg("-o")
         .arg(&out)
         .arg(hosts().join("c_deep_parser.c"))
         .env("AFL_QUIET", "1")
@@ -128,7 +139,13 @@ fn deep_crash(c: &Campaign) -> Option<u64> {
 
 /// Each schedule that added coverage, run again: the union of their edges is the campaign's.
 fn replayed_edges(command: &[String], cov: &CoverageAccount) -> usize {
-    let run = options(command.to_vec(), CoverageUse::Measure, 0, 1, 1).run;
+    replayed_edges_with(command, &[], cov)
+}
+
+/// [`replayed_edges`] of a host run with `env`.
+fn replayed_edges_with(command: &[String], env: &[(String, String)], cov: &CoverageAccount) -> usize {
+    let mut run = options(command.to_vec(), CoverageUse::Measure, 0, 1, 1).run;
+    run.env = env.to_vec();
     let slots = Slots::new(1);
     let mut union = BTreeSet::new();
     for a in &cov.added_by {
@@ -295,4 +312,177 @@ fn a_corpus_carries_the_edges_and_the_deep_bug_to_the_next_campaign() {
     let edges = |j: &serde_json::Value| j["coverage"]["edges"].as_u64().unwrap();
     assert!(edges(&second) >= edges(&first), "{} edges, then {}", edges(&first), edges(&second));
     assert!(crash(&second).is_some(), "the corpus's crashing schedule runs again: {second:#}");
+}
+
+/// The deep hosts' bug, answer by answer (answer 1 is the prompt after the host's ^C, then one
+/// per `1FGET P`): `ERR 32768`, a vertical tab, an 81-byte line, `ERR 2147483648`.
+fn deep_schedule() -> Schedule {
+    let at = |answer: u32, op: Operator, arg: u32| Planned { answer, op, arg };
+    Schedule {
+        planned: vec![
+            at(2, Operator::ErrBits, 0),
+            at(3, Operator::Garbage, 0),
+            at(4, Operator::OverlongLine, 0),
+            at(5, Operator::ErrBits, 2),
+        ],
+    }
+}
+
+/// Minimization keeps a finding's coverage: the edges its run reached first in the campaign.
+/// The deep host built with `-DSHALLOW_TOO` crashes with the same signal by a shallower way too
+/// (err-bits then overlong-line, the deep schedule without its garbage), so minimizing by the
+/// signature alone would trade the deep bug for that one (it did: `err-bits@2
+/// overlong-line@4`). Given the deep schedule as a corpus, the campaign finds the deep crash
+/// right after its systematic pass (one misbehaviour per run: no crash), and its minimized
+/// schedule still takes the host to `retry_slot`: every step is needed for that, so it stays
+/// whole.
+#[test]
+fn minimization_keeps_the_edges_a_finding_reached_first_not_a_shallower_crash_of_the_same_signal() {
+    let dir = tempfile::tempdir().unwrap();
+    if deps::afl_cc().is_none() {
+        return;
+    }
+    let Some(bin) = build_with("afl-cc", dir.path(), &["-DSHALLOW_TOO"]) else { return };
+    let host = vec![bin, "{port}".to_string()];
+    let mut opts = options(host, CoverageUse::Guide, 1, 300, 1);
+    opts.minimize = true;
+    // The shallower schedule crashes with the same signature (or the test could not fail).
+    let shallow = Schedule { planned: vec![deep_schedule().planned[0], deep_schedule().planned[2]] };
+    let r = Slots::new(1).run(&opts.run, &shallow, &AtomicBool::new(false)).expect("a run");
+    let shallow_sig: Vec<String> = judge(&r, &[0]).into_iter().map(|v| v.signature).collect();
+    assert!(shallow_sig.iter().any(|s| s == "crash: SIGSEGV"), "{shallow_sig:?}");
+    let stop = AtomicBool::new(false);
+    let on_event = |e: Event| {
+        if let Event::Found(f) = e
+            && f.verdict.kind == FindingKind::Crash
+        {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    };
+    let c = fuzz_seeded(&opts, vec![deep_schedule()], &stop, &on_event).expect("campaign");
+    let crash = c.findings.iter().find(|f| f.verdict.kind == FindingKind::Crash).expect("the deep crash");
+    assert_eq!(crash.original, deep_schedule(), "found by the corpus's schedule, after the pass");
+    assert!(!crash.first_edges.is_empty(), "its run reached edges no run before it had");
+    assert!(c.minimize_runs >= 4, "each misbehaviour was tried without: {} runs", c.minimize_runs);
+    assert_eq!(crash.schedule, deep_schedule(), "minimized, it still reaches the deep bug's code");
+}
+
+/// The schedules of a corpus folder (not its subfolders), each with its misbehaviours and the
+/// edges its file holds.
+fn corpus_files(dir: &Path) -> Vec<(String, usize, Vec<u64>)> {
+    let Ok(rd) = std::fs::read_dir(dir) else { return Vec::new() };
+    let mut out: Vec<(String, usize, Vec<u64>)> = rd
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .map(|p| {
+            let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+            let edges =
+                j["edges"].as_array().map(|a| a.iter().map(|e| e.as_u64().unwrap()).collect()).unwrap_or_default();
+            let planned = j["planned"].as_array().unwrap().len();
+            (p.file_name().unwrap().to_string_lossy().to_string(), planned, edges)
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Shards share a corpus: two shard processes of one campaign, started together on one folder,
+/// each write the schedules that reached edges new to it (with those edges) to
+/// `DIR/incoming`; `gcl fuzz merge-corpus DIR` folds them into the folder, keeping only
+/// schedules that add edges and every edge they reached; and the next campaign's shards each
+/// run their share of that base after their pass (its provenance names the base, so shards of
+/// two bases do not merge).
+#[test]
+fn shards_write_a_shared_corpus_that_a_merge_keeps_to_the_schedules_adding_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(host) = afl_host(dir.path()) else { return };
+    let corpus = dir.path().join("corpus");
+    let shard = |round: &str, k: u32| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_gcl"));
+        cmd.args(["fuzz", "host", "--profile", "seed", "--seed", "1", "--runs", "60", "--jobs", "1"])
+            .args(["--timeout-hang", "3s", "--no-minimize", "--ops", OPS, "--shard", &format!("{k}/2"), "--corpus"])
+            .arg(&corpus)
+            .arg("--report")
+            .arg(dir.path().join(format!("{round}-{k}")))
+            .arg("--out")
+            .arg(dir.path().join(format!("{round}-{k}-bundles")))
+            .arg("--")
+            .args(&host)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        cmd.spawn().unwrap()
+    };
+    let fuzz_json = |name: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.path().join(name).join("fuzz.json")).unwrap()).unwrap()
+    };
+    // Two processes at once, on one folder.
+    let (a, b) = (shard("first", 1), shard("first", 2));
+    for child in [a, b] {
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let incoming = corpus_files(&corpus.join("incoming"));
+    assert!(corpus_files(&corpus).is_empty(), "no shard writes the base");
+    for k in 1..=2 {
+        let j = fuzz_json(&format!("first-{k}"));
+        assert!(j["coverage"]["kept"].as_u64().unwrap() >= 1, "shard {k} kept schedules for new edges: {j:#}");
+    }
+    assert!(incoming.len() >= 2 && incoming.iter().all(|(_, _, e)| !e.is_empty()), "{incoming:?}");
+    let all_edges: BTreeSet<u64> = incoming.iter().flat_map(|(_, _, e)| e.iter().copied()).collect();
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl")).args(["fuzz", "merge-corpus"]).arg(&corpus).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let base = corpus_files(&corpus);
+    assert!(!corpus.join("incoming").exists(), "the incoming schedules were folded in");
+    assert!(!base.is_empty() && base.len() < incoming.len(), "{} of {} kept", base.len(), incoming.len());
+    let kept_edges: BTreeSet<u64> = base.iter().flat_map(|(_, _, e)| e.iter().copied()).collect();
+    assert_eq!(kept_edges, all_edges, "every edge the shards reached is reached by a kept schedule");
+    // Each kept schedule is, for an edge it reached, one of the smallest that reached it.
+    for (name, planned, edges) in &base {
+        let smallest_for = |e: &u64| !incoming.iter().any(|(_, p, es)| p < planned && es.contains(e));
+        assert!(edges.iter().any(smallest_for), "{name} ({planned} misbehaviours) is the smallest for no edge");
+    }
+    // The next campaign's shards run the base after their pass, and say which base they ran.
+    let (a, b) = (shard("second", 1), shard("second", 2));
+    for child in [a, b] {
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.code().is_some_and(|c| c <= 1), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    for k in 1..=2 {
+        let j = fuzz_json(&format!("second-{k}"));
+        assert_eq!(j["seeds"].as_u64(), Some(base.len() as u64), "{j:#}");
+        let named = j["provenance"]["options"]["corpus"].as_str().unwrap_or_default().to_string();
+        assert!(named.starts_with(&format!("{} schedule(s), ", base.len())), "{:#}", j["provenance"]);
+    }
+}
+
+/// A Python host without python-afl: run through `python -m gcl.afl_cov` (the wheel's module,
+/// here from `python/` on `PYTHONPATH`), it writes the lines it runs to the map of each run.
+/// `import afl` in the host is the module's stand-in, so python-afl is never imported, whether
+/// or not the interpreter has it. Edges rise over the campaign, and the schedules that added
+/// edges replay to nearly the same edges (pyserial's read loop takes lines that depend on how
+/// the bytes arrived, as under python-afl).
+#[test]
+fn a_python_host_without_python_afl_records_its_lines_through_gcl_afl_cov() {
+    let Some(py) = deps::python_with(&["serial"]) else { return };
+    let python_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../python");
+    let host = vec![py, "-m".into(), "gcl.afl_cov".into(), hosts().join("py_deep_parser.py").display().to_string()];
+    let env = vec![("PYTHONPATH".to_string(), python_dir.display().to_string())];
+    let mut opts = options(host.clone(), CoverageUse::Guide, 2, 40, 2);
+    opts.run.env = env.clone();
+    let c = campaign(&opts);
+    let cov = c.coverage.clone().expect("a coverage account");
+    assert!(cov.instrumented && cov.note.is_none(), "{cov:?}");
+    let first = cov.over_time.first().unwrap();
+    assert_eq!(first.runs, 1, "run 0 reaches the host's lines");
+    assert!(cov.over_time.last().unwrap().edges > first.edges, "edges rise past run 0's: {:?}", cov.over_time);
+    assert!(cov.kept >= 1, "{cov:?}");
+    let again = replayed_edges_with(&host, &env, &cov) as u64;
+    assert!(again * 100 >= cov.edges * 97, "{again} edges replayed of {}", cov.edges);
+    eprintln!(
+        "{} edges over {} runs ({:?}); the replays of the {} schedules that added edges: {again}",
+        cov.edges,
+        c.runs,
+        cov.over_time.iter().map(|p| (p.runs, p.edges)).collect::<Vec<_>>(),
+        cov.added_by.len()
+    );
 }

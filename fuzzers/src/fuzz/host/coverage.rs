@@ -3,7 +3,8 @@
 //! A host built as fuzzing users already build it writes its edge hits to a SysV shared-memory
 //! map named by `__AFL_SHM_ID`: C and C++ built with `afl-cc` / `afl-clang-fast` (run without
 //! AFL's fork server, such a binary finds no fork server to talk to and just runs), Python
-//! through `python-afl` (`afl.init()`, which hashes the lines it runs into the same map), Rust
+//! through `python-afl` (`afl.init()`, which hashes the lines it runs into the same map) or the
+//! wheel's `gcl.afl_cov` (`python -m gcl.afl_cov host.py`: the same without python-afl), Rust
 //! built with `cargo-afl` (the same runtime as `afl-cc`; no test builds one yet). For each run [`super::Slots`] makes a map ([`ShmMap`]), gives its id
 //! to the host, and reads the edges hit (the map's non-zero bytes) after the run; the campaign
 //! keeps their union and the schedules that reached an edge no run before them reached
@@ -23,6 +24,10 @@
 //! schedule in the manner of AFLFast: an entry's energy grows with the rarity of the rarest edge
 //! it reached (how few kept schedules reach it) and shrinks with how often it was chosen before.
 //! Both are counted over the runs guidance may see, so a campaign repeats run for run.
+//!
+//! Minimization keeps a finding's coverage: the edges its run was the first of the campaign to
+//! reach (what [`Coverage::take`] returns) must be reached by the smaller schedule's run too
+//! (`super::minimize`).
 
 #![allow(unsafe_code)] // SysV shared memory: shmget, shmat, shmdt and shmctl have no safe wrapper
 
@@ -87,7 +92,7 @@ pub const MAP_SIZE_MAX: usize = 1 << 23;
 
 /// What the campaign says of a host that wrote no edge to its map.
 pub const NOT_INSTRUMENTED: &str = "coverage: the host wrote no edge to the AFL map it was given (__AFL_SHM_ID): it \
-is not built with afl-cc/afl-clang-fast, python-afl or cargo-afl; guided by wire paths only";
+is not built with afl-cc/afl-clang-fast, python-afl or cargo-afl, nor run through gcl.afl_cov; guided by wire paths only";
 
 /// A SysV shared-memory map for one run, removed when dropped (and marked for removal from the
 /// start: see the module's notes).
@@ -344,16 +349,19 @@ impl Coverage {
     }
 
     /// Takes in run `i`'s edges (`None`: no map was read), at `ms` since the start after
-    /// `runs` runs, its schedule as `schedule`: how many edges it reached that no earlier run
-    /// had (the run is then in `added_by`).
-    pub fn take(&mut self, i: u64, edges: Option<&[u32]>, ms: u64, runs: u64, schedule: &Schedule) -> u64 {
-        let Some(edges) = edges else { return 0 };
-        let mut new = 0;
+    /// `runs` runs, its schedule as `schedule`: the edges it reached that no earlier run had,
+    /// in order (the run is then in `added_by`).
+    pub fn take(&mut self, i: u64, edges: Option<&[u32]>, ms: u64, runs: u64, schedule: &Schedule) -> Vec<u32> {
+        let Some(edges) = edges else { return Vec::new() };
+        let mut first = Vec::new();
         for &e in edges {
             let n = self.hits.entry(e).or_default();
-            new += u64::from(*n == 0);
+            if *n == 0 {
+                first.push(e);
+            }
             *n += 1;
         }
+        let new = first.len() as u64;
         self.recent.push_back((i, edges.to_vec()));
         if self.recent.len() > RECENT {
             self.recent.pop_front();
@@ -368,7 +376,7 @@ impl Coverage {
                 self.account.added_by.push(Added { run: i, new_edges: new, schedule: text, planned: schedule.clone() });
             }
         }
-        new
+        first
     }
 
     /// A schedule kept in the corpus (at the corpus's next index), with its run's edges;
@@ -378,6 +386,11 @@ impl Coverage {
         if for_edges {
             self.account.kept += 1;
         }
+    }
+
+    /// The edges of corpus entry `k`'s run (none when it read no map).
+    pub fn entry_edges(&self, k: usize) -> &[u32] {
+        self.entries.get(k).map_or(&[], Vec::as_slice)
     }
 
     /// Whether guidance by coverage is on: some run reached an edge.
@@ -494,11 +507,11 @@ mod tests {
     #[test]
     fn the_account_notes_a_host_that_wrote_no_edge_and_plots_the_rise() {
         let mut c = Coverage::new(MAP_SIZE, Some(20));
-        assert_eq!(c.take(0, Some(&[]), 5, 1, &Schedule::default()), 0);
+        assert!(c.take(0, Some(&[]), 5, 1, &Schedule::default()).is_empty());
         assert_eq!(c.account(9, 1).note.as_deref(), Some(NOT_INSTRUMENTED));
         let one = |op: Operator, answer: u32| Schedule { planned: vec![Planned { answer, op, arg: 0 }] };
-        assert_eq!(c.take(1, Some(&[4, 5]), 10, 2, &one(Operator::Silence, 2)), 2);
-        assert_eq!(c.take(2, Some(&[4, 6]), 20, 3, &one(Operator::Garbage, 1)), 1);
+        assert_eq!(c.take(1, Some(&[4, 5]), 10, 2, &one(Operator::Silence, 2)), vec![4, 5]);
+        assert_eq!(c.take(2, Some(&[4, 6]), 20, 3, &one(Operator::Garbage, 1)), vec![6]);
         let a = c.account(30, 4);
         assert!(a.note.is_none());
         assert_eq!(a.edges, 3);

@@ -39,7 +39,8 @@
 //! or sent no byte is found by `unreached` (from `RunResult::port_opened` and the traffic).
 //!
 //! Under `--shard K/N` (`fuzz/shard.rs`) it runs its indices unguided, each schedule the pass's
-//! entry for its index or drawn from the seed and the index (`fresh_schedule`); a shard without run
+//! entry for its index, then a schedule of the `--corpus` base read at its start ([`corpus`]), or
+//! drawn from the seed and the index (`fresh_schedule`); a shard without run
 //! 0 makes one uncounted run 0 for the answer count schedules span and the pass. Each shard's
 //! report
 //! records what makes it part of its campaign (`shard::Provenance`: `--shard`, seed, every option
@@ -859,6 +860,11 @@ pub struct Finding {
     /// The bytes both ways in it.
     #[serde(skip)]
     pub exchanges: Vec<Exchange>,
+    /// The edges of the host's code its first run reached before any earlier run of the
+    /// campaign (empty without coverage): its minimized schedule must reach them too
+    /// ([`minimize`]).
+    #[serde(skip)]
+    pub first_edges: Vec<u32>,
 }
 
 /// What a campaign tells its caller as it goes.
@@ -953,9 +959,10 @@ pub struct Campaign {
     /// Schedules of an earlier campaign's corpus (`--corpus`) this one was given to run.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub seeds: u64,
-    /// The schedules guidance kept, in the order kept (what `--corpus` saves).
+    /// The schedules guidance kept, in the order kept, each with its run's edges (what
+    /// `--corpus` saves).
     #[serde(skip)]
-    pub kept: Vec<Schedule>,
+    pub kept: Vec<corpus::Entry>,
 }
 
 fn is_zero(n: &u64) -> bool {
@@ -1231,8 +1238,12 @@ impl Shared {
             fresh_path |= self.paths.insert(p);
         }
         let ms = started.elapsed().as_millis() as u64;
-        let new_edges = self.coverage.take(i, r.edges.as_deref(), ms, self.taken + 1, &schedule);
-        let for_edges = opts.run.coverage == coverage::CoverageUse::Guide && new_edges > 0;
+        let first_edges = self.coverage.take(i, r.edges.as_deref(), ms, self.taken + 1, &schedule);
+        // A shard that reads the host's coverage keeps what reached new edges for the corpus it
+        // writes (unguided, it does not run them).
+        let keeps_edges = opts.run.coverage == coverage::CoverageUse::Guide
+            || (opts.shard.is_some() && opts.run.coverage != coverage::CoverageUse::Off);
+        let for_edges = keeps_edges && !first_edges.is_empty();
         if (fresh_path || for_edges) && !r.fired.is_empty() {
             self.corpus.push((i, schedule.clone()));
             self.coverage.kept(r.edges.as_deref(), for_edges);
@@ -1260,6 +1271,7 @@ impl Shared {
                 by_calibration: false,
                 stderr: r.stderr.clone(),
                 exchanges: r.exchanges.clone(),
+                first_edges: first_edges.clone(),
             };
             new.extend(self.add(finding));
         }
@@ -1610,21 +1622,34 @@ pub fn fresh_schedule(seed: u64, i: u64, weights: &Weights, max_planned: usize, 
     fresh_from(&mut run_rng(seed, i), weights, max_planned, answers)
 }
 
-/// Removes misbehaviours one at a time while the run still gives `signature` (until `stop`):
-/// the smaller schedule and its run, or `None` when none could go (the run that found it
-/// stands).
+/// Removes misbehaviours one at a time while the run still gives `signature` and reaches every
+/// edge of `keep` (until `stop`): the smaller schedule and its run, or `None` when none could
+/// go (the run that found it stands).
+///
+/// `keep` is what "keeps the finding's coverage" means: the edges of the host's code the
+/// finding's run reached first in its campaign ([`Finding::first_edges`]; empty without
+/// coverage, when the signature alone decides). Those are the code the finding's schedule led
+/// the host into; a smaller schedule that gives the same signature by a shallower way (the
+/// same signal from another bug) does not reach them, and is not taken. Not every edge of the
+/// finding's run is asked for: a run's other edges differ with timing and with misbehaviours
+/// that minimization is there to drop.
 pub fn minimize(
     opts: &FuzzOptions,
     slots: &Slots,
     schedule: &Schedule,
     signature: &str,
+    keep: &[u32],
     runs: &mut u64,
     stop: &AtomicBool,
 ) -> Result<Option<(Schedule, RunResult)>, RunError> {
     let gives = |s: &Schedule, runs: &mut u64| -> Result<Option<RunResult>, RunError> {
         *runs += 1;
         let r = slots.run(&opts.run, s, stop)?;
-        Ok(judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature).then_some(r))
+        let same = judge(&r, &opts.ok_exit_codes).iter().any(|v| v.signature == signature);
+        // The map's edges are in order (`coverage::ShmMap::edges`).
+        let reached = r.edges.as_deref().unwrap_or_default();
+        let kept = keep.iter().all(|e| reached.binary_search(e).is_ok());
+        Ok((same && kept).then_some(r))
     };
     // Keep only what fired: entries that never fired changed nothing.
     let mut best = schedule.clone();
@@ -1742,8 +1767,8 @@ pub fn fuzz(opts: &FuzzOptions, stop: &AtomicBool, on_event: &(dyn Fn(Event) + S
 }
 
 /// [`fuzz`], with the schedules of an earlier campaign's corpus ([`corpus`]) run right after the
-/// systematic pass (a guided campaign's; a shard runs none); the campaign's own kept schedules
-/// are in [`Campaign::kept`].
+/// systematic pass (a shard runs those whose run index is its own); the campaign's own kept
+/// schedules are in [`Campaign::kept`].
 pub fn fuzz_seeded(
     opts: &FuzzOptions,
     seeds: Vec<Schedule>,
@@ -1962,13 +1987,14 @@ impl<'a> Workers<'a> {
         Ok(ControlFlow::Continue(()))
     }
 
-    /// Minimizes the schedule that gave `sig` (`shrink`): the smaller schedule and its run.
-    fn shrunk(&self, schedule: &Schedule, sig: &str, shrink: bool) -> Option<(Schedule, RunResult)> {
+    /// Minimizes the schedule that gave `sig` (`shrink`), keeping the edges `keep` its run
+    /// reached first: the smaller schedule and its run.
+    fn shrunk(&self, schedule: &Schedule, sig: &str, keep: &[u32], shrink: bool) -> Option<(Schedule, RunResult)> {
         if !(shrink && self.opts.minimize && schedule.planned.len() > 1) {
             return None;
         }
         let mut runs = 0;
-        let m = minimize(self.opts, &self.slots, schedule, sig, &mut runs, self.stop);
+        let m = minimize(self.opts, &self.slots, schedule, sig, keep, &mut runs, self.stop);
         if let Ok(mut sh) = self.shared.lock() {
             sh.minimize_runs += runs;
         }
@@ -1989,9 +2015,11 @@ impl<'a> Workers<'a> {
             match n {
                 New::Finding(k) => {
                     let Ok(sh) = self.shared.lock() else { return };
-                    let (schedule, sig) = (sh.findings[k].original.clone(), sh.findings[k].verdict.signature.clone());
+                    let f = &sh.findings[k];
+                    let (schedule, sig, keep) =
+                        (f.original.clone(), f.verdict.signature.clone(), f.first_edges.clone());
                     drop(sh);
-                    if let Some((s, mr)) = self.shrunk(&schedule, &sig, shrink)
+                    if let Some((s, mr)) = self.shrunk(&schedule, &sig, &keep, shrink)
                         && let Ok(mut sh) = self.shared.lock()
                     {
                         sh.findings[k].shrunk(s, mr);
@@ -2001,10 +2029,10 @@ impl<'a> Workers<'a> {
                 New::Suspect(key) => {
                     let Ok(sh) = self.shared.lock() else { return };
                     let Some(Suspect::Pending(f)) = sh.suspects.get(&key) else { continue };
-                    let schedule = f.original.clone();
+                    let (schedule, keep) = (f.original.clone(), f.first_edges.clone());
                     drop(sh);
                     // Minimized first (with the campaign's hang timeout), then confirmed.
-                    if let Some((s, mr)) = self.shrunk(&schedule, &key.0, shrink)
+                    if let Some((s, mr)) = self.shrunk(&schedule, &key.0, &keep, shrink)
                         && let Ok(mut sh) = self.shared.lock()
                         && let Some(Suspect::Pending(f)) = sh.suspects.get_mut(&key)
                     {
@@ -2086,6 +2114,7 @@ impl<'a> Workers<'a> {
                         by_calibration: true,
                         stderr: r.stderr.clone(),
                         exchanges: r.exchanges.clone(),
+                        first_edges: Vec::new(),
                     };
                     new.extend(sh.add(f));
                 }
@@ -2130,10 +2159,13 @@ impl<'a> Workers<'a> {
         let answers = sh.answers?;
         let k = i as usize - 1;
         let pass = sh.pass.get(k).copied();
+        // After the pass, the corpus's base (every shard reads the same at its start).
+        let seed = k.checked_sub(sh.pass.len()).and_then(|j| sh.seeds.get(j)).cloned();
         drop(sh);
-        Some(match pass {
-            Some(e) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
-            None => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
+        Some(match (pass, seed) {
+            (Some(e), _) => (e.schedule(&mut run_rng(opts.seed, i)), Some(k)),
+            (None, Some(s)) => (s, None),
+            (None, None) => (fresh_from(&mut run_rng(opts.seed, i), &opts.weights, opts.max_planned, answers), None),
         })
     }
 
@@ -2331,7 +2363,12 @@ impl<'a> Workers<'a> {
             void_runs,
             void,
             seeds: sh.seeds.len() as u64,
-            kept: sh.corpus.iter().map(|(_, s)| s.clone()).collect(),
+            kept: sh
+                .corpus
+                .iter()
+                .enumerate()
+                .map(|(k, (_, s))| corpus::Entry { schedule: s.clone(), edges: sh.coverage.entry_edges(k).to_vec() })
+                .collect(),
             coverage: (self.opts.run.coverage != coverage::CoverageUse::Off)
                 .then(|| sh.coverage.account(self.started.elapsed().as_millis() as u64, runs)),
         })
@@ -2485,6 +2522,7 @@ mod tests {
                 by_calibration: false,
                 stderr: String::new(),
                 exchanges: Vec::new(),
+                first_edges: Vec::new(),
             }
         };
         let Some(New::Suspect(a)) = sh.add(hang("awaiting the answer after HI", 1)) else { panic!() };
