@@ -688,12 +688,12 @@ pub fn run_with_events(
     let objects = unplaced_stage(cases, opts, &selection, on);
     let shared = alive_stage(link, found, opts, &plan)?;
     let outside = Outside::of(&pre, probed);
-    let mut ran = cases_stage(cases.len(), selection, shared, opts, &plan, outside.start.is_some(), stream, on)?;
+    let mut ran = cases_stage(selection, shared, outside, opts, &plan, stream, on)?;
     let after = after_stage(&mut ran, opts, &plan);
     let times = clock.stop();
     let triaged = triage_stage(cases, ran, &pre.clauses);
     let preflight = preflight_text(pre.line, motion.into_iter().chain(objects).collect());
-    Ok(report_stage(cases, opts, &plan, times, preflight, triaged, after, outside))
+    Ok(report_stage(cases, opts, &plan, times, preflight, triaged, after))
 }
 
 /// When a run started: the wall-clock second for the report, and the monotonic start.
@@ -956,43 +956,47 @@ struct CasesRun {
     stopped: Option<Stopped>,
     /// The link still open after the last case, if any.
     shared: Option<Box<dyn Link>>,
+    /// What the run put on the line before the first case, for the wire-time bound.
+    before: Outside,
 }
 
-/// Cases: takes the selection and the probed link; runs every case in order (SKIP after an
-/// early end), streaming and telling `on` each result; gives what they gave.
+/// Cases: takes the selection, the probed link and what went on the line before the first
+/// case; runs every case in order (SKIP after an early end), streaming and telling `on` each
+/// result; gives what they gave.
 fn cases_stage(
-    capacity: usize,
     selection: Selection<'_>,
     shared: Option<Box<dyn Link>>,
+    before: Outside,
     opts: &ConformOptions,
     plan: &RunPlan,
-    probe_left_hand: bool,
     stream: Option<&mut ResultStream>,
     on: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<CasesRun, ConformError> {
     let total = selection.to_run.len() + selection.skipped.len();
+    // The first case follows the probes and the pre-flight: the bound starts it from the
+    // model's hand as the motion-time probe left it, or (no probe) a freshly powered-up one,
+    // as after the pre-flight's RESET.
+    let hand_carries = before.start.is_some();
     let mut run = CaseLoop {
         opts,
         plan,
         stream,
         total,
         run: CasesRun {
-            results: Vec::with_capacity(capacity),
+            results: Vec::with_capacity(total),
             signatures: Vec::new(),
             transcripts: Vec::new(),
             wire_cases: Vec::new(),
             stopped: None,
             shared,
+            before,
         },
         failures: 0,
         timeouts_in_a_row: 0,
         first_timeout: String::new(),
         unquiet_in_a_row: 0,
         first_unquiet: String::new(),
-        // The first case follows the probes and the pre-flight: the bound starts it from the
-        // model's hand as the motion-time probe left it, or (no probe) a freshly powered-up
-        // one, as after the pre-flight's RESET.
-        hand_carries: probe_left_hand,
+        hand_carries,
     };
     for r in selection.skipped {
         run.emit(r, on)?;
@@ -1363,12 +1367,12 @@ fn report_stage(
     preflight: Option<String>,
     triaged: Triaged,
     after: bool,
-    outside: Outside,
 ) -> RunOutput {
-    let Triaged { ran, groups } = triaged;
+    let Triaged { mut ran, groups } = triaged;
+    let before = std::mem::replace(&mut ran.before, Outside { steps: Vec::new(), start: None });
     let wire = plan
         .link_baud
-        .map(|baud| wire_time(cases, &ran.wire_cases, outside, opts, plan.replay.trailing, baud, times.duration_ms));
+        .map(|baud| wire_time(cases, &ran.wire_cases, before, opts, plan.replay.trailing, baud, times.duration_ms));
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
         host: None,
@@ -1404,7 +1408,7 @@ struct MotionRun {
     fast: Option<crate::motion::NotRealTime>,
     /// Its steps for the wire-time bound, the closing ^C's answer last: bytes both ways and
     /// the model's time beyond them (the close stopped at the judgement: the time it was
-    /// watched for; bytes only on a hand that does not move in real time).
+    /// watched for; bytes only on a hand that does not move in real time or failed the probe).
     steps: Vec<WireStep>,
     /// The model's hand after the same probe, stopped at the same moment, when the probe ran
     /// on the hand as on the model: where the first case finds the fingers.
@@ -1456,13 +1460,15 @@ fn motion_time(
     }
     let drained = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN).map_or(0, |d| d.bytes);
     let fast = probe.judge(&opts.profile, &out);
-    let real_time = fast.is_none();
+    // The model's time counts only for a probe that ran as the model's does on a hand that
+    // moves in real time (else bytes only, as for a failing case).
+    let modelled = fast.is_none() && (out.is_pass() || stopped(&out));
     let mut steps: Vec<WireStep> = out
         .exchange()
         .iter()
         .map(|e| {
             let cut = decided.filter(|&(step, _)| stopped(&out) && step == e.step).map(|(_, after)| after);
-            let busy = match (real_time, cut) {
+            let busy = match (modelled, cut) {
                 (false, _) => Duration::ZERO,
                 (true, Some(after)) => after,
                 (true, None) => pred.as_ref().and_then(|p| p.get(e.step)).map_or(Duration::ZERO, |p| p.busy()),
@@ -1478,7 +1484,7 @@ fn motion_time(
     // starts from a freshly powered-up model, which moves no more than any hand).
     let mut model = SimLink::new(opts.profile.clone(), suite::model_config(case.header()));
     let model_out = replay(&probe.transcript, &mut model, &ro);
-    let same = model_out.failed_step() == out.failed_step() && (out.is_pass() || stopped(&out)) && real_time;
+    let same = modelled && model_out.failed_step() == out.failed_step();
     if stopped(&model_out) {
         let _ = model.send(&abort);
     }
