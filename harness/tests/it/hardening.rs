@@ -641,7 +641,7 @@ fn a_wire_bound_the_run_beats_is_not_printed_as_a_bound() {
 #[test]
 fn the_wire_bound_counts_the_pre_flight_and_the_motion_time_probe_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
-    let target = format!("exec:{GCL} sim --stdio --profile seed --time real");
+    let target = format!("exec:{GCL} sim --stdio --profile seed --time real --baud 9600");
     let r = gcl(&[
         "conform",
         "--target",
