@@ -32,7 +32,9 @@
 //! plus
 //! one byte where it sent any (no answer starts before the first byte has crossed), and the model's
 //! motion time; the model carries the hand's state from one passing case to the next on a kept
-//! link.
+//! link, and from the motion-time probe to the first case. What the run puts on the line before
+//! its first case (the pre-flight's and the motion-time probe's exchanges) is counted by the same
+//! rule, since the run's wall time includes it (`probes_ms`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -682,10 +684,11 @@ pub fn run_with_events(
     let plan = RunPlan::of(opts);
     let (mut link, found) = probe_stage(opts, &plan)?;
     let pre = preflight_stage(link.as_mut(), &found, opts, &plan, on);
-    let motion = motion_time_stage(link.as_mut(), &found, &pre, opts, &plan, &mut selection, on);
+    let (motion, probed) = motion_time_stage(link.as_mut(), &found, &pre, opts, &plan, &mut selection, on);
     let objects = unplaced_stage(cases, opts, &selection, on);
     let shared = alive_stage(link, found, opts, &plan)?;
-    let mut ran = cases_stage(cases.len(), selection, shared, opts, &plan, stream, on)?;
+    let outside = Outside::of(&pre, probed);
+    let mut ran = cases_stage(selection, shared, outside, opts, &plan, stream, on)?;
     let after = after_stage(&mut ran, opts, &plan);
     let times = clock.stop();
     let triaged = triage_stage(cases, ran, &pre.clauses);
@@ -790,6 +793,32 @@ struct PreflightFound {
     clauses: Vec<String>,
     /// Whether it left the hand after RESET at a quiet prompt.
     settled: bool,
+    /// Bytes sent and received, probe by probe (for the wire-time bound).
+    exchanged: Vec<(u64, u64)>,
+}
+
+/// What the run put on the line before its first case, for the wire-time bound: the
+/// pre-flight's and the motion-time probe's steps, and the model's hand as the probe left the
+/// fingers (the first case starts from there).
+struct Outside {
+    /// Bytes sent and received and the model's time beyond them, step by step.
+    steps: Vec<WireStep>,
+    /// The model's hand after the motion-time probe, when it ran as the model's did.
+    start: Option<SimLink>,
+}
+
+impl Outside {
+    /// Takes the pre-flight's exchanges and the motion-time probe's run (if it ran).
+    fn of(pre: &PreflightFound, probed: Option<MotionRun>) -> Outside {
+        let mut steps: Vec<WireStep> =
+            pre.exchanged.iter().map(|&(put, got)| WireStep { put, got, busy_ms: 0.0 }).collect();
+        let mut start = None;
+        if let Some(m) = probed {
+            steps.extend(m.steps);
+            start = m.model;
+        }
+        Outside { steps, start }
+    }
 }
 
 /// Pre-flight: on a live hand, when asked, runs the framing pre-flight (`on` hears its line)
@@ -818,7 +847,7 @@ fn preflight_stage(
             Some(who) => format!("{who}\n{line}"),
             None => line,
         };
-        pre = PreflightFound { line: Some(line), clauses, settled: p.settled };
+        pre = PreflightFound { line: Some(line), clauses, settled: p.settled, exchanged: p.exchanged };
     }
     // Its last answer may not have ended quietly (a flood, a missing prompt): drain.
     if !pre.settled {
@@ -829,7 +858,7 @@ fn preflight_stage(
 
 /// Motion-time probe: on a live hand kept across cases with abort-timing cases selected,
 /// probes its motions; when they end at once, moves those cases to SKIP. Gives the line `on`
-/// heard.
+/// heard, and what the probe put on the line (when it ran).
 fn motion_time_stage(
     link: &mut dyn Link,
     found: &Alive,
@@ -838,15 +867,20 @@ fn motion_time_stage(
     plan: &RunPlan,
     selection: &mut Selection<'_>,
     on: &mut dyn FnMut(RunEvent<'_>),
-) -> Option<String> {
+) -> (Option<String>, Option<MotionRun>) {
     if !(found.is_alive()
         && !plan.fresh_per_case
         && opts.control.real_time_probe
         && selection.to_run.iter().any(|c| c.requires(&Requirement::AbortTiming)))
     {
-        return None;
+        return (None, None);
     }
-    let fast = motion_time(link, opts, &plan.policy, plan.link_baud, pre.settled)?;
+    let Some(mut probed) = motion_time(link, opts, &plan.policy, plan.link_baud, pre.settled) else {
+        return (None, None);
+    };
+    let Some(fast) = probed.fast.take() else {
+        return (None, Some(probed));
+    };
     let line = format!(
         "motion-time probe: {fast}; ^C cannot land mid-motion on it, so the abort-timing cases are SKIP \
          (as with `--no abort-timing`; `--assume-real-time` runs them)"
@@ -861,7 +895,7 @@ fn motion_time_stage(
         }
         !timing
     });
-    Some(line)
+    (Some(line), Some(probed))
 }
 
 /// Takes the selection; gives one line (also told to `on`) for the cases whose object gcl
@@ -922,41 +956,47 @@ struct CasesRun {
     stopped: Option<Stopped>,
     /// The link still open after the last case, if any.
     shared: Option<Box<dyn Link>>,
+    /// What the run put on the line before the first case, for the wire-time bound.
+    before: Outside,
 }
 
-/// Cases: takes the selection and the probed link; runs every case in order (SKIP after an
-/// early end), streaming and telling `on` each result; gives what they gave.
+/// Cases: takes the selection, the probed link and what went on the line before the first
+/// case; runs every case in order (SKIP after an early end), streaming and telling `on` each
+/// result; gives what they gave.
 fn cases_stage(
-    capacity: usize,
     selection: Selection<'_>,
     shared: Option<Box<dyn Link>>,
+    before: Outside,
     opts: &ConformOptions,
     plan: &RunPlan,
     stream: Option<&mut ResultStream>,
     on: &mut dyn FnMut(RunEvent<'_>),
 ) -> Result<CasesRun, ConformError> {
     let total = selection.to_run.len() + selection.skipped.len();
+    // The first case follows the probes and the pre-flight: the bound starts it from the
+    // model's hand as the motion-time probe left it, or (no probe) a freshly powered-up one,
+    // as after the pre-flight's RESET.
+    let hand_carries = before.start.is_some();
     let mut run = CaseLoop {
         opts,
         plan,
         stream,
         total,
         run: CasesRun {
-            results: Vec::with_capacity(capacity),
+            results: Vec::with_capacity(total),
             signatures: Vec::new(),
             transcripts: Vec::new(),
             wire_cases: Vec::new(),
             stopped: None,
             shared,
+            before,
         },
         failures: 0,
         timeouts_in_a_row: 0,
         first_timeout: String::new(),
         unquiet_in_a_row: 0,
         first_unquiet: String::new(),
-        // The first case follows the probes and the pre-flight: the bound starts it from a
-        // freshly powered-up model.
-        hand_carries: false,
+        hand_carries,
     };
     for r in selection.skipped {
         run.emit(r, on)?;
@@ -1328,10 +1368,11 @@ fn report_stage(
     triaged: Triaged,
     after: bool,
 ) -> RunOutput {
-    let Triaged { ran, groups } = triaged;
+    let Triaged { mut ran, groups } = triaged;
+    let before = std::mem::replace(&mut ran.before, Outside { steps: Vec::new(), start: None });
     let wire = plan
         .link_baud
-        .map(|baud| wire_time(cases, &ran.wire_cases, opts, plan.replay.trailing, baud, times.duration_ms));
+        .map(|baud| wire_time(cases, &ran.wire_cases, before, opts, plan.replay.trailing, baud, times.duration_ms));
     let mut report = RunReport {
         kind: crate::report::ReportKind::Conform,
         host: None,
@@ -1360,17 +1401,31 @@ fn report_stage(
     RunOutput { report, transcripts: ran.transcripts }
 }
 
-/// Runs the motion-time probe on `link` with the run's deadlines; says how the target's motion
-/// fell short of the model's, or `None` (it moves in real time, or the probe decided nothing).
-/// `after_reset`: the hand has just answered RESET at a quiet prompt (the pre-flight's last
-/// probe), so the probe's own ^C and RESET are left out.
+/// What the motion-time probe found and put on the line.
+struct MotionRun {
+    /// How the target's motion fell short of the model's, or `None` (it moves in real time,
+    /// or the probe decided nothing).
+    fast: Option<crate::motion::NotRealTime>,
+    /// Its steps for the wire-time bound, the closing ^C's answer last: bytes both ways and
+    /// the model's time beyond them (the close stopped at the judgement: the time it was
+    /// watched for; bytes only on a hand that does not move in real time or failed the probe).
+    steps: Vec<WireStep>,
+    /// The model's hand after the same probe, stopped at the same moment, when the probe ran
+    /// on the hand as on the model: where the first case finds the fingers.
+    model: Option<SimLink>,
+}
+
+/// Runs the motion-time probe on `link` with the run's deadlines; says what it found and put
+/// on the line (`None` when the profile has no probe). `after_reset`: the hand has just
+/// answered RESET at a quiet prompt (the pre-flight's last probe), so the probe's own ^C and
+/// RESET are left out.
 fn motion_time(
     link: &mut dyn Link,
     opts: &ConformOptions,
     policy: &DeadlinePolicy,
     baud: Option<u32>,
     after_reset: bool,
-) -> Option<crate::motion::NotRealTime> {
+) -> Option<MotionRun> {
     let probe = crate::motion::MotionProbe::new(&opts.profile)?;
     let probe = match after_reset {
         true => probe.after_reset(&opts.profile).unwrap_or(probe),
@@ -1378,8 +1433,9 @@ fn motion_time(
     };
     let case = Case { profile: opts.profile.id.clone(), transcript: probe.transcript.clone() };
     let mut ro = suite::replay_options();
-    if let Some(pred) = crate::deadline::predict(&case, &opts.profile) {
-        ro.budgets = crate::deadline::budgets(&opts.profile, &case, &pred, policy, baud);
+    let pred = crate::deadline::predict(&case, &opts.profile);
+    if let Some(pred) = &pred {
+        ro.budgets = crate::deadline::budgets(&opts.profile, &case, pred, policy, baud);
     }
     ro.silent_wait = policy.silent_wait;
     // The line was found quiet just before (the liveness probe's settling, the pre-flight's
@@ -1394,14 +1450,47 @@ fn motion_time(
     {
         b.deadline = after;
     }
+    let abort = [opts.profile.framing.abort];
+    // Stopped at the judgement: the hand is still moving and gets a ^C.
+    let stopped =
+        |out: &ReplayOutcome| matches!((out, decided), (ReplayOutcome::Timeout(t), Some((step, _))) if t.step == step);
     let out = replay(&probe.transcript, link, &ro);
-    if let (ReplayOutcome::Timeout(t), Some((step, _))) = (&out, decided)
-        && t.step == step
-    {
-        let _ = link.send(&[opts.profile.framing.abort]);
+    if stopped(&out) {
+        let _ = link.send(&abort);
     }
-    let _ = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN);
-    probe.judge(&opts.profile, &out)
+    let drained = discard(link, Duration::from_millis(50), AFTER_FAILURE_DRAIN).map_or(0, |d| d.bytes);
+    let fast = probe.judge(&opts.profile, &out);
+    // The model's time counts only for a probe that ran as the model's does on a hand that
+    // moves in real time (else bytes only, as for a failing case).
+    let modelled = fast.is_none() && (out.is_pass() || stopped(&out));
+    let mut steps: Vec<WireStep> = out
+        .exchange()
+        .iter()
+        .map(|e| {
+            let cut = decided.filter(|&(step, _)| stopped(&out) && step == e.step).map(|(_, after)| after);
+            let busy = match (modelled, cut) {
+                (false, _) => Duration::ZERO,
+                (true, Some(after)) => after,
+                (true, None) => pred.as_ref().and_then(|p| p.get(e.step)).map_or(Duration::ZERO, |p| p.busy()),
+            };
+            WireStep { put: e.sent.len() as u64, got: e.received.len() as u64, busy_ms: busy.as_secs_f64() * 1000.0 }
+        })
+        .collect();
+    if stopped(&out) {
+        steps.push(WireStep { put: 1, got: drained, busy_ms: 0.0 });
+    }
+    // The same probe on the model, stopped where the hand was: the fingers the first case
+    // finds. Only when the hand's run went as the model's does (else the first case's bound
+    // starts from a freshly powered-up model, which moves no more than any hand).
+    let mut model = SimLink::new(opts.profile.clone(), suite::model_config(case.header()));
+    let model_out = replay(&probe.transcript, &mut model, &ro);
+    let same = modelled && model_out.failed_step() == out.failed_step();
+    if stopped(&model_out) {
+        let _ = model.send(&abort);
+    }
+    let model = (same && discard(&mut model, Duration::from_millis(50), AFTER_FAILURE_DRAIN).is_ok_and(|d| d.quiet))
+        .then_some(model);
+    Some(MotionRun { fast, steps, model })
 }
 
 /// What of `opts` changed what ran, for the report. The suite's source and `--partial` are
@@ -1453,6 +1542,31 @@ fn diff_of(step: usize, offset: usize, expected: &str, actual: &str, got: &[u8],
     }
 }
 
+/// One step on the line, for the wire-time bound: bytes sent and received, and the model's
+/// time on it beyond its bytes (motion, a reset).
+#[derive(Debug, Clone, Copy)]
+struct WireStep {
+    put: u64,
+    got: u64,
+    busy_ms: f64,
+}
+
+/// The least time `steps` take on the line, one after the other (GCL is command-then-answer),
+/// the bound's one rule: per step the larger of its received bytes, plus one where it sent any
+/// (no answer starts before the first byte has crossed), and the model's time beyond its bytes;
+/// and over the steps at least their bytes sent.
+fn steps_bound_ms(steps: &[WireStep], per_byte_ms: f64) -> f64 {
+    let sent: u64 = steps.iter().map(|w| w.put).sum();
+    let each: f64 = steps
+        .iter()
+        .map(|w| {
+            let first = u64::from(w.put > 0 && w.got > 0);
+            f64::max((w.got + first) as f64 * per_byte_ms, w.busy_ms)
+        })
+        .sum();
+    f64::max(sent as f64 * per_byte_ms, each)
+}
+
 /// What one case exchanged, for the wire-time bound.
 struct WireCase {
     id: String,
@@ -1481,24 +1595,37 @@ struct WireCase {
 ///
 /// The model's time is its own run of the case. On a kept link a case begins where the
 /// passing case before it left the hand (a homing step after a close moves the fingers all
-/// the way back), so the model runs those cases in order on one hand; a case after anything
-/// else (the first, one after a failure or a reopened link, every case of a target opened
-/// afresh per case) starts from a freshly powered-up model, which moves no more than any
-/// hand. A failing case counts its bytes only.
+/// the way back), so the model runs those cases in order on one hand; the first case begins
+/// where the motion-time probe left the fingers (the model ran the same probe and stopped it
+/// at the same step: `outside.start`); a case after anything else (the first when no probe
+/// ran, one after a failure or a reopened link, every case of a target opened afresh per
+/// case) starts from a freshly powered-up model, which moves no more than any hand. A failing
+/// case counts its bytes only.
+///
+/// The run's wall time is the whole run, its probes included, so what it puts on the line
+/// outside the cases is counted too, by the same rule (`outside.steps`, reported as
+/// `probes_ms`): the framing pre-flight's exchanges (bytes only: the model's time on RESET is
+/// left out) and the motion-time probe's steps, its close for as long as it is watched before
+/// the judgement and the ^C that stops it. The liveness probes, the waits for quiet and the
+/// trailing waits after cases are not line time and are not counted.
 fn wire_time(
     cases: &[Case],
     counted: &[WireCase],
+    outside: Outside,
     opts: &ConformOptions,
     between: Duration,
     baud: u32,
     actual_ms: f64,
 ) -> WireTime {
     let per_byte_ms = 10.0 / f64::from(baud.max(1)) * 1000.0;
-    let (mut motion_ms, mut lower_bound_ms) = (0.0, 0.0);
+    // What the run put on the line before its first case, by the same rule as a case's steps.
+    let probes_ms = steps_bound_ms(&outside.steps, per_byte_ms);
+    let (mut motion_ms, mut lower_bound_ms) = (0.0, probes_ms);
     let (mut sent, mut received) = (0u64, 0u64);
     let fresh = |c: &Case| SimLink::new(opts.profile.clone(), suite::model_config(c.header()));
-    // The model's hand as the last passing case left it.
-    let mut model: Option<SimLink> = None;
+    // The model's hand as the last passing case (or, before the first, the motion-time probe)
+    // left it.
+    let mut model: Option<SimLink> = outside.start;
     // No quiet-time drain: it is the runner's; the trailing wait between cases passes on the
     // model's clock as on the line.
     let quiet = ReplayOptions { trailing: between, drain_quiet: Duration::ZERO, ..suite::replay_options() };
@@ -1533,19 +1660,17 @@ fn wire_time(
         // The model's bytes at its own BAUD; where a case changes it, the slower rate's
         // longer byte time is taken, so that motion is never overcounted.
         let model_byte = byte_time(rate.min(link.device().baud()));
-        let (mut pauses_ms, mut busy_ms, mut steps_ms) = (0.0, 0.0, 0.0);
+        let mut pauses_ms = 0.0;
+        let mut on_line = Vec::with_capacity(steps.len());
         for (e, &(put, got)) in steps.iter().zip(&w.steps) {
             pauses_ms +=
                 case.transcript.steps.get(e.step).and_then(|st| st.pause).unwrap_or_default().as_secs_f64() * 1000.0;
             let wire_at_model = model_byte * u32::try_from(e.sent.len() + e.received.len()).unwrap_or(u32::MAX);
-            let busy = e.took.saturating_sub(wire_at_model).as_secs_f64() * 1000.0;
-            busy_ms += busy;
-            // An answer to bytes sent starts once the first of them has crossed.
-            let first = u64::from(put > 0 && got > 0);
-            steps_ms += f64::max((got + first) as f64 * per_byte_ms, busy);
+            let busy_ms = e.took.saturating_sub(wire_at_model).as_secs_f64() * 1000.0;
+            on_line.push(WireStep { put, got, busy_ms });
         }
-        motion_ms += pauses_ms + busy_ms;
-        lower_bound_ms += pauses_ms + f64::max(s as f64 * per_byte_ms, steps_ms);
+        motion_ms += pauses_ms + on_line.iter().map(|w| w.busy_ms).sum::<f64>();
+        lower_bound_ms += pauses_ms + steps_bound_ms(&on_line, per_byte_ms);
         model = Some(link);
     }
     WireTime {
@@ -1555,6 +1680,7 @@ fn wire_time(
         motion_ms,
         lower_bound_ms,
         counted_cases: counted.len(),
+        probes_ms,
         actual_ms,
         ratio: if lower_bound_ms > 0.0 { actual_ms / lower_bound_ms } else { 0.0 },
     }
@@ -1580,6 +1706,11 @@ mod tests {
     /// The wire-time bound of cases run one after the other on the in-process model, each
     /// marked as carried over from the one before or not.
     fn bound_of(ids: &[(&str, bool)]) -> WireTime {
+        bound_after(ids, Outside { steps: Vec::new(), start: None })
+    }
+
+    /// [`bound_of`], after what the run put on the line before its first case.
+    fn bound_after(ids: &[(&str, bool)], outside: Outside) -> WireTime {
         let p = Profile::builtin("seed").unwrap();
         let cases = suite::generate(&p).unwrap();
         let counted: Vec<WireCase> = ids
@@ -1598,7 +1729,7 @@ mod tests {
             })
             .collect();
         let opts = ConformOptions::in_process(p, vec![]);
-        wire_time(&cases, &counted, &opts, Duration::from_millis(2), 9600, 1.0)
+        wire_time(&cases, &counted, outside, &opts, Duration::from_millis(2), 9600, 1.0)
     }
 
     #[test]
@@ -1622,5 +1753,42 @@ mod tests {
         let kept = bound_of(&[("cmd-c", false), ("cmd-hi", true)]);
         assert!(kept.lower_bound_ms > fresh.lower_bound_ms + 1000.0, "{fresh:?} {kept:?}");
         assert!(kept.motion_ms > fresh.motion_ms + 1000.0, "{fresh:?} {kept:?}");
+    }
+
+    #[test]
+    fn the_wire_bound_counts_the_probes_before_the_first_case_which_starts_where_the_probe_left_the_fingers() {
+        let p = Profile::builtin("seed").unwrap();
+        let opts = ConformOptions::in_process(p.clone(), vec![]);
+        let policy = DeadlinePolicy::for_target(&opts.target);
+        // The probe on the in-process hand (simulated time: it moves in real time), after a
+        // pre-flight's RESET.
+        let mut hand = SimLink::new(p.clone(), gcl_model::DeviceConfig::default());
+        discard(&mut hand, Duration::from_millis(50), Duration::from_secs(1)).unwrap();
+        let probed = motion_time(&mut hand, &opts, &policy, Some(9600), true).expect("seed has a close command");
+        assert!(probed.fast.is_none(), "the model's hand moves in real time");
+        let (close, after) = crate::motion::MotionProbe::new(&p)
+            .and_then(|m| m.after_reset(&p))
+            .and_then(|m| m.decided_after(&p))
+            .unwrap();
+        // Its close is counted for as long as it was watched, then its ^C.
+        assert_eq!(probed.steps.len(), close + 2, "{:?}", probed.steps);
+        assert_eq!(probed.steps[close].busy_ms, after.as_secs_f64() * 1000.0);
+        assert_eq!(probed.steps[close + 1].put, 1);
+        let byte_ms = 10.0 / 9600.0 * 1000.0;
+        let probes = steps_bound_ms(&probed.steps, byte_ms);
+        assert!(probes > after.as_secs_f64() * 1000.0, "{probes}");
+        assert!(probed.model.is_some(), "the probe ran on the hand as on the model");
+        // The bound counts it, and the first case's HI moves the fingers back from where the
+        // probe's ^C stopped them, which a freshly powered-up hand need not do.
+        let pre = PreflightFound { exchanged: vec![(1, 5), (1, 5)], ..Default::default() };
+        let outside = Outside::of(&pre, Some(probed));
+        assert_eq!(outside.steps.len(), close + 4);
+        let probes = steps_bound_ms(&outside.steps, byte_ms);
+        let fresh = bound_of(&[("cmd-hi", true)]);
+        let after_probe = bound_after(&[("cmd-hi", true)], outside);
+        assert_eq!(after_probe.probes_ms, probes);
+        assert!(after_probe.motion_ms > fresh.motion_ms + 100.0, "{fresh:?} {after_probe:?}");
+        assert!(after_probe.lower_bound_ms > fresh.lower_bound_ms + probes + 100.0, "{fresh:?} {after_probe:?}");
+        assert_eq!(fresh.probes_ms, 0.0);
     }
 }

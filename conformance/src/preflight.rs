@@ -7,8 +7,12 @@
 //! status format), VERS and RESET (its answer shows the banner), the same to the in-process
 //! model and to the hand, and compares what came back: line ending, prompt text, echo, status
 //! line shape, banner text; and who the hand says it is (the firmware series its VERS answer
-//! and banner name, against the profile's: [`crate::identity`]). Each answer is read until the hand is quiet, within a deadline from the
-//! model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes.
+//! and banner name, against the profile's: [`crate::identity`]). An answer that is the model's,
+//! byte for byte, is complete and the next probe goes out at once; any other answer, and
+//! RESET's, is read until the hand is quiet ([`QUIET`] after a prompt), within a deadline from
+//! the model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes. Bytes a hand sends
+//! after a complete answer land at the head of the next probe's answer, which then differs from
+//! the model's and is read to a quiet: the last, RESET's, always is.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -50,6 +54,8 @@ pub struct Preflight {
     /// The hand named another firmware series than the profile models, in its banner or its
     /// `VERS` answer: the line that says so ([`crate::identity::mismatch`]).
     pub identity: Option<String>,
+    /// Bytes sent and received, probe by probe, for a runner's wire-time bound.
+    pub exchanged: Vec<(u64, u64)>,
 }
 
 impl Preflight {
@@ -82,13 +88,15 @@ fn probes(profile: &Profile) -> Vec<Probe> {
 
 /// Reads until the link has been quiet for [`QUIET`] after something prompt-like (ending in
 /// `prompt`), or quiet after at least `min` has passed (`None`: only after a prompt), or until
-/// `deadline`, keeping at most [`MAX_ANSWER`] bytes. Also says whether it ended on a prompt
-/// and a whole [`QUIET`] of silence after it.
+/// `deadline`, keeping at most [`MAX_ANSWER`] bytes; or, with `complete`, as soon as what came
+/// is exactly that (the model's whole answer, ending in its prompt: nothing is left to wait
+/// for). Also says whether it ended on a prompt and a whole [`QUIET`] of silence after it.
 fn collect(
     link: &mut dyn Link,
     min: Option<Duration>,
     deadline: Duration,
     prompt: &[u8],
+    complete: Option<&[u8]>,
 ) -> Result<(Vec<u8>, bool), LinkError> {
     let start = link.elapsed();
     let mut got = Vec::new();
@@ -100,6 +108,9 @@ fn collect(
         }
         let wait = QUIET.min(deadline - spent);
         let n = link.recv(&mut got, wait)?;
+        if complete.is_some_and(|c| !c.is_empty() && got == c) {
+            break;
+        }
         let spent = link.elapsed().saturating_sub(start);
         let prompt_like = !prompt.is_empty() && got.trim_ascii_end().ends_with(prompt);
         if n == 0 && !got.is_empty() && (prompt_like || min.is_some_and(|m| spent >= m)) {
@@ -123,16 +134,22 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
     for p in probes(profile) {
         let t0 = model.elapsed();
         model.send(&p.send)?;
-        let (expected, _) = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"")?;
+        let (expected, _) = collect(&mut model, Some(Duration::ZERO), Duration::from_secs(30), b"", None)?;
         let predicted = model.elapsed().saturating_sub(t0);
         link.send(&p.send)?;
         let actual;
         (actual, settled) = if p.what == "RESET" {
             // A power cycle: a real hand may take seconds before its banner; wait for a prompt.
-            collect(link, None, RESET_WAIT, trimmed)?
+            // The last probe: its answer is read to a whole [`QUIET`] after the prompt, so the
+            // line is known drained (`settled`) and any bytes the hand sends after the
+            // exchanges so far land here.
+            collect(link, None, RESET_WAIT, trimmed, None)?
         } else {
+            // An answer the same as the model's, byte for byte, is complete (it ends in the
+            // prompt): the next probe goes out at once. Anything else is read to a quiet.
             let deadline = policy.deadline(predicted).max(policy.silent_wait);
-            collect(link, Some(policy.deadline(predicted).min(deadline)), deadline, trimmed)?
+            let complete = expected.ends_with(profile.framing.prompt.as_bytes()).then_some(expected.as_slice());
+            collect(link, Some(policy.deadline(predicted).min(deadline)), deadline, trimmed, complete)?
         };
         let silent = actual.is_empty();
         answers.push((p, expected, actual));
@@ -144,6 +161,7 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
                 clauses: Vec::new(),
                 settled: false,
                 identity: None,
+                exchanged: exchanged(&answers),
             });
         }
     }
@@ -229,7 +247,13 @@ pub fn run(link: &mut dyn Link, profile: &Arc<Profile>, policy: &DeadlinePolicy)
             findings.push(format!("no answer to {}", p.what));
         }
     }
-    Ok(Preflight { findings, clauses, settled, identity })
+    let exchanged = exchanged(&answers);
+    Ok(Preflight { findings, clauses, settled, identity, exchanged })
+}
+
+/// Bytes sent and received, probe by probe.
+fn exchanged(answers: &[(Probe, Vec<u8>, Vec<u8>)]) -> Vec<(u64, u64)> {
+    answers.iter().map(|(p, _, actual)| (p.send.len() as u64, actual.len() as u64)).collect()
 }
 
 fn split<'a>(s: &'a [u8], sep: &[u8]) -> Vec<&'a [u8]> {
@@ -312,6 +336,61 @@ mod tests {
         let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None })).unwrap();
         assert_eq!(r.findings, vec!["an error status reads `Error 32!`, not in the form `ERR 32`"], "{r:?}");
         assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
+    }
+
+    /// A link that counts the reads that came back empty: each one is a wait for quiet.
+    struct QuietWaits<'a> {
+        inner: &'a mut dyn Link,
+        empty: usize,
+    }
+
+    impl Link for QuietWaits<'_> {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            self.inner.send(bytes)
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            let n = self.inner.recv(buf, timeout)?;
+            self.empty += usize::from(n == 0);
+            Ok(n)
+        }
+        fn elapsed(&self) -> Duration {
+            self.inner.elapsed()
+        }
+        fn describe(&self) -> String {
+            self.inner.describe()
+        }
+    }
+
+    #[test]
+    fn an_answer_the_same_as_the_model_s_is_not_waited_out_and_a_byte_after_one_is_still_named() {
+        // A healthy hand: every answer but RESET's ends the moment it is the model's; RESET's
+        // is read to a quiet, so the hand is left settled.
+        let p = Profile::builtin("seed").unwrap();
+        let policy = DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None });
+        let mut hand = SimLink::new(p.clone(), DeviceConfig::default());
+        discard(&mut hand, Duration::from_millis(50), Duration::from_secs(1)).unwrap();
+        let mut counted = QuietWaits { inner: &mut hand, empty: 0 };
+        let r = run(&mut counted, &p, &policy).unwrap();
+        assert!(r.findings.is_empty() && r.settled, "{r:?}");
+        assert_eq!(counted.empty, 1, "one wait for quiet, after RESET's prompt");
+        // A hand that sends a byte after its bare CR's prompt: the byte lands at the head of
+        // the next answer, which is then not the model's, and the pre-flight names it.
+        let mut hand = Scripted {
+            answers: vec![
+                (b"\x03", b"\n\r=> "),
+                (b"\r", b"\n\r=> "),
+                (b"ZZQX\r", b"ZZQX\n\rERR 32\n\r=> "),
+                (b"VERS\r", b"VERS\n\rFirmware 4.4\n\r=> "),
+                (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
+            ],
+            pending: Vec::new(),
+            now: Duration::ZERO,
+        };
+        let healthy = run(&mut hand, &p, &policy).unwrap();
+        assert!(healthy.findings.is_empty(), "{healthy:?}");
+        hand.answers[2].1 = b"?ZZQX\n\rERR 32\n\r=> ";
+        let r = run(&mut hand, &p, &policy).unwrap();
+        assert_eq!(r.findings, vec!["the hand does not echo what it receives"], "{r:?}");
     }
 
     #[test]

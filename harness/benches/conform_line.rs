@@ -8,9 +8,11 @@
 //! The lower bound ([`gcl_harness::conform`]'s, in `report.json`) counts, per case, its
 //! pauses and step after step the larger of the bytes received and the model's motion time
 //! (GCL is command-then-answer; the line is full duplex and the hand echoes as it reads), the
-//! model carrying the hand's state from one passing case to the next. The bench also prints
-//! the cases' own time (the sum of their durations) against the bound: what is left of the
-//! gap once the probes and the pre-flight before the first case are set aside.
+//! model carrying the hand's state from one passing case to the next, and what the run puts on
+//! the line before its first case (the pre-flight, the motion-time probe: `probes_ms`), since
+//! the wall time is the whole run. The bench also prints the cases' own time (the sum of their
+//! durations) against the cases' part of the bound, and the run's time outside every case
+//! against the probes' part: the first is what load affects least.
 //!
 //! `GCL_BENCH_BIN=PATH` measures another `gcl` binary (an older build, for a before/after).
 //! Without `--bench` (as under `cargo test --all-targets`) it runs the framing cases of seed at
@@ -67,6 +69,7 @@ fn figure(bin: &str, profile: &str, baud: u32, only: &[&str]) {
     let w = &report["wire"];
     let actual = w["actual_ms"].as_f64().unwrap_or(0.0);
     let bound = w["lower_bound_ms"].as_f64().unwrap_or(0.0);
+    let probes = w["probes_ms"].as_f64().unwrap_or(0.0);
     let cases_ms: f64 = report["cases"]
         .as_array()
         .into_iter()
@@ -82,13 +85,17 @@ fn figure(bin: &str, profile: &str, baud: u32, only: &[&str]) {
         .map(|c| format!("{} {}", c["id"].as_str().unwrap_or(""), c["verdict"].as_str().unwrap_or("")))
         .collect();
     println!(
-        "{profile:>8} @ {baud:>5}: {} cases, wall {:.1} s, lower bound {:.1} s, ratio {:.3}; the cases alone {:.1} s, ratio {:.3}{}",
+        "{profile:>8} @ {baud:>5}: {} cases, wall {:.1} s, lower bound {:.1} s, ratio {:.3}; the cases alone {:.1} s \
+         for {:.1} s of the bound, ratio {:.3}; outside the cases {:.2} s for {:.2} s of the bound{}",
         w["counted_cases"],
         actual / 1000.0,
         bound / 1000.0,
         if bound > 0.0 { actual / bound } else { 0.0 },
         cases_ms / 1000.0,
-        if bound > 0.0 { cases_ms / bound } else { 0.0 },
+        (bound - probes) / 1000.0,
+        if bound > probes { cases_ms / (bound - probes) } else { 0.0 },
+        (actual - cases_ms) / 1000.0,
+        probes / 1000.0,
         if not_pass.is_empty() { String::new() } else { format!("; not PASS: {}", not_pass.join(", ")) }
     );
 }

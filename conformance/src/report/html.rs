@@ -317,13 +317,15 @@ pub fn to_html(r: &RunReport) -> String {
             "<p>Lower bound {:.0} ms over the {} PASS/FAIL cases (a passing case: its pauses plus the \
 larger of its bytes sent and, step by step, the larger of the bytes received and the model's motion, at {} baud; a \
 failing case: its bytes one way; {} bytes sent, {} received, motion \
-{:.0} ms); took {:.0} ms, ratio {:.2}.</p>\n",
+{:.0} ms) and, by the same rule, the {:.0} ms of the pre-flight and the motion-time probe before them; the whole \
+run, probes included, took {:.0} ms, ratio {:.2}.</p>\n",
             w.lower_bound_ms,
             w.counted_cases,
             w.baud,
             w.bytes_sent,
             w.bytes_received,
             w.motion_ms,
+            w.probes_ms,
             w.actual_ms,
             w.ratio
         ));

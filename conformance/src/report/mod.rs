@@ -284,7 +284,8 @@ pub struct WireTime {
     pub baud: u32,
     /// Simulated motion time the passing cases need, milliseconds.
     pub motion_ms: f64,
-    /// The lower bound, milliseconds, summed over the cases counted: for a passing case its
+    /// The lower bound, milliseconds, summed over the cases counted and [`WireTime::probes_ms`]:
+    /// for a passing case its
     /// pauses plus the larger of its bytes sent × 10 / baud and the sum over its steps of the
     /// larger of the step's bytes received × 10 / baud (full duplex, the echo overlapping what
     /// is sent) and the model's motion time on the step; for a failing case its bytes in one
@@ -294,6 +295,12 @@ pub struct WireTime {
     /// FAIL and their known-failure forms); TIMEOUT and ERROR cases are left out.
     #[serde(default)]
     pub counted_cases: usize,
+    /// The part of the lower bound, milliseconds, that is what the run puts on the line
+    /// before its first case, by the same rule as a case's steps: the framing pre-flight's
+    /// exchanges and the motion-time probe's (its close counted for as long as it is watched).
+    /// The liveness probes and the waits for quiet are not counted.
+    #[serde(default)]
+    pub probes_ms: f64,
     /// The run's wall time, milliseconds.
     pub actual_ms: f64,
     /// actual / lower bound.

@@ -423,13 +423,15 @@ pub fn summary_text(r: &RunReport) -> String {
         s.push_str(&format!(
             "  wire-time lower bound: {:.3} s over the {} PASS/FAIL cases (step after step, the larger of the bytes \
 received at {} baud, full duplex, and the model's motion time; {} bytes sent, {} received, {:.3} s of motion and \
-pauses); took {:.3} s; ratio {:.3}\n",
+pauses) and the pre-flight and motion-time probe before them ({:.3} s by the same rule); the whole run, probes \
+included, took {:.3} s; ratio {:.3}\n",
             w.lower_bound_ms / 1000.0,
             w.counted_cases,
             w.baud,
             w.bytes_sent,
             w.bytes_received,
             w.motion_ms / 1000.0,
+            w.probes_ms / 1000.0,
             w.actual_ms / 1000.0,
             w.ratio
         ));

@@ -581,10 +581,12 @@ fn absurd_bauds_are_refused_and_the_bound_counts_only_pass_and_fail() {
     assert!(rep2.summary[&Verdict::Timeout] > 0, "{:?}", rep2.summary);
     let w2 = rep2.wire.unwrap();
     assert_eq!(w2.counted_cases, 0, "TIMEOUTs are not line time");
-    assert_eq!(w2.lower_bound_ms, 0.0);
+    // Only the pre-flight's exchanges before the cases are.
+    assert_eq!(w2.lower_bound_ms, w2.probes_ms);
+    assert!(w2.probes_ms > 0.0, "{w2:?}");
     // Full duplex: never more than both directions one after the other, plus motion.
     let serial_ms = (w.bytes_sent + w.bytes_received) as f64 * 10.0 / 9600.0 * 1000.0;
-    assert!(w.lower_bound_ms < serial_ms + w.motion_ms, "{w:?}");
+    assert!(w.lower_bound_ms - w.probes_ms < serial_ms + w.motion_ms, "{w:?}");
     assert!(w.lower_bound_ms >= w.bytes_sent.max(w.bytes_received) as f64 * 10.0 / 9600.0 * 1000.0, "{w:?}");
     // The in-process hand keeps simulated time: its run may beat the bound, and then says so.
     assert!(
@@ -631,6 +633,38 @@ fn a_wire_bound_the_run_beats_is_not_printed_as_a_bound() {
     );
     let html = std::fs::read_to_string(dir.path().join("report.html")).unwrap();
     assert!(html.contains("no wire-time bound: the run took") && !html.contains("Lower bound"), "{html}");
+}
+
+/// The run's time includes the pre-flight and the motion-time probe, so the bound counts what
+/// they put on the line by the same rule, and says so where the ratio is printed: on a hand in
+/// real time the probe's watched close alone is a fifth of a second of the model's time.
+#[test]
+fn the_wire_bound_counts_the_pre_flight_and_the_motion_time_probe_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = format!("exec:{GCL} sim --stdio --profile seed --time real --baud 9600");
+    let r = gcl(&[
+        "conform",
+        "--target",
+        &target,
+        "--profile",
+        "seed",
+        "--only",
+        "abort-motion-discards-queue",
+        "--baud",
+        "9600",
+        "--report",
+        s(dir.path()),
+    ]);
+    assert_eq!(r.code, Some(0), "{}{}", r.stdout, r.stderr);
+    let w = report(dir.path()).wire.unwrap();
+    assert!(w.probes_ms > 200.0, "{w:?}");
+    assert!(w.lower_bound_ms > w.probes_ms, "{w:?}");
+    assert!(
+        r.stdout.contains("and the pre-flight and motion-time probe before them")
+            && r.stdout.contains("the whole run, probes included, took"),
+        "{}",
+        r.stdout
+    );
 }
 
 #[test]
