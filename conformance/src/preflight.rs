@@ -8,11 +8,12 @@
 //! model and to the hand, and compares what came back: line ending, prompt text, echo, status
 //! line shape, banner text; and who the hand says it is (the firmware series its VERS answer
 //! and banner name, against the profile's: [`crate::identity`]). An answer that is the model's,
-//! byte for byte, is complete and the next probe goes out at once; any other answer, and
-//! RESET's, is read until the hand is quiet ([`QUIET`] after a prompt), within a deadline from
-//! the model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes. Bytes a hand sends
-//! after a complete answer land at the head of the next probe's answer, which then differs from
-//! the model's and is read to a quiet: the last, RESET's, always is.
+//! byte for byte, is complete: the next probe goes out once the line stays quiet for
+//! [`TRAILING`] after it (bytes within it are that answer's, read on to a quiet); any other
+//! answer, and RESET's, is read until the hand is quiet ([`QUIET`] after a prompt), within a
+//! deadline from the model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes. Bytes a
+//! hand sends later than that land at the head of the next probe's answer, which then differs
+//! from the model's and is read to a quiet: the last, RESET's, always is.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -33,6 +34,10 @@ const RESET_WAIT: Duration = Duration::from_secs(10);
 
 /// How long the hand must be quiet for an answer to count as complete.
 const QUIET: Duration = Duration::from_millis(60);
+
+/// How long an answer that is already the model's is watched for more bytes: as long as the
+/// runner watches after a case's last answer (`conform`'s trailing wait).
+const TRAILING: Duration = Duration::from_millis(2);
 
 /// The banner text hosts look for after RESET (see `shared/protocol-notes.md`).
 const BANNER_TEXT: &[u8] = b"BarrettHand Firmware";
@@ -108,7 +113,9 @@ fn collect(
         }
         let wait = QUIET.min(deadline - spent);
         let n = link.recv(&mut got, wait)?;
-        if complete.is_some_and(|c| !c.is_empty() && got == c) {
+        // The model's whole answer: done, unless more follows at once (looked for as long as a
+        // case looks after its last answer), which then belongs to this answer, not the next.
+        if complete.is_some_and(|c| !c.is_empty() && got == c) && link.recv(&mut got, TRAILING)? == 0 {
             break;
         }
         let spent = link.elapsed().saturating_sub(start);
@@ -319,6 +326,58 @@ mod tests {
         }
     }
 
+    /// A hand whose answers come in parts, one part per read.
+    struct Parted {
+        answers: Vec<(&'static [u8], Vec<&'static [u8]>)>,
+        pending: std::collections::VecDeque<&'static [u8]>,
+        now: Duration,
+    }
+
+    impl Link for Parted {
+        fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
+            if let Some((_, parts)) = self.answers.iter().find(|(s, _)| *s == bytes) {
+                self.pending.extend(parts.iter().copied());
+            }
+            Ok(())
+        }
+        fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
+            self.now += timeout;
+            let part = self.pending.pop_front().unwrap_or_default();
+            buf.extend_from_slice(part);
+            Ok(part.len())
+        }
+        fn elapsed(&self) -> Duration {
+            self.now
+        }
+        fn describe(&self) -> String {
+            "parted".into()
+        }
+    }
+
+    #[test]
+    fn a_prompt_right_after_a_complete_answer_is_named_with_that_answer() {
+        // A hand that answers a bare CR with two prompts, the second a moment after the first:
+        // the first is the model's whole answer, and the second must still be read as part of
+        // it (what a wait for quiet saw), not taken as the head of ZZQX's answer.
+        let p = Profile::builtin("seed").unwrap();
+        let policy = DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None });
+        let hand = |cr: Vec<&'static [u8]>| Parted {
+            answers: vec![
+                (b"\x03", vec![b"\n\r=> "]),
+                (b"\r", cr),
+                (b"ZZQX\r", vec![b"ZZQX\n\rERR 32\n\r=> "]),
+                (b"VERS\r", vec![b"VERS\n\rFirmware 4.4\n\r=> "]),
+                (b"RESET\r", vec![b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "]),
+            ],
+            pending: Default::default(),
+            now: Duration::ZERO,
+        };
+        let at_once = run(&mut hand(vec![b"\n\r=> \n\r=> "]), &p, &policy).unwrap();
+        assert!(!at_once.findings.is_empty(), "two prompts for a bare CR: {at_once:?}");
+        let in_parts = run(&mut hand(vec![b"\n\r=> ", b"\n\r=> "]), &p, &policy).unwrap();
+        assert_eq!(in_parts.findings, at_once.findings);
+    }
+
     #[test]
     fn a_status_line_in_another_form_is_named() {
         let p = Profile::builtin("seed").unwrap();
@@ -338,7 +397,8 @@ mod tests {
         assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
     }
 
-    /// A link that counts the reads that came back empty: each one is a wait for quiet.
+    /// A link that counts the reads longer than [`TRAILING`] that came back empty: each one is
+    /// a wait for quiet.
     struct QuietWaits<'a> {
         inner: &'a mut dyn Link,
         empty: usize,
@@ -350,7 +410,7 @@ mod tests {
         }
         fn recv(&mut self, buf: &mut Vec<u8>, timeout: Duration) -> Result<usize, LinkError> {
             let n = self.inner.recv(buf, timeout)?;
-            self.empty += usize::from(n == 0);
+            self.empty += usize::from(n == 0 && timeout > TRAILING);
             Ok(n)
         }
         fn elapsed(&self) -> Duration {
