@@ -631,18 +631,35 @@ pub(crate) fn capture_plan_on(
     plans: &[Plan],
     config: gcl_model::DeviceConfig,
 ) -> Result<Vec<Captured>, LinkError> {
-    let mut opts = RecordOptions::new(profile.clone());
-    opts.timeout = Duration::from_secs(120);
-    // (a hand with a difference in how it frames or sizes its answers: the shadow has it too)
-    opts.shadow.faults = config.faults.clone();
-    opts.shadow.without_effect = config.without_effect.clone();
+    let opts = capture_options(profile, &config);
     let mut link = SimLink::new(profile.clone(), config);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();
     capture(&mut link, &steps, &opts)
 }
 
+/// How [`capture_plan_on`] records on a hand built from `config`.
+pub(crate) fn capture_options(profile: &Arc<Profile>, config: &gcl_model::DeviceConfig) -> RecordOptions {
+    let mut opts = RecordOptions::new(profile.clone());
+    opts.timeout = Duration::from_secs(120);
+    // (a hand with a difference in how it frames or sizes its answers: the shadow has it too)
+    opts.shadow.faults = config.faults.clone();
+    opts.shadow.without_effect = config.without_effect.clone();
+    opts
+}
+
 /// [`build`] from the answers [`capture_plan`] gave for `def`'s plans.
 pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured]) -> Result<Transcript, String> {
+    build_from_steps(profile, def, caps, &super::depends::decisions_by_step(profile, &def.plans, caps))
+}
+
+/// [`build_from`] with the decisions each step rests on already found
+/// (`depends::decisions_by_step` of the same plans and answers).
+pub(crate) fn build_from_steps(
+    profile: &Arc<Profile>,
+    def: &CaseDef,
+    caps: &[Captured],
+    by_step: &[Vec<String>],
+) -> Result<Transcript, String> {
     let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
     let mut out = Vec::with_capacity(caps.len());
     let mut captured = Captures::new();
@@ -719,7 +736,7 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
     // The decisions the case rests on: those it checks, then those its steps touch.
     let mut decisions: Vec<String> =
         def.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
-    for d in super::depends::decisions_of(profile, &def.plans, caps) {
+    for d in super::depends::decisions_of(profile, by_step) {
         if !decisions.contains(&d) {
             decisions.push(d);
         }
