@@ -19,7 +19,7 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 use super::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::{Captured, ShadowStep, shadow_step};
-use crate::suite::build::{CaseB, CaseDef, build_from_steps, capture_plan, capture_plan_on, value_range};
+use crate::suite::build::{BuiltSteps, CaseB, CaseDef, build_after, capture_plan, capture_plan_on, value_range};
 use crate::suite::plan::{FieldRule, Plan, Range, Shape};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
@@ -346,7 +346,7 @@ fn assemble(
         Some(ran) => ran.walked.clone(),
         None => {
             let shadow = Walker::walk_preamble(p, config, &pre);
-            super::preamble::keep(p, config, &pre, shadow.clone()).map_err(|e| NotACase(e.to_string()))?;
+            super::preamble::keep(p, config, &k.def.plans, shadow.clone()).map_err(|e| NotACase(e.to_string()))?;
             shadow
         }
     };
@@ -372,7 +372,7 @@ fn assemble(
         no_feedback_inside(&walked.kinds, &caps)?;
     }
     shape_stage(p, &mut walked, &caps, model, wide, homed)?;
-    case_stage(p, walked, &caps, stops_at)
+    case_stage(p, walked, &caps, stops_at, kept.as_deref().and_then(|r| r.built.as_ref()))
 }
 
 /// Takes the actions; gives whether any of them moves the hand (a motion, a loop, a ^C
@@ -837,6 +837,7 @@ fn case_stage(
     walked: Walked,
     caps: &[Captured],
     stops_at: Option<usize>,
+    preamble: Option<&BuiltSteps>,
 ) -> Result<BuiltCase, NotACase> {
     let def = &walked.def;
     let eeprom_writes = def
@@ -851,7 +852,7 @@ fn case_stage(
         })
         .count();
     let mut step_decisions = crate::suite::depends::decisions_by_step(p, &def.plans, caps);
-    let transcript = build_from_steps(p, def, caps, &step_decisions).map_err(NotACase)?;
+    let transcript = build_after(p, def, caps, &step_decisions, preamble).map_err(NotACase)?;
     if let Some(at) = stops_at.and_then(|at| step_decisions.len().checked_sub(1).map(|last| at.min(last))) {
         for id in STOP_DECISIONS.iter().filter(|id| p.decisions.iter().any(|d| d.id == **id)) {
             if !step_decisions[at].iter().any(|d| d == id) {

@@ -20,7 +20,8 @@ use gcl_model::{Device, DeviceConfig, Profile};
 use gcl_transcript::script::ScriptStep;
 
 use crate::record::{Captured, Recorder, ShadowStep};
-use crate::suite::build::capture_options;
+use crate::suite::build::{BuiltSteps, capture_options};
+use crate::suite::plan::Plan;
 
 /// The model's runs of a preamble, at its end.
 pub(crate) struct Ran {
@@ -32,6 +33,8 @@ pub(crate) struct Ran {
     pub(crate) recorder: Recorder,
     /// What the link answered to each step.
     pub(crate) caps: Vec<Captured>,
+    /// The transcript's steps made of them (`suite::build::build_from`'s).
+    pub(crate) built: Option<BuiltSteps>,
     /// Whether a step of the preamble ends on quiet (where the walker's shadow and the
     /// recorder's part).
     preamble_quiet: bool,
@@ -58,20 +61,23 @@ pub(crate) fn kept(profile: &Arc<Profile>, config: &DeviceConfig, steps: &[Scrip
     lock().iter().find(|k| k.is(profile, config, steps)).map(|k| k.ran.clone())
 }
 
-/// Keeps the model's runs of `steps` on `profile` built from `config`: `walked`, the walker's
-/// shadow that walked them fresh, and a fresh capture of them run here.
+/// Keeps the model's runs of the steps of `plans` on `profile` built from `config`: `walked`,
+/// the walker's shadow that walked them fresh, a fresh capture of them run here, and the
+/// transcript's steps made of that.
 pub(crate) fn keep(
     profile: &Arc<Profile>,
     config: &DeviceConfig,
-    steps: &[ScriptStep],
+    plans: &[Plan],
     walked: Device,
 ) -> Result<(), LinkError> {
+    let steps: &[ScriptStep] = &plans.iter().map(|p| p.step.clone()).collect::<Vec<_>>();
     let opts = capture_options(profile, config);
     let mut link = SimLink::new(profile.clone(), config.clone());
     let mut recorder = Recorder::start(&mut link, &opts)?;
     let caps = recorder.capture(&mut link, steps, &opts)?;
     let preamble_quiet = steps.iter().any(|s| s.action.ends_on_quiet());
-    let ran = Arc::new(Ran { walked, link, recorder, caps, preamble_quiet });
+    let built = BuiltSteps::of(profile, plans, &caps);
+    let ran = Arc::new(Ran { walked, link, recorder, caps, built, preamble_quiet });
     let mut kept = lock();
     if !kept.iter().any(|k| k.is(profile, config, steps)) {
         if kept.len() >= KEEP {
