@@ -360,8 +360,7 @@ fn assemble(
     let steps: Vec<ScriptStep> = walked.def.plans.iter().map(|pl| pl.step.clone()).collect();
     let caps = match &kept {
         Some(ran) if steps.starts_with(&pre) => {
-            let seen = std::mem::replace(&mut walked.seen, (Vec::new(), ran.walked.clone()));
-            super::preamble::capture_after(p, config, ran, &steps, seen)
+            super::preamble::capture_after(p, config, ran, &steps, walked.seen.take())
         }
         _ => capture_plan_on(p, &walked.def.plans, config.clone()),
     }
@@ -412,8 +411,8 @@ struct Walked {
     /// See [`BuiltCase::action_steps`].
     action_steps: Vec<(usize, bool)>,
     /// What the recorder's shadow makes of each step walked (see [`Walk::seen`]), and that
-    /// shadow after them.
-    seen: (Vec<(ScriptStep, ShadowStep)>, Device),
+    /// shadow after them (taken by the capture).
+    seen: Option<(Vec<(ScriptStep, ShadowStep)>, Device)>,
 }
 
 /// The actions stage as it goes: the shadow that walks the case's bytes, and what it noted.
@@ -694,7 +693,7 @@ impl<'a> Walker<'a> {
             notes: self.notes,
             stalls_at: self.stalls_at,
             action_steps: self.action_steps,
-            seen: (self.walk.seen, self.walk.twin.unwrap_or(self.walk.shadow)),
+            seen: Some((self.walk.seen, self.walk.twin.unwrap_or(self.walk.shadow))),
         }
     }
 }

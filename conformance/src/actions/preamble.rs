@@ -110,7 +110,7 @@ pub(crate) fn capture_after(
     config: &DeviceConfig,
     ran: &Ran,
     steps: &[ScriptStep],
-    (seen, shadow): (Vec<(ScriptStep, ShadowStep)>, Device),
+    seen: Option<(Vec<(ScriptStep, ShadowStep)>, Device)>,
 ) -> Result<Vec<Captured>, LinkError> {
     let mut caps = ran.caps.clone();
     if caps.last().is_some_and(|c| c.flooded) {
@@ -120,9 +120,10 @@ pub(crate) fn capture_after(
     let (mut link, mut recorder) = (ran.link.clone(), ran.recorder.clone());
     let mut rest = &steps[caps.len().min(steps.len())..];
     let same_model = opts.shadow == *config && !ran.preamble_quiet;
-    let walked_these =
-        seen.len() <= rest.len() && seen.iter().zip(rest).all(|((s, _), r)| s.action == r.action && s.pause == r.pause);
-    if same_model && walked_these {
+    let walked_these = |seen: &[(ScriptStep, ShadowStep)]| {
+        seen.len() <= rest.len() && seen.iter().zip(rest).all(|((s, _), r)| s.action == r.action && s.pause == r.pause)
+    };
+    if let Some((seen, shadow)) = seen.filter(|(seen, _)| same_model && walked_these(seen)) {
         for ((_, s), step) in seen.into_iter().zip(rest) {
             let c = recorder.step_seen(&mut link, step, &opts, s)?;
             let flooded = c.flooded;
