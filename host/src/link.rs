@@ -101,7 +101,9 @@ pub fn byte_time(baud: u32) -> Duration {
 /// Sent bytes reach the hand after their wire time at the hand's present BAUD; output takes
 /// its wire time too. Waiting in [`Link::recv`] or [`Link::pause`] advances simulated time only,
 /// so motion completes as fast as the CPU allows while every clock the host can see agrees
-/// with a real wire.
+/// with a real wire. A clone is the same hand at the same simulated moment (its wall clock
+/// included), going on independently.
+#[derive(Clone)]
 pub struct SimLink {
     device: Device,
     pending: Vec<u8>,

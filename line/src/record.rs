@@ -96,47 +96,101 @@ const SHOWN_IN_ERRORS: usize = 200;
 /// Runs the steps against `link` and captures each answer. The link should be fresh or idle:
 /// anything it sends before the first step is drained first.
 pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) -> Result<Vec<Captured>, LinkError> {
-    let profile = &opts.profile;
-    // The recorder writes down whatever the hand says, GCL or not, so it does not parse the
-    // answer; it only needs the host core's notion of where an answer ends.
-    let framing = Framing::of(profile);
-    let mut shadow = Device::new(profile.clone(), opts.shadow.clone());
-    shadow.clear_output();
-    while shadow.poll_event().is_some() {}
-    drain(link, opts.quiet, Duration::from_secs(10))?;
-    let mut carry: Vec<u8> = Vec::new();
-    let mut out = Vec::with_capacity(steps.len());
-    for step in steps {
-        if let Some(p) = step.pause {
-            link.pause(p);
-            let t = shadow.now() + p;
-            shadow.handle_timeout(t);
-        }
-        let sent = step.action.wire_bytes(profile.framing.terminator);
-        let was_loop = shadow.mode() == Mode::Loop;
-        let layout = shadow.rt_layout().cloned();
+    let mut r = Recorder::start(link, opts)?;
+    r.capture(link, steps, opts)
+}
+
+/// A recording under way: the shadow model beside the link and the bytes the link sent past
+/// the last step's answer. [`capture`] is [`Recorder::start`] then [`Recorder::capture`]; a
+/// caller that records many scripts with the same first steps on equal fresh links may keep a
+/// clone of the recorder (and of its link) after those steps and go on from there: what
+/// follows is what the whole recording would capture, since both are deterministic values.
+#[derive(Debug, Clone)]
+pub struct Recorder {
+    framing: Framing,
+    shadow: Device,
+    carry: Vec<u8>,
+}
+
+impl Recorder {
+    /// Starts a recording on `link` (fresh or idle): drains what it sends first.
+    pub fn start(link: &mut dyn Link, opts: &RecordOptions) -> Result<Recorder, LinkError> {
+        let profile = &opts.profile;
+        // The recorder writes down whatever the hand says, GCL or not, so it does not parse the
+        // answer; it only needs the host core's notion of where an answer ends.
+        let framing = Framing::of(profile);
+        let mut shadow = Device::new(profile.clone(), opts.shadow.clone());
         shadow.clear_output();
-        shadow.handle_input(shadow.now(), &sent);
-        if !step.action.ends_on_quiet() {
-            shadow.run_until_idle(Duration::from_secs(600));
-        }
-        let shadow_out = shadow.take_output();
-        // Whether this step entered the loop (and stayed in it), from what the shadow reports.
-        let mut in_loop = was_loop;
-        while let Some(e) = shadow.poll_event() {
-            match e {
-                Event::LoopEntered => in_loop = true,
-                Event::LoopLeft => in_loop = false,
-                Event::PoweredUp | Event::LineDone(_) => {}
+        while shadow.poll_event().is_some() {}
+        drain(link, opts.quiet, Duration::from_secs(10))?;
+        Ok(Recorder { framing, shadow, carry: Vec::new() })
+    }
+
+    /// The recording with `shadow` as its shadow model from here on: a model in the state the
+    /// recorder's own shadow would be in after the steps so far (one that ran them by
+    /// [`shadow_step`], their pauses included, for the steps recorded with
+    /// [`Recorder::step_seen`]).
+    pub fn with_shadow(mut self, shadow: Device) -> Recorder {
+        self.shadow = shadow;
+        self
+    }
+
+    /// Runs the steps and captures each answer, stopping after a step that floods.
+    pub fn capture(
+        &mut self,
+        link: &mut dyn Link,
+        steps: &[ScriptStep],
+        opts: &RecordOptions,
+    ) -> Result<Vec<Captured>, LinkError> {
+        let mut out = Vec::with_capacity(steps.len());
+        for step in steps {
+            let c = self.step(link, step, opts)?;
+            let flooded = c.flooded;
+            out.push(c);
+            if flooded {
+                break;
             }
         }
-        let entered_loop = !was_loop && in_loop;
+        Ok(out)
+    }
+
+    /// Runs one step and captures its answer.
+    pub fn step(
+        &mut self,
+        link: &mut dyn Link,
+        step: &ScriptStep,
+        opts: &RecordOptions,
+    ) -> Result<Captured, LinkError> {
+        if let Some(p) = step.pause {
+            let t = self.shadow.now() + p;
+            self.shadow.handle_timeout(t);
+        }
+        let seen = shadow_step(&mut self.shadow, step, opts.profile.framing.terminator);
+        self.step_seen(link, step, opts, seen)
+    }
+
+    /// [`Recorder::step`] with what the recorder's shadow makes of it already known: `seen` is
+    /// [`shadow_step`] of a model in the state this recorder's shadow is in, after the step's
+    /// pause. The recorder's own shadow is left as it is (see [`Recorder::with_shadow`]).
+    pub fn step_seen(
+        &mut self,
+        link: &mut dyn Link,
+        step: &ScriptStep,
+        opts: &RecordOptions,
+        seen: ShadowStep,
+    ) -> Result<Captured, LinkError> {
+        let framing = &self.framing;
+        if let Some(p) = step.pause {
+            link.pause(p);
+        }
+        let sent = step.action.wire_bytes(opts.profile.framing.terminator);
+        let ShadowStep { was_loop, layout, out: shadow_out, entered_loop } = seen;
         if !sent.is_empty() {
             link.send(&sent)?;
         }
         let t0 = link.elapsed();
         let timeout = step.timeout.unwrap_or(opts.timeout);
-        let mut buf = std::mem::take(&mut carry);
+        let mut buf = std::mem::take(&mut self.carry);
         let end = |buf: &[u8]| -> Option<usize> {
             let prompt_end = framing.prompt_end(buf);
             if was_loop {
@@ -191,8 +245,8 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
                 }
             }
         };
-        carry = buf.split_off(cut);
-        out.push(Captured {
+        self.carry = buf.split_off(cut);
+        Ok(Captured {
             sent,
             output: buf,
             took: link.elapsed().saturating_sub(t0),
@@ -200,12 +254,47 @@ pub fn capture(link: &mut dyn Link, steps: &[ScriptStep], opts: &RecordOptions) 
             layout,
             timed_out,
             flooded,
-        });
-        if flooded {
-            break;
+        })
+    }
+}
+
+/// What the recorder's shadow model makes of one step: whether the step was sent in RealTime
+/// mode and with which layouts, the shadow's answer (whose size ends a RealTime answer), and
+/// whether the step entered the loop and stayed in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadowStep {
+    /// Whether the shadow was in RealTime mode when the bytes were sent.
+    pub was_loop: bool,
+    /// The shadow's RealTime layouts then.
+    pub layout: Option<RtLayout>,
+    /// The shadow's answer.
+    pub out: Vec<u8>,
+    /// Whether the step entered the loop and stayed in it.
+    pub entered_loop: bool,
+}
+
+/// The recorder's shadow's run of a step whose pause has passed: the step's bytes, then (unless
+/// the step ends on quiet) the model run until it is idle; its output and events are taken.
+pub fn shadow_step(shadow: &mut Device, step: &ScriptStep, terminator: u8) -> ShadowStep {
+    let sent = step.action.wire_bytes(terminator);
+    let was_loop = shadow.mode() == Mode::Loop;
+    let layout = shadow.rt_layout().cloned();
+    shadow.clear_output();
+    shadow.handle_input(shadow.now(), &sent);
+    if !step.action.ends_on_quiet() {
+        shadow.run_until_idle(Duration::from_secs(600));
+    }
+    let out = shadow.take_output();
+    // Whether this step entered the loop (and stayed in it), from what the shadow reports.
+    let mut in_loop = was_loop;
+    while let Some(e) = shadow.poll_event() {
+        match e {
+            Event::LoopEntered => in_loop = true,
+            Event::LoopLeft => in_loop = false,
+            Event::PoweredUp | Event::LineDone(_) => {}
         }
     }
-    Ok(out)
+    ShadowStep { was_loop, layout, out, entered_loop: !was_loop && in_loop }
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {

@@ -494,7 +494,10 @@ fn run_step(
     }
     let budget = opts.budgets.get(i).copied();
     let timeout = budget.map_or_else(|| step.within.unwrap_or(opts.default_timeout), |b| b.deadline);
-    let ceiling = budget.map_or_else(|| default_ceiling(step), |b| b.ceiling);
+    // (the default ceiling writes the expectation out to measure it: that waits until an
+    // answer is longer than the least ceiling could be)
+    let ceiling = std::cell::LazyCell::new(|| budget.map_or_else(|| default_ceiling(step), |b| b.ceiling));
+    let at_least = budget.map_or(CEILING_FLOOR, |b| b.ceiling);
     let mut m = Matcher::with_captures(&step.expect, caps);
     let mut fed = 0;
     // When the answer's first byte came after the deadline (a silent step's grace), the
@@ -514,7 +517,7 @@ fn run_step(
                     let offset = fed - 1;
                     let form = m.form_at_parting();
                     let expected = m.expected_at_parting();
-                    buf.truncate(offset.saturating_add(ceiling));
+                    buf.truncate(offset.saturating_add(*ceiling));
                     let took = link.elapsed().saturating_sub(t0);
                     exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
                     let got = &exchange[exchange.len() - 1].received;
@@ -532,14 +535,14 @@ fn run_step(
                 }
             }
         }
-        if buf.len() > ceiling {
-            buf.truncate(ceiling);
+        if buf.len() > at_least && buf.len() > *ceiling {
+            buf.truncate(*ceiling);
             let took = link.elapsed().saturating_sub(t0);
             exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
             return Err(ReplayOutcome::Flooded(Box::new(Flooded {
                 step: i,
                 line: step.line,
-                ceiling,
+                ceiling: *ceiling,
                 expected_full: step.expect.to_text(),
                 exchange: std::mem::take(exchange),
             })));
@@ -555,7 +558,7 @@ fn run_step(
         let got = if spent < limit { link.recv(buf, limit - spent) } else { Ok(0) };
         match got {
             Err(e) => {
-                buf.truncate(ceiling);
+                buf.truncate(*ceiling);
                 let took = link.elapsed().saturating_sub(t0);
                 exchange.push(Exchanged { step: i, line: step.line, sent, received: std::mem::take(buf), took });
                 return Err(link_failed(i, step.line, &e, std::mem::take(exchange)));

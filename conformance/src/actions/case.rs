@@ -18,8 +18,8 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 
 use super::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
-use crate::record::Captured;
-use crate::suite::build::{CaseB, CaseDef, build_from, capture_plan, capture_plan_on, value_range};
+use crate::record::{Captured, ShadowStep, shadow_step};
+use crate::suite::build::{BuiltSteps, CaseB, CaseDef, build_after, capture_plan, capture_plan_on, value_range};
 use crate::suite::plan::{FieldRule, Plan, Range, Shape};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
@@ -99,6 +99,12 @@ struct Walk {
     /// Whether the model's positions may differ from the hand's by more than a band (after
     /// ^C mid-motion).
     positions_uncertain: bool,
+    /// Each step walked, with what the recorder's shadow makes of it (`record::shadow_step`):
+    /// the capture of the case on a kept preamble needs no shadow of its own for these steps.
+    seen: Vec<(ScriptStep, ShadowStep)>,
+    /// The recorder's shadow, once it parts from this one: after a step that ends on quiet
+    /// the walk lets [`QUIET`] pass, the recorder does not.
+    twin: Option<Device>,
 }
 
 /// How near the end of a motion (by the model's clock) a ^C may not land on a hand outside
@@ -106,6 +112,10 @@ struct Walk {
 const ABORT_MARGIN: Duration = Duration::from_millis(150);
 
 impl Walk {
+    fn new(shadow: Device) -> Walk {
+        Walk { shadow, features: BTreeSet::new(), positions_uncertain: false, seen: Vec::new(), twin: None }
+    }
+
     /// Whether the shadow is still running a command after `t` more without input.
     fn busy_after(&self, t: Duration) -> bool {
         let mut d = self.shadow.clone();
@@ -114,22 +124,31 @@ impl Walk {
         d.mode() == Mode::Busy
     }
 
-    /// Feeds one step to the shadow, the way the recorder's shadow does; returns its answer.
+    /// Feeds one step to the shadow, the way the recorder's shadow does (and lets [`QUIET`] pass
+    /// after a step that ends on quiet); returns its answer.
     fn feed(&mut self, step: &ScriptStep, terminator: u8) -> Vec<u8> {
         if let Some(p) = step.pause {
             let t = self.shadow.now() + p;
             self.shadow.handle_timeout(t);
+            if let Some(twin) = &mut self.twin {
+                let t = twin.now() + p;
+                twin.handle_timeout(t);
+            }
         }
         let before = self.shadow.mode();
-        let sent = step.action.wire_bytes(terminator);
-        self.shadow.clear_output();
-        self.shadow.handle_input(self.shadow.now(), &sent);
+        let mine = shadow_step(&mut self.shadow, step, terminator);
+        let seen = match &mut self.twin {
+            Some(twin) => shadow_step(twin, step, terminator),
+            None => mine.clone(),
+        };
+        let mut answer = mine.out;
         if step.action.ends_on_quiet() {
+            self.twin.get_or_insert_with(|| self.shadow.clone());
             let t = self.shadow.now() + QUIET;
             self.shadow.handle_timeout(t);
-        } else {
-            self.shadow.run_until_idle(Duration::from_secs(600));
+            answer.extend(self.shadow.take_output());
         }
+        self.seen.push((step.clone(), seen));
         let after = self.shadow.mode();
         if before != after {
             self.features.insert(format!("mode:{before:?}->{after:?}"));
@@ -143,7 +162,7 @@ impl Walk {
         {
             self.features.insert(format!("layout:{}/{}/{}", l.motors(), l.control().size(), l.feedback().size()));
         }
-        self.shadow.take_output()
+        answer
     }
 }
 
@@ -319,21 +338,40 @@ fn assemble(
     let moves = moves_any(p, actions);
     let homed = moves || home;
     let mut k = CaseB::new(p, id, title).src("Supervisory mode").preamble(homed);
-    let mut walker = Walker::start(p, config, &k, wide, blocks);
+    // (the preamble is the same for many cases: the model's runs of it are kept, and a case
+    // after the first goes on from clones of them; see `preamble`)
+    let pre: Vec<ScriptStep> = k.def.plans.iter().map(|pl| pl.step.clone()).collect();
+    let kept = super::preamble::kept(p, config, &pre);
+    let shadow = match &kept {
+        Some(ran) => ran.walked.clone(),
+        None => {
+            let shadow = Walker::walk_preamble(p, config, &pre);
+            super::preamble::keep(p, config, &k.def.plans, shadow.clone()).map_err(|e| NotACase(e.to_string()))?;
+            shadow
+        }
+    };
+    let mut walker = Walker::start(p, shadow, wide, blocks);
     for a in actions {
         k = walker.action(k, a)?;
     }
     let mut walked = walker.close(k);
     // The model's answers as the wire meets them, then the shapes from them (and the
     // transcript from the same answers).
-    let caps = capture_plan_on(p, &walked.def.plans, config.clone()).map_err(|e| NotACase(e.to_string()))?;
+    let steps: Vec<ScriptStep> = walked.def.plans.iter().map(|pl| pl.step.clone()).collect();
+    let caps = match &kept {
+        Some(ran) if steps.starts_with(&pre) => {
+            super::preamble::capture_after(p, config, ran, &steps, walked.seen.take())
+        }
+        _ => capture_plan_on(p, &walked.def.plans, config.clone()),
+    }
+    .map_err(|e| NotACase(e.to_string()))?;
     let stops_at = stops_stage(p, &mut walked, &caps, moves, wide);
     abort_timing_stage(p, &mut walked.def, &caps);
     if wide && model == Model::Profile {
         no_feedback_inside(&walked.kinds, &caps)?;
     }
     shape_stage(p, &mut walked, &caps, model, wide, homed)?;
-    case_stage(p, walked, &caps, stops_at)
+    case_stage(p, walked, &caps, stops_at, kept.as_deref().and_then(|r| r.built.as_ref()))
 }
 
 /// Takes the actions; gives whether any of them moves the hand (a motion, a loop, a ^C
@@ -372,6 +410,9 @@ struct Walked {
     stalls_at: Option<usize>,
     /// See [`BuiltCase::action_steps`].
     action_steps: Vec<(usize, bool)>,
+    /// What the recorder's shadow makes of each step walked (see [`Walk::seen`]), and that
+    /// shadow after them (taken by the capture).
+    seen: Option<(Vec<(ScriptStep, ShadowStep)>, Device)>,
 }
 
 /// The actions stage as it goes: the shadow that walks the case's bytes, and what it noted.
@@ -394,25 +435,21 @@ struct Walker<'a> {
 }
 
 impl<'a> Walker<'a> {
-    /// Takes the case's preamble; gives a shadow that has walked it (its features forgotten).
-    fn start(
-        p: &'a Arc<Profile>,
-        config: &DeviceConfig,
-        k: &CaseB,
-        wide: bool,
-        blocks: &'a [Option<Vec<u8>>],
-    ) -> Walker<'a> {
-        let term = p.framing.terminator;
-        let mut walk = Walk {
-            shadow: Device::new(p.clone(), config.clone()),
-            features: BTreeSet::new(),
-            positions_uncertain: false,
-        };
+    /// Takes the case's preamble; gives a fresh shadow that has walked it.
+    fn walk_preamble(p: &Arc<Profile>, config: &DeviceConfig, steps: &[ScriptStep]) -> Device {
+        let mut walk = Walk::new(Device::new(p.clone(), config.clone()));
         walk.shadow.clear_output();
-        for plan in &k.def.plans {
-            walk.feed(&plan.step.clone(), term);
+        for step in steps {
+            walk.feed(step, p.framing.terminator);
         }
-        walk.features.clear();
+        walk.shadow
+    }
+
+    /// Takes a shadow that has walked the case's preamble ([`Walker::walk_preamble`]); gives
+    /// the walker of the actions after it (the preamble's features forgotten).
+    fn start(p: &'a Arc<Profile>, shadow: Device, wide: bool, blocks: &'a [Option<Vec<u8>>]) -> Walker<'a> {
+        let term = p.framing.terminator;
+        let walk = Walk::new(shadow);
         Walker {
             p,
             term,
@@ -656,6 +693,7 @@ impl<'a> Walker<'a> {
             notes: self.notes,
             stalls_at: self.stalls_at,
             action_steps: self.action_steps,
+            seen: Some((self.walk.seen, self.walk.twin.unwrap_or(self.walk.shadow))),
         }
     }
 }
@@ -798,6 +836,7 @@ fn case_stage(
     walked: Walked,
     caps: &[Captured],
     stops_at: Option<usize>,
+    preamble: Option<&BuiltSteps>,
 ) -> Result<BuiltCase, NotACase> {
     let def = &walked.def;
     let eeprom_writes = def
@@ -811,8 +850,8 @@ fn case_stage(
             _ => false,
         })
         .count();
-    let transcript = build_from(p, def, caps).map_err(NotACase)?;
     let mut step_decisions = crate::suite::depends::decisions_by_step(p, &def.plans, caps);
+    let transcript = build_after(p, def, caps, &step_decisions, preamble).map_err(NotACase)?;
     if let Some(at) = stops_at.and_then(|at| step_decisions.len().checked_sub(1).map(|last| at.min(last))) {
         for id in STOP_DECISIONS.iter().filter(|id| p.decisions.iter().any(|d| d.id == **id)) {
             if !step_decisions[at].iter().any(|d| d == id) {

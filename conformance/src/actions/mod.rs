@@ -17,6 +17,7 @@
 //! instrumented.
 
 pub mod case;
+mod preamble;
 mod relate;
 
 use gcl_model::Profile;

@@ -631,23 +631,133 @@ pub(crate) fn capture_plan_on(
     plans: &[Plan],
     config: gcl_model::DeviceConfig,
 ) -> Result<Vec<Captured>, LinkError> {
-    let mut opts = RecordOptions::new(profile.clone());
-    opts.timeout = Duration::from_secs(120);
-    // (a hand with a difference in how it frames or sizes its answers: the shadow has it too)
-    opts.shadow.faults = config.faults.clone();
-    opts.shadow.without_effect = config.without_effect.clone();
+    let opts = capture_options(profile, &config);
     let mut link = SimLink::new(profile.clone(), config);
     let steps: Vec<ScriptStep> = plans.iter().map(|p| p.step.clone()).collect();
     capture(&mut link, &steps, &opts)
 }
 
+/// How [`capture_plan_on`] records on a hand built from `config`.
+pub(crate) fn capture_options(profile: &Arc<Profile>, config: &gcl_model::DeviceConfig) -> RecordOptions {
+    let mut opts = RecordOptions::new(profile.clone());
+    opts.timeout = Duration::from_secs(120);
+    // (a hand with a difference in how it frames or sizes its answers: the shadow has it too)
+    opts.shadow.faults = config.faults.clone();
+    opts.shadow.without_effect = config.without_effect.clone();
+    opts
+}
+
 /// [`build`] from the answers [`capture_plan`] gave for `def`'s plans.
 pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured]) -> Result<Transcript, String> {
+    build_after(profile, def, caps, &super::depends::decisions_by_step(profile, &def.plans, caps), None)
+}
+
+/// The steps [`build_from`] makes of a case's first plans and the model's answers to them, to
+/// go on from in a case that begins with the same plans and answers ([`build_after`]): a
+/// case's preamble, kept with its capture (`actions::preamble`).
+#[derive(Debug, Clone)]
+pub(crate) struct BuiltSteps {
+    plans: Vec<Plan>,
+    caps: Vec<Captured>,
+    steps: Vec<Step>,
+    captured: Captures,
+}
+
+impl BuiltSteps {
+    /// The steps of `plans` answered with `caps`; `None` where they are no steps of a case
+    /// (an answer the shapes refuse) or write notes of their own (relations, timing windows),
+    /// which a case going on from them would need too.
+    pub(crate) fn of(profile: &Arc<Profile>, plans: &[Plan], caps: &[Captured]) -> Option<BuiltSteps> {
+        if plans.len() != caps.len()
+            || plans.iter().any(|p| p.earliest.is_some() || p.binds.iter().any(|b| b.relation.is_some()))
+        {
+            return None;
+        }
+        let def = CaseDef {
+            id: String::new(),
+            title: String::new(),
+            clauses: Vec::new(),
+            level: None,
+            requires: Vec::new(),
+            setup: Vec::new(),
+            notes: Vec::new(),
+            plans: plans.to_vec(),
+        };
+        let mut notes = Vec::new();
+        let (steps, captured) = build_steps(profile, &def, caps, (Vec::new(), Captures::new()), &mut notes).ok()?;
+        notes.is_empty().then(|| BuiltSteps { plans: plans.to_vec(), caps: caps.to_vec(), steps, captured })
+    }
+}
+
+/// [`build_from`] with the decisions each step rests on already found (`depends::decisions_by_step`
+/// of the same plans and answers), going on from `done` where the case begins with its plans and
+/// answers.
+pub(crate) fn build_after(
+    profile: &Arc<Profile>,
+    def: &CaseDef,
+    caps: &[Captured],
+    by_step: &[Vec<String>],
+    done: Option<&BuiltSteps>,
+) -> Result<Transcript, String> {
     let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
-    let mut out = Vec::with_capacity(caps.len());
-    let mut captured = Captures::new();
+    let from = match done {
+        Some(d) if def.plans.starts_with(&d.plans) && caps.starts_with(&d.caps) => {
+            (d.steps.clone(), d.captured.clone())
+        }
+        _ => (Vec::with_capacity(caps.len()), Captures::new()),
+    };
     let mut notes = def.notes.clone();
-    for (i, (plan, c)) in def.plans.iter().zip(caps).enumerate() {
+    let (out, _) = build_steps(profile, def, caps, from, &mut notes)?;
+    let mut requires = def.requires.clone();
+    requires.sort();
+    // The decisions the case rests on: those it checks, then those its steps touch.
+    let mut decisions: Vec<String> =
+        def.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
+    for d in super::depends::decisions_of(profile, by_step) {
+        if !decisions.contains(&d) {
+            decisions.push(d);
+        }
+    }
+    let order = |id: &String| profile.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
+    decisions.sort_by_key(order);
+    // The case binds no more strongly than the weakest decision it rests on.
+    let mut level = def.level.unwrap_or(Level::Must);
+    for d in profile.decisions.iter().filter(|d| decisions.contains(&d.id)) {
+        level = level.max(d.level);
+    }
+    let mut extensions = Vec::new();
+    if !decisions.is_empty() {
+        extensions.push((DECISIONS_KEY.to_string(), decisions.join(" ")));
+    }
+    let header = Header {
+        id: def.id.clone(),
+        title: def.title.clone(),
+        clauses: def.clauses.clone(),
+        level,
+        profiles: vec![profile.id.clone()],
+        requires,
+        setup: def.setup.clone(),
+        notes,
+        extensions,
+    };
+    if header.clauses.is_empty() {
+        return Err(fail("no clause".into()));
+    }
+    Ok(Transcript { header, steps: out })
+}
+
+/// The steps of `def`'s plans answered with `caps`, from the first not in `from` (steps made and
+/// the captures they made) on; notes the steps write are added to `notes`.
+fn build_steps(
+    profile: &Arc<Profile>,
+    def: &CaseDef,
+    caps: &[Captured],
+    (mut out, mut captured): (Vec<Step>, Captures),
+    notes: &mut Vec<String>,
+) -> Result<(Vec<Step>, Captures), String> {
+    let fail = |m: String| format!("case {} ({}): {m}", def.id, profile.id);
+    let start = out.len();
+    for (i, (plan, c)) in def.plans.iter().zip(caps).enumerate().skip(start) {
         if c.timed_out {
             return Err(fail(format!("step {i} got no complete answer: \"{}\"", gcl_model::escape::escape(&c.output))));
         }
@@ -714,42 +824,7 @@ pub(crate) fn build_from(profile: &Arc<Profile>, def: &CaseDef, caps: &[Captured
             expect,
         });
     }
-    let mut requires = def.requires.clone();
-    requires.sort();
-    // The decisions the case rests on: those it checks, then those its steps touch.
-    let mut decisions: Vec<String> =
-        def.clauses.iter().filter_map(|c| c.strip_prefix(DECISION_CLAUSE)).map(str::to_string).collect();
-    for d in super::depends::decisions_of(profile, &def.plans, caps) {
-        if !decisions.contains(&d) {
-            decisions.push(d);
-        }
-    }
-    let order = |id: &String| profile.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);
-    decisions.sort_by_key(order);
-    // The case binds no more strongly than the weakest decision it rests on.
-    let mut level = def.level.unwrap_or(Level::Must);
-    for d in profile.decisions.iter().filter(|d| decisions.contains(&d.id)) {
-        level = level.max(d.level);
-    }
-    let mut extensions = Vec::new();
-    if !decisions.is_empty() {
-        extensions.push((DECISIONS_KEY.to_string(), decisions.join(" ")));
-    }
-    let header = Header {
-        id: def.id.clone(),
-        title: def.title.clone(),
-        clauses: def.clauses.clone(),
-        level,
-        profiles: vec![profile.id.clone()],
-        requires,
-        setup: def.setup.clone(),
-        notes,
-        extensions,
-    };
-    if header.clauses.is_empty() {
-        return Err(fail("no clause".into()));
-    }
-    Ok(Transcript { header, steps: out })
+    Ok((out, captured))
 }
 
 #[cfg(test)]

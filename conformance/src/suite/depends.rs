@@ -139,16 +139,14 @@ pub(crate) fn answer_only(id: &str) -> bool {
     ANSWER_ONLY.contains(&id)
 }
 
-/// Every decision a case's steps rest on, in the profile's order, given the plan and what the
-/// model answered to each step: the union of [`decisions_by_step`].
-pub(crate) fn decisions_of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<String> {
+/// Every decision a case's steps rest on, in the profile's order: [`EVERY_STEP`]'s and the union
+/// of what [`decisions_by_step`] gave for the case's plans and the model's answers.
+pub(crate) fn decisions_of(p: &Profile, by_step: &[Vec<String>]) -> Vec<String> {
     let mut found = Vec::new();
     topic(p, EVERY_STEP, &mut found);
-    for step in decisions_by_step(p, plans, caps) {
-        for d in step {
-            if !found.contains(&d) {
-                found.push(d);
-            }
+    for d in by_step.iter().flatten() {
+        if !found.contains(d) {
+            found.push(d.clone());
         }
     }
     let order = |id: &String| p.decisions.iter().position(|d| &d.id == id).unwrap_or(usize::MAX);

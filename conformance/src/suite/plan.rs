@@ -12,7 +12,7 @@ use gcl_transcript::script::ScriptStep;
 pub(crate) type Range = (i64, i64);
 
 /// How the answer of a planned step is written.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Shape {
     /// Exactly as the model answers.
     Exact,
@@ -34,7 +34,7 @@ pub(crate) enum Shape {
 }
 
 /// An override for one feedback field.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct FieldRule {
     /// The motor, or `None` for a hand-wide field.
     pub motor: Option<u8>,
@@ -62,7 +62,7 @@ pub(crate) enum Target {
 /// before it, or both. A relation is the case's subject written as arithmetic between two
 /// answers, so that the case does not rest on the absolute values another decision sets;
 /// it carries its evidence, which the golden states as a note.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Bind {
     pub target: Target,
     pub capture: Option<String>,
@@ -76,7 +76,7 @@ pub(crate) struct Bind {
 }
 
 /// One planned step.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Plan {
     pub step: ScriptStep,
     pub shape: Shape,
