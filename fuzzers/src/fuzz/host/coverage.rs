@@ -4,7 +4,7 @@
 //! map named by `__AFL_SHM_ID`: C and C++ built with `afl-cc` / `afl-clang-fast` (run without
 //! AFL's fork server, such a binary finds no fork server to talk to and just runs), Python
 //! through `python-afl` (`afl.init()`, which hashes the lines it runs into the same map), Rust
-//! built with `cargo-afl` (the same runtime as `afl-cc`; no test builds one yet). For each run [`super::Slots`] makes a map ([`ShmMap`]), gives its id
+//! built with `cargo-afl` (the same runtime as `afl-cc`; `hosts/rust_host` in the harness's tests). For each run [`super::Slots`] makes a map ([`ShmMap`]), gives its id
 //! to the host, and reads the edges hit (the map's non-zero bytes) after the run; the campaign
 //! keeps their union and the schedules that reached an edge no run before them reached
 //! ([`Coverage`]).
