@@ -177,6 +177,104 @@ fn an_afl_cc_host_reports_its_edges_rising_and_the_schedules_that_added_them_rep
     assert_eq!(replayed_edges(&host, &cov), cov.edges as usize, "the schedules that added edges reach them again");
 }
 
+/// The instrumentation `cargo afl build` gives a crate (cargo-afl 0.18's flags, less
+/// `-C target-cpu=native`), for `rustc` by hand: sanitizer coverage's pc-guard edges, linked
+/// with the runtime `afl-cc` links (Debian's `afl++`), which maps `__AFL_SHM_ID` at start.
+const CARGO_AFL_FLAGS: &[&str] = &[
+    "-C",
+    "debug-assertions",
+    "-C",
+    "overflow_checks",
+    "-C",
+    "codegen-units=1",
+    "-C",
+    "opt-level=3",
+    "-C",
+    "passes=sancov-module",
+    "-C",
+    "llvm-args=-sanitizer-coverage-level=3",
+    "-C",
+    "llvm-args=-sanitizer-coverage-trace-pc-guard",
+    "-C",
+    "llvm-args=-sanitizer-coverage-prune-blocks=0",
+    "-C",
+    "llvm-args=-sanitizer-coverage-trace-compares",
+    "--cfg",
+    "fuzzing",
+];
+
+/// AFL++'s runtime as Debian's `afl++` installs it.
+const AFL_RUNTIME: &str = "/usr/lib/afl/afl-compiler-rt.o";
+
+/// `hosts/rust_host` (a crate outside the workspace) built into `dir`: by hand with `rustc`
+/// and [`CARGO_AFL_FLAGS`] (what CI can build: it installs `afl++`, not cargo-afl, whose install
+/// compiles AFL++ for minutes), and with `cargo afl build` where cargo-afl is installed. Each
+/// binary with the way it was built.
+fn rust_hosts(dir: &Path) -> Vec<(&'static str, String)> {
+    let mut built = Vec::new();
+    let src = hosts().join("rust_host");
+    if deps::afl_cc().is_some() {
+        let out = dir.join("rust_host_by_hand");
+        let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+        let o = Command::new(rustc)
+            .args(["--edition", "2021", "-g"])
+            .args(CARGO_AFL_FLAGS)
+            .arg(format!("-Clink-arg={AFL_RUNTIME}"))
+            .arg("-o")
+            .arg(&out)
+            .arg(src.join("src/main.rs"))
+            .output();
+        match o {
+            Ok(o) if o.status.success() => built.push(("rustc by hand", out.display().to_string())),
+            Ok(o) => panic!("rustc with cargo-afl's flags: {}", String::from_utf8_lossy(&o.stderr)),
+            Err(e) => deps::missing(&format!("rustc ({e})"), "rustup"),
+        }
+    }
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let has_cargo_afl = Command::new(&cargo).args(["afl", "--version"]).output().is_ok_and(|o| o.status.success());
+    if has_cargo_afl {
+        // `--locked`: the crate's Cargo.lock is committed, so the build writes nothing beside
+        // the sources; its target directory is the test's.
+        let o = Command::new(&cargo)
+            .args(["afl", "build", "--locked", "--quiet", "--manifest-path"])
+            .arg(src.join("Cargo.toml"))
+            .arg("--target-dir")
+            .arg(dir.join("cargo-afl-target"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "cargo afl build: {}", String::from_utf8_lossy(&o.stderr));
+        built.push(("cargo afl build", dir.join("cargo-afl-target/debug/rust_host").display().to_string()));
+    } else if !deps::under_ci() {
+        // Not a failure under CI, which does not install cargo-afl: the build by hand above
+        // is the same instrumentation and runtime.
+        deps::missing("cargo-afl (the build by hand ran)", "cargo install cargo-afl --locked");
+    }
+    built
+}
+
+/// A Rust host built as `cargo afl build` builds it writes its edges to the map: the campaign
+/// reads the host's edge count from the binary, and its edges rise as the misbehaviours
+/// change what its answers hold (hosts/rust_host/src/main.rs sorts them), with schedules kept
+/// for them; the host is correct: no finding.
+#[test]
+#[ignore = "slow: .ci/run runs it (cargo test --workspace -- --include-ignored)"]
+fn a_rust_host_built_as_cargo_afl_builds_it_reports_its_edges_rising() {
+    let dir = tempfile::tempdir().unwrap();
+    for (how, exe) in rust_hosts(dir.path()) {
+        let c = campaign(&options(vec![exe, "{port}".into()], CoverageUse::Guide, 1, 40, 2));
+        let cov = c.coverage.clone().expect("a coverage account");
+        assert!(cov.instrumented && cov.note.is_none(), "{how}: {cov:?}");
+        let host_edges = cov.host_edges.expect("the runtime says the map size");
+        assert!(cov.edges > 0 && cov.edges <= host_edges, "{how}: {cov:?}");
+        let (first, last) = (cov.over_time.first().unwrap(), cov.over_time.last().unwrap());
+        assert_eq!(first.runs, 1, "{how}: run 0 reaches the host's code");
+        assert!(last.edges > first.edges, "{how}: edges rise past run 0's: {:?}", cov.over_time);
+        assert!(cov.kept >= 1, "{how}: {cov:?}");
+        assert!(c.findings.is_empty(), "{how}: {:?}", c.findings);
+        eprintln!("{how}: {} edges of {host_edges}, {} kept for edges", cov.edges, cov.kept);
+    }
+}
+
 /// A host built without instrumentation runs as it did before coverage: the same runs, paths,
 /// kept schedules and findings as with coverage off, and a note.
 #[test]

@@ -5,7 +5,7 @@
 //! AFL's fork server, such a binary finds no fork server to talk to and just runs), Python
 //! through `python-afl` (`afl.init()`, which hashes the lines it runs into the same map) or the
 //! wheel's `gcl.afl_cov` (`python -m gcl.afl_cov host.py`: the same without python-afl), Rust
-//! built with `cargo-afl` (the same runtime as `afl-cc`; no test builds one yet). For each run [`super::Slots`] makes a map ([`ShmMap`]), gives its id
+//! built with `cargo-afl` (the same runtime as `afl-cc`; `hosts/rust_host` in the harness's tests). For each run [`super::Slots`] makes a map ([`ShmMap`]), gives its id
 //! to the host, and reads the edges hit (the map's non-zero bytes) after the run; the campaign
 //! keeps their union and the schedules that reached an edge no run before them reached
 //! ([`Coverage`]).

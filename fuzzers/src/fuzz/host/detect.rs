@@ -157,6 +157,10 @@ fn system_frame(func: &str, module: Option<&str>) -> bool {
         "free",
         "_start",
         "??",
+        // Where the C library starts a thread (gdb with libc's sources names no object file).
+        "start_thread",
+        "clone",
+        "clone3",
     ];
     // A library installed with ROS, an address in no known object file.
     let system_module = |m: &str| {
@@ -169,6 +173,10 @@ fn system_frame(func: &str, module: Option<&str>) -> bool {
         || func.starts_with("__")
         || func.starts_with("_dl_")
         || func.starts_with("_IO_")
+        // The compiler's SIMD intrinsics (`_mm512_mask_testn_epi8_mask`): inlined from its
+        // headers into the C library's string functions, where gdb shows them as frames of
+        // their own above `__strstr_avx512` (a spinning host was signed by one).
+        || ["_mm_", "_mm256_", "_mm512_"].iter().any(|p| func.starts_with(p))
         // A Rust v0 symbol left mangled (eu-stack) in the standard library's crates.
         || (func.starts_with("_R") && ["_3std", "_4core", "_5alloc"].iter().any(|c| func.contains(c)))
 }
@@ -1172,6 +1180,24 @@ mod tests {
         // A host's own shared library is the host's (not the system's).
         let own_lib = "#0 0x7f in read () from /lib/x86_64-linux-gnu/libc.so.6\n#1 0x7f in HandGet () from /usr/local/lib/libbarrett.so\n";
         assert_eq!(native_frames(own_lib).unwrap().0, "HandGet");
+    }
+
+    /// A thread spinning on `strstr` (handif.c's worker, waiting for a prompt a garbled byte
+    /// broke), as gdb with libc's sources prints it: the intrinsic inlined into libc's
+    /// `__strstr_avx512` is a frame of its own, and the thread starts in libc's `start_thread`.
+    /// Neither is the host's code: the hang is signed by the host's loop.
+    #[test]
+    fn intrinsics_inlined_in_libc_and_libcs_thread_start_are_the_systems_frames() {
+        let gdb = "Thread 2 (Thread 0x7fe77680b6c0 (LWP 28811) \"spin\"):\n\
+#0  _mm512_mask_testn_epi8_mask (__B=..., __A=..., __U=1152921504606846975) at /usr/lib/gcc/x86_64-linux-gnu/12/include/avx512bwintrin.h:1861\n\
+#1  __strstr_avx512 (haystack=0x55aa0c525060 <buf> 'x' <repeats 200 times>..., ned=0x55aa0c523004 \"=>\") at ../sysdeps/x86_64/multiarch/strstr-avx512.c:112\n\
+#2  0x000055aa0c5221a0 in processCommands (vhand=0x0) at handif/handif.c:140\n\
+#3  0x00007fe7768981f5 in start_thread (arg=<optimized out>) at ./nptl/pthread_create.c:442\n\
+#4  0x00007fe7769188ec in clone3 () at ../sysdeps/unix/sysv/linux/x86_64/clone3.S:81\n";
+        assert_eq!(
+            native_frames(gdb).unwrap(),
+            ("processCommands".into(), Some("_mm512_mask_testn_epi8_mask < __strstr_avx512".into()))
+        );
     }
 
     #[test]
