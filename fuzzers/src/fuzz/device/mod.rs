@@ -1948,7 +1948,8 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
 
 /// What a campaign left on a hand outside this process as it found it, checked where it can
 /// be: on a serial line, whether the hand still answers at the rate the campaign started at
-/// (no case changes it, [`Allowed::keep_rate`]); and what became of the EEPROM.
+/// (no case changes it, [`Allowed::keep_rate`]; or, with [`OpenOptions::follow_rate`], every
+/// connection set it back before it closed); and what became of the EEPROM.
 fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<saved::Saved, String>>) -> Vec<String> {
     if !opts.wide() {
         return Vec::new();
@@ -1982,9 +1983,16 @@ fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<save
         ),
     };
     if let Target::Serial { baud, .. } = &opts.target {
-        said.push(match gcl_host::target::open(&opts.target, &opts.open) {
+        // (a plain port at the first rate: the check does not follow anything)
+        let plain = gcl_host::target::OpenOptions { follow_rate: false, ..opts.open.clone() };
+        let followed = if opts.open.follow_rate {
+            " (cases could change it, --allow rate-change: the port followed each change and set the hand back)"
+        } else {
+            ""
+        };
+        said.push(match gcl_host::target::open(&opts.target, &plain) {
             Ok(mut l) => match dead_hand(l.as_mut(), &opts.profile) {
-                None => format!("line: the hand answers at {baud} baud, the rate it started at"),
+                None => format!("line: the hand answers at {baud} baud, the rate it started at{followed}"),
                 Some(why) => format!("line: the hand no longer answers at {baud} baud, the rate it started at: {why}"),
             },
             Err(e) => format!("line: the port could not be opened again at {baud} baud to check the hand: {e}"),
