@@ -953,6 +953,32 @@ fn a_hand_left_mid_block_by_a_failed_run_is_brought_back_before_the_next() {
     }
 }
 
+/// Issue 37: a hand whose FDEF skips MCV keeps the MCV a case saved (its closing FDEF and FSAVE
+/// save it again), and every later RESET loads it: a failure that rests on it needs the case
+/// that saved it, however many cases back, on a fresh `exec:` hand (the factory's EEPROM). The
+/// campaign tries the cases that wrote the EEPROM last beside the cases that passed last, and
+/// after a finding's confirmations goes on with a fresh hand, not one whose EEPROM the
+/// replays wrote. Before, seed 1 left `value at FLISTV (MCV) after FDEF` as a note (0 of 3:
+/// the MCV was saved 12 cases before); with the first half alone, `value at FLISTAV (MCV)
+/// after FDEF` (the MCV the confirmations saved).
+#[test]
+fn a_failure_resting_on_a_value_saved_cases_before_reproduces_on_a_fresh_hand() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let target: Target = format!("exec:{gcl} sim --stdio --profile bh8-262 --fault fdef-skips-mcv").parse().unwrap();
+    let mut o = FuzzOptions::new(target, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.minimize = false;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.not_reproduced.is_empty(), "{:?}", s.not_reproduced.iter().map(|n| &n.signature).collect::<Vec<_>>());
+    assert!(
+        s.findings.iter().any(|f| f.signature.detail == "MCV" && f.signature.cause == "FDEF"),
+        "{:?}",
+        s.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>()
+    );
+}
+
 /// Issue 37 item 4: a finding's confirmations over `exec:` start their fresh hands at once,
 /// while the finding is minimized, not one after the other as each replay needs one (a Python
 /// hand behind a pyenv shim took about 0.6 s to start, three times per finding). The hand

@@ -887,6 +887,23 @@ impl<'o> Hand<'o> {
         }
     }
 
+    /// After a finding's confirmations, on an `exec:` target: the next case on a fresh hand.
+    /// The campaign's link is then the last confirmation's, or the last earlier case tried
+    /// before the failing one (see [`Met::before`]), and what those replays saved is in that
+    /// hand's EEPROM, known to no list of the worker's: a later failure resting on it
+    /// reproduced on no fresh hand (issue 37: `value at FLISTAV (MCV) after FDEF` after the
+    /// confirmations of `value at FLISTV (MCV) after FDEF` on a hand whose FDEF skips MCV, an
+    /// MCV the earlier case saved). A fresh `exec:` hand has the factory's EEPROM; a serial or
+    /// TCP hand is the same hand after a reopen, so nothing is gained there. Says whether the
+    /// link starts afresh (the worker's lists of earlier cases are then emptied).
+    fn start_afresh(&mut self) -> bool {
+        if !matches!(self.opts.target, Target::Exec { .. }) {
+            return false;
+        }
+        self.link = None;
+        true
+    }
+
     /// The quiet that ends a quick drain: four byte-times on a serial line (at least 1 ms),
     /// 1 ms elsewhere. Only what the last case left is drained; every case begins with ^C
     /// and RESET, whose exact answers catch anything later.
@@ -2070,6 +2087,17 @@ fn worker(
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     // The cases that passed last on this link, the latest last (see [`Met::before`]).
     let mut recent: std::collections::VecDeque<Vec<HostAction>> = std::collections::VecDeque::new();
+    // The cases that wrote the EEPROM last on this link, passed or failed, the latest last: what
+    // they saved outlives any number of cases between (see [`Met::before`]).
+    let mut writers: std::collections::VecDeque<Vec<HostAction>> = std::collections::VecDeque::new();
+    let wrote = |writers: &mut std::collections::VecDeque<Vec<HostAction>>, b: &BuiltCase, a: &[HostAction]| {
+        if b.eeprom_writes > 0 {
+            if writers.len() == RECENT_CASES {
+                writers.pop_front();
+            }
+            writers.push_back(a.to_vec());
+        }
+    };
     loop {
         if stop.load(Ordering::SeqCst) || opts.stop.load(Ordering::SeqCst) {
             return Ok(());
@@ -2153,6 +2181,10 @@ fn worker(
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
                 }
+                if new && hand.start_afresh() {
+                    recent.clear();
+                    writers.clear();
+                }
             }
         }
         let mut outcome = hand.run(&built.transcript, false)?;
@@ -2194,6 +2226,7 @@ fn worker(
                 recent.pop_front();
             }
             recent.push_back(actions.clone());
+            wrote(&mut writers, &built, &actions);
             prev = Some((actions, built, run_no));
             continue;
         };
@@ -2217,10 +2250,17 @@ fn worker(
             return Ok(());
         }
         let new = lock().saw(&sig);
-        let before: Vec<Vec<HostAction>> = recent.iter().cloned().collect();
+        // (the writers the passed cases do not hold first: they are tried after them)
+        let before: Vec<Vec<HostAction>> =
+            writers.iter().filter(|w| !recent.contains(w)).chain(recent.iter()).cloned().collect();
         let met = Met { actions: &actions, built: &built, run: run_no, before: &before };
         if new && report_finding(opts, &mut hand, shared, start, met, sig, progress)? {
             stop.store(true, Ordering::SeqCst);
+        }
+        wrote(&mut writers, &built, &actions);
+        if new && hand.start_afresh() {
+            recent.clear();
+            writers.clear();
         }
     }
 }
@@ -2236,7 +2276,13 @@ struct Met<'a> {
     run: u64,
     /// The actions of the cases that passed last before it on the same link, the latest last
     /// (at most [`RECENT_CASES`]): a state one of them left (a parameter a broken preamble did
-    /// not reset) may be part of the failure.
+    /// not reset) may be part of the failure. Before them, tried after them, the cases that
+    /// wrote the EEPROM last on the link (at most [`RECENT_CASES`]) that are not among them: a
+    /// saved value outlives every case between. A hand whose FDEF skips MCV saved the MCV of
+    /// a case 12 cases back with that case's closing FDEF and FSAVE, and each RESET since
+    /// loaded it: the failure it made reproduced after that case alone, never after the 8
+    /// before it (issue 37: `value at FLISTV (MCV) after FDEF`, 0 of 3 on a fresh `exec:`
+    /// hand, whose EEPROM is the factory's).
     before: &'a [Vec<HostAction>],
 }
 
