@@ -979,6 +979,34 @@ fn a_failure_resting_on_a_value_saved_cases_before_reproduces_on_a_fresh_hand() 
     );
 }
 
+/// Issue 37: a serial port opened again meets the same hand. A run that failed mid-block left a
+/// hand whose control block is longer than the model's (`lcpg-ignored`) waiting for the rest
+/// of it, and a finding's confirmations, each on the port opened again, began with a ^C the
+/// hand took as block data: `missing at RealTime block` failed none of its three
+/// confirmations and became a note (the pty sweep, seed 1). The hand is now brought back to its
+/// prompt on the reopened port too. Through the CLI, so the binary under test is the one
+/// checked.
+#[test]
+fn a_findings_confirmations_on_a_reopened_port_meet_a_hand_brought_back_to_its_prompt() {
+    let (_sim, t) = PtySim::start(&["lcpg-ignored"]);
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("r");
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "device", "--target", &t.to_string(), "--profile", "bh8-262", "--no", "abort-timing"])
+        .args(["--seed", "1", "--runs", "16", "--no-minimize", "-q", "--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap())
+        .unwrap_or_else(|e| panic!("{e}: {stderr}"));
+    assert!(r.not_reproduced.is_empty(), "{:?}", r.not_reproduced.iter().map(|n| &n.signature).collect::<Vec<_>>());
+    assert!(
+        r.findings.iter().any(|f| f.signature.command == "RealTime block"),
+        "{:?}",
+        r.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>()
+    );
+}
+
 /// Issue 37 item 4: a finding's confirmations over `exec:` start their fresh hands at once,
 /// while the finding is minimized, not one after the other as each replay needs one (a Python
 /// hand behind a pyenv shim took about 0.6 s to start, three times per finding). The hand

@@ -1063,6 +1063,14 @@ impl<'o> Hand<'o> {
             ro.silent_wait = policy.silent_wait;
         }
         let quick_quiet = self.quick_quiet();
+        // A serial port or TCP connection opened again after a failed run meets the same hand,
+        // as a kept link does: it may wait mid-block too. Over a pty a finding's three
+        // confirmations (each on a port opened again) began with a ^C such a hand took as
+        // block data, and `missing at RealTime block` of `lcpg-ignored` and `lcv-ignored` became
+        // notes (0 and 1 of 3, issue 37's pty sweep). A new `exec:` hand is another process.
+        if outside && self.dirty && self.link.is_none() && !matches!(self.opts.target, Target::Exec { .. }) {
+            self.link()?;
+        }
         // (the resynchronisation ends in a quiet line: the replay's drain need not wait one out
         // again)
         if outside && self.dirty && self.back_to_prompt() {
