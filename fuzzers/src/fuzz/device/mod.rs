@@ -803,6 +803,9 @@ struct Hand<'o> {
     ahead: std::collections::VecDeque<Box<dyn Link>>,
     /// Whether [`Hand::back_to_prompt`] failed on this link (it is not tried again there).
     unsynced: bool,
+    /// Whether a transcript run on this link may have written the EEPROM (see
+    /// [`Hand::start_afresh`]).
+    saved_on_link: bool,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
@@ -843,6 +846,7 @@ impl<'o> Hand<'o> {
             trailing: TRAILING,
             ahead: Default::default(),
             unsynced: false,
+            saved_on_link: false,
         }
     }
 
@@ -861,6 +865,7 @@ impl<'o> Hand<'o> {
         if fresh || self.link.is_none() {
             self.new = true;
             self.unsynced = false;
+            self.saved_on_link = false;
             self.link = Some(match self.ahead.pop_front() {
                 Some(l) => l,
                 None => gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?,
@@ -894,10 +899,12 @@ impl<'o> Hand<'o> {
     /// reproduced on no fresh hand (issue 37: `value at FLISTAV (MCV) after FDEF` after the
     /// confirmations of `value at FLISTV (MCV) after FDEF` on a hand whose FDEF skips MCV, an
     /// MCV the earlier case saved). A fresh `exec:` hand has the factory's EEPROM; a serial or
-    /// TCP hand is the same hand after a reopen, so nothing is gained there. Says whether the
-    /// link starts afresh (the worker's lists of earlier cases are then emptied).
+    /// TCP hand is the same hand after a reopen, so nothing is gained there; nor on a link
+    /// where nothing saved (a fresh hand costs a process start: a Python hand's took about a
+    /// second under load). Says whether the link starts afresh (the worker's lists of earlier
+    /// cases are then emptied).
     fn start_afresh(&mut self) -> bool {
-        if !matches!(self.opts.target, Target::Exec { .. }) {
+        if !matches!(self.opts.target, Target::Exec { .. }) || !self.saved_on_link {
             return false;
         }
         self.link = None;
@@ -954,6 +961,7 @@ impl<'o> Hand<'o> {
     /// Replays a case's transcript with deadlines from the model; `thorough` as the type says.
     fn run(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let out = self.replay(t, thorough)?;
+        self.saved_on_link |= t.header.requires.contains(&gcl_transcript::Requirement::Eeprom);
         if !out.is_pass() && self.opts.wide() && t.header.requires.contains(&gcl_transcript::Requirement::Eeprom) {
             self.restore_eeprom()?;
         }
