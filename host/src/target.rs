@@ -15,7 +15,7 @@ use gcl_model::params::NvMemory;
 use gcl_model::{DeviceConfig, Fault, Profile, Scenario};
 
 use crate::link::{Link, LinkError, SimLink};
-use crate::links::{ExecLink, SerialLink, StderrMode, TcpLink};
+use crate::links::{ExecLink, RateFollowingLink, SerialLink, StderrMode, TcpLink};
 
 /// A parsed `--target`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -155,6 +155,11 @@ pub struct OpenOptions {
     pub connect_timeout: Duration,
     /// `exec`: what happens to the child's stderr.
     pub stderr: StderrMode,
+    /// `serial`: the port follows the hand's line rate when a line the host sends changes it,
+    /// and sets the hand back to the port's first rate before it closes
+    /// ([`crate::links::RateFollowingLink`]; the profile is [`OpenOptions::loaded_profile`],
+    /// else [`OpenOptions::profile`], else [`DEFAULT_SIM_PROFILE`]).
+    pub follow_rate: bool,
 }
 
 impl Default for OpenOptions {
@@ -168,6 +173,7 @@ impl Default for OpenOptions {
             nv: None,
             connect_timeout: Duration::from_secs(5),
             stderr: StderrMode::Inherit,
+            follow_rate: false,
         }
     }
 }
@@ -209,6 +215,14 @@ pub fn open(target: &Target, opts: &OpenOptions) -> Result<Box<dyn Link>, LinkEr
                 ..DeviceConfig::default()
             };
             Ok(Box::new(SimLink::new(profile, config)))
+        }
+        Target::Serial { path, baud } if opts.follow_rate => {
+            let profile = match &opts.loaded_profile {
+                Some(p) => p.clone(),
+                None => crate::profiles::load(opts.profile.as_deref().unwrap_or(DEFAULT_SIM_PROFILE))
+                    .map_err(|e| LinkError::Open { target: target.to_string(), reason: e.to_string() })?,
+            };
+            Ok(Box::new(RateFollowingLink::open(path, *baud, profile)?))
         }
         Target::Serial { path, baud } => Ok(Box::new(SerialLink::open(path, *baud)?)),
         Target::Tcp { addr } => Ok(Box::new(TcpLink::connect(addr, opts.connect_timeout)?)),

@@ -64,7 +64,8 @@ options that leave no case are refused at the start (--runs 0, a --skip-decision
 such as framing-line-ending), 5000 drawn cases dropped in a row end the campaign, a hand that stops answering ends \
 it, and a signal (SIGINT, SIGTERM, SIGHUP) that stops it before a new finding leaves no verdict (every report says \
 `stopped by SIGTERM after N of M runs`); also a usage or infrastructure error.\n\nserial: targets are fuzzed conservatively by default: no EEPROM \
-writes (FSAVE, PSAVE) unless --write-budget N allows N of them, and one worker.\n\nExamples:\n  gcl fuzz device \
+writes (FSAVE, PSAVE) unless --write-budget N allows N of them, no change of the hand's line rate unless --allow \
+rate-change, and one worker.\n\nExamples:\n  gcl fuzz device \
 --target sim --fault fget-reversed --seed 1 --runs 500 --out reports/findings\n  gcl fuzz device --target 'exec:gcl sim \
 --stdio' --no abort-timing --duration 30s --jobs 2\n  gcl fuzz device --target serial:/dev/ttyUSB0 \
 --profile bh8-262-4.3 --no motion --duration 5m")]
@@ -102,6 +103,11 @@ pub struct DeviceArgs {
     /// `--time fast`), whose motions end at once; such a target is refused (exit 2) without it.
     #[arg(long = "no", value_name = "REQUIREMENT")]
     pub refuse: Vec<String>,
+    /// Allow what a serial target refuses by default (repeatable): `rate-change`, cases may
+    /// set the hand's line rate (BAUD); the port follows each change after the hand's answer
+    /// and sets the hand back to the port's rate before it closes.
+    #[arg(long = "allow", value_name = "WHAT")]
+    pub allow: Vec<String>,
     /// The most EEPROM writes the run may make (restores included); serial targets: 0 unless given.
     #[arg(long, value_name = "N")]
     pub write_budget: Option<u64>,
@@ -219,6 +225,18 @@ fn device_options(a: &DeviceArgs) -> anyhow::Result<(gcl_harness::fuzz::device::
             }
             "abort-timing" => o.allowed.abort_timing = false,
             other => anyhow::bail!("unknown requirement `{other}` (motion, realtime, eeprom, abort-timing)"),
+        }
+    }
+    for w in &a.allow {
+        match w.as_str() {
+            "rate-change" if serial => {
+                o.allowed.keep_rate = None;
+                o.open.follow_rate = true;
+            }
+            "rate-change" => anyhow::bail!(
+                "--allow rate-change applies to serial: targets only (the others have no line rate to keep)"
+            ),
+            other => anyhow::bail!("unknown --allow `{other}` (rate-change)"),
         }
     }
     if let Some(f) = &a.known_failures {
@@ -523,6 +541,9 @@ fn provenance(
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
+    if !a.allow.is_empty() {
+        options.insert("allow".into(), list(a.allow.clone()));
+    }
     match (a.runs, a.duration) {
         (Some(n), _) => options.insert("runs".into(), n.to_string()),
         (None, d) => options

@@ -775,6 +775,46 @@ fn a_serial_campaign_leaves_the_hand_at_its_starting_rate() {
     );
 }
 
+/// Issue 37: asked to (`--allow rate-change`), a serial campaign sends rate changes and its port
+/// follows each after the hand's answer, as a host library does; before a connection closes the
+/// hand is set back to the port's first rate. The hand is `gcl sim --pty` paced at its own BAUD,
+/// which garbles both ways while the port's speed and the hand's rate differ. Seed 2 sends
+/// `PSET LFDPD 1 BAUD 384` in its first cases, then more lines at 38400, then a RESET (which
+/// loads the saved 96). Without the port following, the hand is lost at the first change:
+/// garbled answers are findings, or the hand stops answering.
+#[test]
+fn a_serial_campaign_allowed_to_change_the_rate_follows_it_and_ends_at_the_starting_rate() {
+    let (_sim, t) = hand_paced_pty("bh8-262-4.3");
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("r");
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "device", "--target", &t.to_string(), "--profile", "bh8-262-4.3", "--no", "motion"])
+        .args(["--allow", "rate-change", "--seed", "2", "--runs", "10", "--no-minimize", "-q"])
+        .args(["--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap())
+        .unwrap_or_else(|e| panic!("{e}: {stderr}"));
+    let writes = r.coverage.iter().find(|c| c.category == "param-write").expect("write coverage");
+    assert!(!writes.missing.iter().any(|m| m == "BAUD"), "the campaign set BAUD: {writes:?}");
+    assert!(
+        r.findings.is_empty(),
+        "{:#?}\n{stderr}",
+        r.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>()
+    );
+    assert!(r.not_reproduced.is_empty(), "{:?}", r.not_reproduced);
+    assert_eq!(
+        r.hand_after.first().map(String::as_str),
+        Some(
+            "line: the hand answers at 9600 baud, the rate it started at (cases could change it, --allow \
+             rate-change: the port followed each change and set the hand back)"
+        ),
+        "{stderr}"
+    );
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}
+
 /// Issue 37: `fuzz device` asks a hand outside this process who it is before the first case and
 /// says it first when it names another firmware than the profile; the report keeps it.
 #[test]
@@ -911,6 +951,60 @@ fn a_hand_left_mid_block_by_a_failed_run_is_brought_back_before_the_next() {
         let f = s.findings.first().unwrap_or_else(|| panic!("{fault}: no finding"));
         assert_eq!(f.signature.command, "RealTime block", "{fault}: {}", f.signature);
     }
+}
+
+/// Issue 37: a hand whose FDEF skips MCV keeps the MCV a case saved (its closing FDEF and FSAVE
+/// save it again), and every later RESET loads it: a failure that rests on it needs the case
+/// that saved it, however many cases back, on a fresh `exec:` hand (the factory's EEPROM). The
+/// campaign tries the cases that wrote the EEPROM last beside the cases that passed last, and
+/// after a finding's confirmations goes on with a fresh hand, not one whose EEPROM the
+/// replays wrote. Before, seed 1 left `value at FLISTV (MCV) after FDEF` as a note (0 of 3:
+/// the MCV was saved 12 cases before); with the first half alone, `value at FLISTAV (MCV)
+/// after FDEF` (the MCV the confirmations saved).
+#[test]
+fn a_failure_resting_on_a_value_saved_cases_before_reproduces_on_a_fresh_hand() {
+    let gcl = env!("CARGO_BIN_EXE_gcl");
+    let target: Target = format!("exec:{gcl} sim --stdio --profile bh8-262 --fault fdef-skips-mcv").parse().unwrap();
+    let mut o = FuzzOptions::new(target, Profile::builtin("bh8-262").unwrap());
+    o.budget = Budget::Runs(300);
+    o.seed = 1;
+    o.minimize = false;
+    o.allowed.abort_timing = false;
+    let s = run(&o, &|_| {}).unwrap();
+    assert!(s.not_reproduced.is_empty(), "{:?}", s.not_reproduced.iter().map(|n| &n.signature).collect::<Vec<_>>());
+    assert!(
+        s.findings.iter().any(|f| f.signature.detail == "MCV" && f.signature.cause == "FDEF"),
+        "{:?}",
+        s.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>()
+    );
+}
+
+/// Issue 37: a serial port opened again meets the same hand. A run that failed mid-block left a
+/// hand whose control block is longer than the model's (`lcpg-ignored`) waiting for the rest
+/// of it, and a finding's confirmations, each on the port opened again, began with a ^C the
+/// hand took as block data: `missing at RealTime block` failed none of its three
+/// confirmations and became a note (the pty sweep, seed 1). The hand is now brought back to its
+/// prompt on the reopened port too. Through the CLI, so the binary under test is the one
+/// checked.
+#[test]
+fn a_findings_confirmations_on_a_reopened_port_meet_a_hand_brought_back_to_its_prompt() {
+    let (_sim, t) = PtySim::start(&["lcpg-ignored"]);
+    let dir = tempfile::tempdir().unwrap();
+    let rep = dir.path().join("r");
+    let out = Command::new(env!("CARGO_BIN_EXE_gcl"))
+        .args(["fuzz", "device", "--target", &t.to_string(), "--profile", "bh8-262", "--no", "abort-timing"])
+        .args(["--seed", "1", "--runs", "16", "--no-minimize", "-q", "--report", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let r: report::FuzzReport = serde_json::from_slice(&std::fs::read(rep.join("fuzz-device.json")).unwrap())
+        .unwrap_or_else(|e| panic!("{e}: {stderr}"));
+    assert!(r.not_reproduced.is_empty(), "{:?}", r.not_reproduced.iter().map(|n| &n.signature).collect::<Vec<_>>());
+    assert!(
+        r.findings.iter().any(|f| f.signature.command == "RealTime block"),
+        "{:?}",
+        r.findings.iter().map(|f| f.signature.to_string()).collect::<Vec<_>>()
+    );
 }
 
 /// Issue 37 item 4: a finding's confirmations over `exec:` start their fresh hands at once,

@@ -6,10 +6,12 @@
 //! `TIOCEXCL`.
 
 pub mod exec;
+pub mod follow;
 pub mod serial;
 pub mod tcp;
 
 pub use exec::{ExecLink, StderrMode};
+pub use follow::RateFollowingLink;
 pub use serial::SerialLink;
 pub use tcp::TcpLink;
 

@@ -73,6 +73,24 @@ impl SerialLink {
     }
 }
 
+impl SerialLink {
+    /// Sets the port's rate (bit/s) from now on.
+    pub fn set_rate(&mut self, baud: u32) -> Result<(), LinkError> {
+        self.port.set_baud_rate(baud).map_err(|e| LinkError::Io(e.into()))
+    }
+
+    /// [`Link::recv`], taking at most `max` bytes from the port (what follows stays there).
+    pub fn recv_at_most(&mut self, buf: &mut Vec<u8>, timeout: Duration, max: usize) -> Result<usize, LinkError> {
+        if max == 0 {
+            return Ok(0);
+        }
+        self.port.set_timeout(timeout.max(super::MIN_WAIT)).map_err(|e| LinkError::Io(e.into()))?;
+        let end = max.min(self.scratch.len());
+        let r = self.port.read(&mut self.scratch[..end]);
+        super::read_outcome(r, &self.scratch, buf, is_gone)
+    }
+}
+
 impl Link for SerialLink {
     fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
         self.port.set_timeout(Duration::from_secs(5)).map_err(|e| LinkError::Io(e.into()))?;

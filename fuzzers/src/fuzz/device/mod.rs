@@ -803,6 +803,9 @@ struct Hand<'o> {
     ahead: std::collections::VecDeque<Box<dyn Link>>,
     /// Whether [`Hand::back_to_prompt`] failed on this link (it is not tried again there).
     unsynced: bool,
+    /// Whether a transcript run on this link may have written the EEPROM (see
+    /// [`Hand::start_afresh`]).
+    saved_on_link: bool,
 }
 
 /// How long a link just opened to a hand outside this process is given to say its first byte
@@ -843,6 +846,7 @@ impl<'o> Hand<'o> {
             trailing: TRAILING,
             ahead: Default::default(),
             unsynced: false,
+            saved_on_link: false,
         }
     }
 
@@ -861,6 +865,7 @@ impl<'o> Hand<'o> {
         if fresh || self.link.is_none() {
             self.new = true;
             self.unsynced = false;
+            self.saved_on_link = false;
             self.link = Some(match self.ahead.pop_front() {
                 Some(l) => l,
                 None => gcl_host::target::open(&self.opts.target, &self.opts.open).map_err(FuzzError::Open)?,
@@ -885,6 +890,25 @@ impl<'o> Hand<'o> {
                 Err(_) => return,
             }
         }
+    }
+
+    /// After a finding's confirmations, on an `exec:` target: the next case on a fresh hand.
+    /// The campaign's link is then the last confirmation's, or the last earlier case tried
+    /// before the failing one (see [`Met::before`]), and what those replays saved is in that
+    /// hand's EEPROM, known to no list of the worker's: a later failure resting on it
+    /// reproduced on no fresh hand (issue 37: `value at FLISTAV (MCV) after FDEF` after the
+    /// confirmations of `value at FLISTV (MCV) after FDEF` on a hand whose FDEF skips MCV, an
+    /// MCV the earlier case saved). A fresh `exec:` hand has the factory's EEPROM; a serial or
+    /// TCP hand is the same hand after a reopen, so nothing is gained there; nor on a link
+    /// where nothing saved (a fresh hand costs a process start: a Python hand's took about a
+    /// second under load). Says whether the link starts afresh (the worker's lists of earlier
+    /// cases are then emptied).
+    fn start_afresh(&mut self) -> bool {
+        if !matches!(self.opts.target, Target::Exec { .. }) || !self.saved_on_link {
+            return false;
+        }
+        self.link = None;
+        true
     }
 
     /// The quiet that ends a quick drain: four byte-times on a serial line (at least 1 ms),
@@ -937,6 +961,7 @@ impl<'o> Hand<'o> {
     /// Replays a case's transcript with deadlines from the model; `thorough` as the type says.
     fn run(&mut self, t: &Transcript, thorough: bool) -> Result<ReplayOutcome, FuzzError> {
         let out = self.replay(t, thorough)?;
+        self.saved_on_link |= t.header.requires.contains(&gcl_transcript::Requirement::Eeprom);
         if !out.is_pass() && self.opts.wide() && t.header.requires.contains(&gcl_transcript::Requirement::Eeprom) {
             self.restore_eeprom()?;
         }
@@ -1046,6 +1071,14 @@ impl<'o> Hand<'o> {
             ro.silent_wait = policy.silent_wait;
         }
         let quick_quiet = self.quick_quiet();
+        // A serial port or TCP connection opened again after a failed run meets the same hand,
+        // as a kept link does: it may wait mid-block too. Over a pty a finding's three
+        // confirmations (each on a port opened again) began with a ^C such a hand took as
+        // block data, and `missing at RealTime block` of `lcpg-ignored` and `lcv-ignored` became
+        // notes (0 and 1 of 3, issue 37's pty sweep). A new `exec:` hand is another process.
+        if outside && self.dirty && self.link.is_none() && !matches!(self.opts.target, Target::Exec { .. }) {
+            self.link()?;
+        }
         // (the resynchronisation ends in a quiet line: the replay's drain need not wait one out
         // again)
         if outside && self.dirty && self.back_to_prompt() {
@@ -1948,7 +1981,8 @@ pub fn run(opts: &FuzzOptions, progress: &(dyn Fn(Progress<'_>) + Sync)) -> Resu
 
 /// What a campaign left on a hand outside this process as it found it, checked where it can
 /// be: on a serial line, whether the hand still answers at the rate the campaign started at
-/// (no case changes it, [`Allowed::keep_rate`]); and what became of the EEPROM.
+/// (no case changes it, [`Allowed::keep_rate`]; or, with [`OpenOptions::follow_rate`], every
+/// connection set it back before it closed); and what became of the EEPROM.
 fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<saved::Saved, String>>) -> Vec<String> {
     if !opts.wide() {
         return Vec::new();
@@ -1982,9 +2016,16 @@ fn hand_after(opts: &FuzzOptions, eeprom_writes: u64, saved: Option<&Result<save
         ),
     };
     if let Target::Serial { baud, .. } = &opts.target {
-        said.push(match gcl_host::target::open(&opts.target, &opts.open) {
+        // (a plain port at the first rate: the check does not follow anything)
+        let plain = gcl_host::target::OpenOptions { follow_rate: false, ..opts.open.clone() };
+        let followed = if opts.open.follow_rate {
+            " (cases could change it, --allow rate-change: the port followed each change and set the hand back)"
+        } else {
+            ""
+        };
+        said.push(match gcl_host::target::open(&opts.target, &plain) {
             Ok(mut l) => match dead_hand(l.as_mut(), &opts.profile) {
-                None => format!("line: the hand answers at {baud} baud, the rate it started at"),
+                None => format!("line: the hand answers at {baud} baud, the rate it started at{followed}"),
                 Some(why) => format!("line: the hand no longer answers at {baud} baud, the rate it started at: {why}"),
             },
             Err(e) => format!("line: the port could not be opened again at {baud} baud to check the hand: {e}"),
@@ -2062,6 +2103,17 @@ fn worker(
     let mut prev: Option<(Vec<HostAction>, BuiltCase, u64)> = None;
     // The cases that passed last on this link, the latest last (see [`Met::before`]).
     let mut recent: std::collections::VecDeque<Vec<HostAction>> = std::collections::VecDeque::new();
+    // The cases that wrote the EEPROM last on this link, passed or failed, the latest last: what
+    // they saved outlives any number of cases between (see [`Met::before`]).
+    let mut writers: std::collections::VecDeque<Vec<HostAction>> = std::collections::VecDeque::new();
+    let wrote = |writers: &mut std::collections::VecDeque<Vec<HostAction>>, b: &BuiltCase, a: &[HostAction]| {
+        if b.eeprom_writes > 0 {
+            if writers.len() == RECENT_CASES {
+                writers.pop_front();
+            }
+            writers.push_back(a.to_vec());
+        }
+    };
     loop {
         if stop.load(Ordering::SeqCst) || opts.stop.load(Ordering::SeqCst) {
             return Ok(());
@@ -2145,6 +2197,10 @@ fn worker(
                     stop.store(true, Ordering::SeqCst);
                     return Ok(());
                 }
+                if new && hand.start_afresh() {
+                    recent.clear();
+                    writers.clear();
+                }
             }
         }
         let mut outcome = hand.run(&built.transcript, false)?;
@@ -2186,6 +2242,7 @@ fn worker(
                 recent.pop_front();
             }
             recent.push_back(actions.clone());
+            wrote(&mut writers, &built, &actions);
             prev = Some((actions, built, run_no));
             continue;
         };
@@ -2209,10 +2266,17 @@ fn worker(
             return Ok(());
         }
         let new = lock().saw(&sig);
-        let before: Vec<Vec<HostAction>> = recent.iter().cloned().collect();
+        // (the writers the passed cases do not hold first: they are tried after them)
+        let before: Vec<Vec<HostAction>> =
+            writers.iter().filter(|w| !recent.contains(w)).chain(recent.iter()).cloned().collect();
         let met = Met { actions: &actions, built: &built, run: run_no, before: &before };
         if new && report_finding(opts, &mut hand, shared, start, met, sig, progress)? {
             stop.store(true, Ordering::SeqCst);
+        }
+        wrote(&mut writers, &built, &actions);
+        if new && hand.start_afresh() {
+            recent.clear();
+            writers.clear();
         }
     }
 }
@@ -2228,7 +2292,13 @@ struct Met<'a> {
     run: u64,
     /// The actions of the cases that passed last before it on the same link, the latest last
     /// (at most [`RECENT_CASES`]): a state one of them left (a parameter a broken preamble did
-    /// not reset) may be part of the failure.
+    /// not reset) may be part of the failure. Before them, tried after them, the cases that
+    /// wrote the EEPROM last on the link (at most [`RECENT_CASES`]) that are not among them: a
+    /// saved value outlives every case between. A hand whose FDEF skips MCV saved the MCV of
+    /// a case 12 cases back with that case's closing FDEF and FSAVE, and each RESET since
+    /// loaded it: the failure it made reproduced after that case alone, never after the 8
+    /// before it (issue 37: `value at FLISTV (MCV) after FDEF`, 0 of 3 on a fresh `exec:`
+    /// hand, whose EEPROM is the factory's).
     before: &'a [Vec<HostAction>],
 }
 
