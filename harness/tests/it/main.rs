@@ -21,6 +21,7 @@ mod deps_check;
 mod docs;
 mod fuzz_device;
 mod fuzz_device_baseline_hand;
+mod fuzz_device_rate;
 mod fuzz_host;
 mod fuzz_host_coverage;
 mod fuzz_merge;

@@ -54,8 +54,10 @@ impl std::fmt::Debug for RateFollowingLink {
 }
 
 /// How long the link waits for the answer it is owed before a switch, at most, beyond the
-/// answer's own wire time at the old rate.
-const ANSWER_WAIT: Duration = Duration::from_millis(500);
+/// answer's own wire time at the old rate. The wait ends when the answer is in, so it costs
+/// nothing on a hand that answers; it is long because a hand built for a host (or simulated)
+/// on a busy machine can answer late, and a switch before its answer ends garbles the rest.
+const ANSWER_WAIT: Duration = Duration::from_secs(2);
 
 impl RateFollowingLink {
     /// Opens `path` at `baud` for a hand `profile` describes.
