@@ -145,6 +145,12 @@ impl ParamStore {
     /// The state after power-up or RESET: factory defaults, then FLOAD and PLOAD from `nv`.
     pub fn power_up(profile: &Profile, nv: &mut NvMemory) -> ParamStore {
         let mut s = ParamStore::defaults(profile);
+        // With nothing saved, FLOAD and PLOAD put back the factory default of every
+        // parameter they move, which `defaults` has just written: skip them (a fuzzing
+        // campaign powers a fresh hand up for every case).
+        if nv.motor.is_empty() && nv.global.is_empty() {
+            return s;
+        }
         s.transfer(profile, nv, Transfer::Load, Scope::Motor, MotorSet::ALL);
         s.transfer(profile, nv, Transfer::Load, Scope::Global, MotorSet::ALL);
         s
@@ -232,6 +238,19 @@ mod tests {
         assert_eq!(store.get(&seed, dp, 2), 1000);
         assert_eq!(store.get(&seed, dp, 0), 0, "motor 0 does not exist");
         assert_eq!(store.get(&seed, dp, 5), 0, "motor 5 does not exist");
+    }
+
+    #[test]
+    fn powering_up_with_nothing_saved_is_defaults_then_the_loads() {
+        for name in Profile::builtin_names() {
+            let p = Profile::builtin(name).unwrap();
+            let mut nv = NvMemory::default();
+            let mut loaded = ParamStore::defaults(&p);
+            loaded.transfer(&p, &mut nv, Transfer::Load, Scope::Motor, MotorSet::ALL);
+            loaded.transfer(&p, &mut nv, Transfer::Load, Scope::Global, MotorSet::ALL);
+            assert_eq!(ParamStore::power_up(&p, &mut nv), loaded, "{name}");
+            assert_eq!(nv, NvMemory::default(), "{name}: powering up writes nothing");
+        }
     }
 
     #[test]
