@@ -9,8 +9,8 @@
 //! line shape, banner text; and who the hand says it is (the firmware series its VERS answer
 //! and banner name, against the profile's: [`crate::identity`]). An answer that is the model's,
 //! byte for byte, is complete: the next probe goes out once the line stays quiet for
-//! [`TRAILING`] after it (bytes within it are that answer's, read on to a quiet); any other
-//! answer, and RESET's, is read until the hand is quiet ([`QUIET`] after a prompt), within a
+//! `TRAILING` after it (bytes within it are that answer's, read on to a quiet); any other
+//! answer, and RESET's, is read until the hand is quiet (`QUIET` after a prompt), within a
 //! deadline from the model ([`crate::deadline`]), keeping at most [`MAX_ANSWER`] bytes. Bytes a
 //! hand sends later than that land at the head of the next probe's answer, which then differs
 //! from the model's and is read to a quiet: the last, RESET's, always is.
