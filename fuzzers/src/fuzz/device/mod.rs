@@ -738,29 +738,15 @@ pub fn corpus_name(actions: &[HostAction]) -> String {
     format!("{}.json", &crate::digest::sha256_hex(&json)[..20])
 }
 
-/// Corpus files that did not read or parse, each with why.
-pub type Malformed = Vec<(PathBuf, String)>;
+pub use crate::fuzz::Malformed;
 
 /// Reads every `*.json` entry of a corpus directory (created if missing); entries that do not
 /// read or parse are skipped, and returned with why, so the caller can warn about them.
 pub fn load_corpus(dir: &Path) -> Result<(Vec<Vec<HostAction>>, Malformed), FuzzError> {
     let err = |source| FuzzError::Corpus { path: dir.to_path_buf(), source };
     std::fs::create_dir_all(dir).map_err(err)?;
-    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(err)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    names.sort();
-    let (mut out, mut bad) = (Vec::new(), Vec::new());
-    for p in names {
-        let read = gcl_host::files::read_text_limited(&p, 1 << 20).map_err(|e| e.to_string());
-        match read.and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string())) {
-            Ok(a) => out.push(a),
-            Err(why) => bad.push((p, why)),
-        }
-    }
-    Ok((out, bad))
+    let (entries, bad) = crate::fuzz::read_json_files(dir).map_err(err)?;
+    Ok((entries.into_iter().map(|(_, a)| a).collect(), bad))
 }
 
 /// How many entries (`.json` files) the corpus folder holds.

@@ -52,28 +52,15 @@ pub fn digest(schedules: &[Schedule]) -> String {
     crate::digest::sha256_hex(names.join("\n").as_bytes())[..16].to_string()
 }
 
-/// Files that did not read or parse as a schedule, each with why.
-pub type Malformed = Vec<(PathBuf, String)>;
+pub use crate::fuzz::Malformed;
 
 /// Every `*.json` entry of `dir` (not of its subfolders), with its path, in name order; files
-/// that do not read or parse are left out and returned with why.
+/// that do not read or parse, or plan no misbehaviour, are left out and returned with why.
 fn read_entries(dir: &Path) -> std::io::Result<(Vec<(PathBuf, Entry)>, Malformed)> {
-    let mut names: Vec<PathBuf> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok())
-        .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
-        .collect();
-    names.sort();
-    let (mut out, mut bad) = (Vec::new(), Vec::new());
-    for p in names {
-        let read = gcl_host::files::read_text_limited(&p, 1 << 20).map_err(|e| e.to_string());
-        match read.and_then(|t| serde_json::from_str::<Entry>(&t).map_err(|e| e.to_string())) {
-            Ok(e) if !e.schedule.planned.is_empty() => out.push((p, e)),
-            Ok(_) => bad.push((p, "no misbehaviour planned".into())),
-            Err(why) => bad.push((p, why)),
-        }
-    }
+    let (all, mut bad) = crate::fuzz::read_json_files::<Entry>(dir)?;
+    let (out, empty): (Vec<_>, Vec<_>) = all.into_iter().partition(|(_, e)| !e.schedule.planned.is_empty());
+    bad.extend(empty.into_iter().map(|(p, _)| (p, "no misbehaviour planned".to_string())));
+    bad.sort();
     Ok((out, bad))
 }
 
