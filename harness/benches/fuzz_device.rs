@@ -34,6 +34,10 @@ use gcl_harness::suite::Case;
 use gcl_host::target::Target;
 use gcl_model::{Fault, Profile};
 
+// (the allocator the `gcl` binary runs with, so that these figures are the binary's)
+#[global_allocator]
+static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     let bench = std::env::args().any(|a| a == "--bench");
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));

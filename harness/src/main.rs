@@ -6,6 +6,12 @@ use clap::{Parser, Subcommand};
 
 mod cli;
 
+// A fuzzing campaign allocates and frees many small values per case (matcher states, answers,
+// clones of a model): with mimalloc `gcl fuzz device --target sim` takes about a quarter less
+// CPU than with the system's allocator (issue 41).
+#[global_allocator]
+static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// The conformance kit for the Grasper Control Language (GCL), the serial protocol of
 /// Barrett's BH8-series robot hands.
 ///
