@@ -191,8 +191,11 @@ impl Recorder {
         let t0 = link.elapsed();
         let timeout = step.timeout.unwrap_or(opts.timeout);
         let mut buf = std::mem::take(&mut self.carry);
-        let end = |buf: &[u8]| -> Option<usize> {
-            let prompt_end = framing.prompt_end(buf);
+        // (bytes already searched hold no prompt: each look starts where one could begin)
+        let mut searched = 0;
+        let mut end = |buf: &[u8]| -> Option<usize> {
+            let prompt_end = framing.prompt_end_from(buf, searched);
+            searched = framing.prompt_search_start(buf.len()).max(searched);
             if was_loop {
                 let size_end = (buf.len() >= shadow_out.len() && !shadow_out.is_empty()).then_some(shadow_out.len());
                 return match (prompt_end, size_end) {

@@ -49,8 +49,26 @@ impl Framing {
     /// of every supervisory answer, and the only end a host that does not parse the answer
     /// (the recorder) can rely on.
     pub fn prompt_end(&self, bytes: &[u8]) -> Option<usize> {
-        let end = [self.line_ending.as_slice(), self.prompt.as_slice()].concat();
-        find(bytes, &end).map(|i| i + end.len())
+        self.prompt_end_from(bytes, 0)
+    }
+
+    /// [`Framing::prompt_end`] for a prompt that begins at `from` or later: a reader that
+    /// has looked for it in a shorter buffer looks again only where a prompt could have
+    /// completed since ([`Framing::prompt_search_start`] of the length it looked in).
+    pub fn prompt_end_from(&self, bytes: &[u8], from: usize) -> Option<usize> {
+        let (le, p) = (self.line_ending.as_slice(), self.prompt.as_slice());
+        let n = le.len() + p.len();
+        if n == 0 || bytes.len() < n || from > bytes.len() - n {
+            return None;
+        }
+        bytes[from..].windows(n).position(|w| w.starts_with(le) && w.ends_with(p)).map(|i| from + i + n)
+    }
+
+    /// Where a search for a prompt must begin once a buffer of `len` bytes held none: a
+    /// prompt that those bytes do not hold can only begin in its last `n - 1` (n the prompt's
+    /// length with its line break).
+    pub fn prompt_search_start(&self, len: usize) -> usize {
+        len.saturating_sub((self.line_ending.len() + self.prompt.len()).saturating_sub(1))
     }
 }
 
@@ -631,6 +649,42 @@ mod tests {
             }
         }
         Ok(None)
+    }
+
+    /// Looking again only past [`Framing::prompt_search_start`] of a shorter buffer that held no
+    /// prompt finds what a search of the whole buffer finds: every buffer of up to 7 bytes over
+    /// the prompt's own bytes and one other, grown a byte at a time, as a recorder reads.
+    #[test]
+    fn a_search_for_the_prompt_resumed_finds_what_a_whole_search_finds() {
+        let f = Framing::default();
+        let alphabet = b"\n\r=> x";
+        for len in 0..=7u32 {
+            for code in 0..alphabet.len().pow(len) {
+                let mut c = code;
+                let bytes: Vec<u8> = (0..len)
+                    .map(|_| {
+                        let b = alphabet[c % alphabet.len()];
+                        c /= alphabet.len();
+                        b
+                    })
+                    .collect();
+                assert_eq!(f.prompt_end(&bytes), find(&bytes, b"\n\r=> ").map(|i| i + 5), "{bytes:?}");
+                let mut searched = 0;
+                let mut found = None;
+                for k in 0..=bytes.len() {
+                    found = f.prompt_end_from(&bytes[..k], searched);
+                    if found.is_some() {
+                        assert_eq!(found, f.prompt_end(&bytes[..k]), "{bytes:?} at {k}");
+                        break;
+                    }
+                    assert_eq!(f.prompt_end(&bytes[..k]), None, "{bytes:?} at {k}");
+                    searched = f.prompt_search_start(k).max(searched);
+                }
+                if found.is_none() {
+                    assert_eq!(f.prompt_end(&bytes), None, "{bytes:?}");
+                }
+            }
+        }
     }
 
     #[test]
