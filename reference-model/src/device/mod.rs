@@ -23,7 +23,8 @@
 //! In `realtime`, a `Control` comes in and a `Feedback` goes out, filled by an exhaustive match on
 //! `RtFlag`. In `time`, ticks that only count (HI settling at the open stop) pass at once, as
 //! do ticks that repeat the one before while a command runs (a motor cruising at full speed on
-//! an exact grid, one blocked toward its stall: `physics`), bit for bit as the tick loop, and
+//! an exact grid, one blocked toward its stall: `physics`), bit for bit as the tick loop (the
+//! board's heat over them in closed form, the same to far below TEMP's tenth of a degree), and
 //! `handle_timeout_until_output`, which `SimLink` uses, runs a command's ticks up to its output in
 //! one call, each as tick-by-tick calls would (`tests/it/time_jumps.rs`). The deliberate `Fault`s of
 //! `fault` are framing, status, persistence and RealTime bugs, plus one `*-ignored` fault per
