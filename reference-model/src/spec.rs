@@ -873,6 +873,25 @@ pub struct Profile {
     /// its scope, no alias, whose `persist` names it.
     #[serde(skip)]
     persisted: Vec<Vec<ParamId>>,
+    /// Every parameter name and input alias of at most [`NAME_KEY_BYTES`] bytes as its
+    /// [`name_key`], with the first parameter that answers to it, sorted by key: what
+    /// [`Profile::param_id`] searches (the model looks a name up for every parameter a line
+    /// names).
+    #[serde(skip)]
+    param_index: Vec<(u128, ParamId)>,
+}
+
+/// The longest name [`name_key`] turns into a number.
+const NAME_KEY_BYTES: usize = 15;
+
+/// A name of at most [`NAME_KEY_BYTES`] bytes as one number, ASCII letters upper-cased: two
+/// names have the same key exactly when `eq_ignore_ascii_case` holds between them. (The bytes
+/// in base 256, then the length, which keeps `A` apart from `\0A`.)
+fn name_key(name: &[u8]) -> Option<u128> {
+    (name.len() <= NAME_KEY_BYTES).then(|| {
+        let bytes = name.iter().fold(0u128, |k, b| (k << 8) | u128::from(b.to_ascii_uppercase()));
+        (bytes << 8) | name.len() as u128
+    })
 }
 
 /// The transfer commands a parameter's `persist` list may name, in the order
@@ -1265,7 +1284,21 @@ impl Profile {
                 *slot = Some(*r);
             }
         }
+        let mut param_index: Vec<(u128, ParamId)> = f
+            .params
+            .iter()
+            .enumerate()
+            .flat_map(|(i, p)| {
+                std::iter::once(&p.name)
+                    .chain(&p.input_aliases)
+                    .filter_map(move |n| Some((name_key(n.as_bytes())?, ParamId(i as u16))))
+            })
+            .collect();
+        // (a stable sort, so that the first parameter answering to a name stays first)
+        param_index.sort_by_key(|(k, _)| *k);
+        param_index.dedup_by_key(|(k, _)| *k);
         Ok(Profile {
+            param_index,
             persisted,
             rt_slots,
             roles,
@@ -1345,6 +1378,10 @@ impl Profile {
 
     /// Finds a parameter by name or input alias, ignoring ASCII case.
     pub fn param_id(&self, name: &str) -> Option<ParamId> {
+        if let Some(key) = name_key(name.as_bytes()) {
+            let i = self.param_index.binary_search_by_key(&key, |(k, _)| *k).ok()?;
+            return self.param_index.get(i).map(|(_, id)| *id);
+        }
         self.params
             .iter()
             .position(|p| {
@@ -1697,5 +1734,69 @@ mod include_limit_tests {
         let err = Profile::load_with("top.toml", &|_| Some(shadow.to_string())).unwrap_err().to_string();
         assert!(!err.contains("secretsalt") && !err.contains("root"), "{err}");
         assert!(err.contains("top.toml") && err.contains("line 1"), "{err}");
+    }
+}
+
+#[cfg(test)]
+mod param_lookup_tests {
+    use super::*;
+
+    /// The search [`Profile::param_id`] made before its index: the first parameter whose name
+    /// or an input alias is the name, ignoring ASCII case.
+    fn scan(p: &Profile, name: &str) -> Option<ParamId> {
+        p.params
+            .iter()
+            .position(|s| {
+                s.name.eq_ignore_ascii_case(name) || s.input_aliases.iter().any(|a| a.eq_ignore_ascii_case(name))
+            })
+            .map(|i| ParamId(i as u16))
+    }
+
+    proptest::proptest! {
+        /// The index finds what the scan finds, for every built-in profile: each parameter's
+        /// name and alias in any case, with a byte more or less, a NUL in front, and names of
+        /// every length up to past the index's longest.
+        #[test]
+        fn a_name_is_found_by_the_index_as_by_a_scan(
+            pick in 0usize..1000,
+            upper in proptest::collection::vec(proptest::bool::ANY, 20),
+            edit in 0u8..5,
+            noise in "[A-Za-z0-9\\x00]{0,18}",
+        ) {
+            for id in Profile::builtin_names() {
+                let p = Profile::builtin(id).unwrap();
+                let names: Vec<&String> = p.params.iter().flat_map(|s| std::iter::once(&s.name).chain(&s.input_aliases)).collect();
+                let base = names[pick % names.len()];
+                let cased: String = base
+                    .chars()
+                    .zip(upper.iter().cycle())
+                    .map(|(c, u)| if *u { c.to_ascii_uppercase() } else { c.to_ascii_lowercase() })
+                    .collect();
+                let name = match edit {
+                    0 => cased,
+                    1 => format!("{cased}X"),
+                    2 => cased[..cased.len() - 1].to_string(),
+                    3 => format!("\0{cased}"),
+                    _ => noise.clone(),
+                };
+                proptest::prop_assert_eq!(p.param_id(&name), scan(&p, &name), "{} in {}", name.escape_debug(), id);
+            }
+        }
+    }
+
+    /// A name of more than the index's bytes is still found (by the scan), and its short alias
+    /// by the index. (Two parameters never answer to one name: the loader refuses that.)
+    #[test]
+    fn long_names_are_found_and_their_short_aliases_too() {
+        let mut f = embedded("seed.toml").unwrap().to_string();
+        f.push_str("\n[[params]]\nname = \"AVERYLONGPARAMETERNAME\"\nscope = \"motor\"\nsection = \"advanced\"\ndescription = \"d\"\nmin = 0\nmax = 1\ndefault = 0\ninput_aliases = [\"avlpn\"]\n");
+        let p = Profile::load_with("seed.toml", &|n| {
+            (n == "seed.toml").then(|| f.clone()).or_else(|| embedded(n).map(str::to_string))
+        })
+        .unwrap();
+        let long = p.param_id("averylongparametername").expect("the long name");
+        assert_eq!(p.param(long).name, "AVERYLONGPARAMETERNAME");
+        assert_eq!(p.param_id("AVLPN"), Some(long));
+        assert_eq!(p.param_id("averylongparametername2"), None);
     }
 }

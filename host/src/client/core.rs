@@ -61,7 +61,11 @@ impl Framing {
         if n == 0 || bytes.len() < n || from > bytes.len() - n {
             return None;
         }
-        bytes[from..].windows(n).position(|w| w.starts_with(le) && w.ends_with(p)).map(|i| from + i + n)
+        let first = le.first().or(p.first()).copied();
+        bytes[from..]
+            .windows(n)
+            .position(|w| w.first().copied() == first && w.starts_with(le) && w.ends_with(p))
+            .map(|i| from + i + n)
     }
 
     /// Where a search for a prompt must begin once a buffer of `len` bytes held none: a
