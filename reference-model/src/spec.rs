@@ -878,7 +878,10 @@ pub struct Profile {
     /// [`Profile::param_id`] searches (the model looks a name up for every parameter a line
     /// names).
     #[serde(skip)]
-    param_index: Vec<(u128, ParamId)>,
+    param_index: Vec<(u128, u16)>,
+    /// The same for the command names, for [`Profile::command_id`] (every line names one).
+    #[serde(skip)]
+    command_index: Vec<(u128, u16)>,
 }
 
 /// The longest name [`name_key`] turns into a number.
@@ -892,6 +895,23 @@ fn name_key(name: &[u8]) -> Option<u128> {
         let bytes = name.iter().fold(0u128, |k, b| (k << 8) | u128::from(b.to_ascii_uppercase()));
         (bytes << 8) | name.len() as u128
     })
+}
+
+/// The index of names [`find_by_key`] searches: each name's [`name_key`] (names too long for a
+/// key are left out) with its position, the first position a name has where names repeat.
+fn name_index<'a>(names: impl Iterator<Item = (&'a str, usize)>) -> Vec<(u128, u16)> {
+    let mut index: Vec<(u128, u16)> = names.filter_map(|(n, i)| Some((name_key(n.as_bytes())?, i as u16))).collect();
+    // (a stable sort, so that the first position of a repeated name stays first)
+    index.sort_by_key(|(k, _)| *k);
+    index.dedup_by_key(|(k, _)| *k);
+    index
+}
+
+/// The position [`name_index`] holds for `name`: `Err(())` when the name is too long for a
+/// key, and only a scan can tell.
+fn find_by_key(index: &[(u128, u16)], name: &str) -> Result<Option<u16>, ()> {
+    let key = name_key(name.as_bytes()).ok_or(())?;
+    Ok(index.binary_search_by_key(&key, |(k, _)| *k).ok().and_then(|i| index.get(i)).map(|(_, at)| *at))
 }
 
 /// The transfer commands a parameter's `persist` list may name, in the order
@@ -1284,21 +1304,16 @@ impl Profile {
                 *slot = Some(*r);
             }
         }
-        let mut param_index: Vec<(u128, ParamId)> = f
-            .params
-            .iter()
-            .enumerate()
-            .flat_map(|(i, p)| {
-                std::iter::once(&p.name)
-                    .chain(&p.input_aliases)
-                    .filter_map(move |n| Some((name_key(n.as_bytes())?, ParamId(i as u16))))
-            })
-            .collect();
-        // (a stable sort, so that the first parameter answering to a name stays first)
-        param_index.sort_by_key(|(k, _)| *k);
-        param_index.dedup_by_key(|(k, _)| *k);
+        let param_index = name_index(
+            f.params
+                .iter()
+                .enumerate()
+                .flat_map(|(i, p)| std::iter::once(&p.name).chain(&p.input_aliases).map(move |n| (n.as_str(), i))),
+        );
+        let command_index = name_index(f.commands.iter().enumerate().map(|(i, c)| (c.name.as_str(), i)));
         Ok(Profile {
             param_index,
+            command_index,
             persisted,
             rt_slots,
             roles,
@@ -1362,6 +1377,9 @@ impl Profile {
 
     /// Finds a command by name, ignoring ASCII case.
     pub fn command_id(&self, name: &str) -> Option<CommandId> {
+        if let Ok(at) = find_by_key(&self.command_index, name) {
+            return at.map(CommandId);
+        }
         self.commands.iter().position(|c| c.name.eq_ignore_ascii_case(name)).map(|i| CommandId(i as u16))
     }
 
@@ -1378,9 +1396,8 @@ impl Profile {
 
     /// Finds a parameter by name or input alias, ignoring ASCII case.
     pub fn param_id(&self, name: &str) -> Option<ParamId> {
-        if let Some(key) = name_key(name.as_bytes()) {
-            let i = self.param_index.binary_search_by_key(&key, |(k, _)| *k).ok()?;
-            return self.param_index.get(i).map(|(_, id)| *id);
+        if let Ok(at) = find_by_key(&self.param_index, name) {
+            return at.map(ParamId);
         }
         self.params
             .iter()
@@ -1780,6 +1797,36 @@ mod param_lookup_tests {
                     _ => noise.clone(),
                 };
                 proptest::prop_assert_eq!(p.param_id(&name), scan(&p, &name), "{} in {}", name.escape_debug(), id);
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// The same for command names ([`Profile::command_id`]).
+        #[test]
+        fn a_command_is_found_by_the_index_as_by_a_scan(
+            pick in 0usize..1000,
+            upper in proptest::collection::vec(proptest::bool::ANY, 20),
+            edit in 0u8..5,
+            noise in "[A-Za-z?\\x00]{0,18}",
+        ) {
+            for id in Profile::builtin_names() {
+                let p = Profile::builtin(id).unwrap();
+                let base = &p.commands[pick % p.commands.len()].name;
+                let cased: String = base
+                    .chars()
+                    .zip(upper.iter().cycle())
+                    .map(|(c, u)| if *u { c.to_ascii_uppercase() } else { c.to_ascii_lowercase() })
+                    .collect();
+                let name = match edit {
+                    0 => cased,
+                    1 => format!("{cased}X"),
+                    2 => cased[..cased.len().saturating_sub(1)].to_string(),
+                    3 => format!("\0{cased}"),
+                    _ => noise.clone(),
+                };
+                let scan = p.commands.iter().position(|c| c.name.eq_ignore_ascii_case(&name)).map(|i| CommandId(i as u16));
+                proptest::prop_assert_eq!(p.command_id(&name), scan, "{} in {}", name.escape_debug(), id);
             }
         }
     }
