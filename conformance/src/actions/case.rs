@@ -19,7 +19,7 @@ use gcl_model::{Args, ControlHeader, Device, DeviceConfig, Line, Mode, Profile, 
 use super::HostAction;
 use super::relate::{BlockNote, LoopTrack, Relations};
 use crate::record::{Captured, ShadowStep, shadow_step};
-use crate::suite::build::{BuiltSteps, CaseB, CaseDef, build_after, capture_plan, capture_plan_on, value_range};
+use crate::suite::build::{CaseB, CaseDef, build_after, capture_plan, capture_plan_on, value_range};
 use crate::suite::plan::{FieldRule, Plan, Range, Shape};
 use gcl_transcript::script::ScriptStep;
 use gcl_transcript::{Requirement, Transcript};
@@ -371,7 +371,7 @@ fn assemble(
         no_feedback_inside(&walked.kinds, &caps)?;
     }
     shape_stage(p, &mut walked, &caps, model, wide, homed)?;
-    case_stage(p, walked, &caps, stops_at, kept.as_deref().and_then(|r| r.built.as_ref()))
+    case_stage(p, walked, &caps, stops_at, kept.as_deref())
 }
 
 /// Takes the actions; gives whether any of them moves the hand (a motion, a loop, a ^C
@@ -836,7 +836,7 @@ fn case_stage(
     walked: Walked,
     caps: &[Captured],
     stops_at: Option<usize>,
-    preamble: Option<&BuiltSteps>,
+    preamble: Option<&super::preamble::Ran>,
 ) -> Result<BuiltCase, NotACase> {
     let def = &walked.def;
     let eeprom_writes = def
@@ -850,8 +850,12 @@ fn case_stage(
             _ => false,
         })
         .count();
-    let mut step_decisions = crate::suite::depends::decisions_by_step(p, &def.plans, caps);
-    let transcript = build_after(p, def, caps, &step_decisions, preamble).map_err(NotACase)?;
+    let mut step_decisions = match preamble {
+        Some(ran) => ran.decisions.then(p, &def.plans, caps),
+        None => crate::suite::depends::decisions_by_step(p, &def.plans, caps),
+    };
+    let transcript =
+        build_after(p, def, caps, &step_decisions, preamble.and_then(|r| r.built.as_ref())).map_err(NotACase)?;
     if let Some(at) = stops_at.and_then(|at| step_decisions.len().checked_sub(1).map(|last| at.min(last))) {
         for id in STOP_DECISIONS.iter().filter(|id| p.decisions.iter().any(|d| d.id == **id)) {
             if !step_decisions[at].iter().any(|d| d == id) {

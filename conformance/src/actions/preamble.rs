@@ -21,6 +21,7 @@ use gcl_transcript::script::ScriptStep;
 
 use crate::record::{Captured, Recorder, ShadowStep};
 use crate::suite::build::{BuiltSteps, capture_options};
+use crate::suite::depends::DecisionsSoFar;
 use crate::suite::plan::Plan;
 
 /// The model's runs of a preamble, at its end.
@@ -35,6 +36,8 @@ pub(crate) struct Ran {
     pub(crate) caps: Vec<Captured>,
     /// The transcript's steps made of them (`suite::build::build_from`'s).
     pub(crate) built: Option<BuiltSteps>,
+    /// The decisions each of them rests on, and the reading after them.
+    pub(crate) decisions: DecisionsSoFar,
     /// Whether a step of the preamble ends on quiet (where the walker's shadow and the
     /// recorder's part).
     preamble_quiet: bool,
@@ -77,7 +80,8 @@ pub(crate) fn keep(
     let caps = recorder.capture(&mut link, steps, &opts)?;
     let preamble_quiet = steps.iter().any(|s| s.action.ends_on_quiet());
     let built = BuiltSteps::of(profile, plans, &caps);
-    let ran = Arc::new(Ran { walked, link, recorder, caps, built, preamble_quiet });
+    let decisions = DecisionsSoFar::of(profile, plans, &caps);
+    let ran = Arc::new(Ran { walked, link, recorder, caps, built, decisions, preamble_quiet });
     let mut kept = lock();
     if !kept.iter().any(|k| k.is(profile, config, steps)) {
         if kept.len() >= KEEP {

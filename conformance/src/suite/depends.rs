@@ -65,13 +65,15 @@ fn command_of(p: &Profile, line: &[u8]) -> Option<(Vec<u8>, CommandKind, String)
 
 /// The status an answer reports (`ERR n`), if any.
 pub(crate) fn status_in(output: &[u8]) -> Option<u32> {
-    let text = String::from_utf8_lossy(output);
-    let at = text.find("ERR ")?;
-    text[at + 4..].chars().take_while(char::is_ascii_digit).collect::<String>().parse().ok()
+    // (on the bytes: `ERR ` and digits are ASCII, which no invalid UTF-8 around them changes)
+    let at = output.windows(4).position(|w| w == b"ERR ")? + 4;
+    let rest = output.get(at..).unwrap_or_default();
+    let digits = rest.get(..rest.iter().take_while(|b| b.is_ascii_digit()).count()).unwrap_or_default();
+    std::str::from_utf8(digits).ok()?.parse().ok()
 }
 
 /// What the analysis remembers between lines.
-#[derive(Default)]
+#[derive(Debug, Clone, Default)]
 struct State {
     /// Which motors an earlier HI initialised (RESET forgets).
     initialized: [bool; 4],
@@ -158,52 +160,106 @@ pub(crate) fn decisions_of(p: &Profile, by_step: &[Vec<String>]) -> Vec<String> 
 /// the plan and what the model answered to each step: [`EVERY_STEP`]'s, then those of what
 /// the step sends, read with what earlier steps did (a motion before HI, a read of P after C).
 pub(crate) fn decisions_by_step(p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<Vec<String>> {
-    let mut st = State::default();
-    let mut steps = Vec::with_capacity(plans.len());
-    let mut busy = false;
-    for (plan, c) in plans.iter().zip(caps) {
-        topic(p, EVERY_STEP, &mut st.found);
-        let status = status_in(&c.output);
-        match &plan.step.action {
-            Action::Bytes { bytes, .. } if bytes.as_slice() == [p.framing.abort] => {
-                if st.in_loop {
-                    topic(p, &["seed-abort", "bh8-abort-loop"], &mut st.found);
-                } else if busy {
-                    topic(p, &["seed-abort", "bh8-abort-motion"], &mut st.found);
-                } else {
-                    topic(p, &["framing-abort-idle"], &mut st.found);
-                }
-                st.in_loop = false;
-                busy = false;
-            }
-            Action::Line(line) => {
-                busy = false;
-                line_decisions(p, line, status, &c.output, &mut st);
-            }
-            Action::NoWait(line) => {
-                if line.contains(&p.framing.terminator) {
-                    topic(p, &["framing-busy-input"], &mut st.found);
-                }
-                busy = true;
-            }
-            Action::Bytes { .. } if st.in_loop => {
-                if status.is_some() {
-                    st.in_loop = false;
-                }
-            }
-            Action::Bytes { bytes, .. } => {
-                if bytes.iter().filter(|b| **b == p.framing.terminator).count() > 1 {
-                    topic(p, &["framing-busy-input"], &mut st.found);
-                }
-                for l in bytes.split(|b| *b == p.framing.terminator).filter(|l| !l.is_empty()) {
-                    line_decisions(p, l, None, &c.output, &mut st);
-                }
-            }
-            Action::Partial(_) | Action::Wait => {}
-        }
-        steps.push(std::mem::take(&mut st.found));
+    let mut so_far = DecisionsSoFar::default();
+    so_far.go_on(p, plans, caps, false);
+    so_far.steps
+}
+
+/// [`decisions_by_step`] of a case's first steps, and where its reading stands after them: the
+/// steps that follow can be read from here (a campaign's cases all begin with the same
+/// preamble and the model's same answers to it).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct DecisionsSoFar {
+    st: State,
+    busy: bool,
+    /// What each step read sent, and the model's answer to it.
+    read: Vec<(Action, Vec<u8>)>,
+    /// The decisions of each step read.
+    steps: Vec<Vec<String>>,
+}
+
+impl DecisionsSoFar {
+    /// The reading of `plans` answered by `caps`.
+    pub(crate) fn of(p: &Profile, plans: &[Plan], caps: &[Captured]) -> DecisionsSoFar {
+        let mut so_far = DecisionsSoFar::default();
+        so_far.go_on(p, plans, caps, true);
+        so_far
     }
-    steps
+
+    /// [`decisions_by_step`] of a case, going on from this reading when the case begins with
+    /// the very steps and answers read (reading every step afresh otherwise).
+    pub(crate) fn then(&self, p: &Profile, plans: &[Plan], caps: &[Captured]) -> Vec<Vec<String>> {
+        let n = self.read.len();
+        let same = plans.len() >= n
+            && caps.len() >= n
+            && self
+                .read
+                .iter()
+                .zip(plans)
+                .zip(caps)
+                .all(|(((a, out), plan), c)| *a == plan.step.action && *out == c.output);
+        if !same {
+            return decisions_by_step(p, plans, caps);
+        }
+        let mut so_far = self.clone();
+        so_far.go_on(p, &plans[n..], &caps[n..], false);
+        so_far.steps
+    }
+
+    /// Reads more steps (keeping what they sent and the answers when `remember`, to go on from).
+    fn go_on(&mut self, p: &Profile, plans: &[Plan], caps: &[Captured], remember: bool) {
+        let DecisionsSoFar { st, busy, read, steps } = self;
+        for (plan, c) in plans.iter().zip(caps) {
+            if remember {
+                read.push((plan.step.action.clone(), c.output.clone()));
+            }
+            steps.push(read_step(p, st, busy, plan, c));
+        }
+    }
+}
+
+/// The decisions of one step, given the reading so far (which it moves on).
+fn read_step(p: &Profile, st: &mut State, busy: &mut bool, plan: &Plan, c: &Captured) -> Vec<String> {
+    topic(p, EVERY_STEP, &mut st.found);
+    let status = status_in(&c.output);
+    match &plan.step.action {
+        Action::Bytes { bytes, .. } if bytes.as_slice() == [p.framing.abort] => {
+            if st.in_loop {
+                topic(p, &["seed-abort", "bh8-abort-loop"], &mut st.found);
+            } else if *busy {
+                topic(p, &["seed-abort", "bh8-abort-motion"], &mut st.found);
+            } else {
+                topic(p, &["framing-abort-idle"], &mut st.found);
+            }
+            st.in_loop = false;
+            *busy = false;
+        }
+        Action::Line(line) => {
+            *busy = false;
+            line_decisions(p, line, status, &c.output, st);
+        }
+        Action::NoWait(line) => {
+            if line.contains(&p.framing.terminator) {
+                topic(p, &["framing-busy-input"], &mut st.found);
+            }
+            *busy = true;
+        }
+        Action::Bytes { .. } if st.in_loop => {
+            if status.is_some() {
+                st.in_loop = false;
+            }
+        }
+        Action::Bytes { bytes, .. } => {
+            if bytes.iter().filter(|b| **b == p.framing.terminator).count() > 1 {
+                topic(p, &["framing-busy-input"], &mut st.found);
+            }
+            for l in bytes.split(|b| *b == p.framing.terminator).filter(|l| !l.is_empty()) {
+                line_decisions(p, l, None, &c.output, st);
+            }
+        }
+        Action::Partial(_) | Action::Wait => {}
+    }
+    std::mem::take(&mut st.found)
 }
 
 fn line_decisions(p: &Profile, line: &[u8], status: Option<u32>, output: &[u8], st: &mut State) {
@@ -404,6 +460,32 @@ pub(crate) fn prefix_motors(p: &Profile, prefix: &str) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What `status_in` read before it read bytes: the answer as text (invalid UTF-8 replaced),
+    /// the digits after its first `ERR `.
+    fn status_as_text(output: &[u8]) -> Option<u32> {
+        let text = String::from_utf8_lossy(output);
+        let at = text.find("ERR ")?;
+        text[at + 4..].chars().take_while(char::is_ascii_digit).collect::<String>().parse().ok()
+    }
+
+    proptest::proptest! {
+        /// Reading the status from the bytes gives what reading it from the text gave, invalid
+        /// UTF-8, several statuses, a status too big for a u32 and none at all included.
+        #[test]
+        fn a_status_read_from_the_bytes_is_the_one_the_text_shows(
+            parts in proptest::collection::vec(
+                proptest::prop_oneof![
+                    proptest::collection::vec(proptest::sample::select(b"ER 019\n\r=>\xff\xe2\x82".to_vec()), 0..8),
+                    proptest::strategy::Strategy::prop_map(0u64..10_000_000_000, |n| format!("ERR {n}").into_bytes()),
+                ],
+                0..6,
+            ),
+        ) {
+            let output = parts.concat();
+            proptest::prop_assert_eq!(status_in(&output), status_as_text(&output));
+        }
+    }
 
     /// Every listed answer-only decision is one a profile has (a misspelt id would silently
     /// make its decision a state decision).
