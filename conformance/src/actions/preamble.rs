@@ -7,7 +7,8 @@
 //! config and the steps (simulated time, a seeded generator), so the state a run leaves after
 //! the preamble is kept here and a clone of it goes on with the next case's steps: the answers
 //! and states that follow are bit for bit those of running the preamble again (held by the
-//! unit test `tests::a_kept_preamble_builds_the_case_a_fresh_one_does`).
+//! unit test `tests::a_kept_preamble_builds_the_case_a_fresh_one_does`). The transcript's
+//! steps and the decisions each step rests on are made of those answers once too.
 //!
 //! Only the reference model's runs are kept: the hand under test (the in-process sim, with its
 //! fault if it has one) is replayed the whole case, preamble included, and judged on that.
