@@ -824,10 +824,13 @@ fn a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_findi
     let gcl = env!("CARGO_BIN_EXE_gcl");
     let hand = dir.path().join("hand.sh");
     let count = dir.path().join("count");
+    // (each process claims the next number by making its directory, which only one can: the
+    // campaign starts hands ahead, so processes start at the same time, and a counter file
+    // read and written back gave two of them the same number)
     std::fs::write(
         &hand,
         format!(
-            "n=$(cat '{c}' 2>/dev/null || echo 0); n=$((n+1)); echo $n > '{c}'\n\
+            "n=1; until mkdir '{c}/'$n 2>/dev/null; do n=$((n+1)); done\n\
              if [ \"$n\" -eq \"$BUGGY_AT\" ] || [ \"$BUGGY_AT\" = all ]; then exec {gcl} sim --stdio --fault fget-reversed; fi\n\
              exec {gcl} sim --stdio\n",
             c = count.display()
@@ -836,7 +839,8 @@ fn a_failure_that_does_not_reproduce_on_a_fresh_connection_is_a_note_not_a_findi
     .unwrap();
     let target = format!("exec:sh {}", hand.display());
     let campaign = |buggy_at: &str| {
-        let _ = std::fs::remove_file(&count);
+        let _ = std::fs::remove_dir_all(&count);
+        std::fs::create_dir(&count).unwrap();
         let rep = dir.path().join(format!("r-{buggy_at}"));
         let out = Command::new(gcl)
             .env("BUGGY_AT", buggy_at)
