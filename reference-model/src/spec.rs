@@ -1769,6 +1769,23 @@ mod param_lookup_tests {
             .map(|i| ParamId(i as u16))
     }
 
+    /// A name to look up, made from one the profile has: in the case `upper` gives its letters,
+    /// then as it is (`edit` 0), a byte longer, a byte shorter, after a NUL, or `noise` instead.
+    fn variant(base: &str, upper: &[bool], edit: u8, noise: &str) -> String {
+        let cased: String = base
+            .chars()
+            .zip(upper.iter().cycle())
+            .map(|(c, u)| if *u { c.to_ascii_uppercase() } else { c.to_ascii_lowercase() })
+            .collect();
+        match edit {
+            0 => cased,
+            1 => format!("{cased}X"),
+            2 => cased[..cased.len().saturating_sub(1)].to_string(),
+            3 => format!("\0{cased}"),
+            _ => noise.to_string(),
+        }
+    }
+
     proptest::proptest! {
         /// The index finds what the scan finds, for every built-in profile: each parameter's
         /// name and alias in any case, with a byte more or less, a NUL in front, and names of
@@ -1783,19 +1800,7 @@ mod param_lookup_tests {
             for id in Profile::builtin_names() {
                 let p = Profile::builtin(id).unwrap();
                 let names: Vec<&String> = p.params.iter().flat_map(|s| std::iter::once(&s.name).chain(&s.input_aliases)).collect();
-                let base = names[pick % names.len()];
-                let cased: String = base
-                    .chars()
-                    .zip(upper.iter().cycle())
-                    .map(|(c, u)| if *u { c.to_ascii_uppercase() } else { c.to_ascii_lowercase() })
-                    .collect();
-                let name = match edit {
-                    0 => cased,
-                    1 => format!("{cased}X"),
-                    2 => cased[..cased.len() - 1].to_string(),
-                    3 => format!("\0{cased}"),
-                    _ => noise.clone(),
-                };
+                let name = variant(names[pick % names.len()], &upper, edit, &noise);
                 proptest::prop_assert_eq!(p.param_id(&name), scan(&p, &name), "{} in {}", name.escape_debug(), id);
             }
         }
@@ -1812,19 +1817,7 @@ mod param_lookup_tests {
         ) {
             for id in Profile::builtin_names() {
                 let p = Profile::builtin(id).unwrap();
-                let base = &p.commands[pick % p.commands.len()].name;
-                let cased: String = base
-                    .chars()
-                    .zip(upper.iter().cycle())
-                    .map(|(c, u)| if *u { c.to_ascii_uppercase() } else { c.to_ascii_lowercase() })
-                    .collect();
-                let name = match edit {
-                    0 => cased,
-                    1 => format!("{cased}X"),
-                    2 => cased[..cased.len().saturating_sub(1)].to_string(),
-                    3 => format!("\0{cased}"),
-                    _ => noise.clone(),
-                };
+                let name = variant(&p.commands[pick % p.commands.len()].name, &upper, edit, &noise);
                 let scan = p.commands.iter().position(|c| c.name.eq_ignore_ascii_case(&name)).map(|i| CommandId(i as u16));
                 proptest::prop_assert_eq!(p.command_id(&name), scan, "{} in {}", name.escape_debug(), id);
             }
