@@ -305,6 +305,24 @@ mod tests {
         now: Duration,
     }
 
+    impl Scripted {
+        /// A hand that answers each probe of the pre-flight as the seed profile says (tests
+        /// change one answer of it).
+        fn healthy() -> Scripted {
+            Scripted {
+                answers: vec![
+                    (b"\x03", b"\n\r=> "),
+                    (b"\r", b"\n\r=> "),
+                    (b"ZZQX\r", b"ZZQX\n\rERR 32\n\r=> "),
+                    (b"VERS\r", b"VERS\n\rFirmware 4.4\n\r=> "),
+                    (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
+                ],
+                pending: Vec::new(),
+                now: Duration::ZERO,
+            }
+        }
+    }
+
     impl Link for Scripted {
         fn send(&mut self, bytes: &[u8]) -> Result<(), LinkError> {
             if let Some((_, a)) = self.answers.iter().find(|(s, _)| *s == bytes) {
@@ -381,17 +399,8 @@ mod tests {
     #[test]
     fn a_status_line_in_another_form_is_named() {
         let p = Profile::builtin("seed").unwrap();
-        let mut hand = Scripted {
-            answers: vec![
-                (b"\x03", b"\n\r=> "),
-                (b"\r", b"\n\r=> "),
-                (b"ZZQX\r", b"ZZQX\n\rError 32!\n\r=> "),
-                (b"VERS\r", b"VERS\n\rFirmware 4.4\n\r=> "),
-                (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
-            ],
-            pending: Vec::new(),
-            now: Duration::ZERO,
-        };
+        let mut hand = Scripted::healthy();
+        hand.answers[2].1 = b"ZZQX\n\rError 32!\n\r=> ";
         let r = run(&mut hand, &p, &DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None })).unwrap();
         assert_eq!(r.findings, vec!["an error status reads `Error 32!`, not in the form `ERR 32`"], "{r:?}");
         assert_eq!(shape(b"ERR 1024"), shape(b"ERR 32"));
@@ -435,17 +444,7 @@ mod tests {
         assert_eq!(counted.empty, 1, "one wait for quiet, after RESET's prompt");
         // A hand that sends a byte after its bare CR's prompt: the byte lands at the head of
         // the next answer, which is then not the model's, and the pre-flight names it.
-        let mut hand = Scripted {
-            answers: vec![
-                (b"\x03", b"\n\r=> "),
-                (b"\r", b"\n\r=> "),
-                (b"ZZQX\r", b"ZZQX\n\rERR 32\n\r=> "),
-                (b"VERS\r", b"VERS\n\rFirmware 4.4\n\r=> "),
-                (b"RESET\r", b"RESET\n\rBarrettHand Firmware 4.4\n\r=> "),
-            ],
-            pending: Vec::new(),
-            now: Duration::ZERO,
-        };
+        let mut hand = Scripted::healthy();
         let healthy = run(&mut hand, &p, &policy).unwrap();
         assert!(healthy.findings.is_empty(), "{healthy:?}");
         hand.answers[2].1 = b"?ZZQX\n\rERR 32\n\r=> ";
@@ -477,16 +476,11 @@ mod tests {
     fn a_hand_of_another_firmware_is_named_from_its_vers_or_its_banner() {
         let p = Profile::builtin("bh8-262-4.3").unwrap();
         let policy = DeadlinePolicy::for_target(&gcl_host::Target::Sim { profile: None });
-        let hand = |vers: &'static [u8], banner: &'static [u8]| Scripted {
-            answers: vec![
-                (b"\x03", b"\n\r=> "),
-                (b"\r", b"\n\r=> "),
-                (b"ZZQX\r", b"ZZQX\n\rERR 32\n\r=> "),
-                (b"VERS\r", vers),
-                (b"RESET\r", banner),
-            ],
-            pending: Vec::new(),
-            now: Duration::ZERO,
+        let hand = |vers: &'static [u8], banner: &'static [u8]| {
+            let mut h = Scripted::healthy();
+            h.answers[3].1 = vers;
+            h.answers[4].1 = banner;
+            h
         };
         let said = "identity: the hand says firmware 4.4; you chose bh8-262-4.3 (firmware 4.3): run with --profile bh8-262-4.4";
         // In VERS alone (a banner without a version), and in the banner alone (VERS refused).

@@ -253,10 +253,8 @@ impl Matcher {
     /// after it) in which the elision takes `b` and the literal does not begin with it: then
     /// `b` leaves every way as it was (the elision goes on; its way out starts again).
     fn elisions_take(&self, b: u8) -> bool {
-        let [_, _, ..] = self.states.as_slice() else {
-            return false;
-        };
-        self.states.len().is_multiple_of(2)
+        self.states.len() >= 2
+            && self.states.len().is_multiple_of(2)
             && self.states.chunks_exact(2).all(|pair| {
                 let [e, out] = pair else { return false };
                 let takes = match self.pieces.get(e.piece) {
