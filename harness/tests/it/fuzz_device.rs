@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use std::io::BufRead;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
+use std::time::Duration;
 
 use gcl_harness::fuzz::device::action::HostAction;
 use gcl_harness::fuzz::device::{Budget, FuzzOptions, load_corpus, report, run};
@@ -489,6 +490,22 @@ fn the_unmutated_sim_over_exec_yields_no_findings() {
 /// `serial:` target on its pty.
 pub(crate) struct PtySim(Child);
 
+/// [`run`] over a [`PtySim`]'s port. Every test file shares this process, and a child another
+/// test is starting holds a copy of each descriptor, the port's lock with it, until it execs
+/// (see `sim_support::SimProcess::hand`): a campaign that meets the port busy is run again,
+/// for up to 10 s. Any other error, and a busy port past that, is the test's failure.
+fn run_on_pty(o: &FuzzOptions) -> gcl_harness::fuzz::device::FuzzSummary {
+    let until = std::time::Instant::now() + Duration::from_secs(10);
+    loop {
+        match run(o, &|_| {}) {
+            Err(e) if e.to_string().contains("is in use by another program") && std::time::Instant::now() < until => {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            r => return r.unwrap(),
+        }
+    }
+}
+
 impl PtySim {
     fn start(faults: &[&str]) -> (PtySim, Target) {
         PtySim::start_timed("fast", faults)
@@ -524,7 +541,7 @@ fn the_unmutated_sim_over_a_pty_yields_no_findings() {
     o.budget = Budget::Runs(40);
     o.seed = 5;
     o.allowed.abort_timing = false;
-    let s = run(&o, &|_| {}).unwrap();
+    let s = run_on_pty(&o);
     assert!(
         s.findings.is_empty(),
         "false positives over a pty: {:#?}",
@@ -545,7 +562,7 @@ fn bytes_after_a_quick_case_send_it_to_a_thorough_run_that_reports_it() {
     o.budget = Budget::Runs(300);
     o.seed = 1;
     o.allowed.abort_timing = false;
-    let s = run(&o, &|_| {}).unwrap();
+    let s = run_on_pty(&o);
     assert!(s.rejudged > 0, "no case was judged again in {} runs", s.runs);
     // The extra prompt parts from the model at whatever the host sends next; it is named as
     // more than the answer to the empty line before, and each finding is real.
@@ -601,7 +618,7 @@ fn a_faulty_sim_over_a_pty_is_found_and_the_transcript_replays() {
     o.seed = 1;
     o.max_findings = Some(1);
     o.allowed.abort_timing = false;
-    let s = run(&o, &|_| {}).unwrap();
+    let s = run_on_pty(&o);
     let f = s.findings.first().expect("fget-reversed found over a pty");
     assert_eq!(f.signature.command, "FGET", "{}", f.diff);
     assert!(!replays_on(&f.transcript, vec![Fault::FgetReversed]), "fails on the mutant");
